@@ -1,0 +1,31 @@
+//! # sweeptin
+//!
+//! Exact, bounded-memory Delaunay terrain models from huge lidar point clouds.
+//!
+//! The core is a sweep-line Delaunay triangulation (Domiter & Žalik 2008) over points sorted by
+//! `y`, with exact predicates ([`predicates`]) and a documented tie-breaking rule for cocircular
+//! points, so the same input always gives the same triangles.
+//!
+//! ```
+//! use sweeptin::{triangulate, Options};
+//!
+//! let points = [[0.0, 0.0, 1.0], [1.0, 0.0, 2.0], [0.0, 1.0, 3.0], [1.0, 1.0, 4.0]];
+//! let tin = triangulate(&points, &Options::default()).unwrap();
+//! assert_eq!(tin.triangles.len(), 2);
+//! sweeptin::validate::validate(&tin.vertices, &tin.triangles).unwrap();
+//! ```
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod io;
+pub mod points;
+pub mod predicates;
+pub mod sweep;
+pub mod synth;
+pub mod triangulation;
+pub mod validate;
+
+pub use error::{Error, Result};
+pub use points::DuplicatePolicy;
+pub use triangulation::{Options, Triangulation, triangulate};

@@ -1,0 +1,233 @@
+//! Turning raw input points into the sweep's vertex table.
+//!
+//! [`prepare`] validates every coordinate (finite, in the predicates' exact range), moves the
+//! points into a local frame when that can be done without rounding, sorts them into sweep order
+//! (by `y`, then `x`) with rayon, and merges exact `(x, y)` duplicates by a [`DuplicatePolicy`].
+//! The result depends only on the input, never on the thread count.
+
+use crate::error::{Error, Result};
+use crate::predicates::{self, FIRST_REAL};
+use rayon::slice::ParallelSliceMut;
+
+/// Which point survives when several share exactly the same `(x, y)`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DuplicatePolicy {
+    /// The one that comes first in the input.
+    #[default]
+    First,
+    /// The one that comes last in the input.
+    Last,
+    /// The one with the lowest `z` (first in input order among equals).
+    Lowest,
+    /// The one with the highest `z` (first in input order among equals).
+    Highest,
+}
+
+impl DuplicatePolicy {
+    /// Does candidate `(z, index)` beat the current keeper `(z, index)`?
+    #[inline]
+    pub fn prefers(self, cand: (f64, u64), keep: (f64, u64)) -> bool {
+        match self {
+            DuplicatePolicy::First => cand.1 < keep.1,
+            DuplicatePolicy::Last => cand.1 > keep.1,
+            DuplicatePolicy::Lowest => cand.0 < keep.0 || (cand.0 == keep.0 && cand.1 < keep.1),
+            DuplicatePolicy::Highest => cand.0 > keep.0 || (cand.0 == keep.0 && cand.1 < keep.1),
+        }
+    }
+}
+
+/// Points in sweep order, ready for the sweep.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// Vertex table indexed by vertex id: two placeholder rows for the artificial points, then the
+    /// distinct points in sweep order, in the local frame.
+    pub xy: Vec<[f64; 2]>,
+    /// For each real vertex (`xy[i + 2]`), the index of the input point it came from.
+    pub index: Vec<u32>,
+    /// The local origin that was subtracted (exactly) from every input coordinate.
+    pub origin: [f64; 2],
+    /// Number of input points.
+    pub total: u64,
+    /// Number of input points merged away as exact `(x, y)` duplicates.
+    pub duplicates: u64,
+}
+
+impl Prepared {
+    /// Number of distinct points.
+    pub fn len(&self) -> usize {
+        self.index.len()
+    }
+
+    /// No points at all?
+    pub fn is_empty(&self) -> bool {
+        self.index.is_empty()
+    }
+}
+
+/// Largest number of points the in-memory core accepts (ids are `u32` and half-edge ids use
+/// 30 bits: at most `2^30 / 6` points).
+pub const MAX_POINTS: u64 = (1 << 30) / 6 - 4;
+
+#[derive(Clone, Copy)]
+struct Rec {
+    x: f64,
+    y: f64,
+    idx: u32,
+}
+
+/// Validates, sorts and de-duplicates `points` (`[x, y, z]`).
+///
+/// # Errors
+/// [`Error::NonFinite`] or [`Error::CoordinateOutOfRange`] naming the first bad point,
+/// [`Error::TooManyPoints`] beyond [`MAX_POINTS`].
+pub fn prepare(points: &[[f64; 3]], policy: DuplicatePolicy) -> Result<Prepared> {
+    let total = points.len() as u64;
+    if total > MAX_POINTS {
+        return Err(Error::TooManyPoints {
+            count: total,
+            max: MAX_POINTS,
+        });
+    }
+    let origin = choose_origin(points)?;
+    let mut recs = to_local(points, origin)?;
+    recs.par_sort_unstable_by(|a, b| {
+        a.y.total_cmp(&b.y)
+            .then(a.x.total_cmp(&b.x))
+            .then(a.idx.cmp(&b.idx))
+    });
+    let (xy, index) = dedupe(&recs, points, policy);
+    let duplicates = total - index.len() as u64;
+    Ok(Prepared {
+        xy,
+        index,
+        origin,
+        total,
+        duplicates,
+    })
+}
+
+/// The bounding box's lower-left corner, if subtracting it is exact for every point; otherwise the
+/// true origin (the predicates are exact either way; a local frame keeps the magnitudes small).
+fn choose_origin(points: &[[f64; 3]]) -> Result<[f64; 2]> {
+    let mut lo = [f64::INFINITY; 2];
+    for (i, p) in points.iter().enumerate() {
+        if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
+            return Err(Error::NonFinite {
+                index: i as u64,
+                x: p[0],
+                y: p[1],
+                z: p[2],
+            });
+        }
+        lo[0] = lo[0].min(p[0]);
+        lo[1] = lo[1].min(p[1]);
+    }
+    if points.is_empty() {
+        return Ok([0.0; 2]);
+    }
+    let exact = points
+        .iter()
+        .all(|p| exact_diff(p[0], lo[0]) && exact_diff(p[1], lo[1]));
+    Ok(if exact { lo } else { [0.0; 2] })
+}
+
+/// Is `a - b` exactly representable (TwoSum error term zero)?
+#[inline]
+fn exact_diff(a: f64, b: f64) -> bool {
+    let s = a - b;
+    let bv = s - a;
+    let av = s - bv;
+    (a - av) + (-b - bv) == 0.0
+}
+
+fn to_local(points: &[[f64; 3]], origin: [f64; 2]) -> Result<Vec<Rec>> {
+    let mut recs = Vec::with_capacity(points.len());
+    for (i, p) in points.iter().enumerate() {
+        // `+ 0.0` turns -0.0 into +0.0 so that both compare (and sort) as one position.
+        let x = (p[0] - origin[0]) + 0.0;
+        let y = (p[1] - origin[1]) + 0.0;
+        for v in [x, y] {
+            if !predicates::check_coord(v) {
+                return Err(Error::CoordinateOutOfRange {
+                    index: i as u64,
+                    value: v,
+                    max: predicates::MAX_COORD,
+                    min: predicates::MIN_NONZERO_COORD,
+                });
+            }
+        }
+        recs.push(Rec { x, y, idx: i as u32 });
+    }
+    Ok(recs)
+}
+
+fn dedupe(recs: &[Rec], points: &[[f64; 3]], policy: DuplicatePolicy) -> (Vec<[f64; 2]>, Vec<u32>) {
+    let mut xy = Vec::with_capacity(recs.len() + FIRST_REAL as usize);
+    xy.push([f64::NAN; 2]);
+    xy.push([f64::NAN; 2]);
+    let mut index: Vec<u32> = Vec::with_capacity(recs.len());
+    let mut prev: Option<(f64, f64)> = None;
+    for r in recs {
+        if prev == Some((r.x, r.y)) {
+            let keep = *index.last().expect("a previous point exists");
+            let cand = (points[r.idx as usize][2], r.idx as u64);
+            let kept = (points[keep as usize][2], keep as u64);
+            if policy.prefers(cand, kept) {
+                *index.last_mut().expect("a previous point exists") = r.idx;
+            }
+            continue;
+        }
+        prev = Some((r.x, r.y));
+        xy.push([r.x, r.y]);
+        index.push(r.idx);
+    }
+    (xy, index)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sorts_and_merges_duplicates_by_policy() {
+        let pts = [
+            [1.0, 1.0, 5.0],
+            [0.0, 0.0, 0.0],
+            [1.0, 1.0, 3.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 9.0],
+        ];
+        let p = prepare(&pts, DuplicatePolicy::First).unwrap();
+        assert_eq!(p.duplicates, 2);
+        assert_eq!(p.index, vec![1, 3, 0]);
+        assert_eq!(&p.xy[2..], &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]);
+        assert_eq!(prepare(&pts, DuplicatePolicy::Last).unwrap().index[2], 4);
+        assert_eq!(prepare(&pts, DuplicatePolicy::Lowest).unwrap().index[2], 2);
+        assert_eq!(prepare(&pts, DuplicatePolicy::Highest).unwrap().index[2], 4);
+    }
+
+    #[test]
+    fn negative_zero_is_zero() {
+        let pts = [[0.0, 0.0, 1.0], [-0.0, -0.0, 2.0], [1.0, 0.0, 0.0]];
+        let p = prepare(&pts, DuplicatePolicy::First).unwrap();
+        assert_eq!(p.duplicates, 1);
+    }
+
+    #[test]
+    fn local_origin_is_exact() {
+        let pts = [[500_000.125, 4_000_000.5, 1.0], [500_001.0, 4_000_002.25, 2.0]];
+        let p = prepare(&pts, DuplicatePolicy::First).unwrap();
+        assert_eq!(p.origin, [500_000.125, 4_000_000.5]);
+        assert_eq!(p.xy[3], [0.875, 1.75]);
+    }
+
+    #[test]
+    fn names_the_bad_point() {
+        let pts = [[0.0, 0.0, 0.0], [1.0, f64::NAN, 0.0]];
+        match prepare(&pts, DuplicatePolicy::First) {
+            Err(Error::NonFinite { index: 1, .. }) => {}
+            other => panic!("{other:?}"),
+        }
+    }
+}

@@ -1,0 +1,466 @@
+//! Every geometric decision of sweeptin, in one place.
+//!
+//! All orientation and in-circle signs come from [`robust`]'s adaptive-precision predicates
+//! (Shewchuk's), so they are exact for every finite input in the supported range. Nothing else in
+//! the crate compares areas or circles in floating point to make a decision; floating point is used
+//! only for heuristics that cannot change the result (which triangle to try first).
+//!
+//! # The two artificial points
+//!
+//! The sweep (Domiter & Žalik 2008, section 3.3) starts from two artificial points `P-1` and `P-2`
+//! below the data. Here they are *symbolic*: `P-1 = (-M, -M²)` and `P-2 = (+M, -M²)` in the local
+//! frame, with `M → ∞`. Every predicate that involves them is the sign of the leading term of its
+//! polynomial in `M`, which reduces to exact comparisons and real orientations:
+//!
+//! * `orient(P-1, a, b) = sign(a.x - b.x)`, ties broken by `sign(b.y - a.y)`;
+//! * `orient(P-2, a, b) = sign(a.x - b.x)`, ties broken by `sign(a.y - b.y)`;
+//! * `orient(P-1, P-2, a) = +1`;
+//! * `incircle(P, b, c, d) = orient(b, c, d)`, or, when `b, c, d` are collinear, *inside* exactly
+//!   when `d` lies strictly between `b` and `c`;
+//! * `incircle(P-1, P-2, c, d) = sign(c.y - d.y)`, then `sign(|c.x| - |d.x|)`.
+//!
+//! Because the artificial points are infinitely far away, no circle through three real points
+//! contains them, so the real triangles of the Delaunay triangulation of the data plus `P-1` and `P-2`
+//! are exactly the Delaunay triangulation of the data: removing the artificial triangles at the end
+//! leaves the convex hull closed, with no repair step (the paper's section 3.5 "adding the bordering
+//! triangles" is not needed). The placement also does not depend on the data's bounding box, which
+//! the streaming sweep does not know in advance.
+//!
+//! # Tie-breaking rule (cocircular points)
+//!
+//! Gridded lidar is full of four cocircular points, where the Delaunay triangulation is not unique.
+//! sweeptin resolves every such tie by *symbolic perturbation of the lifting map*: each point's lifted
+//! height `x² + y²` is raised by `ε^k`, where the point that comes **later in sweep order** (larger
+//! `y`, then larger `x`) gets the larger raise. When four real points are exactly cocircular, the
+//! in-circle sign is therefore the sign of the cofactor of the latest of the four points, which is
+//! one exact [`orient`] of the other three (never zero: three distinct points on a circle are never
+//! collinear). The triangulation is then the unique Delaunay triangulation of the perturbed points; it
+//! depends only on the set of input positions, never on input order, memory budget, thread count or
+//! hash capacity. A consequence used by streaming: a later point that lies exactly on a circumcircle is
+//! always *outside* it.
+//!
+//! # Supported coordinates
+//!
+//! Shewchuk's predicates are exact unless an intermediate product underflows or overflows. Input
+//! coordinates (after the local origin is removed) must therefore be finite, at most [`MAX_COORD`] in
+//! magnitude, and either zero or at least [`MIN_NONZERO_COORD`] in magnitude; [`check_coord`] enforces
+//! this once, at input.
+
+use robust::Coord;
+use std::cmp::Ordering;
+
+/// Largest coordinate magnitude accepted (2^52 ≈ 4.5e15; in-circle terms stay far from overflow).
+pub const MAX_COORD: f64 = 4_503_599_627_370_496.0;
+/// Smallest non-zero coordinate magnitude accepted (keeps every product of the adaptive predicates
+/// clear of underflow).
+pub const MIN_NONZERO_COORD: f64 = 1e-30;
+
+/// Id of the artificial point `P-1` (far below, to the left).
+pub const P_LEFT: u32 = 0;
+/// Id of the artificial point `P-2` (far below, to the right).
+pub const P_RIGHT: u32 = 1;
+/// Ids below this are artificial.
+pub const FIRST_REAL: u32 = 2;
+
+/// Is `v` one of the two artificial points?
+#[inline(always)]
+pub fn is_artificial(v: u32) -> bool {
+    v < FIRST_REAL
+}
+
+/// Is a coordinate value in the range where the predicates are exact?
+#[inline]
+pub fn check_coord(v: f64) -> bool {
+    let a = v.abs();
+    a <= MAX_COORD && (a == 0.0 || a >= MIN_NONZERO_COORD)
+}
+
+/// Orientation of an ordered triple of points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Orientation {
+    /// The triple turns right.
+    Clockwise,
+    /// The three points are on one line.
+    Collinear,
+    /// The triple turns left.
+    CounterClockwise,
+}
+
+impl Orientation {
+    #[inline(always)]
+    fn from_f64(d: f64) -> Self {
+        if d > 0.0 {
+            Orientation::CounterClockwise
+        } else if d < 0.0 {
+            Orientation::Clockwise
+        } else {
+            Orientation::Collinear
+        }
+    }
+
+    #[inline(always)]
+    fn from_ordering(o: Ordering) -> Self {
+        match o {
+            Ordering::Greater => Orientation::CounterClockwise,
+            Ordering::Less => Orientation::Clockwise,
+            Ordering::Equal => Orientation::Collinear,
+        }
+    }
+
+    /// The orientation of the reversed triple.
+    #[inline(always)]
+    pub fn reversed(self) -> Self {
+        match self {
+            Orientation::Clockwise => Orientation::CounterClockwise,
+            Orientation::Collinear => Orientation::Collinear,
+            Orientation::CounterClockwise => Orientation::Clockwise,
+        }
+    }
+
+    /// Is the triple a left turn?
+    #[inline(always)]
+    pub fn is_ccw(self) -> bool {
+        self == Orientation::CounterClockwise
+    }
+}
+
+/// Where a point lies relative to a circle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CircleSide {
+    /// Strictly inside.
+    Inside,
+    /// Exactly on the circle (only from the unperturbed [`incircle_exact`]).
+    On,
+    /// Strictly outside.
+    Outside,
+}
+
+#[inline(always)]
+fn c(p: [f64; 2]) -> Coord<f64> {
+    Coord { x: p[0], y: p[1] }
+}
+
+/// Exact orientation of three real points: counter-clockwise when `c` is left of `a → b`.
+#[inline(always)]
+pub fn orient(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> Orientation {
+    Orientation::from_f64(robust::orient2d(c(a), c(b), c(p)))
+}
+
+/// Exact, unperturbed in-circle test: where `d` lies relative to the circle through the
+/// counter-clockwise triangle `a, b, c`.
+#[inline(always)]
+pub fn incircle_exact(a: [f64; 2], b: [f64; 2], p: [f64; 2], d: [f64; 2]) -> CircleSide {
+    let r = robust::incircle(c(a), c(b), c(p), c(d));
+    if r > 0.0 {
+        CircleSide::Inside
+    } else if r < 0.0 {
+        CircleSide::Outside
+    } else {
+        CircleSide::On
+    }
+}
+
+/// Sweep order: by `y`, then by `x`.
+#[inline(always)]
+pub fn sweep_cmp(a: [f64; 2], b: [f64; 2]) -> Ordering {
+    a[1].total_cmp(&b[1]).then(a[0].total_cmp(&b[0]))
+}
+
+/// Perturbed in-circle test of four distinct real points, `a, b, c` counter-clockwise.
+/// Never returns [`CircleSide::On`]; ties follow the module's documented rule.
+#[inline(always)]
+pub fn incircle(a: [f64; 2], b: [f64; 2], p: [f64; 2], d: [f64; 2]) -> CircleSide {
+    let r = robust::incircle(c(a), c(b), c(p), c(d));
+    if r > 0.0 {
+        CircleSide::Inside
+    } else if r < 0.0 {
+        CircleSide::Outside
+    } else {
+        incircle_tie(a, b, p, d)
+    }
+}
+
+#[cold]
+#[inline(never)]
+fn incircle_tie(a: [f64; 2], b: [f64; 2], p: [f64; 2], d: [f64; 2]) -> CircleSide {
+    // The latest point in sweep order carries the dominant perturbation of its lifted height.
+    // The in-circle determinant's derivative with respect to each lifted height is:
+    //   a: orient(b, c, d)   b: orient(c, a, d)   c: orient(a, b, d)   d: -orient(a, b, c).
+    let pts = [a, b, p, d];
+    let mut latest = 0;
+    for i in 1..4 {
+        if sweep_cmp(pts[i], pts[latest]) == Ordering::Greater {
+            latest = i;
+        }
+    }
+    let o = match latest {
+        0 => orient(b, p, d),
+        1 => orient(p, a, d),
+        2 => orient(a, b, d),
+        _ => orient(a, b, p).reversed(),
+    };
+    match o {
+        Orientation::CounterClockwise => CircleSide::Inside,
+        Orientation::Clockwise => CircleSide::Outside,
+        // Only reachable for degenerate input (a repeated point or a collinear "triangle").
+        Orientation::Collinear => CircleSide::Outside,
+    }
+}
+
+/// Orientation of three vertices given by id, any of which may be artificial.
+#[inline(always)]
+pub fn orient_ids(pts: &[[f64; 2]], a: u32, b: u32, p: u32) -> Orientation {
+    if a >= FIRST_REAL && b >= FIRST_REAL && p >= FIRST_REAL {
+        return orient(pts[a as usize], pts[b as usize], pts[p as usize]);
+    }
+    orient_symbolic(pts, a, b, p)
+}
+
+#[inline(never)]
+fn orient_symbolic(pts: &[[f64; 2]], a: u32, b: u32, p: u32) -> Orientation {
+    // Rotate (a cyclic shift keeps the sign) until an artificial point is first.
+    let (a, b, p) = if is_artificial(a) {
+        (a, b, p)
+    } else if is_artificial(b) {
+        (b, p, a)
+    } else {
+        (p, a, b)
+    };
+    if is_artificial(b) {
+        // (P, P', x): P-1 → P-2 is the bottom edge, every real point is above it.
+        return if a == b {
+            Orientation::Collinear
+        } else if a == P_LEFT {
+            Orientation::CounterClockwise
+        } else {
+            Orientation::Clockwise
+        };
+    }
+    if is_artificial(p) {
+        // (P, x, P') is a rotation of (P', P, x).
+        return if a == p {
+            Orientation::Collinear
+        } else if p == P_LEFT {
+            Orientation::CounterClockwise
+        } else {
+            Orientation::Clockwise
+        };
+    }
+    let (u, v) = (pts[b as usize], pts[p as usize]);
+    let by_x = u[0].total_cmp(&v[0]);
+    let o = if by_x != Ordering::Equal {
+        by_x
+    } else if a == P_LEFT {
+        v[1].total_cmp(&u[1])
+    } else {
+        u[1].total_cmp(&v[1])
+    };
+    Orientation::from_ordering(o)
+}
+
+/// Perturbed in-circle test of four vertices given by id (`a, b, c` counter-clockwise), any of which
+/// may be artificial. Never returns [`CircleSide::On`].
+#[inline(always)]
+pub fn incircle_ids(pts: &[[f64; 2]], a: u32, b: u32, p: u32, d: u32) -> CircleSide {
+    if a >= FIRST_REAL && b >= FIRST_REAL && p >= FIRST_REAL && d >= FIRST_REAL {
+        return incircle(
+            pts[a as usize],
+            pts[b as usize],
+            pts[p as usize],
+            pts[d as usize],
+        );
+    }
+    incircle_symbolic(pts, [a, b, p, d])
+}
+
+#[inline(never)]
+fn incircle_symbolic(pts: &[[f64; 2]], ids: [u32; 4]) -> CircleSide {
+    // Move the artificial rows of the 4x4 lifted determinant to the top, keeping the others in
+    // order; every transposition flips the determinant's sign.
+    let mut order = [0u32; 4];
+    let mut n = 0;
+    let mut flips = 0;
+    for (i, &v) in ids.iter().enumerate() {
+        if is_artificial(v) {
+            // It jumps over the (i - n) real rows before it.
+            flips += i - n;
+            order[n] = v;
+            n += 1;
+        }
+    }
+    let n_art = n;
+    for &v in ids.iter() {
+        if !is_artificial(v) {
+            order[n] = v;
+            n += 1;
+        }
+    }
+    let side = match n_art {
+        1 => {
+            // det = M⁴·orient(b, c, d) + lower-order terms.
+            let (b, p, d) = (
+                pts[order[1] as usize],
+                pts[order[2] as usize],
+                pts[order[3] as usize],
+            );
+            match orient(b, p, d) {
+                Orientation::CounterClockwise => 1,
+                Orientation::Clockwise => -1,
+                Orientation::Collinear => {
+                    // The circle through P, b, c meets their line exactly at b and c.
+                    if strictly_between(b, p, d) { 1 } else { -1 }
+                }
+            }
+        }
+        2 => {
+            let (p, d) = (pts[order[2] as usize], pts[order[3] as usize]);
+            // Rows (P-1, P-2, c, d): det = 2M⁵(c.y - d.y) + 2M³(c.x² - d.x²) + ...
+            let mut s = match p[1].total_cmp(&d[1]) {
+                Ordering::Greater => 1,
+                Ordering::Less => -1,
+                Ordering::Equal => match p[0].abs().total_cmp(&d[0].abs()) {
+                    Ordering::Greater => 1,
+                    Ordering::Less => -1,
+                    // Genuinely cocircular for every M: the later point dominates. Its lifted
+                    // height's cofactor is +1 for row c and -1 for row d.
+                    Ordering::Equal => {
+                        if sweep_cmp(p, d) == Ordering::Greater {
+                            1
+                        } else {
+                            -1
+                        }
+                    }
+                },
+            };
+            if order[0] == P_RIGHT {
+                s = -s;
+            }
+            s
+        }
+        _ => -1,
+    };
+    let side = if flips % 2 == 1 { -side } else { side };
+    if side > 0 {
+        CircleSide::Inside
+    } else {
+        CircleSide::Outside
+    }
+}
+
+/// Is `d` strictly between `b` and `c`, all three on one line?
+#[inline]
+fn strictly_between(b: [f64; 2], p: [f64; 2], d: [f64; 2]) -> bool {
+    let k = if b[0] != p[0] { 0 } else { 1 };
+    let (lo, hi) = if b[k] < p[k] { (b[k], p[k]) } else { (p[k], b[k]) };
+    lo < d[k] && d[k] < hi
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(real: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let mut t = vec![[f64::NAN; 2]; 2];
+        t.extend_from_slice(real);
+        t
+    }
+
+    #[test]
+    fn real_orientation() {
+        assert!(orient([0., 0.], [1., 0.], [0., 1.]).is_ccw());
+        assert_eq!(orient([0., 0.], [1., 1.], [2., 2.]), Orientation::Collinear);
+        assert_eq!(orient([0., 0.], [0., 1.], [1., 0.]), Orientation::Clockwise);
+    }
+
+    #[test]
+    fn artificial_orientation_matches_large_finite_points() {
+        // Compare the symbolic rules with actual far-away points in exact arithmetic on small
+        // integer data, where M = 1e6 is already "large enough".
+        let m = 1.0e6;
+        let far = [[-m, -m * m], [m, -m * m]];
+        let real = [[0., 0.], [1., 0.], [0., 1.], [1., 1.], [-2., 3.], [0., 5.], [3., 3.]];
+        let pts = table(&real);
+        let coord = |v: u32| {
+            if v < 2 {
+                far[v as usize]
+            } else {
+                real[(v - 2) as usize]
+            }
+        };
+        let n = real.len() as u32 + 2;
+        for a in 0..n {
+            for b in 0..n {
+                for p in 0..n {
+                    if a == b || b == p || a == p {
+                        continue;
+                    }
+                    let want = orient(coord(a), coord(b), coord(p));
+                    assert_eq!(orient_ids(&pts, a, b, p), want, "{a} {b} {p}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn artificial_incircle_matches_large_finite_points() {
+        let m = 1.0e5;
+        let far = [[-m, -m * m], [m, -m * m]];
+        let real = [[0., 0.], [1., 0.], [0., 1.], [2., 1.], [-2., 3.], [0., 5.], [3., 3.]];
+        let pts = table(&real);
+        let coord = |v: u32| {
+            if v < 2 {
+                far[v as usize]
+            } else {
+                real[(v - 2) as usize]
+            }
+        };
+        let n = real.len() as u32 + 2;
+        let mut checked = 0;
+        for a in 0..n {
+            for b in 0..n {
+                for p in 0..n {
+                    for d in 0..n {
+                        let ids = [a, b, p, d];
+                        if (0..4).any(|i| (i + 1..4).any(|j| ids[i] == ids[j])) {
+                            continue;
+                        }
+                        if !orient(coord(a), coord(b), coord(p)).is_ccw() {
+                            continue;
+                        }
+                        let want = incircle_exact(coord(a), coord(b), coord(p), coord(d));
+                        if want == CircleSide::On {
+                            continue;
+                        }
+                        assert_eq!(incircle_ids(&pts, a, b, p, d), want, "{ids:?}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000);
+    }
+
+    #[test]
+    fn cocircular_tie_is_decided_by_latest_point() {
+        // Unit square: cocircular. Latest point in sweep order is (1, 1).
+        let (a, b, p, d) = ([0., 0.], [1., 0.], [1., 1.], [0., 1.]);
+        assert_eq!(incircle_exact(a, b, p, d), CircleSide::On);
+        // d = (0,1) is not the latest; c = (1,1) is: sign = orient(a, b, d) > 0 → inside.
+        assert_eq!(incircle(a, b, p, d), CircleSide::Inside);
+        // Same quadrilateral, other diagonal: triangle (a, b, d), query c = latest → outside.
+        assert_eq!(incircle(a, b, d, p), CircleSide::Outside);
+        // The rule is invariant under rotating the triangle's vertices.
+        assert_eq!(incircle(b, p, a, d), CircleSide::Inside);
+        assert_eq!(incircle(p, a, b, d), CircleSide::Inside);
+    }
+
+    #[test]
+    fn coordinate_range() {
+        assert!(check_coord(0.0));
+        assert!(check_coord(4.0e6));
+        assert!(check_coord(-1e-9));
+        assert!(!check_coord(1e-40));
+        assert!(!check_coord(1e20));
+        assert!(!check_coord(f64::NAN));
+    }
+}

@@ -1,0 +1,278 @@
+//! The advancing front: an x-monotone polyline from `P-1` to `P-2` over the triangulated region
+//! (Domiter & Žalik 2008, section 3.4.1), as a doubly linked list of nodes in a pool, with a bucket
+//! index over `x` to find the segment under a new point.
+//!
+//! The front is strictly increasing in `x` (`P-1` sits at `x = -∞`, `P-2` at `+∞`), so the segment
+//! under a point is unique: the bucket index only decides where the search starts, never what it
+//! finds, and the result does not depend on the number of buckets.
+
+use super::mesh::{EdgeId, VertexId};
+
+/// Id of a front node.
+pub type NodeId = u32;
+const NIL: NodeId = u32::MAX;
+
+/// One vertex of the front and the segment to its right.
+#[derive(Clone, Copy, Debug)]
+pub struct Node {
+    /// The vertex's x (−∞ for `P-1`, +∞ for `P-2`).
+    pub x: f64,
+    /// The vertex.
+    pub v: VertexId,
+    /// Next node to the right.
+    pub next: NodeId,
+    /// Previous node to the left.
+    pub prev: NodeId,
+    /// Boundary half-edge under the segment `self → next` (it runs right to left).
+    pub edge: EdgeId,
+}
+
+/// The advancing front.
+#[derive(Debug, Clone)]
+pub struct Front {
+    nodes: Vec<Node>,
+    free: Vec<NodeId>,
+    len: usize,
+    peak_len: usize,
+    /// Node of `P-1`.
+    pub head: NodeId,
+    /// Node of `P-2`.
+    pub tail: NodeId,
+    buckets: Vec<NodeId>,
+    x0: f64,
+    width: f64,
+    inv_w: f64,
+}
+
+impl Front {
+    /// A front `P-1 → v → P-2` over the first triangle, whose half-edges under the two segments
+    /// are `left_edge` (under `P-1 → v`) and `right_edge` (under `v → P-2`). `x_range` is a hint for
+    /// the bucket index (the data's x extent in the local frame).
+    pub fn new(
+        p_left: VertexId,
+        p_right: VertexId,
+        v: VertexId,
+        x: f64,
+        left_edge: EdgeId,
+        right_edge: EdgeId,
+        x_range: (f64, f64),
+    ) -> Self {
+        let nodes = vec![
+            Node {
+                x: f64::NEG_INFINITY,
+                v: p_left,
+                next: 2,
+                prev: NIL,
+                edge: left_edge,
+            },
+            Node {
+                x: f64::INFINITY,
+                v: p_right,
+                next: NIL,
+                prev: 2,
+                edge: EdgeId(u32::MAX),
+            },
+            Node {
+                x,
+                v,
+                next: 1,
+                prev: 0,
+                edge: right_edge,
+            },
+        ];
+        let (lo, hi) = x_range;
+        let width = if hi > lo && (hi - lo).is_finite() {
+            hi - lo
+        } else {
+            1.0
+        };
+        let mut f = Front {
+            nodes,
+            free: Vec::new(),
+            len: 3,
+            peak_len: 3,
+            head: 0,
+            tail: 1,
+            buckets: Vec::new(),
+            x0: lo,
+            width,
+            inv_w: 0.0,
+        };
+        f.rebuild_buckets(64);
+        f
+    }
+
+    /// The node with id `n`.
+    #[inline(always)]
+    pub fn node(&self, n: NodeId) -> &Node {
+        &self.nodes[n as usize]
+    }
+
+    /// Next node to the right of `n`.
+    #[inline(always)]
+    pub fn next(&self, n: NodeId) -> NodeId {
+        self.nodes[n as usize].next
+    }
+
+    /// Previous node to the left of `n`.
+    #[inline(always)]
+    pub fn prev(&self, n: NodeId) -> NodeId {
+        self.nodes[n as usize].prev
+    }
+
+    /// Vertex of node `n`.
+    #[inline(always)]
+    pub fn vertex(&self, n: NodeId) -> VertexId {
+        self.nodes[n as usize].v
+    }
+
+    /// Boundary half-edge under the segment right of `n`.
+    #[inline(always)]
+    pub fn edge(&self, n: NodeId) -> EdgeId {
+        self.nodes[n as usize].edge
+    }
+
+    /// Sets the boundary half-edge under the segment right of `n`.
+    #[inline(always)]
+    pub fn set_edge(&mut self, n: NodeId, e: EdgeId) {
+        self.nodes[n as usize].edge = e;
+    }
+
+    /// Number of nodes, `P-1` and `P-2` included.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// The front always holds at least `P-1` and `P-2`.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Largest number of nodes the front ever had.
+    pub fn peak_len(&self) -> usize {
+        self.peak_len
+    }
+
+    #[inline(always)]
+    fn key(&self, x: f64) -> usize {
+        let k = (x - self.x0) * self.inv_w;
+        // Saturating float→int casts clamp NaN/negative to 0 and large values to usize::MAX.
+        (k as usize).min(self.buckets.len() - 1)
+    }
+
+    fn rebuild_buckets(&mut self, count: usize) {
+        self.buckets.clear();
+        self.buckets.resize(count, NIL);
+        self.inv_w = count as f64 / self.width;
+        let mut n = self.next(self.head);
+        while n != self.tail {
+            let k = self.key(self.nodes[n as usize].x);
+            if self.buckets[k] == NIL {
+                self.buckets[k] = n;
+            }
+            n = self.next(n);
+        }
+    }
+
+    /// The node `n` with `n.x <= x < next(n).x`: the left end of the segment under `x`.
+    #[inline]
+    pub fn locate(&self, x: f64) -> NodeId {
+        let mut k = self.key(x);
+        let mut n = self.buckets[k];
+        while n == NIL {
+            if k == 0 {
+                n = self.head;
+                break;
+            }
+            k -= 1;
+            n = self.buckets[k];
+        }
+        let nodes = &self.nodes;
+        if nodes[n as usize].x <= x {
+            loop {
+                let m = nodes[n as usize].next;
+                if nodes[m as usize].x > x {
+                    return n;
+                }
+                n = m;
+            }
+        } else {
+            loop {
+                n = nodes[n as usize].prev;
+                if nodes[n as usize].x <= x {
+                    return n;
+                }
+            }
+        }
+    }
+
+    /// Inserts vertex `v` at `x` right after node `left`; returns the new node.
+    pub fn insert_after(&mut self, left: NodeId, v: VertexId, x: f64) -> NodeId {
+        let right = self.next(left);
+        let node = Node {
+            x,
+            v,
+            next: right,
+            prev: left,
+            edge: EdgeId(u32::MAX),
+        };
+        let n = match self.free.pop() {
+            Some(n) => {
+                self.nodes[n as usize] = node;
+                n
+            }
+            None => {
+                self.nodes.push(node);
+                (self.nodes.len() - 1) as NodeId
+            }
+        };
+        self.nodes[left as usize].next = n;
+        self.nodes[right as usize].prev = n;
+        self.len += 1;
+        if self.len > self.peak_len {
+            self.peak_len = self.len;
+            if self.len > 2 * self.buckets.len() {
+                self.rebuild_buckets(2 * self.buckets.len());
+            }
+        }
+        let k = self.key(x);
+        self.buckets[k] = n;
+        n
+    }
+
+    /// Removes node `n` (never `P-1` or `P-2`).
+    pub fn remove(&mut self, n: NodeId) {
+        debug_assert!(n != self.head && n != self.tail);
+        let Node { prev, next, x, .. } = self.nodes[n as usize];
+        self.nodes[prev as usize].next = next;
+        self.nodes[next as usize].prev = prev;
+        let k = self.key(x);
+        if self.buckets[k] == n {
+            // Invariant: a bucket holds NIL or a live node whose x falls in that bucket.
+            let px = self.nodes[prev as usize].x;
+            self.buckets[k] = if prev != self.head && self.key(px) == k {
+                prev
+            } else {
+                NIL
+            };
+        }
+        self.nodes[n as usize].next = NIL;
+        self.nodes[n as usize].prev = NIL;
+        self.free.push(n);
+        self.len -= 1;
+    }
+
+    /// Iterates the nodes from `P-1` to `P-2`.
+    pub fn iter(&self) -> impl Iterator<Item = NodeId> + '_ {
+        let mut n = self.head;
+        std::iter::from_fn(move || {
+            if n == NIL {
+                return None;
+            }
+            let cur = n;
+            n = self.next(n);
+            Some(cur)
+        })
+    }
+}

@@ -1,0 +1,175 @@
+//! The two heuristics of Domiter & Žalik (section 3.4.1) that keep the advancing front short and
+//! smooth, and the closing of the front to the convex hull.
+//!
+//! The heuristics only choose *which* valid triangle to add next; each candidate is checked with the
+//! exact [`orient`](crate::predicates::orient_ids) predicate and legalised, so the floating-point
+//! angles used here can never change the final triangulation, only how fast it is reached.
+
+use super::Sweep;
+use super::front::NodeId;
+use crate::predicates::is_artificial;
+
+/// Walk direction along the front.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Dir {
+    Left,
+    Right,
+}
+
+impl Sweep {
+    #[inline(always)]
+    fn step_dir(&self, n: NodeId, d: Dir) -> NodeId {
+        match d {
+            Dir::Left => self.front.prev(n),
+            Dir::Right => self.front.next(n),
+        }
+    }
+
+    #[inline(always)]
+    fn xy(&self, n: NodeId) -> [f64; 2] {
+        self.pts[self.front.vertex(n).0 as usize]
+    }
+
+    #[inline(always)]
+    fn is_real(&self, n: NodeId) -> bool {
+        !is_artificial(self.front.vertex(n).0)
+    }
+
+    /// Can node `n` be covered by the triangle (prev, n, next)? Exact: `n` strictly below the
+    /// segment prev → next, all three real.
+    #[inline]
+    fn fillable(&self, n: NodeId) -> bool {
+        if !self.is_real(n) {
+            return false;
+        }
+        let (p, q) = (self.front.prev(n), self.front.next(n));
+        self.is_real(p)
+            && self.is_real(q)
+            && self
+                .orient(
+                    self.front.vertex(p),
+                    self.front.vertex(n),
+                    self.front.vertex(q),
+                )
+                .is_ccw()
+    }
+
+    /// Is the hole at `n` (angle between its two front segments) at most π/2?
+    #[inline]
+    fn hole_is_narrow(&self, n: NodeId) -> bool {
+        let (a, m, b) = (
+            self.xy(self.front.prev(n)),
+            self.xy(n),
+            self.xy(self.front.next(n)),
+        );
+        (a[0] - m[0]) * (b[0] - m[0]) + (a[1] - m[1]) * (b[1] - m[1]) >= 0.0
+    }
+
+    /// After inserting the point at node `n`: fill the narrow holes next to it on both sides, then
+    /// the basins.
+    pub(crate) fn fill_holes(&mut self, n: NodeId) {
+        for d in [Dir::Right, Dir::Left] {
+            loop {
+                let m = self.step_dir(n, d);
+                if !self.fillable(m) || !self.hole_is_narrow(m) {
+                    break;
+                }
+                self.stats.fills += 1;
+                self.fill(m);
+            }
+        }
+        for d in [Dir::Right, Dir::Left] {
+            if self.is_basin(n, d) {
+                self.fill_basin(n, d);
+            }
+        }
+    }
+
+    /// Does the front drop away steeply (more than 45°) from node `n` in direction `d`?
+    fn is_basin(&self, n: NodeId, d: Dir) -> bool {
+        let m = self.step_dir(n, d);
+        if !self.is_real(m) {
+            return false;
+        }
+        let k = self.step_dir(m, d);
+        if !self.is_real(k) {
+            return false;
+        }
+        let (p, q) = (self.xy(n), self.xy(k));
+        p[1] - q[1] > (q[0] - p[0]).abs()
+    }
+
+    /// Fills the basin next to node `n` in direction `d`, from its bottom up, until what is left is
+    /// shallower than it is wide.
+    fn fill_basin(&mut self, n: NodeId, d: Dir) {
+        let near = self.step_dir(n, d);
+        // Walk down to the bottom, then up to the far rim.
+        let mut bottom = near;
+        loop {
+            let m = self.step_dir(bottom, d);
+            if !self.is_real(m) || self.xy(m)[1] > self.xy(bottom)[1] {
+                break;
+            }
+            bottom = m;
+        }
+        if bottom == near {
+            return;
+        }
+        let mut far = bottom;
+        loop {
+            let m = self.step_dir(far, d);
+            if !self.is_real(m) || self.xy(m)[1] <= self.xy(far)[1] {
+                break;
+            }
+            far = m;
+        }
+        if far == bottom {
+            return;
+        }
+        let rim = self.xy(n)[1].min(self.xy(far)[1]);
+        let width = (self.xy(far)[0] - self.xy(n)[0]).abs();
+        let mut node = bottom;
+        loop {
+            if width > rim - self.xy(node)[1] || !self.fillable(node) {
+                return;
+            }
+            let (p, q) = (self.front.prev(node), self.front.next(node));
+            self.stats.fills += 1;
+            self.fill(node);
+            let (p_rim, q_rim) = match d {
+                Dir::Right => (p == n, q == far),
+                Dir::Left => (q == n, p == far),
+            };
+            node = match (p_rim, q_rim) {
+                (true, true) => return,
+                (true, false) => q,
+                (false, true) => p,
+                (false, false) => {
+                    if self.xy(p)[1] < self.xy(q)[1] {
+                        p
+                    } else {
+                        q
+                    }
+                }
+            };
+        }
+    }
+
+    /// Closes the front to its upper convex hull (Graham scan from left to right, exact). With the
+    /// symbolic artificial points the result is the Delaunay triangulation of the data plus
+    /// `P-1`, `P-2`, whose real triangles are the data's Delaunay triangulation.
+    pub(crate) fn close_hull(&mut self) {
+        let (head, tail) = (self.front.head, self.front.tail);
+        let mut n = self.front.next(head);
+        while n != tail {
+            let (p, q) = (self.front.prev(n), self.front.next(n));
+            if self.fillable(n) {
+                self.stats.hull_fills += 1;
+                self.fill(n);
+                n = if p == head { q } else { p };
+            } else {
+                n = q;
+            }
+        }
+    }
+}

@@ -1,0 +1,255 @@
+//! The sweep-line Delaunay triangulation (Domiter & Žalik 2008, section 3).
+//!
+//! Points are inserted in sweep order (by `y`, then `x`). Each one is projected vertically onto the
+//! advancing front ([`front`]) and connected to the segment it hits (the *middle case*), or, when it
+//! lies exactly above a front vertex, to both segments around that vertex (the *left case*). Every
+//! new triangle is legalised at once by Lawson flips with an explicit stack ([`legalize`]). Two
+//! heuristics keep the front smooth ([`heuristics`]): holes next to the new point whose angle is
+//! below π/2 are filled, and deep basins are filled. When all points are in, the front is closed to
+//! its convex hull and the triangles that use an artificial point are dropped.
+//!
+//! The sweep is steppable: [`Sweep::new`] → [`Sweep::step`] … → [`Sweep::finish`], and
+//! [`Sweep::check`] verifies every invariant of the current state (used by tests and fuzzing).
+
+pub mod check;
+pub mod front;
+pub mod heuristics;
+pub mod legalize;
+pub mod mesh;
+
+use crate::error::{Error, Result};
+use crate::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
+use front::{Front, NodeId};
+use mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, VertexId};
+
+/// Counters of what the sweep did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SweepStats {
+    /// Points inserted.
+    pub points: u64,
+    /// Points that hit a front vertex exactly (the paper's left case).
+    pub left_cases: u64,
+    /// Lawson edge flips.
+    pub flips: u64,
+    /// Triangles added by the hole and basin heuristics.
+    pub fills: u64,
+    /// Triangles added when closing the front to the convex hull.
+    pub hull_fills: u64,
+    /// Largest number of front nodes.
+    pub peak_front: u64,
+}
+
+/// A sweep in progress over a vertex table in sweep order.
+#[derive(Debug, Clone)]
+pub struct Sweep {
+    pts: Vec<[f64; 2]>,
+    next: u32,
+    mesh: Mesh,
+    front: Front,
+    stack: Vec<EdgeId>,
+    stats: SweepStats,
+}
+
+impl Sweep {
+    /// Starts a sweep over `pts`: two placeholder rows for the artificial points, then at least one
+    /// real point, all distinct and sorted by `(y, x)` (as produced by [`crate::points::prepare`]).
+    ///
+    /// # Errors
+    /// [`Error::TooFewPoints`] without any real point; [`Error::OutOfOrder`] if the points are not
+    /// strictly increasing in sweep order.
+    pub fn new(pts: Vec<[f64; 2]>) -> Result<Self> {
+        let n = pts.len().saturating_sub(FIRST_REAL as usize);
+        if n == 0 {
+            return Err(Error::TooFewPoints {
+                distinct: 0,
+                total: 0,
+            });
+        }
+        let real = &pts[FIRST_REAL as usize..];
+        if let Some(i) = real
+            .windows(2)
+            .position(|w| crate::predicates::sweep_cmp(w[0], w[1]) != std::cmp::Ordering::Less)
+        {
+            return Err(Error::OutOfOrder { index: i as u64 + 1 });
+        }
+        let (lo, hi) = real.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p[0]), hi.max(p[0]))
+        });
+        // A Delaunay triangulation of n points (plus 2) has at most 2(n + 2) - 5 triangles.
+        let mut mesh = Mesh::with_capacity(2 * n + 4);
+        let first = VertexId(FIRST_REAL);
+        let e = mesh.add_triangle(VertexId(P_LEFT), VertexId(P_RIGHT), first);
+        // Half-edges: e: P-1→P-2 (bottom), e+1: P-2→v (under v→P-2), e+2: v→P-1 (under P-1→v).
+        let x = pts[FIRST_REAL as usize][0];
+        let front = Front::new(
+            VertexId(P_LEFT),
+            VertexId(P_RIGHT),
+            first,
+            x,
+            e.prev(),
+            e.next(),
+            (lo, hi),
+        );
+        mesh.link[e.prev().idx()] = BOUNDARY | front.head;
+        mesh.link[e.next().idx()] = BOUNDARY | front.next(front.head);
+        Ok(Sweep {
+            pts,
+            next: FIRST_REAL + 1,
+            mesh,
+            front,
+            stack: Vec::with_capacity(64),
+            stats: SweepStats {
+                points: 1,
+                ..SweepStats::default()
+            },
+        })
+    }
+
+    /// Inserts the next point; returns `false` when all points are in.
+    pub fn step(&mut self) -> bool {
+        if self.next as usize >= self.pts.len() {
+            return false;
+        }
+        let v = VertexId(self.next);
+        self.next += 1;
+        self.insert(v);
+        true
+    }
+
+    /// Inserts all remaining points.
+    pub fn run(&mut self) {
+        while (self.next as usize) < self.pts.len() {
+            let v = VertexId(self.next);
+            self.next += 1;
+            self.insert(v);
+        }
+    }
+
+    /// The vertex table (local frame; rows 0 and 1 are placeholders for `P-1`, `P-2`).
+    pub fn points(&self) -> &[[f64; 2]] {
+        &self.pts
+    }
+
+    /// The triangles so far, artificial ones included.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The advancing front.
+    pub fn front(&self) -> &Front {
+        &self.front
+    }
+
+    /// What the sweep has done so far.
+    pub fn stats(&self) -> SweepStats {
+        let mut s = self.stats;
+        s.peak_front = self.front.peak_len() as u64;
+        s
+    }
+
+    /// Point event: insert vertex `v`, which lies above or on the front and after every vertex
+    /// inserted so far in sweep order.
+    fn insert(&mut self, v: VertexId) {
+        self.stats.points += 1;
+        let x = self.pts[v.0 as usize][0];
+        let l = self.front.locate(x);
+        let n = self.attach(l, v, x);
+        if self.front.node(l).x == x {
+            // Left case: `v` is straight above front vertex `l`; cover it too.
+            self.stats.left_cases += 1;
+            self.fill(l);
+        }
+        self.fill_holes(n);
+    }
+
+    /// Middle case: triangle (L, R, v) on the front segment right of node `l`; returns v's node.
+    fn attach(&mut self, l: NodeId, v: VertexId, x: f64) -> NodeId {
+        let r = self.front.next(l);
+        let (a, b) = (self.front.vertex(l), self.front.vertex(r));
+        let below = self.front.edge(l);
+        let h = self.mesh.add_triangle(a, b, v);
+        self.mesh.pair(h, below, self.mesh.is_constrained(below));
+        let n = self.front.insert_after(l, v, x);
+        self.set_front_edge(l, h.prev());
+        self.set_front_edge(n, h.next());
+        self.legalize_from_apex(h);
+        n
+    }
+
+    /// Covers front node `n` with the triangle (prev, n, next) and removes it from the front.
+    /// `n` must lie strictly below the segment prev → next.
+    fn fill(&mut self, n: NodeId) {
+        let (p, q) = (self.front.prev(n), self.front.next(n));
+        let (a, b, c) = (
+            self.front.vertex(p),
+            self.front.vertex(n),
+            self.front.vertex(q),
+        );
+        debug_assert!(self.orient(a, b, c).is_ccw());
+        let (e1, e2) = (self.front.edge(p), self.front.edge(n));
+        let h = self.mesh.add_triangle(a, b, c);
+        self.mesh.pair(h, e1, self.mesh.is_constrained(e1));
+        self.mesh.pair(h.next(), e2, self.mesh.is_constrained(e2));
+        self.front.remove(n);
+        self.set_front_edge(p, h.prev());
+        self.legalize_all(&[h, h.next()]);
+    }
+
+    /// Makes `e` the boundary half-edge under the segment right of node `n`.
+    #[inline(always)]
+    fn set_front_edge(&mut self, n: NodeId, e: EdgeId) {
+        self.front.set_edge(n, e);
+        let keep = self.mesh.link[e.idx()] & CONSTRAINED;
+        self.mesh.link[e.idx()] = BOUNDARY | keep | n;
+    }
+
+    /// Stores link word `word` at half-edge `slot`, which has just taken over the edge that word
+    /// describes, and points the other side (twin or front node) back at `slot`.
+    #[inline(always)]
+    fn relink(&mut self, slot: EdgeId, word: u32) {
+        self.mesh.link[slot.idx()] = word;
+        match mesh::across(word) {
+            Across::Twin(t) => {
+                let w = &mut self.mesh.link[t.idx()];
+                *w = slot.0 | (*w & CONSTRAINED);
+            }
+            Across::Front(n) => self.front.set_edge(n, slot),
+            Across::Hull => {}
+        }
+    }
+
+    #[inline(always)]
+    fn orient(&self, a: VertexId, b: VertexId, c: VertexId) -> crate::predicates::Orientation {
+        crate::predicates::orient_ids(&self.pts, a.0, b.0, c.0)
+    }
+
+    /// Closes the front to the convex hull, drops the artificial triangles and returns the real
+    /// triangles (counter-clockwise, vertex ids relative to the first real vertex), the vertex table
+    /// and the statistics.
+    pub fn finish(mut self) -> (Vec<[u32; 3]>, Vec<[f64; 2]>, SweepStats) {
+        self.close_hull();
+        let stats = self.stats();
+        let Sweep { pts, mesh, .. } = self;
+        let Mesh { origin, link } = mesh;
+        drop(link);
+        let mut out: Vec<u32> = bytemuck::allocation::cast_vec(origin);
+        let mut k = 0;
+        for t in 0..out.len() / 3 {
+            let (a, b, c) = (out[3 * t], out[3 * t + 1], out[3 * t + 2]);
+            if is_artificial(a) || is_artificial(b) || is_artificial(c) {
+                continue;
+            }
+            out[3 * k] = a - FIRST_REAL;
+            out[3 * k + 1] = b - FIRST_REAL;
+            out[3 * k + 2] = c - FIRST_REAL;
+            k += 1;
+        }
+        out.truncate(3 * k);
+        out.shrink_to_fit();
+        let tris: Vec<[u32; 3]> = match bytemuck::allocation::try_cast_vec(out) {
+            Ok(t) => t,
+            Err((_, out)) => out.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        };
+        (tris, pts, stats)
+    }
+}

@@ -1,0 +1,1 @@
+//! Synthetic point sets for tests and benchmarks.
