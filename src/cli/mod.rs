@@ -1,0 +1,54 @@
+//! Command-line interface: parse flags, build a validated configuration, call the library.
+//! Errors are printed with their whole chain; the exit code is 2 on any error, 0 on success
+//! (and 0 when the reader of our standard output went away).
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod check;
+mod tin;
+
+/// Exact, bounded-memory Delaunay terrain models from lidar point clouds.
+#[derive(Parser, Debug)]
+#[command(name = "sweeptin", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Triangulate points into a Delaunay TIN.
+    Tin(tin::Args),
+    /// Validate a mesh: orientation, adjacency, Delaunay property, convex hull, Euler count.
+    Check(check::Args),
+}
+
+/// Runs the command line; returns the process exit code.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Tin(a) => tin::run(a),
+        Command::Check(a) => check::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            if is_broken_pipe(&e) {
+                return ExitCode::SUCCESS;
+            }
+            eprintln!("sweeptin: error: {e}");
+            for cause in e.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
