@@ -182,7 +182,11 @@ fn sort_local(points: &[[f64; 3]], origin: [f64; 2], y_range: (f64, f64)) -> Res
     for (i, p) in points.iter().enumerate() {
         let (x, y) = local(p, origin);
         let b = bucket(y);
-        recs[fill[b] as usize] = Rec { x, y, idx: i as u32 };
+        recs[fill[b] as usize] = Rec {
+            x,
+            y,
+            idx: i as u32,
+        };
         fill[b] += 1;
     }
     drop(fill);
@@ -278,7 +282,10 @@ mod tests {
 
     #[test]
     fn local_origin_is_exact() {
-        let pts = [[500_000.125, 4_000_000.5, 1.0], [500_001.0, 4_000_002.25, 2.0]];
+        let pts = [
+            [500_000.125, 4_000_000.5, 1.0],
+            [500_001.0, 4_000_002.25, 2.0],
+        ];
         let p = prepare(&pts, DuplicatePolicy::First).unwrap();
         assert_eq!(p.origin, [500_000.125, 4_000_000.5]);
         assert_eq!(p.xy[3], [0.875, 1.75]);

@@ -366,6 +366,62 @@ fn collinear_lift_sign(artificial: u32, b: [f64; 2], p: [f64; 2], d: [f64; 2]) -
     if artificial == P_LEFT { -s } else { s }
 }
 
+/// A conservative bound of a triangle's circumdisk: the true disk lies inside
+/// `[x_min, x_max] × (-∞, top]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DiskBounds {
+    /// Upper bound of the disk's highest y.
+    pub top: f64,
+    /// Lower bound of the disk's smallest x.
+    pub x_min: f64,
+    /// Upper bound of the disk's largest x.
+    pub x_max: f64,
+}
+
+/// Bounds the circumdisk of triangle `a, b, c` in floating point, enlarged by a generous bound on
+/// the rounding error, so that the true disk is always inside the bounds (used only to decide that a
+/// triangle can no longer change: an error can delay that decision, never hasten it). Returns `None`
+/// for triangles too flat to bound reliably (condition number above 1e8) or non-finite results.
+///
+/// Error analysis: with `b' = b - a`, `c' = c - a` (relative error ε each), the denominator
+/// `D = 2(b'x c'y - b'y c'x)` has absolute error below `4ε·P` with `P = 2(|b'x c'y| + |b'y c'x|)`;
+/// the numerators `Nx = c'y|b'|² - b'y|c'|²` (and `Ny`) below `8ε` times their absolute-value sums.
+/// The centre offset `u = N / D` then errs by at most `ε(10κ|u| + 10|N|abs/|D|)` with `κ = P/|D|`, the
+/// radius by the sum of both components' errors, and the final sums by a few ulps of their
+/// magnitude. The bound used is 16 times all of that.
+pub fn circumdisk_bounds(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> Option<DiskBounds> {
+    const EPS: f64 = f64::EPSILON / 2.0;
+    let (bx, by) = (b[0] - a[0], b[1] - a[1]);
+    let (cx, cy) = (p[0] - a[0], p[1] - a[1]);
+    let (bb, cc) = (bx * bx + by * by, cx * cx + cy * cy);
+    let d = 2.0 * (bx * cy - by * cx);
+    let perm = 2.0 * ((bx * cy).abs() + (by * cx).abs());
+    let kappa = perm / d.abs();
+    if d == 0.0 || kappa.is_nan() || kappa > 1e8 {
+        return None;
+    }
+    let (nx, ny) = (cy * bb - by * cc, bx * cc - cx * bb);
+    let (nx_abs, ny_abs) = (cy.abs() * bb + by.abs() * cc, bx.abs() * cc + cx.abs() * bb);
+    let (ux, uy) = (nx / d, ny / d);
+    let r = (ux * ux + uy * uy).sqrt();
+    let e_ux = EPS * (10.0 * kappa * ux.abs() + 10.0 * nx_abs / d.abs());
+    let e_uy = EPS * (10.0 * kappa * uy.abs() + 10.0 * ny_abs / d.abs());
+    let (cx0, cy0) = (a[0] + ux, a[1] + uy);
+    let err = 16.0
+        * (e_ux + e_uy + 4.0 * EPS * (r + cx0.abs() + cy0.abs() + a[0].abs() + a[1].abs()))
+        + f64::MIN_POSITIVE;
+    let out = DiskBounds {
+        top: cy0 + r + err,
+        x_min: cx0 - r - err,
+        x_max: cx0 + r + err,
+    };
+    if out.top.is_finite() && out.x_min.is_finite() && out.x_max.is_finite() {
+        Some(out)
+    } else {
+        None
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -389,7 +445,15 @@ mod tests {
         // integer data, where M = 1e6 is already "large enough".
         let m = 1.0e6;
         let far = [[-m, -m * m], [m, -m * m]];
-        let real = [[0., 0.], [1., 0.], [0., 1.], [1., 1.], [-2., 3.], [0., 5.], [3., 3.]];
+        let real = [
+            [0., 0.],
+            [1., 0.],
+            [0., 1.],
+            [1., 1.],
+            [-2., 3.],
+            [0., 5.],
+            [3., 3.],
+        ];
         let pts = table(&real);
         let coord = |v: u32| {
             if v < 2 {

@@ -17,6 +17,8 @@ const NIL: NodeId = u32::MAX;
 pub struct Node {
     /// The vertex's x (−∞ for `P-1`, +∞ for `P-2`).
     pub x: f64,
+    /// The vertex's y (−∞ for `P-1` and `P-2`).
+    pub y: f64,
     /// The vertex.
     pub v: VertexId,
     /// Next node to the right.
@@ -52,7 +54,7 @@ impl Front {
         p_left: VertexId,
         p_right: VertexId,
         v: VertexId,
-        x: f64,
+        xy: [f64; 2],
         left_edge: EdgeId,
         right_edge: EdgeId,
         x_range: (f64, f64),
@@ -60,6 +62,7 @@ impl Front {
         let nodes = vec![
             Node {
                 x: f64::NEG_INFINITY,
+                y: f64::NEG_INFINITY,
                 v: p_left,
                 next: 2,
                 prev: NIL,
@@ -67,13 +70,15 @@ impl Front {
             },
             Node {
                 x: f64::INFINITY,
+                y: f64::NEG_INFINITY,
                 v: p_right,
                 next: NIL,
                 prev: 2,
                 edge: EdgeId(u32::MAX),
             },
             Node {
-                x,
+                x: xy[0],
+                y: xy[1],
                 v,
                 next: 1,
                 prev: 0,
@@ -207,11 +212,13 @@ impl Front {
         }
     }
 
-    /// Inserts vertex `v` at `x` right after node `left`; returns the new node.
-    pub fn insert_after(&mut self, left: NodeId, v: VertexId, x: f64) -> NodeId {
+    /// Inserts vertex `v` at `xy` right after node `left`; returns the new node.
+    pub fn insert_after(&mut self, left: NodeId, v: VertexId, xy: [f64; 2]) -> NodeId {
         let right = self.next(left);
+        let x = xy[0];
         let node = Node {
             x,
+            y: xy[1],
             v,
             next: right,
             prev: left,
@@ -261,6 +268,27 @@ impl Front {
         self.nodes[n as usize].prev = NIL;
         self.free.push(n);
         self.len -= 1;
+    }
+
+    /// Lowest y of the front over `[x0, x1]`, conservatively: the minimum over the real nodes from
+    /// the one at or left of `x0` to the one right of `x1` (the front between two nodes is a segment,
+    /// so it never dips below both ends). Parts of the span left of the first real node or right of
+    /// the last are ignored: no point exists or will arrive there below the sweep line.
+    pub fn min_y_over(&self, x0: f64, x1: f64) -> f64 {
+        let mut n = self.locate(x0);
+        if n == self.head {
+            n = self.next(n);
+        }
+        let mut lo = f64::INFINITY;
+        while n != self.tail {
+            let node = &self.nodes[n as usize];
+            lo = lo.min(node.y);
+            if node.x > x1 {
+                break;
+            }
+            n = node.next;
+        }
+        lo
     }
 
     /// Iterates the nodes from `P-1` to `P-2`.

@@ -35,6 +35,13 @@ impl Sweep {
             return None;
         }
         self.stats.flips += 1;
+        if let Some(f) = self.fin.as_mut() {
+            let r = &mut f.vertices.refs;
+            r[pr.0 as usize] -= 1;
+            r[pl.0 as usize] -= 1;
+            r[p0.0 as usize] += 1;
+            r[p1.0 as usize] += 1;
+        }
         let (hbl, har) = (self.mesh.link[bl.idx()], self.mesh.link[ar.idx()]);
         self.mesh.origin[a.idx()] = p1;
         self.mesh.origin[b.idx()] = p0;
@@ -68,8 +75,7 @@ impl Sweep {
         while self.stack.len() > base {
             let a = self.stack.pop().expect("stack is not empty");
             if let Some(b) = self.flip_if_illegal(a) {
-                self.stack
-                    .extend_from_slice(&[a, a.next(), b, b.next()]);
+                self.stack.extend_from_slice(&[a, a.next(), b, b.next()]);
             }
         }
     }

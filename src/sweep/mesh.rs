@@ -27,13 +27,21 @@ impl EdgeId {
     /// The next half-edge counter-clockwise in the same triangle.
     #[inline(always)]
     pub fn next(self) -> EdgeId {
-        EdgeId(if self.0 % 3 == 2 { self.0 - 2 } else { self.0 + 1 })
+        EdgeId(if self.0 % 3 == 2 {
+            self.0 - 2
+        } else {
+            self.0 + 1
+        })
     }
 
     /// The previous half-edge in the same triangle.
     #[inline(always)]
     pub fn prev(self) -> EdgeId {
-        EdgeId(if self.0 % 3 == 0 { self.0 + 2 } else { self.0 - 1 })
+        EdgeId(if self.0.is_multiple_of(3) {
+            self.0 + 2
+        } else {
+            self.0 - 1
+        })
     }
 
     /// The triangle this half-edge belongs to.
@@ -58,6 +66,9 @@ pub const ID_MASK: u32 = CONSTRAINED - 1;
 pub const NO_NODE: u32 = ID_MASK;
 /// Largest number of half-edges (ids must fit in 30 bits).
 pub const MAX_HALF_EDGES: u64 = ID_MASK as u64;
+
+/// Origin of the half-edges of a freed triangle slot.
+pub const DEAD: VertexId = VertexId(u32::MAX);
 
 /// What lies across a half-edge.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -114,6 +125,28 @@ impl Mesh {
         self.origin.extend_from_slice(&[a, b, c]);
         self.link.extend_from_slice(&[BOUNDARY | NO_NODE; 3]);
         EdgeId(e)
+    }
+
+    /// Overwrites the freed triangle slot `t` with triangle `a, b, c`, all edges on the hull.
+    #[inline]
+    pub fn reuse_triangle(&mut self, t: u32, a: VertexId, b: VertexId, c: VertexId) -> EdgeId {
+        let e = 3 * t as usize;
+        self.origin[e..e + 3].copy_from_slice(&[a, b, c]);
+        self.link[e..e + 3].copy_from_slice(&[BOUNDARY | NO_NODE; 3]);
+        EdgeId(e as u32)
+    }
+
+    /// Marks triangle slot `t` free.
+    #[inline]
+    pub fn free_triangle(&mut self, t: u32) {
+        let e = 3 * t as usize;
+        self.origin[e..e + 3].copy_from_slice(&[DEAD; 3]);
+    }
+
+    /// Is triangle slot `t` in use?
+    #[inline(always)]
+    pub fn is_live(&self, t: u32) -> bool {
+        self.origin[3 * t as usize] != DEAD
     }
 
     /// Origin of `e`.

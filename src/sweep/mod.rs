@@ -16,11 +16,13 @@ pub mod front;
 pub mod heuristics;
 pub mod legalize;
 pub mod mesh;
+pub mod stream;
 
 use crate::error::{Error, Result};
 use crate::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
 use front::{Front, NodeId};
 use mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, VertexId};
+pub use stream::{Event, StreamConfig, StreamPoint, StreamStats};
 
 /// Counters of what the sweep did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -39,7 +41,13 @@ pub struct SweepStats {
     pub peak_front: u64,
 }
 
-/// A sweep in progress over a vertex table in sweep order.
+/// A sweep in progress.
+///
+/// Two modes share all of the geometry:
+/// * **batch** ([`Sweep::new`]): the whole vertex table is given up front and every triangle stays in
+///   memory until [`Sweep::finish`];
+/// * **streaming** ([`Sweep::streaming`], see [`stream`]): points are pushed one at a time and a
+///   triangle leaves memory (as an [`Event`]) as soon as nothing later can change it.
 #[derive(Debug, Clone)]
 pub struct Sweep {
     pts: Vec<[f64; 2]>,
@@ -48,6 +56,7 @@ pub struct Sweep {
     front: Front,
     stack: Vec<EdgeId>,
     stats: SweepStats,
+    fin: Option<Box<stream::Finalizer>>,
 }
 
 impl Sweep {
@@ -70,29 +79,42 @@ impl Sweep {
             .windows(2)
             .position(|w| crate::predicates::sweep_cmp(w[0], w[1]) != std::cmp::Ordering::Less)
         {
-            return Err(Error::OutOfOrder { index: i as u64 + 1 });
+            return Err(Error::OutOfOrder {
+                index: i as u64 + 1,
+            });
         }
-        let (lo, hi) = real.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p[0]), hi.max(p[0]))
-        });
+        let x_range = real
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[0]), hi.max(p[0]))
+            });
         // A Delaunay triangulation of n points (plus 2) has at most 2(n + 2) - 5 triangles.
-        let mut mesh = Mesh::with_capacity(2 * n + 4);
+        let mesh = Mesh::with_capacity(2 * n + 4);
+        Ok(Self::start(pts, mesh, x_range, None))
+    }
+
+    /// The first triangle (P-1, P-2, first point) and the front over it.
+    fn start(
+        pts: Vec<[f64; 2]>,
+        mut mesh: Mesh,
+        x_range: (f64, f64),
+        fin: Option<Box<stream::Finalizer>>,
+    ) -> Self {
         let first = VertexId(FIRST_REAL);
         let e = mesh.add_triangle(VertexId(P_LEFT), VertexId(P_RIGHT), first);
         // Half-edges: e: P-1→P-2 (bottom), e+1: P-2→v (under v→P-2), e+2: v→P-1 (under P-1→v).
-        let x = pts[FIRST_REAL as usize][0];
         let front = Front::new(
             VertexId(P_LEFT),
             VertexId(P_RIGHT),
             first,
-            x,
+            pts[FIRST_REAL as usize],
             e.prev(),
             e.next(),
-            (lo, hi),
+            x_range,
         );
         mesh.link[e.prev().idx()] = BOUNDARY | front.head;
         mesh.link[e.next().idx()] = BOUNDARY | front.next(front.head);
-        Ok(Sweep {
+        let mut sweep = Sweep {
             pts,
             next: FIRST_REAL + 1,
             mesh,
@@ -102,7 +124,10 @@ impl Sweep {
                 points: 1,
                 ..SweepStats::default()
             },
-        })
+            fin,
+        };
+        sweep.created(e);
+        sweep
     }
 
     /// Inserts the next point; returns `false` when all points are in.
@@ -153,7 +178,7 @@ impl Sweep {
         self.stats.points += 1;
         let x = self.pts[v.0 as usize][0];
         let l = self.front.locate(x);
-        let n = self.attach(l, v, x);
+        let n = self.attach(l, v);
         if self.front.node(l).x == x {
             // Left case: `v` is straight above front vertex `l`; cover it too.
             self.stats.left_cases += 1;
@@ -163,13 +188,13 @@ impl Sweep {
     }
 
     /// Middle case: triangle (L, R, v) on the front segment right of node `l`; returns v's node.
-    fn attach(&mut self, l: NodeId, v: VertexId, x: f64) -> NodeId {
+    fn attach(&mut self, l: NodeId, v: VertexId) -> NodeId {
         let r = self.front.next(l);
         let (a, b) = (self.front.vertex(l), self.front.vertex(r));
         let below = self.front.edge(l);
-        let h = self.mesh.add_triangle(a, b, v);
+        let h = self.new_triangle(a, b, v);
         self.mesh.pair(h, below, self.mesh.is_constrained(below));
-        let n = self.front.insert_after(l, v, x);
+        let n = self.front.insert_after(l, v, self.pts[v.0 as usize]);
         self.set_front_edge(l, h.prev());
         self.set_front_edge(n, h.next());
         self.legalize_from_apex(h);
@@ -187,12 +212,35 @@ impl Sweep {
         );
         debug_assert!(self.orient(a, b, c).is_ccw());
         let (e1, e2) = (self.front.edge(p), self.front.edge(n));
-        let h = self.mesh.add_triangle(a, b, c);
+        let h = self.new_triangle(a, b, c);
         self.mesh.pair(h, e1, self.mesh.is_constrained(e1));
         self.mesh.pair(h.next(), e2, self.mesh.is_constrained(e2));
         self.front.remove(n);
         self.set_front_edge(p, h.prev());
         self.legalize_all(&[h, h.next()]);
+    }
+
+    /// Adds triangle (a, b, c) (reusing a freed slot when streaming) and returns its half-edge a → b.
+    #[inline(always)]
+    fn new_triangle(&mut self, a: VertexId, b: VertexId, c: VertexId) -> EdgeId {
+        let e = match self.fin.as_mut().and_then(|f| f.free_triangles.pop()) {
+            Some(t) => self.mesh.reuse_triangle(t, a, b, c),
+            None => self.mesh.add_triangle(a, b, c),
+        };
+        self.created(e);
+        e
+    }
+
+    /// Streaming bookkeeping for a new triangle: vertex references and the finalisation queue.
+    #[inline(always)]
+    fn created(&mut self, e: EdgeId) {
+        if let Some(f) = self.fin.as_mut() {
+            let o = &self.mesh.origin;
+            for k in 0..3 {
+                f.vertices.refs[o[e.idx() + k].0 as usize] += 1;
+            }
+            f.created(e.tri());
+        }
     }
 
     /// Makes `e` the boundary half-edge under the segment right of node `n`.
