@@ -71,7 +71,9 @@ pub enum Error {
     },
 
     /// Points were handed to the sweep out of (y, x) order or twice.
-    #[error("point {index} is out of sweep order: points must arrive sorted by (y, x) and distinct")]
+    #[error(
+        "point {index} is out of sweep order: points must arrive sorted by (y, x) and distinct"
+    )]
     OutOfOrder {
         /// Index of the offending point in the order it was given.
         index: u64,
@@ -102,6 +104,16 @@ pub enum Error {
     #[error("{}: {message}", path.display())]
     Format {
         /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+
+    /// A mesh cannot be written as asked: unknown format, a limit of the format (such as PLY's
+    /// 32-bit vertex indices), or a writer used against its contract.
+    #[error("{}: cannot write: {message}", path.display())]
+    Output {
+        /// The output file.
         path: PathBuf,
         /// What is wrong.
         message: String,
