@@ -231,9 +231,18 @@ impl AtomicFile {
             use std::os::unix::fs::PermissionsExt;
             builder.permissions(std::fs::Permissions::from_mode(0o666));
         }
-        let temp = builder
-            .tempfile_in(parent_dir(&path))
-            .map_err(|e| Error::io(&path, e))?;
+        let dir = parent_dir(&path);
+        let temp = builder.tempfile_in(dir).map_err(|e| {
+            // tempfile's own message names the random temporary path; say what the user needs.
+            if !dir.is_dir() {
+                let e = io::Error::new(
+                    io::ErrorKind::NotFound,
+                    format!("directory {} does not exist", dir.display()),
+                );
+                return Error::io(&path, e);
+            }
+            Error::io(&path, e)
+        })?;
         let registration = register_temp(temp.path(), TempKind::File);
         Ok(AtomicFile {
             path,

@@ -191,17 +191,12 @@ fn parse_header<R: BufRead>(src: &mut R, path: &Path) -> Result<Header> {
                 format!("the PLY header is longer than {MAX_HEADER} bytes"),
             ));
         }
-        if n == 0 || raw.last() != Some(&b'\n') {
-            return Err(if lines == 1 && n < 3 {
-                format_error(path, "not a PLY file: it does not start with \"ply\"")
-            } else {
-                format_error(path, "truncated PLY header: no end_header line")
-            });
-        }
-        let text = String::from_utf8_lossy(&raw);
-        let line = text.trim_end_matches(['\n', '\r']);
         if lines == 1 {
-            if line.trim_end() != "ply" {
+            if raw
+                .strip_suffix(b"\n")
+                .map(|l| l.strip_suffix(b"\r").unwrap_or(l))
+                != Some(b"ply")
+            {
                 return Err(format_error(
                     path,
                     "not a PLY file: it does not start with \"ply\"",
@@ -209,6 +204,14 @@ fn parse_header<R: BufRead>(src: &mut R, path: &Path) -> Result<Header> {
             }
             continue;
         }
+        if raw.last() != Some(&b'\n') {
+            return Err(format_error(
+                path,
+                "truncated PLY header: no end_header line",
+            ));
+        }
+        let text = String::from_utf8_lossy(&raw);
+        let line = text.trim_end_matches(['\n', '\r']);
         let words: Vec<&str> = line.split_ascii_whitespace().collect();
         let at = |m: String| format_error(path, format!("PLY header line {lines}: {m}"));
         match words.as_slice() {
@@ -364,10 +367,12 @@ impl<R: BufRead> Body<R> {
     }
 
     /// How many instances to reserve room for: the announced count, capped by what the file
-    /// can hold.
+    /// can hold and by a fixed amount (beyond it the vectors grow as they fill), so that a lying
+    /// header cannot make us allocate much.
     fn capacity(&self, el: &Element) -> usize {
+        const MAX_RESERVE: u64 = 1 << 24;
         let fit = self.remaining / el.min_bytes(self.encoding);
-        usize::try_from(el.count.min(fit)).unwrap_or(usize::MAX)
+        el.count.min(fit).min(MAX_RESERVE) as usize
     }
 
     fn read_vertices(&mut self, el: &Element, out: &mut Vec<[f64; 3]>) -> Result<()> {
