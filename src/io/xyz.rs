@@ -249,15 +249,52 @@ fn parse_line(bytes: &[u8]) -> std::result::Result<Option<[f64; 3]>, LineError> 
             return Ok(None);
         }
         let from = pos;
-        while pos < bytes.len() && !is_separator(bytes[pos]) {
-            pos += 1;
-        }
-        *value = parse_number(&bytes[from..pos], field)?;
+        let (end, fast) = scan_field(bytes, pos);
+        pos = end;
+        *value = match fast {
+            Some(v) => v,
+            None => parse_number(&bytes[from..end], field)?,
+        };
     }
     Ok(Some(p))
 }
 
+/// Finds the end of the field starting at `pos` and, in the same pass, computes its value when
+/// it is a plain decimal that [`fast_decimal`]'s exact fast path covers.
 #[inline]
+fn scan_field(bytes: &[u8], mut pos: usize) -> (usize, Option<f64>) {
+    let negative = bytes[pos] == b'-';
+    if negative || bytes[pos] == b'+' {
+        pos += 1;
+    }
+    let mut mantissa: u64 = 0;
+    let mut count = 0u32;
+    let mut point = usize::MAX;
+    let mut plain = true;
+    while pos < bytes.len() {
+        let b = bytes[pos];
+        let digit = b.wrapping_sub(b'0');
+        if digit < 10 {
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit));
+            count += 1;
+        } else if b == b'.' && point == usize::MAX {
+            point = pos + 1;
+        } else if is_separator(b) {
+            break;
+        } else {
+            plain = false;
+        }
+        pos += 1;
+    }
+    let scale = if point == usize::MAX { 0 } else { pos - point };
+    if !plain || count == 0 || count > 19 || mantissa >= 1 << 53 || scale >= POW10.len() {
+        return (pos, None);
+    }
+    let value = mantissa as f64 / POW10[scale];
+    (pos, Some(if negative { -value } else { value }))
+}
+
+/// Parses a field that the fast path did not cover: `str::parse`, then the finiteness check.
 fn parse_number(token: &[u8], field: usize) -> std::result::Result<f64, LineError> {
     let text = || {
         let s = String::from_utf8_lossy(token);
@@ -267,9 +304,8 @@ fn parse_number(token: &[u8], field: usize) -> std::result::Result<f64, LineErro
             s.into_owned()
         }
     };
-    let value = std::str::from_utf8(token)
-        .ok()
-        .and_then(|s| s.parse::<f64>().ok())
+    let value = fast_decimal(token)
+        .or_else(|| std::str::from_utf8(token).ok()?.parse::<f64>().ok())
         .ok_or_else(|| LineError::NotANumber {
             field,
             token: text(),
@@ -281,6 +317,47 @@ fn parse_number(token: &[u8], field: usize) -> std::result::Result<f64, LineErro
         });
     }
     Ok(value)
+}
+
+/// Exact powers of ten representable in `f64`.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Clinger's fast path for plain decimals (`[+-]digits[.digits]`, no exponent): when the digits
+/// form an integer `m < 2^53` and there are at most 22 of them after the point, both `m` and
+/// `10^k` are exact in `f64` and one IEEE division gives the correctly rounded value, the same
+/// bits `str::parse` gives. Anything else returns `None` and goes to `str::parse`.
+#[inline]
+fn fast_decimal(token: &[u8]) -> Option<f64> {
+    let (negative, digits) = match token.first()? {
+        b'-' => (true, &token[1..]),
+        b'+' => (false, &token[1..]),
+        _ => (false, token),
+    };
+    let mut mantissa: u64 = 0;
+    let mut count = 0usize;
+    let mut fraction: Option<usize> = None;
+    for (i, &b) in digits.iter().enumerate() {
+        match b {
+            b'0'..=b'9' => {
+                if count >= 19 {
+                    return None;
+                }
+                mantissa = mantissa * 10 + u64::from(b - b'0');
+                count += 1;
+            }
+            b'.' if fraction.is_none() => fraction = Some(i + 1),
+            _ => return None,
+        }
+    }
+    if count == 0 || mantissa >= 1 << 53 {
+        return None;
+    }
+    let scale = fraction.map_or(0, |f| digits.len() - f);
+    let value = mantissa as f64 / *POW10.get(scale)?;
+    Some(if negative { -value } else { value })
 }
 
 #[cfg(test)]
@@ -429,6 +506,80 @@ mod tests {
         let mut r = XyzReader::from_reader(&text[..], "t.xyz");
         let e = r.read_chunk(&mut Vec::new(), 10).unwrap_err();
         assert!(matches!(e, Error::Parse { line: 1, .. }), "{e}");
+    }
+
+    #[test]
+    fn fast_path_matches_std_parse() {
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            r
+        };
+        let mut tokens: Vec<String> = [
+            "0",
+            "-0",
+            "+0",
+            "0.",
+            ".0",
+            "5.",
+            ".5",
+            "-.5",
+            "1.",
+            "00012.5000",
+            "9007199254740991",
+            "9007199254740992",
+            "9007199254740993",
+            "0.1",
+            "0.30000000000000004",
+            "1234567890123456789",
+            "12345678901234567890",
+            "1.0000000000000000000001",
+            "0.0000000000000000000001",
+            "0.00000000000000000000001",
+            "511176.115",
+            "-122746.065",
+            "1e3",
+            ".",
+            "-",
+            "+",
+            "",
+            "1.2.3",
+            "1-2",
+            "--1",
+            "0x10",
+            "1_0",
+            "١",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        for _ in 0..20_000 {
+            let int = next() % 10_000_000;
+            let frac = next() % 1_000_000;
+            let width = (next() % 9) as usize;
+            let sign = ["", "-", "+"][(next() % 3) as usize];
+            tokens.push(format!("{sign}{int}.{frac:0width$}"));
+            tokens.push(format!("{}", f64::from_bits(next() >> 2)));
+        }
+        for t in &tokens {
+            let fast = fast_decimal(t.as_bytes());
+            let std = t.parse::<f64>().ok();
+            if let Some(v) = fast {
+                assert_eq!(Some(v.to_bits()), std.map(f64::to_bits), "{t:?}");
+            }
+            let full = parse_number(t.as_bytes(), 0).ok();
+            let want = std.filter(|v| v.is_finite());
+            assert_eq!(full.map(f64::to_bits), want.map(f64::to_bits), "{t:?}");
+            if !t.is_empty() {
+                let line = parse_line(format!("{t},0 {t}\t{t}\r").as_bytes())
+                    .ok()
+                    .flatten();
+                let want = want.map(|v| [v.to_bits(), 0, v.to_bits()]);
+                assert_eq!(line.map(|p| p.map(f64::to_bits)), want, "{t:?}");
+            }
+        }
     }
 
     #[test]
