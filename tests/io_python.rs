@@ -110,3 +110,69 @@ fn plyfile_reads_our_ply() {
     assert!(lines.contains(&"comment crs EPSG:3794"), "{stdout}");
     assert!(lines.contains(&"comment hello from the test"), "{stdout}");
 }
+
+/// The LandXML output is well-formed XML in the LandXML 1.2 namespace, with points in
+/// "northing easting elevation" order (Python's standard library only).
+#[test]
+fn landxml_is_well_formed_xml() {
+    let Some(python) = ["python3", "python"].into_iter().find(|py| {
+        Command::new(py)
+            .args(["-c", "import xml.etree.ElementTree"])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    }) else {
+        eprintln!("SKIP landxml_is_well_formed_xml: python3 not found");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("tin & <co>.xml");
+    let meta = MeshMeta {
+        crs: Some("PROJCS[\"D96 / TM\", GEOGCS[\"D96\"]]".into()),
+        comments: vec!["a -- tricky <comment> &".into()],
+    };
+    let mut sink = create_mesh_sink(&path, None, &meta).unwrap();
+    for p in [[10.0, 20.0, 1.0], [11.0, 20.0, 2.0], [10.0, 21.0, 3.0]] {
+        sink.vertex(p).unwrap();
+    }
+    sink.triangle([0, 1, 2]).unwrap();
+    sink.finish().unwrap();
+    let script = r#"
+import sys
+import xml.etree.ElementTree as ET
+ns = {'l': 'http://www.landxml.org/schema/LandXML-1.2'}
+root = ET.parse(sys.argv[1]).getroot()
+print(root.tag)
+print(root.find('l:CoordinateSystem', ns).get('ogcWktCode'))
+s = root.find('l:Surfaces/l:Surface', ns)
+print(s.get('name'), s.find('l:Definition', ns).get('surfType'))
+for p in s.findall('l:Definition/l:Pnts/l:P', ns):
+    print('P', p.get('id'), p.text)
+for f in s.findall('l:Definition/l:Faces/l:F', ns):
+    print('F', f.text)
+"#;
+    let out = Command::new(python)
+        .arg("-c")
+        .arg(script)
+        .arg(&path)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(
+        lines,
+        [
+            "{http://www.landxml.org/schema/LandXML-1.2}LandXML",
+            "PROJCS[\"D96 / TM\", GEOGCS[\"D96\"]]",
+            "tin & <co> TIN",
+            "P 1 20 10 1",
+            "P 2 20 11 2",
+            "P 3 21 10 3",
+            "F 1 2 3",
+        ]
+    );
+}
