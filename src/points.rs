@@ -157,11 +157,7 @@ fn to_local(points: &[[f64; 3]], origin: [f64; 2]) -> Result<Vec<Rec>> {
                 });
             }
         }
-        recs.push(Rec {
-            x,
-            y,
-            idx: i as u32,
-        });
+        recs.push(Rec { x, y, idx: i as u32 });
     }
     Ok(recs)
 }
@@ -220,10 +216,7 @@ mod tests {
 
     #[test]
     fn local_origin_is_exact() {
-        let pts = [
-            [500_000.125, 4_000_000.5, 1.0],
-            [500_001.0, 4_000_002.25, 2.0],
-        ];
+        let pts = [[500_000.125, 4_000_000.5, 1.0], [500_001.0, 4_000_002.25, 2.0]];
         let p = prepare(&pts, DuplicatePolicy::First).unwrap();
         assert_eq!(p.origin, [500_000.125, 4_000_000.5]);
         assert_eq!(p.xy[3], [0.875, 1.75]);

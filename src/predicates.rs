@@ -351,11 +351,7 @@ fn incircle_symbolic(pts: &[[f64; 2]], ids: [u32; 4]) -> CircleSide {
 #[inline]
 fn strictly_between(b: [f64; 2], p: [f64; 2], d: [f64; 2]) -> bool {
     let k = if b[0] != p[0] { 0 } else { 1 };
-    let (lo, hi) = if b[k] < p[k] {
-        (b[k], p[k])
-    } else {
-        (p[k], b[k])
-    };
+    let (lo, hi) = if b[k] < p[k] { (b[k], p[k]) } else { (p[k], b[k]) };
     lo < d[k] && d[k] < hi
 }
 
@@ -382,15 +378,7 @@ mod tests {
         // integer data, where M = 1e6 is already "large enough".
         let m = 1.0e6;
         let far = [[-m, -m * m], [m, -m * m]];
-        let real = [
-            [0., 0.],
-            [1., 0.],
-            [0., 1.],
-            [1., 1.],
-            [-2., 3.],
-            [0., 5.],
-            [3., 3.],
-        ];
+        let real = [[0., 0.], [1., 0.], [0., 1.], [1., 1.], [-2., 3.], [0., 5.], [3., 3.]];
         let pts = table(&real);
         let coord = |v: u32| {
             if v < 2 {
@@ -417,15 +405,7 @@ mod tests {
     fn artificial_incircle_matches_large_finite_points() {
         let m = 1.0e5;
         let far = [[-m, -m * m], [m, -m * m]];
-        let real = [
-            [0., 0.],
-            [1., 0.],
-            [0., 1.],
-            [2., 1.],
-            [-2., 3.],
-            [0., 5.],
-            [3., 3.],
-        ];
+        let real = [[0., 0.], [1., 0.], [0., 1.], [2., 1.], [-2., 3.], [0., 5.], [3., 3.]];
         let pts = table(&real);
         let coord = |v: u32| {
             if v < 2 {

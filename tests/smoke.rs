@@ -17,12 +17,7 @@ fn tri_set(tris: &[[u32; 3]], verts: &[[f64; 3]]) -> Vec<[(u64, u64); 3]> {
     let mut out: Vec<[(u64, u64); 3]> = tris
         .iter()
         .map(|t| {
-            let mut k = t.map(|i| {
-                (
-                    verts[i as usize][0].to_bits(),
-                    verts[i as usize][1].to_bits(),
-                )
-            });
+            let mut k = t.map(|i| (verts[i as usize][0].to_bits(), verts[i as usize][1].to_bits()));
             k.sort();
             k
         })
@@ -39,9 +34,7 @@ fn spade_set(pts: &[[f64; 3]]) -> Vec<[(u64, u64); 3]> {
     let mut out: Vec<[(u64, u64); 3]> = d
         .inner_faces()
         .map(|f| {
-            let mut k = f
-                .vertices()
-                .map(|v| (v.position().x.to_bits(), v.position().y.to_bits()));
+            let mut k = f.vertices().map(|v| (v.position().x.to_bits(), v.position().y.to_bits()));
             k.sort();
             k
         })
@@ -58,22 +51,16 @@ fn stepwise_check_small() {
         let pts: Vec<[f64; 3]> = (0..n).map(|_| [r(), r(), 0.0]).collect();
         let prep = prepare(&pts, DuplicatePolicy::First).unwrap();
         let mut s = Sweep::new(prep.xy).unwrap();
-        s.check()
-            .unwrap_or_else(|e| panic!("seed {seed} init: {e}"));
+        s.check().unwrap_or_else(|e| panic!("seed {seed} init: {e}"));
         let mut k = 0;
         while s.step() {
             k += 1;
-            s.check()
-                .unwrap_or_else(|e| panic!("seed {seed} step {k}: {e}"));
+            s.check().unwrap_or_else(|e| panic!("seed {seed} step {k}: {e}"));
         }
         let (tris, _, _) = s.finish();
         let t = triangulate(&pts, &Options::default()).unwrap();
         assert_eq!(tris.len(), t.triangles.len());
-        assert_eq!(
-            tri_set(&t.triangles, &t.vertices),
-            spade_set(&pts),
-            "seed {seed}"
-        );
+        assert_eq!(tri_set(&t.triangles, &t.vertices), spade_set(&pts), "seed {seed}");
     }
 }
 
@@ -84,10 +71,6 @@ fn matches_spade_random() {
         let n = 20000;
         let pts: Vec<[f64; 3]> = (0..n).map(|_| [r() * 1000.0, r() * 1000.0, 0.0]).collect();
         let t = triangulate(&pts, &Options::default()).unwrap();
-        assert_eq!(
-            tri_set(&t.triangles, &t.vertices),
-            spade_set(&pts),
-            "seed {seed}"
-        );
+        assert_eq!(tri_set(&t.triangles, &t.vertices), spade_set(&pts), "seed {seed}");
     }
 }

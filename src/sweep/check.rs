@@ -26,9 +26,7 @@ impl Sweep {
         for t in 0..m.triangle_count() as u32 {
             let [a, b, c] = m.tri_vertices(t);
             if !self.orient(a, b, c).is_ccw() {
-                return Err(format!(
-                    "triangle {t} ({a:?}, {b:?}, {c:?}) is not counter-clockwise"
-                ));
+                return Err(format!("triangle {t} ({a:?}, {b:?}, {c:?}) is not counter-clockwise"));
             }
             for k in 0..3 {
                 let e = EdgeId(3 * t + k);
@@ -68,9 +66,7 @@ impl Sweep {
             }
         }
         if hull_edges != 1 {
-            return Err(format!(
-                "{hull_edges} boundary edges outside the front (want 1)"
-            ));
+            return Err(format!("{hull_edges} boundary edges outside the front (want 1)"));
         }
         Ok(())
     }

@@ -68,7 +68,8 @@ impl Sweep {
         while self.stack.len() > base {
             let a = self.stack.pop().expect("stack is not empty");
             if let Some(b) = self.flip_if_illegal(a) {
-                self.stack.extend_from_slice(&[a, a.next(), b, b.next()]);
+                self.stack
+                    .extend_from_slice(&[a, a.next(), b, b.next()]);
             }
         }
     }

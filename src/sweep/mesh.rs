@@ -27,21 +27,13 @@ impl EdgeId {
     /// The next half-edge counter-clockwise in the same triangle.
     #[inline(always)]
     pub fn next(self) -> EdgeId {
-        EdgeId(if self.0 % 3 == 2 {
-            self.0 - 2
-        } else {
-            self.0 + 1
-        })
+        EdgeId(if self.0 % 3 == 2 { self.0 - 2 } else { self.0 + 1 })
     }
 
     /// The previous half-edge in the same triangle.
     #[inline(always)]
     pub fn prev(self) -> EdgeId {
-        EdgeId(if self.0 % 3 == 0 {
-            self.0 + 2
-        } else {
-            self.0 - 1
-        })
+        EdgeId(if self.0 % 3 == 0 { self.0 + 2 } else { self.0 - 1 })
     }
 
     /// The triangle this half-edge belongs to.

@@ -70,15 +70,11 @@ impl Sweep {
             .windows(2)
             .position(|w| crate::predicates::sweep_cmp(w[0], w[1]) != std::cmp::Ordering::Less)
         {
-            return Err(Error::OutOfOrder {
-                index: i as u64 + 1,
-            });
+            return Err(Error::OutOfOrder { index: i as u64 + 1 });
         }
-        let (lo, hi) = real
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(p[0]), hi.max(p[0]))
-            });
+        let (lo, hi) = real.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p[0]), hi.max(p[0]))
+        });
         // A Delaunay triangulation of n points (plus 2) has at most 2(n + 2) - 5 triangles.
         let mut mesh = Mesh::with_capacity(2 * n + 4);
         let first = VertexId(FIRST_REAL);
