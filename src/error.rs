@@ -109,6 +109,16 @@ pub enum Error {
         message: String,
     },
 
+    /// A mesh cannot be written as asked: unknown format, a limit of the format (such as PLY's
+    /// 32-bit vertex indices), or a writer used against its contract.
+    #[error("{}: cannot write: {message}", path.display())]
+    Output {
+        /// The output file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+
     /// A mesh failed validation.
     #[error("mesh is not a valid Delaunay triangulation: {0}")]
     Invalid(String),

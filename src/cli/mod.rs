@@ -1,6 +1,7 @@
 //! Command-line interface: parse flags, build a validated configuration, call the library.
 //! Errors are printed with their whole chain; the exit code is 2 on any error, 0 on success
-//! (and 0 when the reader of our standard output went away).
+//! (and 0 when the reader of our standard output went away), 130 when interrupted (Ctrl-C,
+//! SIGTERM), after deleting temporary files.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -27,6 +28,10 @@ enum Command {
 /// Runs the command line; returns the process exit code.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Ctrl-C / SIGTERM: delete temporary files, exit 130. Without it outputs stay atomic anyway.
+    if let Err(e) = sweeptin::io::install_interrupt_handler() {
+        eprintln!("sweeptin: warning: {e}");
+    }
     let result = match cli.command {
         Command::Tin(a) => tin::run(a),
         Command::Check(a) => check::run(a),

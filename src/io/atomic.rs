@@ -1,0 +1,462 @@
+//! Atomic output files and clean-up of temporary files on Ctrl-C.
+//!
+//! Every output `sweeptin` writes goes through an [`AtomicFile`]: the bytes go to a hidden temporary
+//! file in the same directory as the final path (`.NAME.sweeptin-XXXXXX.tmp`), and only
+//! [`AtomicFile::commit`] flushes, fsyncs and renames it onto the final path. A crash, an error or
+//! an interruption therefore never leaves a partial file under the final name.
+//!
+//! Temporary paths that must not outlive the process are kept in a process-wide registry
+//! ([`register_temp`]). [`install_interrupt_handler`] makes Ctrl-C (SIGINT), SIGTERM and SIGHUP
+//! delete every registered path ([`cleanup_registered_temps`]) and exit with code 130. Modules that
+//! spill to disk (the external sort under `--tmp-dir`) use [`RegisteredTempDir`] or register their
+//! own paths.
+//!
+//! Spool files that are only read back by the process that wrote them should instead be anonymous
+//! ([`tempfile::tempfile_in`]): the operating system deletes those even after `kill -9`.
+
+use crate::error::{Error, Result};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, MutexGuard};
+
+/// Size of the write buffer of an [`AtomicFile`].
+const WRITE_BUFFER: usize = 1 << 20;
+
+/// Exit code after an interruption (128 + SIGINT, the shell convention).
+pub const INTERRUPTED_EXIT_CODE: i32 = 130;
+
+/// What a registered temporary path is, which decides how it is deleted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TempKind {
+    /// A file: deleted with `remove_file`.
+    File,
+    /// A directory: deleted with everything in it.
+    Dir,
+}
+
+/// A set of temporary paths to delete on interruption. The process-wide one is behind
+/// [`register_temp`] and [`cleanup_registered_temps`]; tests make their own.
+struct TempRegistry {
+    inner: Mutex<RegistryInner>,
+}
+
+struct RegistryInner {
+    next_id: u64,
+    entries: BTreeMap<u64, (PathBuf, TempKind)>,
+}
+
+impl TempRegistry {
+    const fn new() -> Self {
+        TempRegistry {
+            inner: Mutex::new(RegistryInner {
+                next_id: 0,
+                entries: BTreeMap::new(),
+            }),
+        }
+    }
+
+    /// Locks the registry, ignoring poisoning: the map stays consistent whatever panicked.
+    fn lock(&self) -> MutexGuard<'_, RegistryInner> {
+        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn register(&'static self, path: PathBuf, kind: TempKind) -> TempRegistration {
+        let mut inner = self.lock();
+        let id = inner.next_id;
+        inner.next_id += 1;
+        inner.entries.insert(id, (path, kind));
+        TempRegistration { registry: self, id }
+    }
+
+    fn paths(&self) -> Vec<(PathBuf, TempKind)> {
+        self.lock().entries.values().cloned().collect()
+    }
+
+    fn cleanup(&self) -> usize {
+        let entries = std::mem::take(&mut self.lock().entries);
+        entries
+            .into_values()
+            .filter(|(path, kind)| {
+                let removed = match kind {
+                    TempKind::File => std::fs::remove_file(path),
+                    TempKind::Dir => std::fs::remove_dir_all(path),
+                };
+                removed.is_ok()
+            })
+            .count()
+    }
+}
+
+static REGISTRY: TempRegistry = TempRegistry::new();
+
+/// Proof that a temporary path is in the registry; dropping it takes the path out again (it does
+/// **not** delete the path: its owner does that).
+#[must_use = "dropping the registration unregisters the path at once"]
+pub struct TempRegistration {
+    registry: &'static TempRegistry,
+    id: u64,
+}
+
+impl std::fmt::Debug for TempRegistration {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TempRegistration")
+            .field("id", &self.id)
+            .finish()
+    }
+}
+
+impl Drop for TempRegistration {
+    fn drop(&mut self) {
+        self.registry.lock().entries.remove(&self.id);
+    }
+}
+
+/// Registers a temporary file or directory to be deleted if the process is interrupted.
+///
+/// Keep the returned [`TempRegistration`] while the path exists; drop it after deleting the path
+/// yourself (or after renaming it into a permanent place).
+pub fn register_temp(path: impl Into<PathBuf>, kind: TempKind) -> TempRegistration {
+    REGISTRY.register(path.into(), kind)
+}
+
+/// The paths registered now, in registration order.
+pub fn registered_temps() -> Vec<(PathBuf, TempKind)> {
+    REGISTRY.paths()
+}
+
+/// Deletes every registered temporary path and empties the registry; returns how many paths were
+/// actually deleted (paths already gone are not counted). This is what the interrupt handler runs;
+/// errors are ignored because there is nothing better to do with them while exiting.
+pub fn cleanup_registered_temps() -> usize {
+    REGISTRY.cleanup()
+}
+
+static HANDLER_INSTALLED: AtomicBool = AtomicBool::new(false);
+
+/// Installs the process-wide Ctrl-C / SIGTERM / SIGHUP handler: it deletes every registered
+/// temporary path, prints one line on stderr and exits with code [`INTERRUPTED_EXIT_CODE`].
+/// Calling it again is harmless.
+///
+/// # Errors
+/// [`Error::Internal`] if the operating system refuses the handler, or another library already
+/// installed one through `ctrlc`.
+pub fn install_interrupt_handler() -> Result<()> {
+    if HANDLER_INSTALLED.swap(true, Ordering::SeqCst) {
+        return Ok(());
+    }
+    ctrlc::set_handler(|| {
+        let removed = cleanup_registered_temps();
+        eprintln!("sweeptin: interrupted; removed {removed} temporary file(s)");
+        std::process::exit(INTERRUPTED_EXIT_CODE);
+    })
+    .map_err(|e| {
+        HANDLER_INSTALLED.store(false, Ordering::SeqCst);
+        Error::Internal(format!("cannot install the interrupt handler: {e}"))
+    })
+}
+
+/// A temporary directory that is deleted (with its contents) when dropped, and also when the
+/// process is interrupted. For spill files under `--tmp-dir`.
+#[derive(Debug)]
+pub struct RegisteredTempDir {
+    // Field order matters: the directory is deleted before it is unregistered.
+    dir: tempfile::TempDir,
+    _registration: TempRegistration,
+}
+
+impl RegisteredTempDir {
+    /// Creates `PARENT/.sweeptin-XXXXXX.tmp/`.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming `parent` if the directory cannot be created.
+    pub fn new_in(parent: &Path) -> Result<Self> {
+        let dir = tempfile::Builder::new()
+            .prefix(".sweeptin-")
+            .suffix(".tmp")
+            .tempdir_in(parent)
+            .map_err(|e| Error::io(parent, e))?;
+        let registration = register_temp(dir.path(), TempKind::Dir);
+        Ok(RegisteredTempDir {
+            dir,
+            _registration: registration,
+        })
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        self.dir.path()
+    }
+}
+
+/// An output file that appears under its final name only when complete.
+///
+/// Writes go, buffered, to a hidden temporary file next to the final path; [`commit`](Self::commit)
+/// moves it into place. Dropping an `AtomicFile` without committing deletes the temporary file and
+/// leaves any existing file at the final path untouched.
+///
+/// `Write` and `Seek` errors are plain [`io::Error`]s; wrap them with [`AtomicFile::err`] to name
+/// the final path.
+#[derive(Debug)]
+pub struct AtomicFile {
+    path: PathBuf,
+    // Field order matters: the temporary file is deleted before it is unregistered.
+    writer: BufWriter<tempfile::NamedTempFile>,
+    _registration: TempRegistration,
+}
+
+impl AtomicFile {
+    /// Starts writing `path`: creates `.NAME.sweeptin-XXXXXX.tmp` in the same directory.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming `path` if the directory does not exist or is not writable;
+    /// [`Error::Output`] if `path` has no file name.
+    pub fn create(path: impl Into<PathBuf>) -> Result<Self> {
+        let path = path.into();
+        let Some(name) = path.file_name() else {
+            return Err(Error::Output {
+                path,
+                message: "not a file name".into(),
+            });
+        };
+        let prefix = format!(".{}.sweeptin-", name.to_string_lossy());
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp").rand_bytes(6);
+        #[cfg(unix)]
+        {
+            // Temporary files are owner-only by default; an output should get the usual
+            // umask-restricted permissions, like any file the user creates.
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let dir = parent_dir(&path);
+        let temp = builder.tempfile_in(dir).map_err(|e| {
+            // tempfile's own message names the random temporary path; say what the user needs.
+            if !dir.is_dir() {
+                let e = io::Error::new(
+                    io::ErrorKind::NotFound,
+                    format!("directory {} does not exist", dir.display()),
+                );
+                return Error::io(&path, e);
+            }
+            Error::io(&path, e)
+        })?;
+        let registration = register_temp(temp.path(), TempKind::File);
+        Ok(AtomicFile {
+            path,
+            writer: BufWriter::with_capacity(WRITE_BUFFER, temp),
+            _registration: registration,
+        })
+    }
+
+    /// The final path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The temporary file being written.
+    pub fn temp_path(&self) -> &Path {
+        self.writer.get_ref().path()
+    }
+
+    /// Wraps an I/O error with the final path.
+    pub fn err(&self, e: io::Error) -> Error {
+        Error::io(&self.path, e)
+    }
+
+    /// Flushes, fsyncs and renames the temporary file onto the final path (replacing any file
+    /// there); returns the size of the file in bytes.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the final path; the temporary file is then deleted.
+    pub fn commit(self) -> Result<u64> {
+        let AtomicFile {
+            path,
+            writer,
+            _registration,
+        } = self;
+        let temp = writer
+            .into_inner()
+            .map_err(|e| Error::io(&path, e.into_error()))?;
+        temp.as_file().sync_all().map_err(|e| Error::io(&path, e))?;
+        let bytes = temp
+            .as_file()
+            .metadata()
+            .map_err(|e| Error::io(&path, e))?
+            .len();
+        temp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
+        sync_dir(parent_dir(&path));
+        Ok(bytes)
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.writer.write(buf)
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
+        self.writer.write_all(buf)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.writer.flush()
+    }
+}
+
+impl Seek for AtomicFile {
+    fn seek(&mut self, pos: SeekFrom) -> io::Result<u64> {
+        self.writer.seek(pos)
+    }
+}
+
+/// The directory a path lives in (`.` for a bare file name).
+fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Makes a rename durable by syncing its directory. Best effort: not every platform or file
+/// system supports it, and the rename itself has already succeeded.
+fn sync_dir(dir: &Path) {
+    #[cfg(unix)]
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
+    }
+    #[cfg(not(unix))]
+    let _ = (dir, File::open);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    fn is_registered(path: &Path) -> bool {
+        registered_temps().iter().any(|(p, _)| p == path)
+    }
+
+    #[test]
+    fn commit_renames_and_leaves_no_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.txt");
+        let mut f = AtomicFile::create(&out).unwrap();
+        let temp = f.temp_path().to_path_buf();
+        let temp_name = temp.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(temp_name.starts_with(".out.txt.sweeptin-") && temp_name.ends_with(".tmp"));
+        assert!(is_registered(&temp));
+        f.write_all(b"hello").unwrap();
+        assert!(!out.exists(), "final path must not exist before commit");
+        assert_eq!(f.commit().unwrap(), 5);
+        assert_eq!(std::fs::read(&out).unwrap(), b"hello");
+        assert_eq!(names(dir.path()), ["out.txt"]);
+        assert!(!is_registered(&temp));
+    }
+
+    #[test]
+    fn drop_without_commit_deletes_temp_and_keeps_old_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.txt");
+        std::fs::write(&out, b"old").unwrap();
+        let mut f = AtomicFile::create(&out).unwrap();
+        let temp = f.temp_path().to_path_buf();
+        f.write_all(b"partial").unwrap();
+        drop(f);
+        assert_eq!(std::fs::read(&out).unwrap(), b"old");
+        assert_eq!(names(dir.path()), ["out.txt"]);
+        assert!(!is_registered(&temp));
+    }
+
+    #[test]
+    fn missing_directory_is_an_io_error_naming_the_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("no/such/dir/out.ply");
+        let e = AtomicFile::create(&out).unwrap_err();
+        assert!(matches!(&e, Error::Io { path, .. } if path == &out), "{e}");
+        assert!(e.to_string().contains("no/such/dir/out.ply"), "{e}");
+    }
+
+    #[test]
+    fn bare_file_name_uses_current_directory() {
+        assert_eq!(parent_dir(Path::new("out.ply")), Path::new("."));
+        assert_eq!(parent_dir(Path::new("a/out.ply")), Path::new("a"));
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn committed_file_is_not_owner_only() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.txt");
+        AtomicFile::create(&out).unwrap().commit().unwrap();
+        let mode = std::fs::metadata(&out).unwrap().permissions().mode();
+        // Whatever the umask, "group/other" bits beyond the owner's are not forced to zero when the
+        // umask allows them; at least the owner can read and write.
+        assert_eq!(mode & 0o600, 0o600);
+    }
+
+    /// The clean-up the interrupt handler runs, without sending a signal, on a registry of its own
+    /// (the process-wide one is shared with the other tests running in parallel).
+    #[test]
+    fn cleanup_deletes_registered_files_and_dirs() {
+        static LOCAL: TempRegistry = TempRegistry::new();
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("spill.bin");
+        std::fs::write(&file, b"x").unwrap();
+        let sub = dir.path().join("spills");
+        std::fs::create_dir(&sub).unwrap();
+        std::fs::write(sub.join("a"), b"a").unwrap();
+        let gone = dir.path().join("already-gone");
+        let kept = dir.path().join("kept.bin");
+        std::fs::write(&kept, b"k").unwrap();
+        let r1 = LOCAL.register(file.clone(), TempKind::File);
+        let _r2 = LOCAL.register(sub.clone(), TempKind::Dir);
+        let _r3 = LOCAL.register(gone.clone(), TempKind::File);
+        let r4 = LOCAL.register(kept.clone(), TempKind::File);
+        drop(r4);
+        assert_eq!(LOCAL.paths().len(), 3);
+        assert_eq!(LOCAL.cleanup(), 2);
+        assert!(!file.exists() && !sub.exists() && kept.exists());
+        assert!(LOCAL.paths().is_empty());
+        drop(r1); // unregistering after the clean-up is harmless
+        assert_eq!(LOCAL.cleanup(), 0);
+    }
+
+    #[test]
+    fn registered_temp_dir_is_deleted_on_drop() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = RegisteredTempDir::new_in(dir.path()).unwrap();
+        let p = t.path().to_path_buf();
+        std::fs::write(p.join("chunk-0"), b"data").unwrap();
+        assert!(is_registered(&p));
+        drop(t);
+        assert!(!p.exists());
+        assert!(!is_registered(&p));
+    }
+
+    #[test]
+    fn seek_back_and_rewrite() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.bin");
+        let mut f = AtomicFile::create(&out).unwrap();
+        f.write_all(b"AAAA-body").unwrap();
+        f.seek(SeekFrom::Start(0)).unwrap();
+        f.write_all(b"BBBB").unwrap();
+        f.seek(SeekFrom::End(0)).unwrap();
+        f.write_all(b"-end").unwrap();
+        f.commit().unwrap();
+        assert_eq!(std::fs::read(&out).unwrap(), b"BBBB-body-end");
+    }
+}

@@ -1,0 +1,301 @@
+//! Streaming LandXML 1.2 TIN surface writer (what Civil 3D, Novapoint and other civil tools
+//! import).
+//!
+//! ```xml
+//! <LandXML xmlns="http://www.landxml.org/schema/LandXML-1.2" version="1.2" date=… time=…>
+//!   <Units><Metric linearUnit="meter" …/></Units>
+//!   <CoordinateSystem epsgCode="3794"/>          (or ogcWktCode="…"; only with a CRS)
+//!   <Application name="sweeptin" version="…"/>
+//!   <Surfaces><Surface name="STEM"><Definition surfType="TIN">
+//!     <Pnts><P id="1">NORTHING EASTING ELEVATION</P>…</Pnts>
+//!     <Faces><F>1 2 3</F>…</Faces>
+//!   </Definition></Surface></Surfaces>
+//! </LandXML>
+//! ```
+//!
+//! **Coordinate order.** LandXML writes every point as "northing easting elevation", that is
+//! `y x z` (LandXML 1.2 schema: `PointType` is "north east elev"; Autodesk's Civil 3D LandXML
+//! notes: "all coordinate locations are always treated as Northing, Easting, Elevation (or Y, X,
+//! Z)"). This writer follows that: `<P>` holds `y x z`.
+//!
+//! Point ids are 1-based vertex numbers; a face lists the ids of its three points in the order
+//! given to [`MeshSink::triangle`] (counter-clockwise seen from above in `x, y`). Units are
+//! declared as metres. Comments from [`MeshMeta`] become XML comments.
+//!
+//! `<Pnts>` must precede `<Faces>`, so faces are spooled (binary, 24 bytes each) to an anonymous
+//! temporary file and appended at [`finish`](MeshSink::finish); vertices are written straight
+//! away. Memory use is bounded by the I/O buffers.
+
+use super::atomic::AtomicFile;
+use super::sink::{MeshMeta, MeshSink, MeshSummary, SinkState, one_line};
+use crate::error::Result;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
+use std::path::Path;
+
+/// A [`MeshSink`] writing a LandXML 1.2 TIN surface.
+#[derive(Debug)]
+pub struct LandXmlWriter {
+    state: SinkState,
+    out: Option<AtomicFile>,
+    faces: Option<BufWriter<File>>,
+    line: Vec<u8>,
+}
+
+impl LandXmlWriter {
+    /// Starts writing `path`; the surface is named after the file stem; faces are spooled to the
+    /// output's directory.
+    ///
+    /// # Errors
+    /// [`crate::Error::Io`] naming `path` if the output or the spool file cannot be created.
+    pub fn create(path: &Path, meta: &MeshMeta) -> Result<Self> {
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        Self::create_with_spool_dir(path, meta, dir)
+    }
+
+    /// Like [`create`](Self::create), with the face spool file in `spool_dir`.
+    ///
+    /// # Errors
+    /// [`crate::Error::Io`] if the output or the spool file cannot be created.
+    pub fn create_with_spool_dir(path: &Path, meta: &MeshMeta, spool_dir: &Path) -> Result<Self> {
+        let state = SinkState::new(path);
+        let mut out = AtomicFile::create(path)?;
+        let spool = tempfile::tempfile_in(spool_dir).map_err(|e| state.io(e))?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "TIN".into());
+        let head = prologue(&name, meta, utc_now());
+        out.write_all(head.as_bytes()).map_err(|e| state.io(e))?;
+        Ok(LandXmlWriter {
+            state,
+            out: Some(out),
+            faces: Some(BufWriter::with_capacity(1 << 20, spool)),
+            line: Vec::with_capacity(128),
+        })
+    }
+
+    fn finish_inner(&mut self) -> Result<MeshSummary> {
+        self.state.finish()?;
+        let (Some(mut out), Some(faces)) = (self.out.take(), self.faces.take()) else {
+            return Err(self.state.error("the mesh writer was already finished"));
+        };
+        let io = |e| self.state.io(e);
+        let mut spool = faces.into_inner().map_err(|e| io(e.into_error()))?;
+        spool.seek(SeekFrom::Start(0)).map_err(io)?;
+        out.write_all(b"</Pnts>\n<Faces>\n").map_err(io)?;
+        let mut reader = BufReader::with_capacity(1 << 20, spool);
+        let mut rec = [0u8; 24];
+        let mut digits = itoa::Buffer::new();
+        for _ in 0..self.state.triangles {
+            reader.read_exact(&mut rec).map_err(io)?;
+            self.line.clear();
+            self.line.extend_from_slice(b"<F>");
+            for (k, chunk) in rec.chunks_exact(8).enumerate() {
+                if k > 0 {
+                    self.line.push(b' ');
+                }
+                let mut b = [0u8; 8];
+                b.copy_from_slice(chunk);
+                let id = u64::from_le_bytes(b) + 1;
+                self.line.extend_from_slice(digits.format(id).as_bytes());
+            }
+            self.line.extend_from_slice(b"</F>\n");
+            out.write_all(&self.line).map_err(io)?;
+        }
+        out.write_all(EPILOGUE.as_bytes()).map_err(io)?;
+        let bytes = out.commit()?;
+        Ok(self.state.summary(bytes))
+    }
+}
+
+const EPILOGUE: &str = "</Faces>\n</Definition>\n</Surface>\n</Surfaces>\n</LandXML>\n";
+
+impl MeshSink for LandXmlWriter {
+    fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
+        self.state.vertex(p)?;
+        self.line.clear();
+        // Writing into a Vec cannot fail. LandXML order: northing (y), easting (x), elevation.
+        let _ = writeln!(
+            self.line,
+            "<P id=\"{}\">{} {} {}</P>",
+            self.state.vertices, p[1], p[0], p[2]
+        );
+        match self.out.as_mut() {
+            Some(out) => out.write_all(&self.line).map_err(|e| self.state.io(e)),
+            None => Err(self.state.error("the mesh writer was already finished")),
+        }
+    }
+
+    fn triangle(&mut self, t: [u64; 3]) -> Result<()> {
+        self.state.triangle(t, u64::MAX - 1)?;
+        let mut rec = [0u8; 24];
+        for (chunk, i) in rec.chunks_exact_mut(8).zip(t) {
+            chunk.copy_from_slice(&i.to_le_bytes());
+        }
+        match self.faces.as_mut() {
+            Some(faces) => faces.write_all(&rec).map_err(|e| self.state.io(e)),
+            None => Err(self.state.error("the mesh writer was already finished")),
+        }
+    }
+
+    fn finish(&mut self) -> Result<MeshSummary> {
+        let result = self.finish_inner();
+        self.out = None;
+        self.faces = None;
+        result
+    }
+}
+
+/// Everything up to and including `<Pnts>`.
+fn prologue(surface: &str, meta: &MeshMeta, (date, time): (String, String)) -> String {
+    let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    s.push_str(&format!(
+        "<LandXML xmlns=\"http://www.landxml.org/schema/LandXML-1.2\" \
+         xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" \
+         xsi:schemaLocation=\"http://www.landxml.org/schema/LandXML-1.2 \
+         http://www.landxml.org/schema/LandXML-1.2/LandXML-1.2.xsd\" \
+         date=\"{date}\" time=\"{time}\" version=\"1.2\" language=\"English\" readOnly=\"false\">\n"
+    ));
+    for c in meta.comment_lines() {
+        s.push_str(&format!("<!-- {} -->\n", xml_comment(&c)));
+    }
+    s.push_str(
+        "<Units><Metric areaUnit=\"squareMeter\" linearUnit=\"meter\" volumeUnit=\"cubicMeter\" \
+         temperatureUnit=\"celsius\" pressureUnit=\"milliBars\" diameterUnit=\"millimeter\" \
+         angularUnit=\"decimal degrees\" directionUnit=\"decimal degrees\"/></Units>\n",
+    );
+    if let Some(code) = meta.epsg_code() {
+        s.push_str(&format!(
+            "<CoordinateSystem name=\"EPSG:{code}\" epsgCode=\"{code}\"/>\n"
+        ));
+    } else if let Some(crs) = &meta.crs {
+        s.push_str(&format!(
+            "<CoordinateSystem ogcWktCode=\"{}\"/>\n",
+            xml_escape(&one_line(crs))
+        ));
+    }
+    s.push_str(&format!(
+        "<Application name=\"sweeptin\" manufacturer=\"sweeptin\" version=\"{}\"/>\n",
+        env!("CARGO_PKG_VERSION")
+    ));
+    s.push_str(&format!(
+        "<Surfaces>\n<Surface name=\"{}\">\n<Definition surfType=\"TIN\">\n<Pnts>\n",
+        xml_escape(surface)
+    ));
+    s
+}
+
+/// Escapes text for an XML attribute value or element content.
+fn xml_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c if (c as u32) < 0x20 => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// Text safe inside `<!-- … -->`: no `--`, and not ending in `-`.
+fn xml_comment(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if c == '-' && out.ends_with('-') {
+            out.push(' ');
+        }
+        out.push(if (c as u32) < 0x20 { ' ' } else { c });
+    }
+    if out.ends_with('-') {
+        out.push(' ');
+    }
+    out
+}
+
+/// Current UTC date (`YYYY-MM-DD`) and time (`HH:MM:SS`).
+fn utc_now() -> (String, String) {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    utc_from_unix(secs)
+}
+
+/// Date and time of a Unix timestamp (proleptic Gregorian calendar, UTC).
+fn utc_from_unix(secs: u64) -> (String, String) {
+    let days = (secs / 86_400) as i64;
+    let rem = secs % 86_400;
+    // Days to civil date (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    (
+        format!("{year:04}-{month:02}-{day:02}"),
+        format!("{:02}:{:02}:{:02}", rem / 3600, rem / 60 % 60, rem % 60),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dates() {
+        assert_eq!(utc_from_unix(0), ("1970-01-01".into(), "00:00:00".into()));
+        assert_eq!(
+            utc_from_unix(951_782_400 + 3661),
+            ("2000-02-29".into(), "01:01:01".into())
+        );
+        assert_eq!(
+            utc_from_unix(1_798_761_599),
+            ("2026-12-31".into(), "23:59:59".into())
+        );
+    }
+
+    #[test]
+    fn escaping() {
+        assert_eq!(xml_escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&apos;");
+        assert_eq!(xml_comment("a--b-"), "a- -b- ");
+        assert_eq!(xml_comment("a---b"), "a- - -b");
+    }
+
+    #[test]
+    fn prologue_records_crs() {
+        let date = ("2026-01-02".to_string(), "03:04:05".to_string());
+        let epsg = MeshMeta {
+            crs: Some("EPSG:3794".into()),
+            comments: vec!["made -- here".into()],
+        };
+        let p = prologue("my <tin>", &epsg, date.clone());
+        assert!(
+            p.contains("<CoordinateSystem name=\"EPSG:3794\" epsgCode=\"3794\"/>"),
+            "{p}"
+        );
+        assert!(p.contains("<!-- made - - here -->"), "{p}");
+        assert!(p.contains("<Surface name=\"my &lt;tin&gt;\">"), "{p}");
+        assert!(p.contains("date=\"2026-01-02\" time=\"03:04:05\""), "{p}");
+        let wkt = MeshMeta {
+            crs: Some("PROJCS[\"D96 / TM\",\n GEOGCS[\"x\"]]".into()),
+            comments: vec![],
+        };
+        let p = prologue("t", &wkt, date);
+        assert!(
+            p.contains("<CoordinateSystem ogcWktCode=\"PROJCS[&quot;D96 / TM&quot;, GEOGCS[&quot;x&quot;]]\"/>"),
+            "{p}"
+        );
+    }
+}

@@ -1,0 +1,172 @@
+//! Streaming binary little-endian PLY writer.
+//!
+//! PLY wants both counts in the header and all vertices before all faces, while a streaming
+//! triangulation interleaves them. So the writer
+//! 1. writes a header with placeholder counts, padded by a `comment` line so that the header has
+//!    the same length whatever the final counts are (up to 20 digits each);
+//! 2. writes vertices straight after it, into the output's temporary file;
+//! 3. spools faces, already encoded, to an anonymous temporary file;
+//! 4. at [`finish`](MeshSink::finish), rewrites the header in place with the true counts and
+//!    appends the spooled faces; then commits the [`AtomicFile`].
+//!
+//! Memory use is two I/O buffers, whatever the mesh size.
+//!
+//! Layout: `element vertex N` with `property double x`, `y`, `z`; `element face M` with
+//! `property list uchar uint vertex_indices`.
+
+use super::atomic::AtomicFile;
+use super::sink::{MeshMeta, MeshSink, MeshSummary, SinkState};
+use crate::error::Result;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Seek, SeekFrom, Write};
+use std::path::Path;
+
+/// Width reserved for the two counts together, in decimal digits (20 digits each fits any `u64`).
+const COUNT_DIGITS: usize = 40;
+
+/// Bytes of one encoded face: the count `3u8` and three little-endian `u32`s.
+const FACE_BYTES: usize = 13;
+
+/// A [`MeshSink`] writing binary little-endian PLY.
+#[derive(Debug)]
+pub struct PlyWriter {
+    state: SinkState,
+    comments: Vec<String>,
+    out: Option<AtomicFile>,
+    faces: Option<BufWriter<File>>,
+    header_len: usize,
+}
+
+impl PlyWriter {
+    /// Starts writing `path`; faces are spooled to the output's directory.
+    ///
+    /// # Errors
+    /// [`crate::Error::Io`] naming `path` if the output or the spool file cannot be created.
+    pub fn create(path: &Path, meta: &MeshMeta) -> Result<Self> {
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        Self::create_with_spool_dir(path, meta, dir)
+    }
+
+    /// Like [`create`](Self::create), with the face spool file in `spool_dir`.
+    ///
+    /// # Errors
+    /// [`crate::Error::Io`] if the output or the spool file cannot be created.
+    pub fn create_with_spool_dir(path: &Path, meta: &MeshMeta, spool_dir: &Path) -> Result<Self> {
+        let state = SinkState::new(path);
+        let mut out = AtomicFile::create(path)?;
+        let spool = tempfile::tempfile_in(spool_dir).map_err(|e| state.io(e))?;
+        let comments = meta.comment_lines();
+        let header = header(&comments, 0, 0);
+        out.write_all(header.as_bytes()).map_err(|e| state.io(e))?;
+        Ok(PlyWriter {
+            state,
+            comments,
+            out: Some(out),
+            faces: Some(BufWriter::with_capacity(1 << 20, spool)),
+            header_len: header.len(),
+        })
+    }
+
+    fn finish_inner(&mut self) -> Result<MeshSummary> {
+        self.state.finish()?;
+        let (Some(mut out), Some(faces)) = (self.out.take(), self.faces.take()) else {
+            return Err(self.state.error("the mesh writer was already finished"));
+        };
+        let io = |e| self.state.io(e);
+        let mut spool = faces.into_inner().map_err(|e| io(e.into_error()))?;
+        spool.seek(SeekFrom::Start(0)).map_err(io)?;
+        let header = header(&self.comments, self.state.vertices, self.state.triangles);
+        if header.len() != self.header_len {
+            return Err(crate::Error::Internal(format!(
+                "PLY header changed length ({} -> {} bytes)",
+                self.header_len,
+                header.len()
+            )));
+        }
+        out.seek(SeekFrom::Start(0)).map_err(io)?;
+        out.write_all(header.as_bytes()).map_err(io)?;
+        out.seek(SeekFrom::End(0)).map_err(io)?;
+        let copied =
+            std::io::copy(&mut BufReader::with_capacity(1 << 20, spool), &mut out).map_err(io)?;
+        if copied != self.state.triangles * FACE_BYTES as u64 {
+            return Err(crate::Error::Internal(format!(
+                "PLY face spool holds {copied} bytes for {} faces",
+                self.state.triangles
+            )));
+        }
+        let bytes = out.commit()?;
+        Ok(self.state.summary(bytes))
+    }
+}
+
+/// The header; its length does not depend on the counts.
+fn header(comments: &[String], vertices: u64, faces: u64) -> String {
+    let mut h = String::from("ply\nformat binary_little_endian 1.0\n");
+    for c in comments {
+        h.push_str("comment ");
+        h.push_str(c);
+        h.push('\n');
+    }
+    let (v, f) = (vertices.to_string(), faces.to_string());
+    // Trailing spaces in a comment line keep the header length fixed; readers ignore comments.
+    h.push_str("comment");
+    h.push_str(&" ".repeat(COUNT_DIGITS - v.len() - f.len()));
+    h.push('\n');
+    h.push_str(&format!(
+        "element vertex {v}\nproperty double x\nproperty double y\nproperty double z\n\
+         element face {f}\nproperty list uchar uint vertex_indices\nend_header\n"
+    ));
+    h
+}
+
+impl MeshSink for PlyWriter {
+    fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
+        self.state.vertex(p)?;
+        let mut rec = [0u8; 24];
+        for (chunk, c) in rec.chunks_exact_mut(8).zip(p) {
+            chunk.copy_from_slice(&c.to_le_bytes());
+        }
+        match self.out.as_mut() {
+            Some(out) => out.write_all(&rec).map_err(|e| self.state.io(e)),
+            None => Err(self.state.error("the mesh writer was already finished")),
+        }
+    }
+
+    fn triangle(&mut self, t: [u64; 3]) -> Result<()> {
+        self.state.triangle(t, u64::from(u32::MAX))?;
+        let mut rec = [3u8; FACE_BYTES];
+        for (chunk, i) in rec[1..].chunks_exact_mut(4).zip(t) {
+            chunk.copy_from_slice(&(i as u32).to_le_bytes());
+        }
+        match self.faces.as_mut() {
+            Some(faces) => faces.write_all(&rec).map_err(|e| self.state.io(e)),
+            None => Err(self.state.error("the mesh writer was already finished")),
+        }
+    }
+
+    fn finish(&mut self) -> Result<MeshSummary> {
+        let result = self.finish_inner();
+        // On error, drop the outputs now so the temporary files go away at once.
+        self.out = None;
+        self.faces = None;
+        result
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_length_is_fixed() {
+        let c = vec!["generated by test".to_string()];
+        let n = header(&c, 0, 0).len();
+        assert_eq!(header(&c, 123, 4567).len(), n);
+        assert_eq!(header(&c, u64::MAX, u64::MAX).len(), n);
+        assert!(header(&c, 5, 6).contains("element vertex 5\n"));
+        assert!(header(&c, 5, 6).contains("element face 6\n"));
+    }
+}

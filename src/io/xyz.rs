@@ -1,0 +1,594 @@
+//! XYZ text points: `x y z` per line.
+//!
+//! The format accepted:
+//! - fields are separated by commas, semicolons, tabs or spaces; a run of separators counts as
+//!   one (so `1, 2, 3` and `1  2  3` work, and an empty field is not noticed);
+//! - blank lines, and lines whose first non-blank character is `#`, are skipped;
+//! - **header**: if the first line that is neither blank nor a comment has a first field that is
+//!   not a number (`x,y,z`, `X Y Z`, `Easting;Northing;Height`), that line is skipped as a header.
+//!   Only that one line can be a header; later non-numeric lines are errors;
+//! - the first three fields are `x`, `y`, `z`; further fields (intensity, class, colour…) are
+//!   ignored without being read;
+//! - numbers are anything Rust's `f64` parser reads (`12`, `-1.5`, `.5`, `3e2`, `+4`); the value
+//!   must be finite;
+//! - line ends may be `\n` or `\r\n`; the last line needs no line end; a UTF-8 byte-order mark at
+//!   the start is skipped.
+//!
+//! A line with fewer than three fields, a field that is not a number, or a non-finite value is an
+//! [`Error::Parse`] naming the file, the 1-based line number and the offending token.
+//!
+//! [`XyzReader`] reads in chunks with one reusable buffer and no allocation per line, for inputs
+//! far larger than memory; [`read_xyz`] reads a whole file.
+
+use crate::error::{Error, Result};
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// Size of the read buffer.
+const BUFFER: usize = 2 << 20;
+
+/// Longest line accepted (a guard against binary input growing the buffer without bound).
+pub const MAX_LINE: usize = 1 << 20;
+
+/// Reads every point of an XYZ file into memory.
+///
+/// # Errors
+/// [`Error::Io`] if the file cannot be read; [`Error::Parse`] naming the first bad line.
+pub fn read_xyz(path: impl AsRef<Path>) -> Result<Vec<[f64; 3]>> {
+    let mut reader = XyzReader::open(path)?;
+    let mut points = Vec::new();
+    reader.read_chunk(&mut points, usize::MAX)?;
+    Ok(points)
+}
+
+/// A chunked, streaming XYZ reader. See the [module docs](self) for the format.
+///
+/// ```no_run
+/// # fn main() -> sweeptin::Result<()> {
+/// let mut reader = sweeptin::io::xyz::XyzReader::open("points.xyz")?;
+/// let mut chunk = Vec::new();
+/// loop {
+///     chunk.clear();
+///     if reader.read_chunk(&mut chunk, 1 << 20)? == 0 {
+///         break;
+///     }
+///     // … sort and spill `chunk` …
+/// }
+/// # Ok(()) }
+/// ```
+#[derive(Debug)]
+pub struct XyzReader<R = File> {
+    path: PathBuf,
+    src: R,
+    buf: Box<[u8]>,
+    start: usize,
+    end: usize,
+    line: u64,
+    seen_data: bool,
+    eof: bool,
+}
+
+impl XyzReader<File> {
+    /// Opens an XYZ file.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file if it cannot be opened.
+    pub fn open(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let file = File::open(path).map_err(|e| Error::io(path, e))?;
+        Ok(Self::from_reader(file, path))
+    }
+}
+
+impl<R: Read> XyzReader<R> {
+    /// Reads XYZ text from any reader; `name` is the file name used in error messages.
+    pub fn from_reader(src: R, name: impl Into<PathBuf>) -> Self {
+        XyzReader {
+            path: name.into(),
+            src,
+            buf: vec![0u8; BUFFER].into_boxed_slice(),
+            start: 0,
+            end: 0,
+            line: 0,
+            seen_data: false,
+            eof: false,
+        }
+    }
+
+    /// The file being read.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Number of lines consumed so far (blank, comment and header lines included).
+    pub fn lines_read(&self) -> u64 {
+        self.line
+    }
+
+    /// Appends up to `max` points to `out` (which it does not clear); returns how many it
+    /// appended. `0` means the end of the file (for `max > 0`).
+    ///
+    /// # Errors
+    /// [`Error::Io`] if reading fails; [`Error::Parse`] naming the file, line and token of the
+    /// first bad line. After an error the reader should not be used further.
+    pub fn read_chunk(&mut self, out: &mut Vec<[f64; 3]>, max: usize) -> Result<usize> {
+        let mut n = 0;
+        while n < max {
+            let Some((from, to)) = self.next_line()? else {
+                break;
+            };
+            self.line += 1;
+            let mut bytes = &self.buf[from..to];
+            if self.line == 1 {
+                bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+            }
+            match parse_line(bytes) {
+                Ok(None) => {}
+                Ok(Some(p)) => {
+                    self.seen_data = true;
+                    out.push(p);
+                    n += 1;
+                }
+                Err(LineError::NotANumber { field: 0, .. }) if !self.seen_data => {
+                    self.seen_data = true; // a header line
+                }
+                Err(e) => return Err(self.parse_error(e.to_string())),
+            }
+        }
+        Ok(n)
+    }
+
+    /// The byte range in `buf` of the next line, without its `\n`; `None` at the end of input.
+    fn next_line(&mut self) -> Result<Option<(usize, usize)>> {
+        loop {
+            if let Some(k) = memchr::memchr(b'\n', &self.buf[self.start..self.end]) {
+                let from = self.start;
+                self.start += k + 1;
+                return Ok(Some((from, from + k)));
+            }
+            if self.eof {
+                if self.start < self.end {
+                    let from = self.start;
+                    self.start = self.end;
+                    return Ok(Some((from, self.end)));
+                }
+                return Ok(None);
+            }
+            self.refill()?;
+        }
+    }
+
+    /// Moves the unfinished line to the front of the buffer and reads more after it.
+    fn refill(&mut self) -> Result<()> {
+        let pending = self.end - self.start;
+        if pending >= MAX_LINE {
+            self.line += 1;
+            return Err(self.parse_error(format!(
+                "line is longer than {} bytes: is this really an XYZ text file?",
+                MAX_LINE
+            )));
+        }
+        self.buf.copy_within(self.start..self.end, 0);
+        self.start = 0;
+        self.end = pending;
+        loop {
+            match self.src.read(&mut self.buf[self.end..]) {
+                Ok(0) => {
+                    self.eof = true;
+                    return Ok(());
+                }
+                Ok(k) => {
+                    self.end += k;
+                    return Ok(());
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(Error::io(&self.path, e)),
+            }
+        }
+    }
+
+    fn parse_error(&self, message: String) -> Error {
+        Error::Parse {
+            path: self.path.clone(),
+            line: self.line,
+            message,
+        }
+    }
+}
+
+/// What is wrong with a line.
+#[derive(Debug, PartialEq)]
+enum LineError {
+    TooFew { found: usize },
+    NotANumber { field: usize, token: String },
+    NonFinite { field: usize, token: String },
+}
+
+impl std::fmt::Display for LineError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        const NAMES: [&str; 3] = ["x", "y", "z"];
+        match self {
+            LineError::TooFew { found } => write!(
+                f,
+                "expected 3 numbers (x y z), found {found} field{}",
+                if *found == 1 { "" } else { "s" }
+            ),
+            LineError::NotANumber { field, token } => {
+                write!(f, "{} is not a number: \"{token}\"", NAMES[*field])
+            }
+            LineError::NonFinite { field, token } => {
+                write!(f, "{} is not a finite number: \"{token}\"", NAMES[*field])
+            }
+        }
+    }
+}
+
+#[inline]
+fn is_separator(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b',' | b';' | b'\r')
+}
+
+/// Parses one line (without its `\n`): `None` for blank and comment lines.
+#[inline]
+fn parse_line(bytes: &[u8]) -> std::result::Result<Option<[f64; 3]>, LineError> {
+    let mut pos = 0;
+    let mut p = [0.0; 3];
+    for (field, value) in p.iter_mut().enumerate() {
+        while pos < bytes.len() && is_separator(bytes[pos]) {
+            pos += 1;
+        }
+        if pos == bytes.len() {
+            return if field == 0 {
+                Ok(None)
+            } else {
+                Err(LineError::TooFew { found: field })
+            };
+        }
+        if field == 0 && bytes[pos] == b'#' {
+            return Ok(None);
+        }
+        let from = pos;
+        let (end, fast) = scan_field(bytes, pos);
+        pos = end;
+        *value = match fast {
+            Some(v) => v,
+            None => parse_number(&bytes[from..end], field)?,
+        };
+    }
+    Ok(Some(p))
+}
+
+/// Finds the end of the field starting at `pos` and, in the same pass, computes its value when
+/// it is a plain decimal that [`fast_decimal`]'s exact fast path covers.
+#[inline]
+fn scan_field(bytes: &[u8], mut pos: usize) -> (usize, Option<f64>) {
+    let negative = bytes[pos] == b'-';
+    if negative || bytes[pos] == b'+' {
+        pos += 1;
+    }
+    let mut mantissa: u64 = 0;
+    let mut count = 0u32;
+    let mut point = usize::MAX;
+    let mut plain = true;
+    while pos < bytes.len() {
+        let b = bytes[pos];
+        let digit = b.wrapping_sub(b'0');
+        if digit < 10 {
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit));
+            count += 1;
+        } else if b == b'.' && point == usize::MAX {
+            point = pos + 1;
+        } else if is_separator(b) {
+            break;
+        } else {
+            plain = false;
+        }
+        pos += 1;
+    }
+    let scale = if point == usize::MAX { 0 } else { pos - point };
+    if !plain || count == 0 || count > 19 || mantissa >= 1 << 53 || scale >= POW10.len() {
+        return (pos, None);
+    }
+    let value = mantissa as f64 / POW10[scale];
+    (pos, Some(if negative { -value } else { value }))
+}
+
+/// Parses a field that the fast path did not cover: `str::parse`, then the finiteness check.
+fn parse_number(token: &[u8], field: usize) -> std::result::Result<f64, LineError> {
+    let text = || {
+        let s = String::from_utf8_lossy(token);
+        if s.chars().count() > 40 {
+            s.chars().take(40).chain("…".chars()).collect()
+        } else {
+            s.into_owned()
+        }
+    };
+    let value = fast_decimal(token)
+        .or_else(|| std::str::from_utf8(token).ok()?.parse::<f64>().ok())
+        .ok_or_else(|| LineError::NotANumber {
+            field,
+            token: text(),
+        })?;
+    if !value.is_finite() {
+        return Err(LineError::NonFinite {
+            field,
+            token: text(),
+        });
+    }
+    Ok(value)
+}
+
+/// Exact powers of ten representable in `f64`.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Clinger's fast path for plain decimals (`[+-]digits[.digits]`, no exponent): when the digits
+/// form an integer `m < 2^53` and there are at most 22 of them after the point, both `m` and
+/// `10^k` are exact in `f64` and one IEEE division gives the correctly rounded value, the same
+/// bits `str::parse` gives. Anything else returns `None` and goes to `str::parse`.
+#[inline]
+fn fast_decimal(token: &[u8]) -> Option<f64> {
+    let (negative, digits) = match token.first()? {
+        b'-' => (true, &token[1..]),
+        b'+' => (false, &token[1..]),
+        _ => (false, token),
+    };
+    let mut mantissa: u64 = 0;
+    let mut count = 0usize;
+    let mut fraction: Option<usize> = None;
+    for (i, &b) in digits.iter().enumerate() {
+        match b {
+            b'0'..=b'9' => {
+                if count >= 19 {
+                    return None;
+                }
+                mantissa = mantissa * 10 + u64::from(b - b'0');
+                count += 1;
+            }
+            b'.' if fraction.is_none() => fraction = Some(i + 1),
+            _ => return None,
+        }
+    }
+    if count == 0 || mantissa >= 1 << 53 {
+        return None;
+    }
+    let scale = fraction.map_or(0, |f| digits.len() - f);
+    let value = mantissa as f64 / *POW10.get(scale)?;
+    Some(if negative { -value } else { value })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read_str(s: impl AsRef<[u8]>) -> Result<Vec<[f64; 3]>> {
+        let mut r = XyzReader::from_reader(s.as_ref(), "test.xyz");
+        let mut v = Vec::new();
+        r.read_chunk(&mut v, usize::MAX)?;
+        Ok(v)
+    }
+
+    fn err_of(s: impl AsRef<[u8]>) -> (u64, String) {
+        match read_str(s).unwrap_err() {
+            Error::Parse {
+                path,
+                line,
+                message,
+            } => {
+                assert_eq!(path, Path::new("test.xyz"));
+                (line, message)
+            }
+            e => panic!("unexpected error {e}"),
+        }
+    }
+
+    #[test]
+    fn separators_comments_header_extra_columns() {
+        let text = "\u{feff}# comment\n\nX;Y;Z;Intensity\n1,2,3\n4\t5\t6\t99 class\n  7 8 9\r\n\
+                    1e1; -2.5 ; .5\n  # indented comment\n+1,2,3,,,\n10 20 30";
+        let v = read_str(text).unwrap();
+        assert_eq!(
+            v,
+            vec![
+                [1.0, 2.0, 3.0],
+                [4.0, 5.0, 6.0],
+                [7.0, 8.0, 9.0],
+                [10.0, -2.5, 0.5],
+                [1.0, 2.0, 3.0],
+                [10.0, 20.0, 30.0]
+            ]
+        );
+    }
+
+    #[test]
+    fn header_only_on_first_data_line() {
+        assert_eq!(read_str("x y z\n1 2 3\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        assert_eq!(
+            err_of("1 2 3\nx y z\n"),
+            (2, "x is not a number: \"x\"".into())
+        );
+        // A numeric first field makes it a data line, which then must be fully numeric.
+        assert_eq!(err_of("1 y z\n"), (1, "y is not a number: \"y\"".into()));
+        assert!(read_str("").unwrap().is_empty());
+        assert!(read_str("x,y,z\n").unwrap().is_empty());
+    }
+
+    #[test]
+    fn errors_name_line_and_token() {
+        assert_eq!(
+            err_of("1 2 3\n\n4 5\n"),
+            (3, "expected 3 numbers (x y z), found 2 fields".into())
+        );
+        assert_eq!(
+            err_of("1 2 3\n4\n"),
+            (2, "expected 3 numbers (x y z), found 1 field".into())
+        );
+        assert_eq!(
+            err_of("1 2 3\n4 5 abc\n"),
+            (2, "z is not a number: \"abc\"".into())
+        );
+        assert_eq!(
+            err_of("1 2 3\n4 NaN 6\n"),
+            (2, "y is not a finite number: \"NaN\"".into())
+        );
+        assert_eq!(
+            err_of("1 2 inf"),
+            (1, "z is not a finite number: \"inf\"".into())
+        );
+        assert_eq!(
+            err_of("1 2 1e999"),
+            (1, "z is not a finite number: \"1e999\"".into())
+        );
+        assert_eq!(
+            err_of(b"1 2 3\n4 5 6\xff\n").1,
+            "z is not a number: \"6\u{fffd}\""
+        );
+    }
+
+    #[test]
+    fn long_tokens_are_truncated_in_messages() {
+        let (_, m) = err_of(format!("1 2 {}\n", "a".repeat(100)));
+        assert!(m.chars().count() < 70 && m.contains('…'), "{m}");
+    }
+
+    #[test]
+    fn chunks_cover_everything_in_order() {
+        let mut text = String::from("x y z\n");
+        for i in 0..1000 {
+            text.push_str(&format!("{i} {} {}\n", i * 2, i % 7));
+        }
+        let mut r = XyzReader::from_reader(text.as_bytes(), "t.xyz");
+        let mut all = Vec::new();
+        let mut chunk = Vec::new();
+        loop {
+            chunk.clear();
+            let n = r.read_chunk(&mut chunk, 64).unwrap();
+            assert_eq!(n, chunk.len());
+            if n == 0 {
+                break;
+            }
+            assert!(n <= 64);
+            all.extend_from_slice(&chunk);
+        }
+        assert_eq!(all.len(), 1000);
+        assert_eq!(all[999], [999.0, 1998.0, 5.0]);
+        assert_eq!(r.lines_read(), 1001);
+    }
+
+    /// A reader that hands out one byte at a time, so every line straddles a buffer refill.
+    struct Trickle<'a>(&'a [u8]);
+    impl Read for Trickle<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.0.is_empty() || buf.is_empty() {
+                return Ok(0);
+            }
+            buf[0] = self.0[0];
+            self.0 = &self.0[1..];
+            Ok(1)
+        }
+    }
+
+    #[test]
+    fn lines_split_across_reads() {
+        let text = b"x y z\r\n1.25 2 3\r\n4 5 6";
+        let mut r = XyzReader::from_reader(Trickle(text), "t.xyz");
+        let mut v = Vec::new();
+        r.read_chunk(&mut v, 10).unwrap();
+        assert_eq!(v, vec![[1.25, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    }
+
+    #[test]
+    fn overlong_line_is_an_error_not_unbounded_memory() {
+        let text = vec![b'1'; MAX_LINE + 10];
+        let mut r = XyzReader::from_reader(&text[..], "t.xyz");
+        let e = r.read_chunk(&mut Vec::new(), 10).unwrap_err();
+        assert!(matches!(e, Error::Parse { line: 1, .. }), "{e}");
+    }
+
+    #[test]
+    fn fast_path_matches_std_parse() {
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            r
+        };
+        let mut tokens: Vec<String> = [
+            "0",
+            "-0",
+            "+0",
+            "0.",
+            ".0",
+            "5.",
+            ".5",
+            "-.5",
+            "1.",
+            "00012.5000",
+            "9007199254740991",
+            "9007199254740992",
+            "9007199254740993",
+            "0.1",
+            "0.30000000000000004",
+            "1234567890123456789",
+            "12345678901234567890",
+            "1.0000000000000000000001",
+            "0.0000000000000000000001",
+            "0.00000000000000000000001",
+            "511176.115",
+            "-122746.065",
+            "1e3",
+            ".",
+            "-",
+            "+",
+            "",
+            "1.2.3",
+            "1-2",
+            "--1",
+            "0x10",
+            "1_0",
+            "١",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        for _ in 0..20_000 {
+            let int = next() % 10_000_000;
+            let frac = next() % 1_000_000;
+            let width = (next() % 9) as usize;
+            let sign = ["", "-", "+"][(next() % 3) as usize];
+            tokens.push(format!("{sign}{int}.{frac:0width$}"));
+            tokens.push(format!("{}", f64::from_bits(next() >> 2)));
+        }
+        for t in &tokens {
+            let fast = fast_decimal(t.as_bytes());
+            let std = t.parse::<f64>().ok();
+            if let Some(v) = fast {
+                assert_eq!(Some(v.to_bits()), std.map(f64::to_bits), "{t:?}");
+            }
+            let full = parse_number(t.as_bytes(), 0).ok();
+            let want = std.filter(|v| v.is_finite());
+            assert_eq!(full.map(f64::to_bits), want.map(f64::to_bits), "{t:?}");
+            if !t.is_empty() {
+                let line = parse_line(format!("{t},0 {t}\t{t}\r").as_bytes())
+                    .ok()
+                    .flatten();
+                let want = want.map(|v| [v.to_bits(), 0, v.to_bits()]);
+                assert_eq!(line.map(|p| p.map(f64::to_bits)), want, "{t:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn round_trips_shortest_decimal() {
+        let vals: [f64; 5] = [0.1, 1.0 / 3.0, 511_500.025, -1e-300, 123_456_789.123_456_79];
+        let text: String = vals.iter().map(|v| format!("{v} {v} {v}\n")).collect();
+        let v = read_str(&text).unwrap();
+        for (p, want) in v.iter().zip(vals) {
+            assert_eq!(p[0].to_bits(), want.to_bits());
+        }
+    }
+}
