@@ -71,7 +71,9 @@ pub enum Error {
     },
 
     /// Points were handed to the sweep out of (y, x) order or twice.
-    #[error("point {index} is out of sweep order: points must arrive sorted by (y, x) and distinct")]
+    #[error(
+        "point {index} is out of sweep order: points must arrive sorted by (y, x) and distinct"
+    )]
     OutOfOrder {
         /// Index of the offending point in the order it was given.
         index: u64,
@@ -106,6 +108,10 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+
+    /// A reader was given no input files.
+    #[error("no input files given")]
+    NoInput,
 
     /// A mesh failed validation.
     #[error("mesh is not a valid Delaunay triangulation: {0}")]
