@@ -516,7 +516,7 @@ fn multi_file_combination_rules() {
     // One file declares EPSG:7415, the other nothing: accepted, the declared CRS is kept.
     assert_eq!(r.crs().and_then(|c| c.epsg), Some(7415));
     assert_eq!(r.quantization().offset, [84980.0, 446230.0, 0.0]);
-    let (alone, r_alone) = read_all(&[ahn.clone()], &Filter::default());
+    let (alone, r_alone) = read_all(std::slice::from_ref(&ahn), &Filter::default());
     let shifted = &both[39_233..];
     assert_eq!(shifted.len(), alone.len());
     for (s, a) in shifted.iter().zip(&alone) {

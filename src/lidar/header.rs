@@ -100,9 +100,15 @@ pub(crate) fn las_message(e: &las::Error) -> String {
         las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
             "unexpected end of file: the file is truncated".to_string()
         }
-        las::Error::LasZipError(laz::LasZipError::IoError(io))
-            if io.kind() == std::io::ErrorKind::UnexpectedEof =>
-        {
+        las::Error::LasZipError(laz) => laz_message(laz),
+        other => other.to_string(),
+    }
+}
+
+/// Turns an error of the `laz` crate into a message a user can act on.
+pub(crate) fn laz_message(e: &laz::LasZipError) -> String {
+    match e {
+        laz::LasZipError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
             "unexpected end of compressed data: the file is truncated".to_string()
         }
         other => other.to_string(),
@@ -197,12 +203,21 @@ fn check_raw_header(path: &Path, raw: &las::raw::Header, file_len: u64) -> Resul
         ));
     }
     let data_start = u64::from(raw.offset_to_point_data);
-    if data_start < u64::from(raw.header_size) || data_start > file_len {
+    if data_start < u64::from(raw.header_size) {
         return Err(format_error(
             path,
             format!(
-                "offset to point data {data_start} is outside the file (header size {}, file size {file_len} bytes)",
+                "offset to point data {data_start} is smaller than the header size {}",
                 raw.header_size
+            ),
+        ));
+    }
+    if data_start > file_len {
+        return Err(format_error(
+            path,
+            format!(
+                "the point data should start at byte {data_start}, but the file has only \
+                 {file_len} bytes: the file is truncated or its header is damaged"
             ),
         ));
     }
@@ -333,7 +348,8 @@ fn check_laz(
     let table_at = chunk_table_offset(path, file, file_len, data_start)?;
     let n_chunks = read_chunk_count(path, file, table_at)?;
     let points = header.number_of_points();
-    let max_chunks = file_len.min(points);
+    // Every chunk holds at least one byte and one point (writers may add one empty chunk).
+    let max_chunks = file_len.min(points.saturating_add(1));
     if n_chunks > max_chunks {
         return Err(format_error(
             path,
@@ -343,20 +359,93 @@ fn check_laz(
             ),
         ));
     }
+    if points == 0 {
+        return Ok(()); // nothing will be decompressed
+    }
     if n_chunks == 0 {
-        if points > 0 {
-            return Err(format_error(
-                path,
-                format!("the LAZ chunk table is empty but the header announces {points} points"),
-            ));
-        }
-        return Ok(());
+        return Err(format_error(
+            path,
+            format!("the LAZ chunk table is empty but the header announces {points} points"),
+        ));
     }
     file.seek(SeekFrom::Start(data_start))
         .map_err(|e| Error::io(path, e))?;
-    let table = laz::laszip::ChunkTable::read_from(BufReader::new(&mut *file), &vlr)
-        .map_err(|e| format_error(path, format!("cannot read the LAZ chunk table: {e}")))?;
-    check_chunk_entries(path, &table, &vlr, points, table_at - (data_start + 8))
+    let table =
+        laz::laszip::ChunkTable::read_from(BufReader::new(&mut *file), &vlr).map_err(|e| {
+            format_error(
+                path,
+                format!("cannot read the LAZ chunk table: {}", laz_message(&e)),
+            )
+        })?;
+    check_chunk_entries(path, &table, &vlr, points, table_at - (data_start + 8))?;
+    if let Some(layers) = layer_count(&vlr) {
+        check_layers(path, file, &table, &vlr, data_start + 8, layers)?;
+    }
+    Ok(())
+}
+
+/// Number of layer sizes at the start of each chunk of a *layered* LAZ file (point formats
+/// 6–10), or `None` for point-wise compression. Layer sizes are `u32`s the decoder trusts when
+/// it sizes its buffers, hence [`check_layers`].
+fn layer_count(vlr: &laz::LazVlr) -> Option<u64> {
+    use laz::LazItemType as T;
+    let items = vlr.items();
+    if !items.iter().any(|i| matches!(i.item_type(), T::Point14)) {
+        return None;
+    }
+    Some(
+        items
+            .iter()
+            .map(|i| match i.item_type() {
+                T::Point14 => 9,
+                T::RGBNIR14 => 2,
+                T::Byte14(n) => u64::from(n),
+                _ => 1,
+            })
+            .sum(),
+    )
+}
+
+/// Each layered chunk starts with one raw point, a point count and the layer sizes; their sum
+/// must fit in the chunk's bytes.
+fn check_layers(
+    path: &Path,
+    file: &mut File,
+    table: &laz::laszip::ChunkTable,
+    vlr: &laz::LazVlr,
+    first_chunk_at: u64,
+    layers: u64,
+) -> Result<()> {
+    let head_len = vlr.items_size() + 4;
+    let mut sizes = vec![0u8; (layers * 4) as usize];
+    let mut at = first_chunk_at;
+    let entries: &[laz::laszip::ChunkTableEntry] = table.as_ref();
+    for (i, e) in entries.iter().enumerate() {
+        let damaged = |what: &str| {
+            format_error(
+                path,
+                format!("LAZ chunk {i} (at byte {at}) is damaged: {what}"),
+            )
+        };
+        if e.byte_count < head_len + 4 * layers {
+            return Err(damaged("it is too short to hold its layer sizes"));
+        }
+        file.seek(SeekFrom::Start(at + head_len))
+            .and_then(|_| file.read_exact(&mut sizes))
+            .map_err(|e| Error::io(path, e))?;
+        let total: u64 = sizes
+            .chunks_exact(4)
+            .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+            .sum();
+        if head_len + 4 * layers + total > e.byte_count {
+            return Err(damaged(&format!(
+                "its layers claim {total} bytes, more than the chunk's {} bytes",
+                e.byte_count
+            )));
+        }
+        at += e.byte_count;
+    }
+    Ok(())
 }
 
 /// Where the chunk table starts, found the way LASzip does: the 8 bytes at the start of the

@@ -4,7 +4,7 @@ use super::LidarPoint;
 use super::combine::{FileMap, FileQuant, Quantization, combine};
 use super::crs::Crs;
 use super::filter::{CompiledFilter, Filter, FilterStats, Verdict};
-use super::header::{Bounds3, FileInfo, format_error, inspect, las_message};
+use super::header::{Bounds3, FileInfo, format_error, inspect, las_message, laz_message};
 use crate::error::{Error, Result};
 use std::fs::File;
 use std::io::{BufReader, Read};
@@ -298,7 +298,12 @@ impl Current {
                 format_error(path, format!("invalid LASzip VLR: {}", las_message(&e)))
             })?;
             guarded(path, || {
-                let laz_err = |e: laz::LasZipError| format_error(path, laz_message(&e));
+                let laz_err = |e: laz::LasZipError| {
+                    format_error(
+                        path,
+                        format!("cannot decompress the points: {}", laz_message(&e)),
+                    )
+                };
                 Ok(if parallel {
                     Decoder::ParLaz(Box::new(
                         laz::ParLasZipDecompressor::new(read, vlr).map_err(laz_err)?,
@@ -335,6 +340,12 @@ impl Current {
         self.pos = 0;
         let buf = &mut self.buf;
         let decoder = &mut self.decoder;
+        let laz_err = |e: laz::LasZipError| {
+            format_error(
+                path,
+                format!("cannot decompress the points: {}", laz_message(&e)),
+            )
+        };
         guarded(path, || match decoder {
             Decoder::Las(read) => read.read_exact(buf).map_err(|e| {
                 if e.kind() == std::io::ErrorKind::UnexpectedEof {
@@ -345,10 +356,8 @@ impl Current {
             }),
             Decoder::Laz(d) => d
                 .decompress_many(buf)
-                .map_err(|e| format_error(path, laz_message(&laz::LasZipError::IoError(e)))),
-            Decoder::ParLaz(d) => d
-                .decompress_many(buf)
-                .map_err(|e| format_error(path, laz_message(&e))),
+                .map_err(|e| laz_err(laz::LasZipError::IoError(e))),
+            Decoder::ParLaz(d) => d.decompress_many(buf).map_err(laz_err),
         })?;
         self.remaining -= n as u64;
         Ok(())
@@ -381,15 +390,6 @@ impl Current {
             }
         }
         Ok(())
-    }
-}
-
-fn laz_message(e: &laz::LasZipError) -> String {
-    match e {
-        laz::LasZipError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
-            "unexpected end of compressed data: the file is truncated".to_string()
-        }
-        other => format!("cannot decompress the points: {other}"),
     }
 }
 
