@@ -71,9 +71,7 @@ pub enum Error {
     },
 
     /// Points were handed to the sweep out of (y, x) order or twice.
-    #[error(
-        "point {index} is out of sweep order: points must arrive sorted by (y, x) and distinct"
-    )]
+    #[error("point {index} is out of sweep order: points must arrive sorted by (y, x) and distinct")]
     OutOfOrder {
         /// Index of the offending point in the order it was given.
         index: u64,
