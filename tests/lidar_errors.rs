@@ -369,6 +369,36 @@ fn corrupt_laz_chunk_table_and_counts() {
     assert!(msg.contains("chunk 0") && msg.contains("damaged"), "{msg}");
 }
 
+/// Damage past the header is found while reading; the reader then stops for good.
+#[test]
+fn damage_found_while_reading_stops_the_reader() {
+    let dir = tmp();
+    let full = dir.path().join("r.las");
+    // Bigger than the reader's 1 MB read buffer.
+    write_cloud(&full, 1, [0.01; 3], [0.0; 3], &grid(100_000));
+    let ok = dir.path().join("ok.las");
+    write_cloud(&ok, 1, [0.01; 3], [0.0; 3], &grid(10));
+    let options = sweeptin::lidar::ReadOptions {
+        parallel: false,
+        batch_points: 1000,
+    };
+    let mut r = LidarReader::open_with(&[&full, &ok], &Filter::keep_all(), options).unwrap();
+    let mut out = Vec::new();
+    assert_eq!(r.read_chunk(&mut out, 150).unwrap(), 150);
+    // Truncate the file behind the reader's back.
+    let bytes = std::fs::read(&full).unwrap();
+    std::fs::write(&full, &bytes[..bytes.len() / 2]).unwrap();
+    let e = loop {
+        match r.read_chunk(&mut out, 10_000) {
+            Ok(0) => panic!("the truncation went unnoticed"),
+            Ok(_) => {}
+            Err(e) => break e,
+        }
+    };
+    assert!(format_message(&e, &full).contains("truncated"));
+    assert_eq!(r.read_chunk(&mut out, 100).unwrap(), 0);
+}
+
 /// Deterministic byte mutations all over small LAS and LAZ files: every outcome is `Ok` or a
 /// clean error, never a panic or an abort.
 #[test]

@@ -191,9 +191,20 @@ impl LidarReader {
     ///
     /// # Errors
     /// [`Error::Io`] or [`Error::Format`] if a file turns out to be damaged while reading, or a
-    /// coordinate does not fit in 32 bits after conversion to the common integer system.
+    /// coordinate does not fit in 32 bits after conversion to the common integer system. After
+    /// an error the reader is finished: later calls return 0. Points appended before the error
+    /// stay in `out`.
     pub fn read_chunk(&mut self, out: &mut Vec<LidarPoint>, max: usize) -> Result<usize> {
         let start = out.len();
+        if let Err(e) = self.fill(out, start, max) {
+            self.current = None;
+            self.next_source = self.sources.len();
+            return Err(e);
+        }
+        Ok(out.len() - start)
+    }
+
+    fn fill(&mut self, out: &mut Vec<LidarPoint>, start: usize, max: usize) -> Result<()> {
         while out.len() - start < max {
             let cur = match &mut self.current {
                 Some(c) if !c.exhausted() => c,
@@ -212,7 +223,7 @@ impl LidarReader {
             let room = max - (out.len() - start);
             cur.decode_into(out, room, source, &self.filter, &mut self.stats)?;
         }
-        Ok(out.len() - start)
+        Ok(())
     }
 
     /// Reads every remaining point that passes the filter.
