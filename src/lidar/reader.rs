@@ -171,9 +171,14 @@ impl LidarReader {
         self.sources.iter().map(|s| s.info.point_count).sum()
     }
 
-    /// Union of the files' header bounds (real-world units).
+    /// Union of the header bounds of the files that have points (real-world units; all zero
+    /// when no file has points).
     pub fn bounds(&self) -> Bounds3 {
-        let mut it = self.sources.iter().map(|s| s.info.bounds);
+        let mut it = self
+            .sources
+            .iter()
+            .filter(|s| s.info.point_count > 0)
+            .map(|s| s.info.bounds);
         let first = it.next().unwrap_or(Bounds3 {
             min: [0.0; 3],
             max: [0.0; 3],
