@@ -118,6 +118,9 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A reader was given no input files.
+    #[error("no input files given")]
+    NoInput,
 
     /// A mesh failed validation.
     #[error("mesh is not a valid Delaunay triangulation: {0}")]

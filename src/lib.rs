@@ -19,6 +19,7 @@
 
 pub mod error;
 pub mod io;
+pub mod lidar;
 pub mod points;
 pub mod predicates;
 pub mod sweep;

@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod check;
+mod info;
 mod tin;
 
 /// Exact, bounded-memory Delaunay terrain models from lidar point clouds.
@@ -23,6 +24,8 @@ enum Command {
     Tin(tin::Args),
     /// Validate a mesh: orientation, adjacency, Delaunay property, convex hull, Euler count.
     Check(check::Args),
+    /// Show what LAS/LAZ headers say: version, format, counts, bounds, scale/offset, CRS.
+    Info(info::Args),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -35,6 +38,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Tin(a) => tin::run(a),
         Command::Check(a) => check::run(a),
+        Command::Info(a) => info::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

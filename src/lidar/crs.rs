@@ -1,0 +1,318 @@
+//! Coordinate reference systems found in LAS/LAZ headers.
+//!
+//! A LAS file declares its CRS in one of two ways:
+//! - **GeoTIFF keys** (LAS ≤ 1.3, and legacy point formats in 1.4): a `LASF_Projection` VLR 34735
+//!   holding a GeoKey directory. We read `ProjectedCSTypeGeoKey` (3072), else
+//!   `GeographicTypeGeoKey` (2048), as the EPSG code, `VerticalCSTypeGeoKey` (4096) as the vertical
+//!   EPSG code, and the citation keys as the name.
+//! - **OGC WKT** (`LASF_Projection` record 2112, required for point formats 6–10): we keep the WKT
+//!   text, and read the name of its outermost object and that object's own
+//!   `AUTHORITY["EPSG", …]` (WKT1) or `ID["EPSG", …]` (WKT2) as the EPSG code. A `VERT_CS` /
+//!   `VERTCRS` child of a compound CRS gives the vertical code.
+//!
+//! The WKT is never interpreted beyond that: outputs carry it through unchanged.
+
+use serde::Serialize;
+use std::fmt;
+
+/// A coordinate reference system as declared in a file's header.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Crs {
+    /// EPSG code of the whole CRS (projected, geographic or compound), if the file gives one.
+    pub epsg: Option<u32>,
+    /// EPSG code of the vertical CRS, if the file gives one separately.
+    pub vertical_epsg: Option<u32>,
+    /// Human-readable name (WKT name or GeoTIFF citation), if any.
+    pub name: Option<String>,
+    /// The WKT text, when the CRS was declared as WKT.
+    pub wkt: Option<String>,
+}
+
+impl Crs {
+    /// The CRS as one string for outputs: the WKT text when the file has one (lossless),
+    /// otherwise `"EPSG:h"` or `"EPSG:h+v"` (horizontal + vertical, as PROJ spells compounds).
+    /// `None` when neither a WKT nor an EPSG code is known.
+    pub fn definition(&self) -> Option<String> {
+        if let Some(wkt) = &self.wkt {
+            return Some(wkt.clone());
+        }
+        match (self.epsg, self.vertical_epsg) {
+            (Some(h), Some(v)) => Some(format!("EPSG:{h}+{v}")),
+            (Some(h), None) => Some(format!("EPSG:{h}")),
+            (None, _) => None,
+        }
+    }
+
+    /// Do two declarations describe the same CRS? Equal EPSG codes when both have one, otherwise
+    /// equal WKT text, otherwise equal names.
+    pub fn same_as(&self, other: &Crs) -> bool {
+        match (self.epsg, other.epsg) {
+            (Some(a), Some(b)) => a == b && self.vertical_epsg == other.vertical_epsg,
+            _ if self.wkt.is_some() || other.wkt.is_some() => self.wkt == other.wkt,
+            _ => self.name == other.name && self.vertical_epsg == other.vertical_epsg,
+        }
+    }
+
+    /// Reads the CRS from a WKT VLR payload (`None` if the text is empty).
+    pub fn from_wkt_bytes(bytes: &[u8]) -> Option<Crs> {
+        let text = String::from_utf8_lossy(bytes);
+        let text = text.trim_matches(|c: char| c == '\0' || c.is_whitespace());
+        if text.is_empty() {
+            return None;
+        }
+        let mut crs = Crs {
+            wkt: Some(text.to_string()),
+            ..Crs::default()
+        };
+        if let Some(root) = wkt::parse(text) {
+            crs.name = root.first_string().map(str::to_string);
+            crs.epsg = root.epsg();
+            crs.vertical_epsg = root
+                .children()
+                .find(|c| matches!(c.keyword.as_str(), "VERT_CS" | "VERTCRS" | "VERTICALCRS"))
+                .and_then(wkt::Node::epsg);
+        }
+        Some(crs)
+    }
+
+    /// Reads the CRS from parsed GeoTIFF keys (`None` if they name no CRS at all).
+    pub fn from_geotiff(keys: &las::crs::GeoTiffCrs) -> Option<Crs> {
+        let code = |v: Option<u16>| v.filter(|k| (1024..=32766).contains(k)).map(u32::from);
+        let epsg = code(keys.get_projected_crs_geo_key_value())
+            .or_else(|| code(keys.get_geodetic_crs_geo_key_value()));
+        let vertical_epsg = code(keys.get_vertical_crs_geo_key_value());
+        // GTCitationGeoKey, PCSCitationGeoKey, GeogCitationGeoKey, in that order of preference.
+        let name = [1026u16, 3073, 2049].iter().find_map(|id| {
+            keys.entries
+                .iter()
+                .find(|e| e.id == *id)
+                .and_then(|e| match &e.data {
+                    las::crs::GeoTiffData::String(s) => {
+                        let s = s.trim_end_matches(['|', '\0']).trim();
+                        (!s.is_empty()).then(|| s.to_string())
+                    }
+                    _ => None,
+                })
+        });
+        if epsg.is_none() && vertical_epsg.is_none() && name.is_none() {
+            return None;
+        }
+        Some(Crs {
+            epsg,
+            vertical_epsg,
+            name,
+            wkt: None,
+        })
+    }
+}
+
+impl fmt::Display for Crs {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut parts = Vec::new();
+        if let Some(h) = self.epsg {
+            parts.push(format!("EPSG:{h}"));
+        }
+        if let Some(v) = self.vertical_epsg {
+            parts.push(format!("vertical EPSG:{v}"));
+        }
+        if let Some(n) = &self.name {
+            parts.push(format!("\"{n}\""));
+        }
+        if self.wkt.is_some() {
+            parts.push("(WKT)".to_string());
+        } else {
+            parts.push("(GeoTIFF keys)".to_string());
+        }
+        f.write_str(&parts.join(" "))
+    }
+}
+
+/// A minimal WKT (1 and 2) reader: just enough structure to find names and authorities.
+mod wkt {
+    /// One `KEYWORD[arg, …]` object.
+    #[derive(Debug)]
+    pub(super) struct Node {
+        pub(super) keyword: String,
+        pub(super) args: Vec<Arg>,
+    }
+
+    /// An argument: a quoted string, a bare token (number or enum), or a nested object.
+    #[derive(Debug)]
+    pub(super) enum Arg {
+        Text(String),
+        Bare(String),
+        Node(Node),
+    }
+
+    impl Node {
+        pub(super) fn first_string(&self) -> Option<&str> {
+            self.args.iter().find_map(|a| match a {
+                Arg::Text(s) => Some(s.as_str()),
+                _ => None,
+            })
+        }
+
+        pub(super) fn children(&self) -> impl Iterator<Item = &Node> {
+            self.args.iter().filter_map(|a| match a {
+                Arg::Node(n) => Some(n),
+                _ => None,
+            })
+        }
+
+        /// The EPSG code of this object's own `AUTHORITY`/`ID` child.
+        pub(super) fn epsg(&self) -> Option<u32> {
+            self.children()
+                .filter(|c| c.keyword == "AUTHORITY" || c.keyword == "ID")
+                .find_map(|c| {
+                    let mut it = c.args.iter();
+                    let auth = match it.next()? {
+                        Arg::Text(s) => s,
+                        _ => return None,
+                    };
+                    if !auth.eq_ignore_ascii_case("EPSG") {
+                        return None;
+                    }
+                    match it.next()? {
+                        Arg::Text(s) | Arg::Bare(s) => s.trim().parse().ok(),
+                        Arg::Node(_) => None,
+                    }
+                })
+        }
+    }
+
+    /// Parses the first object of `text`; `None` if it is not well-formed.
+    pub(super) fn parse(text: &str) -> Option<Node> {
+        let chars: Vec<char> = text.chars().collect();
+        let mut pos = 0;
+        parse_node(&chars, &mut pos, 0)
+    }
+
+    const MAX_DEPTH: usize = 64;
+
+    fn skip_ws(c: &[char], pos: &mut usize) {
+        while *pos < c.len() && c[*pos].is_whitespace() {
+            *pos += 1;
+        }
+    }
+
+    fn parse_node(c: &[char], pos: &mut usize, depth: usize) -> Option<Node> {
+        if depth > MAX_DEPTH {
+            return None;
+        }
+        skip_ws(c, pos);
+        let start = *pos;
+        while *pos < c.len() && (c[*pos].is_alphanumeric() || c[*pos] == '_') {
+            *pos += 1;
+        }
+        let keyword: String = c[start..*pos].iter().collect::<String>().to_uppercase();
+        skip_ws(c, pos);
+        if keyword.is_empty() || *pos >= c.len() || !matches!(c[*pos], '[' | '(') {
+            return None;
+        }
+        *pos += 1;
+        let mut args = Vec::new();
+        loop {
+            skip_ws(c, pos);
+            match c.get(*pos)? {
+                ']' | ')' => {
+                    *pos += 1;
+                    return Some(Node { keyword, args });
+                }
+                ',' => *pos += 1,
+                '"' => args.push(Arg::Text(parse_quoted(c, pos)?)),
+                _ => args.push(parse_bare_or_node(c, pos, depth)?),
+            }
+        }
+    }
+
+    fn parse_quoted(c: &[char], pos: &mut usize) -> Option<String> {
+        *pos += 1;
+        let mut s = String::new();
+        loop {
+            let ch = *c.get(*pos)?;
+            *pos += 1;
+            if ch == '"' {
+                if c.get(*pos) == Some(&'"') {
+                    s.push('"');
+                    *pos += 1;
+                } else {
+                    return Some(s);
+                }
+            } else {
+                s.push(ch);
+            }
+        }
+    }
+
+    fn parse_bare_or_node(c: &[char], pos: &mut usize, depth: usize) -> Option<Arg> {
+        let start = *pos;
+        while *pos < c.len() && !matches!(c[*pos], ',' | ']' | ')' | '[' | '(') {
+            *pos += 1;
+        }
+        if matches!(c.get(*pos), Some('[' | '(')) {
+            *pos = start;
+            return parse_node(c, pos, depth + 1).map(Arg::Node);
+        }
+        let token: String = c[start..*pos].iter().collect();
+        Some(Arg::Bare(token.trim().to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const RD_NAP: &str = r#"COMPD_CS["Amersfoort / RD New + NAP height",PROJCS["Amersfoort / RD New",GEOGCS["Amersfoort",AUTHORITY["EPSG","4289"]],AUTHORITY["EPSG","28992"]],VERT_CS["NAP height",VERT_DATUM["Normaal Amsterdams Peil",2005,AUTHORITY["EPSG","5109"]],AUTHORITY["EPSG","5709"]],AUTHORITY["EPSG","7415"]]"#;
+
+    #[test]
+    fn wkt1_compound() {
+        let crs = Crs::from_wkt_bytes(format!("{RD_NAP}\0\0").as_bytes()).unwrap();
+        assert_eq!(crs.epsg, Some(7415));
+        assert_eq!(crs.vertical_epsg, Some(5709));
+        assert_eq!(
+            crs.name.as_deref(),
+            Some("Amersfoort / RD New + NAP height")
+        );
+        assert_eq!(crs.definition().as_deref(), Some(RD_NAP));
+    }
+
+    #[test]
+    fn wkt2_id() {
+        let wkt = r#"PROJCRS["RGF93 v1 / Lambert-93", BASEGEOGCRS["RGF93 v1", ID["EPSG", 4171]], ID["EPSG", 2154]]"#;
+        let crs = Crs::from_wkt_bytes(wkt.as_bytes()).unwrap();
+        assert_eq!(crs.epsg, Some(2154));
+        assert_eq!(crs.name.as_deref(), Some("RGF93 v1 / Lambert-93"));
+    }
+
+    #[test]
+    fn wkt_without_authority_or_malformed() {
+        let crs = Crs::from_wkt_bytes(br#"PROJCS["local", GEOGCS["x"]]"#).unwrap();
+        assert_eq!(crs.epsg, None);
+        assert_eq!(crs.name.as_deref(), Some("local"));
+        let bad = Crs::from_wkt_bytes(b"PROJCS[\"unterminated").unwrap();
+        assert_eq!(bad.epsg, None);
+        assert!(bad.wkt.is_some());
+        assert!(Crs::from_wkt_bytes(b"\0\0  ").is_none());
+        let deep = "A[".repeat(1000);
+        assert_eq!(Crs::from_wkt_bytes(deep.as_bytes()).unwrap().epsg, None);
+    }
+
+    #[test]
+    fn definitions() {
+        let c = Crs {
+            epsg: Some(2949),
+            ..Crs::default()
+        };
+        assert_eq!(c.definition().as_deref(), Some("EPSG:2949"));
+        let c = Crs {
+            epsg: Some(2949),
+            vertical_epsg: Some(5713),
+            ..Crs::default()
+        };
+        assert_eq!(c.definition().as_deref(), Some("EPSG:2949+5713"));
+        assert!(!c.same_as(&Crs {
+            epsg: Some(2949),
+            ..Crs::default()
+        }));
+    }
+}

@@ -1,0 +1,597 @@
+//! Header facts of one LAS/LAZ file, and the checks that make damaged files fail cleanly.
+//!
+//! [`FileInfo::read`] reads the header, the VLRs and (for LAZ) the chunk table, and checks them
+//! against the file's length *before* any decoder sees the file. The decoders trust these numbers
+//! when they size their buffers, so a damaged header could otherwise make them allocate
+//! absurd amounts of memory or panic. Every problem becomes an [`Error::Format`] naming the file.
+
+use super::crs::Crs;
+use crate::error::{Error, Result};
+use serde::Serialize;
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+
+/// Size of an EVLR header in bytes.
+const EVLR_HEADER_LEN: u64 = 60;
+/// The LASzip VLR's user id and record id.
+const LASZIP_USER_ID: &str = "laszip encoded";
+const LASZIP_RECORD_ID: u16 = 22204;
+
+/// Minimum and maximum of x, y and z in real-world units, as stored in a header.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Bounds3 {
+    /// Minimum x, y, z.
+    pub min: [f64; 3],
+    /// Maximum x, y, z.
+    pub max: [f64; 3],
+}
+
+impl Bounds3 {
+    /// The smallest box containing both.
+    pub fn union(&self, other: &Bounds3) -> Bounds3 {
+        Bounds3 {
+            min: std::array::from_fn(|a| self.min[a].min(other.min[a])),
+            max: std::array::from_fn(|a| self.max[a].max(other.max[a])),
+        }
+    }
+}
+
+/// What a LAS/LAZ file's header says about it.
+#[derive(Clone, Debug, Serialize)]
+pub struct FileInfo {
+    /// The file.
+    pub path: PathBuf,
+    /// LAS version as written in the file, e.g. `(1, 4)`.
+    pub version: (u8, u8),
+    /// Point data record format, 0–10 (without the LAZ compression bit).
+    pub point_format: u8,
+    /// Whether the points are LASzip-compressed (LAZ).
+    pub compressed: bool,
+    /// Bytes per point record, including extra bytes.
+    pub record_length: u16,
+    /// Extra bytes per record beyond the point format's standard fields.
+    pub extra_bytes: u16,
+    /// The number of points the reader will read: the legacy count when it is non-zero,
+    /// else the LAS 1.4 extended count (the rule of the LAS 1.4 specification, R15).
+    pub point_count: u64,
+    /// The legacy 32-bit "number of point records" field.
+    pub legacy_point_count: u32,
+    /// The LAS 1.4 64-bit "number of point records" field (`None` before LAS 1.4).
+    pub extended_point_count: Option<u64>,
+    /// Bounds stored in the header (real-world units).
+    pub bounds: Bounds3,
+    /// Scale factors for x, y, z.
+    pub scale: [f64; 3],
+    /// Offsets for x, y, z.
+    pub offset: [f64; 3],
+    /// The declared coordinate reference system, if any.
+    pub crs: Option<Crs>,
+    /// Header "system identifier".
+    pub system_identifier: String,
+    /// Header "generating software".
+    pub generating_software: String,
+    /// Oddities that do not stop reading (unreadable CRS VLR, disagreeing point counts…).
+    pub warnings: Vec<String>,
+}
+
+impl FileInfo {
+    /// Reads and checks the header of a LAS/LAZ file (and, for LAZ, its chunk table).
+    /// Does not read the points.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if the file cannot be opened; [`Error::Format`] if it is empty, not a
+    /// LAS/LAZ file, truncated, or its header or chunk table is inconsistent.
+    pub fn read(path: impl AsRef<Path>) -> Result<FileInfo> {
+        inspect(path.as_ref())
+    }
+}
+
+pub(crate) fn format_error(path: &Path, message: impl Into<String>) -> Error {
+    Error::Format {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+/// Turns an error of the `las` crate into a message a user can act on.
+pub(crate) fn las_message(e: &las::Error) -> String {
+    match e {
+        las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "unexpected end of file: the file is truncated".to_string()
+        }
+        las::Error::LasZipError(laz) => laz_message(laz),
+        other => other.to_string(),
+    }
+}
+
+/// Turns an error of the `laz` crate into a message a user can act on.
+pub(crate) fn laz_message(e: &laz::LasZipError) -> String {
+    match e {
+        laz::LasZipError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "unexpected end of compressed data: the file is truncated".to_string()
+        }
+        other => other.to_string(),
+    }
+}
+
+/// Opens, checks and describes one file.
+pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
+    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let file_len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    let mut read = BufReader::new(file);
+    check_signature(path, &mut read, file_len)?;
+    read.seek(SeekFrom::Start(0))
+        .map_err(|e| Error::io(path, e))?;
+    let raw = las::raw::Header::read_from(&mut read)
+        .map_err(|e| format_error(path, format!("cannot read the header: {}", las_message(&e))))?;
+    check_raw_header(path, &raw, file_len)?;
+    check_evlr(path, &mut read, &raw, file_len)?;
+    read.seek(SeekFrom::Start(0))
+        .map_err(|e| Error::io(path, e))?;
+    let header = las::Header::new(&mut read)
+        .map_err(|e| format_error(path, format!("invalid header: {}", las_message(&e))))?;
+    let point_count = header.number_of_points();
+    let data_start = u64::from(raw.offset_to_point_data);
+    if header.point_format().is_compressed {
+        check_laz(path, read.get_mut(), &header, file_len, data_start)?;
+    } else {
+        check_las_length(path, &raw, point_count, file_len)?;
+    }
+    Ok(describe(path, &raw, &header))
+}
+
+fn check_signature(path: &Path, read: &mut impl Read, file_len: u64) -> Result<()> {
+    if file_len == 0 {
+        return Err(format_error(
+            path,
+            "the file is empty (0 bytes): not a LAS/LAZ file",
+        ));
+    }
+    let mut start = [0u8; 16];
+    let n = read_up_to(read, &mut start).map_err(|e| Error::io(path, e))?;
+    if n < 4 || &start[..4] != b"LASF" {
+        let shown: String = start[..n]
+            .iter()
+            .map(|&b| {
+                if b.is_ascii_graphic() || b == b' ' {
+                    b as char
+                } else {
+                    '.'
+                }
+            })
+            .collect();
+        return Err(format_error(
+            path,
+            format!(
+                "not a LAS/LAZ file: it starts with \"{shown}\" instead of the signature \"LASF\""
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn read_up_to(read: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match read.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
+}
+
+fn check_raw_header(path: &Path, raw: &las::raw::Header, file_len: u64) -> Result<()> {
+    let (major, minor) = (raw.version.major, raw.version.minor);
+    if major != 1 || minor > 4 {
+        return Err(format_error(
+            path,
+            format!("unsupported LAS version {major}.{minor} (supported: 1.0 to 1.4)"),
+        ));
+    }
+    if raw.header_size < raw.version.header_size() {
+        return Err(format_error(
+            path,
+            format!(
+                "header size {} is smaller than the {} bytes of a LAS {major}.{minor} header",
+                raw.header_size,
+                raw.version.header_size()
+            ),
+        ));
+    }
+    let data_start = u64::from(raw.offset_to_point_data);
+    if data_start < u64::from(raw.header_size) {
+        return Err(format_error(
+            path,
+            format!(
+                "offset to point data {data_start} is smaller than the header size {}",
+                raw.header_size
+            ),
+        ));
+    }
+    if data_start > file_len {
+        return Err(format_error(
+            path,
+            format!(
+                "the point data should start at byte {data_start}, but the file has only \
+                 {file_len} bytes: the file is truncated or its header is damaged"
+            ),
+        ));
+    }
+    let scales = [raw.x_scale_factor, raw.y_scale_factor, raw.z_scale_factor];
+    let offsets = [raw.x_offset, raw.y_offset, raw.z_offset];
+    for (a, axis) in ["x", "y", "z"].iter().enumerate() {
+        if !(scales[a].is_finite() && scales[a] > 0.0) {
+            return Err(format_error(
+                path,
+                format!(
+                    "invalid {axis} scale factor {} (must be finite and > 0)",
+                    scales[a]
+                ),
+            ));
+        }
+        if !offsets[a].is_finite() {
+            return Err(format_error(
+                path,
+                format!("invalid {axis} offset {} (must be finite)", offsets[a]),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The `las` crate reads the first EVLR whole; make sure it lies inside the file.
+fn check_evlr<R: Read + Seek>(
+    path: &Path,
+    read: &mut R,
+    raw: &las::raw::Header,
+    file_len: u64,
+) -> Result<()> {
+    let Some(evlr) = raw
+        .evlr
+        .filter(|e| e.start_of_first_evlr > 0 && e.number_of_evlrs > 0)
+    else {
+        return Ok(());
+    };
+    let start = evlr.start_of_first_evlr;
+    let past_end = || {
+        format_error(
+            path,
+            format!(
+                "the extended VLR at byte {start} extends past the end of the file \
+                 ({file_len} bytes): the file is truncated or its header is damaged"
+            ),
+        )
+    };
+    if start
+        .checked_add(EVLR_HEADER_LEN)
+        .is_none_or(|end| end > file_len)
+    {
+        return Err(past_end());
+    }
+    read.seek(SeekFrom::Start(start + 20))
+        .map_err(|e| Error::io(path, e))?;
+    let mut len = [0u8; 8];
+    read.read_exact(&mut len).map_err(|e| Error::io(path, e))?;
+    let len = u64::from_le_bytes(len);
+    if (start + EVLR_HEADER_LEN)
+        .checked_add(len)
+        .is_none_or(|end| end > file_len)
+    {
+        return Err(past_end());
+    }
+    Ok(())
+}
+
+fn check_las_length(
+    path: &Path,
+    raw: &las::raw::Header,
+    point_count: u64,
+    file_len: u64,
+) -> Result<()> {
+    let data_start = u64::from(raw.offset_to_point_data);
+    let record = u64::from(raw.point_data_record_length);
+    let needed = point_count
+        .checked_mul(record)
+        .and_then(|b| b.checked_add(data_start));
+    match needed {
+        Some(end) if end <= file_len => Ok(()),
+        _ => Err(format_error(
+            path,
+            format!(
+                "the file is truncated: the header announces {point_count} points of {record} bytes \
+                 from byte {data_start}, but the file has only {file_len} bytes \
+                 (room for {} points)",
+                file_len.saturating_sub(data_start) / record.max(1)
+            ),
+        )),
+    }
+}
+
+/// Checks the LASzip VLR and the chunk table against the file length and the point count.
+fn check_laz(
+    path: &Path,
+    file: &mut File,
+    header: &las::Header,
+    file_len: u64,
+    data_start: u64,
+) -> Result<()> {
+    let has_vlr = header
+        .all_vlrs()
+        .any(|v| v.user_id == LASZIP_USER_ID && v.record_id == LASZIP_RECORD_ID);
+    if !has_vlr {
+        return Err(format_error(
+            path,
+            "the point format is marked compressed (LAZ) but the LASzip VLR is missing",
+        ));
+    }
+    let vlr = header
+        .laz_vlr()
+        .map_err(|e| format_error(path, format!("invalid LASzip VLR: {}", las_message(&e))))?;
+    let record_len = u64::from(header.point_format().len());
+    if vlr.items_size() != record_len {
+        return Err(format_error(
+            path,
+            format!(
+                "the LASzip VLR describes {}-byte points but the header says {record_len} bytes",
+                vlr.items_size()
+            ),
+        ));
+    }
+    let variable = vlr.uses_variable_size_chunks();
+    if !variable && vlr.chunk_size() == 0 {
+        return Err(format_error(path, "the LASzip VLR has a chunk size of 0"));
+    }
+    let table_at = chunk_table_offset(path, file, file_len, data_start)?;
+    let n_chunks = read_chunk_count(path, file, table_at)?;
+    let points = header.number_of_points();
+    // Every chunk holds at least one byte and one point (writers may add one empty chunk).
+    let max_chunks = file_len.min(points.saturating_add(1));
+    if n_chunks > max_chunks {
+        return Err(format_error(
+            path,
+            format!(
+                "the LAZ chunk table claims {n_chunks} chunks, impossible for {points} points \
+                 in {file_len} bytes: the file is damaged"
+            ),
+        ));
+    }
+    if points == 0 {
+        return Ok(()); // nothing will be decompressed
+    }
+    if n_chunks == 0 {
+        return Err(format_error(
+            path,
+            format!("the LAZ chunk table is empty but the header announces {points} points"),
+        ));
+    }
+    file.seek(SeekFrom::Start(data_start))
+        .map_err(|e| Error::io(path, e))?;
+    let table =
+        laz::laszip::ChunkTable::read_from(BufReader::new(&mut *file), &vlr).map_err(|e| {
+            format_error(
+                path,
+                format!("cannot read the LAZ chunk table: {}", laz_message(&e)),
+            )
+        })?;
+    check_chunk_entries(path, &table, &vlr, points, table_at - (data_start + 8))?;
+    if let Some(layers) = layer_count(&vlr) {
+        check_layers(path, file, &table, &vlr, data_start + 8, layers)?;
+    }
+    Ok(())
+}
+
+/// Number of layer sizes at the start of each chunk of a *layered* LAZ file (point formats
+/// 6–10), or `None` for point-wise compression. Layer sizes are `u32`s the decoder trusts when
+/// it sizes its buffers, hence [`check_layers`].
+fn layer_count(vlr: &laz::LazVlr) -> Option<u64> {
+    use laz::LazItemType as T;
+    let items = vlr.items();
+    if !items.iter().any(|i| matches!(i.item_type(), T::Point14)) {
+        return None;
+    }
+    Some(
+        items
+            .iter()
+            .map(|i| match i.item_type() {
+                T::Point14 => 9,
+                T::RGBNIR14 => 2,
+                T::Byte14(n) => u64::from(n),
+                _ => 1,
+            })
+            .sum(),
+    )
+}
+
+/// Each layered chunk starts with one raw point, a point count and the layer sizes; their sum
+/// must fit in the chunk's bytes.
+fn check_layers(
+    path: &Path,
+    file: &mut File,
+    table: &laz::laszip::ChunkTable,
+    vlr: &laz::LazVlr,
+    first_chunk_at: u64,
+    layers: u64,
+) -> Result<()> {
+    let head_len = vlr.items_size() + 4;
+    let mut sizes = vec![0u8; (layers * 4) as usize];
+    let mut at = first_chunk_at;
+    let entries: &[laz::laszip::ChunkTableEntry] = table.as_ref();
+    for (i, e) in entries.iter().enumerate() {
+        let damaged = |what: &str| {
+            format_error(
+                path,
+                format!("LAZ chunk {i} (at byte {at}) is damaged: {what}"),
+            )
+        };
+        if e.byte_count < head_len + 4 * layers {
+            return Err(damaged("it is too short to hold its layer sizes"));
+        }
+        file.seek(SeekFrom::Start(at + head_len))
+            .and_then(|_| file.read_exact(&mut sizes))
+            .map_err(|e| Error::io(path, e))?;
+        let total: u64 = sizes
+            .chunks_exact(4)
+            .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+            .sum();
+        if head_len + 4 * layers + total > e.byte_count {
+            return Err(damaged(&format!(
+                "its layers claim {total} bytes, more than the chunk's {} bytes",
+                e.byte_count
+            )));
+        }
+        at += e.byte_count;
+    }
+    Ok(())
+}
+
+/// Where the chunk table starts, found the way LASzip does: the 8 bytes at the start of the
+/// point data, or (when a streaming writer could not go back to fill them) the file's last 8.
+fn chunk_table_offset(path: &Path, file: &mut File, file_len: u64, data_start: u64) -> Result<u64> {
+    let read_i64 = |file: &mut File, at: u64| -> Result<i64> {
+        let mut b = [0u8; 8];
+        file.seek(SeekFrom::Start(at))
+            .and_then(|_| file.read_exact(&mut b))
+            .map_err(|e| {
+                if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                    format_error(path, "the LAZ point data is missing: the file is truncated")
+                } else {
+                    Error::io(path, e)
+                }
+            })?;
+        Ok(i64::from_le_bytes(b))
+    };
+    let mut offset = read_i64(file, data_start)?;
+    if offset <= data_start as i64 && file_len >= data_start + 16 {
+        offset = read_i64(file, file_len - 8)?;
+    }
+    if offset <= data_start as i64 {
+        return Err(format_error(
+            path,
+            "the LAZ chunk table is missing (no valid offset to it): the file is truncated or \
+             was not finished by its writer",
+        ));
+    }
+    let offset = offset as u64;
+    if offset.saturating_add(8) > file_len {
+        return Err(format_error(
+            path,
+            format!(
+                "the LAZ chunk table should start at byte {offset}, past the end of the file \
+                 ({file_len} bytes): the file is truncated"
+            ),
+        ));
+    }
+    Ok(offset)
+}
+
+fn read_chunk_count(path: &Path, file: &mut File, table_at: u64) -> Result<u64> {
+    let mut b = [0u8; 8];
+    file.seek(SeekFrom::Start(table_at))
+        .and_then(|_| file.read_exact(&mut b))
+        .map_err(|e| Error::io(path, e))?;
+    Ok(u64::from(u32::from_le_bytes([b[4], b[5], b[6], b[7]])))
+}
+
+fn check_chunk_entries(
+    path: &Path,
+    table: &laz::laszip::ChunkTable,
+    vlr: &laz::LazVlr,
+    points: u64,
+    data_bytes: u64,
+) -> Result<()> {
+    let entries: &[laz::laszip::ChunkTableEntry] = table.as_ref();
+    let mut bytes = 0u64;
+    let mut counted = 0u64;
+    for e in entries {
+        bytes = bytes.saturating_add(e.byte_count);
+        counted = counted.saturating_add(e.point_count);
+    }
+    if bytes > data_bytes {
+        return Err(format_error(
+            path,
+            format!(
+                "the LAZ chunk table lists {bytes} bytes of compressed points but only \
+                 {data_bytes} bytes precede the table: the file is damaged"
+            ),
+        ));
+    }
+    let consistent = if vlr.uses_variable_size_chunks() {
+        counted == points
+    } else {
+        let size = u64::from(vlr.chunk_size());
+        points <= counted && points > counted - size
+    };
+    if !consistent {
+        return Err(format_error(
+            path,
+            format!(
+                "the LAZ chunk table ({} chunks, {counted} points) does not match the {points} \
+                 points announced by the header: the file is damaged",
+                entries.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileInfo {
+    let mut warnings = Vec::new();
+    let extended = raw.large_file.map(|l| l.number_of_point_records);
+    let legacy = raw.number_of_point_records;
+    if let Some(ext) = extended
+        && legacy != 0
+        && u64::from(legacy) != ext
+    {
+        warnings.push(format!(
+            "legacy point count {legacy} differs from the LAS 1.4 count {ext}; using {legacy} \
+             (LAS 1.4 R15 rule)"
+        ));
+    }
+    let crs = read_crs(header, &mut warnings);
+    let format = header.point_format();
+    let zero = |v: f64| v + 0.0; // turn -0.0 into 0.0
+    FileInfo {
+        path: path.to_path_buf(),
+        version: (raw.version.major, raw.version.minor),
+        point_format: raw.point_data_record_format & 0x3f,
+        compressed: format.is_compressed,
+        record_length: raw.point_data_record_length,
+        extra_bytes: format.extra_bytes,
+        point_count: header.number_of_points(),
+        legacy_point_count: legacy,
+        extended_point_count: extended,
+        bounds: Bounds3 {
+            min: [raw.min_x, raw.min_y, raw.min_z],
+            max: [raw.max_x, raw.max_y, raw.max_z],
+        },
+        scale: [raw.x_scale_factor, raw.y_scale_factor, raw.z_scale_factor],
+        offset: [zero(raw.x_offset), zero(raw.y_offset), zero(raw.z_offset)],
+        crs,
+        system_identifier: header.system_identifier().to_string(),
+        generating_software: header.generating_software().to_string(),
+        warnings,
+    }
+}
+
+/// The WKT VLR wins over GeoTIFF keys when both are present (LAS 1.4 says WKT is authoritative
+/// for the point formats that require it, and writers that emit both copy the same CRS).
+fn read_crs(header: &las::Header, warnings: &mut Vec<String>) -> Option<Crs> {
+    if let Some(crs) = header.get_wkt_crs_bytes().and_then(Crs::from_wkt_bytes) {
+        return Some(crs);
+    }
+    match header.get_geotiff_crs() {
+        Ok(Some(keys)) => Crs::from_geotiff(&keys),
+        Ok(None) => None,
+        Err(e) => {
+            warnings.push(format!(
+                "unreadable GeoTIFF CRS VLR ({}); CRS unknown",
+                las_message(&e)
+            ));
+            None
+        }
+    }
+}
