@@ -20,6 +20,7 @@
 pub mod error;
 pub mod io;
 pub mod lidar;
+pub mod pipeline;
 pub mod points;
 pub mod predicates;
 pub mod sweep;
