@@ -148,6 +148,7 @@ fn stream_set(
                 tris.push(k);
             }
             Event::VertexDone(v) => assert!(done.insert(v), "vertex {v} released twice"),
+            Event::Watermark(_) => {}
         }
     }
     assert_eq!(

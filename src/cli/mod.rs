@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 mod check;
 mod info;
+mod input;
 mod tin;
 
 /// Exact, bounded-memory Delaunay terrain models from lidar point clouds.
