@@ -183,6 +183,7 @@ fn sweep_points(
     pb: &ProgressBar,
 ) -> Result<Swept> {
     let cfg = StreamConfig {
+        x_sample: rd.x_sample.clone(),
         bounds: rd.bounds,
         expected_points: rd.points,
     };

@@ -24,6 +24,42 @@ pub(crate) struct ReadResult {
     /// Local-frame extent of the points read: `[xmin, ymin, xmax, ymax]`.
     pub bounds: [f64; 4],
     pub points: u64,
+    /// Every `2^k`-th point's local x (at most [`SAMPLE`] values), for the front's index.
+    pub x_sample: Vec<f64>,
+}
+
+/// Size of the x sample.
+const SAMPLE: usize = 4096;
+
+/// Keeps every `stride`-th value; halves the sample and doubles the stride when it is full, so it
+/// stays evenly spread over the input, deterministically.
+#[derive(Debug)]
+struct Sampler {
+    xs: Vec<f64>,
+    stride: u64,
+    seen: u64,
+}
+
+impl Sampler {
+    #[inline]
+    fn add(&mut self, x: f64) {
+        if self.seen.is_multiple_of(self.stride) {
+            if self.xs.len() == SAMPLE {
+                let mut k = 0;
+                self.xs.retain(|_| {
+                    k += 1;
+                    k % 2 == 1
+                });
+                self.stride *= 2;
+                if !self.seen.is_multiple_of(self.stride) {
+                    self.seen += 1;
+                    return;
+                }
+            }
+            self.xs.push(x);
+        }
+        self.seen += 1;
+    }
 }
 
 /// Progress callback: points read so far, and the total if known.
@@ -46,7 +82,13 @@ pub(crate) fn read_into(
         f64::NEG_INFINITY,
         f64::NEG_INFINITY,
     ];
+    let mut sample = Sampler {
+        xs: Vec::with_capacity(SAMPLE),
+        stride: 1,
+        seen: 0,
+    };
     let mut add = |s: &mut ExternalSorter, r: SortRecord| -> Result<()> {
+        sample.add(r.x);
         bounds[0] = bounds[0].min(r.x);
         bounds[1] = bounds[1].min(r.y);
         bounds[2] = bounds[2].max(r.x);
@@ -88,6 +130,7 @@ pub(crate) fn read_into(
             crs,
             bounds,
             points: n,
+            x_sample: sample.xs,
         });
     }
     if lidar > 0 {
@@ -139,6 +182,7 @@ pub(crate) fn read_into(
         crs: None,
         bounds,
         points: n,
+        x_sample: sample.xs,
     })
 }
 

@@ -52,8 +52,11 @@ pub struct StreamPoint {
 }
 
 /// What the streaming sweep knows up front.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct StreamConfig {
+    /// A sample of the points' x (any order, a few thousand values): spreads the front's
+    /// search index over the data (speed only; empty is fine).
+    pub x_sample: Vec<f64>,
     /// Extent of the data in the local frame: `[xmin, ymin, xmax, ymax]`.
     pub bounds: [f64; 4],
     /// Number of points expected (sizes the finalisation queue; need not be exact).
@@ -225,7 +228,12 @@ impl Sweep {
         fin.stats.peak_live_vertices = 1;
         let pts = vec![[f64::NAN; 2], [f64::NAN; 2], first.xy];
         let [x0, _, x1, _] = cfg.bounds;
-        Self::start(pts, Mesh::with_capacity(1024), (x0, x1), Some(fin))
+        let xmap = if cfg.x_sample.is_empty() {
+            super::front::XMap::linear(x0, x1)
+        } else {
+            super::front::XMap::from_sample(cfg.x_sample.clone())
+        };
+        Self::start(pts, Mesh::with_capacity(1024), xmap, Some(fin))
     }
 
     /// Adds the next point of a streaming sweep.
