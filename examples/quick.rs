@@ -1,9 +1,26 @@
 use std::time::Instant;
 fn main() {
-    let n: usize = std::env::args().nth(1).map(|s| s.parse().unwrap()).unwrap_or(1_000_000);
+    let args: Vec<String> = std::env::args().collect();
+    let n: usize = args.get(1).map(|s| s.parse().unwrap()).unwrap_or(1_000_000);
+    let dist = args.get(2).map(|s| s.as_str()).unwrap_or("uniform");
     let mut s: u64 = 0x9E3779B97F4A7C15;
     let mut r = move || { s ^= s << 13; s ^= s >> 7; s ^= s << 17; (s >> 11) as f64 / (1u64 << 53) as f64 };
-    let pts: Vec<[f64; 3]> = (0..n).map(|_| [r() * 1000.0, r() * 1000.0, 0.0]).collect();
+    let pts: Vec<[f64; 3]> = match dist {
+        "uniform" => (0..n).map(|_| [r() * 1000.0, r() * 1000.0, 0.0]).collect(),
+        "grid" => { let w = (n as f64).sqrt() as usize; (0..w*w).map(|i| [(i % w) as f64, (i / w) as f64, 0.0]).collect() }
+        "lidar" => {
+            // scan rows: x along row with 0.5 m spacing and jitter, rows 0.5 m apart, 1 cm quantised, UTM offset
+            let w = (n as f64).sqrt() as usize;
+            (0..n).map(|i| {
+                let row = (i / w) as f64; let col = (i % w) as f64;
+                let x = 500000.0 + col * 0.5 + (r() - 0.5) * 0.1 + row * 0.01;
+                let y = 5000000.0 + row * 0.5 + (r() - 0.5) * 0.1;
+                [(x * 100.0).round() / 100.0, (y * 100.0).round() / 100.0, 0.0]
+            }).collect()
+        }
+        "cluster" => (0..n).map(|i| { let c = (i % 50) as f64; let cx = (c * 37.0) % 1000.0; let cy = (c * 91.0) % 1000.0; let sc = 1.0 + (c % 7.0) * 10.0; [cx + (r()-0.5)*sc, cy + (r()-0.5)*sc, 0.0] }).collect(),
+        _ => panic!(),
+    };
     let t0 = Instant::now();
     let prep = sweeptin::points::prepare(&pts, Default::default()).unwrap();
     let t1 = Instant::now();
@@ -13,5 +30,9 @@ fn main() {
     let st = sw.stats();
     let (tris, _, _) = sw.finish();
     let t3 = Instant::now();
-    println!("n={n} prep {:.3}s sweep {:.3}s finish {:.3}s total {:.3}s tris {} {:?}", (t1-t0).as_secs_f64(), (t2-t1).as_secs_f64(), (t3-t2).as_secs_f64(), (t3-t0).as_secs_f64(), tris.len(), st);
+    println!("{dist} n={n} prep {:.3}s sweep {:.3}s finish {:.3}s total {:.3}s tris {} dups {} {:?}", (t1-t0).as_secs_f64(), (t2-t1).as_secs_f64(), (t3-t2).as_secs_f64(), (t3-t0).as_secs_f64(), tris.len(), prep.duplicates, st);
+    if args.get(3).map(|s| s == "check").unwrap_or(false) {
+        let mut sw = sweeptin::sweep::Sweep::new(sweeptin::points::prepare(&pts, Default::default()).unwrap().xy).unwrap();
+        sw.run(); sw.check().unwrap(); println!("check ok");
+    }
 }

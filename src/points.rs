@@ -7,7 +7,6 @@
 
 use crate::error::{Error, Result};
 use crate::predicates::{self, FIRST_REAL};
-use rayon::slice::ParallelSliceMut;
 
 /// Which point survives when several share exactly the same `(x, y)`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -89,13 +88,8 @@ pub fn prepare(points: &[[f64; 3]], policy: DuplicatePolicy) -> Result<Prepared>
             max: MAX_POINTS,
         });
     }
-    let origin = choose_origin(points)?;
-    let mut recs = to_local(points, origin)?;
-    recs.par_sort_unstable_by(|a, b| {
-        a.y.total_cmp(&b.y)
-            .then(a.x.total_cmp(&b.x))
-            .then(a.idx.cmp(&b.idx))
-    });
+    let (origin, y_range) = choose_origin(points)?;
+    let recs = sort_local(points, origin, y_range)?;
     let (xy, index) = dedupe(&recs, points, policy);
     let duplicates = total - index.len() as u64;
     Ok(Prepared {
@@ -109,8 +103,10 @@ pub fn prepare(points: &[[f64; 3]], policy: DuplicatePolicy) -> Result<Prepared>
 
 /// The bounding box's lower-left corner, if subtracting it is exact for every point; otherwise the
 /// true origin (the predicates are exact either way; a local frame keeps the magnitudes small).
-fn choose_origin(points: &[[f64; 3]]) -> Result<[f64; 2]> {
+/// Also returns the input's y range.
+fn choose_origin(points: &[[f64; 3]]) -> Result<([f64; 2], (f64, f64))> {
     let mut lo = [f64::INFINITY; 2];
+    let mut hi_y = f64::NEG_INFINITY;
     for (i, p) in points.iter().enumerate() {
         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
             return Err(Error::NonFinite {
@@ -122,14 +118,15 @@ fn choose_origin(points: &[[f64; 3]]) -> Result<[f64; 2]> {
         }
         lo[0] = lo[0].min(p[0]);
         lo[1] = lo[1].min(p[1]);
+        hi_y = hi_y.max(p[1]);
     }
     if points.is_empty() {
-        return Ok([0.0; 2]);
+        return Ok(([0.0; 2], (0.0, 0.0)));
     }
     let exact = points
         .iter()
         .all(|p| exact_diff(p[0], lo[0]) && exact_diff(p[1], lo[1]));
-    Ok(if exact { lo } else { [0.0; 2] })
+    Ok((if exact { lo } else { [0.0; 2] }, (lo[1], hi_y)))
 }
 
 /// Is `a - b` exactly representable (TwoSum error term zero)?
@@ -141,12 +138,23 @@ fn exact_diff(a: f64, b: f64) -> bool {
     (a - av) + (-b - bv) == 0.0
 }
 
-fn to_local(points: &[[f64; 3]], origin: [f64; 2]) -> Result<Vec<Rec>> {
-    let mut recs = Vec::with_capacity(points.len());
+/// Moves the points into the local frame (checking the range) and sorts them into sweep order:
+/// a counting sort into about n/32 buckets by `y`, then an exact sort of each bucket in parallel.
+/// Bucketing is monotone in `y`, so the result is exactly the order by `(y, x, input index)`.
+fn sort_local(points: &[[f64; 3]], origin: [f64; 2], y_range: (f64, f64)) -> Result<Vec<Rec>> {
+    let n = points.len();
+    let nb = (n / 32).clamp(1, 1 << 22);
+    let base = y_range.0 - origin[1];
+    let span = y_range.1 - y_range.0;
+    let scale = if span > 0.0 && span.is_finite() {
+        nb as f64 / span
+    } else {
+        0.0
+    };
+    let bucket = |y: f64| (((y - base) * scale) as usize).min(nb - 1);
+    let mut start = vec![0u32; nb + 1];
     for (i, p) in points.iter().enumerate() {
-        // `+ 0.0` turns -0.0 into +0.0 so that both compare (and sort) as one position.
-        let x = (p[0] - origin[0]) + 0.0;
-        let y = (p[1] - origin[1]) + 0.0;
+        let (x, y) = local(p, origin);
         for v in [x, y] {
             if !predicates::check_coord(v) {
                 return Err(Error::CoordinateOutOfRange {
@@ -157,9 +165,63 @@ fn to_local(points: &[[f64; 3]], origin: [f64; 2]) -> Result<Vec<Rec>> {
                 });
             }
         }
-        recs.push(Rec { x, y, idx: i as u32 });
+        start[bucket(y) + 1] += 1;
     }
+    for b in 0..nb {
+        start[b + 1] += start[b];
+    }
+    let mut recs = vec![
+        Rec {
+            x: 0.0,
+            y: 0.0,
+            idx: 0
+        };
+        n
+    ];
+    let mut fill = start.clone();
+    for (i, p) in points.iter().enumerate() {
+        let (x, y) = local(p, origin);
+        let b = bucket(y);
+        recs[fill[b] as usize] = Rec { x, y, idx: i as u32 };
+        fill[b] += 1;
+    }
+    drop(fill);
+    sort_buckets(&mut recs, &start);
     Ok(recs)
+}
+
+/// `p` in the local frame; `+ 0.0` turns -0.0 into +0.0 so both sort as one position.
+#[inline(always)]
+fn local(p: &[f64; 3], origin: [f64; 2]) -> (f64, f64) {
+    ((p[0] - origin[0]) + 0.0, (p[1] - origin[1]) + 0.0)
+}
+
+/// Sorts each bucket `recs[start[b]..start[b + 1]]`, in parallel over groups of buckets.
+fn sort_buckets(recs: &mut [Rec], start: &[u32]) {
+    use rayon::prelude::*;
+    let nb = start.len() - 1;
+    let groups = 64.min(nb);
+    let mut pieces = Vec::with_capacity(groups);
+    let mut rest = recs;
+    let mut done = 0usize;
+    for g in 0..groups {
+        let b_end = (g + 1) * nb / groups;
+        let end = start[b_end] as usize;
+        let (piece, tail) = rest.split_at_mut(end - done);
+        pieces.push((piece, &start[g * nb / groups..=b_end], done));
+        rest = tail;
+        done = end;
+    }
+    pieces.into_par_iter().for_each(|(piece, bounds, offset)| {
+        for w in bounds.windows(2) {
+            let (lo, hi) = (w[0] as usize - offset, w[1] as usize - offset);
+            piece[lo..hi].sort_unstable_by(|a, b| {
+                a.y.total_cmp(&b.y)
+                    .then(a.x.total_cmp(&b.x))
+                    .then(a.idx.cmp(&b.idx))
+            });
+        }
+    });
 }
 
 fn dedupe(recs: &[Rec], points: &[[f64; 3]], policy: DuplicatePolicy) -> (Vec<[f64; 2]>, Vec<u32>) {

@@ -297,7 +297,7 @@ fn incircle_symbolic(pts: &[[f64; 2]], ids: [u32; 4]) -> CircleSide {
     }
     let side = match n_art {
         1 => {
-            // det = M⁴·orient(b, c, d) + lower-order terms.
+            // Rows (P, b, c, d): det = M⁴·orient(b, c, d) + M²·X + M·Y + …
             let (b, p, d) = (
                 pts[order[1] as usize],
                 pts[order[2] as usize],
@@ -306,10 +306,7 @@ fn incircle_symbolic(pts: &[[f64; 2]], ids: [u32; 4]) -> CircleSide {
             match orient(b, p, d) {
                 Orientation::CounterClockwise => 1,
                 Orientation::Clockwise => -1,
-                Orientation::Collinear => {
-                    // The circle through P, b, c meets their line exactly at b and c.
-                    if strictly_between(b, p, d) { 1 } else { -1 }
-                }
+                Orientation::Collinear => collinear_lift_sign(order[0], b, p, d),
             }
         }
         2 => {
@@ -347,12 +344,26 @@ fn incircle_symbolic(pts: &[[f64; 2]], ids: [u32; 4]) -> CircleSide {
     }
 }
 
-/// Is `d` strictly between `b` and `c`, all three on one line?
-#[inline]
-fn strictly_between(b: [f64; 2], p: [f64; 2], d: [f64; 2]) -> bool {
-    let k = if b[0] != p[0] { 0 } else { 1 };
-    let (lo, hi) = if b[k] < p[k] { (b[k], p[k]) } else { (p[k], b[k]) };
-    lo < d[k] && d[k] < hi
+/// Sign of the lower-order terms of the lifted determinant with rows `(P, b, c, d)` when `b, c, d`
+/// are collinear. Parametrising the line, the lifted heights are a convex parabola, so the `M²`
+/// coefficient is a positive multiple of `(c.x - b.x)(d.x - b.x)(d.x - c.x)` (a Vandermonde
+/// determinant). On a vertical line that vanishes and the `M` coefficient decides: `∓(c.y - b.y)
+/// (d.y - b.y)(d.y - c.y)`, negative sign for `P-1` (x = -M), positive for `P-2` (x = +M).
+fn collinear_lift_sign(artificial: u32, b: [f64; 2], p: [f64; 2], d: [f64; 2]) -> i32 {
+    let sgn = |o: Ordering| match o {
+        Ordering::Greater => 1,
+        Ordering::Less => -1,
+        Ordering::Equal => 0,
+    };
+    let vandermonde = |k: usize| {
+        sgn(p[k].total_cmp(&b[k])) * sgn(d[k].total_cmp(&b[k])) * sgn(d[k].total_cmp(&p[k]))
+    };
+    let s = vandermonde(0);
+    if s != 0 {
+        return s;
+    }
+    let s = vandermonde(1);
+    if artificial == P_LEFT { -s } else { s }
 }
 
 #[cfg(test)]
@@ -405,7 +416,19 @@ mod tests {
     fn artificial_incircle_matches_large_finite_points() {
         let m = 1.0e5;
         let far = [[-m, -m * m], [m, -m * m]];
-        let real = [[0., 0.], [1., 0.], [0., 1.], [2., 1.], [-2., 3.], [0., 5.], [3., 3.]];
+        let real = [
+            [0., 0.],
+            [1., 0.],
+            [0., 1.],
+            [2., 1.],
+            [-2., 3.],
+            [0., 5.],
+            [3., 3.],
+            [2., 0.],
+            [-1., 0.],
+            [0., -2.],
+            [1., 1.],
+        ];
         let pts = table(&real);
         let coord = |v: u32| {
             if v < 2 {
