@@ -56,7 +56,9 @@ fn parse_count(s: &str) -> Result<usize> {
         Some('m' | 'M') => (&s[..s.len() - 1], 1e6),
         _ => (s, 1.0),
     };
-    let v: f64 = num.parse().with_context(|| format!("bad point count {s:?}"))?;
+    let v: f64 = num
+        .parse()
+        .with_context(|| format!("bad point count {s:?}"))?;
     if !(v >= 0.0 && v * mult < 1e12) {
         bail!("bad point count {s:?}");
     }
