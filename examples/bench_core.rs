@@ -9,15 +9,19 @@
 //! `clustered`; `n` accepts `k`/`M` suffixes (`4M` = 4,000,000). Prints one JSON line:
 //!
 //! `{"algo", "dist", "n", "seed", "threads", "repeat", "median_s", "min_s", "triangles",
-//!   "input_bytes", "peak_rss_bytes", "bytes_per_point", "times_s"}`
+//!   "input_bytes", "peak_rss_bytes", "bytes_per_point", "hwm_reset", "times_s", "peaks_bytes"}`
 //!
 //! Each repetition regenerates the input (not timed), converts it into the algorithm's layout
 //! (see `benches/support/peers.rs`), drops everything else, resets the kernel's peak-RSS mark
-//! (`echo 5 > /proc/self/clear_refs`), then times only the triangulation. `peak_rss_bytes` is the
-//! largest `VmHWM` (from `/proc/self/status`) seen after a repetition: the input in the
-//! algorithm's layout plus everything the algorithm allocated, plus the process's small baseline
-//! (about 2 MB). If the reset is not possible, the mark also covers the input generation and
-//! `"hwm_reset": false` says so. One process per (algo, dist, n), so the mark is per algorithm.
+//! (`echo 5 > /proc/self/clear_refs`), then times only the triangulation. `peak_rss_bytes` is
+//! `VmHWM` (from `/proc/self/status`) after the *first* repetition: the input in the algorithm's
+//! layout plus everything the algorithm allocated, plus the process's small baseline (about
+//! 2 MB). Later repetitions can show more, because the allocator keeps freed memory of the
+//! previous one resident (glibc raises its mmap threshold after large frees); all marks are in
+//! `peaks_bytes`. For the same reason the first repetition is the slowest (it pays the page
+//! faults of fresh memory); `times_s` lists every repetition, the first one is the cold run of a
+//! one-shot tool. If the mark cannot be reset it also covers the input generation and
+//! `"hwm_reset": false` says so. One process per (algo, dist, n).
 //!
 //! `threads` is the size of rayon's pool (only sweeptin uses it, for its sort); set it with
 //! `--threads` or `RAYON_NUM_THREADS`.
@@ -126,7 +130,8 @@ fn dump(args: &Args) -> Result<()> {
 
 fn bench(args: &Args, algo: Algo) -> Result<()> {
     let mut times = Vec::with_capacity(args.repeat);
-    let (mut triangles, mut peak, mut input_bytes, mut hwm_reset) = (0, 0, 0, true);
+    let mut peaks = Vec::with_capacity(args.repeat);
+    let (mut triangles, mut input_bytes, mut hwm_reset) = (0, 0, true);
     for _ in 0..args.repeat {
         let mut input = algo.input(args.dist.generate(args.n, args.seed));
         input_bytes = input.bytes();
@@ -134,7 +139,7 @@ fn bench(args: &Args, algo: Algo) -> Result<()> {
         let t0 = Instant::now();
         let done = peers::run(&mut input).map_err(anyhow::Error::msg)?;
         let dt = t0.elapsed().as_secs_f64();
-        peak = peak.max(status_bytes("VmHWM").unwrap_or(0));
+        peaks.push(status_bytes("VmHWM").unwrap_or(0));
         triangles = done.triangles;
         times.push(dt);
         drop(done);
@@ -143,6 +148,7 @@ fn bench(args: &Args, algo: Algo) -> Result<()> {
     let mut sorted = times.clone();
     sorted.sort_by(f64::total_cmp);
     let median = sorted[sorted.len() / 2];
+    let peak = peaks[0];
     let line = serde_json::json!({
         "algo": algo.name(),
         "dist": args.dist.name(),
@@ -158,6 +164,7 @@ fn bench(args: &Args, algo: Algo) -> Result<()> {
         "bytes_per_point": peak as f64 / args.n.max(1) as f64,
         "hwm_reset": hwm_reset,
         "times_s": times,
+        "peaks_bytes": peaks,
     });
     println!("{line}");
     Ok(())

@@ -95,9 +95,9 @@ def table(args):
         groups.setdefault((r["n"], r["dist"]), []).append(r)
     out = []
     p = out.append
-    p("| points | distribution | algorithm | median s | × fastest peer | M points/s | "
+    p("| points | distribution | algorithm | median s | 1st run s | × fastest peer | M points/s | "
       "peak RSS MB | B/point | max RSS MB (time -v) | triangles |")
-    p("|---:|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    p("|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     summary = []
     order = {"uniform": 0, "lidar-like": 1, "clustered": 2}
     for (n, dist), rs in sorted(groups.items(), key=lambda kv: (kv[0][0], order.get(kv[0][1], 9))):
@@ -109,14 +109,15 @@ def table(args):
         ref = next((r["triangles"] for r in ok if r["label"] == "sweeptin"), None)
         for r in rs:
             if "error" in r:
-                p(f"| {n:,} | {dist} | {r['label']} | failed: {r['error']} | | | | | "
+                p(f"| {n:,} | {dist} | {r['label']} | failed: {r['error']} | | | | | | "
                   f"{mb(r.get('time_max_rss_bytes'))} | |")
                 continue
             ratio = f"{r['median_s'] / fastest['median_s']:.2f}" if fastest else ""
             tri = f"{r['triangles']:,}"
             if ref is not None and r["triangles"] != ref:
                 tri += " (≠)"
-            p(f"| {n:,} | {dist} | {r['label']} | {r['median_s']:.3f} | {ratio} | "
+            first = f"{r['times_s'][0]:.3f}" if r.get("times_s") else ""
+            p(f"| {n:,} | {dist} | {r['label']} | {r['median_s']:.3f} | {first} | {ratio} | "
               f"{n / r['median_s'] / 1e6:.2f} | {mb(r['peak_rss_bytes'])} | "
               f"{r['bytes_per_point']:.0f} | {mb(r.get('time_max_rss_bytes'))} | {tri} |")
         sw = next((r for r in ok if r["label"] == "sweeptin"), None)

@@ -5,7 +5,8 @@
 // FILE holds little-endian f64 (x, y) pairs, as written by `bench_core dump`. The points are read
 // once; each repetition builds a fresh triangulation with the range insert (which spatially sorts
 // the points along a Hilbert curve first: CGAL's fast path). Only the insert is timed. Peak RSS is
-// VmHWM after resetting the mark once the input is in memory (as the Rust runner does). Prints
+// VmHWM of the first repetition, the mark reset once the input is in memory (as the Rust runner
+// does). Prints
 // one JSON line in the runner's format.
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -63,7 +64,7 @@ int main(int argc, char** argv) {
   for (long long i = 0; i < n; ++i) pts.emplace_back(raw[2 * i], raw[2 * i + 1]);
   std::vector<double>().swap(raw);
   std::vector<double> times;
-  long long peak = 0, triangles = 0;
+  long long peak = 0, triangles = 0;  // peak of the first repetition, as in the Rust runner
   bool reset = true;
   for (int r = 0; r < repeat; ++r) {
     reset = reset_hwm() && reset;
@@ -72,7 +73,7 @@ int main(int argc, char** argv) {
     dt->insert(pts.begin(), pts.end());
     auto t1 = std::chrono::steady_clock::now();
     times.push_back(std::chrono::duration<double>(t1 - t0).count());
-    peak = std::max(peak, status_bytes("VmHWM:"));
+    if (r == 0) peak = status_bytes("VmHWM:");
     triangles = dt->number_of_faces();
     delete dt;
   }

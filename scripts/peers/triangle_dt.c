@@ -87,8 +87,7 @@ int main(int argc, char **argv) {
     double t0 = now();
     triangulate(switches, &in, &out, NULL);
     times[r] = now() - t0;
-    long long hwm = status_bytes("VmHWM:");
-    if (hwm > peak) peak = hwm;
+    if (r == 0) peak = status_bytes("VmHWM:"); /* first repetition, as in the Rust runner */
     triangles = out.numberoftriangles;
     free(out.trianglelist);
     free(out.pointlist);
