@@ -1,7 +1,7 @@
 //! One benchmark run of one triangulator on one synthetic input, for `scripts/bench-core.sh`.
 //!
 //! ```text
-//! cargo run --release --example bench_core -- <algo> <dist> <n> [--repeat 3] [--seed 1] [--threads T]
+//! cargo run --release --example bench_core -- <algo> <dist> <n> [--repeat 3] [--seed 1] [--threads T] [--phases]
 //! cargo run --release --example bench_core -- dump <dist> <n> FILE [--seed 1]
 //! ```
 //!
@@ -22,6 +22,11 @@
 //! faults of fresh memory); `times_s` lists every repetition, the first one is the cold run of a
 //! one-shot tool. If the mark cannot be reset it also covers the input generation and
 //! `"hwm_reset": false` says so. One process per (algo, dist, n).
+//!
+//! `--phases` (sweeptin only) adds `"phases_s"`: the first repetition's time split into
+//! `prepare` (validation, sort, de-duplication), `sweep` (`Sweep::new` + `run`) and `finish`
+//! (hull closing, output), measured by a second, untimed-for-the-total run of the same steps
+//! [`sweeptin::triangulate`] takes.
 //!
 //! `threads` is the size of rayon's pool (only sweeptin uses it, for its sort); set it with
 //! `--threads` or `RAYON_NUM_THREADS`.
@@ -45,11 +50,12 @@ struct Args {
     repeat: usize,
     seed: u64,
     threads: Option<usize>,
+    phases: bool,
 }
 
 fn usage() -> String {
     "usage: bench_core <sweeptin|delaunator|spade|cdt> <uniform|lidar-like|clustered> <n> \
-     [--repeat R] [--seed S] [--threads T]\n       bench_core dump <dist> <n> FILE [--seed S]"
+     [--repeat R] [--seed S] [--threads T] [--phases]\n       bench_core dump <dist> <n> FILE [--seed S]"
         .to_string()
 }
 
@@ -71,7 +77,7 @@ fn parse_count(s: &str) -> Result<usize> {
 
 fn parse_args() -> Result<Args> {
     let mut pos = Vec::new();
-    let (mut repeat, mut seed, mut threads) = (3, 1, None);
+    let (mut repeat, mut seed, mut threads, mut phases) = (3, 1, None, false);
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         let mut value = |name: &str| {
@@ -82,6 +88,7 @@ fn parse_args() -> Result<Args> {
             "--repeat" => repeat = value("--repeat")?.parse()?,
             "--seed" => seed = value("--seed")?.parse()?,
             "--threads" => threads = Some(value("--threads")?.parse()?),
+            "--phases" => phases = true,
             "-h" | "--help" => bail!("{}", usage()),
             _ => pos.push(a),
         }
@@ -99,6 +106,7 @@ fn parse_args() -> Result<Args> {
         repeat: repeat.max(1),
         seed,
         threads,
+        phases,
     })
 }
 
@@ -149,7 +157,7 @@ fn bench(args: &Args, algo: Algo) -> Result<()> {
     sorted.sort_by(f64::total_cmp);
     let median = sorted[sorted.len() / 2];
     let peak = peaks[0];
-    let line = serde_json::json!({
+    let mut line = serde_json::json!({
         "algo": algo.name(),
         "dist": args.dist.name(),
         "n": args.n,
@@ -166,8 +174,32 @@ fn bench(args: &Args, algo: Algo) -> Result<()> {
         "times_s": times,
         "peaks_bytes": peaks,
     });
+    if args.phases && algo == Algo::Sweeptin {
+        line["phases_s"] = sweeptin_phases(args.dist.generate(args.n, args.seed))?;
+    }
     println!("{line}");
     Ok(())
+}
+
+/// The steps of `sweeptin::triangulate`, timed one by one.
+fn sweeptin_phases(pts: Vec<[f64; 3]>) -> Result<serde_json::Value> {
+    use sweeptin::points::{DuplicatePolicy, prepare};
+    let t0 = Instant::now();
+    let prepared = prepare(&pts, DuplicatePolicy::First)?;
+    let t1 = Instant::now();
+    let mut sweep = sweeptin::sweep::Sweep::new(prepared.xy)?;
+    sweep.run();
+    let t2 = Instant::now();
+    let (triangles, _xy, stats) = sweep.finish();
+    let vertices: Vec<[f64; 3]> = prepared.index.iter().map(|&i| pts[i as usize]).collect();
+    let t3 = Instant::now();
+    std::hint::black_box((triangles.len(), vertices.len()));
+    Ok(serde_json::json!({
+        "prepare": (t1 - t0).as_secs_f64(),
+        "sweep": (t2 - t1).as_secs_f64(),
+        "finish": (t3 - t2).as_secs_f64(),
+        "stats": stats,
+    }))
 }
 
 fn main() -> Result<()> {
