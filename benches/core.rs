@@ -7,7 +7,7 @@
 //! Point generation and layout conversion happen outside the timed closure.
 //!
 //! ```text
-//! cargo bench --bench core                      # 1M and 4M points: about 10 minutes on 2 cores
+//! cargo bench --bench core                      # 1M and 4M: ~11 min on 2 quiet cores (docs/BENCHMARKS.md)
 //! SWEEPTIN_BENCH_SIZES=100k,1M cargo bench --bench core
 //! cargo bench --bench core -- lidar-like        # criterion's filter on the benchmark id
 //! ```
