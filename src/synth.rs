@@ -119,12 +119,12 @@ const SECOND_SWATH: f64 = 0.4;
 /// - **A second flight line** (20 % of the points) flying at 30° to the first, over a swath 40 %
 ///   as wide as the tile, crossing the tile through its centre: there the density doubles and the
 ///   two row patterns interleave.
-/// - **Holes**: five elliptical areas without any point (water), about 4 % of the tile in all.
-/// - **Realistic `z`**: smooth terrain (about 250 m ± 25 m of long-wave relief) plus 5 cm noise,
-///   also quantised to 1 cm.
+/// - **Holes**: five elliptical areas without any point (water), about 5 % of the tile in all.
+/// - **Realistic `z`**: smooth terrain around 250 m (a gentle random plane, slope under 1 %, plus
+///   long waves of 21 m total amplitude) plus 5 cm noise, also quantised to 1 cm.
 ///
 /// The tile is square, its side chosen so that the first flight line yields the wanted count
-/// (about `√(n / 4)` m: 500 m for 1 M points); it starts at ([`LIDAR_X0`], [`LIDAR_Y0`]). Points
+/// (about `0.46 √n` m: 455 m for 1 M points); it starts at ([`LIDAR_X0`], [`LIDAR_Y0`]). Points
 /// come in acquisition order: the first flight line row by row, then the second.
 pub fn lidar_like(n: usize, seed: u64) -> Vec<[f64; 3]> {
     let mut rng = SplitMix64::new(seed ^ 0x4C49_4441_5200_0000);
