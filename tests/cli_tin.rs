@@ -20,7 +20,10 @@ fn run_tin(input: &Path, out_dir: &Path) -> (i32, String) {
         .map(|e| e.unwrap().file_name())
         .collect();
     assert!(left.is_empty(), "left behind: {left:?}");
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stderr).into_owned())
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
 }
 
 #[test]
@@ -30,10 +33,22 @@ fn bad_inputs_fail_cleanly() {
     let cases: Vec<(&str, Vec<u8>, &str)> = vec![
         ("empty.laz", vec![], "empty.laz"),
         ("text.laz", b"x y z\n1 2 3\n".to_vec(), "text.laz"),
-        ("truncated.laz", sample[..sample.len() / 2].to_vec(), "truncated.laz"),
+        (
+            "truncated.laz",
+            sample[..sample.len() / 2].to_vec(),
+            "truncated.laz",
+        ),
         ("header_only.las", sample[..200].to_vec(), "header_only.las"),
-        ("bad.xyz", b"1 2 3\n4 5 6\n7 eight 9\n".to_vec(), "bad.xyz:3"),
-        ("collinear.xyz", b"0 0 0\n1 1 0\n2 2 0\n3 3 0\n".to_vec(), "collinear"),
+        (
+            "bad.xyz",
+            b"1 2 3\n4 5 6\n7 eight 9\n".to_vec(),
+            "bad.xyz:3",
+        ),
+        (
+            "collinear.xyz",
+            b"0 0 0\n1 1 0\n2 2 0\n3 3 0\n".to_vec(),
+            "collinear",
+        ),
         ("two.xyz", b"0 0 0\n1 1 0\n1 1 5\n".to_vec(), "fewer than 3"),
         ("empty.xyz", b"".to_vec(), "fewer than 3"),
         ("nan.xyz", b"0 0 0\n1 nan 0\n2 1 0\n".to_vec(), "nan.xyz:2"),
@@ -44,7 +59,10 @@ fn bad_inputs_fail_cleanly() {
         let out = tempfile::tempdir().unwrap();
         let (code, err) = run_tin(&path, out.path());
         assert_eq!(code, 2, "{name}: {err}");
-        assert!(err.contains(expect), "{name}: message should mention {expect:?}: {err}");
+        assert!(
+            err.contains(expect),
+            "{name}: message should mention {expect:?}: {err}"
+        );
     }
     let out = tempfile::tempdir().unwrap();
     let (code, err) = run_tin(&inputs.path().join("missing.laz"), out.path());

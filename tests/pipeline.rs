@@ -21,7 +21,10 @@ impl MeshSink for Collect {
     }
     fn triangle(&mut self, t: [u64; 3]) -> sweeptin::Result<()> {
         for v in t {
-            assert!((v as usize) < self.vertices.len(), "vertex {v} not yet written");
+            assert!(
+                (v as usize) < self.vertices.len(),
+                "vertex {v} not yet written"
+            );
             assert!(!self.released.contains(&v), "vertex {v} used after release");
         }
         self.triangles.push(t);
@@ -68,7 +71,11 @@ fn streamed(paths: &[PathBuf], mem: u64, dup: DuplicatePolicy) -> Collect {
     let mut c = Collect::default();
     let summary = run(&input, &options, Some(&mut c), &mut []).unwrap();
     assert_eq!(summary.triangles as usize, c.triangles.len());
-    assert_eq!(c.released.len(), c.vertices.len(), "every vertex released once");
+    assert_eq!(
+        c.released.len(),
+        c.vertices.len(),
+        "every vertex released once"
+    );
     assert_eq!(
         std::fs::read_dir(tmp.path()).unwrap().count(),
         0,
@@ -105,7 +112,10 @@ fn tiny_budgets_equal_the_in_memory_core() {
         );
         for mem in [32 << 10, 256 << 10, 1 << 30] {
             let c = streamed(std::slice::from_ref(&path), mem, DuplicatePolicy::First);
-            let got = key_set(&c.vertices, c.triangles.iter().map(|t| t.map(|i| i as usize)));
+            let got = key_set(
+                &c.vertices,
+                c.triangles.iter().map(|t| t.map(|i| i as usize)),
+            );
             assert_eq!(got, want, "{name} with --mem {mem}");
         }
     }
@@ -148,7 +158,10 @@ fn real_laz_streamed_equals_in_memory_and_is_delaunay() {
             core.triangles.iter().map(|t| t.map(|i| i as usize)),
         );
         let c = streamed(std::slice::from_ref(&f), 64 << 10, DuplicatePolicy::First);
-        let got = key_set(&c.vertices, c.triangles.iter().map(|t| t.map(|i| i as usize)));
+        let got = key_set(
+            &c.vertices,
+            c.triangles.iter().map(|t| t.map(|i| i as usize)),
+        );
         assert_eq!(got.len(), want.len(), "{}", f.display());
         assert_eq!(got, want, "{}", f.display());
         let tris: Vec<[u32; 3]> = c.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
@@ -161,11 +174,21 @@ fn byte_identical_whatever_budget_or_threads() {
     let bin = env!("CARGO_BIN_EXE_sweeptin");
     let dir = tempfile::tempdir().unwrap();
     let mut outputs = Vec::new();
-    for (k, (mem, threads)) in [("1G", "2"), ("48K", "1"), ("300K", "2")].iter().enumerate() {
+    for (k, (mem, threads)) in [("1G", "2"), ("48K", "1"), ("300K", "2")]
+        .iter()
+        .enumerate()
+    {
         for ext in ["ply", "stin"] {
             let out = dir.path().join(format!("o{k}.{ext}"));
             let st = std::process::Command::new(bin)
-                .args(["tin", "data/sample/startinpy_small.laz", "--quiet", "--mem", mem, "-o"])
+                .args([
+                    "tin",
+                    "data/sample/startinpy_small.laz",
+                    "--quiet",
+                    "--mem",
+                    mem,
+                    "-o",
+                ])
                 .arg(&out)
                 .env("RAYON_NUM_THREADS", threads)
                 .status()

@@ -7,7 +7,7 @@
 //!   ──[channel]──► writer thread: MeshSink (PLY/OBJ/LandXML/.stin) + TriangleSinks (DEM, …)
 //! ```
 //!
-//! A streaming mesh (`.stin`) given as input is replayed into the sinks instead (see [`replay`]).
+//! A streaming mesh (`.stin`) given as input is replayed into the sinks instead (see the `replay` module).
 //! Geometry uses LAS's scaled integers (exact) or the XYZ file's doubles; real-world coordinates
 //! are applied on output ([`Frame`]).
 
