@@ -194,12 +194,10 @@ impl<'a> Validator<'a> {
     }
 
     fn run(mut self) -> Result<Report> {
-        let order = self.check_distinct()?;
+        let hull = convex_hull(&self.check_distinct()?);
         self.check_triangles()?;
         self.build_adjacency()?;
         let info = self.check_edges()?;
-        let hull = convex_hull(&self.xy, &order);
-        drop(order);
         self.check_boundary(&info, &hull)?;
         self.check_euler(hull.len())?;
         if let Some([a, b, c, d]) = info.not_delaunay {
@@ -273,8 +271,9 @@ impl<'a> Validator<'a> {
         .is_ccw()
     }
 
-    /// No two vertices at the same `(x, y)`; returns the vertices sorted by `(x, y)`.
-    fn check_distinct(&self) -> Result<Vec<u32>> {
+    /// No two vertices at the same `(x, y)`; returns the vertices sorted by `(x, y)` as
+    /// `(ordered(x), ordered(y), index)`.
+    fn check_distinct(&self) -> Result<Vec<(u64, u64, u32)>> {
         let mut keys: Vec<(u64, u64, u32)> = self
             .xy
             .par_iter()
@@ -292,7 +291,7 @@ impl<'a> Validator<'a> {
                 self.v(w[1].2)
             )));
         }
-        Ok(keys.into_par_iter().map(|k| k.2).collect())
+        Ok(keys)
     }
 
     /// Buckets every directed edge by its origin (a counting sort), sorts each bucket, and checks
@@ -579,6 +578,12 @@ fn ordered(v: f64) -> u64 {
     if b >> 63 == 1 { !b } else { b | (1 << 63) }
 }
 
+/// The inverse of [`ordered`].
+#[inline(always)]
+fn unordered(k: u64) -> f64 {
+    f64::from_bits(if k >> 63 == 1 { k & !(1 << 63) } else { !k })
+}
+
 /// Checks the coordinates and moves `x, y` into a local frame when that is exact (the same
 /// translation for every point, so every predicate keeps its sign).
 fn local_frame(vertices: &[[f64; 3]]) -> Result<Vec<[f64; 2]>> {
@@ -649,29 +654,29 @@ fn constraint_keys(constraints: &[[u32; 2]], n: usize) -> Result<Vec<u64>> {
     Ok(keys)
 }
 
-/// Convex hull of the points `order` (sorted by `(x, y)`, distinct, not all collinear), counter-
-/// clockwise from the first, with every point on the hull boundary (collinear ones included).
-/// Andrew's monotone chain; only strict right turns are removed.
-fn convex_hull(xy: &[[f64; 2]], order: &[u32]) -> Vec<u32> {
-    let p = |v: u32| xy[v as usize];
-    let chain = |pts: &mut dyn Iterator<Item = u32>| {
-        let mut h: Vec<u32> = Vec::new();
-        for v in pts {
+/// Convex hull of the points `sorted` (`(ordered(x), ordered(y), index)` sorted by `(x, y)`,
+/// distinct, not all collinear), counter-clockwise from the first, with every point on the hull
+/// boundary (collinear ones included). Andrew's monotone chain; only strict right turns are removed.
+/// Reads the coordinates from the sorted keys, so memory access is sequential.
+fn convex_hull(sorted: &[(u64, u64, u32)]) -> Vec<u32> {
+    let p = |k: &(u64, u64, u32)| [unordered(k.0), unordered(k.1)];
+    let chain = |pts: &mut dyn Iterator<Item = &(u64, u64, u32)>| {
+        let mut h: Vec<([f64; 2], u32)> = Vec::new();
+        for k in pts {
+            let q = p(k);
             while h.len() >= 2
-                && orient(p(h[h.len() - 2]), p(h[h.len() - 1]), p(v)) == Orientation::Clockwise
+                && orient(h[h.len() - 2].0, h[h.len() - 1].0, q) == Orientation::Clockwise
             {
                 h.pop();
             }
-            h.push(v);
+            h.push((q, k.2));
         }
-        h
+        h.pop();
+        h.into_iter().map(|(_, v)| v)
     };
-    let mut lower = chain(&mut order.iter().copied());
-    let mut upper = chain(&mut order.iter().rev().copied());
-    lower.pop();
-    upper.pop();
-    lower.append(&mut upper);
-    lower
+    let lower = chain(&mut sorted.iter());
+    let upper = chain(&mut sorted.iter().rev());
+    lower.chain(upper).collect()
 }
 
 #[cfg(test)]

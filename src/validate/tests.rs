@@ -411,13 +411,15 @@ fn hull_matches_brute_force() {
             .collect();
         pts.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
         pts.dedup();
-        let order: Vec<u32> = (0..pts.len() as u32).collect();
+        let keys: Vec<(u64, u64, u32)> = (0..pts.len())
+            .map(|i| (ordered(pts[i][0]), ordered(pts[i][1]), i as u32))
+            .collect();
         let all_collinear =
             (2..pts.len()).all(|i| orient(pts[0], pts[1], pts[i]) == Orientation::Collinear);
         if pts.len() < 3 || all_collinear {
             continue;
         }
-        let hull = convex_hull(&pts, &order);
+        let hull = convex_hull(&keys);
         let on_hull = |p: usize| {
             (0..pts.len()).any(|q| {
                 q != p
