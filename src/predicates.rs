@@ -307,8 +307,15 @@ fn incircle_symbolic(pts: &[[f64; 2]], ids: [u32; 4]) -> CircleSide {
                 Orientation::CounterClockwise => 1,
                 Orientation::Clockwise => -1,
                 Orientation::Collinear => {
-                    // The circle through P, b, c meets their line exactly at b and c.
-                    if strictly_between(b, p, d) { 1 } else { -1 }
+                    // The circle through P, b, c meets their line exactly at b and c, so `d` is
+                    // inside when it lies strictly between them. The determinant's sign is that
+                    // times the orientation of (P, b, c), which is clockwise when the row swaps
+                    // above moved P over one real row.
+                    let inside = if strictly_between(b, p, d) { 1 } else { -1 };
+                    match orient_ids(pts, order[0], order[1], order[2]) {
+                        Orientation::CounterClockwise => inside,
+                        _ => -inside,
+                    }
                 }
             }
         }
