@@ -118,13 +118,14 @@ pub fn check(pts: &[[f64; 3]], spade: bool) {
         tri_set(&again) == set,
         "reversing the input changed the triangles"
     );
-    if spade && report.cocircular_edges == 0 {
-        if let Some(s) = spade_set(pts) {
-            assert!(
-                s == set,
-                "differs from spade (unique Delaunay triangulation)"
-            );
-        }
+    if spade
+        && report.cocircular_edges == 0
+        && let Some(s) = spade_set(pts)
+    {
+        assert!(
+            s == set,
+            "differs from spade (unique Delaunay triangulation)"
+        );
     }
     if pts.len() <= 64 {
         step_checked(pts);
