@@ -108,6 +108,7 @@ pub fn stream(pts: &[[f64; 3]]) {
         xy: real[i],
         z: 0.0,
         index: i as u64,
+        constraint: u32::MAX,
     };
     let mut s = Sweep::streaming(sp(0), &cfg);
     let mut ev = Vec::new();

@@ -32,4 +32,4 @@ pub mod validate;
 
 pub use error::{Error, Result};
 pub use points::DuplicatePolicy;
-pub use triangulation::{Options, Triangulation, triangulate};
+pub use triangulation::{Options, Triangulation, triangulate, triangulate_cdt};

@@ -115,6 +115,7 @@ fn stream_set(
         xy: real[i],
         z: 0.0,
         index: i as u64,
+        constraint: u32::MAX,
     };
     let mut s = Sweep::streaming(sp(0), &cfg);
     let mut events = Vec::new();

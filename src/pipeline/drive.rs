@@ -165,6 +165,7 @@ fn merge_points(
             xy: [r.x, r.y],
             z: r.z,
             index: r.index,
+            constraint: crate::sweep::NO_CONSTRAINT,
         });
         if batch.len() == POINT_BATCH {
             if out.send(std::mem::take(&mut batch)).is_err() {

@@ -49,6 +49,8 @@ pub struct StreamPoint {
     pub z: f64,
     /// Index of the point in the input.
     pub index: u64,
+    /// The breakline vertex this point is, or [`super::NO_CONSTRAINT`].
+    pub constraint: u32,
 }
 
 /// What the streaming sweep knows up front.
@@ -109,6 +111,8 @@ pub struct StreamStats {
     pub peak_live_triangles: u64,
     /// Most vertices in memory at once.
     pub peak_live_vertices: u64,
+    /// Most breakline segments pending at once.
+    pub peak_pending_segments: u64,
     /// Finalisation checks that had to be repeated.
     pub rechecks: u64,
     /// Triangles emitted.
@@ -140,12 +144,131 @@ pub(crate) struct Finalizer {
     stats: StreamStats,
     /// Set once all points are in: everything left is final.
     ending: bool,
+    /// Breaklines whose earlier end is swept and later end is not.
+    pub pending: PendingSegments,
+}
+
+/// Pending breakline segments, indexed by x, to keep triangles they may still cross in memory.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PendingSegments {
+    segs: Vec<Option<PendingSeg>>,
+    free: Vec<u32>,
+    by_ends: std::collections::HashMap<(u32, u32), u32>,
+    buckets: Vec<Vec<u32>>,
+    x0: f64,
+    inv_w: f64,
+    live: usize,
+    peak: usize,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct PendingSeg {
+    a: [f64; 2],
+    b: [f64; 2],
+}
+
+impl PendingSegments {
+    fn new(x_range: (f64, f64)) -> Self {
+        let n = 1024;
+        let w = x_range.1 - x_range.0;
+        PendingSegments {
+            buckets: vec![Vec::new(); n],
+            x0: x_range.0,
+            inv_w: if w > 0.0 && w.is_finite() {
+                n as f64 / w
+            } else {
+                0.0
+            },
+            ..Default::default()
+        }
+    }
+
+    #[inline]
+    fn bucket(&self, x: f64) -> usize {
+        (((x - self.x0) * self.inv_w) as usize).min(self.buckets.len() - 1)
+    }
+
+    /// Adds the pending segment between constraint vertices `lo` and `hi`.
+    pub fn add(&mut self, lo: u32, hi: u32, a: [f64; 2], b: [f64; 2]) {
+        let id = match self.free.pop() {
+            Some(id) => {
+                self.segs[id as usize] = Some(PendingSeg { a, b });
+                id
+            }
+            None => {
+                self.segs.push(Some(PendingSeg { a, b }));
+                (self.segs.len() - 1) as u32
+            }
+        };
+        self.by_ends.insert((lo, hi), id);
+        let (k0, k1) = (self.bucket(a[0].min(b[0])), self.bucket(a[0].max(b[0])));
+        for k in k0..=k1 {
+            self.buckets[k].push(id);
+        }
+        self.live += 1;
+        self.peak = self.peak.max(self.live);
+    }
+
+    /// Removes the segment between `lo` and `hi` (inserted now).
+    pub fn remove(&mut self, lo: u32, hi: u32) {
+        if let Some(id) = self.by_ends.remove(&(lo, hi)) {
+            self.segs[id as usize] = None;
+            self.free.push(id);
+            self.live -= 1;
+        }
+    }
+
+    /// Could a pending segment pass within `r` of `c` (conservatively: floating-point error only
+    /// makes this say yes more often)? Prunes dead entries from the buckets it scans.
+    pub fn near(&mut self, c: [f64; 2], r: f64) -> bool {
+        if self.live == 0 {
+            return false;
+        }
+        let (k0, k1) = (self.bucket(c[0] - r), self.bucket(c[0] + r));
+        for k in k0..=k1 {
+            let mut i = 0;
+            while i < self.buckets[k].len() {
+                let id = self.buckets[k][i];
+                match self.segs[id as usize] {
+                    None => {
+                        self.buckets[k].swap_remove(i);
+                        continue;
+                    }
+                    Some(s) => {
+                        if segment_within(s.a, s.b, c, r) {
+                            return true;
+                        }
+                    }
+                }
+                i += 1;
+            }
+        }
+        false
+    }
+}
+
+/// Is segment `a`–`b` within distance `r` of `c`? Floating point with a relative margin of 1e-9
+/// of the magnitudes involved, so a true "yes" is never missed.
+fn segment_within(a: [f64; 2], b: [f64; 2], c: [f64; 2], r: f64) -> bool {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let (px, py) = (c[0] - a[0], c[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        ((px * dx + py * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (qx, qy) = (px - t * dx, py - t * dy);
+    let d = (qx * qx + qy * qy).sqrt();
+    let scale = dx.abs() + dy.abs() + px.abs() + py.abs() + r;
+    d <= r + 1e-9 * scale
 }
 
 impl Finalizer {
     fn new(cfg: &StreamConfig) -> Self {
         let [x0, y0, x1, y1] = cfg.bounds;
         let (w, h) = ((x1 - x0).max(0.0), (y1 - y0).max(0.0));
+        let (x0, x1) = (x0, x1);
         let n = cfg.expected_points.max(1) as f64;
         // Typical spacing between points: sqrt(area / n), or the 1-D spacing for a thin strip.
         let area = w * h;
@@ -176,6 +299,7 @@ impl Finalizer {
             live_vertices: 0,
             stats: StreamStats::default(),
             ending: false,
+            pending: PendingSegments::new((x0, x1)),
         }
     }
 
@@ -195,6 +319,17 @@ impl Finalizer {
         } else {
             self.far.push(Reverse((k, t)));
         }
+    }
+
+    /// Vertex `v` is used by nothing any more: announce it (if it was ever output) and free its
+    /// slot.
+    pub fn release_vertex(&mut self, v: VertexId) {
+        let i = v.0 as usize;
+        if self.vertices.out[i] != NOT_OUT {
+            self.events.push(Event::VertexDone(self.vertices.out[i]));
+        }
+        self.vertices.free.push(v.0);
+        self.live_vertices -= 1;
     }
 
     /// A triangle slot was (re)filled.
@@ -276,7 +411,10 @@ impl Sweep {
         };
         fin.live_vertices += 1;
         fin.stats.peak_live_vertices = fin.stats.peak_live_vertices.max(fin.live_vertices);
-        self.insert(VertexId(v));
+        let n = self.insert(VertexId(v));
+        if p.constraint != super::NO_CONSTRAINT {
+            self.constraint_vertex(VertexId(v), n, p.constraint);
+        }
         Ok(())
     }
 
@@ -431,7 +569,12 @@ impl Sweep {
             return;
         }
         let low = self.front.min_y_over(d.x_min, d.x_max);
-        if d.top < low {
+        let fin = self.fin.as_mut().expect("streaming");
+        if d.top < low && fin.pending.near(d.center, d.radius) {
+            // A breakline still to come may cross it.
+            fin.stats.rechecks += 1;
+            fin.schedule(t, ks + FIRST_CHECK);
+        } else if d.top < low {
             self.finalize(t);
         } else {
             let fin = self.fin.as_mut().expect("streaming");
@@ -480,13 +623,10 @@ impl Sweep {
         fin.events.push(Event::Triangle(ids));
         fin.stats.triangles += 1;
         for v in tri {
-            let vt = &mut fin.vertices;
             let i = v.0 as usize;
-            vt.refs[i] -= 1;
-            if vt.refs[i] == 0 {
-                fin.events.push(Event::VertexDone(vt.out[i]));
-                vt.free.push(v.0);
-                fin.live_vertices -= 1;
+            fin.vertices.refs[i] -= 1;
+            if fin.vertices.refs[i] == 0 {
+                fin.release_vertex(v);
             }
         }
         fin.live_triangles -= 1;
