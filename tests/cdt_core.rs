@@ -45,7 +45,7 @@ fn random_input(seed: u64, n: usize, m: usize) -> (Vec<[f64; 3]>, Vec<[u32; 2]>)
         // Short-ish segments, like real breaklines, plus a few long ones.
         let (pa, pb) = (xy(a), xy(b));
         let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-        if len > 30.0 && segs.len() % 10 != 0 {
+        if len > 30.0 && !segs.len().is_multiple_of(10) {
             continue;
         }
         let collinear_with_point = (0..n as u32).any(|k| {
@@ -289,4 +289,83 @@ fn crossing_breaklines_are_reported_not_fatal() {
     let t = triangulate_cdt(&pts, &[[0, 1], [2, 3]], &Options::default()).unwrap();
     assert_eq!(t.constraint_stats.crossing_skipped, 1);
     sweeptin::validate::validate(&t.vertices, &t.triangles).unwrap();
+}
+
+/// The streaming sweep with breaklines gives the batch sweep's triangles, releases every vertex
+/// once, and keeps pending breaklines from being finalised across.
+#[test]
+fn streaming_breaklines_equal_batch() {
+    use sweeptin::sweep::{Event, StreamConfig, StreamPoint, Sweep};
+    for seed in 0..60 {
+        let n = 20 + (seed as usize * 37) % 600;
+        let (pts, segs) = random_input(seed + 9000, n, n / 4);
+        let batch = ours(&pts, &segs);
+        let prep = prepare(&pts, DuplicatePolicy::First).unwrap();
+        let real = &prep.xy[2..];
+        let vid = |i: u32| {
+            let p = pts[i as usize];
+            let q = [p[0] - prep.origin[0], p[1] - prep.origin[1]];
+            real.binary_search_by(|v| sweeptin::predicates::sweep_cmp(*v, q))
+                .unwrap() as u32
+        };
+        let mut ends: Vec<u32> = segs.iter().flatten().map(|&i| vid(i)).collect();
+        ends.sort_unstable();
+        ends.dedup();
+        let cid = |v: u32| ends.binary_search(&v).map_or(u32::MAX, |c| c as u32);
+        let cs: Vec<[u32; 2]> = segs
+            .iter()
+            .map(|s| [cid(vid(s[0])), cid(vid(s[1]))])
+            .collect();
+        let g = sweeptin::sweep::ConstraintGraph::new(
+            ends.iter().map(|&v| real[v as usize]).collect(),
+            &cs,
+        );
+        let cfg = StreamConfig {
+            x_sample: vec![],
+            bounds: [0.0, 0.0, 100.0, 100.0],
+            expected_points: real.len() as u64,
+        };
+        let sp = |i: usize| StreamPoint {
+            xy: real[i],
+            z: 0.0,
+            index: i as u64,
+            constraint: cid(i as u32),
+        };
+        let mut s = Sweep::streaming(sp(0), &cfg);
+        s.set_stream_constraints(g, cid(0));
+        let mut events = Vec::new();
+        for i in 1..real.len() {
+            s.push(sp(i)).unwrap();
+            if n < 200 {
+                s.check()
+                    .unwrap_or_else(|e| panic!("seed {seed} point {i}: {e}"));
+            }
+        }
+        s.finish_streaming();
+        s.take_events(&mut events);
+        let mut verts = Vec::new();
+        let mut done = std::collections::HashSet::new();
+        let mut tris = Vec::new();
+        for e in events {
+            match e {
+                Event::Vertex { xy, .. } => {
+                    verts.push([xy[0] + prep.origin[0], xy[1] + prep.origin[1]])
+                }
+                Event::Triangle(t) => {
+                    assert!(t.iter().all(|v| !done.contains(v)));
+                    tris.push(key(t.map(|v| verts[v as usize])));
+                }
+                Event::VertexDone(v) => assert!(done.insert(v)),
+                Event::Watermark(_) => {}
+            }
+        }
+        assert_eq!(
+            done.len(),
+            verts.len(),
+            "seed {seed}: every vertex released once"
+        );
+        tris.sort();
+        assert_eq!(tris, batch, "seed {seed}");
+        assert!(s.stream_stats().peak_pending_segments > 0);
+    }
 }

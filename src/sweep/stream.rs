@@ -470,9 +470,11 @@ impl Sweep {
 
     /// Working-set statistics of a streaming sweep.
     pub fn stream_stats(&self) -> StreamStats {
-        self.fin
-            .as_ref()
-            .map_or(StreamStats::default(), |f| f.stats)
+        self.fin.as_ref().map_or(StreamStats::default(), |f| {
+            let mut s = f.stats;
+            s.peak_pending_segments = f.pending.peak as u64;
+            s
+        })
     }
 
     /// Ends a streaming sweep: closes the hull and emits everything still in memory, in a fixed
