@@ -23,6 +23,8 @@ pub mod lidar;
 pub mod pipeline;
 pub mod points;
 pub mod predicates;
+pub mod products;
+pub mod raster;
 pub mod sweep;
 pub mod synth;
 pub mod triangulation;

@@ -1,0 +1,17 @@
+//! Terrain products computed from the stream of final triangles, each a
+//! [`TriangleSink`](crate::pipeline::TriangleSink), so that several run in one pass with bounded
+//! memory:
+//!
+//! - [`dem`]: DEM rasters (float32 GeoTIFF, ESRI ASCII grid) by linear interpolation at cell
+//!   centres.
+//!
+//! Every product handles triangles in any order: the watermark is only used to release memory,
+//! and a late triangle (below the watermark) is still taken into account exactly. Shared geometry
+//! (exact point location, interpolation that is the same from every triangle, the ownership rule
+//! for points on edges, exact sums) is in [`geom`].
+
+pub mod dem;
+pub mod geom;
+
+#[cfg(test)]
+pub(crate) mod testutil;
