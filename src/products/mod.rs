@@ -4,13 +4,16 @@
 //!
 //! - [`dem`]: DEM rasters (float32 GeoTIFF, ESRI ASCII grid) by linear interpolation at cell
 //!   centres.
+//! - [`contours`]: contour lines stitched into polylines across the stream (GeoJSON).
 //!
 //! Every product handles triangles in any order: the watermark is only used to release memory,
 //! and a late triangle (below the watermark) is still taken into account exactly. Shared geometry
 //! (exact point location, interpolation that is the same from every triangle, the ownership rule
 //! for points on edges, exact sums) is in [`geom`].
 
+pub mod contours;
 pub mod dem;
+pub mod geojson;
 pub mod geom;
 
 #[cfg(test)]
