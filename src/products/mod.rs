@@ -5,16 +5,21 @@
 //! - [`dem`]: DEM rasters (float32 GeoTIFF, ESRI ASCII grid) by linear interpolation at cell
 //!   centres.
 //! - [`contours`]: contour lines stitched into polylines across the stream (GeoJSON).
+//! - [`volume`]: cut and fill volumes and areas against a plane, within an optional
+//!   [`boundary`] polygon; [`overlay`]: the same against a second surface.
 //!
 //! Every product handles triangles in any order: the watermark is only used to release memory,
 //! and a late triangle (below the watermark) is still taken into account exactly. Shared geometry
 //! (exact point location, interpolation that is the same from every triangle, the ownership rule
 //! for points on edges, exact sums) is in [`geom`].
 
+pub mod boundary;
 pub mod contours;
 pub mod dem;
 pub mod geojson;
 pub mod geom;
+pub mod overlay;
+pub mod volume;
 
 #[cfg(test)]
 pub(crate) mod testutil;
