@@ -7,6 +7,7 @@
 //! - [`contours`]: contour lines stitched into polylines across the stream (GeoJSON).
 //! - [`volume`]: cut and fill volumes and areas against a plane, within an optional
 //!   [`boundary`] polygon; [`overlay`]: the same against a second surface.
+//! - [`sample`]: heights at query points; [`profile`]: sections along polylines.
 //!
 //! Every product handles triangles in any order: the watermark is only used to release memory,
 //! and a late triangle (below the watermark) is still taken into account exactly. Shared geometry
@@ -19,6 +20,8 @@ pub mod dem;
 pub mod geojson;
 pub mod geom;
 pub mod overlay;
+pub mod profile;
+pub mod sample;
 pub mod volume;
 
 #[cfg(test)]
