@@ -8,6 +8,7 @@
 //! - [`volume`]: cut and fill volumes and areas against a plane, within an optional
 //!   [`boundary`] polygon; [`overlay`]: the same against a second surface.
 //! - [`sample`]: heights at query points; [`profile`]: sections along polylines.
+//! - [`hillshade`]: a shaded-relief PNG of a DEM GeoTIFF (not a sink: it reads a raster).
 //!
 //! Every product handles triangles in any order: the watermark is only used to release memory,
 //! and a late triangle (below the watermark) is still taken into account exactly. Shared geometry
@@ -19,6 +20,7 @@ pub mod contours;
 pub mod dem;
 pub mod geojson;
 pub mod geom;
+pub mod hillshade;
 pub mod overlay;
 pub mod profile;
 pub mod sample;

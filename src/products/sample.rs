@@ -41,8 +41,7 @@ struct Query {
 
 /// Splits a line into fields the way the module docs say.
 fn fields(line: &str) -> impl Iterator<Item = &str> {
-    line.split([',', ';', '\t', ' '])
-        .filter(|s| !s.is_empty())
+    line.split([',', ';', '\t', ' ']).filter(|s| !s.is_empty())
 }
 
 /// What a line is.
