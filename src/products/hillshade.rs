@@ -4,7 +4,7 @@
 //! 3 × 3 window `a b c / d e f / g h i` around a cell, with cell sizes `ew`, `ns` and z factor `k`,
 //!
 //! ```text
-//! x = ((a + 2d + g) − (c + 2f + i)) / (8 ew)      y = ((g + 2h + i) − (a + 2b + c)) / (8 ns)
+//! x = ((a + 2d + g) − (c + 2f + i)) / (8 ew)      y = ((a + 2b + c) − (g + 2h + i)) / (8 ns)
 //! shade = (sin alt − k (y cos az cos alt − x sin az cos alt)) / √(1 + k² (x² + y²))
 //! value = 1 + 254 × max(shade, 0)
 //! ```
@@ -226,7 +226,7 @@ fn shade(w: [[f64; 3]; 3], ew: f64, ns: f64, o: &HillshadeOptions) -> u8 {
     let x =
         ((v(0, 0) + 2.0 * v(1, 0) + v(2, 0)) - (v(0, 2) + 2.0 * v(1, 2) + v(2, 2))) / (8.0 * ew);
     let y =
-        ((v(2, 0) + 2.0 * v(2, 1) + v(2, 2)) - (v(0, 0) + 2.0 * v(0, 1) + v(0, 2))) / (8.0 * ns);
+        ((v(0, 0) + 2.0 * v(0, 1) + v(0, 2)) - (v(2, 0) + 2.0 * v(2, 1) + v(2, 2))) / (8.0 * ns);
     let (az, alt) = (o.azimuth.to_radians(), o.altitude.to_radians());
     let k = o.z_factor;
     let s = (alt.sin() - k * (y * az.cos() * alt.cos() - x * az.sin() * alt.cos()))
@@ -333,10 +333,11 @@ mod tests {
         let (pw, ph, px) = read_png(&png);
         assert_eq!((pw, ph), (5, 4));
         assert_eq!(&px[..2], &[0, 0]);
-        // Rising to the east and falling to the north: x = -0.5, y = +0.5 (south minus north).
+        // Rising to the east and falling to the north: x = −0.5 (west minus east), y = −0.5
+        // (north minus south).
         let want = {
             let (az, alt) = (315f64.to_radians(), 45f64.to_radians());
-            let (x, y) = (-0.5, 0.5);
+            let (x, y) = (-0.5, -0.5);
             let s = (alt.sin() - (y * az.cos() * alt.cos() - x * az.sin() * alt.cos()))
                 / (1.0 + x * x + y * y).sqrt();
             (1.0 + 254.0 * s.max(0.0)).round() as u8

@@ -28,3 +28,97 @@ pub mod volume;
 
 #[cfg(test)]
 pub(crate) mod testutil;
+
+use crate::error::Result;
+use crate::lidar::Crs;
+use crate::pipeline::{StreamInfo, TriangleSink};
+
+/// Several products fed by one pass: forwards the stream to every sink, after assigning a CRS
+/// (when given) and dropping triangles with an edge longer than `max_edge` (when given; their
+/// area is then outside the TIN for every product, e.g. nodata in a DEM).
+///
+/// [`TriangleSink::finish`] returns an object with each sink's summary under its name (and
+/// `trimmed_triangles`); calling it again returns the same object.
+pub struct Fanout {
+    sinks: Vec<(String, Box<dyn TriangleSink>)>,
+    crs: Option<Crs>,
+    max_edge: Option<f64>,
+    trimmed: u64,
+    summary: Option<serde_json::Value>,
+}
+
+impl Fanout {
+    /// Forwards to `sinks` (name, sink).
+    pub fn new(sinks: Vec<(String, Box<dyn TriangleSink>)>) -> Fanout {
+        Fanout {
+            sinks,
+            crs: None,
+            max_edge: None,
+            trimmed: 0,
+            summary: None,
+        }
+    }
+
+    /// Products say that the data are in `crs`, whatever the input declares.
+    pub fn with_crs(mut self, crs: Option<Crs>) -> Fanout {
+        self.crs = crs;
+        self
+    }
+
+    /// Triangles with a horizontal edge longer than `max_edge` are left out.
+    pub fn with_max_edge(mut self, max_edge: Option<f64>) -> Fanout {
+        self.max_edge = max_edge;
+        self
+    }
+}
+
+impl TriangleSink for Fanout {
+    fn begin(&mut self, info: &StreamInfo) -> Result<()> {
+        let mut info = info.clone();
+        if self.crs.is_some() {
+            info.crs = self.crs.clone();
+        }
+        for (_, s) in &mut self.sinks {
+            s.begin(&info)?;
+        }
+        Ok(())
+    }
+
+    fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
+        if let Some(limit) = self.max_edge {
+            let too_long = (0..3).any(|i| {
+                let (a, b) = (t[i], t[(i + 1) % 3]);
+                (b[0] - a[0]).hypot(b[1] - a[1]) > limit
+            });
+            if too_long {
+                self.trimmed += 1;
+                return Ok(());
+            }
+        }
+        for (_, s) in &mut self.sinks {
+            s.triangle(t)?;
+        }
+        Ok(())
+    }
+
+    fn watermark(&mut self, y: f64) -> Result<()> {
+        for (_, s) in &mut self.sinks {
+            s.watermark(y)?;
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<serde_json::Value> {
+        if let Some(v) = &self.summary {
+            return Ok(v.clone());
+        }
+        let mut m = serde_json::Map::new();
+        for (name, s) in &mut self.sinks {
+            m.insert(name.clone(), s.finish()?);
+        }
+        m.insert("trimmed_triangles".into(), self.trimmed.into());
+        let v = serde_json::Value::Object(m);
+        self.summary = Some(v.clone());
+        Ok(v)
+    }
+}
