@@ -96,6 +96,7 @@ pub fn stream(pts: &[[f64; 3]]) {
         y1 = y1.max(p[1]);
     }
     let cfg = StreamConfig {
+        x_sample: real.iter().step_by(64).map(|p| p[0]).collect(),
         bounds: [x0, y0, x1, y1],
         expected_points: real.len() as u64,
     };

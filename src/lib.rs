@@ -14,12 +14,14 @@
 //! assert_eq!(tin.triangles.len(), 2);
 //! sweeptin::validate::validate(&tin.vertices, &tin.triangles).unwrap();
 //! ```
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod extsort;
 pub mod io;
 pub mod lidar;
+pub mod mmap;
 pub mod pipeline;
 pub mod points;
 pub mod predicates;

@@ -107,6 +107,7 @@ fn stream_set(
         y1 = y1.max(p[1]);
     }
     let cfg = StreamConfig {
+        x_sample: real.iter().step_by(64).map(|p| p[0]).collect(),
         bounds: [x0, y0, x1, y1],
         expected_points: real.len() as u64,
     };
@@ -148,6 +149,7 @@ fn stream_set(
                 tris.push(k);
             }
             Event::VertexDone(v) => assert!(done.insert(v), "vertex {v} released twice"),
+            Event::Watermark(_) => {}
         }
     }
     assert_eq!(

@@ -1,7 +1,7 @@
 //! `sweeptin contours`: contour lines of the TIN, stitched into polylines, as GeoJSON.
 
-use super::input::{InputArgs, run_products};
-use super::products::{ContourArgs, report};
+use super::input::{ProductInput, run_products};
+use super::products::{ContourArgs, finish_report};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -9,25 +9,18 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pub input: InputArgs,
+    pub input: ProductInput,
     /// Output GeoJSON (LineString features with an `elevation` property).
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
     pub contour: ContourArgs,
-    /// Print the summary as JSON on standard output.
-    #[arg(long)]
-    pub json: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let sinks = vec![("contours".to_string(), args.contour.sink(&args.output)?)];
-    let input = args.input.to_input(None)?;
+    let input = args.input.input(None)?;
     let (run, summary) = run_products(&args.input, &input, None, sinks)?;
-    report(&run, &summary, start.elapsed().as_secs_f64());
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
-    }
-    Ok(())
+    finish_report(&args.input, &run, summary, start)
 }

@@ -1,8 +1,8 @@
 //! `sweeptin dem`: a DEM raster (float32 GeoTIFF or ESRI ASCII grid) by linear interpolation in
 //! the TIN at cell centres, optionally with contours and a hillshade from the same pass.
 
-use super::input::{InputArgs, run_products};
-use super::products::{ContourArgs, DemArgs, report, shade};
+use super::input::{ProductInput, run_products};
+use super::products::{ContourArgs, DemArgs, finish_report, shade};
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::pipeline::TriangleSink;
@@ -12,8 +12,9 @@ use sweeptin::products::hillshade::HillshadeOptions;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pub input: InputArgs,
-    /// Output raster: .tif (float32 GeoTIFF) or .asc (ESRI ASCII grid).
+    pub input: ProductInput,
+    /// Output raster: .tif (float32 GeoTIFF) or .asc (ESRI ASCII grid). With --bbox it covers
+    /// the cells whose centres lie in [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell).
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
@@ -26,31 +27,24 @@ pub struct Args {
     /// Also write a hillshade PNG of the result (GeoTIFF output only).
     #[arg(long, value_name = "PNG")]
     pub hillshade: Option<PathBuf>,
-    /// Print the summary as JSON on standard output.
-    #[arg(long)]
-    pub json: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    let bbox = args.input.args.filter.bbox;
     let mut sinks: Vec<(String, Box<dyn TriangleSink>)> =
-        vec![("dem".into(), args.dem.sink(&args.output)?)];
+        vec![("dem".into(), args.dem.sink(&args.output, bbox)?)];
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour.sink(p)?));
     }
     if args.dem.buffer.is_some() && !args.input.all_lidar() {
         eprintln!("sweeptin: warning: --buffer only limits the reading of LAS/LAZ files");
     }
-    let input = args.input.to_input(args.dem.crop()?)?;
+    let input = args.input.input(args.dem.read_box(bbox)?)?;
     let (run, mut summary) = run_products(&args.input, &input, None, sinks)?;
     if let Some(png) = &args.hillshade {
         summary["hillshade"] = shade(&args.output, png, &HillshadeOptions::default())?;
         summary["hillshade"]["path"] = serde_json::json!(png);
     }
-    report(&run, &summary, start.elapsed().as_secs_f64());
-    if args.json {
-        summary["run"] = serde_json::to_value(&run)?;
-        println!("{}", serde_json::to_string_pretty(&summary)?);
-    }
-    Ok(())
+    finish_report(&args.input, &run, summary, start)
 }

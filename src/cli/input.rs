@@ -1,42 +1,100 @@
-//! The input options shared by every command that triangulates (`tin` and the products), and the
-//! helper that runs the pipeline into product sinks.
+//! Input and run options shared by every command that triangulates (`tin`, and the terrain
+//! products): the files, the lidar filters, duplicates, memory budget, temporary directory,
+//! progress and the JSON summary.
 
-use super::info::ClassList;
+use super::info::FilterArgs;
 use anyhow::{Context, bail};
-use clap::ArgAction;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use sweeptin::io::MeshSink;
-use sweeptin::lidar::{BBox, Crs, Filter, Returns};
-use sweeptin::pipeline::{self, Input, RunSummary, TriangleSink};
+use sweeptin::lidar::{BBox, Crs};
+use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunOptions, RunSummary, TriangleSink};
 use sweeptin::products::Fanout;
 
-/// Input points and how to read them.
+/// Input files and how to read and run them (flattened into each command's arguments).
 #[derive(clap::Args, Debug, Clone)]
 pub struct InputArgs {
-    /// Input points: LAS/LAZ files (read together as one point set), or XYZ text files (`x y z`
-    /// per line, separated by commas, semicolons, tabs or spaces; `#` comments and one header
-    /// line allowed).
-    #[arg(required = true, value_name = "FILE")]
-    pub files: Vec<PathBuf>,
-    /// LAS/LAZ: keep only these classification codes, e.g. `--class 2,9`.
-    #[arg(long, value_name = "LIST")]
-    pub class: Option<ClassList>,
-    /// LAS/LAZ: which returns to keep: `last`, `first`, or `all`.
-    #[arg(long, value_enum, default_value_t = Returns::All)]
-    pub returns: Returns,
-    /// LAS/LAZ: drop points flagged "withheld".
-    #[arg(long, value_name = "BOOL", default_value_t = true, action = ArgAction::Set)]
-    pub drop_withheld: bool,
-    /// LAS/LAZ: keep withheld points (same as `--drop-withheld false`).
-    #[arg(long, conflicts_with = "drop_withheld")]
-    pub keep_withheld: bool,
-    /// LAS/LAZ: keep only points inside this box (real-world x, y; edges included).
-    #[arg(long, value_name = "XMIN,YMIN,XMAX,YMAX", allow_hyphen_values = true)]
-    pub crop: Option<BBox>,
+    /// Input points: LAS/LAZ files (adjacent tiles form one point set), XYZ text files
+    /// (`x y z` per line), or one streaming mesh (.stin) written by `sweeptin tin`.
+    #[arg(required = true, value_name = "FILES")]
+    pub inputs: Vec<PathBuf>,
+    #[command(flatten)]
+    pub filter: FilterArgs,
     /// Which point survives among exact (x, y) duplicates.
     #[arg(long, value_enum, default_value_t = sweeptin::DuplicatePolicy::First)]
     pub duplicates: sweeptin::DuplicatePolicy,
+    /// Memory budget for sorting (e.g. 512M, 4G). Larger inputs are sorted in chunks spilled to
+    /// --tmp-dir; the result is the same whatever the budget.
+    #[arg(long, value_name = "SIZE", default_value = "1G", value_parser = parse_size)]
+    pub mem: u64,
+    /// Directory for spill files (anonymous temporary files, never left behind).
+    #[arg(long, value_name = "DIR")]
+    pub tmp_dir: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print a one-object JSON summary on stdout (points, triangles, seconds per phase, peak
+    /// memory) for batch jobs.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl InputArgs {
+    /// The library's description of the input.
+    pub fn input(&self) -> Input {
+        Input {
+            paths: self.inputs.clone(),
+            filter: self.filter.to_filter(),
+            duplicates: self.duplicates,
+        }
+    }
+
+    /// The library's run options.
+    pub fn options(&self) -> RunOptions {
+        RunOptions {
+            mem: self.mem,
+            tmp_dir: self.tmp_dir.clone(),
+            progress: !self.quiet && !self.json,
+        }
+    }
+}
+
+/// Parses a human size: `1048576`, `512K`, `128M`, `4G`, `1T`, optionally with `B`, `iB` or a
+/// space (binary multiples: 1K = 1024).
+pub fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let v: f64 = num
+        .parse()
+        .map_err(|_| format!("'{s}' is not a size like 512M or 4G"))?;
+    let mult: u64 = match unit.trim().to_ascii_uppercase().as_str() {
+        "" | "B" => 1,
+        "K" | "KB" | "KIB" => 1 << 10,
+        "M" | "MB" | "MIB" => 1 << 20,
+        "G" | "GB" | "GIB" => 1 << 30,
+        "T" | "TB" | "TIB" => 1 << 40,
+        _ => {
+            return Err(format!(
+                "'{s}': unknown size unit '{unit}' (use K, M, G or T)"
+            ));
+        }
+    };
+    let bytes = v * mult as f64;
+    if !(1.0..=1e18).contains(&bytes) {
+        return Err(format!("'{s}' is not a sensible memory size"));
+    }
+    Ok(bytes as u64)
+}
+
+/// The input options of the terrain-product commands: [`InputArgs`] plus the CRS to record and
+/// the longest edge to keep.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ProductInput {
+    #[command(flatten)]
+    pub args: InputArgs,
     /// Coordinate reference system of the data (`EPSG:code`, `EPSG:code+vertical`, or WKT),
     /// recorded in the outputs instead of what the input declares (if anything).
     #[arg(long, value_name = "CRS")]
@@ -72,28 +130,20 @@ pub fn parse_crs(s: &str) -> anyhow::Result<Crs> {
     }
 }
 
-impl InputArgs {
-    /// The pipeline input, with `crop` (from a product's own options) as the LAS/LAZ box filter
-    /// when `--crop` is not given.
-    pub fn to_input(&self, crop: Option<BBox>) -> anyhow::Result<Input> {
-        if self.crop.is_some() && crop.is_some() {
-            bail!("--crop cannot be combined with --buffer (which sets the box to read)");
-        }
+impl ProductInput {
+    /// The pipeline input, reading only the points inside `read_box` when given (instead of
+    /// `--bbox`).
+    pub fn input(&self, read_box: Option<BBox>) -> anyhow::Result<Input> {
         if let Some(l) = self.max_edge
             && !(l.is_finite() && l > 0.0)
         {
             bail!("--max-edge must be a positive length, not {l}");
         }
-        Ok(Input {
-            paths: self.files.clone(),
-            filter: Filter {
-                classes: self.class.as_ref().map(|c| c.0.clone()),
-                returns: self.returns,
-                drop_withheld: self.drop_withheld && !self.keep_withheld,
-                bbox: self.crop.or(crop),
-            },
-            duplicates: self.duplicates,
-        })
+        let mut input = self.args.input();
+        if read_box.is_some() {
+            input.filter.bbox = read_box;
+        }
+        Ok(input)
     }
 
     /// The CRS given with `--crs`, parsed.
@@ -103,7 +153,7 @@ impl InputArgs {
 
     /// Are all the inputs LAS/LAZ (so that the box filter applies)?
     pub fn all_lidar(&self) -> bool {
-        self.files.iter().all(|p| {
+        self.args.inputs.iter().all(|p| {
             matches!(
                 p.extension()
                     .and_then(|e| e.to_str())
@@ -137,27 +187,48 @@ pub fn check_output(path: &Path) -> anyhow::Result<()> {
 /// Runs the pipeline on `input` into `sinks` (one pass) and the optional mesh sink; returns the
 /// run summary and the products' summaries (an object keyed by the sinks' names).
 pub fn run_products(
-    args: &InputArgs,
+    p: &ProductInput,
     input: &Input,
-    mesh: Option<&mut dyn MeshSink>,
+    mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: Vec<(String, Box<dyn TriangleSink>)>,
 ) -> anyhow::Result<(RunSummary, Value)> {
     let mut fanout = Fanout::new(sinks)
-        .with_crs(args.crs()?)
-        .with_max_edge(args.max_edge);
-    let names: Vec<String> = args.files.iter().map(|p| p.display().to_string()).collect();
-    let run = pipeline::run(input, mesh, &mut [&mut fanout])
+        .with_crs(p.crs()?)
+        .with_max_edge(p.max_edge);
+    let names: Vec<String> = p
+        .args
+        .inputs
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect();
+    let mut run = pipeline::run(input, &p.args.options(), mesh, &mut [&mut fanout])
         .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
     let summary = fanout.finish()?;
+    run.products.clear();
+    run.peak_rss_bytes = pipeline::peak_rss();
     Ok((run, summary))
 }
 
+#[allow(dead_code)]
+const _DEFAULT_IS_1G: () = assert!(DEFAULT_MEM == 1 << 30);
+
 #[cfg(test)]
 mod tests {
-    use super::*;
+    #[test]
+    fn sizes() {
+        use super::parse_size;
+        assert_eq!(parse_size("512M"), Ok(512 << 20));
+        assert_eq!(parse_size("4G"), Ok(4 << 30));
+        assert_eq!(parse_size("1.5K"), Ok(1536));
+        assert_eq!(parse_size("100"), Ok(100));
+        assert_eq!(parse_size("128 MiB"), Ok(128 << 20));
+        assert!(parse_size("lots").is_err());
+        assert!(parse_size("5X").is_err());
+    }
 
     #[test]
     fn crs_forms() {
+        use super::parse_crs;
         assert_eq!(parse_crs("EPSG:3794").unwrap().epsg, Some(3794));
         let c = parse_crs("epsg:28992+5709").unwrap();
         assert_eq!((c.epsg, c.vertical_epsg), (Some(28992), Some(5709)));

@@ -1,7 +1,7 @@
 //! `sweeptin products`: several terrain products from one pass over the triangle stream; and the
 //! option groups and sink builders the single-product commands share.
 
-use super::input::{InputArgs, check_output, run_products};
+use super::input::{ProductInput, check_output, run_products};
 use anyhow::{Context, bail};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -23,16 +23,13 @@ pub struct DemArgs {
     /// Cell size; cell centres fall on whole multiples of it.
     #[arg(long, default_value_t = 1.0, value_name = "SIZE")]
     pub cell: f64,
-    /// Raster extent: the cells whose centres lie in [XMIN, XMAX) × (YMIN, YMAX] (boxes that
-    /// touch share no cell). Default: every centre inside the points' bounds.
-    #[arg(long, value_name = "XMIN,YMIN,XMAX,YMAX", allow_hyphen_values = true)]
-    pub bbox: Option<BBox>,
-    /// Round the --bbox sides outwards to multiples of the cell size (otherwise they must be).
+    /// With --bbox: round the box's sides outwards to multiples of the cell size (otherwise they
+    /// must be multiples).
     #[arg(long, requires = "bbox")]
     pub snap: bool,
-    /// LAS/LAZ: read only the points within this distance of --bbox (faster for a tile of a big
-    /// set; the triangles near the tile's edge are the same as in a full run when the buffer is
-    /// wide enough). Default: read everything.
+    /// With --bbox: also read the points up to this distance outside the box, so that the
+    /// triangles near the raster's edge are those of a run over all the data (tiles then mosaic
+    /// exactly). Default: 0, only the points inside the box.
     #[arg(long, requires = "bbox", value_name = "DISTANCE")]
     pub buffer: Option<f64>,
     /// Value of cells outside the TIN.
@@ -44,9 +41,9 @@ pub struct DemArgs {
 }
 
 impl DemArgs {
-    /// The box of points to read, for `--buffer`.
-    pub fn crop(&self) -> anyhow::Result<Option<BBox>> {
-        let (Some(b), Some(d)) = (self.bbox, self.buffer) else {
+    /// The box of points to read: `bbox` grown by `--buffer`.
+    pub fn read_box(&self, bbox: Option<BBox>) -> anyhow::Result<Option<BBox>> {
+        let (Some(b), Some(d)) = (bbox, self.buffer) else {
             return Ok(None);
         };
         if !(d.is_finite() && d >= 0.0) {
@@ -56,10 +53,10 @@ impl DemArgs {
         Ok(BBox::new(x0 - d, y0 - d, x1 + d, y1 + d))
     }
 
-    /// A DEM sink writing to `path`.
-    pub fn sink(&self, path: &Path) -> anyhow::Result<Box<dyn TriangleSink>> {
+    /// A DEM sink writing to `path`, over `bbox` (the `--bbox` of the input) when given.
+    pub fn sink(&self, path: &Path, bbox: Option<BBox>) -> anyhow::Result<Box<dyn TriangleSink>> {
         check_output(path)?;
-        let extent = match self.bbox {
+        let extent = match bbox {
             Some(b) => DemExtent::BBox {
                 bbox: b.corners(),
                 snap: self.snap,
@@ -114,8 +111,9 @@ pub fn read_boundary(path: &Path) -> anyhow::Result<Boundary> {
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pub input: InputArgs,
-    /// Write a DEM raster (.tif or .asc).
+    pub input: ProductInput,
+    /// Write a DEM raster (.tif or .asc), covering --bbox when given (the cells whose centres
+    /// lie in [XMIN, XMAX) × (YMIN, YMAX]).
     #[arg(long, value_name = "RASTER")]
     pub dem: Option<PathBuf>,
     #[command(flatten)]
@@ -146,18 +144,19 @@ pub struct Args {
     /// … written here (CSV).
     #[arg(long, value_name = "CSV", requires = "profile_line")]
     pub profile_out: Option<PathBuf>,
-    /// Also write the TIN itself (.ply, .obj or .xml).
+    /// Also write the TIN itself (.ply, .obj, .xml or .stin).
     #[arg(long, value_name = "MESH")]
     pub mesh: Option<PathBuf>,
-    /// Print the summary of every product as JSON on standard output.
-    #[arg(long)]
-    pub json: bool,
 }
 
 /// One line per product on standard error.
 pub fn report(run: &sweeptin::pipeline::RunSummary, summary: &Value, seconds: f64) {
+    let peak = run.peak_rss_bytes.map_or("?".to_string(), |b| {
+        format!("{:.0} MiB", b as f64 / 1048576.0)
+    });
     eprintln!(
-        "sweeptin: {} points ({} duplicates merged), {} triangles in {seconds:.2} s",
+        "sweeptin: {} points ({} duplicates merged), {} triangles in {seconds:.2} s \
+         (peak memory {peak})",
         run.points_read, run.duplicates, run.triangles
     );
     let Some(m) = summary.as_object() else {
@@ -206,8 +205,9 @@ pub fn shade(dem: &Path, png: &Path, o: &HillshadeOptions) -> anyhow::Result<Val
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut sinks: Vec<(String, Box<dyn TriangleSink>)> = Vec::new();
+    let bbox = args.input.args.filter.bbox;
     if let Some(p) = &args.dem {
-        sinks.push(("dem".into(), args.dem_options.sink(p)?));
+        sinks.push(("dem".into(), args.dem_options.sink(p, bbox)?));
     }
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour_options.sink(p)?));
@@ -231,8 +231,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
              --sample-points, --profile-line, --mesh"
         );
     }
-    let input = args.input.to_input(args.dem_options.crop()?)?;
-    let crs_text = args.input.crs()?.and_then(|c| c.definition());
+    let read_box = if args.dem.is_some() {
+        args.dem_options.read_box(bbox)?
+    } else {
+        None
+    };
+    let input = args.input.input(read_box)?;
+    let crs_text = match args.input.crs()? {
+        Some(c) => c.definition(),
+        None => sweeptin::pipeline::input_crs(&input)?,
+    };
     let mut mesh = match &args.mesh {
         Some(p) => {
             let meta = sweeptin::io::MeshMeta {
@@ -243,8 +251,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let mesh_ref: Option<&mut dyn sweeptin::io::MeshSink> = match mesh.as_mut() {
-        Some(m) => Some(m.as_mut()),
+    let mesh_ref: Option<&mut (dyn sweeptin::io::MeshSink + Send)> = match mesh.as_mut() {
+        Some(m) => Some(&mut **m),
         None => None,
     };
     let (run, mut summary) = run_products(&args.input, &input, mesh_ref, sinks)?;
@@ -258,10 +266,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         summary["hillshade"] = shade(dem, png, &HillshadeOptions::default())?;
         summary["hillshade"]["path"] = serde_json::json!(png);
     }
-    report(&run, &summary, start.elapsed().as_secs_f64());
-    if args.json {
-        summary["run"] = serde_json::to_value(&run)?;
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+    finish_report(&args.input, &run, summary, start)
+}
+
+/// Prints the one-line-per-product report, or with `--json` the whole summary on stdout.
+pub fn finish_report(
+    input: &ProductInput,
+    run: &sweeptin::pipeline::RunSummary,
+    mut summary: Value,
+    start: Instant,
+) -> anyhow::Result<()> {
+    if input.args.json {
+        summary["run"] = serde_json::to_value(run)?;
+        println!("{}", serde_json::to_string(&summary)?);
+    } else {
+        report(run, &summary, start.elapsed().as_secs_f64());
     }
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! `sweeptin sample`: heights of the TIN at query points.
 
-use super::input::{InputArgs, check_output, run_products};
-use super::products::report;
+use super::input::{ProductInput, check_output, run_products};
+use super::products::finish_report;
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::products::sample::SampleSink;
@@ -10,7 +10,7 @@ use sweeptin::products::sample::SampleSink;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pub input: InputArgs,
+    pub input: ProductInput,
     /// Query points: x and y as the first two fields of each line (sorted by y for bounded
     /// memory; other columns are kept).
     #[arg(long, value_name = "CSV")]
@@ -18,9 +18,6 @@ pub struct Args {
     /// Output: every query line with one more field, z (empty outside the TIN).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Print the summary as JSON on standard output.
-    #[arg(long)]
-    pub json: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -33,16 +30,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.points.display()
         );
     }
-    let input = args.input.to_input(None)?;
+    let input = args.input.input(None)?;
     let (run, summary) = run_products(
         &args.input,
         &input,
         None,
         vec![("sample".into(), Box::new(sink))],
     )?;
-    report(&run, &summary, start.elapsed().as_secs_f64());
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
-    }
-    Ok(())
+    finish_report(&args.input, &run, summary, start)
 }

@@ -1,7 +1,7 @@
 //! `sweeptin volume`: cut and fill volumes and areas against a plane or a second surface, within
 //! an optional boundary polygon.
 
-use super::input::{InputArgs, run_products};
+use super::input::{ProductInput, run_products};
 use super::products::read_boundary;
 use anyhow::Context;
 use serde_json::Value;
@@ -16,7 +16,7 @@ use sweeptin::products::volume::VolumeSink;
 #[command(group(clap::ArgGroup::new("reference").required(true).args(["plane", "surface"])))]
 pub struct Args {
     #[command(flatten)]
-    pub input: InputArgs,
+    pub input: ProductInput,
     /// The reference is the horizontal plane z = Z.
     #[arg(long, value_name = "Z", allow_hyphen_values = true)]
     pub plane: Option<f64>,
@@ -26,12 +26,6 @@ pub struct Args {
     /// Restrict to this polygon (GeoJSON Polygon/MultiPolygon; holes allowed).
     #[arg(long, value_name = "GEOJSON")]
     pub boundary: Option<PathBuf>,
-    /// Print the result as JSON on standard output.
-    #[arg(long)]
-    pub json: bool,
-    /// Directory for the reference surface's scratch file (with --surface).
-    #[arg(long, value_name = "DIR")]
-    pub tmp_dir: Option<PathBuf>,
     /// Bands the reference surface is filed into (with --surface).
     #[arg(long, default_value_t = 1024, hide = true)]
     pub bands: usize,
@@ -40,11 +34,16 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;
-    let input = args.input.to_input(None)?;
+    let input = args.input.input(None)?;
     let sink: Box<dyn TriangleSink> = match args.plane {
         Some(z) => Box::new(VolumeSink::new(z, boundary)),
         None => {
-            let dir = args.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
+            let dir = args
+                .input
+                .args
+                .tmp_dir
+                .clone()
+                .unwrap_or_else(std::env::temp_dir);
             let mut store = BandStore::new(&dir, args.bands);
             let mut reference = input.clone();
             reference.paths = args.surface.clone();
@@ -53,40 +52,44 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .iter()
                 .map(|p| p.display().to_string())
                 .collect();
-            pipeline::run(&reference, None, &mut [&mut store])
-                .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
-            store.finish()?;
+            pipeline::run(
+                &reference,
+                &args.input.args.options(),
+                None,
+                &mut [&mut store],
+            )
+            .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
             Box::new(OverlaySink::new(store.into_reader()?, boundary))
         }
     };
     let (run, summary) = run_products(&args.input, &input, None, vec![("volume".into(), sink)])?;
     let v = &summary["volume"];
-    if args.json {
+    if args.input.args.json {
         let mut out = v.clone();
         out["run"] = serde_json::to_value(&run)?;
-        println!("{}", serde_json::to_string_pretty(&out)?);
-    } else {
-        let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-        let against = match args.plane {
-            Some(z) => format!("the plane z = {z}"),
-            None => "the reference surface".to_string(),
-        };
-        println!("against {against}:");
-        println!(
-            "  cut volume   {:.3}   (area {:.3})",
-            f("cut_volume"),
-            f("cut_area")
-        );
-        println!(
-            "  fill volume  {:.3}   (area {:.3})",
-            f("fill_volume"),
-            f("fill_area")
-        );
-        println!("  net volume   {:.3}", f("net_volume"));
-        println!("  area covered {:.3}", f("area"));
-        if let Some(b) = v.get("boundary_area").and_then(Value::as_f64) {
-            println!("  boundary     {b:.3}");
-        }
+        println!("{}", serde_json::to_string(&out)?);
+        return Ok(());
+    }
+    let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+    let against = match args.plane {
+        Some(z) => format!("the plane z = {z}"),
+        None => "the reference surface".to_string(),
+    };
+    println!("against {against}:");
+    println!(
+        "  cut volume   {:.3}   (area {:.3})",
+        f("cut_volume"),
+        f("cut_area")
+    );
+    println!(
+        "  fill volume  {:.3}   (area {:.3})",
+        f("fill_volume"),
+        f("fill_area")
+    );
+    println!("  net volume   {:.3}", f("net_volume"));
+    println!("  area covered {:.3}", f("area"));
+    if let Some(b) = v.get("boundary_area").and_then(Value::as_f64) {
+        println!("  boundary     {b:.3}");
     }
     eprintln!(
         "sweeptin: {} points, {} triangles in {:.2} s",

@@ -88,7 +88,7 @@ impl GridSpec {
 
 /// A raster being written: rows and single cells can be written in any order, and cells already
 /// written read back. Nothing appears under the output path before [`GridWriter::finish`].
-pub trait GridWriter {
+pub trait GridWriter: Send {
     /// The grid being written.
     fn spec(&self) -> &GridSpec;
 

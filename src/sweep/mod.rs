@@ -20,7 +20,7 @@ pub mod stream;
 
 use crate::error::{Error, Result};
 use crate::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
-use front::{Front, NodeId};
+use front::{Front, NodeId, XMap};
 use mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, VertexId};
 pub use stream::{Event, StreamConfig, StreamPoint, StreamStats};
 
@@ -83,21 +83,22 @@ impl Sweep {
                 index: i as u64 + 1,
             });
         }
-        let x_range = real
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(p[0]), hi.max(p[0]))
-            });
+        let step = (n / 4096).max(1);
+        let xmap = XMap::linear(
+            real.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min),
+            real.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max),
+        );
+        let _ = step;
         // A Delaunay triangulation of n points (plus 2) has at most 2(n + 2) - 5 triangles.
         let mesh = Mesh::with_capacity(2 * n + 4);
-        Ok(Self::start(pts, mesh, x_range, None))
+        Ok(Self::start(pts, mesh, xmap, None))
     }
 
     /// The first triangle (P-1, P-2, first point) and the front over it.
     fn start(
         pts: Vec<[f64; 2]>,
         mut mesh: Mesh,
-        x_range: (f64, f64),
+        xmap: XMap,
         fin: Option<Box<stream::Finalizer>>,
     ) -> Self {
         let first = VertexId(FIRST_REAL);
@@ -110,7 +111,7 @@ impl Sweep {
             pts[FIRST_REAL as usize],
             e.prev(),
             e.next(),
-            x_range,
+            xmap,
         );
         mesh.link[e.prev().idx()] = BOUNDARY | front.head;
         mesh.link[e.next().idx()] = BOUNDARY | front.next(front.head);

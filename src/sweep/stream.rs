@@ -52,8 +52,11 @@ pub struct StreamPoint {
 }
 
 /// What the streaming sweep knows up front.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct StreamConfig {
+    /// A sample of the points' x (any order, a few thousand values): spreads the front's
+    /// search index over the data (speed only; empty is fine).
+    pub x_sample: Vec<f64>,
     /// Extent of the data in the local frame: `[xmin, ymin, xmax, ymax]`.
     pub bounds: [f64; 4],
     /// Number of points expected (sizes the finalisation queue; need not be exact).
@@ -76,6 +79,9 @@ pub enum Event {
     Triangle([u64; 3]),
     /// No later triangle uses this vertex.
     VertexDone(u64),
+    /// Progress hint: later triangles normally lie at `y >=` this (local frame); see
+    /// [`Sweep::emit_watermark`].
+    Watermark(f64),
 }
 
 const NOT_OUT: u64 = u64::MAX;
@@ -222,7 +228,12 @@ impl Sweep {
         fin.stats.peak_live_vertices = 1;
         let pts = vec![[f64::NAN; 2], [f64::NAN; 2], first.xy];
         let [x0, _, x1, _] = cfg.bounds;
-        Self::start(pts, Mesh::with_capacity(1024), (x0, x1), Some(fin))
+        let xmap = if cfg.x_sample.is_empty() {
+            super::front::XMap::linear(x0, x1)
+        } else {
+            super::front::XMap::from_sample(cfg.x_sample.clone())
+        };
+        Self::start(pts, Mesh::with_capacity(1024), xmap, Some(fin))
     }
 
     /// Adds the next point of a streaming sweep.
@@ -274,6 +285,44 @@ impl Sweep {
         if let Some(f) = self.fin.as_mut() {
             out.append(&mut f.events);
         }
+    }
+
+    /// Appends a watermark event: no live triangle of ordinary size has a vertex below the
+    /// returned `y`, and every later point is above it. Long thin triangles along the convex hull
+    /// (circumradius above 100 point spacings), whose finalisation waits for the end, are left out:
+    /// they may arrive later below the watermark ("late"). O(live triangles); call it every few
+    /// thousand points.
+    pub fn emit_watermark(&mut self) -> f64 {
+        let Some(fin) = self.fin.as_ref() else {
+            return f64::NEG_INFINITY;
+        };
+        let r_max = 100.0 / fin.inv_h;
+        let mut w = fin.last[1];
+        for t in 0..self.mesh.triangle_count() as u32 {
+            if !self.mesh.is_live(t) {
+                continue;
+            }
+            let [a, b, c] = self.mesh.tri_vertices(t);
+            if is_artificial(a.0) || is_artificial(b.0) || is_artificial(c.0) {
+                continue;
+            }
+            let (pa, pb, pc) = (
+                self.pts[a.0 as usize],
+                self.pts[b.0 as usize],
+                self.pts[c.0 as usize],
+            );
+            let low = pa[1].min(pb[1]).min(pc[1]);
+            if low >= w {
+                continue;
+            }
+            match predicates::circumdisk_bounds(pa, pb, pc) {
+                Some(d) if d.x_max - d.x_min < 2.0 * r_max => w = low,
+                _ => {}
+            }
+        }
+        let fin = self.fin.as_mut().expect("streaming");
+        fin.events.push(Event::Watermark(w));
+        w
     }
 
     /// Number of events waiting in [`Sweep::take_events`].
