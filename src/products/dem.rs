@@ -501,6 +501,32 @@ mod tests {
         }
     }
 
+    /// With watermarks only a band of rows is held; late triangles write into rows already in the
+    /// file, and the result is the same.
+    #[test]
+    fn band_memory_and_late_writes() {
+        let tris = crate::products::testutil::random_tin_framed(3000, 100.0, 2, plane);
+        let dir = tempfile::tempdir().unwrap();
+        let run = |steps: &[crate::products::testutil::Step], name: &str| {
+            let path = dir.path().join(name);
+            let mut sink = DemSink::new(&path, DemOptions::default()).unwrap();
+            let info = StreamInfo {
+                crs: None,
+                bounds: [0.0, 0.0, 100.0, 100.0],
+            };
+            (feed(&mut sink, &info, steps), read_tiff(&path).2)
+        };
+        let (a, va) = run(&crate::products::testutil::in_sweep_order(&tris), "a.tif");
+        let (b, vb) = run(&shuffled_with_watermarks(&tris, 7), "b.tif");
+        assert_eq!(a["rows"], 101);
+        assert!(a["max_rows_in_memory"].as_u64().unwrap() < 15, "{a}");
+        assert_eq!(a["late_cell_writes"], 0);
+        assert!(b["late_cell_writes"].as_u64().unwrap() > 0, "{b}");
+        assert_eq!(a["cells_with_data"], 101 * 101);
+        assert_eq!(b["cells_with_data"], 101 * 101);
+        assert!(va.iter().zip(&vb).all(|(x, y)| x.to_bits() == y.to_bits()));
+    }
+
     /// Centres outside the TIN (a triangle's worth missing) keep the nodata value.
     #[test]
     fn nodata_outside_the_tin() {

@@ -122,3 +122,65 @@ impl TriangleSink for Fanout {
         Ok(v)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    /// Records what it is given.
+    #[derive(Default)]
+    struct Probe {
+        crs: Option<Crs>,
+        triangles: u64,
+        watermarks: u64,
+    }
+
+    impl TriangleSink for Probe {
+        fn begin(&mut self, info: &StreamInfo) -> Result<()> {
+            self.crs = info.crs.clone();
+            Ok(())
+        }
+        fn triangle(&mut self, _t: &[[f64; 3]; 3]) -> Result<()> {
+            self.triangles += 1;
+            Ok(())
+        }
+        fn watermark(&mut self, _y: f64) -> Result<()> {
+            self.watermarks += 1;
+            Ok(())
+        }
+        fn finish(&mut self) -> Result<serde_json::Value> {
+            Ok(
+                json!({ "crs": self.crs.as_ref().and_then(Crs::definition), "triangles": self.triangles, "watermarks": self.watermarks }),
+            )
+        }
+    }
+
+    #[test]
+    fn fanout_assigns_crs_trims_long_edges_and_finishes_once() {
+        let crs = Crs {
+            epsg: Some(3794),
+            ..Crs::default()
+        };
+        let mut f = Fanout::new(vec![
+            ("a".into(), Box::new(Probe::default())),
+            ("b".into(), Box::new(Probe::default())),
+        ])
+        .with_crs(Some(crs))
+        .with_max_edge(Some(2.0));
+        f.begin(&StreamInfo::default()).unwrap();
+        f.triangle(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+            .unwrap();
+        f.triangle(&[[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+            .unwrap();
+        f.watermark(1.0).unwrap();
+        let s = f.finish().unwrap();
+        assert_eq!(
+            s["a"],
+            json!({"crs": "EPSG:3794", "triangles": 1, "watermarks": 1})
+        );
+        assert_eq!(s["b"]["triangles"], 1);
+        assert_eq!(s["trimmed_triangles"], 1);
+        assert_eq!(f.finish().unwrap(), s);
+    }
+}

@@ -48,6 +48,34 @@ pub fn random_tin(
         .collect()
 }
 
+/// As [`random_tin`], with points every unit along the square's sides, so that no triangle is
+/// long and thin along the hull (the sweep-order watermarks then advance steadily).
+pub fn random_tin_framed(
+    n: usize,
+    size: f64,
+    seed: u64,
+    f: impl Fn(f64, f64) -> f64,
+) -> Vec<[[f64; 3]; 3]> {
+    let mut r = SplitMix(seed);
+    let mut pts = Vec::new();
+    let steps = size as usize;
+    for i in 0..steps {
+        let t = i as f64;
+        for (x, y) in [(t, 0.0), (size, t), (size - t, size), (0.0, size - t)] {
+            pts.push([x, y, f(x, y)]);
+        }
+    }
+    for _ in 0..n {
+        let (x, y) = (r.next_f64() * size, r.next_f64() * size);
+        pts.push([x, y, f(x, y)]);
+    }
+    let tin = crate::triangulate(&pts, &crate::Options::default()).unwrap();
+    tin.triangles
+        .iter()
+        .map(|t| t.map(|i| tin.vertices[i as usize]))
+        .collect()
+}
+
 fn ymin(t: &[[f64; 3]; 3]) -> f64 {
     t[0][1].min(t[1][1]).min(t[2][1])
 }
