@@ -297,3 +297,37 @@ fn clear_errors() {
     let o = run(&["volume", s(&pts)]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// A streaming mesh written by `sweeptin tin` gives the same products as the points themselves
+/// (the mesh is replayed into the sinks, with its CRS).
+#[test]
+fn streaming_mesh_input_gives_the_same_products() {
+    let laz = data_dir().join("lidar/lidR_Topography.laz");
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    ok(&["tin", s(&laz), "--class", "2", "-o", s(&d("t.stin")), "-q"]);
+    ok(&["dem", s(&d("t.stin")), "-o", s(&d("a.tif")), "-q"]);
+    ok(&["dem", s(&laz), "--class", "2", "-o", s(&d("b.tif")), "-q"]);
+    ok(&["contours", s(&d("t.stin")), "-o", s(&d("a.geojson")), "-q"]);
+    ok(&[
+        "contours",
+        s(&laz),
+        "--class",
+        "2",
+        "-o",
+        s(&d("b.geojson")),
+        "-q",
+    ]);
+    for (a, b) in [("a.tif", "b.tif"), ("a.geojson", "b.geojson")] {
+        assert_eq!(
+            std::fs::read(d(a)).unwrap(),
+            std::fs::read(d(b)).unwrap(),
+            "{a}"
+        );
+    }
+    let c = std::fs::read_to_string(d("a.geojson")).unwrap();
+    assert!(
+        c.contains("urn:ogc:def:crs:EPSG::2949"),
+        "the CRS is carried"
+    );
+}
