@@ -84,11 +84,7 @@ impl XMap {
         let mut seg = 0usize;
         let at = (0..=Self::CELLS)
             .map(|i| {
-                let x = if i == Self::CELLS {
-                    hi
-                } else {
-                    lo + step * i as f64
-                };
+                let x = if i == Self::CELLS { hi } else { lo + step * i as f64 };
                 while seg + 2 < q.len() && q[seg + 1] <= x {
                     seg += 1;
                 }
