@@ -44,6 +44,9 @@ fn main() {
                 [cx + (r() - 0.5) * sc, cy + (r() - 0.5) * sc, 0.0]
             })
             .collect(),
+        "sclustered" => sweeptin::synth::clustered(n, 1),
+        "slidar" => sweeptin::synth::lidar_like(n, 1),
+        "suniform" => sweeptin::synth::uniform(n, 1),
         _ => panic!(),
     };
     if args.get(3).map(|s| s == "stream").unwrap_or(false) {

@@ -2,7 +2,9 @@
 //! merging, sweeping and writing overlap and memory stays bounded.
 
 use super::read::{self, ReadResult};
-use super::{Frame, Input, RunOptions, RunSummary, StreamInfo, Timings, TriangleSink, peak_rss};
+use super::{
+    AnonPeak, Frame, Input, RunOptions, RunSummary, StreamInfo, Timings, TriangleSink, peak_rss,
+};
 use crate::error::{Error, Result};
 use crate::extsort::{Dedup, ExternalSorter, Merge};
 use crate::io::sink::MeshSink;
@@ -70,6 +72,8 @@ pub(crate) fn run(
             total: 0,
         });
     }
+    let anon = AnonPeak::default();
+    anon.sample();
     pb.set_message("sorting");
     let merge = sorter.finish()?;
     let sort = merge.stats();
@@ -94,7 +98,7 @@ pub(crate) fn run(
         let merger = scope.spawn(move || merge_points(merge, policy, ptx));
         let frame = rd.frame;
         let writer = scope.spawn(move || write_events(erx, frame, mesh, sinks_ref));
-        let swept = sweep_points(&rd, prx, etx, &pb);
+        let swept = sweep_points(&rd, prx, etx, &pb, &anon);
         let duplicates = merger.join().expect("merge thread panicked");
         let written = writer.join().expect("writer thread panicked");
         (swept, duplicates, written)
@@ -115,6 +119,7 @@ pub(crate) fn run(
             Error::AllCollinear { distinct: kept }
         });
     }
+    anon.sample();
     let fin = Instant::now();
     let mut products = Vec::with_capacity(sinks.len());
     for s in sinks.iter_mut() {
@@ -132,6 +137,7 @@ pub(crate) fn run(
             finish: fin.elapsed().as_secs_f64(),
         },
         peak_rss_bytes: peak_rss(),
+        peak_anon_bytes: anon.get(),
         sort,
         sweep,
         stream,
@@ -181,6 +187,7 @@ fn sweep_points(
     points: Receiver<Vec<StreamPoint>>,
     events: Sender<Vec<Event>>,
     pb: &ProgressBar,
+    anon: &AnonPeak,
 ) -> Result<Swept> {
     let cfg = StreamConfig {
         x_sample: rd.x_sample.clone(),
@@ -206,6 +213,7 @@ fn sweep_points(
                 let s = sweep.as_mut().expect("started");
                 s.emit_watermark();
                 pb.set_position(kept);
+                anon.sample();
             }
         }
         let s = sweep.as_mut().expect("a batch is never empty");

@@ -7,7 +7,7 @@
 //!   ──[channel]──► writer thread: MeshSink (PLY/OBJ/LandXML/.stin) + TriangleSinks (DEM, …)
 //! ```
 //!
-//! A streaming mesh (`.stin`) given as input is replayed into the sinks instead (see [`replay`]).
+//! A streaming mesh (`.stin`) given as input is replayed into the sinks instead (see the `replay` module).
 //! Geometry uses LAS's scaled integers (exact) or the XYZ file's doubles; real-world coordinates
 //! are applied on output ([`Frame`]).
 
@@ -141,8 +141,12 @@ pub struct RunSummary {
     pub vertices: u64,
     /// Seconds per phase.
     pub seconds: Timings,
-    /// Peak resident memory of the process (VmHWM), in bytes, when the OS reports it.
+    /// Peak resident memory of the process (VmHWM), in bytes, when the OS reports it. Includes
+    /// pages of memory-mapped spill files, which the kernel can drop at any time.
     pub peak_rss_bytes: Option<u64>,
+    /// Largest anonymous resident memory (RssAnon: heap and stacks, no file pages) seen when
+    /// sampled: after reading, at every watermark, and at the end.
+    pub peak_anon_bytes: Option<u64>,
     /// External sort.
     pub sort: crate::extsort::SortStats,
     /// Sweep counters (front peak, flips, …).
@@ -172,12 +176,37 @@ pub fn input_crs(input: &Input) -> Result<Option<String>> {
     Ok(None)
 }
 
-/// Peak resident set size of this process, from `/proc/self/status` (Linux).
-pub fn peak_rss() -> Option<u64> {
+fn proc_status_kb(field: &str) -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let line = s.lines().find(|l| l.starts_with(field))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
+}
+
+/// Peak resident set size of this process, from `/proc/self/status` (Linux).
+pub fn peak_rss() -> Option<u64> {
+    proc_status_kb("VmHWM:")
+}
+
+/// Current anonymous resident memory of this process (Linux).
+pub fn anon_rss() -> Option<u64> {
+    proc_status_kb("RssAnon:")
+}
+
+/// Running maximum of [`anon_rss`] samples.
+#[derive(Debug, Default)]
+pub(crate) struct AnonPeak(std::sync::atomic::AtomicU64);
+
+impl AnonPeak {
+    pub fn sample(&self) {
+        if let Some(a) = anon_rss() {
+            self.0.fetch_max(a, std::sync::atomic::Ordering::Relaxed);
+        }
+    }
+    pub fn get(&self) -> Option<u64> {
+        let v = self.0.load(std::sync::atomic::Ordering::Relaxed);
+        (v > 0).then_some(v)
+    }
 }
 
 /// Triangulates `input` and delivers the result to `mesh` (if any) and every sink, streaming.

@@ -84,7 +84,11 @@ impl XMap {
         let mut seg = 0usize;
         let at = (0..=Self::CELLS)
             .map(|i| {
-                let x = if i == Self::CELLS { hi } else { lo + step * i as f64 };
+                let x = if i == Self::CELLS {
+                    hi
+                } else {
+                    lo + step * i as f64
+                };
                 while seg + 2 < q.len() && q[seg + 1] <= x {
                     seg += 1;
                 }
@@ -108,7 +112,7 @@ impl XMap {
     #[inline(always)]
     pub fn unit(&self, x: f64) -> f64 {
         let t = (x - self.lo) * self.inv_step;
-        if !(t > 0.0) {
+        if t.is_nan() || t <= 0.0 {
             return 0.0;
         }
         let c = t as usize;
@@ -228,7 +232,7 @@ impl Front {
 
     #[inline(always)]
     fn key(&self, x: f64) -> usize {
-        let k = (x - self.xmap.lo) * self.xmap.inv_step * (1.0 / XMap::CELLS as f64) * self.nb;
+        let k = self.xmap.unit(x) * self.nb;
         (k as usize).min(self.buckets.len() - 1)
     }
 

@@ -1,5 +1,5 @@
 //! The two heuristics of Domiter & Žalik (section 3.4.1) that keep the advancing front short and
-//! smooth (the hole angle is widened from π/2, see [`HOLE_COS`]), and the closing of the front to the convex hull.
+//! smooth (the hole angle is widened from π/2, see `HOLE_COS`), and the closing of the front to the convex hull.
 //!
 //! The heuristics only choose *which* valid triangle to add next; each candidate is checked with the
 //! exact [`orient`](crate::predicates::orient_ids) predicate and legalised, so the floating-point

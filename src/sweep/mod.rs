@@ -84,7 +84,7 @@ impl Sweep {
             });
         }
         let step = (n / 4096).max(1);
-        let xmap = XMap::linear(real.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min), real.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max)); let _ = step;
+        let xmap = XMap::from_sample(real.iter().step_by(step).map(|p| p[0]).collect());
         // A Delaunay triangulation of n points (plus 2) has at most 2(n + 2) - 5 triangles.
         let mesh = Mesh::with_capacity(2 * n + 4);
         Ok(Self::start(pts, mesh, xmap, None))
