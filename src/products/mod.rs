@@ -1,5 +1,5 @@
 //! Terrain products computed from the stream of final triangles, each a
-//! [`TriangleSink`](crate::pipeline::TriangleSink), so that several run in one pass with bounded
+//! [`TriangleSink`], so that several run in one pass with bounded
 //! memory:
 //!
 //! - [`dem`]: DEM rasters (float32 GeoTIFF, ESRI ASCII grid) by linear interpolation at cell
