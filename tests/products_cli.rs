@@ -296,6 +296,11 @@ fn clear_errors() {
     );
     let o = run(&["volume", s(&pts)]);
     assert_eq!(o.status.code(), Some(2));
+    let asc = dir.path().join("d.asc");
+    let png = dir.path().join("s.png");
+    let o = run(&["dem", s(&pts), "-o", s(&asc), "--hillshade", s(&png), "-q"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("GeoTIFF") && !asc.exists(), "{e}");
 }
 
 /// A streaming mesh written by `sweeptin tin` gives the same products as the points themselves

@@ -1,8 +1,9 @@
 //! `sweeptin dem`: a DEM raster (float32 GeoTIFF or ESRI ASCII grid) by linear interpolation in
 //! the TIN at cell centres, optionally with contours and a hillshade from the same pass.
 
+use super::input::check_output;
 use super::input::{ProductInput, run_products};
-use super::products::{ContourArgs, DemArgs, finish_report, shade};
+use super::products::{ContourArgs, DemArgs, check_hillshade, finish_report, shade};
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::pipeline::TriangleSink;
@@ -34,6 +35,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let bbox = args.input.args.filter.bbox;
     let mut sinks: Vec<(String, Box<dyn TriangleSink>)> =
         vec![("dem".into(), args.dem.sink(&args.output, bbox)?)];
+    if let Some(png) = &args.hillshade {
+        check_output(png)?;
+        check_hillshade(&args.output, args.dem.raster_format)?;
+    }
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour.sink(p)?));
     }

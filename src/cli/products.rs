@@ -196,6 +196,18 @@ pub fn report(run: &sweeptin::pipeline::RunSummary, summary: &Value, seconds: f6
     }
 }
 
+/// Refuses a hillshade of a DEM that is not a GeoTIFF, before any work.
+pub fn check_hillshade(dem: &Path, format: Option<RasterFormat>) -> anyhow::Result<()> {
+    let f = format.or_else(|| RasterFormat::from_extension(dem));
+    if f != Some(RasterFormat::GeoTiff) {
+        bail!(
+            "--hillshade needs a GeoTIFF DEM (.tif), not {}",
+            dem.display()
+        );
+    }
+    Ok(())
+}
+
 /// Shades `dem` into `png` and reports it.
 pub fn shade(dem: &Path, png: &Path, o: &HillshadeOptions) -> anyhow::Result<Value> {
     let s = hillshade(dem, png, o).with_context(|| format!("cannot shade {}", dem.display()))?;
@@ -208,6 +220,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let bbox = args.input.args.filter.bbox;
     if let Some(p) = &args.dem {
         sinks.push(("dem".into(), args.dem_options.sink(p, bbox)?));
+        if let Some(png) = &args.hillshade {
+            check_output(png)?;
+            check_hillshade(p, args.dem_options.raster_format)?;
+        }
     }
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour_options.sink(p)?));
