@@ -25,6 +25,8 @@ pub mod mmap;
 pub mod pipeline;
 pub mod points;
 pub mod predicates;
+pub mod products;
+pub mod raster;
 pub mod sweep;
 pub mod synth;
 pub mod triangulation;

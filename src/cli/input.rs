@@ -3,8 +3,13 @@
 //! progress and the JSON summary.
 
 use super::info::FilterArgs;
-use std::path::PathBuf;
-use sweeptin::pipeline::{DEFAULT_MEM, Input, RunOptions};
+use anyhow::{Context, bail};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use sweeptin::io::MeshSink;
+use sweeptin::lidar::{BBox, Crs};
+use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunOptions, RunSummary, TriangleSink};
+use sweeptin::products::Fanout;
 
 /// Input files and how to read and run them (flattened into each command's arguments).
 #[derive(clap::Args, Debug, Clone)]
@@ -84,6 +89,126 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
     Ok(bytes as u64)
 }
 
+/// The input options of the terrain-product commands: [`InputArgs`] plus the CRS to record and
+/// the longest edge to keep.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ProductInput {
+    #[command(flatten)]
+    pub args: InputArgs,
+    /// Coordinate reference system of the data (`EPSG:code`, `EPSG:code+vertical`, or WKT),
+    /// recorded in the outputs instead of what the input declares (if anything).
+    #[arg(long, value_name = "CRS")]
+    pub crs: Option<String>,
+    /// Leave out triangles with a horizontal edge longer than this (their area has no data).
+    #[arg(long, value_name = "LENGTH")]
+    pub max_edge: Option<f64>,
+}
+
+/// Parses `--crs`.
+pub fn parse_crs(s: &str) -> anyhow::Result<Crs> {
+    let t = s.trim();
+    if let Some(code) = t.strip_prefix("EPSG:").or_else(|| t.strip_prefix("epsg:")) {
+        let mut parts = code.split('+');
+        let h = parts.next().unwrap_or("").trim().parse::<u32>();
+        let v = parts.next().map(|v| v.trim().parse::<u32>());
+        return match (h, v) {
+            (Ok(h), None) => Ok(Crs {
+                epsg: Some(h),
+                ..Crs::default()
+            }),
+            (Ok(h), Some(Ok(v))) => Ok(Crs {
+                epsg: Some(h),
+                vertical_epsg: Some(v),
+                ..Crs::default()
+            }),
+            _ => bail!("--crs {s}: expected EPSG:code or EPSG:code+code"),
+        };
+    }
+    match Crs::from_wkt_bytes(t.as_bytes()) {
+        Some(c) if c.name.is_some() || c.epsg.is_some() => Ok(c),
+        _ => bail!("--crs {s}: expected EPSG:code, EPSG:code+code or a WKT definition"),
+    }
+}
+
+impl ProductInput {
+    /// The pipeline input, reading only the points inside `read_box` when given (instead of
+    /// `--bbox`).
+    pub fn input(&self, read_box: Option<BBox>) -> anyhow::Result<Input> {
+        if let Some(l) = self.max_edge
+            && !(l.is_finite() && l > 0.0)
+        {
+            bail!("--max-edge must be a positive length, not {l}");
+        }
+        let mut input = self.args.input();
+        if read_box.is_some() {
+            input.filter.bbox = read_box;
+        }
+        Ok(input)
+    }
+
+    /// The CRS given with `--crs`, parsed.
+    pub fn crs(&self) -> anyhow::Result<Option<Crs>> {
+        self.crs.as_deref().map(parse_crs).transpose()
+    }
+
+    /// Are all the inputs LAS/LAZ (so that the box filter applies)?
+    pub fn all_lidar(&self) -> bool {
+        self.args.inputs.iter().all(|p| {
+            matches!(
+                p.extension()
+                    .and_then(|e| e.to_str())
+                    .map(str::to_ascii_lowercase)
+                    .as_deref(),
+                Some("las" | "laz")
+            )
+        })
+    }
+}
+
+/// Fails early (before any heavy work) if an output cannot be created where asked.
+pub fn check_output(path: &Path) -> anyhow::Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!(
+            "{}: cannot write: the directory {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    if path.is_dir() {
+        bail!("{}: cannot write: it is a directory", path.display());
+    }
+    Ok(())
+}
+
+/// Runs the pipeline on `input` into `sinks` (one pass) and the optional mesh sink; returns the
+/// run summary and the products' summaries (an object keyed by the sinks' names).
+pub fn run_products(
+    p: &ProductInput,
+    input: &Input,
+    mesh: Option<&mut (dyn MeshSink + Send)>,
+    sinks: Vec<(String, Box<dyn TriangleSink>)>,
+) -> anyhow::Result<(RunSummary, Value)> {
+    let mut fanout = Fanout::new(sinks)
+        .with_crs(p.crs()?)
+        .with_max_edge(p.max_edge);
+    let names: Vec<String> = p
+        .args
+        .inputs
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect();
+    let mut run = pipeline::run(input, &p.args.options(), mesh, &mut [&mut fanout])
+        .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
+    let summary = fanout.finish()?;
+    run.products.clear();
+    run.peak_rss_bytes = pipeline::peak_rss();
+    Ok((run, summary))
+}
+
 #[allow(dead_code)]
 const _DEFAULT_IS_1G: () = assert!(DEFAULT_MEM == 1 << 30);
 
@@ -99,5 +224,17 @@ mod tests {
         assert_eq!(parse_size("128 MiB"), Ok(128 << 20));
         assert!(parse_size("lots").is_err());
         assert!(parse_size("5X").is_err());
+    }
+
+    #[test]
+    fn crs_forms() {
+        use super::parse_crs;
+        assert_eq!(parse_crs("EPSG:3794").unwrap().epsg, Some(3794));
+        let c = parse_crs("epsg:28992+5709").unwrap();
+        assert_eq!((c.epsg, c.vertical_epsg), (Some(28992), Some(5709)));
+        let w = parse_crs(r#"PROJCS["x",AUTHORITY["EPSG","2154"]]"#).unwrap();
+        assert_eq!(w.epsg, Some(2154));
+        assert!(parse_crs("EPSG:abc").is_err());
+        assert!(parse_crs("nonsense").is_err());
     }
 }
