@@ -427,21 +427,20 @@ impl Sweep {
 
     /// Appends a watermark event: no live triangle of ordinary size has a vertex below the
     /// returned `y`, and every later point is above it. Long thin triangles along the convex hull
-    /// (circumradius above 100 point spacings), whose finalisation waits for the end, are left out:
-    /// they may arrive later below the watermark ("late"). O(live triangles); call it every few
+    /// (wider than 100 point spacings), whose finalisation waits for the end, are left out: they
+    /// may arrive later below the watermark ("late"). O(live triangles); call it every few
     /// thousand points.
     pub fn emit_watermark(&mut self) -> f64 {
         let Some(fin) = self.fin.as_ref() else {
             return f64::NEG_INFINITY;
         };
-        let r_max = 100.0 / fin.inv_h;
+        let wide = 100.0 / fin.inv_h;
         let mut w = fin.last[1];
-        for t in 0..self.mesh.triangle_count() as u32 {
-            if !self.mesh.is_live(t) {
-                continue;
-            }
-            let [a, b, c] = self.mesh.tri_vertices(t);
-            if is_artificial(a.0) || is_artificial(b.0) || is_artificial(c.0) {
+        let o = &self.mesh.origin;
+        for t in (0..o.len()).step_by(3) {
+            let [a, b, c] = [o[t], o[t + 1], o[t + 2]];
+            if a == super::mesh::DEAD || is_artificial(a.0) || is_artificial(b.0) || is_artificial(c.0)
+            {
                 continue;
             }
             let (pa, pb, pc) = (
@@ -450,12 +449,11 @@ impl Sweep {
                 self.pts[c.0 as usize],
             );
             let low = pa[1].min(pb[1]).min(pc[1]);
-            if low >= w {
-                continue;
-            }
-            match predicates::circumdisk_bounds(pa, pb, pc) {
-                Some(d) if d.x_max - d.x_min < 2.0 * r_max => w = low,
-                _ => {}
+            if low < w {
+                let span = pa[0].max(pb[0]).max(pc[0]) - pa[0].min(pb[0]).min(pc[0]);
+                if span < wide {
+                    w = low;
+                }
             }
         }
         let fin = self.fin.as_mut().expect("streaming");
