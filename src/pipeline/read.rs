@@ -109,12 +109,15 @@ pub(crate) fn read_into(
                 break;
             }
             for p in &buf {
+                // Real-world doubles, exactly as written to the outputs: the triangulation is
+                // Delaunay for the coordinates in the output file (see docs/ARCHITECTURE.md).
+                let w = q.to_world(p);
                 add(
                     sorter,
                     SortRecord {
-                        x: f64::from(p.x),
-                        y: f64::from(p.y),
-                        z: f64::from(p.z),
+                        x: w[0] + 0.0,
+                        y: w[1] + 0.0,
+                        z: w[2],
                         index: p.index,
                     },
                 )?;
@@ -123,10 +126,7 @@ pub(crate) fn read_into(
             progress(n, Some(total));
         }
         return Ok(ReadResult {
-            frame: Frame {
-                scale: q.scale,
-                offset: q.offset,
-            },
+            frame: Frame::IDENTITY,
             crs,
             bounds,
             points: n,
