@@ -89,7 +89,7 @@ pub enum Event {
 const NOT_OUT: u64 = u64::MAX;
 const RING: usize = 1024;
 /// Buckets between a triangle's creation and its first check.
-const FIRST_CHECK: u64 = 2;
+const FIRST_CHECK: u64 = 3;
 /// Buckets between checks of a triangle that uses an artificial point or is too flat to bound.
 const PARKED: u64 = 64;
 
