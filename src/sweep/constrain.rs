@@ -6,7 +6,7 @@
 //!
 //! 1. **Front pockets.** Where the front dips below the segment (the paper's "advancing-front
 //!    traversal" case), the pocket between front and segment is filled with triangles
-//!    ([`Sweep::fill`], exact and legalised) until every front vertex strictly between the two
+//!    (`Sweep::fill`, exact and legalised) until every front vertex strictly between the two
 //!    endpoints' x lies on or above the segment's line. Each pocket is bounded by front vertices
 //!    on or above the line, so it always has a valley to fill (an x-monotone chain below a straight
 //!    top edge); filling only adds triangles, some of which the next step removes again.
@@ -20,7 +20,7 @@
 //!
 //! The removed triangles' slots are reused for the new ones (a cavity of `k` triangles is
 //! re-triangulated with `k` triangles), and the cavity's outer edges keep their links, including
-//! the front's references, through [`Sweep::relink`].
+//! the front's references, through `Sweep::relink`.
 
 use super::Sweep;
 use super::front::NodeId;

@@ -439,7 +439,10 @@ impl Sweep {
         let o = &self.mesh.origin;
         for t in (0..o.len()).step_by(3) {
             let [a, b, c] = [o[t], o[t + 1], o[t + 2]];
-            if a == super::mesh::DEAD || is_artificial(a.0) || is_artificial(b.0) || is_artificial(c.0)
+            if a == super::mesh::DEAD
+                || is_artificial(a.0)
+                || is_artificial(b.0)
+                || is_artificial(c.0)
             {
                 continue;
             }
