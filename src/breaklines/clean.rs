@@ -198,6 +198,8 @@ impl Pslg {
             z: vec![f64::NAN; n],
             vline: vec![0; n],
             isolated: (0..n as u32).filter(|&v| !used[v as usize]).collect(),
+            lo,
+            hi,
             grid: Grid::new(lo, hi, self.segments.len().max(1)),
             xy,
             segs: self.segments.clone(),
@@ -266,6 +268,9 @@ struct Work {
     dirty: Vec<bool>,
     /// Vertices on no segment (tested against segments that might pass through them).
     isolated: Vec<u32>,
+    /// Bounding box of the vertices (crossing points stay inside).
+    lo: [f64; 2],
+    hi: [f64; 2],
     grid: Grid,
     snap: f64,
     ztol: f64,
@@ -314,6 +319,8 @@ impl Work {
             line: Vec::new(),
             dirty: Vec::new(),
             isolated: Vec::new(),
+            lo: [0.0; 2],
+            hi: [0.0; 2],
             grid: Grid::new([0.0; 2], [0.0; 2], 1),
             snap: 0.0,
             ztol: options.z_tolerance,
@@ -326,6 +333,7 @@ impl Work {
         w.add_vertices(polylines, &id_of);
         w.add_segments(polylines, &id_of);
         let (lo, hi, mag) = bounds(&w.xy);
+        (w.lo, w.hi) = (lo, hi);
         let items = w.segs.len() + w.isolated.len();
         w.grid = Grid::new(lo, hi, (items as f64 * CELLS_PER_ITEM) as usize);
         w.snap = options.snap.unwrap_or(SNAP_REL * mag).max(0.0);
@@ -404,6 +412,10 @@ impl Work {
     fn run(&mut self) -> Result<()> {
         for round in 1..=MAX_ROUNDS {
             self.stats.rounds = round;
+            if round > 1 {
+                let items = self.segs.len() + self.isolated.len();
+                self.grid = Grid::new(self.lo, self.hi, (items as f64 * CELLS_PER_ITEM) as usize);
+            }
             let found = self.find(round == 1);
             if found.is_empty() {
                 return Ok(());
@@ -431,39 +443,59 @@ impl Work {
                 first_round
             }
         };
-        let mut pairs: Vec<u64> = (0..buckets.cells() as u32)
+        // Each dirty item gathers the items sharing a cell with it; a pair of two dirty items is
+        // tested from its first one. Items are taken cell by cell (each from the first cell it is
+        // in), so that nearby items are processed together.
+        let first = |i: u32| {
+            if i < n_seg {
+                let [a, b] = self.segs[i as usize];
+                let mut first = u32::MAX;
+                self.grid
+                    .segment_cells(self.p(a), self.p(b), |c| first = first.min(c));
+                first
+            } else {
+                self.grid
+                    .cell_of(self.p(self.isolated[(i - n_seg) as usize]))
+            }
+        };
+        (0..self.grid.len() as u32)
             .into_par_iter()
             .flat_map_iter(|c| {
-                let items = buckets.cell(c);
-                let mut out = Vec::new();
-                for (k, &i) in items.iter().enumerate() {
-                    if !dirty(i) {
-                        continue;
-                    }
-                    for (l, &j) in items.iter().enumerate() {
-                        // A pair of two dirty items is emitted once, from its first item.
-                        if l == k || (i >= n_seg && j >= n_seg) || (dirty(j) && l < k) {
-                            continue;
-                        }
-                        let (a, b) = (i.min(j), i.max(j));
-                        out.push((u64::from(a) << 32) | u64::from(b));
-                    }
-                }
-                out
+                buckets
+                    .cell(c)
+                    .iter()
+                    .copied()
+                    .filter(move |&i| dirty(i) && first(i) == c)
             })
-            .collect();
-        pairs.par_sort_unstable();
-        pairs.dedup();
-        pairs
-            .par_iter()
-            .filter_map(|&w| {
-                let (i, j) = ((w >> 32) as u32, w as u32);
-                let r = if j >= n_seg {
-                    self.test_point(i, self.isolated[(j - n_seg) as usize])
-                } else {
-                    self.test_pair(i, j)
+            .flat_map_iter(|i| {
+                let mut cand: Vec<u32> = Vec::new();
+                let mut visit = |c: u32| {
+                    for &j in buckets.cell(c) {
+                        if j != i && (i < n_seg || j < n_seg) && (j > i || !dirty(j)) {
+                            cand.push(j);
+                        }
+                    }
                 };
-                (!r.is_empty()).then_some(([i, j], r))
+                if i < n_seg {
+                    let [a, b] = self.segs[i as usize];
+                    self.grid.segment_cells(self.p(a), self.p(b), visit);
+                } else {
+                    visit(
+                        self.grid
+                            .cell_of(self.p(self.isolated[(i - n_seg) as usize])),
+                    );
+                }
+                cand.sort_unstable();
+                cand.dedup();
+                cand.into_iter().filter_map(move |j| {
+                    let (s, t) = (i.min(j), i.max(j));
+                    let r = if t >= n_seg {
+                        self.test_point(s, self.isolated[(t - n_seg) as usize])
+                    } else {
+                        self.test_pair(s, t)
+                    };
+                    (!r.is_empty()).then_some(([s, t], r))
+                })
             })
             .collect()
     }
@@ -596,11 +628,25 @@ impl Work {
             self.stats.crossings += crossings.len() as u64;
             // In the order of the points, so that which crossing point of a cluster becomes the
             // vertex depends on the geometry only.
-            crossings.sort_by(|x, y| lex(x.2, y.2).then((x.0, x.1).cmp(&(y.0, y.1))));
+            crossings.par_sort_by(|x, y| lex(x.2, y.2).then((x.0, x.1).cmp(&(y.0, y.1))));
+            // The nearest existing vertex of each crossing, in parallel; the vertices made in this
+            // round are looked at in order below.
             let vertices = Buckets::points(&self.grid, &self.xy);
+            let old: Vec<Option<Near>> = crossings
+                .par_iter()
+                .map(|c| {
+                    let mut best = None;
+                    self.snap_cells(c.2, |cell| {
+                        for &v in vertices.cell(cell) {
+                            best = closer(best, c.2, self.xy[v as usize], v, self.snap);
+                        }
+                    });
+                    best
+                })
+                .collect();
             let mut fresh: HashMap<u32, Vec<u32>> = HashMap::new();
-            for (s, t, p) in crossings {
-                let v = self.crossing_vertex(s, t, p, &vertices, &mut fresh);
+            for ((s, t, p), near) in crossings.into_iter().zip(old) {
+                let v = self.crossing_vertex(s, t, p, near, &mut fresh);
                 for seg in [s, t] {
                     let [a, b] = self.segs[seg as usize];
                     if v != a && v != b {
@@ -612,43 +658,37 @@ impl Work {
         self.split(splits);
     }
 
-    /// The vertex for the crossing of `s` and `t` at `p`: an existing one within the snap
-    /// distance, or a new one.
+    /// The cells within the snap distance of `p`.
+    fn snap_cells(&self, p: [f64; 2], f: impl FnMut(u32)) {
+        let (lo, hi) = (
+            [p[0] - self.snap, p[1] - self.snap],
+            [p[0] + self.snap, p[1] + self.snap],
+        );
+        self.grid.box_cells(lo, hi, f);
+    }
+
+    /// The vertex for the crossing of `s` and `t` at `p`: the nearest of `near` (the nearest
+    /// older vertex within the snap distance) and the vertices made in this round (`fresh`, by
+    /// cell), or a new one.
     fn crossing_vertex(
         &mut self,
         s: u32,
         t: u32,
         p: [f64; 2],
-        vertices: &Buckets,
+        near: Option<Near>,
         fresh: &mut HashMap<u32, Vec<u32>>,
     ) -> u32 {
         let (zs, zt) = (self.z_along(s, p), self.z_along(t, p));
         let lines = [self.line[s as usize], self.line[t as usize]];
-        let mut best: Option<(f64, [f64; 2], u32)> = None;
-        let (lo, hi) = (
-            [p[0] - self.snap, p[1] - self.snap],
-            [p[0] + self.snap, p[1] + self.snap],
-        );
-        let snap2 = self.snap * self.snap;
-        let mut consider = |v: u32, q: [f64; 2]| {
-            let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
-            let better =
-                best.is_none_or(|(bd, bq, _)| d2.total_cmp(&bd).then(lex(q, bq)) == Ordering::Less);
-            if (d2 <= snap2 || q == p) && better {
-                best = Some((d2, q, v));
-            }
-        };
-        self.grid.box_cells(lo, hi, |c| {
-            for &v in vertices.cell(c) {
-                consider(v, self.xy[v as usize]);
-            }
-            if let Some(list) = fresh.get(&c) {
-                for &v in list {
-                    consider(v, self.xy[v as usize]);
+        let mut best = near;
+        if !fresh.is_empty() {
+            self.snap_cells(p, |c| {
+                for &v in fresh.get(&c).map_or(&[][..], |l| &l[..]) {
+                    best = closer(best, p, self.xy[v as usize], v, self.snap);
                 }
-            }
-        });
-        if let Some((_, _, v)) = best {
+            });
+        }
+        if let Some(Near { v, .. }) = best {
             self.stats.snapped += 1;
             self.merge_z(v, zs, lines);
             self.merge_z(v, zt, lines);
@@ -898,6 +938,28 @@ fn along(a: [f64; 2], b: [f64; 2], u: [f64; 2], v: [f64; 2]) -> Ordering {
     };
     let d = [dx, dy];
     dir(d[major], u[major], v[major]).then(dir(d[minor], u[minor], v[minor]))
+}
+
+/// A vertex near a crossing point.
+#[derive(Clone, Copy, Debug)]
+struct Near {
+    d2: f64,
+    at: [f64; 2],
+    v: u32,
+}
+
+/// `best`, or vertex `v` at `q` if it is within `snap` of `p` (or exactly at `p`) and nearer
+/// (ties: lower in `(x, y)` order).
+#[inline]
+fn closer(best: Option<Near>, p: [f64; 2], q: [f64; 2], v: u32, snap: f64) -> Option<Near> {
+    let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
+    if !(d2 <= snap * snap || q == p) {
+        return best;
+    }
+    match best {
+        Some(b) if d2.total_cmp(&b.d2).then(lex(q, b.at)) != Ordering::Less => best,
+        _ => Some(Near { d2, at: q, v }),
+    }
 }
 
 /// Lexicographic order of points.

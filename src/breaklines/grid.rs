@@ -209,11 +209,6 @@ impl Buckets {
     pub fn cell(&self, c: u32) -> &[u32] {
         &self.items[self.start[c as usize] as usize..self.start[c as usize + 1] as usize]
     }
-
-    /// Number of cells.
-    pub fn cells(&self) -> usize {
-        self.start.len() - 1
-    }
 }
 
 #[cfg(test)]
@@ -272,6 +267,5 @@ mod tests {
         let segs = [[0u32, 1], [3, 1]];
         let b = Buckets::segments(&g, &pts, &segs);
         assert_eq!(b.cell(g.cell_of([3.5, 3.5])), &[0, 1]);
-        assert_eq!(b.cells(), g.len());
     }
 }
