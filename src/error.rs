@@ -118,6 +118,18 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A breakline vertex cannot be used (not finite, or outside the predicates' exact range).
+    /// [`crate::breaklines::Lines::clean`] turns it into [`Error::Format`] naming the file.
+    #[error("breakline {polyline}, vertex {vertex}: {message}")]
+    BadLine {
+        /// Index of the polyline in the input (0-based).
+        polyline: u64,
+        /// Index of the vertex in the polyline (0-based).
+        vertex: u64,
+        /// What is wrong.
+        message: String,
+    },
+
     /// A reader was given no input files.
     #[error("no input files given")]
     NoInput,

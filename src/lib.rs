@@ -17,6 +17,7 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod breaklines;
 pub mod error;
 pub mod extsort;
 pub mod io;

@@ -146,6 +146,15 @@ pub fn orient(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> Orientation {
     Orientation::from_f64(robust::orient2d(c(a), c(b), c(p)))
 }
 
+/// The orientation determinant of `a, b, p` (twice the signed area), from [`robust`]'s adaptive
+/// evaluation: its sign is exact and its value never less accurate than the plain floating-point
+/// formula. For constructions (such as where two segments cross), never for decisions: decide with
+/// [`orient`].
+#[inline]
+pub fn orient_det(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> f64 {
+    robust::orient2d(c(a), c(b), c(p))
+}
+
 /// Exact, unperturbed in-circle test: where `d` lies relative to the circle through the
 /// counter-clockwise triangle `a, b, c`.
 #[inline(always)]

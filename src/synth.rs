@@ -13,8 +13,13 @@
 //! | [`grid`], [`tilted_grid`], [`ring`] | small test shapes | everything is cocircular / collinear |
 //!
 //! All return `Vec<[f64; 3]>` (`[x, y, z]`), the input format of [`crate::triangulate`].
+//!
+//! Breaklines to go with them ([`contours`], [`coastline`]) are in [`lines`].
 
 use std::f64::consts::{PI, TAU};
+
+pub mod lines;
+pub use lines::{coastline, coastline_points, contour_points, contours};
 
 /// SplitMix64 (Steele, Lea & Flood 2014): a tiny, fast, statistically good 64-bit generator.
 ///

@@ -27,6 +27,13 @@
 //!    it is not strictly inside the circumcircle of the triangle on this side;
 //! 10. ([`validate_constrained`]) every constraint is an edge of the mesh.
 //!
+//! [`validate_cdt`] takes the constraints as *input segments* (coordinate pairs) instead: every
+//! segment must be exactly the union of mesh edges (a chain of collinear mesh vertices from one
+//! end to the other, checked exactly), and an edge is exempt from the Delaunay test exactly when
+//! it lies on an input segment. [`validate_cdt_with`] can skip the convex-hull checks (7, 8, and
+//! "every vertex is used") for trimmed meshes, or the Delaunay test (9) for meshes that are valid
+//! triangulations but deliberately not Delaunay (flat-triangle removal); see [`CdtCheck`].
+//!
 //! # Why this proves a (constrained) Delaunay triangulation
 //!
 //! *A proper triangulation of the hull.* Let `w(p)` be the number of triangles whose interior
@@ -60,6 +67,9 @@ use crate::error::{Error, Result};
 use crate::predicates::{self, CircleSide, Orientation, incircle_exact, orient};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering as AtomicOrdering};
+
+mod cdt;
+pub use cdt::{CdtCheck, validate_cdt, validate_cdt_with};
 
 /// What a valid mesh is made of.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -147,6 +157,13 @@ struct Validator<'a> {
     /// Outgoing half-edges of vertex `v`: `out[start[v]..start[v + 1]]`, sorted.
     start: Vec<usize>,
     out: Vec<u64>,
+    /// Check the boundary against the convex hull, Euler's count and that every vertex is used
+    /// (off for trimmed meshes).
+    hull: bool,
+    /// Check that unconstrained edges are locally Delaunay.
+    delaunay: bool,
+    /// Input segments: an edge lying on one is exempt from the Delaunay test.
+    segments: Option<cdt::SegmentIndex>,
 }
 
 /// What the per-vertex pass found for a block of vertices.
@@ -190,29 +207,50 @@ impl<'a> Validator<'a> {
             constraints,
             start: Vec::new(),
             out: Vec::new(),
+            hull: true,
+            delaunay: true,
+            segments: None,
         })
     }
 
-    fn run(mut self) -> Result<Report> {
-        let hull = convex_hull(&self.check_distinct()?);
+    fn run(self) -> Result<Report> {
+        self.run_checks().map(|(_, report)| report)
+    }
+
+    /// All checks; returns the validator (with its adjacency, for further checks) and the report.
+    fn run_checks(mut self) -> Result<(Self, Report)> {
+        let sorted = self.check_distinct()?;
+        let hull = if self.hull {
+            convex_hull(&sorted)
+        } else {
+            Vec::new()
+        };
+        drop(sorted);
         self.check_triangles()?;
         self.build_adjacency()?;
         let info = self.check_edges()?;
-        self.check_boundary(&info, &hull)?;
-        self.check_euler(hull.len())?;
+        if self.hull {
+            self.check_boundary(&info, &hull)?;
+            self.check_euler(hull.len())?;
+        }
         if let Some([a, b, c, d]) = info.not_delaunay {
             return Err(self.not_delaunay(a, b, c, d));
         }
         self.check_constraints_present()?;
         let t = self.triangles.len() as u64;
-        Ok(Report {
+        let report = Report {
             vertices: self.vertices.len() as u64,
             triangles: t,
             edges: info.interior_edges + info.boundary_edges,
-            hull_vertices: hull.len() as u64,
-            constrained_edges: self.constraints.len() as u64,
+            hull_vertices: if self.hull {
+                hull.len() as u64
+            } else {
+                info.boundary_edges
+            },
+            constrained_edges: self.constraints.len() as u64 + info.constrained,
             cocircular_edges: info.cocircular,
-        })
+        };
+        Ok((self, report))
     }
 
     /// `vertex 3 (x, y)`, for messages.
@@ -409,7 +447,7 @@ impl<'a> Validator<'a> {
     /// Checks the edges leaving `a`; returns the destination of its boundary edge, or [`NONE`].
     fn check_vertex(&self, a: u32, info: &mut BlockInfo) -> Result<u32> {
         let list = self.outgoing(a);
-        if list.is_empty() {
+        if list.is_empty() && self.hull {
             return Err(invalid(format!(
                 "{} is not used by any triangle",
                 self.v(a)
@@ -420,7 +458,7 @@ impl<'a> Validator<'a> {
             let (b, c) = (dst_of(w), apex_of(w));
             match self.find(b, a) {
                 None => {
-                    if boundary != NONE {
+                    if boundary != NONE && self.hull {
                         return Err(invalid(format!(
                             "{} has two outgoing boundary edges (to {} and to {}): the mesh is \
                              pinched there, not a disk",
@@ -445,7 +483,9 @@ impl<'a> Validator<'a> {
     /// Interior edge `a → b` with apex `c` on its left and `d` on its right.
     fn check_interior_edge(&self, a: u32, b: u32, c: u32, d: u32, info: &mut BlockInfo) {
         if !self.constraints.is_empty() && self.constraints.binary_search(&edge_key(a, b)).is_ok() {
-            info.constrained += 1;
+            return;
+        }
+        if !self.delaunay {
             return;
         }
         let p = |v: u32| self.xy[v as usize];
@@ -453,7 +493,14 @@ impl<'a> Validator<'a> {
             CircleSide::Outside => {}
             CircleSide::On => info.cocircular += 1,
             CircleSide::Inside => {
-                info.not_delaunay.get_or_insert([a, b, c, d]);
+                let q = |v: u32| [self.vertices[v as usize][0], self.vertices[v as usize][1]];
+                if let Some(s) = &self.segments
+                    && s.contains_edge(q(a), q(b))
+                {
+                    info.constrained += 1;
+                } else {
+                    info.not_delaunay.get_or_insert([a, b, c, d]);
+                }
             }
         }
     }

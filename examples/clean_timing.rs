@@ -1,0 +1,71 @@
+//! Times breakline cleaning on synthetic inputs:
+//! `cargo run --release --example clean_timing -- [segments] [contours|coastline|random|all]`
+//! (default 1,000,000, all).
+//!
+//! Inputs: contour lines (no crossings: the common case), a fractal coastline (simple rings), and
+//! random short segments (a crossing-heavy stress case), each about `segments` segments.
+use std::time::Instant;
+use sweeptin::breaklines::clean::{CleanOptions, clean};
+use sweeptin::synth::{self, SplitMix64};
+
+fn time(name: &str, lines: &[Vec<[f64; 3]>]) {
+    let segs: usize = lines.iter().map(|l| l.len().saturating_sub(1)).sum();
+    let t0 = Instant::now();
+    let g = clean(lines, &CleanOptions::default()).expect("clean");
+    let t = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    g.check_planar().expect("planar");
+    let tc = t1.elapsed().as_secs_f64();
+    println!(
+        "{name}: {} polylines, {segs} segments -> clean {t:.3} s ({:.2} M segments/s), check {tc:.3} s\n  {:?}",
+        lines.len(),
+        segs as f64 / t / 1e6,
+        g.stats
+    );
+}
+
+fn main() {
+    let n: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse().expect("a segment count"))
+        .unwrap_or(1_000_000);
+    let which = std::env::args().nth(2).unwrap_or_else(|| "all".into());
+    let run = |name: &str| which == "all" || which == name;
+    println!("threads {}", rayon::current_num_threads());
+    if run("contours") {
+        let t0 = Instant::now();
+        let contours = synth::contours(n, 1);
+        println!("contours generated in {:.2} s", t0.elapsed().as_secs_f64());
+        time("contours", &contours);
+    }
+    if run("coastline") {
+        let t0 = Instant::now();
+        let coast = synth::coastline(n, 1);
+        println!("coastline generated in {:.2} s", t0.elapsed().as_secs_f64());
+        time("coastline", &coast);
+    }
+    if !run("random") {
+        return;
+    }
+    // Random segments about 3 times the mean spacing long: several crossings each.
+    let mut rng = SplitMix64::new(9);
+    let side = 1000.0;
+    let len = 3.0 * side / (n as f64).sqrt();
+    let random: Vec<Vec<[f64; 3]>> = (0..n)
+        .map(|_| {
+            let a = [
+                rng.range(0.0, side),
+                rng.range(0.0, side),
+                rng.range(0.0, 10.0),
+            ];
+            let t = rng.range(0.0, std::f64::consts::TAU);
+            let b = [
+                a[0] + len * t.cos(),
+                a[1] + len * t.sin(),
+                rng.range(0.0, 10.0),
+            ];
+            vec![a, b]
+        })
+        .collect();
+    time("random", &random);
+}

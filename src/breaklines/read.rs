@@ -1,0 +1,807 @@
+//! Reading breaklines: GeoJSON and a simple text format.
+//!
+//! # GeoJSON
+//!
+//! A `FeatureCollection`, a single `Feature` or a bare geometry. Geometries: `LineString`,
+//! `MultiLineString`, `Polygon` and `MultiPolygon` (every ring, outer and inner, becomes a closed
+//! polyline), and `GeometryCollection` of those. `Point` and `MultiPoint` are refused (they are not
+//! lines); features whose `geometry` is `null` are skipped. Properties are ignored.
+//!
+//! Positions with three values are hard breaklines (`z` given); with two values `z` is unknown and
+//! stored as `NaN`; values beyond the third (a measure) are ignored. A polygon ring that does not
+//! repeat its first position is closed here (RFC 7946 requires the repetition; some writers omit
+//! it). The old-style `crs` member (`{"type": "name", "properties": {"name":
+//! "urn:ogc:def:crs:EPSG::28992"}}`) is read and reported as `EPSG:28992`.
+//!
+//! # Text
+//!
+//! One vertex per line, `x y` or `x y z`, separated by spaces, tabs or commas. A blank line ends a
+//! polyline; `#` starts a comment (a line holding only a comment does not end the polyline). A
+//! closed ring repeats its first vertex. See `docs/FORMATS.md`.
+//!
+//! A file is GeoJSON when its first non-blank character is `{`, text otherwise.
+//!
+//! # Errors
+//!
+//! Syntax errors name the file and the line ([`Error::Parse`]); a well-formed file with something
+//! that is not a breakline names the file and the feature ([`Error::Format`]).
+
+use crate::error::{Error, Result};
+use serde::Deserialize;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Where a polyline comes from, for error messages.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Source {
+    /// The file.
+    pub path: Arc<Path>,
+    /// The place in the file.
+    pub location: Location,
+}
+
+/// A place in a breakline file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// GeoJSON: the feature's index in the collection (0 for a lone feature or geometry) and the
+    /// part within it (line of a multi-line, ring of a polygon, counted across the feature).
+    Feature {
+        /// 0-based feature index.
+        index: u64,
+        /// 0-based part index within the feature.
+        part: u32,
+    },
+    /// Text: the 1-based line of the polyline's first vertex.
+    Line(u64),
+}
+
+impl fmt::Display for Source {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.location {
+            Location::Feature { index, part } => {
+                write!(f, "{} feature {index} part {part}", self.path.display())
+            }
+            Location::Line(line) => write!(f, "{}:{line}", self.path.display()),
+        }
+    }
+}
+
+/// Polylines read from breakline files.
+#[derive(Clone, Debug, Default)]
+pub struct Lines {
+    /// The polylines, `[x, y, z]` with `z = NaN` where unknown; a closed ring repeats its first
+    /// vertex at the end.
+    pub polylines: Vec<Vec<[f64; 3]>>,
+    /// Where each polyline comes from (same length as `polylines`).
+    pub sources: Vec<Source>,
+    /// The coordinate reference system the files declare (`EPSG:xxxx` when recognised), if any.
+    pub crs: Option<String>,
+}
+
+impl Lines {
+    /// Number of polylines.
+    pub fn len(&self) -> usize {
+        self.polylines.len()
+    }
+
+    /// No polylines?
+    pub fn is_empty(&self) -> bool {
+        self.polylines.is_empty()
+    }
+
+    /// Number of vertices over all polylines.
+    pub fn vertex_count(&self) -> usize {
+        self.polylines.iter().map(Vec::len).sum()
+    }
+
+    /// Number of segments (consecutive vertex pairs) over all polylines.
+    pub fn segment_count(&self) -> usize {
+        self.polylines
+            .iter()
+            .map(|p| p.len().saturating_sub(1))
+            .sum()
+    }
+
+    /// Is polyline `i` a closed ring (at least 4 vertices, the last equal in `x, y` to the first)?
+    pub fn is_ring(&self, i: usize) -> bool {
+        is_ring(&self.polylines[i])
+    }
+
+    /// Appends `other`.
+    ///
+    /// # Errors
+    /// [`Error::Format`] when both declare a CRS and they differ.
+    pub fn append(&mut self, other: Lines) -> Result<()> {
+        match (&self.crs, &other.crs) {
+            (Some(a), Some(b)) if a != b => {
+                let path = other
+                    .sources
+                    .first()
+                    .map_or_else(PathBuf::new, |s| s.path.to_path_buf());
+                return Err(Error::Format {
+                    path,
+                    message: format!(
+                        "declares CRS {b}, but the breaklines read before declare {a}"
+                    ),
+                });
+            }
+            (None, Some(_)) => self.crs = other.crs,
+            _ => {}
+        }
+        self.polylines.extend(other.polylines);
+        self.sources.extend(other.sources);
+        Ok(())
+    }
+
+    /// Applies `f` to every `(x, y)` (for instance into the point cloud's local frame); `z` is kept.
+    pub fn map_xy(&mut self, mut f: impl FnMut([f64; 2]) -> [f64; 2]) {
+        for p in self.polylines.iter_mut().flatten() {
+            let [x, y] = f([p[0], p[1]]);
+            p[0] = x;
+            p[1] = y;
+        }
+    }
+
+    /// Checks that every polyline is a closed ring (for `--boundary` and `--holes`).
+    ///
+    /// # Errors
+    /// [`Error::Format`] naming the first polyline that is not.
+    pub fn require_rings(&self) -> Result<()> {
+        for (i, p) in self.polylines.iter().enumerate() {
+            if !is_ring(p) {
+                let s = &self.sources[i];
+                return Err(Error::Format {
+                    path: s.path.to_path_buf(),
+                    message: format!(
+                        "{s}: a polygon is needed here, but this line is not a closed ring ({} \
+                         vertices; a ring has at least 4 and ends where it starts)",
+                        p.len()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Cleans the polylines into a planar straight-line graph ([`super::clean::clean`]); errors
+    /// name the file and feature of the offending polyline.
+    ///
+    /// # Errors
+    /// [`Error::Format`] for a coordinate the predicates cannot handle exactly.
+    pub fn clean(&self, options: &super::CleanOptions) -> Result<super::Pslg> {
+        super::clean::clean(&self.polylines, options).map_err(|e| match e {
+            Error::BadLine {
+                polyline,
+                vertex,
+                message,
+            } => match self.sources.get(polyline as usize) {
+                Some(s) => Error::Format {
+                    path: s.path.to_path_buf(),
+                    message: format!("{s}, vertex {vertex}: {message}"),
+                },
+                None => Error::BadLine {
+                    polyline,
+                    vertex,
+                    message,
+                },
+            },
+            other => other,
+        })
+    }
+}
+
+/// At least 4 vertices and the last equal in `x, y` to the first.
+pub(crate) fn is_ring(p: &[[f64; 3]]) -> bool {
+    p.len() >= 4 && p[0][0] == p[p.len() - 1][0] && p[0][1] == p[p.len() - 1][1]
+}
+
+/// Reads one breakline file (GeoJSON or text, told apart by the first non-blank character).
+///
+/// # Errors
+/// [`Error::Io`] when the file cannot be read; [`Error::Parse`] for a syntax error (file and
+/// line); [`Error::Format`] for content that is not breaklines (file and feature).
+pub fn read_file(path: &Path) -> Result<Lines> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
+    let path: Arc<Path> = Arc::from(path);
+    if first == Some(&b'{') {
+        read_geojson(&bytes, path)
+    } else {
+        read_text(&bytes, path)
+    }
+}
+
+/// Reads several breakline files into one [`Lines`].
+///
+/// # Errors
+/// As [`read_file`], and [`Error::Format`] when two files declare different CRSs.
+pub fn read_files<P: AsRef<Path>>(paths: &[P]) -> Result<Lines> {
+    let mut all = Lines::default();
+    for p in paths {
+        all.append(read_file(p.as_ref())?)?;
+    }
+    Ok(all)
+}
+
+// ---------------------------------------------------------------------------------------------
+// GeoJSON
+
+/// Any GeoJSON object; the fields that do not apply to its type are absent.
+#[derive(Deserialize)]
+struct GeoObject {
+    #[serde(rename = "type")]
+    kind: String,
+    #[serde(default)]
+    features: Option<Vec<GeoObject>>,
+    #[serde(default)]
+    geometry: Option<Box<GeoObject>>,
+    #[serde(default)]
+    geometries: Option<Vec<GeoObject>>,
+    #[serde(default)]
+    coordinates: Option<Tree>,
+    #[serde(default)]
+    crs: Option<serde_json::Value>,
+}
+
+/// Nested coordinate arrays: a position or a list of deeper arrays.
+enum Tree {
+    /// A position: up to three values and how many were given.
+    Pos([f64; 3], usize),
+    List(Vec<Tree>),
+}
+
+impl<'de> Deserialize<'de> for Tree {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Tree, D::Error> {
+        d.deserialize_seq(TreeVisitor)
+    }
+}
+
+struct TreeVisitor;
+
+impl<'de> Visitor<'de> for TreeVisitor {
+    type Value = Tree;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("an array of coordinates")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<Tree, A::Error> {
+        match seq.next_element::<Item>()? {
+            None => Ok(Tree::List(Vec::new())),
+            Some(Item::Num(x)) => {
+                let mut p = [x, f64::NAN, f64::NAN];
+                let mut n = 1;
+                while let Some(v) = seq.next_element::<f64>()? {
+                    if n < 3 {
+                        p[n] = v;
+                    }
+                    n += 1;
+                }
+                Ok(Tree::Pos(p, n))
+            }
+            Some(Item::Tree(t)) => {
+                let mut list = vec![t];
+                while let Some(t) = seq.next_element::<Tree>()? {
+                    list.push(t);
+                }
+                Ok(Tree::List(list))
+            }
+        }
+    }
+}
+
+/// The first element of a coordinate array: a number (so the array is a position) or an array.
+enum Item {
+    Num(f64),
+    Tree(Tree),
+}
+
+impl<'de> Deserialize<'de> for Item {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Item, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Item;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number or an array of coordinates")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> std::result::Result<Item, E> {
+                Ok(Item::Num(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> std::result::Result<Item, E> {
+                Ok(Item::Num(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> std::result::Result<Item, E> {
+                Ok(Item::Num(v as f64))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> std::result::Result<Item, A::Error> {
+                TreeVisitor.visit_seq(seq).map(Item::Tree)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+fn read_geojson(bytes: &[u8], path: Arc<Path>) -> Result<Lines> {
+    let root: GeoObject = serde_json::from_slice(bytes).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        line: e.line() as u64,
+        message: format!("not valid GeoJSON: {e}"),
+    })?;
+    let mut r = GeoReader {
+        path,
+        lines: Lines::default(),
+    };
+    r.lines.crs = root.crs.as_ref().and_then(crs_name);
+    match root.kind.as_str() {
+        "FeatureCollection" => {
+            let Some(features) = root.features else {
+                return Err(r.format("a FeatureCollection without \"features\"".into()));
+            };
+            for (i, f) in features.into_iter().enumerate() {
+                r.feature(f, i as u64)?;
+            }
+        }
+        "Feature" => r.feature(root, 0)?,
+        _ => r.geometry(root, 0, &mut 0)?,
+    }
+    Ok(r.lines)
+}
+
+/// `EPSG:28992` from an old-style GeoJSON `crs` member.
+fn crs_name(crs: &serde_json::Value) -> Option<String> {
+    let props = crs.get("properties")?;
+    match crs.get("type")?.as_str()? {
+        "name" => {
+            let name = props.get("name")?.as_str()?;
+            Some(normalise_crs(name))
+        }
+        "EPSG" => Some(format!("EPSG:{}", props.get("code")?)),
+        _ => None,
+    }
+}
+
+/// `urn:ogc:def:crs:EPSG::28992` → `EPSG:28992`; `urn:ogc:def:crs:OGC:1.3:CRS84` → `OGC:CRS84`.
+fn normalise_crs(name: &str) -> String {
+    let lower = name.to_ascii_lowercase();
+    if let Some(rest) = lower.strip_prefix("urn:ogc:def:crs:") {
+        let parts: Vec<&str> = rest.split(':').collect();
+        if let (Some(auth), Some(code)) = (parts.first(), parts.last()) {
+            return format!(
+                "{}:{}",
+                auth.to_ascii_uppercase(),
+                code.to_ascii_uppercase()
+            );
+        }
+    }
+    name.to_string()
+}
+
+struct GeoReader {
+    path: Arc<Path>,
+    lines: Lines,
+}
+
+impl GeoReader {
+    fn format(&self, message: String) -> Error {
+        Error::Format {
+            path: self.path.to_path_buf(),
+            message,
+        }
+    }
+
+    fn feature(&mut self, f: GeoObject, index: u64) -> Result<()> {
+        if f.kind != "Feature" {
+            return Err(self.format(format!(
+                "feature {index}: type is \"{}\", expected \"Feature\"",
+                f.kind
+            )));
+        }
+        match f.geometry {
+            Some(g) => self.geometry(*g, index, &mut 0),
+            None => Ok(()),
+        }
+    }
+
+    fn geometry(&mut self, g: GeoObject, index: u64, part: &mut u32) -> Result<()> {
+        let kind = g.kind.as_str();
+        if kind == "GeometryCollection" {
+            for sub in g.geometries.unwrap_or_default() {
+                self.geometry(sub, index, part)?;
+            }
+            return Ok(());
+        }
+        let depth = match kind {
+            "LineString" => 1,
+            "MultiLineString" | "Polygon" => 2,
+            "MultiPolygon" => 3,
+            "Point" | "MultiPoint" => {
+                return Err(self.format(format!(
+                    "feature {index}: a {kind} is not a line (breaklines are LineString, \
+                     MultiLineString, Polygon or MultiPolygon)"
+                )));
+            }
+            other => {
+                return Err(self.format(format!(
+                    "feature {index}: unknown geometry type \"{other}\""
+                )));
+            }
+        };
+        let Some(tree) = g.coordinates else {
+            return Err(self.format(format!("feature {index}: {kind} without \"coordinates\"")));
+        };
+        let ring = matches!(kind, "Polygon" | "MultiPolygon");
+        self.parts(tree, depth, ring, index, part, kind)
+    }
+
+    /// Walks `depth` levels of nesting down to lists of positions.
+    fn parts(
+        &mut self,
+        tree: Tree,
+        depth: u32,
+        ring: bool,
+        index: u64,
+        part: &mut u32,
+        kind: &str,
+    ) -> Result<()> {
+        let Tree::List(list) = tree else {
+            return Err(self.format(format!(
+                "feature {index}: {kind} coordinates are nested too shallowly"
+            )));
+        };
+        if depth > 1 {
+            for sub in list {
+                self.parts(sub, depth - 1, ring, index, part, kind)?;
+            }
+            return Ok(());
+        }
+        let p = *part;
+        *part += 1;
+        let line = self.positions(list, index, p, kind)?;
+        let line = if ring {
+            self.close_ring(line, index, p)?
+        } else if line.len() < 2 {
+            return Err(self.format(format!(
+                "feature {index} part {p}: a line needs at least 2 positions, this {kind} has {}",
+                line.len()
+            )));
+        } else {
+            line
+        };
+        self.lines.polylines.push(line);
+        self.lines.sources.push(Source {
+            path: self.path.clone(),
+            location: Location::Feature { index, part: p },
+        });
+        Ok(())
+    }
+
+    fn positions(
+        &self,
+        list: Vec<Tree>,
+        index: u64,
+        part: u32,
+        kind: &str,
+    ) -> Result<Vec<[f64; 3]>> {
+        let mut out = Vec::with_capacity(list.len());
+        for (k, t) in list.into_iter().enumerate() {
+            let Tree::Pos(p, n) = t else {
+                return Err(self.format(format!(
+                    "feature {index} part {part}: {kind} coordinates are nested too deeply \
+                     (position {k} is an array of arrays)"
+                )));
+            };
+            if n < 2 {
+                return Err(self.format(format!(
+                    "feature {index} part {part}, position {k}: {n} value(s), a position needs \
+                     x and y"
+                )));
+            }
+            if !p.iter().take(n.min(3)).all(|v| v.is_finite()) {
+                return Err(self.format(format!(
+                    "feature {index} part {part}, position {k}: coordinate is not finite"
+                )));
+            }
+            out.push(p);
+        }
+        Ok(out)
+    }
+
+    fn close_ring(&self, mut r: Vec<[f64; 3]>, index: u64, part: u32) -> Result<Vec<[f64; 3]>> {
+        if let (Some(&first), Some(&last)) = (r.first(), r.last())
+            && (first[0] != last[0] || first[1] != last[1])
+        {
+            r.push(first);
+        }
+        if r.len() < 4 {
+            return Err(self.format(format!(
+                "feature {index} part {part}: a polygon ring needs at least 3 distinct positions \
+                 and has {}",
+                r.len().saturating_sub(1)
+            )));
+        }
+        Ok(r)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text
+
+fn read_text(bytes: &[u8], path: Arc<Path>) -> Result<Lines> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let line = bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count() as u64
+            + 1;
+        Error::Parse {
+            path: path.to_path_buf(),
+            line,
+            message: "not UTF-8 text (nor GeoJSON)".into(),
+        }
+    })?;
+    let mut lines = Lines::default();
+    let mut current: Vec<[f64; 3]> = Vec::new();
+    let mut start = 0u64;
+    let flush = |current: &mut Vec<[f64; 3]>, start: u64, lines: &mut Lines| {
+        if !current.is_empty() {
+            lines.polylines.push(std::mem::take(current));
+            lines.sources.push(Source {
+                path: path.clone(),
+                location: Location::Line(start),
+            });
+        }
+    };
+    for (i, raw) in text.lines().enumerate() {
+        let n = i as u64 + 1;
+        let (content, comment) = match raw.find('#') {
+            Some(k) => (&raw[..k], true),
+            None => (raw, false),
+        };
+        if content.trim().is_empty() {
+            if !comment {
+                flush(&mut current, start, &mut lines);
+            }
+            continue;
+        }
+        let v = parse_vertex(content).map_err(|message| Error::Parse {
+            path: path.to_path_buf(),
+            line: n,
+            message,
+        })?;
+        if current.is_empty() {
+            start = n;
+        }
+        current.push(v);
+    }
+    flush(&mut current, start, &mut lines);
+    Ok(lines)
+}
+
+/// `x y [z]`, separated by whitespace or commas.
+fn parse_vertex(s: &str) -> std::result::Result<[f64; 3], String> {
+    let fields: Vec<&str> = s
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter(|f| !f.is_empty())
+        .collect();
+    if !(2..=3).contains(&fields.len()) {
+        return Err(format!(
+            "expected \"x y\" or \"x y z\", found {} value(s): {:?}",
+            fields.len(),
+            s.trim()
+        ));
+    }
+    let mut v = [f64::NAN; 3];
+    for (k, f) in fields.iter().enumerate() {
+        let x: f64 = f.parse().map_err(|_| format!("{:?} is not a number", f))?;
+        if !x.is_finite() {
+            return Err(format!("{:?} is not a finite number", f));
+        }
+        v[k] = x;
+    }
+    Ok(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    fn file(content: &str, ext: &str) -> tempfile::NamedTempFile {
+        let mut f = tempfile::Builder::new().suffix(ext).tempfile().unwrap();
+        f.write_all(content.as_bytes()).unwrap();
+        f
+    }
+
+    fn read(content: &str) -> Result<Lines> {
+        let f = file(content, ".geojson");
+        read_file(f.path())
+    }
+
+    fn xy(l: &[[f64; 3]]) -> Vec<[f64; 2]> {
+        l.iter().map(|p| [p[0], p[1]]).collect()
+    }
+
+    #[test]
+    fn feature_collection_of_every_geometry() {
+        let g = r#"{"type": "FeatureCollection",
+          "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::28992"}},
+          "features": [
+            {"type": "Feature", "properties": {"a": [1, {"b": 2}]},
+             "geometry": {"type": "LineString", "coordinates": [[0, 0, 1.5], [1, 0, 2]]}},
+            {"type": "Feature", "properties": null, "geometry": null},
+            {"type": "Feature", "geometry": {"type": "MultiLineString",
+              "coordinates": [[[0, 1], [1, 1]], [[0, 2], [1, 2], [2, 3]]]}},
+            {"type": "Feature", "geometry": {"type": "Polygon",
+              "coordinates": [[[0, 0], [4, 0], [4, 4], [0, 4], [0, 0]],
+                              [[1, 1], [1, 2], [2, 2]]]}},
+            {"type": "Feature", "geometry": {"type": "MultiPolygon",
+              "coordinates": [[[[10, 0], [11, 0], [11, 1], [10, 0]]]]}},
+            {"type": "Feature", "geometry": {"type": "GeometryCollection", "geometries": [
+              {"type": "LineString", "coordinates": [[5, 5, 1, 99], [6, 6, 2, 99]]}]}}
+          ]}"#;
+        let l = read(g).unwrap();
+        assert_eq!(l.crs.as_deref(), Some("EPSG:28992"));
+        assert_eq!(l.len(), 7);
+        assert_eq!(l.polylines[0], vec![[0., 0., 1.5], [1., 0., 2.]]);
+        assert!(l.polylines[1][0][2].is_nan());
+        assert_eq!(xy(&l.polylines[2]), vec![[0., 2.], [1., 2.], [2., 3.]]);
+        // Outer ring as given, the inner ring closed here.
+        assert_eq!(l.polylines[3].len(), 5);
+        assert_eq!(
+            xy(&l.polylines[4]),
+            vec![[1., 1.], [1., 2.], [2., 2.], [1., 1.]]
+        );
+        assert!(l.is_ring(3) && l.is_ring(4) && l.is_ring(5) && !l.is_ring(0));
+        // The measure of the last line is ignored.
+        assert_eq!(l.polylines[6], vec![[5., 5., 1.], [6., 6., 2.]]);
+        let loc: Vec<Location> = l.sources.iter().map(|s| s.location).collect();
+        assert_eq!(loc[0], Location::Feature { index: 0, part: 0 });
+        assert_eq!(loc[2], Location::Feature { index: 2, part: 1 });
+        assert_eq!(loc[4], Location::Feature { index: 3, part: 1 });
+        assert_eq!(loc[6], Location::Feature { index: 5, part: 0 });
+        assert_eq!(l.segment_count(), 1 + 1 + 2 + 4 + 3 + 3 + 1);
+        l.require_rings().unwrap_err();
+    }
+
+    #[test]
+    fn lone_feature_and_bare_geometry() {
+        let l = read(
+            r#"{"type": "Feature", "geometry": {"type": "LineString",
+            "coordinates": [[0, 0], [1, 1]]}, "properties": {}}"#,
+        )
+        .unwrap();
+        assert_eq!(l.len(), 1);
+        assert_eq!(l.crs, None);
+        let l =
+            read(r#" {"coordinates": [[0, 0], [1, 1], [2, 0]], "type": "LineString"}"#).unwrap();
+        assert_eq!(xy(&l.polylines[0]), vec![[0., 0.], [1., 1.], [2., 0.]]);
+    }
+
+    #[test]
+    fn crs_forms() {
+        let c = |v: &str| crs_name(&serde_json::from_str(v).unwrap());
+        assert_eq!(
+            c(r#"{"type":"name","properties":{"name":"urn:ogc:def:crs:OGC:1.3:CRS84"}}"#),
+            Some("OGC:CRS84".into())
+        );
+        assert_eq!(
+            c(r#"{"type":"name","properties":{"name":"EPSG:2154"}}"#),
+            Some("EPSG:2154".into())
+        );
+        assert_eq!(
+            c(r#"{"type":"EPSG","properties":{"code":3857}}"#),
+            Some("EPSG:3857".into())
+        );
+        assert_eq!(c(r#"{"type":"link","properties":{"href":"x"}}"#), None);
+    }
+
+    fn error_text(r: Result<Lines>) -> String {
+        match r {
+            Ok(_) => panic!("expected an error"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn geojson_errors_name_file_and_feature_or_line() {
+        let e = error_text(read(
+            "{\"type\": \"FeatureCollection\",\n \"features\": [1, 2]}",
+        ));
+        assert!(e.contains(":2:") && e.contains("not valid GeoJSON"), "{e}");
+        let e = error_text(read(
+            r#"{"type": "FeatureCollection", "features": [
+               {"type": "Feature", "geometry": {"type": "LineString", "coordinates": [[0, 0], [1, 1]]}},
+               {"type": "Feature", "geometry": {"type": "Point", "coordinates": [0, 0]}}]}"#,
+        ));
+        assert!(
+            e.contains("feature 1") && e.contains("Point is not a line"),
+            "{e}"
+        );
+        let e = error_text(read(r#"{"type": "LineString", "coordinates": [[0, 0]]}"#));
+        assert!(e.contains("at least 2 positions"), "{e}");
+        let e = error_text(read(
+            r#"{"type": "LineString", "coordinates": [[0], [1, 1]]}"#,
+        ));
+        assert!(e.contains("position 0") && e.contains("x and y"), "{e}");
+        let e = error_text(read(
+            r#"{"type": "Polygon", "coordinates": [[[0, 0], [1, 1], [0, 0]]]}"#,
+        ));
+        assert!(e.contains("at least 3 distinct"), "{e}");
+        let e = error_text(read(
+            r#"{"type": "Polygon", "coordinates": [[0, 0], [1, 1]]}"#,
+        ));
+        assert!(e.contains("too shallowly"), "{e}");
+        let e = error_text(read(
+            r#"{"type": "LineString", "coordinates": [[[0, 0]], [[1, 1]]]}"#,
+        ));
+        assert!(e.contains("too deeply"), "{e}");
+        let e = error_text(read(r#"{"type": "Curve", "coordinates": []}"#));
+        assert!(e.contains("unknown geometry type"), "{e}");
+        let e = error_text(read(r#"{"type": "FeatureCollection"}"#));
+        assert!(e.contains("without \"features\""), "{e}");
+        let e = error_text(read(
+            r#"{"type": "FeatureCollection", "features": [{"type": "LineString", "coordinates": []}]}"#,
+        ));
+        assert!(e.contains("expected \"Feature\""), "{e}");
+    }
+
+    #[test]
+    fn text_format() {
+        let t = "# a header\n0 0 1\n1,0,2\n2 1 # trailing comment\n\n\n# comment only\n5 5\n6 6 3\n\
+                 # does not end the line\n7 7\n";
+        let f = file(t, ".txt");
+        let l = read_file(f.path()).unwrap();
+        assert_eq!(l.len(), 2);
+        assert_eq!(l.polylines[0][..2], [[0., 0., 1.], [1., 0., 2.]]);
+        assert!(l.polylines[0][2][2].is_nan());
+        assert_eq!(xy(&l.polylines[1]), vec![[5., 5.], [6., 6.], [7., 7.]]);
+        assert_eq!(l.sources[0].location, Location::Line(2));
+        assert_eq!(l.sources[1].location, Location::Line(8));
+        assert!(l.sources[1].to_string().ends_with(":8"));
+    }
+
+    #[test]
+    fn text_errors_name_the_line() {
+        for (t, needle) in [
+            ("0 0\n1 1 1 1\n", ":2: expected"),
+            ("0 0\n\n1 x\n", ":3: \"x\" is not a number"),
+            ("0 inf\n", ":1: \"inf\" is not a finite"),
+            ("5\n", "found 1 value"),
+        ] {
+            let f = file(t, ".txt");
+            let e = read_file(f.path()).unwrap_err().to_string();
+            assert!(e.contains(needle), "{e} lacks {needle}");
+        }
+    }
+
+    #[test]
+    fn files_append_and_crs_must_agree() {
+        let a = file(
+            r#"{"type": "FeatureCollection", "crs": {"type": "name", "properties": {"name": "EPSG:1"}}, "features": []}"#,
+            ".json",
+        );
+        let b = file("0 0\n1 1\n", ".txt");
+        let c = file(
+            r#"{"type": "FeatureCollection", "crs": {"type": "name", "properties": {"name": "EPSG:2"}}, "features": []}"#,
+            ".json",
+        );
+        let l = read_files(&[b.path(), a.path()]).unwrap();
+        assert_eq!(l.crs.as_deref(), Some("EPSG:1"));
+        assert_eq!(l.len(), 1);
+        let e = read_files(&[a.path(), c.path()]).unwrap_err().to_string();
+        assert!(e.contains("EPSG:2") && e.contains("EPSG:1"), "{e}");
+        let e = read_file(Path::new("/nonexistent/lines.geojson")).unwrap_err();
+        assert!(matches!(e, Error::Io { .. }));
+    }
+
+    #[test]
+    fn rings_required() {
+        let f = file("0 0\n1 0\n1 1\n0 0\n\n5 5\n6 6\n", ".txt");
+        let l = read_file(f.path()).unwrap();
+        assert!(l.is_ring(0));
+        let e = l.require_rings().unwrap_err().to_string();
+        assert!(e.contains(":6") && e.contains("not a closed ring"), "{e}");
+    }
+}
