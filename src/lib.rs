@@ -25,6 +25,7 @@ pub mod points;
 pub mod predicates;
 pub mod sweep;
 pub mod synth;
+pub mod tin;
 pub mod triangulation;
 pub mod validate;
 

@@ -1,0 +1,185 @@
+//! Point removal (Herva 2009, sections 5.3–5.4).
+//!
+//! Removing a vertex leaves a hole bounded by its *link*: a closed, star-shaped polygon for an
+//! interior vertex; an open chain for a hull vertex, whose hole is bounded by the chain and its
+//! convex hull. Every link edge stays Delaunay (its empty-circle witness is unchanged), so the
+//! triangles that fill the hole are exactly the Delaunay triangles of the link's vertices inside
+//! it. They are found as *Delaunay ears*: three consecutive link vertices turning left whose
+//! (perturbed) circle holds no other link vertex; such an ear always exists while the hole is not
+//! filled (a triangulated polygon has two ears, at most one of which uses a new hull edge). No flip
+//! is needed afterwards. Near breaklines the link edges need not be Delaunay; when no empty-circle
+//! ear exists, any left-turning ear with no link vertex in it is taken and the new edges are then
+//! legalised by flips (constrained Delaunay).
+
+use super::{CONSTRAINED, EdgeId, NO_TWIN, NONE, Tin, VertexId};
+use crate::error::{Error, Result};
+use crate::predicates::Orientation;
+
+impl Tin {
+    /// Removes vertex `v` and re-triangulates its hole (Delaunay, or constrained Delaunay when
+    /// breaklines are present). Hull vertices may be removed: the hull shrinks to the convex hull
+    /// of the rest.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] if `v` is not in the triangulation, is an end of a constrained edge, or
+    /// if removing it would leave no triangle (all remaining points collinear). Nothing changes on
+    /// error.
+    pub fn remove(&mut self, v: VertexId) -> Result<()> {
+        if !self.contains_vertex(v) {
+            return Err(Error::Invalid(format!("vertex {} is not in the TIN", v.0)));
+        }
+        let spokes = self.out_edges(v);
+        if spokes
+            .iter()
+            .any(|&e| self.is_constrained(e) || self.is_constrained(e.prev()))
+        {
+            return Err(Error::Invalid(format!(
+                "vertex {} is an end of a breakline and cannot be removed",
+                v.0
+            )));
+        }
+        let hull = self.twin(spokes[0]).is_none();
+        // The link: ring[i] = dst(spokes[i]); rim[i] = outside of the link edge ring[i] → ring[i+1].
+        let mut ring: Vec<u32> = spokes.iter().map(|&e| self.dst(e).0).collect();
+        let mut rim: Vec<u32> = spokes
+            .iter()
+            .map(|&e| self.link[e.next().0 as usize])
+            .collect();
+        if hull {
+            ring.push(self.org(spokes.last().unwrap().prev()).0);
+        }
+        if hull && spokes.len() == self.live_triangles && self.all_collinear(&ring) {
+            return Err(Error::Invalid(format!(
+                "removing vertex {} would leave no triangle",
+                v.0
+            )));
+        }
+        for &e in &spokes {
+            self.free_triangle(e.tri().0);
+        }
+        for &r in &rim {
+            let id = r & !CONSTRAINED;
+            if id != NO_TWIN {
+                self.link[id as usize] = NO_TWIN | (r & CONSTRAINED);
+            }
+        }
+        self.vedge[v.0 as usize] = NONE;
+        self.live_vertices -= 1;
+        // Ring vertices keep an edge in a triangle outside the hole when they have one; the ears
+        // give one to the others.
+        for &u in &ring {
+            self.vedge[u as usize] = NONE;
+        }
+        for &r in &rim {
+            let id = r & !CONSTRAINED;
+            if id != NO_TWIN {
+                let e = EdgeId(id);
+                self.vedge[self.origin[id as usize] as usize] = id;
+                self.vedge[self.origin[e.next().0 as usize] as usize] = e.next().0;
+            }
+        }
+        let all: Vec<u32> = ring.clone();
+        let mut new_edges = Vec::new();
+        self.fill(&mut ring, &mut rim, &all, hull, &mut new_edges);
+        for &u in &all {
+            if self.vedge[u as usize] == NONE {
+                self.repair_vertex_edge(u);
+            }
+        }
+        if !new_edges.is_empty() {
+            self.legalize_edges(new_edges);
+        }
+        Ok(())
+    }
+
+    fn all_collinear(&self, pts: &[u32]) -> bool {
+        let (a, b) = (pts[0], pts[pts.len() - 1]);
+        pts.iter()
+            .all(|&c| self.orient_v(a, b, c) == Orientation::Collinear)
+    }
+
+    /// Ear clipping of the hole. `ring` are the polygon's vertices in order (closed unless
+    /// `hull`), `rim[i]` the outside link of edge `ring[i] → ring[i+1]`. Ears are Delaunay ears
+    /// when one exists; otherwise the fallback ears' vertex pairs go to `new_edges`.
+    fn fill(
+        &mut self,
+        ring: &mut Vec<u32>,
+        rim: &mut Vec<u32>,
+        all: &[u32],
+        hull: bool,
+        new_edges: &mut Vec<(VertexId, VertexId)>,
+    ) {
+        loop {
+            let n = ring.len();
+            if !hull && n == 3 {
+                let t = self.alloc_triangle(ring[0], ring[1], ring[2]);
+                self.link_to(t, rim[0]);
+                self.link_to(t.next(), rim[1]);
+                self.link_to(t.prev(), rim[2]);
+                return;
+            }
+            let ears = if hull { n.saturating_sub(2) } else { n };
+            let mut chosen = None;
+            let mut fallback = None;
+            for i in 0..ears {
+                let (a, b, c) = (ring[i], ring[(i + 1) % n], ring[(i + 2) % n]);
+                if self.orient_v(a, b, c) != Orientation::CounterClockwise {
+                    continue;
+                }
+                let empty_circle = all
+                    .iter()
+                    .all(|&w| w == a || w == b || w == c || !self.in_circle(a, b, c, w));
+                if empty_circle {
+                    chosen = Some(i);
+                    break;
+                }
+                if fallback.is_none() && self.ear_is_empty(a, b, c, all) {
+                    fallback = Some(i);
+                }
+            }
+            let i = match (chosen, fallback) {
+                (Some(i), _) => i,
+                (None, Some(i)) => {
+                    let n = ring.len();
+                    let (a, c) = (ring[i], ring[(i + 2) % n]);
+                    new_edges.push((VertexId(a), VertexId(c)));
+                    i
+                }
+                (None, None) => return, // hull case: the chain is convex, the hole is filled
+            };
+            let (i1, i2) = ((i + 1) % n, (i + 2) % n);
+            let t = self.alloc_triangle(ring[i], ring[i1], ring[i2]);
+            self.link_to(t, rim[i]);
+            self.link_to(t.next(), rim[i1]);
+            // The polygon edge ring[i] → ring[i2] now has the ear's edge ring[i2] → ring[i] outside.
+            rim[i] = t.prev().0;
+            self.link[t.prev().0 as usize] = NO_TWIN;
+            ring.remove(i1);
+            rim.remove(i1);
+        }
+    }
+
+    /// Does the closed triangle `a, b, c` hold no other vertex of `all`?
+    fn ear_is_empty(&self, a: u32, b: u32, c: u32, all: &[u32]) -> bool {
+        all.iter().all(|&w| {
+            w == a
+                || w == b
+                || w == c
+                || self.orient_v(a, b, w) == Orientation::Clockwise
+                || self.orient_v(b, c, w) == Orientation::Clockwise
+                || self.orient_v(c, a, w) == Orientation::Clockwise
+        })
+    }
+
+    /// Points `vedge[u]` at some live outgoing edge of `u`, searching the triangle slots (only
+    /// reached for a vertex left without a triangle by an ear-clipping order that never touched
+    /// it, which cannot happen for a valid hole; kept as a safety net).
+    fn repair_vertex_edge(&mut self, u: u32) {
+        for e in 0..self.origin.len() {
+            if self.origin[e] == u && self.is_live(EdgeId(e as u32).tri()) {
+                self.vedge[u as usize] = e as u32;
+                return;
+            }
+        }
+    }
+}
