@@ -56,7 +56,7 @@ impl EdgeId {
     /// The previous half-edge in the same triangle.
     #[inline(always)]
     pub fn prev(self) -> EdgeId {
-        EdgeId(if self.0 % 3 == 0 {
+        EdgeId(if self.0.is_multiple_of(3) {
             self.0 + 2
         } else {
             self.0 - 1
