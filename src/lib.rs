@@ -23,6 +23,7 @@ pub mod lidar;
 pub mod pipeline;
 pub mod points;
 pub mod predicates;
+pub mod raster;
 pub mod sweep;
 pub mod synth;
 pub mod tin;

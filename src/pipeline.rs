@@ -78,7 +78,7 @@ pub fn read_points(input: &Input) -> Result<(Vec<[f64; 3]>, Option<Crs>)> {
     if input.paths.iter().all(|p| is_lidar(p)) {
         let mut r = LidarReader::open(&input.paths, &input.filter)?;
         let pts = r.read_all()?;
-        let q = r.quantization().clone();
+        let q = *r.quantization();
         let crs = r.crs().cloned();
         Ok((pts.iter().map(|p| q.to_world(p)).collect(), crs))
     } else {

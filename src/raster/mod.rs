@@ -1,0 +1,3 @@
+//! Regular grids (DEMs): georeferencing, reading.
+pub mod grid;
+pub mod read;
