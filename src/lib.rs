@@ -24,6 +24,7 @@ pub mod pipeline;
 pub mod points;
 pub mod predicates;
 pub mod raster;
+pub mod simplify;
 pub mod sweep;
 pub mod synth;
 pub mod tin;

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 mod check;
 mod info;
+mod simplify;
 mod tin;
 
 /// Exact, bounded-memory Delaunay terrain models from lidar point clouds.
@@ -26,6 +27,8 @@ enum Command {
     Check(check::Args),
     /// Show what LAS/LAZ headers say: version, format, counts, bounds, scale/offset, CRS.
     Info(info::Args),
+    /// Simplify a grid DEM (GeoTIFF, ESRI ASCII) into a TIN within an error bound.
+    Simplify(simplify::Args),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -39,6 +42,7 @@ pub fn main() -> ExitCode {
         Command::Tin(a) => tin::run(a),
         Command::Check(a) => check::run(a),
         Command::Info(a) => info::run(a),
+        Command::Simplify(a) => simplify::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -12,6 +12,14 @@
 //! legalised by flips (constrained Delaunay).
 
 use super::{CONSTRAINED, EdgeId, NO_TWIN, NONE, Tin, VertexId};
+
+/// How a removal will fill the hole.
+struct RemovalPlan {
+    spokes: Vec<EdgeId>,
+    ring: Vec<u32>,
+    hull: bool,
+    steps: Vec<(u32, bool)>,
+}
 use crate::error::{Error, Result};
 use crate::predicates::Orientation;
 
@@ -25,35 +33,18 @@ impl Tin {
     /// if removing it would leave no triangle (all remaining points collinear). Nothing changes on
     /// error.
     pub fn remove(&mut self, v: VertexId) -> Result<()> {
-        if !self.contains_vertex(v) {
-            return Err(Error::Invalid(format!("vertex {} is not in the TIN", v.0)));
-        }
-        let spokes = self.out_edges(v);
-        if spokes
-            .iter()
-            .any(|&e| self.is_constrained(e) || self.is_constrained(e.prev()))
-        {
-            return Err(Error::Invalid(format!(
-                "vertex {} is an end of a breakline and cannot be removed",
-                v.0
-            )));
-        }
-        let hull = self.twin(spokes[0]).is_none();
-        // The link: ring[i] = dst(spokes[i]); rim[i] = outside of the link edge ring[i] → ring[i+1].
-        let mut ring: Vec<u32> = spokes.iter().map(|&e| self.dst(e).0).collect();
+        let plan = self.plan_removal(v)?;
+        let RemovalPlan {
+            spokes,
+            mut ring,
+            hull,
+            steps,
+        } = plan;
+        // rim[i] = outside of the link edge ring[i] → ring[i+1].
         let mut rim: Vec<u32> = spokes
             .iter()
             .map(|&e| self.link[e.next().0 as usize])
             .collect();
-        if hull {
-            ring.push(self.org(spokes.last().unwrap().prev()).0);
-        }
-        if hull && spokes.len() == self.live_triangles && self.all_collinear(&ring) {
-            return Err(Error::Invalid(format!(
-                "removing vertex {} would leave no triangle",
-                v.0
-            )));
-        }
         for &e in &spokes {
             self.free_triangle(e.tri().0);
         }
@@ -80,7 +71,29 @@ impl Tin {
         }
         let all: Vec<u32> = ring.clone();
         let mut new_edges = Vec::new();
-        self.fill(&mut ring, &mut rim, &all, hull, &mut new_edges);
+        for &(i, fallback) in &steps {
+            let i = i as usize;
+            let n = ring.len();
+            let (i1, i2) = ((i + 1) % n, (i + 2) % n);
+            if fallback {
+                new_edges.push((VertexId(ring[i]), VertexId(ring[i2])));
+            }
+            let t = self.alloc_triangle(ring[i], ring[i1], ring[i2]);
+            self.link_to(t, rim[i]);
+            self.link_to(t.next(), rim[i1]);
+            // The polygon edge ring[i] → ring[i2] now has the ear's edge ring[i2] → ring[i]
+            // outside.
+            rim[i] = t.prev().0;
+            self.link[t.prev().0 as usize] = NO_TWIN;
+            ring.remove(i1);
+            rim.remove(i1);
+        }
+        if !hull {
+            let t = self.alloc_triangle(ring[0], ring[1], ring[2]);
+            self.link_to(t, rim[0]);
+            self.link_to(t.next(), rim[1]);
+            self.link_to(t.prev(), rim[2]);
+        }
         for &u in &all {
             if self.vedge[u as usize] == NONE {
                 self.repair_vertex_edge(u);
@@ -92,31 +105,75 @@ impl Tin {
         Ok(())
     }
 
-    fn all_collinear(&self, pts: &[u32]) -> bool {
-        let (a, b) = (pts[0], pts[pts.len() - 1]);
-        pts.iter()
-            .all(|&c| self.orient_v(a, b, c) == Orientation::Collinear)
+    /// The triangles that [`Tin::remove`] would put in place of the star of `v`, without changing
+    /// anything (exact when no breakline is near `v`; next to breaklines, flips may follow).
+    ///
+    /// # Errors
+    /// As [`Tin::remove`].
+    pub fn removal_preview(&self, v: VertexId, out: &mut Vec<[VertexId; 3]>) -> Result<()> {
+        let RemovalPlan {
+            mut ring,
+            hull,
+            steps,
+            ..
+        } = self.plan_removal(v)?;
+        for &(i, _) in &steps {
+            let i = i as usize;
+            let n = ring.len();
+            out.push([ring[i], ring[(i + 1) % n], ring[(i + 2) % n]].map(VertexId));
+            ring.remove((i + 1) % n);
+        }
+        if !hull {
+            out.push([ring[0], ring[1], ring[2]].map(VertexId));
+        }
+        Ok(())
     }
 
-    /// Ear clipping of the hole. `ring` are the polygon's vertices in order (closed unless
-    /// `hull`), `rim[i]` the outside link of edge `ring[i] → ring[i+1]`. Ears are Delaunay ears
-    /// when one exists; otherwise the fallback ears' vertex pairs go to `new_edges`.
-    fn fill(
-        &mut self,
-        ring: &mut Vec<u32>,
-        rim: &mut Vec<u32>,
-        all: &[u32],
-        hull: bool,
-        new_edges: &mut Vec<(VertexId, VertexId)>,
-    ) {
+    fn plan_removal(&self, v: VertexId) -> Result<RemovalPlan> {
+        if !self.contains_vertex(v) {
+            return Err(Error::Invalid(format!("vertex {} is not in the TIN", v.0)));
+        }
+        let spokes = self.out_edges(v);
+        if spokes
+            .iter()
+            .any(|&e| self.is_constrained(e) || self.is_constrained(e.prev()))
+        {
+            return Err(Error::Invalid(format!(
+                "vertex {} is an end of a breakline and cannot be removed",
+                v.0
+            )));
+        }
+        let hull = self.twin(spokes[0]).is_none();
+        let mut ring: Vec<u32> = spokes.iter().map(|&e| self.dst(e).0).collect();
+        if hull {
+            ring.push(self.org(spokes.last().unwrap().prev()).0);
+        }
+        if hull && spokes.len() == self.live_triangles && self.all_collinear(&ring) {
+            return Err(Error::Invalid(format!(
+                "removing vertex {} would leave no triangle",
+                v.0
+            )));
+        }
+        let steps = self.plan_ears(&ring, hull);
+        Ok(RemovalPlan {
+            spokes,
+            ring,
+            hull,
+            steps,
+        })
+    }
+
+    /// Ear clipping of the hole, as a list of `(position in the shrinking ring, fallback?)`:
+    /// Delaunay ears when one exists; otherwise (next to breaklines) any left-turning ear with no
+    /// link vertex in it. A closed ring ends with its last three vertices as one more triangle.
+    fn plan_ears(&self, ring: &[u32], hull: bool) -> Vec<(u32, bool)> {
+        let all = ring;
+        let mut ring = ring.to_vec();
+        let mut steps = Vec::with_capacity(ring.len());
         loop {
             let n = ring.len();
             if !hull && n == 3 {
-                let t = self.alloc_triangle(ring[0], ring[1], ring[2]);
-                self.link_to(t, rim[0]);
-                self.link_to(t.next(), rim[1]);
-                self.link_to(t.prev(), rim[2]);
-                return;
+                return steps;
             }
             let ears = if hull { n.saturating_sub(2) } else { n };
             let mut chosen = None;
@@ -130,33 +187,25 @@ impl Tin {
                     .iter()
                     .all(|&w| w == a || w == b || w == c || !self.in_circle(a, b, c, w));
                 if empty_circle {
-                    chosen = Some(i);
+                    chosen = Some((i, false));
                     break;
                 }
                 if fallback.is_none() && self.ear_is_empty(a, b, c, all) {
-                    fallback = Some(i);
+                    fallback = Some((i, true));
                 }
             }
-            let i = match (chosen, fallback) {
-                (Some(i), _) => i,
-                (None, Some(i)) => {
-                    let n = ring.len();
-                    let (a, c) = (ring[i], ring[(i + 2) % n]);
-                    new_edges.push((VertexId(a), VertexId(c)));
-                    i
-                }
-                (None, None) => return, // hull case: the chain is convex, the hole is filled
+            let Some((i, fb)) = chosen.or(fallback) else {
+                return steps; // hull case: the chain is convex, the hole is filled
             };
-            let (i1, i2) = ((i + 1) % n, (i + 2) % n);
-            let t = self.alloc_triangle(ring[i], ring[i1], ring[i2]);
-            self.link_to(t, rim[i]);
-            self.link_to(t.next(), rim[i1]);
-            // The polygon edge ring[i] → ring[i2] now has the ear's edge ring[i2] → ring[i] outside.
-            rim[i] = t.prev().0;
-            self.link[t.prev().0 as usize] = NO_TWIN;
-            ring.remove(i1);
-            rim.remove(i1);
+            steps.push((i as u32, fb));
+            ring.remove((i + 1) % n);
         }
+    }
+
+    fn all_collinear(&self, pts: &[u32]) -> bool {
+        let (a, b) = (pts[0], pts[pts.len() - 1]);
+        pts.iter()
+            .all(|&c| self.orient_v(a, b, c) == Orientation::Collinear)
     }
 
     /// Does the closed triangle `a, b, c` hold no other vertex of `all`?

@@ -421,6 +421,12 @@ impl Tin {
         self.rng.wrapping_mul(0x2545_F491_4F6C_DD1D)
     }
 
+    /// Makes the next walk start from triangle `t` (a triangle near the next query point makes
+    /// [`Tin::locate`], [`Tin::insert`] and [`Tin::restore`] fast).
+    pub fn set_hint(&mut self, t: TriId) {
+        self.hint = t.0;
+    }
+
     /// Locates `p`, walking from the last triangle an operation used.
     pub fn locate(&mut self, p: [f64; 2]) -> Location {
         let mut t = self.hint;
