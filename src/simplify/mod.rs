@@ -190,6 +190,9 @@ struct Refiner<'a, T: Height> {
     scans: u64,
     insertions: u64,
     touched: Vec<TriId>,
+    dbg: [u64; 4],
+    /// Flips done by TINs replaced by [`Refiner::relayout`].
+    flips_before: u64,
 }
 
 impl<'a, T: Height> Refiner<'a, T> {
@@ -248,6 +251,8 @@ impl<'a, T: Height> Refiner<'a, T> {
             scans: 0,
             insertions: 0,
             touched: Vec::new(),
+            dbg: [0; 4],
+            flips_before: 0,
         };
         r.tin.record_touched(true);
         Ok(r)
@@ -329,6 +334,9 @@ impl<'a, T: Height> Refiner<'a, T> {
             self.heap.pop();
             let cell = std::mem::replace(&mut self.cand[t.0 as usize].cell, NO_CELL);
             self.insert(t, cell)?;
+            if std::env::var_os("SWEEPTIN_HIST").is_some() {
+                eprintln!("ins {} {}", self.vdata.len() - 1, error);
+            }
             if self.insertions & 0x3FFF == 0
                 && let Some(p) = progress.as_mut()
             {
@@ -373,8 +381,15 @@ impl<'a, T: Height> Refiner<'a, T> {
     /// triangles that replace its star stays within `e` and no missing cell gets covered.
     fn decimate(&mut self, e: f64) -> Result<u64> {
         let mut removed = 0;
-        let mut preview = Vec::new();
+        let mut tris: Vec<CellTriangle> = Vec::new();
         self.tin.record_touched(false);
+        let band: u32 = std::env::var("SWEEPTIN_BAND")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(16);
+        if band > 0 {
+            self.relayout(band)?;
+        }
         for v in 0..self.vdata.len() as u32 {
             let d = self.vdata[v as usize];
             let corner = (d.col == 0 || i64::from(d.col) == self.cols - 1)
@@ -383,25 +398,76 @@ impl<'a, T: Height> Refiner<'a, T> {
                 continue;
             }
             let v = crate::tin::VertexId(v);
-            preview.clear();
-            if self.tin.removal_preview(v, &mut preview).is_err() {
-                continue;
-            }
-            let ok = preview.iter().all(|tri| {
-                let d = tri.map(|w| self.vdata[w.0 as usize]);
+            // The triangles that would replace the star; the removed point's own cell is the
+            // likeliest to fail, so it is checked as soon as its triangle is known.
+            let own = [i64::from(d.col), i64::from(d.row)];
+            tris.clear();
+            let vdata = &self.vdata;
+            let own_ok = self.tin.removal_preview_with(v, |tri| {
+                let d3 = tri.map(|w| vdata[w.0 as usize]);
                 let ct = CellTriangle {
-                    v: d.map(|d| [i64::from(d.col), i64::from(d.row)]),
-                    z: d.map(|d| d.z),
+                    v: d3.map(|d| [i64::from(d.col), i64::from(d.row)]),
+                    z: d3.map(|d| d.z),
                 }
                 .ccw();
-                !ct.exceeds(self.heights, self.cols, e)
+                tris.push(ct);
+                !(ct.contains(own) && ct.error_at(own, d.z) > e)
             });
+            if !matches!(own_ok, Ok(true)) {
+                self.dbg[1] += 1;
+                continue;
+            }
+            self.dbg[2] += 1;
+            let ok = tris
+                .iter()
+                .all(|ct| !ct.exceeds(self.heights, self.cols, e));
             if ok {
+                self.dbg[3] += 1;
                 self.tin.remove(v)?;
                 removed += 1;
+                if std::env::var_os("SWEEPTIN_HIST").is_some() {
+                    eprintln!("removed {} {} {}", v.0, d.col, d.row);
+                }
             }
         }
+        if std::env::var_os("SWEEPTIN_HIST").is_some() {
+            eprintln!(
+                "extremum {} own {} scanned {} ok {}",
+                self.dbg[0], self.dbg[1], self.dbg[2], self.dbg[3]
+            );
+        }
         Ok(removed)
+    }
+
+    /// Renumbers the TIN's vertices band by band (`band` rows, then by column) and its triangles
+    /// by their first vertex, so that neighbouring points are neighbours in memory: the
+    /// redundant-point pass then visits the points in that order with the TIN and the grid in
+    /// cache.
+    fn relayout(&mut self, band: u32) -> Result<()> {
+        let mut order: Vec<u32> = self.tin.vertices().map(|v| v.0).collect();
+        order.sort_by_key(|&v| {
+            let d = self.vdata[v as usize];
+            (d.row / band, d.col, d.row)
+        });
+        let mut new_id = vec![u32::MAX; self.vdata.len()];
+        for (i, &v) in order.iter().enumerate() {
+            new_id[v as usize] = i as u32;
+        }
+        let vertices: Vec<[f64; 3]> = order
+            .iter()
+            .map(|&v| self.tin.point(crate::tin::VertexId(v)))
+            .collect();
+        let mut triangles: Vec<[u32; 3]> = self
+            .tin
+            .triangles()
+            .map(|t| self.tin.tri_vertices(t).map(|v| new_id[v.0 as usize]))
+            .collect();
+        triangles.sort_unstable_by_key(|t| *t.iter().min().unwrap());
+        self.flips_before += self.tin.flips();
+        self.tin = Tin::from_triangles(&vertices, &triangles)?;
+        self.vdata = order.iter().map(|&v| self.vdata[v as usize]).collect();
+        self.cand.clear();
+        Ok(())
     }
 
     /// Output: the triangles over no missing cell, in world coordinates, with the statistics.
@@ -445,7 +511,7 @@ impl<'a, T: Height> Refiner<'a, T> {
             triangles: out.triangles.len() as u64,
             triangle_ratio: out.triangles.len() as f64 / grid_tris,
             insertions: self.insertions,
-            flips: self.tin.flips(),
+            flips: self.flips_before + self.tin.flips(),
             scans: self.scans,
             removed: 0,
             max_error,

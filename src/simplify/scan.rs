@@ -18,6 +18,19 @@ pub struct CellTriangle {
     pub z: [f64; 3],
 }
 
+/// One edge's bound, stepped from row to row.
+#[derive(Clone, Copy, Debug, Default)]
+struct EdgeStep {
+    /// +1: an upper bound on the column; -1: a lower bound; 0: horizontal (no bound).
+    kind: i64,
+    base: i64,
+    q: i64,
+    rem: i64,
+    dq: i64,
+    dr: i64,
+    d: i64,
+}
+
 /// What a scan found.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ScanResult {
@@ -53,21 +66,41 @@ impl CellTriangle {
         let [a, b, c] = self.v;
         let rmin = a[1].min(b[1]).min(c[1]);
         let rmax = a[1].max(b[1]).max(c[1]);
-        let edges = [(a, b), (b, c), (c, a)];
+        // Inside (left of p → q, or on it): dy·(x - px) <= dx·(r - py). With D = |dy| and
+        // F(r) = floor(dx·(r - py) / D): x <= px + F(r) when dy > 0, x >= px - F(r) when dy < 0.
+        // F is stepped exactly from row to row (quotient and remainder), with no division.
+        let mut steps = [EdgeStep::default(); 3];
+        for (k, (p, q)) in [(a, b), (b, c), (c, a)].into_iter().enumerate() {
+            let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+            if dy == 0 {
+                // A horizontal edge bounds no row: every row of the triangle is on its inner side.
+                continue;
+            }
+            let d = dy.abs();
+            let num = dx * (rmin - p[1]);
+            steps[k] = EdgeStep {
+                kind: dy.signum(),
+                base: p[0],
+                q: num.div_euclid(d),
+                rem: num.rem_euclid(d),
+                dq: dx.div_euclid(d),
+                dr: dx.rem_euclid(d),
+                d,
+            };
+        }
         for r in rmin..=rmax {
             let (mut lo, mut hi) = (0i64, cols - 1);
-            for &(p, q) in &edges {
-                let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
-                // Inside (left of p → q, or on it): dy·(x - px) <= dx·(r - py).
-                let rhs = dx * (r - p[1]);
-                if dy > 0 {
-                    hi = hi.min(p[0] + rhs.div_euclid(dy));
-                } else if dy < 0 {
-                    // x - px >= rhs / dy, rounded up (Euclidean division by a negative
-                    // divisor rounds up).
-                    lo = lo.max(p[0] + rhs.div_euclid(dy));
-                } else if rhs < 0 {
-                    hi = -1;
+            for s in &mut steps {
+                match s.kind {
+                    1 => hi = hi.min(s.base + s.q),
+                    -1 => lo = lo.max(s.base - s.q),
+                    _ => {}
+                }
+                s.q += s.dq;
+                s.rem += s.dr;
+                if s.rem >= s.d {
+                    s.rem -= s.d;
+                    s.q += 1;
                 }
             }
             if lo <= hi {
@@ -86,6 +119,23 @@ impl CellTriangle {
         let (uz, vz) = (self.z[1] - self.z[0], self.z[2] - self.z[0]);
         let det = ux * vy - uy * vx;
         ((uz * vy - vz * uy) / det, (ux * vz - vx * uz) / det)
+    }
+
+    /// Does the closed (counter-clockwise) triangle contain cell `c`?
+    pub fn contains(&self, c: [i64; 2]) -> bool {
+        let [a, b, d] = self.v;
+        let side = |p: [i64; 2], q: [i64; 2]| {
+            (q[0] - p[0]) * (c[1] - p[1]) - (q[1] - p[1]) * (c[0] - p[0]) >= 0
+        };
+        side(a, b) && side(b, d) && side(d, a)
+    }
+
+    /// Vertical error of height `h` at cell `c` (same arithmetic as the scans).
+    pub fn error_at(&self, c: [i64; 2], h: f64) -> f64 {
+        let (gx, gy) = self.plane();
+        let a = self.v[0];
+        let zr = self.z[0] + gy * (c[1] - a[1]) as f64;
+        (h - (zr + gx * (c[0] - a[0]) as f64)).abs()
     }
 
     fn is_vertex(&self, col: i64, row: i64) -> bool {
@@ -269,10 +319,19 @@ mod tests {
 
     #[test]
     fn rasterisation_is_exact_on_the_closed_triangle() {
-        let t = CellTriangle {
-            v: [[0, 0], [6, 2], [2, 5]],
-            z: [0.0; 3],
-        };
+        for v in [
+            [[0, 0], [6, 2], [2, 5]],
+            [[0, 0], [7, 0], [3, 4]],
+            [[1, 5], [8, 5], [3, 0]],
+            [[0, 0], [1, 7], [0, 9]],
+            [[2, 1], [9, 8], [4, 8]],
+        ] {
+            rasterise_exactly(v);
+        }
+    }
+
+    fn rasterise_exactly(v: [[i64; 2]; 3]) {
+        let t = CellTriangle { v, z: [0.0; 3] }.ccw();
         let got = cells(&t, 100);
         let inside = |c: i64, r: i64| {
             let ok = |p: [i64; 2], q: [i64; 2]| {
@@ -282,17 +341,17 @@ mod tests {
             ok(a, b) && ok(b, cc) && ok(cc, a)
         };
         let mut want = Vec::new();
-        for r in -1..8 {
-            for c in -1..10 {
+        for r in -1..12 {
+            for c in -1..12 {
                 if inside(c, r) {
                     want.push((c, r));
                 }
             }
         }
-        assert_eq!(got, want);
+        assert_eq!(got, want, "{v:?}");
         // Clockwise input gives the same cells.
         let cw = CellTriangle {
-            v: [[0, 0], [2, 5], [6, 2]],
+            v: [v[0], v[2], v[1]],
             z: [0.0; 3],
         };
         assert_eq!(cells(&cw, 100), want);

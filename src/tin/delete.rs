@@ -111,25 +111,40 @@ impl Tin {
     /// # Errors
     /// As [`Tin::remove`].
     pub fn removal_preview(&self, v: VertexId, out: &mut Vec<[VertexId; 3]>) -> Result<()> {
-        let RemovalPlan {
-            mut ring,
-            hull,
-            steps,
-            ..
-        } = self.plan_removal(v)?;
-        for &(i, _) in &steps {
-            let i = i as usize;
-            let n = ring.len();
-            out.push([ring[i], ring[(i + 1) % n], ring[(i + 2) % n]].map(VertexId));
-            ring.remove((i + 1) % n);
-        }
-        if !hull {
-            out.push([ring[0], ring[1], ring[2]].map(VertexId));
-        }
+        self.removal_preview_with(v, |t| {
+            out.push(t);
+            true
+        })?;
         Ok(())
     }
 
-    fn plan_removal(&self, v: VertexId) -> Result<RemovalPlan> {
+    /// Like [`Tin::removal_preview`], handing each triangle to `f` as soon as it is known;
+    /// stops early, returning `false`, when `f` returns `false`.
+    ///
+    /// # Errors
+    /// As [`Tin::remove`].
+    pub fn removal_preview_with(
+        &self,
+        v: VertexId,
+        mut f: impl FnMut([VertexId; 3]) -> bool,
+    ) -> Result<bool> {
+        let (spokes, hull) = self.star(v)?;
+        let mut ring = self.link_of(&spokes, hull);
+        let all = ring.clone();
+        let mut ok = true;
+        self.ears(&mut ring, &all, hull, |t, _| {
+            ok = f(t.map(VertexId));
+            ok
+        });
+        if ok && !hull {
+            ok = f([ring[0], ring[1], ring[2]].map(VertexId));
+        }
+        Ok(ok)
+    }
+
+    /// The spokes of `v` (counter-clockwise, from the hull edge for a hull vertex) and whether
+    /// `v` is on the hull, after the checks of [`Tin::remove`].
+    fn star(&self, v: VertexId) -> Result<(Vec<EdgeId>, bool)> {
         if !self.contains_vertex(v) {
             return Err(Error::Invalid(format!("vertex {} is not in the TIN", v.0)));
         }
@@ -144,17 +159,36 @@ impl Tin {
             )));
         }
         let hull = self.twin(spokes[0]).is_none();
+        if hull && spokes.len() == self.live_triangles {
+            let ring = self.link_of(&spokes, hull);
+            if self.all_collinear(&ring) {
+                return Err(Error::Invalid(format!(
+                    "removing vertex {} would leave no triangle",
+                    v.0
+                )));
+            }
+        }
+        Ok((spokes, hull))
+    }
+
+    /// The link of a star: `dst` of every spoke, and for a hull vertex the last spoke's far end.
+    fn link_of(&self, spokes: &[EdgeId], hull: bool) -> Vec<u32> {
         let mut ring: Vec<u32> = spokes.iter().map(|&e| self.dst(e).0).collect();
         if hull {
             ring.push(self.org(spokes.last().unwrap().prev()).0);
         }
-        if hull && spokes.len() == self.live_triangles && self.all_collinear(&ring) {
-            return Err(Error::Invalid(format!(
-                "removing vertex {} would leave no triangle",
-                v.0
-            )));
-        }
-        let steps = self.plan_ears(&ring, hull);
+        ring
+    }
+
+    fn plan_removal(&self, v: VertexId) -> Result<RemovalPlan> {
+        let (spokes, hull) = self.star(v)?;
+        let ring = self.link_of(&spokes, hull);
+        let mut work = ring.clone();
+        let mut steps = Vec::with_capacity(ring.len());
+        self.ears(&mut work, &ring, hull, |_, step| {
+            steps.push(step);
+            true
+        });
         Ok(RemovalPlan {
             spokes,
             ring,
@@ -163,17 +197,21 @@ impl Tin {
         })
     }
 
-    /// Ear clipping of the hole, as a list of `(position in the shrinking ring, fallback?)`:
-    /// Delaunay ears when one exists; otherwise (next to breaklines) any left-turning ear with no
-    /// link vertex in it. A closed ring ends with its last three vertices as one more triangle.
-    fn plan_ears(&self, ring: &[u32], hull: bool) -> Vec<(u32, bool)> {
-        let all = ring;
-        let mut ring = ring.to_vec();
-        let mut steps = Vec::with_capacity(ring.len());
+    /// Ear clipping of the hole in `ring` (shrunk in place): calls `f(triangle, (position, fallback))`
+    /// for each ear, stopping when `f` returns `false`. Delaunay ears when one exists; otherwise
+    /// (next to breaklines) any left-turning ear with no link vertex of `all` in it. A closed
+    /// ring stops at its last three vertices, which form one more triangle.
+    fn ears(
+        &self,
+        ring: &mut Vec<u32>,
+        all: &[u32],
+        hull: bool,
+        mut f: impl FnMut([u32; 3], (u32, bool)) -> bool,
+    ) {
         loop {
             let n = ring.len();
             if !hull && n == 3 {
-                return steps;
+                return;
             }
             let ears = if hull { n.saturating_sub(2) } else { n };
             let mut chosen = None;
@@ -195,9 +233,12 @@ impl Tin {
                 }
             }
             let Some((i, fb)) = chosen.or(fallback) else {
-                return steps; // hull case: the chain is convex, the hole is filled
+                return; // hull case: the chain is convex, the hole is filled
             };
-            steps.push((i as u32, fb));
+            let tri = [ring[i], ring[(i + 1) % n], ring[(i + 2) % n]];
+            if !f(tri, (i as u32, fb)) {
+                return;
+            }
             ring.remove((i + 1) % n);
         }
     }

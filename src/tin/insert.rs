@@ -61,7 +61,7 @@ impl Tin {
                     "point is at a vertex of the triangle".into(),
                 ));
             }
-            match crate::predicates::orient(self.p(a), self.p(b), q) {
+            match self.orient_p(self.p(a), self.p(b), q) {
                 Orientation::Clockwise => {
                     return Err(Error::Invalid("point is outside the triangle".into()));
                 }
@@ -149,7 +149,7 @@ impl Tin {
         let q = self.p(v);
         let visible = |tin: &Tin, h: EdgeId| {
             let (a, b) = (tin.origin[h.0 as usize], tin.origin[h.next().0 as usize]);
-            crate::predicates::orient(tin.p(a), tin.p(b), q) == Orientation::Clockwise
+            tin.orient_p(tin.p(a), tin.p(b), q) == Orientation::Clockwise
         };
         // The visible hull edges, in hull order.
         let mut first = e;

@@ -22,7 +22,9 @@
 //! * [`Tin::interpolate`]: linear interpolation on the triangle under a point.
 
 use crate::error::{Error, Result};
-use crate::predicates::{CircleSide, Orientation, incircle, orient};
+use crate::predicates::{
+    CircleSide, Orientation, incircle, incircle_int, is_small_int, orient, orient_int,
+};
 
 mod delete;
 mod insert;
@@ -126,6 +128,9 @@ pub struct Tin {
     record: bool,
     rng: u64,
     flips: u64,
+    /// Every vertex coordinate is an integer of magnitude at most
+    /// [`crate::predicates::MAX_INT_COORD`]: the integer predicates apply.
+    int_coords: bool,
 }
 
 impl Tin {
@@ -190,6 +195,10 @@ impl Tin {
             i = j;
         }
         tin.live_triangles = triangles.len();
+        tin.int_coords = tin
+            .xy
+            .iter()
+            .all(|p| is_small_int(p[0]) && is_small_int(p[1]));
         tin.live_vertices = tin.vedge.iter().filter(|&&e| e != NONE).count();
         Ok(tin)
     }
@@ -404,13 +413,30 @@ impl Tin {
 
     #[inline(always)]
     fn orient_v(&self, a: u32, b: u32, c: u32) -> Orientation {
-        orient(self.p(a), self.p(b), self.p(c))
+        self.orient_p(self.p(a), self.p(b), self.p(c))
+    }
+
+    /// [`orient`] of two TIN points and any point `q`: integer arithmetic when every coordinate
+    /// is a small integer (grids), the adaptive predicate otherwise. Same result either way.
+    #[inline(always)]
+    fn orient_p(&self, a: [f64; 2], b: [f64; 2], q: [f64; 2]) -> Orientation {
+        if self.int_coords && is_small_int(q[0]) && is_small_int(q[1]) {
+            orient_int(a, b, q)
+        } else {
+            orient(a, b, q)
+        }
     }
 
     /// Perturbed in-circle: is `d` inside the circle of the counter-clockwise `a, b, c`?
     #[inline(always)]
     fn in_circle(&self, a: u32, b: u32, c: u32, d: u32) -> bool {
-        incircle(self.p(a), self.p(b), self.p(c), self.p(d)) == CircleSide::Inside
+        let (pa, pb, pc, pd) = (self.p(a), self.p(b), self.p(c), self.p(d));
+        let side = if self.int_coords {
+            incircle_int(pa, pb, pc, pd)
+        } else {
+            incircle(pa, pb, pc, pd)
+        };
+        side == CircleSide::Inside
     }
 
     fn next_random(&mut self) -> u64 {
@@ -450,7 +476,7 @@ impl Tin {
             let mut e = first;
             for _ in 0..3 {
                 let (a, b) = (self.origin[e.idx()], self.origin[e.next().idx()]);
-                match orient(self.p(a), self.p(b), p) {
+                match self.orient_p(self.p(a), self.p(b), p) {
                     Orientation::Clockwise => match self.twin(e) {
                         Some(t) => {
                             e0 = t;
@@ -678,6 +704,7 @@ impl Tin {
                 max: NONE as u64 - 1,
             });
         }
+        self.int_coords &= is_small_int(p[0]) && is_small_int(p[1]);
         self.xy.push([p[0], p[1]]);
         self.z.push(p[2]);
         self.vedge.push(NONE);

@@ -76,7 +76,7 @@ impl Tin {
     #[allow(clippy::type_complexity)]
     fn crossings(&self, a: VertexId, b: VertexId) -> Result<(Vec<(VertexId, VertexId)>, VertexId)> {
         let (pa, pb) = (self.xy(a), self.xy(b));
-        let side = |v: VertexId| crate::predicates::orient(pa, pb, self.xy(v));
+        let side = |v: VertexId| self.orient_p(pa, pb, self.xy(v));
         let mut g = None;
         for e in self.out_edges(a) {
             let u = self.dst(e);
@@ -144,8 +144,8 @@ impl Tin {
             let p = self.org(e.prev());
             let q = self.org(f.prev());
             let (pp, pq) = (self.xy(p), self.xy(q));
-            let su = crate::predicates::orient(pp, pq, self.xy(u));
-            let sw = crate::predicates::orient(pp, pq, self.xy(w));
+            let su = self.orient_p(pp, pq, self.xy(u));
+            let sw = self.orient_p(pp, pq, self.xy(w));
             let convex = matches!(
                 (su, sw),
                 (Orientation::Clockwise, Orientation::CounterClockwise)
@@ -157,8 +157,8 @@ impl Tin {
             }
             self.flip(e);
             let crosses = p != a && p != b && q != a && q != b && {
-                let sp = crate::predicates::orient(pa, pb, pp);
-                let sq = crate::predicates::orient(pa, pb, pq);
+                let sp = self.orient_p(pa, pb, pp);
+                let sq = self.orient_p(pa, pb, pq);
                 sp != Orientation::Collinear && sq != Orientation::Collinear && sp != sq
             };
             if crosses {
