@@ -214,7 +214,7 @@ pub const MAX_INT_COORD: f64 = 268_435_456.0;
 /// Is `v` an integer of magnitude at most [`MAX_INT_COORD`] (usable by the integer predicates)?
 #[inline(always)]
 pub fn is_small_int(v: f64) -> bool {
-    v.abs() <= MAX_INT_COORD && v.fract() == 0.0
+    v.abs() <= MAX_INT_COORD && (v as i64) as f64 == v
 }
 
 /// [`orient`] for points whose coordinates are integers of magnitude at most [`MAX_INT_COORD`]

@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod check;
+mod crossval;
 mod info;
 mod simplify;
 mod tin;
@@ -27,6 +28,8 @@ enum Command {
     Check(check::Args),
     /// Show what LAS/LAZ headers say: version, format, counts, bounds, scale/offset, CRS.
     Info(info::Args),
+    /// Leave-one-out accuracy of the TIN: remove a point, interpolate its height, put it back.
+    Crossval(crossval::Args),
     /// Simplify a grid DEM (GeoTIFF, ESRI ASCII) into a TIN within an error bound.
     Simplify(simplify::Args),
 }
@@ -43,6 +46,7 @@ pub fn main() -> ExitCode {
         Command::Check(a) => check::run(a),
         Command::Info(a) => info::run(a),
         Command::Simplify(a) => simplify::run(a),
+        Command::Crossval(a) => crossval::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -190,7 +190,6 @@ struct Refiner<'a, T: Height> {
     scans: u64,
     insertions: u64,
     touched: Vec<TriId>,
-    dbg: [u64; 4],
     /// Flips done by TINs replaced by [`Refiner::relayout`].
     flips_before: u64,
 }
@@ -251,7 +250,6 @@ impl<'a, T: Height> Refiner<'a, T> {
             scans: 0,
             insertions: 0,
             touched: Vec::new(),
-            dbg: [0; 4],
             flips_before: 0,
         };
         r.tin.record_touched(true);
@@ -334,9 +332,7 @@ impl<'a, T: Height> Refiner<'a, T> {
             self.heap.pop();
             let cell = std::mem::replace(&mut self.cand[t.0 as usize].cell, NO_CELL);
             self.insert(t, cell)?;
-            if std::env::var_os("SWEEPTIN_HIST").is_some() {
-                eprintln!("ins {} {}", self.vdata.len() - 1, error);
-            }
+
             if self.insertions & 0x3FFF == 0
                 && let Some(p) = progress.as_mut()
             {
@@ -383,13 +379,7 @@ impl<'a, T: Height> Refiner<'a, T> {
         let mut removed = 0;
         let mut tris: Vec<CellTriangle> = Vec::new();
         self.tin.record_touched(false);
-        let band: u32 = std::env::var("SWEEPTIN_BAND")
-            .ok()
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(16);
-        if band > 0 {
-            self.relayout(band)?;
-        }
+        self.relayout(16)?;
         for v in 0..self.vdata.len() as u32 {
             let d = self.vdata[v as usize];
             let corner = (d.col == 0 || i64::from(d.col) == self.cols - 1)
@@ -414,27 +404,15 @@ impl<'a, T: Height> Refiner<'a, T> {
                 !(ct.contains(own) && ct.error_at(own, d.z) > e)
             });
             if !matches!(own_ok, Ok(true)) {
-                self.dbg[1] += 1;
                 continue;
             }
-            self.dbg[2] += 1;
             let ok = tris
                 .iter()
                 .all(|ct| !ct.exceeds(self.heights, self.cols, e));
             if ok {
-                self.dbg[3] += 1;
                 self.tin.remove(v)?;
                 removed += 1;
-                if std::env::var_os("SWEEPTIN_HIST").is_some() {
-                    eprintln!("removed {} {} {}", v.0, d.col, d.row);
-                }
             }
-        }
-        if std::env::var_os("SWEEPTIN_HIST").is_some() {
-            eprintln!(
-                "extremum {} own {} scanned {} ok {}",
-                self.dbg[0], self.dbg[1], self.dbg[2], self.dbg[3]
-            );
         }
         Ok(removed)
     }
@@ -445,9 +423,9 @@ impl<'a, T: Height> Refiner<'a, T> {
     /// cache.
     fn relayout(&mut self, band: u32) -> Result<()> {
         let mut order: Vec<u32> = self.tin.vertices().map(|v| v.0).collect();
-        order.sort_by_key(|&v| {
+        order.sort_unstable_by_key(|&v| {
             let d = self.vdata[v as usize];
-            (d.row / band, d.col, d.row)
+            (u64::from(d.row / band) << 42) | (u64::from(d.col) << 21) | u64::from(d.row % band)
         });
         let mut new_id = vec![u32::MAX; self.vdata.len()];
         for (i, &v) in order.iter().enumerate() {
@@ -462,7 +440,7 @@ impl<'a, T: Height> Refiner<'a, T> {
             .triangles()
             .map(|t| self.tin.tri_vertices(t).map(|v| new_id[v.0 as usize]))
             .collect();
-        triangles.sort_unstable_by_key(|t| *t.iter().min().unwrap());
+        triangles.sort_unstable_by_key(|t| t[0].min(t[1]).min(t[2]));
         self.flips_before += self.tin.flips();
         self.tin = Tin::from_triangles(&vertices, &triangles)?;
         self.vdata = order.iter().map(|&v| self.vdata[v as usize]).collect();

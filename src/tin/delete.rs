@@ -215,24 +215,27 @@ impl Tin {
             }
             let ears = if hull { n.saturating_sub(2) } else { n };
             let mut chosen = None;
-            let mut fallback = None;
             for i in 0..ears {
                 let (a, b, c) = (ring[i], ring[(i + 1) % n], ring[(i + 2) % n]);
-                if self.orient_v(a, b, c) != Orientation::CounterClockwise {
-                    continue;
-                }
-                let empty_circle = all
-                    .iter()
-                    .all(|&w| w == a || w == b || w == c || !self.in_circle(a, b, c, w));
-                if empty_circle {
+                if self.orient_v(a, b, c) == Orientation::CounterClockwise
+                    && all
+                        .iter()
+                        .all(|&w| w == a || w == b || w == c || !self.in_circle(a, b, c, w))
+                {
                     chosen = Some((i, false));
                     break;
                 }
-                if fallback.is_none() && self.ear_is_empty(a, b, c, all) {
-                    fallback = Some((i, true));
-                }
             }
-            let Some((i, fb)) = chosen.or(fallback) else {
+            if chosen.is_none() {
+                chosen = (0..ears)
+                    .find(|&i| {
+                        let (a, b, c) = (ring[i], ring[(i + 1) % n], ring[(i + 2) % n]);
+                        self.orient_v(a, b, c) == Orientation::CounterClockwise
+                            && self.ear_is_empty(a, b, c, all)
+                    })
+                    .map(|i| (i, true));
+            }
+            let Some((i, fb)) = chosen else {
                 return; // hull case: the chain is convex, the hole is filled
             };
             let tri = [ring[i], ring[(i + 1) % n], ring[(i + 2) % n]];

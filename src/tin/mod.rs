@@ -19,13 +19,16 @@
 //!   link (hull vertices included: the hole is then an open chain and the new hull its convex hull);
 //! * [`Tin::insert_segment`]: force a constrained edge by Sloan's flipping, then restore the
 //!   constrained Delaunay property around it;
-//! * [`Tin::interpolate`]: linear interpolation on the triangle under a point.
+//! * [`Tin::interpolate`]: linear interpolation on the triangle under a point;
+//! * [`Tin::leave_one_out`]: the leave-one-out accuracy check (section 7.3.4).
 
 use crate::error::{Error, Result};
 use crate::predicates::{
     CircleSide, Orientation, incircle, incircle_int, is_small_int, orient, orient_int,
 };
+pub use crossval::CrossValidation;
 
+mod crossval;
 mod delete;
 mod insert;
 mod segment;

@@ -293,3 +293,28 @@ fn breakline_through_lattice_vertices_is_split() {
     let e = tin.out_edges(m);
     assert_eq!(e.iter().filter(|&&e| tin.is_constrained(e)).count(), 2);
 }
+
+#[test]
+fn leave_one_out_is_exact_on_a_plane_and_leaves_the_tin_unchanged() {
+    let mut rng = Rng(9);
+    let pts: Vec<[f64; 3]> = random_points(&mut rng, 500)
+        .into_iter()
+        .map(|p| [p[0], p[1], 2.0 * p[0] - p[1] + 7.0])
+        .collect();
+    let mut tin = Tin::from_points(&pts).unwrap();
+    let before = tin_key(&tin);
+    let cv = tin.leave_one_out(200, 1).unwrap();
+    assert_eq!(cv.tested + cv.skipped, 200);
+    assert!(cv.skipped > 0 || cv.tested == 200);
+    assert!(cv.max_error < 1e-9, "{cv:?}");
+    assert_eq!(tin_key(&tin), before);
+    tin.check().unwrap();
+    // On a curved surface the errors are positive.
+    let curved: Vec<[f64; 3]> = pts
+        .iter()
+        .map(|p| [p[0], p[1], p[0] * p[0] / 10.0])
+        .collect();
+    let mut tin = Tin::from_points(&curved).unwrap();
+    let cv = tin.leave_one_out(100, 2).unwrap();
+    assert!(cv.mean_error > 0.0 && cv.bias > 0.0, "{cv:?}");
+}
