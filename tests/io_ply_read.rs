@@ -260,7 +260,11 @@ fn fuzz_like_no_panics() {
             }
         }
         // Also lie about the length.
-        let len = if r().is_multiple_of(8) { r() } else { b.len() as u64 };
+        let len = if r().is_multiple_of(8) {
+            r()
+        } else {
+            b.len() as u64
+        };
         let result = read_ply_from(&b[..], len, "fuzz.ply");
         if let Ok((v, t)) = &result {
             for tri in t {

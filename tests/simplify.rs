@@ -29,7 +29,10 @@ fn rasterise(spec: &GridSpec, h: &[f64], tin: &Simplified) -> Check {
     // World → fractional cell index (centre of cell (c, r) at c + 0.5, r + 0.5).
     let to_cell = |x: f64, y: f64| {
         let (dx, dy) = (x - t[0], y - t[3]);
-        ((t[5] * dx - t[2] * dy) / det, (-t[4] * dx + t[1] * dy) / det)
+        (
+            (t[5] * dx - t[2] * dy) / det,
+            (-t[4] * dx + t[1] * dy) / det,
+        )
     };
     let mut covered = vec![false; cols * rows];
     let mut out = Check::default();
@@ -94,9 +97,16 @@ fn check_file(name: &str, bounds: &[f64]) {
             let c = rasterise(&spec, &h, &tin);
             // Floating-point tolerance of the independent interpolation.
             let tol = 1e-6 * (1.0 + h.iter().fold(0.0f64, |m, v| m.max(v.abs())));
-            assert!(c.max_error <= e + tol, "{name} e={e}: {c:?} {:?}", tin.stats);
+            assert!(
+                c.max_error <= e + tol,
+                "{name} e={e}: {c:?} {:?}",
+                tin.stats
+            );
             assert_eq!(c.covered_missing, 0, "{name} e={e}");
-            assert_eq!(c.uncovered_valid as u64, tin.stats.uncovered_cells, "{name} e={e}");
+            assert_eq!(
+                c.uncovered_valid as u64, tin.stats.uncovered_cells,
+                "{name} e={e}"
+            );
             assert!(tin.stats.max_error <= e, "{name}: {:?}", tin.stats);
         }
     }
@@ -104,7 +114,10 @@ fn check_file(name: &str, bounds: &[f64]) {
 
 #[test]
 fn srtm_ascii_grid_is_within_the_bound() {
-    check_file("landlab_SRTMGL3_40.09_-105.55_40.21_-105.35.asc", &[5.0, 40.0]);
+    check_file(
+        "landlab_SRTMGL3_40.09_-105.55_40.21_-105.35.asc",
+        &[5.0, 40.0],
+    );
 }
 
 #[test]
@@ -114,7 +127,10 @@ fn masked_gully_is_within_the_bound_and_not_triangulated_into_nodata() {
 
 #[test]
 fn ign_dtm_with_missing_cells() {
-    check_file("ign_DTM_test_data_77055_627760_LA93_IGN69_50CM.tif", &[0.02, 0.1]);
+    check_file(
+        "ign_DTM_test_data_77055_627760_LA93_IGN69_50CM.tif",
+        &[0.02, 0.1],
+    );
 }
 
 #[test]
@@ -176,4 +192,27 @@ fn cli_simplify_writes_a_mesh_and_a_json_summary() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn startinpy_float64_with_non_round_cells() {
+    check_file("startinpy_dem_01.tif", &[20.0]);
+}
+
+#[test]
+fn non_square_cells() {
+    let (cols, rows) = (90u32, 70u32);
+    let mut spec = GridSpec::north_up(cols, rows, 1000.0, 5000.0, 2.0);
+    spec.transform[5] = -3.0;
+    let h: Vec<f64> = (0..rows)
+        .flat_map(|r| {
+            (0..cols).map(move |c| 20.0 * ((c as f64 / 9.0).sin() + (r as f64 / 7.0).cos()))
+        })
+        .collect();
+    for e in [0.2, 1.0, 5.0] {
+        let tin = simplify(&spec, &h, &Options::max_error(e), None).unwrap();
+        let c = rasterise(&spec, &h, &tin);
+        assert!(c.max_error <= e + 1e-6, "{c:?}");
+        assert_eq!(c.uncovered_valid, 0);
+    }
 }

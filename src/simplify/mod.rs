@@ -349,7 +349,15 @@ impl<'a, T: Height> Refiner<'a, T> {
         );
         let z: f64 = self.heights[cell as usize].into();
         let p = [col as f64 * self.kx, row as f64 * self.ky, z];
-        let v = self.tin.insert_in_triangle(t, p)?;
+        // With non-square cells the internal coordinates are rounded, so a cell on an edge in
+        // index space may fall just outside the triangle: then the point is located by a walk.
+        let v = match self.tin.insert_in_triangle(t, p) {
+            Ok(v) => v,
+            Err(_) => {
+                self.tin.set_hint(t);
+                self.tin.insert(p)?
+            }
+        };
         if v.0 as usize != self.vdata.len() {
             return Err(Error::Internal("vertex ids out of step".into()));
         }
@@ -557,6 +565,11 @@ fn internal_scale(spec: &GridSpec) -> (f64, f64) {
     }
     let kx = t[1].signum();
     let ky = t[5] / t[1].abs();
+    // Cells square to 1e-9 (a non-round cell size stored with different roundings, such as
+    // 33.365 m): integer coordinates, exact and fast.
+    if (ky.abs() - 1.0).abs() < 1e-9 {
+        return (kx, ky.signum());
+    }
     (kx, ky)
 }
 
