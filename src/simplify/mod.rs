@@ -185,13 +185,9 @@ struct Refiner<'a, T: Height> {
     /// Candidates with an error at or below this are never taken (the error bound), so they
     /// are not queued.
     floor: f64,
-    stamp: Vec<u64>,
-    round: u64,
     scans: u64,
     insertions: u64,
     touched: Vec<TriId>,
-    /// Flips done by TINs replaced by [`Refiner::relayout`].
-    flips_before: u64,
 }
 
 impl<'a, T: Height> Refiner<'a, T> {
@@ -245,12 +241,9 @@ impl<'a, T: Height> Refiner<'a, T> {
             cand: Vec::new(),
             heap: BinaryHeap::new(),
             floor: 0.0,
-            stamp: Vec::new(),
-            round: 0,
             scans: 0,
             insertions: 0,
             touched: Vec::new(),
-            flips_before: 0,
         };
         r.tin.record_touched(true);
         Ok(r)
@@ -363,18 +356,14 @@ impl<'a, T: Height> Refiner<'a, T> {
         }
         self.vdata.push(VData::new(col, row, z));
         self.insertions += 1;
-        self.round += 1;
         self.touched.clear();
         let mut touched = std::mem::take(&mut self.touched);
         self.tin.take_touched(&mut touched);
-        if self.stamp.len() < self.tin.triangle_slots() {
-            self.stamp.resize(self.tin.triangle_slots(), 0);
-        }
+        // A handful of triangles: sorting beats a per-triangle stamp array (cache misses).
+        touched.sort_unstable();
+        touched.dedup();
         for &t in &touched {
-            if self.stamp[t.0 as usize] != self.round {
-                self.stamp[t.0 as usize] = self.round;
-                self.rescan(t);
-            }
+            self.rescan(t);
         }
         self.touched = touched;
         Ok(())
@@ -430,28 +419,13 @@ impl<'a, T: Height> Refiner<'a, T> {
     /// redundant-point pass then visits the points in that order with the TIN and the grid in
     /// cache.
     fn relayout(&mut self, band: u32) -> Result<()> {
-        let mut order: Vec<u32> = self.tin.vertices().map(|v| v.0).collect();
+        let mut order: Vec<crate::tin::VertexId> = self.tin.vertices().collect();
         order.sort_unstable_by_key(|&v| {
-            let d = self.vdata[v as usize];
+            let d = self.vdata[v.0 as usize];
             (u64::from(d.row / band) << 42) | (u64::from(d.col) << 21) | u64::from(d.row % band)
         });
-        let mut new_id = vec![u32::MAX; self.vdata.len()];
-        for (i, &v) in order.iter().enumerate() {
-            new_id[v as usize] = i as u32;
-        }
-        let vertices: Vec<[f64; 3]> = order
-            .iter()
-            .map(|&v| self.tin.point(crate::tin::VertexId(v)))
-            .collect();
-        let mut triangles: Vec<[u32; 3]> = self
-            .tin
-            .triangles()
-            .map(|t| self.tin.tri_vertices(t).map(|v| new_id[v.0 as usize]))
-            .collect();
-        triangles.sort_unstable_by_key(|t| t[0].min(t[1]).min(t[2]));
-        self.flips_before += self.tin.flips();
-        self.tin = Tin::from_triangles(&vertices, &triangles)?;
-        self.vdata = order.iter().map(|&v| self.vdata[v as usize]).collect();
+        self.tin.relayout(&order)?;
+        self.vdata = order.iter().map(|&v| self.vdata[v.0 as usize]).collect();
         self.cand.clear();
         Ok(())
     }
@@ -497,7 +471,7 @@ impl<'a, T: Height> Refiner<'a, T> {
             triangles: out.triangles.len() as u64,
             triangle_ratio: out.triangles.len() as f64 / grid_tris,
             insertions: self.insertions,
-            flips: self.flips_before + self.tin.flips(),
+            flips: self.tin.flips(),
             scans: self.scans,
             removed: 0,
             max_error,

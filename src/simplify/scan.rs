@@ -31,6 +31,23 @@ struct EdgeStep {
     d: i64,
 }
 
+/// `(floor(n / d), n mod d)` for `d > 0`: a floating-point quotient corrected to the exact one
+/// (cheaper than a 64-bit integer division; exact for every `n`, `d` in `i64` range here).
+#[inline(always)]
+fn floor_divmod(n: i64, d: i64) -> (i64, i64) {
+    let mut q = (n as f64 / d as f64).floor() as i64;
+    let mut r = n - q * d;
+    while r < 0 {
+        q -= 1;
+        r += d;
+    }
+    while r >= d {
+        q += 1;
+        r -= d;
+    }
+    (q, r)
+}
+
 /// What a scan found.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ScanResult {
@@ -77,14 +94,15 @@ impl CellTriangle {
                 continue;
             }
             let d = dy.abs();
-            let num = dx * (rmin - p[1]);
+            let (q, rem) = floor_divmod(dx * (rmin - p[1]), d);
+            let (dq, dr) = floor_divmod(dx, d);
             steps[k] = EdgeStep {
                 kind: dy.signum(),
                 base: p[0],
-                q: num.div_euclid(d),
-                rem: num.rem_euclid(d),
-                dq: dx.div_euclid(d),
-                dr: dx.rem_euclid(d),
+                q,
+                rem,
+                dq,
+                dr,
                 d,
             };
         }
@@ -355,6 +373,18 @@ mod tests {
             z: [0.0; 3],
         };
         assert_eq!(cells(&cw, 100), want);
+    }
+
+    #[test]
+    fn floor_divmod_is_exact() {
+        for n in -200i64..200 {
+            for d in 1i64..40 {
+                assert_eq!(floor_divmod(n, d), (n.div_euclid(d), n.rem_euclid(d)));
+            }
+        }
+        for (n, d) in [(1i64 << 40, 3i64), (-(1 << 45) + 1, 7), (1 << 31, 46_341)] {
+            assert_eq!(floor_divmod(n, d), (n.div_euclid(d), n.rem_euclid(d)));
+        }
     }
 
     #[test]

@@ -604,6 +604,86 @@ impl Tin {
         g
     }
 
+    /// Renumbers the vertices (new vertex `i` is the old `order[i]`; `order` must list every live
+    /// vertex once) and the triangles (by their smallest new vertex id), dropping removed
+    /// vertices and free slots. Neighbouring points then sit near each other in memory when
+    /// `order` is spatial. Returns, for each old vertex id, its new id (`u32::MAX` if dropped).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] if `order` is not a permutation of the live vertices.
+    pub fn relayout(&mut self, order: &[VertexId]) -> Result<Vec<u32>> {
+        let mut new_v = vec![NONE; self.xy.len()];
+        for (i, &v) in order.iter().enumerate() {
+            if !self.contains_vertex(v) || new_v[v.0 as usize] != NONE {
+                return Err(Error::Invalid("relayout order is not a permutation".into()));
+            }
+            new_v[v.0 as usize] = i as u32;
+        }
+        if order.len() != self.live_vertices {
+            return Err(Error::Invalid("relayout order misses vertices".into()));
+        }
+        // Counting sort of the live triangles by their smallest new vertex id.
+        let slots = self.triangle_slots();
+        let key = |t: usize| {
+            let e = 3 * t;
+            (0..3)
+                .map(|k| new_v[self.origin[e + k] as usize])
+                .min()
+                .unwrap()
+        };
+        let mut start = vec![0u32; order.len() + 1];
+        for t in 0..slots {
+            if self.is_live(TriId(t as u32)) {
+                start[key(t) as usize + 1] += 1;
+            }
+        }
+        for i in 0..order.len() {
+            start[i + 1] += start[i];
+        }
+        let mut new_t = vec![NONE; slots];
+        for t in 0..slots {
+            if self.is_live(TriId(t as u32)) {
+                let k = key(t) as usize;
+                new_t[t] = start[k];
+                start[k] += 1;
+            }
+        }
+        let n = self.live_triangles;
+        let mut origin = vec![DEAD; 3 * n];
+        let mut link = vec![NO_TWIN; 3 * n];
+        for t in 0..slots {
+            let nt = new_t[t];
+            if nt == NONE {
+                continue;
+            }
+            for k in 0..3 {
+                let (old, new) = (3 * t + k, 3 * nt as usize + k);
+                origin[new] = new_v[self.origin[old] as usize];
+                let l = self.link[old];
+                let id = l & !CONSTRAINED;
+                link[new] = if id == NO_TWIN {
+                    l
+                } else {
+                    (3 * new_t[id as usize / 3] + id % 3) | (l & CONSTRAINED)
+                };
+            }
+        }
+        let mut vedge = vec![NONE; order.len()];
+        for (i, &v) in order.iter().enumerate() {
+            let e = self.vedge[v.0 as usize];
+            vedge[i] = 3 * new_t[e as usize / 3] + e % 3;
+        }
+        self.xy = order.iter().map(|&v| self.xy[v.0 as usize]).collect();
+        self.z = order.iter().map(|&v| self.z[v.0 as usize]).collect();
+        self.origin = origin;
+        self.link = link;
+        self.vedge = vedge;
+        self.free.clear();
+        self.hint = 0;
+        self.touched.clear();
+        Ok(new_v)
+    }
+
     // ---- low-level storage -------------------------------------------------------------------
 
     fn alloc_triangle(&mut self, a: u32, b: u32, c: u32) -> EdgeId {

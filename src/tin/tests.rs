@@ -318,3 +318,30 @@ fn leave_one_out_is_exact_on_a_plane_and_leaves_the_tin_unchanged() {
     let cv = tin.leave_one_out(100, 2).unwrap();
     assert!(cv.mean_error > 0.0 && cv.bias > 0.0, "{cv:?}");
 }
+
+#[test]
+fn relayout_keeps_the_triangulation() {
+    let mut rng = Rng(10);
+    let pts = random_points(&mut rng, 400);
+    let mut tin = Tin::from_points(&pts).unwrap();
+    let live: Vec<VertexId> = tin.vertices().collect();
+    for &v in live.iter().step_by(5) {
+        tin.remove(v).unwrap();
+    }
+    tin.insert_breakline(&[[5.0, 5.0, 0.0], [95.0, 60.0, 0.0]])
+        .unwrap();
+    let before = tin_key(&tin);
+    let mut order: Vec<VertexId> = tin.vertices().collect();
+    order.sort_by(|a, b| tin.xy(*a)[0].total_cmp(&tin.xy(*b)[0]));
+    let map = tin.relayout(&order).unwrap();
+    assert_eq!(map.iter().filter(|&&m| m != u32::MAX).count(), order.len());
+    tin.check().unwrap();
+    assert_eq!(tin_key(&tin), before);
+    assert_eq!(tin.triangle_slots(), tin.triangle_count());
+    // Still editable.
+    tin.insert([50.5, 50.5, 1.0]).unwrap();
+    let v = tin.vertices().nth(10).unwrap();
+    let _ = tin.remove(v);
+    tin.check().unwrap();
+    assert!(tin.relayout(&order[1..]).is_err());
+}
