@@ -651,8 +651,7 @@ impl Tin {
         let n = self.live_triangles;
         let mut origin = vec![DEAD; 3 * n];
         let mut link = vec![NO_TWIN; 3 * n];
-        for t in 0..slots {
-            let nt = new_t[t];
+        for (t, &nt) in new_t.iter().enumerate() {
             if nt == NONE {
                 continue;
             }
