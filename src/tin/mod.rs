@@ -640,14 +640,17 @@ impl Tin {
         for i in 0..order.len() {
             start[i + 1] += start[i];
         }
-        let mut new_t = vec![NONE; slots];
-        for t in 0..slots {
-            if self.is_live(TriId(t as u32)) {
-                let k = key(t) as usize;
-                new_t[t] = start[k];
-                start[k] += 1;
-            }
-        }
+        let new_t: Vec<u32> = (0..slots)
+            .map(|t| {
+                if self.is_live(TriId(t as u32)) {
+                    let k = key(t) as usize;
+                    start[k] += 1;
+                    start[k] - 1
+                } else {
+                    NONE
+                }
+            })
+            .collect();
         let n = self.live_triangles;
         let mut origin = vec![DEAD; 3 * n];
         let mut link = vec![NO_TWIN; 3 * n];
