@@ -5,8 +5,8 @@
 #
 # usage: scripts/bench-simplify.sh [DEM] [MAX_ERROR] [RUNS]
 #   DEM defaults to Big Tujunga (shared/data/dem), MAX_ERROR to 5, RUNS to 5.
-# needs: node + `npm install delatin` in $PEERS (default /tmp/peers); optional: $HMM = path to a
-# built hmm binary (fogleman/hmm; it reads 16-bit PNG heightmaps).
+# needs: node + `npm install delatin` in $PEERS (default /tmp/peers); optional: $HMM = path to
+# hmm's triangulator built with our raw-grid driver (see scripts/peers/README.md).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 dem=${1:-$here/../shared/data/dem/topotoolbox_srtm_bigtujunga30m_utm11.tif}
@@ -37,6 +37,10 @@ for i in $(seq "$runs"); do
     echo "$(cpu node "$peers/delatin_run.mjs" "$work/grid.f64" "$cols" "$rows" "$err")" >>"$work/delatin"
     cp "$work/out" "$work/delatin.json"
   fi
+  if [ -n "${HMM:-}" ]; then
+    echo "$(cpu "$HMM" "$work/grid.f64" "$cols" "$rows" "$err")" >>"$work/hmm"
+    cp "$work/out" "$work/hmm.json"
+  fi
 done
 
 field() { python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
@@ -52,4 +56,9 @@ if [ -f "$work/delatin" ]; then
   printf '%-28s %10s %10s %10s %8s\n' "delatin $(node -p "require('$peers/node_modules/delatin/package.json').version")" \
     "$(field "$work/delatin.json" "d['points']")" "$(field "$work/delatin.json" "d['triangles']")" \
     "$(field "$work/delatin.json" "d['max_error']")" "$(min <"$work/delatin")"
+fi
+if [ -f "$work/hmm" ]; then
+  printf '%-28s %10s %10s %10s %8s\n' "hmm (fogleman, C++)" \
+    "$(field "$work/hmm.json" "d['points']")" "$(field "$work/hmm.json" "d['triangles']")" \
+    "$(field "$work/hmm.json" "d['max_error']")" "$(min <"$work/hmm")"
 fi

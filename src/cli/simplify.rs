@@ -5,7 +5,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use sweeptin::io::{MeshFormat, MeshMeta, create_mesh_sink};
-use sweeptin::raster::read::RasterReader;
+use sweeptin::raster::read::{Heights, RasterReader};
 use sweeptin::simplify::{Options, Stop, simplify};
 
 /// Arguments of `sweeptin simplify`.
@@ -57,7 +57,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     // Open the output first: a bad output path fails before any heavy work.
     let mut sink = create_mesh_sink(&args.output, args.format, &meta)?;
-    let heights = reader.read_all()?;
+    // Kept as f32 when exact (all integer grids up to 16 bits, float32 grids): half the memory
+    // and bandwidth of f64.
+    let heights = reader.read_heights()?;
     let read_s = start.elapsed().as_secs_f64();
     let bar = ProgressBar::new_spinner();
     bar.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("template"));
@@ -69,20 +71,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         stop,
         decimate: !args.no_decimate,
     };
-    // Values exactly representable as f32 (all integer grids up to 24 bits, float32 grids) are
-    // kept as f32: half the memory and bandwidth.
-    let narrow: Option<Vec<f32>> = heights
-        .iter()
-        .map(|&h| {
-            let f = h as f32;
-            (f64::from(f) == h || h.is_nan()).then_some(f)
-        })
-        .collect();
-    let result = match &narrow {
-        Some(h32) => simplify(&spec, h32, &options, Some(&mut progress)),
-        None => simplify(&spec, &heights, &options, Some(&mut progress)),
+    let result = match &heights {
+        Heights::F32(h) => simplify(&spec, h, &options, Some(&mut progress)),
+        Heights::F64(h) => simplify(&spec, h, &options, Some(&mut progress)),
     };
-    drop(narrow);
     let tin = result.with_context(|| format!("cannot simplify {}", args.input.display()))?;
     bar.finish_and_clear();
     drop(heights);

@@ -55,6 +55,39 @@ pub enum SampleType {
     Text,
 }
 
+/// A whole grid in memory, row-major, missing cells NaN: `f32` when every value is exactly an
+/// `f32` (8- and 16-bit integers, float32, and any grid whose values happen to fit), else `f64`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Heights {
+    /// 4 bytes per cell.
+    F32(Vec<f32>),
+    /// 8 bytes per cell.
+    F64(Vec<f64>),
+}
+
+impl Heights {
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        match self {
+            Heights::F32(v) => v.len(),
+            Heights::F64(v) => v.len(),
+        }
+    }
+
+    /// Is the grid empty?
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        match self {
+            Heights::F32(v) => 4 * v.len(),
+            Heights::F64(v) => 8 * v.len(),
+        }
+    }
+}
+
 /// A grid file opened for reading.
 pub struct RasterReader {
     path: PathBuf,
@@ -138,6 +171,48 @@ impl RasterReader {
     pub fn read_all(&mut self) -> Result<Vec<f64>> {
         let (c, r) = (self.spec.cols, self.spec.rows);
         self.read_window(0, 0, c, r)
+    }
+
+    /// Reads the whole grid as compactly as it is exact ([`Heights`]), band by band, so that the
+    /// peak memory is the result plus one band (never a full `f64` copy of an `f32`-exact grid).
+    ///
+    /// # Errors
+    /// As [`RasterReader::read_window`].
+    pub fn read_heights(&mut self) -> Result<Heights> {
+        let (cols, rows) = (self.spec.cols, self.spec.rows);
+        let band = match &self.source {
+            // Whole chunks: a strip or tile row is decoded once.
+            Source::Tiff(t) => t
+                .chunk_h
+                .max(1)
+                .saturating_mul(256u32.div_ceil(t.chunk_h.max(1))),
+            Source::Ascii(_) => 256,
+        };
+        let n = cols as usize * rows as usize;
+        let mut out = Heights::F32(Vec::with_capacity(n));
+        let mut r0 = 0;
+        while r0 < rows {
+            let h = band.min(rows - r0);
+            let w = self.read_window(0, r0, cols, h)?;
+            if let Heights::F32(v) = &mut out {
+                let start = v.len();
+                v.extend(w.iter().map(|&x| x as f32));
+                if !w
+                    .iter()
+                    .zip(&v[start..])
+                    .all(|(&x, &f)| f64::from(f) == x || x.is_nan())
+                {
+                    let mut wide: Vec<f64> = Vec::with_capacity(n);
+                    wide.extend(v[..start].iter().map(|&f| f64::from(f)));
+                    out = Heights::F64(wide);
+                }
+            }
+            if let Heights::F64(v) = &mut out {
+                v.extend_from_slice(&w);
+            }
+            r0 += h;
+        }
+        Ok(out)
     }
 
     /// Reads the `cols × rows` window whose top-left cell is `(col0, row0)`, row-major, missing
@@ -701,6 +776,10 @@ mod tests {
         assert_eq!(all[5], 6.0);
         assert_eq!(r.read_window(1, 1, 2, 1).unwrap()[1], 6.0);
         assert_eq!(r.read_window(0, 0, 1, 2).unwrap(), vec![1.0, 4.0]);
+        match r.read_heights().unwrap() {
+            Heights::F32(v) => assert_eq!(v[5], 6.0),
+            Heights::F64(_) => panic!("small integers fit f32"),
+        }
         assert!(r.read_window(2, 0, 2, 1).is_err());
     }
 
@@ -715,6 +794,14 @@ mod tests {
         .unwrap();
         let e = RasterReader::open(&p).unwrap().read_all().unwrap_err();
         assert!(e.to_string().contains(":7:"), "{e}");
+        std::fs::write(
+            &p,
+            "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 0.1\n",
+        )
+        .unwrap();
+        assert!(
+            matches!(RasterReader::open(&p).unwrap().read_heights().unwrap(), Heights::F64(v) if v[3] == 0.1)
+        );
         std::fs::write(
             &p,
             "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3\n",
