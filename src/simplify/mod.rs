@@ -36,10 +36,11 @@
 use crate::error::{Error, Result};
 use crate::raster::grid::GridSpec;
 use crate::tin::{Tin, TriId};
+use queue::TriangleQueue;
 pub use scan::Height;
 use scan::{CellTriangle, NO_CELL};
-use std::collections::BinaryHeap;
 
+mod queue;
 pub mod scan;
 
 /// When to stop refining.
@@ -181,7 +182,7 @@ struct Refiner<'a, T: Height> {
     vdata: Vec<VData>,
     cand: Vec<Cand>,
     /// Queue keys: the candidate's error as `f32` bits rounded up, then the triangle.
-    heap: BinaryHeap<u64>,
+    heap: TriangleQueue,
     /// Candidates with an error at or below this are never taken (the error bound), so they
     /// are not queued.
     floor: f64,
@@ -239,13 +240,15 @@ impl<'a, T: Height> Refiner<'a, T> {
             tin,
             vdata,
             cand: Vec::new(),
-            heap: BinaryHeap::new(),
+            heap: TriangleQueue::default(),
             floor: 0.0,
             scans: 0,
             insertions: 0,
             touched: Vec::new(),
         };
         r.tin.record_touched(true);
+        // Pure insertion until the redundancy pass: no vertex → edge map upkeep.
+        r.tin.set_vertex_tracking(false);
         Ok(r)
     }
 
@@ -279,24 +282,14 @@ impl<'a, T: Height> Refiner<'a, T> {
         c.cell = s.cell;
         c.error = s.error;
         c.key = error_key(s.error);
-        if s.cell != NO_CELL && s.error > self.floor {
-            self.heap.push((u64::from(c.key) << 32) | u64::from(t.0));
-        }
+        let queued = s.cell != NO_CELL && s.error > self.floor;
+        self.heap.set(t.0, queued.then_some(c.key));
     }
 
-    /// The worst live candidate, dropping stale heap entries (a triangle rescanned since its
-    /// entry was queued with another error; an entry whose key still matches stands for the
-    /// triangle's current candidate, which is what it is meant to).
+    /// The worst candidate.
     fn peek(&mut self) -> Option<(f64, TriId)> {
-        while let Some(&key) = self.heap.peek() {
-            let t = key as u32;
-            let c = &self.cand[t as usize];
-            if c.key == (key >> 32) as u32 && c.cell != NO_CELL && c.error > self.floor {
-                return Some((c.error, TriId(t)));
-            }
-            self.heap.pop();
-        }
-        None
+        let t = self.heap.peek()?;
+        Some((self.cand[t as usize].error, TriId(t)))
     }
 
     fn run(&mut self, stop: Stop, mut progress: Option<Progress<'_>>) -> Result<()> {

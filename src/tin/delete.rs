@@ -145,7 +145,7 @@ impl Tin {
     /// The spokes of `v` (counter-clockwise, from the hull edge for a hull vertex) and whether
     /// `v` is on the hull, after the checks of [`Tin::remove`].
     fn star(&self, v: VertexId) -> Result<(Vec<EdgeId>, bool)> {
-        if !self.contains_vertex(v) {
+        if self.out_edge(v).is_none() {
             return Err(Error::Invalid(format!("vertex {} is not in the TIN", v.0)));
         }
         let spokes = self.out_edges(v);

@@ -28,7 +28,7 @@ impl Tin {
     /// # Errors
     /// [`Error::Invalid`] if `v` is in the triangulation or another vertex now has its position.
     pub fn restore(&mut self, v: VertexId) -> Result<()> {
-        if (v.0 as usize) >= self.xy.len() || self.contains_vertex(v) {
+        if (v.0 as usize) >= self.xy.len() || self.contains_vertex(v) || self.untracked {
             return Err(Error::Invalid(format!(
                 "vertex {} cannot be restored: it is not a removed vertex",
                 v.0

@@ -34,7 +34,7 @@ impl Tin {
     /// vertex first). On error, the pieces before the crossing stay inserted.
     pub fn insert_segment(&mut self, a: VertexId, b: VertexId) -> Result<()> {
         for v in [a, b] {
-            if !self.contains_vertex(v) {
+            if self.out_edge(v).is_none() {
                 return Err(Error::Invalid(format!("vertex {} is not in the TIN", v.0)));
             }
         }

@@ -345,3 +345,21 @@ fn relayout_keeps_the_triangulation() {
     tin.check().unwrap();
     assert!(tin.relayout(&order[1..]).is_err());
 }
+
+#[test]
+fn untracked_insertion_then_tracking_again() {
+    let mut rng = Rng(11);
+    let pts = random_points(&mut rng, 600);
+    let mut tin = Tin::from_points(&pts[..3]).unwrap();
+    tin.set_vertex_tracking(false);
+    for &p in &pts[3..] {
+        tin.insert(p).unwrap();
+    }
+    let v = tin.vertices().nth(5).unwrap();
+    assert!(tin.remove(v).is_err());
+    tin.set_vertex_tracking(true);
+    tin.check().unwrap();
+    assert_eq!(tin_key(&tin), scratch_key(&pts));
+    tin.remove(v).unwrap();
+    tin.check().unwrap();
+}
