@@ -137,7 +137,7 @@ mod tests {
             x ^= x >> 7;
             x ^= x << 17;
             let t = (x % 300) as u32;
-            let key = if x % 5 == 0 {
+            let key = if x.is_multiple_of(5) {
                 None
             } else {
                 Some((x >> 20) as u32 % 1000)
@@ -147,7 +147,7 @@ mod tests {
                 Some(k) => model.insert(t, k),
                 None => model.remove(&t),
             };
-            if x % 7 == 0 {
+            if x.is_multiple_of(7) {
                 let want = model.iter().map(|(&t, &k)| (k, t)).max().map(|(_, t)| t);
                 assert_eq!(q.pop(), want);
                 if let Some(t) = want {

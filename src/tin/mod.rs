@@ -461,7 +461,7 @@ impl Tin {
     /// [`Tin::find_edge`] and breakline insertion do not work (they report the vertex as unknown);
     /// turning it on rebuilds the map in one pass over the triangles.
     pub fn set_vertex_tracking(&mut self, on: bool) {
-        if on == !self.untracked {
+        if on != self.untracked {
             return;
         }
         for e in &mut self.vedge {
