@@ -116,6 +116,8 @@ fn random_inserts_and_removals_stay_delaunay() {
             ops += 1;
             if ops % 250 == 0 {
                 tin.check().unwrap();
+                let (v, t) = tin.to_mesh();
+                crate::validate::validate(&v, &t).unwrap();
                 assert_eq!(tin_key(&tin), scratch_key(&live_points(&tin)), "op {ops}");
             }
         }
