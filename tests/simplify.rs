@@ -1,8 +1,8 @@
 //! Grid to TIN: the output is checked independently of the simplifier, by rasterising the output
 //! triangles (world coordinates, barycentric interpolation) back onto the grid.
 use std::path::PathBuf;
-use sweeptin::raster::grid::GridSpec;
 use sweeptin::raster::read::RasterReader;
+use sweeptin::raster::read::RasterSpec;
 use sweeptin::simplify::{Options, Simplified, Stop, simplify};
 
 fn dem(name: &str) -> Option<PathBuf> {
@@ -22,7 +22,7 @@ struct Check {
 
 /// Rasterises the TIN onto the grid: every valid cell centre inside (or on) a triangle gets the
 /// triangle's linear interpolation; vertices count as covered.
-fn rasterise(spec: &GridSpec, h: &[f64], tin: &Simplified) -> Check {
+fn rasterise(spec: &RasterSpec, h: &[f64], tin: &Simplified) -> Check {
     let (cols, rows) = (spec.cols as usize, spec.rows as usize);
     let t = spec.transform;
     let det = t[1] * t[5] - t[2] * t[4];
@@ -135,7 +135,7 @@ fn ign_dtm_with_missing_cells() {
 
 #[test]
 fn planar_grid_collapses_to_two_triangles() {
-    let spec = GridSpec::north_up(300, 200, 500_000.0, 6_000_000.0, 0.5);
+    let spec = RasterSpec::north_up(300, 200, 500_000.0, 6_000_000.0, 0.5);
     let h: Vec<f64> = (0..200)
         .flat_map(|r| (0..300).map(move |c| 100.0 + 0.25 * c as f64 - 0.125 * r as f64))
         .collect();
@@ -147,7 +147,7 @@ fn planar_grid_collapses_to_two_triangles() {
 #[test]
 fn synthetic_hills_with_a_lake_of_nodata() {
     let (cols, rows) = (160u32, 120u32);
-    let spec = GridSpec::north_up(cols, rows, 0.0, 1200.0, 10.0);
+    let spec = RasterSpec::north_up(cols, rows, 0.0, 1200.0, 10.0);
     let mut h = Vec::new();
     for r in 0..rows {
         for c in 0..cols {
@@ -202,7 +202,7 @@ fn startinpy_float64_with_non_round_cells() {
 #[test]
 fn non_square_cells() {
     let (cols, rows) = (90u32, 70u32);
-    let mut spec = GridSpec::north_up(cols, rows, 1000.0, 5000.0, 2.0);
+    let mut spec = RasterSpec::north_up(cols, rows, 1000.0, 5000.0, 2.0);
     spec.transform[5] = -3.0;
     let h: Vec<f64> = (0..rows)
         .flat_map(|r| {

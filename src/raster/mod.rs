@@ -1,3 +1,2 @@
-//! Regular grids (DEMs): georeferencing, reading.
-pub mod grid;
+//! Regular grids (DEMs): reading.
 pub mod read;

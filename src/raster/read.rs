@@ -19,13 +19,92 @@
 //! A window is read by scanning from the nearest row start seen before, so reading windows in
 //! row order parses the file about once per column of windows.
 
-use super::grid::GridSpec;
 use crate::error::{Error, Result};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 use tiff::decoder::{ChunkType, Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
+
+/// Size, georeferencing, nodata value and CRS of a grid being read (a general affine transform;
+/// the writers' north-up `grid::GridSpec` is separate).
+///
+/// Cell `(col, row)` covers the parallelogram whose corners are the images of `(col, row)` and
+/// `(col + 1, row + 1)` under [`RasterSpec::transform`]; its value belongs to its centre
+/// `(col + 0.5, row + 0.5)`. Row 0 is the first row stored in the file (the northern one for a
+/// usual north-up grid).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RasterSpec {
+    /// Number of columns.
+    pub cols: u32,
+    /// Number of rows.
+    pub rows: u32,
+    /// Affine transform from cell-corner `(col, row)` to world `(x, y)`, in GDAL's order:
+    /// `x = t[0] + col·t[1] + row·t[2]`, `y = t[3] + col·t[4] + row·t[5]`.
+    pub transform: [f64; 6],
+    /// The value that marks a missing cell, if any (NaN cells are always missing).
+    pub nodata: Option<f64>,
+    /// Coordinate reference system: `EPSG:xxxx`, or WKT, when known.
+    pub crs: Option<String>,
+}
+
+impl RasterSpec {
+    /// A north-up grid whose top-left corner is `(x0, y_top)`, with square cells of `size`.
+    pub fn north_up(cols: u32, rows: u32, x0: f64, y_top: f64, size: f64) -> Self {
+        RasterSpec {
+            cols,
+            rows,
+            transform: [x0, size, 0.0, y_top, 0.0, -size],
+            nodata: None,
+            crs: None,
+        }
+    }
+
+    /// Number of cells.
+    pub fn cells(&self) -> u64 {
+        u64::from(self.cols) * u64::from(self.rows)
+    }
+
+    /// World position of cell-grid position `(col, row)` (fractional; `+0.5` is a centre).
+    #[inline]
+    pub fn world(&self, col: f64, row: f64) -> [f64; 2] {
+        let t = &self.transform;
+        [
+            t[0] + col * t[1] + row * t[2],
+            t[3] + col * t[4] + row * t[5],
+        ]
+    }
+
+    /// World position of the centre of cell `(col, row)`.
+    #[inline]
+    pub fn cell_center(&self, col: u32, row: u32) -> [f64; 2] {
+        self.world(f64::from(col) + 0.5, f64::from(row) + 0.5)
+    }
+
+    /// Is the transform free of rotation and shear?
+    pub fn is_axis_aligned(&self) -> bool {
+        self.transform[2] == 0.0 && self.transform[4] == 0.0
+    }
+
+    /// Cell width and height in world units (absolute values, along the grid's axes).
+    pub fn cell_size(&self) -> (f64, f64) {
+        let t = &self.transform;
+        (t[1].hypot(t[4]), t[2].hypot(t[5]))
+    }
+
+    /// Does the transform flip orientation (true for a usual north-up grid, whose row index grows
+    /// southwards)?
+    pub fn flips_orientation(&self) -> bool {
+        let t = &self.transform;
+        t[1] * t[5] - t[2] * t[4] < 0.0
+    }
+
+    /// Is `v` a missing value under this grid's nodata rule?
+    #[inline]
+    pub fn is_nodata(&self, v: f64) -> bool {
+        v.is_nan() || self.nodata == Some(v)
+    }
+}
 
 /// Storage type of the grid's values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -91,7 +170,7 @@ impl Heights {
 /// A grid file opened for reading.
 pub struct RasterReader {
     path: PathBuf,
-    spec: GridSpec,
+    spec: RasterSpec,
     sample: SampleType,
     source: Source,
 }
@@ -150,7 +229,7 @@ impl RasterReader {
     }
 
     /// The grid's size, georeferencing, nodata value and CRS.
-    pub fn spec(&self) -> &GridSpec {
+    pub fn spec(&self) -> &RasterSpec {
         &self.spec
     }
 
@@ -360,7 +439,7 @@ fn open_tiff(path: &Path, file: File) -> Result<RasterReader> {
     };
     Ok(RasterReader {
         path: path.to_path_buf(),
-        spec: GridSpec {
+        spec: RasterSpec {
             cols,
             rows,
             transform,
@@ -628,7 +707,7 @@ fn open_ascii(path: &Path, file: File) -> Result<RasterReader> {
         .filter(|s| !s.is_empty());
     Ok(RasterReader {
         path: path.to_path_buf(),
-        spec: GridSpec {
+        spec: RasterSpec {
             cols,
             rows,
             transform: [x0, dx, 0.0, top, 0.0, -dy],
@@ -644,7 +723,7 @@ fn open_ascii(path: &Path, file: File) -> Result<RasterReader> {
 
 fn read_ascii_window(
     path: &Path,
-    spec: &GridSpec,
+    spec: &RasterSpec,
     a: &mut AsciiSource,
     w: [u32; 4],
     out: &mut [f64],
@@ -716,7 +795,7 @@ fn read_ascii_window(
 #[allow(clippy::too_many_arguments)]
 fn store_token(
     path: &Path,
-    spec: &GridSpec,
+    spec: &RasterSpec,
     a: &mut AsciiSource,
     token: &[u8],
     index: u64,

@@ -41,7 +41,7 @@
 //! handled yet (they would need window-by-window refinement with shared border points).
 
 use crate::error::{Error, Result};
-use crate::raster::grid::GridSpec;
+use crate::raster::read::RasterSpec;
 use crate::tin::{Tin, TriId};
 use queue::TriangleQueue;
 pub use scan::Height;
@@ -139,7 +139,7 @@ pub type Progress<'a> = &'a mut dyn FnMut(u64, f64);
 /// [`Error::Invalid`] when `heights` has the wrong length, the grid has a single row or column,
 /// or the error bound is negative or not finite; [`Error::TooManyPoints`] beyond 2³² cells.
 pub fn simplify<T: Height>(
-    spec: &GridSpec,
+    spec: &RasterSpec,
     heights: &[T],
     options: &Options,
     progress: Option<Progress<'_>>,
@@ -198,7 +198,7 @@ struct Refiner<'a, T: Height> {
 }
 
 impl<'a, T: Height> Refiner<'a, T> {
-    fn new(spec: &GridSpec, heights: &'a [T]) -> Result<Self> {
+    fn new(spec: &RasterSpec, heights: &'a [T]) -> Result<Self> {
         let (cols, rows) = (i64::from(spec.cols), i64::from(spec.rows));
         if heights.len() as u64 != spec.cells() {
             return Err(Error::Invalid(format!(
@@ -430,7 +430,7 @@ impl<'a, T: Height> Refiner<'a, T> {
     }
 
     /// Output: the triangles over no missing cell, in world coordinates, with the statistics.
-    fn finish(self, spec: &GridSpec) -> Simplified {
+    fn finish(self, spec: &RasterSpec) -> Simplified {
         let keep: Vec<TriId> = self
             .tin
             .triangles()
@@ -531,7 +531,7 @@ impl VData {
 /// Scale from cell indices to the internal frame: `x = col·kx`, `y = row·ky`, a similarity of
 /// the world frame for axis-aligned grids (so Delaunay there is Delaunay in the world), with
 /// `|kx| = 1`. Rotated or sheared grids are triangulated in index space (`x = col`, `y = -row`).
-fn internal_scale(spec: &GridSpec) -> (f64, f64) {
+fn internal_scale(spec: &RasterSpec) -> (f64, f64) {
     let t = &spec.transform;
     if !spec.is_axis_aligned() {
         return (1.0, -1.0);

@@ -1,7 +1,7 @@
 use super::*;
 
-fn grid(cols: u32, rows: u32, f: impl Fn(f64, f64) -> f64) -> (GridSpec, Vec<f64>) {
-    let spec = GridSpec::north_up(cols, rows, 1000.0, 2000.0, 2.0);
+fn grid(cols: u32, rows: u32, f: impl Fn(f64, f64) -> f64) -> (RasterSpec, Vec<f64>) {
+    let spec = RasterSpec::north_up(cols, rows, 1000.0, 2000.0, 2.0);
     let mut h = Vec::new();
     for r in 0..rows {
         for c in 0..cols {
