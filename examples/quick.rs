@@ -44,6 +44,9 @@ fn main() {
                 [cx + (r() - 0.5) * sc, cy + (r() - 0.5) * sc, 0.0]
             })
             .collect(),
+        "sclustered" => sweeptin::synth::clustered(n, 1),
+        "slidar" => sweeptin::synth::lidar_like(n, 1),
+        "suniform" => sweeptin::synth::uniform(n, 1),
         _ => panic!(),
     };
     if args.get(3).map(|s| s == "stream").unwrap_or(false) {
@@ -96,6 +99,7 @@ pub fn stream(pts: &[[f64; 3]]) {
         y1 = y1.max(p[1]);
     }
     let cfg = StreamConfig {
+        x_sample: real.iter().step_by(64).map(|p| p[0]).collect(),
         bounds: [x0, y0, x1, y1],
         expected_points: real.len() as u64,
     };
@@ -104,6 +108,7 @@ pub fn stream(pts: &[[f64; 3]]) {
         xy: real[i],
         z: 0.0,
         index: i as u64,
+        constraint: u32::MAX,
     };
     let mut s = Sweep::streaming(sp(0), &cfg);
     let mut ev = Vec::new();

@@ -14,15 +14,18 @@
 //! assert_eq!(tin.triangles.len(), 2);
 //! sweeptin::validate::validate(&tin.vertices, &tin.triangles).unwrap();
 //! ```
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod extsort;
 pub mod io;
 pub mod lidar;
+pub mod mmap;
 pub mod pipeline;
 pub mod points;
 pub mod predicates;
+pub mod products;
 pub mod raster;
 pub mod simplify;
 pub mod sweep;
@@ -33,4 +36,4 @@ pub mod validate;
 
 pub use error::{Error, Result};
 pub use points::DuplicatePolicy;
-pub use triangulation::{Options, Triangulation, triangulate};
+pub use triangulation::{Options, Triangulation, triangulate, triangulate_cdt};

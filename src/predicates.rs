@@ -418,6 +418,11 @@ pub struct DiskBounds {
     pub x_min: f64,
     /// Upper bound of the disk's largest x.
     pub x_max: f64,
+    /// The centre, as computed.
+    pub center: [f64; 2],
+    /// An upper bound of the radius plus the centre's error: the true disk lies within this
+    /// distance of `center`.
+    pub radius: f64,
 }
 
 /// Bounds the circumdisk of triangle `a, b, c` in floating point, enlarged by a generous bound on
@@ -456,6 +461,8 @@ pub fn circumdisk_bounds(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> Option<DiskBo
         top: cy0 + r + err,
         x_min: cx0 - r - err,
         x_max: cx0 + r + err,
+        center: [cx0, cy0],
+        radius: r + err,
     };
     if out.top.is_finite() && out.x_min.is_finite() && out.x_max.is_finite() {
         Some(out)

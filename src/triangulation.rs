@@ -24,6 +24,8 @@ pub struct Triangulation {
     pub duplicates: u64,
     /// What the sweep did.
     pub stats: SweepStats,
+    /// What the breakline insertion did (zero without breaklines).
+    pub constraint_stats: crate::sweep::ConstraintStats,
 }
 
 /// Delaunay triangulation of `points` (`[x, y, z]`; `z` is carried along).
@@ -65,5 +67,95 @@ pub fn triangulate(points: &[[f64; 3]], options: &Options) -> Result<Triangulati
         input_index: index,
         duplicates,
         stats,
+        constraint_stats: Default::default(),
     })
+}
+
+/// Constrained Delaunay triangulation of `points` with the segments `segments` (pairs of indices
+/// into `points`) as breaklines: every segment is a union of triangle edges (a point lying exactly
+/// on a segment splits it), every other edge is locally Delaunay where visibility is not blocked by
+/// a segment.
+///
+/// Segments must not cross each other (clean them first: `sweeptin::breaklines` splits crossings);
+/// a segment that does is left out and counted in
+/// [`ConstraintStats::crossing_skipped`](crate::sweep::ConstraintStats). A segment between two
+/// duplicates of one position is ignored; endpoints merged as duplicates refer to the survivor.
+///
+/// # Errors
+/// As [`triangulate`]; a segment index out of range is [`Error::Invalid`].
+pub fn triangulate_cdt(
+    points: &[[f64; 3]],
+    segments: &[[u32; 2]],
+    options: &Options,
+) -> Result<Triangulation> {
+    if let Some(s) = segments
+        .iter()
+        .find(|s| s.iter().any(|&i| i as usize >= points.len()))
+    {
+        return Err(Error::Invalid(format!(
+            "segment {:?} refers to a point beyond the {} given",
+            s,
+            points.len()
+        )));
+    }
+    let prepared = points::prepare(points, options.duplicates)?;
+    let distinct = prepared.len() as u64;
+    if distinct < 3 {
+        return Err(Error::TooFewPoints {
+            distinct,
+            total: prepared.total,
+        });
+    }
+    let (graph, vertex_of) = constraint_graph(&prepared, points, segments);
+    let points::Prepared {
+        xy,
+        index,
+        duplicates,
+        ..
+    } = prepared;
+    let mut sweep = Sweep::new(xy)?;
+    sweep.set_constraints(graph, &vertex_of);
+    sweep.run();
+    let constraint_stats = sweep.constraint_stats();
+    let (triangles, xy, stats) = sweep.finish();
+    drop(xy);
+    if triangles.is_empty() {
+        return Err(Error::AllCollinear { distinct });
+    }
+    let vertices = index.iter().map(|&i| points[i as usize]).collect();
+    Ok(Triangulation {
+        vertices,
+        triangles,
+        input_index: index,
+        duplicates,
+        stats,
+        constraint_stats,
+    })
+}
+
+/// The breakline graph over the prepared vertices: each segment endpoint is found among the
+/// sorted, de-duplicated vertices by its local position (binary search).
+fn constraint_graph(
+    prepared: &points::Prepared,
+    points: &[[f64; 3]],
+    segments: &[[u32; 2]],
+) -> (crate::sweep::ConstraintGraph, Vec<u32>) {
+    let real = &prepared.xy[crate::predicates::FIRST_REAL as usize..];
+    let o = prepared.origin;
+    let vertex = |i: u32| -> u32 {
+        let p = points[i as usize];
+        let q = [(p[0] - o[0]) + 0.0, (p[1] - o[1]) + 0.0];
+        real.binary_search_by(|v| crate::predicates::sweep_cmp(*v, q))
+            .expect("every input point has a vertex") as u32
+    };
+    let mut ends: Vec<u32> = segments.iter().flatten().map(|&i| vertex(i)).collect();
+    ends.sort_unstable();
+    ends.dedup();
+    let cid = |v: u32| ends.binary_search(&v).expect("endpoint is listed") as u32;
+    let segs: Vec<[u32; 2]> = segments
+        .iter()
+        .map(|s| [cid(vertex(s[0])), cid(vertex(s[1]))])
+        .collect();
+    let xy = ends.iter().map(|&v| real[v as usize]).collect();
+    (crate::sweep::ConstraintGraph::new(xy, &segs), ends)
 }

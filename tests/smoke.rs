@@ -107,6 +107,7 @@ fn stream_set(
         y1 = y1.max(p[1]);
     }
     let cfg = StreamConfig {
+        x_sample: real.iter().step_by(64).map(|p| p[0]).collect(),
         bounds: [x0, y0, x1, y1],
         expected_points: real.len() as u64,
     };
@@ -114,6 +115,7 @@ fn stream_set(
         xy: real[i],
         z: 0.0,
         index: i as u64,
+        constraint: u32::MAX,
     };
     let mut s = Sweep::streaming(sp(0), &cfg);
     let mut events = Vec::new();
@@ -148,6 +150,7 @@ fn stream_set(
                 tris.push(k);
             }
             Event::VertexDone(v) => assert!(done.insert(v), "vertex {v} released twice"),
+            Event::Watermark(_) => {}
         }
     }
     assert_eq!(

@@ -7,10 +7,18 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod check;
+mod contours;
 mod crossval;
+mod dem;
+mod hillshade;
 mod info;
+mod input;
+mod products;
+mod profile;
+mod sample;
 mod simplify;
 mod tin;
+mod volume;
 
 /// Exact, bounded-memory Delaunay terrain models from lidar point clouds.
 #[derive(Parser, Debug)]
@@ -28,6 +36,20 @@ enum Command {
     Check(check::Args),
     /// Show what LAS/LAZ headers say: version, format, counts, bounds, scale/offset, CRS.
     Info(info::Args),
+    /// DEM raster (GeoTIFF or ASCII grid) by linear interpolation in the TIN at cell centres.
+    Dem(dem::Args),
+    /// Contour lines stitched into polylines (GeoJSON).
+    Contours(contours::Args),
+    /// Cut and fill volumes against a plane or a second surface, within an optional boundary.
+    Volume(volume::Args),
+    /// Heights of the TIN at query points.
+    Sample(sample::Args),
+    /// Section of the TIN along polylines, with a point at every edge crossed and chainage.
+    Profile(profile::Args),
+    /// Shaded relief (PNG) of a DEM GeoTIFF.
+    Hillshade(hillshade::Args),
+    /// Several products from one pass: DEM, contours, volume, samples, profiles, mesh.
+    Products(products::Args),
     /// Leave-one-out accuracy of the TIN: remove a point, interpolate its height, put it back.
     Crossval(crossval::Args),
     /// Simplify a grid DEM (GeoTIFF, ESRI ASCII) into a TIN within an error bound.
@@ -45,6 +67,13 @@ pub fn main() -> ExitCode {
         Command::Tin(a) => tin::run(a),
         Command::Check(a) => check::run(a),
         Command::Info(a) => info::run(a),
+        Command::Dem(a) => dem::run(a),
+        Command::Contours(a) => contours::run(a),
+        Command::Volume(a) => volume::run(a),
+        Command::Sample(a) => sample::run(a),
+        Command::Profile(a) => profile::run(a),
+        Command::Hillshade(a) => hillshade::run(a),
+        Command::Products(a) => products::run(a),
         Command::Simplify(a) => simplify::run(a),
         Command::Crossval(a) => crossval::run(a),
     };

@@ -1,67 +1,80 @@
 //! `sweeptin tin`: points in, Delaunay TIN out.
 
+use super::input::InputArgs;
 use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
-use sweeptin::io::{MeshFormat, MeshMeta, create_mesh_sink, read_xyz};
+use sweeptin::io::{MeshFormat, MeshMeta, create_mesh_sink};
 
 /// Arguments of `sweeptin tin`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Input points: XYZ text (`x y z` per line, separated by commas, semicolons, tabs or spaces;
-    /// `#` comments and one header line allowed; extra columns ignored).
-    pub input: PathBuf,
-    /// Output mesh: .ply (binary PLY), .obj (Wavefront OBJ) or .xml (LandXML 1.2).
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Output mesh: .ply (binary PLY), .obj (Wavefront OBJ), .xml (LandXML 1.2 surface for
+    /// civil-design software) or .stin (streaming mesh, for the terrain-product commands).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output format, when the extension does not say it.
     #[arg(long, value_enum)]
     pub format: Option<MeshFormat>,
-    /// Coordinate reference system recorded in the output (`EPSG:xxxx` or WKT).
+    /// Coordinate reference system recorded in the output (`EPSG:xxxx` or WKT); default: the
+    /// input's, when LAS/LAZ files carry one.
     #[arg(long)]
     pub crs: Option<String>,
-    /// Which point survives among exact (x, y) duplicates.
-    #[arg(long, value_enum, default_value_t = sweeptin::DuplicatePolicy::First)]
-    pub duplicates: sweeptin::DuplicatePolicy,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    let input = args.input.input();
+    let crs = match &args.crs {
+        Some(c) => Some(c.clone()),
+        None => sweeptin::pipeline::input_crs(&input)?,
+    };
     let meta = MeshMeta {
-        crs: args.crs.clone(),
-        comments: vec![format!("from {}", args.input.display())],
+        crs,
+        comments: vec![format!(
+            "sweeptin {} Delaunay TIN of {}",
+            env!("CARGO_PKG_VERSION"),
+            args.input
+                .inputs
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )],
     };
     // Open the output first: a bad output path fails before any heavy work, and the temporary
     // file is removed on every error below.
     let mut sink = create_mesh_sink(&args.output, args.format, &meta)?;
-    let points = read_xyz(&args.input)?;
-    let options = sweeptin::Options {
-        duplicates: args.duplicates,
-    };
-    let tin = sweeptin::triangulate(&points, &options)
-        .with_context(|| format!("cannot triangulate {}", args.input.display()))?;
-    for &v in &tin.vertices {
-        sink.vertex(v)?;
+    let mut summary =
+        sweeptin::pipeline::run(&input, &args.input.options(), Some(&mut *sink), &mut [])
+            .with_context(|| format!("cannot triangulate {}", args.input.inputs[0].display()))?;
+    let fin = Instant::now();
+    let written = sink.finish()?;
+    summary.seconds.finish += fin.elapsed().as_secs_f64();
+    summary.peak_rss_bytes = sweeptin::pipeline::peak_rss();
+    if args.input.json {
+        println!("{}", serde_json::to_string(&summary)?);
+    } else {
+        let format = args
+            .format
+            .or_else(|| MeshFormat::from_extension(&args.output))
+            .map_or("mesh", MeshFormat::name);
+        eprintln!(
+            "sweeptin: {} points ({} duplicates merged) -> {}: {} vertices, {} triangles, {} {} \
+             in {:.2} s (peak memory {})",
+            summary.points_read,
+            summary.duplicates,
+            args.output.display(),
+            written.vertices,
+            written.triangles,
+            human_bytes(written.bytes),
+            format,
+            start.elapsed().as_secs_f64(),
+            summary.peak_rss_bytes.map_or("?".into(), human_bytes),
+        );
     }
-    for t in &tin.triangles {
-        sink.triangle(t.map(u64::from))?;
-    }
-    let summary = sink.finish()?;
-    let format = args
-        .format
-        .or_else(|| MeshFormat::from_extension(&args.output))
-        .map_or("mesh", MeshFormat::name);
-    eprintln!(
-        "sweeptin: {} points ({} duplicates merged) -> {}: {} vertices, {} triangles, {} {} in {:.2} s",
-        points.len(),
-        tin.duplicates,
-        args.output.display(),
-        summary.vertices,
-        summary.triangles,
-        human_bytes(summary.bytes),
-        format,
-        start.elapsed().as_secs_f64()
-    );
     Ok(())
 }
 

@@ -7,6 +7,8 @@
 //!   No writer holds the mesh in memory.
 //! - [`xyz`]: XYZ text points, whole ([`read_xyz`]) or in chunks ([`XyzReader`]).
 //! - [`ply`]: PLY mesh reader ([`read_ply`]), ASCII and binary.
+//! - [`stin`]: sweeptin's streaming mesh format, written ([`StinWriter`]) and read back with
+//!   bounded memory ([`StinReader`]).
 //!
 //! ```
 //! use sweeptin::io::{create_mesh_sink, read_ply, MeshMeta};
@@ -32,6 +34,7 @@ pub mod obj;
 pub mod ply;
 pub mod ply_write;
 pub mod sink;
+pub mod stin;
 pub mod xyz;
 
 pub use atomic::{AtomicFile, RegisteredTempDir, install_interrupt_handler};
@@ -40,4 +43,5 @@ pub use obj::ObjWriter;
 pub use ply::read_ply;
 pub use ply_write::PlyWriter;
 pub use sink::{MeshFormat, MeshMeta, MeshSink, MeshSummary, create_mesh_sink};
+pub use stin::{StinEvent, StinReader, StinWriter};
 pub use xyz::{XyzReader, read_xyz};

@@ -25,6 +25,24 @@ pub trait MeshSink {
     /// store, or after `finish`; [`Error::Io`] if writing fails.
     fn triangle(&mut self, t: [u64; 3]) -> Result<()>;
 
+    /// No later triangle refers to vertex `id`. Only the streaming-mesh format records this; other
+    /// writers ignore it.
+    ///
+    /// # Errors
+    /// As [`MeshSink::triangle`].
+    fn vertex_done(&mut self, _id: u64) -> Result<()> {
+        Ok(())
+    }
+
+    /// Later triangles normally lie at `y >= y` (see [`crate::pipeline::TriangleSink`]). Only the
+    /// streaming-mesh format records this; other writers ignore it.
+    ///
+    /// # Errors
+    /// As [`MeshSink::triangle`].
+    fn watermark(&mut self, _y: f64) -> Result<()> {
+        Ok(())
+    }
+
     /// Writes everything out and renames into place; reports errors instead of hiding them in Drop.
     ///
     /// # Errors
@@ -99,6 +117,9 @@ pub enum MeshFormat {
     /// LandXML 1.2 TIN surface (`.xml`, `.landxml`), for Civil 3D, Novapoint and other civil tools.
     #[value(name = "landxml")]
     LandXml,
+    /// sweeptin's streaming mesh (`.stin`): fixed-size records, readable with bounded memory (see
+    /// `docs/FORMATS.md`).
+    Stream,
 }
 
 impl MeshFormat {
@@ -109,6 +130,7 @@ impl MeshFormat {
             "ply" => Some(MeshFormat::Ply),
             "obj" => Some(MeshFormat::Obj),
             "xml" | "landxml" => Some(MeshFormat::LandXml),
+            "stin" => Some(MeshFormat::Stream),
             _ => None,
         }
     }
@@ -119,6 +141,7 @@ impl MeshFormat {
             MeshFormat::Ply => "PLY",
             MeshFormat::Obj => "OBJ",
             MeshFormat::LandXml => "LandXML",
+            MeshFormat::Stream => "streaming mesh",
         }
     }
 }
@@ -142,8 +165,8 @@ pub fn create_mesh_sink(
         None => {
             return Err(Error::Output {
                 path: path.to_path_buf(),
-                message: "unknown mesh format: use the extension .ply, .obj or .xml \
-                          (LandXML), or name the format"
+                message: "unknown mesh format: use the extension .ply, .obj, .xml \
+                          (LandXML) or .stin (streaming mesh), or name the format"
                     .into(),
             });
         }
@@ -152,6 +175,7 @@ pub fn create_mesh_sink(
         MeshFormat::Ply => Box::new(super::ply_write::PlyWriter::create(path, meta)?),
         MeshFormat::Obj => Box::new(super::obj::ObjWriter::create(path, meta)?),
         MeshFormat::LandXml => Box::new(super::landxml::LandXmlWriter::create(path, meta)?),
+        MeshFormat::Stream => Box::new(super::stin::StinWriter::create(path, meta)?),
     })
 }
 

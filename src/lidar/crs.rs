@@ -127,6 +127,48 @@ impl fmt::Display for Crs {
     }
 }
 
+/// Whether a horizontal CRS is projected or geographic (what a GeoTIFF's `GTModelTypeGeoKey`
+/// needs to know).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HorizontalKind {
+    /// A projected CRS (`ProjectedCSTypeGeoKey`).
+    Projected,
+    /// A geographic CRS (`GeographicTypeGeoKey`).
+    Geographic,
+}
+
+impl Crs {
+    /// The EPSG code of the horizontal CRS and its kind, for writers that need them apart (such as
+    /// GeoTIFF keys). From WKT: the root object, or for a compound CRS its first projected or
+    /// geographic child. Without WKT (GeoTIFF keys in the LAS header), [`Crs::epsg`] with a guess
+    /// of the kind from the code: 4000–4999 are geographic, everything else projected.
+    pub fn horizontal_epsg(&self) -> Option<(u32, HorizontalKind)> {
+        let kind_of = |keyword: &str| match keyword {
+            "PROJCS" | "PROJCRS" | "PROJECTEDCRS" => Some(HorizontalKind::Projected),
+            "GEOGCS" | "GEOGCRS" | "GEODCRS" | "GEOGRAPHICCRS" | "GEODETICCRS" => {
+                Some(HorizontalKind::Geographic)
+            }
+            _ => None,
+        };
+        if let Some(root) = self.wkt.as_deref().and_then(wkt::parse) {
+            if let Some(kind) = kind_of(&root.keyword) {
+                return root.epsg().map(|c| (c, kind));
+            }
+            return root
+                .children()
+                .find_map(|c| kind_of(&c.keyword).map(|k| (c, k)))
+                .and_then(|(c, k)| c.epsg().map(|code| (code, k)));
+        }
+        let code = self.epsg?;
+        let kind = if (4000..5000).contains(&code) {
+            HorizontalKind::Geographic
+        } else {
+            HorizontalKind::Projected
+        };
+        Some((code, kind))
+    }
+}
+
 /// A minimal WKT (1 and 2) reader: just enough structure to find names and authorities.
 mod wkt {
     /// One `KEYWORD[arg, …]` object.
@@ -274,6 +316,29 @@ mod tests {
             Some("Amersfoort / RD New + NAP height")
         );
         assert_eq!(crs.definition().as_deref(), Some(RD_NAP));
+    }
+
+    #[test]
+    fn horizontal_part_of_compound_and_plain() {
+        let crs = Crs::from_wkt_bytes(RD_NAP.as_bytes()).unwrap();
+        assert_eq!(
+            crs.horizontal_epsg(),
+            Some((28992, HorizontalKind::Projected))
+        );
+        let geo = Crs::from_wkt_bytes(br#"GEOGCS["WGS 84",AUTHORITY["EPSG","4326"]]"#).unwrap();
+        assert_eq!(
+            geo.horizontal_epsg(),
+            Some((4326, HorizontalKind::Geographic))
+        );
+        let keys = Crs {
+            epsg: Some(2949),
+            ..Crs::default()
+        };
+        assert_eq!(
+            keys.horizontal_epsg(),
+            Some((2949, HorizontalKind::Projected))
+        );
+        assert_eq!(Crs::default().horizontal_epsg(), None);
     }
 
     #[test]

@@ -48,7 +48,7 @@ pub mod header;
 mod reader;
 
 pub use combine::Quantization;
-pub use crs::Crs;
+pub use crs::{Crs, HorizontalKind};
 pub use filter::{BBox, Filter, FilterStats, Returns, parse_classes};
 pub use header::{Bounds3, FileInfo};
 pub use reader::{LidarReader, ReadOptions};

@@ -3,10 +3,10 @@
 //! flip cascades).
 //!
 //! Two entry points:
-//! * [`Sweep::legalize_from_apex`] after a point event: only edges opposite the new point can become
+//! * `Sweep::legalize_from_apex` after a point event: only edges opposite the new point can become
 //!   illegal (the classic incremental-insertion argument), so a flip pushes just the two edges
 //!   opposite the apex in the two new triangles.
-//! * [`Sweep::legalize_all`] after a fill, which adds a triangle between existing vertices: there is
+//! * `Sweep::legalize_all` after a fill, which adds a triangle between existing vertices: there is
 //!   no new point to argue from, so a flip pushes all four outer edges of the quadrilateral.
 
 use super::Sweep;

@@ -12,6 +12,7 @@
 //! [`Sweep::check`] verifies every invariant of the current state (used by tests and fuzzing).
 
 pub mod check;
+pub mod constrain;
 pub mod front;
 pub mod heuristics;
 pub mod legalize;
@@ -20,7 +21,8 @@ pub mod stream;
 
 use crate::error::{Error, Result};
 use crate::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
-use front::{Front, NodeId};
+pub use constrain::{ConstraintGraph, ConstraintStats};
+use front::{Front, NodeId, XMap};
 use mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, VertexId};
 pub use stream::{Event, StreamConfig, StreamPoint, StreamStats};
 
@@ -57,7 +59,23 @@ pub struct Sweep {
     stack: Vec<EdgeId>,
     stats: SweepStats,
     fin: Option<Box<stream::Finalizer>>,
+    cons: Option<Box<Constraints>>,
+    cstats: ConstraintStats,
 }
+
+/// Breakline state of a sweep.
+#[derive(Debug, Clone)]
+struct Constraints {
+    graph: ConstraintGraph,
+    /// Vertex of each constraint vertex, once swept.
+    vertex: Vec<VertexId>,
+    /// Batch mode: (vertex, constraint vertex) pairs in vertex order, and the next one to use.
+    batch: Vec<(u32, u32)>,
+    cursor: usize,
+}
+
+/// No constraint vertex.
+pub const NO_CONSTRAINT: u32 = u32::MAX;
 
 impl Sweep {
     /// Starts a sweep over `pts`: two placeholder rows for the artificial points, then at least one
@@ -83,21 +101,18 @@ impl Sweep {
                 index: i as u64 + 1,
             });
         }
-        let x_range = real
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(p[0]), hi.max(p[0]))
-            });
+        let step = (n / 4096).max(1);
+        let xmap = XMap::from_sample(real.iter().step_by(step).map(|p| p[0]).collect());
         // A Delaunay triangulation of n points (plus 2) has at most 2(n + 2) - 5 triangles.
         let mesh = Mesh::with_capacity(2 * n + 4);
-        Ok(Self::start(pts, mesh, x_range, None))
+        Ok(Self::start(pts, mesh, xmap, None))
     }
 
     /// The first triangle (P-1, P-2, first point) and the front over it.
     fn start(
         pts: Vec<[f64; 2]>,
         mut mesh: Mesh,
-        x_range: (f64, f64),
+        xmap: XMap,
         fin: Option<Box<stream::Finalizer>>,
     ) -> Self {
         let first = VertexId(FIRST_REAL);
@@ -110,7 +125,7 @@ impl Sweep {
             pts[FIRST_REAL as usize],
             e.prev(),
             e.next(),
-            x_range,
+            xmap,
         );
         mesh.link[e.prev().idx()] = BOUNDARY | front.head;
         mesh.link[e.next().idx()] = BOUNDARY | front.next(front.head);
@@ -125,6 +140,8 @@ impl Sweep {
                 ..SweepStats::default()
             },
             fin,
+            cons: None,
+            cstats: ConstraintStats::default(),
         };
         sweep.created(e);
         sweep
@@ -137,7 +154,7 @@ impl Sweep {
         }
         let v = VertexId(self.next);
         self.next += 1;
-        self.insert(v);
+        self.insert_batch(v);
         true
     }
 
@@ -146,7 +163,7 @@ impl Sweep {
         while (self.next as usize) < self.pts.len() {
             let v = VertexId(self.next);
             self.next += 1;
-            self.insert(v);
+            self.insert_batch(v);
         }
     }
 
@@ -165,6 +182,11 @@ impl Sweep {
         &self.front
     }
 
+    /// What the breakline insertion has done so far.
+    pub fn constraint_stats(&self) -> ConstraintStats {
+        self.cstats
+    }
+
     /// What the sweep has done so far.
     pub fn stats(&self) -> SweepStats {
         let mut s = self.stats;
@@ -172,9 +194,103 @@ impl Sweep {
         s
     }
 
+    /// Batch mode: inserts vertex `v` and the breaklines it ends.
+    fn insert_batch(&mut self, v: VertexId) {
+        let n = self.insert(v);
+        let cid = match self.cons.as_mut() {
+            Some(c) if c.cursor < c.batch.len() && c.batch[c.cursor].0 == v.0 => {
+                c.cursor += 1;
+                c.batch[c.cursor - 1].1
+            }
+            _ => return,
+        };
+        self.constraint_vertex(v, n, cid);
+    }
+
+    /// Sets the breaklines of a batch sweep: `vertex_of[c]` is the vertex id of constraint vertex
+    /// `c` (vertex ids count from the first real vertex, as in the table given to [`Sweep::new`]).
+    /// Must be called before the first [`Sweep::step`].
+    ///
+    /// # Panics
+    /// If the first point was already swept.
+    pub fn set_constraints(&mut self, graph: ConstraintGraph, vertex_of: &[u32]) {
+        assert!(
+            self.next == FIRST_REAL + 1,
+            "constraints must be set before sweeping"
+        );
+        let mut batch: Vec<(u32, u32)> = vertex_of
+            .iter()
+            .enumerate()
+            .map(|(c, &v)| (v + FIRST_REAL, c as u32))
+            .collect();
+        batch.sort_unstable();
+        let n = graph.vertex_count();
+        let mut cons = Box::new(Constraints {
+            graph,
+            vertex: vec![VertexId(u32::MAX); n],
+            batch,
+            cursor: 0,
+        });
+        // The first vertex is already in: it ends no segment, but may start some.
+        if let Some(&(v, c)) = cons.batch.first()
+            && v == FIRST_REAL
+        {
+            cons.cursor = 1;
+            cons.vertex[c as usize] = VertexId(v);
+        }
+        self.cons = Some(cons);
+    }
+
+    /// Sets the breaklines of a streaming sweep; points name their constraint vertex in
+    /// [`StreamPoint::constraint`].
+    pub fn set_stream_constraints(&mut self, graph: ConstraintGraph, first_constraint: u32) {
+        let n = graph.vertex_count();
+        let mut cons = Box::new(Constraints {
+            graph,
+            vertex: vec![VertexId(u32::MAX); n],
+            batch: Vec::new(),
+            cursor: 0,
+        });
+        if first_constraint != NO_CONSTRAINT {
+            cons.vertex[first_constraint as usize] = VertexId(FIRST_REAL);
+        }
+        self.cons = Some(cons);
+        if first_constraint != NO_CONSTRAINT {
+            self.constraint_started(VertexId(FIRST_REAL), first_constraint);
+        }
+    }
+
+    /// Vertex `v` (at front node `n`) is constraint vertex `cid`: insert the segments it ends.
+    fn constraint_vertex(&mut self, v: VertexId, n: NodeId, cid: u32) {
+        let cons = self.cons.as_mut().expect("constraints are set");
+        cons.vertex[cid as usize] = v;
+        let lower: Vec<VertexId> = cons
+            .graph
+            .lower(cid)
+            .iter()
+            .map(|&c| cons.vertex[c as usize])
+            .collect();
+        for (k, &a) in lower.iter().enumerate() {
+            debug_assert!(a.0 != u32::MAX, "a breakline's lower end was not swept");
+            // The front node of `v` may change while pockets are filled; it is re-located.
+            let nb = if k == 0 { n } else { self.front_node_of(v) };
+            self.insert_constraint(a, v, nb);
+            let c = self.cons.as_ref().expect("set").graph.lower(cid)[k];
+            self.constraint_finished(a, c, cid);
+        }
+        self.constraint_started(v, cid);
+    }
+
+    /// The front node of vertex `v`, which is on the front.
+    fn front_node_of(&self, v: VertexId) -> NodeId {
+        let n = self.front.locate(self.pts[v.0 as usize][0]);
+        debug_assert_eq!(self.front.vertex(n), v);
+        n
+    }
+
     /// Point event: insert vertex `v`, which lies above or on the front and after every vertex
-    /// inserted so far in sweep order.
-    fn insert(&mut self, v: VertexId) {
+    /// inserted so far in sweep order. Returns its front node.
+    fn insert(&mut self, v: VertexId) -> NodeId {
         self.stats.points += 1;
         let x = self.pts[v.0 as usize][0];
         let l = self.front.locate(x);
@@ -185,6 +301,7 @@ impl Sweep {
             self.fill(l);
         }
         self.fill_holes(n);
+        n
     }
 
     /// Middle case: triangle (L, R, v) on the front segment right of node `l`; returns v's node.

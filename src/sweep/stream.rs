@@ -49,11 +49,16 @@ pub struct StreamPoint {
     pub z: f64,
     /// Index of the point in the input.
     pub index: u64,
+    /// The breakline vertex this point is, or [`super::NO_CONSTRAINT`].
+    pub constraint: u32,
 }
 
 /// What the streaming sweep knows up front.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct StreamConfig {
+    /// A sample of the points' x (any order, a few thousand values): spreads the front's
+    /// search index over the data (speed only; empty is fine).
+    pub x_sample: Vec<f64>,
     /// Extent of the data in the local frame: `[xmin, ymin, xmax, ymax]`.
     pub bounds: [f64; 4],
     /// Number of points expected (sizes the finalisation queue; need not be exact).
@@ -76,12 +81,15 @@ pub enum Event {
     Triangle([u64; 3]),
     /// No later triangle uses this vertex.
     VertexDone(u64),
+    /// Progress hint: later triangles normally lie at `y >=` this (local frame); see
+    /// [`Sweep::emit_watermark`].
+    Watermark(f64),
 }
 
 const NOT_OUT: u64 = u64::MAX;
 const RING: usize = 1024;
 /// Buckets between a triangle's creation and its first check.
-const FIRST_CHECK: u64 = 2;
+const FIRST_CHECK: u64 = 3;
 /// Buckets between checks of a triangle that uses an artificial point or is too flat to bound.
 const PARKED: u64 = 64;
 
@@ -103,6 +111,8 @@ pub struct StreamStats {
     pub peak_live_triangles: u64,
     /// Most vertices in memory at once.
     pub peak_live_vertices: u64,
+    /// Most breakline segments pending at once.
+    pub peak_pending_segments: u64,
     /// Finalisation checks that had to be repeated.
     pub rechecks: u64,
     /// Triangles emitted.
@@ -134,12 +144,131 @@ pub(crate) struct Finalizer {
     stats: StreamStats,
     /// Set once all points are in: everything left is final.
     ending: bool,
+    /// Breaklines whose earlier end is swept and later end is not.
+    pub pending: PendingSegments,
+}
+
+/// Pending breakline segments, indexed by x, to keep triangles they may still cross in memory.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PendingSegments {
+    segs: Vec<Option<PendingSeg>>,
+    free: Vec<u32>,
+    by_ends: std::collections::HashMap<(u32, u32), u32>,
+    buckets: Vec<Vec<u32>>,
+    x0: f64,
+    inv_w: f64,
+    live: usize,
+    peak: usize,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct PendingSeg {
+    a: [f64; 2],
+    b: [f64; 2],
+}
+
+impl PendingSegments {
+    fn new(x_range: (f64, f64)) -> Self {
+        let n = 1024;
+        let w = x_range.1 - x_range.0;
+        PendingSegments {
+            buckets: vec![Vec::new(); n],
+            x0: x_range.0,
+            inv_w: if w > 0.0 && w.is_finite() {
+                n as f64 / w
+            } else {
+                0.0
+            },
+            ..Default::default()
+        }
+    }
+
+    #[inline]
+    fn bucket(&self, x: f64) -> usize {
+        (((x - self.x0) * self.inv_w) as usize).min(self.buckets.len() - 1)
+    }
+
+    /// Adds the pending segment between constraint vertices `lo` and `hi`.
+    pub fn add(&mut self, lo: u32, hi: u32, a: [f64; 2], b: [f64; 2]) {
+        let id = match self.free.pop() {
+            Some(id) => {
+                self.segs[id as usize] = Some(PendingSeg { a, b });
+                id
+            }
+            None => {
+                self.segs.push(Some(PendingSeg { a, b }));
+                (self.segs.len() - 1) as u32
+            }
+        };
+        self.by_ends.insert((lo, hi), id);
+        let (k0, k1) = (self.bucket(a[0].min(b[0])), self.bucket(a[0].max(b[0])));
+        for k in k0..=k1 {
+            self.buckets[k].push(id);
+        }
+        self.live += 1;
+        self.peak = self.peak.max(self.live);
+    }
+
+    /// Removes the segment between `lo` and `hi` (inserted now).
+    pub fn remove(&mut self, lo: u32, hi: u32) {
+        if let Some(id) = self.by_ends.remove(&(lo, hi)) {
+            self.segs[id as usize] = None;
+            self.free.push(id);
+            self.live -= 1;
+        }
+    }
+
+    /// Could a pending segment pass within `r` of `c` (conservatively: floating-point error only
+    /// makes this say yes more often)? Prunes dead entries from the buckets it scans.
+    pub fn near(&mut self, c: [f64; 2], r: f64) -> bool {
+        if self.live == 0 {
+            return false;
+        }
+        let (k0, k1) = (self.bucket(c[0] - r), self.bucket(c[0] + r));
+        for k in k0..=k1 {
+            let mut i = 0;
+            while i < self.buckets[k].len() {
+                let id = self.buckets[k][i];
+                match self.segs[id as usize] {
+                    None => {
+                        self.buckets[k].swap_remove(i);
+                        continue;
+                    }
+                    Some(s) => {
+                        if segment_within(s.a, s.b, c, r) {
+                            return true;
+                        }
+                    }
+                }
+                i += 1;
+            }
+        }
+        false
+    }
+}
+
+/// Is segment `a`–`b` within distance `r` of `c`? Floating point with a relative margin of 1e-9
+/// of the magnitudes involved, so a true "yes" is never missed.
+fn segment_within(a: [f64; 2], b: [f64; 2], c: [f64; 2], r: f64) -> bool {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let (px, py) = (c[0] - a[0], c[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        ((px * dx + py * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (qx, qy) = (px - t * dx, py - t * dy);
+    let d = (qx * qx + qy * qy).sqrt();
+    let scale = dx.abs() + dy.abs() + px.abs() + py.abs() + r;
+    d <= r + 1e-9 * scale
 }
 
 impl Finalizer {
     fn new(cfg: &StreamConfig) -> Self {
         let [x0, y0, x1, y1] = cfg.bounds;
         let (w, h) = ((x1 - x0).max(0.0), (y1 - y0).max(0.0));
+        let (x0, x1) = (x0, x1);
         let n = cfg.expected_points.max(1) as f64;
         // Typical spacing between points: sqrt(area / n), or the 1-D spacing for a thin strip.
         let area = w * h;
@@ -170,6 +299,7 @@ impl Finalizer {
             live_vertices: 0,
             stats: StreamStats::default(),
             ending: false,
+            pending: PendingSegments::new((x0, x1)),
         }
     }
 
@@ -189,6 +319,17 @@ impl Finalizer {
         } else {
             self.far.push(Reverse((k, t)));
         }
+    }
+
+    /// Vertex `v` is used by nothing any more: announce it (if it was ever output) and free its
+    /// slot.
+    pub fn release_vertex(&mut self, v: VertexId) {
+        let i = v.0 as usize;
+        if self.vertices.out[i] != NOT_OUT {
+            self.events.push(Event::VertexDone(self.vertices.out[i]));
+        }
+        self.vertices.free.push(v.0);
+        self.live_vertices -= 1;
     }
 
     /// A triangle slot was (re)filled.
@@ -222,7 +363,12 @@ impl Sweep {
         fin.stats.peak_live_vertices = 1;
         let pts = vec![[f64::NAN; 2], [f64::NAN; 2], first.xy];
         let [x0, _, x1, _] = cfg.bounds;
-        Self::start(pts, Mesh::with_capacity(1024), (x0, x1), Some(fin))
+        let xmap = if cfg.x_sample.is_empty() {
+            super::front::XMap::linear(x0, x1)
+        } else {
+            super::front::XMap::from_sample(cfg.x_sample.clone())
+        };
+        Self::start(pts, Mesh::with_capacity(1024), xmap, Some(fin))
     }
 
     /// Adds the next point of a streaming sweep.
@@ -265,7 +411,10 @@ impl Sweep {
         };
         fin.live_vertices += 1;
         fin.stats.peak_live_vertices = fin.stats.peak_live_vertices.max(fin.live_vertices);
-        self.insert(VertexId(v));
+        let n = self.insert(VertexId(v));
+        if p.constraint != super::NO_CONSTRAINT {
+            self.constraint_vertex(VertexId(v), n, p.constraint);
+        }
         Ok(())
     }
 
@@ -276,6 +425,42 @@ impl Sweep {
         }
     }
 
+    /// Appends a watermark event: no live triangle of ordinary size has a vertex below the
+    /// returned `y`, and every later point is above it. Long thin triangles along the convex hull
+    /// (wider than 100 point spacings), whose finalisation waits for the end, are left out: they
+    /// may arrive later below the watermark ("late"). O(live triangles); call it every few
+    /// thousand points.
+    pub fn emit_watermark(&mut self) -> f64 {
+        let Some(fin) = self.fin.as_ref() else {
+            return f64::NEG_INFINITY;
+        };
+        let wide = 100.0 / fin.inv_h;
+        let mut w = fin.last[1];
+        let o = &self.mesh.origin;
+        for t in (0..o.len()).step_by(3) {
+            let [a, b, c] = [o[t], o[t + 1], o[t + 2]];
+            if a == super::mesh::DEAD || is_artificial(a.0) || is_artificial(b.0) || is_artificial(c.0)
+            {
+                continue;
+            }
+            let (pa, pb, pc) = (
+                self.pts[a.0 as usize],
+                self.pts[b.0 as usize],
+                self.pts[c.0 as usize],
+            );
+            let low = pa[1].min(pb[1]).min(pc[1]);
+            if low < w {
+                let span = pa[0].max(pb[0]).max(pc[0]) - pa[0].min(pb[0]).min(pc[0]);
+                if span < wide {
+                    w = low;
+                }
+            }
+        }
+        let fin = self.fin.as_mut().expect("streaming");
+        fin.events.push(Event::Watermark(w));
+        w
+    }
+
     /// Number of events waiting in [`Sweep::take_events`].
     pub fn pending_events(&self) -> usize {
         self.fin.as_ref().map_or(0, |f| f.events.len())
@@ -283,9 +468,11 @@ impl Sweep {
 
     /// Working-set statistics of a streaming sweep.
     pub fn stream_stats(&self) -> StreamStats {
-        self.fin
-            .as_ref()
-            .map_or(StreamStats::default(), |f| f.stats)
+        self.fin.as_ref().map_or(StreamStats::default(), |f| {
+            let mut s = f.stats;
+            s.peak_pending_segments = f.pending.peak as u64;
+            s
+        })
     }
 
     /// Ends a streaming sweep: closes the hull and emits everything still in memory, in a fixed
@@ -382,7 +569,12 @@ impl Sweep {
             return;
         }
         let low = self.front.min_y_over(d.x_min, d.x_max);
-        if d.top < low {
+        let fin = self.fin.as_mut().expect("streaming");
+        if d.top < low && fin.pending.near(d.center, d.radius) {
+            // A breakline still to come may cross it.
+            fin.stats.rechecks += 1;
+            fin.schedule(t, ks + FIRST_CHECK);
+        } else if d.top < low {
             self.finalize(t);
         } else {
             let fin = self.fin.as_mut().expect("streaming");
@@ -431,13 +623,10 @@ impl Sweep {
         fin.events.push(Event::Triangle(ids));
         fin.stats.triangles += 1;
         for v in tri {
-            let vt = &mut fin.vertices;
             let i = v.0 as usize;
-            vt.refs[i] -= 1;
-            if vt.refs[i] == 0 {
-                fin.events.push(Event::VertexDone(vt.out[i]));
-                vt.free.push(v.0);
-                fin.live_vertices -= 1;
+            fin.vertices.refs[i] -= 1;
+            if fin.vertices.refs[i] == 0 {
+                fin.release_vertex(v);
             }
         }
         fin.live_triangles -= 1;

@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# The whole test suite, from a fresh checkout: installs what the interop tests need (Python's
+# plyfile, GDAL's command-line tools), then checks formatting, lints and runs every test.
+# This is the README's test command; CI runs it through .ci/run.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+# Interop peers used by the tests (each test skips with a message when its tool is absent).
+if ! python3 -c 'import plyfile' 2>/dev/null; then
+    python3 -m pip install --quiet --disable-pip-version-check plyfile==1.1.5 || true
+fi
+if ! command -v gdalinfo >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gdal-bin >/dev/null) || true
+fi
+
+cargo fmt --all -- --check
+cargo clippy --all-targets --locked -- -D warnings
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked --quiet
+cargo test --locked --quiet

@@ -1,0 +1,26 @@
+//! `sweeptin contours`: contour lines of the TIN, stitched into polylines, as GeoJSON.
+
+use super::input::{ProductInput, run_products};
+use super::products::{ContourArgs, finish_report};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `sweeptin contours`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub input: ProductInput,
+    /// Output GeoJSON (LineString features with an `elevation` property).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub contour: ContourArgs,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let sinks = vec![("contours".to_string(), args.contour.sink(&args.output)?)];
+    let input = args.input.input(None)?;
+    let (run, summary) = run_products(&args.input, &input, None, sinks)?;
+    finish_report(&args.input, &run, summary, start)
+}

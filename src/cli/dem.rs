@@ -1,0 +1,55 @@
+//! `sweeptin dem`: a DEM raster (float32 GeoTIFF or ESRI ASCII grid) by linear interpolation in
+//! the TIN at cell centres, optionally with contours and a hillshade from the same pass.
+
+use super::input::check_output;
+use super::input::{ProductInput, run_products};
+use super::products::{ContourArgs, DemArgs, check_hillshade, finish_report, shade};
+use std::path::PathBuf;
+use std::time::Instant;
+use sweeptin::pipeline::TriangleSink;
+use sweeptin::products::hillshade::HillshadeOptions;
+
+/// Arguments of `sweeptin dem`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub input: ProductInput,
+    /// Output raster: .tif (float32 GeoTIFF) or .asc (ESRI ASCII grid). With --bbox it covers
+    /// the cells whose centres lie in [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub dem: DemArgs,
+    /// Also write contour lines (GeoJSON) from the same pass.
+    #[arg(long, value_name = "GEOJSON")]
+    pub contours: Option<PathBuf>,
+    #[command(flatten)]
+    pub contour: ContourArgs,
+    /// Also write a hillshade PNG of the result (GeoTIFF output only).
+    #[arg(long, value_name = "PNG")]
+    pub hillshade: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let bbox = args.input.args.filter.bbox;
+    let mut sinks: Vec<(String, Box<dyn TriangleSink>)> =
+        vec![("dem".into(), args.dem.sink(&args.output, bbox)?)];
+    if let Some(png) = &args.hillshade {
+        check_output(png)?;
+        check_hillshade(&args.output, args.dem.raster_format)?;
+    }
+    if let Some(p) = &args.contours {
+        sinks.push(("contours".into(), args.contour.sink(p)?));
+    }
+    if args.dem.buffer.is_some() && !args.input.all_lidar() {
+        eprintln!("sweeptin: warning: --buffer only limits the reading of LAS/LAZ files");
+    }
+    let input = args.input.input(args.dem.read_box(bbox)?)?;
+    let (run, mut summary) = run_products(&args.input, &input, None, sinks)?;
+    if let Some(png) = &args.hillshade {
+        summary["hillshade"] = shade(&args.output, png, &HillshadeOptions::default())?;
+        summary["hillshade"]["path"] = serde_json::json!(png);
+    }
+    finish_report(&args.input, &run, summary, start)
+}

@@ -1,0 +1,43 @@
+//! `sweeptin hillshade`: a shaded-relief PNG of a DEM GeoTIFF.
+
+use super::input::check_output;
+use std::path::PathBuf;
+use sweeptin::products::hillshade::{HillshadeOptions, hillshade};
+
+/// Arguments of `sweeptin hillshade`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A single-band DEM GeoTIFF.
+    pub dem: PathBuf,
+    /// Output PNG (grey + alpha; nodata is transparent).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Direction the light comes from, in degrees clockwise from north.
+    #[arg(long, default_value_t = 315.0)]
+    pub azimuth: f64,
+    /// Height of the light above the horizon, in degrees.
+    #[arg(long, default_value_t = 45.0)]
+    pub altitude: f64,
+    /// Vertical exaggeration.
+    #[arg(long, default_value_t = 1.0)]
+    pub z_factor: f64,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    check_output(&args.output)?;
+    let o = HillshadeOptions {
+        azimuth: args.azimuth,
+        altitude: args.altitude,
+        z_factor: args.z_factor,
+    };
+    let s = hillshade(&args.dem, &args.output, &o)?;
+    eprintln!(
+        "sweeptin: {} -> {}: {} × {} pixels, {} shaded",
+        args.dem.display(),
+        args.output.display(),
+        s.cols,
+        s.rows,
+        s.shaded
+    );
+    Ok(())
+}

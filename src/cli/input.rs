@@ -1,0 +1,240 @@
+//! Input and run options shared by every command that triangulates (`tin`, and the terrain
+//! products): the files, the lidar filters, duplicates, memory budget, temporary directory,
+//! progress and the JSON summary.
+
+use super::info::FilterArgs;
+use anyhow::{Context, bail};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use sweeptin::io::MeshSink;
+use sweeptin::lidar::{BBox, Crs};
+use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunOptions, RunSummary, TriangleSink};
+use sweeptin::products::Fanout;
+
+/// Input files and how to read and run them (flattened into each command's arguments).
+#[derive(clap::Args, Debug, Clone)]
+pub struct InputArgs {
+    /// Input points: LAS/LAZ files (adjacent tiles form one point set), XYZ text files
+    /// (`x y z` per line), or one streaming mesh (.stin) written by `sweeptin tin`.
+    #[arg(required = true, value_name = "FILES")]
+    pub inputs: Vec<PathBuf>,
+    #[command(flatten)]
+    pub filter: FilterArgs,
+    /// Which point survives among exact (x, y) duplicates.
+    #[arg(long, value_enum, default_value_t = sweeptin::DuplicatePolicy::First)]
+    pub duplicates: sweeptin::DuplicatePolicy,
+    /// Memory budget for sorting (e.g. 512M, 4G). Larger inputs are sorted in chunks spilled to
+    /// --tmp-dir; the result is the same whatever the budget.
+    #[arg(long, value_name = "SIZE", default_value = "1G", value_parser = parse_size)]
+    pub mem: u64,
+    /// Directory for spill files (anonymous temporary files, never left behind).
+    #[arg(long, value_name = "DIR")]
+    pub tmp_dir: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print a one-object JSON summary on stdout (points, triangles, seconds per phase, peak
+    /// memory) for batch jobs.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl InputArgs {
+    /// The library's description of the input.
+    pub fn input(&self) -> Input {
+        Input {
+            paths: self.inputs.clone(),
+            filter: self.filter.to_filter(),
+            duplicates: self.duplicates,
+        }
+    }
+
+    /// The library's run options.
+    pub fn options(&self) -> RunOptions {
+        RunOptions {
+            mem: self.mem,
+            tmp_dir: self.tmp_dir.clone(),
+            progress: !self.quiet && !self.json,
+        }
+    }
+}
+
+/// Parses a human size: `1048576`, `512K`, `128M`, `4G`, `1T`, optionally with `B`, `iB` or a
+/// space (binary multiples: 1K = 1024).
+pub fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let v: f64 = num
+        .parse()
+        .map_err(|_| format!("'{s}' is not a size like 512M or 4G"))?;
+    let mult: u64 = match unit.trim().to_ascii_uppercase().as_str() {
+        "" | "B" => 1,
+        "K" | "KB" | "KIB" => 1 << 10,
+        "M" | "MB" | "MIB" => 1 << 20,
+        "G" | "GB" | "GIB" => 1 << 30,
+        "T" | "TB" | "TIB" => 1 << 40,
+        _ => {
+            return Err(format!(
+                "'{s}': unknown size unit '{unit}' (use K, M, G or T)"
+            ));
+        }
+    };
+    let bytes = v * mult as f64;
+    if !(1.0..=1e18).contains(&bytes) {
+        return Err(format!("'{s}' is not a sensible memory size"));
+    }
+    Ok(bytes as u64)
+}
+
+/// The input options of the terrain-product commands: [`InputArgs`] plus the CRS to record and
+/// the longest edge to keep.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ProductInput {
+    #[command(flatten)]
+    pub args: InputArgs,
+    /// Coordinate reference system of the data (`EPSG:code`, `EPSG:code+vertical`, or WKT),
+    /// recorded in the outputs instead of what the input declares (if anything).
+    #[arg(long, value_name = "CRS")]
+    pub crs: Option<String>,
+    /// Leave out triangles with a horizontal edge longer than this (their area has no data).
+    #[arg(long, value_name = "LENGTH")]
+    pub max_edge: Option<f64>,
+}
+
+/// Parses `--crs`.
+pub fn parse_crs(s: &str) -> anyhow::Result<Crs> {
+    let t = s.trim();
+    if let Some(code) = t.strip_prefix("EPSG:").or_else(|| t.strip_prefix("epsg:")) {
+        let mut parts = code.split('+');
+        let h = parts.next().unwrap_or("").trim().parse::<u32>();
+        let v = parts.next().map(|v| v.trim().parse::<u32>());
+        return match (h, v) {
+            (Ok(h), None) => Ok(Crs {
+                epsg: Some(h),
+                ..Crs::default()
+            }),
+            (Ok(h), Some(Ok(v))) => Ok(Crs {
+                epsg: Some(h),
+                vertical_epsg: Some(v),
+                ..Crs::default()
+            }),
+            _ => bail!("--crs {s}: expected EPSG:code or EPSG:code+code"),
+        };
+    }
+    match Crs::from_wkt_bytes(t.as_bytes()) {
+        Some(c) if c.name.is_some() || c.epsg.is_some() => Ok(c),
+        _ => bail!("--crs {s}: expected EPSG:code, EPSG:code+code or a WKT definition"),
+    }
+}
+
+impl ProductInput {
+    /// The pipeline input, reading only the points inside `read_box` when given (instead of
+    /// `--bbox`).
+    pub fn input(&self, read_box: Option<BBox>) -> anyhow::Result<Input> {
+        if let Some(l) = self.max_edge
+            && !(l.is_finite() && l > 0.0)
+        {
+            bail!("--max-edge must be a positive length, not {l}");
+        }
+        let mut input = self.args.input();
+        if read_box.is_some() {
+            input.filter.bbox = read_box;
+        }
+        Ok(input)
+    }
+
+    /// The CRS given with `--crs`, parsed.
+    pub fn crs(&self) -> anyhow::Result<Option<Crs>> {
+        self.crs.as_deref().map(parse_crs).transpose()
+    }
+
+    /// Are all the inputs LAS/LAZ (so that the box filter applies)?
+    pub fn all_lidar(&self) -> bool {
+        self.args.inputs.iter().all(|p| {
+            matches!(
+                p.extension()
+                    .and_then(|e| e.to_str())
+                    .map(str::to_ascii_lowercase)
+                    .as_deref(),
+                Some("las" | "laz")
+            )
+        })
+    }
+}
+
+/// Fails early (before any heavy work) if an output cannot be created where asked.
+pub fn check_output(path: &Path) -> anyhow::Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!(
+            "{}: cannot write: the directory {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    if path.is_dir() {
+        bail!("{}: cannot write: it is a directory", path.display());
+    }
+    Ok(())
+}
+
+/// Runs the pipeline on `input` into `sinks` (one pass) and the optional mesh sink; returns the
+/// run summary and the products' summaries (an object keyed by the sinks' names).
+pub fn run_products(
+    p: &ProductInput,
+    input: &Input,
+    mesh: Option<&mut (dyn MeshSink + Send)>,
+    sinks: Vec<(String, Box<dyn TriangleSink>)>,
+) -> anyhow::Result<(RunSummary, Value)> {
+    let mut fanout = Fanout::new(sinks)
+        .with_crs(p.crs()?)
+        .with_max_edge(p.max_edge);
+    let names: Vec<String> = p
+        .args
+        .inputs
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect();
+    let mut run = pipeline::run(input, &p.args.options(), mesh, &mut [&mut fanout])
+        .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
+    let summary = fanout.finish()?;
+    run.products.clear();
+    run.peak_rss_bytes = pipeline::peak_rss();
+    Ok((run, summary))
+}
+
+#[allow(dead_code)]
+const _DEFAULT_IS_1G: () = assert!(DEFAULT_MEM == 1 << 30);
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn sizes() {
+        use super::parse_size;
+        assert_eq!(parse_size("512M"), Ok(512 << 20));
+        assert_eq!(parse_size("4G"), Ok(4 << 30));
+        assert_eq!(parse_size("1.5K"), Ok(1536));
+        assert_eq!(parse_size("100"), Ok(100));
+        assert_eq!(parse_size("128 MiB"), Ok(128 << 20));
+        assert!(parse_size("lots").is_err());
+        assert!(parse_size("5X").is_err());
+    }
+
+    #[test]
+    fn crs_forms() {
+        use super::parse_crs;
+        assert_eq!(parse_crs("EPSG:3794").unwrap().epsg, Some(3794));
+        let c = parse_crs("epsg:28992+5709").unwrap();
+        assert_eq!((c.epsg, c.vertical_epsg), (Some(28992), Some(5709)));
+        let w = parse_crs(r#"PROJCS["x",AUTHORITY["EPSG","2154"]]"#).unwrap();
+        assert_eq!(w.epsg, Some(2154));
+        assert!(parse_crs("EPSG:abc").is_err());
+        assert!(parse_crs("nonsense").is_err());
+    }
+}

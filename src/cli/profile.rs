@@ -1,0 +1,35 @@
+//! `sweeptin profile`: the section of the TIN along polylines, with chainage.
+
+use super::input::{ProductInput, check_output, run_products};
+use super::products::finish_report;
+use std::path::PathBuf;
+use std::time::Instant;
+use sweeptin::products::profile::ProfileSink;
+
+/// Arguments of `sweeptin profile`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub input: ProductInput,
+    /// The line(s): GeoJSON LineString or MultiLineString geometries, bare or in features.
+    #[arg(long, value_name = "GEOJSON")]
+    pub line: PathBuf,
+    /// Output CSV: line,chainage,x,y,z — a point at every triangle edge crossed.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let start = Instant::now();
+    check_output(&args.output)?;
+    let lines = sweeptin::products::geojson::read_lines(&args.line)?;
+    let sink = ProfileSink::new(lines, &args.output)?;
+    let input = args.input.input(None)?;
+    let (run, summary) = run_products(
+        &args.input,
+        &input,
+        None,
+        vec![("profile".into(), Box::new(sink))],
+    )?;
+    finish_report(&args.input, &run, summary, start)
+}

@@ -1,0 +1,41 @@
+//! `sweeptin sample`: heights of the TIN at query points.
+
+use super::input::{ProductInput, check_output, run_products};
+use super::products::finish_report;
+use std::path::PathBuf;
+use std::time::Instant;
+use sweeptin::products::sample::SampleSink;
+
+/// Arguments of `sweeptin sample`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub input: ProductInput,
+    /// Query points: x and y as the first two fields of each line (sorted by y for bounded
+    /// memory; other columns are kept).
+    #[arg(long, value_name = "CSV")]
+    pub points: PathBuf,
+    /// Output: every query line with one more field, z (empty outside the TIN).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let start = Instant::now();
+    check_output(&args.output)?;
+    let sink = SampleSink::new(&args.points, &args.output)?;
+    if !sink.sorted() {
+        eprintln!(
+            "sweeptin: warning: {} is not sorted by y: all queries are held in memory",
+            args.points.display()
+        );
+    }
+    let input = args.input.input(None)?;
+    let (run, summary) = run_products(
+        &args.input,
+        &input,
+        None,
+        vec![("sample".into(), Box::new(sink))],
+    )?;
+    finish_report(&args.input, &run, summary, start)
+}

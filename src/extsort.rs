@@ -1,0 +1,348 @@
+//! External sort of points into sweep order (by `y`, then `x`, then input index), with bounded
+//! memory.
+//!
+//! Points are collected in a chunk sized from the memory budget. A full chunk is sorted in RAM
+//! (rayon) and spilled as fixed-size little-endian records ([`SortRecord`], `#[repr(C)]`, 32 bytes)
+//! to an anonymous temporary file under the chosen directory (already unlinked: nothing is left
+//! behind even if the process is killed). At the end the runs are memory-mapped
+//! ([`crate::mmap`]) and k-way merged; pages already merged are released. When everything fits
+//! in one chunk, nothing is spilled. The merged order is a total order, so the result never
+//! depends on the memory budget or the thread count.
+//!
+//! [`Dedup`] then merges exact `(x, y)` duplicates by a [`DuplicatePolicy`].
+
+use crate::error::{Error, Result};
+use crate::mmap::MappedRecords;
+use crate::points::DuplicatePolicy;
+use rayon::slice::ParallelSliceMut;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// One point in a chunk or spill file: local-frame coordinates and the input index.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SortRecord {
+    /// x in the local frame.
+    pub x: f64,
+    /// y in the local frame.
+    pub y: f64,
+    /// Height.
+    pub z: f64,
+    /// Index of the point in the input.
+    pub index: u64,
+}
+
+/// Sweep order: `y`, then `x`, then input index.
+#[inline(always)]
+pub fn sweep_order(a: &SortRecord, b: &SortRecord) -> Ordering {
+    a.y.total_cmp(&b.y)
+        .then(a.x.total_cmp(&b.x))
+        .then(a.index.cmp(&b.index))
+}
+
+/// Records per spill when the budget allows no more.
+const MIN_CHUNK: usize = 1 << 10;
+
+/// Collects points, spilling sorted runs when the chunk is full.
+#[derive(Debug)]
+pub struct ExternalSorter {
+    chunk: Vec<SortRecord>,
+    capacity: usize,
+    runs: Vec<File>,
+    tmp_dir: PathBuf,
+    stats: SortStats,
+}
+
+/// What the sort did.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct SortStats {
+    /// Points pushed.
+    pub points: u64,
+    /// Runs spilled to disk (0 when everything fit in memory).
+    pub runs: u64,
+    /// Bytes spilled.
+    pub spilled_bytes: u64,
+    /// Records per chunk.
+    pub chunk_records: u64,
+}
+
+impl ExternalSorter {
+    /// A sorter whose chunk uses at most `chunk_bytes` of memory, spilling under `tmp_dir`.
+    pub fn new(chunk_bytes: u64, tmp_dir: &Path) -> Self {
+        let capacity = ((chunk_bytes as usize) / std::mem::size_of::<SortRecord>()).max(MIN_CHUNK);
+        ExternalSorter {
+            chunk: Vec::new(),
+            capacity,
+            runs: Vec::new(),
+            tmp_dir: tmp_dir.to_path_buf(),
+            stats: SortStats {
+                chunk_records: capacity as u64,
+                ..SortStats::default()
+            },
+        }
+    }
+
+    /// Room left in the current chunk before it spills.
+    pub fn room(&self) -> usize {
+        self.capacity - self.chunk.len()
+    }
+
+    /// Adds a point.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if a spill fails.
+    #[inline]
+    pub fn push(&mut self, r: SortRecord) -> Result<()> {
+        if self.chunk.capacity() == 0 {
+            self.chunk.reserve_exact(self.capacity.min(1 << 20));
+        }
+        self.chunk.push(r);
+        self.stats.points += 1;
+        if self.chunk.len() >= self.capacity {
+            self.spill()?;
+        }
+        Ok(())
+    }
+
+    fn spill(&mut self) -> Result<()> {
+        self.chunk.par_sort_unstable_by(sweep_order);
+        let io = |e| Error::io(&self.tmp_dir, e);
+        let file = tempfile::tempfile_in(&self.tmp_dir).map_err(io)?;
+        let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
+        w.write_all(bytemuck::cast_slice(&self.chunk)).map_err(io)?;
+        w.flush().map_err(io)?;
+        drop(w);
+        self.stats.runs += 1;
+        self.stats.spilled_bytes += std::mem::size_of_val(&self.chunk[..]) as u64;
+        self.chunk.clear();
+        self.runs.push(file);
+        Ok(())
+    }
+
+    /// Ends the input: returns the points in sweep order.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if the last spill or a mapping fails.
+    pub fn finish(mut self) -> Result<Merge> {
+        if self.runs.is_empty() {
+            self.chunk.par_sort_unstable_by(sweep_order);
+            return Ok(Merge {
+                source: Source::Memory(std::mem::take(&mut self.chunk), 0),
+                stats: self.stats,
+            });
+        }
+        if !self.chunk.is_empty() {
+            self.spill()?;
+        }
+        self.chunk = Vec::new();
+        let mut runs = Vec::with_capacity(self.runs.len());
+        for f in &self.runs {
+            let m = MappedRecords::<SortRecord>::map(f).map_err(|e| Error::io(&self.tmp_dir, e))?;
+            runs.push(Run { map: m, pos: 0 });
+        }
+        let mut heap = BinaryHeap::with_capacity(runs.len());
+        for (i, r) in runs.iter().enumerate() {
+            if let Some(rec) = r.map.records().first() {
+                heap.push(Head { rec: *rec, run: i });
+            }
+        }
+        Ok(Merge {
+            source: Source::Runs {
+                runs,
+                heap,
+                _files: std::mem::take(&mut self.runs),
+            },
+            stats: self.stats,
+        })
+    }
+}
+
+#[derive(Debug)]
+struct Run {
+    map: MappedRecords<SortRecord>,
+    pos: usize,
+}
+
+#[derive(Debug)]
+struct Head {
+    rec: SortRecord,
+    run: usize,
+}
+
+impl PartialEq for Head {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == Ordering::Equal
+    }
+}
+impl Eq for Head {}
+impl PartialOrd for Head {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Head {
+    // Reversed: BinaryHeap is a max-heap and we want the smallest record first.
+    fn cmp(&self, o: &Self) -> Ordering {
+        sweep_order(&o.rec, &self.rec)
+    }
+}
+
+#[derive(Debug)]
+enum Source {
+    Memory(Vec<SortRecord>, usize),
+    Runs {
+        runs: Vec<Run>,
+        heap: BinaryHeap<Head>,
+        _files: Vec<File>,
+    },
+}
+
+/// The sorted points, as an iterator (k-way merge of the spilled runs, or the in-memory chunk).
+#[derive(Debug)]
+pub struct Merge {
+    source: Source,
+    stats: SortStats,
+}
+
+impl Merge {
+    /// What the sort did.
+    pub fn stats(&self) -> SortStats {
+        self.stats
+    }
+}
+
+const RELEASE_EVERY: usize = 1 << 16;
+
+impl Iterator for Merge {
+    type Item = SortRecord;
+
+    #[inline]
+    fn next(&mut self) -> Option<SortRecord> {
+        match &mut self.source {
+            Source::Memory(v, i) => {
+                let r = v.get(*i).copied();
+                *i += 1;
+                r
+            }
+            Source::Runs { runs, heap, .. } => {
+                let mut top = heap.peek_mut()?;
+                let out = top.rec;
+                let run = &mut runs[top.run];
+                run.pos += 1;
+                if run.pos % RELEASE_EVERY == 0 {
+                    run.map.release_before(run.pos);
+                }
+                match run.map.records().get(run.pos) {
+                    Some(next) => top.rec = *next,
+                    None => {
+                        std::collections::binary_heap::PeekMut::pop(top);
+                    }
+                }
+                Some(out)
+            }
+        }
+    }
+}
+
+/// Merges exact `(x, y)` duplicates of a sorted stream, keeping one point per position by policy.
+#[derive(Debug)]
+pub struct Dedup<I: Iterator<Item = SortRecord>> {
+    inner: std::iter::Peekable<I>,
+    policy: DuplicatePolicy,
+    /// Points merged away so far.
+    pub duplicates: u64,
+}
+
+impl<I: Iterator<Item = SortRecord>> Dedup<I> {
+    /// Wraps a stream sorted by [`sweep_order`].
+    pub fn new(inner: I, policy: DuplicatePolicy) -> Self {
+        Dedup {
+            inner: inner.peekable(),
+            policy,
+            duplicates: 0,
+        }
+    }
+}
+
+impl<I: Iterator<Item = SortRecord>> Iterator for Dedup<I> {
+    type Item = SortRecord;
+
+    #[inline]
+    fn next(&mut self) -> Option<SortRecord> {
+        let mut keep = self.inner.next()?;
+        while let Some(n) = self.inner.peek() {
+            if n.x != keep.x || n.y != keep.y {
+                break;
+            }
+            let n = *n;
+            self.inner.next();
+            self.duplicates += 1;
+            if self.policy.prefers((n.z, n.index), (keep.z, keep.index)) {
+                keep = n;
+            }
+        }
+        Some(keep)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rec(x: f64, y: f64, z: f64, index: u64) -> SortRecord {
+        SortRecord { x, y, z, index }
+    }
+
+    #[test]
+    fn spilled_merge_equals_in_memory_sort() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s: u64 = 12345;
+        let mut pts = Vec::new();
+        for i in 0..300_000u64 {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let x = ((s >> 33) % 1000) as f64;
+            let y = ((s >> 13) % 1000) as f64;
+            pts.push(rec(x, y, i as f64, i));
+        }
+        let mut small = ExternalSorter::new(1, dir.path());
+        let mut big = ExternalSorter::new(1 << 30, dir.path());
+        for p in &pts {
+            small.push(*p).unwrap();
+            big.push(*p).unwrap();
+        }
+        let a = small.finish().unwrap();
+        assert!(a.stats().runs >= 4);
+        let b = big.finish().unwrap();
+        assert_eq!(b.stats().runs, 0);
+        let a: Vec<_> = a.collect();
+        let b: Vec<_> = b.collect();
+        assert_eq!(a, b);
+        pts.sort_by(sweep_order);
+        assert_eq!(a, pts);
+        // The spill files were anonymous: nothing is left in the directory.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn dedup_by_policy() {
+        let v = vec![
+            rec(0., 0., 5., 0),
+            rec(0., 0., 1., 3),
+            rec(0., 0., 9., 7),
+            rec(1., 0., 0., 1),
+        ];
+        let first: Vec<_> = Dedup::new(v.clone().into_iter(), DuplicatePolicy::First).collect();
+        assert_eq!(first[0].index, 0);
+        let low: Vec<_> = Dedup::new(v.clone().into_iter(), DuplicatePolicy::Lowest).collect();
+        assert_eq!(low[0].index, 3);
+        let mut d = Dedup::new(v.into_iter(), DuplicatePolicy::Last);
+        assert_eq!(d.next().unwrap().index, 7);
+        assert_eq!(d.next().unwrap().index, 1);
+        assert_eq!(d.duplicates, 2);
+    }
+}

@@ -1,0 +1,296 @@
+//! Phase 2: merge → sweep → write, in three threads joined by bounded crossbeam channels, so
+//! merging, sweeping and writing overlap and memory stays bounded.
+
+use super::read::{self, ReadResult};
+use super::{
+    AnonPeak, Frame, Input, RunOptions, RunSummary, StreamInfo, Timings, TriangleSink, peak_rss,
+};
+use crate::error::{Error, Result};
+use crate::extsort::{Dedup, ExternalSorter, Merge};
+use crate::io::sink::MeshSink;
+use crate::sweep::{Event, StreamConfig, StreamPoint, Sweep};
+use crossbeam_channel::{Receiver, Sender, bounded};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// Points per batch from the merge thread to the sweep.
+const POINT_BATCH: usize = 8192;
+/// Events per batch from the sweep to the writer.
+const EVENT_BATCH: usize = 16384;
+/// Points between watermarks.
+const WATERMARK_EVERY: u64 = 1 << 16;
+
+fn bar(enabled: bool) -> ProgressBar {
+    if !enabled {
+        return ProgressBar::hidden();
+    }
+    let b = ProgressBar::new(0);
+    b.set_style(
+        ProgressStyle::with_template(
+            "{msg:>12} [{elapsed_precise}] {wide_bar} {human_pos}/{human_len} pts \
+             ({per_sec}, ETA {eta})",
+        )
+        .expect("valid template"),
+    );
+    b
+}
+
+pub(crate) fn run(
+    input: &Input,
+    options: &RunOptions,
+    mesh: Option<&mut (dyn MeshSink + Send)>,
+    sinks: &mut [&mut dyn TriangleSink],
+) -> Result<RunSummary> {
+    let start = Instant::now();
+    let tmp = options.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
+    if !tmp.is_dir() {
+        return Err(Error::io(
+            &tmp,
+            std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "temporary directory does not exist",
+            ),
+        ));
+    }
+    // Half the budget for the sort's chunk; the rest covers the sweep's working set, the
+    // channels and the writers' buffers.
+    let mut sorter = ExternalSorter::new(options.mem / 2, &tmp);
+    let pb = bar(options.progress);
+    pb.set_message("reading");
+    let rd = read::read_into(input, &mut sorter, &mut |n, total| {
+        if let Some(t) = total {
+            pb.set_length(t);
+        } else {
+            pb.set_length(n);
+        }
+        pb.set_position(n);
+    })?;
+    if rd.points == 0 {
+        return Err(Error::TooFewPoints {
+            distinct: 0,
+            total: 0,
+        });
+    }
+    let anon = AnonPeak::default();
+    anon.sample();
+    pb.set_message("sorting");
+    let merge = sorter.finish()?;
+    let sort = merge.stats();
+    let read_sort = start.elapsed().as_secs_f64();
+
+    let phase2 = Instant::now();
+    let info = StreamInfo {
+        crs: rd.crs.clone(),
+        bounds: world_bounds(&rd),
+    };
+    for s in sinks.iter_mut() {
+        s.begin(&info)?;
+    }
+    pb.set_message("triangulating");
+    pb.set_length(rd.points);
+    pb.set_position(0);
+    let sinks_ref: &mut [&mut dyn TriangleSink] = &mut *sinks;
+    let outcome = std::thread::scope(|scope| {
+        let (ptx, prx) = bounded::<Vec<StreamPoint>>(4);
+        let (etx, erx) = bounded::<Vec<Event>>(4);
+        let policy = input.duplicates;
+        let merger = scope.spawn(move || merge_points(merge, policy, ptx));
+        let frame = rd.frame;
+        let writer = scope.spawn(move || write_events(erx, frame, mesh, sinks_ref));
+        let swept = sweep_points(&rd, prx, etx, &pb, &anon);
+        let duplicates = merger.join().expect("merge thread panicked");
+        let written = writer.join().expect("writer thread panicked");
+        (swept, duplicates, written)
+    });
+    let (swept, duplicates, written) = outcome;
+    // A writer error closes its channel, which stops the sweep: report the writer's error first.
+    let (vertices, triangles) = written?;
+    let (sweep, stream, kept) = swept?;
+    let triangulate_write = phase2.elapsed().as_secs_f64();
+    pb.finish_and_clear();
+    if triangles == 0 {
+        return Err(if kept < 3 {
+            Error::TooFewPoints {
+                distinct: kept,
+                total: rd.points,
+            }
+        } else {
+            Error::AllCollinear { distinct: kept }
+        });
+    }
+    anon.sample();
+    let fin = Instant::now();
+    let mut products = Vec::with_capacity(sinks.len());
+    for s in sinks.iter_mut() {
+        products.push(s.finish()?);
+    }
+    Ok(RunSummary {
+        points_read: rd.points,
+        points_kept: kept,
+        duplicates,
+        triangles,
+        vertices,
+        seconds: Timings {
+            read_sort,
+            triangulate_write,
+            finish: fin.elapsed().as_secs_f64(),
+        },
+        peak_rss_bytes: peak_rss(),
+        peak_anon_bytes: anon.get(),
+        sort,
+        sweep,
+        stream,
+        products,
+        crs: rd.crs.as_ref().and_then(|c| c.definition()),
+    })
+}
+
+fn world_bounds(rd: &ReadResult) -> [f64; 4] {
+    let lo = rd.frame.world([rd.bounds[0], rd.bounds[1]], 0.0);
+    let hi = rd.frame.world([rd.bounds[2], rd.bounds[3]], 0.0);
+    [lo[0], lo[1], hi[0], hi[1]]
+}
+
+/// Merge thread: sorted, de-duplicated points in batches. Returns the number of duplicates.
+fn merge_points(
+    merge: Merge,
+    policy: crate::points::DuplicatePolicy,
+    out: Sender<Vec<StreamPoint>>,
+) -> u64 {
+    let mut d = Dedup::new(merge, policy);
+    let mut batch = Vec::with_capacity(POINT_BATCH);
+    for r in d.by_ref() {
+        batch.push(StreamPoint {
+            xy: [r.x, r.y],
+            z: r.z,
+            index: r.index,
+            constraint: crate::sweep::NO_CONSTRAINT,
+        });
+        if batch.len() == POINT_BATCH {
+            if out.send(std::mem::take(&mut batch)).is_err() {
+                return d.duplicates;
+            }
+            batch.reserve(POINT_BATCH);
+        }
+    }
+    if !batch.is_empty() {
+        let _ = out.send(batch);
+    }
+    d.duplicates
+}
+
+type Swept = (crate::sweep::SweepStats, crate::sweep::StreamStats, u64);
+
+/// Sweep thread (the caller's): points in, events out.
+fn sweep_points(
+    rd: &ReadResult,
+    points: Receiver<Vec<StreamPoint>>,
+    events: Sender<Vec<Event>>,
+    pb: &ProgressBar,
+    anon: &AnonPeak,
+) -> Result<Swept> {
+    let cfg = StreamConfig {
+        x_sample: rd.x_sample.clone(),
+        bounds: rd.bounds,
+        expected_points: rd.points,
+    };
+    let mut sweep: Option<Sweep> = None;
+    let mut kept = 0u64;
+    let mut out = Vec::with_capacity(EVENT_BATCH);
+    let send = |out: &mut Vec<Event>| -> bool {
+        events
+            .send(std::mem::replace(out, Vec::with_capacity(EVENT_BATCH)))
+            .is_ok()
+    };
+    for batch in points.iter() {
+        for p in batch {
+            kept += 1;
+            match sweep.as_mut() {
+                None => sweep = Some(Sweep::streaming(p, &cfg)),
+                Some(s) => s.push(p)?,
+            }
+            if kept.is_multiple_of(WATERMARK_EVERY) {
+                let s = sweep.as_mut().expect("started");
+                s.emit_watermark();
+                pb.set_position(kept);
+                anon.sample();
+            }
+        }
+        let s = sweep.as_mut().expect("a batch is never empty");
+        if s.pending_events() >= EVENT_BATCH {
+            s.take_events(&mut out);
+            if !send(&mut out) {
+                // The writer stopped (its error is reported by the caller).
+                return Err(Error::Interrupted);
+            }
+        }
+    }
+    let Some(mut s) = sweep else {
+        return Ok((Default::default(), Default::default(), 0));
+    };
+    s.finish_streaming();
+    s.take_events(&mut out);
+    if !send(&mut out) {
+        return Err(Error::Interrupted);
+    }
+    pb.set_position(kept);
+    Ok((s.stats(), s.stream_stats(), kept))
+}
+
+/// Writer thread: events to the mesh sink and the triangle sinks, in real-world coordinates.
+/// Returns the numbers of vertices and triangles written.
+fn write_events(
+    events: Receiver<Vec<Event>>,
+    frame: Frame,
+    mut mesh: Option<&mut (dyn MeshSink + Send)>,
+    sinks: &mut [&mut dyn TriangleSink],
+) -> Result<(u64, u64)> {
+    let need_points = !sinks.is_empty();
+    let mut live: HashMap<u64, [f64; 3]> = HashMap::new();
+    let (mut vertices, mut triangles) = (0u64, 0u64);
+    for batch in events.iter() {
+        for ev in batch {
+            match ev {
+                Event::Vertex { xy, z, .. } => {
+                    let w = frame.world(xy, z);
+                    if let Some(m) = mesh.as_mut() {
+                        m.vertex(w)?;
+                    }
+                    if need_points {
+                        live.insert(vertices, w);
+                    }
+                    vertices += 1;
+                }
+                Event::Triangle(t) => {
+                    if let Some(m) = mesh.as_mut() {
+                        m.triangle(t)?;
+                    }
+                    if need_points {
+                        let p = t.map(|i| live[&i]);
+                        for s in sinks.iter_mut() {
+                            s.triangle(&p)?;
+                        }
+                    }
+                    triangles += 1;
+                }
+                Event::VertexDone(i) => {
+                    if let Some(m) = mesh.as_mut() {
+                        m.vertex_done(i)?;
+                    }
+                    live.remove(&i);
+                }
+                Event::Watermark(y) => {
+                    let wy = frame.offset[1] + frame.scale[1] * y;
+                    if let Some(m) = mesh.as_mut() {
+                        m.watermark(wy)?;
+                    }
+                    for s in sinks.iter_mut() {
+                        s.watermark(wy)?;
+                    }
+                }
+            }
+        }
+    }
+    Ok((vertices, triangles))
+}

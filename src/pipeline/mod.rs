@@ -1,0 +1,227 @@
+//! From input files to final triangles, delivered to sinks, with memory bounded by the budget and
+//! the advancing front, never by the number of points.
+//!
+//! ```text
+//! LAS/LAZ/XYZ ─► read (filters) ─► ExternalSorter (chunks sorted with rayon, spilled, mmapped)
+//!   ─► k-way merge ─► duplicates merged ──[channel]──► streaming sweep (finalisation)
+//!   ──[channel]──► writer thread: MeshSink (PLY/OBJ/LandXML/.stin) + TriangleSinks (DEM, …)
+//! ```
+//!
+//! A streaming mesh (`.stin`) given as input is replayed into the sinks instead (see the `replay` module).
+//! Geometry uses LAS's scaled integers (exact) or the XYZ file's doubles; real-world coordinates
+//! are applied on output ([`Frame`]).
+
+mod drive;
+mod read;
+mod replay;
+
+use crate::error::Result;
+use crate::io::sink::MeshSink;
+use crate::lidar::{Crs, Filter};
+use crate::points::DuplicatePolicy;
+use std::path::PathBuf;
+
+pub use read::read_points;
+
+/// What to triangulate.
+#[derive(Clone, Debug)]
+pub struct Input {
+    /// Point files: LAS/LAZ (by extension `.las`/`.laz`), a streaming mesh (`.stin`, alone), or
+    /// XYZ text; several point files form one set.
+    pub paths: Vec<PathBuf>,
+    /// LAS/LAZ filters (ignored for XYZ).
+    pub filter: Filter,
+    /// Which point survives among exact (x, y) duplicates.
+    pub duplicates: DuplicatePolicy,
+}
+
+/// How to run.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Memory budget in bytes for the sort's chunks and the pipeline's buffers.
+    pub mem: u64,
+    /// Where spill files go (anonymous temporary files); default: the system temp directory.
+    pub tmp_dir: Option<PathBuf>,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            mem: DEFAULT_MEM,
+            tmp_dir: None,
+            progress: false,
+        }
+    }
+}
+
+/// Default memory budget: 1 GiB.
+pub const DEFAULT_MEM: u64 = 1 << 30;
+
+/// Facts about the data, given to every sink before the first triangle.
+#[derive(Clone, Debug, Default)]
+pub struct StreamInfo {
+    /// Coordinate reference system of the input, when known.
+    pub crs: Option<Crs>,
+    /// Real-world extent of the points: `[xmin, ymin, xmax, ymax]`.
+    pub bounds: [f64; 4],
+}
+
+/// A consumer of final triangles (DEM, contours, volumes, …).
+///
+/// Triangles arrive roughly in increasing `y`, in real-world coordinates `[x, y, z]`,
+/// counter-clockwise in (x, y). [`TriangleSink::watermark`] is a *hint*: later triangles normally lie
+/// entirely at `y >= watermark`, so a sink may flush what lies below; but a few triangles can still
+/// arrive *late* (long thin triangles along the convex hull, whose circumcircles are too large to
+/// finalise early), and every sink must handle a late triangle correctly.
+pub trait TriangleSink: Send {
+    /// Called once before the first triangle.
+    fn begin(&mut self, info: &StreamInfo) -> Result<()>;
+    /// One final triangle.
+    fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()>;
+    /// Progress hint (see the trait docs).
+    fn watermark(&mut self, _y: f64) -> Result<()> {
+        Ok(())
+    }
+    /// Called once after the last triangle; returns a machine-readable summary.
+    fn finish(&mut self) -> Result<serde_json::Value>;
+}
+
+/// Maps the sweep's local frame to real-world coordinates: `world = offset + scale * local`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// Scale per axis.
+    pub scale: [f64; 3],
+    /// Offset per axis.
+    pub offset: [f64; 3],
+}
+
+impl Frame {
+    /// The identity (XYZ input).
+    pub const IDENTITY: Frame = Frame {
+        scale: [1.0; 3],
+        offset: [0.0; 3],
+    };
+
+    /// Real-world coordinates of a local point.
+    #[inline]
+    pub fn world(&self, xy: [f64; 2], z: f64) -> [f64; 3] {
+        [
+            self.offset[0] + self.scale[0] * xy[0],
+            self.offset[1] + self.scale[1] * xy[1],
+            self.offset[2] + self.scale[2] * z,
+        ]
+    }
+}
+
+/// Seconds spent per phase.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Timings {
+    /// Reading, filtering, sorting chunks and spilling.
+    pub read_sort: f64,
+    /// Merging, sweeping and writing (overlapped in three threads).
+    pub triangulate_write: f64,
+    /// Closing outputs (PLY assembly, renames).
+    pub finish: f64,
+}
+
+/// What a run did (the `--json` summary of `sweeptin tin`).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct RunSummary {
+    /// Points read (after filters).
+    pub points_read: u64,
+    /// Points triangulated (after merging duplicates).
+    pub points_kept: u64,
+    /// Exact (x, y) duplicates merged away.
+    pub duplicates: u64,
+    /// Triangles delivered.
+    pub triangles: u64,
+    /// Vertices delivered.
+    pub vertices: u64,
+    /// Seconds per phase.
+    pub seconds: Timings,
+    /// Peak resident memory of the process (VmHWM), in bytes, when the OS reports it. Includes
+    /// pages of memory-mapped spill files, which the kernel can drop at any time.
+    pub peak_rss_bytes: Option<u64>,
+    /// Largest anonymous resident memory (RssAnon: heap and stacks, no file pages) seen when
+    /// sampled: after reading, at every watermark, and at the end.
+    pub peak_anon_bytes: Option<u64>,
+    /// External sort.
+    pub sort: crate::extsort::SortStats,
+    /// Sweep counters (front peak, flips, …).
+    pub sweep: crate::sweep::SweepStats,
+    /// Streaming working set.
+    pub stream: crate::sweep::StreamStats,
+    /// What each triangle sink reported.
+    pub products: Vec<serde_json::Value>,
+    /// The CRS, when known.
+    pub crs: Option<String>,
+}
+
+/// The CRS of the input, from LAS/LAZ headers or a streaming mesh's header, without reading the
+/// points.
+///
+/// # Errors
+/// The reader's errors when a header cannot be read.
+pub fn input_crs(input: &Input) -> Result<Option<String>> {
+    if replay::is_stream_input(input) {
+        let r = crate::io::stin::StinReader::open(&input.paths[0])?;
+        return Ok(r.crs().map(str::to_string));
+    }
+    if !input.paths.is_empty() && input.paths.iter().all(|p| read::is_lidar(p)) {
+        let r = crate::lidar::LidarReader::open(&input.paths, &input.filter)?;
+        return Ok(r.crs().and_then(|c| c.definition()));
+    }
+    Ok(None)
+}
+
+fn proc_status_kb(field: &str) -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with(field))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Peak resident set size of this process, from `/proc/self/status` (Linux).
+pub fn peak_rss() -> Option<u64> {
+    proc_status_kb("VmHWM:")
+}
+
+/// Current anonymous resident memory of this process (Linux).
+pub fn anon_rss() -> Option<u64> {
+    proc_status_kb("RssAnon:")
+}
+
+/// Running maximum of [`anon_rss`] samples.
+#[derive(Debug, Default)]
+pub(crate) struct AnonPeak(std::sync::atomic::AtomicU64);
+
+impl AnonPeak {
+    pub fn sample(&self) {
+        if let Some(a) = anon_rss() {
+            self.0.fetch_max(a, std::sync::atomic::Ordering::Relaxed);
+        }
+    }
+    pub fn get(&self) -> Option<u64> {
+        let v = self.0.load(std::sync::atomic::Ordering::Relaxed);
+        (v > 0).then_some(v)
+    }
+}
+
+/// Triangulates `input` and delivers the result to `mesh` (if any) and every sink, streaming.
+///
+/// # Errors
+/// Any reader, triangulation, sink or output error; [`crate::Error::TooFewPoints`] and
+/// [`crate::Error::AllCollinear`] when no triangle exists.
+pub fn run(
+    input: &Input,
+    options: &RunOptions,
+    mesh: Option<&mut (dyn MeshSink + Send)>,
+    sinks: &mut [&mut dyn TriangleSink],
+) -> Result<RunSummary> {
+    if replay::is_stream_input(input) {
+        return replay::replay(input, mesh, sinks);
+    }
+    drive::run(input, options, mesh, sinks)
+}

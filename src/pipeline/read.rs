@@ -1,0 +1,211 @@
+//! Phase 1: read every input point (with filters) into the external sorter, in the local frame.
+
+use super::{Frame, Input};
+use crate::error::{Error, Result};
+use crate::extsort::{ExternalSorter, SortRecord};
+use crate::io::xyz::XyzReader;
+use crate::lidar::{Crs, LidarPoint, LidarReader};
+use crate::predicates;
+use std::path::Path;
+
+/// Is `p` a LAS or LAZ file (by extension)?
+pub(crate) fn is_lidar(p: &Path) -> bool {
+    matches!(
+        p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()),
+        Some(e) if e == "las" || e == "laz"
+    )
+}
+
+/// What reading found out.
+#[derive(Debug)]
+pub(crate) struct ReadResult {
+    pub frame: Frame,
+    pub crs: Option<Crs>,
+    /// Local-frame extent of the points read: `[xmin, ymin, xmax, ymax]`.
+    pub bounds: [f64; 4],
+    pub points: u64,
+    /// Every `2^k`-th point's local x (at most [`SAMPLE`] values), for the front's index.
+    pub x_sample: Vec<f64>,
+}
+
+/// Size of the x sample.
+const SAMPLE: usize = 4096;
+
+/// Keeps every `stride`-th value; halves the sample and doubles the stride when it is full, so it
+/// stays evenly spread over the input, deterministically.
+#[derive(Debug)]
+struct Sampler {
+    xs: Vec<f64>,
+    stride: u64,
+    seen: u64,
+}
+
+impl Sampler {
+    #[inline]
+    fn add(&mut self, x: f64) {
+        if self.seen.is_multiple_of(self.stride) {
+            if self.xs.len() == SAMPLE {
+                let mut k = 0;
+                self.xs.retain(|_| {
+                    k += 1;
+                    k % 2 == 1
+                });
+                self.stride *= 2;
+                if !self.seen.is_multiple_of(self.stride) {
+                    self.seen += 1;
+                    return;
+                }
+            }
+            self.xs.push(x);
+        }
+        self.seen += 1;
+    }
+}
+
+/// Progress callback: points read so far, and the total if known.
+pub(crate) type Progress<'a> = &'a mut dyn FnMut(u64, Option<u64>);
+
+const CHUNK: usize = 1 << 16;
+
+/// Reads all of `input` into `sorter`.
+pub(crate) fn read_into(
+    input: &Input,
+    sorter: &mut ExternalSorter,
+    progress: Progress,
+) -> Result<ReadResult> {
+    if input.paths.is_empty() {
+        return Err(Error::NoInput);
+    }
+    let mut bounds = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    let mut sample = Sampler {
+        xs: Vec::with_capacity(SAMPLE),
+        stride: 1,
+        seen: 0,
+    };
+    let mut add = |s: &mut ExternalSorter, r: SortRecord| -> Result<()> {
+        sample.add(r.x);
+        bounds[0] = bounds[0].min(r.x);
+        bounds[1] = bounds[1].min(r.y);
+        bounds[2] = bounds[2].max(r.x);
+        bounds[3] = bounds[3].max(r.y);
+        s.push(r)
+    };
+    let lidar = input.paths.iter().filter(|p| is_lidar(p)).count();
+    if lidar == input.paths.len() {
+        let mut reader = LidarReader::open(&input.paths, &input.filter)?;
+        let total = reader.point_count();
+        let q = *reader.quantization();
+        let crs = reader.crs().cloned();
+        let mut buf: Vec<LidarPoint> = Vec::with_capacity(CHUNK);
+        let mut n = 0u64;
+        loop {
+            buf.clear();
+            if reader.read_chunk(&mut buf, CHUNK)? == 0 {
+                break;
+            }
+            for p in &buf {
+                // Real-world doubles, exactly as written to the outputs: the triangulation is
+                // Delaunay for the coordinates in the output file (see docs/ARCHITECTURE.md).
+                let w = q.to_world(p);
+                add(
+                    sorter,
+                    SortRecord {
+                        x: w[0] + 0.0,
+                        y: w[1] + 0.0,
+                        z: w[2],
+                        index: p.index,
+                    },
+                )?;
+            }
+            n += buf.len() as u64;
+            progress(n, Some(total));
+        }
+        return Ok(ReadResult {
+            frame: Frame::IDENTITY,
+            crs,
+            bounds,
+            points: n,
+            x_sample: sample.xs,
+        });
+    }
+    if lidar > 0 {
+        return Err(Error::Format {
+            path: input.paths[0].clone(),
+            message: "cannot mix LAS/LAZ and XYZ inputs in one run".into(),
+        });
+    }
+    let mut n = 0u64;
+    let mut buf: Vec<[f64; 3]> = Vec::with_capacity(CHUNK);
+    for path in &input.paths {
+        let mut reader = XyzReader::open(path)?;
+        loop {
+            buf.clear();
+            if reader.read_chunk(&mut buf, CHUNK)? == 0 {
+                break;
+            }
+            for p in &buf {
+                for v in [p[0], p[1]] {
+                    if !predicates::check_coord(v) {
+                        return Err(Error::Format {
+                            path: path.clone(),
+                            message: format!(
+                                "point {n}: coordinate {v} is outside the supported range \
+                                 (|v| <= {:e}, and 0 or |v| >= {:e})",
+                                predicates::MAX_COORD,
+                                predicates::MIN_NONZERO_COORD
+                            ),
+                        });
+                    }
+                }
+                // `+ 0.0` makes -0.0 and 0.0 one position.
+                add(
+                    sorter,
+                    SortRecord {
+                        x: p[0] + 0.0,
+                        y: p[1] + 0.0,
+                        z: p[2],
+                        index: n,
+                    },
+                )?;
+                n += 1;
+            }
+            progress(n, None);
+        }
+    }
+    Ok(ReadResult {
+        frame: Frame::IDENTITY,
+        crs: None,
+        bounds,
+        points: n,
+        x_sample: sample.xs,
+    })
+}
+
+/// Reads all points of `input` into memory, in real-world coordinates, with the CRS when known
+/// (for commands that need the whole set, such as `crossval`).
+///
+/// # Errors
+/// Reader errors, or [`Error::NoInput`].
+pub fn read_points(input: &Input) -> Result<(Vec<[f64; 3]>, Option<Crs>)> {
+    if input.paths.is_empty() {
+        return Err(Error::NoInput);
+    }
+    if input.paths.iter().all(|p| is_lidar(p)) {
+        let mut r = LidarReader::open(&input.paths, &input.filter)?;
+        let pts = r.read_all()?;
+        let q = *r.quantization();
+        let crs = r.crs().cloned();
+        Ok((pts.iter().map(|p| q.to_world(p)).collect(), crs))
+    } else {
+        let mut all = Vec::new();
+        for p in &input.paths {
+            all.extend(crate::io::xyz::read_xyz(p)?);
+        }
+        Ok((all, None))
+    }
+}

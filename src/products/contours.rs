@@ -1,0 +1,741 @@
+//! Contour lines (height lines) from the triangle stream, stitched into polylines.
+//!
+//! # Levels and the rule at a level
+//!
+//! Levels are `base + k × interval` for whole `k`. A vertex whose `z` equals a level exactly
+//! counts as **above** it (as if raised by an infinitesimal amount). Then every triangle crosses a
+//! level in at most one segment, from one edge to another edge whose endpoints lie on opposite
+//! sides; a triangle lying flat at a level is above it and has no segment. Segments of
+//! neighbouring triangles meet on their shared edge, at a point computed from that edge alone (the
+//! same bits from both sides), so lines have no gaps and no segment is produced twice. Where a
+//! vertex lies exactly at a level, several segments meet at that vertex, and zero-length segments
+//! may occur; they are kept for the topology and their repeated points dropped on output.
+//!
+//! Every line runs with the higher ground on its **left**.
+//!
+//! # Stitching across the stream
+//!
+//! A segment is keyed by the two edges it crosses (edge = its two endpoints in canonical order,
+//! plus the level). Open polylines are found by the edge where they start and the edge where they
+//! end (two hash maps): a new segment extends, prepends to or joins open polylines, or closes one
+//! into a ring, which is written at once. This works for triangles in any order; the watermark is
+//! not needed. Polylines that reach the outer boundary of the TIN stay open until the end of the
+//! stream and are then written as open lines.
+//!
+//! # Memory
+//!
+//! Open polylines keep their two end points and end edges in memory; when their points exceed
+//! [`ContourOptions::memory_points`], the inner points are moved to an anonymous scratch file and
+//! read back when the line is written. Memory is thus bounded by the number of open polylines
+//! (those crossing the sweep's front, and those ending on the TIN's boundary so far), not by their
+//! length.
+
+use super::geojson::FeatureWriter;
+use super::geom::{Tri, cmp_xy};
+use crate::error::{Error, Result};
+use crate::pipeline::{StreamInfo, TriangleSink};
+use serde_json::json;
+use std::collections::{HashMap, VecDeque};
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+/// Options of a [`ContourSink`].
+#[derive(Clone, Debug)]
+pub struct ContourOptions {
+    /// Distance between levels (> 0).
+    pub interval: f64,
+    /// A level through which the others are counted (levels are `base + k × interval`).
+    pub base: f64,
+    /// Points of open polylines held in memory before the inner ones move to a scratch file.
+    pub memory_points: usize,
+}
+
+impl Default for ContourOptions {
+    fn default() -> Self {
+        ContourOptions {
+            interval: 1.0,
+            base: 0.0,
+            memory_points: 1 << 22,
+        }
+    }
+}
+
+/// Most levels one triangle may cross (a guard against a tiny interval).
+const MAX_LEVELS_PER_TRIANGLE: i64 = 1_000_000;
+
+/// Level `k` as a number: `base + k × interval`, cleaned of binary noise (`0.30000000000000004`
+/// becomes `0.3`) when that changes it by less than a billionth.
+pub fn level_value(base: f64, interval: f64, k: i64) -> f64 {
+    let l = base + k as f64 * interval;
+    let r = (l * 1e6).round() / 1e6;
+    if (r - l).abs() <= 1e-9 * l.abs().max(1.0) {
+        r
+    } else {
+        l
+    }
+}
+
+/// An edge at a level: `(k, bits of the smaller endpoint's x, y, of the larger's x, y)`.
+type EdgeKey = (i64, [u64; 4]);
+
+fn edge_key(k: i64, a: &[f64; 3], b: &[f64; 3]) -> EdgeKey {
+    let (a, b) = if cmp_xy(a, b).is_gt() { (b, a) } else { (a, b) };
+    (
+        k,
+        [
+            a[0].to_bits(),
+            a[1].to_bits(),
+            b[0].to_bits(),
+            b[1].to_bits(),
+        ],
+    )
+}
+
+/// Where the edge `a b` crosses `level` (one endpoint below, the other at or above), computed
+/// from the endpoints in canonical order.
+fn crossing(level: f64, a: &[f64; 3], b: &[f64; 3]) -> [f64; 2] {
+    let (a, b) = if cmp_xy(a, b).is_gt() { (b, a) } else { (a, b) };
+    let t = (level - a[2]) / (b[2] - a[2]);
+    if t <= 0.0 {
+        [a[0], a[1]]
+    } else if t >= 1.0 {
+        [b[0], b[1]]
+    } else {
+        [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+    }
+}
+
+/// A run of points of an open polyline: in memory, or moved to the scratch file.
+#[derive(Debug)]
+enum Piece {
+    Mem(VecDeque<[f64; 2]>),
+    Disk { offset: u64, len: u64 },
+}
+
+#[derive(Debug)]
+struct Poly {
+    k: i64,
+    pieces: VecDeque<Piece>,
+    first: [f64; 2],
+    start: EdgeKey,
+    end: EdgeKey,
+}
+
+impl Poly {
+    fn push_back(&mut self, p: [f64; 2]) {
+        match self.pieces.back_mut() {
+            Some(Piece::Mem(v)) => v.push_back(p),
+            _ => self.pieces.push_back(Piece::Mem(VecDeque::from([p]))),
+        }
+    }
+
+    fn push_front(&mut self, p: [f64; 2]) {
+        self.first = p;
+        match self.pieces.front_mut() {
+            Some(Piece::Mem(v)) => v.push_front(p),
+            _ => self.pieces.push_front(Piece::Mem(VecDeque::from([p]))),
+        }
+    }
+
+    /// Appends `other`'s pieces, merging two touching in-memory pieces.
+    fn append(&mut self, other: Poly) {
+        for piece in other.pieces {
+            match (self.pieces.back_mut(), piece) {
+                (Some(Piece::Mem(a)), Piece::Mem(b)) => a.extend(b),
+                (_, piece) => self.pieces.push_back(piece),
+            }
+        }
+        self.end = other.end;
+    }
+
+    /// Prepends `other`'s pieces.
+    fn prepend(&mut self, other: Poly) {
+        for piece in other.pieces.into_iter().rev() {
+            match (self.pieces.front_mut(), piece) {
+                (Some(Piece::Mem(a)), Piece::Mem(b)) => {
+                    for p in b.into_iter().rev() {
+                        a.push_front(p);
+                    }
+                }
+                (_, piece) => self.pieces.push_front(piece),
+            }
+        }
+        self.first = other.first;
+        self.start = other.start;
+    }
+
+    fn mem_points(&self) -> usize {
+        self.pieces
+            .iter()
+            .map(|p| match p {
+                Piece::Mem(v) => v.len(),
+                Piece::Disk { .. } => 0,
+            })
+            .sum()
+    }
+}
+
+/// Open polylines, found by their start and end edges.
+#[derive(Debug, Default)]
+struct Stitcher {
+    polys: Vec<Option<Poly>>,
+    free: Vec<usize>,
+    starts: HashMap<EdgeKey, usize>,
+    ends: HashMap<EdgeKey, usize>,
+    max_open: usize,
+}
+
+/// What adding a segment did: the points it added to open polylines, or the ring it closed.
+enum Added {
+    Open(usize),
+    Closed(Poly),
+}
+
+impl Stitcher {
+    fn store(&mut self, p: Poly) -> usize {
+        let (start, end) = (p.start, p.end);
+        let id = match self.free.pop() {
+            Some(i) => {
+                self.polys[i] = Some(p);
+                i
+            }
+            None => {
+                self.polys.push(Some(p));
+                self.polys.len() - 1
+            }
+        };
+        self.starts.insert(start, id);
+        self.ends.insert(end, id);
+        self.max_open = self.max_open.max(self.starts.len());
+        id
+    }
+
+    fn take(&mut self, id: usize) -> Poly {
+        self.free.push(id);
+        let p = self.polys[id].take().expect("a live polyline");
+        self.starts.remove(&p.start);
+        self.ends.remove(&p.end);
+        p
+    }
+
+    /// Adds the segment `s → e`, which crosses edge `se` at `s` and edge `ee` at `e`.
+    fn add(&mut self, k: i64, se: EdgeKey, s: [f64; 2], ee: EdgeKey, e: [f64; 2]) -> Added {
+        let before = self.ends.get(&se).copied();
+        let after = self.starts.get(&ee).copied();
+        match (before, after) {
+            (None, None) => {
+                self.store(Poly {
+                    k,
+                    pieces: VecDeque::from([Piece::Mem(VecDeque::from([s, e]))]),
+                    first: s,
+                    start: se,
+                    end: ee,
+                });
+                Added::Open(2)
+            }
+            (Some(a), None) => {
+                let mut p = self.take(a);
+                p.push_back(e);
+                p.end = ee;
+                self.store(p);
+                Added::Open(1)
+            }
+            (None, Some(b)) => {
+                let mut p = self.take(b);
+                p.push_front(s);
+                p.start = se;
+                self.store(p);
+                Added::Open(1)
+            }
+            (Some(a), Some(b)) if a == b => {
+                let mut p = self.take(a);
+                p.push_back(e);
+                Added::Closed(p)
+            }
+            (Some(a), Some(b)) => {
+                let pa = self.take(a);
+                let pb = self.take(b);
+                let joined = if pa.mem_points() >= pb.mem_points() {
+                    let mut pa = pa;
+                    pa.append(pb);
+                    pa
+                } else {
+                    let mut pb = pb;
+                    pb.prepend(pa);
+                    pb
+                };
+                self.store(joined);
+                Added::Open(0)
+            }
+        }
+    }
+}
+
+/// Counters reported by [`ContourSink::finish`].
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+struct Stats {
+    segments: u64,
+    rings: u64,
+    open_lines: u64,
+    degenerate_dropped: u64,
+    points_spilled: u64,
+}
+
+/// A [`TriangleSink`] writing contour lines to GeoJSON (see the module docs).
+pub struct ContourSink {
+    path: PathBuf,
+    options: ContourOptions,
+    out: Option<FeatureWriter>,
+    stitcher: Stitcher,
+    scratch: Option<File>,
+    scratch_len: u64,
+    mem_points: usize,
+    stats: Stats,
+}
+
+impl ContourSink {
+    /// A contour sink writing to `path` (created when the stream begins).
+    ///
+    /// # Errors
+    /// [`Error::Output`] for an interval that is not a positive number or a non-finite base.
+    pub fn new(path: &Path, options: ContourOptions) -> Result<ContourSink> {
+        if !(options.interval.is_finite() && options.interval > 0.0 && options.base.is_finite()) {
+            return Err(Error::Output {
+                path: path.to_path_buf(),
+                message: format!(
+                    "the contour interval must be a positive number and the base finite \
+                     (interval {}, base {})",
+                    options.interval, options.base
+                ),
+            });
+        }
+        Ok(ContourSink {
+            path: path.to_path_buf(),
+            options,
+            out: None,
+            stitcher: Stitcher::default(),
+            scratch: None,
+            scratch_len: 0,
+            mem_points: 0,
+            stats: Stats::default(),
+        })
+    }
+
+    fn out(&mut self) -> Result<&mut FeatureWriter> {
+        let path = &self.path;
+        self.out.as_mut().ok_or_else(|| Error::Output {
+            path: path.clone(),
+            message: "the contour sink got data before begin() or after finish()".into(),
+        })
+    }
+
+    fn level(&self, k: i64) -> f64 {
+        level_value(self.options.base, self.options.interval, k)
+    }
+
+    /// Writes a finished polyline (ring or open line), dropping repeated points.
+    fn emit(&mut self, p: Poly, closed: bool) -> Result<()> {
+        let level = self.level(p.k);
+        // First pass: count distinct consecutive points, to drop degenerate lines without
+        // writing them.
+        let mut distinct = 0u64;
+        let mut last: Option<[f64; 2]> = None;
+        self.for_each_point(&p, |q| {
+            if last != Some(q) {
+                distinct += 1;
+                last = Some(q);
+            }
+            Ok(())
+        })?;
+        if distinct < if closed { 4 } else { 2 } {
+            self.stats.degenerate_dropped += 1;
+            self.forget(&p);
+            return Ok(());
+        }
+        if closed {
+            self.stats.rings += 1;
+        } else {
+            self.stats.open_lines += 1;
+        }
+        let props = json!({ "elevation": level, "closed": closed });
+        let mut out = self.out.take().expect("checked by the caller");
+        out.start_line(&props)?;
+        let mut last: Option<[f64; 2]> = None;
+        let r = self.for_each_point(&p, |q| {
+            if last != Some(q) {
+                last = Some(q);
+                out.point(q)?;
+            }
+            Ok(())
+        });
+        let r = r.and_then(|_| out.end_line());
+        self.out = Some(out);
+        self.forget(&p);
+        r
+    }
+
+    fn forget(&mut self, p: &Poly) {
+        self.mem_points -= p.mem_points();
+    }
+
+    fn for_each_point(
+        &mut self,
+        p: &Poly,
+        mut f: impl FnMut([f64; 2]) -> Result<()>,
+    ) -> Result<()> {
+        for piece in &p.pieces {
+            match piece {
+                Piece::Mem(v) => {
+                    for &q in v {
+                        f(q)?;
+                    }
+                }
+                Piece::Disk { offset, len } => {
+                    let path = self.path.clone();
+                    let file = self.scratch.as_mut().expect("spilled points have a file");
+                    let io = |e| Error::io(&path, e);
+                    file.seek(SeekFrom::Start(*offset)).map_err(io)?;
+                    let mut r = BufReader::with_capacity(1 << 16, &mut *file);
+                    let mut b = [0u8; 16];
+                    for _ in 0..*len {
+                        r.read_exact(&mut b).map_err(io)?;
+                        let x = f64::from_le_bytes(b[..8].try_into().expect("8 bytes"));
+                        let y = f64::from_le_bytes(b[8..].try_into().expect("8 bytes"));
+                        f([x, y])?;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Moves the inner points of every open polyline to the scratch file.
+    fn spill(&mut self) -> Result<()> {
+        if self.scratch.is_none() {
+            let dir = match self.path.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            self.scratch = Some(tempfile::tempfile_in(&dir).map_err(|e| Error::io(&dir, e))?);
+        }
+        let file = self.scratch.as_mut().expect("created above");
+        let path = &self.path;
+        file.seek(SeekFrom::End(0))
+            .map_err(|e| Error::io(path, e))?;
+        let mut w = std::io::BufWriter::with_capacity(1 << 16, &mut *file);
+        for poly in self.stitcher.polys.iter_mut().flatten() {
+            for piece in poly.pieces.iter_mut() {
+                let Piece::Mem(v) = piece else { continue };
+                if v.len() < 64 {
+                    continue;
+                }
+                for q in v.iter() {
+                    w.write_all(&q[0].to_le_bytes())
+                        .and_then(|_| w.write_all(&q[1].to_le_bytes()))
+                        .map_err(|e| Error::io(path, e))?;
+                }
+                let len = v.len() as u64;
+                self.mem_points -= v.len();
+                self.stats.points_spilled += len;
+                *piece = Piece::Disk {
+                    offset: self.scratch_len,
+                    len,
+                };
+                self.scratch_len += len * 16;
+            }
+        }
+        w.flush().map_err(|e| Error::io(path, e))
+    }
+
+    fn segment(&mut self, k: i64, t: &Tri) -> Result<()> {
+        let l = self.level(k);
+        let v = &t.v;
+        let above = [v[0][2] >= l, v[1][2] >= l, v[2][2] >= l];
+        // Edge i runs from vertex i to i + 1. The line enters the triangle through the edge that
+        // goes from above to below and leaves through the one from below to above, so that the
+        // higher ground is on its left.
+        let mut enter = None;
+        let mut leave = None;
+        for i in 0..3 {
+            let j = (i + 1) % 3;
+            match (above[i], above[j]) {
+                (true, false) => enter = Some(i),
+                (false, true) => leave = Some(i),
+                _ => {}
+            }
+        }
+        let (Some(i), Some(o)) = (enter, leave) else {
+            return Ok(());
+        };
+        let (a, b) = (&v[i], &v[(i + 1) % 3]);
+        let (c, d) = (&v[o], &v[(o + 1) % 3]);
+        let (s, e) = (crossing(l, a, b), crossing(l, c, d));
+        self.stats.segments += 1;
+        let added = self
+            .stitcher
+            .add(k, edge_key(k, a, b), s, edge_key(k, c, d), e);
+        match added {
+            Added::Open(n) => self.mem_points += n,
+            Added::Closed(p) => {
+                self.mem_points += 1;
+                self.out()?;
+                self.emit(p, true)?;
+            }
+        }
+        if self.mem_points > self.options.memory_points {
+            self.spill()?;
+        }
+        Ok(())
+    }
+}
+
+impl TriangleSink for ContourSink {
+    fn begin(&mut self, info: &StreamInfo) -> Result<()> {
+        self.out = Some(FeatureWriter::create(
+            &self.path,
+            "contours",
+            info.crs.as_ref(),
+        )?);
+        Ok(())
+    }
+
+    fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
+        let Some(t) = Tri::new(t) else {
+            return Ok(());
+        };
+        let zmin = t.v[0][2].min(t.v[1][2]).min(t.v[2][2]);
+        let zmax = t.v[0][2].max(t.v[1][2]).max(t.v[2][2]);
+        let (base, interval) = (self.options.base, self.options.interval);
+        let k_lo = ((zmin - base) / interval).floor() as i64 - 1;
+        let k_hi = ((zmax - base) / interval).ceil() as i64 + 1;
+        if k_hi - k_lo > MAX_LEVELS_PER_TRIANGLE {
+            return Err(Error::Output {
+                path: self.path.clone(),
+                message: format!(
+                    "a triangle spans {} contour levels (z {zmin} .. {zmax}, interval {interval}): \
+                     the interval is too small",
+                    k_hi - k_lo
+                ),
+            });
+        }
+        for k in k_lo..=k_hi {
+            let l = self.level(k);
+            if zmin < l && l <= zmax {
+                self.segment(k, &t)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<serde_json::Value> {
+        self.out()?;
+        let max_open = self.stitcher.max_open;
+        let open: Vec<usize> = (0..self.stitcher.polys.len())
+            .filter(|&i| self.stitcher.polys[i].is_some())
+            .collect();
+        for id in open {
+            let p = self.stitcher.take(id);
+            self.emit(p, false)?;
+        }
+        let out = self.out.take().expect("checked above");
+        let features = out.features();
+        let bytes = out.finish()?;
+        Ok(json!({
+            "path": self.path,
+            "interval": self.options.interval,
+            "base": self.options.base,
+            "features": features,
+            "segments": self.stats.segments,
+            "rings": self.stats.rings,
+            "open_lines": self.stats.open_lines,
+            "degenerate_dropped": self.stats.degenerate_dropped,
+            "points_spilled": self.stats.points_spilled,
+            "max_open_polylines": max_open,
+            "bytes": bytes,
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::products::testutil::{
+        Step, feed, grid_tin, in_sweep_order, random_tin, shuffled_with_watermarks,
+    };
+    use serde_json::Value;
+
+    /// `(elevation, closed, points)` of every feature, rings rotated to start at their smallest
+    /// point, sorted: the same for any order of the stream.
+    fn canonical(path: &Path) -> Vec<(f64, bool, Vec<[f64; 2]>)> {
+        let v: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let mut out: Vec<(f64, bool, Vec<[f64; 2]>)> = v["features"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| {
+                let mut pts: Vec<[f64; 2]> = f["geometry"]["coordinates"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|p| [p[0].as_f64().unwrap(), p[1].as_f64().unwrap()])
+                    .collect();
+                let closed = f["properties"]["closed"].as_bool().unwrap();
+                if closed {
+                    assert_eq!(pts.first(), pts.last());
+                    pts.pop();
+                    let m = (0..pts.len())
+                        .min_by(|&i, &j| pts[i].partial_cmp(&pts[j]).unwrap())
+                        .unwrap();
+                    pts.rotate_left(m);
+                }
+                for w in pts.windows(2) {
+                    assert_ne!(w[0], w[1], "repeated point");
+                }
+                (f["properties"]["elevation"].as_f64().unwrap(), closed, pts)
+            })
+            .collect();
+        out.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        out
+    }
+
+    fn run(steps: &[Step], dir: &Path, name: &str, options: ContourOptions) -> PathBuf {
+        run_summary(steps, dir, name, options).0
+    }
+
+    fn run_summary(
+        steps: &[Step],
+        dir: &Path,
+        name: &str,
+        options: ContourOptions,
+    ) -> (PathBuf, Value) {
+        let path = dir.join(name);
+        let mut sink = ContourSink::new(&path, options).unwrap();
+        let info = StreamInfo {
+            crs: None,
+            bounds: [0.0, 0.0, 100.0, 100.0],
+        };
+        let summary = feed(&mut sink, &info, steps);
+        (path, summary)
+    }
+
+    fn area(pts: &[[f64; 2]]) -> f64 {
+        let n = pts.len();
+        (0..n)
+            .map(|i| {
+                let (a, b) = (pts[i], pts[(i + 1) % n]);
+                a[0] * b[1] - a[1] * b[0]
+            })
+            .sum::<f64>()
+            / 2.0
+    }
+
+    #[test]
+    fn levels_are_clean_numbers() {
+        assert_eq!(level_value(0.0, 0.1, 3), 0.3);
+        assert_eq!(level_value(0.5, 2.0, -2), -3.5);
+        assert_eq!(level_value(0.0, 1.0 / 3.0, 1), 1.0 / 3.0);
+    }
+
+    /// On a plane every level is one straight open line across the square whose points satisfy
+    /// the plane's equation, with the higher ground on the left.
+    #[test]
+    fn plane_gives_straight_lines_on_the_level() {
+        let f = |x: f64, y: f64| 0.3 * x + 0.1 * y + 2.0;
+        let tris = random_tin(400, 100.0, 5, f);
+        let dir = tempfile::tempdir().unwrap();
+        let options = ContourOptions {
+            interval: 2.5,
+            ..ContourOptions::default()
+        };
+        let path = run(&in_sweep_order(&tris), dir.path(), "p.geojson", options);
+        let lines = canonical(&path);
+        // z from 2 to 42: levels 2.5, 5, …, 40 (42 is not crossed: no vertex lies above it).
+        assert_eq!(lines.len(), 16);
+        for (l, closed, pts) in &lines {
+            assert!(!closed);
+            for p in pts {
+                assert!((f(p[0], p[1]) - l).abs() < 1e-9, "{p:?} not at level {l}");
+            }
+            // Higher ground (larger x) on the left: the line runs towards -y roughly.
+            assert!(pts.last().unwrap()[1] < pts[0][1]);
+            let ends = [pts[0], *pts.last().unwrap()];
+            for e in ends {
+                let on_border = e
+                    .iter()
+                    .any(|&c| c.abs() < 1e-9 || (c - 100.0).abs() < 1e-9);
+                assert!(on_border, "line ends inside at {e:?}");
+            }
+        }
+    }
+
+    /// Vertices exactly at a level: a stepped pyramid on an integer grid gives one square ring
+    /// per level, through the grid vertices, counter-clockwise (higher ground on the left), and
+    /// nothing for the single-vertex summit.
+    #[test]
+    fn vertices_at_levels_give_clean_rings() {
+        let f = |x: f64, y: f64| 5.0 - (x - 5.0).abs().max((y - 5.0).abs());
+        let tris = grid_tin(10, 10, 1.0, f);
+        let dir = tempfile::tempdir().unwrap();
+        let path = run(
+            &in_sweep_order(&tris),
+            dir.path(),
+            "r.geojson",
+            ContourOptions::default(),
+        );
+        let rings = canonical(&path);
+        let levels: Vec<f64> = rings.iter().map(|r| r.0).collect();
+        assert_eq!(levels, [1.0, 2.0, 3.0, 4.0]);
+        for (l, closed, pts) in &rings {
+            assert!(closed);
+            let r = 5.0 - l;
+            for p in pts {
+                assert_eq!((p[0] - 5.0).abs().max((p[1] - 5.0).abs()), r, "{p:?}");
+            }
+            assert_eq!(area(pts), 4.0 * r * r);
+        }
+    }
+
+    /// The saddle in sweep order, shuffled with late triangles, and with a tiny memory budget (so
+    /// that points go to the scratch file): the same lines.
+    #[test]
+    fn order_and_spilling_do_not_change_the_result() {
+        let f = |x: f64, y: f64| {
+            15.0 * (std::f64::consts::PI * x / 20.0).sin()
+                - 15.0 * (std::f64::consts::PI * y / 20.0).sin()
+        };
+        let tris = random_tin(2000, 100.0, 9, f);
+        let dir = tempfile::tempdir().unwrap();
+        let o = ContourOptions {
+            interval: 5.0,
+            ..ContourOptions::default()
+        };
+        let a = canonical(&run(
+            &in_sweep_order(&tris),
+            dir.path(),
+            "a.json",
+            o.clone(),
+        ));
+        let b = canonical(&run(
+            &shuffled_with_watermarks(&tris, 4),
+            dir.path(),
+            "b.json",
+            o.clone(),
+        ));
+        let tiny = ContourOptions {
+            memory_points: 100,
+            ..o
+        };
+        let (c, summary) = run_summary(
+            &shuffled_with_watermarks(&tris, 5),
+            dir.path(),
+            "c.json",
+            tiny,
+        );
+        assert!(summary["points_spilled"].as_u64().unwrap() > 0, "{summary}");
+        let c = canonical(&c);
+        assert!(a.iter().any(|x| x.1) && a.iter().any(|x| !x.1));
+        assert_eq!(a, b);
+        assert_eq!(a, c);
+    }
+}

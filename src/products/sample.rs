@@ -1,0 +1,462 @@
+//! Heights of the TIN at query points, answered as the triangles stream past.
+//!
+//! # Input and output
+//!
+//! The queries are a text file with `x` and `y` as the first two fields of each line (separated
+//! by commas, semicolons, tabs or spaces; `#` comments and blank lines skipped; a first line that
+//! does not start with two numbers is a header). The output repeats every query line unchanged,
+//! in the same order, with one more field: the height `z`, or an **empty field** when the point is
+//! outside the TIN (a header line gets the field name `z`). A point exactly on an edge or vertex
+//! gets the value computed from that edge or vertex alone ([`super::geom`]), the same whichever
+//! triangle answers.
+//!
+//! # Memory
+//!
+//! When the queries are sorted by `y` (checked in a first pass over the file), they are read
+//! lazily: a query is loaded once the stream's front (the highest triangle top seen) reaches its
+//! `y`, and forgotten as soon as a triangle answers it. Queries outside the bounds of the input
+//! points are answered "outside" at once. Loaded queries that no triangle has answered yet stay
+//! until the end (a late triangle may still answer them), so memory is bounded by the queries near
+//! the front plus those outside the TIN but inside its bounding box. Unsorted queries are all
+//! loaded at the start (memory proportional to their number). Answers go to an anonymous scratch
+//! file (8 bytes per query) and the output is written at the end in the queries' order.
+
+use super::geom::{Location, Tri};
+use crate::error::{Error, Result};
+use crate::io::AtomicFile;
+use crate::pipeline::{StreamInfo, TriangleSink};
+use serde_json::json;
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+/// A query point: its number in the file (0-based, data lines only) and position.
+#[derive(Clone, Copy, Debug)]
+struct Query {
+    n: u64,
+    x: f64,
+    y: f64,
+}
+
+/// Splits a line into fields the way the module docs say.
+fn fields(line: &str) -> impl Iterator<Item = &str> {
+    line.split([',', ';', '\t', ' ']).filter(|s| !s.is_empty())
+}
+
+/// What a line is.
+enum Line {
+    Skip,
+    Header,
+    Point(f64, f64),
+}
+
+fn classify(line: &str, first_data: bool) -> std::result::Result<Line, String> {
+    let t = line.trim();
+    if t.is_empty() || t.starts_with('#') {
+        return Ok(Line::Skip);
+    }
+    let mut f = fields(t);
+    let (a, b) = (f.next(), f.next());
+    let xy = a
+        .zip(b)
+        .and_then(|(a, b)| Some((a.parse::<f64>().ok()?, b.parse::<f64>().ok()?)));
+    match xy {
+        Some((x, y)) if x.is_finite() && y.is_finite() => Ok(Line::Point(x, y)),
+        Some(_) => Err("x or y is not a finite number".into()),
+        None if first_data => Ok(Line::Header),
+        None => Err(format!(
+            "expected x and y as the first two fields, found \"{}\"",
+            t.chars().take(60).collect::<String>()
+        )),
+    }
+}
+
+/// Lazily reads the query points of a file.
+struct QueryReader {
+    path: PathBuf,
+    lines: std::io::Lines<BufReader<File>>,
+    line_no: u64,
+    n: u64,
+    seen_data: bool,
+}
+
+impl QueryReader {
+    fn open(path: &Path) -> Result<QueryReader> {
+        let f = File::open(path).map_err(|e| Error::io(path, e))?;
+        Ok(QueryReader {
+            path: path.to_path_buf(),
+            lines: BufReader::with_capacity(1 << 16, f).lines(),
+            line_no: 0,
+            n: 0,
+            seen_data: false,
+        })
+    }
+
+    fn next(&mut self) -> Result<Option<Query>> {
+        for line in self.lines.by_ref() {
+            self.line_no += 1;
+            let line = line.map_err(|e| Error::io(&self.path, e))?;
+            let first = !self.seen_data;
+            match classify(&line, first) {
+                Ok(Line::Skip) => {}
+                Ok(Line::Header) => self.seen_data = true,
+                Ok(Line::Point(x, y)) => {
+                    self.seen_data = true;
+                    let q = Query { n: self.n, x, y };
+                    self.n += 1;
+                    return Ok(Some(q));
+                }
+                Err(message) => {
+                    return Err(Error::Parse {
+                        path: self.path.clone(),
+                        line: self.line_no,
+                        message,
+                    });
+                }
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// A [`TriangleSink`] answering height queries (see the module docs).
+pub struct SampleSink {
+    queries: PathBuf,
+    output: PathBuf,
+    count: u64,
+    sorted: bool,
+    reader: Option<QueryReader>,
+    /// The next query not yet loaded.
+    next: Option<Query>,
+    /// Loaded, unanswered queries by bucket.
+    pending: HashMap<(i64, i64), Vec<Query>>,
+    pending_count: usize,
+    max_pending: usize,
+    bucket: f64,
+    bounds: [f64; 4],
+    front: f64,
+    answers: Option<File>,
+    answered: u64,
+}
+
+impl SampleSink {
+    /// Reads `queries` once (validating every line, checking whether they are sorted by `y`);
+    /// answers go to `output` at the end.
+    ///
+    /// # Errors
+    /// [`Error::Io`] / [`Error::Parse`] naming the queries file and line.
+    pub fn new(queries: &Path, output: &Path) -> Result<SampleSink> {
+        let mut r = QueryReader::open(queries)?;
+        let mut count = 0;
+        let mut sorted = true;
+        let mut last = f64::NEG_INFINITY;
+        while let Some(q) = r.next()? {
+            count += 1;
+            sorted &= q.y >= last;
+            last = q.y;
+        }
+        Ok(SampleSink {
+            queries: queries.to_path_buf(),
+            output: output.to_path_buf(),
+            count,
+            sorted,
+            reader: None,
+            next: None,
+            pending: HashMap::new(),
+            pending_count: 0,
+            max_pending: 0,
+            bucket: 1.0,
+            bounds: [0.0; 4],
+            front: f64::NEG_INFINITY,
+            answers: None,
+            answered: 0,
+        })
+    }
+
+    /// Are the queries sorted by `y` (so that they are read lazily)?
+    pub fn sorted(&self) -> bool {
+        self.sorted
+    }
+
+    fn key(&self, x: f64, y: f64) -> (i64, i64) {
+        (
+            ((x - self.bounds[0]) / self.bucket).floor() as i64,
+            ((y - self.bounds[1]) / self.bucket).floor() as i64,
+        )
+    }
+
+    fn answer(&mut self, n: u64, z: f64) -> Result<()> {
+        let f = self.answers.as_mut().expect("created in begin");
+        f.seek(SeekFrom::Start(n * 8))
+            .and_then(|_| f.write_all(&z.to_le_bytes()))
+            .map_err(|e| Error::io(&self.output, e))?;
+        self.answered += 1;
+        Ok(())
+    }
+
+    /// Loads queries up to `y` (all of them when unsorted).
+    fn load_until(&mut self, y: f64) -> Result<()> {
+        loop {
+            if self.next.is_none() {
+                self.next = match self.reader.as_mut() {
+                    Some(r) => r.next()?,
+                    None => None,
+                };
+                if self.next.is_none() {
+                    self.reader = None;
+                    return Ok(());
+                }
+            }
+            let q = self.next.expect("just read");
+            if self.sorted && q.y > y {
+                return Ok(());
+            }
+            self.next = None;
+            let b = self.bounds;
+            if q.x < b[0] || q.x > b[2] || q.y < b[1] || q.y > b[3] {
+                continue; // outside the data: stays NaN
+            }
+            let k = self.key(q.x, q.y);
+            self.pending.entry(k).or_default().push(q);
+            self.pending_count += 1;
+            self.max_pending = self.max_pending.max(self.pending_count);
+        }
+    }
+
+    fn try_bucket(&mut self, k: (i64, i64), t: &Tri) -> Result<()> {
+        let Some(v) = self.pending.get_mut(&k) else {
+            return Ok(());
+        };
+        let mut found = Vec::new();
+        v.retain(|q| {
+            let p = [q.x, q.y];
+            let loc = t.locate(p);
+            if loc == Location::Outside {
+                return true;
+            }
+            found.push((q.n, t.value_at(p, loc)));
+            false
+        });
+        if v.is_empty() {
+            self.pending.remove(&k);
+        }
+        self.pending_count -= found.len();
+        for (n, z) in found {
+            self.answer(n, z)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the output: every query line with its answer.
+    fn write_output(&mut self) -> Result<u64> {
+        let answers = self.answers.as_mut().expect("created in begin");
+        answers
+            .seek(SeekFrom::Start(0))
+            .map_err(|e| Error::io(&self.output, e))?;
+        let mut answers = BufReader::with_capacity(1 << 16, answers);
+        let f = File::open(&self.queries).map_err(|e| Error::io(&self.queries, e))?;
+        let mut out = AtomicFile::create(&self.output)?;
+        let mut w = BufWriter::with_capacity(1 << 16, &mut out);
+        let io = |e| Error::io(&self.output, e);
+        let mut seen_data = false;
+        for line in BufReader::with_capacity(1 << 16, f).lines() {
+            let line = line.map_err(|e| Error::io(&self.queries, e))?;
+            let sep = if line.contains(',') {
+                ","
+            } else if line.contains(';') {
+                ";"
+            } else if line.contains('\t') {
+                "\t"
+            } else {
+                " "
+            };
+            match classify(&line, !seen_data) {
+                Ok(Line::Skip) => writeln!(w, "{line}").map_err(io)?,
+                Ok(Line::Header) => {
+                    seen_data = true;
+                    writeln!(w, "{line}{sep}z").map_err(io)?;
+                }
+                Ok(Line::Point(..)) => {
+                    seen_data = true;
+                    let mut b = [0u8; 8];
+                    answers.read_exact(&mut b).map_err(io)?;
+                    let z = f64::from_le_bytes(b);
+                    if z.is_nan() {
+                        writeln!(w, "{line}{sep}").map_err(io)?;
+                    } else {
+                        writeln!(w, "{line}{sep}{z}").map_err(io)?;
+                    }
+                }
+                Err(message) => {
+                    return Err(Error::Parse {
+                        path: self.queries.clone(),
+                        line: 0,
+                        message: format!("the file changed while it was read: {message}"),
+                    });
+                }
+            }
+        }
+        w.flush().map_err(io)?;
+        drop(w);
+        out.commit()
+    }
+}
+
+impl TriangleSink for SampleSink {
+    fn begin(&mut self, info: &StreamInfo) -> Result<()> {
+        self.bounds = info.bounds;
+        let extent = (info.bounds[2] - info.bounds[0]).max(info.bounds[3] - info.bounds[1]);
+        self.bucket = if extent > 0.0 && extent.is_finite() {
+            extent / 1024.0
+        } else {
+            1.0
+        };
+        let dir = match self.output.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let f = tempfile::tempfile_in(&dir).map_err(|e| Error::io(&dir, e))?;
+        let mut w = BufWriter::with_capacity(1 << 16, f);
+        for _ in 0..self.count {
+            w.write_all(&f64::NAN.to_le_bytes())
+                .map_err(|e| Error::io(&dir, e))?;
+        }
+        self.answers = Some(
+            w.into_inner()
+                .map_err(|e| Error::io(&dir, e.into_error()))?,
+        );
+        self.reader = Some(QueryReader::open(&self.queries)?);
+        if !self.sorted {
+            self.load_until(f64::INFINITY)?;
+        }
+        Ok(())
+    }
+
+    fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
+        let Some(t) = Tri::new(t) else {
+            return Ok(());
+        };
+        let [x0, y0, x1, y1] = t.bbox();
+        if y1 > self.front {
+            self.front = y1;
+            self.load_until(y1)?;
+        }
+        if self.pending_count == 0 {
+            return Ok(());
+        }
+        let (k0, k1) = (self.key(x0, y0), self.key(x1, y1));
+        let cells = (k1.0 - k0.0 + 1) as u64 * (k1.1 - k0.1 + 1) as u64;
+        if cells > self.pending.len() as u64 {
+            let keys: Vec<(i64, i64)> = self.pending.keys().copied().collect();
+            for k in keys {
+                if (k0.0..=k1.0).contains(&k.0) && (k0.1..=k1.1).contains(&k.1) {
+                    self.try_bucket(k, &t)?;
+                }
+            }
+        } else {
+            for ky in k0.1..=k1.1 {
+                for kx in k0.0..=k1.0 {
+                    self.try_bucket((kx, ky), &t)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<serde_json::Value> {
+        self.load_until(f64::INFINITY)?;
+        let bytes = self.write_output()?;
+        Ok(json!({
+            "path": self.output,
+            "queries": self.count,
+            "answered": self.answered,
+            "outside": self.count - self.answered,
+            "sorted_by_y": self.sorted,
+            "max_pending_queries": self.max_pending,
+            "bytes": bytes,
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::products::testutil::{feed, in_sweep_order, random_tin, shuffled_with_watermarks};
+
+    fn run(
+        queries: &str,
+        steps: &[crate::products::testutil::Step],
+    ) -> (String, serde_json::Value) {
+        let dir = tempfile::tempdir().unwrap();
+        let q = dir.path().join("q.csv");
+        std::fs::write(&q, queries).unwrap();
+        let out = dir.path().join("out.csv");
+        let mut sink = SampleSink::new(&q, &out).unwrap();
+        let info = StreamInfo {
+            crs: None,
+            bounds: [0.0, 0.0, 100.0, 100.0],
+        };
+        let s = feed(&mut sink, &info, steps);
+        (std::fs::read_to_string(&out).unwrap(), s)
+    }
+
+    #[test]
+    fn plane_heights_outside_empty_in_any_order() {
+        let f = |x: f64, y: f64| 0.5 * x + 0.25 * y - 3.0;
+        let tris = random_tin(300, 100.0, 11, f);
+        let mut text = String::from("# points\nx,y,name\n");
+        let mut r = crate::products::geom::SplitMix(3);
+        let mut pts = Vec::new();
+        for i in 0..200 {
+            let (x, y) = (r.next_f64() * 120.0 - 10.0, r.next_f64() * 100.0);
+            pts.push((x, y, i));
+        }
+        pts.push((0.0, 0.0, 999)); // a corner vertex
+        pts.push((50.0, 100.0, 998)); // on the top edge
+        pts.sort_by(|a, b| a.1.total_cmp(&b.1));
+        for (x, y, i) in &pts {
+            text.push_str(&format!("{x},{y},p{i}\n"));
+        }
+        let (a, sa) = run(&text, &in_sweep_order(&tris));
+        let (b, _) = run(&text, &shuffled_with_watermarks(&tris, 8));
+        assert_eq!(a, b);
+        assert_eq!(sa["sorted_by_y"], true);
+        let lines: Vec<&str> = a.lines().collect();
+        assert_eq!(lines[0], "# points");
+        assert_eq!(lines[1], "x,y,name,z");
+        for l in &lines[2..] {
+            let c: Vec<&str> = l.split(',').collect();
+            let (x, y): (f64, f64) = (c[0].parse().unwrap(), c[1].parse().unwrap());
+            if (0.0..=100.0).contains(&x) {
+                let z: f64 = c[3].parse().unwrap();
+                assert!((z - f(x, y)).abs() < 1e-9, "{l}");
+            } else {
+                assert_eq!(c[3], "", "{l}");
+            }
+        }
+    }
+
+    #[test]
+    fn unsorted_queries_are_all_loaded_and_still_answered() {
+        let tris = random_tin(50, 100.0, 2, |x, _| x);
+        let (out, s) = run("50 60\n10 20\n", &in_sweep_order(&tris));
+        assert_eq!(s["sorted_by_y"], false);
+        let z: Vec<f64> = out
+            .lines()
+            .map(|l| l.split(' ').nth(2).unwrap().parse().unwrap())
+            .collect();
+        assert!((z[0] - 50.0).abs() < 1e-9 && (z[1] - 10.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_bad_line_is_reported_with_its_number() {
+        let dir = tempfile::tempdir().unwrap();
+        let q = dir.path().join("q.csv");
+        std::fs::write(&q, "x,y\n1,2\n3,oops\n").unwrap();
+        let e = SampleSink::new(&q, &dir.path().join("o.csv"))
+            .err()
+            .unwrap();
+        assert!(matches!(e, Error::Parse { line: 3, .. }), "{e}");
+    }
+}

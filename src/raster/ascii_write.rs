@@ -1,0 +1,203 @@
+//! ESRI ASCII grid output (`.asc`).
+//!
+//! The header uses `xllcenter`/`yllcenter` (the centre of the south-western cell), which for an
+//! aligned grid are exact multiples of the cell size:
+//!
+//! ```text
+//! ncols        3
+//! nrows        2
+//! xllcenter    511000
+//! yllcenter    122000
+//! cellsize     1
+//! NODATA_value -9999
+//! 1.5 2 2.5
+//! …
+//! ```
+//!
+//! Rows are text of varying length and run north to south, while a DEM is produced south to
+//! north, so cells first go to an anonymous binary scratch file (random access, deleted by the
+//! operating system even if the process is killed) and [`GridWriter::finish`] transcribes it, row
+//! by row, into the output. Values are written in the shortest form that reads back as the same
+//! `f32`. The output appears under its final name only when complete.
+
+use super::grid::{GridSpec, GridWriter, check_cell};
+use crate::error::{Error, Result};
+use crate::io::AtomicFile;
+use std::fs::File;
+use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+/// An ESRI ASCII grid being written (see the module docs).
+#[derive(Debug)]
+pub struct AsciiGridWriter {
+    path: PathBuf,
+    spec: GridSpec,
+    scratch: File,
+    written: Vec<bool>,
+}
+
+impl AsciiGridWriter {
+    /// Creates the scratch file next to `path` (the output itself is created by `finish`).
+    ///
+    /// # Errors
+    /// [`Error::Output`] for an empty grid; [`Error::Io`] naming `path`'s directory.
+    pub fn create(path: &Path, spec: &GridSpec) -> Result<AsciiGridWriter> {
+        if spec.is_empty() || !(spec.cell > 0.0 && spec.cell.is_finite()) {
+            return Err(Error::Output {
+                path: path.to_path_buf(),
+                message: format!(
+                    "the grid is empty or its cell size is bad ({} × {} cells of {})",
+                    spec.cols, spec.rows, spec.cell
+                ),
+            });
+        }
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let scratch = tempfile::tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
+        Ok(AsciiGridWriter {
+            path: path.to_path_buf(),
+            spec: spec.clone(),
+            scratch,
+            written: vec![false; spec.rows as usize],
+        })
+    }
+
+    fn offset(&self, row: u32, col: u32) -> u64 {
+        (u64::from(row) * u64::from(self.spec.cols) + u64::from(col)) * 4
+    }
+
+    fn io(&self, e: std::io::Error) -> Error {
+        Error::io(&self.path, e)
+    }
+
+    fn header(&self) -> String {
+        let s = &self.spec;
+        let xll = s.origin[0] + s.cell / 2.0;
+        let yll = s.origin[1] - f64::from(s.rows) * s.cell + s.cell / 2.0;
+        format!(
+            "ncols        {}\nnrows        {}\nxllcenter    {}\nyllcenter    {}\ncellsize     {}\n\
+             NODATA_value {}\n",
+            s.cols, s.rows, xll, yll, s.cell, s.nodata
+        )
+    }
+}
+
+impl GridWriter for AsciiGridWriter {
+    fn spec(&self) -> &GridSpec {
+        &self.spec
+    }
+
+    fn write_row(&mut self, row: u32, values: &[f32]) -> Result<()> {
+        check_cell(&self.spec, &self.path, row, 0)?;
+        if values.len() != self.spec.cols as usize {
+            return Err(Error::Output {
+                path: self.path.clone(),
+                message: format!("row {row} has {} values", values.len()),
+            });
+        }
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let off = self.offset(row, 0);
+        self.scratch
+            .seek(SeekFrom::Start(off))
+            .and_then(|_| self.scratch.write_all(&bytes))
+            .map_err(|e| Error::io(&self.path, e))?;
+        self.written[row as usize] = true;
+        Ok(())
+    }
+
+    fn write_cell(&mut self, row: u32, col: u32, value: f32) -> Result<()> {
+        check_cell(&self.spec, &self.path, row, col)?;
+        if !self.written[row as usize] {
+            let nodata = vec![self.spec.nodata; self.spec.cols as usize];
+            self.write_row(row, &nodata)?;
+        }
+        let off = self.offset(row, col);
+        self.scratch
+            .seek(SeekFrom::Start(off))
+            .and_then(|_| self.scratch.write_all(&value.to_le_bytes()))
+            .map_err(|e| Error::io(&self.path, e))
+    }
+
+    fn read_cell(&mut self, row: u32, col: u32) -> Result<f32> {
+        check_cell(&self.spec, &self.path, row, col)?;
+        if !self.written[row as usize] {
+            return Ok(self.spec.nodata);
+        }
+        let off = self.offset(row, col);
+        let mut b = [0u8; 4];
+        self.scratch
+            .seek(SeekFrom::Start(off))
+            .and_then(|_| self.scratch.read_exact(&mut b))
+            .map_err(|e| Error::io(&self.path, e))?;
+        Ok(f32::from_le_bytes(b))
+    }
+
+    fn finish(mut self: Box<Self>) -> Result<u64> {
+        let mut out = AtomicFile::create(&self.path)?;
+        out.write_all(self.header().as_bytes())
+            .map_err(|e| out.err(e))?;
+        let cols = self.spec.cols as usize;
+        let mut raw = vec![0u8; cols * 4];
+        let mut line = String::with_capacity(cols * 8);
+        self.scratch
+            .seek(SeekFrom::Start(0))
+            .map_err(|e| self.io(e))?;
+        let mut reader = std::io::BufReader::with_capacity(1 << 20, &mut self.scratch);
+        let mut text = BufWriter::with_capacity(1 << 16, &mut out);
+        for row in 0..self.spec.rows as usize {
+            line.clear();
+            if self.written[row] {
+                reader
+                    .read_exact(&mut raw)
+                    .map_err(|e| Error::io(&self.path, e))?;
+                for (i, c) in raw.chunks_exact(4).enumerate() {
+                    if i > 0 {
+                        line.push(' ');
+                    }
+                    let v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+                    line.push_str(&v.to_string());
+                }
+            } else {
+                reader
+                    .seek_relative(raw.len() as i64)
+                    .map_err(|e| Error::io(&self.path, e))?;
+                let n = self.spec.nodata.to_string();
+                line.push_str(&vec![n.as_str(); cols].join(" "));
+            }
+            line.push('\n');
+            text.write_all(line.as_bytes())
+                .map_err(|e| Error::io(&self.path, e))?;
+        }
+        text.flush().map_err(|e| Error::io(&self.path, e))?;
+        drop(text);
+        out.commit()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_rows_north_to_south_and_nodata_fill() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("g.asc");
+        let spec = GridSpec::aligned(0.5, 2, 4, 2, 3, -9999.0);
+        let mut w: Box<dyn GridWriter> = Box::new(AsciiGridWriter::create(&path, &spec).unwrap());
+        w.write_row(2, &[1.0, 2.5]).unwrap();
+        w.write_cell(0, 1, 0.1).unwrap();
+        assert_eq!(w.read_cell(0, 1).unwrap(), 0.1);
+        assert_eq!(w.read_cell(0, 0).unwrap(), -9999.0);
+        assert_eq!(w.read_cell(1, 0).unwrap(), -9999.0);
+        assert!(!path.exists());
+        w.finish().unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(
+            text,
+            "ncols        2\nnrows        3\nxllcenter    1\nyllcenter    2\ncellsize     0.5\n\
+             NODATA_value -9999\n-9999 0.1\n-9999 -9999\n1 2.5\n"
+        );
+    }
+}

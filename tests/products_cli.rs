@@ -1,0 +1,338 @@
+//! The terrain-product commands end to end: tiles that mosaic exactly into the single run's
+//! raster (real LAS data), several products in one pass equal to the separate commands, volumes
+//! from the command line, and clear errors.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(args: &[&str]) -> Output {
+    let o = run(args);
+    assert!(
+        o.status.success(),
+        "sweeptin {args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The real data folder: `SWEEPTIN_DATA`, else `../shared/data` beside the repository, else
+/// `/work/shared/data` (as in `tests/lidar_data.rs`).
+fn data_dir() -> PathBuf {
+    [
+        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
+        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
+        Some(PathBuf::from("/work/shared/data")),
+    ]
+    .into_iter()
+    .flatten()
+    .find(|d| d.join("lidar").is_dir())
+    .expect("real test data not found: set SWEEPTIN_DATA to the folder holding lidar/")
+}
+
+/// `(cols, rows, values)` of a float32 TIFF.
+fn read_tiff(path: &Path) -> (usize, usize, Vec<f32>) {
+    let mut d = tiff::decoder::Decoder::new(std::fs::File::open(path).unwrap()).unwrap();
+    let (w, h) = d.dimensions().unwrap();
+    let tiff::decoder::DecodingResult::F32(v) = d.read_image().unwrap() else {
+        panic!("{} is not float32", path.display());
+    };
+    (w as usize, h as usize, v)
+}
+
+/// A real AHN3 tile (ground points) split into two tiles at x = 84900, each rasterised with
+/// `--bbox` and a 40 m buffer: the two rasters side by side are the single run's raster, bit for
+/// bit.
+#[test]
+fn tiles_mosaic_equals_the_single_run() {
+    let laz = data_dir().join("lidar/ahn3_delft_cropped_1.laz");
+    let dir = tempfile::tempdir().unwrap();
+    let (full, a, b) = (
+        dir.path().join("full.tif"),
+        dir.path().join("a.tif"),
+        dir.path().join("b.tif"),
+    );
+    let common = ["--class", "2", "--buffer", "40", "-q"];
+    for (out, bbox) in [
+        (&full, "84810,447415,84990,447640"),
+        (&a, "84810,447415,84900,447640"),
+        (&b, "84900,447415,84990,447640"),
+    ] {
+        let mut args = vec!["dem", s(&laz), "-o", s(out), "--bbox", bbox];
+        args.extend_from_slice(&common);
+        ok(&args);
+    }
+    let (fw, fh, f) = read_tiff(&full);
+    let (aw, ah, av) = read_tiff(&a);
+    let (bw, bh, bv) = read_tiff(&b);
+    assert_eq!((fw, fh), (180, 225));
+    assert_eq!((aw, ah, bw, bh), (90, 225, 90, 225));
+    let mut with_data = 0;
+    for row in 0..fh {
+        for col in 0..fw {
+            let tile = if col < aw {
+                av[row * aw + col]
+            } else {
+                bv[row * bw + col - aw]
+            };
+            let single = f[row * fw + col];
+            assert_eq!(tile.to_bits(), single.to_bits(), "row {row}, column {col}");
+            with_data += usize::from(single != -9999.0);
+        }
+    }
+    assert!(with_data > 40_000, "{with_data}");
+}
+
+fn write_points(path: &Path, f: impl Fn(f64, f64) -> f64, seed: u64) {
+    let mut r = seed;
+    let mut next = || {
+        r ^= r << 13;
+        r ^= r >> 7;
+        r ^= r << 17;
+        (r % 1_000_000) as f64 / 1_000_000.0
+    };
+    let mut text = String::new();
+    let mut pts = vec![(0.0, 0.0), (60.0, 0.0), (0.0, 40.0), (60.0, 40.0)];
+    for _ in 0..1500 {
+        pts.push((next() * 60.0, next() * 40.0));
+    }
+    for (x, y) in pts {
+        text.push_str(&format!("{x},{y},{}\n", f(x, y)));
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+fn bumps(x: f64, y: f64) -> f64 {
+    10.0 + 3.0 * (x / 7.0).sin() * (y / 5.0).cos()
+}
+
+/// `sweeptin products` writes, in one pass, the same files as the single-product commands.
+#[test]
+fn one_pass_products_equal_separate_commands() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    let pts = d("pts.xyz");
+    write_points(&pts, bumps, 7);
+    std::fs::write(d("q.csv"), "x,y,id\n1,1,a\n30.5,20.25,b\n70,10,c\n").unwrap();
+    std::fs::write(
+        d("road.geojson"),
+        r#"{"type":"LineString","coordinates":[[-5,3],[30,20],[59,39]]}"#,
+    )
+    .unwrap();
+    std::fs::write(
+        d("area.geojson"),
+        r#"{"type":"Polygon","coordinates":[[[5,5],[50,5],[50,35],[5,35],[5,5]]]}"#,
+    )
+    .unwrap();
+    let o = ok(&[
+        "products",
+        s(&pts),
+        "--dem",
+        s(&d("all.tif")),
+        "--cell",
+        "0.5",
+        "--contours",
+        s(&d("all.geojson")),
+        "--interval",
+        "0.5",
+        "--volume-plane",
+        "10",
+        "--boundary",
+        s(&d("area.geojson")),
+        "--sample-points",
+        s(&d("q.csv")),
+        "--sample-out",
+        s(&d("all_q.csv")),
+        "--profile-line",
+        s(&d("road.geojson")),
+        "--profile-out",
+        s(&d("all_p.csv")),
+        "--mesh",
+        s(&d("all.ply")),
+        "--json",
+    ]);
+    let all: Value = serde_json::from_slice(&o.stdout).unwrap();
+    ok(&[
+        "dem",
+        s(&pts),
+        "-o",
+        s(&d("dem.tif")),
+        "--cell",
+        "0.5",
+        "-q",
+    ]);
+    ok(&[
+        "contours",
+        s(&pts),
+        "-o",
+        s(&d("c.geojson")),
+        "--interval",
+        "0.5",
+        "-q",
+    ]);
+    ok(&[
+        "sample",
+        s(&pts),
+        "--points",
+        s(&d("q.csv")),
+        "-o",
+        s(&d("q_out.csv")),
+        "-q",
+    ]);
+    ok(&[
+        "profile",
+        s(&pts),
+        "--line",
+        s(&d("road.geojson")),
+        "-o",
+        s(&d("p.csv")),
+        "-q",
+    ]);
+    let v = ok(&[
+        "volume",
+        s(&pts),
+        "--plane",
+        "10",
+        "--boundary",
+        s(&d("area.geojson")),
+        "--json",
+    ]);
+    let vol: Value = serde_json::from_slice(&v.stdout).unwrap();
+    let same = |a: &str, b: &str| {
+        assert_eq!(
+            std::fs::read(d(a)).unwrap(),
+            std::fs::read(d(b)).unwrap(),
+            "{a} vs {b}"
+        )
+    };
+    same("all.tif", "dem.tif");
+    same("all.geojson", "c.geojson");
+    same("all_q.csv", "q_out.csv");
+    same("all_p.csv", "p.csv");
+    for k in ["cut_volume", "fill_volume", "cut_area", "fill_area", "area"] {
+        assert_eq!(all["volume"][k], vol[k], "{k}");
+    }
+    assert!((vol["area"].as_f64().unwrap() - 1350.0).abs() < 1e-9);
+    assert_eq!(all["mesh"]["triangles"], all["run"]["triangles"]);
+    let q = std::fs::read_to_string(d("q_out.csv")).unwrap();
+    let lines: Vec<&str> = q.lines().collect();
+    assert_eq!(lines[0], "x,y,id,z");
+    assert!(lines[3].ends_with("c,"), "outside → empty: {q}");
+}
+
+/// Volumes from the command line against a plane and against a second surface (planes on
+/// different point sets: exact answers).
+#[test]
+fn volume_against_plane_and_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.xyz");
+    let b = dir.path().join("b.xyz");
+    write_points(&a, |x, y| 0.1 * x + 0.2 * y, 3);
+    write_points(&b, |x, _| 0.1 * x + 1.0, 4);
+    let o = ok(&["volume", s(&a), "--plane", "2", "--json"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    // d = 0.1x + 0.2y − 2 over [0,60]×[0,40]: ∫ = 2400 × (3 + 4 − 2) = 12000.
+    let net = v["net_volume"].as_f64().unwrap();
+    assert!((net - 12_000.0).abs() < 1e-6, "{v}");
+    let o = ok(&["volume", s(&a), "--surface", s(&b), "--json"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    // d = 0.2y − 1: fill for y < 5 (60 × 5 × 0.5 = 150), cut for y > 5 (60 × 35 × 3.5 = 7350).
+    let f = |k: &str| v[k].as_f64().unwrap();
+    assert!((f("cut_volume") - 7350.0).abs() < 1e-6, "{v}");
+    assert!((f("fill_volume") - 150.0).abs() < 1e-6, "{v}");
+    assert!((f("cut_area") - 2100.0).abs() < 1e-6, "{v}");
+    assert!((f("fill_area") - 300.0).abs() < 1e-6, "{v}");
+    let text = ok(&["volume", s(&a), "--plane", "2"]);
+    let out = String::from_utf8_lossy(&text.stdout);
+    assert!(out.contains("net volume   12000.000"), "{out}");
+}
+
+#[test]
+fn clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("p.xyz");
+    write_points(&pts, bumps, 1);
+    let out = dir.path().join("d.tif");
+    let o = run(&["dem", s(&pts), "-o", s(&out), "--bbox", "0.3,0,10,10", "-q"]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("--snap") && e.contains("0.3"), "{e}");
+    ok(&[
+        "dem",
+        s(&pts),
+        "-o",
+        s(&out),
+        "--bbox",
+        "0.3,0,10,10",
+        "--snap",
+        "-q",
+    ]);
+    let (w, h, _) = read_tiff(&out);
+    assert_eq!((w, h), (10, 10));
+    let o = run(&["dem", s(&pts), "-o", "/no/such/dir/d.tif", "-q"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("/no/such/dir") && e.contains("does not exist"),
+        "{e}"
+    );
+    let bad = dir.path().join("bad.geojson");
+    std::fs::write(&bad, r#"{"type":"Polygon","coordinates":[[[0,0],[1,1]]]}"#).unwrap();
+    let o = run(&["volume", s(&pts), "--plane", "0", "--boundary", s(&bad)]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("bad.geojson") && e.contains("fewer than 3"),
+        "{e}"
+    );
+    let o = run(&["volume", s(&pts)]);
+    assert_eq!(o.status.code(), Some(2));
+    let asc = dir.path().join("d.asc");
+    let png = dir.path().join("s.png");
+    let o = run(&["dem", s(&pts), "-o", s(&asc), "--hillshade", s(&png), "-q"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("GeoTIFF") && !asc.exists(), "{e}");
+}
+
+/// A streaming mesh written by `sweeptin tin` gives the same products as the points themselves
+/// (the mesh is replayed into the sinks, with its CRS).
+#[test]
+fn streaming_mesh_input_gives_the_same_products() {
+    let laz = data_dir().join("lidar/lidR_Topography.laz");
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    ok(&["tin", s(&laz), "--class", "2", "-o", s(&d("t.stin")), "-q"]);
+    ok(&["dem", s(&d("t.stin")), "-o", s(&d("a.tif")), "-q"]);
+    ok(&["dem", s(&laz), "--class", "2", "-o", s(&d("b.tif")), "-q"]);
+    ok(&["contours", s(&d("t.stin")), "-o", s(&d("a.geojson")), "-q"]);
+    ok(&[
+        "contours",
+        s(&laz),
+        "--class",
+        "2",
+        "-o",
+        s(&d("b.geojson")),
+        "-q",
+    ]);
+    for (a, b) in [("a.tif", "b.tif"), ("a.geojson", "b.geojson")] {
+        assert_eq!(
+            std::fs::read(d(a)).unwrap(),
+            std::fs::read(d(b)).unwrap(),
+            "{a}"
+        );
+    }
+    let c = std::fs::read_to_string(d("a.geojson")).unwrap();
+    assert!(
+        c.contains("urn:ogc:def:crs:EPSG::2949"),
+        "the CRS is carried"
+    );
+}

@@ -1,0 +1,246 @@
+//! Interoperability of the terrain products with GDAL (Debian package `gdal-bin`): `gdalinfo`
+//! reads the GeoTIFF's and the ASCII grid's origin, cell size, nodata and CRS, and the values sit at
+//! the cell centres; `ogrinfo` reads the contours; `gdaldem hillshade` agrees with ours.
+//!
+//! Each test is skipped, with a message, when the GDAL tool is not installed
+//! (`apt-get install -y gdal-bin`).
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn sweeptin(args: &[&str]) -> Output {
+    let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "sweeptin {args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+/// Runs a GDAL tool; `None` (and a message) when it is not installed.
+fn gdal(tool: &str, args: &[&str]) -> Option<String> {
+    match Command::new(tool).args(args).output() {
+        Ok(o) => {
+            assert!(
+                o.status.success(),
+                "{tool} {args:?}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            Some(String::from_utf8_lossy(&o.stdout).into_owned())
+        }
+        Err(_) => {
+            eprintln!("SKIPPED: {tool} not found (install GDAL: apt-get install -y gdal-bin)");
+            None
+        }
+    }
+}
+
+/// The real data folder: `SWEEPTIN_DATA`, else `../shared/data` beside the repository, else
+/// `/work/shared/data` (as in `tests/lidar_data.rs`).
+fn data_dir() -> PathBuf {
+    [
+        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
+        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
+        Some(PathBuf::from("/work/shared/data")),
+    ]
+    .into_iter()
+    .flatten()
+    .find(|d| d.join("lidar").is_dir())
+    .expect("real test data not found: set SWEEPTIN_DATA to the folder holding lidar/")
+}
+
+fn plane(x: f64, y: f64) -> f64 {
+    250.0 + 0.02 * (x - 511_000.0) - 0.05 * (y - 122_000.0)
+}
+
+/// Random points on a plane over [511000, 511100] × [122000, 122080], corners included.
+fn write_plane_points(path: &Path) {
+    let mut s = String::new();
+    let mut r = 99u64;
+    let mut next = || {
+        r ^= r << 13;
+        r ^= r >> 7;
+        r ^= r << 17;
+        (r % 1_000_000) as f64 / 1_000_000.0
+    };
+    let corners = [(0.0, 0.0), (100.0, 0.0), (0.0, 80.0), (100.0, 80.0)];
+    let mut pts: Vec<(f64, f64)> = corners.to_vec();
+    for _ in 0..3000 {
+        pts.push((next() * 100.0, next() * 80.0));
+    }
+    for (dx, dy) in pts {
+        let (x, y) = (511_000.0 + dx, 122_000.0 + dy);
+        s.push_str(&format!("{x} {y} {}\n", plane(x, y)));
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+fn geotransform(info: &Value) -> Vec<f64> {
+    info["geoTransform"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn geotiff_and_ascii_grid_read_by_gdal() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("plane.xyz");
+    write_plane_points(&pts);
+    let tif = dir.path().join("dem.tif");
+    let asc = dir.path().join("dem.asc");
+    let p = |x: &Path| x.to_str().unwrap().to_string();
+    for out in [&tif, &asc] {
+        sweeptin(&[
+            "dem",
+            &p(&pts),
+            "-o",
+            &p(out),
+            "--cell",
+            "0.5",
+            "--crs",
+            "EPSG:3794",
+            "-q",
+        ]);
+    }
+    let Some(text) = gdal("gdalinfo", &["-json", &p(&tif)]) else {
+        return;
+    };
+    let info: Value = serde_json::from_str(&text).unwrap();
+    // Centres from 511000 to 511100 and 122000 to 122080 every 0.5: the outer corner is half a
+    // cell beyond.
+    assert_eq!(
+        geotransform(&info),
+        [510_999.75, 0.5, 0.0, 122_080.25, 0.0, -0.5]
+    );
+    assert_eq!(info["size"], serde_json::json!([201, 161]));
+    assert_eq!(info["bands"][0]["noDataValue"].as_f64(), Some(-9999.0));
+    assert_eq!(info["bands"][0]["type"], "Float32");
+    let wkt = info["coordinateSystem"]["wkt"].as_str().unwrap();
+    assert!(wkt.contains("ID[\"EPSG\",3794]"), "{wkt}");
+    assert_eq!(info["metadata"][""]["AREA_OR_POINT"], "Area");
+    // Values at cell centres (GDAL's pixel at a georeferenced point is the cell containing it).
+    for (x, y) in [
+        (511_000.0, 122_000.0),
+        (511_037.5, 122_012.0),
+        (511_100.0, 122_080.0),
+    ] {
+        let v = gdal(
+            "gdallocationinfo",
+            &[
+                "-valonly",
+                "-geoloc",
+                &p(&tif),
+                &x.to_string(),
+                &y.to_string(),
+            ],
+        )
+        .unwrap();
+        let v: f64 = v.trim().parse().unwrap();
+        assert!((v - plane(x, y)).abs() < 1e-4, "at ({x}, {y}): {v}");
+    }
+    let text = gdal("gdalinfo", &["-json", &p(&asc)]).unwrap();
+    let info: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(
+        geotransform(&info),
+        [510_999.75, 0.5, 0.0, 122_080.25, 0.0, -0.5]
+    );
+    assert_eq!(info["bands"][0]["noDataValue"].as_f64(), Some(-9999.0));
+}
+
+#[test]
+fn contours_read_by_ogrinfo() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("plane.xyz");
+    write_plane_points(&pts);
+    let out = dir.path().join("c.geojson");
+    let o = sweeptin(&[
+        "contours",
+        pts.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--interval",
+        "0.5",
+        "--crs",
+        "EPSG:3794",
+        "--json",
+    ]);
+    let summary: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let features = summary["contours"]["features"].as_u64().unwrap();
+    assert!(features > 5);
+    let Some(text) = gdal("ogrinfo", &["-so", "-al", out.to_str().unwrap()]) else {
+        return;
+    };
+    assert!(
+        text.contains(&format!("Feature Count: {features}")),
+        "{text}"
+    );
+    assert!(text.contains("Line String"), "{text}");
+    assert!(text.contains("elevation: Real"), "{text}");
+    assert!(text.contains("3794") || text.contains("Slovene"), "{text}");
+}
+
+/// Our hillshade against `gdaldem hillshade` on a real DEM: every cell where gdaldem computes a
+/// value (it leaves the edges and the cells next to nodata out) agrees within one grey level.
+#[test]
+fn hillshade_agrees_with_gdaldem() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("topo.tif");
+    let laz = data_dir().join("lidar/lidR_Topography.laz");
+    let png = dir.path().join("ours.png");
+    sweeptin(&[
+        "dem",
+        laz.to_str().unwrap(),
+        "-o",
+        dem.to_str().unwrap(),
+        "--class",
+        "2",
+        "--hillshade",
+        png.to_str().unwrap(),
+        "-q",
+    ]);
+    let theirs = dir.path().join("gdal.tif");
+    if gdal(
+        "gdaldem",
+        &[
+            "hillshade",
+            "-q",
+            dem.to_str().unwrap(),
+            theirs.to_str().unwrap(),
+        ],
+    )
+    .is_none()
+    {
+        return;
+    }
+    let mut d = tiff::decoder::Decoder::new(std::fs::File::open(&theirs).unwrap()).unwrap();
+    let (w, h) = d.dimensions().unwrap();
+    let tiff::decoder::DecodingResult::U8(g) = d.read_image().unwrap() else {
+        panic!("gdaldem writes bytes");
+    };
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let mut r = dec.read_info().unwrap();
+    let mut buf = vec![0; r.output_buffer_size().unwrap()];
+    r.next_frame(&mut buf).unwrap();
+    let (mut compared, mut off) = (0, 0);
+    for i in 0..(w * h) as usize {
+        if g[i] == 0 {
+            continue;
+        }
+        compared += 1;
+        let ours = buf[2 * i];
+        assert_eq!(buf[2 * i + 1], 255);
+        let diff = (i32::from(ours) - i32::from(g[i])).abs();
+        assert!(diff <= 1, "pixel {i}: ours {ours}, gdaldem {}", g[i]);
+        off += usize::from(diff > 0);
+    }
+    assert!(compared > 50_000, "{compared}");
+    assert!(off * 100 < compared, "{off} of {compared} differ by one");
+}
