@@ -28,8 +28,10 @@ pub mod points;
 pub mod predicates;
 pub mod products;
 pub mod raster;
+pub mod simplify;
 pub mod sweep;
 pub mod synth;
+pub mod tin;
 pub mod triangulation;
 pub mod validate;
 

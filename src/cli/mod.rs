@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 mod check;
 mod contours;
+mod crossval;
 mod dem;
 mod hillshade;
 mod info;
@@ -15,6 +16,7 @@ mod input;
 mod products;
 mod profile;
 mod sample;
+mod simplify;
 mod tin;
 mod volume;
 
@@ -48,6 +50,10 @@ enum Command {
     Hillshade(hillshade::Args),
     /// Several products from one pass: DEM, contours, volume, samples, profiles, mesh.
     Products(products::Args),
+    /// Leave-one-out accuracy of the TIN: remove a point, interpolate its height, put it back.
+    Crossval(crossval::Args),
+    /// Simplify a grid DEM (GeoTIFF, ESRI ASCII) into a TIN within an error bound.
+    Simplify(simplify::Args),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -68,6 +74,8 @@ pub fn main() -> ExitCode {
         Command::Profile(a) => profile::run(a),
         Command::Hillshade(a) => hillshade::run(a),
         Command::Products(a) => products::run(a),
+        Command::Simplify(a) => simplify::run(a),
+        Command::Crossval(a) => crossval::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,5 +1,7 @@
-//! Raster grids: the grid geometry ([`grid::GridSpec`]) and writers (float32 GeoTIFF, ESRI ASCII).
+//! Raster grids: the grid geometry ([`grid::GridSpec`]), writers (float32 GeoTIFF, ESRI ASCII)
+//! and the reader ([`read::RasterReader`]).
 
 pub mod ascii_write;
 pub mod geotiff_write;
 pub mod grid;
+pub mod read;

@@ -1,0 +1,218 @@
+//! Grid to TIN: the output is checked independently of the simplifier, by rasterising the output
+//! triangles (world coordinates, barycentric interpolation) back onto the grid.
+use std::path::PathBuf;
+use sweeptin::raster::read::RasterReader;
+use sweeptin::raster::read::RasterSpec;
+use sweeptin::simplify::{Options, Simplified, Stop, simplify};
+
+fn dem(name: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/dem")
+        .join(name);
+    p.exists().then_some(p)
+}
+
+/// What the rasterisation found.
+#[derive(Debug, Default)]
+struct Check {
+    max_error: f64,
+    uncovered_valid: usize,
+    covered_missing: usize,
+}
+
+/// Rasterises the TIN onto the grid: every valid cell centre inside (or on) a triangle gets the
+/// triangle's linear interpolation; vertices count as covered.
+fn rasterise(spec: &RasterSpec, h: &[f64], tin: &Simplified) -> Check {
+    let (cols, rows) = (spec.cols as usize, spec.rows as usize);
+    let t = spec.transform;
+    let det = t[1] * t[5] - t[2] * t[4];
+    // World → fractional cell index (centre of cell (c, r) at c + 0.5, r + 0.5).
+    let to_cell = |x: f64, y: f64| {
+        let (dx, dy) = (x - t[0], y - t[3]);
+        (
+            (t[5] * dx - t[2] * dy) / det,
+            (-t[4] * dx + t[1] * dy) / det,
+        )
+    };
+    let mut covered = vec![false; cols * rows];
+    let mut out = Check::default();
+    for v in &tin.vertices {
+        let (c, r) = to_cell(v[0], v[1]);
+        covered[(r - 0.5).round() as usize * cols + (c - 0.5).round() as usize] = true;
+    }
+    for tri in &tin.triangles {
+        let [a, b, c] = tri.map(|i| tin.vertices[i as usize]);
+        let pa = to_cell(a[0], a[1]);
+        let pb = to_cell(b[0], b[1]);
+        let pc = to_cell(c[0], c[1]);
+        let area = (pb.0 - pa.0) * (pc.1 - pa.1) - (pb.1 - pa.1) * (pc.0 - pa.0);
+        let lo_c = pa.0.min(pb.0).min(pc.0).floor().max(0.0) as usize;
+        let hi_c = (pa.0.max(pb.0).max(pc.0).ceil() as usize).min(cols);
+        let lo_r = pa.1.min(pb.1).min(pc.1).floor().max(0.0) as usize;
+        let hi_r = (pa.1.max(pb.1).max(pc.1).ceil() as usize).min(rows);
+        for r in lo_r..hi_r {
+            for col in lo_c..hi_c {
+                let (x, y) = (col as f64 + 0.5, r as f64 + 0.5);
+                let wa = ((pb.0 - x) * (pc.1 - y) - (pb.1 - y) * (pc.0 - x)) / area;
+                let wb = ((pc.0 - x) * (pa.1 - y) - (pc.1 - y) * (pa.0 - x)) / area;
+                let wc = 1.0 - wa - wb;
+                let eps = 1e-9;
+                if wa < -eps || wb < -eps || wc < -eps {
+                    continue;
+                }
+                let i = r * cols + col;
+                if h[i].is_nan() {
+                    if wa > eps && wb > eps && wc > eps {
+                        out.covered_missing += 1;
+                    }
+                    continue;
+                }
+                covered[i] = true;
+                let z = wa * a[2] + wb * b[2] + wc * c[2];
+                out.max_error = out.max_error.max((z - h[i]).abs());
+            }
+        }
+    }
+    out.uncovered_valid = (0..cols * rows)
+        .filter(|&i| !h[i].is_nan() && !covered[i])
+        .count();
+    out
+}
+
+fn check_file(name: &str, bounds: &[f64]) {
+    let Some(p) = dem(name) else {
+        eprintln!("skipping {name}: not found");
+        return;
+    };
+    let mut r = RasterReader::open(&p).unwrap();
+    let spec = r.spec().clone();
+    let h = r.read_all().unwrap();
+    for &e in bounds {
+        for decimate in [false, true] {
+            let opts = Options {
+                stop: Stop::MaxError(e),
+                decimate,
+            };
+            let tin = simplify(&spec, &h, &opts, None).unwrap();
+            let c = rasterise(&spec, &h, &tin);
+            // Floating-point tolerance of the independent interpolation.
+            let tol = 1e-6 * (1.0 + h.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+            assert!(
+                c.max_error <= e + tol,
+                "{name} e={e}: {c:?} {:?}",
+                tin.stats
+            );
+            assert_eq!(c.covered_missing, 0, "{name} e={e}");
+            assert_eq!(
+                c.uncovered_valid as u64, tin.stats.uncovered_cells,
+                "{name} e={e}"
+            );
+            assert!(tin.stats.max_error <= e, "{name}: {:?}", tin.stats);
+        }
+    }
+}
+
+#[test]
+fn srtm_ascii_grid_is_within_the_bound() {
+    check_file(
+        "landlab_SRTMGL3_40.09_-105.55_40.21_-105.35.asc",
+        &[5.0, 40.0],
+    );
+}
+
+#[test]
+fn masked_gully_is_within_the_bound_and_not_triangulated_into_nodata() {
+    check_file("landlab_west_bijou_gully.asc", &[0.1, 1.0]);
+}
+
+#[test]
+fn ign_dtm_with_missing_cells() {
+    check_file(
+        "ign_DTM_test_data_77055_627760_LA93_IGN69_50CM.tif",
+        &[0.02, 0.1],
+    );
+}
+
+#[test]
+fn planar_grid_collapses_to_two_triangles() {
+    let spec = RasterSpec::north_up(300, 200, 500_000.0, 6_000_000.0, 0.5);
+    let h: Vec<f64> = (0..200)
+        .flat_map(|r| (0..300).map(move |c| 100.0 + 0.25 * c as f64 - 0.125 * r as f64))
+        .collect();
+    let tin = simplify(&spec, &h, &Options::max_error(1e-6), None).unwrap();
+    assert_eq!(tin.triangles.len(), 2);
+    assert_eq!(rasterise(&spec, &h, &tin).uncovered_valid, 0);
+}
+
+#[test]
+fn synthetic_hills_with_a_lake_of_nodata() {
+    let (cols, rows) = (160u32, 120u32);
+    let spec = RasterSpec::north_up(cols, rows, 0.0, 1200.0, 10.0);
+    let mut h = Vec::new();
+    for r in 0..rows {
+        for c in 0..cols {
+            let (x, y) = (c as f64 / 20.0, r as f64 / 15.0);
+            let d = ((c as f64 - 80.0).powi(2) + (r as f64 - 60.0).powi(2)).sqrt();
+            h.push(if d < 18.0 || (c > 150 && r < 8) {
+                f64::NAN
+            } else {
+                50.0 * x.sin() * y.cos() + 3.0 * (3.0 * x).cos()
+            });
+        }
+    }
+    for e in [0.5, 2.0, 10.0] {
+        let tin = simplify(&spec, &h, &Options::max_error(e), None).unwrap();
+        let c = rasterise(&spec, &h, &tin);
+        assert!(c.max_error <= e + 1e-6, "{c:?}");
+        assert_eq!(c.covered_missing, 0);
+        assert_eq!(c.uncovered_valid as u64, tin.stats.uncovered_cells);
+    }
+}
+
+#[test]
+fn cli_simplify_writes_a_mesh_and_a_json_summary() {
+    let Some(p) = dem("landlab_west_bijou_gully.asc") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("gully.ply");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(["simplify", p.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .args(["--max-error", "0.5", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j["stats"]["points"].as_u64().unwrap() > 3);
+    assert!(j["stats"]["max_error"].as_f64().unwrap() <= 0.5);
+    assert!(out.exists());
+    // Exactly one bound is required.
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(["simplify", p.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn startinpy_float64_with_non_round_cells() {
+    check_file("startinpy_dem_01.tif", &[20.0]);
+}
+
+#[test]
+fn non_square_cells() {
+    let (cols, rows) = (90u32, 70u32);
+    let mut spec = RasterSpec::north_up(cols, rows, 1000.0, 5000.0, 2.0);
+    spec.transform[5] = -3.0;
+    let h: Vec<f64> = (0..rows)
+        .flat_map(|r| {
+            (0..cols).map(move |c| 20.0 * ((c as f64 / 9.0).sin() + (r as f64 / 7.0).cos()))
+        })
+        .collect();
+    for e in [0.2, 1.0, 5.0] {
+        let tin = simplify(&spec, &h, &Options::max_error(e), None).unwrap();
+        let c = rasterise(&spec, &h, &tin);
+        assert!(c.max_error <= e + 1e-6, "{c:?}");
+        assert_eq!(c.uncovered_valid, 0);
+    }
+}
