@@ -216,48 +216,6 @@ fn incircle_tie(a: [f64; 2], b: [f64; 2], p: [f64; 2], d: [f64; 2]) -> CircleSid
     }
 }
 
-/// Largest coordinate magnitude for [`orient_int`] and [`incircle_int`] (2^28): their determinants
-/// are then exact in 128-bit integers.
-pub const MAX_INT_COORD: f64 = 268_435_456.0;
-
-/// Is `v` an integer of magnitude at most [`MAX_INT_COORD`] (usable by the integer predicates)?
-#[inline(always)]
-pub fn is_small_int(v: f64) -> bool {
-    v.abs() <= MAX_INT_COORD && (v as i64) as f64 == v
-}
-
-/// [`orient`] for points whose coordinates are integers of magnitude at most [`MAX_INT_COORD`]
-/// (see [`is_small_int`]): the same exact result in plain integer arithmetic, with no adaptive
-/// stage (collinear lattice points are common in grids).
-#[inline(always)]
-pub fn orient_int(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> Orientation {
-    let (ax, ay) = (a[0] as i64, a[1] as i64);
-    let d = (b[0] as i64 - ax) * (p[1] as i64 - ay) - (b[1] as i64 - ay) * (p[0] as i64 - ax);
-    Orientation::from_ordering(d.cmp(&0))
-}
-
-/// [`incircle`] (perturbed, the same tie rule) for points whose coordinates are integers of
-/// magnitude at most [`MAX_INT_COORD`]: exact in 128-bit integers, so the many exactly cocircular
-/// lattice quadruples of a grid need no adaptive stage before the tie rule decides.
-#[inline(always)]
-pub fn incircle_int(a: [f64; 2], b: [f64; 2], p: [f64; 2], d: [f64; 2]) -> CircleSide {
-    let (dx, dy) = (d[0] as i64, d[1] as i64);
-    let (adx, ady) = (a[0] as i64 - dx, a[1] as i64 - dy);
-    let (bdx, bdy) = (b[0] as i64 - dx, b[1] as i64 - dy);
-    let (cdx, cdy) = (p[0] as i64 - dx, p[1] as i64 - dy);
-    let alift = i128::from(adx * adx + ady * ady);
-    let blift = i128::from(bdx * bdx + bdy * bdy);
-    let clift = i128::from(cdx * cdx + cdy * cdy);
-    let det = alift * i128::from(bdx * cdy - bdy * cdx)
-        + blift * i128::from(cdx * ady - cdy * adx)
-        + clift * i128::from(adx * bdy - ady * bdx);
-    match det.cmp(&0) {
-        Ordering::Greater => CircleSide::Inside,
-        Ordering::Less => CircleSide::Outside,
-        Ordering::Equal => incircle_tie(a, b, p, d),
-    }
-}
-
 /// Orientation of three vertices given by id, any of which may be artificial.
 #[inline(always)]
 pub fn orient_ids(pts: &[[f64; 2]], a: u32, b: u32, p: u32) -> Orientation {
@@ -597,31 +555,6 @@ mod tests {
         // The rule is invariant under rotating the triangle's vertices.
         assert_eq!(incircle(b, p, a, d), CircleSide::Inside);
         assert_eq!(incircle(p, a, b, d), CircleSide::Inside);
-    }
-
-    #[test]
-    fn integer_predicates_agree_with_the_adaptive_ones() {
-        let mut x = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = |m: i64| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            ((x % (2 * m as u64 + 1)) as i64 - m) as f64
-        };
-        for m in [3, 50, 1 << 20, 1 << 28] {
-            for _ in 0..20000 {
-                let [a, b, c, d] = [0; 4].map(|_| [next(m), next(m)]);
-                assert_eq!(orient_int(a, b, c), orient(a, b, c));
-                if orient(a, b, c).is_ccw() && a != d && b != d && c != d {
-                    assert_eq!(
-                        incircle_int(a, b, c, d),
-                        incircle(a, b, c, d),
-                        "{a:?} {b:?} {c:?} {d:?}"
-                    );
-                }
-            }
-        }
-        assert!(is_small_int(-268_435_456.0) && !is_small_int(0.5) && !is_small_int(1e9));
     }
 
     #[test]

@@ -13,8 +13,7 @@
 //! 4. stop when the worst error is within the bound, or at a point or triangle budget.
 //!
 //! The triangulation is built in cell-index space scaled to square cells (`x = col`, `y = -row`
-//! for a north-up grid with square cells): exact small integers, so the predicates take their fast
-//! path, and since the map to world coordinates is a similarity the triangulation is Delaunay in
+//! for a north-up grid with square cells): exact small integers (the adaptive predicates' exact stage is then cheap), and since the map to world coordinates is a similarity the triangulation is Delaunay in
 //! world coordinates too. Output vertices are the cell centres in world coordinates.
 //!
 //! # Missing cells (nodata)

@@ -23,9 +23,7 @@
 //! * [`Tin::leave_one_out`]: the leave-one-out accuracy check (section 7.3.4).
 
 use crate::error::{Error, Result};
-use crate::predicates::{
-    CircleSide, Orientation, incircle, incircle_int, is_small_int, orient, orient_int,
-};
+use crate::predicates::{CircleSide, Orientation, incircle, orient};
 pub use crossval::CrossValidation;
 
 mod crossval;
@@ -131,9 +129,6 @@ pub struct Tin {
     record: bool,
     rng: u64,
     flips: u64,
-    /// Every vertex coordinate is an integer of magnitude at most
-    /// [`crate::predicates::MAX_INT_COORD`]: the integer predicates apply.
-    int_coords: bool,
     /// Is `vedge` maintained (see [`Tin::set_vertex_tracking`])?
     untracked: bool,
 }
@@ -203,10 +198,6 @@ impl Tin {
             i = j;
         }
         tin.live_triangles = triangles.len();
-        tin.int_coords = tin
-            .xy
-            .iter()
-            .all(|p| is_small_int(p[0]) && is_small_int(p[1]));
         tin.live_vertices = tin.vedge.iter().filter(|&&e| e != NONE).count();
         Ok(tin)
     }
@@ -424,26 +415,18 @@ impl Tin {
         self.orient_p(self.p(a), self.p(b), self.p(c))
     }
 
-    /// [`orient`] of two TIN points and any point `q`: integer arithmetic when every coordinate
-    /// is a small integer (grids), the adaptive predicate otherwise. Same result either way.
+    /// [`orient`] of two TIN points and any point `q` (the adaptive predicate, like every
+    /// orientation decision of the crate).
     #[inline(always)]
     fn orient_p(&self, a: [f64; 2], b: [f64; 2], q: [f64; 2]) -> Orientation {
-        if self.int_coords && is_small_int(q[0]) && is_small_int(q[1]) {
-            orient_int(a, b, q)
-        } else {
-            orient(a, b, q)
-        }
+        orient(a, b, q)
     }
 
     /// Perturbed in-circle: is `d` inside the circle of the counter-clockwise `a, b, c`?
     #[inline(always)]
     fn in_circle(&self, a: u32, b: u32, c: u32, d: u32) -> bool {
         let (pa, pb, pc, pd) = (self.p(a), self.p(b), self.p(c), self.p(d));
-        let side = if self.int_coords {
-            incircle_int(pa, pb, pc, pd)
-        } else {
-            incircle(pa, pb, pc, pd)
-        };
+        let side = incircle(pa, pb, pc, pd);
         side == CircleSide::Inside
     }
 
@@ -826,7 +809,6 @@ impl Tin {
                 max: NONE as u64 - 1,
             });
         }
-        self.int_coords &= is_small_int(p[0]) && is_small_int(p[1]);
         self.xy.push([p[0], p[1]]);
         self.z.push(p[2]);
         self.vedge
