@@ -252,6 +252,8 @@ impl Iterator for Merge {
 pub struct Dedup<I: Iterator<Item = SortRecord>> {
     inner: std::iter::Peekable<I>,
     policy: DuplicatePolicy,
+    /// Index bits that mark a record whose identity must survive a merge (breakline vertices).
+    mark: u64,
     /// Points merged away so far.
     pub duplicates: u64,
 }
@@ -262,8 +264,16 @@ impl<I: Iterator<Item = SortRecord>> Dedup<I> {
         Dedup {
             inner: inner.peekable(),
             policy,
+            mark: 0,
             duplicates: 0,
         }
+    }
+
+    /// Records with any of the `mark` bits in their index keep their index when merged with
+    /// duplicates: the survivor's `z` follows the policy, its index is the marked record's.
+    pub fn with_mark(mut self, mark: u64) -> Self {
+        self.mark = mark;
+        self
     }
 }
 
@@ -273,6 +283,7 @@ impl<I: Iterator<Item = SortRecord>> Iterator for Dedup<I> {
     #[inline]
     fn next(&mut self) -> Option<SortRecord> {
         let mut keep = self.inner.next()?;
+        let mut marked = (keep.index & self.mark != 0).then_some(keep.index);
         while let Some(n) = self.inner.peek() {
             if n.x != keep.x || n.y != keep.y {
                 break;
@@ -280,9 +291,15 @@ impl<I: Iterator<Item = SortRecord>> Iterator for Dedup<I> {
             let n = *n;
             self.inner.next();
             self.duplicates += 1;
+            if n.index & self.mark != 0 {
+                marked = Some(n.index);
+            }
             if self.policy.prefers((n.z, n.index), (keep.z, keep.index)) {
                 keep = n;
             }
+        }
+        if let Some(m) = marked {
+            keep.index = m;
         }
         Some(keep)
     }

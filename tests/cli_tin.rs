@@ -69,3 +69,42 @@ fn bad_inputs_fail_cleanly() {
     assert_eq!(code, 2);
     assert!(err.contains("missing.laz"), "{err}");
 }
+
+#[test]
+fn bad_breaklines_fail_cleanly() {
+    let inputs = tempfile::tempdir().unwrap();
+    let sample = Path::new("data/sample/startinpy_small.laz");
+    let cases: Vec<(&str, &[u8], &str)> = vec![
+        (
+            "broken.geojson",
+            b"{\"type\": \"FeatureCollection\", \"features\": [",
+            "broken.geojson",
+        ),
+        (
+            "point.geojson",
+            b"{\"type\": \"Point\", \"coordinates\": [1, 2]}",
+            "point.geojson",
+        ),
+        ("bad.txt", b"1 2 3\n4 five 6\n", "bad.txt:2"),
+    ];
+    for (name, bytes, expect) in cases {
+        let path = inputs.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let out = tempfile::tempdir().unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+            .args(["tin", "--quiet"])
+            .arg(sample)
+            .arg("--breaklines")
+            .arg(&path)
+            .arg("-o")
+            .arg(out.path().join("out.ply"))
+            .arg("--tmp-dir")
+            .arg(out.path())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(err.contains(expect), "{name}: {err}");
+        assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0, "{name}");
+    }
+}

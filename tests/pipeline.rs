@@ -61,6 +61,7 @@ fn streamed(paths: &[PathBuf], mem: u64, dup: DuplicatePolicy) -> Collect {
         paths: paths.to_vec(),
         filter: sweeptin::lidar::Filter::keep_all(),
         duplicates: dup,
+        lines: Default::default(),
     };
     let tmp = tempfile::tempdir().unwrap();
     let options = RunOptions {
@@ -150,6 +151,7 @@ fn real_laz_streamed_equals_in_memory_and_is_delaunay() {
             paths: vec![f.clone()],
             filter: sweeptin::lidar::Filter::keep_all(),
             duplicates: DuplicatePolicy::First,
+            lines: Default::default(),
         };
         let (pts, _) = sweeptin::pipeline::read_points(&input).unwrap();
         let core = triangulate(&pts, &Options::default()).unwrap();

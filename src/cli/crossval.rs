@@ -35,6 +35,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         paths: args.input.clone(),
         filter: args.filter.to_filter(),
         duplicates: args.duplicates,
+        lines: Default::default(),
     };
     let (points, _crs) = read_points(&input)?;
     let tri = sweeptin::triangulate(

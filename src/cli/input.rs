@@ -23,6 +23,8 @@ pub struct InputArgs {
     /// Which point survives among exact (x, y) duplicates.
     #[arg(long, value_enum, default_value_t = sweeptin::DuplicatePolicy::First)]
     pub duplicates: sweeptin::DuplicatePolicy,
+    #[command(flatten)]
+    pub lines: LineArgs,
     /// Memory budget for sorting (e.g. 512M, 4G). Larger inputs are sorted in chunks spilled to
     /// --tmp-dir; the result is the same whatever the budget.
     #[arg(long, value_name = "SIZE", default_value = "1G", value_parser = parse_size)]
@@ -46,6 +48,7 @@ impl InputArgs {
             paths: self.inputs.clone(),
             filter: self.filter.to_filter(),
             duplicates: self.duplicates,
+            lines: self.lines.to_options(),
         }
     }
 
@@ -99,9 +102,48 @@ pub struct ProductInput {
     /// recorded in the outputs instead of what the input declares (if anything).
     #[arg(long, value_name = "CRS")]
     pub crs: Option<String>,
-    /// Leave out triangles with a horizontal edge longer than this (their area has no data).
+}
+
+/// Breaklines and trimming, shared by `tin` and the terrain products.
+#[derive(clap::Args, Debug, Clone, Default)]
+#[command(next_help_heading = "Breaklines and trimming")]
+pub struct LineArgs {
+    /// Breaklines (repeatable): GeoJSON LineString/MultiLineString/Polygon/MultiPolygon or text
+    /// (`x y [z]` per line, a blank line between polylines), in the points' CRS and units. They
+    /// become triangle edges; crossings are split, overlaps merged. Lines without z take their
+    /// heights from the points' TIN (an extra pass over the points).
+    #[arg(long = "breaklines", value_name = "FILE")]
+    pub breaklines: Vec<PathBuf>,
+    /// Keep only the triangles inside these polygons (survey limit); the rings become breaklines.
+    #[arg(long, value_name = "FILE")]
+    pub boundary: Option<PathBuf>,
+    /// Drop the triangles inside these polygons (lakes, buildings); the rings become breaklines.
+    #[arg(long, value_name = "FILE")]
+    pub holes: Option<PathBuf>,
+    /// Drop triangles with a horizontal edge longer than this (a concave outline; for rasters,
+    /// nodata there).
     #[arg(long, value_name = "LENGTH")]
     pub max_edge: Option<f64>,
+    /// Report breakline heights that disagree by more than this where lines meet or cross.
+    #[arg(long, value_name = "DZ", default_value_t = 0.1)]
+    pub z_tolerance: f64,
+    /// Flip away triangles lying flat on one contour line (Herva 2009), so that contours derived
+    /// from the TIN are unambiguous. Holds the whole triangulation in memory.
+    #[arg(long)]
+    pub no_flat_triangles: bool,
+}
+
+impl LineArgs {
+    pub fn to_options(&self) -> pipeline::LineOptions {
+        pipeline::LineOptions {
+            breaklines: self.breaklines.clone(),
+            boundary: self.boundary.clone(),
+            holes: self.holes.clone(),
+            max_edge: self.max_edge,
+            z_tolerance: Some(self.z_tolerance),
+            no_flat_triangles: self.no_flat_triangles,
+        }
+    }
 }
 
 /// Parses `--crs`.
@@ -134,7 +176,7 @@ impl ProductInput {
     /// The pipeline input, reading only the points inside `read_box` when given (instead of
     /// `--bbox`).
     pub fn input(&self, read_box: Option<BBox>) -> anyhow::Result<Input> {
-        if let Some(l) = self.max_edge
+        if let Some(l) = self.args.lines.max_edge
             && !(l.is_finite() && l > 0.0)
         {
             bail!("--max-edge must be a positive length, not {l}");
@@ -194,7 +236,7 @@ pub fn run_products(
 ) -> anyhow::Result<(RunSummary, Value)> {
     let mut fanout = Fanout::new(sinks)
         .with_crs(p.crs()?)
-        .with_max_edge(p.max_edge);
+        .with_max_edge(p.args.lines.max_edge);
     let names: Vec<String> = p
         .args
         .inputs

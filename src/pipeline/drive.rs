@@ -1,17 +1,18 @@
 //! Phase 2: merge → sweep → write, in three threads joined by bounded crossbeam channels, so
 //! merging, sweeping and writing overlap and memory stays bounded.
 
+use super::emit::{Collected, Emitter};
+use super::lines::{LINE_FLAG, LineSummary, Prepared};
 use super::read::{self, ReadResult};
 use super::{
     AnonPeak, Frame, Input, RunOptions, RunSummary, StreamInfo, Timings, TriangleSink, peak_rss,
 };
 use crate::error::{Error, Result};
-use crate::extsort::{Dedup, ExternalSorter, Merge};
+use crate::extsort::{Dedup, ExternalSorter, Merge, SortRecord};
 use crate::io::sink::MeshSink;
 use crate::sweep::{Event, StreamConfig, StreamPoint, Sweep};
 use crossbeam_channel::{Receiver, Sender, bounded};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// Points per batch from the merge thread to the sweep.
@@ -39,6 +40,7 @@ fn bar(enabled: bool) -> ProgressBar {
 pub(crate) fn run(
     input: &Input,
     options: &RunOptions,
+    lines: Option<&Prepared>,
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<RunSummary> {
@@ -66,6 +68,26 @@ pub(crate) fn run(
         }
         pb.set_position(n);
     })?;
+    let mut rd = rd;
+    let mut expected = rd.points;
+    if let Some(g) = lines.and_then(|l| l.pslg.as_ref()) {
+        for (c, v) in g.vertices.iter().enumerate() {
+            let (x, y) = (v[0] + 0.0, v[1] + 0.0);
+            sorter.push(SortRecord {
+                x,
+                y,
+                z: v[2],
+                index: LINE_FLAG | c as u64,
+            })?;
+            rd.bounds = [
+                rd.bounds[0].min(x),
+                rd.bounds[1].min(y),
+                rd.bounds[2].max(x),
+                rd.bounds[3].max(y),
+            ];
+        }
+        expected += g.vertices.len() as u64;
+    }
     if rd.points == 0 {
         return Err(Error::TooFewPoints {
             distinct: 0,
@@ -97,16 +119,16 @@ pub(crate) fn run(
         let policy = input.duplicates;
         let merger = scope.spawn(move || merge_points(merge, policy, ptx));
         let frame = rd.frame;
-        let writer = scope.spawn(move || write_events(erx, frame, mesh, sinks_ref));
-        let swept = sweep_points(&rd, prx, etx, &pb, &anon);
+        let writer = scope.spawn(move || write_events(erx, frame, lines, mesh, sinks_ref));
+        let swept = sweep_points(&rd, expected, lines, prx, etx, &pb, &anon);
         let duplicates = merger.join().expect("merge thread panicked");
         let written = writer.join().expect("writer thread panicked");
         (swept, duplicates, written)
     });
     let (swept, duplicates, written) = outcome;
     // A writer error closes its channel, which stops the sweep: report the writer's error first.
-    let (vertices, triangles) = written?;
-    let (sweep, stream, kept) = swept?;
+    let (vertices, triangles, trimmed, flat) = written?;
+    let (sweep, stream, kept, cstats) = swept?;
     let triangulate_write = phase2.elapsed().as_secs_f64();
     pb.finish_and_clear();
     if triangles == 0 {
@@ -143,6 +165,12 @@ pub(crate) fn run(
         stream,
         products,
         crs: rd.crs.as_ref().and_then(|c| c.definition()),
+        breaklines: lines.map(|l| LineSummary {
+            constraints: cstats,
+            trimmed_triangles: trimmed,
+            flat,
+            ..l.summary.clone()
+        }),
     })
 }
 
@@ -158,14 +186,18 @@ fn merge_points(
     policy: crate::points::DuplicatePolicy,
     out: Sender<Vec<StreamPoint>>,
 ) -> u64 {
-    let mut d = Dedup::new(merge, policy);
+    let mut d = Dedup::new(merge, policy).with_mark(LINE_FLAG);
     let mut batch = Vec::with_capacity(POINT_BATCH);
     for r in d.by_ref() {
         batch.push(StreamPoint {
             xy: [r.x, r.y],
             z: r.z,
             index: r.index,
-            constraint: crate::sweep::NO_CONSTRAINT,
+            constraint: if r.index & LINE_FLAG != 0 {
+                (r.index & !LINE_FLAG) as u32
+            } else {
+                crate::sweep::NO_CONSTRAINT
+            },
         });
         if batch.len() == POINT_BATCH {
             if out.send(std::mem::take(&mut batch)).is_err() {
@@ -180,11 +212,18 @@ fn merge_points(
     d.duplicates
 }
 
-type Swept = (crate::sweep::SweepStats, crate::sweep::StreamStats, u64);
+type Swept = (
+    crate::sweep::SweepStats,
+    crate::sweep::StreamStats,
+    u64,
+    crate::sweep::ConstraintStats,
+);
 
 /// Sweep thread (the caller's): points in, events out.
 fn sweep_points(
     rd: &ReadResult,
+    expected: u64,
+    lines: Option<&Prepared>,
     points: Receiver<Vec<StreamPoint>>,
     events: Sender<Vec<Event>>,
     pb: &ProgressBar,
@@ -193,7 +232,7 @@ fn sweep_points(
     let cfg = StreamConfig {
         x_sample: rd.x_sample.clone(),
         bounds: rd.bounds,
-        expected_points: rd.points,
+        expected_points: expected,
     };
     let mut sweep: Option<Sweep> = None;
     let mut kept = 0u64;
@@ -207,7 +246,14 @@ fn sweep_points(
         for p in batch {
             kept += 1;
             match sweep.as_mut() {
-                None => sweep = Some(Sweep::streaming(p, &cfg)),
+                None => {
+                    let first = p.constraint;
+                    let mut s = Sweep::streaming(p, &cfg);
+                    if let Some(g) = lines.and_then(Prepared::graph) {
+                        s.set_stream_constraints(g, first);
+                    }
+                    sweep = Some(s);
+                }
                 Some(s) => s.push(p)?,
             }
             if kept.is_multiple_of(WATERMARK_EVERY) {
@@ -227,7 +273,7 @@ fn sweep_points(
         }
     }
     let Some(mut s) = sweep else {
-        return Ok((Default::default(), Default::default(), 0));
+        return Ok(Default::default());
     };
     s.finish_streaming();
     s.take_events(&mut out);
@@ -235,62 +281,43 @@ fn sweep_points(
         return Err(Error::Interrupted);
     }
     pb.set_position(kept);
-    Ok((s.stats(), s.stream_stats(), kept))
+    Ok((s.stats(), s.stream_stats(), kept, s.constraint_stats()))
 }
 
 /// Writer thread: events to the mesh sink and the triangle sinks, in real-world coordinates.
-/// Returns the numbers of vertices and triangles written.
+/// Returns the numbers of vertices and triangles written, of triangles trimmed, and what the flat
+/// triangle pass did.
 fn write_events(
     events: Receiver<Vec<Event>>,
     frame: Frame,
-    mut mesh: Option<&mut (dyn MeshSink + Send)>,
+    lines: Option<&Prepared>,
+    mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
-) -> Result<(u64, u64)> {
-    let need_points = !sinks.is_empty();
-    let mut live: HashMap<u64, [f64; 3]> = HashMap::new();
-    let (mut vertices, mut triangles) = (0u64, 0u64);
-    for batch in events.iter() {
-        for ev in batch {
-            match ev {
-                Event::Vertex { xy, z, .. } => {
-                    let w = frame.world(xy, z);
-                    if let Some(m) = mesh.as_mut() {
-                        m.vertex(w)?;
-                    }
-                    if need_points {
-                        live.insert(vertices, w);
-                    }
-                    vertices += 1;
-                }
-                Event::Triangle(t) => {
-                    if let Some(m) = mesh.as_mut() {
-                        m.triangle(t)?;
-                    }
-                    if need_points {
-                        let p = t.map(|i| live[&i]);
-                        for s in sinks.iter_mut() {
-                            s.triangle(&p)?;
-                        }
-                    }
-                    triangles += 1;
-                }
-                Event::VertexDone(i) => {
-                    if let Some(m) = mesh.as_mut() {
-                        m.vertex_done(i)?;
-                    }
-                    live.remove(&i);
-                }
-                Event::Watermark(y) => {
-                    let wy = frame.offset[1] + frame.scale[1] * y;
-                    if let Some(m) = mesh.as_mut() {
-                        m.watermark(wy)?;
-                    }
-                    for s in sinks.iter_mut() {
-                        s.watermark(wy)?;
-                    }
-                }
+) -> Result<Written> {
+    let mut emit = Emitter::new(frame, mesh, sinks, lines.map(|l| &l.trim));
+    let flat_graph = lines.filter(|l| l.flat).map(|l| {
+        l.pslg
+            .as_ref()
+            .map_or((&[][..], &[][..]), |g| (&g.segments[..], &g.lines[..]))
+    });
+    let mut flat = None;
+    if let Some((segments, line_ids)) = flat_graph {
+        let mut all = Collected::default();
+        for batch in events.iter() {
+            for ev in batch {
+                all.event(ev);
+            }
+        }
+        flat = Some(all.finish(segments, line_ids, &mut emit)?);
+    } else {
+        for batch in events.iter() {
+            for ev in batch {
+                emit.event(ev)?;
             }
         }
     }
-    Ok((vertices, triangles))
+    let (v, t, trimmed) = emit.counts();
+    Ok((v, t, trimmed, flat))
 }
+
+type Written = (u64, u64, u64, Option<crate::breaklines::flat::FlatStats>);

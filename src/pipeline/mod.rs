@@ -12,6 +12,8 @@
 //! are applied on output ([`Frame`]).
 
 mod drive;
+mod emit;
+mod lines;
 mod read;
 mod replay;
 
@@ -21,6 +23,7 @@ use crate::lidar::{Crs, Filter};
 use crate::points::DuplicatePolicy;
 use std::path::PathBuf;
 
+pub use lines::{LineOptions, LineSummary};
 pub use read::read_points;
 
 /// What to triangulate.
@@ -33,6 +36,8 @@ pub struct Input {
     pub filter: Filter,
     /// Which point survives among exact (x, y) duplicates.
     pub duplicates: DuplicatePolicy,
+    /// Breaklines and trimming (none by default).
+    pub lines: LineOptions,
 }
 
 /// How to run.
@@ -157,6 +162,8 @@ pub struct RunSummary {
     pub products: Vec<serde_json::Value>,
     /// The CRS, when known.
     pub crs: Option<String>,
+    /// Breaklines and trimming, when given.
+    pub breaklines: Option<LineSummary>,
 }
 
 /// The CRS of the input, from LAS/LAZ headers or a streaming mesh's header, without reading the
@@ -221,7 +228,29 @@ pub fn run(
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<RunSummary> {
     if replay::is_stream_input(input) {
+        if !input.lines.is_empty() {
+            return Err(crate::Error::Format {
+                path: input.paths[0].clone(),
+                message: "breaklines and trimming need the points: give the LAS/LAZ or XYZ \
+                          input, not a streaming mesh"
+                    .into(),
+            });
+        }
         return replay::replay(input, mesh, sinks);
     }
-    drive::run(input, options, mesh, sinks)
+    if input.lines.is_empty() && !input.lines.no_flat_triangles {
+        return drive::run(input, options, None, mesh, sinks);
+    }
+    let plain = Input {
+        lines: LineOptions::default(),
+        ..input.clone()
+    };
+    let quiet = RunOptions {
+        progress: false,
+        ..options.clone()
+    };
+    let prepared = lines::prepare(input, &mut |sink| {
+        drive::run(&plain, &quiet, None, None, &mut [sink]).map(|_| ())
+    })?;
+    drive::run(input, options, Some(&prepared), mesh, sinks)
 }

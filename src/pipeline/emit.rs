@@ -1,0 +1,290 @@
+//! The writer thread's end of the pipeline: final triangles to the mesh writer and the triangle
+//! sinks, in real-world coordinates, trimmed, with vertices written lazily when trimming can leave
+//! some unused; and the `--no-flat-triangles` pass, which needs the whole triangulation.
+
+use super::lines::LINE_FLAG;
+use super::{Frame, TriangleSink};
+use crate::breaklines::Trim;
+use crate::breaklines::flat::{FlatStats, remove_flat_triangles};
+use crate::error::Result;
+use crate::io::sink::MeshSink;
+use crate::predicates::{Orientation, orient};
+use crate::sweep::Event;
+use std::collections::HashMap;
+
+/// Not written (yet).
+const NOT_OUT: u64 = u64::MAX;
+
+/// Delivers events to the outputs (see the module docs).
+pub(crate) struct Emitter<'m, 's, 't> {
+    frame: Frame,
+    mesh: Option<&'m mut (dyn MeshSink + Send)>,
+    sinks: &'s mut [&'t mut dyn TriangleSink],
+    /// `None`: every triangle is kept, and vertices are written as they come.
+    trim: Option<&'s Trim>,
+    /// Live vertices (sweep number → position, output number), when needed.
+    live: HashMap<u64, ([f64; 3], u64)>,
+    keep_live: bool,
+    next_in: u64,
+    next_out: u64,
+    triangles: u64,
+    trimmed: u64,
+}
+
+impl<'m, 's, 't> Emitter<'m, 's, 't> {
+    pub fn new(
+        frame: Frame,
+        mesh: Option<&'m mut (dyn MeshSink + Send)>,
+        sinks: &'s mut [&'t mut dyn TriangleSink],
+        trim: Option<&'s Trim>,
+    ) -> Self {
+        let trim = trim.filter(|t| !t.keeps_all());
+        let keep_live = !sinks.is_empty() || trim.is_some();
+        Emitter {
+            frame,
+            mesh,
+            sinks,
+            trim,
+            live: HashMap::new(),
+            keep_live,
+            next_in: 0,
+            next_out: 0,
+            triangles: 0,
+            trimmed: 0,
+        }
+    }
+
+    /// Vertices and triangles written, triangles trimmed.
+    pub fn counts(&self) -> (u64, u64, u64) {
+        (self.next_out, self.triangles, self.trimmed)
+    }
+
+    /// One event of the sweep (local frame).
+    pub fn event(&mut self, ev: Event) -> Result<()> {
+        match ev {
+            Event::Vertex { xy, z, .. } => self.vertex(self.frame.world(xy, z)),
+            Event::Triangle(t) => self.triangle(t),
+            Event::VertexDone(i) => self.vertex_done(i),
+            Event::Watermark(y) => {
+                let wy = self.frame.offset[1] + self.frame.scale[1] * y;
+                if let Some(m) = self.mesh.as_mut() {
+                    m.watermark(wy)?;
+                }
+                for s in self.sinks.iter_mut() {
+                    s.watermark(wy)?;
+                }
+                Ok(())
+            }
+        }
+    }
+
+    fn vertex(&mut self, w: [f64; 3]) -> Result<()> {
+        let id = self.next_in;
+        self.next_in += 1;
+        let mut out = NOT_OUT;
+        if self.trim.is_none() {
+            if let Some(m) = self.mesh.as_mut() {
+                m.vertex(w)?;
+            }
+            out = self.next_out;
+            self.next_out += 1;
+        }
+        if self.keep_live {
+            self.live.insert(id, (w, out));
+        }
+        Ok(())
+    }
+
+    fn triangle(&mut self, t: [u64; 3]) -> Result<()> {
+        if !self.keep_live {
+            if let Some(m) = self.mesh.as_mut() {
+                m.triangle(t)?;
+            }
+            self.triangles += 1;
+            return Ok(());
+        }
+        let p = t.map(|i| self.live[&i].0);
+        if let Some(trim) = self.trim
+            && !trim.keep(&p)
+        {
+            self.trimmed += 1;
+            return Ok(());
+        }
+        let mut out = [0u64; 3];
+        for k in 0..3 {
+            let e = self.live.get_mut(&t[k]).expect("live vertex");
+            if e.1 == NOT_OUT {
+                if let Some(m) = self.mesh.as_mut() {
+                    m.vertex(e.0)?;
+                }
+                e.1 = self.next_out;
+                self.next_out += 1;
+            }
+            out[k] = e.1;
+        }
+        if let Some(m) = self.mesh.as_mut() {
+            m.triangle(out)?;
+        }
+        for s in self.sinks.iter_mut() {
+            s.triangle(&p)?;
+        }
+        self.triangles += 1;
+        Ok(())
+    }
+
+    fn vertex_done(&mut self, i: u64) -> Result<()> {
+        let out = if self.keep_live {
+            match self.live.remove(&i) {
+                Some((_, o)) => o,
+                None => NOT_OUT,
+            }
+        } else {
+            i
+        };
+        if out != NOT_OUT
+            && let Some(m) = self.mesh.as_mut()
+        {
+            m.vertex_done(out)?;
+        }
+        Ok(())
+    }
+}
+
+/// Vertex adjacency in compressed rows: `(start, neighbours)`.
+type Adjacency = (Vec<u32>, Vec<u32>);
+
+/// The whole triangulation, held for `--no-flat-triangles`.
+#[derive(Default)]
+pub(crate) struct Collected {
+    vertices: Vec<[f64; 3]>,
+    /// Graph vertex id of each vertex, or `u32::MAX`.
+    line_vertex: Vec<u32>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Collected {
+    /// Records one event (watermarks and vertex releases are dropped: everything is held).
+    pub fn event(&mut self, ev: Event) {
+        match ev {
+            Event::Vertex { xy, z, index } => {
+                self.vertices.push([xy[0], xy[1], z]);
+                self.line_vertex.push(if index & LINE_FLAG != 0 {
+                    (index & !LINE_FLAG) as u32
+                } else {
+                    u32::MAX
+                });
+            }
+            Event::Triangle(t) => self.triangles.push(t.map(|i| i as u32)),
+            Event::VertexDone(_) | Event::Watermark(_) => {}
+        }
+    }
+
+    /// Flips flat triangles away (`segments` and `lines`: the breakline graph), then replays the
+    /// result into `emit`.
+    pub fn finish(
+        mut self,
+        segments: &[[u32; 2]],
+        lines: &[u32],
+        emit: &mut Emitter,
+    ) -> Result<FlatStats> {
+        let mut vertex_of = HashMap::new();
+        for (v, &c) in self.line_vertex.iter().enumerate() {
+            if c != u32::MAX {
+                vertex_of.insert(c, v as u32);
+            }
+        }
+        let adj = self.adjacency();
+        let mut cons = Vec::with_capacity(segments.len());
+        let mut cons_lines = Vec::with_capacity(segments.len());
+        for (s, &l) in segments.iter().zip(lines) {
+            if let (Some(&a), Some(&b)) = (vertex_of.get(&s[0]), vertex_of.get(&s[1])) {
+                for piece in self.pieces(&adj, a, b) {
+                    cons.push(piece);
+                    cons_lines.push(l);
+                }
+            }
+        }
+        let stats = remove_flat_triangles(&self.vertices, &mut self.triangles, &cons, &cons_lines);
+        for v in &self.vertices {
+            emit.event(Event::Vertex {
+                xy: [v[0], v[1]],
+                z: v[2],
+                index: 0,
+            })?;
+        }
+        for t in &self.triangles {
+            emit.event(Event::Triangle(t.map(u64::from)))?;
+        }
+        for i in 0..self.vertices.len() as u64 {
+            emit.event(Event::VertexDone(i))?;
+        }
+        Ok(stats)
+    }
+
+    fn adjacency(&self) -> Adjacency {
+        let n = self.vertices.len();
+        let mut start = vec![0u32; n + 1];
+        for t in &self.triangles {
+            for &v in t {
+                start[v as usize + 1] += 2;
+            }
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut nb = vec![0u32; start[n] as usize];
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (v, a, b) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                let f = &mut fill[v as usize];
+                nb[*f as usize] = a;
+                nb[*f as usize + 1] = b;
+                *f += 2;
+            }
+        }
+        (start, nb)
+    }
+
+    /// The mesh edges along the breakline segment `a`–`b` (it may have been split where points lie
+    /// exactly on it): from `a`, the neighbour exactly on the segment and further along, until `b`.
+    fn pieces(&self, adj: &Adjacency, a: u32, b: u32) -> Vec<[u32; 2]> {
+        let xy = |v: u32| {
+            let p = self.vertices[v as usize];
+            [p[0], p[1]]
+        };
+        let (pa, pb) = (xy(a), xy(b));
+        let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+        // Exact "further along": the segment's dominant axis, compared exactly.
+        let along = |v: [f64; 2]| {
+            if dx.abs() >= dy.abs() {
+                v[0] * dx.signum()
+            } else {
+                v[1] * dy.signum()
+            }
+        };
+        let mut out = Vec::new();
+        let mut cur = a;
+        while cur != b {
+            let (s, e) = (
+                adj.0[cur as usize] as usize,
+                adj.0[cur as usize + 1] as usize,
+            );
+            let here = along(xy(cur));
+            let next = adj.1[s..e].iter().copied().find(|&n| {
+                let q = xy(n);
+                orient(pa, pb, q) == Orientation::Collinear
+                    && along(q) > here
+                    && along(q) <= along(pb)
+            });
+            match next {
+                Some(n) => {
+                    out.push([cur, n]);
+                    cur = n;
+                }
+                None => break,
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,340 @@
+//! Breaklines and trimming in the streaming pipeline.
+//!
+//! ```text
+//! --breaklines FILES, --boundary FILE, --holes FILE
+//!   ─► read (GeoJSON / text) ─► clean into a planar graph (crossings split, overlaps merged)
+//!   ─► [2-D vertices only] drape: z from a first pass over the points (no breaklines)
+//!   ─► graph vertices join the sorted point stream as flagged records (index = LINE_FLAG | id)
+//!   ─► the sweep inserts each segment when its upper end is swept (edge events)
+//!   ─► writer: [--no-flat-triangles: in-memory flips] ─► trim (boundary, holes, max-edge)
+//! ```
+//!
+//! **Boundary and hole rings** are inserted as breaklines too, so no triangle straddles a ring and
+//! the exact symbolic inside test of [`crate::breaklines::trim`] decides each whole triangle.
+//!
+//! **Lines without z** (2-D GeoJSON, text lines with two columns, boundary polygons) get their
+//! heights from the point cloud's own TIN: a first streaming pass triangulates the points alone,
+//! and each such vertex takes the height of the (first, in stream order) triangle that contains it,
+//! by linear interpolation. A vertex outside the points' triangulation has no height to take:
+//! that is an error naming the line. Vertices where a line with z meets one without take the
+//! known z (breakline cleaning interpolates along the line that has it).
+//!
+//! **Duplicates**: a breakline vertex at exactly the (x, y) of a lidar point is one vertex; its z
+//! follows `--duplicates` like any other duplicate, where the breakline vertex counts as read
+//! after every point (so `first` keeps the point's z, `last` the line's), and the merged vertex is
+//! always a breakline vertex.
+//!
+//! **Memory**: the cleaned graph (32 bytes per line vertex plus 12 per segment and the sweep's
+//! constraint index) stays in memory for the run, beside the front; lidar points never do.
+//! `--no-flat-triangles` is the exception: its flips need the whole triangulation, which the
+//! writer then holds (about 40 bytes per point), so use it on tile-sized inputs.
+
+use super::{Input, TriangleSink};
+use crate::breaklines::flat::FlatStats;
+use crate::breaklines::grid::{Buckets, Grid};
+use crate::breaklines::{CleanOptions, CleanStats, Lines, Pslg, Trim, read_file};
+use crate::error::{Error, Result};
+use crate::predicates::{Orientation, check_coord, orient};
+use crate::sweep::{ConstraintGraph, ConstraintStats};
+use std::path::PathBuf;
+
+/// Sort-record index bit marking a breakline vertex (the rest is its vertex id in the graph).
+pub(crate) const LINE_FLAG: u64 = 1 << 63;
+
+/// Breaklines and trimming for a run.
+#[derive(Clone, Debug, Default)]
+pub struct LineOptions {
+    /// Breakline files (GeoJSON or text; see [`crate::breaklines::read`]).
+    pub breaklines: Vec<PathBuf>,
+    /// Polygons: keep only the triangles inside.
+    pub boundary: Option<PathBuf>,
+    /// Polygons: drop the triangles inside (lakes, buildings).
+    pub holes: Option<PathBuf>,
+    /// Drop triangles with an edge longer than this (the data's xy units).
+    pub max_edge: Option<f64>,
+    /// Report breakline z disagreements larger than this at shared vertices and crossings.
+    pub z_tolerance: Option<f64>,
+    /// Flip away triangles lying flat on one contour line (Herva 2009, 4.2.2).
+    pub no_flat_triangles: bool,
+}
+
+impl LineOptions {
+    /// No breaklines and no trimming: the plain pipeline.
+    pub fn is_empty(&self) -> bool {
+        self.breaklines.is_empty()
+            && self.boundary.is_none()
+            && self.holes.is_none()
+            && self.max_edge.is_none()
+    }
+}
+
+/// What the breakline machinery did (part of the `--json` summary).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct LineSummary {
+    /// Polylines read (breaklines, then boundary and hole rings).
+    pub polylines: u64,
+    /// Vertices of the cleaned graph.
+    pub vertices: u64,
+    /// Segments of the cleaned graph.
+    pub segments: u64,
+    /// What cleaning did (crossings split, overlaps merged, …).
+    pub clean: CleanStats,
+    /// z disagreements beyond `--z-tolerance` (the first few; `clean.z_conflicts` counts all).
+    pub z_conflicts: Vec<crate::breaklines::clean::ZConflict>,
+    /// Vertices that took their z from the points' TIN (lines without z).
+    pub draped: u64,
+    /// What the sweep's edge events did.
+    pub constraints: ConstraintStats,
+    /// Triangles not emitted (outside the boundary, inside holes, edges over `--max-edge`).
+    pub trimmed_triangles: u64,
+    /// `--no-flat-triangles` flips.
+    pub flat: Option<FlatStats>,
+}
+
+/// Breaklines ready for the sweep.
+pub(crate) struct Prepared {
+    /// The cleaned graph with every z known.
+    pub pslg: Option<Pslg>,
+    /// Trimming rules (keeps all when none were given).
+    pub trim: Trim,
+    /// `--no-flat-triangles`.
+    pub flat: bool,
+    pub summary: LineSummary,
+}
+
+impl Prepared {
+    /// The sweep's view of the graph.
+    pub fn graph(&self) -> Option<ConstraintGraph> {
+        self.pslg.as_ref().map(|g| {
+            let xy = g
+                .vertices
+                .iter()
+                .map(|v| [v[0] + 0.0, v[1] + 0.0])
+                .collect();
+            ConstraintGraph::new(xy, &g.segments)
+        })
+    }
+}
+
+/// Reads, cleans and (when needed) drapes the breaklines of `input`.
+///
+/// `drape` runs the points-only pass with the given sink (the caller's pipeline).
+pub(crate) fn prepare(
+    input: &Input,
+    drape: &mut dyn FnMut(&mut dyn TriangleSink) -> Result<()>,
+) -> Result<Prepared> {
+    let o = &input.lines;
+    let mut lines = Lines::default();
+    for p in &o.breaklines {
+        lines.append(read_file(p)?)?;
+    }
+    let boundary = o.boundary.as_deref().map(read_file).transpose()?;
+    let holes = o.holes.as_deref().map(read_file).transpose()?;
+    let trim = Trim::from_lines(boundary.as_ref(), holes.as_ref(), o.max_edge).map_err(|e| {
+        match (e, &o.boundary) {
+            // `Trim` has no file name for an empty boundary: add it.
+            (Error::Format { path, message }, Some(b)) if path.as_os_str().is_empty() => {
+                Error::Format {
+                    path: b.clone(),
+                    message,
+                }
+            }
+            (e, _) => e,
+        }
+    })?;
+    for l in [boundary, holes].into_iter().flatten() {
+        lines.append(l)?;
+    }
+    let mut summary = LineSummary {
+        polylines: lines.len() as u64,
+        ..LineSummary::default()
+    };
+    if lines.is_empty() {
+        return Ok(Prepared {
+            pslg: None,
+            trim,
+            flat: o.no_flat_triangles,
+            summary,
+        });
+    }
+    for (i, p) in lines.polylines.iter().enumerate() {
+        for (k, v) in p.iter().enumerate() {
+            if !(check_coord(v[0]) && check_coord(v[1])) {
+                let s = &lines.sources[i];
+                return Err(Error::Format {
+                    path: s.path.to_path_buf(),
+                    message: format!(
+                        "{s}, vertex {k}: coordinate ({}, {}) is outside the supported range",
+                        v[0], v[1]
+                    ),
+                });
+            }
+        }
+    }
+    let mut opts = CleanOptions::default();
+    if let Some(t) = o.z_tolerance {
+        opts.z_tolerance = t;
+    }
+    let mut pslg = lines.clean(&opts)?;
+    summary.vertices = pslg.vertices.len() as u64;
+    summary.segments = pslg.segments.len() as u64;
+    summary.clean = pslg.stats;
+    summary.z_conflicts = pslg.warnings.clone();
+    let unknown: Vec<u32> = (0..pslg.vertices.len() as u32)
+        .filter(|&v| pslg.vertices[v as usize][2].is_nan())
+        .collect();
+    if !unknown.is_empty() {
+        let xy: Vec<[f64; 2]> = unknown
+            .iter()
+            .map(|&v| {
+                let p = pslg.vertices[v as usize];
+                [p[0], p[1]]
+            })
+            .collect();
+        let mut sink = DrapeSink::new(xy);
+        drape(&mut sink)?;
+        for (k, &v) in unknown.iter().enumerate() {
+            let z = sink.z[k];
+            if z.is_nan() {
+                return Err(outside_error(&lines, &pslg, v));
+            }
+            pslg.vertices[v as usize][2] = z;
+        }
+        summary.draped = unknown.len() as u64;
+    }
+    Ok(Prepared {
+        pslg: Some(pslg),
+        trim,
+        flat: o.no_flat_triangles,
+        summary,
+    })
+}
+
+/// The error for a vertex without z outside the points' TIN, naming a line through it.
+fn outside_error(lines: &Lines, pslg: &Pslg, v: u32) -> Error {
+    let p = pslg.vertices[v as usize];
+    let line = pslg
+        .segments
+        .iter()
+        .position(|s| s.contains(&v))
+        .map(|s| pslg.lines[s] as usize);
+    let message = format!(
+        "breakline vertex ({}, {}) has no z and lies outside the triangulation of the points, so \
+         no height can be taken from them: give the line z values or clip it to the point cloud",
+        p[0], p[1]
+    );
+    match line.and_then(|l| lines.sources.get(l)) {
+        Some(s) => Error::Format {
+            path: s.path.to_path_buf(),
+            message: format!("{s}: {message}"),
+        },
+        None => Error::Invalid(message),
+    }
+}
+
+/// Heights of query points from the triangle stream (the draping pass).
+struct DrapeSink {
+    xy: Vec<[f64; 2]>,
+    z: Vec<f64>,
+    grid: Grid,
+    buckets: Buckets,
+}
+
+impl DrapeSink {
+    fn new(xy: Vec<[f64; 2]>) -> DrapeSink {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for p in &xy {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let grid = Grid::new(lo, hi, xy.len());
+        let buckets = Buckets::points(&grid, &xy);
+        DrapeSink {
+            z: vec![f64::NAN; xy.len()],
+            xy,
+            grid,
+            buckets,
+        }
+    }
+}
+
+/// Linear interpolation of `q` in the closed triangle `t` (either orientation), or `None` when
+/// `q` is outside (decided exactly).
+fn interpolate(t: &[[f64; 3]; 3], q: [f64; 2]) -> Option<f64> {
+    let p = t.map(|v| [v[0], v[1]]);
+    let o = [
+        orient(p[1], p[2], q),
+        orient(p[2], p[0], q),
+        orient(p[0], p[1], q),
+    ];
+    let pos = o.iter().any(|s| s.is_ccw());
+    let neg = o.contains(&Orientation::Clockwise);
+    if pos && neg {
+        return None;
+    }
+    let area = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    let total = area(p[0], p[1], p[2]);
+    if total == 0.0 {
+        return None;
+    }
+    let w = [
+        area(q, p[1], p[2]) / total,
+        area(p[0], q, p[2]) / total,
+        area(p[0], p[1], q) / total,
+    ];
+    Some(w[0] * t[0][2] + w[1] * t[1][2] + w[2] * t[2][2])
+}
+
+impl TriangleSink for DrapeSink {
+    fn begin(&mut self, _info: &super::StreamInfo) -> Result<()> {
+        Ok(())
+    }
+
+    fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
+        let lo = [
+            t[0][0].min(t[1][0]).min(t[2][0]),
+            t[0][1].min(t[1][1]).min(t[2][1]),
+        ];
+        let hi = [
+            t[0][0].max(t[1][0]).max(t[2][0]),
+            t[0][1].max(t[1][1]).max(t[2][1]),
+        ];
+        let (xy, z, buckets) = (&self.xy, &mut self.z, &self.buckets);
+        self.grid.box_cells(lo, hi, |c| {
+            for &q in buckets.cell(c) {
+                let q = q as usize;
+                if z[q].is_nan()
+                    && let Some(h) = interpolate(t, xy[q])
+                {
+                    z[q] = h;
+                }
+            }
+        });
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<serde_json::Value> {
+        Ok(serde_json::Value::Null)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interpolation_is_linear_and_closed() {
+        let t = [[0.0, 0.0, 0.0], [4.0, 0.0, 4.0], [0.0, 4.0, 8.0]];
+        assert_eq!(interpolate(&t, [1.0, 1.0]), Some(3.0));
+        assert_eq!(interpolate(&t, [2.0, 2.0]), Some(6.0)); // on the edge
+        assert_eq!(interpolate(&t, [0.0, 0.0]), Some(0.0)); // a corner
+        assert_eq!(interpolate(&t, [2.0, 2.1]), None);
+        let cw = [t[0], t[2], t[1]];
+        assert_eq!(interpolate(&cw, [1.0, 1.0]), Some(3.0));
+    }
+}
