@@ -1,6 +1,27 @@
+//! Writes synthetic breaklines (`contours` | `coast`) in the breakline text format, or their
+//! points (`contour-points` | `coast-points`) as XYZ, to stdout:
+//! `cargo run --release --example dump_lines -- contours 1000000 > lines.txt`.
+use std::io::{BufWriter, Write};
+
 fn main() {
-    let which = std::env::args().nth(1).unwrap();
-    let n: usize = std::env::args().nth(2).unwrap().parse().unwrap();
+    let which = std::env::args().nth(1).expect("contours|coast|contour-points|coast-points");
+    let n: usize = std::env::args()
+        .nth(2)
+        .expect("a count")
+        .parse()
+        .expect("a count");
+    let mut out = BufWriter::new(std::io::stdout().lock());
+    let points = match which.as_str() {
+        "contour-points" => Some(sweeptin::synth::contour_points(n, 1)),
+        "coast-points" => Some(sweeptin::synth::coastline_points(n, 1)),
+        _ => None,
+    };
+    if let Some(pts) = points {
+        for p in pts {
+            writeln!(out, "{} {} {}", p[0], p[1], p[2]).unwrap();
+        }
+        return;
+    }
     let lines = if which == "coast" {
         sweeptin::synth::coastline(n, 1)
     } else {
@@ -8,8 +29,8 @@ fn main() {
     };
     for l in lines {
         for p in l {
-            println!("{} {} {}", p[0], p[1], p[2]);
+            writeln!(out, "{} {} {}", p[0], p[1], p[2]).unwrap();
         }
-        println!();
+        writeln!(out).unwrap();
     }
 }

@@ -152,9 +152,13 @@ pub(crate) struct Finalizer {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct PendingSegments {
     segs: Vec<Option<PendingSeg>>,
+    /// Generation of each slot, bumped when its segment is removed: bucket entries of an earlier
+    /// generation are stale (slots are reused) and pruned when met.
+    gen_of: Vec<u32>,
     free: Vec<u32>,
     by_ends: std::collections::HashMap<(u32, u32), u32>,
-    buckets: Vec<Vec<u32>>,
+    /// Slot and generation of the segments over each x range.
+    buckets: Vec<Vec<(u32, u32)>>,
     x0: f64,
     inv_w: f64,
     live: usize,
@@ -197,13 +201,15 @@ impl PendingSegments {
             }
             None => {
                 self.segs.push(Some(PendingSeg { a, b }));
+                self.gen_of.push(0);
                 (self.segs.len() - 1) as u32
             }
         };
         self.by_ends.insert((lo, hi), id);
+        let g = self.gen_of[id as usize];
         let (k0, k1) = (self.bucket(a[0].min(b[0])), self.bucket(a[0].max(b[0])));
         for k in k0..=k1 {
-            self.buckets[k].push(id);
+            self.buckets[k].push((id, g));
         }
         self.live += 1;
         self.peak = self.peak.max(self.live);
@@ -213,6 +219,7 @@ impl PendingSegments {
     pub fn remove(&mut self, lo: u32, hi: u32) {
         if let Some(id) = self.by_ends.remove(&(lo, hi)) {
             self.segs[id as usize] = None;
+            self.gen_of[id as usize] = self.gen_of[id as usize].wrapping_add(1);
             self.free.push(id);
             self.live -= 1;
         }
@@ -228,16 +235,16 @@ impl PendingSegments {
         for k in k0..=k1 {
             let mut i = 0;
             while i < self.buckets[k].len() {
-                let id = self.buckets[k][i];
+                let (id, g) = self.buckets[k][i];
                 match self.segs[id as usize] {
-                    None => {
-                        self.buckets[k].swap_remove(i);
-                        continue;
-                    }
-                    Some(s) => {
+                    Some(s) if self.gen_of[id as usize] == g => {
                         if segment_within(s.a, s.b, c, r) {
                             return true;
                         }
+                    }
+                    _ => {
+                        self.buckets[k].swap_remove(i);
+                        continue;
                     }
                 }
                 i += 1;
