@@ -133,29 +133,56 @@ pub fn triangulate_cdt(
     })
 }
 
-/// The breakline graph over the prepared vertices: each segment endpoint is found among the
-/// sorted, de-duplicated vertices by its local position (binary search).
+/// The breakline graph over the prepared vertices. Each segment endpoint is mapped to its vertex
+/// through the inverse of `prepared.index` (an input point that survived de-duplication), or found
+/// among the sorted, de-duplicated vertices by its local position (binary search) when it was
+/// merged into another point. The endpoints are then numbered in vertex order.
 fn constraint_graph(
     prepared: &points::Prepared,
     points: &[[f64; 3]],
     segments: &[[u32; 2]],
 ) -> (crate::sweep::ConstraintGraph, Vec<u32>) {
+    const NONE: u32 = u32::MAX;
     let real = &prepared.xy[crate::predicates::FIRST_REAL as usize..];
     let o = prepared.origin;
+    let mut vertex_of_input = vec![NONE; points.len()];
+    for (v, &i) in prepared.index.iter().enumerate() {
+        vertex_of_input[i as usize] = v as u32;
+    }
     let vertex = |i: u32| -> u32 {
-        let p = points[i as usize];
-        let q = [(p[0] - o[0]) + 0.0, (p[1] - o[1]) + 0.0];
-        real.binary_search_by(|v| crate::predicates::sweep_cmp(*v, q))
-            .expect("every input point has a vertex") as u32
+        match vertex_of_input[i as usize] {
+            NONE => {
+                let p = points[i as usize];
+                let q = [(p[0] - o[0]) + 0.0, (p[1] - o[1]) + 0.0];
+                real.binary_search_by(|v| crate::predicates::sweep_cmp(*v, q))
+                    .expect("every input point has a vertex") as u32
+            }
+            v => v,
+        }
     };
-    let mut ends: Vec<u32> = segments.iter().flatten().map(|&i| vertex(i)).collect();
-    ends.sort_unstable();
-    ends.dedup();
-    let cid = |v: u32| ends.binary_search(&v).expect("endpoint is listed") as u32;
-    let segs: Vec<[u32; 2]> = segments
+    let seg_vertices: Vec<[u32; 2]> = segments
         .iter()
-        .map(|s| [cid(vertex(s[0])), cid(vertex(s[1]))])
+        .map(|s| [vertex(s[0]), vertex(s[1])])
         .collect();
+    drop(vertex_of_input);
+    // Endpoint number of each vertex (NONE where no segment ends), in vertex order.
+    let mut cid = vec![NONE; real.len()];
+    for &v in seg_vertices.iter().flatten() {
+        cid[v as usize] = 0;
+    }
+    let mut ends = Vec::new();
+    for (v, c) in cid.iter_mut().enumerate() {
+        if *c != NONE {
+            *c = ends.len() as u32;
+            ends.push(v as u32);
+        }
+    }
+    let segs: Vec<[u32; 2]> = seg_vertices
+        .iter()
+        .map(|s| [cid[s[0] as usize], cid[s[1] as usize]])
+        .collect();
+    drop(seg_vertices);
+    drop(cid);
     let xy = ends.iter().map(|&v| real[v as usize]).collect();
     (crate::sweep::ConstraintGraph::new(xy, &segs), ends)
 }

@@ -124,6 +124,43 @@ fn equals_spade_cdt_on_random_segments() {
     }
 }
 
+/// Segment endpoints given as exact duplicates of other points (merged away by the duplicate
+/// policy) refer to the surviving point: the result is the one with the survivors' indices.
+#[test]
+fn segments_ending_at_merged_duplicates() {
+    for seed in 0..40 {
+        let n = 20 + (seed as usize * 17) % 200;
+        let (mut pts, segs) = random_input(seed, n, n / 3);
+        let expected = ours(&pts, &segs);
+        // Duplicate every endpoint of every other segment, once before the original (so that
+        // the copy survives under the default policy) and once after it, and point the segments
+        // at the copies.
+        let mut moved = segs.clone();
+        for (k, s) in moved.iter_mut().enumerate().filter(|(k, _)| k % 2 == 0) {
+            for (j, e) in s.iter_mut().enumerate() {
+                let p = pts[*e as usize];
+                pts.push(p);
+                if (k / 2 + j) % 2 == 0 {
+                    *e = (pts.len() - 1) as u32;
+                }
+            }
+        }
+        assert_eq!(ours(&pts, &moved), expected, "seed {seed}");
+        let mut front = pts.clone();
+        front.rotate_right(pts.len() - n);
+        let shift = (pts.len() - n) as u32;
+        let remap = |i: u32| {
+            if i < n as u32 {
+                i + shift
+            } else {
+                i - n as u32
+            }
+        };
+        let moved: Vec<[u32; 2]> = moved.iter().map(|s| s.map(remap)).collect();
+        assert_eq!(ours(&front, &moved), expected, "seed {seed}, copies first");
+    }
+}
+
 #[test]
 fn stepwise_invariants_with_breaklines() {
     for seed in 0..150 {
