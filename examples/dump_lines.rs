@@ -4,7 +4,9 @@
 use std::io::{BufWriter, Write};
 
 fn main() {
-    let which = std::env::args().nth(1).expect("contours|coast|contour-points|coast-points");
+    let which = std::env::args()
+        .nth(1)
+        .expect("contours|coast|contour-points|coast-points");
     let n: usize = std::env::args()
         .nth(2)
         .expect("a count")

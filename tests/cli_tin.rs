@@ -108,3 +108,32 @@ fn bad_breaklines_fail_cleanly() {
         assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0, "{name}");
     }
 }
+
+/// Every command's options parse (clap checks for clashing names only when a command is built).
+#[test]
+fn every_command_has_consistent_options() {
+    for c in [
+        "tin",
+        "info",
+        "check",
+        "dem",
+        "contours",
+        "volume",
+        "sample",
+        "profile",
+        "hillshade",
+        "products",
+        "simplify",
+        "crossval",
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+            .args([c, "--help"])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{c} --help: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}

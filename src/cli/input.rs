@@ -115,7 +115,9 @@ pub struct LineArgs {
     #[arg(long = "breaklines", value_name = "FILE")]
     pub breaklines: Vec<PathBuf>,
     /// Keep only the triangles inside these polygons (survey limit); the rings become breaklines.
-    #[arg(long, value_name = "FILE")]
+    /// (`sweeptin tin` also accepts it as `--boundary`; in `volume` and `products`, `--boundary`
+    /// is the volume's polygon.)
+    #[arg(long = "trim-boundary", id = "trim_boundary", value_name = "FILE")]
     pub boundary: Option<PathBuf>,
     /// Drop the triangles inside these polygons (lakes, buildings); the rings become breaklines.
     #[arg(long, value_name = "FILE")]

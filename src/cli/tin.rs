@@ -22,11 +22,23 @@ pub struct Args {
     /// input's, when LAS/LAZ files carry one.
     #[arg(long)]
     pub crs: Option<String>,
+    /// Keep only the triangles inside these polygons (survey limit); the rings become
+    /// breaklines. Same as `--trim-boundary`.
+    #[arg(
+        long = "boundary",
+        id = "boundary_polygon",
+        value_name = "FILE",
+        conflicts_with = "trim_boundary"
+    )]
+    pub boundary_polygon: Option<PathBuf>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
-    let input = args.input.input();
+    let mut input = args.input.input();
+    if let Some(b) = &args.boundary_polygon {
+        input.lines.boundary = Some(b.clone());
+    }
     let crs = match &args.crs {
         Some(c) => Some(c.clone()),
         None => sweeptin::pipeline::input_crs(&input)?,

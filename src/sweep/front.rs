@@ -340,23 +340,39 @@ impl Front {
         self.len -= 1;
     }
 
-    /// Lowest y of the front over `[x0, x1]`, conservatively: the minimum over the real nodes from
-    /// the one at or left of `x0` to the one right of `x1` (the front between two nodes is a segment,
-    /// so it never dips below both ends). Parts of the span left of the first real node or right of
-    /// the last are ignored: no point exists or will arrive there below the sweep line.
+    /// Lowest y of the front over `[x0, x1]`, conservatively: the minimum over the real nodes
+    /// inside the span and the front's height where it enters and leaves the span, interpolated
+    /// along the segment there and lowered by a bound on the rounding error (so floating point can
+    /// only delay a finalisation; never below the lower end of that segment). Parts of the span
+    /// left of the first real node or right of the last are ignored: no point exists there (the end
+    /// nodes are the extreme points so far) and every later point lies above the sweep line.
     pub fn min_y_over(&self, x0: f64, x1: f64) -> f64 {
+        let nodes = &self.nodes;
         let mut n = self.locate(x0);
         if n == self.head {
             n = self.next(n);
         }
         let mut lo = f64::INFINITY;
         while n != self.tail {
-            let node = &self.nodes[n as usize];
-            lo = lo.min(node.y);
-            if node.x > x1 {
+            let a = &nodes[n as usize];
+            if a.x >= x0 {
+                lo = lo.min(a.y);
+            }
+            if a.next == self.tail {
                 break;
             }
-            n = node.next;
+            let b = &nodes[a.next as usize];
+            if a.x < x0 && x0 < b.x {
+                lo = lo.min(segment_low(a, b, x0));
+            }
+            if a.x < x1 && x1 < b.x {
+                lo = lo.min(segment_low(a, b, x1));
+                break;
+            }
+            if b.x > x1 {
+                break;
+            }
+            n = a.next;
         }
         lo
     }
@@ -373,4 +389,15 @@ impl Front {
             Some(cur)
         })
     }
+}
+
+/// A lower bound of the height of the front segment `a`–`b` at `x` (`a.x < x < b.x`): the
+/// interpolated height minus a bound on its rounding error, and never below the lower end.
+#[inline]
+fn segment_low(a: &Node, b: &Node, x: f64) -> f64 {
+    let w = b.x - a.x;
+    let dy = b.y - a.y;
+    let y = a.y + (x - a.x) / w * dy;
+    let err = 8.0 * f64::EPSILON * ((x.abs() + a.x.abs()) / w * dy.abs() + a.y.abs() + b.y.abs());
+    (y - err).max(a.y.min(b.y))
 }

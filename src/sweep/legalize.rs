@@ -48,6 +48,10 @@ impl Sweep {
         self.relink(a, hbl);
         self.relink(b, har);
         self.mesh.pair(ar, bl, false);
+        if let Some(f) = self.fin.as_mut() {
+            f.changed(a.tri());
+            f.changed(b.tri());
+        }
         Some(b)
     }
 

@@ -146,6 +146,12 @@ pub(crate) struct Finalizer {
     ending: bool,
     /// Breaklines whose earlier end is swept and later end is not.
     pub pending: PendingSegments,
+    /// The data's x range (watermark heuristic).
+    x_range: (f64, f64),
+    /// The bucket at which each triangle slot is due for its next check: queue entries for any
+    /// other bucket are stale (the slot was rescheduled, flipped or refilled since) and skipped,
+    /// so each slot has one live entry.
+    due: Vec<u64>,
 }
 
 /// Pending breakline segments, indexed by x, to keep triangles they may still cross in memory.
@@ -254,6 +260,23 @@ impl PendingSegments {
     }
 }
 
+/// Is the circumcircle of `a b c` narrower than `limit` in radius and inside the x range of the
+/// data? (Floating point: a heuristic for watermarks only, never a topological decision.)
+fn ordinary(a: [f64; 2], b: [f64; 2], c: [f64; 2], limit: f64, x_range: (f64, f64)) -> bool {
+    let (bx, by) = (b[0] - a[0], b[1] - a[1]);
+    let (cx, cy) = (c[0] - a[0], c[1] - a[1]);
+    let d = 2.0 * (bx * cy - by * cx);
+    if d == 0.0 {
+        return false;
+    }
+    let (b2, c2) = (bx * bx + by * by, cx * cx + cy * cy);
+    let ux = (cy * b2 - by * c2) / d;
+    let uy = (bx * c2 - cx * b2) / d;
+    let r = (ux * ux + uy * uy).sqrt();
+    let x = a[0] + ux;
+    r < limit && x - r >= x_range.0 && x + r <= x_range.1
+}
+
 /// Is segment `a`–`b` within distance `r` of `c`? Floating point with a relative margin of 1e-9
 /// of the magnitudes involved, so a true "yes" is never missed.
 fn segment_within(a: [f64; 2], b: [f64; 2], c: [f64; 2], r: f64) -> bool {
@@ -307,6 +330,8 @@ impl Finalizer {
             stats: StreamStats::default(),
             ending: false,
             pending: PendingSegments::new((x0, x1)),
+            x_range: (x0, x1),
+            due: Vec::new(),
         }
     }
 
@@ -320,6 +345,17 @@ impl Finalizer {
     #[inline]
     fn schedule(&mut self, t: u32, k: u64) {
         let k = k.max(self.cur);
+        let i = t as usize;
+        if i >= self.due.len() {
+            self.due.resize(i + 1, u64::MAX);
+        }
+        self.due[i] = k;
+        self.push_entry(t, k);
+    }
+
+    /// Queues slot `t` for bucket `k` (already recorded in `due`).
+    #[inline]
+    fn push_entry(&mut self, t: u32, k: u64) {
         if k < self.cur + RING as u64 {
             self.ring[(k % RING as u64) as usize].push(t);
             self.in_ring += 1;
@@ -337,6 +373,13 @@ impl Finalizer {
         }
         self.vertices.free.push(v.0);
         self.live_vertices -= 1;
+    }
+
+    /// Triangle slot `t` was changed in place (an edge flip): check it again soon, whatever it
+    /// was waiting for before.
+    #[inline(always)]
+    pub fn changed(&mut self, t: u32) {
+        self.schedule(t, self.sweep_bucket.saturating_add(FIRST_CHECK));
     }
 
     /// A triangle slot was (re)filled.
@@ -433,10 +476,12 @@ impl Sweep {
     }
 
     /// Appends a watermark event: no live triangle of ordinary size has a vertex below the
-    /// returned `y`, and every later point is above it. Long thin triangles along the convex hull
-    /// (wider than 100 point spacings), whose finalisation waits for the end, are left out: they
-    /// may arrive later below the watermark ("late"). O(live triangles); call it every few
-    /// thousand points.
+    /// returned `y`, and every later point is above it. Triangles whose finalisation waits for
+    /// the end or for a long time are left out — wider than 100 point spacings, or with a
+    /// circumcircle wider than that or reaching beyond the data's x range (the triangles along the
+    /// left and right sides of the convex hull, whose disks the front never covers) — so they may
+    /// arrive later below the watermark ("late"), which every sink handles. O(live triangles);
+    /// call it every few thousand points.
     pub fn emit_watermark(&mut self) -> f64 {
         let Some(fin) = self.fin.as_ref() else {
             return f64::NEG_INFINITY;
@@ -461,7 +506,7 @@ impl Sweep {
             let low = pa[1].min(pb[1]).min(pc[1]);
             if low < w {
                 let span = pa[0].max(pb[0]).max(pc[0]) - pa[0].min(pb[0]).min(pc[0]);
-                if span < wide {
+                if span < wide && ordinary(pa, pb, pc, wide, fin.x_range) {
                     w = low;
                 }
             }
@@ -530,13 +575,17 @@ impl Sweep {
                 Self::pull_far(fin);
                 continue;
             }
-            let slot = (fin.cur % RING as u64) as usize;
+            let bucket = fin.cur;
+            let slot = (bucket % RING as u64) as usize;
             fin.cur += 1;
             let mut list = std::mem::take(&mut fin.ring[slot]);
             fin.in_ring -= list.len();
             Self::pull_far(fin);
             for &t in &list {
-                self.check_final(t, y, ks);
+                let fin = self.fin.as_ref().expect("streaming");
+                if fin.due[t as usize] == bucket && self.mesh.is_live(t) {
+                    self.check_final(t, y, ks);
+                }
             }
             list.clear();
             let fin = self.fin.as_mut().expect("streaming");
@@ -552,7 +601,9 @@ impl Sweep {
                 break;
             }
             fin.far.pop();
-            fin.schedule(t, k);
+            if fin.due[t as usize] == k {
+                fin.push_entry(t, k);
+            }
         }
     }
 
