@@ -88,6 +88,8 @@ pub enum Event {
 
 const NOT_OUT: u64 = u64::MAX;
 const RING: usize = 1024;
+/// Capacity a processed ring bucket keeps for reuse.
+const RING_KEEP: usize = 256;
 /// Buckets between a triangle's creation and its first check.
 const FIRST_CHECK: u64 = 3;
 /// Buckets between checks of a triangle that uses an artificial point or is too flat to bound.
@@ -588,6 +590,9 @@ impl Sweep {
                 }
             }
             list.clear();
+            // Do not let each of the RING buckets keep the capacity of its busiest moment: that
+            // would hold RING x (entries per bucket), which grows with the front.
+            list.shrink_to(RING_KEEP);
             let fin = self.fin.as_mut().expect("streaming");
             if fin.ring[slot].is_empty() {
                 fin.ring[slot] = list;
