@@ -4,8 +4,9 @@
 //! Points are collected in a chunk sized from the memory budget. A full chunk is sorted in RAM
 //! (rayon) and spilled as fixed-size little-endian records ([`SortRecord`], `#[repr(C)]`, 32 bytes)
 //! to an anonymous temporary file under the chosen directory (already unlinked: nothing is left
-//! behind even if the process is killed). At the end the runs are memory-mapped
-//! ([`crate::mmap`]) and k-way merged; pages already merged are released. When everything fits
+//! behind even if the process is killed). At the end the runs are k-way merged,
+//! each read through a small sliding memory map ([`crate::mmap`]), so the merge's resident file
+//! pages stay at a few hundred KiB per run. When everything fits
 //! in one chunk, nothing is spilled. The merged order is a total order, so the result never
 //! depends on the memory budget or the thread count.
 //!
@@ -132,30 +133,33 @@ impl ExternalSorter {
             return Ok(Merge {
                 source: Source::Memory(std::mem::take(&mut self.chunk), 0),
                 stats: self.stats,
+                error: None,
             });
         }
         if !self.chunk.is_empty() {
             self.spill()?;
         }
         self.chunk = Vec::new();
+        let io = |e| Error::io(&self.tmp_dir, e);
         let mut runs = Vec::with_capacity(self.runs.len());
-        for f in &self.runs {
-            let m = MappedRecords::<SortRecord>::map(f).map_err(|e| Error::io(&self.tmp_dir, e))?;
+        for f in std::mem::take(&mut self.runs) {
+            let m = MappedRecords::<SortRecord>::map(f).map_err(io)?;
             runs.push(Run { map: m, pos: 0 });
         }
         let mut heap = BinaryHeap::with_capacity(runs.len());
-        for (i, r) in runs.iter().enumerate() {
-            if let Some(rec) = r.map.records().first() {
-                heap.push(Head { rec: *rec, run: i });
+        for (i, r) in runs.iter_mut().enumerate() {
+            if let Some(rec) = r.map.get(0).map_err(io)? {
+                heap.push(Head { rec, run: i });
             }
         }
         Ok(Merge {
             source: Source::Runs {
                 runs,
                 heap,
-                _files: std::mem::take(&mut self.runs),
+                dir: self.tmp_dir.clone(),
             },
             stats: self.stats,
+            error: None,
         })
     }
 }
@@ -196,7 +200,8 @@ enum Source {
     Runs {
         runs: Vec<Run>,
         heap: BinaryHeap<Head>,
-        _files: Vec<File>,
+        /// The spill directory, to name it in an error.
+        dir: PathBuf,
     },
 }
 
@@ -205,6 +210,8 @@ enum Source {
 pub struct Merge {
     source: Source,
     stats: SortStats,
+    /// A spill file that could not be read ends the stream early; see [`Merge::take_error`].
+    error: Option<Error>,
 }
 
 impl Merge {
@@ -212,11 +219,13 @@ impl Merge {
     pub fn stats(&self) -> SortStats {
         self.stats
     }
-}
 
-/// Records between releases of a run's consumed pages (256 KiB): with k runs merged, about
-/// k x 256 KiB of mapped pages stay resident, plus the kernel's read-ahead.
-const RELEASE_EVERY: usize = 1 << 13;
+    /// The error that ended the stream early, if any. A consumer must check it after the last
+    /// record: a merge cut short by an I/O error is not the whole input.
+    pub fn take_error(&mut self) -> Option<Error> {
+        self.error.take()
+    }
+}
 
 impl Iterator for Merge {
     type Item = SortRecord;
@@ -229,18 +238,21 @@ impl Iterator for Merge {
                 *i += 1;
                 r
             }
-            Source::Runs { runs, heap, .. } => {
+            Source::Runs { runs, heap, dir } => {
                 let mut top = heap.peek_mut()?;
                 let out = top.rec;
                 let run = &mut runs[top.run];
                 run.pos += 1;
-                if run.pos % RELEASE_EVERY == 0 {
-                    run.map.release_before(run.pos);
-                }
-                match run.map.records().get(run.pos) {
-                    Some(next) => top.rec = *next,
-                    None => {
+                match run.map.get(run.pos) {
+                    Ok(Some(next)) => top.rec = next,
+                    Ok(None) => {
                         std::collections::binary_heap::PeekMut::pop(top);
+                    }
+                    Err(e) => {
+                        drop(top);
+                        heap.clear();
+                        self.error = Some(Error::io(dir.as_path(), e));
+                        return None;
                     }
                 }
                 Some(out)

@@ -3,66 +3,121 @@
 //! A spill file is an anonymous temporary file (already unlinked, so no other process can open
 //! it) that this process wrote completely and never writes again while it is mapped; that is what
 //! makes mapping it sound. Records are plain old data (`bytemuck::Pod`), so any bytes are a valid
-//! record, and the mapping is page-aligned, so the cast to records is aligned.
+//! record, and every mapping starts at a page-aligned file offset that is a multiple of the record
+//! size, so the cast to records is aligned.
+//!
+//! # Why a sliding window, not the whole file
+//!
+//! The merge reads each run front to back. Mapping a whole run and releasing consumed pages with
+//! `MADV_DONTNEED` is not enough on current kernels: the spill file's page cache is made of large
+//! folios (up to 2 MiB), and one page fault maps the whole folio around the faulting address, so a
+//! k-way merge kept about k × 2 MiB of file pages resident (measured: 45 MiB of file-backed RSS
+//! merging 20 runs, 100 MiB merging 48). The map only ever covers a [`WINDOW`]-byte window of the
+//! file, pre-faulted with `MAP_POPULATE`; moving on unmaps the old window. A fault can map no page
+//! outside the mapping, so at most k × [`WINDOW`] bytes of the runs are resident.
 #![allow(unsafe_code)]
 
 use bytemuck::Pod;
-use memmap2::{Advice, Mmap, UncheckedAdvice};
+use memmap2::{Mmap, MmapOptions};
 use std::fs::File;
 use std::marker::PhantomData;
 
-/// A read-only mapping of a file of fixed-size records, read front to back.
+/// Bytes of a run mapped at a time (a multiple of the page size and of every record size used).
+pub const WINDOW: usize = 256 * 1024;
+
+/// A file of fixed-size records, read front to back through a sliding read-only memory map.
 #[derive(Debug)]
 pub struct MappedRecords<T: Pod> {
+    file: File,
+    /// The current window, covering records `start .. start + records().len()`.
     map: Option<Mmap>,
+    start: usize,
     len: usize,
-    released: usize,
     _t: PhantomData<T>,
 }
 
 impl<T: Pod> MappedRecords<T> {
-    /// Maps `file`, which must hold a whole number of `T` records and must not be written while
-    /// mapped (the caller created it and finished writing it).
+    /// Takes `file`, which must hold a whole number of `T` records and must not be written while
+    /// mapped (the caller created it and finished writing it), and maps its first window.
     ///
     /// # Errors
     /// The operating system's error if mapping fails, `InvalidData` if the length is not a
     /// multiple of the record size.
-    pub fn map(file: &File) -> std::io::Result<Self> {
+    pub fn map(file: File) -> std::io::Result<Self> {
         let bytes = file.metadata()?.len() as usize;
         let size = std::mem::size_of::<T>();
+        debug_assert!(WINDOW.is_multiple_of(size));
         if !bytes.is_multiple_of(size) {
             return Err(std::io::Error::new(
                 std::io::ErrorKind::InvalidData,
                 "spill file is not a whole number of records",
             ));
         }
-        if bytes == 0 {
-            return Ok(MappedRecords {
-                map: None,
-                len: 0,
-                released: 0,
-                _t: PhantomData,
-            });
-        }
-        // SAFETY: the file is a private, unlinked temporary file that this process has finished
-        // writing; nothing modifies or truncates it while the map lives (see the module docs).
-        let map = unsafe { Mmap::map(file)? };
-        // Sequential reading: ask for aggressive read-ahead. Advisory only.
-        let _ = map.advise(Advice::Sequential);
-        Ok(MappedRecords {
-            map: Some(map),
+        let mut m = MappedRecords {
+            file,
+            map: None,
+            start: 0,
             len: bytes / size,
-            released: 0,
             _t: PhantomData,
-        })
+        };
+        m.slide(0)?;
+        Ok(m)
     }
 
-    /// All records.
-    pub fn records(&self) -> &[T] {
+    /// Maps the window holding record `i` (or nothing past the end).
+    fn slide(&mut self, i: usize) -> std::io::Result<()> {
+        let size = std::mem::size_of::<T>();
+        let per = WINDOW / size;
+        let start = i / per * per;
+        self.map = None; // unmap the old window first: never two windows resident
+        self.start = start;
+        if start >= self.len {
+            return Ok(());
+        }
+        let count = per.min(self.len - start);
+        // SAFETY: the file is a private, unlinked temporary file that this process has finished
+        // writing; nothing modifies or truncates it while the map lives (see the module docs).
+        // The offset is a multiple of WINDOW, hence page-aligned.
+        let map = unsafe {
+            MmapOptions::new()
+                .offset((start * size) as u64)
+                .len(count * size)
+                .populate()
+                .map(&self.file)?
+        };
+        self.map = Some(map);
+        Ok(())
+    }
+
+    /// The records of the current window (from record [`MappedRecords::window_start`] on).
+    fn records(&self) -> &[T] {
         match &self.map {
             Some(m) => bytemuck::cast_slice(&m[..]),
             None => &[],
         }
+    }
+
+    /// Index of the first record of the current window.
+    fn window_start(&self) -> usize {
+        self.start
+    }
+
+    /// Record `i`, moving the window forward (or back) when `i` lies outside it; `None` past the
+    /// end.
+    ///
+    /// # Errors
+    /// The operating system's error if mapping the next window fails.
+    #[inline]
+    pub fn get(&mut self, i: usize) -> std::io::Result<Option<T>> {
+        let off = i.wrapping_sub(self.window_start());
+        if let Some(r) = self.records().get(off) {
+            return Ok(Some(*r));
+        }
+        if i >= self.len {
+            return Ok(None);
+        }
+        self.slide(i)?;
+        Ok(self.records().get(i - self.start).copied())
     }
 
     /// Number of records.
@@ -74,26 +129,39 @@ impl<T: Pod> MappedRecords<T> {
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
+}
 
-    /// Tells the kernel that records before `upto` will not be read again, so their pages can leave
-    /// this process's resident set.
-    pub fn release_before(&mut self, upto: usize) {
-        let Some(map) = &self.map else { return };
-        let page = 4096;
-        let end = (upto.min(self.len) * std::mem::size_of::<T>()) / page * page;
-        if end <= self.released {
-            return;
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    #[test]
+    fn reads_every_record_across_windows() {
+        let per = WINDOW / 8;
+        let n = 2 * per + 17;
+        let mut f = tempfile::tempfile().unwrap();
+        let data: Vec<u64> = (0..n as u64).collect();
+        f.write_all(bytemuck::cast_slice(&data)).unwrap();
+        let mut m = MappedRecords::<u64>::map(f).unwrap();
+        assert_eq!(m.len(), n);
+        for (i, want) in data.iter().enumerate() {
+            assert_eq!(m.get(i).unwrap(), Some(*want));
         }
-        // SAFETY: MADV_DONTNEED on a read-only, file-backed shared mapping only drops the pages
-        // from this process; if they were read again they would be reloaded from the unchanged
-        // file, so no reference into the map can observe different bytes.
-        let _ = unsafe {
-            map.unchecked_advise_range(
-                UncheckedAdvice::DontNeed,
-                self.released,
-                end - self.released,
-            )
-        };
-        self.released = end;
+        assert_eq!(m.get(n).unwrap(), None);
+        // Going back maps the earlier window again.
+        assert_eq!(m.get(3).unwrap(), Some(3));
+    }
+
+    #[test]
+    fn empty_and_ragged_files() {
+        let f = tempfile::tempfile().unwrap();
+        let mut m = MappedRecords::<u64>::map(f).unwrap();
+        assert!(m.is_empty());
+        assert_eq!(m.get(0).unwrap(), None);
+        let mut f = tempfile::tempfile().unwrap();
+        f.write_all(&[1, 2, 3]).unwrap();
+        let e = MappedRecords::<u64>::map(f).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidData);
     }
 }

@@ -126,7 +126,9 @@ pub(crate) fn run(
         (swept, duplicates, written)
     });
     let (swept, duplicates, written) = outcome;
-    // A writer error closes its channel, which stops the sweep: report the writer's error first.
+    // A merge error ends the points early: report it before anything built from them. A writer
+    // error closes its channel, which stops the sweep: report it before the sweep's.
+    let duplicates = duplicates?;
     let (vertices, triangles, trimmed, flat) = written?;
     let (sweep, stream, kept, cstats) = swept?;
     let triangulate_write = phase2.elapsed().as_secs_f64();
@@ -180,13 +182,14 @@ fn world_bounds(rd: &ReadResult) -> [f64; 4] {
     [lo[0], lo[1], hi[0], hi[1]]
 }
 
-/// Merge thread: sorted, de-duplicated points in batches. Returns the number of duplicates.
+/// Merge thread: sorted, de-duplicated points in batches. Returns the number of duplicates, or
+/// the error that cut the merge short (an unreadable spill file).
 fn merge_points(
-    merge: Merge,
+    mut merge: Merge,
     policy: crate::points::DuplicatePolicy,
     out: Sender<Vec<StreamPoint>>,
-) -> u64 {
-    let mut d = Dedup::new(merge, policy).with_mark(LINE_FLAG);
+) -> Result<u64> {
+    let mut d = Dedup::new(&mut merge, policy).with_mark(LINE_FLAG);
     let mut batch = Vec::with_capacity(POINT_BATCH);
     for r in d.by_ref() {
         batch.push(StreamPoint {
@@ -201,15 +204,20 @@ fn merge_points(
         });
         if batch.len() == POINT_BATCH {
             if out.send(std::mem::take(&mut batch)).is_err() {
-                return d.duplicates;
+                return Ok(d.duplicates);
             }
             batch.reserve(POINT_BATCH);
         }
     }
+    let duplicates = d.duplicates;
+    // An error must not reach the sweep as a normal end of input.
+    if let Some(e) = merge.take_error() {
+        return Err(e);
+    }
     if !batch.is_empty() {
         let _ = out.send(batch);
     }
-    d.duplicates
+    Ok(duplicates)
 }
 
 type Swept = (
