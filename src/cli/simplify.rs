@@ -33,7 +33,11 @@ pub struct Args {
     /// Keep every point the greedy insertion chose (no redundant-point removal pass).
     #[arg(long)]
     pub no_decimate: bool,
-    /// Print a JSON summary on standard output.
+    /// No progress spinner.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print a JSON summary on standard output (instead of the one-line summary on standard
+    /// error).
     #[arg(long)]
     pub json: bool,
 }
@@ -61,9 +65,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // and bandwidth of f64.
     let heights = reader.read_heights()?;
     let read_s = start.elapsed().as_secs_f64();
-    let bar = ProgressBar::new_spinner();
-    bar.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("template"));
-    bar.enable_steady_tick(Duration::from_millis(200));
+    let bar = if args.quiet || args.json {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new_spinner();
+        b.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("template"));
+        b.enable_steady_tick(Duration::from_millis(200));
+        b
+    };
     let mut progress = |points: u64, error: f64| {
         bar.set_message(format!("{points} points, worst error {error:.3}"));
     };
@@ -100,6 +109,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "total_seconds": total_s,
         });
         println!("{}", serde_json::to_string_pretty(&summary)?);
+        return Ok(());
     }
     eprintln!(
         "sweeptin: {} ({}×{}, {} valid cells) -> {}: {} points ({:.2} %), {} triangles, \
