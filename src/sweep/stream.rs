@@ -481,15 +481,19 @@ impl Sweep {
     /// returned `y`, and every later point is above it. Triangles whose finalisation waits for
     /// the end or for a long time are left out — wider than 100 point spacings, or with a
     /// circumcircle wider than that or reaching beyond the data's x range (the triangles along the
-    /// left and right sides of the convex hull, whose disks the front never covers) — so they may
-    /// arrive later below the watermark ("late"), which every sink handles. O(live triangles);
-    /// call it every few thousand points.
+    /// left and right sides of the convex hull, whose disks the front never covers), or with a
+    /// vertex more than 100 spacings below the sweep line (the rim of an empty area such as a lake,
+    /// which waits until the sweep has crossed it) — so they may arrive later below the watermark
+    /// ("late"), which every sink handles. The watermark therefore trails the sweep line by at
+    /// most 100 spacings, whatever the data's holes. O(live triangles); call it every few
+    /// thousand points.
     pub fn emit_watermark(&mut self) -> f64 {
         let Some(fin) = self.fin.as_ref() else {
             return f64::NEG_INFINITY;
         };
         let wide = 100.0 / fin.inv_h;
         let mut w = fin.last[1];
+        let stuck = fin.last[1] - wide;
         let o = &self.mesh.origin;
         for t in (0..o.len()).step_by(3) {
             let [a, b, c] = [o[t], o[t + 1], o[t + 2]];
@@ -506,7 +510,7 @@ impl Sweep {
                 self.pts[c.0 as usize],
             );
             let low = pa[1].min(pb[1]).min(pc[1]);
-            if low < w {
+            if low < w && low >= stuck {
                 let span = pa[0].max(pb[0]).max(pc[0]) - pa[0].min(pb[0]).min(pc[0]);
                 if span < wide && ordinary(pa, pb, pc, wide, fin.x_range) {
                     w = low;
