@@ -2,6 +2,8 @@
 //! `cargo run --release --example gen_laz -- 10M /tmp/lidar10m.laz [--seed 1]`.
 //! Points keep the generator's acquisition order (scan rows, then the second flight line), with
 //! LAS scale 0.01 and the generator's offsets; the integers are exactly the generated coordinates.
+//! `--strip K` cuts the square tile into K horizontal bands (whole metres) and lays them side by
+//! side along x: a corridor K² times wider than tall, with the same density and scan pattern.
 
 use las::{Builder, Point, Transform, Vector, Writer};
 
@@ -18,14 +20,30 @@ fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     anyhow::ensure!(
         args.len() >= 3,
-        "usage: gen_laz <n> <out.laz|out.las> [--seed S]"
+        "usage: gen_laz <n> <out.laz|out.las> [--seed S] [--strip K]"
     );
     let n = parse_count(&args[1]);
     let seed = args
         .iter()
         .position(|a| a == "--seed")
         .map_or(1, |i| args[i + 1].parse().expect("seed"));
-    let pts = sweeptin::synth::lidar_like(n, seed);
+    let strip = args
+        .iter()
+        .position(|a| a == "--strip")
+        .map_or(1, |i| args[i + 1].parse::<u32>().expect("strip factor"));
+    let mut pts = sweeptin::synth::lidar_like(n, seed);
+    if strip > 1 {
+        let (y0, x0) = (sweeptin::synth::LIDAR_Y0, sweeptin::synth::LIDAR_X0);
+        let side = pts.iter().map(|p| p[1] - y0).fold(0.0, f64::max);
+        let width = pts.iter().map(|p| p[0] - x0).fold(0.0, f64::max);
+        let band = (side / f64::from(strip)).ceil();
+        for p in &mut pts {
+            let k = ((p[1] - y0) / band).floor();
+            // Shifts by whole metres: the 1 cm grid of the coordinates is kept exactly.
+            p[0] += k * (width + 1.0).ceil();
+            p[1] -= k * band;
+        }
+    }
     let mut b = Builder::from((1, 2));
     b.point_format = las::point::Format::new(1)?;
     b.transforms = Vector {

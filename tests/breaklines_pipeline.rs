@@ -96,6 +96,7 @@ fn streamed(input: &Input, mem: u64) -> (Collect, RunSummary) {
         mem,
         tmp_dir: Some(tmp.path().to_path_buf()),
         progress: false,
+        ..Default::default()
     };
     let mut c = Collect::default();
     let summary = run(input, &options, Some(&mut c), &mut []).unwrap();
@@ -365,6 +366,7 @@ fn a_2d_line_outside_the_points_is_an_error_naming_the_file() {
         mem: 1 << 20,
         tmp_dir: Some(tmp.path().to_path_buf()),
         progress: false,
+        ..Default::default()
     };
     let err = run(
         &input(&[pts_path], breaklines(&[lp])),

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use sweeptin::io::sink::{MeshSink, MeshSummary};
-use sweeptin::pipeline::{Input, RunOptions, run};
+use sweeptin::pipeline::{Input, RunOptions, SweepAxis, run};
 use sweeptin::{DuplicatePolicy, Options, triangulate};
 
 /// Collects a streamed mesh in memory.
@@ -57,6 +57,15 @@ fn key_set(vertices: &[[f64; 3]], tris: impl Iterator<Item = [usize; 3]>) -> Vec
 }
 
 fn streamed(paths: &[PathBuf], mem: u64, dup: DuplicatePolicy) -> Collect {
+    streamed_along(paths, mem, dup, SweepAxis::Auto).0
+}
+
+fn streamed_along(
+    paths: &[PathBuf],
+    mem: u64,
+    dup: DuplicatePolicy,
+    sweep_axis: SweepAxis,
+) -> (Collect, sweeptin::pipeline::RunSummary) {
     let input = Input {
         paths: paths.to_vec(),
         filter: sweeptin::lidar::Filter::keep_all(),
@@ -68,6 +77,7 @@ fn streamed(paths: &[PathBuf], mem: u64, dup: DuplicatePolicy) -> Collect {
         mem,
         tmp_dir: Some(tmp.path().to_path_buf()),
         progress: false,
+        sweep_axis,
     };
     let mut c = Collect::default();
     let summary = run(&input, &options, Some(&mut c), &mut []).unwrap();
@@ -82,7 +92,7 @@ fn streamed(paths: &[PathBuf], mem: u64, dup: DuplicatePolicy) -> Collect {
         0,
         "spill files left behind"
     );
-    c
+    (c, summary)
 }
 
 fn write_xyz(path: &Path, pts: &[[f64; 3]]) {
@@ -205,4 +215,130 @@ fn byte_identical_whatever_budget_or_threads() {
             assert!(o.1 == same[0].1, "{ext} outputs differ");
         }
     }
+}
+
+/// A strip 40 times wider than tall, as LAS (scaled integers, so grid ties really happen).
+fn write_strip_las(path: &Path, pts: &[[f64; 3]]) {
+    use las::{Builder, Point, Transform, Vector, Writer};
+    let mut b = Builder::from((1, 2));
+    let t = |offset| Transform {
+        scale: 0.001,
+        offset,
+    };
+    b.transforms = Vector {
+        x: t(500_000.0),
+        y: t(4_000_000.0),
+        z: t(0.0),
+    };
+    let mut w = Writer::from_path(path, b.into_header().unwrap()).unwrap();
+    for p in pts {
+        w.write_point(Point {
+            x: 500_000.0 + p[0],
+            y: 4_000_000.0 + p[1],
+            z: p[2],
+            ..Default::default()
+        })
+        .unwrap();
+    }
+    w.close().unwrap();
+}
+
+#[test]
+fn strips_are_swept_lengthwise() {
+    let dir = tempfile::tempdir().unwrap();
+    // General position (unique Delaunay triangulation): both axes give the core's triangles.
+    let mut pts = sweeptin::synth::uniform(20_000, 7);
+    for p in &mut pts {
+        p[1] *= 0.025; // 1000 m x 25 m
+    }
+    let path = dir.path().join("strip.las");
+    write_strip_las(&path, &pts);
+    let input = Input {
+        paths: vec![path.clone()],
+        filter: sweeptin::lidar::Filter::keep_all(),
+        duplicates: DuplicatePolicy::First,
+        lines: Default::default(),
+    };
+    let (parsed, _) = sweeptin::pipeline::read_points(&input).unwrap();
+    let core = triangulate(&parsed, &Options::default()).unwrap();
+    let want = key_set(
+        &core.vertices,
+        core.triangles.iter().map(|t| t.map(|i| i as usize)),
+    );
+    let mut fronts = Vec::new();
+    for (axis, swept) in [
+        (SweepAxis::Auto, SweepAxis::X),
+        (SweepAxis::X, SweepAxis::X),
+        (SweepAxis::Y, SweepAxis::Y),
+    ] {
+        let (c, summary) = streamed_along(
+            std::slice::from_ref(&path),
+            64 << 10,
+            DuplicatePolicy::First,
+            axis,
+        );
+        assert_eq!(summary.sweep_axis, swept, "{axis:?}");
+        let got = key_set(
+            &c.vertices,
+            c.triangles.iter().map(|t| t.map(|i| i as usize)),
+        );
+        assert_eq!(got, want, "{axis:?}");
+        // Counter-clockwise in the world frame, every edge locally Delaunay, hull, Euler.
+        let tris: Vec<[u32; 3]> = c.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
+        sweeptin::validate::validate(&c.vertices, &tris).unwrap();
+        fronts.push(summary.sweep.peak_front);
+    }
+    assert!(
+        fronts[0] * 5 < fronts[2],
+        "front along x {} vs along y {}",
+        fronts[0],
+        fronts[2]
+    );
+
+    // A gridded strip (ties everywhere, 1 mm LAS units) swept along x is still exactly Delaunay.
+    let grid: Vec<[f64; 3]> = sweeptin::synth::grid(400, 9, 0.5);
+    let gpath = dir.path().join("grid.las");
+    write_strip_las(&gpath, &grid);
+    let (c, summary) = streamed_along(
+        std::slice::from_ref(&gpath),
+        16 << 10,
+        DuplicatePolicy::First,
+        SweepAxis::Auto,
+    );
+    assert_eq!(summary.sweep_axis, SweepAxis::X);
+    let tris: Vec<[u32; 3]> = c.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
+    sweeptin::validate::validate(&c.vertices, &tris).unwrap();
+    assert_eq!(c.triangles.len(), 2 * 399 * 8);
+}
+
+#[test]
+fn sweep_along_x_refuses_products() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("pts.xyz");
+    write_xyz(&path, &sweeptin::synth::uniform(100, 1));
+    let input = Input {
+        paths: vec![path],
+        filter: sweeptin::lidar::Filter::keep_all(),
+        duplicates: DuplicatePolicy::First,
+        lines: Default::default(),
+    };
+    let options = RunOptions {
+        sweep_axis: SweepAxis::X,
+        ..Default::default()
+    };
+    struct Nothing;
+    impl sweeptin::pipeline::TriangleSink for Nothing {
+        fn begin(&mut self, _: &sweeptin::pipeline::StreamInfo) -> sweeptin::Result<()> {
+            Ok(())
+        }
+        fn triangle(&mut self, _: &[[f64; 3]; 3]) -> sweeptin::Result<()> {
+            Ok(())
+        }
+        fn finish(&mut self) -> sweeptin::Result<serde_json::Value> {
+            Ok(serde_json::Value::Null)
+        }
+    }
+    let mut sink = Nothing;
+    let e = run(&input, &options, None, &mut [&mut sink]).unwrap_err();
+    assert!(e.to_string().contains("--sweep-axis x"), "{e}");
 }

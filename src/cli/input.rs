@@ -8,7 +8,9 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use sweeptin::io::MeshSink;
 use sweeptin::lidar::{BBox, Crs};
-use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunOptions, RunSummary, TriangleSink};
+use sweeptin::pipeline::{
+    self, DEFAULT_MEM, Input, RunOptions, RunSummary, SweepAxis, TriangleSink,
+};
 use sweeptin::products::Fanout;
 
 /// Input files and how to read and run them (flattened into each command's arguments).
@@ -32,6 +34,14 @@ pub struct InputArgs {
     /// Directory for spill files (anonymous temporary files, never left behind).
     #[arg(long, value_name = "DIR")]
     pub tmp_dir: Option<PathBuf>,
+    /// Axis the sweep advances along. Memory grows with the number of points across the sweep
+    /// (the advancing front), so a long strip is best swept lengthwise: `auto` sweeps along x
+    /// when the LAS/LAZ headers' extent is more than 4 times wider than tall and the run makes a
+    /// plain mesh (no breaklines, trimming or terrain products, which need y); `y` otherwise.
+    /// Exactly cocircular points are split by the sweep order, so the axis can change which of
+    /// several equally Delaunay diagonals is chosen.
+    #[arg(long, value_enum, value_name = "AXIS", default_value_t = SweepAxis::Auto)]
+    pub sweep_axis: SweepAxis,
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
@@ -58,6 +68,7 @@ impl InputArgs {
             mem: self.mem,
             tmp_dir: self.tmp_dir.clone(),
             progress: !self.quiet && !self.json,
+            sweep_axis: self.sweep_axis,
         }
     }
 }

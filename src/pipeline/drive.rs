@@ -5,7 +5,8 @@ use super::emit::{Collected, Emitter};
 use super::lines::{LINE_FLAG, LineSummary, Prepared};
 use super::read::{self, ReadResult};
 use super::{
-    AnonPeak, Frame, Input, RunOptions, RunSummary, StreamInfo, Timings, TriangleSink, peak_rss,
+    AnonPeak, Frame, Input, RunOptions, RunSummary, StreamInfo, SweepAxis, Timings, TriangleSink,
+    peak_rss,
 };
 use crate::error::{Error, Result};
 use crate::extsort::{Dedup, ExternalSorter, Merge, SortRecord};
@@ -57,17 +58,32 @@ pub(crate) fn run(
     }
     // Half the budget for the sort's chunk; the rest covers the sweep's working set, the
     // channels and the writers' buffers.
+    // Breaklines and the terrain products work in y order (pending segments, watermarks).
+    let free_axis = lines.is_none() && sinks.is_empty();
+    if options.sweep_axis == SweepAxis::X && !free_axis {
+        return Err(Error::Invalid(
+            "--sweep-axis x works only for plain meshes (no breaklines, trimming or terrain \
+             products, which need the sweep along y)"
+                .into(),
+        ));
+    }
     let mut sorter = ExternalSorter::new(options.mem / 2, &tmp);
     let pb = bar(options.progress);
     pb.set_message("reading");
-    let rd = read::read_into(input, &mut sorter, &mut |n, total| {
-        if let Some(t) = total {
-            pb.set_length(t);
-        } else {
-            pb.set_length(n);
-        }
-        pb.set_position(n);
-    })?;
+    let rd = read::read_into(
+        input,
+        options.sweep_axis,
+        free_axis,
+        &mut sorter,
+        &mut |n, total| {
+            if let Some(t) = total {
+                pb.set_length(t);
+            } else {
+                pb.set_length(n);
+            }
+            pb.set_position(n);
+        },
+    )?;
     let mut rd = rd;
     let mut expected = rd.points;
     if let Some(g) = lines.and_then(|l| l.pslg.as_ref()) {
@@ -167,6 +183,11 @@ pub(crate) fn run(
         stream,
         products,
         crs: rd.crs.as_ref().and_then(|c| c.definition()),
+        sweep_axis: if rd.frame.swap {
+            SweepAxis::X
+        } else {
+            SweepAxis::Y
+        },
         breaklines: lines.map(|l| LineSummary {
             constraints: cstats,
             trimmed_triangles: trimmed,

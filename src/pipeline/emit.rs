@@ -63,8 +63,12 @@ impl<'m, 's, 't> Emitter<'m, 's, 't> {
     pub fn event(&mut self, ev: Event) -> Result<()> {
         match ev {
             Event::Vertex { xy, z, .. } => self.vertex(self.frame.world(xy, z)),
+            // A sweep along x works on the mirror image: counter-clockwise there is clockwise here.
+            Event::Triangle(t) if self.frame.swap => self.triangle([t[0], t[2], t[1]]),
             Event::Triangle(t) => self.triangle(t),
             Event::VertexDone(i) => self.vertex_done(i),
+            // Watermarks are heights (world y); a sweep along x has none to give.
+            Event::Watermark(_) if self.frame.swap => Ok(()),
             Event::Watermark(y) => {
                 let wy = self.frame.offset[1] + self.frame.scale[1] * y;
                 if let Some(m) = self.mesh.as_mut() {

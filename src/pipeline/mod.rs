@@ -49,6 +49,8 @@ pub struct RunOptions {
     pub tmp_dir: Option<PathBuf>,
     /// Show a progress bar on stderr.
     pub progress: bool,
+    /// The axis the sweep advances along.
+    pub sweep_axis: SweepAxis,
 }
 
 impl Default for RunOptions {
@@ -57,9 +59,30 @@ impl Default for RunOptions {
             mem: DEFAULT_MEM,
             tmp_dir: None,
             progress: false,
+            sweep_axis: SweepAxis::Auto,
         }
     }
 }
+
+/// The axis the streaming sweep advances along. Memory is proportional to the number of points
+/// *across* the sweep (the advancing front), so a long strip should be swept lengthwise.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SweepAxis {
+    /// `x` when the LAS/LAZ headers' extent is more than [`STRIP_RATIO`] times wider than tall
+    /// and nothing needs `y` order (no breaklines, no terrain products); `y` otherwise (and
+    /// always for XYZ text, whose extent is not known before reading).
+    #[default]
+    Auto,
+    /// Along `x` (the points are swept by `x`, then `y`).
+    X,
+    /// Along `y` (the points are swept by `y`, then `x`), as the in-memory core does.
+    Y,
+}
+
+/// How much wider than tall (from the LAS/LAZ headers) an input must be for
+/// [`SweepAxis::Auto`] to sweep along `x`.
+pub const STRIP_RATIO: f64 = 4.0;
 
 /// Default memory budget: 1 GiB.
 pub const DEFAULT_MEM: u64 = 1 << 30;
@@ -100,6 +123,9 @@ pub struct Frame {
     pub scale: [f64; 3],
     /// Offset per axis.
     pub offset: [f64; 3],
+    /// The local frame has x and y exchanged (a sweep along the world's x): a mirror image, so
+    /// triangles change orientation on the way out.
+    pub swap: bool,
 }
 
 impl Frame {
@@ -107,14 +133,16 @@ impl Frame {
     pub const IDENTITY: Frame = Frame {
         scale: [1.0; 3],
         offset: [0.0; 3],
+        swap: false,
     };
 
     /// Real-world coordinates of a local point.
     #[inline]
     pub fn world(&self, xy: [f64; 2], z: f64) -> [f64; 3] {
+        let [x, y] = if self.swap { [xy[1], xy[0]] } else { xy };
         [
-            self.offset[0] + self.scale[0] * xy[0],
-            self.offset[1] + self.scale[1] * xy[1],
+            self.offset[0] + self.scale[0] * x,
+            self.offset[1] + self.scale[1] * y,
             self.offset[2] + self.scale[2] * z,
         ]
     }
@@ -164,6 +192,8 @@ pub struct RunSummary {
     pub crs: Option<String>,
     /// Breaklines and trimming, when given.
     pub breaklines: Option<LineSummary>,
+    /// The axis the sweep went along (`x` or `y`).
+    pub sweep_axis: SweepAxis,
 }
 
 /// The CRS of the input, from LAS/LAZ headers or a streaming mesh's header, without reading the

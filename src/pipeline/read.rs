@@ -1,6 +1,6 @@
 //! Phase 1: read every input point (with filters) into the external sorter, in the local frame.
 
-use super::{Frame, Input};
+use super::{Frame, Input, STRIP_RATIO, SweepAxis};
 use crate::error::{Error, Result};
 use crate::extsort::{ExternalSorter, SortRecord};
 use crate::io::xyz::XyzReader;
@@ -67,9 +67,12 @@ pub(crate) type Progress<'a> = &'a mut dyn FnMut(u64, Option<u64>);
 
 const CHUNK: usize = 1 << 16;
 
-/// Reads all of `input` into `sorter`.
+/// Reads all of `input` into `sorter`, exchanging x and y when the sweep goes along x (`axis`;
+/// `Auto` may choose x only when `free_axis`, i.e. nothing downstream needs y order).
 pub(crate) fn read_into(
     input: &Input,
+    axis: SweepAxis,
+    free_axis: bool,
     sorter: &mut ExternalSorter,
     progress: Progress,
 ) -> Result<ReadResult> {
@@ -87,7 +90,17 @@ pub(crate) fn read_into(
         stride: 1,
         seen: 0,
     };
-    let mut add = |s: &mut ExternalSorter, r: SortRecord| -> Result<()> {
+    let mut swap = axis == SweepAxis::X;
+    let mut add = |s: &mut ExternalSorter, swap: bool, r: SortRecord| -> Result<()> {
+        let r = if swap {
+            SortRecord {
+                x: r.y,
+                y: r.x,
+                ..r
+            }
+        } else {
+            r
+        };
         sample.add(r.x);
         bounds[0] = bounds[0].min(r.x);
         bounds[1] = bounds[1].min(r.y);
@@ -98,6 +111,11 @@ pub(crate) fn read_into(
     let lidar = input.paths.iter().filter(|p| is_lidar(p)).count();
     if lidar == input.paths.len() {
         let mut reader = LidarReader::open(&input.paths, &input.filter)?;
+        if axis == SweepAxis::Auto && free_axis {
+            let b = reader.bounds();
+            let (w, h) = (b.max[0] - b.min[0], b.max[1] - b.min[1]);
+            swap = w > STRIP_RATIO * h;
+        }
         let total = reader.point_count();
         let q = *reader.quantization();
         let crs = reader.crs().cloned();
@@ -114,6 +132,7 @@ pub(crate) fn read_into(
                 let w = q.to_world(p);
                 add(
                     sorter,
+                    swap,
                     SortRecord {
                         x: w[0] + 0.0,
                         y: w[1] + 0.0,
@@ -126,7 +145,10 @@ pub(crate) fn read_into(
             progress(n, Some(total));
         }
         return Ok(ReadResult {
-            frame: Frame::IDENTITY,
+            frame: Frame {
+                swap,
+                ..Frame::IDENTITY
+            },
             crs,
             bounds,
             points: n,
@@ -165,6 +187,7 @@ pub(crate) fn read_into(
                 // `+ 0.0` makes -0.0 and 0.0 one position.
                 add(
                     sorter,
+                    swap,
                     SortRecord {
                         x: p[0] + 0.0,
                         y: p[1] + 0.0,
@@ -178,7 +201,10 @@ pub(crate) fn read_into(
         }
     }
     Ok(ReadResult {
-        frame: Frame::IDENTITY,
+        frame: Frame {
+            swap,
+            ..Frame::IDENTITY
+        },
         crs: None,
         bounds,
         points: n,
