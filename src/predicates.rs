@@ -39,6 +39,11 @@
 //! hash capacity. A consequence used by streaming: a later point that lies exactly on a circumcircle is
 //! always *outside* it.
 //!
+//! The rule is stated in the sweep's own frame. A streaming run over a strip may sweep along the
+//! world's x (`--sweep-axis`, see [`crate::pipeline::SweepAxis`]): the points then enter the sweep
+//! with x and y exchanged, so "later" means larger world x, then larger world y. The axis is chosen
+//! from the input alone, so the output still depends only on the input.
+//!
 //! # Supported coordinates
 //!
 //! Shewchuk's predicates are exact unless an intermediate product underflows or overflows. Input
