@@ -25,8 +25,10 @@
 //!
 //! Rows live in memory from the lowest row not yet written (the sweep's watermark) up to the top
 //! of the highest triangle seen: a band of rows. [`TriangleSink::watermark`] writes the rows below
-//! it to the file. A late triangle below the watermark writes its cells straight into the file
-//! (random access), so it is handled exactly, at the cost of a few small writes.
+//! it to the file. A late triangle below the watermark writes its cells into the file (random
+//! access), so it is handled exactly: its cells are queued (at most [`LATE_BATCH`] at a time)
+//! and applied in arrival order, one read and one write per row span, when the queue is full and
+//! at the end.
 
 use super::geom::Tri;
 use crate::error::{Error, Result};
@@ -35,6 +37,9 @@ use crate::raster::grid::{GridSpec, GridWriter, RasterFormat, create_grid_writer
 use serde_json::json;
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
+
+/// Late cells queued before they are applied to the file (16 bytes each).
+pub const LATE_BATCH: usize = 1 << 16;
 
 /// Which cells the raster has (see the module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -180,6 +185,8 @@ struct Raster {
     cells_with_data: u64,
     /// Cells written after their row had gone to the file.
     late_cells: u64,
+    /// Late cells not yet applied: `(row, column, value, weak)`, in arrival order.
+    late: Vec<(u32, u32, f32, bool)>,
     /// Largest number of rows held at once.
     max_band: usize,
 }
@@ -223,15 +230,40 @@ impl Raster {
         }
         // A late triangle: the row is in the file already.
         let row = self.row_of(ky);
-        let old = self.writer.read_cell(row, col as u32)?;
-        let empty = self.is_nodata(old);
-        if empty || !weak {
-            self.writer.write_cell(row, col as u32, value)?;
-            self.late_cells += 1;
-            if empty {
-                self.cells_with_data += 1;
-            }
+        self.late.push((row, col as u32, value, weak));
+        if self.late.len() >= LATE_BATCH {
+            self.apply_late()?;
         }
+        Ok(())
+    }
+
+    /// Applies the queued late cells, in arrival order per cell, one span of a row at a time.
+    fn apply_late(&mut self) -> Result<()> {
+        let mut late = std::mem::take(&mut self.late);
+        // Stable: the cells of one position keep their arrival order.
+        late.sort_by_key(|&(row, col, ..)| (row, col));
+        let mut span = Vec::new();
+        for same_row in late.chunk_by(|a, b| a.0 == b.0) {
+            let row = same_row[0].0;
+            let c0 = same_row[0].1;
+            let c1 = same_row[same_row.len() - 1].1;
+            span.resize((c1 - c0 + 1) as usize, 0.0);
+            self.writer.read_span(row, c0, &mut span)?;
+            for &(_, col, value, weak) in same_row {
+                let cell = &mut span[(col - c0) as usize];
+                let empty = cell.to_bits() == self.nodata.to_bits();
+                if empty || !weak {
+                    *cell = value;
+                    self.late_cells += 1;
+                    if empty {
+                        self.cells_with_data += 1;
+                    }
+                }
+            }
+            self.writer.write_span(row, c0, &span)?;
+        }
+        late.clear();
+        self.late = late;
         Ok(())
     }
 
@@ -349,6 +381,7 @@ impl TriangleSink for DemSink {
             spare: Vec::new(),
             cells_with_data: 0,
             late_cells: 0,
+            late: Vec::new(),
             max_band: 0,
         });
         Ok(())
@@ -383,6 +416,7 @@ impl TriangleSink for DemSink {
             message: "the DEM sink was finished before begin() or twice".into(),
         })?;
         r.flush_below(i64::MAX)?;
+        r.apply_late()?;
         let spec = r.writer.spec().clone();
         let bytes = r.writer.finish()?;
         Ok(json!({

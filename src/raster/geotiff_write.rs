@@ -15,7 +15,7 @@
 //! goes north) and single cells patched later. Rows never written read as zero bytes, so every row
 //! must be written once; [`GeoTiffWriter::finish`] fills the rows never written with nodata.
 
-use super::grid::{GridSpec, GridWriter, check_cell};
+use super::grid::{GridSpec, GridWriter, check_cell, check_span};
 use crate::error::{Error, Result};
 use crate::io::AtomicFile;
 use crate::lidar::HorizontalKind;
@@ -318,9 +318,16 @@ impl GridWriter for GeoTiffWriter {
     }
 
     fn read_cell(&mut self, row: u32, col: u32) -> Result<f32> {
-        check_cell(&self.spec, &self.path, row, col)?;
+        let mut v = [0f32];
+        self.read_span(row, col, &mut v)?;
+        Ok(v[0])
+    }
+
+    fn read_span(&mut self, row: u32, col: u32, out: &mut [f32]) -> Result<()> {
+        check_span(&self.spec, &self.path, row, col, out.len())?;
         if !self.written[row as usize] {
-            return Ok(self.spec.nodata);
+            out.fill(self.spec.nodata);
+            return Ok(());
         }
         let offset = self.offset(row, col);
         let f = &mut self.file;
@@ -331,12 +338,25 @@ impl GridWriter for GeoTiffWriter {
         }
         let path = &self.path;
         let reader = self.reader.as_mut().expect("opened above");
-        let mut b = [0u8; 4];
+        let mut b = vec![0u8; 4 * out.len()];
         reader
             .seek(SeekFrom::Start(offset))
             .and_then(|_| reader.read_exact(&mut b))
             .map_err(|e| Error::io(path, e))?;
-        Ok(f32::from_le_bytes(b))
+        for (v, c) in out.iter_mut().zip(b.chunks_exact(4)) {
+            *v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+        }
+        Ok(())
+    }
+
+    fn write_span(&mut self, row: u32, col: u32, values: &[f32]) -> Result<()> {
+        check_span(&self.spec, &self.path, row, col, values.len())?;
+        if !self.written[row as usize] {
+            let nodata = vec![self.spec.nodata; self.spec.cols as usize];
+            self.write_row(row, &nodata)?;
+        }
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        self.write_at(self.offset(row, col), &bytes)
     }
 
     fn finish(mut self: Box<Self>) -> Result<u64> {

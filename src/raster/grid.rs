@@ -110,6 +110,29 @@ pub trait GridWriter: Send {
     /// As [`GridWriter::write_row`].
     fn read_cell(&mut self, row: u32, col: u32) -> Result<f32>;
 
+    /// Reads back `out.len()` cells of `row` from column `col` on; cells never written read as
+    /// nodata. The default reads cell by cell.
+    ///
+    /// # Errors
+    /// As [`GridWriter::write_row`].
+    fn read_span(&mut self, row: u32, col: u32, out: &mut [f32]) -> Result<()> {
+        for (i, v) in out.iter_mut().enumerate() {
+            *v = self.read_cell(row, col + i as u32)?;
+        }
+        Ok(())
+    }
+
+    /// Writes `values` into `row` from column `col` on. The default writes cell by cell.
+    ///
+    /// # Errors
+    /// As [`GridWriter::write_row`].
+    fn write_span(&mut self, row: u32, col: u32, values: &[f32]) -> Result<()> {
+        for (i, v) in values.iter().enumerate() {
+            self.write_cell(row, col + i as u32, *v)?;
+        }
+        Ok(())
+    }
+
     /// Completes the file and moves it into place; returns its size in bytes.
     ///
     /// # Errors
@@ -164,7 +187,19 @@ pub fn create_grid_writer(
 
 /// Checks a row/column against the grid, for the writers.
 pub(crate) fn check_cell(spec: &GridSpec, path: &Path, row: u32, col: u32) -> Result<()> {
-    if row >= spec.rows || col >= spec.cols {
+    check_span(spec, path, row, col, 1)
+}
+
+/// Errors unless `len >= 1` cells of `row` from `col` on lie inside the grid.
+pub(crate) fn check_span(
+    spec: &GridSpec,
+    path: &Path,
+    row: u32,
+    col: u32,
+    len: usize,
+) -> Result<()> {
+    let end = u64::from(col) + len.max(1) as u64;
+    if row >= spec.rows || end > u64::from(spec.cols) {
         return Err(crate::Error::Output {
             path: path.to_path_buf(),
             message: format!(
