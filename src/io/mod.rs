@@ -29,6 +29,7 @@
 //! ```
 
 pub mod atomic;
+pub mod idmap;
 pub mod landxml;
 pub mod obj;
 pub mod ply;

@@ -19,9 +19,9 @@
 //! | 5 | end | vertex count `u64`, triangle count `u64`, 8 zero bytes |
 
 use super::atomic::AtomicFile;
+use super::idmap::IdMap;
 use super::sink::{MeshMeta, MeshSink, MeshSummary, SinkState};
 use crate::error::{Error, Result};
-use std::collections::HashMap;
 use std::io::{BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
@@ -156,7 +156,7 @@ pub struct StinReader {
     path: PathBuf,
     input: BufReader<std::fs::File>,
     crs: Option<String>,
-    live: HashMap<u64, [f64; 3]>,
+    live: IdMap<[f64; 3]>,
     vertices: u64,
     triangles: u64,
     record: u64,
@@ -204,7 +204,7 @@ impl StinReader {
             path: path.to_path_buf(),
             input,
             crs: (!crs.is_empty()).then_some(crs),
-            live: HashMap::new(),
+            live: IdMap::default(),
             vertices: 0,
             triangles: 0,
             record: 0,

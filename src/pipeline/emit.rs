@@ -7,6 +7,7 @@ use super::{Frame, TriangleSink};
 use crate::breaklines::Trim;
 use crate::breaklines::flat::{FlatStats, remove_flat_triangles};
 use crate::error::Result;
+use crate::io::idmap::IdMap;
 use crate::io::sink::MeshSink;
 use crate::predicates::{Orientation, orient};
 use crate::sweep::Event;
@@ -23,7 +24,7 @@ pub(crate) struct Emitter<'m, 's, 't> {
     /// `None`: every triangle is kept, and vertices are written as they come.
     trim: Option<&'s Trim>,
     /// Live vertices (sweep number → position, output number), when needed.
-    live: HashMap<u64, ([f64; 3], u64)>,
+    live: IdMap<([f64; 3], u64)>,
     keep_live: bool,
     next_in: u64,
     next_out: u64,
@@ -45,7 +46,7 @@ impl<'m, 's, 't> Emitter<'m, 's, 't> {
             mesh,
             sinks,
             trim,
-            live: HashMap::new(),
+            live: IdMap::default(),
             keep_live,
             next_in: 0,
             next_out: 0,
