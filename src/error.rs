@@ -134,6 +134,10 @@ pub enum Error {
     #[error("no input files given")]
     NoInput,
 
+    /// Options that cannot be used together.
+    #[error("{0}")]
+    Options(String),
+
     /// A mesh failed validation.
     #[error("mesh is not a valid Delaunay triangulation: {0}")]
     Invalid(String),

@@ -342,3 +342,42 @@ fn sweep_along_x_refuses_products() {
     let e = run(&input, &options, None, &mut [&mut sink]).unwrap_err();
     assert!(e.to_string().contains("--sweep-axis x"), "{e}");
 }
+
+#[test]
+fn cli_sweeps_strips_along_x_except_into_a_streaming_mesh() {
+    let bin = env!("CARGO_BIN_EXE_sweeptin");
+    let dir = tempfile::tempdir().unwrap();
+    let mut pts = sweeptin::synth::uniform(3_000, 2);
+    for p in &mut pts {
+        p[1] *= 0.05;
+    }
+    let path = dir.path().join("strip.las");
+    write_strip_las(&path, &pts);
+    let axis = |out: &str, extra: &[&str]| -> String {
+        let o = std::process::Command::new(bin)
+            .arg("tin")
+            .arg(&path)
+            .args(["-o", dir.path().join(out).to_str().unwrap(), "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        v["sweep_axis"].as_str().unwrap().to_string()
+    };
+    assert_eq!(axis("a.ply", &[]), "x");
+    assert_eq!(axis("a.stin", &[]), "y");
+    assert_eq!(axis("b.stin", &["--sweep-axis", "x"]), "x");
+    assert_eq!(axis("b.ply", &["--sweep-axis", "y"]), "y");
+    // The products refuse an x sweep, with exit code 2 and no output.
+    let dem = dir.path().join("d.tif");
+    let o = std::process::Command::new(bin)
+        .arg("dem")
+        .arg(&path)
+        .args(["-o", dem.to_str().unwrap(), "--sweep-axis", "x"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--sweep-axis x"));
+    assert!(!dem.exists());
+}

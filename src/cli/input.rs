@@ -37,7 +37,10 @@ pub struct InputArgs {
     /// Axis the sweep advances along. Memory grows with the number of points across the sweep
     /// (the advancing front), so a long strip is best swept lengthwise: `auto` sweeps along x
     /// when the LAS/LAZ headers' extent is more than 4 times wider than tall and the run makes a
-    /// plain mesh (no breaklines, trimming or terrain products, which need y); `y` otherwise.
+    /// plain mesh (no breaklines, trimming or terrain products, which need y; not a `.stin`,
+    /// whose height watermarks let the products read it back with bounded memory); `y`
+    /// otherwise. A `.stin` swept along x has no watermarks: products made from it hold the
+    /// whole raster.
     /// Exactly cocircular points are split by the sweep order, so the axis can change which of
     /// several equally Delaunay diagonals is chosen.
     #[arg(long, value_enum, value_name = "AXIS", default_value_t = SweepAxis::Auto)]

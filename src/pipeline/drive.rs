@@ -61,7 +61,7 @@ pub(crate) fn run(
     // Breaklines and the terrain products work in y order (pending segments, watermarks).
     let free_axis = lines.is_none() && sinks.is_empty();
     if options.sweep_axis == SweepAxis::X && !free_axis {
-        return Err(Error::Invalid(
+        return Err(Error::Options(
             "--sweep-axis x works only for plain meshes (no breaklines, trimming or terrain \
              products, which need the sweep along y)"
                 .into(),
