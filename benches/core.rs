@@ -34,16 +34,8 @@ fn sizes() -> Vec<usize> {
     };
     spec.split(',')
         .map(|s| {
-            let s = s.trim();
-            let (num, mult) = match s.chars().last() {
-                Some('k' | 'K') => (&s[..s.len() - 1], 1e3),
-                Some('m' | 'M') => (&s[..s.len() - 1], 1e6),
-                _ => (s, 1.0),
-            };
-            let v: f64 = num
-                .parse()
-                .unwrap_or_else(|_| panic!("SWEEPTIN_BENCH_SIZES: bad size {s:?}"));
-            (v * mult) as usize
+            sweeptin::synth::parse_count(s)
+                .unwrap_or_else(|| panic!("SWEEPTIN_BENCH_SIZES: bad size {s:?}"))
         })
         .collect()
 }

@@ -66,20 +66,6 @@ fn usage() -> String {
         .to_string()
 }
 
-/// `1000`, `100k`, `2.9M`.
-fn parse_count(s: &str) -> Result<usize> {
-    let (num, mult) = match s.chars().last() {
-        Some('k' | 'K') => (&s[..s.len() - 1], 1e3),
-        Some('m' | 'M') => (&s[..s.len() - 1], 1e6),
-        _ => (s, 1.0),
-    };
-    let v: f64 = num.parse().with_context(|| format!("bad count {s:?}"))?;
-    if !(v >= 0.0 && v * mult < 1e12) {
-        bail!("bad count {s:?}");
-    }
-    Ok((v * mult).round() as usize)
-}
-
 fn parse_args() -> Result<Args> {
     let mut a = Args {
         pos: Vec::new(),
@@ -430,4 +416,9 @@ fn main() -> Result<()> {
     } else {
         bench(&args)
     }
+}
+
+fn parse_count(s: &str) -> Result<usize> {
+    sweeptin::synth::parse_count(s)
+        .with_context(|| format!("bad count {s:?} (like 1000, 100k, 4M)"))
 }

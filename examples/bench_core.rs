@@ -59,22 +59,6 @@ fn usage() -> String {
         .to_string()
 }
 
-/// `1000`, `100k`, `4M`, `1.5M`.
-fn parse_count(s: &str) -> Result<usize> {
-    let (num, mult) = match s.chars().last() {
-        Some('k' | 'K') => (&s[..s.len() - 1], 1e3),
-        Some('m' | 'M') => (&s[..s.len() - 1], 1e6),
-        _ => (s, 1.0),
-    };
-    let v: f64 = num
-        .parse()
-        .with_context(|| format!("bad point count {s:?}"))?;
-    if !(v >= 0.0 && v * mult < 1e12) {
-        bail!("bad point count {s:?}");
-    }
-    Ok((v * mult).round() as usize)
-}
-
 fn parse_args() -> Result<Args> {
     let mut pos = Vec::new();
     let (mut repeat, mut seed, mut threads, mut phases) = (3, 1, None, false);
@@ -216,4 +200,9 @@ fn main() -> Result<()> {
     let algo = Algo::parse(&args.first)
         .with_context(|| format!("unknown algorithm {:?}\n{}", args.first, usage()))?;
     bench(&args, algo)
+}
+
+fn parse_count(s: &str) -> Result<usize> {
+    sweeptin::synth::parse_count(s)
+        .with_context(|| format!("bad point count {s:?} (like 1000, 100k, 4M)"))
 }

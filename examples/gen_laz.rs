@@ -7,22 +7,13 @@
 
 use las::{Builder, Point, Transform, Vector, Writer};
 
-fn parse_count(s: &str) -> usize {
-    let (num, mult) = match s.chars().last() {
-        Some('k' | 'K') => (&s[..s.len() - 1], 1_000),
-        Some('m' | 'M') => (&s[..s.len() - 1], 1_000_000),
-        _ => (s, 1),
-    };
-    num.parse::<usize>().expect("a count like 10M") * mult
-}
-
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     anyhow::ensure!(
         args.len() >= 3,
         "usage: gen_laz <n> <out.laz|out.las> [--seed S] [--strip K]"
     );
-    let n = parse_count(&args[1]);
+    let n = sweeptin::synth::parse_count(&args[1]).expect("a count like 10M");
     let seed = args
         .iter()
         .position(|a| a == "--seed")

@@ -6,18 +6,10 @@
 use std::time::Instant;
 use sweeptin::sweep::{Event, StreamConfig, StreamPoint, Sweep};
 
-fn parse_count(s: &str) -> usize {
-    let (num, mult) = match s.chars().last() {
-        Some('k' | 'K') => (&s[..s.len() - 1], 1_000),
-        Some('m' | 'M') => (&s[..s.len() - 1], 1_000_000),
-        _ => (s, 1),
-    };
-    num.parse::<usize>().expect("a count like 10M") * mult
-}
-
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let n = parse_count(args.get(1).map_or("1M", String::as_str));
+    let n = sweeptin::synth::parse_count(args.get(1).map_or("1M", String::as_str))
+        .expect("a count like 10M");
     let dist = args.get(2).map_or("lidar-like", String::as_str);
     let pts = match dist {
         "uniform" => sweeptin::synth::uniform(n, 1),

@@ -75,6 +75,21 @@ impl SplitMix64 {
 /// Side of the square of [`uniform`] and of the background of [`clustered`], in metres.
 pub const SQUARE: f64 = 1000.0;
 
+/// A point count as the benchmarks and scripts write it: `1000`, `100k`, `4M`, `1.5M` (k = 10³,
+/// M = 10⁶), rounded to the nearest whole count. `None` unless it is a non-negative number below
+/// 10¹².
+pub fn parse_count(s: &str) -> Option<usize> {
+    let s = s.trim();
+    let (num, mult) = match s.chars().last()? {
+        'k' | 'K' => (&s[..s.len() - 1], 1e3),
+        'm' | 'M' => (&s[..s.len() - 1], 1e6),
+        _ => (s, 1.0),
+    };
+    let v: f64 = num.parse().ok()?;
+    let n = v * mult;
+    (0.0..1e12).contains(&n).then_some(n.round() as usize)
+}
+
 /// `n` points uniform in the square `[0, 1000) × [0, 1000)`, `z` uniform in `[0, 100)`.
 pub fn uniform(n: usize, seed: u64) -> Vec<[f64; 3]> {
     let mut rng = SplitMix64::new(seed);
@@ -476,6 +491,17 @@ mod tests {
     use super::*;
     use crate::predicates::{CircleSide, incircle_exact};
     use std::collections::HashSet;
+
+    #[test]
+    fn counts() {
+        assert_eq!(parse_count("1000"), Some(1000));
+        assert_eq!(parse_count("100k"), Some(100_000));
+        assert_eq!(parse_count("2.9M"), Some(2_900_000));
+        assert_eq!(parse_count("16M"), Some(16_000_000));
+        assert_eq!(parse_count("-1"), None);
+        assert_eq!(parse_count("M"), None);
+        assert_eq!(parse_count(""), None);
+    }
 
     fn key(p: &[f64; 3]) -> (u64, u64) {
         (p[0].to_bits(), p[1].to_bits())
