@@ -56,8 +56,6 @@ pub(crate) fn run(
             ),
         ));
     }
-    // Half the budget for the sort's chunk; the rest covers the sweep's working set, the
-    // channels and the writers' buffers.
     // Breaklines and the terrain products work in y order (pending segments, watermarks).
     let free_axis = lines.is_none() && sinks.is_empty();
     if options.sweep_axis == SweepAxis::X && !free_axis {
@@ -67,6 +65,8 @@ pub(crate) fn run(
                 .into(),
         ));
     }
+    // Half the budget for the sort's chunk; the rest covers the sweep's working set, the
+    // channels and the writers' buffers.
     let mut sorter = ExternalSorter::new(options.mem / 2, &tmp);
     let pb = bar(options.progress);
     pb.set_message("reading");
