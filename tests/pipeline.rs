@@ -381,3 +381,54 @@ fn cli_sweeps_strips_along_x_except_into_a_streaming_mesh() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--sweep-axis x"));
     assert!(!dem.exists());
 }
+
+#[test]
+fn sweep_along_x_equals_the_core_on_random_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = sweeptin::synth::SplitMix64::new(11);
+    for case in 0..12 {
+        let n = 3 + rng.below(3000) as usize;
+        let squash = [1.0, 0.3, 0.02, 5.0][case % 4];
+        let mut pts = sweeptin::synth::uniform(n, case as u64);
+        for p in &mut pts {
+            p[1] *= squash;
+        }
+        let path = dir.path().join(format!("u{case}.xyz"));
+        write_xyz(&path, &pts);
+        let parsed = sweeptin::io::read_xyz(&path).unwrap();
+        let core = triangulate(&parsed, &Options::default()).unwrap();
+        let want = key_set(
+            &core.vertices,
+            core.triangles.iter().map(|t| t.map(|i| i as usize)),
+        );
+        let mem = [16 << 10, 1 << 30][case % 2];
+        let (c, s) = streamed_along(
+            std::slice::from_ref(&path),
+            mem,
+            DuplicatePolicy::First,
+            SweepAxis::X,
+        );
+        assert_eq!(s.sweep_axis, SweepAxis::X);
+        let got = key_set(
+            &c.vertices,
+            c.triangles.iter().map(|t| t.map(|i| i as usize)),
+        );
+        assert_eq!(got, want, "case {case}: {n} points, y × {squash}");
+    }
+    // Ties everywhere (a tilted lattice and a cocircular ring): exactly Delaunay along x too.
+    for (name, pts) in [
+        ("tilted", sweeptin::synth::tilted_grid(40, 25, 0.5, 0.3)),
+        ("ring", sweeptin::synth::ring(64, 10.0)),
+    ] {
+        let path = dir.path().join(format!("{name}.xyz"));
+        write_xyz(&path, &pts);
+        let (c, _) = streamed_along(
+            std::slice::from_ref(&path),
+            16 << 10,
+            DuplicatePolicy::First,
+            SweepAxis::X,
+        );
+        let tris: Vec<[u32; 3]> = c.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
+        sweeptin::validate::validate(&c.vertices, &tris).unwrap();
+    }
+}
