@@ -196,7 +196,7 @@ impl CellTriangle {
                 return;
             }
             let zr = z0 + gy * (r - a[1]) as f64;
-            let (e, k) = row_max(row, zr, gx, (lo - a[0]) as f64);
+            let (e, k) = row_max(row, zr, gx, (lo - a[0]) as f64, best.error);
             if e > best.error {
                 let col = lo + k as i64;
                 if vrows.contains(&r) && self.is_vertex(col, r) {
@@ -279,9 +279,11 @@ impl CellTriangle {
 /// empty row. The same expression is used everywhere an error is measured, so that the bound
 /// checked while refining is the bound reported.
 #[inline]
-fn row_max<T: Height>(row: &[T], z: f64, g: f64, x0: f64) -> (f64, usize) {
+/// The largest `|h - (z + g·(x0 + k))|` over the row and its index `k`; the index is only looked
+/// for when the maximum exceeds `floor` (the caller's best so far), otherwise it is 0.
+fn row_max<T: Height>(row: &[T], z: f64, g: f64, x0: f64, floor: f64) -> (f64, usize) {
     // Two passes: a maximum over four lanes that the compiler vectorises (NaN never wins a
-    // comparison), then the index of that maximum.
+    // comparison), then, only if it beats `floor`, the index of that maximum.
     let mut lanes = [0.0f64; 4];
     let mut chunks = row.chunks_exact(4);
     let mut xb = x0;
@@ -297,8 +299,8 @@ fn row_max<T: Height>(row: &[T], z: f64, g: f64, x0: f64) -> (f64, usize) {
         lanes[l] = if e > lanes[l] { e } else { lanes[l] };
     }
     let m = lanes[0].max(lanes[1]).max(lanes[2].max(lanes[3]));
-    if m == 0.0 {
-        return (0.0, 0);
+    if m <= floor {
+        return (m, 0);
     }
     for (k, &h) in row.iter().enumerate() {
         if (h.into() - (z + g * (x0 + k as f64))).abs() == m {
