@@ -5,7 +5,6 @@ use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::io::{MeshFormat, MeshMeta, create_mesh_sink};
-use sweeptin::pipeline::SweepAxis;
 
 /// Arguments of `sweeptin tin`.
 #[derive(clap::Args, Debug)]
@@ -60,17 +59,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Open the output first: a bad output path fails before any heavy work, and the temporary
     // file is removed on every error below.
     let mut sink = create_mesh_sink(&args.output, args.format, &meta)?;
-    let mut options = args.input.options();
-    let format = args
-        .format
-        .or_else(|| MeshFormat::from_extension(&args.output));
-    if format == Some(MeshFormat::Stream) && options.sweep_axis == SweepAxis::Auto {
-        // A streaming mesh is read back by the terrain products, which need its watermarks
-        // (heights): keep the y sweep unless x is asked for.
-        options.sweep_axis = SweepAxis::Y;
-    }
-    let mut summary = sweeptin::pipeline::run(&input, &options, Some(&mut *sink), &mut [])
-        .with_context(|| format!("cannot triangulate {}", args.input.inputs[0].display()))?;
+    let mut summary =
+        sweeptin::pipeline::run(&input, &args.input.options(), Some(&mut *sink), &mut [])
+            .with_context(|| format!("cannot triangulate {}", args.input.inputs[0].display()))?;
     let fin = Instant::now();
     let written = sink.finish()?;
     summary.seconds.finish += fin.elapsed().as_secs_f64();
@@ -78,7 +69,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.input.json {
         println!("{}", serde_json::to_string(&summary)?);
     } else {
-        let format = format.map_or("mesh", MeshFormat::name);
+        let format = args
+            .format
+            .or_else(|| MeshFormat::from_extension(&args.output))
+            .map_or("mesh", MeshFormat::name);
         eprintln!(
             "sweeptin: {} points ({} duplicates merged) -> {}: {} vertices, {} triangles, {} {} \
              in {:.2} s (peak memory {})",

@@ -43,6 +43,12 @@ pub trait MeshSink {
         Ok(())
     }
 
+    /// Does this format keep the watermarks (so that whoever reads it back relies on them, and
+    /// the sweep must run along y)? Only the streaming-mesh format does.
+    fn keeps_watermarks(&self) -> bool {
+        false
+    }
+
     /// Writes everything out and renames into place; reports errors instead of hiding them in Drop.
     ///
     /// # Errors

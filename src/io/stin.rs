@@ -115,6 +115,10 @@ impl MeshSink for StinWriter {
         self.put(&record(T_WATERMARK, y.to_le_bytes(), [0; 8], [0; 8]))
     }
 
+    fn keeps_watermarks(&self) -> bool {
+        true
+    }
+
     fn finish(&mut self) -> Result<MeshSummary> {
         let end = record(
             T_END,

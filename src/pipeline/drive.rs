@@ -56,9 +56,11 @@ pub(crate) fn run(
             ),
         ));
     }
-    // Breaklines and the terrain products work in y order (pending segments, watermarks).
-    let free_axis = lines.is_none() && sinks.is_empty();
-    if options.sweep_axis == SweepAxis::X && !free_axis {
+    // Breaklines and the terrain products work in y order (pending segments, watermarks), and
+    // so does whoever reads back a mesh format that keeps the watermarks (`.stin`).
+    let free_axis =
+        lines.is_none() && sinks.is_empty() && !mesh.as_ref().is_some_and(|m| m.keeps_watermarks());
+    if options.sweep_axis == SweepAxis::X && !(lines.is_none() && sinks.is_empty()) {
         return Err(Error::Options(
             "--sweep-axis x works only for plain meshes (no breaklines, trimming or terrain \
              products, which need the sweep along y)"

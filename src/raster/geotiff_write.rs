@@ -309,12 +309,7 @@ impl GridWriter for GeoTiffWriter {
     }
 
     fn write_cell(&mut self, row: u32, col: u32, value: f32) -> Result<()> {
-        check_cell(&self.spec, &self.path, row, col)?;
-        if !self.written[row as usize] {
-            let nodata = vec![self.spec.nodata; self.spec.cols as usize];
-            self.write_row(row, &nodata)?;
-        }
-        self.write_at(self.offset(row, col), &value.to_le_bytes())
+        self.write_span(row, col, &[value])
     }
 
     fn read_cell(&mut self, row: u32, col: u32) -> Result<f32> {
