@@ -41,6 +41,30 @@ impl MeshSink for Collect {
 
 type Key = [(u64, u64, u64); 3];
 
+/// The in-memory core's triangles as a sorted set of coordinate triples.
+fn core_keys(core: &sweeptin::Triangulation) -> Vec<Key> {
+    key_set(
+        &core.vertices,
+        core.triangles.iter().map(|t| t.map(|i| i as usize)),
+    )
+}
+
+impl Collect {
+    /// The streamed triangles as a sorted set of coordinate triples.
+    fn keys(&self) -> Vec<Key> {
+        key_set(
+            &self.vertices,
+            self.triangles.iter().map(|t| t.map(|i| i as usize)),
+        )
+    }
+
+    /// Validates the streamed mesh with the crate's exact validator.
+    fn validate(&self) {
+        let tris: Vec<[u32; 3]> = self.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
+        sweeptin::validate::validate(&self.vertices, &tris).unwrap();
+    }
+}
+
 fn key_set(vertices: &[[f64; 3]], tris: impl Iterator<Item = [usize; 3]>) -> Vec<Key> {
     let mut out: Vec<Key> = tris
         .map(|t| {
@@ -117,16 +141,10 @@ fn tiny_budgets_equal_the_in_memory_core() {
         // Exactly what the XYZ reader parses (round-trip of shortest decimals).
         let parsed = sweeptin::io::read_xyz(&path).unwrap();
         let core = triangulate(&parsed, &Options::default()).unwrap();
-        let want = key_set(
-            &core.vertices,
-            core.triangles.iter().map(|t| t.map(|i| i as usize)),
-        );
+        let want = core_keys(&core);
         for mem in [32 << 10, 256 << 10, 1 << 30] {
             let c = streamed(std::slice::from_ref(&path), mem, DuplicatePolicy::First);
-            let got = key_set(
-                &c.vertices,
-                c.triangles.iter().map(|t| t.map(|i| i as usize)),
-            );
+            let got = c.keys();
             assert_eq!(got, want, "{name} with --mem {mem}");
         }
     }
@@ -165,19 +183,12 @@ fn real_laz_streamed_equals_in_memory_and_is_delaunay() {
         };
         let (pts, _) = sweeptin::pipeline::read_points(&input).unwrap();
         let core = triangulate(&pts, &Options::default()).unwrap();
-        let want = key_set(
-            &core.vertices,
-            core.triangles.iter().map(|t| t.map(|i| i as usize)),
-        );
+        let want = core_keys(&core);
         let c = streamed(std::slice::from_ref(&f), 64 << 10, DuplicatePolicy::First);
-        let got = key_set(
-            &c.vertices,
-            c.triangles.iter().map(|t| t.map(|i| i as usize)),
-        );
+        let got = c.keys();
         assert_eq!(got.len(), want.len(), "{}", f.display());
         assert_eq!(got, want, "{}", f.display());
-        let tris: Vec<[u32; 3]> = c.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
-        sweeptin::validate::validate(&c.vertices, &tris).unwrap();
+        c.validate();
     }
 }
 
@@ -261,10 +272,7 @@ fn strips_are_swept_lengthwise() {
     };
     let (parsed, _) = sweeptin::pipeline::read_points(&input).unwrap();
     let core = triangulate(&parsed, &Options::default()).unwrap();
-    let want = key_set(
-        &core.vertices,
-        core.triangles.iter().map(|t| t.map(|i| i as usize)),
-    );
+    let want = core_keys(&core);
     let mut fronts = Vec::new();
     for (axis, swept) in [
         (SweepAxis::Auto, SweepAxis::X),
@@ -278,14 +286,10 @@ fn strips_are_swept_lengthwise() {
             axis,
         );
         assert_eq!(summary.sweep_axis, swept, "{axis:?}");
-        let got = key_set(
-            &c.vertices,
-            c.triangles.iter().map(|t| t.map(|i| i as usize)),
-        );
+        let got = c.keys();
         assert_eq!(got, want, "{axis:?}");
         // Counter-clockwise in the world frame, every edge locally Delaunay, hull, Euler.
-        let tris: Vec<[u32; 3]> = c.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
-        sweeptin::validate::validate(&c.vertices, &tris).unwrap();
+        c.validate();
         fronts.push(summary.sweep.peak_front);
     }
     assert!(
@@ -306,8 +310,7 @@ fn strips_are_swept_lengthwise() {
         SweepAxis::Auto,
     );
     assert_eq!(summary.sweep_axis, SweepAxis::X);
-    let tris: Vec<[u32; 3]> = c.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
-    sweeptin::validate::validate(&c.vertices, &tris).unwrap();
+    c.validate();
     assert_eq!(c.triangles.len(), 2 * 399 * 8);
 }
 
@@ -397,10 +400,7 @@ fn sweep_along_x_equals_the_core_on_random_inputs() {
         write_xyz(&path, &pts);
         let parsed = sweeptin::io::read_xyz(&path).unwrap();
         let core = triangulate(&parsed, &Options::default()).unwrap();
-        let want = key_set(
-            &core.vertices,
-            core.triangles.iter().map(|t| t.map(|i| i as usize)),
-        );
+        let want = core_keys(&core);
         let mem = [16 << 10, 1 << 30][case % 2];
         let (c, s) = streamed_along(
             std::slice::from_ref(&path),
@@ -409,10 +409,7 @@ fn sweep_along_x_equals_the_core_on_random_inputs() {
             SweepAxis::X,
         );
         assert_eq!(s.sweep_axis, SweepAxis::X);
-        let got = key_set(
-            &c.vertices,
-            c.triangles.iter().map(|t| t.map(|i| i as usize)),
-        );
+        let got = c.keys();
         assert_eq!(got, want, "case {case}: {n} points, y × {squash}");
     }
     // Ties everywhere (a tilted lattice and a cocircular ring): exactly Delaunay along x too.
@@ -428,7 +425,6 @@ fn sweep_along_x_equals_the_core_on_random_inputs() {
             DuplicatePolicy::First,
             SweepAxis::X,
         );
-        let tris: Vec<[u32; 3]> = c.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
-        sweeptin::validate::validate(&c.vertices, &tris).unwrap();
+        c.validate();
     }
 }
