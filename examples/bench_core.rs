@@ -167,7 +167,7 @@ fn bench(args: &Args, algo: Algo) -> Result<()> {
 
 /// The steps of `sweeptin::triangulate`, timed one by one.
 fn sweeptin_phases(pts: Vec<[f64; 3]>) -> Result<serde_json::Value> {
-    use sweeptin::points::{DuplicatePolicy, prepare};
+    use sweeptin::sort::memory::{DuplicatePolicy, prepare};
     let t0 = Instant::now();
     let prepared = prepare(&pts, DuplicatePolicy::First)?;
     let t1 = Instant::now();

@@ -8,7 +8,7 @@ use std::io::Write;
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     anyhow::ensure!(args.len() == 3, "usage: dem_to_raw IN OUT");
-    let mut r = sweeptin::raster::read::RasterReader::open(&args[1])?;
+    let mut r = sweeptin::input::raster::RasterReader::open(&args[1])?;
     let (cols, rows) = (r.spec().cols, r.spec().rows);
     let h = r.read_all()?;
     let mut out = std::io::BufWriter::new(std::fs::File::create(&args[2])?);

@@ -4,7 +4,7 @@
 //! `cargo run --release --example las_to_csv -- [--class 2] OUT.csv FILE...`
 
 use std::io::Write;
-use sweeptin::lidar::{Filter, LidarReader, parse_classes};
+use sweeptin::input::las::{Filter, LidarReader, parse_classes};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut filter = Filter::default();

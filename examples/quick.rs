@@ -54,7 +54,7 @@ fn main() {
         return;
     }
     let t0 = Instant::now();
-    let prep = sweeptin::points::prepare(&pts, Default::default()).unwrap();
+    let prep = sweeptin::sort::memory::prepare(&pts, Default::default()).unwrap();
     let t1 = Instant::now();
     let mut sw = sweeptin::sweep::Sweep::new(prep.xy).unwrap();
     sw.run();
@@ -74,7 +74,7 @@ fn main() {
     );
     if args.get(3).map(|s| s == "check").unwrap_or(false) {
         let mut sw = sweeptin::sweep::Sweep::new(
-            sweeptin::points::prepare(&pts, Default::default())
+            sweeptin::sort::memory::prepare(&pts, Default::default())
                 .unwrap()
                 .xy,
         )
@@ -89,7 +89,7 @@ fn main() {
 pub fn stream(pts: &[[f64; 3]]) {
     use sweeptin::sweep::{Event, StreamConfig, StreamPoint, Sweep};
     let t0 = Instant::now();
-    let prep = sweeptin::points::prepare(pts, Default::default()).unwrap();
+    let prep = sweeptin::sort::memory::prepare(pts, Default::default()).unwrap();
     let real = &prep.xy[2..];
     let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
     for p in real {

@@ -1,9 +1,9 @@
-//! Reads LAS/LAZ files with `sweeptin::lidar::LidarReader` and reports the throughput.
+//! Reads LAS/LAZ files with `sweeptin::input::las::LidarReader` and reports the throughput.
 //!
 //! `cargo run --release --example read_lidar -- [--serial] [--batch N] [--class 2] FILE...`
 
 use std::time::Instant;
-use sweeptin::lidar::{Filter, LidarReader, ReadOptions, parse_classes};
+use sweeptin::input::las::{Filter, LidarReader, ReadOptions, parse_classes};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut options = ReadOptions::default();

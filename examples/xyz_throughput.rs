@@ -3,7 +3,7 @@
 //! `read_xyz`, and prints MB/s and points/s for each pass.
 
 use std::time::Instant;
-use sweeptin::io::{XyzReader, read_xyz};
+use sweeptin::input::{XyzReader, read_xyz};
 
 fn main() -> sweeptin::Result<()> {
     let path = std::env::args()

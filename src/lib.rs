@@ -3,7 +3,7 @@
 //! Exact, bounded-memory Delaunay terrain models from huge lidar point clouds.
 //!
 //! The core is a sweep-line Delaunay triangulation (Domiter & Žalik 2008) over points sorted by
-//! `y`, with exact predicates ([`predicates`]) and a documented tie-breaking rule for cocircular
+//! `y`, with exact predicates ([`geom::predicates`]) and a documented tie-breaking rule for cocircular
 //! points, so the same input always gives the same triangles.
 //!
 //! ```
@@ -18,23 +18,27 @@
 #![warn(missing_docs)]
 
 pub mod breaklines;
+pub mod crs;
 pub mod error;
-pub mod extsort;
-pub mod io;
-pub mod lidar;
-pub mod mmap;
+pub mod finalise;
+pub mod geom;
+pub(crate) mod idmap;
+pub mod input;
+pub mod mesh;
+pub mod output;
 pub mod pipeline;
-pub mod points;
-pub mod predicates;
 pub mod products;
 pub mod raster;
 pub mod simplify;
+pub mod sink;
+pub mod sort;
 pub mod sweep;
+#[cfg(any(test, feature = "dev"))]
 pub mod synth;
 pub mod tin;
 pub mod triangulation;
 pub mod validate;
 
 pub use error::{Error, Result};
-pub use points::DuplicatePolicy;
+pub use sort::DuplicatePolicy;
 pub use triangulation::{Options, Triangulation, triangulate, triangulate_cdt};

@@ -1,7 +1,7 @@
 //! In-memory triangulation: the whole point set in RAM, all triangles returned.
 
 use crate::error::{Error, Result};
-use crate::points::{self, DuplicatePolicy};
+use crate::sort::memory::{self, DuplicatePolicy};
 use crate::sweep::{Sweep, SweepStats};
 
 /// Options of [`triangulate`].
@@ -31,15 +31,15 @@ pub struct Triangulation {
 /// Delaunay triangulation of `points` (`[x, y, z]`; `z` is carried along).
 ///
 /// The result is the unique Delaunay triangulation under the tie-breaking rule documented in
-/// [`crate::predicates`]: it depends only on the set of distinct `(x, y)` positions (and, among
+/// [`crate::geom::predicates`]: it depends only on the set of distinct `(x, y)` positions (and, among
 /// duplicates, on the policy), not on input order or thread count.
 ///
 /// # Errors
 /// [`Error::NonFinite`] / [`Error::CoordinateOutOfRange`] naming the first bad point,
 /// [`Error::TooFewPoints`] with fewer than 3 distinct positions, [`Error::AllCollinear`] when no
-/// triangle exists, [`Error::TooManyPoints`] beyond [`points::MAX_POINTS`].
+/// triangle exists, [`Error::TooManyPoints`] beyond [`memory::MAX_POINTS`].
 pub fn triangulate(points: &[[f64; 3]], options: &Options) -> Result<Triangulation> {
-    let prepared = points::prepare(points, options.duplicates)?;
+    let prepared = memory::prepare(points, options.duplicates)?;
     let distinct = prepared.len() as u64;
     if distinct < 3 {
         return Err(Error::TooFewPoints {
@@ -47,7 +47,7 @@ pub fn triangulate(points: &[[f64; 3]], options: &Options) -> Result<Triangulati
             total: prepared.total,
         });
     }
-    let points::Prepared {
+    let memory::Prepared {
         xy,
         index,
         duplicates,
@@ -98,7 +98,7 @@ pub fn triangulate_cdt(
             points.len()
         )));
     }
-    let prepared = points::prepare(points, options.duplicates)?;
+    let prepared = memory::prepare(points, options.duplicates)?;
     let distinct = prepared.len() as u64;
     if distinct < 3 {
         return Err(Error::TooFewPoints {
@@ -107,7 +107,7 @@ pub fn triangulate_cdt(
         });
     }
     let (graph, vertex_of) = constraint_graph(&prepared, points, segments);
-    let points::Prepared {
+    let memory::Prepared {
         xy,
         index,
         duplicates,
@@ -138,12 +138,12 @@ pub fn triangulate_cdt(
 /// among the sorted, de-duplicated vertices by its local position (binary search) when it was
 /// merged into another point. The endpoints are then numbered in vertex order.
 fn constraint_graph(
-    prepared: &points::Prepared,
+    prepared: &memory::Prepared,
     points: &[[f64; 3]],
     segments: &[[u32; 2]],
 ) -> (crate::sweep::ConstraintGraph, Vec<u32>) {
     const NONE: u32 = u32::MAX;
-    let real = &prepared.xy[crate::predicates::FIRST_REAL as usize..];
+    let real = &prepared.xy[crate::geom::predicates::FIRST_REAL as usize..];
     let o = prepared.origin;
     let mut vertex_of_input = vec![NONE; points.len()];
     for (v, &i) in prepared.index.iter().enumerate() {
@@ -154,7 +154,7 @@ fn constraint_graph(
             NONE => {
                 let p = points[i as usize];
                 let q = [(p[0] - o[0]) + 0.0, (p[1] - o[1]) + 0.0];
-                real.binary_search_by(|v| crate::predicates::sweep_cmp(*v, q))
+                real.binary_search_by(|v| crate::geom::predicates::sweep_cmp(*v, q))
                     .expect("every input point has a vertex") as u32
             }
             v => v,

@@ -5,8 +5,8 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use sweeptin::breaklines::{CleanOptions, read_file};
-use sweeptin::io::sink::{MeshSink, MeshSummary};
 use sweeptin::pipeline::{Input, LineOptions, RunOptions, RunSummary, run};
+use sweeptin::sink::{MeshSink, MeshSummary};
 use sweeptin::validate::{CdtCheck, validate_cdt, validate_cdt_with};
 use sweeptin::{DuplicatePolicy, Options, triangulate_cdt};
 
@@ -84,7 +84,7 @@ fn write_lines(path: &Path, lines: &[Vec<[f64; 3]>]) {
 fn input(paths: &[PathBuf], lines: LineOptions) -> Input {
     Input {
         paths: paths.to_vec(),
-        filter: sweeptin::lidar::Filter::keep_all(),
+        filter: sweeptin::input::las::Filter::keep_all(),
         duplicates: DuplicatePolicy::First,
         lines,
     }
@@ -123,7 +123,7 @@ fn streamed_contours_equal_the_in_memory_cdt() {
     write_xyz(&pts_path, &pts);
     write_lines(&lines_path, &lines);
     // Exactly what the readers parse.
-    let mut all = sweeptin::io::read_xyz(&pts_path).unwrap();
+    let mut all = sweeptin::input::read_xyz(&pts_path).unwrap();
     let parsed = read_file(&lines_path).unwrap();
     let mut segments = Vec::new();
     for l in &parsed.polylines {

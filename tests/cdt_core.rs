@@ -2,8 +2,8 @@
 //! constrained Delaunay triangulation on random inputs in general position.
 
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation as _};
-use sweeptin::points::{DuplicatePolicy, prepare};
-use sweeptin::predicates::{Orientation, orient};
+use sweeptin::geom::predicates::{Orientation, orient};
+use sweeptin::sort::memory::{DuplicatePolicy, prepare};
 use sweeptin::{Options, triangulate_cdt};
 
 fn rng(seed: u64) -> impl FnMut() -> f64 {
@@ -342,7 +342,7 @@ fn streaming_breaklines_equal_batch() {
         let vid = |i: u32| {
             let p = pts[i as usize];
             let q = [p[0] - prep.origin[0], p[1] - prep.origin[1]];
-            real.binary_search_by(|v| sweeptin::predicates::sweep_cmp(*v, q))
+            real.binary_search_by(|v| sweeptin::geom::predicates::sweep_cmp(*v, q))
                 .unwrap() as u32
         };
         let mut ends: Vec<u32> = segs.iter().flatten().map(|&i| vid(i)).collect();

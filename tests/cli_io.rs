@@ -68,7 +68,7 @@ fn tin_then_check_succeeds_for_every_format() {
         );
         assert!(out.exists());
     }
-    let (v, t) = sweeptin::io::read_ply(dir.path().join("out.ply")).unwrap();
+    let (v, t) = sweeptin::input::read_ply(dir.path().join("out.ply")).unwrap();
     assert_eq!(v.len(), 200);
     assert!(t.len() > 300);
     assert_eq!(

@@ -6,8 +6,8 @@ use std::io::Write;
 use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
-use sweeptin::io::AtomicFile;
-use sweeptin::io::atomic::{
+use sweeptin::output::AtomicFile;
+use sweeptin::output::atomic::{
     RegisteredTempDir, TempKind, cleanup_registered_temps, register_temp, registered_temps,
 };
 

@@ -1,7 +1,7 @@
 //! The PLY reader: encodings, property types and orders, errors, and arbitrary bytes.
 
 use sweeptin::Error;
-use sweeptin::io::ply::{Mesh, read_ply_from};
+use sweeptin::input::ply::{Mesh, read_ply_from};
 
 fn read(bytes: &[u8]) -> sweeptin::Result<Mesh> {
     read_ply_from(bytes, bytes.len() as u64, "t.ply")

@@ -3,7 +3,7 @@
 //! prints SKIP and passes.
 
 use std::process::Command;
-use sweeptin::io::{MeshMeta, create_mesh_sink};
+use sweeptin::output::{MeshMeta, create_mesh_sink};
 
 const SCRIPT: &str = r#"
 import sys

@@ -2,7 +2,8 @@
 
 use std::path::{Path, PathBuf};
 use sweeptin::Error;
-use sweeptin::io::{MeshFormat, MeshMeta, create_mesh_sink, read_ply};
+use sweeptin::input::read_ply;
+use sweeptin::output::{MeshFormat, MeshMeta, create_mesh_sink};
 
 /// A grid mesh with awkward coordinates, and the order a streaming triangulation would emit it:
 /// a row of vertices, then the triangles between it and the previous row.
@@ -51,7 +52,7 @@ fn meta() -> MeshMeta {
     }
 }
 
-fn write(path: &Path, format: Option<MeshFormat>, g: &Grid) -> sweeptin::io::MeshSummary {
+fn write(path: &Path, format: Option<MeshFormat>, g: &Grid) -> sweeptin::sink::MeshSummary {
     let mut sink = create_mesh_sink(path, format, &meta()).unwrap();
     for step in &g.order {
         match *step {

@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use sweeptin::lidar::{BBox, FileInfo, Filter, LidarPoint, LidarReader, Returns};
+use sweeptin::input::las::{BBox, FileInfo, Filter, LidarPoint, LidarReader, Returns};
 
 fn data_dir() -> PathBuf {
     let candidates = [
@@ -363,7 +363,7 @@ fn chunking_does_not_change_the_points() {
         ..Filter::default()
     };
     let (all, _) = read_all(&path, &filter);
-    let options = sweeptin::lidar::ReadOptions {
+    let options = sweeptin::input::las::ReadOptions {
         parallel: false,
         batch_points: 777,
     };
@@ -576,7 +576,7 @@ fn arso_big_file() {
     assert_eq!(info.offset, [511500.025, 122499.965, 747.255]);
     assert_eq!(info.crs, None);
     for parallel in [true, false] {
-        let options = sweeptin::lidar::ReadOptions {
+        let options = sweeptin::input::las::ReadOptions {
             parallel,
             ..Default::default()
         };

@@ -6,7 +6,7 @@ use las::point::{Classification, Format};
 use las::{Builder, Point, Transform, Vector, Version, Writer};
 use std::path::{Path, PathBuf};
 use sweeptin::Error;
-use sweeptin::lidar::{FileInfo, Filter, LidarPoint, LidarReader, Returns};
+use sweeptin::input::las::{FileInfo, Filter, LidarPoint, LidarReader, Returns};
 
 /// A point to write: real-world coordinates, class, withheld flag, return number / count.
 #[derive(Clone, Copy)]
@@ -115,7 +115,7 @@ fn open_err(path: &Path) -> String {
 
 /// Opens and reads everything; returns the error, if any. Must never panic.
 fn try_read(path: &Path, parallel: bool) -> Result<usize, Error> {
-    let options = sweeptin::lidar::ReadOptions {
+    let options = sweeptin::input::las::ReadOptions {
         parallel,
         batch_points: 300,
     };
@@ -141,7 +141,7 @@ fn written_points_come_back_exactly_las_and_laz() {
         let path = dir.path().join(name);
         write_cloud(&path, format, [0.01; 3], [1000.0, 2000.0, 0.0], &pts);
         for parallel in [true, false] {
-            let options = sweeptin::lidar::ReadOptions {
+            let options = sweeptin::input::las::ReadOptions {
                 parallel,
                 batch_points: 333,
             };
@@ -378,7 +378,7 @@ fn damage_found_while_reading_stops_the_reader() {
     write_cloud(&full, 1, [0.01; 3], [0.0; 3], &grid(100_000));
     let ok = dir.path().join("ok.las");
     write_cloud(&ok, 1, [0.01; 3], [0.0; 3], &grid(10));
-    let options = sweeptin::lidar::ReadOptions {
+    let options = sweeptin::input::las::ReadOptions {
         parallel: false,
         batch_points: 1000,
     };

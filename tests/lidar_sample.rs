@@ -1,6 +1,6 @@
 //! The LAZ sample kept in the repository (`data/sample`, see docs/DATA.md): no shared data needed.
 
-use sweeptin::lidar::{FileInfo, Filter, LidarReader};
+use sweeptin::input::las::{FileInfo, Filter, LidarReader};
 
 const SAMPLE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),

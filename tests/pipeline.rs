@@ -2,8 +2,8 @@
 //! real LAS/LAZ files, and byte-identical outputs.
 
 use std::path::{Path, PathBuf};
-use sweeptin::io::sink::{MeshSink, MeshSummary};
 use sweeptin::pipeline::{Input, RunOptions, SweepAxis, run};
+use sweeptin::sink::{MeshSink, MeshSummary};
 use sweeptin::{DuplicatePolicy, Options, triangulate};
 
 /// Collects a streamed mesh in memory.
@@ -92,7 +92,7 @@ fn streamed_along(
 ) -> (Collect, sweeptin::pipeline::RunSummary) {
     let input = Input {
         paths: paths.to_vec(),
-        filter: sweeptin::lidar::Filter::keep_all(),
+        filter: sweeptin::input::las::Filter::keep_all(),
         duplicates: dup,
         lines: Default::default(),
     };
@@ -139,7 +139,7 @@ fn tiny_budgets_equal_the_in_memory_core() {
         let path = dir.path().join(format!("{name}.xyz"));
         write_xyz(&path, &pts);
         // Exactly what the XYZ reader parses (round-trip of shortest decimals).
-        let parsed = sweeptin::io::read_xyz(&path).unwrap();
+        let parsed = sweeptin::input::read_xyz(&path).unwrap();
         let core = triangulate(&parsed, &Options::default()).unwrap();
         let want = core_keys(&core);
         for mem in [32 << 10, 256 << 10, 1 << 30] {
@@ -177,7 +177,7 @@ fn real_laz_streamed_equals_in_memory_and_is_delaunay() {
     for f in files {
         let input = Input {
             paths: vec![f.clone()],
-            filter: sweeptin::lidar::Filter::keep_all(),
+            filter: sweeptin::input::las::Filter::keep_all(),
             duplicates: DuplicatePolicy::First,
             lines: Default::default(),
         };
@@ -266,7 +266,7 @@ fn strips_are_swept_lengthwise() {
     write_strip_las(&path, &pts);
     let input = Input {
         paths: vec![path.clone()],
-        filter: sweeptin::lidar::Filter::keep_all(),
+        filter: sweeptin::input::las::Filter::keep_all(),
         duplicates: DuplicatePolicy::First,
         lines: Default::default(),
     };
@@ -321,7 +321,7 @@ fn sweep_along_x_refuses_products() {
     write_xyz(&path, &sweeptin::synth::uniform(100, 1));
     let input = Input {
         paths: vec![path],
-        filter: sweeptin::lidar::Filter::keep_all(),
+        filter: sweeptin::input::las::Filter::keep_all(),
         duplicates: DuplicatePolicy::First,
         lines: Default::default(),
     };
@@ -330,8 +330,8 @@ fn sweep_along_x_refuses_products() {
         ..Default::default()
     };
     struct Nothing;
-    impl sweeptin::pipeline::TriangleSink for Nothing {
-        fn begin(&mut self, _: &sweeptin::pipeline::StreamInfo) -> sweeptin::Result<()> {
+    impl sweeptin::sink::TriangleSink for Nothing {
+        fn begin(&mut self, _: &sweeptin::sink::StreamInfo) -> sweeptin::Result<()> {
             Ok(())
         }
         fn triangle(&mut self, _: &[[f64; 3]; 3]) -> sweeptin::Result<()> {
@@ -398,7 +398,7 @@ fn sweep_along_x_equals_the_core_on_random_inputs() {
         }
         let path = dir.path().join(format!("u{case}.xyz"));
         write_xyz(&path, &pts);
-        let parsed = sweeptin::io::read_xyz(&path).unwrap();
+        let parsed = sweeptin::input::read_xyz(&path).unwrap();
         let core = triangulate(&parsed, &Options::default()).unwrap();
         let want = core_keys(&core);
         let mem = [16 << 10, 1 << 30][case % 2];

@@ -16,8 +16,8 @@
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
-use sweeptin::points::prepare;
-use sweeptin::predicates::{Orientation, orient};
+use sweeptin::geom::predicates::{Orientation, orient};
+use sweeptin::sort::memory::prepare;
 use sweeptin::sweep::Sweep;
 use sweeptin::validate::validate;
 use sweeptin::{DuplicatePolicy, Error, Options, Triangulation};
@@ -198,7 +198,8 @@ fn check_all(pts: &[[f64; 3]], seed: u64) -> Result<Option<Triangulation>, TestC
     for s in [0.25, 1024.0] {
         let scaled: Vec<[f64; 3]> = pts.iter().map(|p| [p[0] * s, p[1] * s, p[2]]).collect();
         if scaled.iter().any(|p| {
-            !sweeptin::predicates::check_coord(p[0]) || !sweeptin::predicates::check_coord(p[1])
+            !sweeptin::geom::predicates::check_coord(p[0])
+                || !sweeptin::geom::predicates::check_coord(p[1])
         }) || scaled
             .iter()
             .zip(pts)

@@ -1,6 +1,6 @@
 //! The grid reader on the real DEMs of `shared/data/dem` (skipped when the data are absent).
 use std::path::PathBuf;
-use sweeptin::raster::read::{RasterReader, SampleType};
+use sweeptin::input::raster::{RasterReader, SampleType};
 
 fn dem(name: &str) -> Option<PathBuf> {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))

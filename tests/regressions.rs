@@ -6,7 +6,7 @@
 
 use std::sync::mpsc;
 use std::time::Duration;
-use sweeptin::predicates::{CircleSide, incircle_exact, incircle_ids, orient, orient_ids};
+use sweeptin::geom::predicates::{CircleSide, incircle_exact, incircle_ids, orient, orient_ids};
 use sweeptin::validate::validate;
 use sweeptin::{Error, Options, Triangulation, triangulate};
 
@@ -80,7 +80,7 @@ fn symbolic_incircle_collinear_with_artificial_point_second() {
                         .map(coord)
                         .collect();
                     if orient(reals[0], reals[1], reals[2])
-                        != sweeptin::predicates::Orientation::Collinear
+                        != sweeptin::geom::predicates::Orientation::Collinear
                     {
                         continue;
                     }

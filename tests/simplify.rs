@@ -1,8 +1,8 @@
 //! Grid to TIN: the output is checked independently of the simplifier, by rasterising the output
 //! triangles (world coordinates, barycentric interpolation) back onto the grid.
 use std::path::PathBuf;
-use sweeptin::raster::read::RasterReader;
-use sweeptin::raster::read::RasterSpec;
+use sweeptin::input::raster::RasterReader;
+use sweeptin::input::raster::RasterSpec;
 use sweeptin::simplify::{Options, Simplified, Stop, simplify};
 
 fn dem(name: &str) -> Option<PathBuf> {

@@ -1,5 +1,5 @@
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
-use sweeptin::points::{DuplicatePolicy, prepare};
+use sweeptin::sort::memory::{DuplicatePolicy, prepare};
 use sweeptin::sweep::Sweep;
 use sweeptin::{Options, triangulate};
 

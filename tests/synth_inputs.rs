@@ -6,7 +6,7 @@
 //! must agree and every triangle must be strictly counter-clockwise.
 
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
-use sweeptin::predicates::{Orientation, orient};
+use sweeptin::geom::predicates::{Orientation, orient};
 use sweeptin::{Options, Triangulation, synth, triangulate};
 
 type Key = [(u64, u64); 3];

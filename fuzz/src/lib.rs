@@ -2,7 +2,7 @@
 //! independently of the sweep.
 
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
-use sweeptin::predicates::{Orientation, orient};
+use sweeptin::geom::predicates::{Orientation, orient};
 use sweeptin::sweep::Sweep;
 use sweeptin::{DuplicatePolicy, Error, Options, Triangulation, triangulate};
 
@@ -134,7 +134,7 @@ pub fn check(pts: &[[f64; 3]], spade: bool) {
 
 /// Runs the sweep one point at a time with every invariant checked after each step.
 pub fn step_checked(pts: &[[f64; 3]]) {
-    let prep = sweeptin::points::prepare(pts, DuplicatePolicy::First).expect("prepare");
+    let prep = sweeptin::sort::memory::prepare(pts, DuplicatePolicy::First).expect("prepare");
     if prep.len() < 3 {
         return;
     }

@@ -30,7 +30,7 @@
 //! same line id widens the rule to "three breakline vertices at the same height", which also
 //! removes triangles that bridge two different contour lines of one level.
 
-use crate::predicates::{Orientation, orient};
+use crate::geom::predicates::{Orientation, orient};
 
 /// No twin (hull edge).
 const NONE: u32 = u32::MAX;

@@ -4,7 +4,7 @@
 //! of the triangulation. Real line data is messy, so it goes through three steps before the sweep
 //! sees it:
 //!
-//! 1. [`read`]: GeoJSON (`LineString`, `MultiLineString`, `Polygon`, `MultiPolygon`,
+//! 1. [`read_file`]: GeoJSON (`LineString`, `MultiLineString`, `Polygon`, `MultiPolygon`,
 //!    `GeometryCollection`, as a `FeatureCollection`, a `Feature` or a bare geometry) or a simple
 //!    text format (`x y [z]` per line, a blank line ends a polyline), into [`Lines`]: polylines
 //!    with their [`Source`] (file and feature or line) for error messages. Coordinates without
@@ -12,7 +12,7 @@
 //! 2. [`clean`](clean::clean): polylines → [`Pslg`] (a planar straight-line graph): exact duplicate
 //!    vertices merged, zero-length segments dropped, crossings split at a new vertex, collinear
 //!    overlaps merged, segments split where a vertex lies on them, repeated until nothing changes.
-//!    Every decision is exact ([`crate::predicates::orient`]); only the coordinates of crossing
+//!    Every decision is exact ([`crate::geom::predicates::orient`]); only the coordinates of crossing
 //!    points are rounded, once.
 //! 3. [`trim`]: which triangles to keep (`--boundary`, `--holes`, `--max-edge`).
 //!
@@ -40,10 +40,9 @@
 
 pub mod clean;
 pub mod flat;
-pub(crate) mod grid;
-pub mod read;
+
 pub mod trim;
 
+pub use crate::input::lines::{Lines, Location, Source, read_file, read_files};
 pub use clean::{CleanOptions, CleanStats, Pslg, clean};
-pub use read::{Lines, Location, Source, read_file, read_files};
 pub use trim::Trim;

@@ -15,7 +15,7 @@
 //! is strictly inside triangle `abc` whatever its orientation, and evaluates the ray test on it
 //! exactly: "is vertex `v` above `p`" is a comparison of `y` values (ties broken by `b.y`, then
 //! `c.y`), and the side of `p` relative to a ring edge `uv` is the first non-zero of
-//! `orient(u, v, a)`, `orient(u, v, b)`, `orient(u, v, c)` ([`crate::predicates::orient`]). No
+//! `orient(u, v, a)`, `orient(u, v, b)`, `orient(u, v, c)` ([`crate::geom::predicates::orient`]). No
 //! coordinate of a test point is ever rounded. *Caveat*: if a ring is **not** inserted as a
 //! constraint and crosses a triangle, the answer is the one for the part of the triangle at its
 //! first corner.
@@ -33,10 +33,10 @@
 //! Lengths are compared in floating point (a length within rounding of `L` may go either way: this
 //! is a threshold, not a topological decision).
 
-use super::grid::{Buckets, Grid};
-use super::read::{Lines, is_ring};
 use crate::error::{Error, Result};
-use crate::predicates::{Orientation, orient};
+use crate::geom::grid::{Buckets, Grid};
+use crate::geom::predicates::{Orientation, orient};
+use crate::input::lines::{Lines, is_ring};
 
 /// Cell status: no edge in the cell, the cell is outside.
 const OUTSIDE: u8 = 0;

@@ -24,7 +24,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (vertices, triangles) = sweeptin::io::read_ply(&args.mesh)?;
+    let (vertices, triangles) = sweeptin::input::read_ply(&args.mesh)?;
     let segments = if args.breaklines.is_empty() {
         Vec::new()
     } else {

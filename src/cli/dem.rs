@@ -6,8 +6,8 @@ use super::input::{ProductInput, run_products};
 use super::products::{ContourArgs, DemArgs, check_hillshade, finish_report, shade};
 use std::path::PathBuf;
 use std::time::Instant;
-use sweeptin::pipeline::TriangleSink;
 use sweeptin::products::hillshade::HillshadeOptions;
+use sweeptin::sink::TriangleSink;
 
 /// Arguments of `sweeptin dem`.
 #[derive(clap::Args, Debug)]

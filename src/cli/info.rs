@@ -5,7 +5,9 @@ use anyhow::bail;
 use clap::ArgAction;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-use sweeptin::lidar::{BBox, FileInfo, Filter, FilterStats, LidarReader, Returns, parse_classes};
+use sweeptin::input::las::{
+    BBox, FileInfo, Filter, FilterStats, LidarReader, Returns, parse_classes,
+};
 
 /// Arguments of `sweeptin info`.
 #[derive(clap::Args, Debug)]

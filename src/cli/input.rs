@@ -6,12 +6,11 @@ use super::info::FilterArgs;
 use anyhow::{Context, bail};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use sweeptin::io::MeshSink;
-use sweeptin::lidar::{BBox, Crs};
-use sweeptin::pipeline::{
-    self, DEFAULT_MEM, Input, RunOptions, RunSummary, SweepAxis, TriangleSink,
-};
+use sweeptin::crs::Crs;
+use sweeptin::input::las::BBox;
+use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunOptions, RunSummary, SweepAxis};
 use sweeptin::products::Fanout;
+use sweeptin::sink::{MeshSink, TriangleSink};
 
 /// Input files and how to read and run them (flattened into each command's arguments).
 #[derive(clap::Args, Debug, Clone)]

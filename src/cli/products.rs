@@ -6,8 +6,8 @@ use anyhow::{Context, bail};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use sweeptin::lidar::BBox;
-use sweeptin::pipeline::TriangleSink;
+use sweeptin::input::las::BBox;
+use sweeptin::output::raster::RasterFormat;
 use sweeptin::products::boundary::Boundary;
 use sweeptin::products::contours::{ContourOptions, ContourSink};
 use sweeptin::products::dem::{DemExtent, DemOptions, DemSink};
@@ -15,7 +15,7 @@ use sweeptin::products::hillshade::{HillshadeOptions, hillshade};
 use sweeptin::products::profile::ProfileSink;
 use sweeptin::products::sample::SampleSink;
 use sweeptin::products::volume::VolumeSink;
-use sweeptin::raster::grid::RasterFormat;
+use sweeptin::sink::TriangleSink;
 
 /// DEM options.
 #[derive(clap::Args, Debug, Clone)]
@@ -103,7 +103,7 @@ impl ContourArgs {
 
 /// Reads a boundary polygon file.
 pub fn read_boundary(path: &Path) -> anyhow::Result<Boundary> {
-    let polys = sweeptin::products::geojson::read_polygons(path)?;
+    let polys = sweeptin::input::geojson::read_polygons(path)?;
     Boundary::new(&polys).map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))
 }
 
@@ -238,7 +238,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let (Some(l), Some(o)) = (&args.profile_line, &args.profile_out) {
         check_output(o)?;
-        let lines = sweeptin::products::geojson::read_lines(l)?;
+        let lines = sweeptin::input::geojson::read_lines(l)?;
         sinks.push(("profile".into(), Box::new(ProfileSink::new(lines, o)?)));
     }
     if sinks.is_empty() && args.mesh.is_none() {
@@ -259,15 +259,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let mut mesh = match &args.mesh {
         Some(p) => {
-            let meta = sweeptin::io::MeshMeta {
+            let meta = sweeptin::output::MeshMeta {
                 crs: crs_text,
                 comments: vec!["sweeptin products".into()],
             };
-            Some(sweeptin::io::create_mesh_sink(p, None, &meta)?)
+            Some(sweeptin::output::create_mesh_sink(p, None, &meta)?)
         }
         None => None,
     };
-    let mesh_ref: Option<&mut (dyn sweeptin::io::MeshSink + Send)> = match mesh.as_mut() {
+    let mesh_ref: Option<&mut (dyn sweeptin::sink::MeshSink + Send)> = match mesh.as_mut() {
         Some(m) => Some(&mut **m),
         None => None,
     };

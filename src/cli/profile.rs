@@ -22,7 +22,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     check_output(&args.output)?;
-    let lines = sweeptin::products::geojson::read_lines(&args.line)?;
+    let lines = sweeptin::input::geojson::read_lines(&args.line)?;
     let sink = ProfileSink::new(lines, &args.output)?;
     let input = args.input.input(None)?;
     let (run, summary) = run_products(

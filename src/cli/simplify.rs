@@ -4,8 +4,8 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
-use sweeptin::io::{MeshFormat, MeshMeta, create_mesh_sink};
-use sweeptin::raster::read::{Heights, RasterReader};
+use sweeptin::input::raster::{Heights, RasterReader};
+use sweeptin::output::{MeshFormat, MeshMeta, create_mesh_sink};
 use sweeptin::simplify::{Options, Stop, simplify};
 
 /// Arguments of `sweeptin simplify`.

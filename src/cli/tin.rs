@@ -4,7 +4,7 @@ use super::input::InputArgs;
 use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
-use sweeptin::io::{MeshFormat, MeshMeta, create_mesh_sink};
+use sweeptin::output::{MeshFormat, MeshMeta, create_mesh_sink};
 
 /// Arguments of `sweeptin tin`.
 #[derive(clap::Args, Debug)]

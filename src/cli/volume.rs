@@ -7,9 +7,10 @@ use anyhow::Context;
 use serde_json::Value;
 use std::path::PathBuf;
 use std::time::Instant;
-use sweeptin::pipeline::{self, TriangleSink};
+use sweeptin::pipeline;
 use sweeptin::products::overlay::{BandStore, OverlaySink};
 use sweeptin::products::volume::VolumeSink;
+use sweeptin::sink::TriangleSink;
 
 /// Arguments of `sweeptin volume`.
 #[derive(clap::Args, Debug)]

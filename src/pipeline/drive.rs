@@ -9,8 +9,8 @@ use super::{
     peak_rss,
 };
 use crate::error::{Error, Result};
-use crate::extsort::{Dedup, ExternalSorter, Merge, SortRecord};
-use crate::io::sink::MeshSink;
+use crate::sink::MeshSink;
+use crate::sort::external::{Dedup, ExternalSorter, Merge, SortRecord};
 use crate::sweep::{Event, StreamConfig, StreamPoint, Sweep};
 use crossbeam_channel::{Receiver, Sender, bounded};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -209,7 +209,7 @@ fn world_bounds(rd: &ReadResult) -> [f64; 4] {
 /// the error that cut the merge short (an unreadable spill file).
 fn merge_points(
     mut merge: Merge,
-    policy: crate::points::DuplicatePolicy,
+    policy: crate::sort::memory::DuplicatePolicy,
     out: Sender<Vec<StreamPoint>>,
 ) -> Result<u64> {
     let mut d = Dedup::new(&mut merge, policy).with_mark(LINE_FLAG);

@@ -7,9 +7,9 @@ use super::{Frame, TriangleSink};
 use crate::breaklines::Trim;
 use crate::breaklines::flat::{FlatStats, remove_flat_triangles};
 use crate::error::Result;
-use crate::io::idmap::IdMap;
-use crate::io::sink::MeshSink;
-use crate::predicates::{Orientation, orient};
+use crate::geom::predicates::{Orientation, orient};
+use crate::idmap::IdMap;
+use crate::sink::MeshSink;
 use crate::sweep::Event;
 use std::collections::HashMap;
 

@@ -31,10 +31,10 @@
 
 use super::{Input, TriangleSink};
 use crate::breaklines::flat::FlatStats;
-use crate::breaklines::grid::{Buckets, Grid};
 use crate::breaklines::{CleanOptions, CleanStats, Lines, Pslg, Trim, read_file};
 use crate::error::{Error, Result};
-use crate::predicates::{Orientation, check_coord, orient};
+use crate::geom::grid::{Buckets, Grid};
+use crate::geom::predicates::{Orientation, check_coord, orient};
 use crate::sweep::{ConstraintGraph, ConstraintStats};
 use std::path::PathBuf;
 
@@ -44,7 +44,7 @@ pub(crate) const LINE_FLAG: u64 = 1 << 63;
 /// Breaklines and trimming for a run.
 #[derive(Clone, Debug, Default)]
 pub struct LineOptions {
-    /// Breakline files (GeoJSON or text; see [`crate::breaklines::read`]).
+    /// Breakline files (GeoJSON or text; see [`crate::input::lines`]).
     pub breaklines: Vec<PathBuf>,
     /// Polygons: keep only the triangles inside.
     pub boundary: Option<PathBuf>,

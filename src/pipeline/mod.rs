@@ -18,9 +18,9 @@ mod read;
 mod replay;
 
 use crate::error::Result;
-use crate::io::sink::MeshSink;
-use crate::lidar::{Crs, Filter};
-use crate::points::DuplicatePolicy;
+use crate::input::las::Filter;
+use crate::sink::{MeshSink, StreamInfo, TriangleSink};
+use crate::sort::memory::DuplicatePolicy;
 use std::path::PathBuf;
 
 pub use lines::{LineOptions, LineSummary};
@@ -87,35 +87,6 @@ pub const STRIP_RATIO: f64 = 4.0;
 /// Default memory budget: 1 GiB.
 pub const DEFAULT_MEM: u64 = 1 << 30;
 
-/// Facts about the data, given to every sink before the first triangle.
-#[derive(Clone, Debug, Default)]
-pub struct StreamInfo {
-    /// Coordinate reference system of the input, when known.
-    pub crs: Option<Crs>,
-    /// Real-world extent of the points: `[xmin, ymin, xmax, ymax]`.
-    pub bounds: [f64; 4],
-}
-
-/// A consumer of final triangles (DEM, contours, volumes, …).
-///
-/// Triangles arrive roughly in increasing `y`, in real-world coordinates `[x, y, z]`,
-/// counter-clockwise in (x, y). [`TriangleSink::watermark`] is a *hint*: later triangles normally lie
-/// entirely at `y >= watermark`, so a sink may flush what lies below; but a few triangles can still
-/// arrive *late* (long thin triangles along the convex hull, whose circumcircles are too large to
-/// finalise early), and every sink must handle a late triangle correctly.
-pub trait TriangleSink: Send {
-    /// Called once before the first triangle.
-    fn begin(&mut self, info: &StreamInfo) -> Result<()>;
-    /// One final triangle.
-    fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()>;
-    /// Progress hint (see the trait docs).
-    fn watermark(&mut self, _y: f64) -> Result<()> {
-        Ok(())
-    }
-    /// Called once after the last triangle; returns a machine-readable summary.
-    fn finish(&mut self) -> Result<serde_json::Value>;
-}
-
 /// Maps the sweep's local frame to real-world coordinates: `world = offset + scale * local`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
@@ -181,7 +152,7 @@ pub struct RunSummary {
     /// sampled: after reading, at every watermark, and at the end.
     pub peak_anon_bytes: Option<u64>,
     /// External sort.
-    pub sort: crate::extsort::SortStats,
+    pub sort: crate::sort::external::SortStats,
     /// Sweep counters (front peak, flips, …).
     pub sweep: crate::sweep::SweepStats,
     /// Streaming working set.
@@ -203,11 +174,11 @@ pub struct RunSummary {
 /// The reader's errors when a header cannot be read.
 pub fn input_crs(input: &Input) -> Result<Option<String>> {
     if replay::is_stream_input(input) {
-        let r = crate::io::stin::StinReader::open(&input.paths[0])?;
+        let r = crate::input::stin::StinReader::open(&input.paths[0])?;
         return Ok(r.crs().map(str::to_string));
     }
     if !input.paths.is_empty() && input.paths.iter().all(|p| read::is_lidar(p)) {
-        let r = crate::lidar::LidarReader::open(&input.paths, &input.filter)?;
+        let r = crate::input::las::LidarReader::open(&input.paths, &input.filter)?;
         return Ok(r.crs().and_then(|c| c.definition()));
     }
     Ok(None)

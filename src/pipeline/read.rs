@@ -2,10 +2,10 @@
 
 use super::{Frame, Input, STRIP_RATIO, SweepAxis};
 use crate::error::{Error, Result};
-use crate::extsort::{ExternalSorter, SortRecord};
-use crate::io::xyz::XyzReader;
-use crate::lidar::{Crs, LidarPoint, LidarReader};
-use crate::predicates;
+use crate::geom::predicates;
+use crate::input::las::{Crs, LidarPoint, LidarReader};
+use crate::input::xyz::XyzReader;
+use crate::sort::external::{ExternalSorter, SortRecord};
 use std::path::Path;
 
 /// Is `p` a LAS or LAZ file (by extension)?
@@ -230,7 +230,7 @@ pub fn read_points(input: &Input) -> Result<(Vec<[f64; 3]>, Option<Crs>)> {
     } else {
         let mut all = Vec::new();
         for p in &input.paths {
-            all.extend(crate::io::xyz::read_xyz(p)?);
+            all.extend(crate::input::xyz::read_xyz(p)?);
         }
         Ok((all, None))
     }

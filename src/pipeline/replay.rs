@@ -2,10 +2,10 @@
 //! triangulating again.
 
 use super::{Input, RunSummary, StreamInfo, TriangleSink, peak_rss};
+use crate::crs::Crs;
 use crate::error::{Error, Result};
-use crate::io::sink::MeshSink;
-use crate::io::stin::{StinEvent, StinReader};
-use crate::lidar::Crs;
+use crate::input::stin::{StinEvent, StinReader};
+use crate::sink::MeshSink;
 use std::time::Instant;
 
 pub(crate) fn is_stream_input(input: &Input) -> bool {

@@ -8,8 +8,8 @@
 //! outline and the others are holes, whatever their orientation in the file (rings are
 //! re-oriented); several polygons that overlap cover their union (non-zero winding rule).
 
-use super::geojson::Polygon;
 use super::geom::{PV, clip_left, integrate};
+use crate::input::geojson::Polygon;
 
 /// One trapezoid: bottom-left, bottom-right, top-right, top-left (counter-clockwise).
 type Trap = [[f64; 2]; 4];

@@ -30,10 +30,10 @@
 //! (those crossing the sweep's front, and those ending on the TIN's boundary so far), not by their
 //! length.
 
-use super::geojson::FeatureWriter;
 use super::geom::{Tri, cmp_xy};
 use crate::error::{Error, Result};
-use crate::pipeline::{StreamInfo, TriangleSink};
+use crate::output::geojson::FeatureWriter;
+use crate::sink::{StreamInfo, TriangleSink};
 use serde_json::json;
 use std::collections::{HashMap, VecDeque};
 use std::fs::File;

@@ -32,8 +32,9 @@
 
 use super::geom::Tri;
 use crate::error::{Error, Result};
-use crate::pipeline::{StreamInfo, TriangleSink};
-use crate::raster::grid::{GridSpec, GridWriter, RasterFormat, create_grid_writer};
+use crate::output::raster::{GridWriter, RasterFormat, create_grid_writer};
+use crate::raster::GridSpec;
+use crate::sink::{StreamInfo, TriangleSink};
 use serde_json::json;
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};

@@ -20,7 +20,7 @@
 //! `GDAL_NODATA`.
 
 use crate::error::{Error, Result};
-use crate::io::AtomicFile;
+use crate::output::AtomicFile;
 use std::collections::VecDeque;
 use std::fs::File;
 use std::io::{BufReader, Write};
@@ -298,8 +298,9 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raster::geotiff_write::GeoTiffWriter;
-    use crate::raster::grid::{GridSpec, GridWriter};
+    use crate::output::geotiff::GeoTiffWriter;
+    use crate::output::raster::GridWriter;
+    use crate::raster::GridSpec;
 
     fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
         let d = png::Decoder::new(BufReader::new(File::open(path).unwrap()));

@@ -18,7 +18,7 @@
 pub mod boundary;
 pub mod contours;
 pub mod dem;
-pub mod geojson;
+
 pub mod geom;
 pub mod hillshade;
 pub mod overlay;
@@ -29,9 +29,9 @@ pub mod volume;
 #[cfg(test)]
 pub(crate) mod testutil;
 
+use crate::crs::Crs;
 use crate::error::Result;
-use crate::lidar::Crs;
-use crate::pipeline::{StreamInfo, TriangleSink};
+use crate::sink::{StreamInfo, TriangleSink};
 
 /// Several products fed by one pass: forwards the stream to every sink, after assigning a CRS
 /// (when given) and dropping triangles with an edge longer than `max_edge` (when given; their

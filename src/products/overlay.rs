@@ -22,7 +22,7 @@ use super::boundary::Boundary;
 use super::geom::{PV, Tri, clip_left};
 use super::volume::CutFill;
 use crate::error::{Error, Result};
-use crate::pipeline::{StreamInfo, TriangleSink};
+use crate::sink::{StreamInfo, TriangleSink};
 use serde_json::json;
 use std::collections::HashMap;
 use std::fs::File;

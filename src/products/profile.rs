@@ -2,7 +2,7 @@
 //! line crosses, plus chainage.
 //!
 //! For every line segment `p → q` and every triangle, the sink records (exactly, through
-//! [`crate::predicates::orient`]):
+//! [`crate::geom::predicates::orient`]):
 //! - where the segment properly crosses a triangle edge — the point computed from the edge and the
 //!   segment alone, so the two triangles sharing the edge record the same bits;
 //! - where the segment passes exactly through a TIN vertex (the vertex itself, its `z`);
@@ -17,9 +17,9 @@
 
 use super::geom::{Location, Tri, cmp_xy};
 use crate::error::{Error, Result};
-use crate::io::AtomicFile;
-use crate::pipeline::{StreamInfo, TriangleSink};
-use crate::predicates::{Orientation, orient};
+use crate::geom::predicates::{Orientation, orient};
+use crate::output::AtomicFile;
+use crate::sink::{StreamInfo, TriangleSink};
 use serde_json::json;
 use std::collections::HashMap;
 use std::io::{BufWriter, Write};

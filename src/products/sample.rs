@@ -23,8 +23,8 @@
 
 use super::geom::{Location, Tri};
 use crate::error::{Error, Result};
-use crate::io::AtomicFile;
-use crate::pipeline::{StreamInfo, TriangleSink};
+use crate::output::AtomicFile;
+use crate::sink::{StreamInfo, TriangleSink};
 use serde_json::json;
 use std::collections::HashMap;
 use std::fs::File;

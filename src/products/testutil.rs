@@ -2,7 +2,7 @@
 //! triangles (the two orders every product must treat alike).
 
 use super::geom::SplitMix;
-use crate::pipeline::{StreamInfo, TriangleSink};
+use crate::sink::{StreamInfo, TriangleSink};
 use std::path::Path;
 
 /// A triangle and, optionally, a watermark to give after it.

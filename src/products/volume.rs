@@ -22,7 +22,7 @@
 use super::boundary::Boundary;
 use super::geom::{ExactSum, PV, Tri, clip, integrate};
 use crate::error::Result;
-use crate::pipeline::{StreamInfo, TriangleSink};
+use crate::sink::{StreamInfo, TriangleSink};
 use serde_json::json;
 
 /// Cut/fill accumulators (exact sums).

@@ -35,12 +35,12 @@
 //!
 //! # Memory
 //! The whole grid is held in memory, as `f32` when its values are exactly `f32` (see
-//! [`crate::raster::read::RasterReader::read_heights`], which reads band by band) or `f64`, plus
+//! [`crate::input::raster::RasterReader::read_heights`], which reads band by band) or `f64`, plus
 //! about 150 bytes per TIN point (TIN, candidates, queue). Grids larger than memory are not
 //! handled yet (they would need window-by-window refinement with shared border points).
 
 use crate::error::{Error, Result};
-use crate::raster::read::RasterSpec;
+use crate::input::raster::RasterSpec;
 use crate::tin::{Tin, TriId};
 use queue::TriangleQueue;
 pub use scan::Height;

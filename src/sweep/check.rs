@@ -2,8 +2,8 @@
 //! tests, fuzzing and debugging.
 
 use super::Sweep;
-use super::mesh::{Across, EdgeId};
-use crate::predicates::{CircleSide, incircle_ids};
+use crate::geom::predicates::{CircleSide, incircle_ids};
+use crate::mesh::{Across, EdgeId};
 
 impl Sweep {
     /// Verifies the sweep's invariants and returns the first violation found:

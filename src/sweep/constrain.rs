@@ -24,8 +24,8 @@
 
 use super::Sweep;
 use super::front::NodeId;
-use super::mesh::{Across, CONSTRAINED, EdgeId, VertexId};
-use crate::predicates::{CircleSide, Orientation, incircle_ids, is_artificial, sweep_cmp};
+use crate::geom::predicates::{CircleSide, Orientation, incircle_ids, is_artificial, sweep_cmp};
+use crate::mesh::{Across, CONSTRAINED, EdgeId, VertexId};
 use std::cmp::Ordering;
 
 /// Constraint segments, by constraint vertex (a vertex of the cleaned breakline graph).
@@ -490,7 +490,7 @@ impl Sweep {
     /// Links the new half-edge `h` on a cavity chain edge, which was half-edge `old` with link
     /// word `word` in the removed triangles.
     fn attach_chain_edge(&mut self, h: EdgeId, (old, word): (EdgeId, u32), spikes: &mut Spikes) {
-        if let Across::Twin(o) = super::mesh::across(word)
+        if let Across::Twin(o) = crate::mesh::across(word)
             && spikes.dead.contains(&o.tri())
         {
             // Both sides are in the cavity: pair with the new half-edge made for `o`.

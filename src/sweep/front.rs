@@ -6,7 +6,7 @@
 //! under a point is unique: the bucket index only decides where the search starts, never what it
 //! finds, and the result does not depend on the number of buckets.
 
-use super::mesh::{EdgeId, VertexId};
+use crate::mesh::{EdgeId, VertexId};
 
 /// Id of a front node.
 pub type NodeId = u32;

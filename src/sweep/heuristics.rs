@@ -2,12 +2,12 @@
 //! smooth (the hole angle is widened from π/2, see `HOLE_COS`), and the closing of the front to the convex hull.
 //!
 //! The heuristics only choose *which* valid triangle to add next; each candidate is checked with the
-//! exact [`orient`](crate::predicates::orient_ids) predicate and legalised, so the floating-point
+//! exact [`orient`](crate::geom::predicates::orient_ids) predicate and legalised, so the floating-point
 //! angles used here can never change the final triangulation, only how fast it is reached.
 
 use super::Sweep;
 use super::front::NodeId;
-use crate::predicates::is_artificial;
+use crate::geom::predicates::is_artificial;
 
 /// Cosine of the largest hole angle that is filled at once. The paper uses π/2; about 114° cost
 /// 3–5% fewer instructions on uniform and clustered points and the same on lidar-like rows

@@ -10,8 +10,8 @@
 //!   no new point to argue from, so a flip pushes all four outer edges of the quadrilateral.
 
 use super::Sweep;
-use super::mesh::{Across, EdgeId, VertexId};
-use crate::predicates::{CircleSide, incircle_ids};
+use crate::geom::predicates::{CircleSide, incircle_ids};
+use crate::mesh::{Across, EdgeId, VertexId};
 
 impl Sweep {
     /// If the edge `a` (which has a twin) is illegal, flips it and returns the four outer edges
@@ -23,8 +23,8 @@ impl Sweep {
     #[inline(always)]
     fn flip_if_illegal(&mut self, a: EdgeId) -> Option<EdgeId> {
         let word = self.mesh.link[a.idx()];
-        let b = match super::mesh::across(word) {
-            Across::Twin(b) if word & super::mesh::CONSTRAINED == 0 => b,
+        let b = match crate::mesh::across(word) {
+            Across::Twin(b) if word & crate::mesh::CONSTRAINED == 0 => b,
             _ => return None,
         };
         let (al, ar) = (a.next(), a.prev());

@@ -16,15 +16,13 @@ pub mod constrain;
 pub mod front;
 pub mod heuristics;
 pub mod legalize;
-pub mod mesh;
-pub mod stream;
 
 use crate::error::{Error, Result};
-use crate::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
+pub use crate::finalise::{Event, StreamConfig, StreamPoint, StreamStats};
+use crate::geom::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
+use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, VertexId};
 pub use constrain::{ConstraintGraph, ConstraintStats};
 use front::{Front, NodeId, XMap};
-use mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, VertexId};
-pub use stream::{Event, StreamConfig, StreamPoint, StreamStats};
 
 /// Counters of what the sweep did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -48,24 +46,24 @@ pub struct SweepStats {
 /// Two modes share all of the geometry:
 /// * **batch** ([`Sweep::new`]): the whole vertex table is given up front and every triangle stays in
 ///   memory until [`Sweep::finish`];
-/// * **streaming** ([`Sweep::streaming`], see [`stream`]): points are pushed one at a time and a
+/// * **streaming** ([`Sweep::streaming`], see [`crate::finalise`]): points are pushed one at a time and a
 ///   triangle leaves memory (as an [`Event`]) as soon as nothing later can change it.
 #[derive(Debug, Clone)]
 pub struct Sweep {
-    pts: Vec<[f64; 2]>,
-    next: u32,
-    mesh: Mesh,
-    front: Front,
-    stack: Vec<EdgeId>,
-    stats: SweepStats,
-    fin: Option<Box<stream::Finalizer>>,
-    cons: Option<Box<Constraints>>,
-    cstats: ConstraintStats,
+    pub(crate) pts: Vec<[f64; 2]>,
+    pub(crate) next: u32,
+    pub(crate) mesh: Mesh,
+    pub(crate) front: Front,
+    pub(crate) stack: Vec<EdgeId>,
+    pub(crate) stats: SweepStats,
+    pub(crate) fin: Option<Box<crate::finalise::Finalizer>>,
+    pub(crate) cons: Option<Box<Constraints>>,
+    pub(crate) cstats: ConstraintStats,
 }
 
 /// Breakline state of a sweep.
 #[derive(Debug, Clone)]
-struct Constraints {
+pub(crate) struct Constraints {
     graph: ConstraintGraph,
     /// Vertex of each constraint vertex, once swept.
     vertex: Vec<VertexId>,
@@ -79,7 +77,7 @@ pub const NO_CONSTRAINT: u32 = u32::MAX;
 
 impl Sweep {
     /// Starts a sweep over `pts`: two placeholder rows for the artificial points, then at least one
-    /// real point, all distinct and sorted by `(y, x)` (as produced by [`crate::points::prepare`]).
+    /// real point, all distinct and sorted by `(y, x)` (as produced by [`crate::sort::memory::prepare`]).
     ///
     /// # Errors
     /// [`Error::TooFewPoints`] without any real point; [`Error::OutOfOrder`] if the points are not
@@ -93,10 +91,9 @@ impl Sweep {
             });
         }
         let real = &pts[FIRST_REAL as usize..];
-        if let Some(i) = real
-            .windows(2)
-            .position(|w| crate::predicates::sweep_cmp(w[0], w[1]) != std::cmp::Ordering::Less)
-        {
+        if let Some(i) = real.windows(2).position(|w| {
+            crate::geom::predicates::sweep_cmp(w[0], w[1]) != std::cmp::Ordering::Less
+        }) {
             return Err(Error::OutOfOrder {
                 index: i as u64 + 1,
             });
@@ -109,11 +106,11 @@ impl Sweep {
     }
 
     /// The first triangle (P-1, P-2, first point) and the front over it.
-    fn start(
+    pub(crate) fn start(
         pts: Vec<[f64; 2]>,
         mut mesh: Mesh,
         xmap: XMap,
-        fin: Option<Box<stream::Finalizer>>,
+        fin: Option<Box<crate::finalise::Finalizer>>,
     ) -> Self {
         let first = VertexId(FIRST_REAL);
         let e = mesh.add_triangle(VertexId(P_LEFT), VertexId(P_RIGHT), first);
@@ -261,7 +258,7 @@ impl Sweep {
     }
 
     /// Vertex `v` (at front node `n`) is constraint vertex `cid`: insert the segments it ends.
-    fn constraint_vertex(&mut self, v: VertexId, n: NodeId, cid: u32) {
+    pub(crate) fn constraint_vertex(&mut self, v: VertexId, n: NodeId, cid: u32) {
         let cons = self.cons.as_mut().expect("constraints are set");
         cons.vertex[cid as usize] = v;
         let lower: Vec<VertexId> = cons
@@ -290,7 +287,7 @@ impl Sweep {
 
     /// Point event: insert vertex `v`, which lies above or on the front and after every vertex
     /// inserted so far in sweep order. Returns its front node.
-    fn insert(&mut self, v: VertexId) -> NodeId {
+    pub(crate) fn insert(&mut self, v: VertexId) -> NodeId {
         self.stats.points += 1;
         let x = self.pts[v.0 as usize][0];
         let l = self.front.locate(x);
@@ -373,7 +370,7 @@ impl Sweep {
     #[inline(always)]
     fn relink(&mut self, slot: EdgeId, word: u32) {
         self.mesh.link[slot.idx()] = word;
-        match mesh::across(word) {
+        match crate::mesh::across(word) {
             Across::Twin(t) => {
                 let w = &mut self.mesh.link[t.idx()];
                 *w = slot.0 | (*w & CONSTRAINED);
@@ -384,8 +381,13 @@ impl Sweep {
     }
 
     #[inline(always)]
-    fn orient(&self, a: VertexId, b: VertexId, c: VertexId) -> crate::predicates::Orientation {
-        crate::predicates::orient_ids(&self.pts, a.0, b.0, c.0)
+    fn orient(
+        &self,
+        a: VertexId,
+        b: VertexId,
+        c: VertexId,
+    ) -> crate::geom::predicates::Orientation {
+        crate::geom::predicates::orient_ids(&self.pts, a.0, b.0, c.0)
     }
 
     /// Closes the front to the convex hull, drops the artificial triangles and returns the real

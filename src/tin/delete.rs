@@ -21,7 +21,7 @@ struct RemovalPlan {
     steps: Vec<(u32, bool)>,
 }
 use crate::error::{Error, Result};
-use crate::predicates::Orientation;
+use crate::geom::predicates::Orientation;
 
 impl Tin {
     /// Removes vertex `v` and re-triangulates its hole (Delaunay, or constrained Delaunay when

@@ -3,7 +3,7 @@
 
 use super::{CONSTRAINED, EdgeId, Location, NO_TWIN, NONE, Tin, TriId, VertexId};
 use crate::error::{Error, Result};
-use crate::predicates::{Orientation, check_coord};
+use crate::geom::predicates::{Orientation, check_coord};
 
 impl Tin {
     /// Inserts `p = [x, y, z]` and restores the Delaunay property. A point exactly at an existing
@@ -248,8 +248,8 @@ fn check_point(p: [f64; 3], index: u64) -> Result<()> {
             return Err(Error::CoordinateOutOfRange {
                 index,
                 value,
-                max: crate::predicates::MAX_COORD,
-                min: crate::predicates::MIN_NONZERO_COORD,
+                max: crate::geom::predicates::MAX_COORD,
+                min: crate::geom::predicates::MIN_NONZERO_COORD,
             });
         }
     }

@@ -1,12 +1,12 @@
 //! A dynamic Delaunay TIN: insert points, delete points, insert breaklines, interpolate heights.
 //!
-//! Storage follows the sweep's mesh (`crate::sweep::mesh`): flat half-edge arrays, triangle `t`
+//! Storage follows the sweep's mesh (`crate::mesh`): flat half-edge arrays, triangle `t`
 //! owning half-edges `3t, 3t+1, 3t+2` counter-clockwise, typed `u32` ids. Each half-edge has a
 //! *link word*: its twin (the same edge seen from the neighbouring triangle), or [`NO_TWIN`] on the
 //! convex hull, with bit 31 set when the edge is constrained (a breakline, never flipped). Freed
 //! triangle slots are reused. Every vertex remembers one outgoing half-edge.
 //!
-//! Every geometric decision goes through [`crate::predicates`]: [`orient`] and the perturbed
+//! Every geometric decision goes through [`crate::geom::predicates`]: [`orient`] and the perturbed
 //! [`incircle`] with the crate's tie rule (the latest point in sweep order carries the dominant
 //! lift), so the triangulation is the *unique* Delaunay triangulation of its points under that rule:
 //! whatever the order of insertions and deletions, it equals what [`crate::triangulate`] builds from
@@ -23,7 +23,7 @@
 //! * [`Tin::leave_one_out`]: the leave-one-out accuracy check (section 7.3.4).
 
 use crate::error::{Error, Result};
-use crate::predicates::{CircleSide, Orientation, incircle, orient};
+use crate::geom::predicates::{CircleSide, Orientation, incircle, orient};
 pub use crossval::CrossValidation;
 
 mod crossval;

@@ -4,7 +4,7 @@
 
 use super::{CONSTRAINED, EdgeId, NO_TWIN, Tin, VertexId};
 use crate::error::{Error, Result};
-use crate::predicates::Orientation;
+use crate::geom::predicates::Orientation;
 use std::collections::VecDeque;
 
 impl Tin {

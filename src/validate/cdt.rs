@@ -8,9 +8,9 @@
 //! frame), so they are exact for any segment whose coordinates are in the predicates' range.
 
 use super::{Report, Validator, apex_of, dst_of, invalid};
-use crate::breaklines::grid::{Buckets, Grid};
 use crate::error::Result;
-use crate::predicates::{Orientation, check_coord, orient};
+use crate::geom::grid::{Buckets, Grid};
+use crate::geom::predicates::{Orientation, check_coord, orient};
 use rayon::prelude::*;
 
 /// Which checks [`validate_cdt_with`] runs besides the structural ones (indices, distinct

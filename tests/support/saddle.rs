@@ -7,10 +7,10 @@
 //! Shared by `tests/products_accuracy.rs` and `examples/saddle_accuracy.rs`.
 
 use std::f64::consts::PI;
-use sweeptin::pipeline::{StreamInfo, TriangleSink};
 use sweeptin::products::geom::{Location, SplitMix, Tri};
 use sweeptin::products::overlay::{BandStore, OverlaySink};
 use sweeptin::products::volume::VolumeSink;
+use sweeptin::sink::{StreamInfo, TriangleSink};
 
 /// The thesis's reference surface.
 pub fn saddle(x: f64, y: f64) -> f64 {

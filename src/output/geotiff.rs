@@ -15,10 +15,11 @@
 //! goes north) and single cells patched later. Rows never written read as zero bytes, so every row
 //! must be written once; [`GeoTiffWriter::finish`] fills the rows never written with nodata.
 
-use super::grid::{GridSpec, GridWriter, check_cell, check_span};
+use super::raster::{GridWriter, check_cell, check_span};
+use crate::crs::HorizontalKind;
 use crate::error::{Error, Result};
-use crate::io::AtomicFile;
-use crate::lidar::HorizontalKind;
+use crate::output::AtomicFile;
+use crate::raster::GridSpec;
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -369,7 +370,7 @@ impl GridWriter for GeoTiffWriter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lidar::Crs;
+    use crate::crs::Crs;
 
     fn read_with_tiff_crate(path: &Path) -> (u32, u32, Vec<f32>) {
         let f = File::open(path).unwrap();

@@ -16,7 +16,7 @@
 //!    splits it, and the identical pieces merge (rule 3).
 //! 6. **Proper crossings** (the interiors cross at one point, decided by four exact orientations)
 //!    are split at the crossing point, computed once in floating point from the adaptive
-//!    determinants ([`crate::predicates::orient_det`]) with the two segments and their ends in a
+//!    determinants ([`crate::geom::predicates::orient_det`]) with the two segments and their ends in a
 //!    canonical (coordinate) order, so the point depends only on the geometry, not on input order;
 //!    it is clamped into both segments' bounding boxes. Its `z` is interpolated linearly along each
 //!    segment; the mean of the known values is kept, and two values that differ by more than
@@ -51,9 +51,9 @@
 //! Candidate pairs come from a uniform grid of about one cell per segment: `O(n + k)` pair tests
 //! per round for `n` segments with `k` candidate pairs, almost all in the first round.
 
-use super::grid::{Buckets, Grid};
 use crate::error::{Error, Result};
-use crate::predicates::{Orientation, check_coord, orient, orient_det};
+use crate::geom::grid::{Buckets, Grid};
+use crate::geom::predicates::{Orientation, check_coord, orient, orient_det};
 use rayon::prelude::*;
 use std::cmp::Ordering;
 use std::collections::HashMap;

@@ -5,7 +5,7 @@
 //! when they size their buffers, so a damaged header could otherwise make them allocate
 //! absurd amounts of memory or panic. Every problem becomes an [`Error::Format`] naming the file.
 
-use super::crs::Crs;
+use crate::crs::Crs;
 use crate::error::{Error, Result};
 use serde::Serialize;
 use std::fs::File;

@@ -18,11 +18,9 @@
 //! | 4 | watermark | y: `f64`, 16 zero bytes |
 //! | 5 | end | vertex count `u64`, triangle count `u64`, 8 zero bytes |
 
-use super::atomic::AtomicFile;
-use super::idmap::IdMap;
-use super::sink::{MeshMeta, MeshSink, MeshSummary, SinkState};
 use crate::error::{Error, Result};
-use std::io::{BufReader, Read, Write};
+use crate::idmap::IdMap;
+use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
 /// File signature.
@@ -32,109 +30,11 @@ pub const VERSION: u32 = 1;
 /// Size of every record.
 pub const RECORD: usize = 32;
 
-const T_VERTEX: u32 = 1;
-const T_TRIANGLE: u32 = 2;
-const T_DONE: u32 = 3;
-const T_WATERMARK: u32 = 4;
-const T_END: u32 = 5;
-
-fn record(tag: u32, a: [u8; 8], b: [u8; 8], c: [u8; 8]) -> [u8; RECORD] {
-    let mut r = [0u8; RECORD];
-    r[0..4].copy_from_slice(&tag.to_le_bytes());
-    r[8..16].copy_from_slice(&a);
-    r[16..24].copy_from_slice(&b);
-    r[24..32].copy_from_slice(&c);
-    r
-}
-
-/// A [`MeshSink`] writing the streaming mesh format.
-#[derive(Debug)]
-pub struct StinWriter {
-    state: SinkState,
-    out: Option<AtomicFile>,
-}
-
-impl StinWriter {
-    /// Starts writing `path`.
-    ///
-    /// # Errors
-    /// [`Error::Io`] naming `path` if the output cannot be created.
-    pub fn create(path: &Path, meta: &MeshMeta) -> Result<Self> {
-        let state = SinkState::new(path);
-        let mut out = AtomicFile::create(path)?;
-        let crs = meta.crs.clone().unwrap_or_default().into_bytes();
-        let mut head = Vec::with_capacity(32 + crs.len() + RECORD);
-        head.extend_from_slice(MAGIC);
-        head.extend_from_slice(&VERSION.to_le_bytes());
-        head.extend_from_slice(&(RECORD as u32).to_le_bytes());
-        head.extend_from_slice(&(crs.len() as u32).to_le_bytes());
-        head.extend_from_slice(&0u32.to_le_bytes());
-        head.extend_from_slice(&crs);
-        head.resize(head.len().div_ceil(RECORD) * RECORD, 0);
-        out.write_all(&head).map_err(|e| state.io(e))?;
-        Ok(StinWriter {
-            state,
-            out: Some(out),
-        })
-    }
-
-    fn put(&mut self, r: &[u8; RECORD]) -> Result<()> {
-        match self.out.as_mut() {
-            Some(out) => out.write_all(r).map_err(|e| self.state.io(e)),
-            None => Err(self.state.error("the mesh writer was already finished")),
-        }
-    }
-}
-
-impl MeshSink for StinWriter {
-    fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
-        self.state.vertex(p)?;
-        self.put(&record(
-            T_VERTEX,
-            p[0].to_le_bytes(),
-            p[1].to_le_bytes(),
-            p[2].to_le_bytes(),
-        ))
-    }
-
-    fn triangle(&mut self, t: [u64; 3]) -> Result<()> {
-        self.state.triangle(t, u64::MAX - 1)?;
-        self.put(&record(
-            T_TRIANGLE,
-            t[0].to_le_bytes(),
-            t[1].to_le_bytes(),
-            t[2].to_le_bytes(),
-        ))
-    }
-
-    fn vertex_done(&mut self, id: u64) -> Result<()> {
-        self.put(&record(T_DONE, id.to_le_bytes(), [0; 8], [0; 8]))
-    }
-
-    fn watermark(&mut self, y: f64) -> Result<()> {
-        self.put(&record(T_WATERMARK, y.to_le_bytes(), [0; 8], [0; 8]))
-    }
-
-    fn keeps_watermarks(&self) -> bool {
-        true
-    }
-
-    fn finish(&mut self) -> Result<MeshSummary> {
-        let end = record(
-            T_END,
-            self.state.vertices.to_le_bytes(),
-            self.state.triangles.to_le_bytes(),
-            [0; 8],
-        );
-        self.put(&end)?;
-        self.state.finish()?;
-        let Some(out) = self.out.take() else {
-            return Err(self.state.error("the mesh writer was already finished"));
-        };
-        let bytes = out.commit()?;
-        Ok(self.state.summary(bytes))
-    }
-}
+pub(crate) const T_VERTEX: u32 = 1;
+pub(crate) const T_TRIANGLE: u32 = 2;
+pub(crate) const T_DONE: u32 = 3;
+pub(crate) const T_WATERMARK: u32 = 4;
+pub(crate) const T_END: u32 = 5;
 
 /// One event read back from a streaming mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -307,6 +207,8 @@ impl StinReader {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::{MeshMeta, StinWriter};
+    use crate::sink::MeshSink;
 
     #[test]
     fn round_trip_and_truncation() {

@@ -489,7 +489,7 @@ fn ring_unit(k: u64, n: u64) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::predicates::{CircleSide, incircle_exact};
+    use crate::geom::predicates::{CircleSide, incircle_exact};
     use std::collections::HashSet;
 
     #[test]

@@ -165,13 +165,16 @@ impl Lines {
         Ok(())
     }
 
-    /// Cleans the polylines into a planar straight-line graph ([`super::clean::clean`]); errors
+    /// Cleans the polylines into a planar straight-line graph ([`crate::breaklines::clean::clean`]); errors
     /// name the file and feature of the offending polyline.
     ///
     /// # Errors
     /// [`Error::Format`] for a coordinate the predicates cannot handle exactly.
-    pub fn clean(&self, options: &super::CleanOptions) -> Result<super::Pslg> {
-        super::clean::clean(&self.polylines, options).map_err(|e| match e {
+    pub fn clean(
+        &self,
+        options: &crate::breaklines::CleanOptions,
+    ) -> Result<crate::breaklines::Pslg> {
+        crate::breaklines::clean::clean(&self.polylines, options).map_err(|e| match e {
             Error::BadLine {
                 polyline,
                 vertex,

@@ -46,7 +46,7 @@ pub fn read_xyz(path: impl AsRef<Path>) -> Result<Vec<[f64; 3]>> {
 ///
 /// ```no_run
 /// # fn main() -> sweeptin::Result<()> {
-/// let mut reader = sweeptin::io::xyz::XyzReader::open("points.xyz")?;
+/// let mut reader = sweeptin::input::xyz::XyzReader::open("points.xyz")?;
 /// let mut chunk = Vec::new();
 /// loop {
 ///     chunk.clear();

@@ -2,9 +2,9 @@
 
 use super::LidarPoint;
 use super::combine::{FileMap, FileQuant, Quantization, combine};
-use super::crs::Crs;
 use super::filter::{CompiledFilter, Filter, FilterStats, Verdict};
 use super::header::{Bounds3, FileInfo, format_error, inspect, las_message, laz_message};
+use crate::crs::Crs;
 use crate::error::{Error, Result};
 use std::fs::File;
 use std::io::{BufReader, Read};

@@ -15,8 +15,9 @@
 //! `property list uchar uint vertex_indices`.
 
 use super::atomic::AtomicFile;
-use super::sink::{MeshMeta, MeshSink, MeshSummary, SinkState};
+use super::mesh::{MeshMeta, SinkState};
 use crate::error::Result;
+use crate::sink::{MeshSink, MeshSummary};
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Seek, SeekFrom, Write};
 use std::path::Path;

@@ -5,7 +5,7 @@
 //! (rayon) and spilled as fixed-size little-endian records ([`SortRecord`], `#[repr(C)]`, 32 bytes)
 //! to an anonymous temporary file under the chosen directory (already unlinked: nothing is left
 //! behind even if the process is killed). At the end the runs are k-way merged,
-//! each read through a small sliding memory map ([`crate::mmap`]), so the merge's resident file
+//! each read through a small sliding memory map ([`crate::sort::mmap`]), so the merge's resident file
 //! pages stay at a few hundred KiB per run. When everything fits
 //! in one chunk, nothing is spilled. The merged order is a total order, so the result never
 //! depends on the memory budget or the thread count.
@@ -13,8 +13,8 @@
 //! [`Dedup`] then merges exact `(x, y)` duplicates by a [`DuplicatePolicy`].
 
 use crate::error::{Error, Result};
-use crate::mmap::MappedRecords;
-use crate::points::DuplicatePolicy;
+use crate::sort::memory::DuplicatePolicy;
+use crate::sort::mmap::MappedRecords;
 use rayon::slice::ParallelSliceMut;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;

@@ -1,72 +1,9 @@
-//! Push-style mesh output: the [`MeshSink`] trait every mesh writer implements, and
-//! [`create_mesh_sink`], which picks a writer by format.
+//! Mesh output formats, the metadata writers record, and [`create_mesh_sink`], which picks a
+//! writer by format.
 
 use crate::error::{Error, Result};
+use crate::sink::{MeshSink, MeshSummary};
 use std::path::{Path, PathBuf};
-
-/// A streaming mesh writer.
-///
-/// Vertices are numbered 0, 1, 2, … in the order they are pushed; a triangle refers only to
-/// vertices already pushed. Vertex and triangle calls may interleave (streaming). Nothing appears
-/// under the output path until [`finish`](MeshSink::finish) succeeds; dropping a sink without
-/// finishing leaves no file behind.
-pub trait MeshSink {
-    /// Appends a vertex `[x, y, z]`.
-    ///
-    /// # Errors
-    /// [`Error::Output`] for a non-finite coordinate or after `finish`; [`Error::Io`] if writing
-    /// fails.
-    fn vertex(&mut self, p: [f64; 3]) -> Result<()>;
-
-    /// Appends a triangle of vertex numbers (counter-clockwise in `x, y` by convention).
-    ///
-    /// # Errors
-    /// [`Error::Output`] if a vertex number has not been pushed yet, exceeds what the format can
-    /// store, or after `finish`; [`Error::Io`] if writing fails.
-    fn triangle(&mut self, t: [u64; 3]) -> Result<()>;
-
-    /// No later triangle refers to vertex `id`. Only the streaming-mesh format records this; other
-    /// writers ignore it.
-    ///
-    /// # Errors
-    /// As [`MeshSink::triangle`].
-    fn vertex_done(&mut self, _id: u64) -> Result<()> {
-        Ok(())
-    }
-
-    /// Later triangles normally lie at `y >= y` (see [`crate::pipeline::TriangleSink`]). Only the
-    /// streaming-mesh format records this; other writers ignore it.
-    ///
-    /// # Errors
-    /// As [`MeshSink::triangle`].
-    fn watermark(&mut self, _y: f64) -> Result<()> {
-        Ok(())
-    }
-
-    /// Does this format keep the watermarks (so that whoever reads it back relies on them, and
-    /// the sweep must run along y)? Only the streaming-mesh format does.
-    fn keeps_watermarks(&self) -> bool {
-        false
-    }
-
-    /// Writes everything out and renames into place; reports errors instead of hiding them in Drop.
-    ///
-    /// # Errors
-    /// [`Error::Io`] naming the output if writing, syncing or renaming fails; [`Error::Output`] if
-    /// called twice.
-    fn finish(&mut self) -> Result<MeshSummary>;
-}
-
-/// What a finished [`MeshSink`] wrote.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct MeshSummary {
-    /// Vertices written.
-    pub vertices: u64,
-    /// Triangles written.
-    pub triangles: u64,
-    /// Size of the output file in bytes.
-    pub bytes: u64,
-}
 
 /// Metadata a writer records where its format allows: PLY `comment` lines, OBJ `#` lines,
 /// LandXML `<CoordinateSystem>` and XML comments.
@@ -178,7 +115,7 @@ pub fn create_mesh_sink(
         }
     };
     Ok(match format {
-        MeshFormat::Ply => Box::new(super::ply_write::PlyWriter::create(path, meta)?),
+        MeshFormat::Ply => Box::new(super::ply::PlyWriter::create(path, meta)?),
         MeshFormat::Obj => Box::new(super::obj::ObjWriter::create(path, meta)?),
         MeshFormat::LandXml => Box::new(super::landxml::LandXmlWriter::create(path, meta)?),
         MeshFormat::Stream => Box::new(super::stin::StinWriter::create(path, meta)?),

@@ -6,8 +6,9 @@
 //! The metadata goes into `#` comment lines at the top.
 
 use super::atomic::AtomicFile;
-use super::sink::{MeshMeta, MeshSink, MeshSummary, SinkState};
+use super::mesh::{MeshMeta, SinkState};
 use crate::error::Result;
+use crate::sink::{MeshSink, MeshSummary};
 use std::io::Write;
 use std::path::Path;
 

@@ -6,7 +6,7 @@
 //! The result depends only on the input, never on the thread count.
 
 use crate::error::{Error, Result};
-use crate::predicates::{self, FIRST_REAL};
+use crate::geom::predicates::{self, FIRST_REAL};
 
 /// Which point survives when several share exactly the same `(x, y)`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]

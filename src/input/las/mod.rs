@@ -7,7 +7,7 @@
 //! given, points in file order, counting every point read (filtered points leave gaps).
 //!
 //! ```no_run
-//! use sweeptin::lidar::{Filter, LidarReader};
+//! use sweeptin::input::las::{Filter, LidarReader};
 //!
 //! let filter = Filter { classes: Some(vec![2]), ..Filter::default() };
 //! let mut reader = LidarReader::open(&["a.laz", "b.laz"], &filter)?;
@@ -42,13 +42,13 @@
 //! [`crate::Error::Format`] naming the file, never a panic.
 
 pub mod combine;
-pub mod crs;
+
 pub mod filter;
 pub mod header;
 mod reader;
 
+pub use crate::crs::{Crs, HorizontalKind};
 pub use combine::Quantization;
-pub use crs::{Crs, HorizontalKind};
 pub use filter::{BBox, Filter, FilterStats, Returns, parse_classes};
 pub use header::{Bounds3, FileInfo};
 pub use reader::{LidarReader, ReadOptions};

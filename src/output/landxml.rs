@@ -27,8 +27,9 @@
 //! away. Memory use is bounded by the I/O buffers.
 
 use super::atomic::AtomicFile;
-use super::sink::{MeshMeta, MeshSink, MeshSummary, SinkState, one_line};
+use super::mesh::{MeshMeta, SinkState, one_line};
 use crate::error::Result;
+use crate::sink::{MeshSink, MeshSummary};
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::Path;

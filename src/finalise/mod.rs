@@ -9,14 +9,14 @@
 //! no point exists or will arrive left or right of it below the sweep line). Then:
 //! * no later point can be inside the circle (later points are on or above the sweep line, the disk is
 //!   strictly below the front, which never rises above the sweep line; a later point exactly on the
-//!   circle counts as outside under the tie-breaking rule of [`crate::predicates`]);
+//!   circle counts as outside under the tie-breaking rule of [`crate::geom::predicates`]);
 //! * no current point is inside either: the disk lies in the triangulated region, so every point in it
 //!   is visible from the triangle, and the triangulation of the region is (constrained) Delaunay.
 //!
 //! "The circumcircle is entirely below the sweep line" is *not* enough: a circle can reach across a
 //! basin of the front, above the triangulated region, to a vertex on the basin's other side.
 //!
-//! The disk is bounded conservatively ([`crate::predicates::circumdisk_bounds`]): floating-point
+//! The disk is bounded conservatively ([`crate::geom::predicates::circumdisk_bounds`]): floating-point
 //! error only ever enlarges it, so it can delay a finalisation, never hasten one.
 //!
 //! # Scheduling
@@ -33,10 +33,10 @@
 //! first triangle that uses it and released ([`Event::VertexDone`]) after its last one, so a consumer
 //! also needs only bounded memory. The event order depends only on the input.
 
-use super::Sweep;
-use super::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, NO_NODE, VertexId};
 use crate::error::{Error, Result};
-use crate::predicates::{self, FIRST_REAL, is_artificial};
+use crate::geom::predicates::{self, FIRST_REAL, is_artificial};
+use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, NO_NODE, VertexId};
+use crate::sweep::Sweep;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -49,7 +49,7 @@ pub struct StreamPoint {
     pub z: f64,
     /// Index of the point in the input.
     pub index: u64,
-    /// The breakline vertex this point is, or [`super::NO_CONSTRAINT`].
+    /// The breakline vertex this point is, or [`crate::sweep::NO_CONSTRAINT`].
     pub constraint: u32,
 }
 
@@ -416,9 +416,9 @@ impl Sweep {
         let pts = vec![[f64::NAN; 2], [f64::NAN; 2], first.xy];
         let [x0, _, x1, _] = cfg.bounds;
         let xmap = if cfg.x_sample.is_empty() {
-            super::front::XMap::linear(x0, x1)
+            crate::sweep::front::XMap::linear(x0, x1)
         } else {
-            super::front::XMap::from_sample(cfg.x_sample.clone())
+            crate::sweep::front::XMap::from_sample(cfg.x_sample.clone())
         };
         Self::start(pts, Mesh::with_capacity(1024), xmap, Some(fin))
     }
@@ -464,7 +464,7 @@ impl Sweep {
         fin.live_vertices += 1;
         fin.stats.peak_live_vertices = fin.stats.peak_live_vertices.max(fin.live_vertices);
         let n = self.insert(VertexId(v));
-        if p.constraint != super::NO_CONSTRAINT {
+        if p.constraint != crate::sweep::NO_CONSTRAINT {
             self.constraint_vertex(VertexId(v), n, p.constraint);
         }
         Ok(())

@@ -20,9 +20,10 @@
 //! by row, into the output. Values are written in the shortest form that reads back as the same
 //! `f32`. The output appears under its final name only when complete.
 
-use super::grid::{GridSpec, GridWriter, check_cell};
+use super::raster::{GridWriter, check_cell};
 use crate::error::{Error, Result};
-use crate::io::AtomicFile;
+use crate::output::AtomicFile;
+use crate::raster::GridSpec;
 use std::fs::File;
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};

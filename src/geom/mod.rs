@@ -1,0 +1,5 @@
+//! Geometry every stage shares: the exact predicates (the only place orientation and in-circle
+//! decisions are made) and a uniform grid index for segments and points.
+
+pub(crate) mod grid;
+pub mod predicates;

@@ -1,0 +1,16 @@
+//! Reading what users give: point clouds ([`las`]: LAS/LAZ; [`xyz`]: text), lines and polygons
+//! ([`lines`]: breaklines as GeoJSON or text; [`geojson`]: polygons and lines for the products),
+//! rasters ([`raster`]: GeoTIFF, ESRI ASCII, for grid-to-TIN), and meshes ([`ply`]; [`stin`]:
+//! sweeptin's streaming mesh, read back with bounded memory).
+
+pub mod geojson;
+pub mod las;
+pub mod lines;
+pub mod ply;
+pub mod raster;
+pub mod stin;
+pub mod xyz;
+
+pub use ply::read_ply;
+pub use stin::{StinEvent, StinReader};
+pub use xyz::{XyzReader, read_xyz};

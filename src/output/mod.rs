@@ -1,0 +1,48 @@
+//! Writing results, each output appearing only when complete ([`AtomicFile`]).
+//!
+//! - [`mesh`]: mesh formats and [`create_mesh_sink`], which picks a writer: [`PlyWriter`] (binary
+//!   PLY), [`ObjWriter`] (Wavefront OBJ), [`LandXmlWriter`] (LandXML 1.2), [`StinWriter`]
+//!   (sweeptin's streaming mesh). No writer holds the mesh in memory.
+//! - [`raster`]: the [`GridWriter`] row store and [`create_grid_writer`]: [`geotiff`] (float32
+//!   GeoTIFF) and [`ascii`] (ESRI ASCII grid).
+//! - [`geojson`]: a streaming GeoJSON feature writer.
+//! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C
+//!   ([`install_interrupt_handler`]).
+//!
+//! ```
+//! use sweeptin::output::{create_mesh_sink, MeshMeta};
+//! use sweeptin::input::read_ply;
+//!
+//! let dir = tempfile::tempdir().unwrap();
+//! let path = dir.path().join("tin.ply");
+//! let mut sink = create_mesh_sink(&path, None, &MeshMeta::default()).unwrap();
+//! sink.vertex([0.0, 0.0, 1.0]).unwrap();
+//! sink.vertex([1.0, 0.0, 2.0]).unwrap();
+//! sink.vertex([0.0, 1.0, 3.0]).unwrap();
+//! sink.triangle([0, 1, 2]).unwrap();
+//! let summary = sink.finish().unwrap();
+//! assert_eq!((summary.vertices, summary.triangles), (3, 1));
+//!
+//! let (vertices, triangles) = read_ply(&path).unwrap();
+//! assert_eq!(vertices[2], [0.0, 1.0, 3.0]);
+//! assert_eq!(triangles, vec![[0, 1, 2]]);
+//! ```
+
+pub mod ascii;
+pub mod atomic;
+pub mod geojson;
+pub mod geotiff;
+pub mod landxml;
+pub mod mesh;
+pub mod obj;
+pub mod ply;
+pub mod raster;
+pub mod stin;
+
+pub use atomic::{AtomicFile, RegisteredTempDir, install_interrupt_handler};
+pub use landxml::LandXmlWriter;
+pub use mesh::{MeshFormat, MeshMeta, create_mesh_sink};
+pub use obj::ObjWriter;
+pub use ply::PlyWriter;
+pub use raster::{GridWriter, RasterFormat, create_grid_writer};
+pub use stin::StinWriter;

@@ -1,0 +1,9 @@
+//! Putting points in sweep order: in memory ([`memory`]: validation, exact local origin, bucket
+//! sort, duplicate policy) or out of core ([`external`]: chunks sorted with rayon, spilled, merged
+//! through sliding memory maps ([`mmap`]), duplicates merged).
+
+pub mod external;
+pub mod memory;
+pub mod mmap;
+
+pub use memory::DuplicatePolicy;
