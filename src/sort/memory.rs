@@ -6,6 +6,7 @@
 //! The result depends only on the input, never on the thread count.
 
 use crate::error::{Error, Result};
+use crate::geom::exact::exact_diff;
 use crate::geom::predicates::{self, FIRST_REAL};
 
 /// Which point survives when several share exactly the same `(x, y)`.
@@ -127,15 +128,6 @@ fn choose_origin(points: &[[f64; 3]]) -> Result<([f64; 2], (f64, f64))> {
         .iter()
         .all(|p| exact_diff(p[0], lo[0]) && exact_diff(p[1], lo[1]));
     Ok((if exact { lo } else { [0.0; 2] }, (lo[1], hi_y)))
-}
-
-/// Is `a - b` exactly representable (TwoSum error term zero)?
-#[inline]
-fn exact_diff(a: f64, b: f64) -> bool {
-    let s = a - b;
-    let bv = s - a;
-    let av = s - bv;
-    (a - av) + (-b - bv) == 0.0
 }
 
 /// Moves the points into the local frame (checking the range) and sorts them into sweep order:

@@ -64,6 +64,7 @@
 //! first offending item in index order, so messages are deterministic.
 
 use crate::error::{Error, Result};
+use crate::geom::exact::exact_diff;
 use crate::geom::predicates::{self, CircleSide, Orientation, incircle_exact, orient};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering as AtomicOrdering};
@@ -670,15 +671,6 @@ fn local_frame(vertices: &[[f64; 3]]) -> Result<Vec<[f64; 2]>> {
         )));
     }
     Ok(xy)
-}
-
-/// Is `a - b` exactly representable?
-#[inline]
-fn exact_diff(a: f64, b: f64) -> bool {
-    let s = a - b;
-    let bv = s - a;
-    let av = s - bv;
-    (a - av) + (-b - bv) == 0.0
 }
 
 /// Sorted, deduplicated undirected keys of the constraints.
