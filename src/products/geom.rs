@@ -302,26 +302,6 @@ impl ExactSum {
     }
 }
 
-/// A small deterministic random generator (SplitMix64) for tests, benchmarks and examples.
-#[derive(Clone, Debug)]
-pub struct SplitMix(pub u64);
-
-impl SplitMix {
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)`.
-    pub fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -429,7 +409,7 @@ mod tests {
 
     #[test]
     fn exact_sum_is_order_independent() {
-        let mut r = SplitMix(7);
+        let mut r = crate::geom::rng::SplitMix64::new(7);
         let xs: Vec<f64> = (0..1000)
             .map(|_| (r.next_f64() - 0.5) * 10f64.powi((r.next_u64() % 30) as i32 - 15))
             .collect();

@@ -406,7 +406,7 @@ mod tests {
         let f = |x: f64, y: f64| 0.5 * x + 0.25 * y - 3.0;
         let tris = random_tin(300, 100.0, 11, f);
         let mut text = String::from("# points\nx,y,name\n");
-        let mut r = crate::products::geom::SplitMix(3);
+        let mut r = crate::geom::rng::SplitMix64::new(3);
         let mut pts = Vec::new();
         for i in 0..200 {
             let (x, y) = (r.next_f64() * 120.0 - 10.0, r.next_f64() * 100.0);

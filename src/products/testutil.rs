@@ -1,7 +1,7 @@
 //! Test helpers: small TINs, and feeding them to a sink in sweep order or shuffled with late
 //! triangles (the two orders every product must treat alike).
 
-use super::geom::SplitMix;
+use crate::geom::rng::SplitMix64;
 use crate::sink::{StreamInfo, TriangleSink};
 use std::path::Path;
 
@@ -32,7 +32,7 @@ pub fn random_tin(
     seed: u64,
     f: impl Fn(f64, f64) -> f64,
 ) -> Vec<[[f64; 3]; 3]> {
-    let mut r = SplitMix(seed);
+    let mut r = SplitMix64::new(seed);
     let mut pts: Vec<[f64; 3]> = [[0.0, 0.0], [size, 0.0], [0.0, size], [size, size]]
         .iter()
         .map(|&[x, y]| [x, y, f(x, y)])
@@ -56,7 +56,7 @@ pub fn random_tin_framed(
     seed: u64,
     f: impl Fn(f64, f64) -> f64,
 ) -> Vec<[[f64; 3]; 3]> {
-    let mut r = SplitMix(seed);
+    let mut r = SplitMix64::new(seed);
     let mut pts = Vec::new();
     let steps = size as usize;
     for i in 0..steps {
@@ -116,7 +116,7 @@ pub fn in_sweep_order(tris: &[[[f64; 3]; 3]]) -> Vec<Step> {
 /// Sweep order disturbed: vertices rotated at random, neighbours swapped, and about one triangle
 /// in eight held back and delivered late, after watermarks above it.
 pub fn shuffled_with_watermarks(tris: &[[[f64; 3]; 3]], seed: u64) -> Vec<Step> {
-    let mut r = SplitMix(seed);
+    let mut r = SplitMix64::new(seed);
     let mut v = tris.to_vec();
     v.sort_by(|a, b| ymax(a).total_cmp(&ymax(b)));
     for t in &mut v {

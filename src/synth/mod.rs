@@ -1,7 +1,7 @@
 //! Deterministic synthetic point sets for tests, benchmarks and scripts.
 //!
 //! Every generator is a pure function of its arguments: the same call gives bit-identical points
-//! on every machine (the PRNG is [`SplitMix64`], implemented here, and only IEEE-exact operations
+//! on every machine (the PRNG is [`SplitMix64`], the crate's own, and only IEEE-exact operations
 //! plus `sin`/`cos`/`ln`/`sqrt` are used; the transcendental functions only shape values that are
 //! then rounded to a grid or used as they are, never compared across platforms in tests).
 //!
@@ -19,58 +19,8 @@
 use std::f64::consts::{PI, TAU};
 
 pub mod lines;
+pub use crate::geom::rng::SplitMix64;
 pub use lines::{coastline, coastline_points, contour_points, contours};
-
-/// SplitMix64 (Steele, Lea & Flood 2014): a tiny, fast, statistically good 64-bit generator.
-///
-/// Used instead of a crate so that the synthetic data can never change under a dependency update.
-#[derive(Clone, Debug)]
-pub struct SplitMix64 {
-    state: u64,
-}
-
-impl SplitMix64 {
-    /// A generator seeded with `seed` (any value, zero included).
-    pub fn new(seed: u64) -> Self {
-        SplitMix64 { state: seed }
-    }
-
-    /// The next 64 random bits.
-    #[inline]
-    pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)` with 53 random bits.
-    #[inline]
-    pub fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Uniform in `[lo, hi)`.
-    #[inline]
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next_f64()
-    }
-
-    /// Uniform integer in `0..n` (`n > 0`; the tiny modulo bias is irrelevant here).
-    #[inline]
-    pub fn below(&mut self, n: u64) -> u64 {
-        ((self.next_u64() as u128 * n as u128) >> 64) as u64
-    }
-
-    /// Standard normal deviate (Box–Muller, one value per call).
-    pub fn normal(&mut self) -> f64 {
-        // 1 - u is in (0, 1], so the logarithm is finite.
-        let u = 1.0 - self.next_f64();
-        let v = self.next_f64();
-        (-2.0 * u.ln()).sqrt() * (TAU * v).cos()
-    }
-}
 
 /// Side of the square of [`uniform`] and of the background of [`clustered`], in metres.
 pub const SQUARE: f64 = 1000.0;
@@ -528,20 +478,6 @@ mod tests {
                     assert_ne!(a, f(n, 43), "{name}: the seed matters");
                 }
             }
-        }
-    }
-
-    #[test]
-    fn splitmix_known_values() {
-        // Reference values of SplitMix64 seeded with 0 (as in Vigna's splitmix64.c).
-        let mut r = SplitMix64::new(0);
-        assert_eq!(r.next_u64(), 0xE220_A839_7B1D_CDAF);
-        assert_eq!(r.next_u64(), 0x6E78_9E6A_A1B9_65F4);
-        let mut r = SplitMix64::new(7);
-        for _ in 0..1000 {
-            let v = r.next_f64();
-            assert!((0.0..1.0).contains(&v));
-            assert!(r.below(10) < 10);
         }
     }
 

@@ -4,6 +4,7 @@
 
 use super::{Tin, VertexId};
 use crate::error::Result;
+use crate::geom::rng::SplitMix64;
 
 /// What [`Tin::leave_one_out`] measured.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -33,10 +34,10 @@ impl Tin {
     /// restored (a bug).
     pub fn leave_one_out(&mut self, samples: usize, seed: u64) -> Result<CrossValidation> {
         let mut ids: Vec<VertexId> = self.vertices().collect();
-        let mut rng = seed;
+        let mut rng = SplitMix64::new(seed);
         let n = samples.min(ids.len());
         for i in 0..n {
-            let j = i + (splitmix(&mut rng) % (ids.len() - i) as u64) as usize;
+            let j = i + (rng.next_u64() % (ids.len() - i) as u64) as usize;
             ids.swap(i, j);
         }
         let mut out = CrossValidation::default();
@@ -73,12 +74,4 @@ impl Tin {
         }
         Ok(out)
     }
-}
-
-fn splitmix(state: &mut u64) -> u64 {
-    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
 }

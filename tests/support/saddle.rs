@@ -7,10 +7,11 @@
 //! Shared by `tests/products_accuracy.rs` and `examples/saddle_accuracy.rs`.
 
 use std::f64::consts::PI;
-use sweeptin::products::geom::{Location, SplitMix, Tri};
+use sweeptin::products::geom::{Location, Tri};
 use sweeptin::products::overlay::{BandStore, OverlaySink};
 use sweeptin::products::volume::VolumeSink;
 use sweeptin::sink::{StreamInfo, TriangleSink};
+use sweeptin::synth::SplitMix64;
 
 /// The thesis's reference surface.
 pub fn saddle(x: f64, y: f64) -> f64 {
@@ -31,7 +32,7 @@ pub fn points(n: usize, seed: u64, f: fn(f64, f64) -> f64) -> Vec<[f64; 3]> {
             pts.push([x, y, f(x, y)]);
         }
     }
-    let mut r = SplitMix(seed);
+    let mut r = SplitMix64::new(seed);
     while pts.len() < n {
         let (x, y) = (r.next_f64() * 100.0, r.next_f64() * 100.0);
         pts.push([x, y, f(x, y)]);
@@ -93,7 +94,7 @@ pub fn interpolation_error(tris: &[[[f64; 3]; 3]], count: usize, seed: u64) -> (
             }
         }
     }
-    let mut r = SplitMix(seed);
+    let mut r = SplitMix64::new(seed);
     let (mut sum, mut max) = (0.0, 0.0f64);
     for _ in 0..count {
         let p = [r.next_f64() * 100.0, r.next_f64() * 100.0];
