@@ -52,10 +52,7 @@ impl AsciiGridWriter {
                 ),
             });
         }
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
+        let dir = super::atomic::parent_dir(path);
         let scratch = tempfile::tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
         Ok(AsciiGridWriter {
             path: path.to_path_buf(),

@@ -26,12 +26,12 @@
 //! temporary file and appended at [`finish`](MeshSink::finish); vertices are written straight
 //! away. Memory use is bounded by the I/O buffers.
 
-use super::atomic::AtomicFile;
-use super::mesh::{MeshMeta, SinkState, one_line};
+use super::atomic::{AtomicFile, parent_dir};
+use super::mesh::{MeshMeta, SinkState, SpooledOutput, one_line, rewind_spool};
 use crate::error::Result;
 use crate::sink::{MeshSink, MeshSummary};
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{BufWriter, Read, Write};
 use std::path::Path;
 
 /// A [`MeshSink`] writing a LandXML 1.2 TIN surface.
@@ -50,11 +50,7 @@ impl LandXmlWriter {
     /// # Errors
     /// [`crate::Error::Io`] naming `path` if the output or the spool file cannot be created.
     pub fn create(path: &Path, meta: &MeshMeta) -> Result<Self> {
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        Self::create_with_spool_dir(path, meta, dir)
+        Self::create_with_spool_dir(path, meta, parent_dir(path))
     }
 
     /// Like [`create`](Self::create), with the face spool file in `spool_dir`.
@@ -62,9 +58,11 @@ impl LandXmlWriter {
     /// # Errors
     /// [`crate::Error::Io`] if the output or the spool file cannot be created.
     pub fn create_with_spool_dir(path: &Path, meta: &MeshMeta, spool_dir: &Path) -> Result<Self> {
-        let state = SinkState::new(path);
-        let mut out = AtomicFile::create(path)?;
-        let spool = tempfile::tempfile_in(spool_dir).map_err(|e| state.io(e))?;
+        let SpooledOutput {
+            state,
+            mut out,
+            faces,
+        } = SpooledOutput::create(path, spool_dir)?;
         let name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -74,7 +72,7 @@ impl LandXmlWriter {
         Ok(LandXmlWriter {
             state,
             out: Some(out),
-            faces: Some(BufWriter::with_capacity(1 << 20, spool)),
+            faces: Some(faces),
             line: Vec::with_capacity(128),
         })
     }
@@ -84,11 +82,9 @@ impl LandXmlWriter {
         let (Some(mut out), Some(faces)) = (self.out.take(), self.faces.take()) else {
             return Err(self.state.error("the mesh writer was already finished"));
         };
+        let mut reader = rewind_spool(&self.state, faces)?;
         let io = |e| self.state.io(e);
-        let mut spool = faces.into_inner().map_err(|e| io(e.into_error()))?;
-        spool.seek(SeekFrom::Start(0)).map_err(io)?;
         out.write_all(b"</Pnts>\n<Faces>\n").map_err(io)?;
-        let mut reader = BufReader::with_capacity(1 << 20, spool);
         let mut rec = [0u8; 24];
         let mut digits = itoa::Buffer::new();
         for _ in 0..self.state.triangles {

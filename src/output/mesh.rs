@@ -1,8 +1,11 @@
 //! Mesh output formats, the metadata writers record, and [`create_mesh_sink`], which picks a
 //! writer by format.
 
+use super::atomic::AtomicFile;
 use crate::error::{Error, Result};
 use crate::sink::{MeshSink, MeshSummary};
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 /// Metadata a writer records where its format allows: PLY `comment` lines, OBJ `#` lines,
@@ -120,6 +123,47 @@ pub fn create_mesh_sink(
         MeshFormat::LandXml => Box::new(super::landxml::LandXmlWriter::create(path, meta)?),
         MeshFormat::Stream => Box::new(super::stin::StinWriter::create(path, meta)?),
     })
+}
+
+/// Size of the I/O buffers of a face spool.
+const SPOOL_BUFFER: usize = 1 << 20;
+
+/// What a writer opens when its format lists every face after every vertex (PLY, LandXML): the
+/// output, which takes the vertices as they come, and an anonymous spool file where the encoded
+/// faces wait for [`rewind_spool`].
+#[derive(Debug)]
+pub(crate) struct SpooledOutput {
+    pub state: SinkState,
+    pub out: AtomicFile,
+    pub faces: BufWriter<File>,
+}
+
+impl SpooledOutput {
+    /// Starts writing `path`, with the face spool in `spool_dir` (writers default to the output's
+    /// own directory, [`super::atomic::parent_dir`]).
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming `path` if the output or the spool file cannot be created.
+    pub fn create(path: &Path, spool_dir: &Path) -> Result<Self> {
+        let state = SinkState::new(path);
+        let out = AtomicFile::create(path)?;
+        let spool = tempfile::tempfile_in(spool_dir).map_err(|e| state.io(e))?;
+        Ok(SpooledOutput {
+            state,
+            out,
+            faces: BufWriter::with_capacity(SPOOL_BUFFER, spool),
+        })
+    }
+}
+
+/// The faces spooled by a [`SpooledOutput`], flushed and rewound for reading back.
+///
+/// # Errors
+/// [`Error::Io`] naming the output.
+pub(crate) fn rewind_spool(state: &SinkState, faces: BufWriter<File>) -> Result<BufReader<File>> {
+    let mut spool = faces.into_inner().map_err(|e| state.io(e.into_error()))?;
+    spool.seek(SeekFrom::Start(0)).map_err(|e| state.io(e))?;
+    Ok(BufReader::with_capacity(SPOOL_BUFFER, spool))
 }
 
 /// Bookkeeping shared by the writers: counts, the contract checks, and the finished state.

@@ -14,12 +14,12 @@
 //! Layout: `element vertex N` with `property double x`, `y`, `z`; `element face M` with
 //! `property list uchar uint vertex_indices`.
 
-use super::atomic::AtomicFile;
-use super::mesh::{MeshMeta, SinkState};
+use super::atomic::{AtomicFile, parent_dir};
+use super::mesh::{MeshMeta, SinkState, SpooledOutput, rewind_spool};
 use crate::error::Result;
 use crate::sink::{MeshSink, MeshSummary};
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Seek, SeekFrom, Write};
+use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::Path;
 
 /// Width reserved for the two counts together, in decimal digits (20 digits each fits any `u64`).
@@ -44,11 +44,7 @@ impl PlyWriter {
     /// # Errors
     /// [`crate::Error::Io`] naming `path` if the output or the spool file cannot be created.
     pub fn create(path: &Path, meta: &MeshMeta) -> Result<Self> {
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        Self::create_with_spool_dir(path, meta, dir)
+        Self::create_with_spool_dir(path, meta, parent_dir(path))
     }
 
     /// Like [`create`](Self::create), with the face spool file in `spool_dir`.
@@ -56,9 +52,11 @@ impl PlyWriter {
     /// # Errors
     /// [`crate::Error::Io`] if the output or the spool file cannot be created.
     pub fn create_with_spool_dir(path: &Path, meta: &MeshMeta, spool_dir: &Path) -> Result<Self> {
-        let state = SinkState::new(path);
-        let mut out = AtomicFile::create(path)?;
-        let spool = tempfile::tempfile_in(spool_dir).map_err(|e| state.io(e))?;
+        let SpooledOutput {
+            state,
+            mut out,
+            faces,
+        } = SpooledOutput::create(path, spool_dir)?;
         let comments = meta.comment_lines();
         let header = header(&comments, 0, 0);
         out.write_all(header.as_bytes()).map_err(|e| state.io(e))?;
@@ -66,7 +64,7 @@ impl PlyWriter {
             state,
             comments,
             out: Some(out),
-            faces: Some(BufWriter::with_capacity(1 << 20, spool)),
+            faces: Some(faces),
             header_len: header.len(),
         })
     }
@@ -76,9 +74,8 @@ impl PlyWriter {
         let (Some(mut out), Some(faces)) = (self.out.take(), self.faces.take()) else {
             return Err(self.state.error("the mesh writer was already finished"));
         };
+        let mut spool = rewind_spool(&self.state, faces)?;
         let io = |e| self.state.io(e);
-        let mut spool = faces.into_inner().map_err(|e| io(e.into_error()))?;
-        spool.seek(SeekFrom::Start(0)).map_err(io)?;
         let header = header(&self.comments, self.state.vertices, self.state.triangles);
         if header.len() != self.header_len {
             return Err(crate::Error::Internal(format!(
@@ -90,8 +87,7 @@ impl PlyWriter {
         out.seek(SeekFrom::Start(0)).map_err(io)?;
         out.write_all(header.as_bytes()).map_err(io)?;
         out.seek(SeekFrom::End(0)).map_err(io)?;
-        let copied =
-            std::io::copy(&mut BufReader::with_capacity(1 << 20, spool), &mut out).map_err(io)?;
+        let copied = std::io::copy(&mut spool, &mut out).map_err(io)?;
         if copied != self.state.triangles * FACE_BYTES as u64 {
             return Err(crate::Error::Internal(format!(
                 "PLY face spool holds {copied} bytes for {} faces",
