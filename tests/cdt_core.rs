@@ -206,8 +206,9 @@ fn overlapping(s: &sweeptin::sweep::Sweep) -> Option<(u32, u32)> {
     let m = s.mesh();
     let p = s.points();
     let tris: Vec<(u32, [u32; 3])> = (0..m.triangle_count() as u32)
+        .map(sweeptin::mesh::TriId)
         .filter(|&t| m.is_live(t))
-        .map(|t| (t, m.tri_vertices(t).map(|v| v.0)))
+        .map(|t| (t.0, m.tri_vertices(t).map(|v| v.0)))
         .filter(|(_, v)| v.iter().all(|&x| x >= 2))
         .collect();
     let sep = |a: &[u32; 3], b: &[u32; 3]| {

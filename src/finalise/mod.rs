@@ -35,7 +35,7 @@
 
 use crate::error::{Error, Result};
 use crate::geom::predicates::{self, FIRST_REAL, is_artificial};
-use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, NO_NODE, VertexId};
+use crate::mesh::{Across, EdgeId, Mesh, TriId, VertexId};
 use crate::sweep::Sweep;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -543,7 +543,7 @@ impl Sweep {
         self.fin.as_mut().expect("streaming").ending = true;
         let slots = self.mesh.triangle_count() as u32;
         for t in 0..slots {
-            if self.mesh.is_live(t) && !self.has_artificial(t) {
+            if self.mesh.is_live(TriId(t)) && !self.has_artificial(t) {
                 self.finalize(t);
             }
         }
@@ -558,7 +558,10 @@ impl Sweep {
 
     #[inline]
     fn has_artificial(&self, t: u32) -> bool {
-        self.mesh.tri_vertices(t).iter().any(|v| is_artificial(v.0))
+        self.mesh
+            .tri_vertices(TriId(t))
+            .iter()
+            .any(|v| is_artificial(v.0))
     }
 
     /// Processes every queue bucket the sweep line (now at `y`) has passed.
@@ -589,7 +592,7 @@ impl Sweep {
             Self::pull_far(fin);
             for &t in &list {
                 let fin = self.fin.as_ref().expect("streaming");
-                if fin.due[t as usize] == bucket && self.mesh.is_live(t) {
+                if fin.due[t as usize] == bucket && self.mesh.is_live(TriId(t)) {
                     self.check_final(t, y, ks);
                 }
             }
@@ -618,7 +621,7 @@ impl Sweep {
 
     /// Finalises triangle slot `t` if its circumdisk is under the front; otherwise re-schedules it.
     fn check_final(&mut self, t: u32, y: f64, ks: u64) {
-        let [a, b, c] = self.mesh.tri_vertices(t);
+        let [a, b, c] = self.mesh.tri_vertices(TriId(t));
         let fin = self.fin.as_mut().expect("streaming");
         if is_artificial(a.0) || is_artificial(b.0) || is_artificial(c.0) {
             fin.schedule(t, ks + PARKED);
@@ -662,17 +665,14 @@ impl Sweep {
         for k in 0..3 {
             let e = EdgeId(3 * t + k);
             match self.mesh.across(e) {
-                Across::Twin(f) => {
-                    let w = &mut self.mesh.link[f.idx()];
-                    *w = BOUNDARY | NO_NODE | (*w & CONSTRAINED);
-                }
+                Across::Twin(f) => self.mesh.detach(f),
                 // During the sweep a final triangle is never under the front; at the end the
                 // front is the upper hull.
                 Across::Front(_) => debug_assert!(self.fin.as_ref().is_some_and(|f| f.ending)),
                 Across::Hull => {}
             }
         }
-        let tri = self.mesh.tri_vertices(t);
+        let tri = self.mesh.tri_vertices(TriId(t));
         let fin = self.fin.as_mut().expect("streaming");
         let mut ids = [0u64; 3];
         for (k, v) in tri.iter().enumerate() {
@@ -700,7 +700,7 @@ impl Sweep {
             }
         }
         fin.live_triangles -= 1;
-        self.mesh.free_triangle(t);
+        self.mesh.free_triangle(TriId(t));
         fin.free_triangles.push(t);
     }
 }

@@ -65,9 +65,9 @@ impl Prepared {
     }
 }
 
-/// Largest number of points the in-memory core accepts (ids are `u32` and half-edge ids use
-/// 30 bits: at most `2^30 / 6` points).
-pub const MAX_POINTS: u64 = (1 << 30) / 6 - 4;
+/// Largest number of points the in-memory core accepts (half-edge ids use 30 bits: see
+/// [`crate::mesh::MAX_VERTICES`]).
+pub const MAX_POINTS: u64 = crate::mesh::MAX_VERTICES;
 
 #[derive(Clone, Copy)]
 struct Rec {

@@ -3,7 +3,7 @@
 
 use super::Sweep;
 use crate::geom::predicates::{CircleSide, incircle_ids};
-use crate::mesh::{Across, EdgeId};
+use crate::mesh::{Across, EdgeId, TriId};
 
 impl Sweep {
     /// Verifies the sweep's invariants and returns the first violation found:
@@ -24,10 +24,10 @@ impl Sweep {
         let m = &self.mesh;
         let mut hull_edges = 0;
         for t in 0..m.triangle_count() as u32 {
-            if !m.is_live(t) {
+            if !m.is_live(TriId(t)) {
                 continue;
             }
-            let [a, b, c] = m.tri_vertices(t);
+            let [a, b, c] = m.tri_vertices(TriId(t));
             if !self.orient(a, b, c).is_ccw() {
                 return Err(format!(
                     "triangle {t} ({a:?}, {b:?}, {c:?}) is not counter-clockwise"

@@ -25,7 +25,7 @@
 use super::Sweep;
 use super::front::NodeId;
 use crate::geom::predicates::{CircleSide, Orientation, incircle_ids, is_artificial, sweep_cmp};
-use crate::mesh::{Across, CONSTRAINED, EdgeId, VertexId};
+use crate::mesh::{Across, CONSTRAINED, EdgeId, TriId, VertexId};
 use std::cmp::Ordering;
 
 /// Constraint segments, by constraint vertex (a vertex of the cleaned breakline graph).
@@ -301,7 +301,7 @@ impl Sweep {
             pieces += 1;
             match self.start_towards(cur, t, e) {
                 Start::Along(f) => {
-                    self.mark_constrained(f);
+                    self.mesh.constrain(f);
                     let (from, to) = (self.mesh.org(f), self.mesh.dst(f));
                     let next = if from == cur { to } else { from };
                     if pieces == 1 && next == t {
@@ -333,14 +333,6 @@ impl Sweep {
         }
         self.cstats.splits += u64::from(pieces - 1);
         pieces
-    }
-
-    /// Marks both half-edges of the edge at `f` constrained.
-    fn mark_constrained(&mut self, f: EdgeId) {
-        self.mesh.link[f.idx()] |= CONSTRAINED;
-        if let Across::Twin(g) = self.mesh.across(f) {
-            self.mesh.link[g.idx()] |= CONSTRAINED;
-        }
     }
 
     /// Is `x` on the ray from `c` through `t`, given that the three are collinear?
@@ -420,7 +412,7 @@ impl Sweep {
     /// Returns that end vertex and an outgoing half-edge of it, or `None` (and changes nothing)
     /// when the segment crosses a constrained edge.
     fn dig_cavity(&mut self, cur: VertexId, t: VertexId, f: EdgeId) -> Option<(VertexId, EdgeId)> {
-        let mut dead: Vec<u32> = vec![f.tri()];
+        let mut dead: Vec<u32> = vec![f.tri().0];
         // Right chain (walk order) with the outer words of the edges cur→r1, r1→r2, …
         let mut right: Vec<VertexId> = vec![self.mesh.dst(f)];
         let mut right_words: Vec<EdgeId> = vec![f];
@@ -436,7 +428,7 @@ impl Sweep {
                 Across::Twin(g) => g,
                 _ => panic!("internal error: a breakline crosses the front"),
             };
-            dead.push(g.tri());
+            dead.push(g.tri().0);
             // Triangle of g: (y, x, z) with g = y → x.
             let z = self.apex(g);
             assert!(
@@ -491,7 +483,7 @@ impl Sweep {
     /// word `word` in the removed triangles.
     fn attach_chain_edge(&mut self, h: EdgeId, (old, word): (EdgeId, u32), spikes: &mut Spikes) {
         if let Across::Twin(o) = crate::mesh::across(word)
-            && spikes.dead.contains(&o.tri())
+            && spikes.dead.contains(&o.tri().0)
         {
             // Both sides are in the cavity: pair with the new half-edge made for `o`.
             match spikes.open.iter().position(|&(k, _)| k == o) {
@@ -510,7 +502,7 @@ impl Sweep {
     fn release_triangles(&mut self, dead: &[u32]) {
         if let Some(f) = self.fin.as_mut() {
             for &t in dead {
-                for v in self.mesh.tri_vertices(t) {
+                for v in self.mesh.tri_vertices(TriId(t)) {
                     f.vertices.refs[v.0 as usize] -= 1;
                 }
             }
@@ -554,7 +546,7 @@ impl Sweep {
             let slot = slots
                 .pop()
                 .expect("a cavity re-triangulates into its own slots");
-            let h = self.mesh.reuse_triangle(slot, p.a, p.b, c);
+            let h = self.mesh.reuse_triangle(TriId(slot), p.a, p.b, c);
             if let Some(f) = self.fin.as_mut() {
                 for v in [p.a, p.b, c] {
                     f.vertices.refs[v.0 as usize] += 1;

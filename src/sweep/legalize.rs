@@ -49,8 +49,8 @@ impl Sweep {
         self.relink(b, har);
         self.mesh.pair(ar, bl, false);
         if let Some(f) = self.fin.as_mut() {
-            f.changed(a.tri());
-            f.changed(b.tri());
+            f.changed(a.tri().0);
+            f.changed(b.tri().0);
         }
         Some(b)
     }

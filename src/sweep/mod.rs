@@ -20,7 +20,7 @@ pub mod legalize;
 use crate::error::{Error, Result};
 pub use crate::finalise::{Event, StreamConfig, StreamPoint, StreamStats};
 use crate::geom::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
-use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, VertexId};
+use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, TriId, VertexId};
 pub use constrain::{ConstraintGraph, ConstraintStats};
 use front::{Front, NodeId, XMap};
 
@@ -338,7 +338,7 @@ impl Sweep {
     #[inline(always)]
     fn new_triangle(&mut self, a: VertexId, b: VertexId, c: VertexId) -> EdgeId {
         let e = match self.fin.as_mut().and_then(|f| f.free_triangles.pop()) {
-            Some(t) => self.mesh.reuse_triangle(t, a, b, c),
+            Some(t) => self.mesh.reuse_triangle(TriId(t), a, b, c),
             None => self.mesh.add_triangle(a, b, c),
         };
         self.created(e);
@@ -353,7 +353,7 @@ impl Sweep {
             for k in 0..3 {
                 f.vertices.refs[o[e.idx() + k].0 as usize] += 1;
             }
-            f.created(e.tri());
+            f.created(e.tri().0);
         }
     }
 

@@ -11,17 +11,18 @@
 //! ear exists, any left-turning ear with no link vertex in it is taken and the new edges are then
 //! legalised by flips (constrained Delaunay).
 
-use super::{CONSTRAINED, EdgeId, NO_TWIN, NONE, Tin, VertexId};
+use super::{EdgeId, NONE, Tin, VertexId};
+use crate::error::{Error, Result};
+use crate::geom::predicates::Orientation;
+use crate::mesh::{BOUNDARY, HULL, ID_MASK};
 
 /// How a removal will fill the hole.
 struct RemovalPlan {
     spokes: Vec<EdgeId>,
-    ring: Vec<u32>,
+    ring: Vec<VertexId>,
     hull: bool,
     steps: Vec<(u32, bool)>,
 }
-use crate::error::{Error, Result};
-use crate::geom::predicates::Orientation;
 
 impl Tin {
     /// Removes vertex `v` and re-triangulates its hole (Delaunay, or constrained Delaunay when
@@ -43,15 +44,14 @@ impl Tin {
         // rim[i] = outside of the link edge ring[i] → ring[i+1].
         let mut rim: Vec<u32> = spokes
             .iter()
-            .map(|&e| self.link[e.next().0 as usize])
+            .map(|&e| self.mesh.link[e.next().idx()])
             .collect();
         for &e in &spokes {
-            self.free_triangle(e.tri().0);
+            self.free_triangle(e.tri());
         }
         for &r in &rim {
-            let id = r & !CONSTRAINED;
-            if id != NO_TWIN {
-                self.link[id as usize] = NO_TWIN | (r & CONSTRAINED);
+            if r & BOUNDARY == 0 {
+                self.mesh.detach(EdgeId(r & ID_MASK));
             }
         }
         self.vedge[v.0 as usize] = NONE;
@@ -59,43 +59,43 @@ impl Tin {
         // Ring vertices keep an edge in a triangle outside the hole when they have one; the ears
         // give one to the others.
         for &u in &ring {
-            self.vedge[u as usize] = NONE;
+            self.vedge[u.0 as usize] = NONE;
         }
         for &r in &rim {
-            let id = r & !CONSTRAINED;
-            if id != NO_TWIN {
-                let e = EdgeId(id);
-                self.vedge[self.origin[id as usize] as usize] = id;
-                self.vedge[self.origin[e.next().0 as usize] as usize] = e.next().0;
+            if r & BOUNDARY == 0 {
+                let e = EdgeId(r & ID_MASK);
+                let (u, w) = (self.org(e), self.dst(e));
+                self.vedge[u.0 as usize] = e.0;
+                self.vedge[w.0 as usize] = e.next().0;
             }
         }
-        let all: Vec<u32> = ring.clone();
+        let all: Vec<VertexId> = ring.clone();
         let mut new_edges = Vec::new();
         for &(i, fallback) in &steps {
             let i = i as usize;
             let n = ring.len();
             let (i1, i2) = ((i + 1) % n, (i + 2) % n);
             if fallback {
-                new_edges.push((VertexId(ring[i]), VertexId(ring[i2])));
+                new_edges.push((ring[i], ring[i2]));
             }
             let t = self.alloc_triangle(ring[i], ring[i1], ring[i2]);
-            self.link_to(t, rim[i]);
-            self.link_to(t.next(), rim[i1]);
+            self.mesh.link_to(t, rim[i]);
+            self.mesh.link_to(t.next(), rim[i1]);
             // The polygon edge ring[i] → ring[i2] now has the ear's edge ring[i2] → ring[i]
             // outside.
             rim[i] = t.prev().0;
-            self.link[t.prev().0 as usize] = NO_TWIN;
+            self.mesh.link[t.prev().idx()] = HULL;
             ring.remove(i1);
             rim.remove(i1);
         }
         if !hull {
             let t = self.alloc_triangle(ring[0], ring[1], ring[2]);
-            self.link_to(t, rim[0]);
-            self.link_to(t.next(), rim[1]);
-            self.link_to(t.prev(), rim[2]);
+            self.mesh.link_to(t, rim[0]);
+            self.mesh.link_to(t.next(), rim[1]);
+            self.mesh.link_to(t.prev(), rim[2]);
         }
         for &u in &all {
-            if self.vedge[u as usize] == NONE {
+            if self.vedge[u.0 as usize] == NONE {
                 self.repair_vertex_edge(u);
             }
         }
@@ -133,11 +133,11 @@ impl Tin {
         let all = ring.clone();
         let mut ok = true;
         self.ears(&mut ring, &all, hull, |t, _| {
-            ok = f(t.map(VertexId));
+            ok = f(t);
             ok
         });
         if ok && !hull {
-            ok = f([ring[0], ring[1], ring[2]].map(VertexId));
+            ok = f([ring[0], ring[1], ring[2]]);
         }
         Ok(ok)
     }
@@ -172,10 +172,10 @@ impl Tin {
     }
 
     /// The link of a star: `dst` of every spoke, and for a hull vertex the last spoke's far end.
-    fn link_of(&self, spokes: &[EdgeId], hull: bool) -> Vec<u32> {
-        let mut ring: Vec<u32> = spokes.iter().map(|&e| self.dst(e).0).collect();
+    fn link_of(&self, spokes: &[EdgeId], hull: bool) -> Vec<VertexId> {
+        let mut ring: Vec<VertexId> = spokes.iter().map(|&e| self.dst(e)).collect();
         if hull {
-            ring.push(self.org(spokes.last().unwrap().prev()).0);
+            ring.push(self.org(spokes.last().unwrap().prev()));
         }
         ring
     }
@@ -203,10 +203,10 @@ impl Tin {
     /// ring stops at its last three vertices, which form one more triangle.
     fn ears(
         &self,
-        ring: &mut Vec<u32>,
-        all: &[u32],
+        ring: &mut Vec<VertexId>,
+        all: &[VertexId],
         hull: bool,
-        mut f: impl FnMut([u32; 3], (u32, bool)) -> bool,
+        mut f: impl FnMut([VertexId; 3], (u32, bool)) -> bool,
     ) {
         loop {
             let n = ring.len();
@@ -246,14 +246,14 @@ impl Tin {
         }
     }
 
-    fn all_collinear(&self, pts: &[u32]) -> bool {
+    fn all_collinear(&self, pts: &[VertexId]) -> bool {
         let (a, b) = (pts[0], pts[pts.len() - 1]);
         pts.iter()
             .all(|&c| self.orient_v(a, b, c) == Orientation::Collinear)
     }
 
     /// Does the closed triangle `a, b, c` hold no other vertex of `all`?
-    fn ear_is_empty(&self, a: u32, b: u32, c: u32, all: &[u32]) -> bool {
+    fn ear_is_empty(&self, a: VertexId, b: VertexId, c: VertexId, all: &[VertexId]) -> bool {
         all.iter().all(|&w| {
             w == a
                 || w == b
@@ -267,10 +267,10 @@ impl Tin {
     /// Points `vedge[u]` at some live outgoing edge of `u`, searching the triangle slots (only
     /// reached for a vertex left without a triangle by an ear-clipping order that never touched
     /// it, which cannot happen for a valid hole; kept as a safety net).
-    fn repair_vertex_edge(&mut self, u: u32) {
-        for e in 0..self.origin.len() {
-            if self.origin[e] == u && self.is_live(EdgeId(e as u32).tri()) {
-                self.vedge[u as usize] = e as u32;
+    fn repair_vertex_edge(&mut self, u: VertexId) {
+        for (e, &v) in self.mesh.origin.iter().enumerate() {
+            if v == u && self.is_live(EdgeId(e as u32).tri()) {
+                self.vedge[u.0 as usize] = e as u32;
                 return;
             }
         }

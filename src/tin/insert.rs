@@ -1,9 +1,10 @@
 //! Point insertion (Herva 2009, section 5.1): split the triangle or edge under the point, or
 //! extend the hull, then restore the Delaunay property with Lawson flips.
 
-use super::{CONSTRAINED, EdgeId, Location, NO_TWIN, NONE, Tin, TriId, VertexId};
+use super::{EdgeId, NONE, PointLocation, Tin, TriId, VertexId};
 use crate::error::{Error, Result};
 use crate::geom::predicates::{Orientation, check_coord};
+use crate::mesh::{BOUNDARY, CONSTRAINED};
 
 impl Tin {
     /// Inserts `p = [x, y, z]` and restores the Delaunay property. A point exactly at an existing
@@ -11,16 +12,17 @@ impl Tin {
     ///
     /// # Errors
     /// [`Error::NonFinite`] / [`Error::CoordinateOutOfRange`] for a bad coordinate,
-    /// [`Error::TooManyPoints`] past `u32` ids, [`Error::Invalid`] on an empty TIN.
+    /// [`Error::TooManyPoints`] past [`crate::mesh::MAX_VERTICES`] vertex ids, [`Error::Invalid`]
+    /// on an empty TIN.
     pub fn insert(&mut self, p: [f64; 3]) -> Result<VertexId> {
         check_point(p, self.xy.len() as u64)?;
         let loc = self.locate([p[0], p[1]]);
-        if let Location::OnVertex(v) = loc {
+        if let PointLocation::OnVertex(v) = loc {
             return Ok(v);
         }
         let v = self.push_vertex(p)?;
         self.insert_located(v, loc)?;
-        Ok(VertexId(v))
+        Ok(v)
     }
 
     /// Puts a removed vertex back, with the same id.
@@ -35,13 +37,13 @@ impl Tin {
             )));
         }
         let loc = self.locate(self.xy(v));
-        if let Location::OnVertex(w) = loc {
+        if let PointLocation::OnVertex(w) = loc {
             return Err(Error::Invalid(format!(
                 "vertex {} cannot be restored: vertex {} has its position",
                 v.0, w.0
             )));
         }
-        self.insert_located(v.0, loc)
+        self.insert_located(v, loc)
     }
 
     /// Inserts `p` known to lie in the closed triangle `t` (not at one of its vertices): no walk.
@@ -53,9 +55,8 @@ impl Tin {
         check_point(p, self.xy.len() as u64)?;
         let q = [p[0], p[1]];
         let mut on_edge = None;
-        for k in 0..3 {
-            let e = EdgeId(3 * t.0 + k);
-            let (a, b) = (self.origin[e.0 as usize], self.origin[e.next().0 as usize]);
+        for e in [t.edge(), t.edge().next(), t.edge().prev()] {
+            let (a, b) = (self.org(e), self.dst(e));
             if self.p(a) == q || self.p(b) == q {
                 return Err(Error::Invalid(
                     "point is at a vertex of the triangle".into(),
@@ -70,20 +71,20 @@ impl Tin {
             }
         }
         let loc = match on_edge {
-            Some(e) => Location::OnEdge(e),
-            None => Location::Inside(t),
+            Some(e) => PointLocation::OnEdge(e),
+            None => PointLocation::Inside(t),
         };
         let v = self.push_vertex(p)?;
         self.insert_located(v, loc)?;
-        Ok(VertexId(v))
+        Ok(v)
     }
 
-    pub(super) fn insert_located(&mut self, v: u32, loc: Location) -> Result<()> {
+    pub(super) fn insert_located(&mut self, v: VertexId, loc: PointLocation) -> Result<()> {
         let mut stack = Vec::with_capacity(16);
         match loc {
-            Location::Inside(t) => self.split_triangle(v, t.0, &mut stack),
-            Location::OnEdge(e) => self.split_edge(v, e, &mut stack),
-            Location::Outside(e) if e.0 != NONE => self.extend_hull(v, e, &mut stack),
+            PointLocation::Inside(t) => self.split_triangle(v, t, &mut stack),
+            PointLocation::OnEdge(e) => self.split_edge(v, e, &mut stack),
+            PointLocation::Outside(e) if e.0 != NONE => self.extend_hull(v, e, &mut stack),
             _ => return Err(Error::Invalid("cannot insert into an empty TIN".into())),
         }
         self.live_vertices += 1;
@@ -91,64 +92,61 @@ impl Tin {
         Ok(())
     }
 
-    fn split_triangle(&mut self, v: u32, t: u32, stack: &mut Vec<EdgeId>) {
-        let e = 3 * t as usize;
-        let [a, b, c] = [self.origin[e], self.origin[e + 1], self.origin[e + 2]];
-        let [l0, l1, l2] = [self.link[e], self.link[e + 1], self.link[e + 2]];
+    fn split_triangle(&mut self, v: VertexId, t: TriId, stack: &mut Vec<EdgeId>) {
+        let [a, b, c] = self.tri_vertices(t);
+        let e = t.idx();
+        let l = &self.mesh.link;
+        let [l0, l1, l2] = [l[e], l[e + 1], l[e + 2]];
         let t0 = self.set_triangle(t, a, b, v);
         let t1 = self.alloc_triangle(b, c, v);
         let t2 = self.alloc_triangle(c, a, v);
-        self.link_to(t0, l0);
-        self.link_to(t1, l1);
-        self.link_to(t2, l2);
+        self.mesh.link_to(t0, l0);
+        self.mesh.link_to(t1, l1);
+        self.mesh.link_to(t2, l2);
         self.pair(t0.next(), t1.prev());
         self.pair(t1.next(), t2.prev());
         self.pair(t2.next(), t0.prev());
         stack.extend([t0, t1, t2]);
     }
 
-    fn split_edge(&mut self, v: u32, e: EdgeId, stack: &mut Vec<EdgeId>) {
-        let flag = self.link[e.0 as usize] & CONSTRAINED;
+    fn split_edge(&mut self, v: VertexId, e: EdgeId, stack: &mut Vec<EdgeId>) {
+        let flag = self.mesh.link[e.idx()] & CONSTRAINED;
         let twin = self.twin(e);
-        let (a, b, c) = (
-            self.origin[e.0 as usize],
-            self.origin[e.next().0 as usize],
-            self.origin[e.prev().0 as usize],
-        );
+        let (a, b, c) = (self.org(e), self.dst(e), self.org(e.prev()));
         let (lb, lc) = (
-            self.link[e.next().0 as usize],
-            self.link[e.prev().0 as usize],
+            self.mesh.link[e.next().idx()],
+            self.mesh.link[e.prev().idx()],
         );
-        let ta = self.set_triangle(e.tri().0, a, v, c);
+        let ta = self.set_triangle(e.tri(), a, v, c);
         let tb = self.alloc_triangle(v, b, c);
-        self.link_to(ta.prev(), lc);
-        self.link_to(tb.next(), lb);
+        self.mesh.link_to(ta.prev(), lc);
+        self.mesh.link_to(tb.next(), lb);
         self.pair(ta.next(), tb.prev());
         stack.extend([ta.prev(), tb.next()]);
         match twin {
             None => {}
             Some(f) => {
-                let d = self.origin[f.prev().0 as usize];
+                let d = self.org(f.prev());
                 let (lad, ldb) = (
-                    self.link[f.next().0 as usize],
-                    self.link[f.prev().0 as usize],
+                    self.mesh.link[f.next().idx()],
+                    self.mesh.link[f.prev().idx()],
                 );
-                let tc = self.set_triangle(f.tri().0, b, v, d);
+                let tc = self.set_triangle(f.tri(), b, v, d);
                 let td = self.alloc_triangle(v, a, d);
-                self.link_to(tc.prev(), ldb);
-                self.link_to(td.next(), lad);
+                self.mesh.link_to(tc.prev(), ldb);
+                self.mesh.link_to(td.next(), lad);
                 self.pair(tc.next(), td.prev());
-                self.link_to(ta, td.0 | flag);
-                self.link_to(tb, tc.0 | flag);
+                self.mesh.link_to(ta, td.0 | flag);
+                self.mesh.link_to(tb, tc.0 | flag);
                 stack.extend([tc.prev(), td.next()]);
             }
         }
     }
 
-    fn extend_hull(&mut self, v: u32, e: EdgeId, stack: &mut Vec<EdgeId>) {
+    fn extend_hull(&mut self, v: VertexId, e: EdgeId, stack: &mut Vec<EdgeId>) {
         let q = self.p(v);
         let visible = |tin: &Tin, h: EdgeId| {
-            let (a, b) = (tin.origin[h.0 as usize], tin.origin[h.next().0 as usize]);
+            let (a, b) = (tin.org(h), tin.dst(h));
             tin.orient_p(tin.p(a), tin.p(b), q) == Orientation::Clockwise
         };
         // The visible hull edges, in hull order.
@@ -170,10 +168,11 @@ impl Tin {
         }
         let mut prev_new: Option<EdgeId> = None;
         for h in hull {
-            let (u, w) = (self.origin[h.0 as usize], self.origin[h.next().0 as usize]);
+            let (u, w) = (self.org(h), self.dst(h));
             // Triangle (w, u, v): w → u is the twin of the hull edge u → w.
             let t = self.alloc_triangle(w, u, v);
-            self.link_to(t, h.0 | (self.link[h.0 as usize] & CONSTRAINED));
+            self.mesh
+                .link_to(t, h.0 | (self.mesh.link[h.idx()] & CONSTRAINED));
             if let Some(pn) = prev_new {
                 // Previous triangle's v → u is this one's u → v.
                 self.pair(t.next(), pn);
@@ -184,23 +183,26 @@ impl Tin {
     }
 
     #[inline(always)]
-    pub(super) fn pair(&mut self, a: EdgeId, b: EdgeId) {
-        self.link[a.0 as usize] = b.0;
-        self.link[b.0 as usize] = a.0;
+    fn pair(&mut self, a: EdgeId, b: EdgeId) {
+        self.mesh.pair(a, b, false);
+    }
+
+    /// The twin of `e` when `e` may be flipped: neither on the hull nor constrained.
+    #[inline(always)]
+    fn flippable_twin(&self, e: EdgeId) -> Option<EdgeId> {
+        let l = self.mesh.link[e.idx()];
+        (l & (BOUNDARY | CONSTRAINED) == 0).then_some(EdgeId(l))
     }
 
     /// Lawson flips from the edges in `stack`, each opposite the newly inserted vertex in its
     /// triangle (the standard insertion legalisation: flips stay in the new vertex's star).
     pub(super) fn legalize(&mut self, stack: &mut Vec<EdgeId>) {
         while let Some(e) = stack.pop() {
-            let l = self.link[e.0 as usize];
-            if l & CONSTRAINED != 0 || l == NO_TWIN {
+            let Some(f) = self.flippable_twin(e) else {
                 continue;
-            }
-            let f = EdgeId(l);
-            let (a, b) = (self.origin[e.0 as usize], self.origin[e.next().0 as usize]);
-            let p = self.origin[e.prev().0 as usize];
-            let d = self.origin[f.prev().0 as usize];
+            };
+            let (a, b, p) = (self.org(e), self.dst(e), self.org(e.prev()));
+            let d = self.org(f.prev());
             if self.in_circle(a, b, p, d) {
                 self.flip(e);
                 stack.push(e.prev());
@@ -217,17 +219,13 @@ impl Tin {
             let Some(e) = self.find_edge(u, w) else {
                 continue;
             };
-            let l = self.link[e.0 as usize];
-            if l & CONSTRAINED != 0 || l == NO_TWIN {
+            let Some(f) = self.flippable_twin(e) else {
                 continue;
-            }
-            let f = EdgeId(l);
-            let (a, b) = (self.origin[e.0 as usize], self.origin[e.next().0 as usize]);
-            let p = self.origin[e.prev().0 as usize];
-            let d = self.origin[f.prev().0 as usize];
+            };
+            let (a, b, p) = (self.org(e), self.dst(e), self.org(e.prev()));
+            let d = self.org(f.prev());
             if self.in_circle(a, b, p, d) {
                 self.flip(e);
-                let [a, b, p, d] = [a, b, p, d].map(VertexId);
                 stack.extend([(a, d), (d, b), (b, p), (p, a)]);
             }
         }

@@ -1,10 +1,11 @@
 //! A dynamic Delaunay TIN: insert points, delete points, insert breaklines, interpolate heights.
 //!
-//! Storage follows the sweep's mesh (`crate::mesh`): flat half-edge arrays, triangle `t`
-//! owning half-edges `3t, 3t+1, 3t+2` counter-clockwise, typed `u32` ids. Each half-edge has a
-//! *link word*: its twin (the same edge seen from the neighbouring triangle), or [`NO_TWIN`] on the
-//! convex hull, with bit 31 set when the edge is constrained (a breakline, never flipped). Freed
-//! triangle slots are reused. Every vertex remembers one outgoing half-edge.
+//! The triangles live in the crate's one half-edge store, [`crate::mesh::Mesh`], as the sweep's
+//! do: triangle `t` owns half-edges `3t, 3t+1, 3t+2` counter-clockwise, with the same typed ids
+//! ([`VertexId`], [`EdgeId`], [`TriId`]) and link words: the twin (the same edge seen from the
+//! neighbouring triangle), or [`crate::mesh::HULL`] on the convex hull (a TIN has no advancing
+//! front), plus the constrained flag of a breakline edge (never flipped). Freed triangle slots are
+//! reused. Every vertex remembers one outgoing half-edge.
 //!
 //! Every geometric decision goes through [`crate::geom::predicates`]: [`orient`] and the perturbed
 //! [`incircle`] with the crate's tie rule (the latest point in sweep order carries the dominant
@@ -24,82 +25,27 @@
 
 use crate::error::{Error, Result};
 use crate::geom::predicates::{CircleSide, Orientation, incircle, orient};
+use crate::mesh::Mesh;
+pub use crate::mesh::{EdgeId, TriId, VertexId};
 pub use crossval::CrossValidation;
 
+mod check;
 mod crossval;
 mod delete;
 mod insert;
 mod segment;
+mod store;
 #[cfg(test)]
 mod tests;
 
-/// A vertex of a [`Tin`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct VertexId(pub u32);
-
-/// A half-edge of a [`Tin`]: `3 * triangle + corner`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct EdgeId(pub u32);
-
-/// A triangle slot of a [`Tin`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct TriId(pub u32);
-
-impl EdgeId {
-    /// The next half-edge counter-clockwise in the same triangle.
-    #[inline(always)]
-    pub fn next(self) -> EdgeId {
-        EdgeId(if self.0 % 3 == 2 {
-            self.0 - 2
-        } else {
-            self.0 + 1
-        })
-    }
-
-    /// The previous half-edge in the same triangle.
-    #[inline(always)]
-    pub fn prev(self) -> EdgeId {
-        EdgeId(if self.0.is_multiple_of(3) {
-            self.0 + 2
-        } else {
-            self.0 - 1
-        })
-    }
-
-    /// The triangle of this half-edge.
-    #[inline(always)]
-    pub fn tri(self) -> TriId {
-        TriId(self.0 / 3)
-    }
-
-    #[inline(always)]
-    fn idx(self) -> usize {
-        self.0 as usize
-    }
-}
-
-impl TriId {
-    /// The first half-edge of the triangle.
-    #[inline(always)]
-    pub fn edge(self) -> EdgeId {
-        EdgeId(3 * self.0)
-    }
-}
-
-/// Link word of a hull edge (no twin).
-pub const NO_TWIN: u32 = 0x7FFF_FFFF;
-/// Link-word flag of a constrained edge.
-pub const CONSTRAINED: u32 = 1 << 31;
 /// No edge / no vertex.
 const NONE: u32 = u32::MAX;
-/// Origin of the half-edges of a free triangle slot.
-const DEAD: u32 = u32::MAX;
-/// Largest number of half-edges.
-const MAX_EDGES: usize = NO_TWIN as usize;
+/// `vedge` of a live vertex while vertex tracking is off.
+const UNTRACKED: u32 = NONE - 1;
 
-/// Where a query point lies.
+/// Where a query point lies in a [`Tin`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Location {
+pub enum PointLocation {
     /// Strictly inside this triangle.
     Inside(TriId),
     /// On the relative interior of this edge (either half-edge may be returned).
@@ -115,26 +61,23 @@ pub enum Location {
 pub struct Tin {
     xy: Vec<[f64; 2]>,
     z: Vec<f64>,
-    origin: Vec<u32>,
-    link: Vec<u32>,
+    /// The triangles.
+    mesh: Mesh,
     /// One outgoing half-edge per vertex, [`NONE`] for a vertex not in the triangulation.
     vedge: Vec<u32>,
-    free: Vec<u32>,
+    free: Vec<TriId>,
     live_vertices: usize,
     live_triangles: usize,
     /// Triangle to start the next walk from.
     hint: u32,
     /// Triangles created or changed by the operations since the last [`Tin::take_touched`].
-    touched: Vec<u32>,
+    touched: Vec<TriId>,
     record: bool,
     rng: u64,
     flips: u64,
     /// Is `vedge` maintained (see [`Tin::set_vertex_tracking`])?
     untracked: bool,
 }
-
-/// `vedge` of a live vertex while vertex tracking is off.
-const UNTRACKED: u32 = NONE - 1;
 
 impl Tin {
     /// A TIN of the triangles of a [`crate::Triangulation`] (or any valid triangulation:
@@ -151,20 +94,21 @@ impl Tin {
             rng: 0x9E37_79B9_7F4A_7C15,
             ..Tin::default()
         };
-        if 3 * triangles.len() >= MAX_EDGES {
+        if 3 * triangles.len() as u64 > crate::mesh::MAX_HALF_EDGES {
             return Err(Error::Invalid(
                 "too many triangles for a dynamic TIN".into(),
             ));
         }
         let mut keys: Vec<(u64, u32)> = Vec::with_capacity(3 * triangles.len());
+        tin.mesh = Mesh::with_capacity(triangles.len());
         for (t, tri) in triangles.iter().enumerate() {
+            tin.mesh
+                .add_triangle(VertexId(tri[0]), VertexId(tri[1]), VertexId(tri[2]));
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
                 if a as usize >= vertices.len() || a == b {
                     return Err(Error::Invalid(format!("triangle {t} has a bad vertex")));
                 }
-                tin.origin.push(a);
-                tin.link.push(NO_TWIN);
                 tin.vedge[a as usize] = (3 * t + k) as u32;
                 let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
                 keys.push((key, (3 * t + k) as u32));
@@ -180,14 +124,13 @@ impl Tin {
             match j - i {
                 1 => {}
                 2 => {
-                    let (e, f) = (keys[i].1, keys[i + 1].1);
-                    if tin.origin[e as usize] == tin.origin[f as usize] {
+                    let (e, f) = (EdgeId(keys[i].1), EdgeId(keys[i + 1].1));
+                    if tin.mesh.org(e) == tin.mesh.org(f) {
                         return Err(Error::Invalid(
                             "two triangles use the same edge in the same direction".into(),
                         ));
                     }
-                    tin.link[e as usize] = f;
-                    tin.link[f as usize] = e;
+                    tin.mesh.pair(e, f, false);
                 }
                 _ => {
                     return Err(Error::Invalid(
@@ -236,7 +179,7 @@ impl Tin {
 
     /// Number of triangle slots (live or free).
     pub fn triangle_slots(&self) -> usize {
-        self.origin.len() / 3
+        self.mesh.triangle_count()
     }
 
     /// Edge flips done so far.
@@ -270,43 +213,37 @@ impl Tin {
     /// Is triangle slot `t` in use?
     #[inline(always)]
     pub fn is_live(&self, t: TriId) -> bool {
-        self.origin[3 * t.0 as usize] != DEAD
+        self.mesh.is_live(t)
     }
 
     /// Origin vertex of `e`.
     #[inline(always)]
     pub fn org(&self, e: EdgeId) -> VertexId {
-        VertexId(self.origin[e.idx()])
+        self.mesh.org(e)
     }
 
     /// Destination vertex of `e`.
     #[inline(always)]
     pub fn dst(&self, e: EdgeId) -> VertexId {
-        VertexId(self.origin[e.next().idx()])
+        self.mesh.dst(e)
     }
 
     /// The twin of `e`, or `None` on the hull.
     #[inline(always)]
     pub fn twin(&self, e: EdgeId) -> Option<EdgeId> {
-        let w = self.link[e.idx()] & !CONSTRAINED;
-        (w != NO_TWIN).then_some(EdgeId(w))
+        self.mesh.twin(e)
     }
 
     /// Is `e` constrained (a breakline edge)?
     #[inline(always)]
     pub fn is_constrained(&self, e: EdgeId) -> bool {
-        self.link[e.idx()] & CONSTRAINED != 0
+        self.mesh.is_constrained(e)
     }
 
     /// The vertices of triangle `t`, counter-clockwise.
     #[inline(always)]
     pub fn tri_vertices(&self, t: TriId) -> [VertexId; 3] {
-        let e = 3 * t.0 as usize;
-        [
-            VertexId(self.origin[e]),
-            VertexId(self.origin[e + 1]),
-            VertexId(self.origin[e + 2]),
-        ]
+        self.mesh.tri_vertices(t)
     }
 
     /// Live triangles.
@@ -348,7 +285,7 @@ impl Tin {
     /// The triangles created or changed since the last call (possibly with repeats, possibly
     /// freed since), when recording is on.
     pub fn take_touched(&mut self, out: &mut Vec<TriId>) {
-        out.extend(self.touched.drain(..).map(TriId));
+        out.append(&mut self.touched);
     }
 
     /// An outgoing half-edge of `v`, if `v` is in the triangulation.
@@ -406,12 +343,12 @@ impl Tin {
     }
 
     #[inline(always)]
-    fn p(&self, v: u32) -> [f64; 2] {
-        self.xy[v as usize]
+    fn p(&self, v: VertexId) -> [f64; 2] {
+        self.xy[v.0 as usize]
     }
 
     #[inline(always)]
-    fn orient_v(&self, a: u32, b: u32, c: u32) -> Orientation {
+    fn orient_v(&self, a: VertexId, b: VertexId, c: VertexId) -> Orientation {
         self.orient_p(self.p(a), self.p(b), self.p(c))
     }
 
@@ -424,7 +361,7 @@ impl Tin {
 
     /// Perturbed in-circle: is `d` inside the circle of the counter-clockwise `a, b, c`?
     #[inline(always)]
-    fn in_circle(&self, a: u32, b: u32, c: u32, d: u32) -> bool {
+    fn in_circle(&self, a: VertexId, b: VertexId, c: VertexId, d: VertexId) -> bool {
         let (pa, pb, pc, pd) = (self.p(a), self.p(b), self.p(c), self.p(d));
         let side = incircle(pa, pb, pc, pd);
         side == CircleSide::Inside
@@ -438,31 +375,6 @@ impl Tin {
         self.rng.wrapping_mul(0x2545_F491_4F6C_DD1D)
     }
 
-    /// Turns the vertex → edge map off or on. Off, insertions skip its upkeep (random writes that
-    /// cost a tenth of an insertion on large TINs): for bulk insertion, such as the grid
-    /// simplifier's. While it is off, [`Tin::remove`], [`Tin::restore`], [`Tin::out_edges`],
-    /// [`Tin::find_edge`] and breakline insertion do not work (they report the vertex as unknown);
-    /// turning it on rebuilds the map in one pass over the triangles.
-    pub fn set_vertex_tracking(&mut self, on: bool) {
-        if on != self.untracked {
-            return;
-        }
-        for e in &mut self.vedge {
-            if *e != NONE {
-                *e = UNTRACKED;
-            }
-        }
-        self.untracked = !on;
-        if on {
-            for e in 0..self.origin.len() {
-                let v = self.origin[e];
-                if v != DEAD {
-                    self.vedge[v as usize] = e as u32;
-                }
-            }
-        }
-    }
-
     /// Makes the next walk start from triangle `t` (a triangle near the next query point makes
     /// [`Tin::locate`], [`Tin::insert`] and [`Tin::restore`] fast).
     pub fn set_hint(&mut self, t: TriId) {
@@ -470,12 +382,12 @@ impl Tin {
     }
 
     /// Locates `p`, walking from the last triangle an operation used.
-    pub fn locate(&mut self, p: [f64; 2]) -> Location {
+    pub fn locate(&mut self, p: [f64; 2]) -> PointLocation {
         let mut t = self.hint;
         if t as usize >= self.triangle_slots() || !self.is_live(TriId(t)) {
             match self.triangles().next() {
                 Some(s) => t = s.0,
-                None => return Location::Outside(EdgeId(NONE)),
+                None => return PointLocation::Outside(EdgeId(NONE)),
             }
         }
         self.locate_from(TriId(t), p)
@@ -483,7 +395,7 @@ impl Tin {
 
     /// Locates `p` by a visibility walk from triangle `start` (randomised: terminates on any
     /// triangulation, constrained or not).
-    pub fn locate_from(&mut self, start: TriId, p: [f64; 2]) -> Location {
+    pub fn locate_from(&mut self, start: TriId, p: [f64; 2]) -> PointLocation {
         let mut e0 = start.edge();
         'walk: loop {
             let r = (self.next_random() % 3) as u32;
@@ -491,7 +403,7 @@ impl Tin {
             let mut on_edge = None;
             let mut e = first;
             for _ in 0..3 {
-                let (a, b) = (self.origin[e.idx()], self.origin[e.next().idx()]);
+                let (a, b) = (self.org(e), self.dst(e));
                 match self.orient_p(self.p(a), self.p(b), p) {
                     Orientation::Clockwise => match self.twin(e) {
                         Some(t) => {
@@ -500,15 +412,15 @@ impl Tin {
                         }
                         None => {
                             self.hint = e.tri().0;
-                            return Location::Outside(e);
+                            return PointLocation::Outside(e);
                         }
                     },
                     Orientation::Collinear => {
                         if self.p(a) == p {
-                            return Location::OnVertex(VertexId(a));
+                            return PointLocation::OnVertex(a);
                         }
                         if self.p(b) == p {
-                            return Location::OnVertex(VertexId(b));
+                            return PointLocation::OnVertex(b);
                         }
                         on_edge = Some(e);
                     }
@@ -518,8 +430,8 @@ impl Tin {
             }
             self.hint = e.tri().0;
             return match on_edge {
-                Some(e) => Location::OnEdge(e),
-                None => Location::Inside(e.tri()),
+                Some(e) => PointLocation::OnEdge(e),
+                None => PointLocation::Inside(e.tri()),
             };
         }
     }
@@ -527,76 +439,17 @@ impl Tin {
     /// Height of the TIN at `(x, y)` by linear interpolation, or `None` outside the hull.
     pub fn interpolate(&mut self, p: [f64; 2]) -> Option<f64> {
         match self.locate(p) {
-            Location::Outside(_) => None,
-            Location::OnVertex(v) => Some(self.z(v)),
-            Location::OnEdge(e) => {
+            PointLocation::Outside(_) => None,
+            PointLocation::OnVertex(v) => Some(self.z(v)),
+            PointLocation::OnEdge(e) => {
                 let (a, b) = (self.org(e), self.dst(e));
                 Some(lerp_edge(self.point(a), self.point(b), p))
             }
-            Location::Inside(t) => {
+            PointLocation::Inside(t) => {
                 let [a, b, c] = self.tri_vertices(t).map(|v| self.point(v));
                 Some(planar(a, b, c, p))
             }
         }
-    }
-
-    /// Checks the structure: twins are mutual, triangles counter-clockwise, vertex edges valid,
-    /// hull edges convex, and every unconstrained edge locally Delaunay (perturbed rule).
-    ///
-    /// # Errors
-    /// [`Error::Invalid`] naming the first violation.
-    pub fn check(&self) -> Result<()> {
-        let bad = |m: String| Err(Error::Invalid(m));
-        let mut live = 0;
-        for t in self.triangles() {
-            live += 1;
-            let [a, b, c] = self.tri_vertices(t);
-            if self.orient_v(a.0, b.0, c.0) != Orientation::CounterClockwise {
-                return bad(format!("triangle {} is not counter-clockwise", t.0));
-            }
-            for k in 0..3 {
-                let e = EdgeId(3 * t.0 + k);
-                match self.twin(e) {
-                    Some(f) => {
-                        if !self.is_live(f.tri()) || self.twin(f) != Some(e) {
-                            return bad(format!("edge {} has a broken twin", e.0));
-                        }
-                        if self.org(f) != self.dst(e) || self.dst(f) != self.org(e) {
-                            return bad(format!("edge {} and its twin differ", e.0));
-                        }
-                        if self.is_constrained(e) != self.is_constrained(f) {
-                            return bad(format!("edge {} constrained on one side only", e.0));
-                        }
-                        let d = self.org(f.prev());
-                        if !self.is_constrained(e) && self.in_circle(a.0, b.0, c.0, d.0) {
-                            return bad(format!("edge {} is not locally Delaunay", e.0));
-                        }
-                    }
-                    None => {
-                        // Hull convexity: the next hull edge turns left or goes straight.
-                        let (u, v) = (self.org(e), self.dst(e));
-                        let nxt = self.next_hull_edge(e);
-                        let w = self.dst(nxt);
-                        if self.orient_v(u.0, v.0, w.0) == Orientation::Clockwise {
-                            return bad(format!("hull is not convex at vertex {}", v.0));
-                        }
-                    }
-                }
-            }
-        }
-        if live != self.live_triangles {
-            return bad("triangle count is off".into());
-        }
-        for (v, &e) in self.vedge.iter().enumerate() {
-            if e < UNTRACKED
-                && (e as usize >= self.origin.len()
-                    || self.origin[e as usize] != v as u32
-                    || !self.is_live(EdgeId(e).tri()))
-            {
-                return bad(format!("vertex {v} has a stale edge"));
-            }
-        }
-        Ok(())
     }
 
     /// The hull edge following hull edge `e` (counter-clockwise along the hull).
@@ -615,205 +468,6 @@ impl Tin {
             g = t.prev();
         }
         g
-    }
-
-    /// Renumbers the vertices (new vertex `i` is the old `order[i]`; `order` must list every live
-    /// vertex once) and the triangles (by their smallest new vertex id), dropping removed
-    /// vertices and free slots. Neighbouring points then sit near each other in memory when
-    /// `order` is spatial. Returns, for each old vertex id, its new id (`u32::MAX` if dropped).
-    ///
-    /// # Errors
-    /// [`Error::Invalid`] if `order` is not a permutation of the live vertices.
-    pub fn relayout(&mut self, order: &[VertexId]) -> Result<Vec<u32>> {
-        self.set_vertex_tracking(true);
-        let mut new_v = vec![NONE; self.xy.len()];
-        for (i, &v) in order.iter().enumerate() {
-            if !self.contains_vertex(v) || new_v[v.0 as usize] != NONE {
-                return Err(Error::Invalid("relayout order is not a permutation".into()));
-            }
-            new_v[v.0 as usize] = i as u32;
-        }
-        if order.len() != self.live_vertices {
-            return Err(Error::Invalid("relayout order misses vertices".into()));
-        }
-        // Counting sort of the live triangles by their smallest new vertex id.
-        let slots = self.triangle_slots();
-        let key = |t: usize| {
-            let e = 3 * t;
-            (0..3)
-                .map(|k| new_v[self.origin[e + k] as usize])
-                .min()
-                .unwrap()
-        };
-        let mut start = vec![0u32; order.len() + 1];
-        for t in 0..slots {
-            if self.is_live(TriId(t as u32)) {
-                start[key(t) as usize + 1] += 1;
-            }
-        }
-        for i in 0..order.len() {
-            start[i + 1] += start[i];
-        }
-        let new_t: Vec<u32> = (0..slots)
-            .map(|t| {
-                if self.is_live(TriId(t as u32)) {
-                    let k = key(t) as usize;
-                    start[k] += 1;
-                    start[k] - 1
-                } else {
-                    NONE
-                }
-            })
-            .collect();
-        let n = self.live_triangles;
-        let mut origin = vec![DEAD; 3 * n];
-        let mut link = vec![NO_TWIN; 3 * n];
-        for (t, &nt) in new_t.iter().enumerate() {
-            if nt == NONE {
-                continue;
-            }
-            for k in 0..3 {
-                let (old, new) = (3 * t + k, 3 * nt as usize + k);
-                origin[new] = new_v[self.origin[old] as usize];
-                let l = self.link[old];
-                let id = l & !CONSTRAINED;
-                link[new] = if id == NO_TWIN {
-                    l
-                } else {
-                    (3 * new_t[id as usize / 3] + id % 3) | (l & CONSTRAINED)
-                };
-            }
-        }
-        let mut vedge = vec![NONE; order.len()];
-        for (i, &v) in order.iter().enumerate() {
-            let e = self.vedge[v.0 as usize];
-            vedge[i] = 3 * new_t[e as usize / 3] + e % 3;
-        }
-        self.xy = order.iter().map(|&v| self.xy[v.0 as usize]).collect();
-        self.z = order.iter().map(|&v| self.z[v.0 as usize]).collect();
-        self.origin = origin;
-        self.link = link;
-        self.vedge = vedge;
-        self.free.clear();
-        self.hint = 0;
-        self.touched.clear();
-        Ok(new_v)
-    }
-
-    // ---- low-level storage -------------------------------------------------------------------
-
-    fn alloc_triangle(&mut self, a: u32, b: u32, c: u32) -> EdgeId {
-        self.live_triangles += 1;
-        let e = match self.free.pop() {
-            Some(t) => {
-                let e = 3 * t as usize;
-                self.origin[e..e + 3].copy_from_slice(&[a, b, c]);
-                self.link[e..e + 3].copy_from_slice(&[NO_TWIN; 3]);
-                e as u32
-            }
-            None => {
-                let e = self.origin.len() as u32;
-                self.origin.extend_from_slice(&[a, b, c]);
-                self.link.extend_from_slice(&[NO_TWIN; 3]);
-                e
-            }
-        };
-        if !self.untracked {
-            self.vedge[a as usize] = e;
-            self.vedge[b as usize] = e + 1;
-            self.vedge[c as usize] = e + 2;
-        }
-        if self.record {
-            self.touched.push(e / 3);
-        }
-        EdgeId(e)
-    }
-
-    /// Overwrites live triangle `t` with `a, b, c`, keeping nothing of its links.
-    fn set_triangle(&mut self, t: u32, a: u32, b: u32, c: u32) -> EdgeId {
-        let e = 3 * t as usize;
-        self.origin[e..e + 3].copy_from_slice(&[a, b, c]);
-        self.link[e..e + 3].copy_from_slice(&[NO_TWIN; 3]);
-        if !self.untracked {
-            self.vedge[a as usize] = e as u32;
-            self.vedge[b as usize] = e as u32 + 1;
-            self.vedge[c as usize] = e as u32 + 2;
-        }
-        if self.record {
-            self.touched.push(t);
-        }
-        EdgeId(e as u32)
-    }
-
-    fn free_triangle(&mut self, t: u32) {
-        let e = 3 * t as usize;
-        self.origin[e..e + 3].copy_from_slice(&[DEAD; 3]);
-        self.free.push(t);
-        self.live_triangles -= 1;
-    }
-
-    /// Links half-edge `a` to `b`'s outside: `b` is a half-edge or [`NO_TWIN`], possibly with the
-    /// [`CONSTRAINED`] flag.
-    #[inline(always)]
-    fn link_to(&mut self, a: EdgeId, b: u32) {
-        self.link[a.idx()] = b;
-        let id = b & !CONSTRAINED;
-        if id != NO_TWIN {
-            self.link[id as usize] = a.0 | (b & CONSTRAINED);
-        }
-    }
-
-    /// Flips the edge `e` (shared by triangles `a, b, p` and `b, a, d`) into `p, d`. The diagonal
-    /// keeps the ids `e` and its twin; afterwards `e` is `d → p` in triangle `d, p, a` and its
-    /// twin `p → d` in triangle `p, d, b`.
-    fn flip(&mut self, e0: EdgeId) {
-        let f0 = EdgeId(self.link[e0.idx()] & !CONSTRAINED);
-        let (e1, e2, f1, f2) = (e0.next(), e0.prev(), f0.next(), f0.prev());
-        let a = self.origin[e0.idx()];
-        let b = self.origin[e1.idx()];
-        let p = self.origin[e2.idx()];
-        let d = self.origin[f2.idx()];
-        let (le1, le2, lf1, lf2) = (
-            self.link[e1.idx()],
-            self.link[e2.idx()],
-            self.link[f1.idx()],
-            self.link[f2.idx()],
-        );
-        self.origin[e0.idx()] = d;
-        self.origin[e1.idx()] = p;
-        self.origin[e2.idx()] = a;
-        self.origin[f0.idx()] = p;
-        self.origin[f1.idx()] = d;
-        self.origin[f2.idx()] = b;
-        self.link_to(e1, le2);
-        self.link_to(e2, lf1);
-        self.link_to(f1, lf2);
-        self.link_to(f2, le1);
-        if !self.untracked {
-            self.vedge[a as usize] = e2.0;
-            self.vedge[b as usize] = f2.0;
-            self.vedge[p as usize] = e1.0;
-            self.vedge[d as usize] = f1.0;
-        }
-        self.flips += 1;
-        if self.record {
-            self.touched.push(e0.tri().0);
-            self.touched.push(f0.tri().0);
-        }
-    }
-
-    fn push_vertex(&mut self, p: [f64; 3]) -> Result<u32> {
-        if self.xy.len() >= NONE as usize - 1 {
-            return Err(Error::TooManyPoints {
-                count: self.xy.len() as u64 + 1,
-                max: NONE as u64 - 1,
-            });
-        }
-        self.xy.push([p[0], p[1]]);
-        self.z.push(p[2]);
-        self.vedge
-            .push(if self.untracked { UNTRACKED } else { NONE });
-        Ok(self.xy.len() as u32 - 1)
     }
 }
 

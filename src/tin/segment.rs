@@ -2,7 +2,7 @@
 //! the edges the segment crosses until it appears, then restore the constrained Delaunay
 //! property around the new edges by Lawson flips (the breakline itself is never flipped).
 
-use super::{CONSTRAINED, EdgeId, NO_TWIN, Tin, VertexId};
+use super::{Tin, VertexId};
 use crate::error::{Error, Result};
 use crate::geom::predicates::Orientation;
 use std::collections::VecDeque;
@@ -44,7 +44,7 @@ impl Tin {
                 continue;
             }
             if let Some(e) = self.find_edge(a, b) {
-                self.constrain(e);
+                self.mesh.constrain(e);
                 continue;
             }
             let (crossing, stop) = self.crossings(a, b)?;
@@ -56,19 +56,12 @@ impl Tin {
                 let e = self
                     .find_edge(a, stop)
                     .ok_or_else(|| Error::Internal("breakline walk lost its edge".into()))?;
-                self.constrain(e);
+                self.mesh.constrain(e);
                 continue;
             }
             self.flip_out(a, stop, crossing)?;
         }
         Ok(())
-    }
-
-    fn constrain(&mut self, e: EdgeId) {
-        self.link[e.0 as usize] |= CONSTRAINED;
-        if let Some(t) = self.twin(e) {
-            self.link[t.0 as usize] |= CONSTRAINED;
-        }
     }
 
     /// Walks from `a` towards `b`; returns the edges the segment crosses (as (right, left) vertex
@@ -170,8 +163,7 @@ impl Tin {
         let e = self
             .find_edge(a, b)
             .ok_or_else(|| Error::Internal("breakline edge missing after flips".into()))?;
-        self.constrain(e);
-        debug_assert!(self.link[e.0 as usize] & !CONSTRAINED != NO_TWIN || self.twin(e).is_none());
+        self.mesh.constrain(e);
         self.legalize_edges(fresh);
         Ok(())
     }
