@@ -36,7 +36,8 @@
 use crate::error::{Error, Result};
 use crate::geom::grid::{Buckets, Grid};
 use crate::geom::predicates::{Orientation, orient};
-use crate::input::lines::{Lines, is_ring};
+use crate::input::geojson::is_ring;
+use crate::input::lines::Lines;
 
 /// Cell status: no edge in the cell, the cell is outside.
 const OUTSIDE: u8 = 0;
