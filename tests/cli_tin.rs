@@ -137,3 +137,27 @@ fn every_command_has_consistent_options() {
         );
     }
 }
+
+/// `--max-edge 0` is an option error naming the flag, not "breakline 18446744073709551615"
+/// (`Trim::new` used to report it as a bad line with index `u64::MAX`).
+#[test]
+fn bad_max_edge_names_the_option() {
+    let sample = Path::new("data/sample/startinpy_small.laz");
+    for value in ["0", "inf"] {
+        let out = tempfile::tempdir().unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+            .args(["tin", "--quiet"])
+            .arg(sample)
+            .args(["--max-edge", value, "-o"])
+            .arg(out.path().join("x.ply"))
+            .arg("--tmp-dir")
+            .arg(out.path())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "--max-edge {value}: {err}");
+        assert!(err.contains("--max-edge"), "--max-edge {value}: {err}");
+        assert!(!err.contains("18446744073709551615"), "{err}");
+        assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0);
+    }
+}

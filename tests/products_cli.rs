@@ -336,3 +336,95 @@ fn streaming_mesh_input_gives_the_same_products() {
         "the CRS is carried"
     );
 }
+
+/// One polygon file for every option that takes one: `tin --trim-boundary` keeps exactly its area
+/// and `volume --boundary` integrates over exactly that area, for a `Feature` holding a
+/// `MultiPolygon` with a `crs` member and for a `GeometryCollection` (a polygon whose hole does not
+/// repeat its first position, and a closed `LineString`); a file with a `Point` is refused by both.
+#[test]
+fn one_polygon_file_for_trim_boundary_and_volume_boundary() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    let pts = d("pts.xyz");
+    write_points(&pts, |x, y| 0.1 * x + 0.2 * y, 5);
+    // A 20 × 20 square with a 5 × 5 hole, and a triangle of area 40.
+    let square = "[[10, 10], [30, 10], [30, 30], [10, 30], [10, 10]], \
+                  [[15, 15], [15, 20], [20, 20], [20, 15]]";
+    let triangle = "[[40, 10], [50, 10], [45, 18], [40, 10]]";
+    let files = [
+        format!(
+            r#"{{"type": "Feature", "properties": {{"name": "site"}},
+            "crs": {{"type": "name", "properties": {{"name": "urn:ogc:def:crs:EPSG::28992"}}}},
+            "geometry": {{"type": "MultiPolygon", "coordinates": [[{square}], [{triangle}]]}}}}"#
+        ),
+        format!(
+            r#"{{"type": "GeometryCollection", "geometries": [
+            {{"type": "Polygon", "coordinates": [{square}]}},
+            {{"type": "LineString", "coordinates": {triangle}}}]}}"#
+        ),
+    ];
+    // z = 0.1x + 0.2y is linear: each piece contributes its area times z at its centroid.
+    let z = |x: f64, y: f64| 0.1 * x + 0.2 * y;
+    let want = 400.0 * z(20.0, 20.0) - 25.0 * z(17.5, 17.5) + 40.0 * z(45.0, 38.0 / 3.0);
+    for (k, text) in files.iter().enumerate() {
+        let poly = d(&format!("poly{k}.geojson"));
+        std::fs::write(&poly, text).unwrap();
+        let o = ok(&[
+            "volume",
+            s(&pts),
+            "--plane",
+            "0",
+            "--boundary",
+            s(&poly),
+            "--json",
+        ]);
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        let net = v["net_volume"].as_f64().unwrap();
+        assert!((net - want).abs() < 1e-6, "{k}: {net} vs {want}: {v}");
+        let mesh = d(&format!("trim{k}.ply"));
+        ok(&[
+            "tin",
+            s(&pts),
+            "--trim-boundary",
+            s(&poly),
+            "-o",
+            s(&mesh),
+            "-q",
+        ]);
+        let (vertices, triangles) = sweeptin::input::read_ply(&mesh).unwrap();
+        let area: f64 = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| vertices[i as usize]);
+                ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs() / 2.0
+            })
+            .sum();
+        assert!((area - 415.0).abs() < 1e-6, "{k}: kept area {area}");
+    }
+    let bad = d("point.geojson");
+    std::fs::write(
+        &bad,
+        format!(
+            r#"{{"type": "GeometryCollection", "geometries": [
+            {{"type": "Polygon", "coordinates": [{square}]}},
+            {{"type": "Point", "coordinates": [5, 5]}}]}}"#
+        ),
+    )
+    .unwrap();
+    let o = run(&["volume", s(&pts), "--plane", "0", "--boundary", s(&bad)]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("point.geojson") && e.contains("Point"), "{e}");
+    let o = run(&[
+        "tin",
+        s(&pts),
+        "--trim-boundary",
+        s(&bad),
+        "-o",
+        s(&d("x.ply")),
+        "-q",
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("point.geojson") && e.contains("Point"), "{e}");
+}

@@ -36,7 +36,8 @@
 use crate::error::{Error, Result};
 use crate::geom::grid::{Buckets, Grid};
 use crate::geom::predicates::{Orientation, orient};
-use crate::input::lines::{Lines, is_ring};
+use crate::input::geojson::is_ring;
+use crate::input::lines::Lines;
 
 /// Cell status: no edge in the cell, the cell is outside.
 const OUTSIDE: u8 = 0;
@@ -61,8 +62,8 @@ impl Trim {
     ///
     /// # Errors
     /// [`Error::BadLine`] naming the first ring that is not closed or has a non-finite coordinate
-    /// (`polyline` counts the boundary rings, then the hole rings, each from 0); a `max_edge` that
-    /// is not positive and finite is an [`Error::BadLine`] too (polyline index `u64::MAX`).
+    /// (`polyline` counts the boundary rings, then the hole rings, each from 0); [`Error::Options`]
+    /// for a `max_edge` that is not a positive finite length.
     pub fn new(
         boundary: Option<&[Vec<[f64; 3]>]>,
         holes: &[Vec<[f64; 3]>],
@@ -71,11 +72,9 @@ impl Trim {
         if let Some(l) = max_edge
             && !(l.is_finite() && l > 0.0)
         {
-            return Err(Error::BadLine {
-                polyline: u64::MAX,
-                vertex: 0,
-                message: format!("maximum edge length {l} is not a positive number"),
-            });
+            return Err(Error::Options(format!(
+                "--max-edge must be a positive finite length, got {l}"
+            )));
         }
         let mut rings = Vec::new();
         let boundary = match boundary {
@@ -105,7 +104,7 @@ impl Trim {
     ///
     /// # Errors
     /// [`Error::Format`] for a line that is not a closed ring or a file without any ring;
-    /// [`Error::BadLine`] for a bad `max_edge`.
+    /// [`Error::Options`] for a bad `max_edge`.
     pub fn from_lines(
         boundary: Option<&Lines>,
         holes: Option<&Lines>,
@@ -446,7 +445,12 @@ mod tests {
         assert!(!t.keep(&tri([0., 0.], [3., 0.], [0., 1.])));
         assert!(!t.keep(&tri([0., 0.], [2., 0.], [0., 2.]))); // the diagonal is 2.83
         assert!(t.keep(&tri([0., 0.], [2., 0.], [1., 1.])));
-        assert!(Trim::new(None, &[], Some(0.0)).is_err());
+        let e = Trim::new(None, &[], Some(0.0)).unwrap_err();
+        assert!(matches!(e, Error::Options(_)), "{e:?}");
+        assert_eq!(
+            e.to_string(),
+            "--max-edge must be a positive finite length, got 0"
+        );
         assert!(Trim::new(None, &[], Some(f64::NAN)).is_err());
         assert!(Trim::new(None, &[], None).unwrap().keeps_all());
     }

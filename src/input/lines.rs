@@ -2,16 +2,11 @@
 //!
 //! # GeoJSON
 //!
-//! A `FeatureCollection`, a single `Feature` or a bare geometry. Geometries: `LineString`,
-//! `MultiLineString`, `Polygon` and `MultiPolygon` (every ring, outer and inner, becomes a closed
-//! polyline), and `GeometryCollection` of those. `Point` and `MultiPoint` are refused (they are not
-//! lines); features whose `geometry` is `null` are skipped. Properties are ignored.
-//!
-//! Positions with three values are hard breaklines (`z` given); with two values `z` is unknown and
-//! stored as `NaN`; values beyond the third (a measure) are ignored. A polygon ring that does not
-//! repeat its first position is closed here (RFC 7946 requires the repetition; some writers omit
-//! it). The old-style `crs` member (`{"type": "name", "properties": {"name":
-//! "urn:ogc:def:crs:EPSG::28992"}}`) is read and reported as `EPSG:28992`.
+//! Read by [`crate::input::geojson`], the one GeoJSON reader (its docs say what is accepted):
+//! every line and every ring of every polygon (outer and inner) becomes a polyline, a ring closed
+//! (its last vertex repeats the first). `Point` and `MultiPoint` are refused (they are not lines).
+//! Positions with three values are hard breaklines (`z` given); with two values `z` is unknown
+//! (`NaN`). The file's `crs` member becomes [`Lines::crs`].
 //!
 //! # Text
 //!
@@ -26,9 +21,8 @@
 //! Syntax errors name the file and the line ([`Error::Parse`]); a well-formed file with something
 //! that is not a breakline names the file and the feature ([`Error::Format`]).
 
+use super::geojson::{self, is_ring, not_a_ring};
 use crate::error::{Error, Result};
-use serde::Deserialize;
-use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -154,11 +148,7 @@ impl Lines {
                 let s = &self.sources[i];
                 return Err(Error::Format {
                     path: s.path.to_path_buf(),
-                    message: format!(
-                        "{s}: a polygon is needed here, but this line is not a closed ring ({} \
-                         vertices; a ring has at least 4 and ends where it starts)",
-                        p.len()
-                    ),
+                    message: not_a_ring(&s.to_string(), p.len()),
                 });
             }
         }
@@ -195,11 +185,6 @@ impl Lines {
     }
 }
 
-/// At least 4 vertices and the last equal in `x, y` to the first.
-pub(crate) fn is_ring(p: &[[f64; 3]]) -> bool {
-    p.len() >= 4 && p[0][0] == p[p.len() - 1][0] && p[0][1] == p[p.len() - 1][1]
-}
-
 /// Reads one breakline file (GeoJSON or text, told apart by the first non-blank character).
 ///
 /// # Errors
@@ -231,301 +216,34 @@ pub fn read_files<P: AsRef<Path>>(paths: &[P]) -> Result<Lines> {
 // ---------------------------------------------------------------------------------------------
 // GeoJSON
 
-/// Any GeoJSON object; the fields that do not apply to its type are absent.
-#[derive(Deserialize)]
-struct GeoObject {
-    #[serde(rename = "type")]
-    kind: String,
-    #[serde(default)]
-    features: Option<Vec<GeoObject>>,
-    #[serde(default)]
-    geometry: Option<Box<GeoObject>>,
-    #[serde(default)]
-    geometries: Option<Vec<GeoObject>>,
-    #[serde(default)]
-    coordinates: Option<Tree>,
-    #[serde(default)]
-    crs: Option<serde_json::Value>,
-}
-
-/// Nested coordinate arrays: a position or a list of deeper arrays.
-enum Tree {
-    /// A position: up to three values and how many were given.
-    Pos([f64; 3], usize),
-    List(Vec<Tree>),
-}
-
-impl<'de> Deserialize<'de> for Tree {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Tree, D::Error> {
-        d.deserialize_seq(TreeVisitor)
-    }
-}
-
-struct TreeVisitor;
-
-impl<'de> Visitor<'de> for TreeVisitor {
-    type Value = Tree;
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("an array of coordinates")
-    }
-
-    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<Tree, A::Error> {
-        match seq.next_element::<Item>()? {
-            None => Ok(Tree::List(Vec::new())),
-            Some(Item::Num(x)) => {
-                let mut p = [x, f64::NAN, f64::NAN];
-                let mut n = 1;
-                while let Some(v) = seq.next_element::<f64>()? {
-                    if n < 3 {
-                        p[n] = v;
-                    }
-                    n += 1;
-                }
-                Ok(Tree::Pos(p, n))
-            }
-            Some(Item::Tree(t)) => {
-                let mut list = vec![t];
-                while let Some(t) = seq.next_element::<Tree>()? {
-                    list.push(t);
-                }
-                Ok(Tree::List(list))
-            }
-        }
-    }
-}
-
-/// The first element of a coordinate array: a number (so the array is a position) or an array.
-enum Item {
-    Num(f64),
-    Tree(Tree),
-}
-
-impl<'de> Deserialize<'de> for Item {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Item, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = Item;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a number or an array of coordinates")
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> std::result::Result<Item, E> {
-                Ok(Item::Num(v))
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> std::result::Result<Item, E> {
-                Ok(Item::Num(v as f64))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> std::result::Result<Item, E> {
-                Ok(Item::Num(v as f64))
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> std::result::Result<Item, A::Error> {
-                TreeVisitor.visit_seq(seq).map(Item::Tree)
-            }
-        }
-        d.deserialize_any(V)
-    }
-}
-
+/// Every line and ring of a GeoJSON file ([`geojson::parse`]) as a polyline; points are refused.
 fn read_geojson(bytes: &[u8], path: Arc<Path>) -> Result<Lines> {
-    let root: GeoObject = serde_json::from_slice(bytes).map_err(|e| Error::Parse {
-        path: path.to_path_buf(),
-        line: e.line() as u64,
-        message: format!("not valid GeoJSON: {e}"),
-    })?;
-    let mut r = GeoReader {
-        path,
-        lines: Lines::default(),
-    };
-    r.lines.crs = root.crs.as_ref().and_then(crs_name);
-    match root.kind.as_str() {
-        "FeatureCollection" => {
-            let Some(features) = root.features else {
-                return Err(r.format("a FeatureCollection without \"features\"".into()));
-            };
-            for (i, f) in features.into_iter().enumerate() {
-                r.feature(f, i as u64)?;
-            }
-        }
-        "Feature" => r.feature(root, 0)?,
-        _ => r.geometry(root, 0, &mut 0)?,
-    }
-    Ok(r.lines)
-}
-
-/// `EPSG:28992` from an old-style GeoJSON `crs` member.
-fn crs_name(crs: &serde_json::Value) -> Option<String> {
-    let props = crs.get("properties")?;
-    match crs.get("type")?.as_str()? {
-        "name" => {
-            let name = props.get("name")?.as_str()?;
-            Some(normalise_crs(name))
-        }
-        "EPSG" => Some(format!("EPSG:{}", props.get("code")?)),
-        _ => None,
-    }
-}
-
-/// `urn:ogc:def:crs:EPSG::28992` → `EPSG:28992`; `urn:ogc:def:crs:OGC:1.3:CRS84` → `OGC:CRS84`.
-fn normalise_crs(name: &str) -> String {
-    let lower = name.to_ascii_lowercase();
-    if let Some(rest) = lower.strip_prefix("urn:ogc:def:crs:") {
-        let parts: Vec<&str> = rest.split(':').collect();
-        if let (Some(auth), Some(code)) = (parts.first(), parts.last()) {
-            return format!(
-                "{}:{}",
-                auth.to_ascii_uppercase(),
-                code.to_ascii_uppercase()
-            );
-        }
-    }
-    name.to_string()
-}
-
-struct GeoReader {
-    path: Arc<Path>,
-    lines: Lines,
-}
-
-impl GeoReader {
-    fn format(&self, message: String) -> Error {
-        Error::Format {
-            path: self.path.to_path_buf(),
-            message,
-        }
-    }
-
-    fn feature(&mut self, f: GeoObject, index: u64) -> Result<()> {
-        if f.kind != "Feature" {
-            return Err(self.format(format!(
-                "feature {index}: type is \"{}\", expected \"Feature\"",
-                f.kind
-            )));
-        }
-        match f.geometry {
-            Some(g) => self.geometry(*g, index, &mut 0),
-            None => Ok(()),
-        }
-    }
-
-    fn geometry(&mut self, g: GeoObject, index: u64, part: &mut u32) -> Result<()> {
-        let kind = g.kind.as_str();
-        if kind == "GeometryCollection" {
-            for sub in g.geometries.unwrap_or_default() {
-                self.geometry(sub, index, part)?;
-            }
-            return Ok(());
-        }
-        let depth = match kind {
-            "LineString" => 1,
-            "MultiLineString" | "Polygon" => 2,
-            "MultiPolygon" => 3,
-            "Point" | "MultiPoint" => {
-                return Err(self.format(format!(
-                    "feature {index}: a {kind} is not a line (breaklines are LineString, \
-                     MultiLineString, Polygon or MultiPolygon)"
-                )));
-            }
-            other => {
-                return Err(self.format(format!(
-                    "feature {index}: unknown geometry type \"{other}\""
-                )));
-            }
-        };
-        let Some(tree) = g.coordinates else {
-            return Err(self.format(format!("feature {index}: {kind} without \"coordinates\"")));
-        };
-        let ring = matches!(kind, "Polygon" | "MultiPolygon");
-        self.parts(tree, depth, ring, index, part, kind)
-    }
-
-    /// Walks `depth` levels of nesting down to lists of positions.
-    fn parts(
-        &mut self,
-        tree: Tree,
-        depth: u32,
-        ring: bool,
-        index: u64,
-        part: &mut u32,
-        kind: &str,
-    ) -> Result<()> {
-        let Tree::List(list) = tree else {
-            return Err(self.format(format!(
-                "feature {index}: {kind} coordinates are nested too shallowly"
-            )));
-        };
-        if depth > 1 {
-            for sub in list {
-                self.parts(sub, depth - 1, ring, index, part, kind)?;
-            }
-            return Ok(());
-        }
-        let p = *part;
-        *part += 1;
-        let line = self.positions(list, index, p, kind)?;
-        let line = if ring {
-            self.close_ring(line, index, p)?
-        } else if line.len() < 2 {
-            return Err(self.format(format!(
-                "feature {index} part {p}: a line needs at least 2 positions, this {kind} has {}",
-                line.len()
-            )));
-        } else {
-            line
-        };
-        self.lines.polylines.push(line);
-        self.lines.sources.push(Source {
-            path: self.path.clone(),
-            location: Location::Feature { index, part: p },
+    let doc = geojson::parse(bytes, &path)?;
+    if let Some((feature, kind)) = doc.points.first() {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: format!(
+                "feature {feature}: a {kind} is not a line (breaklines are LineString, \
+                 MultiLineString, Polygon or MultiPolygon)"
+            ),
         });
-        Ok(())
     }
-
-    fn positions(
-        &self,
-        list: Vec<Tree>,
-        index: u64,
-        part: u32,
-        kind: &str,
-    ) -> Result<Vec<[f64; 3]>> {
-        let mut out = Vec::with_capacity(list.len());
-        for (k, t) in list.into_iter().enumerate() {
-            let Tree::Pos(p, n) = t else {
-                return Err(self.format(format!(
-                    "feature {index} part {part}: {kind} coordinates are nested too deeply \
-                     (position {k} is an array of arrays)"
-                )));
-            };
-            if n < 2 {
-                return Err(self.format(format!(
-                    "feature {index} part {part}, position {k}: {n} value(s), a position needs \
-                     x and y"
-                )));
-            }
-            if !p.iter().take(n.min(3)).all(|v| v.is_finite()) {
-                return Err(self.format(format!(
-                    "feature {index} part {part}, position {k}: coordinate is not finite"
-                )));
-            }
-            out.push(p);
-        }
-        Ok(out)
-    }
-
-    fn close_ring(&self, mut r: Vec<[f64; 3]>, index: u64, part: u32) -> Result<Vec<[f64; 3]>> {
-        if let (Some(&first), Some(&last)) = (r.first(), r.last())
-            && (first[0] != last[0] || first[1] != last[1])
-        {
-            r.push(first);
-        }
-        if r.len() < 4 {
-            return Err(self.format(format!(
-                "feature {index} part {part}: a polygon ring needs at least 3 distinct positions \
-                 and has {}",
-                r.len().saturating_sub(1)
-            )));
-        }
-        Ok(r)
-    }
+    let sources = doc
+        .parts
+        .iter()
+        .map(|p| Source {
+            path: path.clone(),
+            location: Location::Feature {
+                index: p.feature,
+                part: p.part,
+            },
+        })
+        .collect();
+    Ok(Lines {
+        polylines: doc.parts.into_iter().map(|p| p.positions).collect(),
+        sources,
+        crs: doc.crs,
+    })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -680,24 +398,6 @@ mod tests {
         let l =
             read(r#" {"coordinates": [[0, 0], [1, 1], [2, 0]], "type": "LineString"}"#).unwrap();
         assert_eq!(xy(&l.polylines[0]), vec![[0., 0.], [1., 1.], [2., 0.]]);
-    }
-
-    #[test]
-    fn crs_forms() {
-        let c = |v: &str| crs_name(&serde_json::from_str(v).unwrap());
-        assert_eq!(
-            c(r#"{"type":"name","properties":{"name":"urn:ogc:def:crs:OGC:1.3:CRS84"}}"#),
-            Some("OGC:CRS84".into())
-        );
-        assert_eq!(
-            c(r#"{"type":"name","properties":{"name":"EPSG:2154"}}"#),
-            Some("EPSG:2154".into())
-        );
-        assert_eq!(
-            c(r#"{"type":"EPSG","properties":{"code":3857}}"#),
-            Some("EPSG:3857".into())
-        );
-        assert_eq!(c(r#"{"type":"link","properties":{"href":"x"}}"#), None);
     }
 
     fn error_text(r: Result<Lines>) -> String {

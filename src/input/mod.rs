@@ -1,5 +1,6 @@
 //! Reading what users give: point clouds ([`las`]: LAS/LAZ; [`xyz`]: text), lines and polygons
-//! ([`lines`]: breaklines as GeoJSON or text; [`geojson`]: polygons and lines for the products),
+//! ([`geojson`]: the one GeoJSON reader, with a polygons view and a lines view; [`lines`]:
+//! breaklines, from GeoJSON through [`geojson`] or from text),
 //! rasters ([`raster`]: GeoTIFF, ESRI ASCII, for grid-to-TIN), and meshes ([`ply`]; [`stin`]:
 //! sweeptin's streaming mesh, read back with bounded memory).
 

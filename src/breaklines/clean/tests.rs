@@ -1,8 +1,11 @@
 //! Unit tests of the cleaner: one per rule, then random inputs checked by a brute-force planarity
 //! test that shares no code with the cleaner.
 
+use super::intersect::crossing_point;
 use super::*;
+use crate::geom::predicates::{Orientation, orient, orient_det};
 use crate::synth::SplitMix64;
+use std::collections::HashMap;
 
 fn run(lines: &[Vec<[f64; 3]>]) -> Pslg {
     let g = clean(lines, &CleanOptions::default()).unwrap();
