@@ -5,19 +5,31 @@
 //!
 //! A [`GridSpec`] describes `cols × rows` square cells of side `cell`. Row 0 is the **northern**
 //! row (largest `y`), as in GeoTIFF and ESRI ASCII grids; column 0 is the western one. Cells are
-//! areas ("pixel is area"): `origin` is the outer upper-left **corner** of cell (0, 0), and the
-//! value of a cell is the surface's value at the cell's **centre**.
+//! areas ("pixel is area"): [`GridSpec::origin`] is the outer upper-left **corner** of cell
+//! (0, 0), and the value of a cell is the surface's value at the cell's **centre**.
+//!
+//! # Alignment
 //!
 //! Grids that sweeptin produces are *aligned*: every centre lies on a whole multiple of the cell
-//! size, so rasters from separate runs over adjacent tiles line up exactly ([`GridSpec::aligned`]).
+//! size, `x = kx × cell` and `y = ky × cell` for integers `kx`, `ky` (the grid's *lattice*), so
+//! rasters from separate runs over adjacent tiles line up exactly and a mosaic of them equals
+//! one run over the whole area. A grid stores its lattice indices, and every centre is computed
+//! from them ([`GridSpec::centre_x`], [`GridSpec::centre_y`]): the same bits in every run.
+//!
+//! Which cells a grid has is decided in one place, [`GridPlan`], from a cell size and a
+//! [`GridExtent`]:
+//! - [`GridExtent::Auto`]: every centre inside the bounds of the data;
+//! - [`GridExtent::BBox`]: the centres in `[xmin, xmax) × (ymin, ymax]` — the convention of IGN's
+//!   LiDAR HD DTM tiles, so boxes that touch share no centre and leave none out. The box's sides
+//!   must be multiples of the cell size, or are rounded outwards to them with `snap`.
 
 use crate::crs::Crs;
+use crate::error::{Error, Result};
+use std::ops::Range;
 
-/// A north-up grid of square cells.
+/// A north-up grid of square cells whose centres lie on whole multiples of the cell size.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridSpec {
-    /// Upper-left outer corner `[x, y]` of cell (0, 0) (row 0 is the northern row).
-    pub origin: [f64; 2],
     /// Side of a cell (> 0), in the units of the coordinates.
     pub cell: f64,
     /// Number of columns.
@@ -28,43 +40,103 @@ pub struct GridSpec {
     pub nodata: f32,
     /// Coordinate reference system, when known.
     pub crs: Option<Crs>,
+    /// Lattice index of the western column's centre (`x = kx0 × cell`).
+    kx0: i64,
+    /// Lattice index of the southern row's centre (`y = ky0 × cell`).
+    ky0: i64,
 }
 
 impl GridSpec {
     /// The grid whose lower-left cell centre is `(kx0 × cell, ky0 × cell)`: centres on whole
     /// multiples of the cell size.
     pub fn aligned(cell: f64, kx0: i64, ky0: i64, cols: u32, rows: u32, nodata: f32) -> GridSpec {
-        let top = ky0 + i64::from(rows) - 1;
         GridSpec {
-            origin: [
-                kx0 as f64 * cell - cell / 2.0,
-                top as f64 * cell + cell / 2.0,
-            ],
             cell,
             cols,
             rows,
             nodata,
             crs: None,
+            kx0,
+            ky0,
         }
+    }
+
+    /// The coordinate of lattice index `k`: the one formula for where centres are.
+    #[inline]
+    fn at(&self, k: i64) -> f64 {
+        k as f64 * self.cell
+    }
+
+    /// Lattice index of the northern row's centre.
+    fn ky_top(&self) -> i64 {
+        self.ky0 + i64::from(self.rows) - 1
+    }
+
+    /// Upper-left outer corner `[x, y]` of cell (0, 0) (row 0 is the northern row).
+    pub fn origin(&self) -> [f64; 2] {
+        let c = self.cell;
+        [
+            self.at(self.kx0) - c / 2.0,
+            self.at(self.ky_top()) + c / 2.0,
+        ]
     }
 
     /// `x` of the centre of column `col`.
     pub fn centre_x(&self, col: u32) -> f64 {
-        self.origin[0] + (f64::from(col) + 0.5) * self.cell
+        self.at(self.kx0 + i64::from(col))
     }
 
     /// `y` of the centre of row `row` (row 0 is the northern row).
     pub fn centre_y(&self, row: u32) -> f64 {
-        self.origin[1] - (f64::from(row) + 0.5) * self.cell
+        self.at(self.ky_top() - i64::from(row))
+    }
+
+    /// The columns whose centres may lie in `[xmin, xmax]`: all of those, and at most one more
+    /// on each side (an exact test decides).
+    pub fn cols_over(&self, xmin: f64, xmax: f64) -> Range<u32> {
+        let c = self.cell;
+        let lo = ((xmin / c).floor() as i64).max(self.kx0);
+        let hi = ((xmax / c).ceil() as i64).min(self.kx0 + i64::from(self.cols) - 1);
+        if hi < lo {
+            return 0..0;
+        }
+        (lo - self.kx0) as u32..(hi - self.kx0 + 1) as u32
+    }
+
+    /// The rows whose centres may lie in `[ymin, ymax]`: all of those, and at most one more on
+    /// each side (an exact test decides).
+    pub fn rows_over(&self, ymin: f64, ymax: f64) -> Range<u32> {
+        let c = self.cell;
+        let top = self.ky_top();
+        let lo = ((ymin / c).floor() as i64).max(self.ky0);
+        let hi = ((ymax / c).ceil() as i64).min(top);
+        if hi < lo {
+            return 0..0;
+        }
+        (top - hi) as u32..(top - lo + 1) as u32
+    }
+
+    /// How many rows, counted from the southern one, have their centre strictly below `y`.
+    pub fn rows_below(&self, y: f64) -> u32 {
+        // The lowest lattice index whose coordinate is at least y.
+        let mut k = (y / self.cell).ceil() as i64;
+        if self.at(k) < y {
+            k = k.saturating_add(1);
+        }
+        while k > i64::MIN && self.at(k - 1) >= y {
+            k -= 1;
+        }
+        k.saturating_sub(self.ky0).clamp(0, i64::from(self.rows)) as u32
     }
 
     /// The real-world extent `[xmin, ymin, xmax, ymax]` of the cells' areas.
     pub fn extent(&self) -> [f64; 4] {
+        let o = self.origin();
         [
-            self.origin[0],
-            self.origin[1] - f64::from(self.rows) * self.cell,
-            self.origin[0] + f64::from(self.cols) * self.cell,
-            self.origin[1],
+            o[0],
+            o[1] - f64::from(self.rows) * self.cell,
+            o[0] + f64::from(self.cols) * self.cell,
+            o[1],
         ]
     }
 
@@ -84,6 +156,148 @@ impl GridSpec {
     }
 }
 
+/// Which cells a grid has (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum GridExtent {
+    /// Every centre inside the bounds of the data.
+    #[default]
+    Auto,
+    /// The centres in `[xmin, xmax) × (ymin, ymax]`.
+    BBox {
+        /// `[xmin, ymin, xmax, ymax]`.
+        bbox: [f64; 4],
+        /// Round the sides outwards to multiples of the cell size instead of refusing them.
+        snap: bool,
+    },
+}
+
+/// A cell size and an extent, checked once ([`GridPlan::new`]); [`GridPlan::grid`] then gives
+/// the grid's cells.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridPlan {
+    cell: f64,
+    extent: GridExtent,
+    /// For a box, its lattice `(kx0, ky0, cols, rows)`, which does not depend on the data.
+    fixed: Option<(i64, i64, u32, u32)>,
+}
+
+impl Default for GridPlan {
+    /// Cells of 1 over the data's bounds.
+    fn default() -> Self {
+        GridPlan {
+            cell: 1.0,
+            extent: GridExtent::Auto,
+            fixed: None,
+        }
+    }
+}
+
+/// How far a value may be from a multiple of the cell size and still count as one, in cells.
+const MULTIPLE_TOLERANCE: f64 = 1e-6;
+
+impl GridPlan {
+    /// Cells of side `cell` over `extent`.
+    ///
+    /// # Errors
+    /// [`Error::Options`] for a cell size that is not a positive number, a box side that is not
+    /// a multiple of the cell size (without `snap`), or a box holding no centre or too many.
+    pub fn new(cell: f64, extent: GridExtent) -> Result<GridPlan> {
+        if !(cell.is_finite() && cell > 0.0) {
+            return Err(Error::Options(format!(
+                "the cell size must be a positive number, not {cell}"
+            )));
+        }
+        let fixed = match extent {
+            GridExtent::Auto => None,
+            GridExtent::BBox { bbox, snap } => {
+                let side = |v: f64, up: bool| -> Result<i64> {
+                    let q = v / cell;
+                    let k = q.round();
+                    if (q - k).abs() <= MULTIPLE_TOLERANCE {
+                        Ok(k as i64)
+                    } else if snap {
+                        Ok(if up { q.ceil() } else { q.floor() } as i64)
+                    } else {
+                        Err(Error::Options(format!(
+                            "the box side {v} is not a multiple of the cell size {cell} \
+                             (use --snap to round the box outwards)"
+                        )))
+                    }
+                };
+                let (x0, y0) = (side(bbox[0], false)?, side(bbox[1], false)?);
+                let (x1, y1) = (side(bbox[2], true)?, side(bbox[3], true)?);
+                // Centres in [xmin, xmax) × (ymin, ymax].
+                Some(lattice(cell, x0, x1 - 1, y0 + 1, y1)?)
+            }
+        };
+        Ok(GridPlan {
+            cell,
+            extent,
+            fixed,
+        })
+    }
+
+    /// The cell size.
+    pub fn cell(&self) -> f64 {
+        self.cell
+    }
+
+    /// The extent.
+    pub fn extent(&self) -> GridExtent {
+        self.extent
+    }
+
+    /// The grid for data within `bounds` (`[xmin, ymin, xmax, ymax]`; only used by
+    /// [`GridExtent::Auto`]).
+    ///
+    /// # Errors
+    /// [`Error::TooFewPoints`] when `bounds` are empty (no data) and the extent is `Auto`;
+    /// [`Error::Options`] when no centre of this cell size lies inside them, or too many.
+    pub fn grid(&self, bounds: [f64; 4], nodata: f32) -> Result<GridSpec> {
+        let (kx0, ky0, cols, rows) = match self.fixed {
+            Some(l) => l,
+            None => {
+                if !bounds.iter().all(|v| v.is_finite()) {
+                    return Err(Error::TooFewPoints {
+                        distinct: 0,
+                        total: 0,
+                    });
+                }
+                let c = self.cell;
+                lattice(
+                    c,
+                    (bounds[0] / c).ceil() as i64,
+                    (bounds[2] / c).floor() as i64,
+                    (bounds[1] / c).ceil() as i64,
+                    (bounds[3] / c).floor() as i64,
+                )?
+            }
+        };
+        Ok(GridSpec::aligned(self.cell, kx0, ky0, cols, rows, nodata))
+    }
+}
+
+/// The lattice of centres with indices `kx0 ..= kx1`, `ky0 ..= ky1`: `(kx0, ky0, cols, rows)`.
+fn lattice(cell: f64, kx0: i64, kx1: i64, ky0: i64, ky1: i64) -> Result<(i64, i64, u32, u32)> {
+    if kx1 < kx0 || ky1 < ky0 {
+        return Err(Error::Options(format!(
+            "the grid would have no cell (no cell centre of size {cell} inside the extent)"
+        )));
+    }
+    let count = |lo: i64, hi: i64, what: &str| {
+        hi.checked_sub(lo)
+            .and_then(|d| u32::try_from(d).ok())
+            .and_then(|d| d.checked_add(1))
+            .ok_or_else(|| Error::Options(format!("too many {what} of size {cell}")))
+    };
+    Ok((
+        kx0,
+        ky0,
+        count(kx0, kx1, "columns")?,
+        count(ky0, ky1, "rows")?,
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -91,7 +305,7 @@ mod tests {
     #[test]
     fn aligned_centres_fall_on_multiples() {
         let g = GridSpec::aligned(0.5, 1_541_100, 12_555_101, 100, 100, -9999.0);
-        assert_eq!(g.origin, [770_549.75, 6_277_600.25]);
+        assert_eq!(g.origin(), [770_549.75, 6_277_600.25]);
         assert_eq!(g.centre_x(0), 770_550.0);
         assert_eq!(g.centre_y(0), 6_277_600.0);
         assert_eq!(g.centre_y(99), 6_277_550.5);
@@ -102,11 +316,82 @@ mod tests {
         assert_eq!(g.len(), 10_000);
     }
 
+    /// A centre is the same bits in every grid that has it: `k × cell`, not a sum from a corner.
+    #[test]
+    fn centres_do_not_depend_on_the_grid() {
+        let a = GridSpec::aligned(0.1, 7_705_500, 0, 10, 1, 0.0);
+        let b = GridSpec::aligned(0.1, 7_705_503, 0, 10, 1, 0.0);
+        assert_eq!(a.centre_x(3).to_bits(), b.centre_x(0).to_bits());
+        assert_eq!(a.centre_x(3), 7_705_503.0 * 0.1);
+    }
+
     #[test]
     fn nan_nodata_compares_by_bits() {
         let mut g = GridSpec::aligned(1.0, 0, 0, 1, 1, f32::NAN);
         assert!(g.is_nodata(f32::NAN));
         g.nodata = -9999.0;
         assert!(!g.is_nodata(f32::NAN) && g.is_nodata(-9999.0));
+    }
+
+    #[test]
+    fn rows_and_columns_over_a_span() {
+        // Centres x 10..=14, y 20..=23 (row 0 is y = 23).
+        let g = GridSpec::aligned(1.0, 10, 20, 5, 4, 0.0);
+        assert_eq!(g.cols_over(11.5, 12.5), 1..4);
+        assert_eq!(g.cols_over(0.0, 100.0), 0..5);
+        assert_eq!(g.cols_over(20.0, 30.0), 0..0);
+        assert_eq!(g.rows_over(20.5, 21.5), 1..4);
+        assert_eq!(g.rows_over(0.0, 5.0), 0..0);
+        assert_eq!(g.rows_below(20.0), 0);
+        assert_eq!(g.rows_below(20.5), 1);
+        assert_eq!(g.rows_below(21.0), 1);
+        assert_eq!(g.rows_below(100.0), 4);
+        assert_eq!(g.rows_below(-100.0), 0);
+    }
+
+    fn lat(g: &GridSpec) -> (i64, i64, u32, u32) {
+        (g.kx0, g.ky0, g.cols, g.rows)
+    }
+
+    #[test]
+    fn plan_auto_and_bbox() {
+        let auto = GridPlan::new(1.0, GridExtent::Auto).unwrap();
+        let g = auto.grid([0.5, 0.0, 3.0, 2.2], 0.0).unwrap();
+        assert_eq!(lat(&g), (1, 0, 3, 3));
+        let b = GridExtent::BBox {
+            bbox: [0.0, 0.0, 4.0, 2.0],
+            snap: false,
+        };
+        // Centres x 0..3, y 1..2.
+        let g = GridPlan::new(1.0, b).unwrap().grid([0.0; 4], 0.0).unwrap();
+        assert_eq!(lat(&g), (0, 1, 4, 2));
+        let off = GridExtent::BBox {
+            bbox: [0.2, 0.0, 4.0, 2.0],
+            snap: false,
+        };
+        let e = GridPlan::new(1.0, off).unwrap_err();
+        assert!(e.to_string().contains("--snap"), "{e}");
+        let snapped = GridExtent::BBox {
+            bbox: [0.2, -0.5, 3.5, 2.0],
+            snap: true,
+        };
+        let g = GridPlan::new(1.0, snapped)
+            .unwrap()
+            .grid([0.0; 4], 0.0)
+            .unwrap();
+        assert_eq!(lat(&g), (0, 0, 4, 3));
+        assert!(GridPlan::new(0.0, GridExtent::Auto).is_err());
+        assert!(GridPlan::new(f64::NAN, GridExtent::Auto).is_err());
+        assert!(auto.grid([0.2, 0.2, 0.8, 0.8], 0.0).is_err());
+        let none = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        assert!(matches!(
+            auto.grid(none, 0.0),
+            Err(Error::TooFewPoints { .. })
+        ));
     }
 }

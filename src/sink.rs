@@ -1,9 +1,21 @@
 //! Where final triangles go: push-style sinks. [`MeshSink`] takes numbered vertices and triangles
 //! (the mesh writers in [`crate::output`]); [`TriangleSink`] takes triangles with their
-//! coordinates (the terrain products in [`crate::products`]).
+//! coordinates (the terrain products in [`crate::products`]); [`Fanout`] feeds several triangle
+//! sinks from one pass.
+//!
+//! # Summaries
+//!
+//! What a finished sink reports is typed: [`MeshSummary`] for a mesh writer, a
+//! [`ProductSummary`] for a triangle sink, one variant per product. The summaries are defined
+//! here, next to the traits that return them, rather than in the product modules that fill them
+//! in: [`TriangleSink::finish`] returns the closed enum, and this module sits below the products
+//! in the layers (they import it, never the reverse), so the enum and its variants live here.
+//! They serialise to the products' part of the `--json` summaries.
 
 use crate::crs::Crs;
 use crate::error::Result;
+use serde::{Serialize, Serializer};
+use std::path::PathBuf;
 
 /// A streaming mesh writer.
 ///
@@ -94,6 +106,331 @@ pub trait TriangleSink: Send {
     fn watermark(&mut self, _y: f64) -> Result<()> {
         Ok(())
     }
-    /// Called once after the last triangle; returns a machine-readable summary.
-    fn finish(&mut self) -> Result<serde_json::Value>;
+    /// Called once after the last triangle; returns what the sink did.
+    fn finish(&mut self) -> Result<ProductSummary>;
+}
+
+/// What a finished [`TriangleSink`] reports. Serialises as the inner summary (`null` for
+/// [`ProductSummary::None`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum ProductSummary {
+    /// A sink with nothing to report.
+    None,
+    /// A DEM raster.
+    Dem(DemSummary),
+    /// Contour lines.
+    Contours(ContourSummary),
+    /// Cut and fill volumes, against a plane or a second surface.
+    Volume(VolumeSummary),
+    /// Heights at query points.
+    Sample(SampleSummary),
+    /// Sections along polylines.
+    Profile(ProfileSummary),
+    /// The reference surface of an overlay volume, filed into bands.
+    SurfaceStore(SurfaceStoreSummary),
+    /// Several sinks fed by one [`Fanout`].
+    Fanout(FanoutSummary),
+}
+
+/// What a DEM sink wrote.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DemSummary {
+    /// The raster file.
+    pub path: PathBuf,
+    /// Columns.
+    pub cols: u32,
+    /// Rows.
+    pub rows: u32,
+    /// Cell size.
+    pub cell: f64,
+    /// Upper-left outer corner of the raster.
+    pub origin: [f64; 2],
+    /// Extent of the cells' areas: `[xmin, ymin, xmax, ymax]`.
+    pub extent: [f64; 4],
+    /// Value of cells without data.
+    pub nodata: f32,
+    /// The CRS recorded in the file, when known.
+    pub crs: Option<String>,
+    /// Cells with a value.
+    pub cells_with_data: u64,
+    /// Cells written after their row had gone to the file (late triangles).
+    pub late_cell_writes: u64,
+    /// Largest number of rows held in memory at once.
+    pub max_rows_in_memory: u64,
+    /// Triangles received.
+    pub triangles: u64,
+    /// Size of the file in bytes.
+    pub bytes: u64,
+}
+
+/// What a contour sink wrote.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ContourSummary {
+    /// The GeoJSON file.
+    pub path: PathBuf,
+    /// Distance between levels.
+    pub interval: f64,
+    /// The level through which the others are counted.
+    pub base: f64,
+    /// Features written (one polyline each).
+    pub features: u64,
+    /// Level segments found in triangles.
+    pub segments: u64,
+    /// Closed rings among the features.
+    pub rings: u64,
+    /// Open lines (ending on the TIN's boundary).
+    pub open_lines: u64,
+    /// Degenerate pieces dropped.
+    pub degenerate_dropped: u64,
+    /// Points of open polylines moved to the scratch file.
+    pub points_spilled: u64,
+    /// Largest number of open polylines at once.
+    pub max_open_polylines: u64,
+    /// Size of the file in bytes.
+    pub bytes: u64,
+}
+
+/// Totals of a cut and fill computation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct CutFillTotals {
+    /// Volume where the surface is above the reference.
+    pub cut_volume: f64,
+    /// Volume where the surface is below the reference.
+    pub fill_volume: f64,
+    /// `cut_volume − fill_volume`.
+    pub net_volume: f64,
+    /// Area where the surface is above the reference.
+    pub cut_area: f64,
+    /// Area where the surface is below the reference.
+    pub fill_area: f64,
+    /// Area covered (cut + fill + where they are equal).
+    pub area: f64,
+}
+
+/// What a volume sink computed.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct VolumeSummary {
+    /// Cut, fill, net and areas.
+    #[serde(flatten)]
+    pub totals: CutFillTotals,
+    /// What the surface was compared with.
+    pub reference: VolumeReference,
+    /// Area of the boundary polygon, when one was given.
+    pub boundary_area: Option<f64>,
+    /// Triangles received.
+    pub triangles: u64,
+    /// How the second surface was read back (against a surface only).
+    #[serde(flatten)]
+    pub overlay: Option<OverlayStats>,
+}
+
+/// The reference of a [`VolumeSummary`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub enum VolumeReference {
+    /// The horizontal plane `z = plane`.
+    #[serde(rename = "plane")]
+    Plane(f64),
+    /// A second surface of this many triangles.
+    #[serde(rename = "surface_triangles")]
+    Surface(u64),
+}
+
+/// The work of a volume against a second surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct OverlayStats {
+    /// Pairs of overlapping triangles (surface, reference) intersected.
+    pub pairs: u64,
+    /// Bands of the reference read from the scratch file.
+    pub band_loads: u64,
+    /// Largest number of bands held in memory at once.
+    pub max_bands_in_memory: u64,
+}
+
+/// What a sample sink wrote.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct SampleSummary {
+    /// The output file.
+    pub path: PathBuf,
+    /// Query points read.
+    pub queries: u64,
+    /// Queries inside the TIN (with a height).
+    pub answered: u64,
+    /// Queries outside the TIN.
+    pub outside: u64,
+    /// Were the queries sorted by y (bounded memory)?
+    pub sorted_by_y: bool,
+    /// Largest number of queries waiting at once.
+    pub max_pending_queries: u64,
+    /// Size of the file in bytes.
+    pub bytes: u64,
+}
+
+/// What a profile sink wrote.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct ProfileSummary {
+    /// The output file.
+    pub path: PathBuf,
+    /// Polylines.
+    pub lines: u64,
+    /// Points written (line vertices inside the TIN and edge crossings).
+    pub points: u64,
+    /// Line vertices inside the TIN.
+    pub line_vertices_inside: u64,
+    /// Size of the file in bytes.
+    pub bytes: u64,
+}
+
+/// What the band store of an overlay's reference surface holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct SurfaceStoreSummary {
+    /// Triangles of the reference surface.
+    pub reference_triangles: u64,
+    /// Bands they are filed into.
+    pub bands: u64,
+}
+
+/// The summaries of the sinks of a [`Fanout`], by name, in the order of the sinks. Serialises
+/// as an object.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FanoutSummary(pub Vec<(String, ProductSummary)>);
+
+impl FanoutSummary {
+    /// The summary of the sink called `name`.
+    pub fn get(&self, name: &str) -> Option<&ProductSummary> {
+        self.0.iter().find(|(n, _)| n == name).map(|(_, s)| s)
+    }
+}
+
+impl Serialize for FanoutSummary {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.collect_map(self.0.iter().map(|(n, v)| (n, v)))
+    }
+}
+
+/// Several triangle sinks fed by one pass: forwards the stream to every sink, after assigning a
+/// CRS (when given).
+///
+/// [`TriangleSink::finish`] returns a [`ProductSummary::Fanout`] with each sink's summary under
+/// its name; calling it again returns the same summary.
+pub struct Fanout {
+    sinks: Vec<(String, Box<dyn TriangleSink>)>,
+    crs: Option<Crs>,
+    summary: Option<FanoutSummary>,
+}
+
+impl Fanout {
+    /// Forwards to `sinks` (name, sink).
+    pub fn new(sinks: Vec<(String, Box<dyn TriangleSink>)>) -> Fanout {
+        Fanout {
+            sinks,
+            crs: None,
+            summary: None,
+        }
+    }
+
+    /// The sinks are told that the data are in `crs`, whatever the input declares.
+    pub fn with_crs(mut self, crs: Option<Crs>) -> Fanout {
+        self.crs = crs;
+        self
+    }
+}
+
+impl TriangleSink for Fanout {
+    fn begin(&mut self, info: &StreamInfo) -> Result<()> {
+        let mut info = info.clone();
+        if self.crs.is_some() {
+            info.crs = self.crs.clone();
+        }
+        for (_, s) in &mut self.sinks {
+            s.begin(&info)?;
+        }
+        Ok(())
+    }
+
+    fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
+        for (_, s) in &mut self.sinks {
+            s.triangle(t)?;
+        }
+        Ok(())
+    }
+
+    fn watermark(&mut self, y: f64) -> Result<()> {
+        for (_, s) in &mut self.sinks {
+            s.watermark(y)?;
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<ProductSummary> {
+        if let Some(s) = &self.summary {
+            return Ok(ProductSummary::Fanout(s.clone()));
+        }
+        let mut all = Vec::with_capacity(self.sinks.len());
+        for (name, s) in &mut self.sinks {
+            all.push((name.clone(), s.finish()?));
+        }
+        let summary = FanoutSummary(all);
+        self.summary = Some(summary.clone());
+        Ok(ProductSummary::Fanout(summary))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::{Arc, Mutex};
+
+    /// What a probe was given: CRS, triangles, watermarks.
+    type Seen = Arc<Mutex<(Option<String>, u64, u64)>>;
+
+    /// Records what it is given.
+    #[derive(Default)]
+    struct Probe(Seen);
+
+    impl TriangleSink for Probe {
+        fn begin(&mut self, info: &StreamInfo) -> Result<()> {
+            self.0.lock().unwrap().0 = info.crs.as_ref().and_then(Crs::definition);
+            Ok(())
+        }
+        fn triangle(&mut self, _t: &[[f64; 3]; 3]) -> Result<()> {
+            self.0.lock().unwrap().1 += 1;
+            Ok(())
+        }
+        fn watermark(&mut self, _y: f64) -> Result<()> {
+            self.0.lock().unwrap().2 += 1;
+            Ok(())
+        }
+        fn finish(&mut self) -> Result<ProductSummary> {
+            Ok(ProductSummary::None)
+        }
+    }
+
+    #[test]
+    fn fanout_assigns_crs_forwards_and_finishes_once() {
+        let crs = Crs {
+            epsg: Some(3794),
+            ..Crs::default()
+        };
+        let (a, b) = (Probe::default(), Probe::default());
+        let (seen_a, seen_b) = (a.0.clone(), b.0.clone());
+        let mut f = Fanout::new(vec![("a".into(), Box::new(a)), ("b".into(), Box::new(b))])
+            .with_crs(Some(crs));
+        f.begin(&StreamInfo::default()).unwrap();
+        f.triangle(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+            .unwrap();
+        f.watermark(1.0).unwrap();
+        let s = f.finish().unwrap();
+        assert_eq!(
+            *seen_a.lock().unwrap(),
+            (Some("EPSG:3794".to_string()), 1, 1)
+        );
+        assert_eq!(seen_b.lock().unwrap().1, 1);
+        let ProductSummary::Fanout(all) = &s else {
+            panic!("{s:?}")
+        };
+        assert_eq!(all.get("a"), Some(&ProductSummary::None));
+        assert_eq!(serde_json::to_string(&s).unwrap(), r#"{"a":null,"b":null}"#);
+        assert_eq!(f.finish().unwrap(), s);
+    }
 }

@@ -5,7 +5,7 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use sweeptin::breaklines::{CleanOptions, read_file};
-use sweeptin::pipeline::{Input, LineOptions, RunOptions, RunSummary, run};
+use sweeptin::pipeline::{Input, LineOptions, RunConfig, RunOptions, RunSummary, run};
 use sweeptin::sink::{MeshSink, MeshSummary};
 use sweeptin::validate::{CdtCheck, validate_cdt, validate_cdt_with};
 use sweeptin::{DuplicatePolicy, Options, triangulate_cdt};
@@ -99,7 +99,8 @@ fn streamed(input: &Input, mem: u64) -> (Collect, RunSummary) {
         ..Default::default()
     };
     let mut c = Collect::default();
-    let summary = run(input, &options, Some(&mut c), &mut []).unwrap();
+    let config = RunConfig::new(input.clone(), options).unwrap();
+    let summary = run(&config, Some(&mut c), &mut []).unwrap();
     assert_eq!(summary.triangles as usize, c.triangles.len());
     assert_eq!(c.released.len(), c.vertices.len(), "every vertex released");
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
@@ -368,14 +369,8 @@ fn a_2d_line_outside_the_points_is_an_error_naming_the_file() {
         progress: false,
         ..Default::default()
     };
-    let err = run(
-        &input(&[pts_path], breaklines(&[lp])),
-        &options,
-        None,
-        &mut [],
-    )
-    .unwrap_err()
-    .to_string();
+    let config = RunConfig::new(input(&[pts_path], breaklines(&[lp])), options).unwrap();
+    let err = run(&config, None, &mut []).unwrap_err().to_string();
     assert!(err.contains("far.txt") && err.contains("no z"), "{err}");
     // The same line with z extends the TIN instead.
     let lz = dir.path().join("far_z.txt");

@@ -2,7 +2,7 @@
 //! real LAS/LAZ files, and byte-identical outputs.
 
 use std::path::{Path, PathBuf};
-use sweeptin::pipeline::{Input, RunOptions, SweepAxis, run};
+use sweeptin::pipeline::{Input, RunConfig, RunOptions, SweepAxis, run};
 use sweeptin::sink::{MeshSink, MeshSummary};
 use sweeptin::{DuplicatePolicy, Options, triangulate};
 
@@ -104,7 +104,8 @@ fn streamed_along(
         sweep_axis,
     };
     let mut c = Collect::default();
-    let summary = run(&input, &options, Some(&mut c), &mut []).unwrap();
+    let config = RunConfig::new(input, options).unwrap();
+    let summary = run(&config, Some(&mut c), &mut []).unwrap();
     assert_eq!(summary.triangles as usize, c.triangles.len());
     assert_eq!(
         c.released.len(),
@@ -337,12 +338,13 @@ fn sweep_along_x_refuses_products() {
         fn triangle(&mut self, _: &[[f64; 3]; 3]) -> sweeptin::Result<()> {
             Ok(())
         }
-        fn finish(&mut self) -> sweeptin::Result<serde_json::Value> {
-            Ok(serde_json::Value::Null)
+        fn finish(&mut self) -> sweeptin::Result<sweeptin::sink::ProductSummary> {
+            Ok(sweeptin::sink::ProductSummary::None)
         }
     }
     let mut sink = Nothing;
-    let e = run(&input, &options, None, &mut [&mut sink]).unwrap_err();
+    let config = RunConfig::new(input, options).unwrap();
+    let e = run(&config, None, &mut [&mut sink]).unwrap_err();
     assert!(e.to_string().contains("--sweep-axis x"), "{e}");
 }
 

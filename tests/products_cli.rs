@@ -428,3 +428,35 @@ fn one_polygon_file_for_trim_boundary_and_volume_boundary() {
     assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains("point.geojson") && e.contains("Point"), "{e}");
 }
+
+/// `--max-edge` in a product run is applied once, by the writer's trimming: the products get
+/// exactly the triangles that are kept, and the summary counts the others once.
+#[test]
+fn max_edge_is_applied_once() {
+    let laz = data_dir().join("lidar/lidR_Topography.laz");
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("d.tif");
+    let o = ok(&[
+        "dem",
+        s(&laz),
+        "--class",
+        "2",
+        "-o",
+        s(&dem),
+        "--max-edge",
+        "20",
+        "--json",
+    ]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let trimmed = v["run"]["breaklines"]["trimmed_triangles"]
+        .as_u64()
+        .unwrap();
+    assert!(trimmed > 0, "{v}");
+    assert_eq!(v["trimmed_triangles"], trimmed, "{v}");
+    assert_eq!(v["dem"]["triangles"], v["run"]["triangles"], "{v}");
+    // Checked once, before any point is read.
+    let bad = dir.path().join("bad.tif");
+    let o = run(&["dem", s(&laz), "-o", s(&bad), "--max-edge=-1", "-q"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!bad.exists());
+}

@@ -34,9 +34,9 @@
 //! assert_eq!(g.stats.crossings, 1);
 //! ```
 //!
-//! Everything here works in whatever coordinates it is given: the pipeline maps lines into the
-//! point cloud's local frame (for LAS input, integer units) first, and tolerances are in those
-//! units too.
+//! Everything here works in whatever coordinates it is given: the pipeline gives lines in the
+//! points' real-world coordinates (the doubles the outputs get, also for LAS/LAZ input; see
+//! docs/ARCHITECTURE.md, "Coordinates"), and tolerances are in those units too.
 
 pub mod clean;
 pub mod flat;

@@ -1,7 +1,7 @@
 //! `sweeptin contours`: contour lines of the TIN, stitched into polylines, as GeoJSON.
 
 use super::input::{ProductInput, run_products};
-use super::products::{ContourArgs, finish_report};
+use super::products::{ContourArgs, Report, finish_report};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -20,7 +20,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let sinks = vec![("contours".to_string(), args.contour.sink(&args.output)?)];
-    let input = args.input.input(None)?;
-    let (run, summary) = run_products(&args.input, &input, None, sinks)?;
-    finish_report(&args.input, &run, summary, start)
+    let config = args.input.config(None)?;
+    let (run, products) = run_products(&args.input, &config, None, sinks)?;
+    finish_report(&args.input, &run, &Report::new(products), start)
 }

@@ -3,10 +3,9 @@
 
 use super::input::check_output;
 use super::input::{ProductInput, run_products};
-use super::products::{ContourArgs, DemArgs, check_hillshade, finish_report, shade};
+use super::products::{ContourArgs, DemArgs, Report, check_hillshade, finish_report, shade};
 use std::path::PathBuf;
 use std::time::Instant;
-use sweeptin::products::hillshade::HillshadeOptions;
 use sweeptin::sink::TriangleSink;
 
 /// Arguments of `sweeptin dem`.
@@ -45,11 +44,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.dem.buffer.is_some() && !args.input.all_lidar() {
         eprintln!("sweeptin: warning: --buffer only limits the reading of LAS/LAZ files");
     }
-    let input = args.input.input(args.dem.read_box(bbox)?)?;
-    let (run, mut summary) = run_products(&args.input, &input, None, sinks)?;
+    let config = args.input.config(args.dem.read_box(bbox)?)?;
+    let (run, products) = run_products(&args.input, &config, None, sinks)?;
+    let mut report = Report::new(products);
     if let Some(png) = &args.hillshade {
-        summary["hillshade"] = shade(&args.output, png, &HillshadeOptions::default())?;
-        summary["hillshade"]["path"] = serde_json::json!(png);
+        report.hillshade = Some(shade(&args.output, png)?);
     }
-    finish_report(&args.input, &run, summary, start)
+    finish_report(&args.input, &run, &report, start)
 }

@@ -4,13 +4,12 @@
 
 use super::info::FilterArgs;
 use anyhow::{Context, bail};
-use serde_json::Value;
 use std::path::{Path, PathBuf};
+use sweeptin::breaklines::CleanOptions;
 use sweeptin::crs::Crs;
 use sweeptin::input::las::BBox;
-use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunOptions, RunSummary, SweepAxis};
-use sweeptin::products::Fanout;
-use sweeptin::sink::{MeshSink, TriangleSink};
+use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunConfig, RunOptions, RunSummary, SweepAxis};
+use sweeptin::sink::{Fanout, FanoutSummary, MeshSink, ProductSummary, TriangleSink};
 
 /// Input files and how to read and run them (flattened into each command's arguments).
 #[derive(clap::Args, Debug, Clone)]
@@ -28,8 +27,8 @@ pub struct InputArgs {
     pub lines: LineArgs,
     /// Memory budget for sorting (e.g. 512M, 4G). Larger inputs are sorted in chunks spilled to
     /// --tmp-dir; the result is the same whatever the budget.
-    #[arg(long, value_name = "SIZE", default_value = "1G", value_parser = parse_size)]
-    pub mem: u64,
+    #[arg(long, value_name = "SIZE", default_value_t = Size(DEFAULT_MEM))]
+    pub mem: Size,
     /// Directory for spill files (anonymous temporary files, never left behind).
     #[arg(long, value_name = "DIR")]
     pub tmp_dir: Option<PathBuf>,
@@ -67,10 +66,41 @@ impl InputArgs {
     /// The library's run options.
     pub fn options(&self) -> RunOptions {
         RunOptions {
-            mem: self.mem,
+            mem: self.mem.0,
             tmp_dir: self.tmp_dir.clone(),
             progress: !self.quiet && !self.json,
             sweep_axis: self.sweep_axis,
+        }
+    }
+
+    /// The run's configuration, checked.
+    pub fn config(&self, input: Input) -> anyhow::Result<RunConfig> {
+        Ok(RunConfig::new(input, self.options())?)
+    }
+}
+
+/// A memory size given as `512M`, `4G`, … (see [`parse_size`]); shown in the same form.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Size(pub u64);
+
+impl std::str::FromStr for Size {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Size, String> {
+        parse_size(s).map(Size)
+    }
+}
+
+impl std::fmt::Display for Size {
+    /// The largest binary unit that divides the size: `1073741824` is `1G`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let units = [(40, "T"), (30, "G"), (20, "M"), (10, "K")];
+        match units
+            .iter()
+            .find(|(shift, _)| self.0 >= 1 << shift && self.0.is_multiple_of(1 << shift))
+        {
+            Some((shift, unit)) => write!(f, "{}{unit}", self.0 >> shift),
+            None => write!(f, "{}", self.0),
         }
     }
 }
@@ -140,7 +170,7 @@ pub struct LineArgs {
     #[arg(long, value_name = "LENGTH")]
     pub max_edge: Option<f64>,
     /// Report breakline heights that disagree by more than this where lines meet or cross.
-    #[arg(long, value_name = "DZ", default_value_t = 0.1)]
+    #[arg(long, value_name = "DZ", default_value_t = CleanOptions::default().z_tolerance)]
     pub z_tolerance: f64,
     /// Flip away triangles lying flat on one contour line (Herva 2009), so that contours derived
     /// from the TIN are unambiguous. Holds the whole triangulation in memory.
@@ -188,19 +218,14 @@ pub fn parse_crs(s: &str) -> anyhow::Result<Crs> {
 }
 
 impl ProductInput {
-    /// The pipeline input, reading only the points inside `read_box` when given (instead of
-    /// `--bbox`).
-    pub fn input(&self, read_box: Option<BBox>) -> anyhow::Result<Input> {
-        if let Some(l) = self.args.lines.max_edge
-            && !(l.is_finite() && l > 0.0)
-        {
-            bail!("--max-edge must be a positive length, not {l}");
-        }
+    /// The run's configuration, reading only the points inside `read_box` when given (instead
+    /// of `--bbox`).
+    pub fn config(&self, read_box: Option<BBox>) -> anyhow::Result<RunConfig> {
         let mut input = self.args.input();
         if read_box.is_some() {
             input.filter.bbox = read_box;
         }
-        Ok(input)
+        self.args.config(input)
     }
 
     /// The CRS given with `--crs`, parsed.
@@ -241,39 +266,39 @@ pub fn check_output(path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs the pipeline on `input` into `sinks` (one pass) and the optional mesh sink; returns the
-/// run summary and the products' summaries (an object keyed by the sinks' names).
+/// Runs the pipeline of `config` into `sinks` (one pass) and the optional mesh sink; returns the
+/// run summary (without the products) and the products' summaries by the sinks' names.
 pub fn run_products(
     p: &ProductInput,
-    input: &Input,
+    config: &RunConfig,
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: Vec<(String, Box<dyn TriangleSink>)>,
-) -> anyhow::Result<(RunSummary, Value)> {
-    let mut fanout = Fanout::new(sinks)
-        .with_crs(p.crs()?)
-        .with_max_edge(p.args.lines.max_edge);
+) -> anyhow::Result<(RunSummary, FanoutSummary)> {
+    let mut fanout = Fanout::new(sinks).with_crs(p.crs()?);
     let names: Vec<String> = p
         .args
         .inputs
         .iter()
         .map(|f| f.display().to_string())
         .collect();
-    let mut run = pipeline::run(input, &p.args.options(), mesh, &mut [&mut fanout])
+    let mut run = pipeline::run(config, mesh, &mut [&mut fanout])
         .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
-    let summary = fanout.finish()?;
-    run.products.clear();
+    let products = match run.products.pop() {
+        Some(ProductSummary::Fanout(s)) if run.products.is_empty() => s,
+        other => bail!("internal error: the products' summary is {other:?}"),
+    };
     run.peak_rss_bytes = pipeline::peak_rss();
-    Ok((run, summary))
+    Ok((run, products))
 }
-
-#[allow(dead_code)]
-const _DEFAULT_IS_1G: () = assert!(DEFAULT_MEM == 1 << 30);
 
 #[cfg(test)]
 mod tests {
     #[test]
     fn sizes() {
-        use super::parse_size;
+        use super::{Size, parse_size};
+        assert_eq!(Size(sweeptin::pipeline::DEFAULT_MEM).to_string(), "1G");
+        assert_eq!(Size(1536).to_string(), "1536");
+        assert_eq!(Size(512 << 20).to_string(), "512M");
         assert_eq!(parse_size("512M"), Ok(512 << 20));
         assert_eq!(parse_size("4G"), Ok(4 << 30));
         assert_eq!(parse_size("1.5K"), Ok(1536));

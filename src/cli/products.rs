@@ -3,25 +3,28 @@
 
 use super::input::{ProductInput, check_output, run_products};
 use anyhow::{Context, bail};
-use serde_json::Value;
+use serde_json::{Map, Value, json};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use sweeptin::input::las::BBox;
 use sweeptin::output::raster::RasterFormat;
+use sweeptin::pipeline::RunSummary;
 use sweeptin::products::boundary::Boundary;
 use sweeptin::products::contours::{ContourOptions, ContourSink};
-use sweeptin::products::dem::{DemExtent, DemOptions, DemSink};
-use sweeptin::products::hillshade::{HillshadeOptions, hillshade};
+use sweeptin::products::dem::{DemOptions, DemSink};
+use sweeptin::products::hillshade::{HillshadeOptions, HillshadeSummary, hillshade};
 use sweeptin::products::profile::ProfileSink;
 use sweeptin::products::sample::SampleSink;
 use sweeptin::products::volume::VolumeSink;
-use sweeptin::sink::TriangleSink;
+use sweeptin::raster::{GridExtent, GridPlan};
+use sweeptin::sink::{FanoutSummary, MeshSummary, ProductSummary, TriangleSink};
 
 /// DEM options.
 #[derive(clap::Args, Debug, Clone)]
 pub struct DemArgs {
     /// Cell size; cell centres fall on whole multiples of it.
-    #[arg(long, default_value_t = 1.0, value_name = "SIZE")]
+    #[arg(long, default_value_t = GridPlan::default().cell(), value_name = "SIZE")]
     pub cell: f64,
     /// With --bbox: round the box's sides outwards to multiples of the cell size (otherwise they
     /// must be multiples).
@@ -33,7 +36,7 @@ pub struct DemArgs {
     #[arg(long, requires = "bbox", value_name = "DISTANCE")]
     pub buffer: Option<f64>,
     /// Value of cells outside the TIN.
-    #[arg(long, default_value_t = -9999.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = DemOptions::default().nodata, allow_hyphen_values = true)]
     pub nodata: f32,
     /// Raster format, when the extension does not say it.
     #[arg(long, value_enum)]
@@ -57,17 +60,16 @@ impl DemArgs {
     pub fn sink(&self, path: &Path, bbox: Option<BBox>) -> anyhow::Result<Box<dyn TriangleSink>> {
         check_output(path)?;
         let extent = match bbox {
-            Some(b) => DemExtent::BBox {
+            Some(b) => GridExtent::BBox {
                 bbox: b.corners(),
                 snap: self.snap,
             },
-            None => DemExtent::Auto,
+            None => GridExtent::Auto,
         };
         Ok(Box::new(DemSink::new(
             path,
             DemOptions {
-                cell: self.cell,
-                extent,
+                grid: GridPlan::new(self.cell, extent)?,
                 nodata: self.nodata,
                 format: self.raster_format,
             },
@@ -79,10 +81,10 @@ impl DemArgs {
 #[derive(clap::Args, Debug, Clone)]
 pub struct ContourArgs {
     /// Distance between contour levels.
-    #[arg(long, default_value_t = 1.0, value_name = "DZ")]
+    #[arg(long, default_value_t = ContourOptions::default().interval, value_name = "DZ")]
     pub interval: f64,
     /// A level through which the others are counted (levels are BASE + k × INTERVAL).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = ContourOptions::default().base, allow_hyphen_values = true)]
     pub base: f64,
 }
 
@@ -103,8 +105,7 @@ impl ContourArgs {
 
 /// Reads a boundary polygon file.
 pub fn read_boundary(path: &Path) -> anyhow::Result<Boundary> {
-    let polys = sweeptin::input::geojson::read_polygons(path)?;
-    Boundary::new(&polys).map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))
+    Ok(Boundary::read(path)?)
 }
 
 /// Arguments of `sweeptin products`.
@@ -149,50 +150,118 @@ pub struct Args {
     pub mesh: Option<PathBuf>,
 }
 
-/// One line per product on standard error.
-pub fn report(run: &sweeptin::pipeline::RunSummary, summary: &Value, seconds: f64) {
-    let peak = run.peak_rss_bytes.map_or("?".to_string(), |b| {
-        format!("{:.0} MiB", b as f64 / 1048576.0)
-    });
-    eprintln!(
-        "sweeptin: {} points ({} duplicates merged), {} triangles in {seconds:.2} s \
-         (peak memory {peak})",
-        run.points_read, run.duplicates, run.triangles
-    );
-    let Some(m) = summary.as_object() else {
-        return;
-    };
-    for (name, v) in m {
-        let path = v.get("path").and_then(Value::as_str).unwrap_or("");
-        let line = match name.as_str() {
-            "dem" => format!(
-                "{} × {} cells of {}, {} with data",
-                v["cols"], v["rows"], v["cell"], v["cells_with_data"]
-            ),
-            "contours" => format!("{} lines ({} closed rings)", v["features"], v["rings"]),
-            "volume" => format!(
-                "cut {} fill {} (areas {} / {}, covered {})",
-                v["cut_volume"], v["fill_volume"], v["cut_area"], v["fill_area"], v["area"]
-            ),
-            "sample" => format!(
-                "{} of {} points inside the TIN",
-                v["answered"], v["queries"]
-            ),
-            "profile" => format!("{} points", v["points"]),
-            "trimmed_triangles" => {
-                if v.as_u64().unwrap_or(0) > 0 {
-                    format!("{v} triangles left out by --max-edge")
-                } else {
-                    continue;
-                }
-            }
-            _ => v.to_string(),
-        };
-        if path.is_empty() {
-            eprintln!("  {name}: {line}");
-        } else {
-            eprintln!("  {name} -> {path}: {line}");
+/// What a product command made: the sinks' summaries by name, and the mesh and hillshade
+/// written beside them.
+pub struct Report {
+    pub products: FanoutSummary,
+    pub mesh: Option<(PathBuf, MeshSummary)>,
+    pub hillshade: Option<(PathBuf, HillshadeSummary)>,
+}
+
+impl Report {
+    /// The products of one pass, without mesh or hillshade yet.
+    pub fn new(products: FanoutSummary) -> Report {
+        Report {
+            products,
+            mesh: None,
+            hillshade: None,
         }
+    }
+
+    /// The `--json` object: each product under its name, `mesh`, `hillshade`,
+    /// `trimmed_triangles` and the `run`, keys in alphabetical order.
+    fn to_json(&self, run: &RunSummary) -> anyhow::Result<Value> {
+        let mut m = Map::new();
+        for (name, s) in &self.products.0 {
+            m.insert(name.clone(), serde_json::to_value(s)?);
+        }
+        m.insert("trimmed_triangles".into(), json!(trimmed(run)));
+        if let Some((path, s)) = &self.mesh {
+            m.insert(
+                "mesh".into(),
+                json!({
+                    "path": path, "vertices": s.vertices, "triangles": s.triangles, "bytes": s.bytes
+                }),
+            );
+        }
+        if let Some((path, s)) = &self.hillshade {
+            let mut v = serde_json::to_value(s)?;
+            v["path"] = json!(path);
+            m.insert("hillshade".into(), v);
+        }
+        m.insert("run".into(), serde_json::to_value(run)?);
+        Ok(Value::Object(m))
+    }
+
+    /// One line per product on standard error, by name.
+    fn print(&self, run: &RunSummary, seconds: f64) {
+        let peak = run.peak_rss_bytes.map_or("?".to_string(), |b| {
+            format!("{:.0} MiB", b as f64 / 1048576.0)
+        });
+        eprintln!(
+            "sweeptin: {} points ({} duplicates merged), {} triangles in {seconds:.2} s \
+             (peak memory {peak})",
+            run.points_read, run.duplicates, run.triangles
+        );
+        let mut lines: BTreeMap<&str, (Option<&Path>, String)> = BTreeMap::new();
+        for (name, s) in &self.products.0 {
+            lines.insert(name, describe(s));
+        }
+        if let Some((path, s)) = &self.mesh {
+            let line = format!("{} vertices, {} triangles", s.vertices, s.triangles);
+            lines.insert("mesh", (Some(path), line));
+        }
+        if let Some((path, s)) = &self.hillshade {
+            let line = format!("{} × {} pixels, {} shaded", s.cols, s.rows, s.shaded);
+            lines.insert("hillshade", (Some(path), line));
+        }
+        let trimmed = trimmed(run);
+        if trimmed > 0 {
+            let line = format!("{trimmed} triangles left out by trimming");
+            lines.insert("trimmed_triangles", (None, line));
+        }
+        for (name, (path, line)) in lines {
+            match path {
+                Some(p) => eprintln!("  {name} -> {}: {line}", p.display()),
+                None => eprintln!("  {name}: {line}"),
+            }
+        }
+    }
+}
+
+/// Triangles that trimming (`--trim-boundary`, `--holes`, `--max-edge`) kept from the products.
+fn trimmed(run: &RunSummary) -> u64 {
+    run.breaklines.as_ref().map_or(0, |b| b.trimmed_triangles)
+}
+
+/// The file a product wrote and a line about it.
+fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
+    match s {
+        ProductSummary::Dem(d) => (
+            Some(&d.path),
+            format!(
+                "{} × {} cells of {:?}, {} with data",
+                d.cols, d.rows, d.cell, d.cells_with_data
+            ),
+        ),
+        ProductSummary::Contours(c) => (
+            Some(&c.path),
+            format!("{} lines ({} closed rings)", c.features, c.rings),
+        ),
+        ProductSummary::Volume(v) => {
+            let t = &v.totals;
+            let line = format!(
+                "cut {:?} fill {:?} (areas {:?} / {:?}, covered {:?})",
+                t.cut_volume, t.fill_volume, t.cut_area, t.fill_area, t.area
+            );
+            (None, line)
+        }
+        ProductSummary::Sample(s) => (
+            Some(&s.path),
+            format!("{} of {} points inside the TIN", s.answered, s.queries),
+        ),
+        ProductSummary::Profile(p) => (Some(&p.path), format!("{} points", p.points)),
+        other => (None, format!("{other:?}")),
     }
 }
 
@@ -208,10 +277,11 @@ pub fn check_hillshade(dem: &Path, format: Option<RasterFormat>) -> anyhow::Resu
     Ok(())
 }
 
-/// Shades `dem` into `png` and reports it.
-pub fn shade(dem: &Path, png: &Path, o: &HillshadeOptions) -> anyhow::Result<Value> {
-    let s = hillshade(dem, png, o).with_context(|| format!("cannot shade {}", dem.display()))?;
-    Ok(serde_json::to_value(s)?)
+/// Shades `dem` into `png`.
+pub fn shade(dem: &Path, png: &Path) -> anyhow::Result<(PathBuf, HillshadeSummary)> {
+    let s = hillshade(dem, png, &HillshadeOptions::default())
+        .with_context(|| format!("cannot shade {}", dem.display()))?;
+    Ok((png.to_path_buf(), s))
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -252,10 +322,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         None
     };
-    let input = args.input.input(read_box)?;
+    let config = args.input.config(read_box)?;
     let crs_text = match args.input.crs()? {
         Some(c) => c.definition(),
-        None => sweeptin::pipeline::input_crs(&input)?,
+        None => config.input_crs()?,
     };
     let mut mesh = match &args.mesh {
         Some(p) => {
@@ -271,32 +341,28 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(m) => Some(&mut **m),
         None => None,
     };
-    let (run, mut summary) = run_products(&args.input, &input, mesh_ref, sinks)?;
-    if let Some(mut m) = mesh {
-        let s = m.finish()?;
-        summary["mesh"] = serde_json::json!({
-            "path": args.mesh, "vertices": s.vertices, "triangles": s.triangles, "bytes": s.bytes
-        });
+    let (run, products) = run_products(&args.input, &config, mesh_ref, sinks)?;
+    let mut report = Report::new(products);
+    if let (Some(mut m), Some(path)) = (mesh, &args.mesh) {
+        report.mesh = Some((path.clone(), m.finish()?));
     }
     if let (Some(png), Some(dem)) = (&args.hillshade, &args.dem) {
-        summary["hillshade"] = shade(dem, png, &HillshadeOptions::default())?;
-        summary["hillshade"]["path"] = serde_json::json!(png);
+        report.hillshade = Some(shade(dem, png)?);
     }
-    finish_report(&args.input, &run, summary, start)
+    finish_report(&args.input, &run, &report, start)
 }
 
 /// Prints the one-line-per-product report, or with `--json` the whole summary on stdout.
 pub fn finish_report(
     input: &ProductInput,
-    run: &sweeptin::pipeline::RunSummary,
-    mut summary: Value,
+    run: &RunSummary,
+    report: &Report,
     start: Instant,
 ) -> anyhow::Result<()> {
     if input.args.json {
-        summary["run"] = serde_json::to_value(run)?;
-        println!("{}", serde_json::to_string(&summary)?);
+        println!("{}", serde_json::to_string(&report.to_json(run)?)?);
     } else {
-        report(run, &summary, start.elapsed().as_secs_f64());
+        report.print(run, start.elapsed().as_secs_f64());
     }
     Ok(())
 }

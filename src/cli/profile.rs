@@ -1,7 +1,7 @@
 //! `sweeptin profile`: the section of the TIN along polylines, with chainage.
 
 use super::input::{ProductInput, check_output, run_products};
-use super::products::finish_report;
+use super::products::{Report, finish_report};
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::products::profile::ProfileSink;
@@ -24,12 +24,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     check_output(&args.output)?;
     let lines = sweeptin::input::geojson::read_lines(&args.line)?;
     let sink = ProfileSink::new(lines, &args.output)?;
-    let input = args.input.input(None)?;
-    let (run, summary) = run_products(
+    let config = args.input.config(None)?;
+    let (run, products) = run_products(
         &args.input,
-        &input,
+        &config,
         None,
         vec![("profile".into(), Box::new(sink))],
     )?;
-    finish_report(&args.input, &run, summary, start)
+    finish_report(&args.input, &run, &Report::new(products), start)
 }

@@ -1,7 +1,7 @@
 //! `sweeptin sample`: heights of the TIN at query points.
 
 use super::input::{ProductInput, check_output, run_products};
-use super::products::finish_report;
+use super::products::{Report, finish_report};
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::products::sample::SampleSink;
@@ -30,12 +30,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.points.display()
         );
     }
-    let input = args.input.input(None)?;
-    let (run, summary) = run_products(
+    let config = args.input.config(None)?;
+    let (run, products) = run_products(
         &args.input,
-        &input,
+        &config,
         None,
         vec![("sample".into(), Box::new(sink))],
     )?;
-    finish_report(&args.input, &run, summary, start)
+    finish_report(&args.input, &run, &Report::new(products), start)
 }

@@ -39,9 +39,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(b) = &args.boundary_polygon {
         input.lines.boundary = Some(b.clone());
     }
+    let config = args.input.config(input)?;
     let crs = match &args.crs {
         Some(c) => Some(c.clone()),
-        None => sweeptin::pipeline::input_crs(&input)?,
+        None => config.input_crs()?,
     };
     let meta = MeshMeta {
         crs,
@@ -59,9 +60,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Open the output first: a bad output path fails before any heavy work, and the temporary
     // file is removed on every error below.
     let mut sink = create_mesh_sink(&args.output, args.format, &meta)?;
-    let mut summary =
-        sweeptin::pipeline::run(&input, &args.input.options(), Some(&mut *sink), &mut [])
-            .with_context(|| format!("cannot triangulate {}", args.input.inputs[0].display()))?;
+    let mut summary = sweeptin::pipeline::run(&config, Some(&mut *sink), &mut [])
+        .with_context(|| format!("cannot triangulate {}", args.input.inputs[0].display()))?;
     let fin = Instant::now();
     let written = sink.finish()?;
     summary.seconds.finish += fin.elapsed().as_secs_f64();

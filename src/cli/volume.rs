@@ -3,14 +3,13 @@
 
 use super::input::{ProductInput, run_products};
 use super::products::read_boundary;
-use anyhow::Context;
-use serde_json::Value;
+use anyhow::{Context, bail};
 use std::path::PathBuf;
 use std::time::Instant;
-use sweeptin::pipeline;
+use sweeptin::pipeline::{self, Input, RunConfig};
 use sweeptin::products::overlay::{BandStore, OverlaySink};
 use sweeptin::products::volume::VolumeSink;
-use sweeptin::sink::TriangleSink;
+use sweeptin::sink::{ProductSummary, TriangleSink};
 
 /// Arguments of `sweeptin volume`.
 #[derive(clap::Args, Debug)]
@@ -35,7 +34,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;
-    let input = args.input.input(None)?;
+    let config = args.input.config(None)?;
     let sink: Box<dyn TriangleSink> = match args.plane {
         Some(z) => Box::new(VolumeSink::new(z, boundary)),
         None => {
@@ -46,32 +45,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .clone()
                 .unwrap_or_else(std::env::temp_dir);
             let mut store = BandStore::new(&dir, args.bands);
-            let mut reference = input.clone();
-            reference.paths = args.surface.clone();
+            let reference = RunConfig::new(
+                Input {
+                    paths: args.surface.clone(),
+                    ..config.input().clone()
+                },
+                config.options().clone(),
+            )?;
             let names: Vec<String> = args
                 .surface
                 .iter()
                 .map(|p| p.display().to_string())
                 .collect();
-            pipeline::run(
-                &reference,
-                &args.input.args.options(),
-                None,
-                &mut [&mut store],
-            )
-            .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
+            pipeline::run(&reference, None, &mut [&mut store])
+                .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
             Box::new(OverlaySink::new(store.into_reader()?, boundary))
         }
     };
-    let (run, summary) = run_products(&args.input, &input, None, vec![("volume".into(), sink)])?;
-    let v = &summary["volume"];
+    let (run, products) = run_products(&args.input, &config, None, vec![("volume".into(), sink)])?;
+    let Some(ProductSummary::Volume(v)) = products.get("volume") else {
+        bail!("internal error: no volume summary in {products:?}");
+    };
     if args.input.args.json {
-        let mut out = v.clone();
+        let mut out = serde_json::to_value(v)?;
         out["run"] = serde_json::to_value(&run)?;
         println!("{}", serde_json::to_string(&out)?);
         return Ok(());
     }
-    let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+    let t = &v.totals;
     let against = match args.plane {
         Some(z) => format!("the plane z = {z}"),
         None => "the reference surface".to_string(),
@@ -79,17 +80,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     println!("against {against}:");
     println!(
         "  cut volume   {:.3}   (area {:.3})",
-        f("cut_volume"),
-        f("cut_area")
+        t.cut_volume, t.cut_area
     );
     println!(
         "  fill volume  {:.3}   (area {:.3})",
-        f("fill_volume"),
-        f("fill_area")
+        t.fill_volume, t.fill_area
     );
-    println!("  net volume   {:.3}", f("net_volume"));
-    println!("  area covered {:.3}", f("area"));
-    if let Some(b) = v.get("boundary_area").and_then(Value::as_f64) {
+    println!("  net volume   {:.3}", t.net_volume);
+    println!("  area covered {:.3}", t.area);
+    if let Some(b) = v.boundary_area {
         println!("  boundary     {b:.3}");
     }
     eprintln!(

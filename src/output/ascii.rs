@@ -72,8 +72,8 @@ impl AsciiGridWriter {
 
     fn header(&self) -> String {
         let s = &self.spec;
-        let xll = s.origin[0] + s.cell / 2.0;
-        let yll = s.origin[1] - f64::from(s.rows) * s.cell + s.cell / 2.0;
+        // `create` refuses an empty grid, so there is a southern row.
+        let (xll, yll) = (s.centre_x(0), s.centre_y(s.rows - 1));
         format!(
             "ncols        {}\nnrows        {}\nxllcenter    {}\nyllcenter    {}\ncellsize     {}\n\
              NODATA_value {}\n",

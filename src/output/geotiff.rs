@@ -169,7 +169,7 @@ impl GeoTiffWriter {
     fn layout(spec: &GridSpec, big: bool) -> Result<(Vec<u8>, u64)> {
         let rows = u64::from(spec.rows);
         let row_bytes = u64::from(spec.cols) * 4;
-        let [x0, y0] = spec.origin;
+        let [x0, y0] = spec.origin();
         let mut entries = vec![
             longs(256, &[spec.cols]),
             longs(257, &[spec.rows]),

@@ -5,8 +5,7 @@ use super::emit::{Collected, Emitter};
 use super::lines::{LINE_FLAG, LineSummary, Prepared};
 use super::read::{self, ReadResult};
 use super::{
-    AnonPeak, Frame, Input, RunOptions, RunSummary, StreamInfo, SweepAxis, Timings, TriangleSink,
-    peak_rss,
+    AnonPeak, Frame, RunConfig, RunSummary, StreamInfo, SweepAxis, Timings, TriangleSink, peak_rss,
 };
 use crate::error::{Error, Result};
 use crate::sink::MeshSink;
@@ -39,23 +38,13 @@ fn bar(enabled: bool) -> ProgressBar {
 }
 
 pub(crate) fn run(
-    input: &Input,
-    options: &RunOptions,
+    config: &RunConfig,
     lines: Option<&Prepared>,
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<RunSummary> {
     let start = Instant::now();
-    let tmp = options.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
-    if !tmp.is_dir() {
-        return Err(Error::io(
-            &tmp,
-            std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "temporary directory does not exist",
-            ),
-        ));
-    }
+    let (input, options) = (config.input(), config.options());
     // Breaklines and the terrain products work in y order (pending segments, watermarks), and
     // so does whoever reads back a mesh format that keeps the watermarks (`.stin`).
     let free_axis =
@@ -69,23 +58,17 @@ pub(crate) fn run(
     }
     // Half the budget for the sort's chunk; the rest covers the sweep's working set, the
     // channels and the writers' buffers.
-    let mut sorter = ExternalSorter::new(options.mem / 2, &tmp);
+    let mut sorter = ExternalSorter::new(options.mem / 2, config.tmp_dir());
     let pb = bar(options.progress);
     pb.set_message("reading");
-    let rd = read::read_into(
-        input,
-        options.sweep_axis,
-        free_axis,
-        &mut sorter,
-        &mut |n, total| {
-            if let Some(t) = total {
-                pb.set_length(t);
-            } else {
-                pb.set_length(n);
-            }
-            pb.set_position(n);
-        },
-    )?;
+    let rd = read::read_into(config, free_axis, &mut sorter, &mut |n, total| {
+        if let Some(t) = total {
+            pb.set_length(t);
+        } else {
+            pb.set_length(n);
+        }
+        pb.set_position(n);
+    })?;
     let mut rd = rd;
     let mut expected = rd.points;
     if let Some(g) = lines.and_then(|l| l.pslg.as_ref()) {

@@ -60,7 +60,7 @@ impl<'m, 's, 't> Emitter<'m, 's, 't> {
         (self.next_out, self.triangles, self.trimmed)
     }
 
-    /// One event of the sweep (local frame).
+    /// One event of the sweep (the sweep's frame).
     pub fn event(&mut self, ev: Event) -> Result<()> {
         match ev {
             Event::Vertex { xy, z, .. } => self.vertex(self.frame.world(xy, z)),
@@ -71,12 +71,11 @@ impl<'m, 's, 't> Emitter<'m, 's, 't> {
             // Watermarks are heights (world y); a sweep along x has none to give.
             Event::Watermark(_) if self.frame.swap => Ok(()),
             Event::Watermark(y) => {
-                let wy = self.frame.offset[1] + self.frame.scale[1] * y;
                 if let Some(m) = self.mesh.as_mut() {
-                    m.watermark(wy)?;
+                    m.watermark(y)?;
                 }
                 for s in self.sinks.iter_mut() {
-                    s.watermark(wy)?;
+                    s.watermark(y)?;
                 }
                 Ok(())
             }

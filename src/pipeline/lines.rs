@@ -29,12 +29,13 @@
 //! `--no-flat-triangles` is the exception: its flips need the whole triangulation, which the
 //! writer then holds (about 40 bytes per point), so use it on tile-sized inputs.
 
-use super::{Input, TriangleSink};
+use super::TriangleSink;
 use crate::breaklines::flat::FlatStats;
 use crate::breaklines::{CleanOptions, CleanStats, Lines, Pslg, Trim, read_file};
 use crate::error::{Error, Result};
 use crate::geom::grid::{Buckets, Grid};
 use crate::geom::predicates::{Orientation, check_coord, orient};
+use crate::sink::ProductSummary;
 use crate::sweep::{ConstraintGraph, ConstraintStats};
 use std::path::PathBuf;
 
@@ -116,14 +117,13 @@ impl Prepared {
     }
 }
 
-/// Reads, cleans and (when needed) drapes the breaklines of `input`.
+/// Reads, cleans and (when needed) drapes the breaklines of a run.
 ///
 /// `drape` runs the points-only pass with the given sink (the caller's pipeline).
 pub(crate) fn prepare(
-    input: &Input,
+    o: &LineOptions,
     drape: &mut dyn FnMut(&mut dyn TriangleSink) -> Result<()>,
 ) -> Result<Prepared> {
-    let o = &input.lines;
     let mut lines = Lines::default();
     for p in &o.breaklines {
         lines.append(read_file(p)?)?;
@@ -318,8 +318,8 @@ impl TriangleSink for DrapeSink {
         Ok(())
     }
 
-    fn finish(&mut self) -> Result<serde_json::Value> {
-        Ok(serde_json::Value::Null)
+    fn finish(&mut self) -> Result<ProductSummary> {
+        Ok(ProductSummary::None)
     }
 }
 

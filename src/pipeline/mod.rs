@@ -7,10 +7,16 @@
 //!   ──[channel]──► writer thread: MeshSink (PLY/OBJ/LandXML/.stin) + TriangleSinks (DEM, …)
 //! ```
 //!
-//! A streaming mesh (`.stin`) given as input is replayed into the sinks instead (see the `replay` module).
-//! Geometry uses LAS's scaled integers (exact) or the XYZ file's doubles; real-world coordinates
-//! are applied on output ([`Frame`]).
+//! A run is described by an [`Input`] and [`RunOptions`], checked once into a [`RunConfig`]
+//! that every stage reads. A streaming mesh (`.stin`) given as input is replayed into the sinks
+//! instead (see the `replay` module).
+//!
+//! Geometry is in the binary doubles that the outputs get: the XYZ file's values as parsed, and
+//! for LAS/LAZ the real-world values `offset + scale × N`, computed once when reading
+//! (docs/ARCHITECTURE.md, "Coordinates"). The only change on the way out is the sweep axis: a
+//! sweep along x works on the points with x and y exchanged, which [`Frame`] undoes.
 
+mod config;
 mod drive;
 mod emit;
 mod lines;
@@ -19,10 +25,12 @@ mod replay;
 
 use crate::error::Result;
 use crate::input::las::Filter;
-use crate::sink::{MeshSink, StreamInfo, TriangleSink};
+use crate::sink::{MeshSink, ProductSummary, StreamInfo, TriangleSink};
 use crate::sort::memory::DuplicatePolicy;
+use config::Source;
 use std::path::PathBuf;
 
+pub use config::RunConfig;
 pub use lines::{LineOptions, LineSummary};
 pub use read::read_points;
 
@@ -87,35 +95,20 @@ pub const STRIP_RATIO: f64 = 4.0;
 /// Default memory budget: 1 GiB.
 pub const DEFAULT_MEM: u64 = 1 << 30;
 
-/// Maps the sweep's local frame to real-world coordinates: `world = offset + scale * local`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The sweep's frame: the world's coordinates, with x and y exchanged for a sweep along x.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Frame {
-    /// Scale per axis.
-    pub scale: [f64; 3],
-    /// Offset per axis.
-    pub offset: [f64; 3],
-    /// The local frame has x and y exchanged (a sweep along the world's x): a mirror image, so
-    /// triangles change orientation on the way out.
+    /// The sweep's frame has x and y exchanged (a sweep along the world's x): a mirror image,
+    /// so triangles change orientation on the way out.
     pub swap: bool,
 }
 
 impl Frame {
-    /// The identity (XYZ input).
-    pub const IDENTITY: Frame = Frame {
-        scale: [1.0; 3],
-        offset: [0.0; 3],
-        swap: false,
-    };
-
-    /// Real-world coordinates of a local point.
+    /// World coordinates of a point of the sweep's frame.
     #[inline]
     pub fn world(&self, xy: [f64; 2], z: f64) -> [f64; 3] {
         let [x, y] = if self.swap { [xy[1], xy[0]] } else { xy };
-        [
-            self.offset[0] + self.scale[0] * x,
-            self.offset[1] + self.scale[1] * y,
-            self.offset[2] + self.scale[2] * z,
-        ]
+        [x, y, z]
     }
 }
 
@@ -157,31 +150,14 @@ pub struct RunSummary {
     pub sweep: crate::sweep::SweepStats,
     /// Streaming working set.
     pub stream: crate::sweep::StreamStats,
-    /// What each triangle sink reported.
-    pub products: Vec<serde_json::Value>,
+    /// What each triangle sink reported, in the order of the sinks.
+    pub products: Vec<ProductSummary>,
     /// The CRS, when known.
     pub crs: Option<String>,
     /// Breaklines and trimming, when given.
     pub breaklines: Option<LineSummary>,
     /// The axis the sweep went along (`x` or `y`).
     pub sweep_axis: SweepAxis,
-}
-
-/// The CRS of the input, from LAS/LAZ headers or a streaming mesh's header, without reading the
-/// points.
-///
-/// # Errors
-/// The reader's errors when a header cannot be read.
-pub fn input_crs(input: &Input) -> Result<Option<String>> {
-    if replay::is_stream_input(input) {
-        let r = crate::input::stin::StinReader::open(&input.paths[0])?;
-        return Ok(r.crs().map(str::to_string));
-    }
-    if !input.paths.is_empty() && input.paths.iter().all(|p| read::is_lidar(p)) {
-        let r = crate::input::las::LidarReader::open(&input.paths, &input.filter)?;
-        return Ok(r.crs().and_then(|c| c.definition()));
-    }
-    Ok(None)
 }
 
 fn proc_status_kb(field: &str) -> Option<u64> {
@@ -217,41 +193,27 @@ impl AnonPeak {
     }
 }
 
-/// Triangulates `input` and delivers the result to `mesh` (if any) and every sink, streaming.
+/// Triangulates the input of `config` and delivers the result to `mesh` (if any) and every
+/// sink, streaming.
 ///
 /// # Errors
 /// Any reader, triangulation, sink or output error; [`crate::Error::TooFewPoints`] and
 /// [`crate::Error::AllCollinear`] when no triangle exists.
 pub fn run(
-    input: &Input,
-    options: &RunOptions,
+    config: &RunConfig,
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<RunSummary> {
-    if replay::is_stream_input(input) {
-        if !input.lines.is_empty() {
-            return Err(crate::Error::Format {
-                path: input.paths[0].clone(),
-                message: "breaklines and trimming need the points: give the LAS/LAZ or XYZ \
-                          input, not a streaming mesh"
-                    .into(),
-            });
-        }
-        return replay::replay(input, mesh, sinks);
+    if config.source() == Source::Stream {
+        return replay::replay(config, mesh, sinks);
     }
-    if input.lines.is_empty() && !input.lines.no_flat_triangles {
-        return drive::run(input, options, None, mesh, sinks);
+    let lines = &config.input().lines;
+    if lines.is_empty() && !lines.no_flat_triangles {
+        return drive::run(config, None, mesh, sinks);
     }
-    let plain = Input {
-        lines: LineOptions::default(),
-        ..input.clone()
-    };
-    let quiet = RunOptions {
-        progress: false,
-        ..options.clone()
-    };
-    let prepared = lines::prepare(input, &mut |sink| {
-        drive::run(&plain, &quiet, None, None, &mut [sink]).map(|_| ())
+    let points_only = config.points_only();
+    let prepared = lines::prepare(lines, &mut |sink| {
+        drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
     })?;
-    drive::run(input, options, Some(&prepared), mesh, sinks)
+    drive::run(config, Some(&prepared), mesh, sinks)
 }

@@ -1,20 +1,12 @@
 //! Phase 1: read every input point (with filters) into the external sorter, in the local frame.
 
-use super::{Frame, Input, STRIP_RATIO, SweepAxis};
+use super::config::Source;
+use super::{Frame, Input, RunConfig, STRIP_RATIO, SweepAxis};
 use crate::error::{Error, Result};
 use crate::geom::predicates;
 use crate::input::las::{Crs, LidarPoint, LidarReader};
 use crate::input::xyz::XyzReader;
 use crate::sort::external::{ExternalSorter, SortRecord};
-use std::path::Path;
-
-/// Is `p` a LAS or LAZ file (by extension)?
-pub(crate) fn is_lidar(p: &Path) -> bool {
-    matches!(
-        p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()),
-        Some(e) if e == "las" || e == "laz"
-    )
-}
 
 /// What reading found out.
 #[derive(Debug)]
@@ -67,18 +59,17 @@ pub(crate) type Progress<'a> = &'a mut dyn FnMut(u64, Option<u64>);
 
 const CHUNK: usize = 1 << 16;
 
-/// Reads all of `input` into `sorter`, exchanging x and y when the sweep goes along x (`axis`;
-/// `Auto` may choose x only when `free_axis`, i.e. nothing downstream needs y order).
+/// Reads all of the input into `sorter`, exchanging x and y when the sweep goes along x (the
+/// configured axis; `Auto` may choose x only when `free_axis`, i.e. nothing downstream needs y
+/// order).
 pub(crate) fn read_into(
-    input: &Input,
-    axis: SweepAxis,
+    config: &RunConfig,
     free_axis: bool,
     sorter: &mut ExternalSorter,
     progress: Progress,
 ) -> Result<ReadResult> {
-    if input.paths.is_empty() {
-        return Err(Error::NoInput);
-    }
+    let input = config.input();
+    let axis = config.options().sweep_axis;
     let mut bounds = [
         f64::INFINITY,
         f64::INFINITY,
@@ -108,8 +99,7 @@ pub(crate) fn read_into(
         bounds[3] = bounds[3].max(r.y);
         s.push(r)
     };
-    let lidar = input.paths.iter().filter(|p| is_lidar(p)).count();
-    if lidar == input.paths.len() {
+    if config.source() == Source::Lidar {
         let mut reader = LidarReader::open(&input.paths, &input.filter)?;
         if axis == SweepAxis::Auto && free_axis {
             let b = reader.bounds();
@@ -145,20 +135,11 @@ pub(crate) fn read_into(
             progress(n, Some(total));
         }
         return Ok(ReadResult {
-            frame: Frame {
-                swap,
-                ..Frame::IDENTITY
-            },
+            frame: Frame { swap },
             crs,
             bounds,
             points: n,
             x_sample: sample.xs,
-        });
-    }
-    if lidar > 0 {
-        return Err(Error::Format {
-            path: input.paths[0].clone(),
-            message: "cannot mix LAS/LAZ and XYZ inputs in one run".into(),
         });
     }
     let mut n = 0u64;
@@ -201,10 +182,7 @@ pub(crate) fn read_into(
         }
     }
     Ok(ReadResult {
-        frame: Frame {
-            swap,
-            ..Frame::IDENTITY
-        },
+        frame: Frame { swap },
         crs: None,
         bounds,
         points: n,
@@ -216,12 +194,17 @@ pub(crate) fn read_into(
 /// (for commands that need the whole set, such as `crossval`).
 ///
 /// # Errors
-/// Reader errors, or [`Error::NoInput`].
+/// Reader errors; [`Error::NoInput`]; [`Error::Format`] for LAS/LAZ files mixed with XYZ or a
+/// streaming mesh, which holds a triangulation rather than points to read.
 pub fn read_points(input: &Input) -> Result<(Vec<[f64; 3]>, Option<Crs>)> {
-    if input.paths.is_empty() {
-        return Err(Error::NoInput);
+    let source = Source::of(&input.paths)?;
+    if source == Source::Stream {
+        return Err(Error::Format {
+            path: input.paths[0].clone(),
+            message: "a streaming mesh (.stin) cannot be read as points".into(),
+        });
     }
-    if input.paths.iter().all(|p| is_lidar(p)) {
+    if source == Source::Lidar {
         let mut r = LidarReader::open(&input.paths, &input.filter)?;
         let pts = r.read_all()?;
         let q = *r.quantization();

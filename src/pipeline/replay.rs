@@ -1,20 +1,12 @@
 //! A streaming mesh (`.stin`) as input: replay it into the sinks with bounded memory, without
 //! triangulating again.
 
-use super::{Input, RunSummary, StreamInfo, TriangleSink, peak_rss};
+use super::{RunConfig, RunSummary, StreamInfo, TriangleSink, peak_rss};
 use crate::crs::Crs;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::input::stin::{StinEvent, StinReader};
 use crate::sink::MeshSink;
 use std::time::Instant;
-
-pub(crate) fn is_stream_input(input: &Input) -> bool {
-    input.paths.iter().any(|p| {
-        p.extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("stin"))
-    })
-}
 
 /// A CRS from the text a streaming mesh records (`EPSG:n` or WKT).
 fn crs_from_text(t: &str) -> Option<Crs> {
@@ -32,19 +24,14 @@ fn crs_from_text(t: &str) -> Option<Crs> {
     Crs::from_wkt_bytes(t.as_bytes())
 }
 
+/// Replays the one streaming mesh of `config` (checked by [`RunConfig::new`]).
 pub(crate) fn replay(
-    input: &Input,
+    config: &RunConfig,
     mut mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<RunSummary> {
     let start = Instant::now();
-    if input.paths.len() != 1 {
-        return Err(Error::Format {
-            path: input.paths[0].clone(),
-            message: "a streaming mesh (.stin) must be the only input".into(),
-        });
-    }
-    let path = &input.paths[0];
+    let path = &config.input().paths[0];
     // First pass over the header only for the CRS; bounds are not recorded, so sinks get the
     // extent from a quick pre-scan of the vertices (bounded memory, one extra sequential read).
     let mut bounds = [

@@ -9,7 +9,9 @@
 //! re-oriented); several polygons that overlap cover their union (non-zero winding rule).
 
 use super::geom::{PV, clip_left, integrate};
+use crate::error::{Error, Result};
 use crate::input::geojson::Polygon;
+use std::path::Path;
 
 /// One trapezoid: bottom-left, bottom-right, top-right, top-left (counter-clockwise).
 type Trap = [[f64; 2]; 4];
@@ -54,8 +56,26 @@ impl Boundary {
     /// Decomposes `polygons` (each: outline, then holes).
     ///
     /// # Errors
-    /// A message if there is no area.
-    pub fn new(polygons: &[Polygon]) -> Result<Boundary, String> {
+    /// [`Error::Options`] if there is no area, or the edges cross too often to decompose them.
+    pub fn new(polygons: &[Polygon]) -> Result<Boundary> {
+        Self::decompose(polygons).map_err(|m| Error::Options(m.into()))
+    }
+
+    /// Reads the polygons of a GeoJSON file ([`crate::input::geojson::read_polygons`]) and
+    /// decomposes them.
+    ///
+    /// # Errors
+    /// The reader's errors; [`Error::Format`] naming the file for the problems of
+    /// [`Boundary::new`].
+    pub fn read(path: &Path) -> Result<Boundary> {
+        let polygons = crate::input::geojson::read_polygons(path)?;
+        Self::decompose(&polygons).map_err(|m| Error::Format {
+            path: path.to_path_buf(),
+            message: m.into(),
+        })
+    }
+
+    fn decompose(polygons: &[Polygon]) -> std::result::Result<Boundary, &'static str> {
         let mut edges: Vec<Edge> = Vec::new();
         for poly in polygons {
             for (i, ring) in poly.iter().enumerate() {
@@ -81,19 +101,19 @@ impl Boundary {
             ys.sort_by(f64::total_cmp);
             ys.dedup();
             if ys.len() < 2 {
-                return Err("the boundary has no area".into());
+                return Err("the boundary has no area");
             }
             let (slabs, crossings) = Self::slabs(&edges, &ys);
             if crossings.is_empty() {
                 let b = Boundary { ys, slabs };
                 if b.area() <= 0.0 {
-                    return Err("the boundary has no area".into());
+                    return Err("the boundary has no area");
                 }
                 return Ok(b);
             }
             ys.extend(crossings);
         }
-        Err("the boundary's edges cross too often to decompose it".into())
+        Err("the boundary's edges cross too often to decompose it")
     }
 
     /// The trapezoids of every slab, or the `y` of points where edges cross inside a slab.

@@ -33,7 +33,7 @@
 use super::geom::{Tri, cmp_xy};
 use crate::error::{Error, Result};
 use crate::output::geojson::FeatureWriter;
-use crate::sink::{StreamInfo, TriangleSink};
+use crate::sink::{ContourSummary, ProductSummary, StreamInfo, TriangleSink};
 use serde_json::json;
 use std::collections::{HashMap, VecDeque};
 use std::fs::File;
@@ -528,7 +528,7 @@ impl TriangleSink for ContourSink {
         Ok(())
     }
 
-    fn finish(&mut self) -> Result<serde_json::Value> {
+    fn finish(&mut self) -> Result<ProductSummary> {
         self.out()?;
         let max_open = self.stitcher.max_open;
         let open: Vec<usize> = (0..self.stitcher.polys.len())
@@ -541,18 +541,18 @@ impl TriangleSink for ContourSink {
         let out = self.out.take().expect("checked above");
         let features = out.features();
         let bytes = out.finish()?;
-        Ok(json!({
-            "path": self.path,
-            "interval": self.options.interval,
-            "base": self.options.base,
-            "features": features,
-            "segments": self.stats.segments,
-            "rings": self.stats.rings,
-            "open_lines": self.stats.open_lines,
-            "degenerate_dropped": self.stats.degenerate_dropped,
-            "points_spilled": self.stats.points_spilled,
-            "max_open_polylines": max_open,
-            "bytes": bytes,
+        Ok(ProductSummary::Contours(ContourSummary {
+            path: self.path.clone(),
+            interval: self.options.interval,
+            base: self.options.base,
+            features,
+            segments: self.stats.segments,
+            rings: self.stats.rings,
+            open_lines: self.stats.open_lines,
+            degenerate_dropped: self.stats.degenerate_dropped,
+            points_spilled: self.stats.points_spilled,
+            max_open_polylines: max_open as u64,
+            bytes,
         }))
     }
 }
@@ -608,14 +608,16 @@ mod tests {
         dir: &Path,
         name: &str,
         options: ContourOptions,
-    ) -> (PathBuf, Value) {
+    ) -> (PathBuf, ContourSummary) {
         let path = dir.join(name);
         let mut sink = ContourSink::new(&path, options).unwrap();
         let info = StreamInfo {
             crs: None,
             bounds: [0.0, 0.0, 100.0, 100.0],
         };
-        let summary = feed(&mut sink, &info, steps);
+        let ProductSummary::Contours(summary) = feed(&mut sink, &info, steps) else {
+            panic!("not a contour summary")
+        };
         (path, summary)
     }
 
@@ -732,7 +734,7 @@ mod tests {
             "c.json",
             tiny,
         );
-        assert!(summary["points_spilled"].as_u64().unwrap() > 0, "{summary}");
+        assert!(summary.points_spilled > 0, "{summary:?}");
         let c = canonical(&c);
         assert!(a.iter().any(|x| x.1) && a.iter().any(|x| !x.1));
         assert_eq!(a, b);

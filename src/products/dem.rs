@@ -2,13 +2,10 @@
 //!
 //! # The grid
 //!
-//! Cell centres lie on whole multiples of the cell size (`x = kx × cell`, `y = ky × cell` for
-//! integers `kx`, `ky`), so rasters of adjacent tiles from separate runs line up exactly and a
-//! mosaic of them equals one run over the whole area. The extent is, by [`DemExtent`]:
-//! - `Auto`: every centre inside the bounds of the points;
-//! - `BBox`: the centres in `[xmin, xmax) × (ymin, ymax]` — the convention of IGN's LiDAR HD DTM
-//!   tiles, so boxes that touch share no centre and leave none out. The box's sides must be
-//!   multiples of the cell size, or are rounded outwards to them with `snap`.
+//! Cell centres lie on whole multiples of the cell size, so rasters of adjacent tiles from
+//! separate runs line up exactly and a mosaic of them equals one run over the whole area; the
+//! cells are every centre inside the points' bounds, or those of a box. Which cells a grid has,
+//! and where their centres are, is decided in [`crate::raster`] ([`GridPlan`], [`GridSpec`]).
 //!
 //! # Which triangle writes a cell
 //!
@@ -30,40 +27,22 @@
 //! and applied in arrival order, one read and one write per row span, when the queue is full and
 //! at the end.
 
-use super::geom::Tri;
+use super::geom::{Location, Tri};
 use crate::error::{Error, Result};
 use crate::output::raster::{GridWriter, RasterFormat, create_grid_writer};
-use crate::raster::GridSpec;
-use crate::sink::{StreamInfo, TriangleSink};
-use serde_json::json;
+use crate::raster::{GridPlan, GridSpec};
+use crate::sink::{DemSummary, ProductSummary, StreamInfo, TriangleSink};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 
 /// Late cells queued before they are applied to the file (16 bytes each).
 pub const LATE_BATCH: usize = 1 << 16;
 
-/// Which cells the raster has (see the module docs).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub enum DemExtent {
-    /// Every centre inside the bounds of the input points.
-    #[default]
-    Auto,
-    /// The centres in `[xmin, xmax) × (ymin, ymax]`.
-    BBox {
-        /// `[xmin, ymin, xmax, ymax]`.
-        bbox: [f64; 4],
-        /// Round the sides outwards to multiples of the cell size instead of refusing them.
-        snap: bool,
-    },
-}
-
 /// Options of a [`DemSink`].
 #[derive(Clone, Debug)]
 pub struct DemOptions {
-    /// Cell size (> 0).
-    pub cell: f64,
-    /// Extent.
-    pub extent: DemExtent,
+    /// Cell size and extent (checked when the plan is made).
+    pub grid: GridPlan,
     /// Value of cells without data.
     pub nodata: f32,
     /// Output format; by extension when `None`.
@@ -73,112 +52,21 @@ pub struct DemOptions {
 impl Default for DemOptions {
     fn default() -> Self {
         DemOptions {
-            cell: 1.0,
-            extent: DemExtent::Auto,
+            grid: GridPlan::default(),
             nodata: -9999.0,
             format: None,
         }
     }
 }
 
-/// The integer lattice of centres: columns `kx0 .. kx0 + cols`, rows `ky0 .. ky0 + rows`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Lattice {
-    /// Index of the western column's centre (`x = kx0 × cell`).
-    pub kx0: i64,
-    /// Index of the southern row's centre (`y = ky0 × cell`).
-    pub ky0: i64,
-    /// Columns.
-    pub cols: u32,
-    /// Rows.
-    pub rows: u32,
-}
-
-/// How far a value may be from a multiple of the cell size and still count as one, in cells.
-const MULTIPLE_TOLERANCE: f64 = 1e-6;
-
-fn as_multiple(v: f64, cell: f64) -> Option<i64> {
-    let q = v / cell;
-    let k = q.round();
-    ((q - k).abs() <= MULTIPLE_TOLERANCE).then_some(k as i64)
-}
-
-/// The lattice for `extent` given the points' `bounds`, or a message saying what is wrong.
-///
-/// # Errors
-/// A bad cell size, a box side that is not a multiple of the cell size (without `snap`), an
-/// empty or absurdly large grid.
-pub fn lattice(
-    cell: f64,
-    extent: DemExtent,
-    bounds: [f64; 4],
-) -> std::result::Result<Lattice, String> {
-    if !(cell.is_finite() && cell > 0.0) {
-        return Err(format!(
-            "the cell size must be a positive number, not {cell}"
-        ));
-    }
-    let (kx0, kx1, ky0, ky1) = match extent {
-        DemExtent::Auto => {
-            if !bounds.iter().all(|v| v.is_finite()) {
-                return Err("the input has no points".into());
-            }
-            (
-                (bounds[0] / cell).ceil() as i64,
-                (bounds[2] / cell).floor() as i64,
-                (bounds[1] / cell).ceil() as i64,
-                (bounds[3] / cell).floor() as i64,
-            )
-        }
-        DemExtent::BBox { bbox, snap } => {
-            let side = |v: f64, up: bool| -> std::result::Result<i64, String> {
-                match as_multiple(v, cell) {
-                    Some(k) => Ok(k),
-                    None if snap => Ok(if up {
-                        (v / cell).ceil()
-                    } else {
-                        (v / cell).floor()
-                    } as i64),
-                    None => Err(format!(
-                        "the box side {v} is not a multiple of the cell size {cell} \
-                         (use --snap to round the box outwards)"
-                    )),
-                }
-            };
-            let (x0, y0, x1, y1) = (
-                side(bbox[0], false)?,
-                side(bbox[1], false)?,
-                side(bbox[2], true)?,
-                side(bbox[3], true)?,
-            );
-            // Centres in [xmin, xmax) × (ymin, ymax].
-            (x0, x1 - 1, y0 + 1, y1)
-        }
-    };
-    if kx1 < kx0 || ky1 < ky0 {
-        return Err(format!(
-            "the grid would have no cell (no cell centre of size {cell} inside the extent)"
-        ));
-    }
-    let cols = u32::try_from(kx1 - kx0 + 1).map_err(|_| "too many columns".to_string())?;
-    let rows = u32::try_from(ky1 - ky0 + 1).map_err(|_| "too many rows".to_string())?;
-    Ok(Lattice {
-        kx0,
-        ky0,
-        cols,
-        rows,
-    })
-}
-
 /// The band of rows in memory and the writer behind it.
 struct Raster {
     writer: Box<dyn GridWriter>,
-    lat: Lattice,
-    cell: f64,
-    nodata: f32,
-    /// Lowest row index (`ky`) not yet written to the file.
-    band_lo: i64,
-    /// Rows `band_lo, band_lo + 1, …`.
+    spec: GridSpec,
+    /// Rows already written to the file, counted from the southern one.
+    written: u32,
+    /// Rows `rows − 1 − written`, `rows − 2 − written`, … (northwards from the lowest row not
+    /// yet written).
     band: VecDeque<Vec<f32>>,
     /// Row buffers for reuse.
     spare: Vec<Vec<f32>>,
@@ -193,45 +81,35 @@ struct Raster {
 }
 
 impl Raster {
-    fn ky_top(&self) -> i64 {
-        self.lat.ky0 + i64::from(self.lat.rows) - 1
+    /// Is `row` still in memory (not written to the file yet)?
+    fn in_band(&self, row: u32) -> bool {
+        row + self.written < self.spec.rows
     }
 
-    /// Raster row (0 = north) of lattice row `ky`.
-    fn row_of(&self, ky: i64) -> u32 {
-        (self.ky_top() - ky) as u32
-    }
-
-    fn is_nodata(&self, v: f32) -> bool {
-        v.to_bits() == self.nodata.to_bits()
-    }
-
-    fn band_row(&mut self, ky: i64) -> &mut Vec<f32> {
-        let i = (ky - self.band_lo) as usize;
+    fn band_row(&mut self, row: u32) -> &mut Vec<f32> {
+        let i = (self.spec.rows - 1 - self.written - row) as usize;
         while self.band.len() <= i {
-            let mut row = self.spare.pop().unwrap_or_default();
-            row.clear();
-            row.resize(self.lat.cols as usize, self.nodata);
-            self.band.push_back(row);
+            let mut values = self.spare.pop().unwrap_or_default();
+            values.clear();
+            values.resize(self.spec.cols as usize, self.spec.nodata);
+            self.band.push_back(values);
         }
         self.max_band = self.max_band.max(self.band.len());
         &mut self.band[i]
     }
 
-    /// Sets cell `(kx, ky)`; a `weak` value only fills a cell that has no value yet.
-    fn put(&mut self, kx: i64, ky: i64, value: f32, weak: bool) -> Result<()> {
-        let col = (kx - self.lat.kx0) as usize;
-        if ky >= self.band_lo {
-            let nodata = self.nodata;
-            let cell = &mut self.band_row(ky)[col];
+    /// Sets cell `(col, row)`; a `weak` value only fills a cell that has no value yet.
+    fn put(&mut self, col: u32, row: u32, value: f32, weak: bool) -> Result<()> {
+        if self.in_band(row) {
+            let nodata = self.spec.nodata;
+            let cell = &mut self.band_row(row)[col as usize];
             if !weak || cell.to_bits() == nodata.to_bits() {
                 *cell = value;
             }
             return Ok(());
         }
         // A late triangle: the row is in the file already.
-        let row = self.row_of(ky);
-        self.late.push((row, col as u32, value, weak));
+        self.late.push((row, col, value, weak));
         if self.late.len() >= LATE_BATCH {
             self.apply_late()?;
         }
@@ -252,7 +130,7 @@ impl Raster {
             self.writer.read_span(row, c0, &mut span)?;
             for &(_, col, value, weak) in same_row {
                 let cell = &mut span[(col - c0) as usize];
-                let empty = cell.to_bits() == self.nodata.to_bits();
+                let empty = self.spec.is_nodata(*cell);
                 if empty || !weak {
                     *cell = value;
                     self.late_cells += 1;
@@ -268,47 +146,42 @@ impl Raster {
         Ok(())
     }
 
-    /// Writes every row with `ky < limit` (and below the top) to the file.
-    fn flush_below(&mut self, limit: i64) -> Result<()> {
-        let limit = limit.min(self.ky_top() + 1);
-        while self.band_lo < limit {
-            let row = self.row_of(self.band_lo);
+    /// Writes the southern `count` rows (those not written yet) to the file.
+    fn flush_below(&mut self, count: u32) -> Result<()> {
+        let count = count.min(self.spec.rows);
+        while self.written < count {
+            let row = self.spec.rows - 1 - self.written;
             match self.band.pop_front() {
                 Some(values) => {
                     self.cells_with_data +=
-                        values.iter().filter(|v| !self.is_nodata(**v)).count() as u64;
+                        values.iter().filter(|v| !self.spec.is_nodata(**v)).count() as u64;
                     self.writer.write_row(row, &values)?;
                     self.spare.push(values);
                 }
                 None => {
-                    let empty = vec![self.nodata; self.lat.cols as usize];
+                    let empty = vec![self.spec.nodata; self.spec.cols as usize];
                     self.writer.write_row(row, &empty)?;
                 }
             }
-            self.band_lo += 1;
+            self.written += 1;
         }
         Ok(())
     }
 
     fn rasterise(&mut self, t: &Tri) -> Result<()> {
         let [xmin, ymin, xmax, ymax] = t.bbox();
-        let c = self.cell;
-        let lat = self.lat;
-        // One cell of slack on each side: the exact test below decides.
-        let kx_lo = ((xmin / c).floor() as i64).max(lat.kx0);
-        let kx_hi = ((xmax / c).ceil() as i64).min(lat.kx0 + i64::from(lat.cols) - 1);
-        let ky_lo = ((ymin / c).floor() as i64).max(lat.ky0);
-        let ky_hi = ((ymax / c).ceil() as i64).min(self.ky_top());
-        for ky in ky_lo..=ky_hi {
-            let y = ky as f64 * c;
-            for kx in kx_lo..=kx_hi {
-                let p = [kx as f64 * c, y];
+        // The candidates have a cell of slack on each side: the exact test below decides.
+        let cols = self.spec.cols_over(xmin, xmax);
+        for row in self.spec.rows_over(ymin, ymax).rev() {
+            let y = self.spec.centre_y(row);
+            for col in cols.clone() {
+                let p = [self.spec.centre_x(col), y];
                 let loc = t.locate(p);
-                if loc == super::geom::Location::Outside {
+                if loc == Location::Outside {
                     continue;
                 }
                 let value = t.value_at(p, loc) as f32;
-                self.put(kx, ky, value, !t.owns(loc))?;
+                self.put(col, row, value, !t.owns(loc))?;
             }
         }
         Ok(())
@@ -328,22 +201,13 @@ impl DemSink {
     /// depend on the data) and appears under its name when the stream finishes.
     ///
     /// # Errors
-    /// [`Error::Output`] for a bad cell size, a box that is not on the lattice (without `snap`) or
-    /// an unknown format.
+    /// [`Error::Output`] for an unknown format.
     pub fn new(path: &Path, options: DemOptions) -> Result<DemSink> {
-        let bad = |message: String| Error::Output {
-            path: path.to_path_buf(),
-            message,
-        };
-        if let DemExtent::BBox { .. } = options.extent {
-            lattice(options.cell, options.extent, [0.0; 4]).map_err(bad)?;
-        } else if !(options.cell.is_finite() && options.cell > 0.0) {
-            return Err(bad(format!("bad cell size {}", options.cell)));
-        }
         if options.format.is_none() && RasterFormat::from_extension(path).is_none() {
-            return Err(bad(
-                "unknown raster format: use a .tif or .asc extension".into()
-            ));
+            return Err(Error::Output {
+                path: path.to_path_buf(),
+                message: "unknown raster format: use a .tif or .asc extension".into(),
+            });
         }
         Ok(DemSink {
             path: path.to_path_buf(),
@@ -365,19 +229,13 @@ impl DemSink {
 impl TriangleSink for DemSink {
     fn begin(&mut self, info: &StreamInfo) -> Result<()> {
         let o = &self.options;
-        let lat = lattice(o.cell, o.extent, info.bounds).map_err(|message| Error::Output {
-            path: self.path.clone(),
-            message,
-        })?;
-        let mut spec = GridSpec::aligned(o.cell, lat.kx0, lat.ky0, lat.cols, lat.rows, o.nodata);
+        let mut spec = o.grid.grid(info.bounds, o.nodata)?;
         spec.crs = info.crs.clone();
         let writer = create_grid_writer(&self.path, o.format, &spec)?;
         self.raster = Some(Raster {
             writer,
-            lat,
-            cell: o.cell,
-            nodata: o.nodata,
-            band_lo: lat.ky0,
+            spec,
+            written: 0,
             band: VecDeque::new(),
             spare: Vec::new(),
             cells_with_data: 0,
@@ -398,42 +256,33 @@ impl TriangleSink for DemSink {
 
     fn watermark(&mut self, y: f64) -> Result<()> {
         let r = self.raster()?;
-        // Rows whose centre lies strictly below y.
-        let limit = (y / r.cell).ceil() as i64;
-        let mut limit = if limit as f64 * r.cell < y {
-            limit + 1
-        } else {
-            limit
-        };
-        while (limit - 1) as f64 * r.cell >= y {
-            limit -= 1;
-        }
-        r.flush_below(limit)
+        let below = r.spec.rows_below(y);
+        r.flush_below(below)
     }
 
-    fn finish(&mut self) -> Result<serde_json::Value> {
+    fn finish(&mut self) -> Result<ProductSummary> {
         let mut r = self.raster.take().ok_or_else(|| Error::Output {
             path: self.path.clone(),
             message: "the DEM sink was finished before begin() or twice".into(),
         })?;
-        r.flush_below(i64::MAX)?;
+        r.flush_below(u32::MAX)?;
         r.apply_late()?;
         let spec = r.writer.spec().clone();
         let bytes = r.writer.finish()?;
-        Ok(json!({
-            "path": self.path,
-            "cols": spec.cols,
-            "rows": spec.rows,
-            "cell": spec.cell,
-            "origin": spec.origin,
-            "extent": spec.extent(),
-            "nodata": spec.nodata,
-            "crs": spec.crs.as_ref().and_then(|c| c.definition()),
-            "cells_with_data": r.cells_with_data,
-            "late_cell_writes": r.late_cells,
-            "max_rows_in_memory": r.max_band,
-            "triangles": self.triangles,
-            "bytes": bytes,
+        Ok(ProductSummary::Dem(DemSummary {
+            path: self.path.clone(),
+            cols: spec.cols,
+            rows: spec.rows,
+            cell: spec.cell,
+            origin: spec.origin(),
+            extent: spec.extent(),
+            nodata: spec.nodata,
+            crs: spec.crs.as_ref().and_then(|c| c.definition()),
+            cells_with_data: r.cells_with_data,
+            late_cell_writes: r.late_cells,
+            max_rows_in_memory: r.max_band as u64,
+            triangles: self.triangles,
+            bytes,
         }))
     }
 }
@@ -445,54 +294,6 @@ mod tests {
         feed, grid_tin, random_tin, read_tiff, shuffled_with_watermarks,
     };
 
-    #[test]
-    fn lattice_auto_and_bbox() {
-        let l = lattice(1.0, DemExtent::Auto, [0.5, 0.0, 3.0, 2.2]).unwrap();
-        assert_eq!(
-            l,
-            Lattice {
-                kx0: 1,
-                ky0: 0,
-                cols: 3,
-                rows: 3
-            }
-        );
-        let b = DemExtent::BBox {
-            bbox: [0.0, 0.0, 4.0, 2.0],
-            snap: false,
-        };
-        // Centres x 0..3, y 1..2.
-        assert_eq!(
-            lattice(1.0, b, [0.0; 4]).unwrap(),
-            Lattice {
-                kx0: 0,
-                ky0: 1,
-                cols: 4,
-                rows: 2
-            }
-        );
-        let off = DemExtent::BBox {
-            bbox: [0.2, 0.0, 4.0, 2.0],
-            snap: false,
-        };
-        assert!(lattice(1.0, off, [0.0; 4]).unwrap_err().contains("--snap"));
-        let snapped = DemExtent::BBox {
-            bbox: [0.2, -0.5, 3.5, 2.0],
-            snap: true,
-        };
-        assert_eq!(
-            lattice(1.0, snapped, [0.0; 4]).unwrap(),
-            Lattice {
-                kx0: 0,
-                ky0: 0,
-                cols: 4,
-                rows: 3
-            }
-        );
-        assert!(lattice(0.0, DemExtent::Auto, [0.0; 4]).is_err());
-        assert!(lattice(1.0, DemExtent::Auto, [0.2, 0.2, 0.8, 0.8]).is_err());
-    }
-
     fn plane(x: f64, y: f64) -> f64 {
         0.25 * x - 0.5 * y + 100.0
     }
@@ -502,7 +303,7 @@ mod tests {
         let mut sink = DemSink::new(
             &path,
             DemOptions {
-                cell: 1.0,
+                grid: GridPlan::new(1.0, crate::raster::GridExtent::Auto).unwrap(),
                 ..DemOptions::default()
             },
         )
@@ -549,16 +350,19 @@ mod tests {
                 crs: None,
                 bounds: [0.0, 0.0, 100.0, 100.0],
             };
-            (feed(&mut sink, &info, steps), read_tiff(&path).2)
+            let ProductSummary::Dem(s) = feed(&mut sink, &info, steps) else {
+                panic!("not a DEM summary")
+            };
+            (s, read_tiff(&path).2)
         };
         let (a, va) = run(&crate::products::testutil::in_sweep_order(&tris), "a.tif");
         let (b, vb) = run(&shuffled_with_watermarks(&tris, 7), "b.tif");
-        assert_eq!(a["rows"], 101);
-        assert!(a["max_rows_in_memory"].as_u64().unwrap() < 15, "{a}");
-        assert_eq!(a["late_cell_writes"], 0);
-        assert!(b["late_cell_writes"].as_u64().unwrap() > 0, "{b}");
-        assert_eq!(a["cells_with_data"], 101 * 101);
-        assert_eq!(b["cells_with_data"], 101 * 101);
+        assert_eq!(a.rows, 101);
+        assert!(a.max_rows_in_memory < 15, "{a:?}");
+        assert_eq!(a.late_cell_writes, 0);
+        assert!(b.late_cell_writes > 0, "{b:?}");
+        assert_eq!(a.cells_with_data, 101 * 101);
+        assert_eq!(b.cells_with_data, 101 * 101);
         assert!(va.iter().zip(&vb).all(|(x, y)| x.to_bits() == y.to_bits()));
     }
 

@@ -22,8 +22,10 @@ use super::boundary::Boundary;
 use super::geom::{PV, Tri, clip_left};
 use super::volume::CutFill;
 use crate::error::{Error, Result};
-use crate::sink::{StreamInfo, TriangleSink};
-use serde_json::json;
+use crate::sink::{
+    CutFillTotals, OverlayStats, ProductSummary, StreamInfo, SurfaceStoreSummary, TriangleSink,
+    VolumeReference, VolumeSummary,
+};
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
@@ -189,8 +191,11 @@ impl TriangleSink for BandStore {
         Ok(())
     }
 
-    fn finish(&mut self) -> Result<serde_json::Value> {
-        Ok(json!({ "reference_triangles": self.next_id, "bands": self.index.len() }))
+    fn finish(&mut self) -> Result<ProductSummary> {
+        Ok(ProductSummary::SurfaceStore(SurfaceStoreSummary {
+            reference_triangles: self.next_id,
+            bands: self.index.len() as u64,
+        }))
     }
 }
 
@@ -292,7 +297,7 @@ impl OverlaySink {
     }
 
     /// The totals so far.
-    pub fn totals(&self) -> super::volume::CutFillTotals {
+    pub fn totals(&self) -> CutFillTotals {
         self.acc.totals()
     }
 
@@ -379,15 +384,18 @@ impl TriangleSink for OverlaySink {
         Ok(())
     }
 
-    fn finish(&mut self) -> Result<serde_json::Value> {
-        let mut v = serde_json::to_value(self.acc.totals()).unwrap_or_default();
-        v["reference"] = json!({ "surface_triangles": self.reference.triangles });
-        v["boundary_area"] = json!(self.boundary.as_ref().map(Boundary::area));
-        v["triangles"] = json!(self.triangles);
-        v["pairs"] = json!(self.pairs);
-        v["band_loads"] = json!(self.band_loads);
-        v["max_bands_in_memory"] = json!(self.max_loaded);
-        Ok(v)
+    fn finish(&mut self) -> Result<ProductSummary> {
+        Ok(ProductSummary::Volume(VolumeSummary {
+            totals: self.acc.totals(),
+            reference: VolumeReference::Surface(self.reference.triangles),
+            boundary_area: self.boundary.as_ref().map(Boundary::area),
+            triangles: self.triangles,
+            overlay: Some(OverlayStats {
+                pairs: self.pairs,
+                band_loads: self.band_loads,
+                max_bands_in_memory: self.max_loaded as u64,
+            }),
+        }))
     }
 }
 

@@ -19,8 +19,7 @@ use super::geom::{Location, Tri, cmp_xy};
 use crate::error::{Error, Result};
 use crate::geom::predicates::{Orientation, orient};
 use crate::output::AtomicFile;
-use crate::sink::{StreamInfo, TriangleSink};
-use serde_json::json;
+use crate::sink::{ProductSummary, ProfileSummary, StreamInfo, TriangleSink};
 use std::collections::HashMap;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -301,7 +300,7 @@ impl TriangleSink for ProfileSink {
         Ok(())
     }
 
-    fn finish(&mut self) -> Result<serde_json::Value> {
+    fn finish(&mut self) -> Result<ProductSummary> {
         let bytes = self.write()?;
         let inside = self
             .vertex_z
@@ -309,12 +308,12 @@ impl TriangleSink for ProfileSink {
             .flatten()
             .filter(|z| !z.is_nan())
             .count();
-        Ok(json!({
-            "path": self.output,
-            "lines": self.lines.len(),
-            "points": self.hits.len(),
-            "line_vertices_inside": inside,
-            "bytes": bytes,
+        Ok(ProductSummary::Profile(ProfileSummary {
+            path: self.output.clone(),
+            lines: self.lines.len() as u64,
+            points: self.hits.len() as u64,
+            line_vertices_inside: inside as u64,
+            bytes,
         }))
     }
 }

@@ -24,8 +24,7 @@
 use super::geom::{Location, Tri};
 use crate::error::{Error, Result};
 use crate::output::AtomicFile;
-use crate::sink::{StreamInfo, TriangleSink};
-use serde_json::json;
+use crate::sink::{ProductSummary, SampleSummary, StreamInfo, TriangleSink};
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
@@ -364,17 +363,17 @@ impl TriangleSink for SampleSink {
         Ok(())
     }
 
-    fn finish(&mut self) -> Result<serde_json::Value> {
+    fn finish(&mut self) -> Result<ProductSummary> {
         self.load_until(f64::INFINITY)?;
         let bytes = self.write_output()?;
-        Ok(json!({
-            "path": self.output,
-            "queries": self.count,
-            "answered": self.answered,
-            "outside": self.count - self.answered,
-            "sorted_by_y": self.sorted,
-            "max_pending_queries": self.max_pending,
-            "bytes": bytes,
+        Ok(ProductSummary::Sample(SampleSummary {
+            path: self.output.clone(),
+            queries: self.count,
+            answered: self.answered,
+            outside: self.count - self.answered,
+            sorted_by_y: self.sorted,
+            max_pending_queries: self.max_pending as u64,
+            bytes,
         }))
     }
 }
@@ -384,10 +383,7 @@ mod tests {
     use super::*;
     use crate::products::testutil::{feed, in_sweep_order, random_tin, shuffled_with_watermarks};
 
-    fn run(
-        queries: &str,
-        steps: &[crate::products::testutil::Step],
-    ) -> (String, serde_json::Value) {
+    fn run(queries: &str, steps: &[crate::products::testutil::Step]) -> (String, SampleSummary) {
         let dir = tempfile::tempdir().unwrap();
         let q = dir.path().join("q.csv");
         std::fs::write(&q, queries).unwrap();
@@ -397,7 +393,9 @@ mod tests {
             crs: None,
             bounds: [0.0, 0.0, 100.0, 100.0],
         };
-        let s = feed(&mut sink, &info, steps);
+        let ProductSummary::Sample(s) = feed(&mut sink, &info, steps) else {
+            panic!("not a sample summary")
+        };
         (std::fs::read_to_string(&out).unwrap(), s)
     }
 
@@ -421,7 +419,7 @@ mod tests {
         let (a, sa) = run(&text, &in_sweep_order(&tris));
         let (b, _) = run(&text, &shuffled_with_watermarks(&tris, 8));
         assert_eq!(a, b);
-        assert_eq!(sa["sorted_by_y"], true);
+        assert!(sa.sorted_by_y);
         let lines: Vec<&str> = a.lines().collect();
         assert_eq!(lines[0], "# points");
         assert_eq!(lines[1], "x,y,name,z");
@@ -441,7 +439,7 @@ mod tests {
     fn unsorted_queries_are_all_loaded_and_still_answered() {
         let tris = random_tin(50, 100.0, 2, |x, _| x);
         let (out, s) = run("50 60\n10 20\n", &in_sweep_order(&tris));
-        assert_eq!(s["sorted_by_y"], false);
+        assert!(!s.sorted_by_y);
         let z: Vec<f64> = out
             .lines()
             .map(|l| l.split(' ').nth(2).unwrap().parse().unwrap())

@@ -2,7 +2,7 @@
 //! triangles (the two orders every product must treat alike).
 
 use crate::geom::rng::SplitMix64;
-use crate::sink::{StreamInfo, TriangleSink};
+use crate::sink::{ProductSummary, StreamInfo, TriangleSink};
 use std::path::Path;
 
 /// A triangle and, optionally, a watermark to give after it.
@@ -163,7 +163,7 @@ pub fn shuffled_with_watermarks(tris: &[[[f64; 3]; 3]], seed: u64) -> Vec<Step> 
 }
 
 /// begin, every step, finish.
-pub fn feed(sink: &mut dyn TriangleSink, info: &StreamInfo, steps: &[Step]) -> serde_json::Value {
+pub fn feed(sink: &mut dyn TriangleSink, info: &StreamInfo, steps: &[Step]) -> ProductSummary {
     sink.begin(info).unwrap();
     for (t, w) in steps {
         sink.triangle(t).unwrap();

@@ -22,8 +22,9 @@
 use super::boundary::Boundary;
 use super::geom::{ExactSum, PV, Tri, clip, integrate};
 use crate::error::Result;
-use crate::sink::{StreamInfo, TriangleSink};
-use serde_json::json;
+use crate::sink::{
+    CutFillTotals, ProductSummary, StreamInfo, TriangleSink, VolumeReference, VolumeSummary,
+};
 
 /// Cut/fill accumulators (exact sums).
 #[derive(Clone, Debug, Default)]
@@ -34,23 +35,6 @@ pub struct CutFill {
     fill_area: ExactSum,
     area: ExactSum,
     scratch: (Vec<PV>, Vec<PV>),
-}
-
-/// The totals of a [`CutFill`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct CutFillTotals {
-    /// Volume where the surface is above the reference.
-    pub cut_volume: f64,
-    /// Volume where the surface is below the reference.
-    pub fill_volume: f64,
-    /// `cut_volume − fill_volume`.
-    pub net_volume: f64,
-    /// Area where the surface is above the reference.
-    pub cut_area: f64,
-    /// Area where the surface is below the reference.
-    pub fill_area: f64,
-    /// Area covered (cut + fill + where they are equal).
-    pub area: f64,
 }
 
 impl CutFill {
@@ -139,12 +123,14 @@ impl TriangleSink for VolumeSink {
         Ok(())
     }
 
-    fn finish(&mut self) -> Result<serde_json::Value> {
-        let mut v = serde_json::to_value(self.acc.totals()).unwrap_or_default();
-        v["reference"] = json!({ "plane": self.plane });
-        v["boundary_area"] = json!(self.boundary.as_ref().map(Boundary::area));
-        v["triangles"] = json!(self.triangles);
-        Ok(v)
+    fn finish(&mut self) -> Result<ProductSummary> {
+        Ok(ProductSummary::Volume(VolumeSummary {
+            totals: self.acc.totals(),
+            reference: VolumeReference::Plane(self.plane),
+            boundary_area: self.boundary.as_ref().map(Boundary::area),
+            triangles: self.triangles,
+            overlay: None,
+        }))
     }
 }
 
@@ -166,16 +152,19 @@ mod tests {
         // z = x / 10 on [0, 100]²: above z = 5 for x > 50.
         let tris = random_tin(500, 100.0, 3, |x, _| x / 10.0);
         let mut sink = VolumeSink::new(5.0, None);
-        let v = feed(&mut sink, &info(), &in_sweep_order(&tris));
+        let ProductSummary::Volume(s) = feed(&mut sink, &info(), &in_sweep_order(&tris)) else {
+            panic!("not a volume summary")
+        };
+        let v = s.totals;
         // Each side: ∫_0^50 (x/10) dx × 100 = 125 × 100.
-        let close =
-            |a: &serde_json::Value, b: f64| (a.as_f64().unwrap() - b).abs() < 1e-8 * b.max(1.0);
-        assert!(close(&v["cut_volume"], 12_500.0), "{v}");
-        assert!(close(&v["fill_volume"], 12_500.0), "{v}");
-        assert!(close(&v["cut_area"], 5_000.0), "{v}");
-        assert!(close(&v["fill_area"], 5_000.0), "{v}");
-        assert!(close(&v["area"], 10_000.0), "{v}");
-        assert!(v["net_volume"].as_f64().unwrap().abs() < 1e-8, "{v}");
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-8 * b.max(1.0);
+        assert!(close(v.cut_volume, 12_500.0), "{v:?}");
+        assert!(close(v.fill_volume, 12_500.0), "{v:?}");
+        assert!(close(v.cut_area, 5_000.0), "{v:?}");
+        assert!(close(v.fill_area, 5_000.0), "{v:?}");
+        assert!(close(v.area, 10_000.0), "{v:?}");
+        assert!(v.net_volume.abs() < 1e-8, "{v:?}");
+        assert_eq!(s.reference, VolumeReference::Plane(5.0));
     }
 
     /// Inside a boundary (a triangle with a hole), against a plane, in any order.

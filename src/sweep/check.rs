@@ -2,6 +2,7 @@
 //! tests, fuzzing and debugging.
 
 use super::Sweep;
+use crate::error::{Error, Result};
 use crate::geom::predicates::{CircleSide, incircle_ids};
 use crate::mesh::{Across, EdgeId, TriId};
 
@@ -14,10 +15,13 @@ impl Sweep {
     ///   front segment that names it, and every front segment names its half-edge;
     /// * the front runs from `P-1` to `P-2`, strictly increasing in `x`;
     /// * every unconstrained interior edge is locally Delaunay (perturbed exact in-circle).
-    pub fn check(&self) -> Result<(), String> {
-        self.check_triangles()?;
-        self.check_front()?;
-        Ok(())
+    ///
+    /// # Errors
+    /// [`Error::Internal`] describing the first violation.
+    pub fn check(&self) -> Result<()> {
+        self.check_triangles()
+            .and_then(|()| self.check_front())
+            .map_err(Error::Internal)
     }
 
     fn check_triangles(&self) -> Result<(), String> {

@@ -56,7 +56,7 @@ fn info() -> StreamInfo {
     }
 }
 
-fn feed(sink: &mut dyn TriangleSink, tris: &[[[f64; 3]; 3]]) -> serde_json::Value {
+fn feed(sink: &mut dyn TriangleSink, tris: &[[[f64; 3]; 3]]) -> sweeptin::sink::ProductSummary {
     sink.begin(&info()).unwrap();
     for t in tris {
         sink.triangle(t).unwrap();

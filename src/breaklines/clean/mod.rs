@@ -179,8 +179,13 @@ impl Pslg {
     /// tests as [`clean`], run on every pair of nearby segments).
     ///
     /// # Errors
-    /// A description of the first problem found.
-    pub fn check_planar(&self) -> std::result::Result<(), String> {
+    /// [`Error::Internal`] describing the first problem found (cleaning makes every graph
+    /// planar, so a failure is a bug).
+    pub fn check_planar(&self) -> Result<()> {
+        self.planar_problem().map_err(Error::Internal)
+    }
+
+    fn planar_problem(&self) -> std::result::Result<(), String> {
         let n = self.vertices.len();
         if let Some(s) = self
             .segments

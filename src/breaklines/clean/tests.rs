@@ -404,14 +404,24 @@ fn check_planar_finds_problems() {
         lines: vec![0, 1],
         ..Pslg::default()
     };
-    assert!(g.check_planar().unwrap_err().contains("crosses"));
+    assert!(
+        g.check_planar()
+            .unwrap_err()
+            .to_string()
+            .contains("crosses")
+    );
     let g = Pslg {
         vertices: vec![[0., 0., 0.], [2., 2., 0.], [1., 1., 0.]],
         segments: vec![[0, 1]],
         lines: vec![0],
         ..Pslg::default()
     };
-    assert!(g.check_planar().unwrap_err().contains("vertex 2"));
+    assert!(
+        g.check_planar()
+            .unwrap_err()
+            .to_string()
+            .contains("vertex 2")
+    );
 }
 
 #[test]

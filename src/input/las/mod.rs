@@ -2,16 +2,20 @@
 //!
 //! [`LidarReader`] reads one or more LAS/LAZ files as **one point set** (adjacent tiles), in
 //! chunks of bounded size, keeping only the points a [`Filter`] accepts. Each [`LidarPoint`]
-//! carries the **integer coordinates** the file stores (exact, so geometry uses them), in one
-//! integer system common to all the files, plus its **global input index**: files in the order
-//! given, points in file order, counting every point read (filtered points leave gaps).
+//! carries the **integer coordinates** the file stores, in one integer system common to all the
+//! files (exact: the box filter and the combination of tiles work on them), plus its **global
+//! input index**: files in the order given, points in file order, counting every point read
+//! (filtered points leave gaps). The geometry is not made of these integers but of the
+//! real-world doubles `offset + scale × N` ([`Quantization::to_world`]), computed once when the
+//! pipeline reads the points: the values the outputs get, so that every output is Delaunay in
+//! its own coordinates (docs/ARCHITECTURE.md, "Coordinates").
 //!
 //! ```no_run
 //! use sweeptin::input::las::{Filter, LidarReader};
 //!
 //! let filter = Filter { classes: Some(vec![2]), ..Filter::default() };
 //! let mut reader = LidarReader::open(&["a.laz", "b.laz"], &filter)?;
-//! let quant = *reader.quantization(); // integer -> real-world mapping for output
+//! let quant = *reader.quantization(); // integers -> the real-world doubles
 //! let mut chunk = Vec::new();
 //! while reader.read_chunk(&mut chunk, 1 << 20)? > 0 {
 //!     for p in &chunk {

@@ -1,0 +1,204 @@
+//! One validated configuration per run: [`RunConfig::new`] checks a run's [`Input`] and
+//! [`RunOptions`] once, before anything is read, and every stage of the pipeline reads the
+//! result instead of checking again.
+//!
+//! What is checked here: that there is an input and what kind of files it is (LAS/LAZ, XYZ, or
+//! one streaming mesh, decided once from the names), that a streaming mesh comes without
+//! breaklines or trimming, and that the temporary directory exists. The breakline and trimming
+//! options are checked where they are turned into their types (`--max-edge` by
+//! [`crate::breaklines::Trim::new`]), and a terrain product's options when its sink is made (the
+//! DEM's cell size and extent by [`crate::raster::GridPlan::new`]); the one rule that depends on
+//! the sinks of a run (`--sweep-axis x` only for a plain mesh) is checked when the run starts.
+
+use super::{Input, RunOptions};
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// What kind of files the points come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Source {
+    /// LAS/LAZ files, forming one point set.
+    Lidar,
+    /// XYZ text files.
+    Xyz,
+    /// One streaming mesh (`.stin`), replayed instead of triangulated.
+    Stream,
+}
+
+fn has_extension(p: &Path, names: &[&str]) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| names.iter().any(|n| e.eq_ignore_ascii_case(n)))
+}
+
+impl Source {
+    /// The kind of `paths`, by extension (`.las`/`.laz`, `.stin`, anything else is XYZ).
+    ///
+    /// # Errors
+    /// [`Error::NoInput`] for no path; [`Error::Format`] for a streaming mesh among other files,
+    /// or LAS/LAZ files mixed with XYZ.
+    pub(crate) fn of(paths: &[PathBuf]) -> Result<Source> {
+        let Some(first) = paths.first() else {
+            return Err(Error::NoInput);
+        };
+        let bad = |message: &str| Error::Format {
+            path: first.clone(),
+            message: message.into(),
+        };
+        if paths.iter().any(|p| has_extension(p, &["stin"])) {
+            if paths.len() != 1 {
+                return Err(bad("a streaming mesh (.stin) must be the only input"));
+            }
+            return Ok(Source::Stream);
+        }
+        let lidar = paths
+            .iter()
+            .filter(|p| has_extension(p, &["las", "laz"]))
+            .count();
+        if lidar == paths.len() {
+            Ok(Source::Lidar)
+        } else if lidar > 0 {
+            Err(bad("cannot mix LAS/LAZ and XYZ inputs in one run"))
+        } else {
+            Ok(Source::Xyz)
+        }
+    }
+}
+
+/// A run's input and options, checked (see the module docs). Build it with [`RunConfig::new`]
+/// and hand it to [`super::run`].
+#[derive(Clone, Debug)]
+pub struct RunConfig {
+    input: Input,
+    options: RunOptions,
+    source: Source,
+    tmp_dir: PathBuf,
+}
+
+impl RunConfig {
+    /// Checks `input` and `options`.
+    ///
+    /// # Errors
+    /// [`Error::NoInput`]; [`Error::Format`] for a streaming mesh that is not the only input or
+    /// comes with breaklines or trimming, or LAS/LAZ files mixed with XYZ; [`Error::Io`] for a
+    /// temporary directory that does not exist.
+    pub fn new(input: Input, options: RunOptions) -> Result<RunConfig> {
+        let source = Source::of(&input.paths)?;
+        if source == Source::Stream && !input.lines.is_empty() {
+            return Err(Error::Format {
+                path: input.paths[0].clone(),
+                message: "breaklines and trimming need the points: give the LAS/LAZ or XYZ \
+                          input, not a streaming mesh"
+                    .into(),
+            });
+        }
+        let tmp_dir = options.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
+        if !tmp_dir.is_dir() {
+            return Err(Error::io(
+                &tmp_dir,
+                std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "temporary directory does not exist",
+                ),
+            ));
+        }
+        Ok(RunConfig {
+            input,
+            options,
+            source,
+            tmp_dir,
+        })
+    }
+
+    /// What to triangulate.
+    pub fn input(&self) -> &Input {
+        &self.input
+    }
+
+    /// How to run.
+    pub fn options(&self) -> &RunOptions {
+        &self.options
+    }
+
+    /// The kind of input files.
+    pub(crate) fn source(&self) -> Source {
+        self.source
+    }
+
+    /// Where spill files go (an existing directory).
+    pub(crate) fn tmp_dir(&self) -> &Path {
+        &self.tmp_dir
+    }
+
+    /// The same run on the points alone (no breaklines, no trimming) without a progress bar:
+    /// the draping pass of lines without z.
+    pub(crate) fn points_only(&self) -> RunConfig {
+        let mut c = self.clone();
+        c.input.lines = Default::default();
+        c.options.progress = false;
+        c
+    }
+
+    /// The CRS of the input, from LAS/LAZ headers or a streaming mesh's header, without reading
+    /// the points (`None` for XYZ).
+    ///
+    /// # Errors
+    /// The reader's errors when a header cannot be read.
+    pub fn input_crs(&self) -> Result<Option<String>> {
+        match self.source {
+            Source::Stream => {
+                let r = crate::input::stin::StinReader::open(&self.input.paths[0])?;
+                Ok(r.crs().map(str::to_string))
+            }
+            Source::Lidar => {
+                let r =
+                    crate::input::las::LidarReader::open(&self.input.paths, &self.input.filter)?;
+                Ok(r.crs().and_then(|c| c.definition()))
+            }
+            Source::Xyz => Ok(None),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::input::las::Filter;
+
+    fn input(paths: &[&str]) -> Input {
+        Input {
+            paths: paths.iter().map(PathBuf::from).collect(),
+            filter: Filter::keep_all(),
+            duplicates: Default::default(),
+            lines: Default::default(),
+        }
+    }
+
+    #[test]
+    fn the_kind_of_input_is_decided_once() {
+        let kind = |p: &[&str]| Source::of(&input(p).paths);
+        assert_eq!(kind(&["a.LAZ", "b.las"]).unwrap(), Source::Lidar);
+        assert_eq!(kind(&["a.xyz", "b.txt"]).unwrap(), Source::Xyz);
+        assert_eq!(kind(&["a.stin"]).unwrap(), Source::Stream);
+        assert!(matches!(kind(&[]), Err(Error::NoInput)));
+        let e = kind(&["a.las", "b.xyz"]).unwrap_err();
+        assert!(e.to_string().contains("cannot mix"), "{e}");
+        let e = kind(&["a.stin", "b.stin"]).unwrap_err();
+        assert!(e.to_string().contains("only input"), "{e}");
+    }
+
+    #[test]
+    fn a_streaming_mesh_has_no_breaklines_and_the_temporary_directory_exists() {
+        let mut i = input(&["a.stin"]);
+        i.lines.max_edge = Some(5.0);
+        let e = RunConfig::new(i, RunOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("need the points"), "{e}");
+        let o = RunOptions {
+            tmp_dir: Some("/no/such/dir".into()),
+            ..RunOptions::default()
+        };
+        let e = RunConfig::new(input(&["a.xyz"]), o).unwrap_err();
+        assert!(e.to_string().contains("does not exist"), "{e}");
+        assert!(RunConfig::new(input(&["a.xyz"]), RunOptions::default()).is_ok());
+    }
+}
