@@ -35,6 +35,7 @@ pub mod sort;
 pub mod sweep;
 #[cfg(any(test, feature = "dev"))]
 pub mod synth;
+pub mod tiles;
 pub mod tin;
 pub mod triangulation;
 pub mod validate;

@@ -106,6 +106,11 @@ pub trait TriangleSink: Send {
     fn watermark(&mut self, _y: f64) -> Result<()> {
         Ok(())
     }
+    /// The cell size of the grid this sink fills, if any: a tiled run makes its tiles whole
+    /// multiples of it, so that every cell has one owner tile.
+    fn grid_cell(&self) -> Option<f64> {
+        None
+    }
     /// Called once after the last triangle; returns what the sink did.
     fn finish(&mut self) -> Result<ProductSummary>;
 }
@@ -360,6 +365,10 @@ impl TriangleSink for Fanout {
             s.watermark(y)?;
         }
         Ok(())
+    }
+
+    fn grid_cell(&self) -> Option<f64> {
+        self.sinks.iter().find_map(|(_, s)| s.grid_cell())
     }
 
     fn finish(&mut self) -> Result<ProductSummary> {

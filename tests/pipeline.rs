@@ -102,6 +102,7 @@ fn streamed_along(
         tmp_dir: Some(tmp.path().to_path_buf()),
         progress: false,
         sweep_axis,
+        tiles: None,
     };
     let mut c = Collect::default();
     let config = RunConfig::new(input, options).unwrap();

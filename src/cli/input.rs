@@ -43,6 +43,20 @@ pub struct InputArgs {
     /// several equally Delaunay diagonals is chosen.
     #[arg(long, value_enum, value_name = "AXIS", default_value_t = SweepAxis::Auto)]
     pub sweep_axis: SweepAxis,
+    /// How to triangulate. `tiles` (the default where it applies: LAS/LAZ points without
+    /// breaklines or trimming polygons) cuts the data into exact tiles run on every core, each
+    /// certified to equal the triangulation of all the points; `sweep` runs one streaming sweep
+    /// on one core, whose memory follows the advancing front. Both give the same triangles, in a
+    /// different order.
+    #[arg(long, value_enum, default_value_t = Engine::Tiles)]
+    pub engine: Engine,
+    /// Threads for the tiled engine (default: every core). The output is the same for any number.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub threads: usize,
+    /// Tile side for the tiled engine, in the data's units (a multiple of the DEM cell); default:
+    /// about 250,000 points per tile at the data's density.
+    #[arg(long, value_name = "SIZE")]
+    pub tile: Option<f64>,
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
@@ -70,6 +84,14 @@ impl InputArgs {
             tmp_dir: self.tmp_dir.clone(),
             progress: !self.quiet && !self.json,
             sweep_axis: self.sweep_axis,
+            tiles: match self.engine {
+                Engine::Sweep => None,
+                Engine::Tiles => Some(sweeptin::tiles::TileOptions {
+                    threads: self.threads,
+                    tile: self.tile,
+                    base: None,
+                }),
+            },
         }
     }
 
@@ -103,6 +125,15 @@ impl std::fmt::Display for Size {
             None => write!(f, "{}", self.0),
         }
     }
+}
+
+/// The triangulation engine (see `--engine`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Engine {
+    /// Exact tiles on every core where the input allows it; one sweep otherwise.
+    Tiles,
+    /// One streaming sweep.
+    Sweep,
 }
 
 /// Parses a human size: `1048576`, `512K`, `128M`, `4G`, `1T`, optionally with `B`, `iB` or a

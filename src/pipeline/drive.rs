@@ -22,7 +22,7 @@ const EVENT_BATCH: usize = 16384;
 /// Points between watermarks.
 const WATERMARK_EVERY: u64 = 1 << 16;
 
-fn bar(enabled: bool) -> ProgressBar {
+pub(super) fn bar(enabled: bool) -> ProgressBar {
     if !enabled {
         return ProgressBar::hidden();
     }
@@ -179,6 +179,7 @@ pub(crate) fn run(
             flat,
             ..l.summary.clone()
         }),
+        tiles: None,
     })
 }
 

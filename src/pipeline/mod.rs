@@ -22,6 +22,7 @@ mod emit;
 mod lines;
 mod read;
 mod replay;
+mod tiled;
 
 use crate::error::Result;
 use crate::input::las::Filter;
@@ -59,6 +60,9 @@ pub struct RunOptions {
     pub progress: bool,
     /// The axis the sweep advances along.
     pub sweep_axis: SweepAxis,
+    /// Run in exact tiles on several threads when the input allows it (LAS/LAZ points, no
+    /// breaklines or trimming polygons); `None`: one streaming sweep.
+    pub tiles: Option<crate::tiles::TileOptions>,
 }
 
 impl Default for RunOptions {
@@ -68,6 +72,7 @@ impl Default for RunOptions {
             tmp_dir: None,
             progress: false,
             sweep_axis: SweepAxis::Auto,
+            tiles: None,
         }
     }
 }
@@ -158,6 +163,9 @@ pub struct RunSummary {
     pub breaklines: Option<LineSummary>,
     /// The axis the sweep went along (`x` or `y`).
     pub sweep_axis: SweepAxis,
+    /// The tiles, for a tiled run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tiles: Option<crate::tiles::TileStats>,
 }
 
 fn proc_status_kb(field: &str) -> Option<u64> {
@@ -206,6 +214,14 @@ pub fn run(
 ) -> Result<RunSummary> {
     if config.source() == Source::Stream {
         return replay::replay(config, mesh, sinks);
+    }
+    if let Some(t) = config
+        .options()
+        .tiles
+        .as_ref()
+        .filter(|_| tiled::applies(config))
+    {
+        return tiled::run(config, t, mesh, sinks);
     }
     let lines = &config.input().lines;
     if lines.is_empty() && !lines.no_flat_triangles {

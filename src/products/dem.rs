@@ -260,6 +260,10 @@ impl TriangleSink for DemSink {
         r.flush_below(below)
     }
 
+    fn grid_cell(&self) -> Option<f64> {
+        Some(self.options.grid.cell())
+    }
+
     fn finish(&mut self) -> Result<ProductSummary> {
         let mut r = self.raster.take().ok_or_else(|| Error::Output {
             path: self.path.clone(),

@@ -44,13 +44,31 @@ pub fn sweep_order(a: &SortRecord, b: &SortRecord) -> Ordering {
         .then(a.index.cmp(&b.index))
 }
 
+/// A fixed-size record the external sort can order.
+pub trait SortKey: bytemuck::Pod + Send + Sync + std::fmt::Debug {
+    /// The order of the sort.
+    fn order(a: &Self, b: &Self) -> Ordering;
+    /// Must records that compare equal keep their input order? (Then chunks are sorted with a
+    /// stable sort and the merge breaks ties by run, so equal records come out in input order.)
+    const STABLE: bool;
+}
+
+impl SortKey for SortRecord {
+    #[inline(always)]
+    fn order(a: &Self, b: &Self) -> Ordering {
+        sweep_order(a, b)
+    }
+    // The order is total (the input index decides last).
+    const STABLE: bool = false;
+}
+
 /// Records per spill when the budget allows no more.
 const MIN_CHUNK: usize = 1 << 10;
 
 /// Collects points, spilling sorted runs when the chunk is full.
 #[derive(Debug)]
-pub struct ExternalSorter {
-    chunk: Vec<SortRecord>,
+pub struct ExternalSorter<R: SortKey = SortRecord> {
+    chunk: Vec<R>,
     capacity: usize,
     runs: Vec<File>,
     tmp_dir: PathBuf,
@@ -70,10 +88,10 @@ pub struct SortStats {
     pub chunk_records: u64,
 }
 
-impl ExternalSorter {
+impl<R: SortKey> ExternalSorter<R> {
     /// A sorter whose chunk uses at most `chunk_bytes` of memory, spilling under `tmp_dir`.
     pub fn new(chunk_bytes: u64, tmp_dir: &Path) -> Self {
-        let capacity = ((chunk_bytes as usize) / std::mem::size_of::<SortRecord>()).max(MIN_CHUNK);
+        let capacity = ((chunk_bytes as usize) / std::mem::size_of::<R>()).max(MIN_CHUNK);
         ExternalSorter {
             chunk: Vec::new(),
             capacity,
@@ -96,7 +114,7 @@ impl ExternalSorter {
     /// # Errors
     /// [`Error::Io`] if a spill fails.
     #[inline]
-    pub fn push(&mut self, r: SortRecord) -> Result<()> {
+    pub fn push(&mut self, r: R) -> Result<()> {
         if self.chunk.capacity() == 0 {
             self.chunk.reserve_exact(self.capacity.min(1 << 20));
         }
@@ -108,8 +126,16 @@ impl ExternalSorter {
         Ok(())
     }
 
+    fn sort_chunk(&mut self) {
+        if R::STABLE {
+            self.chunk.par_sort_by(R::order);
+        } else {
+            self.chunk.par_sort_unstable_by(R::order);
+        }
+    }
+
     fn spill(&mut self) -> Result<()> {
-        self.chunk.par_sort_unstable_by(sweep_order);
+        self.sort_chunk();
         let io = |e| Error::io(&self.tmp_dir, e);
         let file = tempfile::tempfile_in(&self.tmp_dir).map_err(io)?;
         let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
@@ -127,9 +153,9 @@ impl ExternalSorter {
     ///
     /// # Errors
     /// [`Error::Io`] if the last spill or a mapping fails.
-    pub fn finish(mut self) -> Result<Merge> {
+    pub fn finish(mut self) -> Result<Merge<R>> {
         if self.runs.is_empty() {
-            self.chunk.par_sort_unstable_by(sweep_order);
+            self.sort_chunk();
             return Ok(Merge {
                 source: Source::Memory(std::mem::take(&mut self.chunk), 0),
                 stats: self.stats,
@@ -143,7 +169,7 @@ impl ExternalSorter {
         let io = |e| Error::io(&self.tmp_dir, e);
         let mut runs = Vec::with_capacity(self.runs.len());
         for f in std::mem::take(&mut self.runs) {
-            let m = MappedRecords::<SortRecord>::map(f).map_err(io)?;
+            let m = MappedRecords::<R>::map(f).map_err(io)?;
             runs.push(Run { map: m, pos: 0 });
         }
         let mut heap = BinaryHeap::with_capacity(runs.len());
@@ -165,41 +191,48 @@ impl ExternalSorter {
 }
 
 #[derive(Debug)]
-struct Run {
-    map: MappedRecords<SortRecord>,
+struct Run<R: SortKey> {
+    map: MappedRecords<R>,
     pos: usize,
 }
 
 #[derive(Debug)]
-struct Head {
-    rec: SortRecord,
+struct Head<R: SortKey> {
+    rec: R,
     run: usize,
 }
 
-impl PartialEq for Head {
+impl<R: SortKey> PartialEq for Head<R> {
     fn eq(&self, o: &Self) -> bool {
         self.cmp(o) == Ordering::Equal
     }
 }
-impl Eq for Head {}
-impl PartialOrd for Head {
+impl<R: SortKey> Eq for Head<R> {}
+impl<R: SortKey> PartialOrd for Head<R> {
     fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
         Some(self.cmp(o))
     }
 }
-impl Ord for Head {
-    // Reversed: BinaryHeap is a max-heap and we want the smallest record first.
+impl<R: SortKey> Ord for Head<R> {
+    // Reversed: BinaryHeap is a max-heap and we want the smallest record first; equal records
+    // come from the earlier run first (runs are in input order).
+    #[inline(always)]
     fn cmp(&self, o: &Self) -> Ordering {
-        sweep_order(&o.rec, &self.rec)
+        let c = R::order(&o.rec, &self.rec);
+        if R::STABLE {
+            c.then(o.run.cmp(&self.run))
+        } else {
+            c
+        }
     }
 }
 
 #[derive(Debug)]
-enum Source {
-    Memory(Vec<SortRecord>, usize),
+enum Source<R: SortKey> {
+    Memory(Vec<R>, usize),
     Runs {
-        runs: Vec<Run>,
-        heap: BinaryHeap<Head>,
+        runs: Vec<Run<R>>,
+        heap: BinaryHeap<Head<R>>,
         /// The spill directory, to name it in an error.
         dir: PathBuf,
     },
@@ -207,17 +240,26 @@ enum Source {
 
 /// The sorted points, as an iterator (k-way merge of the spilled runs, or the in-memory chunk).
 #[derive(Debug)]
-pub struct Merge {
-    source: Source,
+pub struct Merge<R: SortKey = SortRecord> {
+    source: Source<R>,
     stats: SortStats,
     /// A spill file that could not be read ends the stream early; see [`Merge::take_error`].
     error: Option<Error>,
 }
 
-impl Merge {
+impl<R: SortKey> Merge<R> {
     /// What the sort did.
     pub fn stats(&self) -> SortStats {
         self.stats
+    }
+
+    /// The whole sorted input as one vector, when it fit in memory and nothing was read yet
+    /// (no spill: the chunk itself).
+    pub fn take_memory(&mut self) -> Option<Vec<R>> {
+        match &mut self.source {
+            Source::Memory(v, 0) => Some(std::mem::take(v)),
+            _ => None,
+        }
     }
 
     /// The error that ended the stream early, if any. A consumer must check it after the last
@@ -227,11 +269,11 @@ impl Merge {
     }
 }
 
-impl Iterator for Merge {
-    type Item = SortRecord;
+impl<R: SortKey> Iterator for Merge<R> {
+    type Item = R;
 
     #[inline]
-    fn next(&mut self) -> Option<SortRecord> {
+    fn next(&mut self) -> Option<R> {
         match &mut self.source {
             Source::Memory(v, i) => {
                 let r = v.get(*i).copied();

@@ -1,0 +1,81 @@
+//! The tiled run: [`crate::tiles`] on every core, summarised like the sweep's.
+
+use super::config::{RunConfig, Source};
+use super::drive::bar;
+use super::{AnonPeak, RunSummary, SweepAxis, Timings, peak_rss};
+use crate::error::Result;
+use crate::sink::{MeshSink, TriangleSink};
+use crate::tiles::TileOptions;
+use std::time::Instant;
+
+/// Can `input` run in tiles? (LAS/LAZ points; no breaklines, trimming polygons or flat-triangle
+/// pass, which need the sweep; `--max-edge` is fine.)
+pub(crate) fn applies(config: &RunConfig) -> bool {
+    let l = &config.input().lines;
+    config.source() == Source::Lidar
+        && l.breaklines.is_empty()
+        && l.boundary.is_none()
+        && l.holes.is_none()
+        && !l.no_flat_triangles
+        && config.options().sweep_axis != SweepAxis::X
+}
+
+pub(crate) fn run(
+    config: &RunConfig,
+    tiles: &TileOptions,
+    mesh: Option<&mut (dyn MeshSink + Send)>,
+    sinks: &mut [&mut dyn TriangleSink],
+) -> Result<RunSummary> {
+    let start = Instant::now();
+    let (input, options) = (config.input(), config.options());
+    let anon = AnonPeak::default();
+    let pb = bar(options.progress);
+    let mut phase = String::new();
+    let mut progress = |what: &str, n: u64, total: u64| {
+        if phase != what {
+            phase = what.to_string();
+            pb.set_message(phase.clone());
+            anon.sample();
+        }
+        pb.set_length(total);
+        pb.set_position(n);
+    };
+    let r = crate::tiles::run(
+        input,
+        options.mem,
+        config.tmp_dir(),
+        tiles,
+        input.lines.max_edge,
+        &mut progress,
+        mesh,
+        sinks,
+    )?;
+    pb.finish_and_clear();
+    anon.sample();
+    let triangulate_write = start.elapsed().as_secs_f64() - r.read_sort;
+    let fin = Instant::now();
+    let mut products = Vec::with_capacity(sinks.len());
+    for s in sinks.iter_mut() {
+        products.push(s.finish()?);
+    }
+    Ok(RunSummary {
+        points_read: r.points_read,
+        points_kept: r.points_kept,
+        duplicates: r.points_read - r.points_kept,
+        triangles: r.triangles,
+        vertices: r.vertices,
+        seconds: Timings {
+            read_sort: r.read_sort,
+            triangulate_write,
+            finish: fin.elapsed().as_secs_f64(),
+        },
+        peak_rss_bytes: peak_rss(),
+        peak_anon_bytes: anon.get(),
+        sort: r.sort,
+        products,
+        crs: r.crs.as_ref().and_then(|c| c.definition()),
+        sweep_axis: SweepAxis::Y,
+        tiles: Some(r.tiles),
+        ..RunSummary::default()
+    })
+}

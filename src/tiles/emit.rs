@@ -1,0 +1,174 @@
+//! The writer side of a tiled run: tiles' outputs in tile order into the sinks.
+//!
+//! Terrain products get each owned triangle with its coordinates, and a watermark when a row of
+//! tiles is complete (later triangles are owned by higher rows, so they lie above it). A mesh
+//! writer gets numbered vertices: a vertex is numbered when a triangle first uses it, and its
+//! entry is dropped (`vertex_done`) when all its triangles have been written; its degree comes
+//! from the tile that owns it, whose run holds its whole star. Only vertices with some but not
+//! all triangles written are held: a band along the tile edges.
+
+use super::worker::{NOT_OWNED, TileOutput};
+use crate::breaklines::Trim;
+use crate::error::Result;
+use crate::sink::{MeshSink, TriangleSink};
+use std::collections::HashMap;
+
+/// State of a vertex some triangle has used or will use.
+#[derive(Debug, Clone, Copy)]
+struct Live {
+    /// Number in the mesh, once written.
+    id: Option<u64>,
+    /// Triangles written that use it.
+    seen: u32,
+    /// Its triangles in the whole triangulation, once its owner tile said.
+    degree: u32,
+}
+
+/// Feeds tiles to the sinks.
+pub(crate) struct TileWriter<'m, 'a, 'b> {
+    mesh: Option<&'m mut (dyn MeshSink + Send)>,
+    sinks: &'a mut [&'b mut dyn TriangleSink],
+    /// `--max-edge`: triangles it drops still count for their vertices, but are not written.
+    trim: Option<Trim>,
+    live: HashMap<(u64, u64), Live>,
+    next_id: u64,
+    /// Triangles and vertices written, triangles trimmed.
+    pub triangles: u64,
+    pub trimmed: u64,
+    pub vertices: u64,
+    /// Largest number of live vertex entries.
+    pub peak_live: usize,
+}
+
+fn key(p: &[f64; 3]) -> (u64, u64) {
+    (p[0].to_bits(), p[1].to_bits())
+}
+
+impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
+    pub fn new(
+        mesh: Option<&'m mut (dyn MeshSink + Send)>,
+        sinks: &'a mut [&'b mut dyn TriangleSink],
+        trim: Option<Trim>,
+    ) -> Self {
+        TileWriter {
+            mesh,
+            sinks,
+            trim,
+            live: HashMap::new(),
+            next_id: 0,
+            triangles: 0,
+            trimmed: 0,
+            vertices: 0,
+            peak_live: 0,
+        }
+    }
+
+    /// Writes one tile's triangles.
+    ///
+    /// # Errors
+    /// Any sink's error.
+    pub fn tile(&mut self, t: &TileOutput) -> Result<()> {
+        let kept: Vec<bool> = t
+            .triangles
+            .iter()
+            .map(|tri| {
+                self.trim
+                    .as_ref()
+                    .is_none_or(|tr| tr.keep(&tri.map(|i| t.vertices[i as usize])))
+            })
+            .collect();
+        for s in self.sinks.iter_mut() {
+            for (tri, _) in t.triangles.iter().zip(&kept).filter(|(_, k)| **k) {
+                let p = tri.map(|i| t.vertices[i as usize]);
+                s.triangle(&p)?;
+            }
+        }
+        let n = kept.iter().filter(|&&k| k).count() as u64;
+        self.triangles += n;
+        self.trimmed += t.triangles.len() as u64 - n;
+        if self.mesh.is_none() {
+            return Ok(());
+        }
+        // Degrees of the owned vertices first: some were used by earlier tiles already.
+        for (i, &d) in t.degree.iter().enumerate() {
+            if d != NOT_OWNED {
+                let k = key(&t.vertices[i]);
+                let e = self.live.entry(k).or_insert(Live {
+                    id: None,
+                    seen: 0,
+                    degree: NOT_OWNED,
+                });
+                e.degree = d;
+                if e.seen == d {
+                    self.done(k)?;
+                }
+            }
+        }
+        for (tri, &keep) in t.triangles.iter().zip(&kept) {
+            if keep {
+                let mut ids = [0u64; 3];
+                for (j, &i) in tri.iter().enumerate() {
+                    ids[j] = self.use_vertex(&t.vertices[i as usize])?;
+                }
+                self.mesh.as_mut().expect("a mesh").triangle(ids)?;
+            }
+            for &i in tri {
+                let k = key(&t.vertices[i as usize]);
+                let e = self.live.entry(k).or_insert(Live {
+                    id: None,
+                    seen: 0,
+                    degree: NOT_OWNED,
+                });
+                e.seen += 1;
+                if e.seen == e.degree {
+                    self.done(k)?;
+                }
+            }
+        }
+        self.peak_live = self.peak_live.max(self.live.len());
+        Ok(())
+    }
+
+    fn use_vertex(&mut self, p: &[f64; 3]) -> Result<u64> {
+        let e = self.live.entry(key(p)).or_insert(Live {
+            id: None,
+            seen: 0,
+            degree: NOT_OWNED,
+        });
+        if let Some(id) = e.id {
+            return Ok(id);
+        }
+        let id = self.next_id;
+        e.id = Some(id);
+        self.next_id += 1;
+        self.vertices += 1;
+        self.mesh.as_mut().expect("a mesh").vertex(*p)?;
+        Ok(id)
+    }
+
+    fn done(&mut self, k: (u64, u64)) -> Result<()> {
+        if let Some(Live { id: Some(id), .. }) = self.live.remove(&k) {
+            self.mesh.as_mut().expect("a mesh").vertex_done(id)?;
+        }
+        Ok(())
+    }
+
+    /// Later triangles lie at `y >= y`.
+    ///
+    /// # Errors
+    /// Any sink's error.
+    pub fn watermark(&mut self, y: f64) -> Result<()> {
+        for s in self.sinks.iter_mut() {
+            s.watermark(y)?;
+        }
+        if let Some(m) = self.mesh.as_mut() {
+            m.watermark(y)?;
+        }
+        Ok(())
+    }
+
+    /// Vertices still waiting for triangles (none after the last tile).
+    pub fn pending(&self) -> usize {
+        self.live.len()
+    }
+}

@@ -1,0 +1,372 @@
+//! The block index: every point once, grouped by block, so a tile can read the blocks of its
+//! buffered extent without decoding the input again.
+//!
+//! Reading pushes each point with its block key into the external sort ([`BlockRecord`], a stable
+//! sort by key, so the points of a block stay in input order). The merged stream is written once
+//! to an anonymous temporary file as bare `[x, y, z]` records (or kept in memory when it fit in
+//! one chunk), with a table of the non-empty blocks and where each starts. A row of blocks is one
+//! contiguous run of records, so reading a rectangle of blocks is one read per block row.
+//!
+//! The table also answers *occupancy* (is any point in these blocks?), which the certificates use.
+
+use super::grid::{BlockRect, TileGrid};
+use super::hull::hull;
+use crate::error::{Error, Result};
+use crate::sort::external::{Merge, SortKey};
+use std::cmp::Ordering;
+use std::fs::File;
+use std::io::Write;
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+
+/// A point with its block key, for the external sort.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct BlockRecord {
+    pub key: u64,
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+}
+
+impl SortKey for BlockRecord {
+    #[inline(always)]
+    fn order(a: &Self, b: &Self) -> Ordering {
+        a.key.cmp(&b.key)
+    }
+    // Points of one block keep their input order: the duplicate policy needs it.
+    const STABLE: bool = true;
+}
+
+#[derive(Debug)]
+enum Store {
+    Memory(Vec<[f64; 3]>),
+    File { file: File, dir: PathBuf },
+}
+
+/// Every point, grouped by block.
+#[derive(Debug)]
+pub(crate) struct BlockIndex {
+    pub grid: TileGrid,
+    /// Keys of the non-empty blocks, increasing.
+    keys: Vec<u64>,
+    /// Record offset of each non-empty block, and the total at the end.
+    starts: Vec<u64>,
+    store: Store,
+    /// The blocks holding points: their bounding rectangle.
+    occupied: BlockRect,
+    /// Corners of the convex hull of the blocks' extreme points.
+    hull: Vec<[f64; 3]>,
+}
+
+/// The table, the occupied rectangle and the hull candidates, built as the records stream by.
+#[derive(Debug)]
+struct Builder {
+    keys: Vec<u64>,
+    starts: Vec<u64>,
+    n: u64,
+    occupied: BlockRect,
+}
+
+impl Default for Builder {
+    fn default() -> Self {
+        Builder {
+            keys: Vec::new(),
+            starts: Vec::new(),
+            n: 0,
+            occupied: BlockRect {
+                x0: i64::MAX,
+                y0: i64::MAX,
+                x1: i64::MIN,
+                y1: i64::MIN,
+            },
+        }
+    }
+}
+
+impl Builder {
+    #[inline]
+    fn note(&mut self, r: &BlockRecord) {
+        if self.keys.last() != Some(&r.key) {
+            let (bx, by) = TileGrid::unkey(r.key);
+            self.keys.push(r.key);
+            self.starts.push(self.n);
+            let o = &mut self.occupied;
+            o.x0 = o.x0.min(bx);
+            o.y0 = o.y0.min(by);
+            o.x1 = o.x1.max(bx + 1);
+            o.y1 = o.y1.max(by + 1);
+        }
+        self.n += 1;
+    }
+}
+
+impl BlockIndex {
+    /// Builds the index from the merged sort, writing the points to an anonymous file under
+    /// `tmp_dir` unless the sort kept them in memory.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming `tmp_dir`, or the merge's own error.
+    pub fn build(grid: TileGrid, mut merge: Merge<BlockRecord>, tmp_dir: &Path) -> Result<Self> {
+        let io = |e| Error::io(tmp_dir, e);
+        let mut b = Builder::default();
+        let store = if let Some(v) = merge.take_memory() {
+            let mut pts = Vec::with_capacity(v.len());
+            for r in &v {
+                b.note(r);
+                pts.push([r.x, r.y, r.z]);
+            }
+            Store::Memory(pts)
+        } else {
+            let file = tempfile::tempfile_in(tmp_dir).map_err(io)?;
+            let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
+            let mut buf: Vec<[f64; 3]> = Vec::with_capacity(1 << 14);
+            for r in merge.by_ref() {
+                b.note(&r);
+                buf.push([r.x, r.y, r.z]);
+                if buf.len() == buf.capacity() {
+                    w.write_all(bytemuck::cast_slice(&buf)).map_err(io)?;
+                    buf.clear();
+                }
+            }
+            if let Some(e) = merge.take_error() {
+                return Err(e);
+            }
+            w.write_all(bytemuck::cast_slice(&buf)).map_err(io)?;
+            w.flush().map_err(io)?;
+            drop(w);
+            Store::File {
+                file,
+                dir: tmp_dir.to_path_buf(),
+            }
+        };
+        b.starts.push(b.n);
+        if b.keys.is_empty() {
+            b.occupied = BlockRect {
+                x0: 0,
+                y0: 0,
+                x1: 0,
+                y1: 0,
+            };
+        }
+        let mut index = BlockIndex {
+            grid,
+            keys: b.keys,
+            starts: b.starts,
+            store,
+            occupied: b.occupied,
+            hull: Vec::new(),
+        };
+        index.hull = index.convex_hull()?;
+        Ok(index)
+    }
+
+    /// The corners of the convex hull of all the points. Only blocks with an empty diagonal
+    /// neighbour can hold one: a point of a block whose four diagonal neighbours hold points is
+    /// beaten in every direction by a point of the neighbour in that quadrant (block assignment
+    /// is monotone in each coordinate), so it is inside the hull.
+    fn convex_hull(&self) -> Result<Vec<[f64; 3]>> {
+        let has = |bx: i64, by: i64| self.keys.binary_search(&TileGrid::key(bx, by)).is_ok();
+        let mut h: Vec<[f64; 3]> = Vec::new();
+        let mut row: Vec<[f64; 3]> = Vec::new();
+        let mut row_y = None;
+        for (i, &k) in self.keys.iter().enumerate() {
+            let (bx, by) = TileGrid::unkey(k);
+            if row_y != Some(by) && !row.is_empty() {
+                row.extend_from_slice(&h);
+                h = hull(&mut row);
+                row.clear();
+            }
+            row_y = Some(by);
+            let inner = has(bx - 1, by - 1)
+                && has(bx + 1, by - 1)
+                && has(bx - 1, by + 1)
+                && has(bx + 1, by + 1);
+            if !inner {
+                let before = row.len();
+                self.read_span(
+                    self.starts[i] as usize,
+                    self.starts[i + 1] as usize,
+                    &mut row,
+                )?;
+                // Keep the block's own hull only.
+                let mut mine = row.split_off(before);
+                row.extend(hull(&mut mine));
+            }
+        }
+        row.extend_from_slice(&h);
+        Ok(hull(&mut row))
+    }
+
+    /// Hull candidates of all the points (see [`super::hull`]).
+    pub fn hull(&self) -> &[[f64; 3]] {
+        &self.hull
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> u64 {
+        *self.starts.last().unwrap_or(&0)
+    }
+
+    /// The bounding rectangle of the non-empty blocks.
+    pub fn occupied(&self) -> BlockRect {
+        self.occupied
+    }
+
+    /// Number of non-empty blocks.
+    pub fn blocks(&self) -> usize {
+        self.keys.len()
+    }
+
+    /// Indices into `keys` of the non-empty blocks of row `by` in columns `x0 .. x1`.
+    #[inline]
+    fn row_range(&self, by: i64, x0: i64, x1: i64) -> std::ops::Range<usize> {
+        if x1 <= x0 {
+            return 0..0;
+        }
+        let lo = self.keys.partition_point(|&k| k < TileGrid::key(x0, by));
+        let hi = self.keys.partition_point(|&k| k < TileGrid::key(x1, by));
+        lo..hi.max(lo)
+    }
+
+    /// Is any point in row `by`, columns `x0 .. x1`?
+    #[inline]
+    #[cfg(test)]
+    pub fn any_in_row(&self, by: i64, x0: i64, x1: i64) -> bool {
+        !self.row_range(by, x0, x1).is_empty()
+    }
+
+    /// Keys of the non-empty blocks of row `by` in columns `x0 .. x1`.
+    #[inline]
+    pub fn keys_in_row(&self, by: i64, x0: i64, x1: i64) -> &[u64] {
+        &self.keys[self.row_range(by, x0, x1)]
+    }
+
+    /// Appends the points of the non-empty block `key` to `out`.
+    ///
+    /// # Errors
+    /// As [`BlockIndex::read`].
+    pub fn read_block(&self, key: u64, out: &mut Vec<[f64; 3]>) -> Result<()> {
+        let Ok(i) = self.keys.binary_search(&key) else {
+            return Ok(());
+        };
+        self.read_span(self.starts[i] as usize, self.starts[i + 1] as usize, out)
+    }
+
+    fn read_span(&self, a: usize, b: usize, out: &mut Vec<[f64; 3]>) -> Result<()> {
+        if a == b {
+            return Ok(());
+        }
+        match &self.store {
+            Store::Memory(v) => out.extend_from_slice(&v[a..b]),
+            Store::File { file, dir } => {
+                let old = out.len();
+                out.resize(old + (b - a), [0.0; 3]);
+                let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out[old..]);
+                file.read_exact_at(bytes, (a * 24) as u64)
+                    .map_err(|e| Error::io(dir, e))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Points in the blocks of `r`.
+    pub fn count(&self, r: &BlockRect) -> u64 {
+        (r.y0..r.y1)
+            .map(|by| {
+                let k = self.row_range(by, r.x0, r.x1);
+                self.starts[k.end] - self.starts[k.start]
+            })
+            .sum()
+    }
+
+    /// Appends the points of the blocks of `r` to `out`: block rows from south to north, blocks
+    /// west to east, each block's points in input order.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if the index file cannot be read.
+    pub fn read(&self, r: &BlockRect, out: &mut Vec<[f64; 3]>) -> Result<()> {
+        let r = r.intersect(&self.occupied);
+        for by in r.y0..r.y1 {
+            let k = self.row_range(by, r.x0, r.x1);
+            self.read_span(
+                self.starts[k.start] as usize,
+                self.starts[k.end] as usize,
+                out,
+            )?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sort::external::ExternalSorter;
+
+    fn index(mem: u64, pts: &[[f64; 3]], grid: TileGrid, dir: &Path) -> BlockIndex {
+        let mut s = ExternalSorter::<BlockRecord>::new(mem, dir);
+        for p in pts {
+            let (bx, by) = grid.block_of(p[0], p[1]);
+            s.push(BlockRecord {
+                key: TileGrid::key(bx, by),
+                x: p[0],
+                y: p[1],
+                z: p[2],
+            })
+            .unwrap();
+        }
+        BlockIndex::build(grid, s.finish().unwrap(), dir).unwrap()
+    }
+
+    #[test]
+    fn spilled_and_in_memory_indexes_agree_and_keep_input_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let grid = TileGrid::new(16.0, 2).unwrap();
+        let mut pts = Vec::new();
+        let mut s = 99u64;
+        for i in 0..50_000 {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let x = ((s >> 33) % 6400) as f64 / 100.0 - 10.0;
+            let y = ((s >> 13) % 6400) as f64 / 100.0 - 20.0;
+            pts.push([x, y, i as f64]);
+        }
+        let a = index(1, &pts, grid, dir.path());
+        let b = index(1 << 30, &pts, grid, dir.path());
+        assert_eq!(a.len(), 50_000);
+        assert_eq!(a.occupied(), b.occupied());
+        let r = BlockRect {
+            x0: -2,
+            y0: -3,
+            x1: 5,
+            y1: 4,
+        };
+        let (mut va, mut vb) = (Vec::new(), Vec::new());
+        a.read(&r, &mut va).unwrap();
+        b.read(&r, &mut vb).unwrap();
+        assert_eq!(va, vb);
+        assert_eq!(va.len() as u64, a.count(&r));
+        let expect: Vec<[f64; 3]> = {
+            let mut e: Vec<_> = pts
+                .iter()
+                .filter(|p| {
+                    let (bx, by) = grid.block_of(p[0], p[1]);
+                    r.contains(bx, by)
+                })
+                .copied()
+                .collect();
+            // Row-major by block, input order (z) within a block.
+            e.sort_by_key(|p| {
+                let (bx, by) = grid.block_of(p[0], p[1]);
+                (TileGrid::key(bx, by), p[2] as u64)
+            });
+            e
+        };
+        assert_eq!(va, expect);
+        assert!(a.any_in_row(0, -2, 5));
+        assert!(!a.any_in_row(100, -2, 5));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+}

@@ -1,0 +1,345 @@
+//! Exact tiles in parallel: the triangulation of all the points, computed tile by tile on every
+//! core, equal to the single sweep's.
+//!
+//! ```text
+//! LAS/LAZ ─► read once (filters) ─► external sort by block (stable) ─► block index (temp file)
+//!   ─► tiles on N threads: read own blocks + buffer, triangulate in memory, certify, grow
+//!   ─► writer: tiles in order ─► MeshSink / TriangleSinks (the same sinks as the sweep's)
+//! ```
+//!
+//! [`grid`] defines the tiles and blocks, [`index`] stores the points by block, [`certify`] says
+//! which triangles of a tile's run are triangles of the whole triangulation, [`worker`] runs one
+//! tile (ownership rule and acceptance condition there), [`emit`] delivers the tiles in order.
+//!
+//! The tile and block sizes depend on the data only (the headers' density and the points kept by
+//! the filters), never on `--mem` or `--threads`, and tiles are delivered in a fixed order, so the
+//! output is the same bytes for every memory budget and thread count. The triangle *set* is the
+//! one of the streaming sweep along `y` (the same tie rule, stated in positions), in another order.
+
+pub(crate) mod certify;
+pub(crate) mod emit;
+pub(crate) mod grid;
+pub(crate) mod hull;
+pub(crate) mod index;
+pub(crate) mod worker;
+
+use crate::error::{Error, Result};
+use crate::input::las::{LidarPoint, LidarReader};
+use crate::sink::{MeshSink, StreamInfo, TriangleSink};
+use crate::sort::external::ExternalSorter;
+use grid::{TileGrid, pow2, side_for};
+use index::{BlockIndex, BlockRecord};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::Instant;
+use worker::TileOutput;
+
+/// Average points per block the block size aims at.
+const BLOCK_POINTS: f64 = 256.0;
+/// Points per tile the tile size aims at (owned points, before the buffer).
+const TILE_POINTS: f64 = (1u64 << 18) as f64;
+/// The first buffer of a tile, in blocks.
+const FIRST_BUFFER: i64 = 1;
+
+/// How to tile.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TileOptions {
+    /// Worker threads (0: every core).
+    pub threads: usize,
+    /// Tile side; default: from the data's density.
+    pub tile: Option<f64>,
+    /// Tiles are whole multiples of this (a DEM's cell); default 1.
+    pub base: Option<f64>,
+}
+
+/// What the tiles did (part of the `--json` summary).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct TileStats {
+    /// Tile side.
+    pub tile_size: f64,
+    /// Block side (the unit of buffers).
+    pub block_size: f64,
+    /// Tiles with points.
+    pub tiles: u64,
+    /// Extra runs of tiles whose first buffer was not enough.
+    pub reruns: u64,
+    /// Widest buffer a tile ended with, in the data's units.
+    pub max_buffer: f64,
+    /// Points triangulated over all runs' last attempts (owned plus buffers).
+    pub loaded_points: u64,
+    /// Owned triangles that were not certified: always 0 (a tile only finishes when all are).
+    pub uncertified_owned: u64,
+    /// Worker threads.
+    pub threads: u64,
+}
+
+/// What [`run`] hands back to the pipeline.
+#[derive(Debug, Default)]
+pub(crate) struct TiledRun {
+    pub points_read: u64,
+    pub points_kept: u64,
+    pub triangles: u64,
+    pub vertices: u64,
+    pub sort: crate::sort::external::SortStats,
+    pub tiles: TileStats,
+    pub crs: Option<crate::crs::Crs>,
+    pub read_sort: f64,
+}
+
+/// Reads the LAS/LAZ `input` into a block index.
+fn read_index(
+    input: &crate::pipeline::Input,
+    mem: u64,
+    tmp: &std::path::Path,
+    options: &TileOptions,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4])> {
+    let mut reader = LidarReader::open(&input.paths, &input.filter)?;
+    let b = reader.bounds();
+    let total = reader.point_count();
+    let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
+    let base = options.base.unwrap_or(1.0);
+    let density = total as f64 / area;
+    let block = match options.tile {
+        Some(t) => {
+            let k = side_for(base, density, BLOCK_POINTS);
+            let s = ((t / pow2(base, k)).log2().round().max(0.0) as u32).min(12);
+            t / f64::from(1u32 << s)
+        }
+        None => pow2(base, side_for(base, density, BLOCK_POINTS).max(-30)),
+    };
+    let probe = TileGrid::new(block, 0)?;
+    probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
+    let q = *reader.quantization();
+    let crs = reader.crs().cloned();
+    let mut sorter = ExternalSorter::<BlockRecord>::new(mem / 2, tmp);
+    let mut bounds = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    let mut buf: Vec<LidarPoint> = Vec::with_capacity(1 << 16);
+    let mut n = 0u64;
+    loop {
+        buf.clear();
+        if reader.read_chunk(&mut buf, 1 << 16)? == 0 {
+            break;
+        }
+        for p in &buf {
+            let w = q.to_world(p);
+            let (x, y) = (w[0] + 0.0, w[1] + 0.0);
+            bounds = [
+                bounds[0].min(x),
+                bounds[1].min(y),
+                bounds[2].max(x),
+                bounds[3].max(y),
+            ];
+            let (bx, by) = probe.block_of(x, y);
+            sorter.push(BlockRecord {
+                key: TileGrid::key(bx, by),
+                x,
+                y,
+                z: w[2],
+            })?;
+        }
+        n += buf.len() as u64;
+        progress(n, total);
+    }
+    let merge = sorter.finish()?;
+    let sort = merge.stats();
+    let mut index = BlockIndex::build(probe, merge, tmp)?;
+    // The tile: as given, or about TILE_POINTS at the density over the non-empty blocks.
+    let tile = match options.tile {
+        Some(t) => t,
+        None => {
+            let covered = index.blocks().max(1) as f64 * block * block;
+            let d = index.len() as f64 / covered;
+            let k = side_for(block, d, TILE_POINTS).clamp(0, 12);
+            // A whole multiple of the base (blocks may be finer than the base).
+            let mut t = pow2(block, k);
+            while t < base {
+                t *= 2.0;
+            }
+            t
+        }
+    };
+    let shift = (tile / block).log2().round() as u32;
+    index.grid = TileGrid::new(tile, shift)?;
+    debug_assert_eq!(index.grid.block, block);
+    let _ = sort;
+    Ok((index, crs, bounds))
+}
+
+/// Runs a tiled triangulation of `input` into `mesh` and `sinks`.
+///
+/// # Errors
+/// Reader, tile and sink errors; [`Error::TooFewPoints`] / [`Error::AllCollinear`] when the whole
+/// input has no triangle.
+pub(crate) fn run(
+    input: &crate::pipeline::Input,
+    mem: u64,
+    tmp: &std::path::Path,
+    options: &TileOptions,
+    max_edge: Option<f64>,
+    progress: &mut dyn FnMut(&str, u64, u64),
+    mesh: Option<&mut (dyn MeshSink + Send)>,
+    sinks: &mut [&mut dyn TriangleSink],
+) -> Result<TiledRun> {
+    let start = Instant::now();
+    let mut options = *options;
+    if options.base.is_none() {
+        options.base = sinks.iter().find_map(|s| s.grid_cell());
+    }
+    let options = &options;
+    let (index, crs, bounds) = read_index(input, mem, tmp, options, &mut |n, t| {
+        progress("reading", n, t)
+    })?;
+    let read_sort = start.elapsed().as_secs_f64();
+    if index.len() == 0 {
+        return Err(Error::TooFewPoints {
+            distinct: 0,
+            total: 0,
+        });
+    }
+    let g = index.grid;
+    let tiles_rect = g.tiles_of(&index.occupied());
+    let order: Vec<(i64, i64)> = (tiles_rect.y0..tiles_rect.y1)
+        .flat_map(|ty| (tiles_rect.x0..tiles_rect.x1).map(move |tx| (tx, ty)))
+        .filter(|&(tx, ty)| index.count(&g.tile_blocks(tx, ty)) > 0)
+        .collect();
+    let threads = match options.threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    }
+    .max(1);
+    let info = StreamInfo {
+        crs: crs.clone(),
+        bounds,
+    };
+    for s in sinks.iter_mut() {
+        s.begin(&info)?;
+    }
+    let trim = match max_edge {
+        Some(l) => Some(crate::breaklines::Trim::new(None, &[], Some(l))?),
+        None => None,
+    };
+    let mut writer = emit::TileWriter::new(mesh, sinks, trim);
+    let mut stats = TileStats {
+        tile_size: g.tile,
+        block_size: g.block,
+        threads: threads as u64,
+        ..TileStats::default()
+    };
+    let (mut read, mut kept) = (0u64, 0u64);
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    // At most this many tiles in flight or waiting to be written.
+    let window = threads + 2;
+    let (tx, rx) = crossbeam_channel::bounded::<(usize, Result<TileOutput>)>(window);
+    let (tok_tx, tok_rx) = crossbeam_channel::bounded::<()>(window);
+    for _ in 0..window {
+        tok_tx.send(()).expect("room for every token");
+    }
+    let policy = input.duplicates;
+    let total = order.len();
+    let result = std::thread::scope(|scope| -> Result<()> {
+        let rx = rx;
+        for _ in 0..threads {
+            let (tx, tok_rx, next, stop, order, index) =
+                (tx.clone(), tok_rx.clone(), &next, &stop, &order, &index);
+            scope.spawn(move || {
+                while tok_rx.recv().is_ok() {
+                    if stop.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    if i >= order.len() {
+                        break;
+                    }
+                    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        worker::run_tile(index, order[i], policy, FIRST_BUFFER)
+                    }))
+                    .unwrap_or_else(|p| Err(Error::Internal(panic_message(&p))));
+                    if tx.send((i, r)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let mut pending = std::collections::BTreeMap::new();
+        let mut done = 0usize;
+        let mut row = order.first().map(|t| t.1);
+        let outcome = (|| -> Result<()> {
+            while done < total {
+                let (i, r) = rx.recv().map_err(|_| {
+                    Error::Internal("a tile worker stopped without a result".into())
+                })?;
+                pending.insert(i, r);
+                while let Some(r) = pending.remove(&done) {
+                    let t = r?;
+                    if row != Some(t.tile.1) {
+                        writer.watermark(g.world(&g.tile_blocks(t.tile.0, t.tile.1))[1])?;
+                        row = Some(t.tile.1);
+                    }
+                    writer.tile(&t)?;
+                    read += t.points_read;
+                    kept += t.points_kept;
+                    stats.tiles += 1;
+                    stats.reruns += u64::from(t.runs.saturating_sub(1));
+                    stats.loaded_points += t.loaded_points;
+                    stats.max_buffer = stats.max_buffer.max(t.buffer_blocks as f64 * g.block);
+                    done += 1;
+                    progress("triangulating", done as u64, total as u64);
+                    let _ = tok_tx.send(());
+                }
+            }
+            Ok(())
+        })();
+        if outcome.is_err() {
+            stop.store(true, Ordering::Relaxed);
+        }
+        // Workers waiting for a token or to send a result see the channels closed and stop.
+        drop(tok_tx);
+        drop(rx);
+        outcome
+    });
+    result?;
+    if writer.pending() != 0 {
+        return Err(Error::Internal(format!(
+            "{} vertices were left waiting for triangles after the last tile",
+            writer.pending()
+        )));
+    }
+    if writer.triangles == 0 {
+        return Err(if kept < 3 {
+            Error::TooFewPoints {
+                distinct: kept,
+                total: read,
+            }
+        } else {
+            Error::AllCollinear { distinct: kept }
+        });
+    }
+    Ok(TiledRun {
+        points_read: read,
+        points_kept: kept,
+        triangles: writer.triangles,
+        vertices: writer.vertices,
+        sort: crate::sort::external::SortStats::default(),
+        tiles: stats,
+        crs,
+        read_sort,
+    })
+}
+
+/// The message of a panic payload.
+pub(crate) fn panic_message(p: &Box<dyn std::any::Any + Send>) -> String {
+    if let Some(s) = p.downcast_ref::<&str>() {
+        format!("a worker thread panicked: {s}")
+    } else if let Some(s) = p.downcast_ref::<String>() {
+        format!("a worker thread panicked: {s}")
+    } else {
+        "a worker thread panicked".into()
+    }
+}
