@@ -364,6 +364,7 @@ fn cli_sweeps_strips_along_x_except_into_a_streaming_mesh() {
             .arg("tin")
             .arg(&path)
             .args(["-o", dir.path().join(out).to_str().unwrap(), "--json"])
+            .args(["--engine", "sweep"])
             .args(extra)
             .output()
             .unwrap();

@@ -27,7 +27,7 @@ pub(crate) fn run(
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<RunSummary> {
     let start = Instant::now();
-    let (input, options) = (config.input(), config.options());
+    let options = config.options();
     let anon = AnonPeak::default();
     let pb = bar(options.progress);
     let mut phase = String::new();
@@ -40,16 +40,7 @@ pub(crate) fn run(
         pb.set_length(total);
         pb.set_position(n);
     };
-    let r = crate::tiles::run(
-        input,
-        options.mem,
-        config.tmp_dir(),
-        tiles,
-        input.lines.max_edge,
-        &mut progress,
-        mesh,
-        sinks,
-    )?;
+    let r = crate::tiles::run(config, tiles, &mut progress, mesh, sinks)?;
     pb.finish_and_clear();
     anon.sample();
     let triangulate_write = start.elapsed().as_secs_f64() - r.read_sort;

@@ -176,16 +176,15 @@ fn read_index(
 /// Reader, tile and sink errors; [`Error::TooFewPoints`] / [`Error::AllCollinear`] when the whole
 /// input has no triangle.
 pub(crate) fn run(
-    input: &crate::pipeline::Input,
-    mem: u64,
-    tmp: &std::path::Path,
+    config: &crate::pipeline::RunConfig,
     options: &TileOptions,
-    max_edge: Option<f64>,
     progress: &mut dyn FnMut(&str, u64, u64),
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<TiledRun> {
     let start = Instant::now();
+    let (input, mem, tmp) = (config.input(), config.options().mem, config.tmp_dir());
+    let max_edge = input.lines.max_edge;
     let mut options = *options;
     if options.base.is_none() {
         options.base = sinks.iter().find_map(|s| s.grid_cell());
