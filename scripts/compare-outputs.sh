@@ -6,14 +6,17 @@
 #   scripts/compare-outputs.sh target/release/sweeptin /tmp/out-new > new.sha
 #   diff old.sha new.sha && echo identical
 #
+# TRI_ARGS is appended to every triangulating command (e.g. TRI_ARGS="--engine sweep" to compare
+# the sweep of a newer binary with an older one; the DEMs of the two engines are the same bytes).
+#
 # Timing-dependent fields (seconds, peak memory) are not in any output file, and the LandXML
 # header's date and time are blanked, so the hashes are deterministic. Set FULL=1 to include the 13.2M-point ARSO tile (about a minute more).
 set -euo pipefail
 BIN=$(realpath "$1"); OUT=$2
-D=$(realpath "$(dirname "$0")/../../shared/data")
+D=${SWEEPTIN_DATA:-$(realpath "$(dirname "$0")/../../shared/data")}
 rm -rf "$OUT"; mkdir -p "$OUT"; cd "$OUT"
 L=$D/lidar; T=$L/ign_50m_tiles; LN=$D/lines
-run() { "$BIN" "$@" -q >/dev/null 2>&1 || { echo "FAILED: $*" >&2; exit 1; }; }
+run() { "$BIN" "$@" ${TRI_ARGS:-} -q >/dev/null 2>&1 || { echo "FAILED: $*" >&2; exit 1; }; }
 run tin "$L/startinpy_small.laz" -o small.ply
 run tin "$L/startinpy_small.laz" -o small.obj
 run tin "$L/startinpy_small.laz" -o small.xml
@@ -32,7 +35,7 @@ run dem small.stin --cell 0.5 -o small_stin.tif
 run dem "$T"/*_IGN69.laz --class 2 --cell 0.5 --bbox 770550,6277550,770600,6277600 --buffer 10 -o ign_bbox.tif
 run contours "$L/lidR_Topography.laz" --interval 0.5 -o topo_c.geojson
 run volume "$L/lidR_Topography.laz" --class 2 --plane 800 --json > vol.json 2>/dev/null || true
-"$BIN" volume "$L/lidR_Topography.laz" --class 2 --plane 800 -q > vol.txt
+"$BIN" volume "$L/lidR_Topography.laz" --class 2 --plane 800 ${TRI_ARGS:-} -q > vol.txt
 printf '273400 5274400\n273500 5274500\n273600 5274600\n' > q.csv
 run sample "$L/lidR_Topography.laz" --class 2 --points q.csv -o sample.csv
 "$BIN" hillshade ign.tif -o shade.png >/dev/null 2>&1

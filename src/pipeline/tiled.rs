@@ -67,6 +67,10 @@ pub(crate) fn run(
         crs: r.crs.as_ref().and_then(|c| c.definition()),
         sweep_axis: SweepAxis::Y,
         tiles: Some(r.tiles),
+        breaklines: config.input().lines.max_edge.map(|_| super::LineSummary {
+            trimmed_triangles: r.trimmed,
+            ..super::LineSummary::default()
+        }),
         ..RunSummary::default()
     })
 }

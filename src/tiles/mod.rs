@@ -78,6 +78,8 @@ pub(crate) struct TiledRun {
     pub points_read: u64,
     pub points_kept: u64,
     pub triangles: u64,
+    /// Triangles `--max-edge` dropped.
+    pub trimmed: u64,
     pub vertices: u64,
     pub sort: crate::sort::external::SortStats,
     pub tiles: TileStats,
@@ -324,6 +326,7 @@ pub(crate) fn run(
         points_read: read,
         points_kept: kept,
         triangles: writer.triangles,
+        trimmed: writer.trimmed,
         vertices: writer.vertices,
         sort: crate::sort::external::SortStats::default(),
         tiles: stats,
