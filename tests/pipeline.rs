@@ -1,84 +1,13 @@
 //! The streaming pipeline against the in-memory core: same triangles whatever the memory budget,
 //! real LAS/LAZ files, and byte-identical outputs.
 
+#[path = "support/mesh.rs"]
+mod mesh;
+
+use mesh::{Collect, core_keys, write_las};
 use std::path::{Path, PathBuf};
 use sweeptin::pipeline::{Input, RunConfig, RunOptions, SweepAxis, run};
-use sweeptin::sink::{MeshSink, MeshSummary};
 use sweeptin::{DuplicatePolicy, Options, triangulate};
-
-/// Collects a streamed mesh in memory.
-#[derive(Default)]
-struct Collect {
-    vertices: Vec<[f64; 3]>,
-    triangles: Vec<[u64; 3]>,
-    released: std::collections::HashSet<u64>,
-}
-
-impl MeshSink for Collect {
-    fn vertex(&mut self, p: [f64; 3]) -> sweeptin::Result<()> {
-        self.vertices.push(p);
-        Ok(())
-    }
-    fn triangle(&mut self, t: [u64; 3]) -> sweeptin::Result<()> {
-        for v in t {
-            assert!(
-                (v as usize) < self.vertices.len(),
-                "vertex {v} not yet written"
-            );
-            assert!(!self.released.contains(&v), "vertex {v} used after release");
-        }
-        self.triangles.push(t);
-        Ok(())
-    }
-    fn vertex_done(&mut self, id: u64) -> sweeptin::Result<()> {
-        assert!(self.released.insert(id), "vertex {id} released twice");
-        Ok(())
-    }
-    fn finish(&mut self) -> sweeptin::Result<MeshSummary> {
-        Ok(MeshSummary::default())
-    }
-}
-
-type Key = [(u64, u64, u64); 3];
-
-/// The in-memory core's triangles as a sorted set of coordinate triples.
-fn core_keys(core: &sweeptin::Triangulation) -> Vec<Key> {
-    key_set(
-        &core.vertices,
-        core.triangles.iter().map(|t| t.map(|i| i as usize)),
-    )
-}
-
-impl Collect {
-    /// The streamed triangles as a sorted set of coordinate triples.
-    fn keys(&self) -> Vec<Key> {
-        key_set(
-            &self.vertices,
-            self.triangles.iter().map(|t| t.map(|i| i as usize)),
-        )
-    }
-
-    /// Validates the streamed mesh with the crate's exact validator.
-    fn validate(&self) {
-        let tris: Vec<[u32; 3]> = self.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
-        sweeptin::validate::validate(&self.vertices, &tris).unwrap();
-    }
-}
-
-fn key_set(vertices: &[[f64; 3]], tris: impl Iterator<Item = [usize; 3]>) -> Vec<Key> {
-    let mut out: Vec<Key> = tris
-        .map(|t| {
-            let mut k = t.map(|i| {
-                let p = vertices[i];
-                (p[0].to_bits(), p[1].to_bits(), p[2].to_bits())
-            });
-            k.sort();
-            k
-        })
-        .collect();
-    out.sort();
-    out
-}
 
 fn streamed(paths: &[PathBuf], mem: u64, dup: DuplicatePolicy) -> Collect {
     streamed_along(paths, mem, dup, SweepAxis::Auto).0
@@ -230,32 +159,6 @@ fn byte_identical_whatever_budget_or_threads() {
     }
 }
 
-/// A strip 40 times wider than tall, as LAS (scaled integers, so grid ties really happen).
-fn write_strip_las(path: &Path, pts: &[[f64; 3]]) {
-    use las::{Builder, Point, Transform, Vector, Writer};
-    let mut b = Builder::from((1, 2));
-    let t = |offset| Transform {
-        scale: 0.001,
-        offset,
-    };
-    b.transforms = Vector {
-        x: t(500_000.0),
-        y: t(4_000_000.0),
-        z: t(0.0),
-    };
-    let mut w = Writer::from_path(path, b.into_header().unwrap()).unwrap();
-    for p in pts {
-        w.write_point(Point {
-            x: 500_000.0 + p[0],
-            y: 4_000_000.0 + p[1],
-            z: p[2],
-            ..Default::default()
-        })
-        .unwrap();
-    }
-    w.close().unwrap();
-}
-
 #[test]
 fn strips_are_swept_lengthwise() {
     let dir = tempfile::tempdir().unwrap();
@@ -265,7 +168,7 @@ fn strips_are_swept_lengthwise() {
         p[1] *= 0.025; // 1000 m x 25 m
     }
     let path = dir.path().join("strip.las");
-    write_strip_las(&path, &pts);
+    write_las(&path, &pts);
     let input = Input {
         paths: vec![path.clone()],
         filter: sweeptin::input::las::Filter::keep_all(),
@@ -304,7 +207,7 @@ fn strips_are_swept_lengthwise() {
     // A gridded strip (ties everywhere, 1 mm LAS units) swept along x is still exactly Delaunay.
     let grid: Vec<[f64; 3]> = sweeptin::synth::grid(400, 9, 0.5);
     let gpath = dir.path().join("grid.las");
-    write_strip_las(&gpath, &grid);
+    write_las(&gpath, &grid);
     let (c, summary) = streamed_along(
         std::slice::from_ref(&gpath),
         16 << 10,
@@ -358,7 +261,7 @@ fn cli_sweeps_strips_along_x_except_into_a_streaming_mesh() {
         p[1] *= 0.05;
     }
     let path = dir.path().join("strip.las");
-    write_strip_las(&path, &pts);
+    write_las(&path, &pts);
     let axis = |out: &str, extra: &[&str]| -> String {
         let o = std::process::Command::new(bin)
             .arg("tin")

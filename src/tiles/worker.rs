@@ -100,7 +100,7 @@ pub(crate) fn run_tile(
         let grow = match &tri {
             None => Grow::Double,
             Some(_) if full => Grow::Done,
-            Some(t) => check(index, t, &owned, &loaded)?,
+            Some(t) => check(index, t, &owned, &loaded, own)?,
         };
         let before = loaded.clone();
         if std::env::var_os("SWEEPTIN_DEBUG_TILES").is_some() {
@@ -205,6 +205,7 @@ fn check(
     t: &crate::Triangulation,
     owned: &BlockRect,
     loaded: &Loaded,
+    own: usize,
 ) -> Result<Grow> {
     let g = index.grid;
     let cert = Certifier::new(index, loaded);
@@ -219,16 +220,21 @@ fn check(
         let [a, b, c] = tri.map(|i| [v[i as usize][0], v[i as usize][1]]);
         let (x0, x1) = (a[0].min(b[0]).min(c[0]), a[0].max(b[0]).max(c[0]));
         let (y0, y1) = (a[1].min(b[1]).min(c[1]), a[1].max(b[1]).max(c[1]));
-        if x1 < r[0] || x0 > r[2] || y1 < r[1] || y0 > r[3] || separated([a, b, c], &corners) {
+        if x1 < r[0] || x0 > r[2] || y1 < r[1] || y0 > r[3] {
             continue;
         }
-        // A hull corner whose block was not read: its height may not be the one the duplicate
-        // policy keeps, so the triangle waits for the block.
-        for p in [a, b, c] {
-            let (bx, by) = g.block_of(p[0], p[1]);
-            let k = TileGrid::key(bx, by);
-            if !loaded.contains(k, bx, by) {
-                missing.push(k);
+        let within = x0 >= r[0] && x1 <= r[2] && y0 >= r[1] && y1 <= r[3];
+        if !within && separated([a, b, c], &corners) {
+            continue;
+        }
+        // A hull corner whose block was not read (they come after the `own` points read): its
+        // height may not be the one the duplicate policy keeps, so the triangle waits for the
+        // block.
+        for &i in tri {
+            if t.input_index[i as usize] as usize >= own {
+                let p = v[i as usize];
+                let (bx, by) = g.block_of(p[0], p[1]);
+                missing.push(TileGrid::key(bx, by));
             }
         }
         match circumdisk_bounds(a, b, c) {
@@ -280,12 +286,22 @@ fn separated(t: [[f64; 2]; 3], corners: &[[f64; 2]; 4]) -> bool {
 fn keep(index: &BlockIndex, t: &crate::Triangulation, owned: &BlockRect, out: &mut TileOutput) {
     let g = index.grid;
     let n = t.vertices.len();
+    // Clearly inside or outside the tile's rectangle, or else by the block function itself.
+    let w = g.world(owned);
+    let m = g.margin(w.iter().fold(0.0f64, |m, v| m.max(v.abs())));
     let is_owned: Vec<bool> = t
         .vertices
         .iter()
         .map(|p| {
-            let (bx, by) = g.block_of(p[0], p[1]);
-            owned.contains(bx, by)
+            let (x, y) = (p[0], p[1]);
+            if x > w[0] + m && x < w[2] - m && y > w[1] + m && y < w[3] - m {
+                true
+            } else if x < w[0] - m || x > w[2] + m || y < w[1] - m || y > w[3] + m {
+                false
+            } else {
+                let (bx, by) = g.block_of(x, y);
+                owned.contains(bx, by)
+            }
         })
         .collect();
     let mut degree = vec![0u32; n];

@@ -1,0 +1,57 @@
+//! Where the real test data and the interop tools are, for every integration test.
+//!
+//! A test that needs something that is missing must not pass silently: under `CI=true` a missing
+//! data folder or tool fails the test; locally the test prints why it is skipped and returns.
+
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// Is this a CI run (`CI=true`)?
+pub fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
+}
+
+/// The folder with the real data (`lidar/`, `dem/`, `lines/`): `$SWEEPTIN_DATA`, or
+/// `../shared/data` beside the repository.
+///
+/// # Panics
+/// When it cannot be found (the data is part of every test run).
+pub fn data_dir() -> PathBuf {
+    [
+        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
+        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
+        Some(PathBuf::from("/work/shared/data")),
+    ]
+    .into_iter()
+    .flatten()
+    .find(|d| d.join("lidar").is_dir())
+    .expect("real test data not found: set SWEEPTIN_DATA to the folder holding lidar/")
+}
+
+/// A file of the real data, by its path under the data folder.
+///
+/// # Panics
+/// When it does not exist.
+pub fn shared(rel: &str) -> PathBuf {
+    let p = data_dir().join(rel);
+    assert!(p.exists(), "test data file missing: {}", p.display());
+    p
+}
+
+/// Is the command-line tool `name` on the PATH? When it is not: panics under CI, prints a skip
+/// message and returns `false` locally.
+pub fn tool(name: &str, test: &str) -> bool {
+    let found = std::process::Command::new("sh")
+        .args(["-c", &format!("command -v {name}")])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(
+            !in_ci(),
+            "{test}: `{name}` is required under CI=true but not installed"
+        );
+        eprintln!("{test}: skipped, `{name}` is not installed");
+    }
+    found
+}

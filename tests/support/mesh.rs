@@ -1,0 +1,111 @@
+//! A mesh sink that keeps what it is given and checks the streaming contract, and triangle sets
+//! to compare meshes whatever their order and numbering.
+
+#![allow(dead_code)]
+
+use std::path::Path;
+use sweeptin::sink::{MeshSink, MeshSummary};
+
+/// Collects a streamed mesh in memory, checking that a triangle only uses vertices already
+/// written and not yet released, and that each vertex is released at most once.
+#[derive(Default)]
+pub struct Collect {
+    pub vertices: Vec<[f64; 3]>,
+    pub triangles: Vec<[u64; 3]>,
+    pub released: std::collections::HashSet<u64>,
+}
+
+impl MeshSink for Collect {
+    fn vertex(&mut self, p: [f64; 3]) -> sweeptin::Result<()> {
+        self.vertices.push(p);
+        Ok(())
+    }
+    fn triangle(&mut self, t: [u64; 3]) -> sweeptin::Result<()> {
+        for v in t {
+            assert!(
+                (v as usize) < self.vertices.len(),
+                "vertex {v} not yet written"
+            );
+            assert!(!self.released.contains(&v), "vertex {v} used after release");
+        }
+        self.triangles.push(t);
+        Ok(())
+    }
+    fn vertex_done(&mut self, id: u64) -> sweeptin::Result<()> {
+        assert!(self.released.insert(id), "vertex {id} released twice");
+        Ok(())
+    }
+    fn finish(&mut self) -> sweeptin::Result<MeshSummary> {
+        Ok(MeshSummary::default())
+    }
+}
+
+/// A triangle by the bits of its corners, sorted.
+pub type Key = [(u64, u64, u64); 3];
+
+impl Collect {
+    /// The triangles as a sorted set of coordinate triples.
+    pub fn keys(&self) -> Vec<Key> {
+        key_set(
+            &self.vertices,
+            self.triangles.iter().map(|t| t.map(|i| i as usize)),
+        )
+    }
+
+    /// Validates the mesh with the crate's exact validator.
+    pub fn validate(&self) {
+        let tris: Vec<[u32; 3]> = self.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
+        sweeptin::validate::validate(&self.vertices, &tris).unwrap();
+    }
+}
+
+/// The in-memory core's triangles as a sorted set of coordinate triples.
+pub fn core_keys(core: &sweeptin::Triangulation) -> Vec<Key> {
+    key_set(
+        &core.vertices,
+        core.triangles.iter().map(|t| t.map(|i| i as usize)),
+    )
+}
+
+/// Triangles (vertex numbers into `vertices`) as a sorted set of coordinate triples.
+pub fn key_set(vertices: &[[f64; 3]], tris: impl Iterator<Item = [usize; 3]>) -> Vec<Key> {
+    let mut out: Vec<Key> = tris
+        .map(|t| {
+            let mut k = t.map(|i| {
+                let p = vertices[i];
+                (p[0].to_bits(), p[1].to_bits(), p[2].to_bits())
+            });
+            k.sort();
+            k
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// Writes `pts` (offsets from (500 000, 4 000 000)) as a LAS 1.2 file with a 1 mm scale, so that
+/// coordinates are on a lattice and ties really happen.
+pub fn write_las(path: &Path, pts: &[[f64; 3]]) {
+    use las::{Builder, Point, Transform, Vector, Writer};
+    let mut b = Builder::from((1, 2));
+    let t = |offset| Transform {
+        scale: 0.001,
+        offset,
+    };
+    b.transforms = Vector {
+        x: t(500_000.0),
+        y: t(4_000_000.0),
+        z: t(0.0),
+    };
+    let mut w = Writer::from_path(path, b.into_header().unwrap()).unwrap();
+    for p in pts {
+        w.write_point(Point {
+            x: 500_000.0 + p[0],
+            y: 4_000_000.0 + p[1],
+            z: p[2],
+            ..Default::default()
+        })
+        .unwrap();
+    }
+    w.close().unwrap();
+}

@@ -1,0 +1,304 @@
+//! Exact tiles on several threads: the tiled triangulation has the triangles of the triangulation
+//! of all the points (the in-memory core's, itself proved against spade in `prop_core.rs`), on
+//! random inputs, lattices (ties everywhere), real files and data with wide gaps whose tiles must
+//! grow their buffers; and the tiled outputs are the same bytes for any thread count and budget,
+//! with the same DEM and contours as the single sweep.
+
+#[path = "support/data.rs"]
+mod data;
+#[path = "support/mesh.rs"]
+mod mesh;
+
+use data::shared;
+use mesh::{Collect, core_keys, write_las};
+use std::path::{Path, PathBuf};
+use sweeptin::pipeline::{Input, RunConfig, RunOptions, RunSummary, run};
+use sweeptin::tiles::TileOptions;
+use sweeptin::{DuplicatePolicy, Options, triangulate};
+
+fn input(paths: &[PathBuf], classes: Option<Vec<u8>>) -> Input {
+    Input {
+        paths: paths.to_vec(),
+        filter: sweeptin::input::las::Filter {
+            classes,
+            ..sweeptin::input::las::Filter::keep_all()
+        },
+        duplicates: DuplicatePolicy::First,
+        lines: Default::default(),
+    }
+}
+
+/// A tiled run into a collecting mesh sink.
+fn tiled(input: &Input, tile: Option<f64>, threads: usize, mem: u64) -> (Collect, RunSummary) {
+    let tmp = tempfile::tempdir().unwrap();
+    let options = RunOptions {
+        mem,
+        tmp_dir: Some(tmp.path().to_path_buf()),
+        tiles: Some(TileOptions {
+            threads,
+            tile,
+            base: None,
+        }),
+        ..RunOptions::default()
+    };
+    let mut c = Collect::default();
+    let config = RunConfig::new(input.clone(), options).unwrap();
+    let summary = run(&config, Some(&mut c), &mut []).unwrap();
+    assert!(summary.tiles.is_some(), "the run was tiled");
+    assert_eq!(summary.triangles as usize, c.triangles.len());
+    assert_eq!(
+        c.released.len(),
+        c.vertices.len(),
+        "every vertex released once"
+    );
+    assert_eq!(
+        std::fs::read_dir(tmp.path()).unwrap().count(),
+        0,
+        "spill files left behind"
+    );
+    (c, summary)
+}
+
+/// The tiled triangles equal the core's on the same points, for the given tile sizes and both
+/// thread counts; the mesh is valid (exact validator).
+fn assert_tiles_equal_core(input: &Input, tiles: &[Option<f64>], what: &str) {
+    let (pts, _) = sweeptin::pipeline::read_points(input).unwrap();
+    let core = triangulate(&pts, &Options::default()).unwrap();
+    let want = core_keys(&core);
+    for &tile in tiles {
+        for threads in [1, 2] {
+            let (c, s) = tiled(input, tile, threads, 1 << 30);
+            let got = c.keys();
+            assert_eq!(
+                got.len(),
+                want.len(),
+                "{what}, tile {tile:?}, {threads} threads"
+            );
+            assert!(got == want, "{what}, tile {tile:?}, {threads} threads");
+            let t = s.tiles.unwrap();
+            assert_eq!(t.uncertified_owned, 0);
+            if threads == 1 {
+                c.validate();
+            }
+        }
+    }
+}
+
+fn las_of(dir: &Path, name: &str, pts: &[[f64; 3]]) -> PathBuf {
+    let p = dir.join(name);
+    write_las(&p, pts);
+    p
+}
+
+#[test]
+fn random_inputs_and_lattices_equal_the_core() {
+    let dir = tempfile::tempdir().unwrap();
+    let sets: Vec<(&str, Vec<[f64; 3]>)> = vec![
+        ("uniform", sweeptin::synth::uniform(6_000, 3)),
+        ("clustered", sweeptin::synth::clustered(6_000, 5)),
+        ("grid", sweeptin::synth::grid(80, 60, 1.0)),
+        (
+            "tilted grid",
+            sweeptin::synth::tilted_grid(70, 70, 1.0, 0.3),
+        ),
+    ];
+    for (name, pts) in sets {
+        let p = las_of(dir.path(), "a.las", &pts);
+        // Tiles of 16 (many tiles, thin buffers) and the automatic size.
+        assert_tiles_equal_core(&input(&[p], None), &[None, Some(16.0)], name);
+    }
+}
+
+#[test]
+fn duplicates_follow_the_policy_across_tiles() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut pts = sweeptin::synth::grid(60, 60, 1.0);
+    // Every point twice, the second copy higher: `first` keeps the first.
+    let copies: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], p[2] + 0.5]).collect();
+    pts.extend(copies);
+    let p = las_of(dir.path(), "d.las", &pts);
+    let (c, s) = tiled(&input(&[p], None), Some(8.0), 2, 1 << 20);
+    assert_eq!(s.points_read, 7200);
+    assert_eq!(s.points_kept, 3600);
+    assert!(
+        c.vertices.iter().all(|v| v[2].fract() == 0.0),
+        "first copies kept"
+    );
+}
+
+/// Data with an empty disk much wider than a tile (a lake): the tiles on its shore must grow
+/// their buffers across it, and still give the core's triangles.
+#[test]
+fn a_wide_lake_makes_buffers_grow() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts: Vec<[f64; 3]> = sweeptin::synth::uniform(12_000, 11)
+        .into_iter()
+        .map(|p| [p[0] * 0.3, p[1] * 0.3, p[2]])
+        .filter(|p| (p[0] - 150.0).hypot(p[1] - 150.0) > 90.0)
+        .collect();
+    let p = las_of(dir.path(), "lake.las", &pts);
+    let inp = input(&[p], None);
+    let (_, s) = tiled(&inp, Some(32.0), 2, 1 << 30);
+    let t = s.tiles.unwrap();
+    assert!(t.reruns > 0, "{t:?}");
+    assert!(t.max_buffer >= 32.0, "a buffer grew past a tile: {t:?}");
+    assert_tiles_equal_core(&inp, &[Some(32.0)], "lake");
+}
+
+#[test]
+fn real_files_equal_the_core() {
+    let l = |n: &str| shared(&format!("lidar/{n}"));
+    let ign: Vec<PathBuf> = std::fs::read_dir(shared("lidar/ign_50m_tiles"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "laz"))
+        .collect();
+    let cases = [
+        ("IGN 50 m tiles, ground", ign, Some(vec![2])),
+        (
+            "AHN3 Delft, two tiles, ground",
+            vec![l("ahn3_delft_cropped_1.laz"), l("ahn3_delft_cropped_2.laz")],
+            Some(vec![2]),
+        ),
+        (
+            "lidR Topography, ground (a lake)",
+            vec![l("lidR_Topography.laz")],
+            Some(vec![2]),
+        ),
+        (
+            "IGN decimated tiles (sparse, no order)",
+            vec![
+                l("ign_test_semis_2023_0299_6802_LA93_IGN69.laz"),
+                l("ign_test_semis_2023_0300_6802_LA93_IGN69.laz"),
+            ],
+            None,
+        ),
+    ];
+    for (what, paths, classes) in cases {
+        assert_tiles_equal_core(&input(&paths, classes), &[Some(32.0)], what);
+    }
+}
+
+fn cli(args: &[&str]) -> std::process::Output {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+/// Same bytes whatever the thread count and memory budget; the DEM is the sweep's, byte for
+/// byte, and the contours are the sweep's polylines.
+#[test]
+fn cli_outputs_do_not_depend_on_threads_or_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
+    let topo = shared("lidar/lidR_Topography.laz");
+    let topo = topo.to_str().unwrap();
+    let mut meshes = Vec::new();
+    let mut dems = Vec::new();
+    for (k, (threads, mem)) in [("1", "1G"), ("2", "1G"), ("2", "2M")].iter().enumerate() {
+        let (ply, tif, geo) = (
+            d(&format!("m{k}.ply")),
+            d(&format!("d{k}.tif")),
+            d(&format!("c{k}.geojson")),
+        );
+        cli(&[
+            "tin",
+            topo,
+            "--threads",
+            threads,
+            "--mem",
+            mem,
+            "-o",
+            &ply,
+            "-q",
+        ]);
+        cli(&[
+            "dem",
+            topo,
+            "--class",
+            "2",
+            "--cell",
+            "0.5",
+            "--threads",
+            threads,
+            "--mem",
+            mem,
+            "-o",
+            &tif,
+            "--contours",
+            &geo,
+            "-q",
+        ]);
+        meshes.push(std::fs::read(&ply).unwrap());
+        dems.push((std::fs::read(&tif).unwrap(), std::fs::read(&geo).unwrap()));
+    }
+    assert!(meshes.iter().all(|m| *m == meshes[0]), "meshes differ");
+    assert!(
+        dems.iter().all(|m| *m == dems[0]),
+        "DEMs or contours differ"
+    );
+    let (tif, geo) = (d("s.tif"), d("s.geojson"));
+    cli(&[
+        "dem",
+        topo,
+        "--class",
+        "2",
+        "--cell",
+        "0.5",
+        "--engine",
+        "sweep",
+        "-o",
+        &tif,
+        "--contours",
+        &geo,
+        "-q",
+    ]);
+    assert!(
+        std::fs::read(&tif).unwrap() == dems[0].0,
+        "the DEM is not the sweep's"
+    );
+    assert_eq!(
+        contour_set(&std::fs::read(&geo).unwrap()),
+        contour_set(&dems[0].1),
+        "the contours are not the sweep's"
+    );
+}
+
+/// Contour polylines as a sorted set: each with its elevation, rings started at their least
+/// point.
+fn contour_set(bytes: &[u8]) -> Vec<String> {
+    let v: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+    let mut out: Vec<String> = v["features"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            let mut c: Vec<(u64, u64)> = f["geometry"]["coordinates"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|p| {
+                    (
+                        p[0].as_f64().unwrap().to_bits(),
+                        p[1].as_f64().unwrap().to_bits(),
+                    )
+                })
+                .collect();
+            if c.len() > 1 && c.first() == c.last() {
+                c.pop();
+                let i = (0..c.len()).min_by_key(|&i| c[i]).unwrap();
+                c.rotate_left(i);
+            }
+            format!("{} {c:?}", f["properties"]["elevation"])
+        })
+        .collect();
+    out.sort();
+    out
+}
