@@ -54,16 +54,16 @@ impl<'a> Certifier<'a> {
         }
     }
 
-    /// Adds to `out` the non-empty blocks of row `by`, columns `x0 ..= x1`, that were not read;
-    /// returns whether there was any.
-    fn missing_in_row(&self, by: i64, x0: i64, x1: i64, out: &mut Missing) -> bool {
+    /// Adds to `out` the non-empty blocks of row `by`, columns `x0 ..= x1` (only those not read
+    /// unless `all`); returns whether there was any.
+    fn blocks_in_row(&self, by: i64, x0: i64, x1: i64, all: bool, out: &mut Missing) -> bool {
         let occ = self.index.occupied();
         let (x0, x1) = (x0.max(occ.x0), x1.min(occ.x1 - 1));
         if x1 < x0 {
             return false;
         }
         let l = &self.loaded.rect;
-        let spans = if by < l.y0 || by >= l.y1 || x1 < l.x0 || x0 >= l.x1 {
+        let spans = if all || by < l.y0 || by >= l.y1 || x1 < l.x0 || x0 >= l.x1 {
             [(x0, x1 + 1), (0, 0)]
         } else {
             [(x0, x1.min(l.x0 - 1) + 1), (x0.max(l.x1), x1 + 1)]
@@ -71,7 +71,7 @@ impl<'a> Certifier<'a> {
         let before = out.len();
         for (a, b) in spans {
             for &k in self.index.keys_in_row(by, a, b) {
-                if self.loaded.extra.binary_search(&k).is_err() {
+                if all || self.loaded.extra.binary_search(&k).is_err() {
                     out.push(k);
                 }
             }
@@ -82,6 +82,16 @@ impl<'a> Certifier<'a> {
     /// Is the closed disk of `center` and `radius` (an upper bound of the true radius) free of
     /// points outside the loaded blocks? The blocks that hold such points go to `out`.
     pub fn disk_clear(&self, center: [f64; 2], radius: f64, out: &mut Missing) -> bool {
+        self.disk_blocks(center, radius, false, out)
+    }
+
+    /// Adds to `out` every non-empty block the closed disk touches (read or not): what a run that
+    /// must get this disk right has to read.
+    pub fn touched(&self, center: [f64; 2], radius: f64, out: &mut Missing) {
+        self.disk_blocks(center, radius, true, out);
+    }
+
+    fn disk_blocks(&self, center: [f64; 2], radius: f64, all: bool, out: &mut Missing) -> bool {
         let g = &self.index.grid;
         let [cx, cy] = center;
         let r = radius + g.margin(cx.abs().max(cy.abs()) + radius);
@@ -89,7 +99,7 @@ impl<'a> Certifier<'a> {
             return false;
         }
         let w = &self.world;
-        if cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
+        if !all && cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
             return true;
         }
         let occ = self.index.occupied();
@@ -112,7 +122,7 @@ impl<'a> Certifier<'a> {
             let hw = (r * r - dy * dy).max(0.0).sqrt() * (1.0 + 1e-12) + r * 1e-12;
             let bx0 = ((cx - hw) / b).floor() as i64;
             let bx1 = ((cx + hw) / b).floor() as i64;
-            if self.missing_in_row(by, bx0, bx1, out) {
+            if self.blocks_in_row(by, bx0, bx1, all, out) {
                 clear = false;
             }
         }

@@ -21,6 +21,8 @@ pub(crate) mod emit;
 pub(crate) mod grid;
 pub(crate) mod hull;
 pub(crate) mod index;
+pub(crate) mod keep;
+pub(crate) mod region;
 pub(crate) mod worker;
 
 use crate::error::{Error, Result};
@@ -38,7 +40,7 @@ const BLOCK_POINTS: f64 = 256.0;
 /// Points per tile the tile size aims at (owned points, before the buffer).
 const TILE_POINTS: f64 = (1u64 << 18) as f64;
 /// The first buffer of a tile, in blocks.
-const FIRST_BUFFER: i64 = 1;
+const FIRST_BUFFER: i64 = 2;
 
 /// How to tile.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

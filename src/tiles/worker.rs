@@ -5,21 +5,26 @@
 //! `y`, then least `x`); a vertex to the tile holding it. Tiles are unions of blocks, and a point's
 //! block is one function of its coordinates, so every triangle and vertex has exactly one owner.
 //!
-//! **When a tile is done.** Let `R` be the tile's closed rectangle. The run is accepted when every
-//! triangle of the run that meets `R` is certified ([`super::certify`]) and every edge of the
-//! run's convex hull whose outer half-plane meets `R` is an edge of the whole hull. Then the
-//! certified triangles cover `R` as far as the whole triangulation does, so the run agrees with
-//! the whole triangulation on `R`: in particular every owned triangle is there, the star of every
-//! owned vertex is complete (its degree is known), and the parts of `R` outside the run's hull
-//! are outside the whole hull. Otherwise the loaded rectangle grows to take in the circumdisks that
-//! failed (or doubles its buffer for a hull edge or a degenerate disk) and the tile runs again.
-//! When the loaded blocks hold every non-empty block, every certificate holds.
+//! **When a tile is done.** Let `R` be the tile's closed rectangle. Every run holds the corners of
+//! the whole convex hull, so its hull is the whole hull. The first run reads the tile's blocks and
+//! a buffer, and judges every triangle that meets `R` ([`super::region`]): certified triangles
+//! ([`super::certify`]) are triangles of the whole triangulation. If some fail, a *patch* run reads
+//! the blocks around the failed triangles and every non-empty block their circumdisks touch, and
+//! must certify every triangle meeting the union `F` of the failed ones; and so on until a run
+//! fails nothing. The failed triangles of a run cover exactly the part of its region that its
+//! certified triangles do not, and each patch covers that part with certified triangles (its hull
+//! holds `F`, whose vertices it reads), so the certified triangles of all runs cover `R`. Being
+//! triangles of one triangulation, they are then exactly the whole triangulation's triangles that
+//! meet `R`: every owned triangle is there, and every owned vertex has its whole star (its degree).
+//! Parts of `R` outside them are outside the whole hull. When the blocks read are every non-empty
+//! block, every certificate holds, so this ends.
 
-use super::certify::{Certifier, Loaded, Missing};
+use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
 use super::index::BlockIndex;
+use super::keep::{Owner, from_list, from_run};
+use super::region::{Region, Tri2, judge};
 use crate::error::{Error, Result};
-use crate::geom::predicates::{Orientation, circumdisk_bounds, orient};
 use crate::sort::DuplicatePolicy;
 use crate::triangulation::{Options, triangulate};
 
@@ -42,18 +47,18 @@ pub(crate) struct TileOutput {
     pub points_read: u64,
     /// Distinct owned vertices.
     pub points_kept: u64,
-    /// Runs of the tile (1 when the first buffer was enough).
+    /// Runs of the tile (1 when the first buffer was enough; then patches).
     pub runs: u32,
-    /// The buffer the tile ended with, in blocks (the widest side).
+    /// The widest buffer of the first run, in blocks, or of a patch, measured from the tile.
     pub buffer_blocks: i64,
-    /// Points triangulated in the last run (owned plus buffer).
+    /// Points triangulated, all runs together.
     pub loaded_points: u64,
 }
 
 /// Runs tile `(tx, ty)`, starting with a buffer of `buffer` blocks.
 ///
 /// # Errors
-/// Reading the index; [`Error::Internal`] if a run over every block still fails a certificate.
+/// Reading the index; the triangulation's errors when the whole input has no triangle.
 pub(crate) fn run_tile(
     index: &BlockIndex,
     tile: (i64, i64),
@@ -71,10 +76,18 @@ pub(crate) fn run_tile(
         return Ok(out);
     }
     let occ = index.occupied();
+    let owner = Owner::new(g, owned);
+    let w = g.world(&owned);
+    let m = g.margin(w.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+    let mut region = Region::Rect([w[0] - m, w[1] - m, w[2] + m, w[3] + m]);
     let mut loaded = Loaded {
         rect: owned.expand(buffer.max(0)).intersect(&occ),
         extra: Vec::new(),
     };
+    // The first run, with what it certified; then the certified triangles of the patches.
+    let mut first: Option<(crate::Triangulation, Vec<u32>)> = None;
+    let mut patched: Vec<[[f64; 3]; 3]> = Vec::new();
+    let mut first_rect = loaded.rect;
     let mut pts = Vec::new();
     loop {
         out.runs += 1;
@@ -84,6 +97,8 @@ pub(crate) fn run_tile(
             index.read_block(k, &mut pts)?;
         }
         let own = pts.len();
+        out.loaded_points += own as u64;
+        out.buffer_blocks = out.buffer_blocks.max(buffer_of(&owned, &loaded.rect));
         // Corners of the whole hull from blocks not read: they make the run's hull the whole hull.
         for p in index.hull() {
             let (bx, by) = g.block_of(p[0], p[1]);
@@ -92,91 +107,190 @@ pub(crate) fn run_tile(
             }
         }
         let full = loaded.rect.contains_rect(&occ);
-        let tri = match triangulate(&pts, &Options { duplicates: policy }) {
-            Ok(t) => Some(t),
-            Err(Error::TooFewPoints { .. } | Error::AllCollinear { .. }) if !full => None,
+        let t = match triangulate(&pts, &Options { duplicates: policy }) {
+            Ok(t) => t,
+            Err(Error::TooFewPoints { .. } | Error::AllCollinear { .. }) if !full => {
+                loaded = doubled(&owned, &first_rect, &loaded, &occ);
+                first_rect = loaded.rect;
+                continue;
+            }
             Err(e) => return Err(e),
         };
-        let grow = match &tri {
-            None => Grow::Double,
-            Some(_) if full => Grow::Done,
-            Some(t) => check(index, t, &owned, &loaded, own)?,
-        };
-        let before = loaded.clone();
+        let verdict = judge(index, &t, &region, &loaded, own, full);
         if std::env::var_os("SWEEPTIN_DEBUG_TILES").is_some() {
-            let what = match &grow {
-                Grow::Done => "done".to_string(),
-                Grow::Blocks(m) => format!(
-                    "missing {} blocks, e.g. {:?}",
-                    m.len(),
-                    m.iter()
-                        .take(3)
-                        .map(|&k| TileGrid::unkey(k))
-                        .collect::<Vec<_>>()
-                ),
-                Grow::Double => "double".into(),
-            };
             eprintln!(
-                "tile {tile:?} run {}: {} points ({} extra blocks) rect {:?}: {what}",
+                "tile {tile:?} run {}: {own} points ({} extra blocks): {} certified, {} failed, \
+                 {} blocks wanted{}",
                 out.runs,
-                pts.len(),
                 loaded.extra.len(),
-                loaded.rect
+                verdict.certified.len(),
+                verdict.failed.len(),
+                verdict.blocks.len(),
+                if verdict.degenerate {
+                    ", degenerate"
+                } else {
+                    ""
+                }
             );
         }
-        match grow {
-            Grow::Done => {
-                let t = tri.expect("a triangulation was checked");
-                keep(index, &t, &owned, &mut out);
-                out.loaded_points = own as u64;
-                out.buffer_blocks = buffer_of(&owned, &loaded.rect);
-                return Ok(out);
-            }
-            Grow::Blocks(m) => loaded.extra = with_neighbours(index, &loaded, m),
-            Grow::Double => {
-                let b = buffer_of(&owned, &loaded.rect);
-                loaded.rect = owned.expand(2 * b + 1).union(&loaded.rect).intersect(&occ);
-                let rect = loaded.rect;
-                loaded.extra.retain(|&k| {
+        let failed: Vec<Tri2> = verdict
+            .failed
+            .iter()
+            .map(|&k| {
+                t.triangles[k as usize]
+                    .map(|i| [t.vertices[i as usize][0], t.vertices[i as usize][1]])
+            })
+            .collect();
+        let next = if failed.is_empty() {
+            None
+        } else if verdict.degenerate {
+            Some(doubled(&owned, &first_rect, &loaded, &occ))
+        } else {
+            // Patches only grow (the first starts afresh, without the first run's rectangle), so
+            // the runs end: each reads at least one block more, or everything.
+            let mut p = patch(index, &failed, verdict.blocks.clone());
+            if first.is_some() {
+                p.extra.extend_from_slice(&loaded.extra);
+                p.extra.sort_unstable();
+                p.extra.dedup();
+                p.rect = loaded.rect;
+                let rect = p.rect;
+                p.extra.retain(|&k| {
                     let (bx, by) = TileGrid::unkey(k);
                     !rect.contains(bx, by)
                 });
             }
+            Some(p)
+        };
+        match &first {
+            None => first = Some((t, verdict.certified)),
+            Some(_) => patched.extend(
+                verdict
+                    .certified
+                    .iter()
+                    .map(|&k| t.triangles[k as usize].map(|i| t.vertices[i as usize])),
+            ),
         }
-        if loaded == before {
-            if full {
-                return Err(Error::Internal(format!(
-                    "tile {tile:?}: a run over all the points failed a certificate"
-                )));
+        let Some(mut next) = next else { break };
+        if next == loaded {
+            next = Loaded {
+                rect: occ,
+                extra: Vec::new(),
+            };
+        }
+        loaded = next;
+        if !failed.is_empty() {
+            region = Region::of_tris(failed);
+        }
+    }
+    let (t, certified) = first.expect("a first run");
+    if patched.is_empty() {
+        from_run(&owner, &t, &certified, &mut out);
+    } else {
+        let mut all: Vec<[[f64; 3]; 3]> = certified
+            .iter()
+            .map(|&k| t.triangles[k as usize].map(|i| t.vertices[i as usize]))
+            .collect();
+        drop(t);
+        all.append(&mut patched);
+        from_list(&owner, &all, &mut out);
+        out.points_kept = out
+            .degree
+            .iter()
+            .filter(|&&d| d != super::worker::NOT_OWNED)
+            .count() as u64;
+    }
+    Ok(out)
+}
+
+/// The blocks of a patch run: around each cluster of failed triangles (the blocks of its
+/// bounding rectangle, two wider), every non-empty block their circumdisks touch and the blocks
+/// of their hull corners (`blocks`). Clusters, not one
+/// rectangle: the failed triangles may lie far apart (a lens along the data's edge, a lake's
+/// shore).
+fn patch(index: &BlockIndex, failed: &[Tri2], blocks: Vec<u64>) -> Loaded {
+    let g = index.grid;
+    let mut extra = blocks;
+    for r in clusters(&g, failed) {
+        let r = r.expand(2).intersect(&index.occupied());
+        for by in r.y0..r.y1 {
+            extra.extend_from_slice(index.keys_in_row(by, r.x0, r.x1));
+        }
+    }
+    extra.sort_unstable();
+    extra.dedup();
+    Loaded {
+        rect: BlockRect {
+            x0: 0,
+            y0: 0,
+            x1: 0,
+            y1: 0,
+        },
+        extra,
+    }
+}
+
+/// The block rectangles of groups of triangles whose rectangles come within a block of each
+/// other.
+fn clusters(g: &super::grid::TileGrid, tris: &[Tri2]) -> Vec<BlockRect> {
+    let mut rects: Vec<BlockRect> = tris
+        .iter()
+        .map(|t| {
+            let (mut x0, mut y0) = g.block_of(t[0][0], t[0][1]);
+            let (mut x1, mut y1) = (x0, y0);
+            for p in &t[1..] {
+                let (bx, by) = g.block_of(p[0], p[1]);
+                (x0, y0, x1, y1) = (x0.min(bx), y0.min(by), x1.max(bx), y1.max(by));
             }
-            loaded.rect = occ;
-            loaded.extra.clear();
+            BlockRect {
+                x0,
+                y0,
+                x1: x1 + 1,
+                y1: y1 + 1,
+            }
+        })
+        .collect();
+    // Merge until no two rectangles come within a block (few failed triangles: quadratic is fine).
+    loop {
+        let mut merged = false;
+        let mut i = 0;
+        while i < rects.len() {
+            let mut j = i + 1;
+            while j < rects.len() {
+                if !rects[i].expand(1).intersect(&rects[j]).is_empty() {
+                    let r = rects.swap_remove(j);
+                    rects[i] = rects[i].union(&r);
+                    merged = true;
+                } else {
+                    j += 1;
+                }
+            }
+            i += 1;
+        }
+        if !merged {
+            return rects;
         }
     }
 }
 
-/// The extra blocks of the next run: those already read outside the rectangle, the blocks `m`
-/// that withheld certificates, and their non-empty neighbours (so that the triangles near them
-/// are right at the next try).
-fn with_neighbours(index: &BlockIndex, loaded: &Loaded, m: Missing) -> Vec<u64> {
-    let mut out = loaded.extra.clone();
-    for &k in &m {
+/// The loaded blocks with the buffer of the first run's rectangle `first` around `owned` doubled
+/// (for a run that could not be judged).
+fn doubled(owned: &BlockRect, first: &BlockRect, loaded: &Loaded, occ: &BlockRect) -> Loaded {
+    let b = buffer_of(owned, first);
+    let rect = owned.expand(2 * b + 1).union(&loaded.rect).intersect(occ);
+    let mut extra = loaded.extra.clone();
+    extra.retain(|&k| {
         let (bx, by) = TileGrid::unkey(k);
-        for ny in by - 1..=by + 1 {
-            out.extend_from_slice(index.keys_in_row(ny, bx - 1, bx + 2));
-        }
-    }
-    out.sort_unstable();
-    out.dedup();
-    out.retain(|&k| {
-        let (bx, by) = TileGrid::unkey(k);
-        !loaded.rect.contains(bx, by)
+        !rect.contains(bx, by)
     });
-    out
+    Loaded { rect, extra }
 }
 
 /// The widest side of the buffer of `loaded` around `owned`, in blocks.
 fn buffer_of(owned: &BlockRect, loaded: &BlockRect) -> i64 {
+    if loaded.is_empty() {
+        return 0;
+    }
     [
         owned.x0 - loaded.x0,
         owned.y0 - loaded.y0,
@@ -187,155 +301,4 @@ fn buffer_of(owned: &BlockRect, loaded: &BlockRect) -> i64 {
     .max()
     .unwrap_or(0)
     .max(0)
-}
-
-/// The outcome of checking a run.
-enum Grow {
-    /// Everything the tile owns is certified.
-    Done,
-    /// Read these blocks too.
-    Blocks(Missing),
-    /// Double the buffer.
-    Double,
-}
-
-/// Is the run `t` over the `loaded` blocks certified on the tile `owned`?
-fn check(
-    index: &BlockIndex,
-    t: &crate::Triangulation,
-    owned: &BlockRect,
-    loaded: &Loaded,
-    own: usize,
-) -> Result<Grow> {
-    let g = index.grid;
-    let cert = Certifier::new(index, loaded);
-    let w = g.world(owned);
-    let mag = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let m = g.margin(mag);
-    let r = [w[0] - m, w[1] - m, w[2] + m, w[3] + m];
-    let v = &t.vertices;
-    let corners = [[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]];
-    let mut missing = Missing::new();
-    for tri in &t.triangles {
-        let [a, b, c] = tri.map(|i| [v[i as usize][0], v[i as usize][1]]);
-        let (x0, x1) = (a[0].min(b[0]).min(c[0]), a[0].max(b[0]).max(c[0]));
-        let (y0, y1) = (a[1].min(b[1]).min(c[1]), a[1].max(b[1]).max(c[1]));
-        if x1 < r[0] || x0 > r[2] || y1 < r[1] || y0 > r[3] {
-            continue;
-        }
-        let within = x0 >= r[0] && x1 <= r[2] && y0 >= r[1] && y1 <= r[3];
-        if !within && separated([a, b, c], &corners) {
-            continue;
-        }
-        // A hull corner whose block was not read (they come after the `own` points read): its
-        // height may not be the one the duplicate policy keeps, so the triangle waits for the
-        // block.
-        for &i in tri {
-            if t.input_index[i as usize] as usize >= own {
-                let p = v[i as usize];
-                let (bx, by) = g.block_of(p[0], p[1]);
-                missing.push(TileGrid::key(bx, by));
-            }
-        }
-        match circumdisk_bounds(a, b, c) {
-            Some(d) => {
-                let before = missing.len();
-                cert.disk_clear(d.center, d.radius, &mut missing);
-                if missing.len() - before > 1000
-                    && std::env::var_os("SWEEPTIN_DEBUG_TILES").is_some()
-                {
-                    eprintln!(
-                        "  big disk r={} at {:?}: {:?} {:?} {:?} ({} blocks)",
-                        d.radius,
-                        d.center,
-                        a,
-                        b,
-                        c,
-                        missing.len() - before
-                    );
-                }
-            }
-            None => {
-                if std::env::var_os("SWEEPTIN_DEBUG_TILES").is_some() {
-                    eprintln!("  degenerate disk: {a:?} {b:?} {c:?}");
-                }
-                return Ok(Grow::Double);
-            }
-        }
-    }
-    Ok(if missing.is_empty() {
-        Grow::Done
-    } else {
-        Grow::Blocks(missing)
-    })
-}
-
-/// Does an edge line of the counter-clockwise triangle `t` have every corner of a rectangle
-/// strictly outside? (Then they do not meet: the exact half of the separating-axis test, the
-/// bounding boxes being the other half.)
-fn separated(t: [[f64; 2]; 3], corners: &[[f64; 2]; 4]) -> bool {
-    (0..3).any(|i| {
-        let (p, q) = (t[i], t[(i + 1) % 3]);
-        corners
-            .iter()
-            .all(|&c| orient(p, q, c) == Orientation::Clockwise)
-    })
-}
-
-/// Fills `out` with the owned triangles of the accepted run `t`.
-fn keep(index: &BlockIndex, t: &crate::Triangulation, owned: &BlockRect, out: &mut TileOutput) {
-    let g = index.grid;
-    let n = t.vertices.len();
-    // Clearly inside or outside the tile's rectangle, or else by the block function itself.
-    let w = g.world(owned);
-    let m = g.margin(w.iter().fold(0.0f64, |m, v| m.max(v.abs())));
-    let is_owned: Vec<bool> = t
-        .vertices
-        .iter()
-        .map(|p| {
-            let (x, y) = (p[0], p[1]);
-            if x > w[0] + m && x < w[2] - m && y > w[1] + m && y < w[3] - m {
-                true
-            } else if x < w[0] - m || x > w[2] + m || y < w[1] - m || y > w[3] + m {
-                false
-            } else {
-                let (bx, by) = g.block_of(x, y);
-                owned.contains(bx, by)
-            }
-        })
-        .collect();
-    let mut degree = vec![0u32; n];
-    let mut foreign = vec![false; n];
-    for tri in &t.triangles {
-        let low = tri[0].min(tri[1]).min(tri[2]) as usize;
-        for &i in tri {
-            degree[i as usize] += 1;
-            if !is_owned[low] {
-                foreign[i as usize] = true;
-            }
-        }
-    }
-    let mut map = vec![u32::MAX; n];
-    let mut add = |i: usize, out: &mut TileOutput| -> u32 {
-        if map[i] == u32::MAX {
-            map[i] = out.vertices.len() as u32;
-            out.vertices.push(t.vertices[i]);
-            out.degree
-                .push(if is_owned[i] { degree[i] } else { NOT_OWNED });
-        }
-        map[i]
-    };
-    for tri in &t.triangles {
-        let low = tri[0].min(tri[1]).min(tri[2]) as usize;
-        if is_owned[low] {
-            let o = tri.map(|i| add(i as usize, out));
-            out.triangles.push(o);
-        }
-    }
-    for i in 0..n {
-        if is_owned[i] && foreign[i] {
-            add(i, out);
-        }
-    }
-    out.points_kept = is_owned.iter().filter(|&&o| o).count() as u64;
 }

@@ -1,0 +1,254 @@
+//! What a run of a tile must get right, and the verdict on a run.
+//!
+//! The first run of a tile must certify every triangle that meets the tile's closed rectangle.
+//! When some fail, the next run (a *patch*) is smaller: it reads the blocks around the failed
+//! triangles and those their circumdisks touch, and must certify every triangle that meets the
+//! union of the failed ones. The certified triangles of all runs together cover the rectangle
+//! (see [`super::worker`]).
+
+use super::certify::{Certifier, Loaded, Missing};
+use super::grid::TileGrid;
+use super::index::BlockIndex;
+use crate::geom::predicates::{Orientation, circumdisk_bounds, orient};
+
+/// A triangle in the plane.
+pub(crate) type Tri2 = [[f64; 2]; 3];
+
+fn bbox(t: &Tri2) -> [f64; 4] {
+    let (x0, x1) = (
+        t[0][0].min(t[1][0]).min(t[2][0]),
+        t[0][0].max(t[1][0]).max(t[2][0]),
+    );
+    let (y0, y1) = (
+        t[0][1].min(t[1][1]).min(t[2][1]),
+        t[0][1].max(t[1][1]).max(t[2][1]),
+    );
+    [x0, y0, x1, y1]
+}
+
+fn overlap(a: &[f64; 4], b: &[f64; 4]) -> bool {
+    a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3]
+}
+
+/// Does an edge line of the counter-clockwise triangle `t` have every corner of the rectangle
+/// `r` strictly outside? (Then they do not meet: the exact half of the separating-axis test, the
+/// bounding boxes being the other half.)
+fn separated(t: &Tri2, r: &[f64; 4]) -> bool {
+    let corners = [[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]];
+    (0..3).any(|i| {
+        let (p, q) = (t[i], t[(i + 1) % 3]);
+        corners
+            .iter()
+            .all(|&c| orient(p, q, c) == Orientation::Clockwise)
+    })
+}
+
+/// Do two closed counter-clockwise triangles meet? Exact: they are disjoint exactly when an edge
+/// line of one has the other strictly outside (separating axes of two triangles are their edges).
+pub(crate) fn tris_meet(a: &Tri2, b: &Tri2) -> bool {
+    let outside = |t: &Tri2, u: &Tri2| {
+        (0..3).any(|i| {
+            let (p, q) = (t[i], t[(i + 1) % 3]);
+            u.iter().all(|&c| orient(p, q, c) == Orientation::Clockwise)
+        })
+    };
+    !outside(a, b) && !outside(b, a)
+}
+
+/// Side of the bucket grid over the failed triangles.
+const CELLS: usize = 64;
+
+/// The part of the plane whose triangles a run must certify.
+#[derive(Debug, Clone)]
+pub(crate) enum Region {
+    /// A closed rectangle `[xmin, ymin, xmax, ymax]` (the tile, widened by the rounding margin).
+    Rect([f64; 4]),
+    /// The union of closed triangles (those a previous run failed), bucketed by bounding box.
+    Tris {
+        bbox: [f64; 4],
+        tris: Vec<Tri2>,
+        cells: Vec<Vec<u32>>,
+    },
+}
+
+impl Region {
+    /// The union of the closed triangles `tris` (not empty).
+    pub fn of_tris(tris: Vec<Tri2>) -> Region {
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for t in &tris {
+            let tb = bbox(t);
+            b = [
+                b[0].min(tb[0]),
+                b[1].min(tb[1]),
+                b[2].max(tb[2]),
+                b[3].max(tb[3]),
+            ];
+        }
+        let mut cells = vec![Vec::new(); CELLS * CELLS];
+        let r = Self::cell_range_of(&b, &b);
+        debug_assert!(r.0 == 0 && r.1 == 0);
+        for (i, t) in tris.iter().enumerate() {
+            let (cx0, cy0, cx1, cy1) = Self::cell_range_of(&b, &bbox(t));
+            for cy in cy0..=cy1 {
+                for cx in cx0..=cx1 {
+                    cells[cy * CELLS + cx].push(i as u32);
+                }
+            }
+        }
+        Region::Tris {
+            bbox: b,
+            tris,
+            cells,
+        }
+    }
+
+    /// The cells of the grid over `all` that the box `b` covers (clamped), inclusive.
+    fn cell_range_of(all: &[f64; 4], b: &[f64; 4]) -> (usize, usize, usize, usize) {
+        let w = (all[2] - all[0]).max(f64::MIN_POSITIVE);
+        let h = (all[3] - all[1]).max(f64::MIN_POSITIVE);
+        let c = |v: f64, lo: f64, span: f64| -> usize {
+            (((v - lo) / span * CELLS as f64).floor().max(0.0) as usize).min(CELLS - 1)
+        };
+        (
+            c(b[0], all[0], w),
+            c(b[1], all[1], h),
+            c(b[2], all[0], w),
+            c(b[3], all[1], h),
+        )
+    }
+
+    /// Does triangle `t` meet the region? (Exact, the rectangle being widened by its margin.)
+    pub fn meets(&self, t: &Tri2) -> bool {
+        let tb = bbox(t);
+        match self {
+            Region::Rect(r) => {
+                if !overlap(&tb, r) {
+                    return false;
+                }
+                let within = tb[0] >= r[0] && tb[2] <= r[2] && tb[1] >= r[1] && tb[3] <= r[3];
+                within || !separated(t, r)
+            }
+            Region::Tris { bbox, tris, cells } => {
+                if !overlap(&tb, bbox) {
+                    return false;
+                }
+                let (cx0, cy0, cx1, cy1) = Self::cell_range_of(bbox, &tb);
+                for cy in cy0..=cy1 {
+                    for cx in cx0..=cx1 {
+                        for &i in &cells[cy * CELLS + cx] {
+                            let f = &tris[i as usize];
+                            if overlap(&tb, &super::region::bbox(f)) && tris_meet(t, f) {
+                                return true;
+                            }
+                        }
+                    }
+                }
+                false
+            }
+        }
+    }
+}
+
+/// What a run got right and what it did not.
+#[derive(Debug, Default)]
+pub(crate) struct Verdict {
+    /// Triangles (indices into the run's triangles) that meet the region and are certified.
+    pub certified: Vec<u32>,
+    /// Triangles that meet the region and are not.
+    pub failed: Vec<u32>,
+    /// Non-empty blocks the next run must read: those the failed triangles' disks touch, and the
+    /// blocks of hull corners the failed triangles use.
+    pub blocks: Missing,
+    /// A failed triangle too thin for its disk to be bounded: the next run doubles its buffer.
+    pub degenerate: bool,
+}
+
+/// Judges the run `t` over `loaded` (its first `own` input points read from blocks, the rest hull
+/// corners) on `region`. A run over every non-empty block (`full`) is the whole triangulation:
+/// everything in it is certified.
+pub(crate) fn judge(
+    index: &BlockIndex,
+    t: &crate::Triangulation,
+    region: &Region,
+    loaded: &Loaded,
+    own: usize,
+    full: bool,
+) -> Verdict {
+    let g = index.grid;
+    let cert = Certifier::new(index, loaded);
+    let v = &t.vertices;
+    let mut out = Verdict::default();
+    let mut missing = Missing::new();
+    for (k, tri) in t.triangles.iter().enumerate() {
+        let t2: Tri2 = tri.map(|i| [v[i as usize][0], v[i as usize][1]]);
+        if !region.meets(&t2) {
+            continue;
+        }
+        if full {
+            out.certified.push(k as u32);
+            continue;
+        }
+        // A hull corner whose block was not read (they come after the `own` points read): its
+        // height may not be the one the duplicate policy keeps, so the triangle waits for the
+        // block.
+        let mut ok = true;
+        for &i in tri {
+            if t.input_index[i as usize] as usize >= own {
+                let p = v[i as usize];
+                let (bx, by) = g.block_of(p[0], p[1]);
+                out.blocks.push(TileGrid::key(bx, by));
+                ok = false;
+            }
+        }
+        match circumdisk_bounds(t2[0], t2[1], t2[2]) {
+            Some(d) => {
+                missing.clear();
+                if !cert.disk_clear(d.center, d.radius, &mut missing) || !ok {
+                    ok = false;
+                    cert.touched(d.center, d.radius, &mut out.blocks);
+                }
+            }
+            None => {
+                ok = false;
+                out.degenerate = true;
+            }
+        }
+        if ok {
+            out.certified.push(k as u32);
+        } else {
+            out.failed.push(k as u32);
+        }
+    }
+    out.blocks.sort_unstable();
+    out.blocks.dedup();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn regions() {
+        let r = Region::Rect([0.0, 0.0, 10.0, 10.0]);
+        assert!(r.meets(&[[1.0, 1.0], [2.0, 1.0], [1.0, 2.0]]));
+        // Bounding boxes overlap, the triangle does not reach the square.
+        assert!(!r.meets(&[[11.0, 5.0], [5.0, 11.0], [11.0, 11.0]]));
+        assert!(r.meets(&[[10.0, 5.0], [20.0, 5.0], [20.0, 6.0]]));
+        let f = Region::of_tris(vec![
+            [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            [[100.0, 100.0], [101.0, 100.0], [100.0, 101.0]],
+        ]);
+        assert!(f.meets(&[[0.5, 0.5], [3.0, 0.5], [0.5, 3.0]]));
+        assert!(!f.meets(&[[50.0, 50.0], [51.0, 50.0], [50.0, 51.0]]));
+        assert!(f.meets(&[[99.0, 99.0], [100.5, 99.0], [99.0, 100.5]]));
+        // Boxes overlap, triangles do not.
+        assert!(!f.meets(&[[0.6, 0.6], [2.0, 0.6], [0.6, 2.0]]));
+        assert!(f.meets(&[[0.5, 0.5], [2.0, 0.5], [0.5, 2.0]]));
+    }
+}
