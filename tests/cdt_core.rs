@@ -191,7 +191,7 @@ fn stepwise_invariants_with_breaklines() {
         );
         s.set_constraints(g, &ends);
         let mut k = 0;
-        while s.step() {
+        while s.step().unwrap() {
             k += 1;
             s.check()
                 .unwrap_or_else(|e| panic!("seed {seed} step {k}: {e}"));
@@ -333,7 +333,7 @@ fn crossing_breaklines_are_reported_not_fatal() {
 /// once, and keeps pending breaklines from being finalised across.
 #[test]
 fn streaming_breaklines_equal_batch() {
-    use sweeptin::sweep::{Event, StreamConfig, StreamPoint, Sweep};
+    use sweeptin::finalise::{Event, StreamConfig, StreamPoint, StreamingSweep};
     for seed in 0..60 {
         let n = 20 + (seed as usize * 37) % 600;
         let (pts, segs) = random_input(seed + 9000, n, n / 4);
@@ -369,8 +369,8 @@ fn streaming_breaklines_equal_batch() {
             index: i as u64,
             constraint: cid(i as u32),
         };
-        let mut s = Sweep::streaming(sp(0), &cfg);
-        s.set_stream_constraints(g, cid(0));
+        let mut s = StreamingSweep::new(sp(0), &cfg);
+        s.set_constraints(g, cid(0)).unwrap();
         let mut events = Vec::new();
         for i in 1..real.len() {
             s.push(sp(i)).unwrap();
@@ -379,7 +379,7 @@ fn streaming_breaklines_equal_batch() {
                     .unwrap_or_else(|e| panic!("seed {seed} point {i}: {e}"));
             }
         }
-        s.finish_streaming();
+        s.finish();
         s.take_events(&mut events);
         let mut verts = Vec::new();
         let mut done = std::collections::HashSet::new();
