@@ -407,3 +407,46 @@ fn streaming_breaklines_equal_batch() {
         assert!(s.stream_stats().peak_pending_segments > 0);
     }
 }
+
+/// Breaklines that do not match the points are an internal error, not a panic: a batch sweep
+/// given a segment whose later end (in the graph) is swept before its earlier end, and a
+/// streaming sweep given a point naming a breakline vertex it has no graph for.
+#[test]
+fn mismatched_breaklines_are_errors_not_panics() {
+    use sweeptin::Error;
+    use sweeptin::finalise::{StreamConfig, StreamPoint, StreamingSweep};
+    let pts = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.5, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 2.0, 0.0],
+    ];
+    let prep = prepare(&pts, DuplicatePolicy::First).unwrap();
+    let mut s = sweeptin::sweep::Sweep::new(prep.xy.clone()).unwrap();
+    // Constraint vertex 1 is the later end of the segment, but it is mapped to vertex 1 and
+    // constraint vertex 0 to vertex 3: the later end comes first.
+    let g = sweeptin::sweep::ConstraintGraph::new(vec![[0.0, 0.0], [1.0, 1.0]], &[[0, 1]]);
+    s.set_constraints(g, &[3, 1]);
+    assert!(matches!(s.run(), Err(Error::Internal(_))));
+
+    let cfg = StreamConfig {
+        x_sample: vec![],
+        bounds: [0.0, 0.0, 1.0, 2.0],
+        expected_points: 4,
+    };
+    let sp = |i: usize, constraint: u32| StreamPoint {
+        xy: prep.xy[2 + i],
+        z: 0.0,
+        index: i as u64,
+        constraint,
+    };
+    let mut s = StreamingSweep::new(sp(0, u32::MAX), &cfg);
+    s.push(sp(1, u32::MAX)).unwrap();
+    match s.push(sp(2, 7)) {
+        Err(Error::Internal(m)) => assert!(m.contains("breakline vertex 7"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    let mut s = StreamingSweep::new(sp(0, 7), &cfg);
+    let g = sweeptin::sweep::ConstraintGraph::new(vec![[0.0, 0.0], [1.0, 1.0]], &[[0, 1]]);
+    assert!(matches!(s.set_constraints(g, 7), Err(Error::Internal(_))));
+}

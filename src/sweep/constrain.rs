@@ -213,10 +213,11 @@ impl<H: Mode> Sweep<H> {
         // half-edge next → b, whose successor starts at b.
         let e = self.front.edge(nb).next();
         if self.mesh.org(e) != b {
-            return Err(internal(format!(
-                "breakline end {} is not at its front node after the pockets were filled",
-                b.0
-            )));
+            return Err(self.internal(
+                a,
+                b,
+                "its upper end left the front while pockets were filled",
+            ));
         }
         self.constrain_from(b, a, e)
     }
@@ -276,10 +277,7 @@ impl<H: Mode> Sweep<H> {
                     || !in_range(self.front.node(m).x)
                     || self.side_of_line(a, b, v) >= 0
                 {
-                    return Err(internal(format!(
-                        "the front pocket under breakline {}-{} has no valley",
-                        a.0, b.0
-                    )));
+                    return Err(self.internal(a, b, "a front pocket under it has no valley"));
                 }
             }
         }
@@ -355,12 +353,7 @@ impl<H: Mode> Sweep<H> {
     /// Finds, around `cur` (from its outgoing half-edge `e`), the edge along `cur → t` or the
     /// triangle the segment enters.
     fn start_towards(&self, cur: VertexId, t: VertexId, e: EdgeId) -> Result<Start> {
-        let lost = |what: &str| {
-            internal(format!(
-                "breakline {}-{}: {what} around vertex {}",
-                cur.0, t.0, cur.0
-            ))
-        };
+        let lost = |what: &str| self.internal(cur, t, &format!("{what} around its first end"));
         // Rotate counter-clockwise from `e` until the boundary, then clockwise from `e`.
         let mut f = e;
         let mut ccw = true;
@@ -402,9 +395,9 @@ impl<H: Mode> Sweep<H> {
             };
             match next {
                 Some(g) if g != e => f = g,
-                Some(_) => return Err(lost("the direction was not found in a full turn")),
+                Some(_) => return Err(lost("its direction was not found in a full turn")),
                 None if !ccw => {
-                    return Err(lost("the segment leaves the triangulated region clockwise"));
+                    return Err(lost("it leaves the triangulated region clockwise"));
                 }
                 None => {
                     ccw = false;
@@ -413,7 +406,7 @@ impl<H: Mode> Sweep<H> {
                         Across::Twin(g) => g.next(),
                         _ => {
                             return Err(lost(
-                                "the segment leaves the triangulated region counter-clockwise",
+                                "it leaves the triangulated region counter-clockwise",
                             ));
                         }
                     };
@@ -447,20 +440,14 @@ impl<H: Mode> Sweep<H> {
             let g = match self.mesh.across(e) {
                 Across::Twin(g) => g,
                 _ => {
-                    return Err(internal(format!(
-                        "breakline {}-{} crosses the front or the hull",
-                        cur.0, t.0
-                    )));
+                    return Err(self.internal(cur, t, "it crosses the front or the hull"));
                 }
             };
             dead.push(g.tri().0);
             // Triangle of g: (y, x, z) with g = y → x.
             let z = self.apex(g);
             if is_artificial(z.0) {
-                return Err(internal(format!(
-                    "breakline {}-{} enters a triangle of an artificial point",
-                    cur.0, t.0
-                )));
+                return Err(self.internal(cur, t, "it enters a triangle of an artificial point"));
             }
             let oz = self.orient(cur, t, z);
             if z == t || oz == Orientation::Collinear {
@@ -507,14 +494,12 @@ impl<H: Mode> Sweep<H> {
             &mut spikes,
         )?;
         if !spikes.open.is_empty() || !dead.is_empty() {
-            return Err(internal(format!(
-                "the cavity of breakline {}-{} was re-triangulated with {} edges unpaired and {} \
-                 slots unused",
-                cur.0,
-                end.0,
+            let what = format!(
+                "its cavity was re-triangulated with {} edges unpaired and {} slots unused",
                 spikes.open.len(),
                 dead.len()
-            )));
+            );
+            return Err(self.internal(cur, end, &what));
         }
         self.mesh.pair(left_first, right_first, true);
         Ok(Some((end, right_first)))
@@ -578,12 +563,9 @@ impl<H: Mode> Sweep<H> {
                 }
             }
             let c = chain[k];
-            let slot = slots.pop().ok_or_else(|| {
-                internal(format!(
-                    "the cavity of breakline {}-{} needs more triangles than it had",
-                    a.0, b.0
-                ))
-            })?;
+            let Some(slot) = slots.pop() else {
+                return Err(self.internal(a, b, "its cavity needs more triangles than it had"));
+            };
             let h = self.mesh.reuse_triangle(TriId(slot), p.a, p.b, c);
             self.hooks.cavity_filled([p.a, p.b, c]);
             match p.base {
@@ -614,16 +596,16 @@ impl<H: Mode> Sweep<H> {
                 });
             }
         }
-        base_edge.ok_or_else(|| {
-            internal(format!(
-                "the cavity of breakline {}-{} has no triangle on the segment",
-                a.0, b.0
-            ))
-        })
+        base_edge.ok_or_else(|| self.internal(a, b, "its cavity has no triangle on it"))
     }
-}
 
-/// An [`Error::Internal`] from the breakline insertion.
-fn internal(what: String) -> Error {
-    Error::Internal(format!("breakline insertion: {what}"))
+    /// An [`Error::Internal`] from the insertion of the breakline segment between `a` and `b`:
+    /// what failed, and where (sweep coordinates, relative to the run's local origin).
+    fn internal(&self, a: VertexId, b: VertexId, what: &str) -> Error {
+        let (pa, pb) = (self.pts[a.0 as usize], self.pts[b.0 as usize]);
+        Error::Internal(format!(
+            "inserting the breakline segment ({}, {})-({}, {}) (local frame): {what}",
+            pa[0], pa[1], pb[0], pb[1]
+        ))
+    }
 }
