@@ -326,9 +326,9 @@ impl Finalizer {
         }
     }
 
-    /// Emits the final triangle that was in slot `t` (vertices `tri` at `xy`, and any vertex not
-    /// yet emitted), releases the vertices it no longer needs and recycles the slot.
-    fn emit(&mut self, t: u32, tri: [VertexId; 3], xy: [[f64; 2]; 3]) {
+    /// Emits the final triangle that was in slot `t` (vertices `tri`, positions in `pts`, and any
+    /// vertex not yet emitted), releases the vertices it no longer needs and recycles the slot.
+    fn emit(&mut self, t: u32, tri: [VertexId; 3], pts: &[[f64; 2]]) {
         let mut ids = [0u64; 3];
         for (k, v) in tri.iter().enumerate() {
             let i = v.0 as usize;
@@ -338,7 +338,7 @@ impl Finalizer {
                 self.next_out += 1;
                 self.stats.vertices += 1;
                 self.events.push(Event::Vertex {
-                    xy: xy[k],
+                    xy: pts[i],
                     z: vt.z[i],
                     index: vt.index[i],
                 });
@@ -681,8 +681,7 @@ impl StreamingSweep {
     fn finalize(&mut self, t: u32) {
         let ending = self.sweep.hooks().ending;
         let tri = self.sweep.remove_final(TriId(t), ending);
-        let pts = self.sweep.points();
-        let xy = tri.map(|v| pts[v.0 as usize]);
-        self.fin().emit(t, tri, xy);
+        let (pts, fin) = self.sweep.points_and_hooks_mut();
+        fin.emit(t, tri, pts);
     }
 }

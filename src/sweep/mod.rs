@@ -294,6 +294,13 @@ impl<H: Mode> Sweep<H> {
         &mut self.hooks
     }
 
+    /// The vertex table, and the mode's state mutable (the finaliser reads positions while it
+    /// updates itself).
+    #[inline(always)]
+    pub(crate) fn points_and_hooks_mut(&mut self) -> (&[[f64; 2]], &mut H) {
+        (&self.pts, &mut self.hooks)
+    }
+
     /// Sets the breaklines of a sweep whose points arrive one by one and name their constraint
     /// vertex (or [`NO_CONSTRAINT`]) themselves; `first_constraint` is that of the first point.
     ///
