@@ -29,9 +29,10 @@
 //!
 //! Each live triangle slot has exactly one entry in a bucket queue keyed by `y` (bucket width ≈ the
 //! point spacing). A new triangle is checked a couple of buckets after it appears; when the sweep line
-//! passes a bucket, its triangles are re-checked with their *current* vertices (flips change a slot's
-//! triangle in place, so nothing is tracked at flip time) and either finalised or re-scheduled, at
-//! their circle's top or after the basin that blocks them has had time to fill.
+//! passes a bucket, its triangles are re-checked with their *current* vertices (a flip changes two
+//! slots' triangles in place and re-schedules both a few buckets ahead; queue entries for any other
+//! bucket are stale and skipped) and either finalised or re-scheduled, at their circle's top or
+//! after the basin that blocks them has had time to fill.
 //!
 //! # Output
 //!

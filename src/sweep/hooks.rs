@@ -3,8 +3,9 @@
 //! The core ([`Sweep`](super::Sweep)) is generic over its mode and monomorphised for each: in
 //! batch mode ([`Batch`]) every hook is empty and compiles away, so batch mode pays nothing for
 //! streaming; the streaming finaliser ([`crate::finalise::StreamingSweep`]) counts vertex
-//! references, recycles triangle slots and schedules finalisation checks. The hooks are called
-//! after the core has changed the mesh, and never change it themselves.
+//! references, recycles triangle slots and schedules finalisation checks. The hooks are told what
+//! the core has changed (for a breakline's cavity, what it is about to replace), and never change
+//! the mesh themselves.
 
 use crate::mesh::{Mesh, TriId, VertexId};
 
