@@ -185,16 +185,7 @@ pub(crate) fn run(
 
 /// The result of a worker thread; a panic in it becomes [`Error::Internal`] with its message.
 fn joined<T>(result: std::thread::Result<Result<T>>, thread: &str) -> Result<T> {
-    result.unwrap_or_else(|payload| {
-        let message = payload
-            .downcast_ref::<&str>()
-            .copied()
-            .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
-            .unwrap_or("(no message)");
-        Err(Error::Internal(format!(
-            "the {thread} thread panicked: {message}"
-        )))
-    })
+    result.unwrap_or_else(|payload| Err(Error::panicked(thread, &*payload)))
 }
 
 fn world_bounds(rd: &ReadResult) -> [f64; 4] {
