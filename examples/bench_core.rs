@@ -172,7 +172,7 @@ fn sweeptin_phases(pts: Vec<[f64; 3]>) -> Result<serde_json::Value> {
     let prepared = prepare(&pts, DuplicatePolicy::First)?;
     let t1 = Instant::now();
     let mut sweep = sweeptin::sweep::Sweep::new(prepared.xy)?;
-    sweep.run();
+    sweep.run()?;
     let t2 = Instant::now();
     let (triangles, _xy, stats) = sweep.finish();
     let vertices: Vec<[f64; 3]> = prepared.index.iter().map(|&i| pts[i as usize]).collect();

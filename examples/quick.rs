@@ -57,7 +57,7 @@ fn main() {
     let prep = sweeptin::sort::memory::prepare(&pts, Default::default()).unwrap();
     let t1 = Instant::now();
     let mut sw = sweeptin::sweep::Sweep::new(prep.xy).unwrap();
-    sw.run();
+    sw.run().unwrap();
     let t2 = Instant::now();
     let st = sw.stats();
     let (tris, _, _) = sw.finish();
@@ -79,7 +79,7 @@ fn main() {
                 .xy,
         )
         .unwrap();
-        sw.run();
+        sw.run().unwrap();
         sw.check().unwrap();
         println!("check ok");
     }
@@ -87,7 +87,7 @@ fn main() {
 
 #[allow(dead_code)]
 pub fn stream(pts: &[[f64; 3]]) {
-    use sweeptin::sweep::{Event, StreamConfig, StreamPoint, Sweep};
+    use sweeptin::finalise::{Event, StreamConfig, StreamPoint, StreamingSweep};
     let t0 = Instant::now();
     let prep = sweeptin::sort::memory::prepare(pts, Default::default()).unwrap();
     let real = &prep.xy[2..];
@@ -110,7 +110,7 @@ pub fn stream(pts: &[[f64; 3]]) {
         index: i as u64,
         constraint: u32::MAX,
     };
-    let mut s = Sweep::streaming(sp(0), &cfg);
+    let mut s = StreamingSweep::new(sp(0), &cfg);
     let mut ev = Vec::new();
     let mut ntri = 0u64;
     for i in 1..real.len() {
@@ -124,7 +124,7 @@ pub fn stream(pts: &[[f64; 3]]) {
             ev.clear();
         }
     }
-    s.finish_streaming();
+    s.finish();
     s.take_events(&mut ev);
     ntri += ev
         .iter()

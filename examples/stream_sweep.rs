@@ -4,7 +4,7 @@
 //! sweep's (points pre-sorted and de-duplicated, events drained and dropped).
 
 use std::time::Instant;
-use sweeptin::sweep::{Event, StreamConfig, StreamPoint, Sweep};
+use sweeptin::finalise::{Event, StreamConfig, StreamPoint, StreamingSweep};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -44,7 +44,7 @@ fn main() {
         constraint: sweeptin::sweep::NO_CONSTRAINT,
     };
     let t = Instant::now();
-    let mut s = Sweep::streaming(sp(&sorted[0]), &cfg);
+    let mut s = StreamingSweep::new(sp(&sorted[0]), &cfg);
     let mut events: Vec<Event> = Vec::with_capacity(1 << 16);
     let mut triangles = 0u64;
     for (k, p) in sorted.iter().enumerate().skip(1) {
@@ -58,7 +58,7 @@ fn main() {
             events.clear();
         }
     }
-    s.finish_streaming();
+    s.finish();
     s.take_events(&mut events);
     triangles += events
         .iter()

@@ -159,4 +159,15 @@ impl Error {
             source,
         }
     }
+
+    /// [`Error::Internal`] for a panic caught in the `thread` thread: its message (the payload
+    /// as `&str` or `String`), instead of a re-panic.
+    pub(crate) fn panicked(thread: &str, payload: &(dyn std::any::Any + Send)) -> Self {
+        let message = payload
+            .downcast_ref::<&str>()
+            .copied()
+            .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
+            .unwrap_or("(no message)");
+        Error::Internal(format!("the {thread} thread panicked: {message}"))
+    }
 }

@@ -39,36 +39,7 @@ pub struct Triangulation {
 /// [`Error::TooFewPoints`] with fewer than 3 distinct positions, [`Error::AllCollinear`] when no
 /// triangle exists, [`Error::TooManyPoints`] beyond [`memory::MAX_POINTS`].
 pub fn triangulate(points: &[[f64; 3]], options: &Options) -> Result<Triangulation> {
-    let prepared = memory::prepare(points, options.duplicates)?;
-    let distinct = prepared.len() as u64;
-    if distinct < 3 {
-        return Err(Error::TooFewPoints {
-            distinct,
-            total: prepared.total,
-        });
-    }
-    let memory::Prepared {
-        xy,
-        index,
-        duplicates,
-        ..
-    } = prepared;
-    let mut sweep = Sweep::new(xy)?;
-    sweep.run();
-    let (triangles, xy, stats) = sweep.finish();
-    drop(xy);
-    if triangles.is_empty() {
-        return Err(Error::AllCollinear { distinct });
-    }
-    let vertices = index.iter().map(|&i| points[i as usize]).collect();
-    Ok(Triangulation {
-        vertices,
-        triangles,
-        input_index: index,
-        duplicates,
-        stats,
-        constraint_stats: Default::default(),
-    })
+    sweep_in_memory(points, &[], options)
 }
 
 /// Constrained Delaunay triangulation of `points` with the segments `segments` (pairs of indices
@@ -82,7 +53,8 @@ pub fn triangulate(points: &[[f64; 3]], options: &Options) -> Result<Triangulati
 /// duplicates of one position is ignored; endpoints merged as duplicates refer to the survivor.
 ///
 /// # Errors
-/// As [`triangulate`]; a segment index out of range is [`Error::Invalid`].
+/// As [`triangulate`]; a segment index out of range is [`Error::Invalid`]; [`Error::Internal`] if
+/// inserting a breakline breaks an invariant (a bug in sweeptin).
 pub fn triangulate_cdt(
     points: &[[f64; 3]],
     segments: &[[u32; 2]],
@@ -98,6 +70,15 @@ pub fn triangulate_cdt(
             points.len()
         )));
     }
+    sweep_in_memory(points, segments, options)
+}
+
+/// [`triangulate_cdt`] with segment indices already checked; without segments, [`triangulate`].
+fn sweep_in_memory(
+    points: &[[f64; 3]],
+    segments: &[[u32; 2]],
+    options: &Options,
+) -> Result<Triangulation> {
     let prepared = memory::prepare(points, options.duplicates)?;
     let distinct = prepared.len() as u64;
     if distinct < 3 {
@@ -106,7 +87,7 @@ pub fn triangulate_cdt(
             total: prepared.total,
         });
     }
-    let (graph, vertex_of) = constraint_graph(&prepared, points, segments);
+    let constraints = (!segments.is_empty()).then(|| constraint_graph(&prepared, points, segments));
     let memory::Prepared {
         xy,
         index,
@@ -114,8 +95,10 @@ pub fn triangulate_cdt(
         ..
     } = prepared;
     let mut sweep = Sweep::new(xy)?;
-    sweep.set_constraints(graph, &vertex_of);
-    sweep.run();
+    if let Some((graph, vertex_of)) = constraints {
+        sweep.set_constraints(graph, &vertex_of);
+    }
+    sweep.run()?;
     let constraint_stats = sweep.constraint_stats();
     let (triangles, xy, stats) = sweep.finish();
     drop(xy);

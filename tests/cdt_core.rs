@@ -191,7 +191,7 @@ fn stepwise_invariants_with_breaklines() {
         );
         s.set_constraints(g, &ends);
         let mut k = 0;
-        while s.step() {
+        while s.step().unwrap() {
             k += 1;
             s.check()
                 .unwrap_or_else(|e| panic!("seed {seed} step {k}: {e}"));
@@ -333,7 +333,7 @@ fn crossing_breaklines_are_reported_not_fatal() {
 /// once, and keeps pending breaklines from being finalised across.
 #[test]
 fn streaming_breaklines_equal_batch() {
-    use sweeptin::sweep::{Event, StreamConfig, StreamPoint, Sweep};
+    use sweeptin::finalise::{Event, StreamConfig, StreamPoint, StreamingSweep};
     for seed in 0..60 {
         let n = 20 + (seed as usize * 37) % 600;
         let (pts, segs) = random_input(seed + 9000, n, n / 4);
@@ -369,8 +369,8 @@ fn streaming_breaklines_equal_batch() {
             index: i as u64,
             constraint: cid(i as u32),
         };
-        let mut s = Sweep::streaming(sp(0), &cfg);
-        s.set_stream_constraints(g, cid(0));
+        let mut s = StreamingSweep::new(sp(0), &cfg);
+        s.set_constraints(g, cid(0)).unwrap();
         let mut events = Vec::new();
         for i in 1..real.len() {
             s.push(sp(i)).unwrap();
@@ -379,7 +379,7 @@ fn streaming_breaklines_equal_batch() {
                     .unwrap_or_else(|e| panic!("seed {seed} point {i}: {e}"));
             }
         }
-        s.finish_streaming();
+        s.finish();
         s.take_events(&mut events);
         let mut verts = Vec::new();
         let mut done = std::collections::HashSet::new();
@@ -406,4 +406,47 @@ fn streaming_breaklines_equal_batch() {
         assert_eq!(tris, batch, "seed {seed}");
         assert!(s.stream_stats().peak_pending_segments > 0);
     }
+}
+
+/// Breaklines that do not match the points are an internal error, not a panic: a batch sweep
+/// given a segment whose later end (in the graph) is swept before its earlier end, and a
+/// streaming sweep given a point naming a breakline vertex it has no graph for.
+#[test]
+fn mismatched_breaklines_are_errors_not_panics() {
+    use sweeptin::Error;
+    use sweeptin::finalise::{StreamConfig, StreamPoint, StreamingSweep};
+    let pts = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.5, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 2.0, 0.0],
+    ];
+    let prep = prepare(&pts, DuplicatePolicy::First).unwrap();
+    let mut s = sweeptin::sweep::Sweep::new(prep.xy.clone()).unwrap();
+    // Constraint vertex 1 is the later end of the segment, but it is mapped to vertex 1 and
+    // constraint vertex 0 to vertex 3: the later end comes first.
+    let g = sweeptin::sweep::ConstraintGraph::new(vec![[0.0, 0.0], [1.0, 1.0]], &[[0, 1]]);
+    s.set_constraints(g, &[3, 1]);
+    assert!(matches!(s.run(), Err(Error::Internal(_))));
+
+    let cfg = StreamConfig {
+        x_sample: vec![],
+        bounds: [0.0, 0.0, 1.0, 2.0],
+        expected_points: 4,
+    };
+    let sp = |i: usize, constraint: u32| StreamPoint {
+        xy: prep.xy[2 + i],
+        z: 0.0,
+        index: i as u64,
+        constraint,
+    };
+    let mut s = StreamingSweep::new(sp(0, u32::MAX), &cfg);
+    s.push(sp(1, u32::MAX)).unwrap();
+    match s.push(sp(2, 7)) {
+        Err(Error::Internal(m)) => assert!(m.contains("breakline vertex 7"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    let mut s = StreamingSweep::new(sp(0, 7), &cfg);
+    let g = sweeptin::sweep::ConstraintGraph::new(vec![[0.0, 0.0], [1.0, 1.0]], &[[0, 1]]);
+    assert!(matches!(s.set_constraints(g, 7), Err(Error::Internal(_))));
 }

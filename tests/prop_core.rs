@@ -228,7 +228,7 @@ fn steps(pts: &[[f64; 3]]) -> Result<(), String> {
     let mut s = Sweep::new(prep.xy).unwrap();
     s.check().map_err(|e| format!("initial state: {e}"))?;
     let mut k = 0;
-    while s.step() {
+    while s.step().unwrap() {
         k += 1;
         s.check().map_err(|e| format!("after step {k}: {e}"))?;
     }

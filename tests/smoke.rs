@@ -61,7 +61,7 @@ fn stepwise_check_small() {
         s.check()
             .unwrap_or_else(|e| panic!("seed {seed} init: {e}"));
         let mut k = 0;
-        while s.step() {
+        while s.step().unwrap() {
             k += 1;
             s.check()
                 .unwrap_or_else(|e| panic!("seed {seed} step {k}: {e}"));
@@ -95,8 +95,8 @@ fn matches_spade_random() {
 fn stream_set(
     pts: &[[f64; 3]],
     check: bool,
-) -> (Vec<[(u64, u64); 3]>, sweeptin::sweep::StreamStats) {
-    use sweeptin::sweep::{Event, StreamConfig, StreamPoint};
+) -> (Vec<[(u64, u64); 3]>, sweeptin::finalise::StreamStats) {
+    use sweeptin::finalise::{Event, StreamConfig, StreamPoint, StreamingSweep};
     let prep = prepare(pts, DuplicatePolicy::First).unwrap();
     let real = &prep.xy[2..];
     let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
@@ -117,7 +117,7 @@ fn stream_set(
         index: i as u64,
         constraint: u32::MAX,
     };
-    let mut s = Sweep::streaming(sp(0), &cfg);
+    let mut s = StreamingSweep::new(sp(0), &cfg);
     let mut events = Vec::new();
     for i in 1..real.len() {
         s.push(sp(i)).unwrap();
@@ -126,7 +126,7 @@ fn stream_set(
         }
         s.take_events(&mut events);
     }
-    s.finish_streaming();
+    s.finish();
     s.take_events(&mut events);
     let mut verts: Vec<[f64; 2]> = Vec::new();
     let mut done = std::collections::HashSet::new();

@@ -141,7 +141,7 @@ pub fn step_checked(pts: &[[f64; 3]]) {
     let mut s = Sweep::new(prep.xy).expect("sweep");
     s.check().unwrap_or_else(|e| panic!("initial: {e}"));
     let mut k = 0;
-    while s.step() {
+    while s.step().expect("step") {
         k += 1;
         s.check().unwrap_or_else(|e| panic!("step {k}: {e}"));
     }

@@ -1,5 +1,11 @@
-//! Streaming mode: triangles leave memory as soon as nothing later can change them
-//! (Isenburg et al. 2006, "Streaming computation of Delaunay triangulations", done with a sweep).
+//! The streaming sweep ([`StreamingSweep`]): triangles leave memory as soon as nothing later can
+//! change them (Isenburg et al. 2006, "Streaming computation of Delaunay triangulations", done
+//! with a sweep).
+//!
+//! A [`StreamingSweep`] owns the sweep core ([`crate::sweep::Sweep`]) monomorphised over its
+//! finaliser: the core calls the finaliser's hooks ([`crate::sweep::Mode`]) whenever it creates,
+//! flips or removes a triangle, and the streaming sweep drives the finalisation queue between
+//! points.
 //!
 //! # When is a triangle final?
 //!
@@ -23,9 +29,10 @@
 //!
 //! Each live triangle slot has exactly one entry in a bucket queue keyed by `y` (bucket width ≈ the
 //! point spacing). A new triangle is checked a couple of buckets after it appears; when the sweep line
-//! passes a bucket, its triangles are re-checked with their *current* vertices (flips change a slot's
-//! triangle in place, so nothing is tracked at flip time) and either finalised or re-scheduled, at
-//! their circle's top or after the basin that blocks them has had time to fill.
+//! passes a bucket, its triangles are re-checked with their *current* vertices (a flip changes two
+//! slots' triangles in place and re-schedules both a few buckets ahead; queue entries for any other
+//! bucket are stale and skipped) and either finalised or re-scheduled, at their circle's top or
+//! after the basin that blocks them has had time to fill.
 //!
 //! # Output
 //!
@@ -33,10 +40,15 @@
 //! first triangle that uses it and released ([`Event::VertexDone`]) after its last one, so a consumer
 //! also needs only bounded memory. The event order depends only on the input.
 
+mod pending;
+
 use crate::error::{Error, Result};
 use crate::geom::predicates::{self, FIRST_REAL, is_artificial};
-use crate::mesh::{Across, EdgeId, Mesh, TriId, VertexId};
-use crate::sweep::Sweep;
+use crate::mesh::{Mesh, TriId, VertexId};
+use crate::sweep::front::XMap;
+use crate::sweep::hooks::sealed::Hooks;
+use crate::sweep::{ConstraintGraph, ConstraintStats, Sweep, SweepStats};
+use pending::PendingSegments;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -82,7 +94,7 @@ pub enum Event {
     /// No later triangle uses this vertex.
     VertexDone(u64),
     /// Progress hint: later triangles normally lie at `y >=` this (local frame); see
-    /// [`Sweep::emit_watermark`].
+    /// [`StreamingSweep::emit_watermark`].
     Watermark(f64),
 }
 
@@ -95,15 +107,45 @@ const FIRST_CHECK: u64 = 3;
 /// Buckets between checks of a triangle that uses an artificial point or is too flat to bound.
 const PARKED: u64 = 64;
 
-/// Per-vertex data needed only when streaming.
+/// Per-vertex data needed only when streaming (the same rows as the core's vertex table).
 #[derive(Debug, Clone, Default)]
-pub(crate) struct VertexTable {
-    pub z: Vec<f64>,
-    pub index: Vec<u64>,
-    pub out: Vec<u64>,
-    /// Live triangles using the vertex.
-    pub refs: Vec<u32>,
+struct VertexTable {
+    z: Vec<f64>,
+    index: Vec<u64>,
+    /// Output number, or `NOT_OUT`.
+    out: Vec<u64>,
+    /// Live triangles and pending breakline segments using the vertex.
+    refs: Vec<u32>,
+    /// Rows of released vertices, to reuse.
     free: Vec<u32>,
+}
+
+impl VertexTable {
+    /// Appends a row.
+    fn push(&mut self, z: f64, index: u64) {
+        self.z.push(z);
+        self.index.push(index);
+        self.out.push(NOT_OUT);
+        self.refs.push(0);
+    }
+
+    /// Stores point `p` in a freed row, or a new one; returns the row (the vertex id).
+    fn add(&mut self, p: &StreamPoint) -> u32 {
+        match self.free.pop() {
+            Some(v) => {
+                let i = v as usize;
+                self.z[i] = p.z;
+                self.index[i] = p.index;
+                self.out[i] = NOT_OUT;
+                self.refs[i] = 0;
+                v
+            }
+            None => {
+                self.push(p.z, p.index);
+                (self.z.len() - 1) as u32
+            }
+        }
+    }
 }
 
 /// Peak sizes of the streaming sweep's working set.
@@ -123,11 +165,12 @@ pub struct StreamStats {
     pub vertices: u64,
 }
 
-/// The finalisation queue and streaming state.
+/// The finalisation queue and streaming state: the [`crate::sweep::Mode`] of the core inside a
+/// [`StreamingSweep`].
 #[derive(Debug, Clone)]
 pub(crate) struct Finalizer {
-    pub vertices: VertexTable,
-    pub free_triangles: Vec<u32>,
+    vertices: VertexTable,
+    free_triangles: Vec<u32>,
     ring: Vec<Vec<u32>>,
     /// Entries in `ring`.
     in_ring: usize,
@@ -147,119 +190,13 @@ pub(crate) struct Finalizer {
     /// Set once all points are in: everything left is final.
     ending: bool,
     /// Breaklines whose earlier end is swept and later end is not.
-    pub pending: PendingSegments,
+    pending: PendingSegments,
     /// The data's x range (watermark heuristic).
     x_range: (f64, f64),
     /// The bucket at which each triangle slot is due for its next check: queue entries for any
     /// other bucket are stale (the slot was rescheduled, flipped or refilled since) and skipped,
     /// so each slot has one live entry.
     due: Vec<u64>,
-}
-
-/// Pending breakline segments, indexed by x, to keep triangles they may still cross in memory.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct PendingSegments {
-    segs: Vec<Option<PendingSeg>>,
-    /// Generation of each slot, bumped when its segment is removed: bucket entries of an earlier
-    /// generation are stale (slots are reused) and pruned when met.
-    gen_of: Vec<u32>,
-    free: Vec<u32>,
-    by_ends: std::collections::HashMap<(u32, u32), u32>,
-    /// Slot and generation of the segments over each x range.
-    buckets: Vec<Vec<(u32, u32)>>,
-    x0: f64,
-    inv_w: f64,
-    live: usize,
-    peak: usize,
-}
-
-#[derive(Debug, Clone, Copy)]
-struct PendingSeg {
-    a: [f64; 2],
-    b: [f64; 2],
-}
-
-impl PendingSegments {
-    fn new(x_range: (f64, f64)) -> Self {
-        let n = 1024;
-        let w = x_range.1 - x_range.0;
-        PendingSegments {
-            buckets: vec![Vec::new(); n],
-            x0: x_range.0,
-            inv_w: if w > 0.0 && w.is_finite() {
-                n as f64 / w
-            } else {
-                0.0
-            },
-            ..Default::default()
-        }
-    }
-
-    #[inline]
-    fn bucket(&self, x: f64) -> usize {
-        (((x - self.x0) * self.inv_w) as usize).min(self.buckets.len() - 1)
-    }
-
-    /// Adds the pending segment between constraint vertices `lo` and `hi`.
-    pub fn add(&mut self, lo: u32, hi: u32, a: [f64; 2], b: [f64; 2]) {
-        let id = match self.free.pop() {
-            Some(id) => {
-                self.segs[id as usize] = Some(PendingSeg { a, b });
-                id
-            }
-            None => {
-                self.segs.push(Some(PendingSeg { a, b }));
-                self.gen_of.push(0);
-                (self.segs.len() - 1) as u32
-            }
-        };
-        self.by_ends.insert((lo, hi), id);
-        let g = self.gen_of[id as usize];
-        let (k0, k1) = (self.bucket(a[0].min(b[0])), self.bucket(a[0].max(b[0])));
-        for k in k0..=k1 {
-            self.buckets[k].push((id, g));
-        }
-        self.live += 1;
-        self.peak = self.peak.max(self.live);
-    }
-
-    /// Removes the segment between `lo` and `hi` (inserted now).
-    pub fn remove(&mut self, lo: u32, hi: u32) {
-        if let Some(id) = self.by_ends.remove(&(lo, hi)) {
-            self.segs[id as usize] = None;
-            self.gen_of[id as usize] = self.gen_of[id as usize].wrapping_add(1);
-            self.free.push(id);
-            self.live -= 1;
-        }
-    }
-
-    /// Could a pending segment pass within `r` of `c` (conservatively: floating-point error only
-    /// makes this say yes more often)? Prunes dead entries from the buckets it scans.
-    pub fn near(&mut self, c: [f64; 2], r: f64) -> bool {
-        if self.live == 0 {
-            return false;
-        }
-        let (k0, k1) = (self.bucket(c[0] - r), self.bucket(c[0] + r));
-        for k in k0..=k1 {
-            let mut i = 0;
-            while i < self.buckets[k].len() {
-                let (id, g) = self.buckets[k][i];
-                match self.segs[id as usize] {
-                    Some(s) if self.gen_of[id as usize] == g => {
-                        if segment_within(s.a, s.b, c, r) {
-                            return true;
-                        }
-                    }
-                    _ => {
-                        self.buckets[k].swap_remove(i);
-                        continue;
-                    }
-                }
-                i += 1;
-            }
-        }
-        false
-    }
 }
 
 /// Is the circumcircle of `a b c` narrower than `limit` in radius and inside the x range of the
@@ -277,23 +214,6 @@ fn ordinary(a: [f64; 2], b: [f64; 2], c: [f64; 2], limit: f64, x_range: (f64, f6
     let r = (ux * ux + uy * uy).sqrt();
     let x = a[0] + ux;
     r < limit && x - r >= x_range.0 && x + r <= x_range.1
-}
-
-/// Is segment `a`–`b` within distance `r` of `c`? Floating point with a relative margin of 1e-9
-/// of the magnitudes involved, so a true "yes" is never missed.
-fn segment_within(a: [f64; 2], b: [f64; 2], c: [f64; 2], r: f64) -> bool {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let (px, py) = (c[0] - a[0], c[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        ((px * dx + py * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let (qx, qy) = (px - t * dx, py - t * dy);
-    let d = (qx * qx + qy * qy).sqrt();
-    let scale = dx.abs() + dy.abs() + px.abs() + py.abs() + r;
-    d <= r + 1e-9 * scale
 }
 
 impl Finalizer {
@@ -368,7 +288,7 @@ impl Finalizer {
 
     /// Vertex `v` is used by nothing any more: announce it (if it was ever output) and free its
     /// slot.
-    pub fn release_vertex(&mut self, v: VertexId) {
+    fn release_vertex(&mut self, v: VertexId) {
         let i = v.0 as usize;
         if self.vertices.out[i] != NOT_OUT {
             self.events.push(Event::VertexDone(self.vertices.out[i]));
@@ -380,101 +300,199 @@ impl Finalizer {
     /// Triangle slot `t` was changed in place (an edge flip): check it again soon, whatever it
     /// was waiting for before.
     #[inline(always)]
-    pub fn changed(&mut self, t: u32) {
+    fn changed(&mut self, t: u32) {
         self.schedule(t, self.sweep_bucket.saturating_add(FIRST_CHECK));
     }
 
     /// A triangle slot was (re)filled.
     #[inline(always)]
-    pub fn created(&mut self, t: u32) {
+    fn created_slot(&mut self, t: u32) {
         self.live_triangles += 1;
         if self.live_triangles > self.stats.peak_live_triangles {
             self.stats.peak_live_triangles = self.live_triangles;
         }
         self.schedule(t, self.sweep_bucket.saturating_add(FIRST_CHECK));
     }
+
+    /// Moves the far-queue entries that now fall within the ring into it.
+    fn pull_far(&mut self) {
+        while let Some(&Reverse((k, t))) = self.far.peek() {
+            if k >= self.cur + RING as u64 {
+                break;
+            }
+            self.far.pop();
+            if self.due[t as usize] == k {
+                self.push_entry(t, k);
+            }
+        }
+    }
+
+    /// Emits the final triangle that was in slot `t` (vertices `tri`, positions in `pts`, and any
+    /// vertex not yet emitted), releases the vertices it no longer needs and recycles the slot.
+    fn emit(&mut self, t: u32, tri: [VertexId; 3], pts: &[[f64; 2]]) {
+        let mut ids = [0u64; 3];
+        for (k, v) in tri.iter().enumerate() {
+            let i = v.0 as usize;
+            let vt = &mut self.vertices;
+            if vt.out[i] == NOT_OUT {
+                vt.out[i] = self.next_out;
+                self.next_out += 1;
+                self.stats.vertices += 1;
+                self.events.push(Event::Vertex {
+                    xy: pts[i],
+                    z: vt.z[i],
+                    index: vt.index[i],
+                });
+            }
+            ids[k] = self.vertices.out[i];
+        }
+        self.events.push(Event::Triangle(ids));
+        self.stats.triangles += 1;
+        for v in tri {
+            let i = v.0 as usize;
+            self.vertices.refs[i] -= 1;
+            if self.vertices.refs[i] == 0 {
+                self.release_vertex(v);
+            }
+        }
+        self.live_triangles -= 1;
+        self.free_triangles.push(t);
+    }
 }
 
-impl Sweep {
-    /// Starts a streaming sweep with its first point (see the [module docs](self)).
-    pub fn streaming(first: StreamPoint, cfg: &StreamConfig) -> Self {
-        let mut fin = Box::new(Finalizer::new(cfg));
-        let v = &mut fin.vertices;
-        for _ in 0..FIRST_REAL {
-            v.z.push(f64::NAN);
-            v.index.push(u64::MAX);
-            v.out.push(NOT_OUT);
-            v.refs.push(0);
+impl Hooks for Finalizer {
+    const FINALISES: bool = true;
+
+    #[inline(always)]
+    fn free_slot(&mut self) -> Option<TriId> {
+        self.free_triangles.pop().map(TriId)
+    }
+
+    #[inline(always)]
+    fn created(&mut self, mesh: &Mesh, t: TriId) {
+        for v in mesh.tri_vertices(t) {
+            self.vertices.refs[v.0 as usize] += 1;
         }
-        v.z.push(first.z);
-        v.index.push(first.index);
-        v.out.push(NOT_OUT);
-        v.refs.push(0);
+        self.created_slot(t.0);
+    }
+
+    #[inline(always)]
+    fn flipped(&mut self, ta: TriId, tb: TriId, gone: [VertexId; 2], new: [VertexId; 2]) {
+        let r = &mut self.vertices.refs;
+        r[gone[0].0 as usize] -= 1;
+        r[gone[1].0 as usize] -= 1;
+        r[new[0].0 as usize] += 1;
+        r[new[1].0 as usize] += 1;
+        self.changed(ta.0);
+        self.changed(tb.0);
+    }
+
+    fn cavity_removed(&mut self, mesh: &Mesh, dead: &[u32]) {
+        for &t in dead {
+            for v in mesh.tri_vertices(TriId(t)) {
+                self.vertices.refs[v.0 as usize] -= 1;
+            }
+        }
+    }
+
+    fn cavity_filled(&mut self, tri: [VertexId; 3]) {
+        for v in tri {
+            self.vertices.refs[v.0 as usize] += 1;
+        }
+    }
+
+    /// Keeps `v` alive and blocks the finalisation of triangles near the segment.
+    fn segment_pending(&mut self, v: VertexId, lo: u32, hi: u32, a: [f64; 2], b: [f64; 2]) {
+        self.vertices.refs[v.0 as usize] += 1;
+        self.pending.add(lo, hi, a, b);
+    }
+
+    fn segment_done(&mut self, v: VertexId, lo: u32, hi: u32) {
+        self.pending.remove(lo, hi);
+        let r = &mut self.vertices.refs[v.0 as usize];
+        *r -= 1;
+        if *r == 0 {
+            self.release_vertex(v);
+        }
+    }
+}
+
+/// A streaming sweep: points are pushed one at a time in sweep order and triangles leave memory,
+/// as [`Event`]s, as soon as nothing later can change them (see the [module docs](self)).
+///
+/// [`StreamingSweep::new`] → [`StreamingSweep::push`] … → [`StreamingSweep::finish`], with
+/// [`StreamingSweep::take_events`] whenever convenient.
+#[derive(Debug, Clone)]
+pub struct StreamingSweep {
+    /// The core, whose mode is the finaliser.
+    sweep: Sweep<Finalizer>,
+}
+
+impl StreamingSweep {
+    /// Starts a streaming sweep with its first point.
+    pub fn new(first: StreamPoint, cfg: &StreamConfig) -> Self {
+        let mut fin = Finalizer::new(cfg);
+        for _ in 0..FIRST_REAL {
+            fin.vertices.push(f64::NAN, u64::MAX);
+        }
+        fin.vertices.push(first.z, first.index);
         fin.last = first.xy;
         fin.live_vertices = 1;
         fin.stats.peak_live_vertices = 1;
         let pts = vec![[f64::NAN; 2], [f64::NAN; 2], first.xy];
         let [x0, _, x1, _] = cfg.bounds;
         let xmap = if cfg.x_sample.is_empty() {
-            crate::sweep::front::XMap::linear(x0, x1)
+            XMap::linear(x0, x1)
         } else {
-            crate::sweep::front::XMap::from_sample(cfg.x_sample.clone())
+            XMap::from_sample(cfg.x_sample.clone())
         };
-        Self::start(pts, Mesh::with_capacity(1024), xmap, Some(fin))
+        StreamingSweep {
+            sweep: Sweep::start(pts, Mesh::with_capacity(1024), xmap, fin),
+        }
     }
 
-    /// Adds the next point of a streaming sweep.
+    /// Sets the breaklines; points name their constraint vertex in [`StreamPoint::constraint`],
+    /// and `first_constraint` is that of the first point (given to [`StreamingSweep::new`]).
+    /// Call it before the second point.
+    ///
+    /// # Errors
+    /// [`Error::Internal`] if `first_constraint` is neither [`crate::sweep::NO_CONSTRAINT`] nor a vertex of
+    /// `graph`.
+    pub fn set_constraints(&mut self, graph: ConstraintGraph, first_constraint: u32) -> Result<()> {
+        self.sweep.set_point_constraints(graph, first_constraint)
+    }
+
+    #[inline(always)]
+    fn fin(&mut self) -> &mut Finalizer {
+        self.sweep.hooks_mut()
+    }
+
+    /// Adds the next point.
     ///
     /// # Errors
     /// [`Error::OutOfOrder`] unless `p` comes strictly after the previous point in sweep order (by
-    /// `y`, then `x`); duplicates must be merged before.
-    ///
-    /// # Panics
-    /// If the sweep was not started with [`Sweep::streaming`].
+    /// `y`, then `x`); duplicates must be merged before. [`Error::Internal`] if a breakline that
+    /// `p` ends cannot be inserted (a bug; the sweep must not be used further).
     pub fn push(&mut self, p: StreamPoint) -> Result<()> {
-        let fin = self.fin.as_mut().expect("push needs a streaming sweep");
+        let fin = self.fin();
         if predicates::sweep_cmp(fin.last, p.xy) != std::cmp::Ordering::Less {
             return Err(Error::OutOfOrder {
-                index: self.stats.points,
+                index: self.sweep.stats().points,
             });
         }
         fin.last = p.xy;
         self.finalize_due(p.xy[1]);
-        let fin = self.fin.as_mut().expect("streaming");
-        let vt = &mut fin.vertices;
-        let v = match vt.free.pop() {
-            Some(v) => {
-                let i = v as usize;
-                self.pts[i] = p.xy;
-                vt.z[i] = p.z;
-                vt.index[i] = p.index;
-                vt.out[i] = NOT_OUT;
-                vt.refs[i] = 0;
-                v
-            }
-            None => {
-                self.pts.push(p.xy);
-                vt.z.push(p.z);
-                vt.index.push(p.index);
-                vt.out.push(NOT_OUT);
-                vt.refs.push(0);
-                (self.pts.len() - 1) as u32
-            }
-        };
+        let fin = self.fin();
+        let v = fin.vertices.add(&p);
         fin.live_vertices += 1;
         fin.stats.peak_live_vertices = fin.stats.peak_live_vertices.max(fin.live_vertices);
-        let n = self.insert(VertexId(v));
-        if p.constraint != crate::sweep::NO_CONSTRAINT {
-            self.constraint_vertex(VertexId(v), n, p.constraint);
-        }
-        Ok(())
+        self.sweep.put_point(v, p.xy);
+        self.sweep.insert_point(VertexId(v), p.constraint)
     }
 
     /// Moves the events produced so far into `out` (appending).
     pub fn take_events(&mut self, out: &mut Vec<Event>) {
-        if let Some(f) = self.fin.as_mut() {
-            out.append(&mut f.events);
-        }
+        out.append(&mut self.fin().events);
     }
 
     /// Appends a watermark event: no live triangle of ordinary size has a vertex below the
@@ -488,66 +506,86 @@ impl Sweep {
     /// most 100 spacings, whatever the data's holes. O(live triangles); call it every few
     /// thousand points.
     pub fn emit_watermark(&mut self) -> f64 {
-        let Some(fin) = self.fin.as_ref() else {
-            return f64::NEG_INFINITY;
-        };
+        let fin = self.sweep.hooks();
         let wide = 100.0 / fin.inv_h;
         let mut w = fin.last[1];
         let stuck = fin.last[1] - wide;
-        let o = &self.mesh.origin;
+        let x_range = fin.x_range;
+        let pts = self.sweep.points();
+        let o = &self.sweep.mesh().origin;
         for t in (0..o.len()).step_by(3) {
             let [a, b, c] = [o[t], o[t + 1], o[t + 2]];
-            if a == super::mesh::DEAD
+            if a == crate::mesh::DEAD
                 || is_artificial(a.0)
                 || is_artificial(b.0)
                 || is_artificial(c.0)
             {
                 continue;
             }
-            let (pa, pb, pc) = (
-                self.pts[a.0 as usize],
-                self.pts[b.0 as usize],
-                self.pts[c.0 as usize],
-            );
+            let (pa, pb, pc) = (pts[a.0 as usize], pts[b.0 as usize], pts[c.0 as usize]);
             let low = pa[1].min(pb[1]).min(pc[1]);
             if low < w && low >= stuck {
                 let span = pa[0].max(pb[0]).max(pc[0]) - pa[0].min(pb[0]).min(pc[0]);
-                if span < wide && ordinary(pa, pb, pc, wide, fin.x_range) {
+                if span < wide && ordinary(pa, pb, pc, wide, x_range) {
                     w = low;
                 }
             }
         }
-        let fin = self.fin.as_mut().expect("streaming");
-        fin.events.push(Event::Watermark(w));
+        self.fin().events.push(Event::Watermark(w));
         w
     }
 
-    /// Number of events waiting in [`Sweep::take_events`].
+    /// Number of events waiting in [`StreamingSweep::take_events`].
     pub fn pending_events(&self) -> usize {
-        self.fin.as_ref().map_or(0, |f| f.events.len())
+        self.sweep.hooks().events.len()
     }
 
-    /// Working-set statistics of a streaming sweep.
+    /// Working-set statistics.
     pub fn stream_stats(&self) -> StreamStats {
-        self.fin.as_ref().map_or(StreamStats::default(), |f| {
-            let mut s = f.stats;
-            s.peak_pending_segments = f.pending.peak as u64;
-            s
-        })
+        let f = self.sweep.hooks();
+        let mut s = f.stats;
+        s.peak_pending_segments = f.pending.peak as u64;
+        s
     }
 
-    /// Ends a streaming sweep: closes the hull and emits everything still in memory, in a fixed
-    /// order (triangle slot order, then vertex slot order for the releases).
-    pub fn finish_streaming(&mut self) {
-        self.close_hull();
-        self.fin.as_mut().expect("streaming").ending = true;
-        let slots = self.mesh.triangle_count() as u32;
+    /// What the sweep has done so far.
+    pub fn stats(&self) -> SweepStats {
+        self.sweep.stats()
+    }
+
+    /// What the breakline insertion has done so far.
+    pub fn constraint_stats(&self) -> ConstraintStats {
+        self.sweep.constraint_stats()
+    }
+
+    /// Verifies the invariants of the triangles still in memory and of the front (see
+    /// [`Sweep::check`]; edges facing finalised triangles are boundary edges).
+    ///
+    /// # Errors
+    /// [`Error::Internal`] describing the first violation.
+    pub fn check(&self) -> Result<()> {
+        self.sweep.check()
+    }
+
+    /// Ends the sweep: closes the hull and emits everything still in memory, in a fixed order
+    /// (triangle slot order, then vertex slot order for the releases). The events wait in
+    /// [`StreamingSweep::take_events`]; the statistics stay readable.
+    pub fn finish(&mut self) {
+        self.sweep.close_hull();
+        self.fin().ending = true;
+        let slots = self.sweep.mesh().triangle_count() as u32;
         for t in 0..slots {
-            if self.mesh.is_live(TriId(t)) && !self.has_artificial(t) {
+            let mesh = self.sweep.mesh();
+            if mesh.is_live(TriId(t))
+                && !mesh
+                    .tri_vertices(TriId(t))
+                    .iter()
+                    .any(|v| is_artificial(v.0))
+            {
                 self.finalize(t);
             }
         }
-        let fin = self.fin.as_mut().expect("streaming");
+        let fin = self.fin();
         let vt = &fin.vertices;
         for v in FIRST_REAL as usize..vt.out.len() {
             if vt.out[v] != NOT_OUT && vt.refs[v] > 0 {
@@ -556,24 +594,16 @@ impl Sweep {
         }
     }
 
-    #[inline]
-    fn has_artificial(&self, t: u32) -> bool {
-        self.mesh
-            .tri_vertices(TriId(t))
-            .iter()
-            .any(|v| is_artificial(v.0))
-    }
-
     /// Processes every queue bucket the sweep line (now at `y`) has passed.
     fn finalize_due(&mut self, y: f64) {
         let ks = {
-            let fin = self.fin.as_mut().expect("streaming");
+            let fin = self.fin();
             let ks = fin.bucket(y);
             fin.sweep_bucket = fin.sweep_bucket.max(ks);
             ks
         };
         loop {
-            let fin = self.fin.as_mut().expect("streaming");
+            let fin = self.fin();
             if fin.cur >= ks {
                 return;
             }
@@ -581,7 +611,7 @@ impl Sweep {
                 // Nothing in the ring: jump straight to the sweep line or the next far entry.
                 let next_far = fin.far.peek().map_or(u64::MAX, |r| r.0.0);
                 fin.cur = ks.min(next_far.max(fin.cur + 1));
-                Self::pull_far(fin);
+                fin.pull_far();
                 continue;
             }
             let bucket = fin.cur;
@@ -589,10 +619,11 @@ impl Sweep {
             fin.cur += 1;
             let mut list = std::mem::take(&mut fin.ring[slot]);
             fin.in_ring -= list.len();
-            Self::pull_far(fin);
+            fin.pull_far();
             for &t in &list {
-                let fin = self.fin.as_ref().expect("streaming");
-                if fin.due[t as usize] == bucket && self.mesh.is_live(TriId(t)) {
+                if self.sweep.hooks().due[t as usize] == bucket
+                    && self.sweep.mesh().is_live(TriId(t))
+                {
                     self.check_final(t, y, ks);
                 }
             }
@@ -600,49 +631,38 @@ impl Sweep {
             // Do not let each of the RING buckets keep the capacity of its busiest moment: that
             // would hold RING x (entries per bucket), which grows with the front.
             list.shrink_to(RING_KEEP);
-            let fin = self.fin.as_mut().expect("streaming");
+            let fin = self.fin();
             if fin.ring[slot].is_empty() {
                 fin.ring[slot] = list;
             }
         }
     }
 
-    fn pull_far(fin: &mut Finalizer) {
-        while let Some(&Reverse((k, t))) = fin.far.peek() {
-            if k >= fin.cur + RING as u64 {
-                break;
-            }
-            fin.far.pop();
-            if fin.due[t as usize] == k {
-                fin.push_entry(t, k);
-            }
-        }
-    }
-
     /// Finalises triangle slot `t` if its circumdisk is under the front; otherwise re-schedules it.
     fn check_final(&mut self, t: u32, y: f64, ks: u64) {
-        let [a, b, c] = self.mesh.tri_vertices(TriId(t));
-        let fin = self.fin.as_mut().expect("streaming");
+        let [a, b, c] = self.sweep.mesh().tri_vertices(TriId(t));
         if is_artificial(a.0) || is_artificial(b.0) || is_artificial(c.0) {
-            fin.schedule(t, ks + PARKED);
+            self.fin().schedule(t, ks + PARKED);
             return;
         }
-        let p = &self.pts;
+        let p = self.sweep.points();
         let Some(d) =
             predicates::circumdisk_bounds(p[a.0 as usize], p[b.0 as usize], p[c.0 as usize])
         else {
+            let fin = self.fin();
             fin.stats.rechecks += 1;
             fin.schedule(t, ks + PARKED);
             return;
         };
         if d.top >= y {
+            let fin = self.fin();
             fin.stats.rechecks += 1;
             let k = fin.bucket(d.top);
             fin.schedule(t, k.max(ks));
             return;
         }
-        let low = self.front.min_y_over(d.x_min, d.x_max);
-        let fin = self.fin.as_mut().expect("streaming");
+        let low = self.sweep.front().min_y_over(d.x_min, d.x_max);
+        let fin = self.fin();
         if d.top < low && fin.pending.near(d.center, d.radius) {
             // A breakline still to come may cross it.
             fin.stats.rechecks += 1;
@@ -650,7 +670,6 @@ impl Sweep {
         } else if d.top < low {
             self.finalize(t);
         } else {
-            let fin = self.fin.as_mut().expect("streaming");
             fin.stats.rechecks += 1;
             // The front under the disk must rise by (top - low): wait about that long.
             let k = fin.bucket(y + (d.top - low));
@@ -659,48 +678,11 @@ impl Sweep {
     }
 
     /// Emits triangle slot `t` (and any vertex not yet emitted), releases what it no longer needs
-    /// and frees the slot. Its neighbours see a hull edge from now on: the shared edge is a final
-    /// Delaunay edge and will never be tested again.
+    /// and frees the slot.
     fn finalize(&mut self, t: u32) {
-        for k in 0..3 {
-            let e = EdgeId(3 * t + k);
-            match self.mesh.across(e) {
-                Across::Twin(f) => self.mesh.detach(f),
-                // During the sweep a final triangle is never under the front; at the end the
-                // front is the upper hull.
-                Across::Front(_) => debug_assert!(self.fin.as_ref().is_some_and(|f| f.ending)),
-                Across::Hull => {}
-            }
-        }
-        let tri = self.mesh.tri_vertices(TriId(t));
-        let fin = self.fin.as_mut().expect("streaming");
-        let mut ids = [0u64; 3];
-        for (k, v) in tri.iter().enumerate() {
-            let i = v.0 as usize;
-            let vt = &mut fin.vertices;
-            if vt.out[i] == NOT_OUT {
-                vt.out[i] = fin.next_out;
-                fin.next_out += 1;
-                fin.stats.vertices += 1;
-                fin.events.push(Event::Vertex {
-                    xy: self.pts[i],
-                    z: vt.z[i],
-                    index: vt.index[i],
-                });
-            }
-            ids[k] = fin.vertices.out[i];
-        }
-        fin.events.push(Event::Triangle(ids));
-        fin.stats.triangles += 1;
-        for v in tri {
-            let i = v.0 as usize;
-            fin.vertices.refs[i] -= 1;
-            if fin.vertices.refs[i] == 0 {
-                fin.release_vertex(v);
-            }
-        }
-        fin.live_triangles -= 1;
-        self.mesh.free_triangle(TriId(t));
-        fin.free_triangles.push(t);
+        let ending = self.sweep.hooks().ending;
+        let tri = self.sweep.remove_final(TriId(t), ending);
+        let (pts, fin) = self.sweep.points_and_hooks_mut();
+        fin.emit(t, tri, pts);
     }
 }

@@ -8,9 +8,9 @@ use super::{
     AnonPeak, Frame, RunConfig, RunSummary, StreamInfo, SweepAxis, Timings, TriangleSink, peak_rss,
 };
 use crate::error::{Error, Result};
+use crate::finalise::{Event, StreamConfig, StreamPoint, StreamingSweep};
 use crate::sink::MeshSink;
 use crate::sort::external::{Dedup, ExternalSorter, Merge, SortRecord};
-use crate::sweep::{Event, StreamConfig, StreamPoint, Sweep};
 use crossbeam_channel::{Receiver, Sender, bounded};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::time::Instant;
@@ -122,8 +122,8 @@ pub(crate) fn run(
         let frame = rd.frame;
         let writer = scope.spawn(move || write_events(erx, frame, lines, mesh, sinks_ref));
         let swept = sweep_points(&rd, expected, lines, prx, etx, &pb, &anon);
-        let duplicates = merger.join().expect("merge thread panicked");
-        let written = writer.join().expect("writer thread panicked");
+        let duplicates = joined(merger.join(), "merge");
+        let written = joined(writer.join(), "writer");
         (swept, duplicates, written)
     });
     let (swept, duplicates, written) = outcome;
@@ -183,6 +183,11 @@ pub(crate) fn run(
     })
 }
 
+/// The result of a worker thread; a panic in it becomes [`Error::Internal`] with its message.
+fn joined<T>(result: std::thread::Result<Result<T>>, thread: &str) -> Result<T> {
+    result.unwrap_or_else(|payload| Err(Error::panicked(thread, &*payload)))
+}
+
 fn world_bounds(rd: &ReadResult) -> [f64; 4] {
     let lo = rd.frame.world([rd.bounds[0], rd.bounds[1]], 0.0);
     let hi = rd.frame.world([rd.bounds[2], rd.bounds[3]], 0.0);
@@ -229,7 +234,7 @@ fn merge_points(
 
 type Swept = (
     crate::sweep::SweepStats,
-    crate::sweep::StreamStats,
+    crate::finalise::StreamStats,
     u64,
     crate::sweep::ConstraintStats,
 );
@@ -249,7 +254,7 @@ fn sweep_points(
         bounds: rd.bounds,
         expected_points: expected,
     };
-    let mut sweep: Option<Sweep> = None;
+    let mut sweep: Option<StreamingSweep> = None;
     let mut kept = 0u64;
     let mut out = Vec::with_capacity(EVENT_BATCH);
     let send = |out: &mut Vec<Event>| -> bool {
@@ -263,9 +268,9 @@ fn sweep_points(
             match sweep.as_mut() {
                 None => {
                     let first = p.constraint;
-                    let mut s = Sweep::streaming(p, &cfg);
+                    let mut s = StreamingSweep::new(p, &cfg);
                     if let Some(g) = lines.and_then(Prepared::graph) {
-                        s.set_stream_constraints(g, first);
+                        s.set_constraints(g, first)?;
                     }
                     sweep = Some(s);
                 }
@@ -290,7 +295,7 @@ fn sweep_points(
     let Some(mut s) = sweep else {
         return Ok(Default::default());
     };
-    s.finish_streaming();
+    s.finish();
     s.take_events(&mut out);
     if !send(&mut out) {
         return Err(Error::Interrupted);
@@ -336,3 +341,23 @@ fn write_events(
 }
 
 type Written = (u64, u64, u64, Option<crate::breaklines::flat::FlatStats>);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_worker_panic_is_an_internal_error() {
+        let text = std::thread::spawn(|| -> Result<()> { panic!("boom") }).join();
+        let formatted = std::thread::spawn(|| -> Result<()> { panic!("boom {}", 2) }).join();
+        for (r, want) in [(text, "boom"), (formatted, "boom 2")] {
+            match joined(r, "merge") {
+                Err(Error::Internal(m)) => {
+                    assert_eq!(m, format!("the merge thread panicked: {want}"))
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+        assert_eq!(joined(Ok(Ok(7)), "writer").unwrap(), 7);
+    }
+}

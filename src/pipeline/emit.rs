@@ -7,10 +7,10 @@ use super::{Frame, TriangleSink};
 use crate::breaklines::Trim;
 use crate::breaklines::flat::{FlatStats, remove_flat_triangles};
 use crate::error::Result;
+use crate::finalise::Event;
 use crate::geom::predicates::{Orientation, orient};
 use crate::idmap::IdMap;
 use crate::sink::MeshSink;
-use crate::sweep::Event;
 use std::collections::HashMap;
 
 /// Not written (yet).

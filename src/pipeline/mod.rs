@@ -154,7 +154,7 @@ pub struct RunSummary {
     /// Sweep counters (front peak, flips, …).
     pub sweep: crate::sweep::SweepStats,
     /// Streaming working set.
-    pub stream: crate::sweep::StreamStats,
+    pub stream: crate::finalise::StreamStats,
     /// What each triangle sink reported, in the order of the sinks.
     pub products: Vec<ProductSummary>,
     /// The CRS, when known.

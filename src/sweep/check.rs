@@ -1,12 +1,12 @@
 //! [`Sweep::check`]: every invariant of a sweep in progress, checked exactly. O(triangles); for
 //! tests, fuzzing and debugging.
 
-use super::Sweep;
+use super::{Mode, Sweep};
 use crate::error::{Error, Result};
 use crate::geom::predicates::{CircleSide, incircle_ids};
 use crate::mesh::{Across, EdgeId, TriId};
 
-impl Sweep {
+impl<H: Mode> Sweep<H> {
     /// Verifies the sweep's invariants and returns the first violation found:
     ///
     /// * every triangle is strictly counter-clockwise (symbolic points included);
@@ -76,7 +76,7 @@ impl Sweep {
         }
         // In batch mode the only boundary edge off the front is the bottom edge P-1 → P-2; when
         // streaming, edges facing finalised triangles are boundary edges too.
-        if self.fin.is_none() && hull_edges != 1 {
+        if !H::FINALISES && hull_edges != 1 {
             return Err(format!(
                 "{hull_edges} boundary edges outside the front (want 1)"
             ));

@@ -22,8 +22,9 @@
 //! re-triangulated with `k` triangles), and the cavity's outer edges keep their links, including
 //! the front's references, through `Sweep::relink`.
 
-use super::Sweep;
 use super::front::NodeId;
+use super::{Mode, Sweep};
+use crate::error::{Error, Result};
 use crate::geom::predicates::{CircleSide, Orientation, incircle_ids, is_artificial, sweep_cmp};
 use crate::mesh::{Across, CONSTRAINED, EdgeId, TriId, VertexId};
 use std::cmp::Ordering;
@@ -173,7 +174,7 @@ enum Start {
     Crossing(EdgeId),
 }
 
-impl Sweep {
+impl<H: Mode> Sweep<H> {
     /// Constraint vertex `cid` was swept as `v`: its segments to later vertices become pending.
     /// When streaming, they keep `v` alive and block the finalisation of triangles near them.
     pub(crate) fn constraint_started(&mut self, v: VertexId, cid: u32) {
@@ -185,36 +186,39 @@ impl Sweep {
             return;
         }
         let a = self.pts[v.0 as usize];
-        let segs: Vec<(u32, [f64; 2])> = ups.iter().map(|&u| (u, cons.graph.xy(u))).collect();
-        if let Some(f) = self.fin.as_mut() {
-            f.vertices.refs[v.0 as usize] += segs.len() as u32;
-            for (u, b) in segs {
-                f.pending.add(cid, u, a, b);
-            }
+        for &u in ups {
+            self.hooks.segment_pending(v, cid, u, a, cons.graph.xy(u));
         }
     }
 
     /// The segment from constraint vertex `lo` (swept as `a`) to constraint vertex `hi` is in.
     pub(crate) fn constraint_finished(&mut self, a: VertexId, lo: u32, hi: u32) {
-        if let Some(f) = self.fin.as_mut() {
-            f.pending.remove(lo, hi);
-            let r = &mut f.vertices.refs[a.0 as usize];
-            *r -= 1;
-            if *r == 0 {
-                f.release_vertex(a);
-            }
-        }
+        self.hooks.segment_done(a, lo, hi);
     }
 
     /// Inserts the constraint segment between `a` (inserted earlier) and `b` (just inserted, at
     /// front node `nb`). Returns the number of pieces (more than one when vertices lie on it).
-    pub(crate) fn insert_constraint(&mut self, a: VertexId, b: VertexId, nb: NodeId) -> u32 {
+    ///
+    /// # Errors
+    /// [`Error::Internal`] when an invariant of the insertion fails (a bug).
+    pub(crate) fn insert_constraint(
+        &mut self,
+        a: VertexId,
+        b: VertexId,
+        nb: NodeId,
+    ) -> Result<u32> {
         self.cstats.segments += 1;
-        self.fill_pockets(a, b, nb);
+        self.fill_pockets(a, b, nb)?;
         // An outgoing half-edge of `b`: `b` is on the front, under its right segment lies the
         // half-edge next → b, whose successor starts at b.
         let e = self.front.edge(nb).next();
-        debug_assert_eq!(self.mesh.org(e), b);
+        if self.mesh.org(e) != b {
+            return Err(self.internal(
+                a,
+                b,
+                "its upper end left the front while pockets were filled",
+            ));
+        }
         self.constrain_from(b, a, e)
     }
 
@@ -234,10 +238,10 @@ impl Sweep {
     }
 
     /// Step 1: fill the front pockets under segment a–b (see the module docs).
-    fn fill_pockets(&mut self, a: VertexId, b: VertexId, nb: NodeId) {
+    fn fill_pockets(&mut self, a: VertexId, b: VertexId, nb: NodeId) -> Result<()> {
         let (xa, xb) = (self.pts[a.0 as usize][0], self.pts[b.0 as usize][0]);
         if xa == xb {
-            return;
+            return Ok(());
         }
         let toward_a = |s: &Self, n: NodeId| {
             if xa < xb {
@@ -258,7 +262,7 @@ impl Sweep {
                 }
                 n = toward_a(self, n);
             }
-            let Some(first) = below else { return };
+            let Some(first) = below else { return Ok(()) };
             // Within its run of below-vertices, fill the first valley.
             let mut m = first;
             loop {
@@ -269,12 +273,12 @@ impl Sweep {
                 }
                 m = toward_a(self, m);
                 let v = self.front.vertex(m);
-                assert!(
-                    !is_artificial(v.0)
-                        && in_range(self.front.node(m).x)
-                        && self.side_of_line(a, b, v) < 0,
-                    "internal error: a front pocket under a breakline has no valley"
-                );
+                if is_artificial(v.0)
+                    || !in_range(self.front.node(m).x)
+                    || self.side_of_line(a, b, v) >= 0
+                {
+                    return Err(self.internal(a, b, "a front pocket under it has no valley"));
+                }
             }
         }
     }
@@ -294,12 +298,12 @@ impl Sweep {
     }
 
     /// Step 2: make `s`–`t` a chain of constrained edges, starting from half-edge `e` out of `s`.
-    fn constrain_from(&mut self, s: VertexId, t: VertexId, mut e: EdgeId) -> u32 {
+    fn constrain_from(&mut self, s: VertexId, t: VertexId, mut e: EdgeId) -> Result<u32> {
         let mut cur = s;
         let mut pieces = 0;
         while cur != t {
             pieces += 1;
-            match self.start_towards(cur, t, e) {
+            match self.start_towards(cur, t, e)? {
                 Start::Along(f) => {
                     self.mesh.constrain(f);
                     let (from, to) = (self.mesh.org(f), self.mesh.dst(f));
@@ -318,7 +322,7 @@ impl Sweep {
                     };
                     cur = next;
                 }
-                Start::Crossing(f) => match self.dig_cavity(cur, t, f) {
+                Start::Crossing(f) => match self.dig_cavity(cur, t, f)? {
                     Some((v, out)) => {
                         cur = v;
                         e = out;
@@ -326,13 +330,13 @@ impl Sweep {
                     None => {
                         // It crosses another breakline: leave it out and report it.
                         self.cstats.crossing_skipped += 1;
-                        return pieces;
+                        return Ok(pieces);
                     }
                 },
             }
         }
         self.cstats.splits += u64::from(pieces - 1);
-        pieces
+        Ok(pieces)
     }
 
     /// Is `x` on the ray from `c` through `t`, given that the three are collinear?
@@ -348,33 +352,34 @@ impl Sweep {
 
     /// Finds, around `cur` (from its outgoing half-edge `e`), the edge along `cur → t` or the
     /// triangle the segment enters.
-    fn start_towards(&self, cur: VertexId, t: VertexId, e: EdgeId) -> Start {
+    fn start_towards(&self, cur: VertexId, t: VertexId, e: EdgeId) -> Result<Start> {
+        let lost = |what: &str| self.internal(cur, t, &format!("{what} around its first end"));
         // Rotate counter-clockwise from `e` until the boundary, then clockwise from `e`.
         let mut f = e;
         let mut ccw = true;
         let mut steps = 0usize;
         loop {
             steps += 1;
-            assert!(
-                steps < 1 << 24,
-                "internal error: no way from a vertex to its breakline"
-            );
+            if steps >= 1 << 24 {
+                return Err(lost("no way found after 2^24 steps"));
+            }
+            // `f` comes from rotations around `cur` only.
             debug_assert_eq!(self.mesh.org(f), cur);
             let x = self.mesh.dst(f);
             let y = self.mesh.dst(f.next());
             let ox = self.orient(cur, x, t);
             if ox == Orientation::Collinear && !is_artificial(x.0) && self.same_direction(cur, x, t)
             {
-                return Start::Along(f);
+                return Ok(Start::Along(f));
             }
             let oy = self.orient(cur, y, t);
             if oy == Orientation::Collinear && !is_artificial(y.0) && self.same_direction(cur, y, t)
             {
                 // Along the edge y → cur (f.prev()), which starts at y.
-                return Start::Along(f.prev());
+                return Ok(Start::Along(f.prev()));
             }
             if ox.is_ccw() && oy == Orientation::Clockwise {
-                return Start::Crossing(f);
+                return Ok(Start::Crossing(f));
             }
             // Next outgoing half-edge.
             let next = if ccw {
@@ -390,17 +395,20 @@ impl Sweep {
             };
             match next {
                 Some(g) if g != e => f = g,
-                Some(_) => panic!("internal error: breakline direction not found around vertex"),
+                Some(_) => return Err(lost("its direction was not found in a full turn")),
+                None if !ccw => {
+                    return Err(lost("it leaves the triangulated region clockwise"));
+                }
                 None => {
-                    assert!(
-                        ccw,
-                        "internal error: breakline leaves the triangulated region"
-                    );
                     ccw = false;
                     // Restart clockwise from `e` (its own triangle was already tested).
                     f = match self.mesh.across(e) {
                         Across::Twin(g) => g.next(),
-                        _ => panic!("internal error: breakline leaves the triangulated region"),
+                        _ => {
+                            return Err(lost(
+                                "it leaves the triangulated region counter-clockwise",
+                            ));
+                        }
                     };
                 }
             }
@@ -411,7 +419,12 @@ impl Sweep {
     /// up to `t` or the first vertex exactly on the segment, and re-triangulates both sides.
     /// Returns that end vertex and an outgoing half-edge of it, or `None` (and changes nothing)
     /// when the segment crosses a constrained edge.
-    fn dig_cavity(&mut self, cur: VertexId, t: VertexId, f: EdgeId) -> Option<(VertexId, EdgeId)> {
+    fn dig_cavity(
+        &mut self,
+        cur: VertexId,
+        t: VertexId,
+        f: EdgeId,
+    ) -> Result<Option<(VertexId, EdgeId)>> {
         let mut dead: Vec<u32> = vec![f.tri().0];
         // Right chain (walk order) with the outer words of the edges cur→r1, r1→r2, …
         let mut right: Vec<VertexId> = vec![self.mesh.dst(f)];
@@ -422,19 +435,20 @@ impl Sweep {
         let mut e = f.next(); // the crossed edge x → y (right → left)
         let end = loop {
             if self.mesh.is_constrained(e) {
-                return None;
+                return Ok(None);
             }
             let g = match self.mesh.across(e) {
                 Across::Twin(g) => g,
-                _ => panic!("internal error: a breakline crosses the front"),
+                _ => {
+                    return Err(self.internal(cur, t, "it crosses the front or the hull"));
+                }
             };
             dead.push(g.tri().0);
             // Triangle of g: (y, x, z) with g = y → x.
             let z = self.apex(g);
-            assert!(
-                !is_artificial(z.0),
-                "internal error: a breakline enters an artificial triangle"
-            );
+            if is_artificial(z.0) {
+                return Err(self.internal(cur, t, "it enters a triangle of an artificial point"));
+            }
             let oz = self.orient(cur, t, z);
             if z == t || oz == Orientation::Collinear {
                 // x → z closes the right chain, z → y the left.
@@ -469,14 +483,26 @@ impl Sweep {
         // Left polygon: base cur → end, chain from end back to cur: left reversed.
         let verts: Vec<VertexId> = left.iter().rev().copied().collect();
         let left_first =
-            self.triangulate_pseudo_polygon(cur, end, &verts, &left_edges, &mut dead, &mut spikes);
+            self.triangulate_pseudo_polygon(cur, end, &verts, &left_edges, &mut dead, &mut spikes)?;
         // Right polygon: base end → cur, chain right (walk order).
-        let right_first =
-            self.triangulate_pseudo_polygon(end, cur, &right, &right_edges, &mut dead, &mut spikes);
-        debug_assert!(spikes.open.is_empty());
+        let right_first = self.triangulate_pseudo_polygon(
+            end,
+            cur,
+            &right,
+            &right_edges,
+            &mut dead,
+            &mut spikes,
+        )?;
+        if !spikes.open.is_empty() || !dead.is_empty() {
+            let what = format!(
+                "its cavity was re-triangulated with {} edges unpaired and {} slots unused",
+                spikes.open.len(),
+                dead.len()
+            );
+            return Err(self.internal(cur, end, &what));
+        }
         self.mesh.pair(left_first, right_first, true);
-        debug_assert!(dead.is_empty());
-        Some((end, right_first))
+        Ok(Some((end, right_first)))
     }
 
     /// Links the new half-edge `h` on a cavity chain edge, which was half-edge `old` with link
@@ -500,13 +526,7 @@ impl Sweep {
 
     /// Drops the triangles in `dead` from the vertex reference counts (their slots are reused).
     fn release_triangles(&mut self, dead: &[u32]) {
-        if let Some(f) = self.fin.as_mut() {
-            for &t in dead {
-                for v in self.mesh.tri_vertices(TriId(t)) {
-                    f.vertices.refs[v.0 as usize] -= 1;
-                }
-            }
-        }
+        self.hooks.cavity_removed(&self.mesh, dead);
     }
 
     /// Constrained Delaunay triangulation of the pseudo-polygon with base `a → b` and `chain`
@@ -522,7 +542,7 @@ impl Sweep {
         words: &[(EdgeId, u32)],
         slots: &mut Vec<u32>,
         spikes: &mut Spikes,
-    ) -> EdgeId {
+    ) -> Result<EdgeId> {
         debug_assert_eq!(words.len(), chain.len() + 1);
         let mut base_edge = None;
         let mut stack = vec![Poly {
@@ -543,15 +563,11 @@ impl Sweep {
                 }
             }
             let c = chain[k];
-            let slot = slots
-                .pop()
-                .expect("a cavity re-triangulates into its own slots");
+            let Some(slot) = slots.pop() else {
+                return Err(self.internal(a, b, "its cavity needs more triangles than it had"));
+            };
             let h = self.mesh.reuse_triangle(TriId(slot), p.a, p.b, c);
-            if let Some(f) = self.fin.as_mut() {
-                for v in [p.a, p.b, c] {
-                    f.vertices.refs[v.0 as usize] += 1;
-                }
-            }
+            self.hooks.cavity_filled([p.a, p.b, c]);
             match p.base {
                 Base::Edge(g) => self.mesh.pair(h, g, false),
                 Base::Segment => base_edge = Some(h),
@@ -580,6 +596,16 @@ impl Sweep {
                 });
             }
         }
-        base_edge.expect("the base triangle exists")
+        base_edge.ok_or_else(|| self.internal(a, b, "its cavity has no triangle on it"))
+    }
+
+    /// An [`Error::Internal`] from the insertion of the breakline segment between `a` and `b`:
+    /// what failed, and where (sweep coordinates, relative to the run's local origin).
+    fn internal(&self, a: VertexId, b: VertexId, what: &str) -> Error {
+        let (pa, pb) = (self.pts[a.0 as usize], self.pts[b.0 as usize]);
+        Error::Internal(format!(
+            "inserting the breakline segment ({}, {})-({}, {}) (local frame): {what}",
+            pa[0], pa[1], pb[0], pb[1]
+        ))
     }
 }

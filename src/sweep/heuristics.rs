@@ -5,8 +5,8 @@
 //! exact [`orient`](crate::geom::predicates::orient_ids) predicate and legalised, so the floating-point
 //! angles used here can never change the final triangulation, only how fast it is reached.
 
-use super::Sweep;
 use super::front::NodeId;
+use super::{Mode, Sweep};
 use crate::geom::predicates::is_artificial;
 
 /// Cosine of the largest hole angle that is filled at once. The paper uses π/2; about 114° cost
@@ -21,7 +21,7 @@ enum Dir {
     Right,
 }
 
-impl Sweep {
+impl<H: Mode> Sweep<H> {
     #[inline(always)]
     fn step_dir(&self, n: NodeId, d: Dir) -> NodeId {
         match d {

@@ -9,11 +9,11 @@
 //! * `Sweep::legalize_all` after a fill, which adds a triangle between existing vertices: there is
 //!   no new point to argue from, so a flip pushes all four outer edges of the quadrilateral.
 
-use super::Sweep;
+use super::{Mode, Sweep};
 use crate::geom::predicates::{CircleSide, incircle_ids};
 use crate::mesh::{Across, EdgeId, VertexId};
 
-impl Sweep {
+impl<H: Mode> Sweep<H> {
     /// If the edge `a` (which has a twin) is illegal, flips it and returns the four outer edges
     /// `[a, a.next, b, b.next]` in their new slots; `None` when it is legal or constrained.
     ///
@@ -35,23 +35,13 @@ impl Sweep {
             return None;
         }
         self.stats.flips += 1;
-        if let Some(f) = self.fin.as_mut() {
-            let r = &mut f.vertices.refs;
-            r[pr.0 as usize] -= 1;
-            r[pl.0 as usize] -= 1;
-            r[p0.0 as usize] += 1;
-            r[p1.0 as usize] += 1;
-        }
         let (hbl, har) = (self.mesh.link[bl.idx()], self.mesh.link[ar.idx()]);
         self.mesh.origin[a.idx()] = p1;
         self.mesh.origin[b.idx()] = p0;
         self.relink(a, hbl);
         self.relink(b, har);
         self.mesh.pair(ar, bl, false);
-        if let Some(f) = self.fin.as_mut() {
-            f.changed(a.tri().0);
-            f.changed(b.tri().0);
-        }
+        self.hooks.flipped(a.tri(), b.tri(), [pr, pl], [p0, p1]);
         Some(b)
     }
 

@@ -5,24 +5,28 @@
 //! lies exactly above a front vertex, to both segments around that vertex (the *left case*). Every
 //! new triangle is legalised at once by Lawson flips with an explicit stack ([`legalize`]). Two
 //! heuristics keep the front smooth ([`heuristics`]): holes next to the new point whose angle is
-//! below π/2 are filled, and deep basins are filled. When all points are in, the front is closed to
-//! its convex hull and the triangles that use an artificial point are dropped.
+//! at most about 114° are filled (the paper's bound is π/2; see `HOLE_COS` in [`heuristics`]), and
+//! deep basins are filled. When all points are in, the front is closed to its convex hull and the
+//! triangles that use an artificial point are dropped.
 //!
 //! The sweep is steppable: [`Sweep::new`] → [`Sweep::step`] … → [`Sweep::finish`], and
 //! [`Sweep::check`] verifies every invariant of the current state (used by tests and fuzzing).
+//! The same core, monomorphised over its [`Mode`] ([`hooks`]), is the streaming sweep of
+//! [`crate::finalise`].
 
 pub mod check;
 pub mod constrain;
 pub mod front;
 pub mod heuristics;
+pub mod hooks;
 pub mod legalize;
 
 use crate::error::{Error, Result};
-pub use crate::finalise::{Event, StreamConfig, StreamPoint, StreamStats};
 use crate::geom::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
 use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, TriId, VertexId};
 pub use constrain::{ConstraintGraph, ConstraintStats};
 use front::{Front, NodeId, XMap};
+pub use hooks::{Batch, Mode};
 
 /// Counters of what the sweep did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -43,22 +47,24 @@ pub struct SweepStats {
 
 /// A sweep in progress.
 ///
-/// Two modes share all of the geometry:
-/// * **batch** ([`Sweep::new`]): the whole vertex table is given up front and every triangle stays in
-///   memory until [`Sweep::finish`];
-/// * **streaming** ([`Sweep::streaming`], see [`crate::finalise`]): points are pushed one at a time and a
-///   triangle leaves memory (as an [`Event`]) as soon as nothing later can change it.
+/// Two modes share all of the geometry, each a monomorphised instance of this type:
+/// * **batch** (`Sweep`, that is `Sweep<Batch>`, from [`Sweep::new`]): the whole vertex table is
+///   given up front and every triangle stays in memory until [`Sweep::finish`];
+/// * **streaming** ([`crate::finalise::StreamingSweep`], which owns a `Sweep` whose mode is its
+///   finaliser): points are pushed one at a time and a triangle leaves memory as soon as nothing
+///   later can change it.
 #[derive(Debug, Clone)]
-pub struct Sweep {
-    pub(crate) pts: Vec<[f64; 2]>,
-    pub(crate) next: u32,
-    pub(crate) mesh: Mesh,
-    pub(crate) front: Front,
-    pub(crate) stack: Vec<EdgeId>,
-    pub(crate) stats: SweepStats,
-    pub(crate) fin: Option<Box<crate::finalise::Finalizer>>,
-    pub(crate) cons: Option<Box<Constraints>>,
-    pub(crate) cstats: ConstraintStats,
+pub struct Sweep<H: Mode = Batch> {
+    pts: Vec<[f64; 2]>,
+    /// Batch mode: the next vertex to insert.
+    next: u32,
+    mesh: Mesh,
+    front: Front,
+    stack: Vec<EdgeId>,
+    stats: SweepStats,
+    hooks: H,
+    cons: Option<Box<Constraints>>,
+    cstats: ConstraintStats,
 }
 
 /// Breakline state of a sweep.
@@ -75,7 +81,10 @@ pub(crate) struct Constraints {
 /// No constraint vertex.
 pub const NO_CONSTRAINT: u32 = u32::MAX;
 
-impl Sweep {
+/// A constraint vertex not swept yet.
+const UNSWEPT: VertexId = VertexId(u32::MAX);
+
+impl Sweep<Batch> {
     /// Starts a sweep over `pts`: two placeholder rows for the artificial points, then at least one
     /// real point, all distinct and sorted by `(y, x)` (as produced by [`crate::sort::memory::prepare`]).
     ///
@@ -102,16 +111,118 @@ impl Sweep {
         let xmap = XMap::from_sample(real.iter().step_by(step).map(|p| p[0]).collect());
         // A Delaunay triangulation of n points (plus 2) has at most 2(n + 2) - 5 triangles.
         let mesh = Mesh::with_capacity(2 * n + 4);
-        Ok(Self::start(pts, mesh, xmap, None))
+        Ok(Self::start(pts, mesh, xmap, Batch))
     }
 
+    /// Inserts the next point; returns `false` when all points are in.
+    ///
+    /// # Errors
+    /// [`Error::Internal`] if inserting a breakline ended by the point breaks an invariant (a bug;
+    /// the sweep must not be used further).
+    pub fn step(&mut self) -> Result<bool> {
+        if self.next as usize >= self.pts.len() {
+            return Ok(false);
+        }
+        let v = VertexId(self.next);
+        self.next += 1;
+        self.insert_batch(v)?;
+        Ok(true)
+    }
+
+    /// Inserts all remaining points.
+    ///
+    /// # Errors
+    /// As [`Sweep::step`].
+    pub fn run(&mut self) -> Result<()> {
+        while (self.next as usize) < self.pts.len() {
+            let v = VertexId(self.next);
+            self.next += 1;
+            self.insert_batch(v)?;
+        }
+        Ok(())
+    }
+
+    /// Inserts vertex `v` and the breaklines it ends.
+    fn insert_batch(&mut self, v: VertexId) -> Result<()> {
+        let n = self.insert(v);
+        let cid = match self.cons.as_mut() {
+            Some(c) if c.cursor < c.batch.len() && c.batch[c.cursor].0 == v.0 => {
+                c.cursor += 1;
+                c.batch[c.cursor - 1].1
+            }
+            _ => return Ok(()),
+        };
+        self.constraint_vertex(v, n, cid)
+    }
+
+    /// Sets the breaklines of a batch sweep: `vertex_of[c]` is the vertex id of constraint vertex
+    /// `c` (vertex ids count from the first real vertex, as in the table given to [`Sweep::new`]).
+    /// Must be called before the first [`Sweep::step`].
+    ///
+    /// # Panics
+    /// If the first point was already swept.
+    pub fn set_constraints(&mut self, graph: ConstraintGraph, vertex_of: &[u32]) {
+        assert!(
+            self.next == FIRST_REAL + 1,
+            "constraints must be set before sweeping"
+        );
+        let mut batch: Vec<(u32, u32)> = vertex_of
+            .iter()
+            .enumerate()
+            .map(|(c, &v)| (v + FIRST_REAL, c as u32))
+            .collect();
+        batch.sort_unstable();
+        let n = graph.vertex_count();
+        let mut cons = Box::new(Constraints {
+            graph,
+            vertex: vec![UNSWEPT; n],
+            batch,
+            cursor: 0,
+        });
+        // The first vertex is already in: it ends no segment, but may start some.
+        if let Some(&(v, c)) = cons.batch.first()
+            && v == FIRST_REAL
+        {
+            cons.cursor = 1;
+            cons.vertex[c as usize] = VertexId(v);
+        }
+        self.cons = Some(cons);
+    }
+
+    /// Closes the front to the convex hull, drops the artificial triangles and returns the real
+    /// triangles (counter-clockwise, vertex ids relative to the first real vertex), the vertex table
+    /// and the statistics.
+    pub fn finish(mut self) -> (Vec<[u32; 3]>, Vec<[f64; 2]>, SweepStats) {
+        self.close_hull();
+        let stats = self.stats();
+        let Sweep { pts, mesh, .. } = self;
+        let Mesh { origin, link } = mesh;
+        drop(link);
+        let mut out: Vec<u32> = bytemuck::allocation::cast_vec(origin);
+        let mut k = 0;
+        for t in 0..out.len() / 3 {
+            let (a, b, c) = (out[3 * t], out[3 * t + 1], out[3 * t + 2]);
+            if is_artificial(a) || is_artificial(b) || is_artificial(c) {
+                continue;
+            }
+            out[3 * k] = a - FIRST_REAL;
+            out[3 * k + 1] = b - FIRST_REAL;
+            out[3 * k + 2] = c - FIRST_REAL;
+            k += 1;
+        }
+        out.truncate(3 * k);
+        out.shrink_to_fit();
+        let tris: Vec<[u32; 3]> = match bytemuck::allocation::try_cast_vec(out) {
+            Ok(t) => t,
+            Err((_, out)) => out.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        };
+        (tris, pts, stats)
+    }
+}
+
+impl<H: Mode> Sweep<H> {
     /// The first triangle (P-1, P-2, first point) and the front over it.
-    pub(crate) fn start(
-        pts: Vec<[f64; 2]>,
-        mut mesh: Mesh,
-        xmap: XMap,
-        fin: Option<Box<crate::finalise::Finalizer>>,
-    ) -> Self {
+    pub(crate) fn start(pts: Vec<[f64; 2]>, mut mesh: Mesh, xmap: XMap, hooks: H) -> Self {
         let first = VertexId(FIRST_REAL);
         let e = mesh.add_triangle(VertexId(P_LEFT), VertexId(P_RIGHT), first);
         // Half-edges: e: P-1→P-2 (bottom), e+1: P-2→v (under v→P-2), e+2: v→P-1 (under P-1→v).
@@ -136,32 +247,12 @@ impl Sweep {
                 points: 1,
                 ..SweepStats::default()
             },
-            fin,
+            hooks,
             cons: None,
             cstats: ConstraintStats::default(),
         };
         sweep.created(e);
         sweep
-    }
-
-    /// Inserts the next point; returns `false` when all points are in.
-    pub fn step(&mut self) -> bool {
-        if self.next as usize >= self.pts.len() {
-            return false;
-        }
-        let v = VertexId(self.next);
-        self.next += 1;
-        self.insert_batch(v);
-        true
-    }
-
-    /// Inserts all remaining points.
-    pub fn run(&mut self) {
-        while (self.next as usize) < self.pts.len() {
-            let v = VertexId(self.next);
-            self.next += 1;
-            self.insert_batch(v);
-        }
     }
 
     /// The vertex table (local frame; rows 0 and 1 are placeholders for `P-1`, `P-2`).
@@ -191,103 +282,133 @@ impl Sweep {
         s
     }
 
-    /// Batch mode: inserts vertex `v` and the breaklines it ends.
-    fn insert_batch(&mut self, v: VertexId) {
-        let n = self.insert(v);
-        let cid = match self.cons.as_mut() {
-            Some(c) if c.cursor < c.batch.len() && c.batch[c.cursor].0 == v.0 => {
-                c.cursor += 1;
-                c.batch[c.cursor - 1].1
-            }
-            _ => return,
-        };
-        self.constraint_vertex(v, n, cid);
+    /// The mode's state (the streaming finaliser).
+    #[inline(always)]
+    pub(crate) fn hooks(&self) -> &H {
+        &self.hooks
     }
 
-    /// Sets the breaklines of a batch sweep: `vertex_of[c]` is the vertex id of constraint vertex
-    /// `c` (vertex ids count from the first real vertex, as in the table given to [`Sweep::new`]).
-    /// Must be called before the first [`Sweep::step`].
+    /// The mode's state, mutable.
+    #[inline(always)]
+    pub(crate) fn hooks_mut(&mut self) -> &mut H {
+        &mut self.hooks
+    }
+
+    /// The vertex table, and the mode's state mutable (the finaliser reads positions while it
+    /// updates itself).
+    #[inline(always)]
+    pub(crate) fn points_and_hooks_mut(&mut self) -> (&[[f64; 2]], &mut H) {
+        (&self.pts, &mut self.hooks)
+    }
+
+    /// Sets the breaklines of a sweep whose points arrive one by one and name their constraint
+    /// vertex (or [`NO_CONSTRAINT`]) themselves; `first_constraint` is that of the first point.
     ///
-    /// # Panics
-    /// If the first point was already swept.
-    pub fn set_constraints(&mut self, graph: ConstraintGraph, vertex_of: &[u32]) {
-        assert!(
-            self.next == FIRST_REAL + 1,
-            "constraints must be set before sweeping"
-        );
-        let mut batch: Vec<(u32, u32)> = vertex_of
-            .iter()
-            .enumerate()
-            .map(|(c, &v)| (v + FIRST_REAL, c as u32))
-            .collect();
-        batch.sort_unstable();
+    /// # Errors
+    /// [`Error::Internal`] if `first_constraint` is not a vertex of `graph`.
+    pub(crate) fn set_point_constraints(
+        &mut self,
+        graph: ConstraintGraph,
+        first_constraint: u32,
+    ) -> Result<()> {
         let n = graph.vertex_count();
         let mut cons = Box::new(Constraints {
             graph,
-            vertex: vec![VertexId(u32::MAX); n],
-            batch,
-            cursor: 0,
-        });
-        // The first vertex is already in: it ends no segment, but may start some.
-        if let Some(&(v, c)) = cons.batch.first()
-            && v == FIRST_REAL
-        {
-            cons.cursor = 1;
-            cons.vertex[c as usize] = VertexId(v);
-        }
-        self.cons = Some(cons);
-    }
-
-    /// Sets the breaklines of a streaming sweep; points name their constraint vertex in
-    /// [`StreamPoint::constraint`].
-    pub fn set_stream_constraints(&mut self, graph: ConstraintGraph, first_constraint: u32) {
-        let n = graph.vertex_count();
-        let mut cons = Box::new(Constraints {
-            graph,
-            vertex: vec![VertexId(u32::MAX); n],
+            vertex: vec![UNSWEPT; n],
             batch: Vec::new(),
             cursor: 0,
         });
         if first_constraint != NO_CONSTRAINT {
-            cons.vertex[first_constraint as usize] = VertexId(FIRST_REAL);
+            let Some(slot) = cons.vertex.get_mut(first_constraint as usize) else {
+                return Err(Error::Internal(format!(
+                    "the first point is breakline vertex {first_constraint}, one of {n}"
+                )));
+            };
+            *slot = VertexId(FIRST_REAL);
         }
         self.cons = Some(cons);
         if first_constraint != NO_CONSTRAINT {
             self.constraint_started(VertexId(FIRST_REAL), first_constraint);
         }
+        Ok(())
+    }
+
+    /// Stores the position of vertex `v`: the next row of the vertex table, or a row freed
+    /// earlier (streaming).
+    #[inline]
+    pub(crate) fn put_point(&mut self, v: u32, xy: [f64; 2]) {
+        let i = v as usize;
+        if i == self.pts.len() {
+            self.pts.push(xy);
+        } else {
+            self.pts[i] = xy;
+        }
+    }
+
+    /// Inserts vertex `v` (in the table, after every vertex inserted so far in sweep order) and,
+    /// unless `constraint` is [`NO_CONSTRAINT`], the breaklines that constraint vertex ends.
+    ///
+    /// # Errors
+    /// [`Error::Internal`] if a breakline cannot be inserted (a bug, or a point naming a
+    /// constraint vertex the sweep does not have).
+    #[inline]
+    pub(crate) fn insert_point(&mut self, v: VertexId, constraint: u32) -> Result<()> {
+        let n = self.insert(v);
+        if constraint != NO_CONSTRAINT {
+            self.constraint_vertex(v, n, constraint)?;
+        }
+        Ok(())
     }
 
     /// Vertex `v` (at front node `n`) is constraint vertex `cid`: insert the segments it ends.
-    pub(crate) fn constraint_vertex(&mut self, v: VertexId, n: NodeId, cid: u32) {
-        let cons = self.cons.as_mut().expect("constraints are set");
+    fn constraint_vertex(&mut self, v: VertexId, n: NodeId, cid: u32) -> Result<()> {
+        let Some(cons) = self
+            .cons
+            .as_mut()
+            .filter(|c| (cid as usize) < c.vertex.len())
+        else {
+            return Err(Error::Internal(format!(
+                "vertex {} is breakline vertex {cid}, which the sweep does not have",
+                v.0
+            )));
+        };
         cons.vertex[cid as usize] = v;
-        let lower: Vec<VertexId> = cons
+        let lower: Vec<(u32, VertexId)> = cons
             .graph
             .lower(cid)
             .iter()
-            .map(|&c| cons.vertex[c as usize])
+            .map(|&c| (c, cons.vertex[c as usize]))
             .collect();
-        for (k, &a) in lower.iter().enumerate() {
-            debug_assert!(a.0 != u32::MAX, "a breakline's lower end was not swept");
+        for (k, &(c, a)) in lower.iter().enumerate() {
+            if a == UNSWEPT {
+                return Err(Error::Internal(format!(
+                    "breakline vertex {cid} was swept before the earlier end {c} of its segment"
+                )));
+            }
             // The front node of `v` may change while pockets are filled; it is re-located.
-            let nb = if k == 0 { n } else { self.front_node_of(v) };
-            self.insert_constraint(a, v, nb);
-            let c = self.cons.as_ref().expect("set").graph.lower(cid)[k];
+            let nb = if k == 0 { n } else { self.front_node_of(v)? };
+            self.insert_constraint(a, v, nb)?;
             self.constraint_finished(a, c, cid);
         }
         self.constraint_started(v, cid);
+        Ok(())
     }
 
     /// The front node of vertex `v`, which is on the front.
-    fn front_node_of(&self, v: VertexId) -> NodeId {
+    fn front_node_of(&self, v: VertexId) -> Result<NodeId> {
         let n = self.front.locate(self.pts[v.0 as usize][0]);
-        debug_assert_eq!(self.front.vertex(n), v);
-        n
+        if self.front.vertex(n) != v {
+            return Err(Error::Internal(format!(
+                "vertex {} left the front while its breaklines were inserted",
+                v.0
+            )));
+        }
+        Ok(n)
     }
 
     /// Point event: insert vertex `v`, which lies above or on the front and after every vertex
     /// inserted so far in sweep order. Returns its front node.
-    pub(crate) fn insert(&mut self, v: VertexId) -> NodeId {
+    fn insert(&mut self, v: VertexId) -> NodeId {
         self.stats.points += 1;
         let x = self.pts[v.0 as usize][0];
         let l = self.front.locate(x);
@@ -337,24 +458,19 @@ impl Sweep {
     /// Adds triangle (a, b, c) (reusing a freed slot when streaming) and returns its half-edge a → b.
     #[inline(always)]
     fn new_triangle(&mut self, a: VertexId, b: VertexId, c: VertexId) -> EdgeId {
-        let e = match self.fin.as_mut().and_then(|f| f.free_triangles.pop()) {
-            Some(t) => self.mesh.reuse_triangle(TriId(t), a, b, c),
+        let e = match self.hooks.free_slot() {
+            Some(t) => self.mesh.reuse_triangle(t, a, b, c),
             None => self.mesh.add_triangle(a, b, c),
         };
         self.created(e);
         e
     }
 
-    /// Streaming bookkeeping for a new triangle: vertex references and the finalisation queue.
+    /// Tells the mode about a new triangle (streaming: vertex references and the finalisation
+    /// queue).
     #[inline(always)]
     fn created(&mut self, e: EdgeId) {
-        if let Some(f) = self.fin.as_mut() {
-            let o = &self.mesh.origin;
-            for k in 0..3 {
-                f.vertices.refs[o[e.idx() + k].0 as usize] += 1;
-            }
-            f.created(e.tri().0);
-        }
+        self.hooks.created(&self.mesh, e.tri());
     }
 
     /// Makes `e` the boundary half-edge under the segment right of node `n`.
@@ -390,33 +506,22 @@ impl Sweep {
         crate::geom::predicates::orient_ids(&self.pts, a.0, b.0, c.0)
     }
 
-    /// Closes the front to the convex hull, drops the artificial triangles and returns the real
-    /// triangles (counter-clockwise, vertex ids relative to the first real vertex), the vertex table
-    /// and the statistics.
-    pub fn finish(mut self) -> (Vec<[u32; 3]>, Vec<[f64; 2]>, SweepStats) {
-        self.close_hull();
-        let stats = self.stats();
-        let Sweep { pts, mesh, .. } = self;
-        let Mesh { origin, link } = mesh;
-        drop(link);
-        let mut out: Vec<u32> = bytemuck::allocation::cast_vec(origin);
-        let mut k = 0;
-        for t in 0..out.len() / 3 {
-            let (a, b, c) = (out[3 * t], out[3 * t + 1], out[3 * t + 2]);
-            if is_artificial(a) || is_artificial(b) || is_artificial(c) {
-                continue;
+    /// Removes the final triangle slot `t` from the mesh and returns its vertices. Its neighbours
+    /// see a hull edge from now on: the shared edge is a final Delaunay edge and will never be
+    /// tested again. `ending`: the sweep is over (the front is the upper hull).
+    pub(crate) fn remove_final(&mut self, t: TriId, ending: bool) -> [VertexId; 3] {
+        for k in 0..3 {
+            let e = EdgeId(3 * t.0 + k);
+            match self.mesh.across(e) {
+                Across::Twin(f) => self.mesh.detach(f),
+                // During the sweep a final triangle is never under the front; at the end the
+                // front is the upper hull.
+                Across::Front(_) => debug_assert!(ending),
+                Across::Hull => {}
             }
-            out[3 * k] = a - FIRST_REAL;
-            out[3 * k + 1] = b - FIRST_REAL;
-            out[3 * k + 2] = c - FIRST_REAL;
-            k += 1;
         }
-        out.truncate(3 * k);
-        out.shrink_to_fit();
-        let tris: Vec<[u32; 3]> = match bytemuck::allocation::try_cast_vec(out) {
-            Ok(t) => t,
-            Err((_, out)) => out.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
-        };
-        (tris, pts, stats)
+        let tri = self.mesh.tri_vertices(t);
+        self.mesh.free_triangle(t);
+        tri
     }
 }

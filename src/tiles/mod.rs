@@ -262,7 +262,7 @@ pub(crate) fn run(
                     let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                         worker::run_tile(index, order[i], policy, FIRST_BUFFER)
                     }))
-                    .unwrap_or_else(|p| Err(Error::Internal(panic_message(&p))));
+                    .unwrap_or_else(|p| Err(Error::panicked("tile worker", &*p)));
                     if tx.send((i, r)).is_err() {
                         break;
                     }
@@ -335,15 +335,4 @@ pub(crate) fn run(
         crs,
         read_sort,
     })
-}
-
-/// The message of a panic payload.
-pub(crate) fn panic_message(p: &Box<dyn std::any::Any + Send>) -> String {
-    if let Some(s) = p.downcast_ref::<&str>() {
-        format!("a worker thread panicked: {s}")
-    } else if let Some(s) = p.downcast_ref::<String>() {
-        format!("a worker thread panicked: {s}")
-    } else {
-        "a worker thread panicked".into()
-    }
 }
