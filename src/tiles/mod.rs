@@ -7,9 +7,10 @@
 //!   ─► writer: tiles in order ─► MeshSink / TriangleSinks (the same sinks as the sweep's)
 //! ```
 //!
-//! [`grid`] defines the tiles and blocks, [`index`] stores the points by block, [`certify`] says
-//! which triangles of a tile's run are triangles of the whole triangulation, [`worker`] runs one
-//! tile (ownership rule and acceptance condition there), [`emit`] delivers the tiles in order.
+//! `grid` defines the tiles and blocks, `index` stores the points by block (and the convex hull,
+//! `hull`), `certify` says which triangles of a tile's run are triangles of the whole
+//! triangulation, `region` judges a run, `worker` runs one tile (the ownership rule and why a tile
+//! is exact are stated there), `keep` collects what a tile owns, `emit` delivers the tiles in order.
 //!
 //! The tile and block sizes depend on the data only (the headers' density and the points kept by
 //! the filters), never on `--mem` or `--threads`, and tiles are delivered in a fixed order, so the
