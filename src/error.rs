@@ -146,6 +146,17 @@ pub enum Error {
     #[error("interrupted")]
     Interrupted,
 
+    /// A task of a plan read the points up to `buffer` around its tile, and a triangle it owns
+    /// needs points farther out: run it again with a wider buffer (`sweeptin run` does so).
+    #[error(
+        "the task's buffer of {buffer} around its tile is too small for the triangles it owns \
+         (a wider buffer is needed)"
+    )]
+    BufferTooSmall {
+        /// The buffer that was read.
+        buffer: f64,
+    },
+
     /// A bug in sweeptin: an internal invariant does not hold. Please report it with the input.
     #[error("internal error (a bug in sweeptin, please report it with the input): {0}")]
     Internal(String),

@@ -27,6 +27,7 @@ pub mod input;
 pub mod mesh;
 pub mod output;
 pub mod pipeline;
+pub mod plan;
 pub mod products;
 pub mod raster;
 pub mod simplify;

@@ -111,6 +111,12 @@ pub trait TriangleSink: Send {
     fn grid_cell(&self) -> Option<f64> {
         None
     }
+    /// In a task of a plan: a triangle that meets the task's tile but belongs to another task.
+    /// A grid needs it for its own cells; every other product ignores it (the default), since the
+    /// other task counts it.
+    fn boundary_triangle(&mut self, _t: &[[f64; 3]; 3]) -> Result<()> {
+        Ok(())
+    }
     /// Called once after the last triangle; returns what the sink did.
     fn finish(&mut self) -> Result<ProductSummary>;
 }
@@ -219,6 +225,10 @@ pub struct VolumeSummary {
     /// Cut, fill, net and areas.
     #[serde(flatten)]
     pub totals: CutFillTotals,
+    /// The exact sums behind `totals` (cut, fill, cut area, fill area, area) as partials, for
+    /// adding up the volumes of a plan's tasks exactly; not in the JSON summary.
+    #[serde(skip)]
+    pub partials: Option<[Vec<f64>; 5]>,
     /// What the surface was compared with.
     pub reference: VolumeReference,
     /// Area of the boundary polygon, when one was given.
@@ -363,6 +373,13 @@ impl TriangleSink for Fanout {
     fn watermark(&mut self, y: f64) -> Result<()> {
         for (_, s) in &mut self.sinks {
             s.watermark(y)?;
+        }
+        Ok(())
+    }
+
+    fn boundary_triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
+        for (_, s) in &mut self.sinks {
+            s.boundary_triangle(t)?;
         }
         Ok(())
     }

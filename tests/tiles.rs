@@ -38,6 +38,7 @@ fn tiled(input: &Input, tile: Option<f64>, threads: usize, mem: u64) -> (Collect
             threads,
             tile,
             base: None,
+            scope: None,
         }),
         ..RunOptions::default()
     };

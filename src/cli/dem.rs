@@ -29,8 +29,8 @@ pub struct Args {
     pub hillshade: Option<PathBuf>,
 }
 
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let start = Instant::now();
+/// The sinks of the DEM and its contours (checked before any work).
+pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>> {
     let bbox = args.input.args.filter.bbox;
     let mut sinks: Vec<(String, Box<dyn TriangleSink>)> =
         vec![("dem".into(), args.dem.sink(&args.output, bbox)?)];
@@ -41,6 +41,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour.sink(p)?));
     }
+    Ok(sinks)
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let bbox = args.input.args.filter.bbox;
+    let sinks = sinks(&args)?;
     if args.dem.buffer.is_some() && !args.input.all_lidar() {
         eprintln!("sweeptin: warning: --buffer only limits the reading of LAS/LAZ files");
     }

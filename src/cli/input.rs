@@ -60,6 +60,9 @@ pub struct InputArgs {
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Set by `sweeptin run`: this run is one task of a plan.
+    #[arg(skip)]
+    pub task: Option<sweeptin::tiles::TaskScope>,
     /// Print a one-object JSON summary on stdout (points, triangles, seconds per phase, peak
     /// memory) for batch jobs.
     #[arg(long)]
@@ -90,6 +93,7 @@ impl InputArgs {
                     threads: self.threads,
                     tile: self.tile,
                     base: None,
+                    scope: self.task.clone(),
                 }),
             },
         }

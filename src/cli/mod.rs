@@ -12,6 +12,7 @@ mod crossval;
 mod dem;
 mod hillshade;
 mod info;
+mod plan;
 mod input;
 mod products;
 mod profile;
@@ -54,6 +55,14 @@ enum Command {
     Crossval(crossval::Args),
     /// Simplify a grid DEM (GeoTIFF, ESRI ASCII) into a TIN within an error bound.
     Simplify(simplify::Args),
+    /// Cut a `dem`, `contours` or `volume` job into exact tiles for a batch engine: writes
+    /// DIR/plan.json (from the files' headers only).
+    Plan(plan::PlanArgs),
+    /// Run one task of a plan (--task I, or the index a job array gives), or all of them.
+    Run(plan::RunArgs),
+    /// Join the finished tasks of a plan into one result: a VRT or GeoTIFF mosaic, stitched
+    /// contours, summed volumes.
+    Merge(plan::MergeArgs),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -76,6 +85,9 @@ pub fn main() -> ExitCode {
         Command::Products(a) => products::run(a),
         Command::Simplify(a) => simplify::run(a),
         Command::Crossval(a) => crossval::run(a),
+        Command::Plan(a) => plan::plan(a),
+        Command::Run(a) => plan::run(a),
+        Command::Merge(a) => plan::merge(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

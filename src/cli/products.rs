@@ -41,6 +41,9 @@ pub struct DemArgs {
     /// Raster format, when the extension does not say it.
     #[arg(long, value_enum)]
     pub raster_format: Option<RasterFormat>,
+    /// Set by `sweeptin run`: the raster covers this box (a plan's tile), whatever is read.
+    #[arg(skip)]
+    pub grid_bbox: Option<[f64; 4]>,
 }
 
 impl DemArgs {
@@ -59,12 +62,16 @@ impl DemArgs {
     /// A DEM sink writing to `path`, over `bbox` (the `--bbox` of the input) when given.
     pub fn sink(&self, path: &Path, bbox: Option<BBox>) -> anyhow::Result<Box<dyn TriangleSink>> {
         check_output(path)?;
-        let extent = match bbox {
-            Some(b) => GridExtent::BBox {
+        let extent = match (self.grid_bbox, bbox) {
+            (Some(b), _) => GridExtent::BBox {
+                bbox: b,
+                snap: false,
+            },
+            (None, Some(b)) => GridExtent::BBox {
                 bbox: b.corners(),
                 snap: self.snap,
             },
-            None => GridExtent::Auto,
+            (None, None) => GridExtent::Auto,
         };
         Ok(Box::new(DemSink::new(
             path,

@@ -31,13 +31,21 @@ pub struct Args {
     pub bands: usize,
 }
 
+/// The volume sink against the plane (`None` when the reference is a surface).
+pub fn plane_sink(args: &Args) -> anyhow::Result<Option<Box<dyn TriangleSink>>> {
+    let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;
+    Ok(args
+        .plane
+        .map(|z| Box::new(VolumeSink::new(z, boundary)) as Box<dyn TriangleSink>))
+}
+
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
-    let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;
     let config = args.input.config(None)?;
-    let sink: Box<dyn TriangleSink> = match args.plane {
-        Some(z) => Box::new(VolumeSink::new(z, boundary)),
+    let sink: Box<dyn TriangleSink> = match plane_sink(&args)? {
+        Some(s) => s,
         None => {
+            let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;
             let dir = args
                 .input
                 .args

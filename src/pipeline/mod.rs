@@ -24,7 +24,7 @@ mod read;
 mod replay;
 mod tiled;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::input::las::Filter;
 use crate::sink::{MeshSink, ProductSummary, StreamInfo, TriangleSink};
 use crate::sort::memory::DuplicatePolicy;
@@ -222,6 +222,13 @@ pub fn run(
         .filter(|_| tiled::applies(config))
     {
         return tiled::run(config, t, mesh, sinks);
+    }
+    if config.options().tiles.as_ref().is_some_and(|t| t.scope.is_some()) {
+        return Err(Error::Options(
+            "a task of a plan runs in exact tiles, which need LAS/LAZ points without \
+             breaklines, trimming polygons or --no-flat-triangles, swept along y"
+                .into(),
+        ));
     }
     let lines = &config.input().lines;
     if lines.is_empty() && !lines.no_flat_triangles {

@@ -264,6 +264,10 @@ impl TriangleSink for DemSink {
         Some(self.options.grid.cell())
     }
 
+    fn boundary_triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
+        self.triangle(t)
+    }
+
     fn finish(&mut self) -> Result<ProductSummary> {
         let mut r = self.raster.take().ok_or_else(|| Error::Output {
             path: self.path.clone(),

@@ -270,6 +270,11 @@ impl ExactSum {
         self.partials.push(x);
     }
 
+    /// The partials whose exact sum this is.
+    pub fn partials(&self) -> &[f64] {
+        &self.partials
+    }
+
     /// The correctly rounded sum.
     pub fn value(&self) -> f64 {
         let p = &self.partials;

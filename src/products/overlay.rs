@@ -386,6 +386,7 @@ impl TriangleSink for OverlaySink {
 
     fn finish(&mut self) -> Result<ProductSummary> {
         Ok(ProductSummary::Volume(VolumeSummary {
+            partials: None,
             totals: self.acc.totals(),
             reference: VolumeReference::Surface(self.reference.triangles),
             boundary_area: self.boundary.as_ref().map(Boundary::area),

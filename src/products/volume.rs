@@ -55,6 +55,41 @@ impl CutFill {
         self.fill.add(-v);
     }
 
+    /// The exact sums so far (cut, fill, cut area, fill area, area), as the non-overlapping
+    /// partials whose sum they are: summing the partials of several parts gives the same totals,
+    /// bit for bit, as one pass over all of them (a plan's tasks).
+    pub fn partials(&self) -> [Vec<f64>; 5] {
+        [
+            self.cut.partials().to_vec(),
+            self.fill.partials().to_vec(),
+            self.cut_area.partials().to_vec(),
+            self.fill_area.partials().to_vec(),
+            self.area.partials().to_vec(),
+        ]
+    }
+
+    /// The totals of exact sums given as partials (see [`CutFill::partials`]).
+    pub fn totals_of(parts: &[[Vec<f64>; 5]]) -> CutFillTotals {
+        let mut acc = CutFill::default();
+        for p in parts {
+            for (s, v) in [
+                &mut acc.cut,
+                &mut acc.fill,
+                &mut acc.cut_area,
+                &mut acc.fill_area,
+                &mut acc.area,
+            ]
+            .into_iter()
+            .zip(p)
+            {
+                for &x in v {
+                    s.add(x);
+                }
+            }
+        }
+        acc.totals()
+    }
+
     /// The totals so far.
     pub fn totals(&self) -> CutFillTotals {
         let cut = self.cut.value();
@@ -126,6 +161,7 @@ impl TriangleSink for VolumeSink {
     fn finish(&mut self) -> Result<ProductSummary> {
         Ok(ProductSummary::Volume(VolumeSummary {
             totals: self.acc.totals(),
+            partials: Some(self.acc.partials()),
             reference: VolumeReference::Plane(self.plane),
             boundary_area: self.boundary.as_ref().map(Boundary::area),
             triangles: self.triangles,

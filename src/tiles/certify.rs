@@ -40,17 +40,24 @@ pub(crate) struct Certifier<'a> {
     loaded: &'a Loaded,
     /// World rectangle of the loaded rectangle.
     world: [f64; 4],
+    /// Set when a test reached beyond what a plan's task read (see [`BlockIndex::scope`]).
+    pub unknown: &'a std::cell::Cell<bool>,
 }
 
 /// Where [`Certifier`] puts the blocks that withheld a certificate.
 pub(crate) type Missing = Vec<u64>;
 
 impl<'a> Certifier<'a> {
-    pub fn new(index: &'a BlockIndex, loaded: &'a Loaded) -> Self {
+    pub fn new(
+        index: &'a BlockIndex,
+        loaded: &'a Loaded,
+        unknown: &'a std::cell::Cell<bool>,
+    ) -> Self {
         Certifier {
             index,
             loaded,
             world: index.grid.world(&loaded.rect),
+            unknown,
         }
     }
 
@@ -102,6 +109,12 @@ impl<'a> Certifier<'a> {
         if !all && cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
             return true;
         }
+        if let Some(sc) = &self.index.scope
+            && sc.unknown_in([cx - r, cy - r, cx + r, cy + r])
+        {
+            self.unknown.set(true);
+            return false;
+        }
         let occ = self.index.occupied();
         let b = g.block;
         let by0 = (((cy - r) / b).floor() as i64).max(occ.y0);
@@ -127,6 +140,67 @@ impl<'a> Certifier<'a> {
             }
         }
         clear
+    }
+}
+
+impl Certifier<'_> {
+    /// Is the closed half-plane on the right of the directed edge `a → b` (the outer side of a
+    /// counter-clockwise hull) free of points outside the loaded blocks, the points of the line
+    /// beyond the segment aside (they do not cut the edge)? Blocks wholly inside it must be
+    /// empty; the points of blocks the line crosses are tested one by one, exactly.
+    ///
+    /// # Errors
+    /// Reading a block.
+    pub fn halfplane_clear(&self, a: [f64; 2], bpt: [f64; 2]) -> crate::Result<bool> {
+        use crate::geom::predicates::{Orientation, orient};
+        let right = |c: [f64; 2]| orient(a, bpt, c) != Orientation::CounterClockwise;
+        if let Some(sc) = &self.index.scope {
+            for u in sc.unknown_parts() {
+                if [[u[0], u[1]], [u[2], u[1]], [u[2], u[3]], [u[0], u[3]]]
+                    .into_iter()
+                    .any(right)
+                {
+                    self.unknown.set(true);
+                    return Ok(false);
+                }
+            }
+        }
+        let g = &self.index.grid;
+        let occ = self.index.occupied();
+        let b = g.block;
+        let mut found = Vec::new();
+        for by in occ.y0..occ.y1 {
+            found.clear();
+            self.blocks_in_row(by, occ.x0, occ.x1 - 1, false, &mut found);
+            for &k in &found {
+                let (bx, _) = super::grid::TileGrid::unkey(k);
+                let m = g.margin(a[0].abs().max(a[1].abs()) + b);
+                let (x0, y0) = (bx as f64 * b - m, by as f64 * b - m);
+                let (x1, y1) = ((bx + 1) as f64 * b + m, (by + 1) as f64 * b + m);
+                let corners = [[x0, y0], [x1, y0], [x1, y1], [x0, y1]];
+                if !corners.into_iter().any(right) {
+                    continue;
+                }
+                let mut pts = Vec::new();
+                self.index.read_block(k, &mut pts)?;
+                for p in &pts {
+                    let q = [p[0], p[1]];
+                    match orient(a, bpt, q) {
+                        Orientation::Clockwise => return Ok(false),
+                        Orientation::Collinear => {
+                            // On the line: only a point strictly inside the segment cuts it.
+                            let k = usize::from((bpt[1] - a[1]).abs() > (bpt[0] - a[0]).abs());
+                            let (lo, hi) = (a[k].min(bpt[k]), a[k].max(bpt[k]));
+                            if lo < q[k] && q[k] < hi {
+                                return Ok(false);
+                            }
+                        }
+                        Orientation::CounterClockwise => {}
+                    }
+                }
+            }
+        }
+        Ok(true)
     }
 }
 
@@ -175,7 +249,8 @@ mod tests {
             },
             extra: vec![],
         };
-        let c = Certifier::new(&ix, &loaded);
+        let unknown = std::cell::Cell::new(false);
+        let c = Certifier::new(&ix, &loaded, &unknown);
         let mut m = Missing::new();
         assert!(c.disk_clear([10.0, 10.0], 5.9, &mut m));
         assert!(!c.disk_clear([10.0, 10.0], 6.6, &mut m));
@@ -189,7 +264,7 @@ mod tests {
             rect: ix.occupied(),
             extra: vec![],
         };
-        let all = Certifier::new(&ix, &everything);
+        let all = Certifier::new(&ix, &everything, &unknown);
         assert!(all.disk_clear([10.0, 10.0], 1e6, &mut m));
         // What withheld the certificates: blocks outside the loaded rectangle only.
         assert!(!m.is_empty());
@@ -205,6 +280,6 @@ mod tests {
             extra: m.clone(),
         };
         let mut m2 = Missing::new();
-        assert!(Certifier::new(&ix, &more).disk_clear([4.0, 4.0], 0.8, &mut m2));
+        assert!(Certifier::new(&ix, &more, &unknown).disk_clear([4.0, 4.0], 0.8, &mut m2));
     }
 }

@@ -31,6 +31,8 @@ pub(crate) struct TileWriter<'m, 'a, 'b> {
     /// `--max-edge`: triangles it drops still count for their vertices, but are not written.
     trim: Option<Trim>,
     live: HashMap<(u64, u64), Live>,
+    /// A task's boundary triangles already given (they can meet two of its tiles).
+    boundary: std::collections::HashSet<[(u64, u64); 3]>,
     next_id: u64,
     /// Triangles and vertices written, triangles trimmed.
     pub triangles: u64,
@@ -55,6 +57,7 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             sinks,
             trim,
             live: HashMap::new(),
+            boundary: Default::default(),
             next_id: 0,
             triangles: 0,
             trimmed: 0,
@@ -81,6 +84,17 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             for (tri, _) in t.triangles.iter().zip(&kept).filter(|(_, k)| **k) {
                 let p = tri.map(|i| t.vertices[i as usize]);
                 s.triangle(&p)?;
+            }
+        }
+        // A task's triangles of other tasks that meet its tiles: to the grids, once each.
+        for tri in &t.boundary {
+            let p = tri.map(|i| t.vertices[i as usize]);
+            let mut k = p.map(|v| (v[0].to_bits(), v[1].to_bits()));
+            k.sort_unstable();
+            if self.trim.as_ref().is_none_or(|tr| tr.keep(&p)) && self.boundary.insert(k) {
+                for s in self.sinks.iter_mut() {
+                    s.boundary_triangle(&p)?;
+                }
             }
         }
         let n = kept.iter().filter(|&&k| k).count() as u64;

@@ -57,6 +57,47 @@ pub(crate) struct BlockIndex {
     occupied: BlockRect,
     /// Corners of the convex hull of the blocks' extreme points.
     hull: Vec<[f64; 3]>,
+    /// For a task of a plan: the blocks that were read from the files, and the files' extents.
+    /// Outside those blocks nothing is known, and a block that meets an extent may hold points.
+    pub scope: Option<Scope>,
+}
+
+/// What a task knows of the data (see [`BlockIndex::scope`]).
+#[derive(Debug, Clone)]
+pub(crate) struct Scope {
+    /// World rectangle of the blocks read (every point in them is in the index).
+    pub known_world: [f64; 4],
+    /// The input files' extents `[xmin, ymin, xmax, ymax]` (from their headers).
+    pub extents: Vec<[f64; 4]>,
+    /// How far around its tile the task read.
+    pub buffer: f64,
+}
+
+impl Scope {
+    /// Might the closed rectangle `r` hold points outside the known blocks?
+    pub fn unknown_in(&self, r: [f64; 4]) -> bool {
+        let k = &self.known_world;
+        self.extents.iter().any(|e| {
+            let i = [r[0].max(e[0]), r[1].max(e[1]), r[2].min(e[2]), r[3].min(e[3])];
+            i[0] <= i[2] && i[1] <= i[3] && !(i[0] > k[0] && i[1] > k[1] && i[2] < k[2] && i[3] < k[3])
+        })
+    }
+
+    /// The parts of the extents outside the known blocks, as rectangles (closed).
+    pub fn unknown_parts(&self) -> Vec<[f64; 4]> {
+        let k = &self.known_world;
+        let mut out = Vec::new();
+        for e in &self.extents {
+            let parts = [
+                [e[0], e[1], e[2], e[3].min(k[1])],
+                [e[0], e[1].max(k[3]), e[2], e[3]],
+                [e[0], e[1].max(k[1]), e[2].min(k[0]), e[3].min(k[3])],
+                [e[0].max(k[2]), e[1].max(k[1]), e[2], e[3].min(k[3])],
+            ];
+            out.extend(parts.into_iter().filter(|p| p[0] <= p[2] && p[1] <= p[3]));
+        }
+        out
+    }
 }
 
 /// The table, the occupied rectangle and the hull candidates, built as the records stream by.
@@ -156,6 +197,7 @@ impl BlockIndex {
             store,
             occupied: b.occupied,
             hull: Vec::new(),
+            scope: None,
         };
         index.hull = index.convex_hull()?;
         Ok(index)

@@ -46,6 +46,7 @@ fn sweep_cmp(a: &[f64; 3], b: &[f64; 3]) -> Ordering {
 /// its least index.
 pub(crate) fn from_run(
     owner: &Owner,
+    task: Option<&Owner>,
     t: &crate::Triangulation,
     certified: &[u32],
     out: &mut TileOutput,
@@ -80,6 +81,9 @@ pub(crate) fn from_run(
         if is_owned[low] {
             let o = tri.map(|i| add(i as usize, out));
             out.triangles.push(o);
+        } else if task.is_some_and(|tk| !tk.owns(&t.vertices[low])) {
+            let o = tri.map(|i| add(i as usize, out));
+            out.boundary.push(o);
         }
     }
     for i in 0..n {
@@ -92,7 +96,12 @@ pub(crate) fn from_run(
 
 /// Fills `out` from certified triangles of several runs (world coordinates, counter-clockwise;
 /// the same triangle may come from two runs).
-pub(crate) fn from_list(owner: &Owner, tris: &[[[f64; 3]; 3]], out: &mut TileOutput) {
+pub(crate) fn from_list(
+    owner: &Owner,
+    task: Option<&Owner>,
+    tris: &[[[f64; 3]; 3]],
+    out: &mut TileOutput,
+) {
     let key = |p: &[f64; 3]| (p[0].to_bits(), p[1].to_bits());
     let mut ids: HashMap<(u64, u64), u32> = HashMap::with_capacity(tris.len() / 2 + 16);
     let mut pts: Vec<[f64; 3]> = Vec::with_capacity(tris.len() / 2 + 16);
@@ -143,9 +152,13 @@ pub(crate) fn from_list(owner: &Owner, tris: &[[[f64; 3]; 3]], out: &mut TileOut
         map[i]
     };
     for t in &unique {
-        if is_owned[low(t)] {
+        let l = low(t);
+        if is_owned[l] {
             let o = t.map(|i| add(i as usize, out));
             out.triangles.push(o);
+        } else if task.is_some_and(|tk| !tk.owns(&pts[l])) {
+            let o = t.map(|i| add(i as usize, out));
+            out.boundary.push(o);
         }
     }
     for i in 0..pts.len() {

@@ -44,14 +44,34 @@ const TILE_POINTS: f64 = (1u64 << 18) as f64;
 const FIRST_BUFFER: i64 = 2;
 
 /// How to tile.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct TileOptions {
     /// Worker threads (0: every core).
     pub threads: usize,
-    /// Tile side; default: from the data's density.
+    /// Tile side; default: from the data's density. For a task, the plan's tile side (the task
+    /// cuts its tile into smaller ones).
     pub tile: Option<f64>,
     /// Tiles are whole multiples of this (a DEM's cell); default 1.
     pub base: Option<f64>,
+    /// Run one tile of a plan only (see [`TaskScope`]).
+    pub scope: Option<TaskScope>,
+}
+
+/// One task of a plan: the tile it owns, how far around it the points are read, and the extents
+/// of every input file of the plan (so that the task knows where points it did not read may be).
+///
+/// The task delivers the triangles it owns (lowest vertex in its tile) to every sink, and to
+/// sinks of grids (a DEM) also the other triangles that meet its tile
+/// ([`crate::sink::TriangleSink::boundary_triangle`]). When a certificate needs points beyond the
+/// buffer, the run fails with [`Error::BufferTooSmall`] before any sink is finished.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TaskScope {
+    /// The task's tile `[xmin, ymin, xmax, ymax]`, on the plan's grid of tiles of side `tile`.
+    pub tile: [f64; 4],
+    /// Points are read up to this far around the tile.
+    pub buffer: f64,
+    /// Extents `[xmin, ymin, xmax, ymax]` of all the plan's input files, from their headers.
+    pub extents: Vec<[f64; 4]>,
 }
 
 /// What the tiles did (part of the `--json` summary).
@@ -98,7 +118,32 @@ fn read_index(
     options: &TileOptions,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4])> {
-    let mut reader = LidarReader::open(&input.paths, &input.filter)?;
+    let scope = options.scope.as_ref();
+    let known_world = scope.map(|sc| {
+        let t = sc.tile;
+        [t[0] - sc.buffer, t[1] - sc.buffer, t[2] + sc.buffer, t[3] + sc.buffer]
+    });
+    // A task reads the files that reach into its buffered tile only.
+    let paths: Vec<std::path::PathBuf> = match known_world {
+        None => input.paths.clone(),
+        Some(k) => {
+            let mut v = Vec::new();
+            for p in &input.paths {
+                let b = crate::input::las::FileInfo::read(p)?.bounds;
+                if b.min[0] <= k[2] && b.max[0] >= k[0] && b.min[1] <= k[3] && b.max[1] >= k[1] {
+                    v.push(p.clone());
+                }
+            }
+            if v.is_empty() {
+                return Err(Error::TooFewPoints {
+                    distinct: 0,
+                    total: 0,
+                });
+            }
+            v
+        }
+    };
+    let mut reader = LidarReader::open(&paths, &input.filter)?;
     let b = reader.bounds();
     let total = reader.point_count();
     let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
@@ -114,6 +159,16 @@ fn read_index(
     };
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
+    let known = known_world.map(|k| {
+        let (x0, y0) = probe.block_of(k[0], k[1]);
+        let (x1, y1) = probe.block_of(k[2], k[3]);
+        grid::BlockRect {
+            x0: x0 + 1,
+            y0: y0 + 1,
+            x1,
+            y1,
+        }
+    });
     let q = *reader.quantization();
     let crs = reader.crs().cloned();
     let mut sorter = ExternalSorter::<BlockRecord>::new(mem / 2, tmp);
@@ -140,6 +195,9 @@ fn read_index(
                 bounds[3].max(y),
             ];
             let (bx, by) = probe.block_of(x, y);
+            if known.is_some_and(|k| !k.contains(bx, by)) {
+                continue;
+            }
             sorter.push(BlockRecord {
                 key: TileGrid::key(bx, by),
                 x,
@@ -153,8 +211,25 @@ fn read_index(
     let merge = sorter.finish()?;
     let sort = merge.stats();
     let mut index = BlockIndex::build(probe, merge, tmp)?;
-    // The tile: as given, or about TILE_POINTS at the density over the non-empty blocks.
+    if let (Some(sc), Some(known)) = (scope, known) {
+        index.scope = Some(index::Scope {
+            known_world: probe.world(&known),
+            extents: sc.extents.clone(),
+            buffer: sc.buffer,
+        });
+    }
+    // The tile: as given, or about TILE_POINTS at the density over the non-empty blocks; for a
+    // task, its plan tile halved until it holds about TILE_POINTS.
     let tile = match options.tile {
+        Some(t) if scope.is_some() => {
+            let covered = index.blocks().max(1) as f64 * block * block;
+            let d = index.len() as f64 / covered;
+            let mut sub = t;
+            while sub / 2.0 >= block && sub / 2.0 >= base && sub * sub * d > 2.0 * TILE_POINTS {
+                sub /= 2.0;
+            }
+            sub
+        }
         Some(t) => t,
         None => {
             let covered = index.blocks().max(1) as f64 * block * block;
@@ -190,7 +265,7 @@ pub(crate) fn run(
     let start = Instant::now();
     let (input, mem, tmp) = (config.input(), config.options().mem, config.tmp_dir());
     let max_edge = input.lines.max_edge;
-    let mut options = *options;
+    let mut options = options.clone();
     if options.base.is_none() {
         options.base = sinks.iter().find_map(|s| s.grid_cell());
     }
@@ -200,16 +275,44 @@ pub(crate) fn run(
     })?;
     let read_sort = start.elapsed().as_secs_f64();
     if index.len() == 0 {
+        // A task that read no point may still lie under triangles of points farther out.
+        if index.scope.as_ref().is_some_and(|sc| !sc.unknown_parts().is_empty()) {
+            let buffer = index.scope.as_ref().map_or(0.0, |sc| sc.buffer);
+            return Err(Error::BufferTooSmall { buffer });
+        }
         return Err(Error::TooFewPoints {
             distinct: 0,
             total: 0,
         });
     }
     let g = index.grid;
-    let tiles_rect = g.tiles_of(&index.occupied());
+    // A task runs every tile of its plan tile, with points or not: triangles of other tasks may
+    // cover its empty parts, and its cells need them.
+    let tiles_rect = match &options.scope {
+        None => g.tiles_of(&index.occupied()),
+        Some(sc) => {
+            let tile_at = |x: f64, y: f64| {
+                let (bx, by) = g.block_of(x, y);
+                g.tile_of_block(bx, by)
+            };
+            let (x0, y0) = tile_at(sc.tile[0], sc.tile[1]);
+            let (x1, y1) = tile_at(sc.tile[2], sc.tile[3]);
+            grid::BlockRect { x0, y0, x1, y1 }
+        }
+    };
+    let task = options.scope.as_ref().map(|_| {
+        let r = tiles_rect;
+        let n = 1i64 << g.shift;
+        grid::BlockRect {
+            x0: r.x0 * n,
+            y0: r.y0 * n,
+            x1: r.x1 * n,
+            y1: r.y1 * n,
+        }
+    });
     let order: Vec<(i64, i64)> = (tiles_rect.y0..tiles_rect.y1)
         .flat_map(|ty| (tiles_rect.x0..tiles_rect.x1).map(move |tx| (tx, ty)))
-        .filter(|&(tx, ty)| index.count(&g.tile_blocks(tx, ty)) > 0)
+        .filter(|&(tx, ty)| options.scope.is_some() || index.count(&g.tile_blocks(tx, ty)) > 0)
         .collect();
     let threads = match options.threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -240,6 +343,7 @@ pub(crate) fn run(
     // At most this many tiles in flight or waiting to be written.
     let window = threads + 2;
     let (tx, rx) = crossbeam_channel::bounded::<(usize, Result<TileOutput>)>(window);
+    let task = task.as_ref();
     let (tok_tx, tok_rx) = crossbeam_channel::bounded::<()>(window);
     for _ in 0..window {
         tok_tx.send(()).expect("room for every token");
@@ -261,7 +365,7 @@ pub(crate) fn run(
                         break;
                     }
                     let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        worker::run_tile(index, order[i], policy, FIRST_BUFFER)
+                        worker::run_tile(index, order[i], policy, FIRST_BUFFER, task)
                     }))
                     .unwrap_or_else(|p| Err(Error::panicked("tile worker", &*p)));
                     if tx.send((i, r)).is_err() {

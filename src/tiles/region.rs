@@ -166,6 +166,8 @@ pub(crate) struct Verdict {
     pub blocks: Missing,
     /// A failed triangle too thin for its disk to be bounded: the next run doubles its buffer.
     pub degenerate: bool,
+    /// A certificate reached beyond what a plan's task read: the task needs a wider buffer.
+    pub unknown: bool,
 }
 
 /// Judges the run `t` over `loaded` (its first `own` input points read from blocks, the rest hull
@@ -180,7 +182,8 @@ pub(crate) fn judge(
     full: bool,
 ) -> Verdict {
     let g = index.grid;
-    let cert = Certifier::new(index, loaded);
+    let unknown = std::cell::Cell::new(false);
+    let cert = Certifier::new(index, loaded, &unknown);
     let v = &t.vertices;
     let mut out = Verdict::default();
     let mut missing = Missing::new();
@@ -226,7 +229,36 @@ pub(crate) fn judge(
     }
     out.blocks.sort_unstable();
     out.blocks.dedup();
+    // A task does not hold the corners of the whole hull: the parts of the region outside the
+    // run's hull must be outside the whole hull, which only the half-planes tell.
+    if index.scope.is_some() && !full && hull_fails(&cert, v, region) {
+        unknown.set(true);
+    }
+    out.unknown = unknown.get();
     out
+}
+
+/// Does an edge of the convex hull of `v` whose outer half-plane meets the region's box fail to
+/// be an edge of the whole hull (or could not be read)?
+fn hull_fails(cert: &Certifier, v: &[[f64; 3]], region: &Region) -> bool {
+    let r = match region {
+        Region::Rect(r) => *r,
+        Region::Tris { bbox, .. } => *bbox,
+    };
+    let hull = super::hull::hull(&mut v.to_vec());
+    let corners = [[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]];
+    for i in 0..hull.len() {
+        let a = [hull[i][0], hull[i][1]];
+        let j = &hull[(i + 1) % hull.len()];
+        let b = [j[0], j[1]];
+        let meets = corners
+            .iter()
+            .any(|&c| orient(a, b, c) != Orientation::CounterClockwise);
+        if meets && !cert.halfplane_clear(a, b).unwrap_or(false) {
+            return true;
+        }
+    }
+    false
 }
 
 #[cfg(test)]

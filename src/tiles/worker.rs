@@ -40,6 +40,9 @@ pub(crate) struct TileOutput {
     pub vertices: Vec<[f64; 3]>,
     /// Owned triangles (counter-clockwise, indices into `vertices`), in the run's order.
     pub triangles: Vec<[u32; 3]>,
+    /// For a task of a plan: the certified triangles that meet this tile but belong to a tile
+    /// outside the task (for the grids of the task's own cells).
+    pub boundary: Vec<[u32; 3]>,
     /// For each vertex: its number of triangles in the whole triangulation when this tile owns
     /// it, else [`NOT_OWNED`].
     pub degree: Vec<u32>,
@@ -64,6 +67,7 @@ pub(crate) fn run_tile(
     tile: (i64, i64),
     policy: DuplicatePolicy,
     buffer: i64,
+    task: Option<&BlockRect>,
 ) -> Result<TileOutput> {
     let g = index.grid;
     let owned = g.tile_blocks(tile.0, tile.1);
@@ -72,11 +76,14 @@ pub(crate) fn run_tile(
         ..TileOutput::default()
     };
     out.points_read = index.count(&owned);
-    if out.points_read == 0 {
+    // A tile without points owns nothing; in a task it still delivers the triangles of other
+    // tasks that cover it.
+    if out.points_read == 0 && task.is_none() {
         return Ok(out);
     }
     let occ = index.occupied();
     let owner = Owner::new(g, owned);
+    let task_owner = task.map(|t| Owner::new(g, *t));
     let w = g.world(&owned);
     let m = g.margin(w.iter().fold(0.0f64, |m, v| m.max(v.abs())));
     let mut region = Region::Rect([w[0] - m, w[1] - m, w[2] + m, w[3] + m]);
@@ -106,10 +113,20 @@ pub(crate) fn run_tile(
                 pts.push(*p);
             }
         }
-        let full = loaded.rect.contains_rect(&occ);
+        // Every point there is: all the blocks, and (for a task) nothing unread in the files.
+        let full = loaded.rect.contains_rect(&occ)
+            && index
+                .scope
+                .as_ref()
+                .is_none_or(|sc| sc.unknown_parts().is_empty());
         let t = match triangulate(&pts, &Options { duplicates: policy }) {
             Ok(t) => t,
             Err(Error::TooFewPoints { .. } | Error::AllCollinear { .. }) if !full => {
+                if loaded.rect.contains_rect(&occ) {
+                    // Every block of a task read, and points may lie beyond them.
+                    let buffer = index.scope.as_ref().map_or(0.0, |sc| sc.buffer);
+                    return Err(Error::BufferTooSmall { buffer });
+                }
                 loaded = doubled(&owned, &first_rect, &loaded, &occ);
                 first_rect = loaded.rect;
                 continue;
@@ -132,6 +149,10 @@ pub(crate) fn run_tile(
                     ""
                 }
             );
+        }
+        if verdict.unknown {
+            let buffer = index.scope.as_ref().map_or(0.0, |sc| sc.buffer);
+            return Err(Error::BufferTooSmall { buffer });
         }
         let failed: Vec<Tri2> = verdict
             .failed
@@ -172,6 +193,11 @@ pub(crate) fn run_tile(
             ),
         }
         let Some(mut next) = next else { break };
+        if next == loaded && loaded.rect.contains_rect(&occ) {
+            // Everything read and still not judged: only a wider buffer can help (a task).
+            let buffer = index.scope.as_ref().map_or(0.0, |sc| sc.buffer);
+            return Err(Error::BufferTooSmall { buffer });
+        }
         if next == loaded {
             next = Loaded {
                 rect: occ,
@@ -185,7 +211,7 @@ pub(crate) fn run_tile(
     }
     let (t, certified) = first.expect("a first run");
     if patched.is_empty() {
-        from_run(&owner, &t, &certified, &mut out);
+        from_run(&owner, task_owner.as_ref(), &t, &certified, &mut out);
     } else {
         let mut all: Vec<[[f64; 3]; 3]> = certified
             .iter()
@@ -193,7 +219,7 @@ pub(crate) fn run_tile(
             .collect();
         drop(t);
         all.append(&mut patched);
-        from_list(&owner, &all, &mut out);
+        from_list(&owner, task_owner.as_ref(), &all, &mut out);
         out.points_kept = out
             .degree
             .iter()
@@ -276,8 +302,13 @@ fn clusters(g: &super::grid::TileGrid, tris: &[Tri2]) -> Vec<BlockRect> {
 /// The loaded blocks with the buffer of the first run's rectangle `first` around `owned` doubled
 /// (for a run that could not be judged).
 fn doubled(owned: &BlockRect, first: &BlockRect, loaded: &Loaded, occ: &BlockRect) -> Loaded {
-    let b = buffer_of(owned, first);
-    let rect = owned.expand(2 * b + 1).union(&loaded.rect).intersect(occ);
+    let mut b = buffer_of(owned, first);
+    let mut rect = owned.expand(2 * b + 1).union(&loaded.rect).intersect(occ);
+    // Around an empty tile the first rings may hold no block: grow until one more is read.
+    while rect == loaded.rect && !rect.contains_rect(occ) {
+        b = 2 * b + 1;
+        rect = owned.expand(2 * b + 1).union(&loaded.rect).intersect(occ);
+    }
     let mut extra = loaded.extra.clone();
     extra.retain(|&k| {
         let (bx, by) = TileGrid::unkey(k);

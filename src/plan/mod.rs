@@ -1,0 +1,396 @@
+//! Plans: one job cut into tasks, one per tile of a global grid, for batch engines (Slurm job
+//! arrays, Kubernetes Indexed Jobs, AWS Batch array jobs, GNU parallel).
+//!
+//! A [`Plan`] is written as `DIR/plan.json` from the input files' headers only (no point is
+//! decoded): the product command and its options, the tile grid, and for every tile the files
+//! whose extent reaches into it or its buffer. A task needs nothing else. It runs the tiled engine
+//! on its tile alone ([`crate::tiles::TaskScope`]): it reads the files near its tile, keeps the
+//! points up to the buffer, and delivers exactly what its tile owns, certified to be what a run
+//! over all the points gives; when a certificate needs points beyond the buffer the task runs
+//! again with a wider one. Tasks write their outputs under `DIR/tiles/` atomically, with a
+//! `task_<i>.json` marker last, so a task can be re-run at any time and finished tasks skipped.
+//! [`merge`] then checks that every task finished and joins the outputs: a GDAL VRT or one
+//! GeoTIFF for the DEM, contour lines stitched across tile edges, volumes summed exactly.
+//!
+//! Tile edges lie on whole multiples of the tile size, which is a whole multiple of the cell, so
+//! plans with the same tile size agree tile for tile, and every raster cell (by its centre) and
+//! every triangle (by its lowest vertex in sweep order) has exactly one owner tile.
+
+pub mod merge;
+mod stitch;
+
+use crate::error::{Error, Result};
+use crate::input::las::FileInfo;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Format version of `plan.json`.
+pub const PLAN_VERSION: u32 = 1;
+
+/// One input file of a plan.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanFile {
+    /// The file, as given (absolute when the plan was made with absolute paths).
+    pub path: PathBuf,
+    /// Its extent `[xmin, ymin, xmax, ymax]`, from the header.
+    pub bounds: [f64; 4],
+    /// Its number of points, from the header.
+    pub points: u64,
+}
+
+/// One task: a tile of the grid.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanTile {
+    /// Task index (0, 1, …: the `--task` of `sweeptin run`, `SLURM_ARRAY_TASK_ID`, …).
+    pub index: usize,
+    /// Tile coordinates: the tile is `[tx × tile, (tx + 1) × tile) × [ty × tile, (ty + 1) × tile)`.
+    pub tx: i64,
+    /// See `tx`.
+    pub ty: i64,
+    /// The tile `[xmin, ymin, xmax, ymax]`.
+    pub bounds: [f64; 4],
+    /// The plan's files (indices) whose extent reaches into the tile grown by the buffer.
+    pub files: Vec<usize>,
+    /// Points in those files (an upper bound of the task's work).
+    pub points: u64,
+}
+
+/// A job cut into tiles (see the module docs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// [`PLAN_VERSION`].
+    pub version: u32,
+    /// The product command (`dem`, `contours`, `volume`).
+    pub command: String,
+    /// Its options, as given on the command line (inputs and outputs left out).
+    pub args: Vec<String>,
+    /// Where the outputs of the whole job go (as given; `merge` may write elsewhere).
+    pub outputs: Vec<(String, PathBuf)>,
+    /// Every input file.
+    pub files: Vec<PlanFile>,
+    /// Tile side.
+    pub tile: f64,
+    /// The first buffer of every task: points this far around the tile are read.
+    pub buffer: f64,
+    /// The cell size of the DEM, when the command makes one.
+    pub cell: Option<f64>,
+    /// The tasks, in tile order (rows from south to north, west to east in a row).
+    pub tiles: Vec<PlanTile>,
+}
+
+/// What a finished task records in `tiles/task_<i>.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TaskRecord {
+    /// The task.
+    pub index: usize,
+    /// `"done"`, or `"empty"` when no point is left in the tile after the filters (its raster is
+    /// all nodata; not a failure).
+    pub status: String,
+    /// The buffer the task ended with.
+    pub buffer: f64,
+    /// Runs (1, or more when the buffer had to grow).
+    pub runs: u32,
+    /// Points triangulated and triangles owned.
+    pub points: u64,
+    /// See `points`.
+    pub triangles: u64,
+    /// Seconds.
+    pub seconds: f64,
+    /// The task's outputs, by product name.
+    pub outputs: Vec<(String, PathBuf)>,
+    /// Exact volume partial sums (cut, fill, cut area, fill area, area), for `volume`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume: Option<[Vec<f64>; 5]>,
+}
+
+fn bad(path: &Path, message: impl Into<String>) -> Error {
+    Error::Format {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+impl Plan {
+    /// A plan for `command` over `paths`, tiles of side `tile` (a whole multiple of `cell` when
+    /// given) and a first buffer of `buffer`. Only headers are read.
+    ///
+    /// # Errors
+    /// [`Error::Options`] for a bad tile size or buffer; the header reader's errors.
+    pub fn new(
+        command: &str,
+        args: Vec<String>,
+        outputs: Vec<(String, PathBuf)>,
+        paths: &[PathBuf],
+        tile: f64,
+        buffer: f64,
+        cell: Option<f64>,
+    ) -> Result<Plan> {
+        if !(tile.is_finite() && tile > 0.0) {
+            return Err(Error::Options(format!(
+                "--tile must be a positive length, not {tile}"
+            )));
+        }
+        if let Some(c) = cell {
+            let k = tile / c;
+            if (k - k.round()).abs() > 1e-9 * k.max(1.0) {
+                return Err(Error::Options(format!(
+                    "--tile {tile} must be a whole multiple of the cell size {c}"
+                )));
+            }
+        }
+        if !(buffer.is_finite() && buffer >= 0.0) {
+            return Err(Error::Options(format!(
+                "--plan-buffer must be a distance >= 0, not {buffer}"
+            )));
+        }
+        if paths.is_empty() {
+            return Err(Error::NoInput);
+        }
+        let mut files = Vec::with_capacity(paths.len());
+        for p in paths {
+            let info = FileInfo::read(p)?;
+            let b = info.bounds;
+            files.push(PlanFile {
+                path: p.clone(),
+                bounds: [b.min[0], b.min[1], b.max[0], b.max[1]],
+                points: info.point_count,
+            });
+        }
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for f in &files {
+            if f.points == 0 {
+                continue;
+            }
+            lo = [lo[0].min(f.bounds[0]), lo[1].min(f.bounds[1])];
+            hi = [hi[0].max(f.bounds[2]), hi[1].max(f.bounds[3])];
+        }
+        let mut tiles = Vec::new();
+        if lo[0].is_finite() {
+            let t = |v: f64| (v / tile).floor() as i64;
+            for ty in t(lo[1])..=t(hi[1]) {
+                for tx in t(lo[0])..=t(hi[0]) {
+                    let b = [
+                        tx as f64 * tile,
+                        ty as f64 * tile,
+                        (tx + 1) as f64 * tile,
+                        (ty + 1) as f64 * tile,
+                    ];
+                    let g = [b[0] - buffer, b[1] - buffer, b[2] + buffer, b[3] + buffer];
+                    let near: Vec<usize> = (0..files.len())
+                        .filter(|&i| {
+                            let f = &files[i].bounds;
+                            files[i].points > 0
+                                && f[0] <= g[2]
+                                && f[2] >= g[0]
+                                && f[1] <= g[3]
+                                && f[3] >= g[1]
+                        })
+                        .collect();
+                    // A tile no file reaches into holds no point: no task.
+                    let inside = near.iter().any(|&i| {
+                        let f = &files[i].bounds;
+                        f[0] <= b[2] && f[2] >= b[0] && f[1] <= b[3] && f[3] >= b[1]
+                    });
+                    if !inside {
+                        continue;
+                    }
+                    let points = near.iter().map(|&i| files[i].points).sum();
+                    tiles.push(PlanTile {
+                        index: tiles.len(),
+                        tx,
+                        ty,
+                        bounds: b,
+                        files: near,
+                        points,
+                    });
+                }
+            }
+        }
+        Ok(Plan {
+            version: PLAN_VERSION,
+            command: command.to_string(),
+            args,
+            outputs,
+            files,
+            tile,
+            buffer,
+            cell,
+            tiles,
+        })
+    }
+
+    /// Writes `DIR/plan.json` (atomically) and creates `DIR/tiles/`.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file.
+    pub fn save(&self, dir: &Path) -> Result<PathBuf> {
+        std::fs::create_dir_all(dir.join("tiles")).map_err(|e| Error::io(dir, e))?;
+        let path = dir.join("plan.json");
+        let text = serde_json::to_string_pretty(self).map_err(|e| bad(&path, e.to_string()))?;
+        write_atomic(&path, text.as_bytes())?;
+        Ok(path)
+    }
+
+    /// Reads a `plan.json`.
+    ///
+    /// # Errors
+    /// [`Error::Io`], or [`Error::Format`] for a file that is not a plan of this version.
+    pub fn load(path: &Path) -> Result<Plan> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let plan: Plan = serde_json::from_str(&text)
+            .map_err(|e| bad(path, format!("not a sweeptin plan: {e}")))?;
+        if plan.version != PLAN_VERSION {
+            return Err(bad(
+                path,
+                format!(
+                    "plan version {} (this sweeptin reads version {PLAN_VERSION})",
+                    plan.version
+                ),
+            ));
+        }
+        Ok(plan)
+    }
+
+    /// The task `i`.
+    ///
+    /// # Errors
+    /// [`Error::Options`] when there is no such task.
+    pub fn task(&self, i: usize) -> Result<&PlanTile> {
+        self.tiles.get(i).ok_or_else(|| {
+            Error::Options(format!(
+                "task {i} does not exist: the plan has {} tasks (0 to {})",
+                self.tiles.len(),
+                self.tiles.len().saturating_sub(1)
+            ))
+        })
+    }
+
+    /// The engine's scope for task `i` with a buffer of `buffer`.
+    ///
+    /// # Errors
+    /// As [`Plan::task`].
+    pub fn scope(&self, i: usize, buffer: f64) -> Result<crate::tiles::TaskScope> {
+        let t = self.task(i)?;
+        Ok(crate::tiles::TaskScope {
+            tile: t.bounds,
+            buffer,
+            extents: self.files.iter().map(|f| f.bounds).collect(),
+        })
+    }
+
+    /// The files task `i` reads with a buffer of `buffer` (those reaching into its grown tile).
+    ///
+    /// # Errors
+    /// As [`Plan::task`].
+    pub fn task_files(&self, i: usize, buffer: f64) -> Result<Vec<PathBuf>> {
+        let b = self.task(i)?.bounds;
+        let g = [b[0] - buffer, b[1] - buffer, b[2] + buffer, b[3] + buffer];
+        Ok(self
+            .files
+            .iter()
+            .filter(|f| {
+                let e = &f.bounds;
+                f.points > 0 && e[0] <= g[2] && e[2] >= g[0] && e[1] <= g[3] && e[3] >= g[1]
+            })
+            .map(|f| f.path.clone())
+            .collect())
+    }
+
+    /// Where task `i` writes its output `name` (extension `ext`) under `dir`.
+    pub fn task_output(&self, dir: &Path, i: usize, name: &str, ext: &str) -> PathBuf {
+        let t = &self.tiles[i];
+        dir.join("tiles")
+            .join(format!("{name}_{}_{}.{ext}", t.tx, t.ty))
+    }
+
+    /// Where task `i` records that it finished.
+    pub fn marker(&self, dir: &Path, i: usize) -> PathBuf {
+        dir.join("tiles").join(format!("task_{i}.json"))
+    }
+
+    /// The record of task `i`, if it finished.
+    ///
+    /// # Errors
+    /// [`Error::Format`] for a damaged record.
+    pub fn record(&self, dir: &Path, i: usize) -> Result<Option<TaskRecord>> {
+        let p = self.marker(dir, i);
+        match std::fs::read_to_string(&p) {
+            Ok(t) => serde_json::from_str(&t)
+                .map(Some)
+                .map_err(|e| bad(&p, format!("damaged task record: {e}"))),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io(&p, e)),
+        }
+    }
+
+    /// Records that task `i` finished (last, after its outputs).
+    ///
+    /// # Errors
+    /// [`Error::Io`].
+    pub fn finish_task(&self, dir: &Path, r: &TaskRecord) -> Result<()> {
+        let p = self.marker(dir, r.index);
+        let text = serde_json::to_string_pretty(r).map_err(|e| bad(&p, e.to_string()))?;
+        write_atomic(&p, text.as_bytes())
+    }
+}
+
+/// The task index a batch engine gives: `SLURM_ARRAY_TASK_ID`, `JOB_COMPLETION_INDEX`
+/// (Kubernetes Indexed Job), `AWS_BATCH_JOB_ARRAY_INDEX`, `PBS_ARRAY_INDEX` or `SGE_TASK_ID`
+/// (1-based, as Grid Engine counts), whichever is set.
+pub fn task_from_env() -> Option<usize> {
+    for (var, base) in [
+        ("SLURM_ARRAY_TASK_ID", 0),
+        ("JOB_COMPLETION_INDEX", 0),
+        ("AWS_BATCH_JOB_ARRAY_INDEX", 0),
+        ("PBS_ARRAY_INDEX", 0),
+        ("SGE_TASK_ID", 1),
+    ] {
+        if let Some(i) = std::env::var(var)
+            .ok()
+            .and_then(|v| v.trim().parse::<usize>().ok())
+        {
+            return i.checked_sub(base);
+        }
+    }
+    None
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    use std::io::Write;
+    let mut f = crate::output::AtomicFile::create(path)?;
+    f.write_all(bytes).map_err(|e| Error::io(path, e))?;
+    f.commit()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_cover_the_files_and_list_their_neighbours() {
+        let sample = PathBuf::from("data/sample/startinpy_small.laz");
+        let p = Plan::new(
+            "dem",
+            vec![],
+            vec![],
+            std::slice::from_ref(&sample),
+            16.0,
+            4.0,
+            Some(0.5),
+        )
+        .unwrap();
+        // 85699.665 – 85740.506 × 447195.328 – 447243.504: tiles 5356..=5358 × 27949..=27952.
+        assert_eq!(p.tiles.len(), 3 * 4);
+        assert_eq!((p.tiles[0].tx, p.tiles[0].ty), (5356, 27949));
+        assert!(p.tiles.iter().all(|t| t.files == vec![0]));
+        assert!(Plan::new("dem", vec![], vec![], &[sample.clone()], 16.3, 4.0, Some(0.5)).is_err());
+        let dir = tempfile::tempdir().unwrap();
+        let path = p.save(dir.path()).unwrap();
+        assert_eq!(Plan::load(&path).unwrap(), p);
+        assert!(p.record(dir.path(), 0).unwrap().is_none());
+        assert!(p.task(12).is_err());
+    }
+}
