@@ -417,11 +417,13 @@ fn task_sinks(
             d.hillshade = None;
             if d.contours.is_some() {
                 d.contours = Some(plan.task_output(dir, i, "contours", "geojson"));
+                d.contour.edges = true;
             }
             super::dem::sinks(d)?
         }
         Job::Contours(c) => {
             c.output = plan.task_output(dir, i, "contours", "geojson");
+            c.contour.edges = true;
             vec![("contours".to_string(), c.contour.sink(&c.output)?)]
         }
         Job::Volume(v) => {
@@ -600,16 +602,14 @@ fn planned(plan: &Plan, name: &str) -> Option<PathBuf> {
         .map(|(_, p)| p.clone())
 }
 
-/// The CRS of the first DEM tile, for the mosaic.
-fn first_tile_crs(plan: &Plan, dir: &Path) -> anyhow::Result<Option<sweeptin::crs::Crs>> {
-    let Some(t) = plan.tiles.first() else {
+/// The CRS of the plan's first file (as a single run takes it from the headers).
+fn first_tile_crs(plan: &Plan, _dir: &Path) -> anyhow::Result<Option<sweeptin::crs::Crs>> {
+    let Some(f) = plan.files.first() else {
         return Ok(None);
     };
-    let path = plan.task_output(dir, t.index, "dem", "tif");
-    let r = sweeptin::input::raster::RasterReader::open(&path)?;
-    Ok(r
-        .spec()
-        .crs
-        .as_deref()
-        .and_then(|w| sweeptin::crs::Crs::from_wkt_bytes(w.as_bytes())))
+    let r = sweeptin::input::las::LidarReader::open(
+        std::slice::from_ref(&f.path),
+        &sweeptin::input::las::Filter::default(),
+    )?;
+    Ok(r.crs().cloned())
 }

@@ -93,6 +93,9 @@ pub struct ContourArgs {
     /// A level through which the others are counted (levels are BASE + k × INTERVAL).
     #[arg(long, default_value_t = ContourOptions::default().base, allow_hyphen_values = true)]
     pub base: f64,
+    /// Set by `sweeptin run`: open lines keep their end edges for the merge.
+    #[arg(skip)]
+    pub edges: bool,
 }
 
 impl ContourArgs {
@@ -104,6 +107,7 @@ impl ContourArgs {
             ContourOptions {
                 interval: self.interval,
                 base: self.base,
+                edges: self.edges,
                 ..ContourOptions::default()
             },
         )?))

@@ -137,7 +137,7 @@ pub fn merge_dem(
                     let a = (k * spec.cols) as usize;
                     let vals: Vec<f32> = v[a..a + spec.cols as usize]
                         .iter()
-                        .map(|&x| x as f32)
+                        .map(|&x| if x.is_nan() { nodata } else { x as f32 })
                         .collect();
                     w.write_span(r0 + row + k, c0, &vals)?;
                 }

@@ -1,7 +1,10 @@
-//! Contour lines across tile edges: every task writes the contours of the triangles it owns, so a
-//! line that crosses a tile edge ends there in one task's file and goes on in another's, from the
-//! same point (the crossing of the same triangle edge, computed the same way). Joining lines whose
-//! end is another's start gives the polylines of one run over all the points.
+//! Contour lines across tasks: every task writes the contours of the triangles it owns, so a line
+//! that passes from triangles of one task to those of another ends in one task's file and goes on
+//! in the other's, from the same triangle edge. The tasks write the edges their open lines start
+//! and end on (`start_edge`, `end_edge`), and joining each line to the one starting on the edge it
+//! ends on gives the polylines of one run over all the points (that run joins its segments by
+//! the same edges). Repeated points are dropped and degenerate lines left out after joining, as
+//! one run does.
 
 use crate::crs::Crs;
 use crate::error::{Error, Result};
@@ -11,16 +14,27 @@ use std::collections::HashMap;
 use std::path::Path;
 
 type Pt = [f64; 2];
-type Key = (u64, u64, u64);
+type Key = (u64, [u64; 4]);
 
-fn key(level: f64, p: &Pt) -> Key {
-    (level.to_bits(), p[0].to_bits(), p[1].to_bits())
+/// The key of an end of a line: the edge it lies on, or (from a file without edges) its point.
+fn key(level: f64, edge: &Value, p: Option<&Pt>) -> Option<Key> {
+    let bits = |v: &Value| v.as_f64().map(f64::to_bits);
+    if let Some(e) = edge.as_array().filter(|e| e.len() == 4) {
+        let mut k = [0u64; 4];
+        for (slot, v) in k.iter_mut().zip(e) {
+            *slot = bits(v)?;
+        }
+        return Some((level.to_bits(), k));
+    }
+    p.map(|p| (level.to_bits(), [p[0].to_bits(), p[1].to_bits(), 0, 0]))
 }
 
 /// An open contour line of one task.
 struct Open {
     level: f64,
     points: Vec<Pt>,
+    start: Option<Key>,
+    end: Option<Key>,
 }
 
 /// What stitching wrote.
@@ -66,31 +80,34 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
                 .iter()
                 .map(|p| [p[0].as_f64().unwrap_or(f64::NAN), p[1].as_f64().unwrap_or(f64::NAN)])
                 .collect();
-            if pts.len() > 1 && pts.first() == pts.last() {
+            let closed = f["properties"]["closed"].as_bool().unwrap_or(false);
+            if closed {
                 w.line_string(&serde_json::json!({"elevation": level, "closed": true}), pts)?;
                 s.features += 1;
                 s.rings += 1;
             } else {
-                open.push(Open { level, points: pts });
+                let p = &f["properties"];
+                let start = key(level, &p["start_edge"], pts.first());
+                let end = key(level, &p["end_edge"], pts.last());
+                open.push(Open {
+                    level,
+                    points: pts,
+                    start,
+                    end,
+                });
             }
         }
     }
     // Join ends to starts.
     let mut by_start: HashMap<Key, usize> = HashMap::with_capacity(open.len());
     for (i, l) in open.iter().enumerate() {
-        if let Some(p) = l.points.first() {
-            by_start.insert(key(l.level, p), i);
+        if let Some(k) = l.start {
+            by_start.insert(k, i);
         }
     }
     let next: Vec<Option<usize>> = open
         .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            l.points
-                .last()
-                .and_then(|p| by_start.get(&key(l.level, p)).copied())
-                .filter(|&j| j != i)
-        })
+        .map(|l| l.end.and_then(|k| by_start.get(&k).copied()))
         .collect();
     let mut has_prev = vec![false; open.len()];
     for j in next.iter().flatten() {
@@ -104,12 +121,13 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
         let mut closed = false;
         loop {
             used[i] = true;
-            let p = &open[i].points;
-            if pts.is_empty() {
-                pts.extend_from_slice(p);
-            } else {
-                pts.extend_from_slice(&p[1..]);
+            if !pts.is_empty() {
                 s.joins += 1;
+            }
+            for q in &open[i].points {
+                if pts.last() != Some(q) {
+                    pts.push(*q);
+                }
             }
             match next[i] {
                 Some(j) if j == start => {
@@ -119,6 +137,10 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
                 Some(j) if !used[j] => i = j,
                 _ => break,
             }
+        }
+        // As one run: a ring of fewer than 4 points, or a line of fewer than 2, is left out.
+        if pts.len() < if closed { 4 } else { 2 } {
+            return Ok(());
         }
         s.features += 1;
         if closed {

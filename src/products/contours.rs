@@ -49,6 +49,11 @@ pub struct ContourOptions {
     pub base: f64,
     /// Points of open polylines held in memory before the inner ones move to a scratch file.
     pub memory_points: usize,
+    /// For a task of a plan: write open lines whole (repeated points and one-point pieces
+    /// kept) with the edges they start and end on (`start_edge`, `end_edge`: the edge's
+    /// endpoints `[x0, y0, x1, y1]` in canonical order), so that the merge joins them exactly
+    /// as one run would.
+    pub edges: bool,
 }
 
 impl Default for ContourOptions {
@@ -57,6 +62,7 @@ impl Default for ContourOptions {
             interval: 1.0,
             base: 0.0,
             memory_points: 1 << 22,
+            edges: false,
         }
     }
 }
@@ -348,7 +354,8 @@ impl ContourSink {
             }
             Ok(())
         })?;
-        if distinct < if closed { 4 } else { 2 } {
+        let pieces = self.options.edges && !closed;
+        if distinct < if closed { 4 } else { 2 } && !pieces {
             self.stats.degenerate_dropped += 1;
             self.forget(&p);
             return Ok(());
@@ -358,12 +365,20 @@ impl ContourSink {
         } else {
             self.stats.open_lines += 1;
         }
-        let props = json!({ "elevation": level, "closed": closed });
+        let props = if pieces {
+            let edge = |e: &EdgeKey| e.1.map(f64::from_bits);
+            json!({
+                "elevation": level, "closed": false,
+                "start_edge": edge(&p.start), "end_edge": edge(&p.end)
+            })
+        } else {
+            json!({ "elevation": level, "closed": closed })
+        };
         let mut out = self.out.take().expect("checked by the caller");
         out.start_line(&props)?;
         let mut last: Option<[f64; 2]> = None;
         let r = self.for_each_point(&p, |q| {
-            if last != Some(q) {
+            if pieces || last != Some(q) {
                 last = Some(q);
                 out.point(q)?;
             }

@@ -110,7 +110,7 @@ impl<'a> Certifier<'a> {
             return true;
         }
         if let Some(sc) = &self.index.scope
-            && sc.unknown_in([cx - r, cy - r, cx + r, cy + r])
+            && sc.unknown_meets_disk([cx, cy], r)
         {
             self.unknown.set(true);
             return false;
@@ -144,63 +144,24 @@ impl<'a> Certifier<'a> {
 }
 
 impl Certifier<'_> {
-    /// Is the closed half-plane on the right of the directed edge `a → b` (the outer side of a
-    /// counter-clockwise hull) free of points outside the loaded blocks, the points of the line
-    /// beyond the segment aside (they do not cut the edge)? Blocks wholly inside it must be
-    /// empty; the points of blocks the line crosses are tested one by one, exactly.
-    ///
-    /// # Errors
-    /// Reading a block.
-    pub fn halfplane_clear(&self, a: [f64; 2], bpt: [f64; 2]) -> crate::Result<bool> {
+    /// For a task of a plan: might a point it did not read lie strictly on the right of the
+    /// directed line `a → b` (the outer side of a counter-clockwise hull edge)? Points on the
+    /// line do not move the hull's boundary beyond it (the triangles along it are judged by
+    /// their disks). Without a scope, every point is known: `false`.
+    pub fn beyond_unknown(&self, a: [f64; 2], b: [f64; 2]) -> bool {
         use crate::geom::predicates::{Orientation, orient};
-        let right = |c: [f64; 2]| orient(a, bpt, c) != Orientation::CounterClockwise;
-        if let Some(sc) = &self.index.scope {
-            for u in sc.unknown_parts() {
-                if [[u[0], u[1]], [u[2], u[1]], [u[2], u[3]], [u[0], u[3]]]
-                    .into_iter()
-                    .any(right)
-                {
-                    self.unknown.set(true);
-                    return Ok(false);
-                }
-            }
+        let Some(sc) = &self.index.scope else {
+            return false;
+        };
+        let hit = sc.unknown.iter().any(|u| {
+            [[u[0], u[1]], [u[2], u[1]], [u[2], u[3]], [u[0], u[3]]]
+                .into_iter()
+                .any(|c| orient(a, b, c) == Orientation::Clockwise)
+        });
+        if hit {
+            self.unknown.set(true);
         }
-        let g = &self.index.grid;
-        let occ = self.index.occupied();
-        let b = g.block;
-        let mut found = Vec::new();
-        for by in occ.y0..occ.y1 {
-            found.clear();
-            self.blocks_in_row(by, occ.x0, occ.x1 - 1, false, &mut found);
-            for &k in &found {
-                let (bx, _) = super::grid::TileGrid::unkey(k);
-                let m = g.margin(a[0].abs().max(a[1].abs()) + b);
-                let (x0, y0) = (bx as f64 * b - m, by as f64 * b - m);
-                let (x1, y1) = ((bx + 1) as f64 * b + m, (by + 1) as f64 * b + m);
-                let corners = [[x0, y0], [x1, y0], [x1, y1], [x0, y1]];
-                if !corners.into_iter().any(right) {
-                    continue;
-                }
-                let mut pts = Vec::new();
-                self.index.read_block(k, &mut pts)?;
-                for p in &pts {
-                    let q = [p[0], p[1]];
-                    match orient(a, bpt, q) {
-                        Orientation::Clockwise => return Ok(false),
-                        Orientation::Collinear => {
-                            // On the line: only a point strictly inside the segment cuts it.
-                            let k = usize::from((bpt[1] - a[1]).abs() > (bpt[0] - a[0]).abs());
-                            let (lo, hi) = (a[k].min(bpt[k]), a[k].max(bpt[k]));
-                            if lo < q[k] && q[k] < hi {
-                                return Ok(false);
-                            }
-                        }
-                        Orientation::CounterClockwise => {}
-                    }
-                }
-            }
-        }
-        Ok(true)
+        hit
     }
 }
 

@@ -65,38 +65,53 @@ pub(crate) struct BlockIndex {
 /// What a task knows of the data (see [`BlockIndex::scope`]).
 #[derive(Debug, Clone)]
 pub(crate) struct Scope {
-    /// World rectangle of the blocks read (every point in them is in the index).
-    pub known_world: [f64; 4],
-    /// The input files' extents `[xmin, ymin, xmax, ymax]` (from their headers).
-    pub extents: Vec<[f64; 4]>,
+    /// The parts of the input files' extents (from their headers) outside the known blocks, as
+    /// closed rectangles: points may lie there.
+    pub unknown: Vec<[f64; 4]>,
     /// How far around its tile the task read.
     pub buffer: f64,
 }
 
 impl Scope {
-    /// Might the closed rectangle `r` hold points outside the known blocks?
-    pub fn unknown_in(&self, r: [f64; 4]) -> bool {
-        let k = &self.known_world;
-        self.extents.iter().any(|e| {
-            let i = [r[0].max(e[0]), r[1].max(e[1]), r[2].min(e[2]), r[3].min(e[3])];
-            i[0] <= i[2] && i[1] <= i[3] && !(i[0] > k[0] && i[1] > k[1] && i[2] < k[2] && i[3] < k[3])
-        })
+    /// The scope of a task that read every point in `known_world` of files with `extents`.
+    pub fn new(known_world: [f64; 4], extents: &[[f64; 4]], buffer: f64) -> Scope {
+        let k = &known_world;
+        let mut unknown = Vec::new();
+        for e in extents {
+            // The known blocks hold every point with k[0] <= x < k[2] and k[1] <= y < k[3].
+            let parts = [
+                (e[1] < k[1], [e[0], e[1], e[2], e[3].min(k[1])]),
+                (e[3] >= k[3], [e[0], e[1].max(k[3]), e[2], e[3]]),
+                (e[0] < k[0], [e[0], e[1].max(k[1]), e[2].min(k[0]), e[3].min(k[3])]),
+                (e[2] >= k[2], [e[0].max(k[2]), e[1].max(k[1]), e[2], e[3].min(k[3])]),
+            ];
+            unknown.extend(
+                parts
+                    .into_iter()
+                    .filter(|(open, p)| *open && p[0] <= p[2] && p[1] <= p[3])
+                    .map(|(_, p)| p),
+            );
+        }
+        Scope {
+            unknown,
+            buffer,
+        }
     }
 
-    /// The parts of the extents outside the known blocks, as rectangles (closed).
-    pub fn unknown_parts(&self) -> Vec<[f64; 4]> {
-        let k = &self.known_world;
-        let mut out = Vec::new();
-        for e in &self.extents {
-            let parts = [
-                [e[0], e[1], e[2], e[3].min(k[1])],
-                [e[0], e[1].max(k[3]), e[2], e[3]],
-                [e[0], e[1].max(k[1]), e[2].min(k[0]), e[3].min(k[3])],
-                [e[0].max(k[2]), e[1].max(k[1]), e[2], e[3].min(k[3])],
-            ];
-            out.extend(parts.into_iter().filter(|p| p[0] <= p[2] && p[1] <= p[3]));
-        }
-        out
+    /// Does the task know every point there is?
+    pub fn complete(&self) -> bool {
+        self.unknown.is_empty()
+    }
+
+    /// Might the closed disk of centre `c` and radius `r` hold a point outside the known blocks?
+    /// (Conservative: a disk that nearly touches an unknown part counts as meeting it.)
+    pub fn unknown_meets_disk(&self, c: [f64; 2], r: f64) -> bool {
+        self.unknown.iter().any(|u| {
+            let dx = (u[0] - c[0]).max(c[0] - u[2]).max(0.0);
+            let dy = (u[1] - c[1]).max(c[1] - u[3]).max(0.0);
+            let slack = 1e-9 * (r + c[0].abs().max(c[1].abs()));
+            (dx * dx + dy * dy).sqrt() <= r + slack
+        })
     }
 }
 

@@ -119,9 +119,18 @@ fn read_index(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4])> {
     let scope = options.scope.as_ref();
+    // What a task reads: its tile and buffer, within the files' extents (a wide buffer must not
+    // make blocks whose keys overflow).
     let known_world = scope.map(|sc| {
         let t = sc.tile;
-        [t[0] - sc.buffer, t[1] - sc.buffer, t[2] + sc.buffer, t[3] + sc.buffer]
+        let u = extents_union(&sc.extents);
+        let pad = 0.01 * (u[2] - u[0]).max(u[3] - u[1]).max(t[2] - t[0]);
+        [
+            (t[0] - sc.buffer).max(u[0] - pad),
+            (t[1] - sc.buffer).max(u[1] - pad),
+            (t[2] + sc.buffer).min(u[2] + pad),
+            (t[3] + sc.buffer).min(u[3] + pad),
+        ]
     });
     // A task reads the files that reach into its buffered tile only.
     let paths: Vec<std::path::PathBuf> = match known_world {
@@ -159,14 +168,19 @@ fn read_index(
     };
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
-    let known = known_world.map(|k| {
+    // The blocks a task reads whole: those inside its buffered tile; on a side where that
+    // reaches past every file, all the blocks up to the files' edge.
+    let known = scope.zip(known_world).map(|(sc, k)| {
+        let u = extents_union(&sc.extents);
         let (x0, y0) = probe.block_of(k[0], k[1]);
         let (x1, y1) = probe.block_of(k[2], k[3]);
+        let (ux0, uy0) = probe.block_of(u[0], u[1]);
+        let (ux1, uy1) = probe.block_of(u[2], u[3]);
         grid::BlockRect {
-            x0: x0 + 1,
-            y0: y0 + 1,
-            x1,
-            y1,
+            x0: if k[0] < u[0] { ux0 } else { x0 + 1 },
+            y0: if k[1] < u[1] { uy0 } else { y0 + 1 },
+            x1: if k[2] > u[2] { ux1 + 1 } else { x1 },
+            y1: if k[3] > u[3] { uy1 + 1 } else { y1 },
         }
     });
     let q = *reader.quantization();
@@ -212,11 +226,11 @@ fn read_index(
     let sort = merge.stats();
     let mut index = BlockIndex::build(probe, merge, tmp)?;
     if let (Some(sc), Some(known)) = (scope, known) {
-        index.scope = Some(index::Scope {
-            known_world: probe.world(&known),
-            extents: sc.extents.clone(),
-            buffer: sc.buffer,
-        });
+        index.scope = Some(index::Scope::new(
+            probe.world(&known),
+            &sc.extents,
+            sc.buffer,
+        ));
     }
     // The tile: as given, or about TILE_POINTS at the density over the non-empty blocks; for a
     // task, its plan tile halved until it holds about TILE_POINTS.
@@ -250,6 +264,15 @@ fn read_index(
     Ok((index, crs, bounds))
 }
 
+/// The smallest rectangle holding every extent.
+fn extents_union(extents: &[[f64; 4]]) -> [f64; 4] {
+    let mut u = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    for e in extents {
+        u = [u[0].min(e[0]), u[1].min(e[1]), u[2].max(e[2]), u[3].max(e[3])];
+    }
+    u
+}
+
 /// Runs a tiled triangulation of `input` into `mesh` and `sinks`.
 ///
 /// # Errors
@@ -276,7 +299,7 @@ pub(crate) fn run(
     let read_sort = start.elapsed().as_secs_f64();
     if index.len() == 0 {
         // A task that read no point may still lie under triangles of points farther out.
-        if index.scope.as_ref().is_some_and(|sc| !sc.unknown_parts().is_empty()) {
+        if index.scope.as_ref().is_some_and(|sc| !sc.complete()) {
             let buffer = index.scope.as_ref().map_or(0.0, |sc| sc.buffer);
             return Err(Error::BufferTooSmall { buffer });
         }
@@ -419,7 +442,8 @@ pub(crate) fn run(
             writer.pending()
         )));
     }
-    if writer.triangles == 0 {
+    // A task may own no triangle (its points all belong to triangles of other tasks).
+    if writer.triangles == 0 && options.scope.is_none() {
         return Err(if kept < 3 {
             Error::TooFewPoints {
                 distinct: kept,

@@ -230,17 +230,17 @@ pub(crate) fn judge(
     out.blocks.sort_unstable();
     out.blocks.dedup();
     // A task does not hold the corners of the whole hull: the parts of the region outside the
-    // run's hull must be outside the whole hull, which only the half-planes tell.
-    if index.scope.is_some() && !full && hull_fails(&cert, v, region) {
-        unknown.set(true);
+    // run's hull are outside the whole hull only if nothing unread lies beyond its edges.
+    if index.scope.is_some() && !full {
+        hull_unknown(&cert, v, region);
     }
     out.unknown = unknown.get();
     out
 }
 
-/// Does an edge of the convex hull of `v` whose outer half-plane meets the region's box fail to
-/// be an edge of the whole hull (or could not be read)?
-fn hull_fails(cert: &Certifier, v: &[[f64; 3]], region: &Region) -> bool {
+/// Might an unread point lie beyond an edge of the convex hull of `v` whose outer half-plane
+/// meets the region's box? (Sets the certifier's `unknown`.)
+fn hull_unknown(cert: &Certifier, v: &[[f64; 3]], region: &Region) -> bool {
     let r = match region {
         Region::Rect(r) => *r,
         Region::Tris { bbox, .. } => *bbox,
@@ -254,7 +254,7 @@ fn hull_fails(cert: &Certifier, v: &[[f64; 3]], region: &Region) -> bool {
         let meets = corners
             .iter()
             .any(|&c| orient(a, b, c) != Orientation::CounterClockwise);
-        if meets && !cert.halfplane_clear(a, b).unwrap_or(false) {
+        if meets && cert.beyond_unknown(a, b) {
             return true;
         }
     }

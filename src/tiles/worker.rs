@@ -118,7 +118,7 @@ pub(crate) fn run_tile(
             && index
                 .scope
                 .as_ref()
-                .is_none_or(|sc| sc.unknown_parts().is_empty());
+                .is_none_or(|sc| sc.complete());
         let t = match triangulate(&pts, &Options { duplicates: policy }) {
             Ok(t) => t,
             Err(Error::TooFewPoints { .. } | Error::AllCollinear { .. }) if !full => {
