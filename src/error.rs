@@ -155,6 +155,8 @@ pub enum Error {
     BufferTooSmall {
         /// The buffer that was read.
         buffer: f64,
+        /// A buffer that reads the files the certificates reached (0 when not known).
+        reach: f64,
     },
 
     /// A bug in sweeptin: an internal invariant does not hold. Please report it with the input.

@@ -326,8 +326,16 @@ fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result
                 break record_of(i, status, buffer, runs, &run, &products, job_outputs(&products));
             }
             Err(e) => match e.downcast_ref::<Error>() {
-                Some(Error::BufferTooSmall { .. }) if runs < 40 => {
-                    buffer = if buffer > 0.0 { 2.0 * buffer } else { plan.tile / 8.0 };
+                Some(Error::BufferTooSmall { reach, .. }) if runs < 40 => {
+                    // Straight to the files the certificates reached, or double.
+                    let step = plan.tile / 16.0;
+                    buffer = if *reach > buffer {
+                        (*reach / step).ceil() * step
+                    } else if buffer > 0.0 {
+                        2.0 * buffer
+                    } else {
+                        plan.tile / 8.0
+                    };
                 }
                 Some(Error::TooFewPoints { .. }) => {
                     let sinks = task_sinks(plan, dir, i, buffer, args, &mut job)?;

@@ -272,10 +272,16 @@ impl Plan {
     /// As [`Plan::task`].
     pub fn scope(&self, i: usize, buffer: f64) -> Result<crate::tiles::TaskScope> {
         let t = self.task(i)?;
+        let g = grown(t.bounds, buffer);
         Ok(crate::tiles::TaskScope {
             tile: t.bounds,
             buffer,
-            extents: self.files.iter().map(|f| f.bounds).collect(),
+            unread: self
+                .files
+                .iter()
+                .filter(|f| f.points > 0 && !overlaps(&f.bounds, &g))
+                .map(|f| f.bounds)
+                .collect(),
         })
     }
 
@@ -284,15 +290,11 @@ impl Plan {
     /// # Errors
     /// As [`Plan::task`].
     pub fn task_files(&self, i: usize, buffer: f64) -> Result<Vec<PathBuf>> {
-        let b = self.task(i)?.bounds;
-        let g = [b[0] - buffer, b[1] - buffer, b[2] + buffer, b[3] + buffer];
+        let g = grown(self.task(i)?.bounds, buffer);
         Ok(self
             .files
             .iter()
-            .filter(|f| {
-                let e = &f.bounds;
-                f.points > 0 && e[0] <= g[2] && e[2] >= g[0] && e[1] <= g[3] && e[3] >= g[1]
-            })
+            .filter(|f| f.points > 0 && overlaps(&f.bounds, &g))
             .map(|f| f.path.clone())
             .collect())
     }
@@ -354,6 +356,16 @@ pub fn task_from_env() -> Option<usize> {
         }
     }
     None
+}
+
+/// `b` grown by `d` on every side.
+fn grown(b: [f64; 4], d: f64) -> [f64; 4] {
+    [b[0] - d, b[1] - d, b[2] + d, b[3] + d]
+}
+
+/// Do the closed rectangles `a` and `b` meet?
+fn overlaps(a: &[f64; 4], b: &[f64; 4]) -> bool {
+    a[0] <= b[2] && a[2] >= b[0] && a[1] <= b[3] && a[3] >= b[1]
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.

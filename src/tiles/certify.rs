@@ -41,7 +41,8 @@ pub(crate) struct Certifier<'a> {
     /// World rectangle of the loaded rectangle.
     world: [f64; 4],
     /// Set when a test reached beyond what a plan's task read (see [`BlockIndex::scope`]).
-    pub unknown: &'a std::cell::Cell<bool>,
+    /// The widest buffer an unread file needs (0: none).
+    pub unknown: &'a std::cell::Cell<f64>,
 }
 
 /// Where [`Certifier`] puts the blocks that withheld a certificate.
@@ -51,7 +52,7 @@ impl<'a> Certifier<'a> {
     pub fn new(
         index: &'a BlockIndex,
         loaded: &'a Loaded,
-        unknown: &'a std::cell::Cell<bool>,
+        unknown: &'a std::cell::Cell<f64>,
     ) -> Self {
         Certifier {
             index,
@@ -110,9 +111,10 @@ impl<'a> Certifier<'a> {
             return true;
         }
         if let Some(sc) = &self.index.scope
-            && sc.unknown_meets_disk([cx, cy], r)
+            && let reach = sc.disk_reach([cx, cy], r)
+            && reach > 0.0
         {
-            self.unknown.set(true);
+            self.unknown.set(self.unknown.get().max(reach));
             return false;
         }
         let occ = self.index.occupied();
@@ -153,15 +155,18 @@ impl Certifier<'_> {
         let Some(sc) = &self.index.scope else {
             return false;
         };
-        let hit = sc.unknown.iter().any(|u| {
-            [[u[0], u[1]], [u[2], u[1]], [u[2], u[3]], [u[0], u[3]]]
-                .into_iter()
-                .any(|c| orient(a, b, c) == Orientation::Clockwise)
-        });
-        if hit {
-            self.unknown.set(true);
-        }
-        hit
+        let reach = sc
+            .unknown
+            .iter()
+            .filter(|u| {
+                [[u[0], u[1]], [u[2], u[1]], [u[2], u[3]], [u[0], u[3]]]
+                    .into_iter()
+                    .any(|c| orient(a, b, c) == Orientation::Clockwise)
+            })
+            .map(|u| sc.reach(u))
+            .fold(0.0, f64::max);
+        self.unknown.set(self.unknown.get().max(reach));
+        reach > 0.0
     }
 }
 
@@ -210,7 +215,7 @@ mod tests {
             },
             extra: vec![],
         };
-        let unknown = std::cell::Cell::new(false);
+        let unknown = std::cell::Cell::new(0.0);
         let c = Certifier::new(&ix, &loaded, &unknown);
         let mut m = Missing::new();
         assert!(c.disk_clear([10.0, 10.0], 5.9, &mut m));

@@ -57,61 +57,49 @@ pub(crate) struct BlockIndex {
     occupied: BlockRect,
     /// Corners of the convex hull of the blocks' extreme points.
     hull: Vec<[f64; 3]>,
-    /// For a task of a plan: the blocks that were read from the files, and the files' extents.
-    /// Outside those blocks nothing is known, and a block that meets an extent may hold points.
+    /// For a task of a plan: where the points it did not read may be.
     pub scope: Option<Scope>,
 }
 
 /// What a task knows of the data (see [`BlockIndex::scope`]).
 #[derive(Debug, Clone)]
 pub(crate) struct Scope {
-    /// The parts of the input files' extents (from their headers) outside the known blocks, as
-    /// closed rectangles: points may lie there.
+    /// Extents of the files the task did not read (closed rectangles, from their headers):
+    /// points may lie there.
     pub unknown: Vec<[f64; 4]>,
+    /// The task's tile.
+    pub tile: [f64; 4],
     /// How far around its tile the task read.
     pub buffer: f64,
 }
 
 impl Scope {
-    /// The scope of a task that read every point in `known_world` of files with `extents`.
-    pub fn new(known_world: [f64; 4], extents: &[[f64; 4]], buffer: f64) -> Scope {
-        let k = &known_world;
-        let mut unknown = Vec::new();
-        for e in extents {
-            // The known blocks hold every point with k[0] <= x < k[2] and k[1] <= y < k[3].
-            let parts = [
-                (e[1] < k[1], [e[0], e[1], e[2], e[3].min(k[1])]),
-                (e[3] >= k[3], [e[0], e[1].max(k[3]), e[2], e[3]]),
-                (e[0] < k[0], [e[0], e[1].max(k[1]), e[2].min(k[0]), e[3].min(k[3])]),
-                (e[2] >= k[2], [e[0].max(k[2]), e[1].max(k[1]), e[2], e[3].min(k[3])]),
-            ];
-            unknown.extend(
-                parts
-                    .into_iter()
-                    .filter(|(open, p)| *open && p[0] <= p[2] && p[1] <= p[3])
-                    .map(|(_, p)| p),
-            );
-        }
-        Scope {
-            unknown,
-            buffer,
-        }
-    }
-
     /// Does the task know every point there is?
     pub fn complete(&self) -> bool {
         self.unknown.is_empty()
     }
 
-    /// Might the closed disk of centre `c` and radius `r` hold a point outside the known blocks?
-    /// (Conservative: a disk that nearly touches an unknown part counts as meeting it.)
-    pub fn unknown_meets_disk(&self, c: [f64; 2], r: f64) -> bool {
-        self.unknown.iter().any(|u| {
-            let dx = (u[0] - c[0]).max(c[0] - u[2]).max(0.0);
-            let dy = (u[1] - c[1]).max(c[1] - u[3]).max(0.0);
-            let slack = 1e-9 * (r + c[0].abs().max(c[1].abs()));
-            (dx * dx + dy * dy).sqrt() <= r + slack
-        })
+    /// The buffer that would read the unread files meeting the closed disk of centre `c` and
+    /// radius `r` (conservative: a disk that nearly touches one counts), or 0 when none does.
+    pub fn disk_reach(&self, c: [f64; 2], r: f64) -> f64 {
+        let slack = 1e-9 * (r + c[0].abs().max(c[1].abs()));
+        self.unknown
+            .iter()
+            .filter(|u| {
+                let dx = (u[0] - c[0]).max(c[0] - u[2]).max(0.0);
+                let dy = (u[1] - c[1]).max(c[1] - u[3]).max(0.0);
+                (dx * dx + dy * dy).sqrt() <= r + slack
+            })
+            .map(|u| self.reach(u))
+            .fold(0.0, f64::max)
+    }
+
+    /// The buffer around the tile that reaches the rectangle `u` (a little more, so that the
+    /// plan's closed overlap test selects its file).
+    pub fn reach(&self, u: &[f64; 4]) -> f64 {
+        let t = &self.tile;
+        let d = (u[0] - t[2]).max(t[0] - u[2]).max(u[1] - t[3]).max(t[1] - u[3]);
+        d.max(0.0) * (1.0 + 1e-9) + 1e-9
     }
 }
 

@@ -57,8 +57,8 @@ pub struct TileOptions {
     pub scope: Option<TaskScope>,
 }
 
-/// One task of a plan: the tile it owns, how far around it the points are read, and the extents
-/// of every input file of the plan (so that the task knows where points it did not read may be).
+/// One task of a plan: the tile it owns, how far around it the files are read, and the extents
+/// of the plan's files it does not read (so that it knows where points it has not seen may be).
 ///
 /// The task delivers the triangles it owns (lowest vertex in its tile) to every sink, and to
 /// sinks of grids (a DEM) also the other triangles that meet its tile
@@ -68,10 +68,11 @@ pub struct TileOptions {
 pub struct TaskScope {
     /// The task's tile `[xmin, ymin, xmax, ymax]`, on the plan's grid of tiles of side `tile`.
     pub tile: [f64; 4],
-    /// Points are read up to this far around the tile.
+    /// The files reaching this far around the tile are read (all their points).
     pub buffer: f64,
-    /// Extents `[xmin, ymin, xmax, ymax]` of all the plan's input files, from their headers.
-    pub extents: Vec<[f64; 4]>,
+    /// Extents `[xmin, ymin, xmax, ymax]` of the plan's files with points that the task does not
+    /// read, from their headers.
+    pub unread: Vec<[f64; 4]>,
 }
 
 /// What the tiles did (part of the `--json` summary).
@@ -119,40 +120,11 @@ fn read_index(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4])> {
     let scope = options.scope.as_ref();
-    // What a task reads: its tile and buffer, within the files' extents (a wide buffer must not
-    // make blocks whose keys overflow).
-    let known_world = scope.map(|sc| {
-        let t = sc.tile;
-        let u = extents_union(&sc.extents);
-        let pad = 0.01 * (u[2] - u[0]).max(u[3] - u[1]).max(t[2] - t[0]);
-        [
-            (t[0] - sc.buffer).max(u[0] - pad),
-            (t[1] - sc.buffer).max(u[1] - pad),
-            (t[2] + sc.buffer).min(u[2] + pad),
-            (t[3] + sc.buffer).min(u[3] + pad),
-        ]
-    });
-    // A task reads the files that reach into its buffered tile only.
-    let paths: Vec<std::path::PathBuf> = match known_world {
-        None => input.paths.clone(),
-        Some(k) => {
-            let mut v = Vec::new();
-            for p in &input.paths {
-                let b = crate::input::las::FileInfo::read(p)?.bounds;
-                if b.min[0] <= k[2] && b.max[0] >= k[0] && b.min[1] <= k[3] && b.max[1] >= k[1] {
-                    v.push(p.clone());
-                }
-            }
-            if v.is_empty() {
-                return Err(Error::TooFewPoints {
-                    distinct: 0,
-                    total: 0,
-                });
-            }
-            v
-        }
-    };
-    let mut reader = LidarReader::open(&paths, &input.filter)?;
+    // A task is given the files near its tile, and keeps all their points (decoding a file costs
+    // the same whatever is kept, and the points far out settle the triangles along the data's
+    // edge without another run).
+    let paths = &input.paths;
+    let mut reader = LidarReader::open(paths, &input.filter)?;
     let b = reader.bounds();
     let total = reader.point_count();
     let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
@@ -168,21 +140,6 @@ fn read_index(
     };
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
-    // The blocks a task reads whole: those inside its buffered tile; on a side where that
-    // reaches past every file, all the blocks up to the files' edge.
-    let known = scope.zip(known_world).map(|(sc, k)| {
-        let u = extents_union(&sc.extents);
-        let (x0, y0) = probe.block_of(k[0], k[1]);
-        let (x1, y1) = probe.block_of(k[2], k[3]);
-        let (ux0, uy0) = probe.block_of(u[0], u[1]);
-        let (ux1, uy1) = probe.block_of(u[2], u[3]);
-        grid::BlockRect {
-            x0: if k[0] < u[0] { ux0 } else { x0 + 1 },
-            y0: if k[1] < u[1] { uy0 } else { y0 + 1 },
-            x1: if k[2] > u[2] { ux1 + 1 } else { x1 },
-            y1: if k[3] > u[3] { uy1 + 1 } else { y1 },
-        }
-    });
     let q = *reader.quantization();
     let crs = reader.crs().cloned();
     let mut sorter = ExternalSorter::<BlockRecord>::new(mem / 2, tmp);
@@ -209,9 +166,6 @@ fn read_index(
                 bounds[3].max(y),
             ];
             let (bx, by) = probe.block_of(x, y);
-            if known.is_some_and(|k| !k.contains(bx, by)) {
-                continue;
-            }
             sorter.push(BlockRecord {
                 key: TileGrid::key(bx, by),
                 x,
@@ -225,12 +179,12 @@ fn read_index(
     let merge = sorter.finish()?;
     let sort = merge.stats();
     let mut index = BlockIndex::build(probe, merge, tmp)?;
-    if let (Some(sc), Some(known)) = (scope, known) {
-        index.scope = Some(index::Scope::new(
-            probe.world(&known),
-            &sc.extents,
-            sc.buffer,
-        ));
+    if let Some(sc) = scope {
+        index.scope = Some(index::Scope {
+            unknown: sc.unread.clone(),
+            tile: sc.tile,
+            buffer: sc.buffer,
+        });
     }
     // The tile: as given, or about TILE_POINTS at the density over the non-empty blocks; for a
     // task, its plan tile halved until it holds about TILE_POINTS.
@@ -264,15 +218,6 @@ fn read_index(
     Ok((index, crs, bounds))
 }
 
-/// The smallest rectangle holding every extent.
-fn extents_union(extents: &[[f64; 4]]) -> [f64; 4] {
-    let mut u = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
-    for e in extents {
-        u = [u[0].min(e[0]), u[1].min(e[1]), u[2].max(e[2]), u[3].max(e[3])];
-    }
-    u
-}
-
 /// Runs a tiled triangulation of `input` into `mesh` and `sinks`.
 ///
 /// # Errors
@@ -301,7 +246,7 @@ pub(crate) fn run(
         // A task that read no point may still lie under triangles of points farther out.
         if index.scope.as_ref().is_some_and(|sc| !sc.complete()) {
             let buffer = index.scope.as_ref().map_or(0.0, |sc| sc.buffer);
-            return Err(Error::BufferTooSmall { buffer });
+            return Err(Error::BufferTooSmall { buffer, reach: 0.0 });
         }
         return Err(Error::TooFewPoints {
             distinct: 0,

@@ -167,7 +167,8 @@ pub(crate) struct Verdict {
     /// A failed triangle too thin for its disk to be bounded: the next run doubles its buffer.
     pub degenerate: bool,
     /// A certificate reached beyond what a plan's task read: the task needs a wider buffer.
-    pub unknown: bool,
+    /// (0: it did not.) The buffer that reads the files it reached.
+    pub unknown: f64,
 }
 
 /// Judges the run `t` over `loaded` (its first `own` input points read from blocks, the rest hull
@@ -182,7 +183,7 @@ pub(crate) fn judge(
     full: bool,
 ) -> Verdict {
     let g = index.grid;
-    let unknown = std::cell::Cell::new(false);
+    let unknown = std::cell::Cell::new(0.0);
     let cert = Certifier::new(index, loaded, &unknown);
     let v = &t.vertices;
     let mut out = Verdict::default();

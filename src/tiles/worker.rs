@@ -125,7 +125,7 @@ pub(crate) fn run_tile(
                 if loaded.rect.contains_rect(&occ) {
                     // Every block of a task read, and points may lie beyond them.
                     let buffer = index.scope.as_ref().map_or(0.0, |sc| sc.buffer);
-                    return Err(Error::BufferTooSmall { buffer });
+                    return Err(Error::BufferTooSmall { buffer, reach: 0.0 });
                 }
                 loaded = doubled(&owned, &first_rect, &loaded, &occ);
                 first_rect = loaded.rect;
@@ -150,9 +150,12 @@ pub(crate) fn run_tile(
                 }
             );
         }
-        if verdict.unknown {
+        if verdict.unknown > 0.0 {
             let buffer = index.scope.as_ref().map_or(0.0, |sc| sc.buffer);
-            return Err(Error::BufferTooSmall { buffer });
+            return Err(Error::BufferTooSmall {
+                buffer,
+                reach: verdict.unknown,
+            });
         }
         let failed: Vec<Tri2> = verdict
             .failed
@@ -196,7 +199,7 @@ pub(crate) fn run_tile(
         if next == loaded && loaded.rect.contains_rect(&occ) {
             // Everything read and still not judged: only a wider buffer can help (a task).
             let buffer = index.scope.as_ref().map_or(0.0, |sc| sc.buffer);
-            return Err(Error::BufferTooSmall { buffer });
+            return Err(Error::BufferTooSmall { buffer, reach: 0.0 });
         }
         if next == loaded {
             next = Loaded {
