@@ -16,9 +16,11 @@ use sweeptin::sink::{Fanout, FanoutSummary, ProductSummary, StreamInfo, Triangle
 
 /// Arguments of `sweeptin plan`.
 #[derive(clap::Args, Debug)]
-#[command(after_help = "Example:\n  sweeptin plan dem tiles/*.laz --cell 1 --class 2 --tile 1000 \
+#[command(
+    after_help = "Example:\n  sweeptin plan dem tiles/*.laz --cell 1 --class 2 --tile 1000 \
                         -o job\n  sweeptin run job/plan.json --all --jobs 2\n  sweeptin merge \
-                        job/plan.json -o dtm.tif")]
+                        job/plan.json -o dtm.tif"
+)]
 pub struct PlanArgs {
     /// The first buffer of every task: points this far around its tile are read (default: a
     /// tenth of the tile). A task whose triangles need points farther out doubles it and runs
@@ -122,7 +124,10 @@ fn take_output(argv: &[String]) -> (Vec<String>, Option<PathBuf>) {
             out = it.next().map(PathBuf::from);
         } else if let Some(v) = a.strip_prefix("--output=") {
             out = Some(PathBuf::from(v));
-        } else if let Some(v) = a.strip_prefix("-o").filter(|v| !v.is_empty() && !a.starts_with("--")) {
+        } else if let Some(v) = a
+            .strip_prefix("-o")
+            .filter(|v| !v.is_empty() && !a.starts_with("--"))
+        {
             out = Some(PathBuf::from(v));
         } else {
             rest.push(a.clone());
@@ -134,6 +139,12 @@ fn take_output(argv: &[String]) -> (Vec<String>, Option<PathBuf>) {
 /// Parses a plan's command line (`dem FILES… options`, without `-o`) into its command.
 fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
     let name = argv.first().map(String::as_str).unwrap_or("");
+    if !matches!(name, "dem" | "contours" | "volume") {
+        bail!(
+            "a plan runs `dem`, `contours` or `volume --plane Z`, not `{name}` (a single mesh \
+             of many tiles is made by one `sweeptin tin` run, on every core)"
+        );
+    }
     let mut full = vec!["sweeptin".to_string()];
     full.extend(argv.iter().cloned());
     if matches!(name, "dem" | "contours") {
@@ -145,10 +156,7 @@ fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
         Command::Dem(a) => Job::Dem(Box::new(a)),
         Command::Contours(a) => Job::Contours(Box::new(a)),
         Command::Volume(a) => Job::Volume(Box::new(a)),
-        _ => bail!(
-            "a plan runs `dem`, `contours` or `volume --plane Z`, not `{name}` \
-             (a single mesh of many tiles is made by one `sweeptin tin` run on every core)"
-        ),
+        _ => unreachable!("checked above"),
     })
 }
 
@@ -294,7 +302,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if args.resume
         && let Some(r) = plan.record(&dir, i)?
     {
-        eprintln!("sweeptin: task {i} already finished ({}): skipped", r.status);
+        eprintln!(
+            "sweeptin: task {i} already finished ({}): skipped",
+            r.status
+        );
         return Ok(());
     }
     let r = run_task(&plan, &dir, i, &args)?;
@@ -323,7 +334,15 @@ fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result
         match run_products(input, &config, None, sinks) {
             Ok((run, products)) => {
                 let status = if run.triangles == 0 { "empty" } else { "done" };
-                break record_of(i, status, buffer, runs, &run, &products, job_outputs(&products));
+                break record_of(
+                    i,
+                    status,
+                    buffer,
+                    runs,
+                    &run,
+                    &products,
+                    job_outputs(&products),
+                );
             }
             Err(e) => match e.downcast_ref::<Error>() {
                 Some(Error::BufferTooSmall { reach, .. }) if runs < 40 => {
@@ -345,7 +364,15 @@ fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result
                         "sweeptin: warning: task {i} has no point after the filters: its \
                          outputs are empty (a nodata raster), which is not a failure"
                     );
-                    break record_of(i, "empty", buffer, runs, &run, &products, job_outputs(&products));
+                    break record_of(
+                        i,
+                        "empty",
+                        buffer,
+                        runs,
+                        &run,
+                        &products,
+                        job_outputs(&products),
+                    );
                 }
                 _ => return Err(e.context(format!("task {i} of {}", plan.tiles.len()))),
             },
@@ -450,11 +477,12 @@ fn empty_task(
 ) -> anyhow::Result<FanoutSummary> {
     let crs = match input.crs()? {
         Some(c) => Some(c),
-        None if !input.args.inputs.is_empty() => {
-            sweeptin::input::las::LidarReader::open(&input.args.inputs, &input.args.filter.to_filter())?
-                .crs()
-                .cloned()
-        }
+        None if !input.args.inputs.is_empty() => sweeptin::input::las::LidarReader::open(
+            &input.args.inputs,
+            &input.args.filter.to_filter(),
+        )?
+        .crs()
+        .cloned(),
         None => None,
     };
     let mut fanout = Fanout::new(sinks);
@@ -539,7 +567,10 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     let mut summary = serde_json::Map::new();
     match &job {
         Job::Dem(d) => {
-            let out = args.output.as_deref().context("give the mosaic with -o OUT.vrt or OUT.tif")?;
+            let out = args
+                .output
+                .as_deref()
+                .context("give the mosaic with -o OUT.vrt or OUT.tif")?;
             super::input::check_output(out)?;
             let crs = match crs {
                 Some(c) => Some(c),
@@ -552,7 +583,11 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
                 let s = merge::merge_contours(&plan, &dir, c, crs.as_ref())?;
                 summary.insert("contours".into(), serde_json::to_value(&s)?);
             }
-            if let Some(png) = args.hillshade.clone().or_else(|| planned(&plan, "hillshade")) {
+            if let Some(png) = args
+                .hillshade
+                .clone()
+                .or_else(|| planned(&plan, "hillshade"))
+            {
                 if RasterFormat::from_extension(out) != Some(RasterFormat::GeoTiff) {
                     bail!("--hillshade shades a GeoTIFF mosaic: merge with -o OUT.tif");
                 }
@@ -563,7 +598,10 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
             }
         }
         Job::Contours(_) => {
-            let out = args.output.as_deref().context("give the contours with -o OUT.geojson")?;
+            let out = args
+                .output
+                .as_deref()
+                .context("give the contours with -o OUT.geojson")?;
             super::input::check_output(out)?;
             let s = merge::merge_contours(&plan, &dir, out, crs.as_ref())?;
             summary.insert("contours".into(), serde_json::to_value(&s)?);
@@ -571,8 +609,14 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
         Job::Volume(_) => {
             let t = merge::merge_volume(&plan, &dir)?;
             if !args.json {
-                println!("cut volume   {:.3}   (area {:.3})", t.cut_volume, t.cut_area);
-                println!("fill volume  {:.3}   (area {:.3})", t.fill_volume, t.fill_area);
+                println!(
+                    "cut volume   {:.3}   (area {:.3})",
+                    t.cut_volume, t.cut_area
+                );
+                println!(
+                    "fill volume  {:.3}   (area {:.3})",
+                    t.fill_volume, t.fill_area
+                );
                 println!("net volume   {:.3}", t.net_volume);
                 println!("area covered {:.3}", t.area);
             }

@@ -223,7 +223,12 @@ pub fn run(
     {
         return tiled::run(config, t, mesh, sinks);
     }
-    if config.options().tiles.as_ref().is_some_and(|t| t.scope.is_some()) {
+    if config
+        .options()
+        .tiles
+        .as_ref()
+        .is_some_and(|t| t.scope.is_some())
+    {
         return Err(Error::Options(
             "a task of a plan runs in exact tiles, which need LAS/LAZ points without \
              breaklines, trimming polygons or --no-flat-triangles, swept along y"

@@ -47,9 +47,7 @@ fn outputs<'a>(records: &'a [TaskRecord], name: &str) -> Result<Vec<&'a Path>> {
                 .iter()
                 .find(|(n, _)| n == name)
                 .map(|(_, p)| p.as_path())
-                .ok_or_else(|| {
-                    Error::Options(format!("task {} wrote no {name} output", r.index))
-                })
+                .ok_or_else(|| Error::Options(format!("task {} wrote no {name} output", r.index)))
         })
         .collect()
 }
@@ -72,7 +70,12 @@ fn mosaic_grid(plan: &Plan, nodata: f32, crs: Option<&Crs>) -> Result<crate::ras
     let cell = plan
         .cell
         .ok_or_else(|| Error::Options("the plan makes no DEM".into()))?;
-    let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut b = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     for t in &plan.tiles {
         b = [
             b[0].min(t.bounds[0]),

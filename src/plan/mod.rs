@@ -398,7 +398,18 @@ mod tests {
         assert_eq!(p.tiles.len(), 3 * 4);
         assert_eq!((p.tiles[0].tx, p.tiles[0].ty), (5356, 27949));
         assert!(p.tiles.iter().all(|t| t.files == vec![0]));
-        assert!(Plan::new("dem", vec![], vec![], &[sample.clone()], 16.3, 4.0, Some(0.5)).is_err());
+        assert!(
+            Plan::new(
+                "dem",
+                vec![],
+                vec![],
+                &[sample.clone()],
+                16.3,
+                4.0,
+                Some(0.5)
+            )
+            .is_err()
+        );
         let dir = tempfile::tempdir().unwrap();
         let path = p.save(dir.path()).unwrap();
         assert_eq!(Plan::load(&path).unwrap(), p);

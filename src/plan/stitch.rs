@@ -78,11 +78,19 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
                 .as_array()
                 .ok_or_else(|| bad(path, "a feature without coordinates"))?
                 .iter()
-                .map(|p| [p[0].as_f64().unwrap_or(f64::NAN), p[1].as_f64().unwrap_or(f64::NAN)])
+                .map(|p| {
+                    [
+                        p[0].as_f64().unwrap_or(f64::NAN),
+                        p[1].as_f64().unwrap_or(f64::NAN),
+                    ]
+                })
                 .collect();
             let closed = f["properties"]["closed"].as_bool().unwrap_or(false);
             if closed {
-                w.line_string(&serde_json::json!({"elevation": level, "closed": true}), pts)?;
+                w.line_string(
+                    &serde_json::json!({"elevation": level, "closed": true}),
+                    pts,
+                )?;
                 s.features += 1;
                 s.rings += 1;
             } else {
@@ -146,7 +154,10 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
         if closed {
             s.rings += 1;
         }
-        w.line_string(&serde_json::json!({"elevation": level, "closed": closed}), pts)
+        w.line_string(
+            &serde_json::json!({"elevation": level, "closed": closed}),
+            pts,
+        )
     };
     for i in 0..open.len() {
         if !has_prev[i] && !used[i] {

@@ -98,7 +98,10 @@ impl Scope {
     /// plan's closed overlap test selects its file).
     pub fn reach(&self, u: &[f64; 4]) -> f64 {
         let t = &self.tile;
-        let d = (u[0] - t[2]).max(t[0] - u[2]).max(u[1] - t[3]).max(t[1] - u[3]);
+        let d = (u[0] - t[2])
+            .max(t[0] - u[2])
+            .max(u[1] - t[3])
+            .max(t[1] - u[3]);
         d.max(0.0) * (1.0 + 1e-9) + 1e-9
     }
 }

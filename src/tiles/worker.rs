@@ -114,11 +114,8 @@ pub(crate) fn run_tile(
             }
         }
         // Every point there is: all the blocks, and (for a task) nothing unread in the files.
-        let full = loaded.rect.contains_rect(&occ)
-            && index
-                .scope
-                .as_ref()
-                .is_none_or(|sc| sc.complete());
+        let full =
+            loaded.rect.contains_rect(&occ) && index.scope.as_ref().is_none_or(|sc| sc.complete());
         let t = match triangulate(&pts, &Options { duplicates: policy }) {
             Ok(t) => t,
             Err(Error::TooFewPoints { .. } | Error::AllCollinear { .. }) if !full => {

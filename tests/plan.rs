@@ -1,0 +1,384 @@
+//! `sweeptin plan` / `run` / `merge`: a job cut into tasks, run locally, through GNU parallel and
+//! as a job array would (the task index from the environment), gives the same DEM (every cell,
+//! bit for bit), the same contour polylines and the same volumes as one run over all the points;
+//! empty tasks are not failures; what a plan cannot do exactly is refused.
+
+#[path = "support/data.rs"]
+mod data;
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use sweeptin::input::raster::RasterReader;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+}
+
+fn ok(out: Output, what: &str) -> Output {
+    assert!(
+        out.status.success(),
+        "{what} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn sweeptin(args: &[&str], what: &str) -> Output {
+    ok(bin().args(args).output().unwrap(), what)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Every cell's value bits, and the raster's size and origin.
+fn cells(path: &Path) -> (u32, u32, [f64; 6], Vec<u64>) {
+    let mut r = RasterReader::open(path).unwrap();
+    let spec = r.spec().clone();
+    let v = r.read_window(0, 0, spec.cols, spec.rows).unwrap();
+    let bits = v
+        .iter()
+        .map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() })
+        .collect();
+    (spec.cols, spec.rows, spec.transform, bits)
+}
+
+/// `(elevation, closed, points)` of every contour line, rings rotated to start at their smallest
+/// point: the same for any order of the triangles.
+fn contour_set(path: &Path) -> BTreeSet<(u64, bool, Vec<(u64, u64)>)> {
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let mut out = BTreeSet::new();
+    for f in doc["features"].as_array().unwrap() {
+        let z = f["properties"]["elevation"].as_f64().unwrap().to_bits();
+        let closed = f["properties"]["closed"].as_bool().unwrap();
+        let mut pts: Vec<(u64, u64)> = f["geometry"]["coordinates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| {
+                (
+                    p[0].as_f64().unwrap().to_bits(),
+                    p[1].as_f64().unwrap().to_bits(),
+                )
+            })
+            .collect();
+        if closed {
+            pts.pop();
+            let i = (0..pts.len()).min_by_key(|&i| pts[i]).unwrap();
+            pts.rotate_left(i);
+        }
+        out.insert((z, closed, pts));
+    }
+    out
+}
+
+/// The union of a plan's tiles `xmin,ymin,xmax,ymax`, and its number of tasks.
+fn plan_extent(plan: &Path) -> (String, usize) {
+    let p: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(plan).unwrap()).unwrap();
+    let tiles = p["tiles"].as_array().unwrap();
+    let mut b = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for t in tiles {
+        let t: Vec<f64> = t["bounds"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        b = [
+            b[0].min(t[0]),
+            b[1].min(t[1]),
+            b[2].max(t[2]),
+            b[3].max(t[3]),
+        ];
+    }
+    (format!("{},{},{},{}", b[0], b[1], b[2], b[3]), tiles.len())
+}
+
+fn records(dir: &Path, n: usize) -> Vec<serde_json::Value> {
+    (0..n)
+        .map(|i| {
+            let p = dir.join("tiles").join(format!("task_{i}.json"));
+            serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn dem_and_contours_of_a_plan_equal_one_run() {
+    // Ground of the six IGN 50 m tiles: gaps under buildings, and the data's outer edge, where
+    // tasks must read farther than their first buffer.
+    let dir_data = data::data_dir().join("lidar/ign_50m_tiles");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir_data)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "laz"))
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 6);
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("job");
+    let mut args: Vec<&str> = vec!["plan", "--buffer", "2", "dem"];
+    args.extend(files.iter().map(|p| s(p)));
+    let contours_planned = t.path().join("planned.geojson");
+    args.extend([
+        "--class",
+        "2",
+        "--cell",
+        "0.5",
+        "--contours",
+        s(&contours_planned),
+        "--interval",
+        "0.25",
+        "--tile",
+        "50",
+        "-o",
+        s(&job),
+    ]);
+    sweeptin(&args, "plan");
+    let plan = job.join("plan.json");
+    let (bbox, n) = plan_extent(&plan);
+    assert!(n >= 6, "{n} tasks");
+
+    // One run over all the points, on the mosaic's extent.
+    let single = t.path().join("single.tif");
+    let single_c = t.path().join("single.geojson");
+    let mut one: Vec<&str> = vec!["dem"];
+    one.extend(files.iter().map(|p| s(p)));
+    one.extend([
+        "--class",
+        "2",
+        "--cell",
+        "0.5",
+        "--bbox",
+        &bbox,
+        "--buffer",
+        "10000",
+        "--contours",
+        s(&single_c),
+        "--interval",
+        "0.25",
+        "-o",
+        s(&single),
+        "-q",
+    ]);
+    sweeptin(&one, "single run");
+
+    // Locally, two tasks at a time.
+    sweeptin(
+        &["run", s(&plan), "--all", "--jobs", "2", "-q"],
+        "run --all",
+    );
+    let recs = records(&job, n);
+    assert!(
+        recs.iter().any(|r| r["runs"].as_u64().unwrap() > 1),
+        "no task had to widen its buffer: {recs:?}"
+    );
+    let mosaic = t.path().join("mosaic.tif");
+    let merged_c = t.path().join("merged.geojson");
+    sweeptin(
+        &[
+            "merge",
+            s(&plan),
+            "-o",
+            s(&mosaic),
+            "--contours",
+            s(&merged_c),
+        ],
+        "merge",
+    );
+    assert_eq!(
+        cells(&mosaic),
+        cells(&single),
+        "the mosaic differs from one run"
+    );
+    let one_set = contour_set(&single_c);
+    assert!(one_set.len() > 100);
+    assert_eq!(contour_set(&merged_c), one_set, "stitched contours differ");
+
+    // A VRT over the tiles: GDAL reads the same cells.
+    let vrt = t.path().join("mosaic.vrt");
+    sweeptin(&["merge", s(&plan), "-o", s(&vrt)], "merge to VRT");
+    if data::tool("gdal_translate", "dem_and_contours_of_a_plan_equal_one_run") {
+        let from_vrt = t.path().join("from_vrt.tif");
+        let out = Command::new("gdal_translate")
+            .args(["-q", s(&vrt), s(&from_vrt)])
+            .output()
+            .unwrap();
+        ok(out, "gdal_translate of the VRT");
+        assert_eq!(
+            cells(&from_vrt),
+            cells(&single),
+            "GDAL reads other cells in the VRT"
+        );
+    }
+
+    // Re-running is safe; --resume skips finished tasks.
+    let out = sweeptin(&["run", s(&plan), "--task", "0", "--resume"], "resume");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("skipped"));
+
+    // GNU parallel, as in docs/SCALING.md, into a fresh copy of the plan.
+    if data::tool("parallel", "dem_and_contours_of_a_plan_equal_one_run") {
+        std::fs::remove_dir_all(job.join("tiles")).unwrap();
+        std::fs::create_dir(job.join("tiles")).unwrap();
+        let list: Vec<String> = (0..n).map(|i| i.to_string()).collect();
+        let out = Command::new("parallel")
+            .args(["--halt", "now,fail=1", "-j", "2"])
+            .arg(env!("CARGO_BIN_EXE_sweeptin"))
+            .args([
+                "run",
+                s(&plan),
+                "--task",
+                "{}",
+                "--quiet",
+                "--threads",
+                "1",
+                ":::",
+            ])
+            .args(&list)
+            .output()
+            .unwrap();
+        ok(out, "GNU parallel");
+        let again = t.path().join("parallel.tif");
+        sweeptin(
+            &["merge", s(&plan), "-o", s(&again)],
+            "merge after parallel",
+        );
+        assert_eq!(cells(&again), cells(&single));
+    }
+
+    // A job array gives the index in the environment (Slurm, Kubernetes, AWS Batch).
+    std::fs::remove_file(job.join("tiles/task_1.json")).unwrap();
+    for var in [
+        "SLURM_ARRAY_TASK_ID",
+        "JOB_COMPLETION_INDEX",
+        "AWS_BATCH_JOB_ARRAY_INDEX",
+    ] {
+        let out = bin()
+            .args(["run", s(&plan), "--json", "-q"])
+            .env(var, "1")
+            .output()
+            .unwrap();
+        let out = ok(out, var);
+        let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(r["index"], 1, "{var}");
+    }
+    let again = t.path().join("array.tif");
+    sweeptin(
+        &["merge", s(&plan), "-o", s(&again)],
+        "merge after the array",
+    );
+    assert_eq!(cells(&again), cells(&single));
+}
+
+#[test]
+fn volume_of_a_plan_equals_one_run() {
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("job");
+    let out = sweeptin(
+        &["volume", s(&sample), "--plane", "5", "--json", "-q"],
+        "volume",
+    );
+    let one: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    sweeptin(
+        &[
+            "plan",
+            "volume",
+            s(&sample),
+            "--plane",
+            "5",
+            "--tile",
+            "8",
+            "-o",
+            s(&job),
+        ],
+        "plan",
+    );
+    let plan = job.join("plan.json");
+    sweeptin(&["run", s(&plan), "--all", "--jobs", "2", "-q"], "run");
+    let out = sweeptin(&["merge", s(&plan), "--json"], "merge");
+    let merged: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for k in ["cut_volume", "fill_volume", "cut_area", "fill_area", "area"] {
+        assert_eq!(merged["volume"][k], one[k], "{k}: summed exactly");
+    }
+}
+
+#[test]
+fn empty_tasks_pass_and_what_a_plan_cannot_do_is_refused() {
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("job");
+    // No point of class 18: every task is empty, which is not a failure.
+    sweeptin(
+        &[
+            "plan",
+            "dem",
+            s(&sample),
+            "--class",
+            "18",
+            "--cell",
+            "0.5",
+            "--tile",
+            "16",
+            "-o",
+            s(&job),
+        ],
+        "plan",
+    );
+    let plan = job.join("plan.json");
+    let out = bin()
+        .args(["merge", s(&plan), "-o"])
+        .arg(t.path().join("early.tif"))
+        .output();
+    let out = out.unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("have not finished"));
+    let out = sweeptin(&["run", s(&plan), "--task", "0", "--json"], "an empty task");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("warning"));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["status"], "empty");
+    let out = bin()
+        .args(["run", s(&plan), "--task", "999"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("does not exist"));
+    let out = bin()
+        .args(["run", s(&plan)])
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .output();
+    assert!(String::from_utf8_lossy(&out.unwrap().stderr).contains("which task"));
+
+    let refuse = |extra: &[&str], says: &str| {
+        let mut a = vec!["plan", "dem", s(&sample), "--tile", "16", "-o"];
+        let d = t.path().join("refused");
+        a.push(s(&d));
+        a.extend_from_slice(extra);
+        let out = bin().args(&a).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{extra:?}");
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(err.contains(says), "{extra:?}: {err}");
+        assert!(!d.join("plan.json").exists());
+    };
+    refuse(
+        &["--breaklines", "lines.geojson"],
+        "not yet proved exact in tiles",
+    );
+    refuse(&["--bbox", "0,0,1,1"], "leave --bbox out");
+    refuse(&["--cell", "3"], "whole multiple of the cell");
+    refuse(&["--engine", "sweep"], "tiled engine");
+    let out = bin()
+        .args(["plan", "tin", s(&sample), "--tile", "16", "-o"])
+        .arg(t.path().join("tin"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
