@@ -44,9 +44,12 @@ fn cells(path: &Path) -> (u32, u32, [f64; 6], Vec<u64>) {
     (spec.cols, spec.rows, spec.transform, bits)
 }
 
+/// A contour line: elevation, closed, points (as bits).
+type Line = (u64, bool, Vec<(u64, u64)>);
+
 /// `(elevation, closed, points)` of every contour line, rings rotated to start at their smallest
 /// point: the same for any order of the triangles.
-fn contour_set(path: &Path) -> BTreeSet<(u64, bool, Vec<(u64, u64)>)> {
+fn contour_set(path: &Path) -> BTreeSet<Line> {
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let mut out = BTreeSet::new();

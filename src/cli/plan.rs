@@ -198,10 +198,8 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
         }
     }
     match job {
-        Job::Dem(d) => {
-            if d.dem.snap || d.dem.buffer.is_some() {
-                bail!("a plan's DEM covers the tiles: leave --snap and --buffer out");
-            }
+        Job::Dem(d) if d.dem.snap || d.dem.buffer.is_some() => {
+            bail!("a plan's DEM covers the tiles: leave --snap and --buffer out");
         }
         Job::Volume(v) if v.plane.is_none() => {
             bail!("a plan computes volumes against a plane (--plane Z); --surface needs one run")
@@ -581,7 +579,7 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
             let contours = args.contours.clone().or_else(|| planned(&plan, "contours"));
             if let (Some(c), true) = (&contours, d.contours.is_some()) {
                 let s = merge::merge_contours(&plan, &dir, c, crs.as_ref())?;
-                summary.insert("contours".into(), serde_json::to_value(&s)?);
+                summary.insert("contours".into(), serde_json::to_value(s)?);
             }
             if let Some(png) = args
                 .hillshade
@@ -592,7 +590,7 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
                     bail!("--hillshade shades a GeoTIFF mosaic: merge with -o OUT.tif");
                 }
                 let (p, h) = shade(out, &png)?;
-                let mut v = serde_json::to_value(&h)?;
+                let mut v = serde_json::to_value(h)?;
                 v["path"] = serde_json::json!(p);
                 summary.insert("hillshade".into(), v);
             }
@@ -604,7 +602,7 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
                 .context("give the contours with -o OUT.geojson")?;
             super::input::check_output(out)?;
             let s = merge::merge_contours(&plan, &dir, out, crs.as_ref())?;
-            summary.insert("contours".into(), serde_json::to_value(&s)?);
+            summary.insert("contours".into(), serde_json::to_value(s)?);
         }
         Job::Volume(_) => {
             let t = merge::merge_volume(&plan, &dir)?;
@@ -620,7 +618,7 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
                 println!("net volume   {:.3}", t.net_volume);
                 println!("area covered {:.3}", t.area);
             }
-            summary.insert("volume".into(), serde_json::to_value(&t)?);
+            summary.insert("volume".into(), serde_json::to_value(t)?);
         }
     }
     let recs = merge::records(&plan, &dir)?;

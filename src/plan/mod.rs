@@ -403,7 +403,7 @@ mod tests {
                 "dem",
                 vec![],
                 vec![],
-                &[sample.clone()],
+                std::slice::from_ref(&sample),
                 16.3,
                 4.0,
                 Some(0.5)
