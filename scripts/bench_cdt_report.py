@@ -4,7 +4,7 @@
   bench_cdt_report.py record RESULTS LABEL INPUT EXIT_CODE TIME_LOG JSON_LINE
   bench_cdt_report.py table RESULTS [--command C] [--load-before L] [--load-after L]
 
-Records are the JSON lines of examples/bench_cdt.rs plus the label, the input name and the
+Records are the JSON lines of dev/bench_cdt.rs plus the label, the input name and the
 /usr/bin/time -v max RSS. `prep` records (label "clean") give the input table; the others give one
 row per tool: minimum, median and first-run time, ratio to the faster peer (spade, cdt), peak RSS
 of the triangulation, bytes per vertex, triangle count (marked when it differs from spade's).

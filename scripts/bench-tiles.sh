@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# Exact tiles on every core (issue: exact tiles in parallel): one job, --threads 1 against 2,
+# and the single sweep (--engine sweep) side by side in one run, under /usr/bin/time -v, with
+# --mem 128M, on the real 13.2M-point ARSO tile; optionally on a generated 100M-point LAZ.
+# Prints a Markdown table: wall, user CPU, peak RSS, points/s, and the tiles' re-runs and buffer.
+#
+#   scripts/bench-tiles.sh [--big] [--mem 128M] [--out DIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+MEM=128M; OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench}; BIG=0
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --big) BIG=1; shift;;
+        --mem) MEM=$2; shift 2;;
+        --out) OUT=$2; shift 2;;
+        *) echo "unknown option $1" >&2; exit 2;;
+    esac
+done
+mkdir -p "$OUT"
+command -v /usr/bin/time >/dev/null || { apt-get install -y -qq time >/dev/null; }
+cargo build --release --quiet --bin sweeptin --example gen_laz
+BIN=target/release/sweeptin
+ARSO=${SWEEPTIN_DATA:-../shared/data}/lidar/arso_TM_511_122_from_ept.laz
+
+row() { # label points command…
+    local label=$1 points=$2; shift 2
+    local log="$OUT/bench.time"
+    /usr/bin/time -v "$@" > "$OUT/bench.json" 2> "$log"
+    python3 - "$label" "$points" "$log" "$OUT/bench.json" <<'PY'
+import json, re, sys
+label, points, log, js = sys.argv[1:5]
+t = open(log).read()
+wall = t.split("Elapsed (wall clock) time (h:mm:ss or m:ss):")[1].split("\n")[0].strip()
+p = [float(x) for x in wall.split(":")]
+secs = p[-1] + 60 * p[-2] + (3600 * p[-3] if len(p) > 2 else 0)
+user = float(re.search(r"User time \(seconds\): ([\d.]+)", t).group(1))
+rss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", t).group(1)) / 1024
+try:
+    d = json.load(open(js)); run = d.get("run", d); tiles = run.get("tiles") or {}
+    extra = f"{tiles.get('tiles', '–')} tiles, {tiles.get('reruns', '–')} re-runs, buffer ≤ {tiles.get('max_buffer', '–')}"
+except Exception:
+    extra = ""
+n = float(points)
+print(f"| {label} | {secs:.2f} s | {user:.2f} s | {rss:.0f} MB | {n / secs / 1e6:.2f} M/s | {user / (n / 1e6) * 1e3:.0f} ms | {extra} |")
+PY
+}
+
+echo "| job | wall | user CPU | peak RSS | points/s | user CPU per M points | tiles |"
+echo "|---|---:|---:|---:|---:|---:|---|"
+if [ -f "$ARSO" ]; then
+    N=13216491; G=9000000
+    for t in 1 2; do
+        row "ARSO dem --cell 1, --threads $t" $N "$BIN" dem "$ARSO" --cell 1 -o "$OUT/a.tif" --mem "$MEM" --threads $t --json
+    done
+    row "ARSO dem --cell 1, --engine sweep" $N "$BIN" dem "$ARSO" --cell 1 -o "$OUT/s.tif" --mem "$MEM" --engine sweep --json
+    cmp "$OUT/a.tif" "$OUT/s.tif" || echo "| (tiled and sweep DEMs differ!) |"
+    for t in 1 2; do
+        row "ARSO dem --cell 1 --class 2, --threads $t" $N "$BIN" dem "$ARSO" --cell 1 --class 2 -o "$OUT/g.tif" --mem "$MEM" --threads $t --json
+    done
+    row "ARSO dem --cell 1 --class 2, --engine sweep" $N "$BIN" dem "$ARSO" --cell 1 --class 2 -o "$OUT/gs.tif" --mem "$MEM" --engine sweep --json
+    cmp "$OUT/g.tif" "$OUT/gs.tif" || echo "| (tiled and sweep ground DEMs differ!) |"
+    row "ARSO tin → PLY, --threads 2" $N "$BIN" tin "$ARSO" -o "$OUT/a.ply" --mem "$MEM" --json
+    row "ARSO tin → PLY, --engine sweep" $N "$BIN" tin "$ARSO" -o "$OUT/s.ply" --mem "$MEM" --engine sweep --json
+    rm -f "$OUT"/a.ply "$OUT"/s.ply
+fi
+if [ "$BIG" = 1 ]; then
+    f="$OUT/lidar-100M.laz"
+    [ -f "$f" ] || target/release/examples/gen_laz 100M "$f"
+    row "100M generated dem --cell 1, --threads 2" 100000000 "$BIN" dem "$f" --cell 1 -o "$OUT/big.tif" --mem "$MEM" --tmp-dir "$OUT" --json
+fi

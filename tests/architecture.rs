@@ -1,0 +1,163 @@
+//! The house rules of the tree, checked on the source (see docs/ARCHITECTURE.md): the pipeline's
+//! stages import only what lies before them, geometry decisions go through one module, `unsafe`
+//! lives in one file, the library does not use `anyhow`, and files stay small.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// Every `.rs` file under `dir`.
+fn files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            files(&p, out);
+        } else if p.extension().is_some_and(|e| e == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+fn src() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src")
+}
+
+/// The library's source files (the binary's `cli/` and `main.rs` left out), with their top-level
+/// module and their code: comments and the unit-test module at the end of a file removed.
+fn library() -> Vec<(PathBuf, String, String)> {
+    let root = src();
+    let mut all = Vec::new();
+    files(&root, &mut all);
+    all.sort();
+    all.into_iter()
+        .filter_map(|p| {
+            let rel = p.strip_prefix(&root).unwrap().to_path_buf();
+            let first = rel.components().next()?.as_os_str().to_str()?.to_string();
+            if first == "cli" || first == "main.rs" || rel.ends_with("tests.rs") {
+                return None;
+            }
+            let top = first.trim_end_matches(".rs").to_string();
+            let text = std::fs::read_to_string(&p).unwrap();
+            let code = match text.find("#[cfg(test)]\nmod tests") {
+                Some(i) => &text[..i],
+                None => &text[..],
+            };
+            let code: String = code
+                .lines()
+                .filter(|l| !l.trim_start().starts_with("//"))
+                .collect::<Vec<_>>()
+                .join("\n");
+            Some((rel, top, code))
+        })
+        .collect()
+}
+
+/// Which top-level modules each top-level module names as `crate::module`.
+fn imports() -> BTreeMap<String, BTreeSet<String>> {
+    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (_, top, code) in library() {
+        let mut rest = code.as_str();
+        while let Some(i) = rest.find("crate::") {
+            rest = &rest[i + 7..];
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_lowercase() || *c == '_')
+                .collect();
+            if !name.is_empty() && name != top {
+                g.entry(top.clone()).or_default().insert(name);
+            }
+        }
+    }
+    g
+}
+
+#[test]
+fn stages_import_only_what_comes_before_them() {
+    let g = imports();
+    let never = |module: &str, forbidden: &[&str]| {
+        let deps = g.get(module).cloned().unwrap_or_default();
+        for f in forbidden {
+            assert!(
+                !deps.contains(*f),
+                "`{module}` must not import `{f}` (it imports {deps:?})"
+            );
+        }
+    };
+    let late = [
+        "input", "output", "products", "pipeline", "tiles", "plan", "sink",
+    ];
+    // Geometry first: the predicates and exact helpers need nothing but the error type.
+    let geom: Vec<&String> = g
+        .get("geom")
+        .map(|d| d.iter().filter(|m| *m != "error").collect())
+        .unwrap_or_default();
+    assert!(geom.is_empty(), "`geom` imports {geom:?}");
+    // The core knows nothing of files, products or how runs are organised.
+    for core in [
+        "mesh",
+        "sweep",
+        "finalise",
+        "sort",
+        "tin",
+        "triangulation",
+        "validate",
+    ] {
+        never(core, &late);
+    }
+    // Readers come before the sweep and the outputs.
+    never(
+        "input",
+        &[
+            "sweep", "finalise", "output", "products", "pipeline", "tiles", "plan", "sink",
+        ],
+    );
+    // Products and writers consume triangles; they do not run triangulations.
+    for consumer in ["products", "output"] {
+        never(
+            consumer,
+            &["pipeline", "tiles", "plan", "sweep", "finalise"],
+        );
+    }
+    never(
+        "sink",
+        &["pipeline", "tiles", "plan", "sweep", "products", "input"],
+    );
+    // Plans are built on tiles, never the other way round.
+    for m in g.keys().filter(|m| *m != "plan" && *m != "lib") {
+        never(m, &["plan"]);
+    }
+}
+
+#[test]
+fn one_home_for_predicates_unsafe_and_anyhow() {
+    for (rel, _, code) in library() {
+        let name = rel.to_string_lossy().replace('\\', "/");
+        if code.contains("robust::") {
+            assert_eq!(name, "geom/predicates.rs", "{name} calls `robust` directly");
+        }
+        if code.contains("unsafe ") || code.contains("allow(unsafe_code)") {
+            assert_eq!(name, "sort/mmap.rs", "{name} has unsafe code");
+        }
+        assert!(
+            !code.contains("anyhow"),
+            "{name}: the library uses `anyhow`"
+        );
+        assert!(
+            !code.contains(".expect(\"streaming\")"),
+            "{name}: the streaming sweep owns its finaliser"
+        );
+    }
+}
+
+#[test]
+fn files_stay_small() {
+    let mut all = Vec::new();
+    files(&src(), &mut all);
+    for p in all {
+        let n = std::fs::read_to_string(&p).unwrap().lines().count();
+        assert!(
+            n <= 800,
+            "{} has {n} lines (keep files under ~800)",
+            p.display()
+        );
+    }
+}
