@@ -6,7 +6,7 @@
 #   scripts/bench-cdt.sh [--repeat N] [--inputs "contours coastline"] [--points N]
 #                        [--contour-segments N] [--coast-vertices N] [--out DIR]
 #
-# Inputs (examples/bench_cdt.rs, seed 1), each generated and cleaned once (`bench_cdt prep`,
+# Inputs (dev/bench_cdt.rs, seed 1), each generated and cleaned once (`bench_cdt prep`,
 # which also times `breaklines::clean::clean`) into a scratch file, then read by every tool:
 #   contours   synth::contours(~1M segments) + synth::contour_points(1M)
 #   coastline  synth::coastline(~2.9M vertices) + synth::coastline_points(1M)

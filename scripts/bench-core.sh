@@ -10,7 +10,7 @@
 # --out DIR      where results.jsonl, the /usr/bin/time logs and table.md go
 #                (default: bench-out/core-<date>, ignored by git).
 #
-# In-process peers (examples/bench_core.rs): sweeptin (rayon's default pool, used by its sort),
+# In-process peers (dev/bench_core.rs): sweeptin (rayon's default pool, used by its sort),
 # sweeptin with one thread ("sweeptin-1t"), delaunator, spade (bulk_load), cdt.
 # External peers, built in a scratch directory outside the repository ($SWEEPTIN_PEERS_DIR,
 # default $TMPDIR/sweeptin-peers), each skipped with a message when it cannot be built:
