@@ -32,6 +32,13 @@ impl Hasher for IdHasher {
 /// A `HashMap` from vertex numbers.
 pub type IdMap<V> = HashMap<u64, V, BuildHasherDefault<IdHasher>>;
 
+/// A `HashMap` keyed by our own integers or coordinate bits (positions of points, triangles as
+/// their corners' positions), hashed as [`IdMap`] is.
+pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<IdHasher>>;
+
+/// A set keyed as [`FastMap`].
+pub type FastSet<K> = std::collections::HashSet<K, BuildHasherDefault<IdHasher>>;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,7 +11,7 @@ use super::worker::{NOT_OWNED, TileOutput};
 use crate::breaklines::Trim;
 use crate::error::Result;
 use crate::sink::{MeshSink, TriangleSink};
-use std::collections::HashMap;
+use crate::idmap::{FastMap, FastSet};
 
 /// State of a vertex some triangle has used or will use.
 #[derive(Debug, Clone, Copy)]
@@ -30,9 +30,9 @@ pub(crate) struct TileWriter<'m, 'a, 'b> {
     sinks: &'a mut [&'b mut dyn TriangleSink],
     /// `--max-edge`: triangles it drops still count for their vertices, but are not written.
     trim: Option<Trim>,
-    live: HashMap<(u64, u64), Live>,
+    live: FastMap<(u64, u64), Live>,
     /// A task's boundary triangles already given (they can meet two of its tiles).
-    boundary: std::collections::HashSet<[(u64, u64); 3]>,
+    boundary: FastSet<[(u64, u64); 3]>,
     next_id: u64,
     /// Triangles and vertices written, triangles trimmed.
     pub triangles: u64,
@@ -56,7 +56,7 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             mesh,
             sinks,
             trim,
-            live: HashMap::new(),
+            live: FastMap::default(),
             boundary: Default::default(),
             next_id: 0,
             triangles: 0,

@@ -4,7 +4,7 @@
 use super::grid::{BlockRect, TileGrid};
 use super::worker::{NOT_OWNED, TileOutput};
 use std::cmp::Ordering;
-use std::collections::HashMap;
+use crate::idmap::{FastMap, FastSet};
 
 /// Decides which points the tile owns: clearly inside or outside its rectangle by a margin, or
 /// else by the block function itself (the one rule of ownership).
@@ -103,9 +103,11 @@ pub(crate) fn from_list(
     out: &mut TileOutput,
 ) {
     let key = |p: &[f64; 3]| (p[0].to_bits(), p[1].to_bits());
-    let mut ids: HashMap<(u64, u64), u32> = HashMap::with_capacity(tris.len() / 2 + 16);
+    let mut ids: FastMap<(u64, u64), u32> = FastMap::default();
+    ids.reserve(tris.len() / 2 + 16);
     let mut pts: Vec<[f64; 3]> = Vec::with_capacity(tris.len() / 2 + 16);
-    let mut seen = std::collections::HashSet::with_capacity(tris.len());
+    let mut seen = FastSet::default();
+    seen.reserve(tris.len());
     let mut unique: Vec<[u32; 3]> = Vec::with_capacity(tris.len());
     for t in tris {
         let v = t.map(|p| {
