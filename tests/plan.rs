@@ -5,8 +5,9 @@
 
 #[path = "support/data.rs"]
 mod data;
+#[path = "support/mesh.rs"]
+mod mesh;
 
-use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use sweeptin::input::raster::RasterReader;
@@ -42,39 +43,6 @@ fn cells(path: &Path) -> (u32, u32, [f64; 6], Vec<u64>) {
         .map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() })
         .collect();
     (spec.cols, spec.rows, spec.transform, bits)
-}
-
-/// A contour line: elevation, closed, points (as bits).
-type Line = (u64, bool, Vec<(u64, u64)>);
-
-/// `(elevation, closed, points)` of every contour line, rings rotated to start at their smallest
-/// point: the same for any order of the triangles.
-fn contour_set(path: &Path) -> BTreeSet<Line> {
-    let doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
-    let mut out = BTreeSet::new();
-    for f in doc["features"].as_array().unwrap() {
-        let z = f["properties"]["elevation"].as_f64().unwrap().to_bits();
-        let closed = f["properties"]["closed"].as_bool().unwrap();
-        let mut pts: Vec<(u64, u64)> = f["geometry"]["coordinates"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|p| {
-                (
-                    p[0].as_f64().unwrap().to_bits(),
-                    p[1].as_f64().unwrap().to_bits(),
-                )
-            })
-            .collect();
-        if closed {
-            pts.pop();
-            let i = (0..pts.len()).min_by_key(|&i| pts[i]).unwrap();
-            pts.rotate_left(i);
-        }
-        out.insert((z, closed, pts));
-    }
-    out
 }
 
 /// The union of a plan's tiles `xmin,ymin,xmax,ymax`, and its number of tasks.
@@ -202,9 +170,13 @@ fn dem_and_contours_of_a_plan_equal_one_run() {
         cells(&single),
         "the mosaic differs from one run"
     );
-    let one_set = contour_set(&single_c);
+    let one_set = mesh::contour_set(&std::fs::read(&single_c).unwrap());
     assert!(one_set.len() > 100);
-    assert_eq!(contour_set(&merged_c), one_set, "stitched contours differ");
+    assert_eq!(
+        mesh::contour_set(&std::fs::read(&merged_c).unwrap()),
+        one_set,
+        "stitched contours differ"
+    );
 
     // A VRT over the tiles: GDAL reads the same cells.
     let vrt = t.path().join("mosaic.vrt");

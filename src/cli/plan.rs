@@ -607,16 +607,8 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
         Job::Volume(_) => {
             let t = merge::merge_volume(&plan, &dir)?;
             if !args.json {
-                println!(
-                    "cut volume   {:.3}   (area {:.3})",
-                    t.cut_volume, t.cut_area
-                );
-                println!(
-                    "fill volume  {:.3}   (area {:.3})",
-                    t.fill_volume, t.fill_area
-                );
-                println!("net volume   {:.3}", t.net_volume);
-                println!("area covered {:.3}", t.area);
+                println!("the tasks' volumes, summed:");
+                super::volume::print_totals(&t);
             }
             summary.insert("volume".into(), serde_json::to_value(t)?);
         }

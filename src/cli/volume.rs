@@ -86,16 +86,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => "the reference surface".to_string(),
     };
     println!("against {against}:");
-    println!(
-        "  cut volume   {:.3}   (area {:.3})",
-        t.cut_volume, t.cut_area
-    );
-    println!(
-        "  fill volume  {:.3}   (area {:.3})",
-        t.fill_volume, t.fill_area
-    );
-    println!("  net volume   {:.3}", t.net_volume);
-    println!("  area covered {:.3}", t.area);
+    print_totals(t);
     if let Some(b) = v.boundary_area {
         println!("  boundary     {b:.3}");
     }
@@ -106,4 +97,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// Cut, fill, net volume and the areas, one per line (as `sweeptin volume` prints them).
+pub fn print_totals(t: &sweeptin::sink::CutFillTotals) {
+    println!(
+        "  cut volume   {:.3}   (area {:.3})",
+        t.cut_volume, t.cut_area
+    );
+    println!(
+        "  fill volume  {:.3}   (area {:.3})",
+        t.fill_volume, t.fill_area
+    );
+    println!("  net volume   {:.3}", t.net_volume);
+    println!("  area covered {:.3}", t.area);
 }

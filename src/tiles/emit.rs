@@ -10,8 +10,8 @@
 use super::worker::{NOT_OWNED, TileOutput};
 use crate::breaklines::Trim;
 use crate::error::Result;
-use crate::sink::{MeshSink, TriangleSink};
 use crate::idmap::{FastMap, FastSet};
+use crate::sink::{MeshSink, TriangleSink};
 
 /// State of a vertex some triangle has used or will use.
 #[derive(Debug, Clone, Copy)]

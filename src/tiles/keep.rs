@@ -3,8 +3,8 @@
 
 use super::grid::{BlockRect, TileGrid};
 use super::worker::{NOT_OWNED, TileOutput};
-use std::cmp::Ordering;
 use crate::idmap::{FastMap, FastSet};
+use std::cmp::Ordering;
 
 /// Decides which points the tile owns: clearly inside or outside its rectangle by a margin, or
 /// else by the block function itself (the one rule of ownership).

@@ -109,3 +109,35 @@ pub fn write_las(path: &Path, pts: &[[f64; 3]]) {
     }
     w.close().unwrap();
 }
+
+/// Contour polylines as a sorted set: each with its elevation, rings started at their least
+/// point.
+pub fn contour_set(bytes: &[u8]) -> Vec<String> {
+    let v: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+    let mut out: Vec<String> = v["features"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            let mut c: Vec<(u64, u64)> = f["geometry"]["coordinates"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|p| {
+                    (
+                        p[0].as_f64().unwrap().to_bits(),
+                        p[1].as_f64().unwrap().to_bits(),
+                    )
+                })
+                .collect();
+            if c.len() > 1 && c.first() == c.last() {
+                c.pop();
+                let i = (0..c.len()).min_by_key(|&i| c[i]).unwrap();
+                c.rotate_left(i);
+            }
+            format!("{} {c:?}", f["properties"]["elevation"])
+        })
+        .collect();
+    out.sort();
+    out
+}
