@@ -2,6 +2,9 @@
 //! equals the in-memory CDT whatever the memory budget, real BGT polygons over AHN3 lidar validate
 //! as a CDT, trimming keeps exactly what it should, and bad line input is a clear error.
 
+#[path = "support/data.rs"]
+mod data;
+
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use sweeptin::breaklines::{CleanOptions, read_file};
@@ -153,15 +156,7 @@ fn streamed_contours_equal_the_in_memory_cdt() {
 }
 
 fn shared(name: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data")
-        .join(name);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} not found", p.display());
-        None
-    }
+    data::optional(name, "breaklines_pipeline")
 }
 
 /// BGT polylines lying inside `[x0, x1] × [y0, y1]`, as 2-D lines.

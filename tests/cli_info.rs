@@ -1,21 +1,12 @@
 //! `sweeptin info` end to end, on the real data in `shared/data/lidar` (see tests/lidar_data.rs
 //! for how the folder is found).
 
+#[path = "support/data.rs"]
+mod data;
+use data::data_dir;
+
 use std::path::PathBuf;
 use std::process::{Command, Output};
-
-fn data_dir() -> PathBuf {
-    let candidates = [
-        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
-        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
-        Some(PathBuf::from("/work/shared/data")),
-    ];
-    candidates
-        .into_iter()
-        .flatten()
-        .find(|d| d.join("lidar").is_dir())
-        .expect("real test data not found: set SWEEPTIN_DATA to the folder holding lidar/")
-}
 
 fn lidar(name: &str) -> PathBuf {
     data_dir().join("lidar").join(name)

@@ -3,22 +3,13 @@
 //! The data folder is found through `SWEEPTIN_DATA` (the folder holding `lidar/`), else
 //! `../shared/data` beside the repository, else `/work/shared/data`.
 
+#[path = "support/data.rs"]
+mod data;
+use data::data_dir;
+
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use sweeptin::input::las::{BBox, FileInfo, Filter, LidarPoint, LidarReader, Returns};
-
-fn data_dir() -> PathBuf {
-    let candidates = [
-        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
-        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
-        Some(PathBuf::from("/work/shared/data")),
-    ];
-    candidates
-        .into_iter()
-        .flatten()
-        .find(|d| d.join("lidar").is_dir())
-        .expect("real test data not found: set SWEEPTIN_DATA to the folder holding lidar/")
-}
 
 fn lidar(name: &str) -> PathBuf {
     data_dir().join("lidar").join(name)

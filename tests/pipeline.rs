@@ -1,6 +1,9 @@
 //! The streaming pipeline against the in-memory core: same triangles whatever the memory budget,
 //! real LAS/LAZ files, and byte-identical outputs.
 
+#[path = "support/data.rs"]
+mod data;
+
 #[path = "support/mesh.rs"]
 mod mesh;
 
@@ -82,20 +85,7 @@ fn tiny_budgets_equal_the_in_memory_core() {
 }
 
 fn shared_lidar(name: &str) -> Option<PathBuf> {
-    for base in [
-        std::env::var("SWEEPTIN_DATA").ok().map(PathBuf::from),
-        Some(PathBuf::from("../shared/data")),
-        Some(PathBuf::from("/work/shared/data")),
-    ]
-    .into_iter()
-    .flatten()
-    {
-        let p = base.join("lidar").join(name);
-        if p.exists() {
-            return Some(p);
-        }
-    }
-    None
+    data::optional(&format!("lidar/{name}"), "pipeline")
 }
 
 #[test]

@@ -170,6 +170,29 @@ fn dem_and_contours_of_a_plan_equal_one_run() {
         cells(&single),
         "the mosaic differs from one run"
     );
+    // And it has every cell with data that one run on its own extent has (a centre on the data's
+    // lower edge belongs to the tile below, which the plan must hold).
+    let auto = t.path().join("auto.tif");
+    let mut own: Vec<&str> = vec!["dem"];
+    own.extend(files.iter().map(|p| s(p)));
+    own.extend([
+        "--class",
+        "2",
+        "--cell",
+        "0.5",
+        "--json",
+        "-q",
+        "-o",
+        s(&auto),
+    ]);
+    let out = sweeptin(&own, "single run on its own extent");
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let with_data = |p: &Path| cells(p).3.iter().filter(|&&b| b != u64::MAX).count() as u64;
+    assert_eq!(
+        with_data(&mosaic),
+        summary["dem"]["cells_with_data"].as_u64().unwrap(),
+        "the mosaic lost cells that one run fills"
+    );
     let one_set = mesh::contour_set(&std::fs::read(&single_c).unwrap());
     assert!(one_set.len() > 100);
     assert_eq!(
@@ -350,6 +373,67 @@ fn empty_tasks_pass_and_what_a_plan_cannot_do_is_refused() {
     refuse(&["--bbox", "0,0,1,1"], "leave --bbox out");
     refuse(&["--cell", "3"], "whole multiple of the cell");
     refuse(&["--engine", "sweep"], "tiled engine");
+    refuse(&["--cell", "0.0005"], "16384 cells a side");
+    let hs = sample.to_str().unwrap().to_string();
+    refuse(&["--contours", &hs], "an input of the plan");
+    // Merging onto an input, the plan or a task's output is refused.
+    let done = t.path().join("done");
+    sweeptin(
+        &[
+            "plan",
+            "dem",
+            s(&sample),
+            "--cell",
+            "0.5",
+            "--tile",
+            "32",
+            "-o",
+            s(&done),
+        ],
+        "plan",
+    );
+    let plan2 = done.join("plan.json");
+    sweeptin(&["run", s(&plan2), "--all", "-q"], "run");
+    for (o, says) in [
+        (s(&sample).to_string(), "an input of the plan"),
+        (s(&plan2).to_string(), "an input of the plan"),
+        (
+            t.path().join("m.asc").to_str().unwrap().to_string(),
+            "a .vrt or a .tif",
+        ),
+    ] {
+        let out = bin().args(["merge", s(&plan2), "-o", &o]).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{o}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains(says), "{o}");
+    }
+    let out = bin()
+        .args(["merge", s(&plan2), "-o"])
+        .arg(t.path().join("m.tif"))
+        .args(["--hillshade", s(&sample)])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        std::fs::read(&sample).unwrap().starts_with(b"LASF"),
+        "the input was replaced"
+    );
+    // Planning again into the same directory with other options is refused.
+    let out = bin()
+        .args([
+            "plan",
+            "dem",
+            s(&sample),
+            "--cell",
+            "1",
+            "--tile",
+            "32",
+            "-o",
+            s(&done),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("already holds another plan"));
     let out = bin()
         .args(["plan", "tin", s(&sample), "--tile", "16", "-o"])
         .arg(t.path().join("tin"))

@@ -2,8 +2,12 @@
 //! raster (real LAS data), several products in one pass equal to the separate commands, volumes
 //! from the command line, and clear errors.
 
+#[path = "support/data.rs"]
+mod data;
+use data::data_dir;
+
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn run(args: &[&str]) -> Output {
@@ -25,20 +29,6 @@ fn ok(args: &[&str]) -> Output {
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
-}
-
-/// The real data folder: `SWEEPTIN_DATA`, else `../shared/data` beside the repository, else
-/// `/work/shared/data` (as in `tests/lidar_data.rs`).
-fn data_dir() -> PathBuf {
-    [
-        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
-        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
-        Some(PathBuf::from("/work/shared/data")),
-    ]
-    .into_iter()
-    .flatten()
-    .find(|d| d.join("lidar").is_dir())
-    .expect("real test data not found: set SWEEPTIN_DATA to the folder holding lidar/")
 }
 
 /// `(cols, rows, values)` of a float32 TIFF.

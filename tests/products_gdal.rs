@@ -5,8 +5,12 @@
 //! Each test is skipped, with a message, when the GDAL tool is not installed
 //! (`apt-get install -y gdal-bin`).
 
+#[path = "support/data.rs"]
+mod data;
+use data::data_dir;
+
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn sweeptin(args: &[&str]) -> Output {
@@ -38,20 +42,6 @@ fn gdal(tool: &str, args: &[&str]) -> Option<String> {
             None
         }
     }
-}
-
-/// The real data folder: `SWEEPTIN_DATA`, else `../shared/data` beside the repository, else
-/// `/work/shared/data` (as in `tests/lidar_data.rs`).
-fn data_dir() -> PathBuf {
-    [
-        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
-        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
-        Some(PathBuf::from("/work/shared/data")),
-    ]
-    .into_iter()
-    .flatten()
-    .find(|d| d.join("lidar").is_dir())
-    .expect("real test data not found: set SWEEPTIN_DATA to the folder holding lidar/")
 }
 
 fn plane(x: f64, y: f64) -> f64 {

@@ -1,12 +1,12 @@
-//! The grid reader on the real DEMs of `shared/data/dem` (skipped when the data are absent).
+//! The grid reader on the real DEMs of `shared/data/dem` (required under CI, skipped locally when absent).
+
+#[path = "support/data.rs"]
+mod data;
 use std::path::PathBuf;
 use sweeptin::input::raster::{RasterReader, SampleType};
 
 fn dem(name: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data/dem")
-        .join(name);
-    p.exists().then_some(p)
+    data::optional(&format!("dem/{name}"), "raster_data")
 }
 
 struct Facts {

@@ -1,15 +1,15 @@
 //! Grid to TIN: the output is checked independently of the simplifier, by rasterising the output
 //! triangles (world coordinates, barycentric interpolation) back onto the grid.
+
+#[path = "support/data.rs"]
+mod data;
 use std::path::PathBuf;
 use sweeptin::input::raster::RasterReader;
 use sweeptin::input::raster::RasterSpec;
 use sweeptin::simplify::{Options, Simplified, Stop, simplify};
 
 fn dem(name: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data/dem")
-        .join(name);
-    p.exists().then_some(p)
+    data::optional(&format!("dem/{name}"), "simplify")
 }
 
 /// What the rasterisation found.

@@ -232,6 +232,16 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         _ => (None, Vec::new()),
     };
     outputs.insert(0, ("dir".to_string(), dir.clone()));
+    if let Some(c) = cell
+        && tile / c > 16384.0
+    {
+        bail!(
+            "--tile {tile} holds {:.0} × {:.0} cells of {c}: a task's raster is limited to 16384 \
+             cells a side (use a smaller --tile)",
+            tile / c,
+            tile / c
+        );
+    }
     let buffer = args.buffer.unwrap_or(tile / 10.0);
     let inputs: Vec<PathBuf> = a
         .inputs
@@ -244,7 +254,20 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     if dir.exists() && !dir.is_dir() {
         bail!("{}: not a directory", dir.display());
     }
+    // Outputs the plan will write later must not be its inputs.
+    let mut planned_outputs: Vec<(&str, &Path)> = vec![];
+    for (name, p) in plan.outputs.iter().filter(|(n, _)| n != "dir") {
+        planned_outputs.push((name.as_str(), p.as_path()));
+    }
+    distinct_outputs(&planned_outputs, &inputs)?;
     let path = plan.save(&dir)?;
+    if plan.tiles.len() > 1000 {
+        eprintln!(
+            "sweeptin: warning: {} tasks: Slurm's default MaxArraySize is 1001; a larger --tile \
+             makes fewer, longer tasks",
+            plan.tiles.len()
+        );
+    }
     let points: u64 = plan.files.iter().map(|f| f.points).sum();
     eprintln!(
         "sweeptin: {} tasks (tiles of {tile}, first buffer {buffer}) over {} files, {points} \
@@ -253,6 +276,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         plan.files.len(),
         path.display()
     );
+    println!("{}", plan.tiles.len());
     eprintln!(
         "  next: sweeptin run {} --all --jobs N   (or a job array of {} tasks: --array=0-{})",
         path.display(),
@@ -275,16 +299,20 @@ fn absolute_inputs(argv: &[String], given: &[PathBuf], abs: &[PathBuf]) -> Vec<S
 }
 
 /// The directory of a plan file.
-fn plan_dir(path: &Path) -> PathBuf {
-    match path.parent() {
+/// The directory of a plan file, absolute (task records then name their outputs wherever the
+/// task ran from).
+fn plan_dir(path: &Path) -> anyhow::Result<PathBuf> {
+    let abs = std::path::absolute(path)
+        .with_context(|| format!("{}: cannot resolve the path", path.display()))?;
+    Ok(match abs.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
-    }
+    })
 }
 
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.plan)?;
-    let dir = plan_dir(&args.plan);
+    let dir = plan_dir(&args.plan)?;
     if args.all {
         return run_all(&plan, &dir, &args);
     }
@@ -326,6 +354,7 @@ fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result
     let mut job = parse_job(&plan.args)?;
     let record = loop {
         runs += 1;
+        plan.check_files(i, buffer)?;
         let sinks = task_sinks(plan, dir, i, buffer, args, &mut job)?;
         let input = job.input();
         let config = input.config(None)?;
@@ -559,9 +588,43 @@ fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
 
 pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.plan)?;
-    let dir = plan_dir(&args.plan);
+    let dir = plan_dir(&args.plan)?;
     let job = parse_job(&plan.args)?;
     let crs = job.input().crs()?;
+    let mut outs: Vec<(&str, &Path)> = Vec::new();
+    if let Some(o) = &args.output {
+        outs.push(("-o", o));
+    }
+    let contours = args.contours.clone().or_else(|| planned(&plan, "contours"));
+    let hillshade = args
+        .hillshade
+        .clone()
+        .or_else(|| planned(&plan, "hillshade"));
+    if let Some(c) = &contours {
+        outs.push(("--contours", c));
+    }
+    if let Some(h) = &hillshade {
+        outs.push(("--hillshade", h));
+    }
+    let mut protected: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
+    protected.push(args.plan.clone());
+    distinct_outputs(&outs, &protected)?;
+    for (flag, o) in &outs {
+        let abs = std::path::absolute(o).unwrap_or_else(|_| o.to_path_buf());
+        if abs.starts_with(dir.join("tiles")) {
+            bail!(
+                "{flag} {}: that is where the tasks' outputs are",
+                o.display()
+            );
+        }
+    }
+    let recs = merge::records(&plan, &dir)?;
+    if !recs.is_empty() && recs.iter().all(|r| r.points == 0) {
+        bail!(
+            "no task found a point after the filters: nothing to merge (check --class and the \
+             other filters of the plan)"
+        );
+    }
     let mut summary = serde_json::Map::new();
     match &job {
         Job::Dem(d) => {
@@ -569,6 +632,9 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
                 .output
                 .as_deref()
                 .context("give the mosaic with -o OUT.vrt or OUT.tif")?;
+            if !matches!(extension(out).as_deref(), Some("vrt" | "tif" | "tiff")) {
+                bail!("-o {}: a DEM mosaic is a .vrt or a .tif", out.display());
+            }
             super::input::check_output(out)?;
             let crs = match crs {
                 Some(c) => Some(c),
@@ -576,7 +642,6 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
             };
             let s = merge::merge_dem(&plan, &dir, out, d.dem.nodata, crs.as_ref())?;
             summary.insert("dem".into(), serde_json::to_value(&s)?);
-            let contours = args.contours.clone().or_else(|| planned(&plan, "contours"));
             if let (Some(c), true) = (&contours, d.contours.is_some()) {
                 let s = merge::merge_contours(&plan, &dir, c, crs.as_ref())?;
                 summary.insert("contours".into(), serde_json::to_value(s)?);
@@ -600,11 +665,24 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
                 .output
                 .as_deref()
                 .context("give the contours with -o OUT.geojson")?;
+            if !matches!(extension(out).as_deref(), Some("geojson" | "json")) {
+                bail!(
+                    "-o {}: contours are written as GeoJSON (.geojson)",
+                    out.display()
+                );
+            }
             super::input::check_output(out)?;
             let s = merge::merge_contours(&plan, &dir, out, crs.as_ref())?;
             summary.insert("contours".into(), serde_json::to_value(s)?);
         }
         Job::Volume(_) => {
+            if let Some(o) = &args.output {
+                bail!(
+                    "-o {}: a volume plan writes no file (its totals are printed; --json for a \
+                     summary)",
+                    o.display()
+                );
+            }
             let t = merge::merge_volume(&plan, &dir)?;
             if !args.json {
                 println!("the tasks' volumes, summed:");
@@ -613,7 +691,6 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
             summary.insert("volume".into(), serde_json::to_value(t)?);
         }
     }
-    let recs = merge::records(&plan, &dir)?;
     let empty = recs.iter().filter(|r| r.status == "empty").count();
     summary.insert("tasks".into(), serde_json::json!(recs.len()));
     summary.insert("empty_tasks".into(), serde_json::json!(empty));
@@ -654,4 +731,39 @@ fn first_tile_crs(plan: &Plan, _dir: &Path) -> anyhow::Result<Option<sweeptin::c
         &sweeptin::input::las::Filter::default(),
     )?;
     Ok(r.crs().cloned())
+}
+
+/// Refuses outputs that are the same file as each other or as one of `inputs` (compared by
+/// absolute path, and by the file itself where it exists).
+fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[PathBuf]) -> anyhow::Result<()> {
+    let same = |a: &Path, b: &Path| {
+        let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        if abs(a) == abs(b) {
+            return true;
+        }
+        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        }
+    };
+    for (k, (flag, o)) in outputs.iter().enumerate() {
+        if let Some(i) = inputs.iter().find(|i| same(o, i)) {
+            bail!(
+                "{flag} {}: that is an input of the plan ({}); an output never overwrites one",
+                o.display(),
+                i.display()
+            );
+        }
+        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same(o, p)) {
+            bail!("{flag} and {other} name the same file {}", o.display());
+        }
+    }
+    Ok(())
+}
+
+/// The lower-case extension of `p`.
+fn extension(p: &Path) -> Option<String> {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
 }

@@ -221,6 +221,23 @@ impl AtomicFile {
                 message: "not a file name".into(),
             });
         };
+        // An output replaces a regular file only: never a symlink (nor what it points to), a
+        // FIFO, a device or a directory.
+        if let Ok(m) = std::fs::symlink_metadata(&path)
+            && !m.file_type().is_file()
+        {
+            let what = if m.file_type().is_symlink() {
+                "a symbolic link"
+            } else if m.is_dir() {
+                "a directory"
+            } else {
+                "a FIFO, socket or device"
+            };
+            return Err(Error::Output {
+                path,
+                message: format!("it is {what}, not a regular file: an output never replaces it"),
+            });
+        }
         let prefix = format!(".{}.sweeptin-", name.to_string_lossy());
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(".tmp").rand_bytes(6);
@@ -346,6 +363,30 @@ mod tests {
 
     fn is_registered(path: &Path) -> bool {
         registered_temps().iter().any(|(p, _)| p == path)
+    }
+
+    #[test]
+    #[cfg(unix)]
+    fn symlinks_and_directories_are_never_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("precious.txt");
+        std::fs::write(&target, b"keep").unwrap();
+        let link = dir.path().join("out.tif");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let e = AtomicFile::create(&link).unwrap_err().to_string();
+        assert!(e.contains("symbolic link"), "{e}");
+        assert_eq!(std::fs::read(&target).unwrap(), b"keep");
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        let e = AtomicFile::create(dir.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("directory") || e.contains("not a file name"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -167,9 +167,12 @@ impl Plan {
         }
         let mut tiles = Vec::new();
         if lo[0].is_finite() {
-            let t = |v: f64| (v / tile).floor() as i64;
-            for ty in t(lo[1])..=t(hi[1]) {
-                for tx in t(lo[0])..=t(hi[0]) {
+            // A tile owns the cells whose centres lie in [x0, x1) × (y0, y1]: columns by floor,
+            // rows by ceil − 1 (a centre on the data's lower edge belongs to the row below).
+            let col_of = |v: f64| (v / tile).floor() as i64;
+            let ty_of = |v: f64| (v / tile).ceil() as i64 - 1;
+            for ty in ty_of(lo[1])..=ty_of(hi[1]) {
+                for tx in col_of(lo[0])..=col_of(hi[0]) {
                     let b = [
                         tx as f64 * tile,
                         ty as f64 * tile,
@@ -225,9 +228,19 @@ impl Plan {
     /// # Errors
     /// [`Error::Io`] naming the file.
     pub fn save(&self, dir: &Path) -> Result<PathBuf> {
-        std::fs::create_dir_all(dir.join("tiles")).map_err(|e| Error::io(dir, e))?;
         let path = dir.join("plan.json");
         let text = serde_json::to_string_pretty(self).map_err(|e| bad(&path, e.to_string()))?;
+        // Another plan's tasks must never be taken for this one's.
+        if let Ok(old) = std::fs::read_to_string(&path)
+            && old != text
+        {
+            return Err(Error::Options(format!(
+                "{} already holds another plan (and maybe its tasks' outputs): plan into a new \
+                 directory, or delete that one first",
+                dir.display()
+            )));
+        }
+        std::fs::create_dir_all(dir.join("tiles")).map_err(|e| Error::io(dir, e))?;
         write_atomic(&path, text.as_bytes())?;
         Ok(path)
     }
@@ -297,6 +310,35 @@ impl Plan {
             .filter(|f| f.points > 0 && overlaps(&f.bounds, &g))
             .map(|f| f.path.clone())
             .collect())
+    }
+
+    /// Checks that the files task `i` reads with `buffer` are still what the plan saw (the same
+    /// number of points and extent in their headers).
+    ///
+    /// # Errors
+    /// [`Error::Format`] naming a file that changed; the header reader's errors.
+    pub fn check_files(&self, i: usize, buffer: f64) -> Result<()> {
+        let g = grown(self.task(i)?.bounds, buffer);
+        for f in self
+            .files
+            .iter()
+            .filter(|f| f.points > 0 && overlaps(&f.bounds, &g))
+        {
+            let info = FileInfo::read(&f.path)?;
+            let b = info.bounds;
+            if info.point_count != f.points || [b.min[0], b.min[1], b.max[0], b.max[1]] != f.bounds
+            {
+                return Err(bad(
+                    &f.path,
+                    format!(
+                        "the file changed since the plan was made ({} points then, {} now): \
+                         make the plan again",
+                        f.points, info.point_count
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Where task `i` writes its output `name` (extension `ext`) under `dir`.

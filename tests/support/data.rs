@@ -55,3 +55,27 @@ pub fn tool(name: &str, test: &str) -> bool {
     }
     found
 }
+
+/// A file of the real data that a test may do without locally: `Some(path)` when it exists;
+/// when it does not, panics under CI and prints why the test is skipped otherwise.
+pub fn optional(rel: &str, test: &str) -> Option<PathBuf> {
+    let base = [
+        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
+        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
+        Some(PathBuf::from("/work/shared/data")),
+    ]
+    .into_iter()
+    .flatten()
+    .find(|d| d.join(rel).exists());
+    match base {
+        Some(d) => Some(d.join(rel)),
+        None => {
+            assert!(
+                !in_ci(),
+                "{test}: test data {rel} is required under CI=true but missing"
+            );
+            eprintln!("{test}: skipped, test data {rel} not found (set SWEEPTIN_DATA)");
+            None
+        }
+    }
+}
