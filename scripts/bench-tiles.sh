@@ -50,21 +50,21 @@ echo "|---|---:|---:|---:|---:|---:|---|"
 if [ -f "$ARSO" ]; then
     N=13216491; G=9000000
     for t in 1 2; do
-        row "ARSO dem --cell 1, --threads $t" $N "$BIN" dem "$ARSO" --cell 1 -o "$OUT/a.tif" --mem "$MEM" --threads $t --json
+        row "ARSO dem --cell 1, --threads $t" $N "$BIN" dem "$ARSO" --cell 1 -o "$OUT/a.tif" --mem "$MEM" --engine tiles --threads $t --json
     done
     row "ARSO dem --cell 1, --engine sweep" $N "$BIN" dem "$ARSO" --cell 1 -o "$OUT/s.tif" --mem "$MEM" --engine sweep --json
     cmp "$OUT/a.tif" "$OUT/s.tif" || echo "| (tiled and sweep DEMs differ!) |"
     for t in 1 2; do
-        row "ARSO dem --cell 1 --class 2, --threads $t" $N "$BIN" dem "$ARSO" --cell 1 --class 2 -o "$OUT/g.tif" --mem "$MEM" --threads $t --json
+        row "ARSO dem --cell 1 --class 2, --threads $t" $N "$BIN" dem "$ARSO" --cell 1 --class 2 -o "$OUT/g.tif" --mem "$MEM" --engine tiles --threads $t --json
     done
     row "ARSO dem --cell 1 --class 2, --engine sweep" $N "$BIN" dem "$ARSO" --cell 1 --class 2 -o "$OUT/gs.tif" --mem "$MEM" --engine sweep --json
     cmp "$OUT/g.tif" "$OUT/gs.tif" || echo "| (tiled and sweep ground DEMs differ!) |"
-    row "ARSO tin → PLY, --threads 2" $N "$BIN" tin "$ARSO" -o "$OUT/a.ply" --mem "$MEM" --json
+    row "ARSO tin → PLY, --threads 2" $N "$BIN" tin "$ARSO" -o "$OUT/a.ply" --mem "$MEM" --engine tiles --json
     row "ARSO tin → PLY, --engine sweep" $N "$BIN" tin "$ARSO" -o "$OUT/s.ply" --mem "$MEM" --engine sweep --json
     rm -f "$OUT"/a.ply "$OUT"/s.ply
 fi
 if [ "$BIG" = 1 ]; then
     f="$OUT/lidar-100M.laz"
     [ -f "$f" ] || target/release/examples/gen_laz 100M "$f"
-    row "100M generated dem --cell 1, --threads 2" 100000000 "$BIN" dem "$f" --cell 1 -o "$OUT/big.tif" --mem "$MEM" --tmp-dir "$OUT" --json
+    row "100M generated dem --cell 1, --threads 2" 100000000 "$BIN" dem "$f" --cell 1 -o "$OUT/big.tif" --mem "$MEM" --tmp-dir "$OUT" --engine tiles --json
 fi

@@ -43,14 +43,16 @@ pub struct InputArgs {
     /// several equally Delaunay diagonals is chosen.
     #[arg(long, value_enum, value_name = "AXIS", default_value_t = SweepAxis::Auto)]
     pub sweep_axis: SweepAxis,
-    /// How to triangulate. `tiles` (the default where it applies: LAS/LAZ points without
-    /// breaklines or trimming polygons) cuts the data into exact tiles run on every core, each
-    /// certified to equal the triangulation of all the points; `sweep` runs one streaming sweep
-    /// on one core, whose memory follows the advancing front. Both give the same triangles, in a
-    /// different order.
-    #[arg(long, value_enum, default_value_t = Engine::Tiles)]
+    /// How to triangulate. `sweep` (the default) runs one streaming sweep on one core, whose
+    /// memory follows the advancing front (bounded whatever the input). `tiles` (LAS/LAZ points
+    /// without breaklines or trimming polygons) cuts the data into exact tiles run on every core
+    /// (--threads), each certified to equal the triangulation of all the points; it is not yet
+    /// the default because data with long, exactly straight edges (cut tiles, scan lines) can
+    /// make a tile read far more than its buffer, up to the whole input. Both give the same
+    /// triangles, in a different order.
+    #[arg(long, value_enum, default_value_t = Engine::Sweep)]
     pub engine: Engine,
-    /// Threads for the tiled engine (default: every core). The output is the same for any number.
+    /// Threads for `--engine tiles` (default: every core). The output is the same for any number.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub threads: usize,
     /// Tile side for the tiled engine, in the data's units (a multiple of the DEM cell); default:
@@ -134,9 +136,9 @@ impl std::fmt::Display for Size {
 /// The triangulation engine (see `--engine`).
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Engine {
-    /// Exact tiles on every core where the input allows it; one sweep otherwise.
+    /// Exact tiles on every core where the input allows it; one sweep otherwise (opt-in).
     Tiles,
-    /// One streaming sweep.
+    /// One streaming sweep (the default).
     Sweep,
 }
 
