@@ -151,7 +151,19 @@ fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
         // A placeholder: every task writes under the plan's directory.
         full.extend(["-o".to_string(), "plan-output".to_string()]);
     }
-    let cli = Cli::try_parse_from(&full).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let cli = match Cli::try_parse_from(&full) {
+        Ok(c) => c,
+        Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelp => {
+            // `sweeptin plan dem --help`: the command's own help, then stop.
+            let _ = e.print();
+            std::process::exit(0);
+        }
+        Err(e) => {
+            let text = e.to_string();
+            let text = text.trim_start_matches("error: ").trim_end();
+            bail!("{text}");
+        }
+    };
     Ok(match cli.command {
         Command::Dem(a) => Job::Dem(Box::new(a)),
         Command::Contours(a) => Job::Contours(Box::new(a)),
@@ -211,8 +223,8 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
 
 pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let (argv, dir) = take_output(&args.command);
-    let dir = dir.context("give the plan's directory with -o DIR")?;
     let job = parse_job(&argv)?;
+    let dir = dir.context("give the plan's directory with -o DIR")?;
     check_job(&job)?;
     let a = &job.input().args;
     let tile = a
@@ -316,11 +328,16 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if args.all {
         return run_all(&plan, &dir, &args);
     }
-    let i = match args.task.or_else(task_from_env) {
+    let from_env = match args.task {
+        Some(_) => None,
+        None => task_from_env()?,
+    };
+    let i = match args.task.or(from_env) {
         Some(i) => i,
         None => bail!(
             "which task? give --task I (0 to {}) or --all, or run under a job array \
-             (SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX, AWS_BATCH_JOB_ARRAY_INDEX)",
+             (SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX, AWS_BATCH_JOB_ARRAY_INDEX, \
+             PBS_ARRAY_INDEX, SGE_TASK_ID)",
             plan.tiles.len().saturating_sub(1)
         ),
     };
