@@ -128,6 +128,35 @@ fn stages_import_only_what_comes_before_them() {
 }
 
 #[test]
+fn the_import_graph_has_no_circles() {
+    let g = imports();
+    // Depth-first search; a module met again while on the path closes a circle.
+    fn visit(
+        m: &str,
+        g: &BTreeMap<String, BTreeSet<String>>,
+        path: &mut Vec<String>,
+        done: &mut BTreeSet<String>,
+    ) {
+        if done.contains(m) {
+            return;
+        }
+        if let Some(i) = path.iter().position(|p| p == m) {
+            panic!("import circle: {} -> {m}", path[i..].join(" -> "));
+        }
+        path.push(m.to_string());
+        for d in g.get(m).into_iter().flatten() {
+            visit(d, g, path, done);
+        }
+        path.pop();
+        done.insert(m.to_string());
+    }
+    let mut done = BTreeSet::new();
+    for m in g.keys() {
+        visit(m, &g, &mut Vec::new(), &mut done);
+    }
+}
+
+#[test]
 fn one_home_for_predicates_unsafe_and_anyhow() {
     for (rel, _, code) in library() {
         let name = rel.to_string_lossy().replace('\\', "/");

@@ -46,3 +46,33 @@ pub mod trim;
 pub use crate::input::lines::{Lines, Location, Source, read_file, read_files};
 pub use clean::{CleanOptions, CleanStats, Pslg, clean};
 pub use trim::Trim;
+
+use crate::error::{Error, Result};
+
+impl crate::input::lines::Lines {
+    /// Cleans the polylines into a planar straight-line graph ([`clean::clean`]); errors
+    /// name the file and feature of the offending polyline.
+    ///
+    /// # Errors
+    /// [`Error::Format`] for a coordinate the predicates cannot handle exactly.
+    pub fn clean(&self, options: &CleanOptions) -> Result<Pslg> {
+        clean::clean(&self.polylines, options).map_err(|e| match e {
+            Error::BadLine {
+                polyline,
+                vertex,
+                message,
+            } => match self.sources.get(polyline as usize) {
+                Some(s) => Error::Format {
+                    path: s.path.to_path_buf(),
+                    message: format!("{s}, vertex {vertex}: {message}"),
+                },
+                None => Error::BadLine {
+                    polyline,
+                    vertex,
+                    message,
+                },
+            },
+            other => other,
+        })
+    }
+}

@@ -49,9 +49,9 @@ pub struct InputArgs {
     /// (--threads), each certified to equal the triangulation of all the points; it is not yet
     /// the default because data with long, exactly straight edges (cut tiles, scan lines) can
     /// make a tile read far more than its buffer, up to the whole input. Both give the same
-    /// triangles, in a different order.
-    #[arg(long, value_enum, default_value_t = Engine::Sweep)]
-    pub engine: Engine,
+    /// triangles, in a different order. [default: sweep]
+    #[arg(long, value_enum, value_name = "ENGINE")]
+    pub engine: Option<Engine>,
     /// Threads for `--engine tiles` (default: every core). The output is the same for any number.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub threads: usize,
@@ -89,7 +89,12 @@ impl InputArgs {
             tmp_dir: self.tmp_dir.clone(),
             progress: !self.quiet && !self.json,
             sweep_axis: self.sweep_axis,
-            tiles: match self.engine {
+            // A task of a plan always runs in tiles.
+            tiles: match self.engine.unwrap_or(if self.task.is_some() {
+                Engine::Tiles
+            } else {
+                Engine::Sweep
+            }) {
                 Engine::Sweep => None,
                 Engine::Tiles => Some(sweeptin::tiles::TileOptions {
                     threads: self.threads,

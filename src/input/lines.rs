@@ -154,35 +154,6 @@ impl Lines {
         }
         Ok(())
     }
-
-    /// Cleans the polylines into a planar straight-line graph ([`crate::breaklines::clean::clean`]); errors
-    /// name the file and feature of the offending polyline.
-    ///
-    /// # Errors
-    /// [`Error::Format`] for a coordinate the predicates cannot handle exactly.
-    pub fn clean(
-        &self,
-        options: &crate::breaklines::CleanOptions,
-    ) -> Result<crate::breaklines::Pslg> {
-        crate::breaklines::clean::clean(&self.polylines, options).map_err(|e| match e {
-            Error::BadLine {
-                polyline,
-                vertex,
-                message,
-            } => match self.sources.get(polyline as usize) {
-                Some(s) => Error::Format {
-                    path: s.path.to_path_buf(),
-                    message: format!("{s}, vertex {vertex}: {message}"),
-                },
-                None => Error::BadLine {
-                    polyline,
-                    vertex,
-                    message,
-                },
-            },
-            other => other,
-        })
-    }
 }
 
 /// Reads one breakline file (GeoJSON or text, told apart by the first non-blank character).

@@ -40,7 +40,16 @@ pub(crate) fn run(
         pb.set_length(total);
         pb.set_position(n);
     };
-    let r = crate::tiles::run(config, tiles, &mut progress, mesh, sinks)?;
+    let input = config.input();
+    let job = crate::tiles::TileJob {
+        paths: &input.paths,
+        filter: &input.filter,
+        duplicates: input.duplicates,
+        max_edge: input.lines.max_edge,
+        mem: options.mem,
+        tmp: config.tmp_dir(),
+    };
+    let r = crate::tiles::run(&job, tiles, &mut progress, mesh, sinks)?;
     pb.finish_and_clear();
     anon.sample();
     let triangulate_write = start.elapsed().as_secs_f64() - r.read_sort;

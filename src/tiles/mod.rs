@@ -111,11 +111,25 @@ pub(crate) struct TiledRun {
     pub read_sort: f64,
 }
 
-/// Reads the LAS/LAZ `input` into a block index.
+/// What a tiled run reads, and with what budget (the pipeline's run configuration, checked).
+pub(crate) struct TileJob<'a> {
+    /// The LAS/LAZ files.
+    pub paths: &'a [std::path::PathBuf],
+    /// Their filters.
+    pub filter: &'a crate::input::las::Filter,
+    /// Which point survives among exact (x, y) duplicates.
+    pub duplicates: crate::DuplicatePolicy,
+    /// `--max-edge`.
+    pub max_edge: Option<f64>,
+    /// Memory budget in bytes.
+    pub mem: u64,
+    /// Where spill files go.
+    pub tmp: &'a std::path::Path,
+}
+
+/// Reads the LAS/LAZ files of `job` into a block index.
 fn read_index(
-    input: &crate::pipeline::Input,
-    mem: u64,
-    tmp: &std::path::Path,
+    job: &TileJob,
     options: &TileOptions,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4])> {
@@ -123,8 +137,8 @@ fn read_index(
     // A task is given the files near its tile, and keeps all their points (decoding a file costs
     // the same whatever is kept, and the points far out settle the triangles along the data's
     // edge without another run).
-    let paths = &input.paths;
-    let mut reader = LidarReader::open(paths, &input.filter)?;
+    let (mem, tmp) = (job.mem, job.tmp);
+    let mut reader = LidarReader::open(job.paths, job.filter)?;
     let b = reader.bounds();
     let total = reader.point_count();
     let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
@@ -218,29 +232,26 @@ fn read_index(
     Ok((index, crs, bounds))
 }
 
-/// Runs a tiled triangulation of `input` into `mesh` and `sinks`.
+/// Runs a tiled triangulation of `job` into `mesh` and `sinks`.
 ///
 /// # Errors
 /// Reader, tile and sink errors; [`Error::TooFewPoints`] / [`Error::AllCollinear`] when the whole
 /// input has no triangle.
 pub(crate) fn run(
-    config: &crate::pipeline::RunConfig,
+    job: &TileJob,
     options: &TileOptions,
     progress: &mut dyn FnMut(&str, u64, u64),
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<TiledRun> {
     let start = Instant::now();
-    let (input, mem, tmp) = (config.input(), config.options().mem, config.tmp_dir());
-    let max_edge = input.lines.max_edge;
+    let max_edge = job.max_edge;
     let mut options = options.clone();
     if options.base.is_none() {
         options.base = sinks.iter().find_map(|s| s.grid_cell());
     }
     let options = &options;
-    let (index, crs, bounds) = read_index(input, mem, tmp, options, &mut |n, t| {
-        progress("reading", n, t)
-    })?;
+    let (index, crs, bounds) = read_index(job, options, &mut |n, t| progress("reading", n, t))?;
     let read_sort = start.elapsed().as_secs_f64();
     if index.len() == 0 {
         // A task that read no point may still lie under triangles of points farther out.
@@ -316,7 +327,7 @@ pub(crate) fn run(
     for _ in 0..window {
         tok_tx.send(()).expect("room for every token");
     }
-    let policy = input.duplicates;
+    let policy = job.duplicates;
     let total = order.len();
     let result = std::thread::scope(|scope| -> Result<()> {
         let rx = rx;
