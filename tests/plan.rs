@@ -218,9 +218,18 @@ fn dem_and_contours_of_a_plan_equal_one_run() {
         );
     }
 
-    // Re-running is safe; --resume skips finished tasks.
+    // Re-running is safe; --resume skips finished tasks, but not one whose output is gone.
     let out = sweeptin(&["run", s(&plan), "--task", "0", "--resume"], "resume");
     assert!(String::from_utf8_lossy(&out.stderr).contains("skipped"));
+    let rec0 = &records(&job, n)[0];
+    let tif0 = PathBuf::from(rec0["outputs"][0][1].as_str().unwrap());
+    std::fs::remove_file(&tif0).unwrap();
+    let out = sweeptin(
+        &["run", s(&plan), "--task", "0", "--resume"],
+        "resume a lost output",
+    );
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("skipped"));
+    assert!(tif0.is_file(), "the lost output was not made again");
 
     // GNU parallel, as in docs/SCALING.md, into a fresh copy of the plan.
     if data::tool("parallel", "dem_and_contours_of_a_plan_equal_one_run") {

@@ -262,6 +262,9 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         .collect::<anyhow::Result<_>>()?;
     // The stored command line names the inputs by absolute path, so tasks run from anywhere.
     let argv = absolute_inputs(&argv, &a.inputs, &inputs);
+    // The files must make one point set (one CRS, compatible formats), as for a single run:
+    // refused now, from the headers, not by every task later.
+    sweeptin::input::las::LidarReader::open(&inputs, &a.filter.to_filter())?;
     let plan = Plan::new(&argv[0], argv.clone(), outputs, &inputs, tile, buffer, cell)?;
     if dir.exists() && !dir.is_dir() {
         bail!("{}: not a directory", dir.display());
@@ -343,6 +346,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     };
     plan.task(i)?;
     if args.resume
+        && finished(&plan, &dir, i)
         && let Some(r) = plan.record(&dir, i)?
     {
         eprintln!(
@@ -550,7 +554,7 @@ fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
     let threads = args.threads.unwrap_or((cores / jobs).max(1));
     let mut todo = Vec::new();
     for t in &plan.tiles {
-        if args.resume && plan.record(dir, t.index)?.is_some() {
+        if args.resume && finished(plan, dir, t.index) {
             continue;
         }
         todo.push(t.index);
@@ -784,4 +788,13 @@ fn extension(p: &Path) -> Option<String> {
     p.extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
+}
+
+/// Has task `i` finished, with its record readable and every output it names present? (What
+/// `--resume` skips; anything less runs again.)
+fn finished(plan: &Plan, dir: &Path, i: usize) -> bool {
+    match plan.record(dir, i) {
+        Ok(Some(r)) => r.outputs.iter().all(|(_, p)| dir.join(p).is_file()),
+        _ => false,
+    }
 }
