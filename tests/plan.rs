@@ -450,3 +450,38 @@ fn empty_tasks_pass_and_what_a_plan_cannot_do_is_refused() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn one_run_never_writes_over_its_input_or_one_output_over_another() {
+    let t = tempfile::tempdir().unwrap();
+    let input = t.path().join("in.laz");
+    std::fs::copy(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz"),
+        &input,
+    )
+    .unwrap();
+    let out = t.path().join("o.tif");
+    for (flag, target, says) in [
+        ("--contours", &input, "an input of the run"),
+        ("--hillshade", &out, "name the same file"),
+    ] {
+        let r = bin()
+            .args([
+                "dem",
+                s(&input),
+                "--cell",
+                "1",
+                "-q",
+                "-o",
+                s(&out),
+                flag,
+                s(target),
+            ])
+            .output()
+            .unwrap();
+        assert_eq!(r.status.code(), Some(2), "{flag}");
+        assert!(String::from_utf8_lossy(&r.stderr).contains(says), "{flag}");
+        assert!(std::fs::read(&input).unwrap().starts_with(b"LASF"));
+        assert!(!out.exists(), "{flag}: an output was written");
+    }
+}

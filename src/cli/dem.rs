@@ -31,6 +31,14 @@ pub struct Args {
 
 /// The sinks of the DEM and its contours (checked before any work).
 pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>> {
+    let mut outputs: Vec<(&str, &std::path::Path)> = vec![("-o", &args.output)];
+    if let Some(c) = &args.contours {
+        outputs.push(("--contours", c));
+    }
+    if let Some(h) = &args.hillshade {
+        outputs.push(("--hillshade", h));
+    }
+    super::input::distinct_outputs(&outputs, &args.input.args.inputs, "the run")?;
     let bbox = args.input.args.filter.bbox;
     let mut sinks: Vec<(String, Box<dyn TriangleSink>)> =
         vec![("dem".into(), args.dem.sink(&args.output, bbox)?)];

@@ -308,6 +308,38 @@ pub fn check_output(path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses outputs that are the same file as each other or as one of the `inputs` of `of` (the
+/// run, the plan), compared by absolute path and, where it exists, by the file itself.
+pub fn distinct_outputs(
+    outputs: &[(&str, &Path)],
+    inputs: &[PathBuf],
+    of: &str,
+) -> anyhow::Result<()> {
+    let same = |a: &Path, b: &Path| {
+        let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        if abs(a) == abs(b) {
+            return true;
+        }
+        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        }
+    };
+    for (k, (flag, o)) in outputs.iter().enumerate() {
+        if let Some(i) = inputs.iter().find(|i| same(o, i)) {
+            bail!(
+                "{flag} {}: that is an input of {of} ({}); an output never overwrites one",
+                o.display(),
+                i.display()
+            );
+        }
+        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same(o, p)) {
+            bail!("{flag} and {other} name the same file {}", o.display());
+        }
+    }
+    Ok(())
+}
+
 /// Runs the pipeline of `config` into `sinks` (one pass) and the optional mesh sink; returns the
 /// run summary (without the products) and the products' summaries by the sinks' names.
 pub fn run_products(

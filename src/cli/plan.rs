@@ -2,7 +2,7 @@
 //! run as tasks of a batch engine (or locally), and joined into one seamless result. See
 //! [`sweeptin::plan`] and `docs/SCALING.md`.
 
-use super::input::{ProductInput, run_products};
+use super::input::{ProductInput, distinct_outputs, run_products};
 use super::products::shade;
 use super::{Cli, Command};
 use anyhow::{Context, bail};
@@ -197,17 +197,15 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
     if a.sweep_axis == sweeptin::pipeline::SweepAxis::X {
         bail!("a plan sweeps along y: leave --sweep-axis x out");
     }
-    for p in &a.inputs {
-        let ext = p
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        if !matches!(ext.as_deref(), Some("las" | "laz")) {
-            bail!(
-                "{}: a plan reads LAS/LAZ files (their headers give the extents)",
-                p.display()
-            );
-        }
+    if let Some(p) = a
+        .inputs
+        .iter()
+        .find(|p| !matches!(extension(p).as_deref(), Some("las" | "laz")))
+    {
+        bail!(
+            "{}: a plan reads LAS/LAZ files (their headers give the extents)",
+            p.display()
+        );
     }
     match job {
         Job::Dem(d) if d.dem.snap || d.dem.buffer.is_some() => {
@@ -274,7 +272,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     for (name, p) in plan.outputs.iter().filter(|(n, _)| n != "dir") {
         planned_outputs.push((name.as_str(), p.as_path()));
     }
-    distinct_outputs(&planned_outputs, &inputs)?;
+    distinct_outputs(&planned_outputs, &inputs, "the plan")?;
     let path = plan.save(&dir)?;
     if plan.tiles.len() > 1000 {
         eprintln!(
@@ -630,7 +628,7 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     }
     let mut protected: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
     protected.push(args.plan.clone());
-    distinct_outputs(&outs, &protected)?;
+    distinct_outputs(&outs, &protected, "the plan")?;
     for (flag, o) in &outs {
         let abs = std::path::absolute(o).unwrap_or_else(|_| o.to_path_buf());
         if abs.starts_with(dir.join("tiles")) {
@@ -660,7 +658,7 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
             super::input::check_output(out)?;
             let crs = match crs {
                 Some(c) => Some(c),
-                None => first_tile_crs(&plan, &dir)?,
+                None => plan_crs(&plan)?,
             };
             let s = merge::merge_dem(&plan, &dir, out, d.dem.nodata, crs.as_ref())?;
             summary.insert("dem".into(), serde_json::to_value(&s)?);
@@ -744,7 +742,7 @@ fn planned(plan: &Plan, name: &str) -> Option<PathBuf> {
 }
 
 /// The CRS of the plan's first file (as a single run takes it from the headers).
-fn first_tile_crs(plan: &Plan, _dir: &Path) -> anyhow::Result<Option<sweeptin::crs::Crs>> {
+fn plan_crs(plan: &Plan) -> anyhow::Result<Option<sweeptin::crs::Crs>> {
     let Some(f) = plan.files.first() else {
         return Ok(None);
     };
@@ -753,34 +751,6 @@ fn first_tile_crs(plan: &Plan, _dir: &Path) -> anyhow::Result<Option<sweeptin::c
         &sweeptin::input::las::Filter::default(),
     )?;
     Ok(r.crs().cloned())
-}
-
-/// Refuses outputs that are the same file as each other or as one of `inputs` (compared by
-/// absolute path, and by the file itself where it exists).
-fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[PathBuf]) -> anyhow::Result<()> {
-    let same = |a: &Path, b: &Path| {
-        let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-        if abs(a) == abs(b) {
-            return true;
-        }
-        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
-            (Ok(x), Ok(y)) => x == y,
-            _ => false,
-        }
-    };
-    for (k, (flag, o)) in outputs.iter().enumerate() {
-        if let Some(i) = inputs.iter().find(|i| same(o, i)) {
-            bail!(
-                "{flag} {}: that is an input of the plan ({}); an output never overwrites one",
-                o.display(),
-                i.display()
-            );
-        }
-        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same(o, p)) {
-            bail!("{flag} and {other} name the same file {}", o.display());
-        }
-    }
-    Ok(())
 }
 
 /// The lower-case extension of `p`.

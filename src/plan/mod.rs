@@ -179,22 +179,12 @@ impl Plan {
                         (tx + 1) as f64 * tile,
                         (ty + 1) as f64 * tile,
                     ];
-                    let g = [b[0] - buffer, b[1] - buffer, b[2] + buffer, b[3] + buffer];
+                    let g = grown(b, buffer);
                     let near: Vec<usize> = (0..files.len())
-                        .filter(|&i| {
-                            let f = &files[i].bounds;
-                            files[i].points > 0
-                                && f[0] <= g[2]
-                                && f[2] >= g[0]
-                                && f[1] <= g[3]
-                                && f[3] >= g[1]
-                        })
+                        .filter(|&i| files[i].points > 0 && overlaps(&files[i].bounds, &g))
                         .collect();
                     // A tile no file reaches into holds no point: no task.
-                    let inside = near.iter().any(|&i| {
-                        let f = &files[i].bounds;
-                        f[0] <= b[2] && f[2] >= b[0] && f[1] <= b[3] && f[3] >= b[1]
-                    });
+                    let inside = near.iter().any(|&i| overlaps(&files[i].bounds, &b));
                     if !inside {
                         continue;
                     }
