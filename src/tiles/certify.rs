@@ -1,15 +1,22 @@
 //! Certificates: which triangles of a tile's run are triangles of the triangulation of *all*
 //! points.
 //!
-//! A tile's run triangulates the points of a rectangle of blocks (the *loaded* blocks). A
-//! triangle of that run is Delaunay for the loaded points: its closed circumdisk holds no other
-//! loaded point (ties go by the global rule of [`crate::geom::predicates`], which depends on
-//! positions only). If the disk also reaches no point outside the loaded blocks, it holds no point
-//! at all, so the triangle is a triangle of the whole triangulation: it is **certified**. The test
-//! is conservative: the disk is the floating-point bound of [`crate::geom::predicates::circumdisk_bounds`]
-//! (never smaller than the true disk), widened by the rounding of the block assignment, and it
-//! asks the block index whether any *block* it touches outside the loaded ones holds a point. An
-//! error can only withhold a certificate, never grant a wrong one.
+//! A tile's run triangulates the points of some blocks (the *loaded* blocks). A triangle of that
+//! run is Delaunay for the loaded points: its closed circumdisk holds no other loaded point (ties
+//! go by the global rule of [`crate::geom::predicates`], which depends on positions only). If the
+//! disk also holds no point of any other block, it holds no point at all, so the triangle is a
+//! triangle of the whole triangulation: it is **certified**.
+//!
+//! The test has two stages. A floating-point bound of the disk
+//! ([`crate::geom::predicates::circumdisk_bounds`], never smaller than the true disk) picks the
+//! blocks not read whose *extent* (the tight box of their points, rounded outward) it reaches;
+//! most disks stay inside the loaded rectangle and the test ends there. The points of each block
+//! it reaches are then tested one by one with the exact, perturbed in-circle predicate: the
+//! certificate fails only when some point really lies in the disk (a *witness*; its block is what
+//! a patch run must read). An error of the bound can only make the second stage test more
+//! points, never grant a wrong certificate. This matters along the data's edges: a ragged edge
+//! makes flat triangles whose huge disks reach far along the edge, but only by a sliver that the
+//! points there stay out of.
 //!
 //! The convex hull needs no certificate of its own: every run also holds the corners of the hull
 //! of all the points ([`super::hull`]), so a run's hull *is* the whole hull, and what lies
@@ -17,6 +24,10 @@
 
 use super::grid::BlockRect;
 use super::index::BlockIndex;
+use crate::error::Result;
+use crate::geom::predicates::{CircleSide, DiskBounds, incircle};
+use crate::idmap::FastMap;
+use std::cell::RefCell;
 
 /// The blocks a run read: a rectangle, and single blocks outside it (sorted keys).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -33,8 +44,19 @@ impl Loaded {
     }
 }
 
+/// Points of blocks not read, kept while a run is judged (a block is often tested by many
+/// triangles along a data edge).
+#[derive(Debug, Default)]
+struct Cache {
+    blocks: FastMap<u64, Vec<[f64; 3]>>,
+    points: usize,
+}
+
+/// Cached points beyond which the cache starts afresh.
+const CACHE_POINTS: usize = 1 << 20;
+
 /// Answers certificate questions for one run over the `loaded` blocks.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug)]
 pub(crate) struct Certifier<'a> {
     index: &'a BlockIndex,
     loaded: &'a Loaded,
@@ -43,6 +65,20 @@ pub(crate) struct Certifier<'a> {
     /// Set when a test reached beyond what a plan's task read (see [`BlockIndex::scope`]).
     /// The widest buffer an unread file needs (0: none).
     pub unknown: &'a std::cell::Cell<f64>,
+    cache: RefCell<Cache>,
+    /// Points tested one by one, and the blocks they came from.
+    pub tested: std::cell::Cell<(u64, u64)>,
+}
+
+/// Witness blocks a failed certificate reports at most.
+const WITNESSES: usize = 4;
+
+/// Squared distance from `p` to the box `e` (`[xmin, ymin, xmax, ymax]`).
+#[inline]
+fn box_dist2(e: &[f64; 4], p: [f64; 2]) -> f64 {
+    let dx = (e[0] - p[0]).max(p[0] - e[2]).max(0.0);
+    let dy = (e[1] - p[1]).max(p[1] - e[3]).max(0.0);
+    dx * dx + dy * dy
 }
 
 /// Where [`Certifier`] puts the blocks that withheld a certificate.
@@ -59,69 +95,73 @@ impl<'a> Certifier<'a> {
             loaded,
             world: index.grid.world(&loaded.rect),
             unknown,
+            cache: RefCell::new(Cache::default()),
+            tested: std::cell::Cell::new((0, 0)),
         }
     }
 
-    /// Adds to `out` the non-empty blocks of row `by`, columns `x0 ..= x1` (only those not read
-    /// unless `all`); returns whether there was any.
-    fn blocks_in_row(&self, by: i64, x0: i64, x1: i64, all: bool, out: &mut Missing) -> bool {
+    /// Calls `f` on each non-empty block not read in row `by`, columns `x0 ..= x1`.
+    fn unread_in_row(
+        &self,
+        by: i64,
+        x0: i64,
+        x1: i64,
+        f: &mut dyn FnMut(u64) -> Result<()>,
+    ) -> Result<()> {
         let occ = self.index.occupied();
         let (x0, x1) = (x0.max(occ.x0), x1.min(occ.x1 - 1));
         if x1 < x0 {
-            return false;
+            return Ok(());
         }
         let l = &self.loaded.rect;
-        let spans = if all || by < l.y0 || by >= l.y1 || x1 < l.x0 || x0 >= l.x1 {
+        let spans = if by < l.y0 || by >= l.y1 || x1 < l.x0 || x0 >= l.x1 {
             [(x0, x1 + 1), (0, 0)]
         } else {
             [(x0, x1.min(l.x0 - 1) + 1), (x0.max(l.x1), x1 + 1)]
         };
-        let before = out.len();
         for (a, b) in spans {
             for &k in self.index.keys_in_row(by, a, b) {
-                if all || self.loaded.extra.binary_search(&k).is_err() {
-                    out.push(k);
+                if self.loaded.extra.binary_search(&k).is_err() {
+                    f(k)?;
                 }
             }
         }
-        out.len() > before
+        Ok(())
     }
 
-    /// Is the closed disk of `center` and `radius` (an upper bound of the true radius) free of
-    /// points outside the loaded blocks? The blocks that hold such points go to `out`.
-    pub fn disk_clear(&self, center: [f64; 2], radius: f64, out: &mut Missing) -> bool {
-        self.disk_blocks(center, radius, false, out)
-    }
-
-    /// Adds to `out` every non-empty block the closed disk touches (read or not): what a run that
-    /// must get this disk right has to read.
-    pub fn touched(&self, center: [f64; 2], radius: f64, out: &mut Missing) {
-        self.disk_blocks(center, radius, true, out);
-    }
-
-    fn disk_blocks(&self, center: [f64; 2], radius: f64, all: bool, out: &mut Missing) -> bool {
+    /// Is the triangle `t` (counter-clockwise) certified: does its circumdisk, bounded by `d`,
+    /// hold no point of a block not read? The blocks holding a point inside go to `out`.
+    ///
+    /// # Errors
+    /// Reading a block's points.
+    pub fn clear(&self, t: &[[f64; 2]; 3], d: &DiskBounds, out: &mut Missing) -> Result<bool> {
         let g = &self.index.grid;
-        let [cx, cy] = center;
-        let r = radius + g.margin(cx.abs().max(cy.abs()) + radius);
+        let [cx, cy] = d.center;
+        let r = d.radius + g.margin(cx.abs().max(cy.abs()) + d.radius);
         if !r.is_finite() {
-            return false;
+            return Ok(false);
         }
         let w = &self.world;
-        if !all && cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
-            return true;
+        if cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
+            return Ok(true);
         }
         if let Some(sc) = &self.index.scope
             && let reach = sc.disk_reach([cx, cy], r)
             && reach > 0.0
         {
             self.unknown.set(self.unknown.get().max(reach));
-            return false;
+            return Ok(false);
         }
         let occ = self.index.occupied();
         let b = g.block;
         let by0 = (((cy - r) / b).floor() as i64).max(occ.y0);
         let by1 = (((cy + r) / b).floor() as i64).min(occ.y1 - 1);
-        let mut clear = true;
+        // The blocks not read whose points' box the disk reaches, nearest to the triangle first.
+        let mut near: Vec<(f64, u64)> = Vec::new();
+        let m = [
+            (t[0][0] + t[1][0] + t[2][0]) / 3.0,
+            (t[0][1] + t[1][1] + t[2][1]) / 3.0,
+        ];
         for by in by0..=by1 {
             let (lo, hi) = (by as f64 * b, (by + 1) as f64 * b);
             let dy = if cy < lo {
@@ -137,11 +177,57 @@ impl<'a> Certifier<'a> {
             let hw = (r * r - dy * dy).max(0.0).sqrt() * (1.0 + 1e-12) + r * 1e-12;
             let bx0 = ((cx - hw) / b).floor() as i64;
             let bx1 = ((cx + hw) / b).floor() as i64;
-            if self.blocks_in_row(by, bx0, bx1, all, out) {
-                clear = false;
+            self.unread_in_row(by, bx0, bx1, &mut |k| {
+                if let Some(e) = self.index.extent(k)
+                    && box_dist2(&e, [cx, cy]) <= r * r * (1.0 + 1e-9)
+                {
+                    near.push((box_dist2(&e, m), k));
+                }
+                Ok(())
+            })?;
+        }
+        if near.is_empty() {
+            return Ok(true);
+        }
+        near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        // A few witnesses are enough for the next run to make progress; a disk that a sparse
+        // patch run left huge may hold points of thousands of blocks.
+        let mut found = 0;
+        for &(_, k) in &near {
+            if self.witness(k, t)? {
+                out.push(k);
+                found += 1;
+                if found == WITNESSES {
+                    break;
+                }
             }
         }
-        clear
+        Ok(found == 0)
+    }
+
+    /// Does block `k` (not read) hold a point inside the circumdisk of `t`? Exact.
+    fn witness(&self, k: u64, t: &[[f64; 2]; 3]) -> Result<bool> {
+        let mut cache = self.cache.borrow_mut();
+        if !cache.blocks.contains_key(&k) {
+            if cache.points > CACHE_POINTS {
+                cache.blocks.clear();
+                cache.points = 0;
+            }
+            let mut pts = Vec::new();
+            self.index.read_block(k, &mut pts)?;
+            cache.points += pts.len();
+            cache.blocks.insert(k, pts);
+        }
+        let pts = &cache.blocks[&k];
+        let (n, nb) = self.tested.get();
+        self.tested.set((n + pts.len() as u64, nb + 1));
+        Ok(pts.iter().any(|p| {
+            let q = [p[0], p[1]];
+            q != t[0]
+                && q != t[1]
+                && q != t[2]
+                && incircle(t[0], t[1], t[2], q) == CircleSide::Inside
+        }))
     }
 }
 
@@ -191,7 +277,17 @@ mod tests {
             })
             .unwrap();
         }
-        BlockIndex::build(grid, s.finish().unwrap(), dir.path()).unwrap()
+        BlockIndex::build(
+            grid,
+            s.finish().unwrap(),
+            dir.path(),
+            crate::sort::DuplicatePolicy::First,
+        )
+        .unwrap()
+    }
+
+    fn bounds(t: &[[f64; 2]; 3]) -> DiskBounds {
+        crate::geom::predicates::circumdisk_bounds(t[0], t[1], t[2]).unwrap()
     }
 
     #[test]
@@ -218,34 +314,45 @@ mod tests {
         let unknown = std::cell::Cell::new(0.0);
         let c = Certifier::new(&ix, &loaded, &unknown);
         let mut m = Missing::new();
-        assert!(c.disk_clear([10.0, 10.0], 5.9, &mut m));
-        assert!(!c.disk_clear([10.0, 10.0], 6.6, &mut m));
-        // The hole is empty, so a disk reaching into it from a loaded side is clear.
-        assert!(c.disk_clear([6.0, 10.0], 1.5, &mut m));
-        // The lower-left outside corner has points.
-        assert!(!c.disk_clear([4.0, 4.0], 0.8, &mut m));
-        // Outside the data everything is empty.
-        assert!(c.disk_clear([40.0, 40.0], 5.0, &mut m));
-        let everything = Loaded {
-            rect: ix.occupied(),
-            extra: vec![],
-        };
-        let all = Certifier::new(&ix, &everything, &unknown);
-        assert!(all.disk_clear([10.0, 10.0], 1e6, &mut m));
-        // What withheld the certificates: blocks outside the loaded rectangle only.
+        // A small triangle well inside the loaded blocks.
+        let t = [[9.0, 9.0], [11.0, 9.0], [10.0, 11.0]];
+        assert!(c.clear(&t, &bounds(&t), &mut m).unwrap());
+        // A wide one over the lower-left outside corner: lattice points there lie in its disk.
+        let t = [[2.0, 2.0], [6.0, 2.0], [4.0, 6.0]];
+        assert!(!c.clear(&t, &bounds(&t), &mut m).unwrap());
         assert!(!m.is_empty());
         for k in &m {
             let (bx, by) = TileGrid::unkey(*k);
             assert!(!loaded.rect.contains(bx, by));
         }
-        // With those blocks read, the corner disk is clear.
+        // A disk that reaches unread blocks only where no point lies in it (the lattice points
+        // around are outside the circle through these three): certified.
+        let t = [[3.9, 10.0], [4.3, 9.8], [4.3, 10.2]];
+        let mut m2 = Missing::new();
+        assert!(c.clear(&t, &bounds(&t), &mut m2).unwrap());
+        assert!(m2.is_empty());
+        // A flat triangle along the lattice's bottom row: its disk is huge, but the lattice
+        // points keep out of it, one by one.
+        let t = [[0.5, 0.5], [1.5, 0.5], [1.0, 0.5 + 1e-7]];
+        let before = c.tested.get().0;
+        assert!(c.clear(&t, &bounds(&t), &mut m2).unwrap());
+        assert!(c.tested.get().0 > before);
+        // Outside the data everything is empty.
+        let t = [[40.0, 40.0], [45.0, 40.0], [42.0, 44.0]];
+        assert!(c.clear(&t, &bounds(&t), &mut m2).unwrap());
+        // With the witness blocks read, the corner triangle is certified.
         m.sort_unstable();
         m.dedup();
         let more = Loaded {
             rect: loaded.rect,
             extra: m.clone(),
         };
-        let mut m2 = Missing::new();
-        assert!(Certifier::new(&ix, &more, &unknown).disk_clear([4.0, 4.0], 0.8, &mut m2));
+        let t = [[2.0, 2.0], [6.0, 2.0], [4.0, 6.0]];
+        let mut m3 = Missing::new();
+        let c2 = Certifier::new(&ix, &more, &unknown);
+        // Still not certified as a *triangle* (points of the read blocks lie in it), but no
+        // unread block is a witness any more.
+        let _ = c2.clear(&t, &bounds(&t), &mut m3).unwrap();
+        assert!(m3.iter().all(|k| !m.contains(k)));
     }
 }

@@ -192,7 +192,7 @@ fn read_index(
     }
     let merge = sorter.finish()?;
     let sort = merge.stats();
-    let mut index = BlockIndex::build(probe, merge, tmp)?;
+    let mut index = BlockIndex::build(probe, merge, tmp, job.duplicates)?;
     if let Some(sc) = scope {
         index.scope = Some(index::Scope {
             unknown: sc.unread.clone(),

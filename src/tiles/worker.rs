@@ -23,7 +23,7 @@ use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
 use super::index::BlockIndex;
 use super::keep::{Owner, from_list, from_run};
-use super::region::{Region, Tri2, judge};
+use super::region::{Region, Tri2, Tris, judge};
 use crate::error::{Error, Result};
 use crate::sort::DuplicatePolicy;
 use crate::triangulation::{Options, triangulate};
@@ -86,7 +86,8 @@ pub(crate) fn run_tile(
     let task_owner = task.map(|t| Owner::new(g, *t));
     let w = g.world(&owned);
     let m = g.margin(w.iter().fold(0.0f64, |m, v| m.max(v.abs())));
-    let mut region = Region::Rect([w[0] - m, w[1] - m, w[2] + m, w[3] + m]);
+    let rect = [w[0] - m, w[1] - m, w[2] + m, w[3] + m];
+    let mut region = Region { rect, failed: None };
     let mut loaded = Loaded {
         rect: owned.expand(buffer.max(0)).intersect(&occ),
         extra: Vec::new(),
@@ -130,16 +131,18 @@ pub(crate) fn run_tile(
             }
             Err(e) => return Err(e),
         };
-        let verdict = judge(index, &t, &region, &loaded, own, full);
+        let verdict = judge(index, &t, &region, &loaded, full)?;
         if std::env::var_os("SWEEPTIN_DEBUG_TILES").is_some() {
             eprintln!(
                 "tile {tile:?} run {}: {own} points ({} extra blocks): {} certified, {} failed, \
-                 {} blocks wanted{}",
+                 {} blocks wanted, {} points in {} blocks tested{}",
                 out.runs,
                 loaded.extra.len(),
                 verdict.certified.len(),
                 verdict.failed.len(),
                 verdict.blocks.len(),
+                verdict.tested.0,
+                verdict.tested.1,
                 if verdict.degenerate {
                     ", degenerate"
                 } else {
@@ -169,7 +172,7 @@ pub(crate) fn run_tile(
         } else {
             // Patches only grow (the first starts afresh, without the first run's rectangle), so
             // the runs end: each reads at least one block more, or everything.
-            let mut p = patch(index, &failed, verdict.blocks.clone());
+            let mut p = patch(index, &owned, &failed, verdict.blocks.clone());
             if first.is_some() {
                 p.extra.extend_from_slice(&loaded.extra);
                 p.extra.sort_unstable();
@@ -206,7 +209,10 @@ pub(crate) fn run_tile(
         }
         loaded = next;
         if !failed.is_empty() {
-            region = Region::of_tris(failed);
+            region = Region {
+                rect,
+                failed: Some(Tris::new(failed)),
+            };
         }
     }
     let (t, certified) = first.expect("a first run");
@@ -229,16 +235,18 @@ pub(crate) fn run_tile(
     Ok(out)
 }
 
-/// The blocks of a patch run: around each cluster of failed triangles (the blocks of its
-/// bounding rectangle, two wider), every non-empty block their circumdisks touch and the blocks
-/// of their hull corners (`blocks`). Clusters, not one
-/// rectangle: the failed triangles may lie far apart (a lens along the data's edge, a lake's
-/// shore).
-fn patch(index: &BlockIndex, failed: &[Tri2], blocks: Vec<u64>) -> Loaded {
+/// The blocks of a patch run: around each cluster of failed triangles within the tile (the
+/// blocks of its bounding rectangle clipped to the tile, one wider), and the blocks holding a
+/// point inside a failed triangle's circumdisk (`blocks`). Clusters, not one rectangle: the
+/// failed triangles may lie far apart (a lens along the data's edge, a lake's shore).
+fn patch(index: &BlockIndex, owned: &BlockRect, failed: &[Tri2], blocks: Vec<u64>) -> Loaded {
     let g = index.grid;
     let mut extra = blocks;
     for r in clusters(&g, failed) {
-        let r = r.expand(2).intersect(&index.occupied());
+        let r = r
+            .intersect(&owned.expand(1))
+            .expand(1)
+            .intersect(&index.occupied());
         for by in r.y0..r.y1 {
             extra.extend_from_slice(index.keys_in_row(by, r.x0, r.x1));
         }
