@@ -25,7 +25,7 @@
 use super::grid::BlockRect;
 use super::index::BlockIndex;
 use crate::error::Result;
-use crate::geom::predicates::{CircleSide, DiskBounds, incircle};
+use crate::geom::predicates::{CircleSide, DiskBounds, Orientation, incircle, orient};
 use crate::idmap::FastMap;
 use std::cell::RefCell;
 
@@ -68,10 +68,11 @@ pub(crate) struct Certifier<'a> {
     cache: RefCell<Cache>,
     /// Points tested one by one, and the blocks they came from.
     pub tested: std::cell::Cell<(u64, u64)>,
+    /// Witness blocks a failed certificate reports at most: a few are enough for the next run
+    /// to make progress, and the judge doubles it with every run of a tile (a disk that a sparse
+    /// patch run left huge may hold points of thousands of blocks).
+    pub witnesses: usize,
 }
-
-/// Witness blocks a failed certificate reports at most.
-const WITNESSES: usize = 4;
 
 /// Squared distance from `p` to the box `e` (`[xmin, ymin, xmax, ymax]`).
 #[inline]
@@ -79,6 +80,33 @@ fn box_dist2(e: &[f64; 4], p: [f64; 2]) -> f64 {
     let dx = (e[0] - p[0]).max(p[0] - e[2]).max(0.0);
     let dy = (e[1] - p[1]).max(p[1] - e[3]).max(0.0);
     dx * dx + dy * dy
+}
+
+/// An upper bound of the height of the circular segment that the chord `ab` cuts off the
+/// circumdisk of `a, b, c` on `c`'s side, for an obtuse angle at `c` (centre beyond the chord)
+/// and `l = |ab|`. In the frame of `ab`, `c = (s, δ)`: the centre lies `K = m / 2δ` beyond the
+/// chord with `m = s(l - s) - δ²`, and the height is `(l²/4) / (R + K) ≤ l²δ / 4m`; never more
+/// than `l / 2`. Computed with `δ` rounded up (its cross product cancels) and `m` rounded down.
+fn sagitta_bound(a: [f64; 2], b: [f64; 2], c: [f64; 2], l: f64) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let e = [c[0] - a[0], c[1] - a[1]];
+    let scale = d[0].abs().max(d[1].abs()) * e[0].abs().max(e[1].abs());
+    let cross = (d[0] * e[1] - d[1] * e[0]).abs() + 8.0 * f64::EPSILON * scale;
+    let delta = cross / l * (1.0 + 1e-9) + f64::MIN_POSITIVE;
+    let s = (d[0] * e[0] + d[1] * e[1]) / l;
+    let m = s * (l - s) * (1.0 - 1e-9) - delta * delta;
+    let h = if m > 0.0 {
+        l * l * delta / (4.0 * m) * (1.0 + 1e-9)
+    } else {
+        f64::INFINITY
+    };
+    h.min(l / 2.0) + l * 1e-9
+}
+
+/// Do two closed boxes meet?
+#[inline]
+fn boxes_meet(a: &[f64; 4], b: &[f64; 4]) -> bool {
+    a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3]
 }
 
 /// Where [`Certifier`] puts the blocks that withheld a certificate.
@@ -97,6 +125,7 @@ impl<'a> Certifier<'a> {
             unknown,
             cache: RefCell::new(Cache::default()),
             tested: std::cell::Cell::new((0, 0)),
+            witnesses: 4,
         }
     }
 
@@ -186,23 +215,151 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        if near.is_empty() {
-            return Ok(true);
-        }
+        Ok(self.witnesses_among(near, t, out)? == 0)
+    }
+
+    /// Tests the blocks `near` (keys with a distance), nearest first, until
+    /// [`Certifier::witnesses`] of them hold a point inside the circumdisk of `t`; returns how
+    /// many did (the keys go to `out`).
+    fn witnesses_among(
+        &self,
+        mut near: Vec<(f64, u64)>,
+        t: &[[f64; 2]; 3],
+        out: &mut Missing,
+    ) -> Result<usize> {
         near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        // A few witnesses are enough for the next run to make progress; a disk that a sparse
-        // patch run left huge may hold points of thousands of blocks.
         let mut found = 0;
         for &(_, k) in &near {
             if self.witness(k, t)? {
                 out.push(k);
                 found += 1;
-                if found == WITNESSES {
+                if found >= self.witnesses {
                     break;
                 }
             }
         }
-        Ok(found == 0)
+        Ok(found)
+    }
+
+    /// The certificate of a triangle too flat for its disk to be bounded in floating point
+    /// ([`crate::geom::predicates::circumdisk_bounds`] gives up). Let `a → b` be its longest
+    /// edge, with `c` on its left. When the angle at `c` is obtuse (always, this flat), the
+    /// circumcentre lies on the right of the line `L` through `a` and `b`, so the disk is within
+    /// (1) the *chord box*: the points on or left of `L` that project into the segment `ab` and
+    /// lie within `|ab| / 2` of `L` (the circular segment cut off by the chord `ab`), and (2) the
+    /// open half-plane right of `L`. Blocks whose points' box meets either are tested point by
+    /// point: those near the triangle first, then the rest of the half-plane, row by row.
+    /// `None` when the angle at `c` cannot be shown obtuse.
+    ///
+    /// # Errors
+    /// Reading a block's points.
+    pub fn flat_clear(&self, t: &[[f64; 2]; 3], out: &mut Missing) -> Result<Option<bool>> {
+        let len2 = |p: [f64; 2], q: [f64; 2]| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
+        let i = (0..3)
+            .max_by(|&i, &j| len2(t[i], t[(i + 1) % 3]).total_cmp(&len2(t[j], t[(j + 1) % 3])))
+            .unwrap_or(0);
+        let (a, b, c) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+        let (ca, cb) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
+        let dot = ca[0] * cb[0] + ca[1] * cb[1];
+        let lens = (ca[0].hypot(ca[1])) * (cb[0].hypot(cb[1]));
+        if !(dot < -1e-6 * lens) {
+            return Ok(None);
+        }
+        let g = &self.index.grid;
+        let l = len2(a, b).sqrt();
+        let mag = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
+        let slack = g.margin(mag + l) + l * 1e-9;
+        let h = sagitta_bound(a, b, c, l);
+        // The near box: the chord box (the segment `ab` moved up to `h` to the left), two
+        // blocks wider (witnesses on the far side are most often close to the triangle).
+        let n = [-(b[1] - a[1]) / l, (b[0] - a[0]) / l];
+        let (ah, bh) = (
+            [a[0] + n[0] * h, a[1] + n[1] * h],
+            [b[0] + n[0] * h, b[1] + n[1] * h],
+        );
+        let reach = slack + 2.0 * g.block;
+        let near_box = [
+            a[0].min(b[0]).min(ah[0]).min(bh[0]) - reach,
+            a[1].min(b[1]).min(ah[1]).min(bh[1]) - reach,
+            a[0].max(b[0]).max(ah[0]).max(bh[0]) + reach,
+            a[1].max(b[1]).max(ah[1]).max(bh[1]) + reach,
+        ];
+        let beyond = |e: &[f64; 4]| {
+            [[e[0], e[1]], [e[2], e[1]], [e[2], e[3]], [e[0], e[3]]]
+                .into_iter()
+                .any(|p| orient(a, b, p) == Orientation::Clockwise)
+        };
+        let m = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+        let occ = self.index.occupied();
+        let bs = g.block;
+        let rows = |lo: f64, hi: f64| {
+            (
+                ((lo / bs).floor() as i64).max(occ.y0),
+                ((hi / bs).floor() as i64).min(occ.y1 - 1),
+            )
+        };
+        // Near the triangle: the chord box and the half-plane.
+        let mut near: Vec<(f64, u64)> = Vec::new();
+        let (by0, by1) = rows(near_box[1], near_box[3]);
+        for by in by0..=by1 {
+            let bx0 = (near_box[0] / bs).floor() as i64;
+            let bx1 = (near_box[2] / bs).floor() as i64;
+            self.unread_in_row(by, bx0, bx1, &mut |k| {
+                if let Some(e) = self.index.extent(k)
+                    && boxes_meet(&e, &near_box)
+                {
+                    near.push((box_dist2(&e, m), k));
+                }
+                Ok(())
+            })?;
+        }
+        if self.witnesses_among(near, t, out)? > 0 {
+            return Ok(Some(false));
+        }
+        // The rest of the half-plane right of `L`, row by row: in each row the half-plane is
+        // an interval of x (bounded conservatively).
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let mut far: Vec<(f64, u64)> = Vec::new();
+        for by in occ.y0..occ.y1 {
+            let (y0, y1) = (by as f64 * bs - slack, (by + 1) as f64 * bs + slack);
+            let (lo, hi) = if d[1] == 0.0 {
+                // Right of a horizontal line: below it going east, above it going west.
+                let right = if d[0] > 0.0 { y0 <= a[1] } else { y1 >= a[1] };
+                if !right {
+                    continue;
+                }
+                (f64::NEG_INFINITY, f64::INFINITY)
+            } else {
+                // Where L crosses the row's edges; right of L is x > (d.y > 0) or x < that.
+                let xs = [y0, y1].map(|y| a[0] + d[0] * (y - a[1]) / d[1]);
+                let w = (xs[1] - xs[0]).abs() * 1e-9 + slack + bs * 1e-9;
+                if d[1] > 0.0 {
+                    (xs[0].min(xs[1]) - w, f64::INFINITY)
+                } else {
+                    (f64::NEG_INFINITY, xs[0].max(xs[1]) + w)
+                }
+            };
+            let bx0 = if lo.is_finite() {
+                (lo / bs).floor() as i64
+            } else {
+                occ.x0
+            };
+            let bx1 = if hi.is_finite() {
+                (hi / bs).floor() as i64
+            } else {
+                occ.x1 - 1
+            };
+            self.unread_in_row(by, bx0, bx1, &mut |k| {
+                if let Some(e) = self.index.extent(k)
+                    && !boxes_meet(&e, &near_box)
+                    && beyond(&e)
+                {
+                    far.push((box_dist2(&e, m), k));
+                }
+                Ok(())
+            })?;
+        }
+        Ok(Some(self.witnesses_among(far, t, out)? == 0))
     }
 
     /// Does block `k` (not read) hold a point inside the circumdisk of `t`? Exact.

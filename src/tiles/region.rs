@@ -42,6 +42,11 @@ fn separated(t: &Tri2, r: &[f64; 4]) -> bool {
     })
 }
 
+/// Does the closed counter-clockwise triangle `t` meet the closed rectangle `r`? Exact.
+pub(crate) fn tri_meets_rect(t: &Tri2, r: &[f64; 4]) -> bool {
+    overlap(&bbox(t), r) && !separated(t, r)
+}
+
 /// Do two closed counter-clockwise triangles meet? Exact: they are disjoint exactly when an edge
 /// line of one has the other strictly outside (separating axes of two triangles are their edges).
 pub(crate) fn tris_meet(a: &Tri2, b: &Tri2) -> bool {
@@ -196,8 +201,8 @@ pub(crate) struct Verdict {
     pub tested: (u64, u64),
 }
 
-/// Judges the run `t` over `loaded` on `region`. A run over every non-empty block (`full`) is
-/// the whole triangulation: everything in it is certified.
+/// Judges the run `t` over `loaded` on `region` (the tile's `run`-th). A run over every
+/// non-empty block (`full`) is the whole triangulation: everything in it is certified.
 ///
 /// # Errors
 /// Reading the points of blocks not loaded.
@@ -207,9 +212,11 @@ pub(crate) fn judge(
     region: &Region,
     loaded: &Loaded,
     full: bool,
+    run: u32,
 ) -> crate::error::Result<Verdict> {
     let unknown = std::cell::Cell::new(0.0);
-    let cert = Certifier::new(index, loaded, &unknown);
+    let mut cert = Certifier::new(index, loaded, &unknown);
+    cert.witnesses = 4usize << run.saturating_sub(1).min(8);
     let v = &t.vertices;
     let mut out = Verdict::default();
     for (k, tri) in t.triangles.iter().enumerate() {
@@ -223,10 +230,13 @@ pub(crate) fn judge(
         }
         let ok = match circumdisk_bounds(t2[0], t2[1], t2[2]) {
             Some(d) => cert.clear(&t2, &d, &mut out.blocks)?,
-            None => {
-                out.degenerate = true;
-                false
-            }
+            None => match cert.flat_clear(&t2, &mut out.blocks)? {
+                Some(ok) => ok,
+                None => {
+                    out.degenerate = true;
+                    false
+                }
+            },
         };
         if ok {
             out.certified.push(k as u32);
