@@ -262,7 +262,7 @@ impl<'a> Certifier<'a> {
         let (ca, cb) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
         let dot = ca[0] * cb[0] + ca[1] * cb[1];
         let lens = (ca[0].hypot(ca[1])) * (cb[0].hypot(cb[1]));
-        if !(dot < -1e-6 * lens) {
+        if dot.is_nan() || dot >= -1e-6 * lens {
             return Ok(None);
         }
         let g = &self.index.grid;
