@@ -22,7 +22,7 @@
 use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
 use super::index::BlockIndex;
-use super::keep::{Owner, from_list, from_run};
+use super::keep::{Owner, from_runs};
 use super::region::{Region, Tri2, Tris, judge, tri_meets_rect};
 use crate::error::{Error, Result};
 use crate::sort::DuplicatePolicy;
@@ -216,22 +216,14 @@ pub(crate) fn run_tile(
         }
     }
     let (t, certified) = first.expect("a first run");
-    if patched.is_empty() {
-        from_run(&owner, task_owner.as_ref(), &t, &certified, &mut out);
-    } else {
-        let mut all: Vec<[[f64; 3]; 3]> = certified
-            .iter()
-            .map(|&k| t.triangles[k as usize].map(|i| t.vertices[i as usize]))
-            .collect();
-        drop(t);
-        all.append(&mut patched);
-        from_list(&owner, task_owner.as_ref(), &all, &mut out);
-        out.points_kept = out
-            .degree
-            .iter()
-            .filter(|&&d| d != super::worker::NOT_OWNED)
-            .count() as u64;
-    }
+    from_runs(
+        &owner,
+        task_owner.as_ref(),
+        &t,
+        &certified,
+        &patched,
+        &mut out,
+    );
     Ok(out)
 }
 
