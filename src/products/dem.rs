@@ -170,12 +170,20 @@ impl Raster {
 
     fn rasterise(&mut self, t: &Tri) -> Result<()> {
         let [xmin, ymin, xmax, ymax] = t.bbox();
-        // The candidates have a cell of slack on each side: the exact test below decides.
+        // The candidates have a cell of slack on each side; a centre outside the triangle's
+        // box is outside the triangle (exact comparisons), the exact test decides the rest.
         let cols = self.spec.cols_over(xmin, xmax);
         for row in self.spec.rows_over(ymin, ymax).rev() {
             let y = self.spec.centre_y(row);
+            if y < ymin || y > ymax {
+                continue;
+            }
             for col in cols.clone() {
-                let p = [self.spec.centre_x(col), y];
+                let x = self.spec.centre_x(col);
+                if x < xmin || x > xmax {
+                    continue;
+                }
+                let p = [x, y];
                 let loc = t.locate(p);
                 if loc == Location::Outside {
                     continue;
