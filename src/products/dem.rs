@@ -168,6 +168,29 @@ impl Raster {
         Ok(())
     }
 
+    /// Might a cell centre lie in the closed box of `t`? (`false` only when none does.)
+    fn any_centre_in(&self, t: &[[f64; 3]; 3]) -> bool {
+        let (xmin, xmax) = (
+            t[0][0].min(t[1][0]).min(t[2][0]),
+            t[0][0].max(t[1][0]).max(t[2][0]),
+        );
+        let (ymin, ymax) = (
+            t[0][1].min(t[1][1]).min(t[2][1]),
+            t[0][1].max(t[1][1]).max(t[2][1]),
+        );
+        let rows = self.spec.rows_over(ymin, ymax);
+        if !rows.clone().any(|row| {
+            let y = self.spec.centre_y(row);
+            y >= ymin && y <= ymax
+        }) {
+            return false;
+        }
+        self.spec.cols_over(xmin, xmax).any(|col| {
+            let x = self.spec.centre_x(col);
+            x >= xmin && x <= xmax
+        })
+    }
+
     fn rasterise(&mut self, t: &Tri) -> Result<()> {
         let [xmin, ymin, xmax, ymax] = t.bbox();
         // The candidates have a cell of slack on each side; a centre outside the triangle's
@@ -256,10 +279,15 @@ impl TriangleSink for DemSink {
 
     fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
         self.triangles += 1;
+        let r = self.raster()?;
+        // Most triangles of dense lidar hold no cell centre: skip them before any exact test.
+        if !r.any_centre_in(t) {
+            return Ok(());
+        }
         let Some(t) = Tri::new(t) else {
             return Ok(());
         };
-        self.raster()?.rasterise(&t)
+        r.rasterise(&t)
     }
 
     fn watermark(&mut self, y: f64) -> Result<()> {

@@ -75,10 +75,12 @@ pub(crate) fn from_runs(
                 shared[i] = true;
                 i as u32
             }
-            Err(_) => *new_ids.entry((p[0].to_bits(), p[1].to_bits())).or_insert_with(|| {
-                vertices.push(*p);
-                (vertices.len() - 1) as u32
-            }),
+            Err(_) => *new_ids
+                .entry((p[0].to_bits(), p[1].to_bits()))
+                .or_insert_with(|| {
+                    vertices.push(*p);
+                    (vertices.len() - 1) as u32
+                }),
         }
     };
     // A patch's triangle that is also one of the first run's is kept where the first run has it.
@@ -111,10 +113,36 @@ pub(crate) fn from_runs(
             tris.push(v);
         }
     }
-    collect(owner, task, &vertices, tris.into_iter(), out);
+    // Number the vertices in sweep order again (the new ones are few), so that a triangle's
+    // lowest vertex is its least number.
+    let mut order: Vec<u32> = (first as u32..vertices.len() as u32).collect();
+    order.sort_unstable_by(|&i, &j| sweep_cmp(&vertices[i as usize], &vertices[j as usize]));
+    let mut remap = vec![0u32; vertices.len()];
+    let mut sorted = Vec::with_capacity(vertices.len());
+    let mut news = order.iter().peekable();
+    for i in 0..first {
+        while let Some(&&j) = news.peek()
+            && sweep_cmp(&vertices[j as usize], &vertices[i]) == Ordering::Less
+        {
+            remap[j as usize] = sorted.len() as u32;
+            sorted.push(vertices[j as usize]);
+            news.next();
+        }
+        remap[i] = sorted.len() as u32;
+        sorted.push(vertices[i]);
+    }
+    for &j in news {
+        remap[j as usize] = sorted.len() as u32;
+        sorted.push(vertices[j as usize]);
+    }
+    for t in &mut tris {
+        *t = t.map(|i| remap[i as usize]);
+    }
+    collect(owner, task, &sorted, tris.iter().copied(), out);
 }
 
-/// Fills `out` from triangles (indices into `vertices`, each once) certified for the tile.
+/// Fills `out` from triangles (indices into `vertices`, which are in sweep order; each triangle
+/// once) certified for the tile.
 fn collect(
     owner: &Owner,
     task: Option<&Owner>,
@@ -124,15 +152,7 @@ fn collect(
 ) {
     let n = vertices.len();
     let is_owned: Vec<bool> = vertices.iter().map(|p| owner.owns(p)).collect();
-    let low = |t: &[u32; 3]| -> usize {
-        let mut l = t[0];
-        for &i in &t[1..] {
-            if sweep_cmp(&vertices[i as usize], &vertices[l as usize]) == Ordering::Less {
-                l = i;
-            }
-        }
-        l as usize
-    };
+    let low = |t: &[u32; 3]| t[0].min(t[1]).min(t[2]) as usize;
     let mut degree = vec![0u32; n];
     let mut foreign = vec![false; n];
     for tri in tris.clone() {

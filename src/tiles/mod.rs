@@ -41,7 +41,7 @@ const BLOCK_POINTS: f64 = 256.0;
 /// Points per tile the tile size aims at (owned points, before the buffer).
 const TILE_POINTS: f64 = (1u64 << 18) as f64;
 /// The first buffer of a tile, in blocks.
-const FIRST_BUFFER: i64 = 2;
+const FIRST_BUFFER: i64 = 1;
 
 /// How to tile.
 #[derive(Clone, Debug, Default, PartialEq)]
