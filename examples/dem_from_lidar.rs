@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dem_sink = DemSink::new(
         dem.as_ref(),
         DemOptions {
-            grid: GridPlan::new(1.0, GridExtent::Auto)?,
+            grid: GridPlan::new(1.0, GridExtent::Auto, Align::Edges)?,
             ..DemOptions::default()
         },
     )?;

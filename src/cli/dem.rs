@@ -13,8 +13,9 @@ use sweeptin::sink::TriangleSink;
 pub struct Args {
     #[command(flatten)]
     pub input: ProductInput,
-    /// Output raster: .tif (float32 GeoTIFF) or .asc (ESRI ASCII grid). With --bbox it covers
-    /// the cells whose centres lie in [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell).
+    /// Output raster: .tif (float32 GeoTIFF; --format cog for a Cloud Optimized GeoTIFF) or .asc
+    /// (ESRI ASCII grid). With --bbox it covers the cells whose centres lie in
+    /// [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell).
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
@@ -44,7 +45,7 @@ pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>
         vec![("dem".into(), args.dem.sink(&args.output, bbox)?)];
     if let Some(png) = &args.hillshade {
         check_output(png)?;
-        check_hillshade(&args.output, args.dem.raster_format)?;
+        check_hillshade(&args.output, args.dem.raster.format)?;
     }
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour.sink(p)?));
