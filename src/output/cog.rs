@@ -517,7 +517,7 @@ pub(crate) fn write_u8_image(
     rows: u32,
     geo: &TiffGeo,
     r: &ResolvedRaster,
-    mut fill: impl FnMut(&mut Scratch) -> Result<()>,
+    fill: impl FnOnce(&mut Scratch) -> Result<()>,
 ) -> Result<u64> {
     let mut stage = Scratch::new(path, cols, rows, geo.nodata)?;
     fill(&mut stage)?;
