@@ -193,7 +193,7 @@ impl RasterOptions {
                 || self.bigtiff
             {
                 return Err(bad(
-                    "--compress, --predictor and --bigtiff apply to GeoTIFF and COG outputs,                      not to an ESRI ASCII grid"
+                    "--compress, --predictor and --bigtiff apply to GeoTIFF and COG outputs, not to an ESRI ASCII grid"
                         .into(),
                 ));
             }
