@@ -10,7 +10,7 @@ use sweeptin::input::las::Filter;
 use sweeptin::pipeline::{Input, RunConfig, RunOptions, run};
 use sweeptin::products::contours::{ContourOptions, ContourSink};
 use sweeptin::products::dem::{DemOptions, DemSink};
-use sweeptin::raster::{GridExtent, GridPlan};
+use sweeptin::raster::{Align, GridExtent, GridPlan};
 use sweeptin::sink::{Fanout, ProductSummary, TriangleSink};
 use sweeptin::tiles::TileOptions;
 

@@ -548,7 +548,7 @@ mod tests {
     #[test]
     fn clipping_to_a_convex_hull() {
         let hull = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
-        let src = Source {
+        let src = crate::breaklines::Source {
             path: std::sync::Arc::from(std::path::Path::new("l.geojson")),
             location: crate::breaklines::Location::Line(1),
         };
