@@ -4,7 +4,7 @@
 //! written ([`GridWriter`] is random access), while a compressed TIFF needs each chunk whole and a
 //! COG needs its directories first, its smallest overview's data next and the full resolution
 //! last. So the cells are staged in a [`Scratch`] (4 bytes a cell, on disk in the output's
-//! directory) and [`write_tiff`] assembles the file at the end:
+//! directory) and `write_tiff` assembles the file at the end:
 //!
 //! 1. **Overviews** (COG): each level halves the previous one (`⌈w/2⌉ × ⌈h/2⌉`), a cell the
 //!    average of the cells with data among the 2 × 2 below it (nodata when none has data: GDAL's

@@ -58,7 +58,7 @@ pub struct LineOptions {
     /// Flip away triangles lying flat on one contour line (Herva 2009, 4.2.2).
     pub no_flat_triangles: bool,
     /// Cut the breaklines to the points' convex hull instead of refusing lines that run outside
-    /// it ([`clip`]; costs one more pass over the points).
+    /// it (cut by `clip`; costs one more pass over the points).
     pub clip: bool,
 }
 
