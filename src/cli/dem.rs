@@ -25,7 +25,8 @@ pub struct Args {
     pub contours: Option<PathBuf>,
     #[command(flatten)]
     pub contour: ContourArgs,
-    /// Also write a hillshade PNG of the result (GeoTIFF output only).
+    /// Also write a hillshade of the result (GeoTIFF or COG output only): a PNG with a .pgw
+    /// world file, or an 8-bit GeoTIFF (.tif).
     #[arg(long, value_name = "PNG")]
     pub hillshade: Option<PathBuf>,
 }

@@ -1,7 +1,7 @@
 //! The random-access row store every grid writer offers ([`GridWriter`]), the raster formats,
 //! their options ([`RasterOptions`]) and the factory that picks a writer; [`Scratch`], the
-//! anonymous temporary cell store of the writers that transcribe at the end (compressed GeoTIFF,
-//! COG).
+//! anonymous temporary cell store of the writers that transcribe at the end (ESRI ASCII,
+//! compressed GeoTIFF, COG).
 
 use crate::error::{Error, Result};
 use crate::raster::GridSpec;

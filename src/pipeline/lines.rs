@@ -583,7 +583,8 @@ mod tests {
                 .flatten()
                 .all(|p| in_hull(&hull, [p[0], p[1]]))
         );
-        assert_eq!(out.polylines[2], lines.polylines[1]);
+        let xy = |l: &Vec<[f64; 3]>| l.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>();
+        assert_eq!(xy(&out.polylines[2]), xy(&lines.polylines[1]));
         let want = 5.0 + 5.0 + 1.5f64.hypot(5.0) + 10.0;
         assert!((s.length_cut - want).abs() < 1e-9, "{s:?}");
         // A crossing that rounds outside is moved in.

@@ -351,11 +351,17 @@ mod tests {
     }
 
     #[test]
-    fn not_a_tiff_is_a_format_error() {
+    fn not_a_grid_is_an_error_naming_the_file() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("x.tif");
         std::fs::write(&p, b"hello").unwrap();
         let e = hillshade(&p, &dir.path().join("o.png"), &HillshadeOptions::default());
-        assert!(matches!(e, Err(Error::Format { .. })));
+        // Neither TIFF nor ESRI ASCII: the grid reader's error, naming the file.
+        let e = e.unwrap_err();
+        assert!(
+            matches!(e, Error::Format { .. } | Error::Parse { .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("x.tif"), "{e}");
     }
 }
