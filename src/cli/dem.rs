@@ -13,8 +13,9 @@ use sweeptin::sink::TriangleSink;
 pub struct Args {
     #[command(flatten)]
     pub input: ProductInput,
-    /// Output raster: .tif (float32 GeoTIFF) or .asc (ESRI ASCII grid). With --bbox it covers
-    /// the cells whose centres lie in [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell).
+    /// Output raster: .tif (float32 GeoTIFF; --format cog for a Cloud Optimized GeoTIFF) or .asc
+    /// (ESRI ASCII grid). With --bbox it covers the cells whose centres lie in
+    /// [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell).
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
@@ -24,7 +25,8 @@ pub struct Args {
     pub contours: Option<PathBuf>,
     #[command(flatten)]
     pub contour: ContourArgs,
-    /// Also write a hillshade PNG of the result (GeoTIFF output only).
+    /// Also write a hillshade of the result (GeoTIFF or COG output only): a PNG with a .pgw
+    /// world file, or an 8-bit GeoTIFF (.tif).
     #[arg(long, value_name = "PNG")]
     pub hillshade: Option<PathBuf>,
 }
@@ -44,7 +46,7 @@ pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>
         vec![("dem".into(), args.dem.sink(&args.output, bbox)?)];
     if let Some(png) = &args.hillshade {
         check_output(png)?;
-        check_hillshade(&args.output, args.dem.raster_format)?;
+        check_hillshade(&args.output, args.dem.raster.format)?;
     }
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour.sink(p)?));

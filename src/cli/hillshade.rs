@@ -1,4 +1,5 @@
-//! `sweeptin hillshade`: a shaded-relief PNG of a DEM GeoTIFF.
+//! `sweeptin hillshade`: shaded relief of a DEM, as a PNG with a world file or a georeferenced
+//! GeoTIFF / COG.
 
 use super::input::check_output;
 use std::path::PathBuf;
@@ -7,11 +8,15 @@ use sweeptin::products::hillshade::{HillshadeOptions, hillshade};
 /// Arguments of `sweeptin hillshade`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A single-band DEM GeoTIFF.
+    /// A single-band DEM (GeoTIFF, COG or ESRI ASCII grid).
     pub dem: PathBuf,
-    /// Output PNG (grey + alpha; nodata is transparent).
+    /// Output: .png (grey + alpha, nodata transparent, with a .pgw world file and a .prj when
+    /// the CRS is known as WKT) or .tif (8-bit GeoTIFF, 0 = nodata, as gdaldem writes; --format
+    /// cog for a Cloud Optimized GeoTIFF).
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub raster: super::products::RasterArgs,
     /// Direction the light comes from, in degrees clockwise from north.
     #[arg(long, default_value_t = 315.0)]
     pub azimuth: f64,
@@ -29,6 +34,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         azimuth: args.azimuth,
         altitude: args.altitude,
         z_factor: args.z_factor,
+        output: args.raster.options(),
     };
     let s = hillshade(&args.dem, &args.output, &o)?;
     eprintln!(

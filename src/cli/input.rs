@@ -193,8 +193,9 @@ pub struct ProductInput {
 #[derive(clap::Args, Debug, Clone, Default)]
 #[command(next_help_heading = "Breaklines and trimming")]
 pub struct LineArgs {
-    /// Breaklines (repeatable): GeoJSON LineString/MultiLineString/Polygon/MultiPolygon or text
-    /// (`x y [z]` per line, a blank line between polylines), in the points' CRS and units. They
+    /// Breaklines (repeatable): GeoJSON LineString/MultiLineString/Polygon/MultiPolygon, a
+    /// GeoPackage or OGR-SQLite layer (`FILE.gpkg:LAYER` when it has several), a Shapefile, or
+    /// text (`x y [z]` per line, a blank line between polylines), in the points' CRS and units. They
     /// become triangle edges; crossings are split, overlaps merged. Lines without z take their
     /// heights from the points' TIN (an extra pass over the points).
     #[arg(long = "breaklines", value_name = "FILE")]
@@ -218,6 +219,11 @@ pub struct LineArgs {
     /// from the TIN are unambiguous. Holds the whole triangulation in memory.
     #[arg(long)]
     pub no_flat_triangles: bool,
+    /// Cut the breaklines to the data (the points' convex hull, exactly) with a warning of how
+    /// much was cut, instead of stopping at a line that runs outside the points (one more pass
+    /// over the points).
+    #[arg(long)]
+    pub clip_breaklines: bool,
 }
 
 impl LineArgs {
@@ -229,7 +235,26 @@ impl LineArgs {
             max_edge: self.max_edge,
             z_tolerance: Some(self.z_tolerance),
             no_flat_triangles: self.no_flat_triangles,
+            clip: self.clip_breaklines,
         }
+    }
+}
+
+/// Prints the warning of `--clip-breaklines` when it cut anything.
+pub fn warn_clipped(run: &RunSummary) {
+    let Some(c) = run.breaklines.as_ref().and_then(|b| b.clipped) else {
+        return;
+    };
+    if c.lines_cut + c.lines_dropped > 0 {
+        eprintln!(
+            "sweeptin: warning: --clip-breaklines cut {} of {} breaklines to the points' convex hull and left out {} lying wholly outside: {:.1} of {:.1} (xy units) of line cut ({:.1} %)",
+            c.lines_cut,
+            c.lines,
+            c.lines_dropped,
+            c.length_cut,
+            c.length,
+            100.0 * c.length_cut / c.length.max(f64::MIN_POSITIVE)
+        );
     }
 }
 
@@ -362,6 +387,7 @@ pub fn run_products(
         other => bail!("internal error: the products' summary is {other:?}"),
     };
     run.peak_rss_bytes = pipeline::peak_rss();
+    warn_clipped(&run);
     Ok((run, products))
 }
 

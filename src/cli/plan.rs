@@ -84,6 +84,9 @@ pub struct MergeArgs {
     /// For a DEM plan merged into one GeoTIFF: a hillshade PNG of the whole mosaic (no seams).
     #[arg(long, value_name = "PNG")]
     pub hillshade: Option<PathBuf>,
+    /// For a DEM plan: the mosaic's format (`tif`, `cog`) and compression (default: the plan's).
+    #[command(flatten)]
+    pub raster: super::products::RasterArgs,
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
@@ -494,7 +497,11 @@ fn task_sinks(
     Ok(match job {
         Job::Dem(d) => {
             d.output = plan.task_output(dir, i, "dem", "tif");
-            d.dem.raster_format = Some(RasterFormat::GeoTiff);
+            // The tasks' tiles are plain GeoTIFFs; the mosaic gets the plan's --format.
+            d.dem.raster = super::products::RasterArgs {
+                format: Some(RasterFormat::GeoTiff),
+                ..Default::default()
+            };
             d.dem.grid_bbox = Some(tile);
             d.hillshade = None;
             if d.contours.is_some() {
@@ -655,12 +662,25 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
             if !matches!(extension(out).as_deref(), Some("vrt" | "tif" | "tiff")) {
                 bail!("-o {}: a DEM mosaic is a .vrt or a .tif", out.display());
             }
+            if args.raster.format == Some(RasterFormat::Ascii) {
+                bail!("--format asc: a DEM mosaic is a GeoTIFF (tif, cog) or a VRT");
+            }
             super::input::check_output(out)?;
             let crs = match crs {
                 Some(c) => Some(c),
                 None => plan_crs(&plan)?,
             };
-            let s = merge::merge_dem(&plan, &dir, out, d.dem.nodata, crs.as_ref())?;
+            let mut output = args.raster.options();
+            if output == Default::default() && extension(out).as_deref() != Some("vrt") {
+                // The plan's own --format / --compress, as one run would have written.
+                output = d.dem.raster.options();
+            }
+            let options = merge::MosaicOptions {
+                nodata: d.dem.nodata,
+                align: d.dem.align,
+                output,
+            };
+            let s = merge::merge_dem(&plan, &dir, out, &options, crs.as_ref())?;
             summary.insert("dem".into(), serde_json::to_value(&s)?);
             if let (Some(c), true) = (&contours, d.contours.is_some()) {
                 let s = merge::merge_contours(&plan, &dir, c, crs.as_ref())?;
@@ -671,7 +691,9 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
                 .clone()
                 .or_else(|| planned(&plan, "hillshade"))
             {
-                if RasterFormat::from_extension(out) != Some(RasterFormat::GeoTiff) {
+                if RasterFormat::from_extension(out) != Some(RasterFormat::GeoTiff)
+                    || output.format == Some(RasterFormat::Ascii)
+                {
                     bail!("--hillshade shades a GeoTIFF mosaic: merge with -o OUT.tif");
                 }
                 let (p, h) = shade(out, &png)?;
