@@ -6,6 +6,7 @@
 //! - [`raster`]: the [`GridWriter`] row store and [`create_grid_writer`]: [`geotiff`] (float32
 //!   GeoTIFF) and [`ascii`] (ESRI ASCII grid).
 //! - [`geojson`]: a streaming GeoJSON feature writer.
+//! - [`vpc`]: virtual point clouds (`.vpc`) from LAS/LAZ headers.
 //! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C
 //!   ([`install_interrupt_handler`]).
 //!
@@ -38,6 +39,7 @@ pub mod obj;
 pub mod ply;
 pub mod raster;
 pub mod stin;
+pub mod vpc;
 
 pub use atomic::{AtomicFile, RegisteredTempDir, install_interrupt_handler};
 pub use landxml::LandXmlWriter;

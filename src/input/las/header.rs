@@ -196,7 +196,9 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
             e.start_of_first_evlr,
             e.number_of_evlrs,
             file_len,
-            |user, record| user == "copc" && record == 1000,
+            |user, record| {
+                (user == "copc" && record == 1000) || (user == "LASF_Projection" && record == 2112)
+            },
         )?,
         None => Vec::new(),
     };
@@ -206,6 +208,13 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
     });
     let mut info = describe(path, &raw, &header);
     info.vlrs = vlrs::list(&header, &evlrs);
+    // A WKT in an EVLR past the first (copclib writes it last), which `las` does not read.
+    if info.crs.is_none() {
+        info.crs = evlrs
+            .iter()
+            .filter(|e| e.info.user_id == "LASF_Projection" && e.info.record_id == 2112)
+            .find_map(|e| Crs::from_wkt_bytes(e.data.as_ref()?));
+    }
     info.copc = copc;
     info.layout = layout;
     Ok(info)

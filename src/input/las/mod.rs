@@ -44,6 +44,7 @@ mod decode;
 pub mod filter;
 pub mod header;
 mod reader;
+pub mod stats;
 pub mod vlrs;
 pub mod vpc;
 pub mod world;
@@ -53,6 +54,7 @@ pub use copc::CopcInfo;
 pub use filter::{BBox, Filter, FilterStats, Returns, parse_classes};
 pub use header::{Bounds3, FileInfo};
 pub use reader::{LidarReader, ReadOptions};
+pub use stats::{PointStats, scan};
 pub use vlrs::VlrInfo;
 pub use world::Quantization;
 

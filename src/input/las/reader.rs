@@ -68,7 +68,6 @@ impl std::fmt::Debug for LidarReader {
 
 /// One input file.
 struct Source {
-    path: PathBuf,
     points: u64,
     bounds: Bounds3,
     /// Global index of the file's first point.
@@ -141,7 +140,6 @@ impl LidarReader {
                     declared.push((info.path.clone(), c.clone()));
                 }
                 push(Source {
-                    path: info.path.clone(),
                     points: info.point_count,
                     bounds: info.bounds,
                     first_index: 0,
@@ -181,7 +179,6 @@ impl LidarReader {
                     None
                 };
                 push(Source {
-                    path: e.path,
                     points: e.points,
                     bounds: e.bounds,
                     first_index: 0,
