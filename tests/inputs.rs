@@ -517,3 +517,54 @@ print(json.dumps(out))
     }
     assert_eq!(got["summary"]["files"], 3);
 }
+
+/// `plan` takes a `.vpc`, an `@list` or a quoted glob like a single run: the plan names every
+/// file (by absolute path, in the stored command line too).
+#[test]
+fn a_plan_of_a_vpc_list_or_glob_names_every_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let tiles = ign_tiles();
+    let names: Vec<&str> = tiles.iter().map(|t| s(t)).collect();
+    let vpc = dir.path().join("ign.vpc");
+    let mut args = vec!["index"];
+    args.extend_from_slice(&names);
+    args.extend_from_slice(&["-o", s(&vpc)]);
+    sweeptin(&args);
+    let list = dir.path().join("l.txt");
+    std::fs::write(&list, names.join("\n")).unwrap();
+    let at = format!("@{}", s(&list));
+    let pattern = format!("{}/*.laz", s(&shared("lidar/ign_50m_tiles")));
+    for (k, input) in [s(&vpc), at.as_str(), pattern.as_str()].iter().enumerate() {
+        let job = dir.path().join(format!("job{k}"));
+        sweeptin(&[
+            "plan",
+            "dem",
+            input,
+            "--cell",
+            "0.5",
+            "--tile",
+            "50",
+            "-o",
+            s(&job),
+        ]);
+        let plan: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(job.join("plan.json")).unwrap()).unwrap();
+        let files: Vec<PathBuf> = plan["files"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| PathBuf::from(f["path"].as_str().unwrap()))
+            .collect();
+        let want: Vec<PathBuf> = tiles.iter().map(|t| t.canonicalize().unwrap()).collect();
+        assert_eq!(files, want, "{input}");
+        let stored: Vec<&str> = plan["args"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a.as_str().unwrap())
+            .collect();
+        for w in &want {
+            assert!(stored.contains(&s(w)), "{input}: {stored:?}");
+        }
+    }
+}

@@ -79,7 +79,7 @@ pub fn main() -> ExitCode {
     // `@list.txt`, quoted globs: the files a command's FILES stand for.
     let expanded = match &mut cli.command {
         Command::Tin(a) => input::expand(&mut a.input.inputs),
-        Command::Info(a) => input::expand(&mut a.files),
+        Command::Info(a) => input::expand_files(&mut a.files),
         Command::Dem(a) => input::expand(&mut a.input.args.inputs),
         Command::Contours(a) => input::expand(&mut a.input.args.inputs),
         Command::Volume(a) => input::expand(&mut a.input.args.inputs),
@@ -87,6 +87,7 @@ pub fn main() -> ExitCode {
         Command::Profile(a) => input::expand(&mut a.input.args.inputs),
         Command::Products(a) => input::expand(&mut a.input.args.inputs),
         Command::Index(a) => input::expand_files(&mut a.files),
+        Command::Crossval(a) => input::expand(&mut a.input),
         _ => Ok(()),
     };
     let result = match (expanded, cli.command) {
