@@ -163,7 +163,7 @@ fn arso_copc_box() {
         bbox: Some(b),
         ..Filter::keep_all()
     };
-    let (got, r) = read(&[copc.clone()], &f, ReadOptions::default());
+    let (got, r) = read(std::slice::from_ref(&copc), &f, ReadOptions::default());
     let plain = ReadOptions {
         copc_index: false,
         ..ReadOptions::default()

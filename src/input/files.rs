@@ -110,7 +110,7 @@ mod tests {
         std::fs::create_dir(d.join("sub")).unwrap();
         std::fs::write(d.join("sub/list.txt"), "# tiles\n../c.las\n\n../a.laz\n").unwrap();
         let pattern = d.join("*.laz");
-        let got = expand(&[pattern.clone()], Expand::KeepVpc).unwrap();
+        let got = expand(std::slice::from_ref(&pattern), Expand::KeepVpc).unwrap();
         assert_eq!(got, [d.join("a.laz"), d.join("b.laz")]);
         let list = PathBuf::from(format!("@{}", d.join("sub/list.txt").display()));
         let got = expand(&[list, d.join("b.laz")], Expand::KeepVpc).unwrap();

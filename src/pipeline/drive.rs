@@ -365,7 +365,7 @@ mod tests {
 
     #[test]
     fn rates_in_whole_units() {
-        assert_eq!(rate(1_356_317.1949), "1.36 M pts/s");
+        assert_eq!(rate(1_356_317.194_9), "1.36 M pts/s");
         assert_eq!(rate(12_480.0), "12.5 k pts/s");
         assert_eq!(rate(950.4), "950 pts/s");
         assert_eq!(rate(f64::NAN), "0 pts/s");

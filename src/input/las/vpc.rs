@@ -342,7 +342,7 @@ fn relative(path: &Path, dir: &Path) -> Option<PathBuf> {
 
 /// `YYYY-MM-DDT00:00:00Z` of a day of the year (1-based), when valid.
 fn date(year: u16, day: u16) -> Option<String> {
-    let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+    let leap = (year.is_multiple_of(4) && !year.is_multiple_of(100)) || year.is_multiple_of(400);
     let months = [
         31,
         if leap { 29 } else { 28 },
