@@ -48,7 +48,7 @@ np.unique(np.asarray(l.classification), return_counts=True)
 np.unique(np.asarray(l.return_number), return_counts=True)
 ")
 points=$($BIN info "$FILE" | sed -n 's/^  points: *\([0-9]*\).*/\1/p' | head -1)
-echo "load: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores; $(python3 -c 'import laspy, lazrs; print("laspy", laspy.__version__, "lazrs", lazrs.__version__)' 2>/dev/null)"
+echo "load: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores; $(python3 -c 'import laspy, importlib.metadata as m; print("laspy", laspy.__version__, "lazrs", m.version("lazrs"))' 2>/dev/null)"
 echo
 echo "| $(basename "$FILE") ($points points) | wall (median of $RUNS) | M points/s |"
 echo "|---|---:|---:|"

@@ -16,9 +16,9 @@ pub struct ReadOptions {
     /// Decode LAZ chunks (and filter their points) on several threads (rayon's global pool).
     /// The points and their order are the same either way.
     pub parallel: bool,
-    /// Point records decoded per batch (at least one LAZ chunk, and at least two chunks per
-    /// thread when parallel). Memory held by the reader is about `batch_points × 40` bytes plus
-    /// the records of one batch.
+    /// Point records decoded per batch (at least one LAZ chunk, and one chunk per thread when
+    /// parallel, up to `4 × batch_points` or 2^20 points). Memory held by the reader is about
+    /// 80 bytes per point of a batch.
     pub batch_points: usize,
     /// Keep only the points inside this area too (edges included), on top of the filter's box:
     /// "the points of these files inside this rectangle". Files whose header extent misses it
@@ -307,13 +307,15 @@ impl LidarReader {
                 } else {
                     1
                 };
+                // At least `batch_points` and one span per thread, at most about four batches
+                // (or 2^20 points) in memory at once, whatever the number of cores.
+                let batch = self.options.batch_points as u64;
+                let cap = (4 * batch).max(1 << 20);
                 let (mut end, mut points) = (cur.next, 0u64);
-                while end < cur.spans.len()
-                    && (end - cur.next < 2 * threads || points < self.options.batch_points as u64)
-                {
+                while end < cur.spans.len() {
                     points += cur.spans[end].points;
                     end += 1;
-                    if points >= self.options.batch_points as u64 && end - cur.next >= threads {
+                    if (points >= batch && end - cur.next >= threads) || points >= cap {
                         break;
                     }
                 }
