@@ -75,10 +75,14 @@ def main():
     center = (mins + maxs) / 2
     halfsize = float((maxs - mins).max() / 2) * (1 + 1e-9) + 1e-6
 
-    wkt = ""
-    crs = h.parse_crs() if hasattr(h, "parse_crs") else None
-    if crs is not None:
-        wkt = crs.to_wkt()
+    # The WKT as the file has it; GeoTIFF keys need pyproj to become WKT (left out without it).
+    wkt = next((v.string for v in h.vlrs if type(v).__name__ == "WktCoordinateSystemVlr"), "")
+    if not wkt:
+        try:
+            crs = h.parse_crs()
+            wkt = crs.to_wkt() if crs is not None else ""
+        except Exception:  # pyproj missing or keys it cannot read
+            wkt = ""
     cfg = copclib.CopcConfigWriter(
         target, copclib.Vector3(*h.scales), copclib.Vector3(*h.offsets), wkt
     )
