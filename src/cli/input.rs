@@ -14,8 +14,11 @@ use sweeptin::sink::{Fanout, FanoutSummary, MeshSink, ProductSummary, TriangleSi
 /// Input files and how to read and run them (flattened into each command's arguments).
 #[derive(clap::Args, Debug, Clone)]
 pub struct InputArgs {
-    /// Input points: LAS/LAZ files (adjacent tiles form one point set), XYZ text files
-    /// (`x y z` per line), or one streaming mesh (.stin) written by `sweeptin tin`.
+    /// Input points: LAS/LAZ/COPC files (adjacent tiles form one point set, whatever their
+    /// scales and offsets), `.vpc` virtual point clouds, `@list.txt` (one path per line,
+    /// relative to the list), quoted globs (`'tiles/*.laz'`), XYZ text files (`x y z` per
+    /// line), or one streaming mesh (.stin) written by `sweeptin tin`. With --bbox, files whose
+    /// extent misses the box are not read, and COPC files read only the octree nodes it meets.
     #[arg(required = true, value_name = "FILES")]
     pub inputs: Vec<PathBuf>,
     #[command(flatten)]
@@ -308,10 +311,23 @@ impl ProductInput {
                     .and_then(|e| e.to_str())
                     .map(str::to_ascii_lowercase)
                     .as_deref(),
-                Some("las" | "laz")
+                Some("las" | "laz" | "vpc")
             )
         })
     }
+}
+
+/// Replaces `paths` by the files they stand for (`@list.txt`, quoted globs; a `.vpc` stays, the
+/// reader knows its files and their extents).
+pub fn expand(paths: &mut Vec<PathBuf>) -> anyhow::Result<()> {
+    *paths = sweeptin::input::files::expand(paths, sweeptin::input::files::Expand::KeepVpc)?;
+    Ok(())
+}
+
+/// As [`expand`], and a `.vpc` replaced by its files (for commands that need every header).
+pub fn expand_files(paths: &mut Vec<PathBuf>) -> anyhow::Result<()> {
+    *paths = sweeptin::input::files::expand(paths, sweeptin::input::files::Expand::VpcFiles)?;
+    Ok(())
 }
 
 /// Fails early (before any heavy work) if an output cannot be created where asked.

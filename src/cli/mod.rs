@@ -11,6 +11,7 @@ mod contours;
 mod crossval;
 mod dem;
 mod hillshade;
+mod index;
 mod info;
 mod input;
 mod plan;
@@ -63,31 +64,52 @@ enum Command {
     /// Join the finished tasks of a plan into one result: a VRT or GeoTIFF mosaic, stitched
     /// contours, summed volumes.
     Merge(plan::MergeArgs),
+    /// Write a virtual point cloud (.vpc) listing LAS/LAZ/COPC files with their extents, counts
+    /// and CRS (headers only), for QGIS, PDAL wrench, lasR and sweeptin's own box reads.
+    Index(index::Args),
 }
 
 /// Runs the command line; returns the process exit code.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let mut cli = Cli::parse();
     // Ctrl-C / SIGTERM: delete temporary files, exit 130. Without it outputs stay atomic anyway.
     if let Err(e) = sweeptin::output::install_interrupt_handler() {
         eprintln!("sweeptin: warning: {e}");
     }
-    let result = match cli.command {
-        Command::Tin(a) => tin::run(a),
-        Command::Check(a) => check::run(a),
-        Command::Info(a) => info::run(a),
-        Command::Dem(a) => dem::run(a),
-        Command::Contours(a) => contours::run(a),
-        Command::Volume(a) => volume::run(a),
-        Command::Sample(a) => sample::run(a),
-        Command::Profile(a) => profile::run(a),
-        Command::Hillshade(a) => hillshade::run(a),
-        Command::Products(a) => products::run(a),
-        Command::Simplify(a) => simplify::run(a),
-        Command::Crossval(a) => crossval::run(a),
-        Command::Plan(a) => plan::plan(a),
-        Command::Run(a) => plan::run(a),
-        Command::Merge(a) => plan::merge(a),
+    // `@list.txt`, quoted globs: the files a command's FILES stand for.
+    let expanded = match &mut cli.command {
+        Command::Tin(a) => input::expand(&mut a.input.inputs),
+        Command::Info(a) => input::expand_files(&mut a.files),
+        Command::Dem(a) => input::expand(&mut a.input.args.inputs),
+        Command::Contours(a) => input::expand(&mut a.input.args.inputs),
+        Command::Volume(a) => input::expand(&mut a.input.args.inputs),
+        Command::Sample(a) => input::expand(&mut a.input.args.inputs),
+        Command::Profile(a) => input::expand(&mut a.input.args.inputs),
+        Command::Products(a) => input::expand(&mut a.input.args.inputs),
+        Command::Index(a) => input::expand_files(&mut a.files),
+        Command::Crossval(a) => input::expand(&mut a.input),
+        _ => Ok(()),
+    };
+    let result = match (expanded, cli.command) {
+        (Err(e), _) => Err(e),
+        (Ok(()), command) => match command {
+            Command::Tin(a) => tin::run(a),
+            Command::Check(a) => check::run(a),
+            Command::Info(a) => info::run(a),
+            Command::Dem(a) => dem::run(a),
+            Command::Contours(a) => contours::run(a),
+            Command::Volume(a) => volume::run(a),
+            Command::Sample(a) => sample::run(a),
+            Command::Profile(a) => profile::run(a),
+            Command::Hillshade(a) => hillshade::run(a),
+            Command::Products(a) => products::run(a),
+            Command::Simplify(a) => simplify::run(a),
+            Command::Crossval(a) => crossval::run(a),
+            Command::Plan(a) => plan::plan(a),
+            Command::Run(a) => plan::run(a),
+            Command::Merge(a) => plan::merge(a),
+            Command::Index(a) => index::run(a),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -224,8 +224,21 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
 
 pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let (argv, dir) = take_output(&args.command);
-    let job = parse_job(&argv)?;
+    let mut job = parse_job(&argv)?;
     let dir = dir.context("give the plan's directory with -o DIR")?;
+    // `@list.txt`, quoted globs and `.vpc` files: the plan names every file (it reads each
+    // header), each given input standing for its files in the stored command line.
+    let given = job.input().args.inputs.clone();
+    let groups: Vec<Vec<PathBuf>> = given
+        .iter()
+        .map(|g| {
+            sweeptin::input::files::expand(
+                std::slice::from_ref(g),
+                sweeptin::input::files::Expand::VpcFiles,
+            )
+        })
+        .collect::<Result<_, _>>()?;
+    job.input_mut().args.inputs = groups.iter().flatten().cloned().collect();
     check_job(&job)?;
     let a = &job.input().args;
     let tile = a
@@ -256,13 +269,20 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         );
     }
     let buffer = args.buffer.unwrap_or(tile / 10.0);
+    let canonical = |p: &PathBuf| {
+        std::fs::canonicalize(p).with_context(|| format!("cannot read {}", p.display()))
+    };
     let inputs: Vec<PathBuf> = a
         .inputs
         .iter()
-        .map(|p| std::fs::canonicalize(p).with_context(|| format!("cannot read {}", p.display())))
+        .map(canonical)
+        .collect::<anyhow::Result<_>>()?;
+    let abs_groups: Vec<Vec<PathBuf>> = groups
+        .iter()
+        .map(|g| g.iter().map(canonical).collect::<anyhow::Result<_>>())
         .collect::<anyhow::Result<_>>()?;
     // The stored command line names the inputs by absolute path, so tasks run from anywhere.
-    let argv = absolute_inputs(&argv, &a.inputs, &inputs);
+    let argv = absolute_inputs(&argv, &given, &abs_groups);
     // The files must make one point set (one CRS, compatible formats), as for a single run:
     // refused now, from the headers, not by every task later.
     sweeptin::input::las::LidarReader::open(&inputs, &a.filter.to_filter())?;
@@ -303,13 +323,16 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
 }
 
 /// `argv` with each input replaced by its absolute path.
-fn absolute_inputs(argv: &[String], given: &[PathBuf], abs: &[PathBuf]) -> Vec<String> {
+fn absolute_inputs(argv: &[String], given: &[PathBuf], abs: &[Vec<PathBuf>]) -> Vec<String> {
     argv.iter()
-        .map(|s| {
+        .flat_map(|s| {
             given
                 .iter()
                 .position(|g| g.as_os_str() == s.as_str())
-                .map_or_else(|| s.clone(), |i| abs[i].display().to_string())
+                .map_or_else(
+                    || vec![s.clone()],
+                    |i| abs[i].iter().map(|p| p.display().to_string()).collect(),
+                )
         })
         .collect()
 }

@@ -1,6 +1,7 @@
 //! `sweeptin products`: several terrain products from one pass over the triangle stream; and the
 //! option groups and sink builders the single-product commands share.
 
+use super::info::thousands;
 use super::input::{ProductInput, check_output, run_products};
 use anyhow::{Context, bail};
 use serde_json::{Map, Value, json};
@@ -260,7 +261,9 @@ impl Report {
         eprintln!(
             "sweeptin: {} points ({} duplicates merged), {} triangles in {seconds:.2} s \
              (peak memory {peak})",
-            run.points_read, run.duplicates, run.triangles
+            thousands(run.points_read),
+            thousands(run.duplicates),
+            thousands(run.triangles)
         );
         let mut lines: BTreeMap<&str, (Option<&Path>, String)> = BTreeMap::new();
         for (name, s) in &self.products.0 {
@@ -299,8 +302,11 @@ fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
         ProductSummary::Dem(d) => (
             Some(&d.path),
             format!(
-                "{} × {} cells of {:?}, {} with data",
-                d.cols, d.rows, d.cell, d.cells_with_data
+                "{} × {} cells of {}, {} with data",
+                d.cols,
+                d.rows,
+                d.cell,
+                thousands(d.cells_with_data)
             ),
         ),
         ProductSummary::Contours(c) => (
@@ -310,8 +316,9 @@ fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
         ProductSummary::Volume(v) => {
             let t = &v.totals;
             let line = format!(
-                "cut {:?} fill {:?} (areas {:?} / {:?}, covered {:?})",
-                t.cut_volume, t.fill_volume, t.cut_area, t.fill_area, t.area
+                "cut {:.3}, fill {:.3}, net {:.3} (cubic units of the data; cut area {:.3}, fill \
+                 area {:.3}, covered {:.3} square units)",
+                t.cut_volume, t.fill_volume, t.net_volume, t.cut_area, t.fill_area, t.area
             );
             (None, line)
         }
@@ -320,7 +327,9 @@ fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
             format!("{} of {} points inside the TIN", s.answered, s.queries),
         ),
         ProductSummary::Profile(p) => (Some(&p.path), format!("{} points", p.points)),
-        other => (None, format!("{other:?}")),
+        ProductSummary::None | ProductSummary::SurfaceStore(_) | ProductSummary::Fanout(_) => {
+            (None, "done".to_string())
+        }
     }
 }
 

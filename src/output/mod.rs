@@ -8,6 +8,7 @@
 //!   Optimized GeoTIFF, staged and assembled in bounded memory) and [`ascii`] (ESRI ASCII grid
 //!   with a `.prj`); [`world`]: world files and `.prj` files beside images.
 //! - [`geojson`]: a streaming GeoJSON feature writer.
+//! - [`vpc`]: virtual point clouds (`.vpc`) from LAS/LAZ headers.
 //! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C
 //!   ([`install_interrupt_handler`]).
 //!
@@ -41,6 +42,7 @@ pub mod obj;
 pub mod ply;
 pub mod raster;
 pub mod stin;
+pub mod vpc;
 pub mod world;
 
 pub use atomic::{AtomicFile, RegisteredTempDir, install_interrupt_handler};
