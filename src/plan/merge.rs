@@ -239,3 +239,146 @@ pub fn merge_volume(plan: &Plan, dir: &Path) -> Result<crate::sink::CutFillTotal
     }
     Ok(crate::products::volume::CutFill::totals_of(&parts))
 }
+
+/// What [`merge_plan`] made. Serialises as the `--json` summary of `sweeptin merge`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct MergeSummary {
+    /// The DEM mosaic.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dem: Option<DemMergeSummary>,
+    /// The stitched contours.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contours: Option<StitchSummary>,
+    /// The summed volumes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub volume: Option<crate::sink::CutFillTotals>,
+    /// Tasks joined.
+    pub tasks: usize,
+    /// Tasks that found no point.
+    pub empty_tasks: usize,
+    /// The widest buffer a task needed.
+    pub max_buffer: f64,
+}
+
+/// The lower-case extension of `p`.
+fn extension(p: &Path) -> Option<String> {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+}
+
+/// The CRS of the plan's first file (as a single run takes it from the headers).
+fn plan_crs(plan: &Plan) -> Result<Option<Crs>> {
+    let Some(f) = plan.files.first() else {
+        return Ok(None);
+    };
+    let r = crate::input::las::LidarReader::open(
+        std::slice::from_ref(&f.path),
+        &crate::input::las::Filter::default(),
+    )?;
+    Ok(r.crs().cloned())
+}
+
+/// Joins the finished tasks of `plan` (in `dir`) into the job's result: the DEM mosaic `out`
+/// (`.vrt` or `.tif`) and, for a DEM with contours, the stitched `contours` (default: where the
+/// plan was told); the contours `out` (`.geojson`); the summed volumes (no file).
+///
+/// # Errors
+/// [`Error::Options`] for unfinished tasks, a missing or wrong output, an output that is an
+/// input, the plan, a task's output or another output, or when no task found a point; the
+/// readers' and writers' errors.
+pub fn merge_plan(
+    plan: &Plan,
+    dir: &Path,
+    out: Option<&Path>,
+    contours: Option<&Path>,
+) -> Result<MergeSummary> {
+    use super::Product;
+    let contours = contours.map(Path::to_path_buf).or_else(|| {
+        plan.outputs
+            .iter()
+            .find(|(n, _)| n == "contours")
+            .map(|(_, p)| p.clone())
+    });
+    let mut outs: Vec<(&str, &Path)> = Vec::new();
+    if let Some(o) = out {
+        outs.push(("the mosaic", o));
+    }
+    if let Some(c) = &contours {
+        outs.push(("the contours", c));
+    }
+    let mut protected: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
+    protected.push(dir.join("plan.json"));
+    crate::output::distinct_outputs(&outs, &protected, "the plan")?;
+    for (what, o) in &outs {
+        let abs = std::path::absolute(o).unwrap_or_else(|_| o.to_path_buf());
+        if abs.starts_with(dir.join("tiles")) {
+            return Err(Error::Options(format!(
+                "{what} {}: that is where the tasks' outputs are",
+                o.display()
+            )));
+        }
+    }
+    let recs = records(plan, dir)?;
+    if !recs.is_empty() && recs.iter().all(|r| r.points == 0) {
+        return Err(Error::Options(
+            "no task found a point after the filters: nothing to merge (check --class and the \
+             other filters of the plan)"
+                .into(),
+        ));
+    }
+    let crs = plan.job.crs()?;
+    let mut summary = MergeSummary {
+        tasks: recs.len(),
+        empty_tasks: recs.iter().filter(|r| r.status == "empty").count(),
+        max_buffer: recs.iter().map(|r| r.buffer).fold(0.0, f64::max),
+        ..MergeSummary::default()
+    };
+    fn need<'a>(o: Option<&'a Path>, what: &str) -> Result<&'a Path> {
+        o.ok_or_else(|| Error::Options(format!("give the {what}")))
+    }
+    match &plan.job.product {
+        Product::Dem {
+            nodata,
+            contours: levels,
+            ..
+        } => {
+            let out = need(out, "mosaic (OUT.vrt or OUT.tif)")?;
+            if !matches!(extension(out).as_deref(), Some("vrt" | "tif" | "tiff")) {
+                return Err(Error::Options(format!(
+                    "{}: a DEM mosaic is a .vrt or a .tif",
+                    out.display()
+                )));
+            }
+            let crs = match crs {
+                Some(c) => Some(c),
+                None => plan_crs(plan)?,
+            };
+            summary.dem = Some(merge_dem(plan, dir, out, *nodata, crs.as_ref())?);
+            if let (Some(c), Some(_)) = (&contours, levels) {
+                summary.contours = Some(merge_contours(plan, dir, c, crs.as_ref())?);
+            }
+        }
+        Product::Contours(_) => {
+            let out = need(out, "contours (OUT.geojson)")?;
+            if !matches!(extension(out).as_deref(), Some("geojson" | "json")) {
+                return Err(Error::Options(format!(
+                    "{}: contours are written as GeoJSON (.geojson)",
+                    out.display()
+                )));
+            }
+            summary.contours = Some(merge_contours(plan, dir, out, crs.as_ref())?);
+        }
+        Product::Volume { .. } => {
+            if let Some(o) = out {
+                return Err(Error::Options(format!(
+                    "{}: a volume plan writes no file (its totals are printed; --json for a \
+                     summary)",
+                    o.display()
+                )));
+            }
+            summary.volume = Some(merge_volume(plan, dir)?);
+        }
+    }
+    Ok(summary)
+}

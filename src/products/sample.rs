@@ -30,6 +30,29 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+/// Heights of an in-memory TIN at the points `xy` (NaN outside it), with the same values as
+/// the streamed [`SampleSink`] and the DEM: each point is found by a walk from the previous one
+/// ([`crate::tin::Tin::locate`], exact), then valued by [`Tri::value_at`] (on an edge or vertex
+/// from that edge or vertex alone).
+pub fn heights(tin: &mut crate::tin::Tin, xy: &[[f64; 2]]) -> Vec<f64> {
+    use crate::tin::PointLocation;
+    xy.iter()
+        .map(|&p| {
+            let t = match tin.locate(p) {
+                PointLocation::Outside(_) => return f64::NAN,
+                PointLocation::OnVertex(v) => return tin.z(v),
+                PointLocation::OnEdge(e) => e.tri(),
+                PointLocation::Inside(t) => t,
+            };
+            let v = tin.tri_vertices(t).map(|v| tin.point(v));
+            match Tri::new(&v) {
+                Some(tri) => tri.value_at(p, tri.locate(p)),
+                None => f64::NAN,
+            }
+        })
+        .collect()
+}
+
 /// A query point: its number in the file (0-based, data lines only) and position.
 #[derive(Clone, Copy, Debug)]
 struct Query {
