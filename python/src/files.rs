@@ -3,6 +3,7 @@
 //! (`stream_triangles`), with the same bounded memory as the command line.
 
 use crate::errors::value_error;
+use crate::interrupt::{Cancel, CancelMesh, CancelSink, interruptible};
 use crate::memory::duplicates;
 use crate::to_py;
 use numpy::PyArray3;
@@ -193,14 +194,15 @@ pub(crate) fn run_products(
             .map_err(to_py)?;
         sinks.push(("volume".into(), Box::new(VolumeSink::new(plane, boundary))));
     }
-    let (mut run, products) = py
-        .detach(|| -> sweeptin::Result<_> {
-            let mut fanout = Fanout::new(sinks).with_crs(crs);
-            let mut run = pipeline::run(&config, None, &mut [&mut fanout])?;
-            let products = run.products.pop();
-            Ok((run, products))
-        })
-        .map_err(to_py)?;
+    let cancel = Cancel::default();
+    let (mut run, products) = interruptible(py, &cancel, || {
+        let mut fanout = Fanout::new(sinks).with_crs(crs);
+        let mut stop = CancelSink(&cancel);
+        let mut run = pipeline::run(&config, None, &mut [&mut fanout, &mut stop])?;
+        run.products.truncate(1);
+        let products = run.products.pop();
+        Ok((run, products))
+    })?;
     run.peak_rss_bytes = pipeline::peak_rss();
     match products {
         Some(ProductSummary::Fanout(p)) => summary_json(
@@ -219,27 +221,30 @@ pub(crate) fn run_products(
 pub(crate) fn run_tin(py: Python<'_>, opts: InputOpts, out: PathBuf) -> PyResult<String> {
     let (config, crs) = opts.config()?;
     sweeptin::output::distinct_outputs(&[("out", &out)], &opts.files, "the run").map_err(to_py)?;
-    let (mut run, mesh) = py
-        .detach(|| -> sweeptin::Result<_> {
-            let crs = match crs {
-                Some(c) => c.definition(),
-                None => config.input_crs()?,
-            };
-            let names: Vec<String> = opts.files.iter().map(|p| p.display().to_string()).collect();
-            let meta = sweeptin::output::MeshMeta {
-                crs,
-                comments: vec![format!(
-                    "sweeptin {} Delaunay TIN of {}",
-                    env!("CARGO_PKG_VERSION"),
-                    names.join(", ")
-                )],
-            };
-            let mut sink = sweeptin::output::create_mesh_sink(&out, None, &meta)?;
-            let run = pipeline::run(&config, Some(&mut *sink), &mut [])?;
-            let mesh = sink.finish()?;
-            Ok((run, mesh))
-        })
-        .map_err(to_py)?;
+    let cancel = Cancel::default();
+    let (mut run, mesh) = interruptible(py, &cancel, || {
+        let crs = match crs {
+            Some(c) => c.definition(),
+            None => config.input_crs()?,
+        };
+        let names: Vec<String> = opts.files.iter().map(|p| p.display().to_string()).collect();
+        let meta = sweeptin::output::MeshMeta {
+            crs,
+            comments: vec![format!(
+                "sweeptin {} Delaunay TIN of {}",
+                env!("CARGO_PKG_VERSION"),
+                names.join(", ")
+            )],
+        };
+        let mut sink = sweeptin::output::create_mesh_sink(&out, None, &meta)?;
+        let mut guarded = CancelMesh {
+            inner: &mut *sink,
+            cancel: &cancel,
+        };
+        let run = pipeline::run(&config, Some(&mut guarded), &mut [])?;
+        let mesh = sink.finish()?;
+        Ok((run, mesh))
+    })?;
     run.peak_rss_bytes = pipeline::peak_rss();
     let mesh = serde_json::json!({
         "path": out, "vertices": mesh.vertices, "triangles": mesh.triangles, "bytes": mesh.bytes
@@ -332,7 +337,15 @@ impl TriangleStream {
     fn __next__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
         let next = match &*state {
-            StreamState::Running { rx, .. } => py.detach(|| rx.recv().ok()),
+            StreamState::Running { rx, .. } => loop {
+                let r = py.detach(|| rx.recv_timeout(std::time::Duration::from_millis(100)));
+                match r {
+                    Ok(tris) => break Some(tris),
+                    Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break None,
+                    // Ctrl-C while waiting: raised here; dropping the iterator stops the run.
+                    Err(crossbeam_channel::RecvTimeoutError::Timeout) => py.check_signals()?,
+                }
+            },
             StreamState::Done(_) => return Err(PyStopIteration::new_err(())),
         };
         if let Some(tris) = next {

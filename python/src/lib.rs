@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 
 mod errors;
 mod files;
+mod interrupt;
 mod memory;
 mod plans;
 

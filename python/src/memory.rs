@@ -68,7 +68,9 @@ pub struct Tin {
     duplicates: u64,
     #[pyo3(get)]
     crossing_skipped: u64,
-    /// The walkable TIN for `interpolate`, built on first use.
+    /// The sweep's adjacency (`twins[3t + k]`), 12 bytes per triangle, for `interpolate`.
+    twins: Vec<u32>,
+    /// The walkable TIN for `interpolate`, built from `twins` on first use.
     walk: Mutex<Option<sweeptin::tin::Tin>>,
 }
 
@@ -88,14 +90,8 @@ pub(crate) fn triangulate(
         Some(s) => rows(s, "segments")?,
         None => &[],
     };
-    let t = py
-        .detach(|| {
-            if segs.is_empty() {
-                sweeptin::triangulate(points, &options)
-            } else {
-                sweeptin::triangulate_cdt(points, segs, &options)
-            }
-        })
+    let (t, twins) = py
+        .detach(|| sweeptin::triangulation::triangulate_with_twins(points, segs, &options))
         .map_err(to_py)?;
     let index = numpy::PyArray1::from_vec(py, t.input_index);
     index.getattr("flags")?.setattr("writeable", false)?;
@@ -105,6 +101,7 @@ pub(crate) fn triangulate(
         input_index: index.unbind(),
         duplicates: t.duplicates,
         crossing_skipped: t.constraint_stats.crossing_skipped,
+        twins,
         walk: Mutex::new(None),
     })
 }
@@ -256,12 +253,12 @@ impl Tin {
         let q: &[[f64; 2]] = rows(&xy, "xy")?;
         let (v, t) = self.arrays(py);
         let (v, t): (&[[f64; 3]], &[[u32; 3]]) = (rows(&v, "vertices")?, rows(&t, "triangles")?);
-        let walk = &self.walk;
+        let (walk, twins) = (&self.walk, &self.twins);
         let z = py
             .detach(|| {
                 let mut guard = walk.lock().unwrap_or_else(|e| e.into_inner());
                 if guard.is_none() {
-                    *guard = Some(sweeptin::tin::Tin::from_triangles(v, t)?);
+                    *guard = Some(sweeptin::tin::Tin::from_twins(v, t, twins)?);
                 }
                 let tin = guard.as_mut().expect("built above");
                 Ok(sweeptin::products::sample::heights(tin, q))

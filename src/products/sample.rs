@@ -37,17 +37,17 @@ use std::path::{Path, PathBuf};
 pub fn heights(tin: &mut crate::tin::Tin, xy: &[[f64; 2]]) -> Vec<f64> {
     use crate::tin::PointLocation;
     xy.iter()
-        .map(|&p| {
-            let t = match tin.locate(p) {
-                PointLocation::Outside(_) => return f64::NAN,
-                PointLocation::OnVertex(v) => return tin.z(v),
-                PointLocation::OnEdge(e) => e.tri(),
-                PointLocation::Inside(t) => t,
-            };
-            let v = tin.tri_vertices(t).map(|v| tin.point(v));
-            match Tri::new(&v) {
-                Some(tri) => tri.value_at(p, tri.locate(p)),
-                None => f64::NAN,
+        .map(|&p| match tin.locate(p) {
+            PointLocation::Outside(_) => f64::NAN,
+            PointLocation::OnVertex(v) => tin.z(v),
+            PointLocation::OnEdge(e) => {
+                let (a, b) = (tin.point(tin.org(e)), tin.point(tin.dst(e)));
+                super::geom::edge_value(&a, &b, p)
+            }
+            // A TIN's triangles are counter-clockwise: only the canonical first vertex is
+            // needed (the value inside does not depend on anything else).
+            PointLocation::Inside(t) => {
+                Tri::canonical_ccw(tin.tri_vertices(t).map(|v| tin.point(v))).plane_value(p)
             }
         })
         .collect()
