@@ -101,3 +101,29 @@ def test_file_errors(small, tmp_path):
     with pytest.raises(TypeError, match="unknown option"):
         sweeptin.tin(path, tmp_path / "x.ply", colour="red")
     assert not list(tmp_path.glob("x.*"))
+
+
+def test_ctrl_c_stops_a_run_and_leaves_no_output(tmp_path):
+    """SIGINT during `sweeptin.tin` on the 13M-point tile: KeyboardInterrupt once the run has
+    stopped (at its next triangle), and no file under the output's name."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    arso = data("lidar/arso_TM_511_122_from_ept.laz")
+    out = tmp_path / "arso.ply"
+    code = (
+        "import sweeptin, sys\n"
+        "try:\n"
+        f"    sweeptin.tin({str(arso)!r}, {str(out)!r})\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted'); sys.exit(3)\n"
+    )
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    time.sleep(3)
+    p.send_signal(signal.SIGINT)
+    stdout, _ = p.communicate(timeout=300)
+    assert p.returncode == 3 and "interrupted" in stdout, (p.returncode, stdout)
+    assert not out.exists()
+    assert not [f for f in tmp_path.iterdir() if f.name != "arso.ply"], list(tmp_path.iterdir())
