@@ -126,7 +126,7 @@ fn sweep_in_memory(
     sweep.run()?;
     let constraint_stats = sweep.constraint_stats();
     let (triangles, twins, xy, stats) = if twins {
-        let (t, w, xy, s) = sweep.finish_with_twins();
+        let ((t, w), xy, s) = sweep.finish_with_twins();
         (t, Some(w), xy, s)
     } else {
         let (t, xy, s) = sweep.finish();

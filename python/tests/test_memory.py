@@ -82,7 +82,8 @@ def test_interpolate_equals_cli_sample(small, cli, tmp_path):
     assert np.isnan(z[-1])
     np.testing.assert_array_equal(z, np.array(want))
     # On a vertex, exactly its z.
-    assert np.array_equal(z[2000:2050], xyz[:50, 2]) or tin.duplicates > 0
+    v = tin.vertices[:500]
+    assert np.array_equal(tin.interpolate(v[:, :2]), v[:, 2])
 
 
 def asc_cells(path) -> tuple[list[str], list[list[str]]]:

@@ -51,7 +51,6 @@ def test_a_python_plan_runs_anywhere_and_merges_to_one_run(ign, cli, tmp_path):
     for i in range(1, n, 2):
         cli("run", plan.path, "--task", i, "-q", "--threads", "1")
     assert all(r["status"] in ("done", "empty") for r in records)
-    assert any(r["runs"] > 1 for r in records) or n > 0
     again = sweeptin.run_task(plan, 0, resume=True)
     assert again == records[0]  # skipped: its record as it was
     py_mosaic = tmp_path / "py.tif"

@@ -26,6 +26,10 @@ use crate::geom::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
 use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, TriId, VertexId};
 pub use constrain::{ConstraintGraph, ConstraintStats};
 use front::{Front, NodeId, XMap};
+
+/// Triangles and, for each of their half-edges, the half-edge across it (`u32::MAX` on the
+/// hull): what [`Sweep::finish_with_twins`] returns.
+pub type Twinned = (Vec<[u32; 3]>, Vec<u32>);
 pub use hooks::{Batch, Mode};
 
 /// Counters of what the sweep did.
@@ -194,7 +198,7 @@ impl Sweep<Batch> {
     /// numbered the same way, or `u32::MAX` on the convex hull. Costs one pass and a map of the
     /// triangle slots (4 bytes each, while it runs), where rebuilding the adjacency from the
     /// triangles means finding every edge's twin again.
-    pub fn finish_with_twins(mut self) -> (Vec<[u32; 3]>, Vec<u32>, Vec<[f64; 2]>, SweepStats) {
+    pub fn finish_with_twins(mut self) -> (Twinned, Vec<[f64; 2]>, SweepStats) {
         self.close_hull();
         let stats = self.stats();
         let Sweep { pts, mesh, .. } = self;
@@ -231,7 +235,7 @@ impl Sweep<Batch> {
                 twins.push(twin);
             }
         }
-        (tris, twins, pts, stats)
+        ((tris, twins), pts, stats)
     }
 
     /// Closes the front to the convex hull, drops the artificial triangles and returns the real
