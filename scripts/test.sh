@@ -29,3 +29,5 @@ cargo fmt --all -- --check
 cargo clippy --all-targets --locked -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked --quiet
 cargo test --locked --quiet
+# The Python package (python/): its own venv under target/, the extension built once in release.
+scripts/test-python.sh

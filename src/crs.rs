@@ -53,6 +53,37 @@ impl Crs {
         }
     }
 
+    /// Parses a CRS given by a user (`--crs`, the Python package's `crs=`): `EPSG:code`,
+    /// `EPSG:code+vertical` or a WKT definition.
+    ///
+    /// # Errors
+    /// [`crate::Error::Options`] for anything else.
+    pub fn parse(s: &str) -> crate::Result<Crs> {
+        let t = s.trim();
+        let bad = |what: &str| crate::Error::Options(format!("--crs {s}: expected {what}"));
+        if let Some(code) = t.strip_prefix("EPSG:").or_else(|| t.strip_prefix("epsg:")) {
+            let mut parts = code.split('+');
+            let h = parts.next().unwrap_or("").trim().parse::<u32>();
+            let v = parts.next().map(|v| v.trim().parse::<u32>());
+            return match (h, v) {
+                (Ok(h), None) => Ok(Crs {
+                    epsg: Some(h),
+                    ..Crs::default()
+                }),
+                (Ok(h), Some(Ok(v))) => Ok(Crs {
+                    epsg: Some(h),
+                    vertical_epsg: Some(v),
+                    ..Crs::default()
+                }),
+                _ => Err(bad("EPSG:code or EPSG:code+code")),
+            };
+        }
+        match Crs::from_wkt_bytes(t.as_bytes()) {
+            Some(c) if c.name.is_some() || c.epsg.is_some() => Ok(c),
+            _ => Err(bad("EPSG:code, EPSG:code+code or a WKT definition")),
+        }
+    }
+
     /// Reads the CRS from a WKT VLR payload (`None` if the text is empty).
     pub fn from_wkt_bytes(bytes: &[u8]) -> Option<Crs> {
         let text = String::from_utf8_lossy(bytes);

@@ -39,7 +39,39 @@ pub struct Triangulation {
 /// [`Error::TooFewPoints`] with fewer than 3 distinct positions, [`Error::AllCollinear`] when no
 /// triangle exists, [`Error::TooManyPoints`] beyond [`memory::MAX_POINTS`].
 pub fn triangulate(points: &[[f64; 3]], options: &Options) -> Result<Triangulation> {
-    sweep_in_memory(points, &[], options)
+    sweep_in_memory(points, &[], options, false).map(|(t, _)| t)
+}
+
+/// [`triangulate`] (or [`triangulate_cdt`] with `segments`), with the triangles' adjacency:
+/// `twins[3t + k]` is the half-edge across edge `k` of triangle `t` (the edge from its vertex
+/// `k` to vertex `k + 1`): `3u + j` for edge `j` of the neighbour `u`, or `u32::MAX` on the
+/// convex hull. The sweep has it already, so this costs 12 bytes per triangle and no search
+/// (what [`crate::tin::Tin::from_twins`] takes to walk the triangulation).
+///
+/// # Errors
+/// As [`triangulate_cdt`].
+pub fn triangulate_with_twins(
+    points: &[[f64; 3]],
+    segments: &[[u32; 2]],
+    options: &Options,
+) -> Result<(Triangulation, Vec<u32>)> {
+    check_segments(points, segments)?;
+    let (t, twins) = sweep_in_memory(points, segments, options, true)?;
+    Ok((t, twins.unwrap_or_default()))
+}
+
+fn check_segments(points: &[[f64; 3]], segments: &[[u32; 2]]) -> Result<()> {
+    if let Some(s) = segments
+        .iter()
+        .find(|s| s.iter().any(|&i| i as usize >= points.len()))
+    {
+        return Err(Error::Invalid(format!(
+            "segment {:?} refers to a point beyond the {} given",
+            s,
+            points.len()
+        )));
+    }
+    Ok(())
 }
 
 /// Constrained Delaunay triangulation of `points` with the segments `segments` (pairs of indices
@@ -60,25 +92,18 @@ pub fn triangulate_cdt(
     segments: &[[u32; 2]],
     options: &Options,
 ) -> Result<Triangulation> {
-    if let Some(s) = segments
-        .iter()
-        .find(|s| s.iter().any(|&i| i as usize >= points.len()))
-    {
-        return Err(Error::Invalid(format!(
-            "segment {:?} refers to a point beyond the {} given",
-            s,
-            points.len()
-        )));
-    }
-    sweep_in_memory(points, segments, options)
+    check_segments(points, segments)?;
+    sweep_in_memory(points, segments, options, false).map(|(t, _)| t)
 }
 
-/// [`triangulate_cdt`] with segment indices already checked; without segments, [`triangulate`].
+/// [`triangulate_cdt`] with segment indices already checked; without segments, [`triangulate`];
+/// with the adjacency when `twins`.
 fn sweep_in_memory(
     points: &[[f64; 3]],
     segments: &[[u32; 2]],
     options: &Options,
-) -> Result<Triangulation> {
+    twins: bool,
+) -> Result<(Triangulation, Option<Vec<u32>>)> {
     let prepared = memory::prepare(points, options.duplicates)?;
     let distinct = prepared.len() as u64;
     if distinct < 3 {
@@ -100,20 +125,29 @@ fn sweep_in_memory(
     }
     sweep.run()?;
     let constraint_stats = sweep.constraint_stats();
-    let (triangles, xy, stats) = sweep.finish();
+    let (triangles, twins, xy, stats) = if twins {
+        let ((t, w), xy, s) = sweep.finish_with_twins();
+        (t, Some(w), xy, s)
+    } else {
+        let (t, xy, s) = sweep.finish();
+        (t, None, xy, s)
+    };
     drop(xy);
     if triangles.is_empty() {
         return Err(Error::AllCollinear { distinct });
     }
     let vertices = index.iter().map(|&i| points[i as usize]).collect();
-    Ok(Triangulation {
-        vertices,
-        triangles,
-        input_index: index,
-        duplicates,
-        stats,
-        constraint_stats,
-    })
+    Ok((
+        Triangulation {
+            vertices,
+            triangles,
+            input_index: index,
+            duplicates,
+            stats,
+            constraint_stats,
+        },
+        twins,
+    ))
 }
 
 /// The breakline graph over the prepared vertices. Each segment endpoint is mapped to its vertex

@@ -150,34 +150,9 @@ pub enum Engine {
     Sweep,
 }
 
-/// Parses a human size: `1048576`, `512K`, `128M`, `4G`, `1T`, optionally with `B`, `iB` or a
-/// space (binary multiples: 1K = 1024).
+/// Parses a human size ([`pipeline::parse_size`]).
 pub fn parse_size(s: &str) -> Result<u64, String> {
-    let t = s.trim();
-    let split = t
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .unwrap_or(t.len());
-    let (num, unit) = t.split_at(split);
-    let v: f64 = num
-        .parse()
-        .map_err(|_| format!("'{s}' is not a size like 512M or 4G"))?;
-    let mult: u64 = match unit.trim().to_ascii_uppercase().as_str() {
-        "" | "B" => 1,
-        "K" | "KB" | "KIB" => 1 << 10,
-        "M" | "MB" | "MIB" => 1 << 20,
-        "G" | "GB" | "GIB" => 1 << 30,
-        "T" | "TB" | "TIB" => 1 << 40,
-        _ => {
-            return Err(format!(
-                "'{s}': unknown size unit '{unit}' (use K, M, G or T)"
-            ));
-        }
-    };
-    let bytes = v * mult as f64;
-    if !(1.0..=1e18).contains(&bytes) {
-        return Err(format!("'{s}' is not a sensible memory size"));
-    }
-    Ok(bytes as u64)
+    pipeline::parse_size(s)
 }
 
 /// The input options of the terrain-product commands: [`InputArgs`] plus the CRS to record and
@@ -261,30 +236,9 @@ pub fn warn_clipped(run: &RunSummary) {
     }
 }
 
-/// Parses `--crs`.
+/// Parses `--crs` ([`Crs::parse`]).
 pub fn parse_crs(s: &str) -> anyhow::Result<Crs> {
-    let t = s.trim();
-    if let Some(code) = t.strip_prefix("EPSG:").or_else(|| t.strip_prefix("epsg:")) {
-        let mut parts = code.split('+');
-        let h = parts.next().unwrap_or("").trim().parse::<u32>();
-        let v = parts.next().map(|v| v.trim().parse::<u32>());
-        return match (h, v) {
-            (Ok(h), None) => Ok(Crs {
-                epsg: Some(h),
-                ..Crs::default()
-            }),
-            (Ok(h), Some(Ok(v))) => Ok(Crs {
-                epsg: Some(h),
-                vertical_epsg: Some(v),
-                ..Crs::default()
-            }),
-            _ => bail!("--crs {s}: expected EPSG:code or EPSG:code+code"),
-        };
-    }
-    match Crs::from_wkt_bytes(t.as_bytes()) {
-        Some(c) if c.name.is_some() || c.epsg.is_some() => Ok(c),
-        _ => bail!("--crs {s}: expected EPSG:code, EPSG:code+code or a WKT definition"),
-    }
+    Ok(Crs::parse(s)?)
 }
 
 impl ProductInput {
@@ -350,35 +304,13 @@ pub fn check_output(path: &Path) -> anyhow::Result<()> {
 }
 
 /// Refuses outputs that are the same file as each other or as one of the `inputs` of `of` (the
-/// run, the plan), compared by absolute path and, where it exists, by the file itself.
+/// run, the plan): [`sweeptin::output::distinct_outputs`].
 pub fn distinct_outputs(
     outputs: &[(&str, &Path)],
     inputs: &[PathBuf],
     of: &str,
 ) -> anyhow::Result<()> {
-    let same = |a: &Path, b: &Path| {
-        let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-        if abs(a) == abs(b) {
-            return true;
-        }
-        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
-            (Ok(x), Ok(y)) => x == y,
-            _ => false,
-        }
-    };
-    for (k, (flag, o)) in outputs.iter().enumerate() {
-        if let Some(i) = inputs.iter().find(|i| same(o, i)) {
-            bail!(
-                "{flag} {}: that is an input of {of} ({}); an output never overwrites one",
-                o.display(),
-                i.display()
-            );
-        }
-        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same(o, p)) {
-            bail!("{flag} and {other} name the same file {}", o.display());
-        }
-    }
-    Ok(())
+    Ok(sweeptin::output::distinct_outputs(outputs, inputs, of)?)
 }
 
 /// Runs the pipeline of `config` into `sinks` (one pass) and the optional mesh sink; returns the

@@ -2,17 +2,13 @@
 //! run as tasks of a batch engine (or locally), and joined into one seamless result. See
 //! [`sweeptin::plan`] and `docs/SCALING.md`.
 
-use super::input::{ProductInput, distinct_outputs, run_products};
-use super::products::shade;
+use super::input::{ProductInput, distinct_outputs};
 use super::{Cli, Command};
 use anyhow::{Context, bail};
 use clap::Parser;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use sweeptin::Error;
-use sweeptin::output::raster::RasterFormat;
-use sweeptin::plan::{Plan, TaskRecord, merge, task_from_env};
-use sweeptin::sink::{Fanout, FanoutSummary, ProductSummary, StreamInfo, TriangleSink};
+use sweeptin::plan::{Levels, Plan, Product, TaskOptions, TaskRecord, merge, task_from_env};
 
 /// Arguments of `sweeptin plan`.
 #[derive(clap::Args, Debug)]
@@ -81,7 +77,9 @@ pub struct MergeArgs {
     /// plan was given).
     #[arg(long, value_name = "GEOJSON")]
     pub contours: Option<PathBuf>,
-    /// For a DEM plan merged into one GeoTIFF: a hillshade PNG of the whole mosaic (no seams).
+    /// For a DEM plan merged into one GeoTIFF: a hillshade of the whole mosaic (no seams), a
+    /// PNG with a .pgw world file or an 8-bit GeoTIFF (.tif) (default: the path the plan was
+    /// given).
     #[arg(long, value_name = "PNG")]
     pub hillshade: Option<PathBuf>,
     /// For a DEM plan: the mosaic's format (`tif`, `cog`) and compression (default: the plan's).
@@ -114,6 +112,49 @@ impl Job {
             Job::Contours(a) => &mut a.input,
             Job::Volume(a) => &mut a.input,
         }
+    }
+
+    /// The library's job: what every task runs.
+    fn typed(&self) -> anyhow::Result<sweeptin::plan::Job> {
+        let levels = |c: &super::products::ContourArgs| Levels {
+            interval: c.interval,
+            base: c.base,
+        };
+        let product = match self {
+            Job::Dem(d) => Product::Dem {
+                cell: d.dem.cell,
+                align: d.dem.align,
+                nodata: d.dem.nodata,
+                raster: d.dem.raster.options(),
+                contours: d.contours.as_ref().map(|_| levels(&d.contour)),
+            },
+            Job::Contours(c) => Product::Contours(levels(&c.contour)),
+            Job::Volume(v) => Product::Volume {
+                plane: v.plane.context("a plan's volume needs --plane")?,
+                // Absolute, so that tasks run from anywhere.
+                boundary: v
+                    .boundary
+                    .as_deref()
+                    .map(|b| {
+                        std::fs::canonicalize(b)
+                            .with_context(|| format!("cannot read {}", b.display()))
+                    })
+                    .transpose()?,
+            },
+        };
+        let a = &self.input().args;
+        let f = a.filter.to_filter();
+        Ok(sweeptin::plan::Job {
+            product,
+            classes: f.classes,
+            returns: f.returns,
+            drop_withheld: f.drop_withheld,
+            duplicates: a.duplicates,
+            max_edge: a.lines.max_edge,
+            crs: self.input().crs.clone(),
+            mem: a.mem.0,
+            tmp_dir: a.tmp_dir.clone(),
+        })
     }
 }
 
@@ -244,49 +285,28 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let tile = a
         .tile
         .context("give the plan's tile side with --tile SIZE (e.g. --tile 1000)")?;
-    let (cell, mut outputs) = match &job {
-        Job::Dem(d) => {
-            let mut o = Vec::new();
-            if let Some(c) = &d.contours {
-                o.push(("contours".to_string(), c.clone()));
-            }
-            if let Some(h) = &d.hillshade {
-                o.push(("hillshade".to_string(), h.clone()));
-            }
-            (Some(d.dem.cell), o)
+    let mut outputs = Vec::new();
+    if let Job::Dem(d) = &job {
+        if let Some(c) = &d.contours {
+            outputs.push(("contours".to_string(), c.clone()));
         }
-        _ => (None, Vec::new()),
-    };
-    outputs.insert(0, ("dir".to_string(), dir.clone()));
-    if let Some(c) = cell
-        && tile / c > 16384.0
-    {
-        bail!(
-            "--tile {tile} holds {:.0} × {:.0} cells of {c}: a task's raster is limited to 16384 \
-             cells a side (use a smaller --tile)",
-            tile / c,
-            tile / c
-        );
+        if let Some(h) = &d.hillshade {
+            outputs.push(("hillshade".to_string(), h.clone()));
+        }
     }
+    outputs.insert(0, ("dir".to_string(), dir.clone()));
     let buffer = args.buffer.unwrap_or(tile / 10.0);
     let canonical = |p: &PathBuf| {
         std::fs::canonicalize(p).with_context(|| format!("cannot read {}", p.display()))
     };
-    let inputs: Vec<PathBuf> = a
-        .inputs
-        .iter()
-        .map(canonical)
-        .collect::<anyhow::Result<_>>()?;
     let abs_groups: Vec<Vec<PathBuf>> = groups
         .iter()
         .map(|g| g.iter().map(canonical).collect::<anyhow::Result<_>>())
         .collect::<anyhow::Result<_>>()?;
-    // The stored command line names the inputs by absolute path, so tasks run from anywhere.
+    let inputs: Vec<PathBuf> = abs_groups.iter().flatten().cloned().collect();
+    // The stored command line (for people) names the inputs by absolute path.
     let argv = absolute_inputs(&argv, &given, &abs_groups);
-    // The files must make one point set (one CRS, compatible formats), as for a single run:
-    // refused now, from the headers, not by every task later.
-    sweeptin::input::las::LidarReader::open(&inputs, &a.filter.to_filter())?;
-    let plan = Plan::new(&argv[0], argv.clone(), outputs, &inputs, tile, buffer, cell)?;
+    let plan = Plan::new(job.typed()?, argv, outputs, &inputs, tile, buffer)?;
     if dir.exists() && !dir.is_dir() {
         bail!("{}: not a directory", dir.display());
     }
@@ -322,7 +342,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `argv` with each input replaced by its absolute path.
+/// `argv` with each input replaced by the absolute paths of its files.
 fn absolute_inputs(argv: &[String], given: &[PathBuf], abs: &[Vec<PathBuf>]) -> Vec<String> {
     argv.iter()
         .flat_map(|s| {
@@ -337,21 +357,9 @@ fn absolute_inputs(argv: &[String], given: &[PathBuf], abs: &[Vec<PathBuf>]) -> 
         .collect()
 }
 
-/// The directory of a plan file.
-/// The directory of a plan file, absolute (task records then name their outputs wherever the
-/// task ran from).
-fn plan_dir(path: &Path) -> anyhow::Result<PathBuf> {
-    let abs = std::path::absolute(path)
-        .with_context(|| format!("{}: cannot resolve the path", path.display()))?;
-    Ok(match abs.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    })
-}
-
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.plan)?;
-    let dir = plan_dir(&args.plan)?;
+    let dir = Plan::dir_of(&args.plan)?;
     if args.all {
         return run_all(&plan, &dir, &args);
     }
@@ -370,7 +378,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     };
     plan.task(i)?;
     if args.resume
-        && finished(&plan, &dir, i)
+        && plan.finished(&dir, i)
         && let Some(r) = plan.record(&dir, i)?
     {
         eprintln!(
@@ -391,186 +399,23 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs task `i` until its buffer is wide enough; writes its outputs and then its record.
+/// Runs task `i` ([`Plan::run_task`]).
 fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result<TaskRecord> {
-    let start = Instant::now();
-    let mut buffer = plan.buffer;
-    let mut runs = 0;
-    let mut job = parse_job(&plan.args)?;
-    let record = loop {
-        runs += 1;
-        plan.check_files(i, buffer)?;
-        let sinks = task_sinks(plan, dir, i, buffer, args, &mut job)?;
-        let input = job.input();
-        let config = input.config(None)?;
-        match run_products(input, &config, None, sinks) {
-            Ok((run, products)) => {
-                let status = if run.triangles == 0 { "empty" } else { "done" };
-                break record_of(
-                    i,
-                    status,
-                    buffer,
-                    runs,
-                    &run,
-                    &products,
-                    job_outputs(&products),
-                );
-            }
-            Err(e) => match e.downcast_ref::<Error>() {
-                Some(Error::BufferTooSmall { reach, .. }) if runs < 40 => {
-                    // Straight to the files the certificates reached, or double.
-                    let step = plan.tile / 16.0;
-                    buffer = if *reach > buffer {
-                        (*reach / step).ceil() * step
-                    } else if buffer > 0.0 {
-                        2.0 * buffer
-                    } else {
-                        plan.tile / 8.0
-                    };
-                }
-                Some(Error::TooFewPoints { .. }) => {
-                    let sinks = task_sinks(plan, dir, i, buffer, args, &mut job)?;
-                    let products = empty_task(plan, i, job.input(), sinks)?;
-                    let run = sweeptin::pipeline::RunSummary::default();
-                    eprintln!(
-                        "sweeptin: warning: task {i} has no point after the filters: its \
-                         outputs are empty (a nodata raster), which is not a failure"
-                    );
-                    break record_of(
-                        i,
-                        "empty",
-                        buffer,
-                        runs,
-                        &run,
-                        &products,
-                        job_outputs(&products),
-                    );
-                }
-                _ => return Err(e.context(format!("task {i} of {}", plan.tiles.len()))),
-            },
-        }
+    let quiet = args.quiet || args.json || args.all;
+    let options = TaskOptions {
+        threads: args.threads.unwrap_or(0),
+        progress: !quiet,
     };
-    let mut record = record;
-    record.seconds = start.elapsed().as_secs_f64();
-    plan.finish_task(dir, &record)?;
-    Ok(record)
-}
-
-/// The outputs the sinks wrote, by name.
-fn job_outputs(products: &FanoutSummary) -> Vec<(String, PathBuf)> {
-    products
-        .0
-        .iter()
-        .filter_map(|(name, s)| match s {
-            ProductSummary::Dem(d) => Some((name.clone(), d.path.clone())),
-            ProductSummary::Contours(c) => Some((name.clone(), c.path.clone())),
-            _ => None,
-        })
-        .collect()
-}
-
-fn record_of(
-    i: usize,
-    status: &str,
-    buffer: f64,
-    runs: u32,
-    run: &sweeptin::pipeline::RunSummary,
-    products: &FanoutSummary,
-    outputs: Vec<(String, PathBuf)>,
-) -> TaskRecord {
-    let volume = match products.get("volume") {
-        Some(ProductSummary::Volume(v)) => v.partials.clone(),
-        _ => None,
-    };
-    TaskRecord {
-        index: i,
-        status: status.to_string(),
-        buffer,
-        runs,
-        points: run.points_kept,
-        triangles: run.triangles,
-        seconds: 0.0,
-        outputs,
-        volume,
+    let r = plan
+        .run_task(dir, i, &options)
+        .with_context(|| format!("task {i} of {}", plan.tiles.len()))?;
+    if r.status == "empty" && r.points == 0 {
+        eprintln!(
+            "sweeptin: warning: task {i} has no point after the filters: its outputs are empty \
+             (a nodata raster), which is not a failure"
+        );
     }
-}
-
-/// Points the job at task `i` with a buffer of `buffer` and builds its sinks.
-fn task_sinks(
-    plan: &Plan,
-    dir: &Path,
-    i: usize,
-    buffer: f64,
-    args: &RunArgs,
-    job: &mut Job,
-) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>> {
-    let tile = plan.task(i)?.bounds;
-    {
-        let a = &mut job.input_mut().args;
-        a.inputs = plan.task_files(i, buffer)?;
-        a.task = Some(plan.scope(i, buffer)?);
-        a.engine = Some(super::input::Engine::Tiles);
-        a.tile = Some(plan.tile);
-        a.quiet = args.quiet || args.json || args.all;
-        a.json = false;
-        if let Some(t) = args.threads {
-            a.threads = t;
-        }
-    }
-    Ok(match job {
-        Job::Dem(d) => {
-            d.output = plan.task_output(dir, i, "dem", "tif");
-            // The tasks' tiles are plain GeoTIFFs; the mosaic gets the plan's --format.
-            d.dem.raster = super::products::RasterArgs {
-                format: Some(RasterFormat::GeoTiff),
-                ..Default::default()
-            };
-            d.dem.grid_bbox = Some(tile);
-            d.hillshade = None;
-            if d.contours.is_some() {
-                d.contours = Some(plan.task_output(dir, i, "contours", "geojson"));
-                d.contour.edges = true;
-            }
-            super::dem::sinks(d)?
-        }
-        Job::Contours(c) => {
-            c.output = plan.task_output(dir, i, "contours", "geojson");
-            c.contour.edges = true;
-            vec![("contours".to_string(), c.contour.sink(&c.output)?)]
-        }
-        Job::Volume(v) => {
-            let s = super::volume::plane_sink(v)?.context("a plan's volume needs --plane")?;
-            vec![("volume".to_string(), s)]
-        }
-    })
-}
-
-/// The outputs of a task with no point: a nodata raster over its tile, no contours, no volume.
-fn empty_task(
-    plan: &Plan,
-    i: usize,
-    input: &ProductInput,
-    sinks: Vec<(String, Box<dyn TriangleSink>)>,
-) -> anyhow::Result<FanoutSummary> {
-    let crs = match input.crs()? {
-        Some(c) => Some(c),
-        None if !input.args.inputs.is_empty() => sweeptin::input::las::LidarReader::open(
-            &input.args.inputs,
-            &input.args.filter.to_filter(),
-        )?
-        .crs()
-        .cloned(),
-        None => None,
-    };
-    let mut fanout = Fanout::new(sinks);
-    fanout.begin(&StreamInfo {
-        crs,
-        bounds: plan.task(i)?.bounds,
-    })?;
-    match fanout.finish()? {
-        ProductSummary::Fanout(s) => Ok(s),
-        other => bail!("internal error: the products' summary is {other:?}"),
-    }
+    Ok(r)
 }
 
 /// `--all`: every task (not yet finished, with --resume), --jobs at a time, each in its own
@@ -582,7 +427,7 @@ fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
     let threads = args.threads.unwrap_or((cores / jobs).max(1));
     let mut todo = Vec::new();
     for t in &plan.tiles {
-        if args.resume && finished(plan, dir, t.index) {
+        if args.resume && plan.finished(dir, t.index) {
             continue;
         }
         todo.push(t.index);
@@ -638,137 +483,30 @@ fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
 
 pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.plan)?;
-    let dir = plan_dir(&args.plan)?;
-    let job = parse_job(&plan.args)?;
-    let crs = job.input().crs()?;
-    let mut outs: Vec<(&str, &Path)> = Vec::new();
-    if let Some(o) = &args.output {
-        outs.push(("-o", o));
+    let dir = Plan::dir_of(&args.plan)?;
+    for o in [&args.output, &args.hillshade].into_iter().flatten() {
+        super::input::check_output(o)?;
     }
-    let contours = args.contours.clone().or_else(|| planned(&plan, "contours"));
-    let hillshade = args
-        .hillshade
-        .clone()
-        .or_else(|| planned(&plan, "hillshade"));
-    if let Some(c) = &contours {
-        outs.push(("--contours", c));
+    let outputs = merge::MergeOutputs {
+        out: args.output.clone(),
+        contours: args.contours.clone(),
+        hillshade: args.hillshade.clone(),
+        raster: args.raster.options(),
+    };
+    let s = merge::merge_plan(&plan, &dir, &outputs)?;
+    if let Some(t) = &s.volume
+        && !args.json
+    {
+        println!("the tasks' volumes, summed:");
+        super::volume::print_totals(t);
     }
-    if let Some(h) = &hillshade {
-        outs.push(("--hillshade", h));
-    }
-    let mut protected: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
-    protected.push(args.plan.clone());
-    distinct_outputs(&outs, &protected, "the plan")?;
-    for (flag, o) in &outs {
-        let abs = std::path::absolute(o).unwrap_or_else(|_| o.to_path_buf());
-        if abs.starts_with(dir.join("tiles")) {
-            bail!(
-                "{flag} {}: that is where the tasks' outputs are",
-                o.display()
-            );
-        }
-    }
-    let recs = merge::records(&plan, &dir)?;
-    if !recs.is_empty() && recs.iter().all(|r| r.points == 0) {
-        bail!(
-            "no task found a point after the filters: nothing to merge (check --class and the \
-             other filters of the plan)"
-        );
-    }
-    let mut summary = serde_json::Map::new();
-    match &job {
-        Job::Dem(d) => {
-            let out = args
-                .output
-                .as_deref()
-                .context("give the mosaic with -o OUT.vrt or OUT.tif")?;
-            if !matches!(extension(out).as_deref(), Some("vrt" | "tif" | "tiff")) {
-                bail!("-o {}: a DEM mosaic is a .vrt or a .tif", out.display());
-            }
-            if args.raster.format == Some(RasterFormat::Ascii) {
-                bail!("--format asc: a DEM mosaic is a GeoTIFF (tif, cog) or a VRT");
-            }
-            super::input::check_output(out)?;
-            let crs = match crs {
-                Some(c) => Some(c),
-                None => plan_crs(&plan)?,
-            };
-            let mut output = args.raster.options();
-            if output == Default::default() && extension(out).as_deref() != Some("vrt") {
-                // The plan's own --format / --compress, as one run would have written.
-                output = d.dem.raster.options();
-            }
-            let options = merge::MosaicOptions {
-                nodata: d.dem.nodata,
-                align: d.dem.align,
-                output,
-            };
-            let s = merge::merge_dem(&plan, &dir, out, &options, crs.as_ref())?;
-            summary.insert("dem".into(), serde_json::to_value(&s)?);
-            if let (Some(c), true) = (&contours, d.contours.is_some()) {
-                let s = merge::merge_contours(&plan, &dir, c, crs.as_ref())?;
-                summary.insert("contours".into(), serde_json::to_value(s)?);
-            }
-            if let Some(png) = args
-                .hillshade
-                .clone()
-                .or_else(|| planned(&plan, "hillshade"))
-            {
-                if RasterFormat::from_extension(out) != Some(RasterFormat::GeoTiff)
-                    || output.format == Some(RasterFormat::Ascii)
-                {
-                    bail!("--hillshade shades a GeoTIFF mosaic: merge with -o OUT.tif");
-                }
-                let (p, h) = shade(out, &png)?;
-                let mut v = serde_json::to_value(h)?;
-                v["path"] = serde_json::json!(p);
-                summary.insert("hillshade".into(), v);
-            }
-        }
-        Job::Contours(_) => {
-            let out = args
-                .output
-                .as_deref()
-                .context("give the contours with -o OUT.geojson")?;
-            if !matches!(extension(out).as_deref(), Some("geojson" | "json")) {
-                bail!(
-                    "-o {}: contours are written as GeoJSON (.geojson)",
-                    out.display()
-                );
-            }
-            super::input::check_output(out)?;
-            let s = merge::merge_contours(&plan, &dir, out, crs.as_ref())?;
-            summary.insert("contours".into(), serde_json::to_value(s)?);
-        }
-        Job::Volume(_) => {
-            if let Some(o) = &args.output {
-                bail!(
-                    "-o {}: a volume plan writes no file (its totals are printed; --json for a \
-                     summary)",
-                    o.display()
-                );
-            }
-            let t = merge::merge_volume(&plan, &dir)?;
-            if !args.json {
-                println!("the tasks' volumes, summed:");
-                super::volume::print_totals(&t);
-            }
-            summary.insert("volume".into(), serde_json::to_value(t)?);
-        }
-    }
-    let empty = recs.iter().filter(|r| r.status == "empty").count();
-    summary.insert("tasks".into(), serde_json::json!(recs.len()));
-    summary.insert("empty_tasks".into(), serde_json::json!(empty));
-    summary.insert(
-        "max_buffer".into(),
-        serde_json::json!(recs.iter().map(|r| r.buffer).fold(0.0, f64::max)),
-    );
     if args.json {
-        println!("{}", serde_json::Value::Object(summary));
+        println!("{}", serde_json::to_string(&s)?);
     } else {
         eprintln!(
-            "sweeptin: merged {} tasks ({empty} empty){}",
-            recs.len(),
+            "sweeptin: merged {} tasks ({} empty){}",
+            s.tasks,
+            s.empty_tasks,
             args.output
                 .as_ref()
                 .map(|p| format!(" -> {}", p.display()))
@@ -778,38 +516,9 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// An output the plan's command was given (`--contours`, `--hillshade`).
-fn planned(plan: &Plan, name: &str) -> Option<PathBuf> {
-    plan.outputs
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, p)| p.clone())
-}
-
-/// The CRS of the plan's first file (as a single run takes it from the headers).
-fn plan_crs(plan: &Plan) -> anyhow::Result<Option<sweeptin::crs::Crs>> {
-    let Some(f) = plan.files.first() else {
-        return Ok(None);
-    };
-    let r = sweeptin::input::las::LidarReader::open(
-        std::slice::from_ref(&f.path),
-        &sweeptin::input::las::Filter::default(),
-    )?;
-    Ok(r.crs().cloned())
-}
-
 /// The lower-case extension of `p`.
 fn extension(p: &Path) -> Option<String> {
     p.extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
-}
-
-/// Has task `i` finished, with its record readable and every output it names present? (What
-/// `--resume` skips; anything less runs again.)
-fn finished(plan: &Plan, dir: &Path, i: usize) -> bool {
-    match plan.record(dir, i) {
-        Ok(Some(r)) => r.outputs.iter().all(|(_, p)| dir.join(p).is_file()),
-        _ => false,
-    }
 }

@@ -50,5 +50,45 @@ pub use landxml::LandXmlWriter;
 pub use mesh::{MeshFormat, MeshMeta, create_mesh_sink};
 pub use obj::ObjWriter;
 pub use ply::PlyWriter;
-pub use raster::{GridWriter, RasterFormat, RasterOptions, create_grid_writer};
+pub use raster::{GridWriter, MemoryGrid, RasterFormat, RasterOptions, create_grid_writer};
 pub use stin::StinWriter;
+
+/// Refuses outputs (`(flag, path)`) that are the same file as each other or as one of the
+/// `inputs` of `of` (the run, the plan), compared by absolute path and, where it exists, by the
+/// file itself: an output never overwrites an input or another output.
+///
+/// # Errors
+/// [`crate::Error::Options`] naming the clash.
+pub fn distinct_outputs(
+    outputs: &[(&str, &std::path::Path)],
+    inputs: &[std::path::PathBuf],
+    of: &str,
+) -> crate::Result<()> {
+    use std::path::Path;
+    let same = |a: &Path, b: &Path| {
+        let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        if abs(a) == abs(b) {
+            return true;
+        }
+        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        }
+    };
+    for (k, (flag, o)) in outputs.iter().enumerate() {
+        if let Some(i) = inputs.iter().find(|i| same(o, i)) {
+            return Err(crate::Error::Options(format!(
+                "{flag} {}: that is an input of {of} ({}); an output never overwrites one",
+                o.display(),
+                i.display()
+            )));
+        }
+        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same(o, p)) {
+            return Err(crate::Error::Options(format!(
+                "{flag} and {other} name the same file {}",
+                o.display()
+            )));
+        }
+    }
+    Ok(())
+}

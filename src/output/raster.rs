@@ -61,24 +61,121 @@ pub trait GridWriter: Send {
     /// # Errors
     /// [`crate::Error::Io`] naming the output.
     fn finish(self: Box<Self>) -> Result<u64>;
+
+    /// The cells, row 0 (north) first, of a grid kept in memory ([`MemoryGrid`]); `None` for a
+    /// file. Taken once, before [`GridWriter::finish`].
+    fn take_values(&mut self) -> Option<Vec<f32>> {
+        None
+    }
 }
 
-/// Raster output formats.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+/// A grid kept in memory instead of a file, for rasters handed to a caller (the Python
+/// package's `Tin.rasterize`): the same DEM sink fills it, then [`GridWriter::take_values`]
+/// gives the cells.
+pub struct MemoryGrid {
+    spec: GridSpec,
+    values: Vec<f32>,
+}
+
+impl MemoryGrid {
+    /// A grid of `spec`, every cell nodata.
+    ///
+    /// # Errors
+    /// [`crate::Error::Options`] when the cells do not fit in memory.
+    pub fn new(spec: &GridSpec) -> Result<MemoryGrid> {
+        let n = usize::try_from(spec.len()).unwrap_or(usize::MAX);
+        let mut values = Vec::new();
+        values.try_reserve_exact(n).map_err(|_| {
+            crate::Error::Options(format!(
+                "a {} × {} raster does not fit in memory",
+                spec.cols, spec.rows
+            ))
+        })?;
+        values.resize(n, spec.nodata);
+        Ok(MemoryGrid {
+            spec: spec.clone(),
+            values,
+        })
+    }
+
+    fn at(&self, row: u32, col: u32, len: usize) -> Result<usize> {
+        check_span(&self.spec, Path::new("(memory)"), row, col, len)?;
+        Ok(row as usize * self.spec.cols as usize + col as usize)
+    }
+}
+
+impl GridWriter for MemoryGrid {
+    fn spec(&self) -> &GridSpec {
+        &self.spec
+    }
+
+    fn write_row(&mut self, row: u32, values: &[f32]) -> Result<()> {
+        self.write_span(row, 0, values)
+    }
+
+    fn write_cell(&mut self, row: u32, col: u32, value: f32) -> Result<()> {
+        let i = self.at(row, col, 1)?;
+        self.values[i] = value;
+        Ok(())
+    }
+
+    fn read_cell(&mut self, row: u32, col: u32) -> Result<f32> {
+        let i = self.at(row, col, 1)?;
+        Ok(self.values[i])
+    }
+
+    fn read_span(&mut self, row: u32, col: u32, out: &mut [f32]) -> Result<()> {
+        let i = self.at(row, col, out.len())?;
+        out.copy_from_slice(&self.values[i..i + out.len()]);
+        Ok(())
+    }
+
+    fn write_span(&mut self, row: u32, col: u32, values: &[f32]) -> Result<()> {
+        let i = self.at(row, col, values.len())?;
+        self.values[i..i + values.len()].copy_from_slice(values);
+        Ok(())
+    }
+
+    fn finish(self: Box<Self>) -> Result<u64> {
+        Ok(0)
+    }
+
+    fn take_values(&mut self) -> Option<Vec<f32>> {
+        Some(std::mem::take(&mut self.values))
+    }
+}
+
+/// Raster output formats (named as `--format` names them, also in a plan's `plan.json`).
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
 pub enum RasterFormat {
     /// Float32 GeoTIFF (`.tif`, `.tiff`).
     #[value(name = "tif", alias = "gtiff")]
+    #[serde(rename = "tif")]
     GeoTiff,
     /// Cloud Optimized GeoTIFF (`.tif`): tiled 512 × 512, compressed, internal overviews.
     #[value(name = "cog")]
+    #[serde(rename = "cog")]
     Cog,
     /// ESRI ASCII grid (`.asc`), with a `.prj` beside it when the CRS is known.
     #[value(name = "asc")]
+    #[serde(rename = "asc")]
     Ascii,
 }
 
 /// GeoTIFF compression.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    clap::ValueEnum,
+    serde::Serialize,
+    serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Compression {
     /// Uncompressed.
@@ -105,7 +202,9 @@ impl Compression {
 }
 
 /// GeoTIFF predictor, applied before compression (GDAL's `PREDICTOR=1|2|3`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Predictor {
     /// No predictor (1).
@@ -142,7 +241,7 @@ impl Predictor {
 
 /// How a raster is written: format, compression, predictor, BigTIFF. Checked once
 /// ([`RasterOptions::resolve`]) before any work.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct RasterOptions {
     /// The format; by the output's extension when `None`.
     pub format: Option<RasterFormat>,

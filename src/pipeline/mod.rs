@@ -100,6 +100,39 @@ pub const STRIP_RATIO: f64 = 4.0;
 /// Default memory budget: 1 GiB.
 pub const DEFAULT_MEM: u64 = 1 << 30;
 
+/// Parses a human memory size: `1048576`, `512K`, `128M`, `4G`, `1T`, optionally with `B`,
+/// `iB` or a space (binary multiples: 1K = 1024), as `--mem` and the Python package take it.
+///
+/// # Errors
+/// A message saying what is wrong with `s`.
+pub fn parse_size(s: &str) -> std::result::Result<u64, String> {
+    let t = s.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let v: f64 = num
+        .parse()
+        .map_err(|_| format!("'{s}' is not a size like 512M or 4G"))?;
+    let mult: u64 = match unit.trim().to_ascii_uppercase().as_str() {
+        "" | "B" => 1,
+        "K" | "KB" | "KIB" => 1 << 10,
+        "M" | "MB" | "MIB" => 1 << 20,
+        "G" | "GB" | "GIB" => 1 << 30,
+        "T" | "TB" | "TIB" => 1 << 40,
+        _ => {
+            return Err(format!(
+                "'{s}': unknown size unit '{unit}' (use K, M, G or T)"
+            ));
+        }
+    };
+    let bytes = v * mult as f64;
+    if !(1.0..=1e18).contains(&bytes) {
+        return Err(format!("'{s}' is not a sensible memory size"));
+    }
+    Ok(bytes as u64)
+}
+
 /// The sweep's frame: the world's coordinates, with x and y exchanged for a sweep along x.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Frame {

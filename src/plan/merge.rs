@@ -1,11 +1,13 @@
-//! Joining the outputs of a plan's tasks: DEM tiles into a GDAL VRT or one GeoTIFF, contour lines
-//! stitched across tile edges, volumes summed exactly.
+//! Joining the outputs of a plan's tasks ([`merge_plan`], for the command line and Python alike):
+//! DEM tiles into a GDAL VRT or one GeoTIFF or COG (and its hillshade), contour lines stitched
+//! across tile edges, volumes summed exactly.
 
 use super::{Plan, TaskRecord};
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use crate::input::raster::RasterReader;
 use crate::output::raster::{RasterFormat, RasterOptions, create_grid_writer};
+use crate::products::hillshade::{self, HillshadeSummary};
 use crate::raster::{Align, GridExtent, GridPlan};
 use std::path::{Path, PathBuf};
 
@@ -260,4 +262,248 @@ pub fn merge_volume(plan: &Plan, dir: &Path) -> Result<crate::sink::CutFillTotal
         );
     }
     Ok(crate::products::volume::CutFill::totals_of(&parts))
+}
+
+/// Where [`merge_plan`] writes, and how. Every path left out is taken from the plan when it
+/// was given one (`contours`, `hillshade`), or not written.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MergeOutputs {
+    /// The DEM mosaic (`.vrt` over the tiles, or one `.tif`), or the contours (`.geojson`); a
+    /// volume plan writes no file.
+    pub out: Option<PathBuf>,
+    /// A DEM plan's stitched contours.
+    pub contours: Option<PathBuf>,
+    /// A hillshade of a DEM plan's `.tif` mosaic: a `.png` with a world file, or an 8-bit
+    /// GeoTIFF (`.tif`).
+    pub hillshade: Option<PathBuf>,
+    /// The `.tif` mosaic's format (GeoTIFF or COG) and compression; all left out: the plan's.
+    pub raster: RasterOptions,
+}
+
+/// A hillshade written by [`merge_plan`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct MergedHillshade {
+    /// The file written.
+    pub path: PathBuf,
+    /// Its size and cells.
+    #[serde(flatten)]
+    pub summary: HillshadeSummary,
+}
+
+/// What [`merge_plan`] made. Serialises as the `--json` summary of `sweeptin merge`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct MergeSummary {
+    /// The DEM mosaic.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dem: Option<DemMergeSummary>,
+    /// The stitched contours.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contours: Option<StitchSummary>,
+    /// The mosaic's hillshade.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hillshade: Option<MergedHillshade>,
+    /// The summed volumes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub volume: Option<crate::sink::CutFillTotals>,
+    /// Tasks joined.
+    pub tasks: usize,
+    /// Tasks that found no point.
+    pub empty_tasks: usize,
+    /// The widest buffer a task needed.
+    pub max_buffer: f64,
+}
+
+/// The lower-case extension of `p`.
+fn extension(p: &Path) -> Option<String> {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+}
+
+/// The CRS of the plan's first file (as a single run takes it from the headers).
+fn plan_crs(plan: &Plan) -> Result<Option<Crs>> {
+    let Some(f) = plan.files.first() else {
+        return Ok(None);
+    };
+    let r = crate::input::las::LidarReader::open(
+        std::slice::from_ref(&f.path),
+        &crate::input::las::Filter::default(),
+    )?;
+    Ok(r.crs().cloned())
+}
+
+/// An output the plan was given (`"contours"`, `"hillshade"`).
+fn planned(plan: &Plan, name: &str) -> Option<PathBuf> {
+    plan.outputs
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, p)| p.clone())
+}
+
+/// The DEM mosaic's options: those given, or the plan's for a `.tif` when none is given.
+///
+/// # Errors
+/// [`Error::Options`] for a mosaic that is neither `.vrt` nor `.tif`, an ESRI ASCII format, or
+/// raster options given for a `.vrt`.
+fn mosaic_options(plan: &Plan, out: &Path, given: &RasterOptions) -> Result<MosaicOptions> {
+    let super::Product::Dem {
+        align,
+        nodata,
+        raster,
+        ..
+    } = &plan.job.product
+    else {
+        return Err(Error::Options("the plan makes no DEM".into()));
+    };
+    let ext = extension(out);
+    if !matches!(ext.as_deref(), Some("vrt" | "tif" | "tiff")) {
+        return Err(Error::Options(format!(
+            "{}: a DEM mosaic is a .vrt or a .tif",
+            out.display()
+        )));
+    }
+    super::task::check_mosaic(given)?;
+    let default = RasterOptions::default();
+    let output = match (ext.as_deref(), *given == default) {
+        (Some("vrt"), true) => default,
+        (Some("vrt"), false) => {
+            return Err(Error::Options(format!(
+                "{}: a .vrt mosaic points at the tiles as they are: leave --format, --compress,                  --predictor and --bigtiff out, or merge into a .tif",
+                out.display()
+            )));
+        }
+        // The plan's own --format / --compress, as one run would have written.
+        (_, true) => *raster,
+        (_, false) => *given,
+    };
+    Ok(MosaicOptions {
+        nodata: *nodata,
+        align: *align,
+        output,
+    })
+}
+
+/// Joins the finished tasks of `plan` (in `dir`) into the job's result: the DEM mosaic (`.vrt`
+/// or `.tif`, GeoTIFF or COG) with, when asked or planned, its stitched contours and its
+/// hillshade; the contours (`.geojson`); the summed volumes (no file). Every output is checked
+/// before anything is written.
+///
+/// # Errors
+/// [`Error::Options`] for unfinished tasks, a missing or wrong output, an output that is an
+/// input, the plan, a task's output or another output, or when no task found a point; the
+/// readers' and writers' errors.
+pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSummary> {
+    use super::Product;
+    let out = o.out.as_deref();
+    let dem = matches!(plan.job.product, Product::Dem { .. });
+    let contours = o.contours.clone().or_else(|| planned(plan, "contours"));
+    let hillshade = o.hillshade.clone().or_else(|| planned(plan, "hillshade"));
+    let mut outs: Vec<(&str, &Path)> = Vec::new();
+    if let Some(o) = out {
+        outs.push(("the mosaic", o));
+    }
+    if let Some(c) = &contours {
+        outs.push(("the contours", c));
+    }
+    if let Some(h) = &hillshade {
+        outs.push(("the hillshade", h));
+    }
+    let mut protected: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
+    protected.push(dir.join("plan.json"));
+    crate::output::distinct_outputs(&outs, &protected, "the plan")?;
+    for (what, o) in &outs {
+        let abs = std::path::absolute(o).unwrap_or_else(|_| o.to_path_buf());
+        if abs.starts_with(dir.join("tiles")) {
+            return Err(Error::Options(format!(
+                "{what} {}: that is where the tasks' outputs are",
+                o.display()
+            )));
+        }
+    }
+    fn need<'a>(o: Option<&'a Path>, what: &str) -> Result<&'a Path> {
+        o.ok_or_else(|| Error::Options(format!("give the {what}")))
+    }
+    let mosaic = if dem {
+        let out = need(out, "mosaic (OUT.vrt or OUT.tif)")?;
+        let m = mosaic_options(plan, out, &o.raster)?;
+        if hillshade.is_some() && extension(out).as_deref() == Some("vrt") {
+            return Err(Error::Options(
+                "--hillshade shades a GeoTIFF mosaic: merge with -o OUT.tif".into(),
+            ));
+        }
+        Some((out, m))
+    } else {
+        if hillshade.is_some() {
+            return Err(Error::Options(
+                "--hillshade shades a DEM plan's mosaic".into(),
+            ));
+        }
+        if o.raster != RasterOptions::default() {
+            return Err(Error::Options(
+                "--format, --compress, --predictor and --bigtiff apply to a DEM plan's mosaic"
+                    .into(),
+            ));
+        }
+        None
+    };
+    let recs = records(plan, dir)?;
+    if !recs.is_empty() && recs.iter().all(|r| r.points == 0) {
+        return Err(Error::Options(
+            "no task found a point after the filters: nothing to merge (check --class and the \
+             other filters of the plan)"
+                .into(),
+        ));
+    }
+    let crs = plan.job.crs()?;
+    let mut summary = MergeSummary {
+        tasks: recs.len(),
+        empty_tasks: recs.iter().filter(|r| r.status == "empty").count(),
+        max_buffer: recs.iter().map(|r| r.buffer).fold(0.0, f64::max),
+        ..MergeSummary::default()
+    };
+    match &plan.job.product {
+        Product::Dem {
+            contours: levels, ..
+        } => {
+            let Some((out, m)) = mosaic else {
+                return Err(Error::Internal("a DEM plan without its mosaic".into()));
+            };
+            let crs = match crs {
+                Some(c) => Some(c),
+                None => plan_crs(plan)?,
+            };
+            summary.dem = Some(merge_dem(plan, dir, out, &m, crs.as_ref())?);
+            if let (Some(c), Some(_)) = (&contours, levels) {
+                summary.contours = Some(merge_contours(plan, dir, c, crs.as_ref())?);
+            }
+            if let Some(h) = hillshade {
+                let s = hillshade::hillshade(out, &h, &hillshade::HillshadeOptions::default())?;
+                summary.hillshade = Some(MergedHillshade {
+                    path: h,
+                    summary: s,
+                });
+            }
+        }
+        Product::Contours(_) => {
+            let out = need(out, "contours (OUT.geojson)")?;
+            if !matches!(extension(out).as_deref(), Some("geojson" | "json")) {
+                return Err(Error::Options(format!(
+                    "{}: contours are written as GeoJSON (.geojson)",
+                    out.display()
+                )));
+            }
+            summary.contours = Some(merge_contours(plan, dir, out, crs.as_ref())?);
+        }
+        Product::Volume { .. } => {
+            if let Some(o) = out {
+                return Err(Error::Options(format!(
+                    "{}: a volume plan writes no file (its totals are printed; --json for a \
+                     summary)",
+                    o.display()
+                )));
+            }
+            summary.volume = Some(merge_volume(plan, dir)?);
+        }
+    }
+    Ok(summary)
 }

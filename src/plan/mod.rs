@@ -18,14 +18,17 @@
 
 pub mod merge;
 mod stitch;
+mod task;
+
+pub use task::{Job, Levels, Product, TaskOptions};
 
 use crate::error::{Error, Result};
 use crate::input::las::FileInfo;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// Format version of `plan.json`.
-pub const PLAN_VERSION: u32 = 1;
+/// Format version of `plan.json` (2: the typed [`Job`]).
+pub const PLAN_VERSION: u32 = 2;
 
 /// One input file of a plan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -62,8 +65,10 @@ pub struct Plan {
     pub version: u32,
     /// The product command (`dem`, `contours`, `volume`).
     pub command: String,
-    /// Its options, as given on the command line (inputs and outputs left out).
+    /// The command line it was made from, for people (the tasks run [`Plan::job`]).
     pub args: Vec<String>,
+    /// What every task runs.
+    pub job: Job,
     /// Where the outputs of the whole job go (as given; `merge` may write elsewhere).
     pub outputs: Vec<(String, PathBuf)>,
     /// Every input file.
@@ -111,20 +116,26 @@ fn bad(path: &Path, message: impl Into<String>) -> Error {
 }
 
 impl Plan {
-    /// A plan for `command` over `paths`, tiles of side `tile` (a whole multiple of `cell` when
-    /// given) and a first buffer of `buffer`. Only headers are read.
+    /// A plan for `job` over the LAS/LAZ files `paths` (`@lists`, globs and `.vpc` files
+    /// expanded; stored by absolute path), tiles of side `tile` (a whole multiple
+    /// of the job's cell, if any) and a first buffer of `buffer`. Only headers are read. `args`
+    /// is the command line it was made from (for people); `outputs` are where the whole job's
+    /// outputs go (`"dir"`, `"contours"`, …).
     ///
     /// # Errors
-    /// [`Error::Options`] for a bad tile size or buffer; the header reader's errors.
+    /// [`Error::Options`] for a bad tile size, buffer or job option; [`Error::Format`] for a
+    /// file that is not LAS/LAZ; the header reader's errors, also for files that cannot be read
+    /// together (CRS, formats), as a single run would refuse them.
     pub fn new(
-        command: &str,
+        job: Job,
         args: Vec<String>,
         outputs: Vec<(String, PathBuf)>,
         paths: &[PathBuf],
         tile: f64,
         buffer: f64,
-        cell: Option<f64>,
     ) -> Result<Plan> {
+        job.check()?;
+        let cell = job.cell();
         if !(tile.is_finite() && tile > 0.0) {
             return Err(Error::Options(format!(
                 "--tile must be a positive length, not {tile}"
@@ -137,6 +148,12 @@ impl Plan {
                     "--tile {tile} must be a whole multiple of the cell size {c}"
                 )));
             }
+            if k > 16384.0 {
+                return Err(Error::Options(format!(
+                    "--tile {tile} holds {k:.0} × {k:.0} cells of {c}: a task's raster is \
+                     limited to 16384 cells a side (use a smaller --tile)"
+                )));
+            }
         }
         if !(buffer.is_finite() && buffer >= 0.0) {
             return Err(Error::Options(format!(
@@ -146,6 +163,26 @@ impl Plan {
         if paths.is_empty() {
             return Err(Error::NoInput);
         }
+        // `@list.txt`, quoted globs and `.vpc` files stand for their files (each header is
+        // read); every file is named by its absolute path, so that tasks run from anywhere.
+        let paths = crate::input::files::expand(paths, crate::input::files::Expand::VpcFiles)?
+            .iter()
+            .map(|p| std::fs::canonicalize(p).map_err(|e| Error::io(p, e)))
+            .collect::<Result<Vec<_>>>()?;
+        let paths = paths.as_slice();
+        if let Some(p) = paths.iter().find(|p| {
+            !p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("las") || e.eq_ignore_ascii_case("laz"))
+        }) {
+            return Err(bad(
+                p,
+                "a plan reads LAS/LAZ files (their headers give the extents)",
+            ));
+        }
+        // The files must make one point set (one CRS, compatible formats), as for a single run:
+        // refused now, from the headers, not by every task later.
+        crate::input::las::LidarReader::open(paths, &job.filter())?;
         let mut files = Vec::with_capacity(paths.len());
         for p in paths {
             let info = FileInfo::read(p)?;
@@ -202,8 +239,9 @@ impl Plan {
         }
         Ok(Plan {
             version: PLAN_VERSION,
-            command: command.to_string(),
+            command: job.command().to_string(),
             args,
+            job,
             outputs,
             files,
             tile,
@@ -241,18 +279,23 @@ impl Plan {
     /// [`Error::Io`], or [`Error::Format`] for a file that is not a plan of this version.
     pub fn load(path: &Path) -> Result<Plan> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let plan: Plan = serde_json::from_str(&text)
+        #[derive(Deserialize)]
+        struct Version {
+            version: u32,
+        }
+        let v: Version = serde_json::from_str(&text)
             .map_err(|e| bad(path, format!("not a sweeptin plan: {e}")))?;
-        if plan.version != PLAN_VERSION {
+        if v.version != PLAN_VERSION {
             return Err(bad(
                 path,
                 format!(
-                    "plan version {} (this sweeptin reads version {PLAN_VERSION})",
-                    plan.version
+                    "plan version {} (this sweeptin reads version {PLAN_VERSION}): make the plan \
+                     again with this sweeptin",
+                    v.version
                 ),
             ));
         }
-        Ok(plan)
+        serde_json::from_str(&text).map_err(|e| bad(path, format!("not a sweeptin plan: {e}")))
     }
 
     /// The task `i`.
@@ -427,14 +470,20 @@ mod tests {
     #[test]
     fn tiles_cover_the_files_and_list_their_neighbours() {
         let sample = PathBuf::from("data/sample/startinpy_small.laz");
+        let job = Job::new(Product::Dem {
+            cell: 0.5,
+            align: crate::raster::Align::Edges,
+            nodata: -9999.0,
+            raster: crate::output::raster::RasterOptions::default(),
+            contours: None,
+        });
         let p = Plan::new(
-            "dem",
+            job.clone(),
             vec![],
             vec![],
             std::slice::from_ref(&sample),
             16.0,
             4.0,
-            Some(0.5),
         )
         .unwrap();
         // 85699.665 – 85740.506 × 447195.328 – 447243.504: tiles 5356..=5358 × 27949..=27952.
@@ -443,13 +492,12 @@ mod tests {
         assert!(p.tiles.iter().all(|t| t.files == vec![0]));
         assert!(
             Plan::new(
-                "dem",
+                job,
                 vec![],
                 vec![],
                 std::slice::from_ref(&sample),
                 16.3,
-                4.0,
-                Some(0.5)
+                4.0
             )
             .is_err()
         );

@@ -30,7 +30,9 @@
 
 use super::geom::{Location, Tri};
 use crate::error::{Error, Result};
-use crate::output::raster::{GridWriter, RasterFormat, RasterOptions, create_grid_writer};
+use crate::output::raster::{
+    GridWriter, MemoryGrid, RasterFormat, RasterOptions, create_grid_writer,
+};
 use crate::raster::{GridPlan, GridSpec};
 use crate::sink::{DemSummary, ProductSummary, StreamInfo, TriangleSink};
 use std::collections::VecDeque;
@@ -226,6 +228,8 @@ pub struct DemSink {
     options: DemOptions,
     raster: Option<Raster>,
     triangles: u64,
+    /// Kept in memory ([`DemSink::in_memory`]): the finished grid and its cells.
+    memory: Option<Option<(GridSpec, Vec<f32>)>>,
 }
 
 impl DemSink {
@@ -242,7 +246,26 @@ impl DemSink {
             options,
             raster: None,
             triangles: 0,
+            memory: None,
         })
+    }
+
+    /// A DEM sink that keeps the raster in memory ([`MemoryGrid`]) instead of writing a file;
+    /// [`DemSink::take_grid`] gives it after [`TriangleSink::finish`].
+    pub fn in_memory(options: DemOptions) -> DemSink {
+        DemSink {
+            path: PathBuf::from("(memory)"),
+            options,
+            raster: None,
+            triangles: 0,
+            memory: Some(None),
+        }
+    }
+
+    /// The grid and its cells (row 0 north first) of a finished [`DemSink::in_memory`] sink,
+    /// once.
+    pub fn take_grid(&mut self) -> Option<(GridSpec, Vec<f32>)> {
+        self.memory.as_mut().and_then(Option::take)
     }
 
     fn raster(&mut self) -> Result<&mut Raster> {
@@ -259,7 +282,10 @@ impl TriangleSink for DemSink {
         let o = &self.options;
         let mut spec = o.grid.grid(info.bounds, o.nodata)?;
         spec.crs = info.crs.clone();
-        let writer = create_grid_writer(&self.path, &o.output, &spec)?;
+        let writer: Box<dyn GridWriter> = match self.memory {
+            Some(_) => Box::new(MemoryGrid::new(&spec)?),
+            None => create_grid_writer(&self.path, &o.output, &spec)?,
+        };
         self.raster = Some(Raster {
             writer,
             spec,
@@ -309,8 +335,13 @@ impl TriangleSink for DemSink {
         r.flush_below(u32::MAX)?;
         r.apply_late()?;
         let spec = r.writer.spec().clone();
+        if let (Some(slot), Some(values)) = (self.memory.as_mut(), r.writer.take_values()) {
+            *slot = Some((spec.clone(), values));
+        }
         let bytes = r.writer.finish()?;
-        if self.options.output.resolve(&self.path, false)?.format == RasterFormat::Ascii {
+        if self.memory.is_none()
+            && self.options.output.resolve(&self.path, false)?.format == RasterFormat::Ascii
+        {
             crate::output::world::write_prj(&self.path, spec.crs.as_ref())?;
         }
         Ok(ProductSummary::Dem(DemSummary {
@@ -415,6 +446,38 @@ mod tests {
         assert_eq!(a.cells_with_data, 100 * 100);
         assert_eq!(b.cells_with_data, 100 * 100);
         assert!(va.iter().zip(&vb).all(|(x, y)| x.to_bits() == y.to_bits()));
+    }
+
+    /// A raster kept in memory has the same cells as the file, late triangles included.
+    #[test]
+    fn in_memory_equals_the_file() {
+        let tris = crate::products::testutil::random_tin_framed(500, 30.0, 5, plane);
+        let steps = shuffled_with_watermarks(&tris, 11);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.tif");
+        let info = StreamInfo {
+            crs: None,
+            bounds: [0.0, 0.0, 30.0, 30.0],
+        };
+        feed(
+            &mut DemSink::new(&path, DemOptions::default()).unwrap(),
+            &info,
+            &steps,
+        );
+        let mut mem = DemSink::in_memory(DemOptions::default());
+        feed(&mut mem, &info, &steps);
+        let (spec, values) = mem.take_grid().unwrap();
+        // Edges on whole numbers (the default lattice): 30 × 30 cells over [0, 30]².
+        assert_eq!((spec.cols, spec.rows), (30, 30));
+        let file = read_tiff(&path).2;
+        assert!(
+            values
+                .iter()
+                .zip(&file)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+        assert_eq!(values.len(), file.len());
+        assert!(mem.take_grid().is_none());
     }
 
     /// Centres outside the TIN (a triangle's worth missing) keep the nodata value.

@@ -71,6 +71,16 @@ impl Tri {
         Some(Tri { v })
     }
 
+    /// The canonical form of a triangle known to be counter-clockwise and not degenerate (a
+    /// TIN's): [`Tri::new`] without its orientation test.
+    pub fn canonical_ccw(mut v: [[f64; 3]; 3]) -> Tri {
+        let first = (0..3)
+            .min_by(|&i, &j| cmp_xy(&v[i], &v[j]))
+            .expect("three vertices");
+        v.rotate_left(first);
+        Tri { v }
+    }
+
     /// `[xmin, ymin, xmax, ymax]`.
     pub fn bbox(&self) -> [f64; 4] {
         let [a, b, c] = &self.v;

@@ -55,7 +55,7 @@ impl Default for HillshadeOptions {
 }
 
 /// What [`hillshade`] produced.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct HillshadeSummary {
     /// Image width.
     pub cols: u32,

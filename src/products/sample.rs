@@ -30,6 +30,29 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+/// Heights of an in-memory TIN at the points `xy` (NaN outside it), with the same values as
+/// the streamed [`SampleSink`] and the DEM: each point is found by a walk from the previous one
+/// ([`crate::tin::Tin::locate`], exact), then valued by [`Tri::value_at`] (on an edge or vertex
+/// from that edge or vertex alone).
+pub fn heights(tin: &mut crate::tin::Tin, xy: &[[f64; 2]]) -> Vec<f64> {
+    use crate::tin::PointLocation;
+    xy.iter()
+        .map(|&p| match tin.locate(p) {
+            PointLocation::Outside(_) => f64::NAN,
+            PointLocation::OnVertex(v) => tin.z(v),
+            PointLocation::OnEdge(e) => {
+                let (a, b) = (tin.point(tin.org(e)), tin.point(tin.dst(e)));
+                super::geom::edge_value(&a, &b, p)
+            }
+            // A TIN's triangles are counter-clockwise: only the canonical first vertex is
+            // needed (the value inside does not depend on anything else).
+            PointLocation::Inside(t) => {
+                Tri::canonical_ccw(tin.tri_vertices(t).map(|v| tin.point(v))).plane_value(p)
+            }
+        })
+        .collect()
+}
+
 /// A query point: its number in the file (0-based, data lines only) and position.
 #[derive(Clone, Copy, Debug)]
 struct Query {

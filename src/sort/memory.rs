@@ -10,7 +10,17 @@ use crate::geom::exact::exact_diff;
 use crate::geom::predicates::{self, FIRST_REAL};
 
 /// Which point survives when several share exactly the same `(x, y)`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    clap::ValueEnum,
+    serde::Serialize,
+    serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum DuplicatePolicy {
     /// The one that comes first in the input.

@@ -26,6 +26,10 @@ use crate::geom::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
 use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, TriId, VertexId};
 pub use constrain::{ConstraintGraph, ConstraintStats};
 use front::{Front, NodeId, XMap};
+
+/// Triangles and, for each of their half-edges, the half-edge across it (`u32::MAX` on the
+/// hull): what [`Sweep::finish_with_twins`] returns.
+pub type Twinned = (Vec<[u32; 3]>, Vec<u32>);
 pub use hooks::{Batch, Mode};
 
 /// Counters of what the sweep did.
@@ -187,6 +191,51 @@ impl Sweep<Batch> {
             cons.vertex[c as usize] = VertexId(v);
         }
         self.cons = Some(cons);
+    }
+
+    /// As [`Sweep::finish`], with the adjacency the sweep already has: `twins[3t + k]` is the
+    /// half-edge on the other side of edge `k` of triangle `t` (from vertex `k` to `k + 1`),
+    /// numbered the same way, or `u32::MAX` on the convex hull. Costs one pass and a map of the
+    /// triangle slots (4 bytes each, while it runs), where rebuilding the adjacency from the
+    /// triangles means finding every edge's twin again.
+    pub fn finish_with_twins(mut self) -> (Twinned, Vec<[f64; 2]>, SweepStats) {
+        self.close_hull();
+        let stats = self.stats();
+        let Sweep { pts, mesh, .. } = self;
+        let Mesh { origin, link } = mesh;
+        let slots = origin.len() / 3;
+        let real = |t: usize| {
+            let v = [origin[3 * t].0, origin[3 * t + 1].0, origin[3 * t + 2].0];
+            !v.iter()
+                .any(|&a| is_artificial(a) || a == crate::mesh::DEAD.0)
+        };
+        let mut new_of = vec![u32::MAX; slots];
+        let mut kept = 0u32;
+        for (t, n) in new_of.iter_mut().enumerate() {
+            if real(t) {
+                *n = kept;
+                kept += 1;
+            }
+        }
+        let mut tris = Vec::with_capacity(kept as usize);
+        let mut twins = Vec::with_capacity(3 * kept as usize);
+        for t in (0..slots).filter(|&t| new_of[t] != u32::MAX) {
+            tris.push([0, 1, 2].map(|k| origin[3 * t + k].0 - FIRST_REAL));
+            for k in 0..3 {
+                let w = link[3 * t + k];
+                let twin = if w & crate::mesh::BOUNDARY != 0 {
+                    u32::MAX
+                } else {
+                    let f = (w & crate::mesh::ID_MASK) as usize;
+                    match new_of[f / 3] {
+                        u32::MAX => u32::MAX,
+                        n => 3 * n + (f % 3) as u32,
+                    }
+                };
+                twins.push(twin);
+            }
+        }
+        ((tris, twins), pts, stats)
     }
 
     /// Closes the front to the convex hull, drops the artificial triangles and returns the real

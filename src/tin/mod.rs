@@ -99,7 +99,6 @@ impl Tin {
                 "too many triangles for a dynamic TIN".into(),
             ));
         }
-        let mut keys: Vec<(u64, u32)> = Vec::with_capacity(3 * triangles.len());
         tin.mesh = Mesh::with_capacity(triangles.len());
         for (t, tri) in triangles.iter().enumerate() {
             tin.mesh
@@ -110,35 +109,111 @@ impl Tin {
                     return Err(Error::Invalid(format!("triangle {t} has a bad vertex")));
                 }
                 tin.vedge[a as usize] = (3 * t + k) as u32;
-                let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-                keys.push((key, (3 * t + k) as u32));
             }
         }
-        keys.sort_unstable();
-        let mut i = 0;
-        while i < keys.len() {
-            let mut j = i + 1;
-            while j < keys.len() && keys[j].0 == keys[i].0 {
-                j += 1;
+        // Half-edges by origin (a counting sort: 4 bytes per half-edge and per vertex, where
+        // sorting (edge key, half-edge) pairs took 16 per half-edge and O(m log m)); the twin of
+        // a → b is then among the few half-edges leaving b.
+        let n = vertices.len();
+        let mut start = vec![0u32; n + 1];
+        for tri in triangles {
+            for &a in tri {
+                start[a as usize + 1] += 1;
             }
-            match j - i {
-                1 => {}
-                2 => {
-                    let (e, f) = (EdgeId(keys[i].1), EdgeId(keys[i + 1].1));
-                    if tin.mesh.org(e) == tin.mesh.org(f) {
-                        return Err(Error::Invalid(
-                            "two triangles use the same edge in the same direction".into(),
-                        ));
-                    }
-                    tin.mesh.pair(e, f, false);
-                }
-                _ => {
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut next = start.clone();
+        // Each half-edge leaving a vertex, and its destination beside it (scanned together).
+        let mut by_origin = vec![0u32; 3 * triangles.len()];
+        let mut dst_of = vec![0u32; 3 * triangles.len()];
+        for (t, tri) in triangles.iter().enumerate() {
+            for (k, &a) in tri.iter().enumerate() {
+                let i = next[a as usize] as usize;
+                by_origin[i] = (3 * t + k) as u32;
+                dst_of[i] = tri[(k + 1) % 3];
+                next[a as usize] += 1;
+            }
+        }
+        drop(next);
+        let range = |v: u32| start[v as usize] as usize..start[v as usize + 1] as usize;
+        // In triangle order: each half-edge's own link word is written in sequence.
+        for (t, tri) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let e = (3 * t + k) as u32;
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                let along = dst_of[range(a)].iter().filter(|&&d| d == b).count();
+                let mut twins = range(b).filter(|&j| dst_of[j] == a).map(|j| by_origin[j]);
+                let (twin, more) = (twins.next(), twins.count());
+                if along + usize::from(twin.is_some()) + more > 2 {
                     return Err(Error::Invalid(
                         "an edge is shared by 3 or more triangles".into(),
                     ));
                 }
+                if along > 1 {
+                    return Err(Error::Invalid(
+                        "two triangles use the same edge in the same direction".into(),
+                    ));
+                }
+                if let Some(f) = twin.filter(|&f| f > e) {
+                    tin.mesh.pair(EdgeId(e), EdgeId(f), false);
+                }
             }
-            i = j;
+        }
+        tin.live_triangles = triangles.len();
+        tin.live_vertices = tin.vedge.iter().filter(|&&e| e != NONE).count();
+        Ok(tin)
+    }
+
+    /// A TIN of a triangulation whose adjacency is known (`twins` as
+    /// [`crate::triangulation::triangulate_with_twins`] gives it): no search, one pass.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for a bad vertex, or twins that are not each other's.
+    pub fn from_twins(vertices: &[[f64; 3]], triangles: &[[u32; 3]], twins: &[u32]) -> Result<Tin> {
+        if twins.len() != 3 * triangles.len() {
+            return Err(Error::Invalid(format!(
+                "{} twins for {} triangles",
+                twins.len(),
+                triangles.len()
+            )));
+        }
+        if 3 * triangles.len() as u64 > crate::mesh::MAX_HALF_EDGES {
+            return Err(Error::Invalid(
+                "too many triangles for a dynamic TIN".into(),
+            ));
+        }
+        let mut tin = Tin {
+            xy: vertices.iter().map(|p| [p[0], p[1]]).collect(),
+            z: vertices.iter().map(|p| p[2]).collect(),
+            vedge: vec![NONE; vertices.len()],
+            rng: 0x9E37_79B9_7F4A_7C15,
+            ..Tin::default()
+        };
+        tin.mesh = Mesh::with_capacity(triangles.len());
+        for (t, tri) in triangles.iter().enumerate() {
+            if tri.iter().any(|&v| v as usize >= vertices.len()) {
+                return Err(Error::Invalid(format!("triangle {t} has a bad vertex")));
+            }
+            tin.mesh
+                .add_triangle(VertexId(tri[0]), VertexId(tri[1]), VertexId(tri[2]));
+            for (k, &a) in tri.iter().enumerate() {
+                tin.vedge[a as usize] = (3 * t + k) as u32;
+            }
+        }
+        for (e, &f) in twins.iter().enumerate() {
+            if f == u32::MAX {
+                continue;
+            }
+            if twins.get(f as usize) != Some(&(e as u32)) {
+                return Err(Error::Invalid(format!(
+                    "half-edges {e} and {f} are not each other's twins"
+                )));
+            }
+            if f as usize > e {
+                tin.mesh.pair(EdgeId(e as u32), EdgeId(f), false);
+            }
         }
         tin.live_triangles = triangles.len();
         tin.live_vertices = tin.vedge.iter().filter(|&&e| e != NONE).count();

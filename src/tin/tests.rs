@@ -363,3 +363,49 @@ fn untracked_insertion_then_tracking_again() {
     tin.remove(v).unwrap();
     tin.check().unwrap();
 }
+
+/// `from_triangles` pairs every inner edge once and refuses non-manifold input.
+#[test]
+fn from_triangles_pairs_twins_and_refuses_bad_meshes() {
+    let v = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [2.0, 0.5, 0.0],
+    ];
+    let tin = Tin::from_triangles(&v, &[[0, 1, 2], [0, 2, 3], [1, 4, 2]]).unwrap();
+    let inner = tin
+        .triangles()
+        .flat_map(|t| (0..3).map(move |k| EdgeId(3 * t.0 + k)))
+        .filter(|&e| tin.twin(e).is_some())
+        .count();
+    assert_eq!(inner, 4, "two inner edges, each seen from both sides");
+    let e = Tin::from_triangles(&v, &[[0, 1, 2], [0, 1, 4]]).unwrap_err();
+    assert!(e.to_string().contains("same direction"), "{e}");
+    let e = Tin::from_triangles(&v, &[[0, 1, 2], [0, 2, 3], [2, 0, 4]]).unwrap_err();
+    assert!(e.to_string().contains("3 or more"), "{e}");
+    assert!(Tin::from_triangles(&v, &[[0, 1, 9]]).is_err());
+}
+
+/// The sweep's own adjacency gives the same TIN as finding the twins again.
+#[test]
+fn from_twins_equals_from_triangles() {
+    let mut r = Rng::new(12);
+    let pts: Vec<[f64; 3]> = (0..3000)
+        .map(|_| [(r.below(200) as f64) * 0.5, r.unit() * 100.0, r.unit()])
+        .collect();
+    let (t, twins) =
+        crate::triangulation::triangulate_with_twins(&pts, &[], &crate::Options::default())
+            .unwrap();
+    let a = Tin::from_twins(&t.vertices, &t.triangles, &twins).unwrap();
+    let b = Tin::from_triangles(&t.vertices, &t.triangles).unwrap();
+    a.check().unwrap();
+    for e in 0..3 * t.triangles.len() as u32 {
+        assert_eq!(a.twin(EdgeId(e)), b.twin(EdgeId(e)), "half-edge {e}");
+    }
+    let mut bad = twins.clone();
+    let i = bad.iter().position(|&f| f != u32::MAX).unwrap();
+    bad[i] = u32::MAX;
+    assert!(Tin::from_twins(&t.vertices, &t.triangles, &bad).is_err());
+}

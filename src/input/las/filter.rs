@@ -10,7 +10,9 @@ use std::fmt;
 use std::str::FromStr;
 
 /// Which returns of each pulse to keep.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Returns {
     /// Every return.

@@ -1,0 +1,204 @@
+//! Tile plans: `plan.json` written, its tasks run and merged through the library's `plan`
+//! module, the same manifest as the command line's `plan` / `run` / `merge`.
+
+use crate::errors::value_error;
+use crate::files::raster_options;
+use crate::memory::{align, duplicates};
+use crate::to_py;
+use pyo3::prelude::*;
+use std::path::PathBuf;
+use sweeptin::input::las::Returns;
+use sweeptin::plan::{Job, Levels, Plan, Product, TaskOptions};
+
+/// The job's options (a dict built by the package).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub(crate) struct JobOpts {
+    product: String,
+    cell: f64,
+    align: String,
+    nodata: f32,
+    format: Option<String>,
+    compress: Option<String>,
+    predictor: Option<String>,
+    bigtiff: bool,
+    contours: Option<PathBuf>,
+    interval: f64,
+    base: f64,
+    plane: Option<f64>,
+    boundary: Option<PathBuf>,
+    classes: Option<Vec<u8>>,
+    returns: String,
+    keep_withheld: bool,
+    duplicates: String,
+    max_edge: Option<f64>,
+    crs: Option<String>,
+    mem: u64,
+    tmp_dir: Option<PathBuf>,
+}
+
+fn absolute(p: &std::path::Path) -> sweeptin::Result<PathBuf> {
+    std::fs::canonicalize(p).map_err(|e| sweeptin::Error::io(p, e))
+}
+
+/// Writes `DIR/plan.json` for the job over `files`; returns its path.
+#[pyfunction]
+#[pyo3(signature = (files, dir, tile, buffer, job, args))]
+pub(crate) fn make_plan(
+    py: Python<'_>,
+    files: Vec<PathBuf>,
+    dir: PathBuf,
+    tile: f64,
+    buffer: Option<f64>,
+    job: JobOpts,
+    args: Vec<String>,
+) -> PyResult<PathBuf> {
+    let levels = Levels {
+        interval: job.interval,
+        base: job.base,
+    };
+    let product = match job.product.as_str() {
+        "dem" => Product::Dem {
+            cell: job.cell,
+            align: align(&job.align)?,
+            nodata: job.nodata,
+            raster: raster_options(
+                job.format.as_deref(),
+                job.compress.as_deref(),
+                job.predictor.as_deref(),
+                job.bigtiff,
+            )?,
+            contours: job.contours.as_ref().map(|_| levels),
+        },
+        "contours" => Product::Contours(levels),
+        "volume" => Product::Volume {
+            plane: job
+                .plane
+                .ok_or_else(|| value_error("a volume plan needs plane=Z"))?,
+            boundary: job
+                .boundary
+                .as_deref()
+                .map(absolute)
+                .transpose()
+                .map_err(to_py)?,
+        },
+        p => {
+            return Err(value_error(format!(
+                "product={p:?}: a plan makes 'dem', 'contours' or 'volume'"
+            )));
+        }
+    };
+    let returns = match job.returns.as_str() {
+        "all" => Returns::All,
+        "first" => Returns::First,
+        "last" => Returns::Last,
+        r => {
+            return Err(value_error(format!(
+                "returns={r:?}: use 'all', 'first' or 'last'"
+            )));
+        }
+    };
+    let typed = Job {
+        product,
+        classes: job.classes,
+        returns,
+        drop_withheld: !job.keep_withheld,
+        duplicates: duplicates(&job.duplicates)?,
+        max_edge: job.max_edge,
+        crs: job.crs,
+        mem: job.mem,
+        tmp_dir: job.tmp_dir,
+    };
+    let mut outputs = vec![("dir".to_string(), dir.clone())];
+    if let Some(c) = job.contours {
+        outputs.push(("contours".to_string(), c));
+    }
+    py.detach(|| -> sweeptin::Result<PathBuf> {
+        let buffer = buffer.unwrap_or(tile / 10.0);
+        // `@lists`, globs and `.vpc` files expanded, every file by absolute path.
+        let plan = Plan::new(typed, args, outputs, &files, tile, buffer)?;
+        let inputs: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
+        let planned: Vec<(&str, &std::path::Path)> = plan
+            .outputs
+            .iter()
+            .filter(|(n, _)| n != "dir")
+            .map(|(n, p)| (n.as_str(), p.as_path()))
+            .collect();
+        sweeptin::output::distinct_outputs(&planned, &inputs, "the plan")?;
+        if dir.exists() && !dir.is_dir() {
+            return Err(sweeptin::Error::Options(format!(
+                "{}: not a directory",
+                dir.display()
+            )));
+        }
+        plan.save(&dir)
+    })
+    .map_err(to_py)
+}
+
+/// The number of tasks of the plan `path`.
+#[pyfunction]
+pub(crate) fn task_count(path: PathBuf) -> PyResult<usize> {
+    Ok(Plan::load(&path).map_err(to_py)?.tiles.len())
+}
+
+/// Runs task `i` of the plan `path` (skipped when `resume` and it finished); returns its record
+/// as JSON text.
+#[pyfunction]
+#[pyo3(signature = (path, i, threads = 0, resume = false, progress = false))]
+pub(crate) fn run_task(
+    py: Python<'_>,
+    path: PathBuf,
+    i: usize,
+    threads: usize,
+    resume: bool,
+    progress: bool,
+) -> PyResult<String> {
+    py.detach(|| -> sweeptin::Result<String> {
+        let plan = Plan::load(&path)?;
+        let dir = Plan::dir_of(&path)?;
+        plan.task(i)?;
+        let record = match plan.record(&dir, i)? {
+            Some(r) if resume && plan.finished(&dir, i) => r,
+            _ => plan.run_task(&dir, i, &TaskOptions { threads, progress })?,
+        };
+        serde_json::to_string(&record).map_err(|e| sweeptin::Error::Internal(e.to_string()))
+    })
+    .map_err(to_py)
+}
+
+/// Where a merge writes and how (a dict built by the package).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub(crate) struct MergeOpts {
+    out: Option<PathBuf>,
+    contours: Option<PathBuf>,
+    hillshade: Option<PathBuf>,
+    format: Option<String>,
+    compress: Option<String>,
+    predictor: Option<String>,
+    bigtiff: bool,
+}
+
+/// Joins the finished tasks of the plan `path`; returns the summary as JSON text.
+#[pyfunction]
+pub(crate) fn merge(py: Python<'_>, path: PathBuf, opts: MergeOpts) -> PyResult<String> {
+    let outputs = sweeptin::plan::merge::MergeOutputs {
+        out: opts.out,
+        contours: opts.contours,
+        hillshade: opts.hillshade,
+        raster: raster_options(
+            opts.format.as_deref(),
+            opts.compress.as_deref(),
+            opts.predictor.as_deref(),
+            opts.bigtiff,
+        )?,
+    };
+    py.detach(|| -> sweeptin::Result<String> {
+        let plan = Plan::load(&path)?;
+        let dir = Plan::dir_of(&path)?;
+        let s = sweeptin::plan::merge::merge_plan(&plan, &dir, &outputs)?;
+        serde_json::to_string(&s).map_err(|e| sweeptin::Error::Internal(e.to_string()))
+    })
+    .map_err(to_py)
+}

@@ -1,0 +1,592 @@
+"""sweeptin: exact, bounded-memory Delaunay TINs and terrain products from lidar.
+
+Three ways in, as in pdal-python:
+
+* **Whole arrays in memory**: :func:`triangulate` an ``(n, 3)`` array into a :class:`Tin`,
+  then :meth:`Tin.interpolate`, :meth:`Tin.rasterize` (array + affine transform for rasterio),
+  :meth:`Tin.contours` (GeoJSON-like dicts) or :meth:`Tin.write` (PLY, OBJ, LandXML).
+* **A chunk iterator**: :func:`stream_triangles` yields the final triangles of a streaming run
+  over LAS/LAZ/XYZ files as numpy chunks, in bounded memory.
+* **Run to completion on files**: :func:`dem`, :func:`contours`, :func:`volume` and :func:`tin`
+  do what the command line does, with the same bounded memory and the same output bytes.
+
+And tile plans for Dask or any batch engine: :func:`plan`, :func:`run_task`, :func:`merge` over
+the same ``plan.json`` as ``sweeptin plan/run/merge``.
+
+The file functions take these input options (keyword only), as the command line does:
+``classes`` (kept classification codes), ``returns`` (``"all"``, ``"first"``, ``"last"``),
+``keep_withheld``, ``bbox`` (``(xmin, ymin, xmax, ymax)``), ``duplicates`` (``"first"``,
+``"last"``, ``"lowest"``, ``"highest"``), ``breaklines`` (files), ``trim_boundary``, ``holes``,
+``max_edge``, ``mem`` (sort budget: bytes or ``"512M"``, default ``"1G"``), ``tmp_dir``,
+``engine`` (``"sweep"`` or ``"tiles"``), ``threads``, ``tile``, ``crs`` (``"EPSG:2154"`` or
+WKT) and ``progress`` (a progress bar on stderr).
+
+Errors raise the exceptions of :mod:`sweeptin._errors` (all :class:`SweeptinError`). The GIL is
+released while the library works, so threads (and Dask's threaded scheduler) run in parallel.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Iterator, Sequence, Union
+
+import numpy as np
+
+from . import _sweeptin as _native
+from ._errors import (
+    FileError,
+    InputError,
+    InternalError,
+    MissingFileError,
+    NoTriangleError,
+    OptionsError,
+    OutputError,
+    SweeptinError,
+)
+
+__version__: str = _native.__version__
+
+PathLike = Union[str, "os.PathLike[str]"]
+Files = Union[PathLike, Sequence[PathLike]]
+
+__all__ = [
+    "Tin",
+    "triangulate",
+    "dem",
+    "contours",
+    "volume",
+    "tin",
+    "stream_triangles",
+    "Plan",
+    "plan",
+    "run_task",
+    "merge",
+    "SweeptinError",
+    "InputError",
+    "NoTriangleError",
+    "OptionsError",
+    "FileError",
+    "MissingFileError",
+    "OutputError",
+    "InternalError",
+]
+
+
+def _transform(t: Sequence[float]) -> Any:
+    """``affine.Affine`` when the package is installed (what rasterio uses), else the 6-tuple
+    ``(a, b, c, d, e, f)`` with ``x = a*col + b*row + c`` and ``y = d*col + e*row + f``."""
+    try:
+        from affine import Affine
+    except ImportError:
+        return tuple(float(v) for v in t)
+    return Affine(*t)
+
+
+def _points(a: Any, cols: int, what: str) -> np.ndarray:
+    """``a`` as a C-contiguous float64 ``(n, cols)`` array (no copy when it already is one)."""
+    arr = np.ascontiguousarray(a, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] < cols:
+        raise OptionsError(f"{what} must be an (n, {cols}) array, not shape {arr.shape}")
+    if arr.shape[1] != cols:
+        arr = np.ascontiguousarray(arr[:, :cols])
+    return arr
+
+
+class Tin:
+    """A Delaunay triangulation in memory, made by :func:`triangulate`.
+
+    Attributes (read-only numpy arrays, owned by the TIN, not copies):
+
+    * ``vertices``: ``(n, 3)`` float64, the distinct points ``[x, y, z]`` exactly as given, in
+      sweep order (by ``y``, then ``x``);
+    * ``triangles``: ``(m, 3)`` uint32, counter-clockwise triples of indices into ``vertices``;
+    * ``input_index``: ``(n,)`` uint32, for every vertex the row of the input it is.
+
+    ``points`` is ``vertices`` (startinpy's name).
+    """
+
+    __slots__ = ("_tin",)
+
+    def __init__(self, native: Any) -> None:
+        self._tin = native
+
+    @property
+    def vertices(self) -> np.ndarray:
+        return self._tin.vertices
+
+    points = vertices
+
+    @property
+    def triangles(self) -> np.ndarray:
+        return self._tin.triangles
+
+    @property
+    def input_index(self) -> np.ndarray:
+        return self._tin.input_index
+
+    @property
+    def duplicates(self) -> int:
+        """Input points merged away as exact (x, y) duplicates."""
+        return int(self._tin.duplicates)
+
+    @property
+    def crossing_skipped(self) -> int:
+        """Breakline segments left out because they cross another one."""
+        return int(self._tin.crossing_skipped)
+
+    def number_of_vertices(self) -> int:
+        return int(self._tin.vertices.shape[0])
+
+    def number_of_triangles(self) -> int:
+        return int(self._tin.triangles.shape[0])
+
+    def __repr__(self) -> str:
+        return f"<sweeptin.Tin: {self.number_of_vertices()} vertices, {self.number_of_triangles()} triangles>"
+
+    def interpolate(self, xy: Any) -> np.ndarray:
+        """Heights at the points ``xy`` (``(k, 2)``; more columns are ignored) by linear
+        interpolation in the TIN; NaN outside it. A point exactly on an edge or a vertex gets
+        the value of that edge or vertex alone, as the DEM and ``sweeptin sample`` do."""
+        return self._tin.interpolate(_points(xy, 2, "xy"))
+
+    def rasterize(
+        self,
+        cell: float,
+        bbox: Sequence[float] | None = None,
+        align: str = "edges",
+        *,
+        nodata: float = float("nan"),
+        snap: bool = False,
+    ) -> tuple[np.ndarray, Any]:
+        """The DEM of the TIN: ``(values, transform)``.
+
+        ``values`` is a float32 ``(rows, cols)`` array, row 0 the northern one, each cell the
+        TIN's height at the cell's centre (``nodata`` outside the TIN); ``transform`` is the
+        affine transform rasterio expects (``affine.Affine`` when installed, else the 6-tuple).
+
+        ``align="edges"`` (default): cell edges on multiples of ``cell`` (GDAL's ``-tap``): a
+        1 km tile at 1 m is 1000 × 1000 cells. ``align="centres"``: cell centres on multiples
+        (IGN's LiDAR HD lattice). The same lattices as ``sweeptin dem --align``, computed by
+        the library's ``GridPlan``. ``bbox=(xmin, ymin, xmax, ymax)``
+        with sides on multiples of ``cell`` (or ``snap=True`` to round them outwards); without
+        it, the cells whose centres lie within the data's bounds. The values are computed by
+        the library's DEM sink, as ``sweeptin dem`` computes them.
+        """
+        b = None if bbox is None else [float(v) for v in bbox]
+        values, t = self._tin.rasterize(float(cell), b, align, float(nodata), bool(snap))
+        return values, _transform(t)
+
+    def contours(self, interval: float = 1.0, base: float = 0.0) -> dict[str, Any]:
+        """Contour lines at ``base + k × interval`` as a GeoJSON-like FeatureCollection dict:
+        LineString features with properties ``elevation`` and ``closed`` (higher ground on the
+        left), the same lines ``sweeptin contours`` writes."""
+        return json.loads(self._tin.contours_geojson(float(interval), float(base)))
+
+    def write(self, path: PathLike, *, crs: str | None = None) -> dict[str, int]:
+        """Writes the mesh: ``.ply`` (binary PLY), ``.obj``, ``.xml`` (LandXML) or ``.stin``."""
+        v, t, b = self._tin.write(os.fspath(path), crs)
+        return {"vertices": v, "triangles": t, "bytes": b}
+
+    def write_ply(self, path: PathLike) -> dict[str, int]:
+        """Writes a binary PLY (startinpy's name)."""
+        return self.write(_with_extension(path, ".ply"))
+
+    def write_obj(self, path: PathLike) -> dict[str, int]:
+        """Writes a Wavefront OBJ (startinpy's name)."""
+        return self.write(_with_extension(path, ".obj"))
+
+
+def _with_extension(path: PathLike, ext: str) -> str:
+    p = os.fspath(path)
+    if not p.lower().endswith(ext):
+        raise OptionsError(f"{p}: expected a {ext} file name")
+    return p
+
+
+def triangulate(
+    xyz: Any,
+    *,
+    duplicates: str = "first",
+    breaklines: Sequence[Any] | np.ndarray | None = None,
+) -> Tin:
+    """Exact Delaunay triangulation of the points ``xyz`` (an ``(n, 3)`` array; ``z`` is
+    carried along). The result depends only on the set of distinct (x, y) positions, never on
+    their order (a documented tie rule decides cocircular points).
+
+    ``duplicates``: which point survives among exact (x, y) duplicates (``"first"``,
+    ``"last"``, ``"lowest"``, ``"highest"`` z).
+
+    ``breaklines``: a constrained triangulation. Either an ``(m, 2)`` integer array of
+    segments (rows of ``xyz``), or a list of polylines, each a 1-D sequence of row indices of
+    ``xyz`` or an ``(k, 3)`` float array of new vertices (appended after the points:
+    ``input_index`` then counts them from ``len(xyz)`` on). Segments must not cross each other
+    (a crossing one is left out and counted in :attr:`Tin.crossing_skipped`).
+
+    A float64 C-contiguous array is used without a copy; the GIL is released while it works.
+    Raises :class:`NoTriangleError` for fewer than 3 distinct points or all collinear,
+    :class:`InputError` for a NaN/infinite or out-of-range coordinate (``.index`` names it).
+    """
+    pts = _points(xyz, 3, "xyz")
+    segments = None
+    if breaklines is not None:
+        pts, segments = _segments(pts, breaklines)
+    return Tin(_native.triangulate(pts, duplicates, segments))
+
+
+def _segments(pts: np.ndarray, breaklines: Any) -> tuple[np.ndarray, np.ndarray | None]:
+    n = pts.shape[0]
+    if isinstance(breaklines, np.ndarray) and breaklines.ndim == 2 and breaklines.shape[1] == 2:
+        seg = breaklines
+        if not np.issubdtype(seg.dtype, np.integer):
+            raise OptionsError("breaklines as an (m, 2) array must hold integer point indices")
+        if len(seg) and (seg.min() < 0 or seg.max() >= n):
+            raise OptionsError(f"a breakline segment refers to a point beyond the {n} given")
+        return pts, np.ascontiguousarray(seg, dtype=np.uint32)
+    extra: list[np.ndarray] = []
+    segs: list[np.ndarray] = []
+    total = n
+    for k, line in enumerate(breaklines):
+        a = np.asarray(line)
+        if a.ndim == 1 and np.issubdtype(a.dtype, np.integer):
+            idx = a.astype(np.int64)
+            if len(idx) and (idx.min() < 0 or idx.max() >= n):
+                raise OptionsError(f"breakline {k} refers to a point beyond the {n} given")
+        elif a.ndim == 2 and a.shape[1] == 3:
+            extra.append(np.asarray(a, dtype=np.float64))
+            idx = np.arange(total, total + len(a), dtype=np.int64)
+            total += len(a)
+        else:
+            raise OptionsError(
+                f"breakline {k}: expected point indices (1-D integers) or (k, 3) coordinates, "
+                f"not shape {a.shape}"
+            )
+        if len(idx) >= 2:
+            segs.append(np.stack([idx[:-1], idx[1:]], axis=1))
+    if extra:
+        pts = np.ascontiguousarray(np.concatenate([pts, *extra]))
+    if not segs:
+        return pts, None
+    return pts, np.ascontiguousarray(np.concatenate(segs), dtype=np.uint32)
+
+
+# ---- files -------------------------------------------------------------------------------
+
+_INPUT_DEFAULTS: dict[str, Any] = {
+    "classes": None,
+    "returns": "all",
+    "keep_withheld": False,
+    "bbox": None,
+    "duplicates": "first",
+    "breaklines": (),
+    "trim_boundary": None,
+    "holes": None,
+    "max_edge": None,
+    "mem": "1G",
+    "tmp_dir": None,
+    "engine": "sweep",
+    "threads": 0,
+    "tile": None,
+    "crs": None,
+    "progress": False,
+}
+
+
+def _files(files: Files) -> list[str]:
+    if isinstance(files, (str, os.PathLike)):
+        return [os.fspath(files)]
+    out = [os.fspath(f) for f in files]
+    if not out:
+        raise OptionsError("no input files given")
+    return out
+
+
+def _mem(mem: int | str) -> int:
+    return int(mem) if isinstance(mem, int) else _native.parse_size(str(mem))
+
+
+def _opts(files: Files, options: dict[str, Any]) -> dict[str, Any]:
+    unknown = set(options) - set(_INPUT_DEFAULTS)
+    if unknown:
+        raise TypeError(f"unknown option(s): {', '.join(sorted(unknown))}")
+    o = {**_INPUT_DEFAULTS, **options}
+    o["files"] = _files(files)
+    o["mem"] = _mem(o["mem"])
+    o["breaklines"] = [os.fspath(p) for p in o["breaklines"]]
+    for k in ("trim_boundary", "holes", "tmp_dir"):
+        if o[k] is not None:
+            o[k] = os.fspath(o[k])
+    if o["classes"] is not None:
+        o["classes"] = [int(c) for c in o["classes"]]
+    if o["bbox"] is not None:
+        o["bbox"] = [float(v) for v in o["bbox"]]
+    return o
+
+
+def _raster(
+    format: str | None, compress: str | None, predictor: str | None, bigtiff: bool
+) -> dict[str, Any]:
+    return {"format": format, "compress": compress, "predictor": predictor, "bigtiff": bool(bigtiff)}
+
+
+def dem(
+    files: Files,
+    out: PathLike,
+    *,
+    cell: float = 1.0,
+    align: str = "edges",
+    snap: bool = False,
+    nodata: float = -9999.0,
+    format: str | None = None,
+    compress: str | None = None,
+    predictor: str | None = None,
+    bigtiff: bool = False,
+    contours: PathLike | None = None,
+    interval: float = 1.0,
+    base: float = 0.0,
+    **options: Any,
+) -> dict[str, Any]:
+    """``sweeptin dem``: a DEM raster (``.tif`` float32 GeoTIFF or ``.asc``) of the TIN of the
+    files, by linear interpolation at cell centres, streaming in bounded memory; optionally
+    contour lines (``contours=`` a ``.geojson`` path) from the same pass. With ``bbox=`` the
+    raster covers the cells whose centres lie in ``[xmin, xmax) × (ymin, ymax]``.
+
+    ``align="edges"`` (default): cell edges on multiples of ``cell`` (GDAL's ``-tap``,
+    LAStools, lasR: a 1 km tile at 1 m is 1000 × 1000 cells); ``"centres"``: cell centres on
+    multiples (IGN's LiDAR HD lattice). ``format``: ``"tif"``, ``"cog"`` (Cloud Optimized
+    GeoTIFF) or ``"asc"`` (default: by the extension); ``compress`` (``"deflate"``,
+    ``"zstd"``, ``"lzw"``, ``"none"``), ``predictor`` (``"float"``, ``"horizontal"``,
+    ``"none"``) and ``bigtiff`` as the command line's ``--compress``, ``--predictor`` and
+    ``--bigtiff``.
+
+    Returns the run's summary: ``{"run": {...}, "products": {"dem": {...}, ...}}``, the same
+    fields as the command line's ``--json``."""
+    o = _opts(files, options)
+    d = {
+        "out": os.fspath(out),
+        "cell": float(cell),
+        "nodata": float(nodata),
+        "snap": bool(snap),
+        "align": align,
+        **_raster(format, compress, predictor, bigtiff),
+    }
+    c = None if contours is None else (os.fspath(contours), float(interval), float(base))
+    return json.loads(_native.run_products(o, dem=d, contours=c))
+
+
+def contours(
+    files: Files,
+    out: PathLike,
+    *,
+    interval: float = 1.0,
+    base: float = 0.0,
+    **options: Any,
+) -> dict[str, Any]:
+    """``sweeptin contours``: contour lines at ``base + k × interval`` as GeoJSON, stitched
+    into polylines, streaming in bounded memory. Returns the run's summary."""
+    o = _opts(files, options)
+    c = (os.fspath(out), float(interval), float(base))
+    return json.loads(_native.run_products(o, contours=c))
+
+
+def volume(
+    files: Files,
+    *,
+    plane: float,
+    boundary: PathLike | None = None,
+    **options: Any,
+) -> dict[str, Any]:
+    """``sweeptin volume --plane``: cut and fill volumes and areas of the TIN against the plane
+    ``z = plane``, within an optional GeoJSON polygon. Returns the run's summary; the volumes
+    are ``result["products"]["volume"]`` (``cut_volume``, ``fill_volume``, ``net_volume``,
+    ``cut_area``, ``fill_area``, ``area``)."""
+    o = _opts(files, options)
+    b = None if boundary is None else os.fspath(boundary)
+    return json.loads(_native.run_products(o, volume=(float(plane), b)))
+
+
+def tin(files: Files, out: PathLike, **options: Any) -> dict[str, Any]:
+    """``sweeptin tin``: the Delaunay TIN of the files written as ``.ply``, ``.obj``, ``.xml``
+    (LandXML) or ``.stin``, streaming in bounded memory. Returns the run's summary."""
+    o = _opts(files, options)
+    return json.loads(_native.run_tin(o, os.fspath(out)))
+
+
+class _Stream:
+    """The iterator of :func:`stream_triangles`."""
+
+    __slots__ = ("_it",)
+
+    def __init__(self, it: Any) -> None:
+        self._it = it
+
+    def __iter__(self) -> "_Stream":
+        return self
+
+    def __next__(self) -> np.ndarray:
+        return next(self._it)
+
+    @property
+    def summary(self) -> dict[str, Any] | None:
+        """The run's summary once the iterator is exhausted (else ``None``)."""
+        s = self._it.summary_json()
+        return None if s is None else json.loads(s)
+
+
+def stream_triangles(files: Files, chunk: int = 1_000_000, **options: Any) -> Iterator[np.ndarray]:
+    """Iterates over the final triangles of a streaming run over the files, in chunks: float64
+    arrays of shape ``(k, 3, 3)`` (``k <= chunk`` triangles, three ``[x, y, z]`` corners each,
+    counter-clockwise), as the sweep releases them (roughly south to north). Memory stays
+    bounded (at most two chunks wait in the pipe). Stopping early stops the run. The returned
+    iterator has ``.summary`` once exhausted."""
+    o = _opts(files, options)
+    return _Stream(_native.stream_triangles(o, int(chunk)))
+
+
+# ---- plans -------------------------------------------------------------------------------
+
+
+class Plan:
+    """A tile plan (``DIR/plan.json``): ``len(plan)`` tasks, run in any order, anywhere that
+    sees the files, then merged. Picklable (it is its path), so it can be sent to workers."""
+
+    __slots__ = ("path",)
+
+    def __init__(self, path: PathLike) -> None:
+        self.path = os.path.abspath(os.fspath(path))
+
+    def __fspath__(self) -> str:
+        return self.path
+
+    def __len__(self) -> int:
+        return int(_native.task_count(self.path))
+
+    def __repr__(self) -> str:
+        return f"sweeptin.Plan({self.path!r})"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (Plan, (self.path,))
+
+    @property
+    def tasks(self) -> range:
+        """The task indices ``0 .. len(plan) - 1``."""
+        return range(len(self))
+
+
+def _plan_path(p: Plan | PathLike) -> str:
+    path = os.fspath(p)
+    return os.path.join(path, "plan.json") if os.path.isdir(path) else path
+
+
+def plan(
+    product: str,
+    files: Files,
+    dir: PathLike,
+    *,
+    tile: float,
+    buffer: float | None = None,
+    cell: float = 1.0,
+    align: str = "edges",
+    nodata: float = -9999.0,
+    format: str | None = None,
+    compress: str | None = None,
+    predictor: str | None = None,
+    bigtiff: bool = False,
+    contours: PathLike | None = None,
+    interval: float = 1.0,
+    base: float = 0.0,
+    plane: float | None = None,
+    boundary: PathLike | None = None,
+    classes: Sequence[int] | None = None,
+    returns: str = "all",
+    keep_withheld: bool = False,
+    duplicates: str = "first",
+    max_edge: float | None = None,
+    crs: str | None = None,
+    mem: int | str = "1G",
+    tmp_dir: PathLike | None = None,
+) -> Plan:
+    """``sweeptin plan``: cuts a ``"dem"``, ``"contours"`` or ``"volume"`` job over LAS/LAZ
+    files into tiles of side ``tile`` (a multiple of ``cell``), one task each, and writes
+    ``DIR/plan.json`` (from the files' headers only). ``buffer``: the first buffer of every
+    task (default a tenth of the tile; a task widens it by itself when needed, so this never
+    changes the result). A DEM plan may also make ``contours`` (the path ``merge`` writes).
+    ``align``, ``format`` (``"tif"`` or ``"cog"``: the mosaic's; the tasks write plain GeoTIFF
+    tiles), ``compress``, ``predictor`` and ``bigtiff`` as in :func:`dem`. ``files`` may name
+    ``.vpc`` virtual point clouds, ``@list.txt`` files and globs; the plan stores every file by
+    absolute path. Run the tasks with :func:`run_task` (any order, any machine: ``sweeptin
+    run`` too) and join them with :func:`merge`; the result equals one run over all the
+    files."""
+    job = {
+        "product": product,
+        "cell": float(cell),
+        "align": align,
+        "nodata": float(nodata),
+        **_raster(format, compress, predictor, bigtiff),
+        "contours": None if contours is None else os.path.abspath(os.fspath(contours)),
+        "interval": float(interval),
+        "base": float(base),
+        "plane": None if plane is None else float(plane),
+        "boundary": None if boundary is None else os.fspath(boundary),
+        "classes": None if classes is None else [int(c) for c in classes],
+        "returns": returns,
+        "keep_withheld": bool(keep_withheld),
+        "duplicates": duplicates,
+        "max_edge": max_edge,
+        "crs": crs,
+        "mem": _mem(mem),
+        "tmp_dir": None if tmp_dir is None else os.fspath(tmp_dir),
+    }
+    names = _files(files)
+    args = [product, *[os.path.abspath(f) for f in names], "--tile", repr(float(tile))]
+    if product == "dem":
+        args += ["--cell", repr(float(cell)), "--align", align]
+        if format is not None:
+            args += ["--format", format]
+    if classes is not None:
+        args += ["--class", ",".join(str(int(c)) for c in classes)]
+    path = _native.make_plan(names, os.fspath(dir), float(tile), buffer, job, args)
+    return Plan(path)
+
+
+def run_task(
+    plan: Plan | PathLike,
+    i: int,
+    *,
+    threads: int = 0,
+    resume: bool = False,
+    progress: bool = False,
+) -> dict[str, Any]:
+    """``sweeptin run --task i``: runs task ``i`` of the plan (its outputs under
+    ``DIR/tiles/``, then its record); with ``resume`` a finished task is skipped. ``threads``:
+    the task's worker threads (0: every core). Returns the task's record (status ``"done"``,
+    or ``"empty"`` when its tile holds no point after the filters)."""
+    return json.loads(_native.run_task(_plan_path(plan), int(i), int(threads), bool(resume), bool(progress)))
+
+
+def merge(
+    plan: Plan | PathLike,
+    out: PathLike | None = None,
+    *,
+    contours: PathLike | None = None,
+    hillshade: PathLike | None = None,
+    format: str | None = None,
+    compress: str | None = None,
+    predictor: str | None = None,
+    bigtiff: bool = False,
+) -> dict[str, Any]:
+    """``sweeptin merge``: joins the finished tasks: the DEM mosaic ``out`` (``.vrt`` over the
+    tiles or one ``.tif``, a GeoTIFF or COG as the plan's ``format`` says unless ``format``,
+    ``compress``, ``predictor`` or ``bigtiff`` are given here) with the DEM's contours
+    (``contours=``, default: the path the plan was given) and a ``hillshade`` of a ``.tif``
+    mosaic (``.png`` with a world file, or an 8-bit ``.tif``); the stitched contours ``out``
+    (``.geojson``); or the summed volumes (no ``out``). Returns the summary
+    (``dem``/``contours``/``hillshade``/``volume``, ``tasks``, ``empty_tasks``,
+    ``max_buffer``)."""
+    opts = {
+        "out": None if out is None else os.fspath(out),
+        "contours": None if contours is None else os.fspath(contours),
+        "hillshade": None if hillshade is None else os.fspath(hillshade),
+        **_raster(format, compress, predictor, bigtiff),
+    }
+    return json.loads(_native.merge(_plan_path(plan), opts))

@@ -1,0 +1,60 @@
+"""The exceptions raised by sweeptin, one per kind of library error.
+
+Every one is a :class:`SweeptinError`, and also the built-in class a Python user would catch
+for that kind of problem (``ValueError`` for bad data or options, ``OSError`` for files).
+Where the library knows it, the exception carries ``path`` (the file), ``line`` (1-based) or
+``index`` (0-based point index) as attributes.
+"""
+
+from __future__ import annotations
+
+
+class SweeptinError(Exception):
+    """Base class of every sweeptin error."""
+
+    path: str | None = None
+    line: int | None = None
+    index: int | None = None
+
+
+class InputError(SweeptinError, ValueError):
+    """The data cannot be used: a non-finite or out-of-range coordinate, a damaged or
+    unreadable file, a bad line of a text file, a breakline that cannot be used."""
+
+
+class NoTriangleError(InputError):
+    """No triangle exists: fewer than 3 distinct (x, y) positions, or all of them on one line
+    (for instance after the filters left too few points)."""
+
+
+class OptionsError(SweeptinError, ValueError):
+    """Options that cannot be used (a bad value, options that do not go together, no input,
+    an output that would overwrite an input or another output)."""
+
+
+class FileError(SweeptinError, OSError):
+    """Reading or writing a file failed (the operating system's error)."""
+
+
+class MissingFileError(FileError, FileNotFoundError):
+    """A file or directory does not exist."""
+
+
+class OutputError(SweeptinError, OSError):
+    """An output cannot be written as asked (unknown format, a limit of the format)."""
+
+
+class InternalError(SweeptinError, RuntimeError):
+    """A bug in sweeptin: please report it with the input."""
+
+
+__all__ = [
+    "SweeptinError",
+    "InputError",
+    "NoTriangleError",
+    "OptionsError",
+    "FileError",
+    "MissingFileError",
+    "OutputError",
+    "InternalError",
+]

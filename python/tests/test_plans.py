@@ -1,0 +1,135 @@
+"""Tile plans from Python: the same plan.json as the command line, tasks run by either, a
+mosaic equal to one run, and the Dask example with two worker processes."""
+
+from __future__ import annotations
+
+import json
+import os
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import sweeptin
+
+from conftest import REPO, data
+
+
+@pytest.fixture(scope="module")
+def ign():
+    d = data("lidar/ign_50m_tiles")
+    files = sorted(str(p) for p in Path(d).glob("*.laz"))
+    assert len(files) == 6
+    return files
+
+
+def extent(plan: sweeptin.Plan) -> tuple[float, ...]:
+    tiles = json.loads(Path(plan.path).read_text())["tiles"]
+    return tuple(f(t["bounds"][k] for t in tiles) for k, f in ((0, min), (1, min), (2, max), (3, max)))
+
+
+def test_a_python_plan_runs_anywhere_and_merges_to_one_run(ign, cli, tmp_path):
+    contours = tmp_path / "planned.geojson"
+    plan = sweeptin.plan(
+        "dem", ign, tmp_path / "job", tile=50, cell=0.5, classes=[2], contours=contours,
+        interval=0.25, buffer=2,
+    )
+    n = len(plan)
+    assert n >= 6 and plan.tasks == range(n)
+    assert pickle.loads(pickle.dumps(plan)).path == plan.path
+    # The same job from the command line makes the same plan (but for who wrote it).
+    cli("plan", "--buffer", "2", "dem", *ign, "--cell", "0.5", "--class", "2", "--contours", contours,
+        "--interval", "0.25", "--tile", "50", "-o", tmp_path / "cli-job")
+    ours = json.loads(Path(plan.path).read_text())
+    theirs = json.loads((tmp_path / "cli-job" / "plan.json").read_text())
+    for k in ("version", "command", "job", "files", "tile", "buffer", "cell", "tiles"):
+        assert ours[k] == theirs[k], k
+    # Half the tasks from Python, half from the command line, in any order.
+    records = [sweeptin.run_task(plan, i, threads=1) for i in range(0, n, 2)]
+    for i in range(1, n, 2):
+        cli("run", plan.path, "--task", i, "-q", "--threads", "1")
+    assert all(r["status"] in ("done", "empty") for r in records)
+    again = sweeptin.run_task(plan, 0, resume=True)
+    assert again == records[0]  # skipped: its record as it was
+    py_mosaic = tmp_path / "py.tif"
+    s = sweeptin.merge(plan, py_mosaic)
+    assert s["tasks"] == n and s["dem"]["tiles"] == n and s["contours"]["features"] > 100
+    cli_mosaic = tmp_path / "cli.tif"
+    cli("merge", plan.path, "-o", cli_mosaic, "--contours", tmp_path / "cli.geojson")
+    assert py_mosaic.read_bytes() == cli_mosaic.read_bytes()
+    assert contours.read_bytes() == (tmp_path / "cli.geojson").read_bytes()
+    single = tmp_path / "single.tif"
+    sweeptin.dem(ign, single, cell=0.5, bbox=extent(plan), classes=[2])
+    assert py_mosaic.read_bytes() == single.read_bytes()
+
+
+def test_a_centre_aligned_cog_plan_is_the_cli_plan(ign, cli, tmp_path):
+    """The DEM's alignment and the mosaic's format live in the plan's job: Python and the
+    command line make the same job, and the mosaic (a COG by the plan) equals one run."""
+    files = ign[:2]
+    plan = sweeptin.plan(
+        "dem", files, tmp_path / "job", tile=50, cell=0.5, align="centres", format="cog",
+        classes=[2], buffer=2,
+    )
+    cli("plan", "--buffer", "2", "dem", *files, "--cell", "0.5", "--align", "centres",
+        "--format", "cog", "--class", "2", "--tile", "50", "-o", tmp_path / "cli-job")
+    ours = json.loads(Path(plan.path).read_text())
+    theirs = json.loads((tmp_path / "cli-job" / "plan.json").read_text())
+    assert ours["job"] == theirs["job"]
+    assert ours["job"]["product"]["align"] == "centres"
+    assert ours["job"]["product"]["raster"]["format"] == "cog"
+    for i in plan.tasks:
+        sweeptin.run_task(plan, i, threads=1)
+    py_mosaic, cli_mosaic = tmp_path / "py.tif", tmp_path / "cli.tif"
+    s = sweeptin.merge(plan, py_mosaic, hillshade=tmp_path / "shade.png")
+    assert s["hillshade"]["shaded"] > 0 and (tmp_path / "shade.pgw").exists()
+    cli("merge", plan.path, "-o", cli_mosaic)
+    assert py_mosaic.read_bytes() == cli_mosaic.read_bytes()
+    single = tmp_path / "single.tif"
+    sweeptin.dem(files, single, cell=0.5, align="centres", format="cog", bbox=extent(plan),
+                 classes=[2])
+    assert py_mosaic.read_bytes() == single.read_bytes()
+    with pytest.raises(sweeptin.OptionsError, match="GeoTIFF"):
+        sweeptin.merge(plan, tmp_path / "m.tif", format="asc")
+
+
+def test_volume_plan_sums_exactly(ign, tmp_path):
+    plan = sweeptin.plan("volume", ign[:2], tmp_path / "v", tile=50, plane=21.0, classes=[2])
+    for i in plan.tasks:
+        sweeptin.run_task(plan, i)
+    v = sweeptin.merge(plan)["volume"]
+    one = sweeptin.volume(ign[:2], plane=21.0, classes=[2])["products"]["volume"]
+    for k in ("cut_volume", "fill_volume", "net_volume", "cut_area", "fill_area", "area"):
+        assert v[k] == one[k], k
+
+
+def test_plan_errors(ign, small, tmp_path):
+    path, _ = small
+    plan = sweeptin.plan("contours", [path], tmp_path / "c", tile=16, interval=1)
+    with pytest.raises(sweeptin.OptionsError, match="does not exist"):
+        sweeptin.run_task(plan, len(plan))
+    with pytest.raises(sweeptin.OptionsError, match="have not finished"):
+        sweeptin.merge(plan, tmp_path / "c.geojson")
+    with pytest.raises(sweeptin.OptionsError, match="multiple"):
+        sweeptin.plan("dem", ign, tmp_path / "d", tile=50.3, cell=0.5)
+    with pytest.raises(sweeptin.OptionsError, match="plan makes"):
+        sweeptin.plan("tin", ign, tmp_path / "d", tile=50)
+    xyz = tmp_path / "p.xyz"
+    xyz.write_text("0 0 0\n1 0 0\n0 1 0\n")
+    with pytest.raises(sweeptin.InputError, match="LAS/LAZ"):
+        sweeptin.plan("dem", [xyz], tmp_path / "d", tile=50)
+    with pytest.raises(sweeptin.OptionsError, match="another plan"):
+        sweeptin.plan("contours", [path], tmp_path / "c", tile=16, interval=2)
+
+
+def test_the_dask_example_runs_on_two_worker_processes(ign, tmp_path):
+    pytest.importorskip("dask.distributed") if os.environ.get("CI") not in ("true", "1") else None
+    r = subprocess.run(
+        [sys.executable, str(REPO / "examples" / "dask_plan.py"), *ign, "--workers", "2", "--out", str(tmp_path)],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "on 2 worker processes" in r.stdout, r.stdout
+    assert "mosaic == single run (the same GeoTIFF bytes): True" in r.stdout

@@ -1,0 +1,553 @@
+//! What a plan's tasks run, typed ([`Job`], stored in `plan.json`), and running one task
+//! ([`Plan::run_task`]): the tiled engine on the task's tile, its buffer widened until every
+//! triangle it owns is certified, its outputs under `DIR/tiles/` and then its record. The
+//! command line (`sweeptin plan/run`) and the Python package (`sweeptin.plan/run_task`) both
+//! build a [`Job`] and run tasks through here, so their plans are interchangeable.
+
+use super::{Plan, TaskRecord};
+use crate::crs::Crs;
+use crate::error::{Error, Result};
+use crate::input::las::{Filter, Returns};
+use crate::output::raster::{RasterFormat, RasterOptions};
+use crate::pipeline::{Input, LineOptions, RunConfig, RunOptions, RunSummary, SweepAxis};
+use crate::products::contours::{ContourOptions, ContourSink};
+use crate::products::dem::{DemOptions, DemSink};
+use crate::products::volume::VolumeSink;
+use crate::raster::{Align, GridExtent, GridPlan};
+use crate::sink::{Fanout, FanoutSummary, ProductSummary, StreamInfo, TriangleSink};
+use crate::sort::memory::DuplicatePolicy;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Contour levels: `base + k × interval`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Levels {
+    /// Distance between levels (> 0).
+    pub interval: f64,
+    /// A level through which the others are counted.
+    pub base: f64,
+}
+
+impl Levels {
+    /// The contour sink's options, with end edges for the merge (`edges`).
+    fn options(&self, edges: bool) -> ContourOptions {
+        ContourOptions {
+            interval: self.interval,
+            base: self.base,
+            edges,
+            ..ContourOptions::default()
+        }
+    }
+}
+
+/// The product a plan makes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Product {
+    /// A DEM of cells of `cell` (tiles are whole multiples of it), optionally with contours.
+    Dem {
+        /// Cell size.
+        cell: f64,
+        /// Where the cells lie: edges (the default) or centres on multiples of `cell`.
+        align: Align,
+        /// Value of cells without data (stored as a string when not finite: `"NaN"`).
+        #[serde(with = "nodata")]
+        nodata: f32,
+        /// The mosaic's format (GeoTIFF or COG; by its extension when not given), compression,
+        /// predictor, BigTIFF. The tasks write plain GeoTIFF tiles whatever it says; `merge`
+        /// writes the mosaic with it unless told otherwise.
+        raster: RasterOptions,
+        /// Contours from the same pass.
+        contours: Option<Levels>,
+    },
+    /// Contour lines.
+    Contours(Levels),
+    /// Cut and fill against the plane `z = plane`, within an optional boundary polygon.
+    Volume {
+        /// The plane's height.
+        plane: f64,
+        /// The boundary polygon file (absolute).
+        boundary: Option<PathBuf>,
+    },
+}
+
+/// A non-finite `f32` (a NaN nodata) as a string in JSON.
+mod nodata {
+    use serde::{Deserialize, Deserializer, Serializer, de::Error as _};
+
+    pub fn serialize<S: Serializer>(v: &f32, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_finite() {
+            s.serialize_f32(*v)
+        } else {
+            s.serialize_str(&v.to_string())
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum V {
+            N(f32),
+            S(String),
+        }
+        match V::deserialize(d)? {
+            V::N(v) => Ok(v),
+            V::S(s) => s.parse().map_err(D::Error::custom),
+        }
+    }
+}
+
+/// A plan's job: the product and how the points are read (everything a task needs besides its
+/// tile, its files and its buffer).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Job {
+    /// What is made.
+    pub product: Product,
+    /// Classification codes kept (`None`: all).
+    pub classes: Option<Vec<u8>>,
+    /// Returns kept.
+    pub returns: Returns,
+    /// Drop withheld points.
+    pub drop_withheld: bool,
+    /// Which point survives among exact (x, y) duplicates.
+    pub duplicates: DuplicatePolicy,
+    /// Drop triangles with a horizontal edge longer than this.
+    pub max_edge: Option<f64>,
+    /// The CRS recorded in the outputs (`EPSG:code`, `EPSG:h+v` or WKT) instead of the input's.
+    pub crs: Option<String>,
+    /// Memory budget of a task's sort, in bytes.
+    pub mem: u64,
+    /// Where a task's spill files go.
+    pub tmp_dir: Option<PathBuf>,
+}
+
+impl Job {
+    /// A job making `product` from every point (withheld ones dropped), with the defaults of a
+    /// single run.
+    pub fn new(product: Product) -> Job {
+        let f = Filter::default();
+        Job {
+            product,
+            classes: f.classes,
+            returns: f.returns,
+            drop_withheld: f.drop_withheld,
+            duplicates: DuplicatePolicy::default(),
+            max_edge: None,
+            crs: None,
+            mem: crate::pipeline::DEFAULT_MEM,
+            tmp_dir: None,
+        }
+    }
+
+    /// The command that makes the product (`dem`, `contours`, `volume`).
+    pub fn command(&self) -> &'static str {
+        match self.product {
+            Product::Dem { .. } => "dem",
+            Product::Contours(_) => "contours",
+            Product::Volume { .. } => "volume",
+        }
+    }
+
+    /// The DEM's cell size, when the job makes one.
+    pub fn cell(&self) -> Option<f64> {
+        match self.product {
+            Product::Dem { cell, .. } => Some(cell),
+            _ => None,
+        }
+    }
+
+    /// The points' filter.
+    pub fn filter(&self) -> Filter {
+        Filter {
+            classes: self.classes.clone(),
+            returns: self.returns,
+            drop_withheld: self.drop_withheld,
+            bbox: None,
+        }
+    }
+
+    /// The CRS given, parsed.
+    ///
+    /// # Errors
+    /// [`Error::Options`] for a CRS that is not one.
+    pub fn crs(&self) -> Result<Option<Crs>> {
+        self.crs.as_deref().map(Crs::parse).transpose()
+    }
+
+    /// Checks the product's options as its sinks would (before a plan is written).
+    ///
+    /// # Errors
+    /// [`Error::Options`] naming the bad value.
+    pub fn check(&self) -> Result<()> {
+        let positive = |v: f64, what: &str| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::Options(format!(
+                    "{what} must be a positive number, not {v}"
+                )))
+            }
+        };
+        let levels = |l: &Levels| {
+            positive(l.interval, "the contour interval")?;
+            if l.base.is_finite() {
+                Ok(())
+            } else {
+                Err(Error::Options(format!(
+                    "the contour base must be finite, not {}",
+                    l.base
+                )))
+            }
+        };
+        match &self.product {
+            Product::Dem {
+                cell,
+                raster,
+                contours,
+                ..
+            } => {
+                positive(*cell, "the cell size")?;
+                contours.as_ref().map_or(Ok(()), levels)?;
+                check_mosaic(raster)?;
+            }
+            Product::Contours(l) => levels(l)?,
+            Product::Volume { plane, .. } if !plane.is_finite() => {
+                return Err(Error::Options(format!(
+                    "the volume's plane must be finite, not {plane}"
+                )));
+            }
+            Product::Volume { .. } => {}
+        }
+        if let Some(m) = self.max_edge {
+            positive(m, "--max-edge")?;
+        }
+        self.crs()?;
+        Ok(())
+    }
+}
+
+/// Refuses mosaic options that `merge` could not write: an ESRI ASCII mosaic, or compression
+/// options that do not go together.
+///
+/// # Errors
+/// [`Error::Options`] naming the option.
+pub(super) fn check_mosaic(raster: &RasterOptions) -> Result<()> {
+    if raster.format == Some(RasterFormat::Ascii) {
+        return Err(Error::Options(
+            "--format asc: a DEM mosaic is a GeoTIFF (tif, cog) or a VRT".into(),
+        ));
+    }
+    match raster.resolve(Path::new("mosaic.tif"), false) {
+        Ok(_) => Ok(()),
+        Err(Error::Output { message, .. }) => Err(Error::Options(message)),
+        Err(e) => Err(e),
+    }
+}
+
+/// How to run a task (what may differ between the machines that run a plan).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TaskOptions {
+    /// Worker threads (0: every core).
+    pub threads: usize,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+}
+
+impl Plan {
+    /// The directory of the plan file `path`, absolute (task records then name their outputs
+    /// wherever the task ran from).
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the path cannot be made absolute.
+    pub fn dir_of(path: &Path) -> Result<PathBuf> {
+        let abs = std::path::absolute(path).map_err(|e| Error::io(path, e))?;
+        Ok(match abs.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        })
+    }
+
+    /// Has task `i` finished, with its record readable and every output it names present? (What
+    /// a resumed run skips; anything less runs again.)
+    pub fn finished(&self, dir: &Path, i: usize) -> bool {
+        match self.record(dir, i) {
+            Ok(Some(r)) => r.outputs.iter().all(|(_, p)| dir.join(p).is_file()),
+            _ => false,
+        }
+    }
+
+    /// Runs task `i` of the plan in `dir` until its buffer is wide enough; writes its outputs
+    /// and then its record, which it returns. A task with no point after the filters writes a
+    /// nodata raster and records `"empty"` with no point.
+    ///
+    /// # Errors
+    /// [`Error::Options`] for a task that does not exist; the pipeline's and the sinks' errors.
+    pub fn run_task(&self, dir: &Path, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
+        let start = std::time::Instant::now();
+        self.task(i)?;
+        let crs = self.job.crs()?;
+        let mut buffer = self.buffer;
+        let mut runs = 0;
+        let mut record = loop {
+            runs += 1;
+            self.check_files(i, buffer)?;
+            let config = self.task_config(i, buffer, options)?;
+            let mut fanout = Fanout::new(self.task_sinks(dir, i)?).with_crs(crs.clone());
+            match crate::pipeline::run(&config, None, &mut [&mut fanout]) {
+                Ok(mut run) => {
+                    let products = fanout_summary(run.products.pop())?;
+                    let status = if run.triangles == 0 { "empty" } else { "done" };
+                    break record_of(i, status, buffer, runs, &run, &products);
+                }
+                Err(Error::BufferTooSmall { reach, .. }) if runs < 40 => {
+                    // Straight to the files the certificates reached, or double.
+                    let step = self.tile / 16.0;
+                    buffer = if reach > buffer {
+                        (reach / step).ceil() * step
+                    } else if buffer > 0.0 {
+                        2.0 * buffer
+                    } else {
+                        self.tile / 8.0
+                    };
+                }
+                Err(Error::TooFewPoints { .. }) => {
+                    let products = self.empty_task(dir, i, &config, crs.clone())?;
+                    let run = RunSummary::default();
+                    break record_of(i, "empty", buffer, runs, &run, &products);
+                }
+                Err(e) => return Err(e),
+            }
+        };
+        record.seconds = start.elapsed().as_secs_f64();
+        self.finish_task(dir, &record)?;
+        Ok(record)
+    }
+
+    /// The run of task `i` with a buffer of `buffer`.
+    fn task_config(&self, i: usize, buffer: f64, o: &TaskOptions) -> Result<RunConfig> {
+        let input = Input {
+            paths: self.task_files(i, buffer)?,
+            filter: self.job.filter(),
+            duplicates: self.job.duplicates,
+            lines: LineOptions {
+                max_edge: self.job.max_edge,
+                ..LineOptions::default()
+            },
+        };
+        let options = RunOptions {
+            mem: self.job.mem,
+            tmp_dir: self.job.tmp_dir.clone(),
+            progress: o.progress,
+            sweep_axis: SweepAxis::Auto,
+            tiles: Some(crate::tiles::TileOptions {
+                threads: o.threads,
+                tile: Some(self.tile),
+                base: None,
+                scope: Some(self.scope(i, buffer)?),
+            }),
+        };
+        RunConfig::new(input, options)
+    }
+
+    /// The sinks of task `i`, writing under `dir/tiles/`.
+    fn task_sinks(&self, dir: &Path, i: usize) -> Result<Vec<(String, Box<dyn TriangleSink>)>> {
+        let tile = self.task(i)?.bounds;
+        let contours = |l: &Levels| -> Result<(String, Box<dyn TriangleSink>)> {
+            let path = self.task_output(dir, i, "contours", "geojson");
+            Ok((
+                "contours".into(),
+                Box::new(ContourSink::new(&path, l.options(true))?),
+            ))
+        };
+        let mut sinks: Vec<(String, Box<dyn TriangleSink>)> = Vec::new();
+        match &self.job.product {
+            Product::Dem {
+                cell,
+                align,
+                nodata,
+                contours: levels,
+                ..
+            } => {
+                // The raster covers the tile (on the plan's lattice), whatever is read.
+                let extent = GridExtent::BBox {
+                    bbox: tile,
+                    snap: false,
+                };
+                // The tasks' tiles are plain GeoTIFFs; the mosaic gets the plan's format.
+                let options = DemOptions {
+                    grid: GridPlan::new(*cell, extent, *align)?,
+                    nodata: *nodata,
+                    output: RasterOptions {
+                        format: Some(RasterFormat::GeoTiff),
+                        ..RasterOptions::default()
+                    },
+                };
+                let path = self.task_output(dir, i, "dem", "tif");
+                sinks.push(("dem".into(), Box::new(DemSink::new(&path, options)?)));
+                if let Some(l) = levels {
+                    sinks.push(contours(l)?);
+                }
+            }
+            Product::Contours(l) => sinks.push(contours(l)?),
+            Product::Volume { plane, boundary } => {
+                let boundary = boundary
+                    .as_deref()
+                    .map(crate::products::boundary::Boundary::read)
+                    .transpose()?;
+                sinks.push(("volume".into(), Box::new(VolumeSink::new(*plane, boundary))));
+            }
+        }
+        Ok(sinks)
+    }
+
+    /// The outputs of a task with no point: a nodata raster over its tile, no contours, no
+    /// volume.
+    fn empty_task(
+        &self,
+        dir: &Path,
+        i: usize,
+        config: &RunConfig,
+        crs: Option<Crs>,
+    ) -> Result<FanoutSummary> {
+        let paths = &config.input().paths;
+        let crs = match crs {
+            Some(c) => Some(c),
+            None if !paths.is_empty() => {
+                crate::input::las::LidarReader::open(paths, &config.input().filter)?
+                    .crs()
+                    .cloned()
+            }
+            None => None,
+        };
+        let mut fanout = Fanout::new(self.task_sinks(dir, i)?);
+        fanout.begin(&StreamInfo {
+            crs,
+            bounds: self.task(i)?.bounds,
+        })?;
+        fanout_summary(Some(fanout.finish()?))
+    }
+}
+
+fn fanout_summary(s: Option<ProductSummary>) -> Result<FanoutSummary> {
+    match s {
+        Some(ProductSummary::Fanout(s)) => Ok(s),
+        other => Err(Error::Internal(format!(
+            "the products' summary is {other:?}"
+        ))),
+    }
+}
+
+fn record_of(
+    i: usize,
+    status: &str,
+    buffer: f64,
+    runs: u32,
+    run: &RunSummary,
+    products: &FanoutSummary,
+) -> TaskRecord {
+    let volume = match products.get("volume") {
+        Some(ProductSummary::Volume(v)) => v.partials.clone(),
+        _ => None,
+    };
+    let outputs = products
+        .0
+        .iter()
+        .filter_map(|(name, s)| match s {
+            ProductSummary::Dem(d) => Some((name.clone(), d.path.clone())),
+            ProductSummary::Contours(c) => Some((name.clone(), c.path.clone())),
+            _ => None,
+        })
+        .collect();
+    TaskRecord {
+        index: i,
+        status: status.to_string(),
+        buffer,
+        runs,
+        points: run.points_kept,
+        triangles: run.triangles,
+        seconds: 0.0,
+        outputs,
+        volume,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_job_round_trips_through_json_nan_nodata_included() {
+        let mut job = Job::new(Product::Dem {
+            cell: 0.5,
+            align: Align::Centres,
+            nodata: f32::NAN,
+            raster: RasterOptions {
+                format: Some(RasterFormat::Cog),
+                ..RasterOptions::default()
+            },
+            contours: Some(Levels {
+                interval: 0.25,
+                base: 0.1,
+            }),
+        });
+        job.classes = Some(vec![2, 9]);
+        job.crs = Some("EPSG:2154".into());
+        let text = serde_json::to_string(&job).unwrap();
+        assert!(text.contains(r#""nodata":"NaN""#), "{text}");
+        let back: Job = serde_json::from_str(&text).unwrap();
+        assert!(text.contains(r#""align":"centres""#), "{text}");
+        assert!(text.contains(r#""format":"cog""#), "{text}");
+        let Product::Dem {
+            nodata,
+            align,
+            raster,
+            ..
+        } = back.product
+        else {
+            panic!("{back:?}")
+        };
+        assert!(nodata.is_nan());
+        assert_eq!(
+            (align, raster.format),
+            (Align::Centres, Some(RasterFormat::Cog))
+        );
+        let mut asc = Job::new(Product::Dem {
+            cell: 1.0,
+            align: Align::Edges,
+            nodata: -9999.0,
+            raster: RasterOptions {
+                format: Some(RasterFormat::Ascii),
+                ..RasterOptions::default()
+            },
+            contours: None,
+        });
+        assert!(
+            asc.check()
+                .unwrap_err()
+                .to_string()
+                .contains("a DEM mosaic is")
+        );
+        if let Product::Dem { raster, .. } = &mut asc.product {
+            *raster = RasterOptions {
+                predictor: Some(crate::output::raster::Predictor::Float),
+                ..RasterOptions::default()
+            };
+        }
+        assert!(
+            asc.check()
+                .unwrap_err()
+                .to_string()
+                .contains("needs compression")
+        );
+        job.product = Product::Contours(Levels {
+            interval: 1.0,
+            base: 0.0,
+        });
+        let back: Job = serde_json::from_str(&serde_json::to_string(&job).unwrap()).unwrap();
+        assert_eq!(back, job);
+        assert_eq!(back.command(), "contours");
+        assert!(back.check().is_ok());
+        job.crs = Some("nonsense".into());
+        assert!(job.check().is_err());
+    }
+}
