@@ -385,6 +385,10 @@ fn empty_tasks_pass_and_what_a_plan_cannot_do_is_refused() {
     refuse(&["--cell", "0.0005"], "16384 cells a side");
     let hs = sample.to_str().unwrap().to_string();
     refuse(&["--contours", &hs], "an input of the plan");
+    // The mosaic's format lives in the plan's job: an ASCII mosaic, or a predictor without
+    // compression, is refused before the plan is written.
+    refuse(&["--format", "asc"], "a DEM mosaic is a GeoTIFF");
+    refuse(&["--predictor", "float"], "needs compression");
     // Merging onto an input, the plan or a task's output is refused.
     let done = t.path().join("done");
     sweeptin(
@@ -414,6 +418,26 @@ fn empty_tasks_pass_and_what_a_plan_cannot_do_is_refused() {
         let out = bin().args(["merge", s(&plan2), "-o", &o]).output().unwrap();
         assert_eq!(out.status.code(), Some(2), "{o}");
         assert!(String::from_utf8_lossy(&out.stderr).contains(says), "{o}");
+    }
+    // A VRT points at the tiles as they are: no format or compression of its own; no ASCII
+    // mosaic either.
+    let vrt = t.path().join("m.vrt");
+    let tif = t.path().join("m.tif");
+    for (o, extra, says) in [
+        (&vrt, ["--compress", "deflate"], "a .vrt mosaic"),
+        (&tif, ["--format", "asc"], "a DEM mosaic is a GeoTIFF"),
+    ] {
+        let out = bin()
+            .args(["merge", s(&plan2), "-o", s(o)])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{extra:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(says),
+            "{extra:?}"
+        );
+        assert!(!o.exists());
     }
     let out = bin()
         .args(["merge", s(&plan2), "-o"])

@@ -105,6 +105,20 @@ def test_volume_plan_sums_exactly(ign, tmp_path):
         assert v[k] == one[k], k
 
 
+def test_plan_inputs_from_a_vpc_a_list_and_a_glob(ign, cli, tmp_path):
+    """The library expands the inputs (as the command line does): a plan names every file of a
+    .vpc, an @list or a glob, by absolute path."""
+    vpc = tmp_path / "ign.vpc"
+    cli("index", *ign, "-o", vpc)
+    listing = tmp_path / "list.txt"
+    listing.write_text("".join(f"{f}\n" for f in ign))
+    want = sorted(os.path.realpath(f) for f in ign)
+    for k, given in enumerate([[vpc], [f"@{listing}"], [str(Path(ign[0]).parent / "*.laz")]]):
+        plan = sweeptin.plan("contours", given, tmp_path / f"p{k}", tile=50, interval=1)
+        files = [f["path"] for f in json.loads(Path(plan.path).read_text())["files"]]
+        assert sorted(files) == want, given
+
+
 def test_plan_errors(ign, small, tmp_path):
     path, _ = small
     plan = sweeptin.plan("contours", [path], tmp_path / "c", tile=16, interval=1)
