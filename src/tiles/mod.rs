@@ -165,6 +165,7 @@ fn read_index(
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
     let crs = reader.crs().cloned();
+    let t0 = Instant::now();
     let mut sorter = ExternalSorter::<BlockRecord>::new(mem / 2, tmp);
     let mut bounds = [
         f64::INFINITY,
@@ -172,13 +173,8 @@ fn read_index(
         f64::NEG_INFINITY,
         f64::NEG_INFINITY,
     ];
-    let mut buf: Vec<LidarPoint> = Vec::with_capacity(1 << 16);
-    loop {
-        buf.clear();
-        if reader.read_chunk(&mut buf, 1 << 16)? == 0 {
-            break;
-        }
-        for p in &buf {
+    prefetched(&mut reader, |buf, done| {
+        for p in buf {
             let (x, y) = (p.x, p.y);
             bounds = [
                 bounds[0].min(x),
@@ -194,12 +190,22 @@ fn read_index(
                 z: p.z,
             })?;
         }
-        let s = reader.stats();
-        progress(s.read + s.skipped, total);
-    }
+        progress(done, total);
+        Ok(())
+    })?;
+    let t_read = Instant::now();
     let merge = sorter.finish()?;
+    let t_fin = Instant::now();
     let sort = merge.stats();
     let mut index = BlockIndex::build(probe, merge, tmp, job.duplicates)?;
+    if std::env::var_os("SWEEPTIN_DEBUG_PHASES").is_some() {
+        eprintln!(
+            "phase1: read {:?} finish {:?} build {:?}",
+            t_read - t0,
+            t_fin - t_read,
+            t_fin.elapsed()
+        );
+    }
     if let Some(sc) = scope {
         index.scope = Some(index::Scope {
             unknown: sc.unread.clone(),
@@ -237,6 +243,55 @@ fn read_index(
     debug_assert_eq!(index.grid.block, block);
     let _ = sort;
     Ok((index, crs, bounds))
+}
+
+/// Points per batch handed from the reader's thread.
+const BATCH: usize = 1 << 16;
+
+/// Reads every point of `reader` on a thread of its own, a few batches ahead, and hands each
+/// batch to `f` with the points read (or skipped) so far: decoding (on every core) goes on while
+/// `f` works (the sort's chunks are sorted and spilled meanwhile).
+fn prefetched(
+    reader: &mut LidarReader,
+    mut f: impl FnMut(&[LidarPoint], u64) -> Result<()>,
+) -> Result<()> {
+    let (full_tx, full_rx) = crossbeam_channel::bounded::<Result<(Vec<LidarPoint>, u64)>>(2);
+    let (free_tx, free_rx) = crossbeam_channel::bounded::<Vec<LidarPoint>>(4);
+    std::thread::scope(|scope| {
+        scope.spawn(move || {
+            loop {
+                let mut buf = free_rx
+                    .try_recv()
+                    .unwrap_or_else(|_| Vec::with_capacity(BATCH));
+                buf.clear();
+                let r = reader.read_chunk(&mut buf, BATCH).map(|n| {
+                    let s = reader.stats();
+                    (n, s.read + s.skipped)
+                });
+                let (stop, msg) = match r {
+                    Ok((0, _)) => (true, None),
+                    Ok((_, done)) => (false, Some(Ok((buf, done)))),
+                    Err(e) => (true, Some(Err(e))),
+                };
+                if let Some(m) = msg
+                    && full_tx.send(m).is_err()
+                {
+                    break;
+                }
+                if stop {
+                    break;
+                }
+            }
+        });
+        // Dropped on an error before the scope waits for the reader, which then stops.
+        let (rx, free) = (full_rx, free_tx);
+        for m in rx.iter() {
+            let (buf, done) = m?;
+            f(&buf, done)?;
+            let _ = free.try_send(buf);
+        }
+        Ok(())
+    })
 }
 
 /// Points per block: [`BLOCK_POINTS`], or more for inputs so large that the block table would
