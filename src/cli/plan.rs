@@ -235,7 +235,7 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
             }
         );
     }
-    if a.engine == Some(super::input::Engine::Sweep) {
+    if a.engine == super::input::Engine::Sweep {
         bail!("a plan runs the tiled engine: leave --engine sweep out");
     }
     if a.sweep_axis == sweeptin::pipeline::SweepAxis::X {

@@ -89,9 +89,15 @@ pub struct SortStats {
 }
 
 impl<R: SortKey> ExternalSorter<R> {
-    /// A sorter whose chunk uses at most `chunk_bytes` of memory, spilling under `tmp_dir`.
+    /// A sorter whose chunk uses at most `chunk_bytes` of memory, spilling under `tmp_dir`. A
+    /// stable sort needs scratch space of half the chunk: its chunk then takes two thirds.
     pub fn new(chunk_bytes: u64, tmp_dir: &Path) -> Self {
-        let capacity = ((chunk_bytes as usize) / std::mem::size_of::<R>()).max(MIN_CHUNK);
+        let bytes = if R::STABLE {
+            chunk_bytes / 3 * 2
+        } else {
+            chunk_bytes
+        };
+        let capacity = ((bytes as usize) / std::mem::size_of::<R>()).max(MIN_CHUNK);
         ExternalSorter {
             chunk: Vec::new(),
             capacity,
@@ -115,8 +121,11 @@ impl<R: SortKey> ExternalSorter<R> {
     /// [`Error::Io`] if a spill fails.
     #[inline]
     pub fn push(&mut self, r: R) -> Result<()> {
-        if self.chunk.capacity() == 0 {
-            self.chunk.reserve_exact(self.capacity.min(1 << 20));
+        if self.chunk.len() == self.chunk.capacity() {
+            // Grow by doubling, never past the chunk's capacity.
+            let cap = self.chunk.capacity();
+            self.chunk
+                .reserve_exact(cap.max(1 << 20).min(self.capacity - cap));
         }
         self.chunk.push(r);
         self.stats.points += 1;

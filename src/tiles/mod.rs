@@ -36,10 +36,16 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 use worker::TileOutput;
 
-/// Average points per block the block size aims at.
-const BLOCK_POINTS: f64 = 256.0;
-/// Points per tile the tile size aims at (owned points, before the buffer).
-const TILE_POINTS: f64 = (1u64 << 18) as f64;
+/// Average points per block the block size aims at (at least; see [`block_points`]).
+const BLOCK_POINTS: f64 = 64.0;
+/// Non-empty blocks the block table aims to stay under (32 bytes each: key, start, extent).
+const MAX_BLOCKS: f64 = (1u64 << 21) as f64;
+/// Blocks per tile the tile size aims at (a tile of 32 × 32 blocks: a buffer of one block adds
+/// about 13 %).
+const TILE_BLOCKS: f64 = 1024.0;
+/// Bytes a tile's run holds per point read, at its peak (the points, the in-memory sweep, the
+/// triangulation, the certificates and the tile's output), for the memory budget.
+const RUN_BYTES_PER_POINT: f64 = 256.0;
 /// The first buffer of a tile, in blocks.
 const FIRST_BUFFER: i64 = 1;
 
@@ -94,6 +100,8 @@ pub struct TileStats {
     pub uncertified_owned: u64,
     /// Worker threads.
     pub threads: u64,
+    /// Tiles allowed in flight (running or waiting to be written) within `--mem`.
+    pub window: u64,
 }
 
 /// What [`run`] hands back to the pipeline.
@@ -134,27 +142,27 @@ fn read_index(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4])> {
     let scope = options.scope.as_ref();
-    // A task is given the files near its tile, and keeps all their points (decoding a file costs
-    // the same whatever is kept, and the points far out settle the triangles along the data's
-    // edge without another run).
     let (mem, tmp) = (job.mem, job.tmp);
-    let mut reader = LidarReader::open(job.paths, job.filter)?;
+    let (mut reader, outside) = open_for(job, scope)?;
     let b = reader.bounds();
     let total = reader.point_count();
     let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
     let base = options.base.unwrap_or(1.0);
     let density = total as f64 / area;
+    let block_points = block_points(total);
+    let tile_points = block_points * TILE_BLOCKS;
     let block = match options.tile {
         Some(t) => {
-            let k = side_for(base, density, BLOCK_POINTS);
+            let k = side_for(base, density, block_points);
             let s = ((t / pow2(base, k)).log2().round().max(0.0) as u32).min(12);
             t / f64::from(1u32 << s)
         }
-        None => pow2(base, side_for(base, density, BLOCK_POINTS).max(-30)),
+        None => pow2(base, side_for(base, density, block_points).max(-30)),
     };
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
     let crs = reader.crs().cloned();
+    let t0 = Instant::now();
     let mut sorter = ExternalSorter::<BlockRecord>::new(mem / 2, tmp);
     let mut bounds = [
         f64::INFINITY,
@@ -162,13 +170,8 @@ fn read_index(
         f64::NEG_INFINITY,
         f64::NEG_INFINITY,
     ];
-    let mut buf: Vec<LidarPoint> = Vec::with_capacity(1 << 16);
-    loop {
-        buf.clear();
-        if reader.read_chunk(&mut buf, 1 << 16)? == 0 {
-            break;
-        }
-        for p in &buf {
+    prefetched(&mut reader, |buf, done| {
+        for p in buf {
             let (x, y) = (p.x, p.y);
             bounds = [
                 bounds[0].min(x),
@@ -184,27 +187,38 @@ fn read_index(
                 z: p.z,
             })?;
         }
-        let s = reader.stats();
-        progress(s.read + s.skipped, total);
-    }
+        progress(done, total);
+        Ok(())
+    })?;
+    let t_read = Instant::now();
     let merge = sorter.finish()?;
+    let t_fin = Instant::now();
     let sort = merge.stats();
     let mut index = BlockIndex::build(probe, merge, tmp, job.duplicates)?;
+    if std::env::var_os("SWEEPTIN_DEBUG_PHASES").is_some() {
+        eprintln!(
+            "phase1: read {:?} finish {:?} build {:?}",
+            t_read - t0,
+            t_fin - t_read,
+            t_fin.elapsed()
+        );
+    }
     if let Some(sc) = scope {
         index.scope = Some(index::Scope {
             unknown: sc.unread.clone(),
+            beyond: outside,
             tile: sc.tile,
             buffer: sc.buffer,
         });
     }
-    // The tile: as given, or about TILE_POINTS at the density over the non-empty blocks; for a
-    // task, its plan tile halved until it holds about TILE_POINTS.
+    // The tile: as given, or about `tile_points` at the density over the non-empty blocks; for
+    // a task, its plan tile halved until it holds about `tile_points`.
     let tile = match options.tile {
         Some(t) if scope.is_some() => {
             let covered = index.blocks().max(1) as f64 * block * block;
             let d = index.len() as f64 / covered;
             let mut sub = t;
-            while sub / 2.0 >= block && sub / 2.0 >= base && sub * sub * d > 2.0 * TILE_POINTS {
+            while sub / 2.0 >= block && sub / 2.0 >= base && sub * sub * d > 2.0 * tile_points {
                 sub /= 2.0;
             }
             sub
@@ -213,7 +227,7 @@ fn read_index(
         None => {
             let covered = index.blocks().max(1) as f64 * block * block;
             let d = index.len() as f64 / covered;
-            let k = side_for(block, d, TILE_POINTS).clamp(0, 12);
+            let k = side_for(block, d, tile_points).clamp(0, 12);
             // A whole multiple of the base (blocks may be finer than the base).
             let mut t = pow2(block, k);
             while t < base {
@@ -227,6 +241,126 @@ fn read_index(
     debug_assert_eq!(index.grid.block, block);
     let _ = sort;
     Ok((index, crs, bounds))
+}
+
+/// Opens the files of `job`. A task of a plan whose files are all COPC reads only the points of
+/// its tile and buffer (their octrees skip the rest) and returns the rest of each file's extent
+/// as rectangles where points it did not read may lie, like the files it does not read at all.
+/// Other tasks keep every point of their files (decoding LAZ costs the same whatever is kept,
+/// and the points farther out settle the triangles along the data's edge without another run).
+fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Vec<[f64; 4]>)> {
+    if let Some(sc) = scope {
+        let infos = job
+            .paths
+            .iter()
+            .map(crate::input::las::FileInfo::read)
+            .collect::<Result<Vec<_>>>()?;
+        let (t, b) = (sc.tile, sc.buffer);
+        let area = [t[0] - b, t[1] - b, t[2] + b, t[3] + b];
+        if !infos.is_empty()
+            && infos.iter().all(|i| i.copc.is_some())
+            && let Some(bbox) = crate::input::las::BBox::new(area[0], area[1], area[2], area[3])
+        {
+            let reader = LidarReader::open_area(job.paths, job.filter, bbox)?;
+            let outside = infos
+                .iter()
+                .flat_map(|i| outside_of(i.rect(), area))
+                .collect();
+            return Ok((reader, outside));
+        }
+    }
+    Ok((LidarReader::open(job.paths, job.filter)?, Vec::new()))
+}
+
+/// The parts of the closed rectangle `e` outside the closed rectangle `a`, as at most four closed
+/// rectangles (sharing `a`'s edges: points on them are read, and counted as unknown too).
+fn outside_of(e: [f64; 4], a: [f64; 4]) -> Vec<[f64; 4]> {
+    let mut out = Vec::new();
+    if e[1] < a[1] {
+        out.push([e[0], e[1], e[2], a[1].min(e[3])]);
+    }
+    if e[3] > a[3] {
+        out.push([e[0], a[3].max(e[1]), e[2], e[3]]);
+    }
+    let (y0, y1) = (e[1].max(a[1]), e[3].min(a[3]));
+    if y0 <= y1 {
+        if e[0] < a[0] {
+            out.push([e[0], y0, a[0].min(e[2]), y1]);
+        }
+        if e[2] > a[2] {
+            out.push([a[2].max(e[0]), y0, e[2], y1]);
+        }
+    }
+    out
+}
+
+/// Points per batch handed from the reader's thread.
+const BATCH: usize = 1 << 16;
+
+/// Reads every point of `reader` on a thread of its own, a few batches ahead, and hands each
+/// batch to `f` with the points read (or skipped) so far: decoding (on every core) goes on while
+/// `f` works (the sort's chunks are sorted and spilled meanwhile).
+fn prefetched(
+    reader: &mut LidarReader,
+    mut f: impl FnMut(&[LidarPoint], u64) -> Result<()>,
+) -> Result<()> {
+    let (full_tx, full_rx) = crossbeam_channel::bounded::<Result<(Vec<LidarPoint>, u64)>>(2);
+    let (free_tx, free_rx) = crossbeam_channel::bounded::<Vec<LidarPoint>>(4);
+    std::thread::scope(|scope| {
+        scope.spawn(move || {
+            loop {
+                let mut buf = free_rx
+                    .try_recv()
+                    .unwrap_or_else(|_| Vec::with_capacity(BATCH));
+                buf.clear();
+                let r = reader.read_chunk(&mut buf, BATCH).map(|n| {
+                    let s = reader.stats();
+                    (n, s.read + s.skipped)
+                });
+                let (stop, msg) = match r {
+                    Ok((0, _)) => (true, None),
+                    Ok((_, done)) => (false, Some(Ok((buf, done)))),
+                    Err(e) => (true, Some(Err(e))),
+                };
+                if let Some(m) = msg
+                    && full_tx.send(m).is_err()
+                {
+                    break;
+                }
+                if stop {
+                    break;
+                }
+            }
+        });
+        // Dropped on an error before the scope waits for the reader, which then stops.
+        let (rx, free) = (full_rx, free_tx);
+        for m in rx.iter() {
+            let (buf, done) = m?;
+            f(&buf, done)?;
+            let _ = free.try_send(buf);
+        }
+        Ok(())
+    })
+}
+
+/// Points per block: [`BLOCK_POINTS`], or more for inputs so large that the block table would
+/// pass [`MAX_BLOCKS`]. A function of the input's point count only (the output must not depend
+/// on anything else).
+fn block_points(total: u64) -> f64 {
+    BLOCK_POINTS.max(total as f64 / MAX_BLOCKS)
+}
+
+/// How many tiles may be in flight (running, or waiting to be written) within the memory
+/// budget `mem` (after what the index holds), with `threads` workers: at most `threads + 2`,
+/// at least one.
+fn window(index: &BlockIndex, mem: u64, threads: usize) -> usize {
+    let per_block = index.len() as f64 / index.blocks().max(1) as f64;
+    // A tile's first run: its blocks and a buffer of one block around.
+    let side = f64::from(1u32 << index.grid.shift.min(15)) + 2.0;
+    let points = per_block * side * side;
+    let run = (points * RUN_BYTES_PER_POINT).max(1.0);
+    let free = mem.saturating_sub(index.memory_bytes()) as f64;
+    ((free / run) as usize).clamp(1, threads + 2)
 }
 
 /// Runs a tiled triangulation of `job` into `mesh` and `sinks`.
@@ -317,7 +451,8 @@ pub(crate) fn run(
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     // At most this many tiles in flight or waiting to be written.
-    let window = threads + 2;
+    let window = window(&index, job.mem, threads);
+    stats.window = window as u64;
     let (tx, rx) = crossbeam_channel::bounded::<(usize, Result<TileOutput>)>(window);
     let task = task.as_ref();
     let (tok_tx, tok_rx) = crossbeam_channel::bounded::<()>(window);
