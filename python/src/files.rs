@@ -88,16 +88,21 @@ impl InputOpts {
                 ..LineOptions::default()
             },
         };
+        // As `--engine`: `auto` (the default) and `tiles` run exact tiles where the input
+        // allows it (LAS/LAZ points without breaklines or trimming polygons), one sweep
+        // otherwise; `sweep` always runs one streaming sweep.
         let tiles = match self.engine.as_str() {
             "sweep" => None,
-            "tiles" => Some(sweeptin::tiles::TileOptions {
+            "auto" | "tiles" => Some(sweeptin::tiles::TileOptions {
                 threads: self.threads,
                 tile: self.tile,
                 base: None,
                 scope: None,
             }),
             e => {
-                return Err(value_error(format!("engine={e:?}: use 'sweep' or 'tiles'")));
+                return Err(value_error(format!(
+                    "engine={e:?}: use 'auto', 'tiles' or 'sweep'"
+                )));
             }
         };
         let options = RunOptions {

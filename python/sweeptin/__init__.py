@@ -18,8 +18,10 @@ The file functions take these input options (keyword only), as the command line 
 ``keep_withheld``, ``bbox`` (``(xmin, ymin, xmax, ymax)``), ``duplicates`` (``"first"``,
 ``"last"``, ``"lowest"``, ``"highest"``), ``breaklines`` (files), ``trim_boundary``, ``holes``,
 ``max_edge``, ``mem`` (sort budget: bytes or ``"512M"``, default ``"1G"``), ``tmp_dir``,
-``engine`` (``"sweep"`` or ``"tiles"``), ``threads``, ``tile``, ``crs`` (``"EPSG:2154"`` or
-WKT) and ``progress`` (a progress bar on stderr).
+``engine`` (``"auto"``, the default: exact tiles on every core for LAS/LAZ points without
+breaklines or trimming polygons, one streaming sweep otherwise; ``"tiles"``; ``"sweep"``),
+``threads``, ``tile``, ``crs`` (``"EPSG:2154"`` or WKT) and ``progress`` (a progress bar on
+stderr).
 
 Errors raise the exceptions of :mod:`sweeptin._errors` (all :class:`SweeptinError`). The GIL is
 released while the library works, so threads (and Dask's threaded scheduler) run in parallel.
@@ -284,7 +286,7 @@ _INPUT_DEFAULTS: dict[str, Any] = {
     "max_edge": None,
     "mem": "1G",
     "tmp_dir": None,
-    "engine": "sweep",
+    "engine": "auto",
     "threads": 0,
     "tile": None,
     "crs": None,
