@@ -56,7 +56,8 @@ pub struct InputArgs {
     /// volumes, byte for byte); a mesh lists them in another order.
     #[arg(long, value_enum, value_name = "ENGINE", default_value_t = Engine::Auto)]
     pub engine: Engine,
-    /// Threads of the tiled engine (default: every core). The output is the same for any number.
+    /// Threads (default: every core): the tiled engine's tile workers, and the decoding and
+    /// sorting of every engine. The output is the same for any number.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub threads: usize,
     /// Tile side for the tiled engine, in the data's units (a multiple of the DEM cell); default:
@@ -86,8 +87,15 @@ impl InputArgs {
         }
     }
 
-    /// The library's run options.
+    /// The library's run options. `--threads N` also sizes the thread pool that decodes and
+    /// sorts (once per process), so that `--threads 1` runs on one core.
     pub fn options(&self) -> RunOptions {
+        if self.threads > 0 {
+            // Only the first call can size the global pool; later ones keep it.
+            let _ = rayon::ThreadPoolBuilder::new()
+                .num_threads(self.threads)
+                .build_global();
+        }
         RunOptions {
             mem: self.mem.0,
             tmp_dir: self.tmp_dir.clone(),
