@@ -1,7 +1,7 @@
 //! `sweeptin info`: what the headers of LAS/LAZ files say (and, with `--classes`, what their
-//! points are). A bad file is reported and the others still shown; the exit code is then 2.
+//! points are). A bad file is reported and the others still shown; the exit status is then that
+//! of the first failure (3 for a damaged file).
 
-use anyhow::bail;
 use clap::ArgAction;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -79,6 +79,7 @@ struct Report {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let filter = args.filter.to_filter();
     let mut failed = 0;
+    let mut first_error: Option<sweeptin::Error> = None;
     let mut json_out = Vec::new();
     for (i, path) in args.files.iter().enumerate() {
         match report(path, args.classes, &filter) {
@@ -95,14 +96,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 if args.json {
                     json_out.push(json!({ "path": path, "error": e.to_string() }));
                 }
+                first_error.get_or_insert(e);
             }
         }
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&json_out)?);
     }
-    if failed > 0 {
-        bail!("{failed} of {} files could not be read", args.files.len());
+    if let Some(e) = first_error {
+        // The first failure's kind is the exit status (3 for a bad file).
+        return Err(anyhow::Error::from(e).context(format!(
+            "{failed} of {} files could not be read",
+            args.files.len()
+        )));
     }
     Ok(())
 }

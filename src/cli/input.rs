@@ -359,7 +359,11 @@ pub fn run_products(
         .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
     let products = match run.products.pop() {
         Some(ProductSummary::Fanout(s)) if run.products.is_empty() => s,
-        other => bail!("internal error: the products' summary is {other:?}"),
+        other => {
+            return Err(
+                sweeptin::Error::Internal(format!("the products' summary is {other:?}")).into(),
+            );
+        }
     };
     run.peak_rss_bytes = pipeline::peak_rss();
     Ok((run, products))

@@ -1,7 +1,8 @@
 //! Command-line interface: parse flags, build a validated configuration, call the library.
-//! Errors are printed with their whole chain; the exit code is 2 on any error, 0 on success
-//! (and 0 when the reader of our standard output went away), 130 when interrupted (Ctrl-C,
-//! SIGTERM), after deleting temporary files.
+//! Errors are printed with their whole chain; the exit status is the library error's kind
+//! ([`sweeptin::ErrorKind::exit_code`], listed in [`EXIT_STATUS`]), 0 on success (and 0 when the
+//! reader of our standard output went away), 128 + the signal when interrupted, after deleting
+//! temporary files.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -21,9 +22,21 @@ mod simplify;
 mod tin;
 mod volume;
 
+/// The exit statuses, shown after the top-level `--help` (and in the README).
+pub const EXIT_STATUS: &str = "\
+Exit status:
+  0    done (also when the reader of standard output went away)
+  2    usage: bad or conflicting options, unknown format, an output naming an input or another
+       output, a job over its limits (--max-cells, --mem)
+  3    bad input data: unreadable, damaged or not in its format, or nothing left to triangulate
+  4    output or temporary I/O: disk full, read-only, permissions, a directory or device in the
+       way, memory that cannot be had
+  5    internal error (a bug in sweeptin: please report it with the input)
+  130  interrupted by Ctrl-C (SIGINT); 143 by SIGTERM, 129 by SIGHUP (temporary files removed)";
+
 /// Exact, bounded-memory Delaunay terrain models from lidar point clouds.
 #[derive(Parser, Debug)]
-#[command(name = "sweeptin", version, about, long_about = None)]
+#[command(name = "sweeptin", version, about, long_about = None, after_help = EXIT_STATUS)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -72,22 +85,16 @@ pub fn main() -> ExitCode {
     if let Err(e) = sweeptin::output::install_interrupt_handler() {
         eprintln!("sweeptin: warning: {e}");
     }
-    let result = match cli.command {
-        Command::Tin(a) => tin::run(a),
-        Command::Check(a) => check::run(a),
-        Command::Info(a) => info::run(a),
-        Command::Dem(a) => dem::run(a),
-        Command::Contours(a) => contours::run(a),
-        Command::Volume(a) => volume::run(a),
-        Command::Sample(a) => sample::run(a),
-        Command::Profile(a) => profile::run(a),
-        Command::Hillshade(a) => hillshade::run(a),
-        Command::Products(a) => products::run(a),
-        Command::Simplify(a) => simplify::run(a),
-        Command::Crossval(a) => crossval::run(a),
-        Command::Plan(a) => plan::plan(a),
-        Command::Run(a) => plan::run(a),
-        Command::Merge(a) => plan::merge(a),
+    let result = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dispatch(cli))) {
+        Ok(r) => r,
+        Err(payload) => {
+            let message = payload
+                .downcast_ref::<&str>()
+                .copied()
+                .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
+                .unwrap_or("(no message)");
+            Err(sweeptin::Error::Internal(format!("a thread panicked: {message}")).into())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -105,8 +112,45 @@ pub fn main() -> ExitCode {
                 }
                 shown = text;
             }
-            ExitCode::from(2)
+            ExitCode::from(kind(&e).exit_code())
         }
+    }
+}
+
+/// What kind of failure `e` is: the kind of the library error in its chain; an I/O error of the
+/// binary's own (writing standard output) is an output failure; anything else the binary
+/// refused itself is a usage error.
+pub fn kind(e: &anyhow::Error) -> sweeptin::ErrorKind {
+    if let Some(k) = e
+        .chain()
+        .find_map(|c| c.downcast_ref::<sweeptin::Error>())
+        .map(sweeptin::Error::kind)
+    {
+        return k;
+    }
+    if e.chain().any(|c| c.is::<std::io::Error>()) {
+        return sweeptin::ErrorKind::Output;
+    }
+    sweeptin::ErrorKind::Usage
+}
+
+fn dispatch(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Tin(a) => tin::run(a),
+        Command::Check(a) => check::run(a),
+        Command::Info(a) => info::run(a),
+        Command::Dem(a) => dem::run(a),
+        Command::Contours(a) => contours::run(a),
+        Command::Volume(a) => volume::run(a),
+        Command::Sample(a) => sample::run(a),
+        Command::Profile(a) => profile::run(a),
+        Command::Hillshade(a) => hillshade::run(a),
+        Command::Products(a) => products::run(a),
+        Command::Simplify(a) => simplify::run(a),
+        Command::Crossval(a) => crossval::run(a),
+        Command::Plan(a) => plan::plan(a),
+        Command::Run(a) => plan::run(a),
+        Command::Merge(a) => plan::merge(a),
     }
 }
 

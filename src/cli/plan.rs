@@ -539,7 +539,11 @@ fn empty_task(
     })?;
     match fanout.finish()? {
         ProductSummary::Fanout(s) => Ok(s),
-        other => bail!("internal error: the products' summary is {other:?}"),
+        other => {
+            return Err(
+                sweeptin::Error::Internal(format!("the products' summary is {other:?}")).into(),
+            );
+        }
     }
 }
 
@@ -575,7 +579,11 @@ fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
                         .status();
                     let ok = matches!(&status, Ok(s) if s.success());
                     if !ok {
-                        failed.lock().unwrap_or_else(|e| e.into_inner()).push(i);
+                        let code = status.ok().and_then(|s| s.code()).unwrap_or(5);
+                        failed
+                            .lock()
+                            .unwrap_or_else(|e| e.into_inner())
+                            .push((i, code));
                     }
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     if !args.quiet {
@@ -587,13 +595,14 @@ fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
     });
     let mut failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
     failed.sort_unstable();
-    if !failed.is_empty() {
-        bail!(
-            "{} of {} tasks failed: {:?} (run them again with --resume)",
-            failed.len(),
-            todo.len(),
-            failed
-        );
+    if let Some(&(_, code)) = failed.first() {
+        return Err(sweeptin::Error::TasksFailed {
+            failed: failed.iter().map(|&(i, _)| i).collect(),
+            total: todo.len(),
+            kind: sweeptin::ErrorKind::from_exit_code(code)
+                .unwrap_or(sweeptin::ErrorKind::Internal),
+        }
+        .into());
     }
     if !args.quiet {
         eprintln!(

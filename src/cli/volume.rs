@@ -3,7 +3,7 @@
 
 use super::input::{ProductInput, run_products};
 use super::products::read_boundary;
-use anyhow::{Context, bail};
+use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::pipeline::{self, Input, RunConfig};
@@ -72,7 +72,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let (run, products) = run_products(&args.input, &config, None, vec![("volume".into(), sink)])?;
     let Some(ProductSummary::Volume(v)) = products.get("volume") else {
-        bail!("internal error: no volume summary in {products:?}");
+        return Err(sweeptin::Error::Internal(format!("no volume summary in {products:?}")).into());
     };
     if args.input.args.json {
         let mut out = serde_json::to_value(v)?;

@@ -41,7 +41,7 @@ impl AsciiGridWriter {
     /// Creates the scratch file next to `path` (the output itself is created by `finish`).
     ///
     /// # Errors
-    /// [`Error::Output`] for an empty grid; [`Error::Io`] naming `path`'s directory.
+    /// [`Error::Output`] for an empty grid; [`Error::Write`] naming `path`'s directory.
     pub fn create(path: &Path, spec: &GridSpec) -> Result<AsciiGridWriter> {
         if spec.is_empty() || !(spec.cell > 0.0 && spec.cell.is_finite()) {
             return Err(Error::Output {
@@ -52,8 +52,8 @@ impl AsciiGridWriter {
                 ),
             });
         }
-        let dir = super::atomic::parent_dir(path);
-        let scratch = tempfile::tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
+        let dir = super::target::scratch_dir(path);
+        let scratch = tempfile::tempfile_in(&dir).map_err(|e| Error::write(&dir, e))?;
         Ok(AsciiGridWriter {
             path: path.to_path_buf(),
             spec: spec.clone(),
@@ -67,7 +67,7 @@ impl AsciiGridWriter {
     }
 
     fn io(&self, e: std::io::Error) -> Error {
-        Error::io(&self.path, e)
+        Error::write(&self.path, e)
     }
 
     fn header(&self) -> String {
@@ -100,7 +100,7 @@ impl GridWriter for AsciiGridWriter {
         self.scratch
             .seek(SeekFrom::Start(off))
             .and_then(|_| self.scratch.write_all(&bytes))
-            .map_err(|e| Error::io(&self.path, e))?;
+            .map_err(|e| Error::write(&self.path, e))?;
         self.written[row as usize] = true;
         Ok(())
     }
@@ -115,7 +115,7 @@ impl GridWriter for AsciiGridWriter {
         self.scratch
             .seek(SeekFrom::Start(off))
             .and_then(|_| self.scratch.write_all(&value.to_le_bytes()))
-            .map_err(|e| Error::io(&self.path, e))
+            .map_err(|e| Error::write(&self.path, e))
     }
 
     fn read_cell(&mut self, row: u32, col: u32) -> Result<f32> {
@@ -128,7 +128,7 @@ impl GridWriter for AsciiGridWriter {
         self.scratch
             .seek(SeekFrom::Start(off))
             .and_then(|_| self.scratch.read_exact(&mut b))
-            .map_err(|e| Error::io(&self.path, e))?;
+            .map_err(|e| Error::write(&self.path, e))?;
         Ok(f32::from_le_bytes(b))
     }
 
@@ -149,7 +149,7 @@ impl GridWriter for AsciiGridWriter {
             if self.written[row] {
                 reader
                     .read_exact(&mut raw)
-                    .map_err(|e| Error::io(&self.path, e))?;
+                    .map_err(|e| Error::write(&self.path, e))?;
                 for (i, c) in raw.chunks_exact(4).enumerate() {
                     if i > 0 {
                         line.push(' ');
@@ -160,15 +160,15 @@ impl GridWriter for AsciiGridWriter {
             } else {
                 reader
                     .seek_relative(raw.len() as i64)
-                    .map_err(|e| Error::io(&self.path, e))?;
+                    .map_err(|e| Error::write(&self.path, e))?;
                 let n = self.spec.nodata.to_string();
                 line.push_str(&vec![n.as_str(); cols].join(" "));
             }
             line.push('\n');
             text.write_all(line.as_bytes())
-                .map_err(|e| Error::io(&self.path, e))?;
+                .map_err(|e| Error::write(&self.path, e))?;
         }
-        text.flush().map_err(|e| Error::io(&self.path, e))?;
+        text.flush().map_err(|e| Error::write(&self.path, e))?;
         drop(text);
         out.commit()
     }

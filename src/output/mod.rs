@@ -7,7 +7,8 @@
 //!   GeoTIFF) and [`ascii`] (ESRI ASCII grid).
 //! - [`geojson`]: a streaming GeoJSON feature writer.
 //! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C
-//!   ([`install_interrupt_handler`]).
+//!   ([`install_interrupt_handler`]); [`target`]: what an output path is (a file, a link, a
+//!   stream) and the temporary files of dead runs.
 //!
 //! ```
 //! use sweeptin::output::{create_mesh_sink, MeshMeta};
@@ -38,6 +39,7 @@ pub mod obj;
 pub mod ply;
 pub mod raster;
 pub mod stin;
+pub mod target;
 
 pub use atomic::{AtomicFile, RegisteredTempDir, install_interrupt_handler};
 pub use landxml::LandXmlWriter;

@@ -14,7 +14,7 @@ pub trait GridWriter: Send {
     /// Writes a whole row (`values.len() == cols`; row 0 is the northern row).
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the output; [`crate::Error::Output`] for a bad row or length.
+    /// [`crate::Error::Write`] naming the output; [`crate::Error::Output`] for a bad row or length.
     fn write_row(&mut self, row: u32, values: &[f32]) -> Result<()>;
 
     /// Writes one cell.
@@ -55,7 +55,7 @@ pub trait GridWriter: Send {
     /// Completes the file and moves it into place; returns its size in bytes.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the output.
+    /// [`crate::Error::Write`] naming the output.
     fn finish(self: Box<Self>) -> Result<u64>;
 }
 
@@ -85,7 +85,7 @@ impl RasterFormat {
 /// Opens a writer for `spec` at `path`, in `format` or the format the extension names.
 ///
 /// # Errors
-/// [`crate::Error::Output`] if the format is unknown; [`crate::Error::Io`] if the file cannot be
+/// [`crate::Error::Output`] if the format is unknown; [`crate::Error::Write`] if the file cannot be
 /// created.
 pub fn create_grid_writer(
     path: &Path,
@@ -94,9 +94,11 @@ pub fn create_grid_writer(
 ) -> Result<Box<dyn GridWriter>> {
     let format = format
         .or_else(|| RasterFormat::from_extension(path))
-        .ok_or_else(|| crate::Error::Output {
-            path: path.to_path_buf(),
-            message: "unknown raster format: use a .tif or .asc extension, or --format".into(),
+        .ok_or_else(|| {
+            crate::Error::Options(format!(
+                "{}: unknown raster format: use a .tif or .asc extension, or --raster-format",
+                path.display()
+            ))
         })?;
     Ok(match format {
         RasterFormat::GeoTiff => Box::new(super::geotiff::GeoTiffWriter::create(path, spec)?),

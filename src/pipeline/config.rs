@@ -94,7 +94,7 @@ impl RunConfig {
         }
         let tmp_dir = options.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
         if !tmp_dir.is_dir() {
-            return Err(Error::io(
+            return Err(Error::write(
                 &tmp_dir,
                 std::io::Error::new(
                     std::io::ErrorKind::NotFound,

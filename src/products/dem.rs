@@ -204,10 +204,10 @@ impl DemSink {
     /// [`Error::Output`] for an unknown format.
     pub fn new(path: &Path, options: DemOptions) -> Result<DemSink> {
         if options.format.is_none() && RasterFormat::from_extension(path).is_none() {
-            return Err(Error::Output {
-                path: path.to_path_buf(),
-                message: "unknown raster format: use a .tif or .asc extension".into(),
-            });
+            return Err(Error::Options(format!(
+                "{}: unknown raster format: use a .tif or .asc extension, or --raster-format",
+                path.display()
+            )));
         }
         Ok(DemSink {
             path: path.to_path_buf(),

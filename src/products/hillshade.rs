@@ -279,13 +279,15 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
                 line[2 * x + 1] = 255;
                 shaded += 1;
             }
-            stream.write_all(&line).map_err(|e| Error::io(output, e))?;
+            stream
+                .write_all(&line)
+                .map_err(|e| Error::write(output, e))?;
             prev = Some(c);
             cur = next;
         }
         stream.finish().map_err(png_err)?;
     }
-    out.flush().map_err(|e| Error::io(output, e))?;
+    out.flush().map_err(|e| Error::write(output, e))?;
     let bytes = out.commit()?;
     Ok(HillshadeSummary {
         cols: w as u32,

@@ -189,7 +189,7 @@ impl SampleSink {
         let f = self.answers.as_mut().expect("created in begin");
         f.seek(SeekFrom::Start(n * 8))
             .and_then(|_| f.write_all(&z.to_le_bytes()))
-            .map_err(|e| Error::io(&self.output, e))?;
+            .map_err(|e| Error::write(&self.output, e))?;
         self.answered += 1;
         Ok(())
     }
@@ -252,12 +252,12 @@ impl SampleSink {
         let answers = self.answers.as_mut().expect("created in begin");
         answers
             .seek(SeekFrom::Start(0))
-            .map_err(|e| Error::io(&self.output, e))?;
+            .map_err(|e| Error::write(&self.output, e))?;
         let mut answers = BufReader::with_capacity(1 << 16, answers);
         let f = File::open(&self.queries).map_err(|e| Error::io(&self.queries, e))?;
         let mut out = AtomicFile::create(&self.output)?;
         let mut w = BufWriter::with_capacity(1 << 16, &mut out);
-        let io = |e| Error::io(&self.output, e);
+        let io = |e| Error::write(&self.output, e);
         let mut seen_data = false;
         for line in BufReader::with_capacity(1 << 16, f).lines() {
             let line = line.map_err(|e| Error::io(&self.queries, e))?;
@@ -311,19 +311,16 @@ impl TriangleSink for SampleSink {
         } else {
             1.0
         };
-        let dir = match self.output.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let f = tempfile::tempfile_in(&dir).map_err(|e| Error::io(&dir, e))?;
+        let dir = crate::output::target::scratch_dir(&self.output);
+        let f = tempfile::tempfile_in(&dir).map_err(|e| Error::write(&dir, e))?;
         let mut w = BufWriter::with_capacity(1 << 16, f);
         for _ in 0..self.count {
             w.write_all(&f64::NAN.to_le_bytes())
-                .map_err(|e| Error::io(&dir, e))?;
+                .map_err(|e| Error::write(&dir, e))?;
         }
         self.answers = Some(
             w.into_inner()
-                .map_err(|e| Error::io(&dir, e.into_error()))?,
+                .map_err(|e| Error::write(&dir, e.into_error()))?,
         );
         self.reader = Some(QueryReader::open(&self.queries)?);
         if !self.sorted {

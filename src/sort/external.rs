@@ -112,7 +112,7 @@ impl<R: SortKey> ExternalSorter<R> {
     /// Adds a point.
     ///
     /// # Errors
-    /// [`Error::Io`] if a spill fails.
+    /// [`Error::Write`] if a spill fails.
     #[inline]
     pub fn push(&mut self, r: R) -> Result<()> {
         if self.chunk.capacity() == 0 {
@@ -136,7 +136,7 @@ impl<R: SortKey> ExternalSorter<R> {
 
     fn spill(&mut self) -> Result<()> {
         self.sort_chunk();
-        let io = |e| Error::io(&self.tmp_dir, e);
+        let io = |e| Error::write(&self.tmp_dir, e);
         let file = tempfile::tempfile_in(&self.tmp_dir).map_err(io)?;
         let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
         w.write_all(bytemuck::cast_slice(&self.chunk)).map_err(io)?;
@@ -152,7 +152,7 @@ impl<R: SortKey> ExternalSorter<R> {
     /// Ends the input: returns the points in sweep order.
     ///
     /// # Errors
-    /// [`Error::Io`] if the last spill or a mapping fails.
+    /// [`Error::Write`] if the last spill or a mapping fails.
     pub fn finish(mut self) -> Result<Merge<R>> {
         if self.runs.is_empty() {
             self.sort_chunk();
@@ -166,7 +166,7 @@ impl<R: SortKey> ExternalSorter<R> {
             self.spill()?;
         }
         self.chunk = Vec::new();
-        let io = |e| Error::io(&self.tmp_dir, e);
+        let io = |e| Error::write(&self.tmp_dir, e);
         let mut runs = Vec::with_capacity(self.runs.len());
         for f in std::mem::take(&mut self.runs) {
             let m = MappedRecords::<R>::map(f).map_err(io)?;
@@ -293,7 +293,7 @@ impl<R: SortKey> Iterator for Merge<R> {
                     Err(e) => {
                         drop(top);
                         heap.clear();
-                        self.error = Some(Error::io(dir.as_path(), e));
+                        self.error = Some(Error::write(dir.as_path(), e));
                         return None;
                     }
                 }
