@@ -172,13 +172,15 @@ pub enum Error {
         source: std::io::Error,
     },
 
-    /// The filters left no point to triangulate (see [`crate::input::las::FilterStats`]).
-    #[error("{}", no_points_message(.files, .stats))]
+    /// The filters left fewer than three distinct points to triangulate.
+    #[error("{}", no_points_message(.files, .stats, *.distinct))]
     NothingLeft {
         /// The input files.
         files: Vec<PathBuf>,
-        /// What each filter dropped.
+        /// What each filter read, kept and dropped.
         stats: crate::input::las::FilterStats,
+        /// Distinct (x, y) positions among the points kept.
+        distinct: u64,
     },
 
     /// A buffer the job needs cannot be allocated (or would exceed the memory budget).
@@ -258,7 +260,11 @@ impl ErrorKind {
 }
 
 /// The message of [`Error::NothingLeft`]: which filters dropped how many points.
-fn no_points_message(files: &[PathBuf], s: &crate::input::las::FilterStats) -> String {
+fn no_points_message(
+    files: &[PathBuf],
+    s: &crate::input::las::FilterStats,
+    distinct: u64,
+) -> String {
     let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
     let mut dropped = Vec::new();
     for (n, what) in [
@@ -271,15 +277,23 @@ fn no_points_message(files: &[PathBuf], s: &crate::input::las::FilterStats) -> S
             dropped.push(format!("{n} {what}"));
         }
     }
-    let what = if s.read == 0 {
-        "the files hold no point".to_string()
-    } else if dropped.is_empty() {
-        format!("{} point(s) read, none kept", s.read)
-    } else {
-        format!("of {} point(s) read, {}", s.read, dropped.join(", "))
-    };
+    if s.read == 0 {
+        return format!("{}: the files hold no point", names.join(", "));
+    }
+    let mut what = format!("of {} point(s) read, {}", s.read, dropped.join(", "));
+    if s.kept == 0 {
+        return format!(
+            "{}: no point left after the filters: {what}",
+            names.join(", ")
+        );
+    }
+    what.push_str(&format!(
+        "; {} kept, {} of them exact (x, y) duplicates",
+        s.kept,
+        s.kept.saturating_sub(distinct)
+    ));
     format!(
-        "{}: no point left after the filters: {what}",
+        "{}: fewer than 3 distinct points left after the filters ({distinct} distinct): {what}",
         names.join(", ")
     )
 }

@@ -24,6 +24,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    super::input::distinct_outputs(&[("-o", &args.output)], &[args.dem.clone()], "hillshade")?;
     check_output(&args.output)?;
     let o = HillshadeOptions {
         azimuth: args.azimuth,

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use sweeptin::breaklines::CleanOptions;
 use sweeptin::crs::Crs;
 use sweeptin::input::las::BBox;
+use sweeptin::output::target::Destination;
 use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunConfig, RunOptions, RunSummary, SweepAxis};
 use sweeptin::sink::{Fanout, FanoutSummary, MeshSink, ProductSummary, TriangleSink};
 
@@ -15,7 +16,8 @@ use sweeptin::sink::{Fanout, FanoutSummary, MeshSink, ProductSummary, TriangleSi
 #[derive(clap::Args, Debug, Clone)]
 pub struct InputArgs {
     /// Input points: LAS/LAZ files (adjacent tiles form one point set), XYZ text files
-    /// (`x y z` per line), or one streaming mesh (.stin) written by `sweeptin tin`.
+    /// (`x y z` per line; `-` or a pipe is read once, as it comes), or one streaming mesh
+    /// (.stin) written by `sweeptin tin`.
     #[arg(required = true, value_name = "FILES")]
     pub inputs: Vec<PathBuf>,
     #[command(flatten)]
@@ -72,10 +74,34 @@ pub struct InputArgs {
 }
 
 impl InputArgs {
+    /// Every file the run reads: the points, breaklines, boundary and holes (outputs must be
+    /// none of them).
+    pub fn all_inputs(&self) -> Vec<PathBuf> {
+        let l = &self.lines;
+        let mut v = self.inputs.clone();
+        v.extend(l.breaklines.iter().cloned());
+        v.extend(l.boundary.iter().chain(&l.holes).cloned());
+        v
+    }
+
+    /// The checks every command that writes files makes before any work: `outputs` are
+    /// distinct from each other and from every file read (the run's and `more`), and none goes
+    /// to standard output with `--json`.
+    pub fn check_outputs(&self, outputs: &[(&str, &Path)], more: &[&Path]) -> anyhow::Result<()> {
+        let mut inputs = self.all_inputs();
+        inputs.extend(more.iter().map(|p| p.to_path_buf()));
+        distinct_outputs(outputs, &inputs, "the run")?;
+        stdout_free(outputs, self.json)?;
+        for (_, o) in outputs {
+            check_output(o)?;
+        }
+        Ok(())
+    }
+
     /// The library's description of the input.
     pub fn input(&self) -> Input {
         Input {
-            paths: self.inputs.clone(),
+            paths: self.inputs.iter().map(|p| stdin_path(p)).collect(),
             filter: self.filter.to_filter(),
             duplicates: self.duplicates,
             lines: self.lines.to_options(),
@@ -109,6 +135,15 @@ impl InputArgs {
     /// The run's configuration, checked.
     pub fn config(&self, input: Input) -> anyhow::Result<RunConfig> {
         Ok(RunConfig::new(input, self.options())?)
+    }
+}
+
+/// `-` as an input is standard input (`/dev/stdin`), as in most command-line tools.
+pub fn stdin_path(p: &Path) -> PathBuf {
+    if p.as_os_str() == "-" {
+        PathBuf::from("/dev/stdin")
+    } else {
+        p.to_path_buf()
     }
 }
 
@@ -275,6 +310,17 @@ impl ProductInput {
         self.crs.as_deref().map(parse_crs).transpose()
     }
 
+    /// The extent of the points from the LAS/LAZ headers (`None` for other inputs or when a
+    /// header cannot be read: the run then reports it).
+    pub fn header_bounds(&self) -> Option<[f64; 4]> {
+        if !self.all_lidar() {
+            return None;
+        }
+        let r = sweeptin::input::las::LidarReader::open(&self.args.inputs, &Default::default());
+        let b = r.ok()?.bounds();
+        Some([b.min[0], b.min[1], b.max[0], b.max[1]])
+    }
+
     /// Are all the inputs LAS/LAZ (so that the box filter applies)?
     pub fn all_lidar(&self) -> bool {
         self.args.inputs.iter().all(|p| {
@@ -289,52 +335,105 @@ impl ProductInput {
     }
 }
 
-/// Fails early (before any heavy work) if an output cannot be created where asked.
+/// Fails early (before any heavy work) if an output cannot be created where asked: a missing
+/// directory, a directory or block device in the way (see `sweeptin::output::target`).
 pub fn check_output(path: &Path) -> anyhow::Result<()> {
-    let dir = match path.parent() {
+    let Destination::File { target, .. } = Destination::of(path)? else {
+        return Ok(());
+    };
+    let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     if !dir.is_dir() {
-        bail!(
-            "{}: cannot write: the directory {} does not exist",
-            path.display(),
-            dir.display()
+        let e = std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            format!(
+                "cannot write: the directory {} does not exist",
+                dir.display()
+            ),
         );
-    }
-    if path.is_dir() {
-        bail!("{}: cannot write: it is a directory", path.display());
+        return Err(sweeptin::Error::write(path, e).into());
     }
     Ok(())
 }
 
-/// Refuses outputs that are the same file as each other or as one of the `inputs` of `of` (the
-/// run, the plan), compared by absolute path and, where it exists, by the file itself.
+/// Is `a` the same file as `b`: the same absolute path, the same file (device and inode) when
+/// both exist, or the same file an output there would write (through symbolic links)?
+fn same_file(a: &Path, b: &Path) -> bool {
+    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    if abs(a) == abs(b) {
+        return true;
+    }
+    #[cfg(unix)]
+    if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+        use std::os::unix::fs::MetadataExt;
+        return (x.dev(), x.ino()) == (y.dev(), y.ino());
+    }
+    let target = |p: &Path| match Destination::of(p) {
+        Ok(Destination::File { target, .. }) => Some(abs(&target)),
+        _ => std::fs::canonicalize(p).ok(),
+    };
+    matches!((target(a), target(b)), (Some(x), Some(y)) if x == y)
+}
+
+/// Is `p` a character device (`/dev/null`): several outputs may all go there.
+fn is_char_device(p: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        std::fs::metadata(p).is_ok_and(|m| m.file_type().is_char_device())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = p;
+        false
+    }
+}
+
+/// Refuses an output on standard output (`-o -`, `/dev/stdout`) together with `--json`, whose
+/// summary goes there too.
+pub fn stdout_free(outputs: &[(&str, &Path)], json: bool) -> anyhow::Result<()> {
+    for (flag, o) in outputs {
+        if json && let Ok(Destination::Stream { fd: Some(1), .. }) = Destination::of(o) {
+            return Err(sweeptin::Error::Options(format!(
+                "{flag} {}: the output goes to standard output, where --json prints the summary: \
+                 leave --json out or write the output to a file",
+                o.display()
+            ))
+            .into());
+        }
+    }
+    Ok(())
+}
+
+/// Refuses, before any work, outputs that are the same file as each other or as one of the
+/// `inputs` of `of` (the run, the plan): compared by absolute path, by device and inode where
+/// they exist, and through symbolic links. Several outputs may go to one character device
+/// (`/dev/null`).
 pub fn distinct_outputs(
     outputs: &[(&str, &Path)],
     inputs: &[PathBuf],
     of: &str,
 ) -> anyhow::Result<()> {
-    let same = |a: &Path, b: &Path| {
-        let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-        if abs(a) == abs(b) {
-            return true;
-        }
-        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
-            (Ok(x), Ok(y)) => x == y,
-            _ => false,
-        }
-    };
     for (k, (flag, o)) in outputs.iter().enumerate() {
-        if let Some(i) = inputs.iter().find(|i| same(o, i)) {
-            bail!(
+        if let Some(i) = inputs.iter().find(|i| same_file(o, i)) {
+            return Err(sweeptin::Error::Options(format!(
                 "{flag} {}: that is an input of {of} ({}); an output never overwrites one",
                 o.display(),
                 i.display()
-            );
+            ))
+            .into());
         }
-        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same(o, p)) {
-            bail!("{flag} and {other} name the same file {}", o.display());
+        if is_char_device(o) {
+            continue;
+        }
+        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same_file(o, p)) {
+            return Err(sweeptin::Error::Options(format!(
+                "{flag} and {other} name the same file {}",
+                o.display()
+            ))
+            .into());
         }
     }
     Ok(())

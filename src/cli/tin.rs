@@ -13,6 +13,8 @@ pub struct Args {
     pub input: InputArgs,
     /// Output mesh: .ply (binary PLY), .obj (Wavefront OBJ), .xml (LandXML 1.2 surface for
     /// civil-design software) or .stin (streaming mesh, for the terrain-product commands).
+    /// It appears only when complete; a symbolic link's target is replaced (keeping its
+    /// permissions); `-`, a FIFO or a device (with --format) is written as a stream.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output format, when the extension does not say it.
@@ -35,6 +37,10 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    let boundary: Vec<&std::path::Path> =
+        args.boundary_polygon.iter().map(|p| p.as_path()).collect();
+    args.input
+        .check_outputs(&[("-o", &args.output)], &boundary)?;
     let mut input = args.input.input();
     if let Some(b) = &args.boundary_polygon {
         input.lines.boundary = Some(b.clone());

@@ -12,6 +12,7 @@
 
 use super::{Input, RunOptions};
 use crate::error::{Error, Result};
+use crate::input::las::{Filter, Returns};
 use std::path::{Path, PathBuf};
 
 /// What kind of files the points come from.
@@ -65,6 +66,49 @@ impl Source {
     }
 }
 
+/// Refuses filters that do not apply to `source`: `--class` and `--returns` need LAS/LAZ
+/// attributes that XYZ text does not have; a streaming mesh (`.stin`) holds triangles, not
+/// points to filter.
+///
+/// # Errors
+/// [`Error::Options`] naming the filter and the file.
+pub(crate) fn check_filter(source: Source, f: &Filter, paths: &[PathBuf]) -> Result<()> {
+    let name = paths
+        .first()
+        .map(|p| p.display().to_string())
+        .unwrap_or_default();
+    let mut lidar_only = Vec::new();
+    if f.classes.is_some() {
+        lidar_only.push("--class");
+    }
+    if f.returns != Returns::All {
+        lidar_only.push("--returns");
+    }
+    match source {
+        Source::Xyz if !lidar_only.is_empty() => Err(Error::Options(format!(
+            "{}: {} need(s) the LAS/LAZ point attributes, which XYZ text does not have",
+            name,
+            lidar_only.join(" and ")
+        ))),
+        Source::Stream if !lidar_only.is_empty() || f.bbox.is_some() => {
+            Err(Error::Options(format!(
+                "{name}: a streaming mesh holds triangles, not points: --bbox, --class and \
+                 --returns apply to LAS/LAZ and XYZ points"
+            )))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The inputs among `paths` that are pipes or devices (readable once, no seeking).
+fn streams(paths: &[PathBuf]) -> Vec<PathBuf> {
+    paths
+        .iter()
+        .filter(|p| std::fs::metadata(p).is_ok_and(|m| !m.is_file() && !m.is_dir()))
+        .cloned()
+        .collect()
+}
+
 /// A run's input and options, checked (see the module docs). Build it with [`RunConfig::new`]
 /// and hand it to [`super::run`].
 #[derive(Clone, Debug)]
@@ -73,6 +117,8 @@ pub struct RunConfig {
     options: RunOptions,
     source: Source,
     tmp_dir: PathBuf,
+    /// Inputs that are pipes or devices: they can be read once only.
+    streams: Vec<PathBuf>,
 }
 
 impl RunConfig {
@@ -84,6 +130,15 @@ impl RunConfig {
     /// temporary directory that does not exist.
     pub fn new(input: Input, options: RunOptions) -> Result<RunConfig> {
         let source = Source::of(&input.paths)?;
+        check_filter(source, &input.filter, &input.paths)?;
+        let streams = streams(&input.paths);
+        if let (Some(s), Source::Lidar | Source::Stream) = (streams.first(), source) {
+            return Err(Error::Options(format!(
+                "{}: is a pipe or a device, which can be read only once: a LAS/LAZ file or a \
+                 streaming mesh is read more than once (headers, then points), so give a file",
+                s.display()
+            )));
+        }
         if source == Source::Stream && !input.lines.is_empty() {
             return Err(Error::Format {
                 path: input.paths[0].clone(),
@@ -107,6 +162,7 @@ impl RunConfig {
             options,
             source,
             tmp_dir,
+            streams,
         })
     }
 
@@ -123,6 +179,11 @@ impl RunConfig {
     /// The kind of input files.
     pub(crate) fn source(&self) -> Source {
         self.source
+    }
+
+    /// The first input that is a pipe or a device (read once only), if any.
+    pub(crate) fn stream_input(&self) -> Option<&Path> {
+        self.streams.first().map(PathBuf::as_path)
     }
 
     /// Where spill files go (an existing directory).

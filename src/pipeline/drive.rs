@@ -90,9 +90,10 @@ pub(crate) fn run(
         expected += g.vertices.len() as u64;
     }
     if rd.points == 0 {
-        return Err(Error::TooFewPoints {
+        return Err(Error::NothingLeft {
+            files: input.paths.clone(),
+            stats: rd.stats,
             distinct: 0,
-            total: 0,
         });
     }
     let anon = AnonPeak::default();
@@ -135,7 +136,14 @@ pub(crate) fn run(
     let triangulate_write = phase2.elapsed().as_secs_f64();
     pb.finish_and_clear();
     if triangles == 0 {
-        return Err(if kept < 3 {
+        let filtered = rd.stats.read > rd.stats.kept;
+        return Err(if kept < 3 && filtered {
+            Error::NothingLeft {
+                files: input.paths.clone(),
+                stats: rd.stats,
+                distinct: kept,
+            }
+        } else if kept < 3 {
             Error::TooFewPoints {
                 distinct: kept,
                 total: rd.points,

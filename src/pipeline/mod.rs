@@ -241,6 +241,14 @@ pub fn run(
     }
     let points_only = config.points_only();
     let prepared = lines::prepare(lines, &mut |sink| {
+        if let Some(s) = config.stream_input() {
+            return Err(Error::Options(format!(
+                "{}: lines without z take their heights from a first pass over the points, but \
+                 this input is a pipe or a device, which can be read only once: give the points \
+                 as a file, or the lines with z",
+                s.display()
+            )));
+        }
         drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
     })?;
     drive::run(config, Some(&prepared), mesh, sinks)

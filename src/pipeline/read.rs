@@ -1,10 +1,10 @@
 //! Phase 1: read every input point (with filters) into the external sorter, in the local frame.
 
-use super::config::Source;
+use super::config::{self, Source};
 use super::{Frame, Input, RunConfig, STRIP_RATIO, SweepAxis};
 use crate::error::{Error, Result};
 use crate::geom::predicates;
-use crate::input::las::{Crs, LidarPoint, LidarReader};
+use crate::input::las::{Crs, FilterStats, LidarPoint, LidarReader};
 use crate::input::xyz::XyzReader;
 use crate::sort::external::{ExternalSorter, SortRecord};
 
@@ -16,6 +16,8 @@ pub(crate) struct ReadResult {
     /// Local-frame extent of the points read: `[xmin, ymin, xmax, ymax]`.
     pub bounds: [f64; 4],
     pub points: u64,
+    /// What the filters read, kept and dropped.
+    pub stats: FilterStats,
     /// Every `2^k`-th point's local x (at most [`SAMPLE`] values), for the front's index.
     pub x_sample: Vec<f64>,
 }
@@ -139,9 +141,13 @@ pub(crate) fn read_into(
             crs,
             bounds,
             points: n,
+            stats: *reader.stats(),
             x_sample: sample.xs,
         });
     }
+    // XYZ text: the box filter (the only one that applies, `RunConfig::new` refuses the others).
+    let bbox = input.filter.bbox.map(|b| b.corners());
+    let mut stats = FilterStats::default();
     let mut n = 0u64;
     let mut buf: Vec<[f64; 3]> = Vec::with_capacity(CHUNK);
     for path in &input.paths {
@@ -152,6 +158,14 @@ pub(crate) fn read_into(
                 break;
             }
             for p in &buf {
+                stats.read += 1;
+                if let Some([x0, y0, x1, y1]) = bbox
+                    && !(p[0] >= x0 && p[0] <= x1 && p[1] >= y0 && p[1] <= y1)
+                {
+                    stats.bbox += 1;
+                    continue;
+                }
+                stats.kept += 1;
                 for v in [p[0], p[1]] {
                     if !predicates::check_coord(v) {
                         return Err(Error::Format {
@@ -173,12 +187,12 @@ pub(crate) fn read_into(
                         x: p[0] + 0.0,
                         y: p[1] + 0.0,
                         z: p[2],
-                        index: n,
+                        index: stats.read - 1,
                     },
                 )?;
                 n += 1;
             }
-            progress(n, None);
+            progress(stats.read, None);
         }
     }
     Ok(ReadResult {
@@ -186,6 +200,7 @@ pub(crate) fn read_into(
         crs: None,
         bounds,
         points: n,
+        stats,
         x_sample: sample.xs,
     })
 }
@@ -211,9 +226,13 @@ pub fn read_points(input: &Input) -> Result<(Vec<[f64; 3]>, Option<Crs>)> {
         let crs = r.crs().cloned();
         Ok((pts.iter().map(|p| q.to_world(p)).collect(), crs))
     } else {
+        config::check_filter(source, &input.filter, &input.paths)?;
         let mut all = Vec::new();
         for p in &input.paths {
             all.extend(crate::input::xyz::read_xyz(p)?);
+        }
+        if let Some([x0, y0, x1, y1]) = input.filter.bbox.map(|b| b.corners()) {
+            all.retain(|p| p[0] >= x0 && p[0] <= x1 && p[1] >= y0 && p[1] <= y1);
         }
         Ok((all, None))
     }

@@ -21,7 +21,10 @@
 //! # Memory
 //!
 //! Rows live in memory from the lowest row not yet written (the sweep's watermark) up to the top
-//! of the highest triangle seen: a band of rows. [`TriangleSink::watermark`] writes the rows below
+//! of the highest triangle seen: a band of rows, at most [`DemOptions::memory`] bytes of them
+//! (the lowest rows go to the file early when the band would grow past it, and later cells
+//! there are late writes, below). A grid whose rows (two of them, and the GeoTIFF's strip
+//! tables) do not fit in that budget is refused before anything is allocated. [`TriangleSink::watermark`] writes the rows below
 //! it to the file. A late triangle below the watermark writes its cells into the file (random
 //! access), so it is handled exactly: its cells are queued (at most [`LATE_BATCH`] at a time)
 //! and applied in arrival order, one read and one write per row span, when the queue is full and
@@ -47,6 +50,8 @@ pub struct DemOptions {
     pub nodata: f32,
     /// Output format; by extension when `None`.
     pub format: Option<RasterFormat>,
+    /// Bytes of rows the sink may hold in memory (its share of the run's `--mem`).
+    pub memory: u64,
 }
 
 impl Default for DemOptions {
@@ -55,6 +60,7 @@ impl Default for DemOptions {
             grid: GridPlan::default(),
             nodata: -9999.0,
             format: None,
+            memory: crate::pipeline::DEFAULT_MEM / 4,
         }
     }
 }
@@ -78,6 +84,8 @@ struct Raster {
     late: Vec<(u32, u32, f32, bool)>,
     /// Largest number of rows held at once.
     max_band: usize,
+    /// Most rows the band may hold (from the memory budget).
+    band_limit: usize,
 }
 
 impl Raster {
@@ -86,8 +94,14 @@ impl Raster {
         row + self.written < self.spec.rows
     }
 
-    fn band_row(&mut self, row: u32) -> &mut Vec<f32> {
-        let i = (self.spec.rows - 1 - self.written - row) as usize;
+    fn band_row(&mut self, row: u32) -> Result<&mut Vec<f32>> {
+        let mut i = (self.spec.rows - 1 - self.written - row) as usize;
+        if i >= self.band_limit {
+            // Over budget: the lowest rows go to the file now; their later cells are late writes.
+            let extra = (i + 1 - self.band_limit) as u32;
+            self.flush_below(self.written + extra)?;
+            i = (self.spec.rows - 1 - self.written - row) as usize;
+        }
         while self.band.len() <= i {
             let mut values = self.spare.pop().unwrap_or_default();
             values.clear();
@@ -95,14 +109,14 @@ impl Raster {
             self.band.push_back(values);
         }
         self.max_band = self.max_band.max(self.band.len());
-        &mut self.band[i]
+        Ok(&mut self.band[i])
     }
 
     /// Sets cell `(col, row)`; a `weak` value only fills a cell that has no value yet.
     fn put(&mut self, col: u32, row: u32, value: f32, weak: bool) -> Result<()> {
         if self.in_band(row) {
             let nodata = self.spec.nodata;
-            let cell = &mut self.band_row(row)[col as usize];
+            let cell = &mut self.band_row(row)?[col as usize];
             if !weak || cell.to_bits() == nodata.to_bits() {
                 *cell = value;
             }
@@ -158,10 +172,9 @@ impl Raster {
                     self.writer.write_row(row, &values)?;
                     self.spare.push(values);
                 }
-                None => {
-                    let empty = vec![self.spec.nodata; self.spec.cols as usize];
-                    self.writer.write_row(row, &empty)?;
-                }
+                // A row no triangle reached: the writers fill rows never written with nodata,
+                // so nothing is allocated or written for it.
+                None => {}
             }
             self.written += 1;
         }
@@ -185,6 +198,43 @@ impl Raster {
             }
         }
         Ok(())
+    }
+}
+
+/// Rows the band of `spec` may hold within `memory` bytes, after the writers' per-row tables
+/// (the GeoTIFF's strip offsets and sizes, 16 bytes a row, and a flag a row).
+///
+/// # Errors
+/// [`Error::Options`] when fewer than two rows fit, naming the sizes.
+fn band_rows(spec: &GridSpec, memory: u64) -> Result<usize> {
+    let row = u64::from(spec.cols) * 4;
+    let tables = u64::from(spec.rows) * 17;
+    let rows = memory.saturating_sub(tables) / row.max(1);
+    if rows < 2 {
+        return Err(Error::Options(format!(
+            "a DEM of {} × {} cells needs at least {} MiB ({} bytes a row, two rows, and {} \
+             bytes of row tables), more than its share of --mem ({} MiB): raise --mem, or use a \
+             larger --cell or a smaller --bbox",
+            spec.cols,
+            spec.rows,
+            (2 * row + tables).div_ceil(1 << 20),
+            row,
+            tables,
+            memory >> 20
+        )));
+    }
+    Ok(usize::try_from(rows).unwrap_or(usize::MAX))
+}
+
+impl DemSink {
+    /// Checks, before any data, that the grid over `bounds` (the data's, from file headers) is
+    /// within the limits: the plan's `--max-cells` and the memory budget.
+    ///
+    /// # Errors
+    /// [`Error::Options`] naming the sizes.
+    pub fn check_size(&self, bounds: [f64; 4]) -> Result<()> {
+        let spec = self.options.grid.grid(bounds, self.options.nodata)?;
+        band_rows(&spec, self.options.memory).map(|_| ())
     }
 }
 
@@ -231,6 +281,7 @@ impl TriangleSink for DemSink {
         let o = &self.options;
         let mut spec = o.grid.grid(info.bounds, o.nodata)?;
         spec.crs = info.crs.clone();
+        let band_limit = band_rows(&spec, o.memory)?;
         let writer = create_grid_writer(&self.path, o.format, &spec)?;
         self.raster = Some(Raster {
             writer,
@@ -242,6 +293,7 @@ impl TriangleSink for DemSink {
             late_cells: 0,
             late: Vec::new(),
             max_band: 0,
+            band_limit,
         });
         Ok(())
     }
