@@ -3,7 +3,7 @@
 //! progress and the JSON summary.
 
 use super::info::FilterArgs;
-use anyhow::{Context, bail};
+use anyhow::bail;
 use std::path::{Path, PathBuf};
 use sweeptin::breaklines::CleanOptions;
 use sweeptin::crs::Crs;
@@ -439,6 +439,34 @@ pub fn distinct_outputs(
     Ok(())
 }
 
+/// The error of a run over `inputs`: library errors name their file, line or option, and are
+/// shown as they are; those about the point set as a whole (too few points, all collinear, a
+/// coordinate out of range) are prefixed with the inputs' names.
+pub fn run_error(e: sweeptin::Error, inputs: &[PathBuf]) -> anyhow::Error {
+    use sweeptin::Error as E;
+    match e {
+        E::TooFewPoints { .. }
+        | E::AllCollinear { .. }
+        | E::NonFinite { .. }
+        | E::CoordinateOutOfRange { .. } => {
+            let names: Vec<String> = inputs.iter().map(|f| f.display().to_string()).collect();
+            anyhow::Error::from(e).context(format!("cannot triangulate {}", names.join(", ")))
+        }
+        other => other.into(),
+    }
+}
+
+/// Prints the run's warnings on standard error: breakline heights far from the points'.
+pub fn warn(run: &RunSummary) {
+    if let Some(f) = run.breaklines.as_ref().and_then(|b| b.far_heights) {
+        eprintln!(
+            "sweeptin: warning: {} breakline vertices have heights from {} to {}, far outside \
+             the points' ({} to {}): check the lines' units and vertical datum",
+            f.vertices, f.lines_z[0], f.lines_z[1], f.points_z[0], f.points_z[1]
+        );
+    }
+}
+
 /// Runs the pipeline of `config` into `sinks` (one pass) and the optional mesh sink; returns the
 /// run summary (without the products) and the products' summaries by the sinks' names.
 pub fn run_products(
@@ -448,14 +476,8 @@ pub fn run_products(
     sinks: Vec<(String, Box<dyn TriangleSink>)>,
 ) -> anyhow::Result<(RunSummary, FanoutSummary)> {
     let mut fanout = Fanout::new(sinks).with_crs(p.crs()?);
-    let names: Vec<String> = p
-        .args
-        .inputs
-        .iter()
-        .map(|f| f.display().to_string())
-        .collect();
     let mut run = pipeline::run(config, mesh, &mut [&mut fanout])
-        .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
+        .map_err(|e| run_error(e, &p.args.inputs))?;
     let products = match run.products.pop() {
         Some(ProductSummary::Fanout(s)) if run.products.is_empty() => s,
         other => {
@@ -465,6 +487,7 @@ pub fn run_products(
         }
     };
     run.peak_rss_bytes = pipeline::peak_rss();
+    warn(&run);
     Ok((run, products))
 }
 

@@ -366,6 +366,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour_options.sink(p)?));
     }
+    if let Some(z) = args.volume_plane.filter(|z| !z.is_finite()) {
+        return Err(sweeptin::Error::Options(format!(
+            "--volume-plane {z}: must be a finite height"
+        ))
+        .into());
+    }
     if let Some(z) = args.volume_plane {
         let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;
         sinks.push(("volume".into(), Box::new(VolumeSink::new(z, boundary))));

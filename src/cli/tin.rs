@@ -1,7 +1,6 @@
 //! `sweeptin tin`: points in, Delaunay TIN out.
 
 use super::input::InputArgs;
-use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::output::{MeshFormat, MeshMeta, create_mesh_sink};
@@ -67,11 +66,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // file is removed on every error below.
     let mut sink = create_mesh_sink(&args.output, args.format, &meta)?;
     let mut summary = sweeptin::pipeline::run(&config, Some(&mut *sink), &mut [])
-        .with_context(|| format!("cannot triangulate {}", args.input.inputs[0].display()))?;
+        .map_err(|e| super::input::run_error(e, &args.input.inputs))?;
     let fin = Instant::now();
     let written = sink.finish()?;
     summary.seconds.finish += fin.elapsed().as_secs_f64();
     summary.peak_rss_bytes = sweeptin::pipeline::peak_rss();
+    super::input::warn(&summary);
     if args.input.json {
         println!("{}", serde_json::to_string(&summary)?);
     } else {

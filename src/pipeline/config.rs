@@ -100,6 +100,32 @@ pub(crate) fn check_filter(source: Source, f: &Filter, paths: &[PathBuf]) -> Res
     }
 }
 
+/// Refuses numeric options that mean nothing: a `--max-edge` that is not a positive length, a
+/// `--z-tolerance` that is not a distance, a `--tile` that is not a positive size.
+///
+/// # Errors
+/// [`Error::Options`] naming the option and the value.
+fn check_numbers(input: &Input, options: &RunOptions) -> Result<()> {
+    let l = &input.lines;
+    if let Some(m) = l.max_edge.filter(|m| !(m.is_finite() && *m > 0.0)) {
+        return Err(Error::Options(format!(
+            "--max-edge {m}: must be a positive length"
+        )));
+    }
+    if let Some(t) = l.z_tolerance.filter(|t| !(t.is_finite() && *t >= 0.0)) {
+        return Err(Error::Options(format!(
+            "--z-tolerance {t}: must be a height difference >= 0"
+        )));
+    }
+    let tile = options.tiles.as_ref().and_then(|t| t.tile);
+    if let Some(t) = tile.filter(|t| !(t.is_finite() && *t > 0.0)) {
+        return Err(Error::Options(format!(
+            "--tile {t}: must be a positive size"
+        )));
+    }
+    Ok(())
+}
+
 /// The inputs among `paths` that are pipes or devices (readable once, no seeking).
 fn streams(paths: &[PathBuf]) -> Vec<PathBuf> {
     paths
@@ -131,6 +157,7 @@ impl RunConfig {
     pub fn new(input: Input, options: RunOptions) -> Result<RunConfig> {
         let source = Source::of(&input.paths)?;
         check_filter(source, &input.filter, &input.paths)?;
+        check_numbers(&input, &options)?;
         let streams = streams(&input.paths);
         if let (Some(s), Source::Lidar | Source::Stream) = (streams.first(), source) {
             return Err(Error::Options(format!(

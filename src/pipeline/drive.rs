@@ -2,7 +2,7 @@
 //! merging, sweeping and writing overlap and memory stays bounded.
 
 use super::emit::{Collected, Emitter};
-use super::lines::{LINE_FLAG, LineSummary, Prepared};
+use super::lines::{FarHeights, LINE_FLAG, LineSummary, Prepared};
 use super::read::{self, ReadResult};
 use super::{
     AnonPeak, Frame, RunConfig, RunSummary, StreamInfo, SweepAxis, Timings, TriangleSink, peak_rss,
@@ -185,6 +185,7 @@ pub(crate) fn run(
             constraints: cstats,
             trimmed_triangles: trimmed,
             flat,
+            far_heights: FarHeights::of(l, rd.z_range),
             ..l.summary.clone()
         }),
         tiles: None,
@@ -322,6 +323,10 @@ fn write_events(
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<Written> {
+    // Fault injection for the test of the exit status after a panic in a worker thread.
+    if std::env::var_os("SWEEPTIN_TEST_PANIC").is_some_and(|v| v == "writer") {
+        panic!("injected panic (SWEEPTIN_TEST_PANIC=writer)");
+    }
     let mut emit = Emitter::new(frame, mesh, sinks, lines.map(|l| &l.trim));
     let flat_graph = lines.filter(|l| l.flat).map(|l| {
         l.pslg

@@ -15,6 +15,8 @@ pub(crate) struct ReadResult {
     pub crs: Option<Crs>,
     /// Local-frame extent of the points read: `[xmin, ymin, xmax, ymax]`.
     pub bounds: [f64; 4],
+    /// Lowest and highest z of the points read.
+    pub z_range: [f64; 2],
     pub points: u64,
     /// What the filters read, kept and dropped.
     pub stats: FilterStats,
@@ -84,7 +86,9 @@ pub(crate) fn read_into(
         seen: 0,
     };
     let mut swap = axis == SweepAxis::X;
+    let mut z_range = [f64::INFINITY, f64::NEG_INFINITY];
     let mut add = |s: &mut ExternalSorter, swap: bool, r: SortRecord| -> Result<()> {
+        z_range = [z_range[0].min(r.z), z_range[1].max(r.z)];
         let r = if swap {
             SortRecord {
                 x: r.y,
@@ -109,6 +113,7 @@ pub(crate) fn read_into(
             swap = w > STRIP_RATIO * h;
         }
         let total = reader.point_count();
+        sorter.reserve(total)?;
         let q = *reader.quantization();
         let crs = reader.crs().cloned();
         let mut buf: Vec<LidarPoint> = Vec::with_capacity(CHUNK);
@@ -140,6 +145,7 @@ pub(crate) fn read_into(
             frame: Frame { swap },
             crs,
             bounds,
+            z_range,
             points: n,
             stats: *reader.stats(),
             x_sample: sample.xs,
@@ -199,6 +205,7 @@ pub(crate) fn read_into(
         frame: Frame { swap },
         crs: None,
         bounds,
+        z_range,
         points: n,
         stats,
         x_sample: sample.xs,

@@ -39,6 +39,29 @@ pub struct HillshadeOptions {
     pub z_factor: f64,
 }
 
+impl HillshadeOptions {
+    /// Checks the options: an azimuth in [0, 360], an altitude in [0, 90] degrees, a positive
+    /// finite z factor (anything else shades every cell the same).
+    ///
+    /// # Errors
+    /// [`Error::Options`] naming the option and the value.
+    pub fn check(&self) -> Result<()> {
+        let bad = |what: &str, v: f64, range: &str| {
+            Err(Error::Options(format!("--{what} {v}: must be {range}")))
+        };
+        if !(0.0..=360.0).contains(&self.azimuth) {
+            return bad("azimuth", self.azimuth, "from 0 to 360 degrees");
+        }
+        if !(0.0..=90.0).contains(&self.altitude) {
+            return bad("altitude", self.altitude, "from 0 to 90 degrees");
+        }
+        if !(self.z_factor.is_finite() && self.z_factor > 0.0) {
+            return bad("z-factor", self.z_factor, "a positive number");
+        }
+        Ok(())
+    }
+}
+
 impl Default for HillshadeOptions {
     fn default() -> Self {
         HillshadeOptions {
@@ -175,7 +198,11 @@ impl Rows {
                 .read_chunk(self.next_chunk)
                 .map_err(|e| Error::Format {
                     path: self.path.clone(),
-                    message: format!("strip {}: {e}", self.next_chunk),
+                    message: format!(
+                        "strip {}: {}",
+                        self.next_chunk,
+                        crate::input::raster::tiff_message(&e)
+                    ),
                 })?;
             self.next_chunk += 1;
             let values = to_f64(chunk).ok_or_else(|| Error::Format {
@@ -237,8 +264,10 @@ fn shade(w: [[f64; 3]; 3], ew: f64, ns: f64, o: &HillshadeOptions) -> u8 {
 /// Shades the DEM at `input` into a grey + alpha PNG at `output`.
 ///
 /// # Errors
-/// [`Error::Io`] / [`Error::Format`] naming the file.
+/// [`Error::Io`] / [`Error::Format`] naming the file; [`Error::Options`] for options out of range
+/// ([`HillshadeOptions::check`]).
 pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<HillshadeSummary> {
+    o.check()?;
     let (mut rows, [ew, ns]) = Rows::open(input)?;
     let (w, h) = (rows.width, rows.height);
     let mut out = AtomicFile::create(output)?;

@@ -112,11 +112,12 @@ impl<R: SortKey> ExternalSorter<R> {
     /// Adds a point.
     ///
     /// # Errors
-    /// [`Error::Write`] if a spill fails.
+    /// [`Error::Write`] if a spill fails; [`Error::OutOfMemory`] if the chunk cannot grow (a
+    /// memory limit below the budget): a message and clean-up instead of an abort.
     #[inline]
     pub fn push(&mut self, r: R) -> Result<()> {
-        if self.chunk.capacity() == 0 {
-            self.chunk.reserve_exact(self.capacity.min(1 << 20));
+        if self.chunk.len() == self.chunk.capacity() {
+            self.grow()?;
         }
         self.chunk.push(r);
         self.stats.points += 1;
@@ -124,6 +125,44 @@ impl<R: SortKey> ExternalSorter<R> {
             self.spill()?;
         }
         Ok(())
+    }
+
+    /// Allocates the chunk for `points` points (as many as the input has, when its headers say;
+    /// at most the chunk's capacity) before reading, so that a memory limit below the budget
+    /// fails at once, with a message, rather than after minutes of reading.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`] naming the size.
+    pub fn reserve(&mut self, points: u64) -> Result<()> {
+        let want = usize::try_from(points)
+            .unwrap_or(usize::MAX)
+            .min(self.capacity);
+        self.reserve_more(want.saturating_sub(self.chunk.len()))
+    }
+
+    /// Doubles the chunk's allocation (up to its capacity), failing cleanly.
+    #[cold]
+    fn grow(&mut self) -> Result<()> {
+        let have = self.chunk.capacity();
+        let more = have
+            .max(1 << 20)
+            .min(self.capacity - self.chunk.len())
+            .max(1);
+        self.reserve_more(more)
+    }
+
+    fn reserve_more(&mut self, more: usize) -> Result<()> {
+        let have = self.chunk.capacity();
+        self.chunk.try_reserve_exact(more).map_err(|_| {
+            let bytes = ((have + more) * std::mem::size_of::<R>()) as u64;
+            Error::OutOfMemory {
+                what: format!("the sort's chunk of {} points", have + more),
+                bytes,
+                hint: "the process has less memory than --mem asks (ulimit -v, a cgroup or \
+                       a batch job's limit): give a smaller --mem"
+                    .into(),
+            }
+        })
     }
 
     fn sort_chunk(&mut self) {
