@@ -78,6 +78,9 @@ enum Command {
     Merge(plan::MergeArgs),
 }
 
+/// The last panic's message and place (see `main`).
+static LAST_PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
 /// Runs the command line; returns the process exit code.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -85,15 +88,24 @@ pub fn main() -> ExitCode {
     if let Err(e) = sweeptin::output::install_interrupt_handler() {
         eprintln!("sweeptin: warning: {e}");
     }
+    // A panic is reported once, as an internal error (exit 5), by whoever catches it: the
+    // library turns its threads' panics and its decoders' into errors. The hook only keeps the
+    // message and place (and prints a backtrace when RUST_BACKTRACE asks for one).
+    std::panic::set_hook(Box::new(|info| {
+        if std::env::var_os("RUST_BACKTRACE").is_some_and(|v| v != "0") {
+            eprintln!("{info}\n{}", std::backtrace::Backtrace::force_capture());
+        }
+        *LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()) = Some(info.to_string());
+    }));
     let result = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dispatch(cli))) {
         Ok(r) => r,
-        Err(payload) => {
-            let message = payload
-                .downcast_ref::<&str>()
-                .copied()
-                .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
-                .unwrap_or("(no message)");
-            Err(sweeptin::Error::Internal(format!("a thread panicked: {message}")).into())
+        Err(_) => {
+            let what = LAST_PANIC
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .take()
+                .unwrap_or_else(|| "(no message)".into());
+            Err(sweeptin::Error::Internal(what.replace('\n', " ")).into())
         }
     };
     match result {

@@ -45,6 +45,7 @@
 //! any decoder runs ([`FileInfo::read`]); empty, truncated, corrupt and non-LAS files give an
 //! [`crate::Error::Format`] naming the file, never a panic.
 
+mod chunks;
 pub mod combine;
 
 pub mod filter;

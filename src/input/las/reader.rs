@@ -1,6 +1,7 @@
 //! The chunked reader over one or more LAS/LAZ files.
 
 use super::LidarPoint;
+use super::chunks::ChunkDecoder;
 use super::combine::{FileMap, FileQuant, Quantization, combine};
 use super::filter::{CompiledFilter, Filter, FilterStats, Verdict};
 use super::header::{Bounds3, FileInfo, format_error, inspect, las_message, laz_message};
@@ -63,6 +64,28 @@ struct Source {
     map: FileMap,
     /// Global index of the file's first point.
     first_index: u64,
+    /// The header's bounds in the file's own integers, one step wider on each side (`None`
+    /// when the header has no usable bounds): a decoded point outside is corrupt.
+    int_bounds: Option<[[i64; 2]; 3]>,
+}
+
+/// The integer box of `info`'s header bounds, one scale step wider on each side; `None` for a
+/// header without usable bounds (all zero, or min above max).
+fn int_bounds(info: &FileInfo) -> Option<[[i64; 2]; 3]> {
+    let b = &info.bounds;
+    let zero = b.min.iter().chain(&b.max).all(|v| *v == 0.0);
+    if zero || (0..3).any(|k| !(b.min[k] <= b.max[k]) || !(info.scale[k] > 0.0)) {
+        return None;
+    }
+    let mut out = [[0i64; 2]; 3];
+    for k in 0..3 {
+        let (s, o) = (info.scale[k], info.offset[k]);
+        out[k] = [
+            ((b.min[k] - o) / s).floor() as i64 - 1,
+            ((b.max[k] - o) / s).ceil() as i64 + 1,
+        ];
+    }
+    Some(out)
 }
 
 /// The file being read.
@@ -76,6 +99,8 @@ struct Current {
     pos: usize,
     /// Global index of the record at `pos`.
     next_index: u64,
+    /// Points per LAZ chunk (fixed-size chunks), to name the chunk of a corrupt point.
+    chunk_size: Option<u64>,
     /// Records of the file not yet decoded into `buf`.
     remaining: u64,
 }
@@ -83,7 +108,8 @@ struct Current {
 enum Decoder {
     Las(BufReader<File>),
     Laz(Box<laz::LasZipDecompressor<'static, BufReader<File>>>),
-    ParLaz(Box<laz::ParLasZipDecompressor<BufReader<File>>>),
+    /// Chunk by chunk, in parallel, each chunk checked (see [`super::chunks`]).
+    Chunks(Box<ChunkDecoder>),
 }
 
 impl LidarReader {
@@ -129,6 +155,7 @@ impl LidarReader {
         for (info, map) in infos.into_iter().zip(maps) {
             let count = info.point_count;
             sources.push(Source {
+                int_bounds: int_bounds(&info),
                 info,
                 map,
                 first_index,
@@ -309,10 +336,14 @@ impl Current {
             ));
         }
         let format = header.point_format();
+        let mut chunk_size = None;
         let decoder = if format.is_compressed {
             let vlr = header.laz_vlr().map_err(|e| {
                 format_error(path, format!("invalid LASzip VLR: {}", las_message(&e)))
             })?;
+            if !vlr.uses_variable_size_chunks() {
+                chunk_size = Some(u64::from(vlr.chunk_size()).max(1));
+            }
             guarded(path, || {
                 let laz_err = |e: laz::LasZipError| {
                     format_error(
@@ -321,9 +352,12 @@ impl Current {
                     )
                 };
                 Ok(if parallel {
-                    Decoder::ParLaz(Box::new(
-                        laz::ParLasZipDecompressor::new(read, vlr).map_err(laz_err)?,
-                    ))
+                    Decoder::Chunks(Box::new(ChunkDecoder::open(
+                        path,
+                        read,
+                        vlr,
+                        source.info.point_count,
+                    )?))
                 } else {
                     Decoder::Laz(Box::new(
                         laz::LasZipDecompressor::new(read, vlr).map_err(laz_err)?,
@@ -341,6 +375,7 @@ impl Current {
             buf: Vec::new(),
             pos: 0,
             next_index: source.first_index,
+            chunk_size,
             remaining: source.info.point_count,
         })
     }
@@ -351,6 +386,13 @@ impl Current {
 
     /// Decodes the next batch of records into `buf`.
     fn refill(&mut self, path: &Path, batch: usize) -> Result<()> {
+        if let Decoder::Chunks(d) = &mut self.decoder {
+            let buf = &mut self.buf;
+            let n = guarded(path, || d.decode(path, batch as u64, buf))?;
+            self.pos = 0;
+            self.remaining -= n;
+            return Ok(());
+        }
         let n = self.remaining.min(batch as u64) as usize;
         self.buf.resize(n * self.record_len, 0);
         self.pos = 0;
@@ -373,7 +415,7 @@ impl Current {
             Decoder::Laz(d) => d
                 .decompress_many(buf)
                 .map_err(|e| laz_err(laz::LasZipError::IoError(e))),
-            Decoder::ParLaz(d) => d.decompress_many(buf).map_err(laz_err),
+            Decoder::Chunks(_) => Err(Error::Internal("chunks are decoded above".into())),
         })?;
         self.remaining -= n as u64;
         Ok(())
@@ -393,6 +435,7 @@ impl Current {
         while kept < room && self.pos < self.buf.len() {
             let rec = &self.buf[self.pos..self.pos + self.record_len];
             let mut p = decode(rec, self.extended, self.next_index);
+            check_point(&p, source, self.chunk_size)?;
             if !identity {
                 convert(&mut p, source)?;
             }
@@ -430,6 +473,54 @@ fn decode(rec: &[u8], extended: bool, index: u64) -> LidarPoint {
         number_of_returns,
         flags,
     }
+}
+
+/// Checks what a decoded point can be checked for: inside the header's bounds (one scale step of
+/// slack) and a return number no larger than the number of returns (when that is known, > 0).
+/// A point that fails is corrupt data that happened to decode.
+#[inline]
+fn check_point(p: &LidarPoint, source: &Source, chunk_size: Option<u64>) -> Result<()> {
+    let in_box = source.int_bounds.is_none_or(|b| {
+        let v = [i64::from(p.x), i64::from(p.y), i64::from(p.z)];
+        (0..3).all(|k| v[k] >= b[k][0] && v[k] <= b[k][1])
+    });
+    let returns_ok = p.number_of_returns == 0 || p.return_number <= p.number_of_returns;
+    if in_box && returns_ok {
+        return Ok(());
+    }
+    Err(corrupt_point(p, source, chunk_size, !in_box))
+}
+
+#[cold]
+fn corrupt_point(p: &LidarPoint, source: &Source, chunk_size: Option<u64>, out: bool) -> Error {
+    let n = p.index - source.first_index;
+    let i = &source.info;
+    let at = match chunk_size.filter(|_| i.compressed) {
+        Some(c) => format!("chunk {}, point {n}", n / c),
+        None => format!("point {n}"),
+    };
+    let what = if out {
+        let w = |k: usize, v: i32| i.offset[k] + i.scale[k] * f64::from(v);
+        format!(
+            "its position ({}, {}, {}) is outside the header's bounds x {} .. {}, y {} .. {}, \
+             z {} .. {} (the data is damaged, or the header's bounds are wrong)",
+            w(0, p.x),
+            w(1, p.y),
+            w(2, p.z),
+            i.bounds.min[0],
+            i.bounds.max[0],
+            i.bounds.min[1],
+            i.bounds.max[1],
+            i.bounds.min[2],
+            i.bounds.max[2]
+        )
+    } else {
+        format!(
+            "return number {} of {} returns",
+            p.return_number, p.number_of_returns
+        )
+    };
+    format_error(&i.path, format!("corrupt point data ({at}): {what}"))
 }
 
 /// Converts a point's integers into the common system.
