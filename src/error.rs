@@ -173,14 +173,12 @@ pub enum Error {
     },
 
     /// The filters left fewer than three distinct points to triangulate.
-    #[error("{}", no_points_message(.files, .stats, *.distinct))]
+    #[error("{}: {what}", names(.files))]
     NothingLeft {
         /// The input files.
         files: Vec<PathBuf>,
-        /// What each filter read, kept and dropped.
-        stats: crate::input::las::FilterStats,
-        /// Distinct (x, y) positions among the points kept.
-        distinct: u64,
+        /// What each filter dropped (`FilterStats::describe` in `input::las`).
+        what: String,
     },
 
     /// A buffer the job needs cannot be allocated (or would exceed the memory budget).
@@ -259,43 +257,10 @@ impl ErrorKind {
     }
 }
 
-/// The message of [`Error::NothingLeft`]: which filters dropped how many points.
-fn no_points_message(
-    files: &[PathBuf],
-    s: &crate::input::las::FilterStats,
-    distinct: u64,
-) -> String {
+/// The files' names, comma-separated.
+fn names(files: &[PathBuf]) -> String {
     let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
-    let mut dropped = Vec::new();
-    for (n, what) in [
-        (s.withheld, "withheld (--keep-withheld keeps them)"),
-        (s.class, "by --class"),
-        (s.returns, "by --returns"),
-        (s.bbox, "outside --bbox"),
-    ] {
-        if n > 0 {
-            dropped.push(format!("{n} {what}"));
-        }
-    }
-    if s.read == 0 {
-        return format!("{}: the files hold no point", names.join(", "));
-    }
-    let mut what = format!("of {} point(s) read, {}", s.read, dropped.join(", "));
-    if s.kept == 0 {
-        return format!(
-            "{}: no point left after the filters: {what}",
-            names.join(", ")
-        );
-    }
-    what.push_str(&format!(
-        "; {} kept, {} of them exact (x, y) duplicates",
-        s.kept,
-        s.kept.saturating_sub(distinct)
-    ));
-    format!(
-        "{}: fewer than 3 distinct points left after the filters ({distinct} distinct): {what}",
-        names.join(", ")
-    )
+    names.join(", ")
 }
 
 impl Error {

@@ -3,7 +3,8 @@
 use anyhow::Context;
 use std::path::PathBuf;
 use sweeptin::breaklines::{CleanOptions, read_files};
-use sweeptin::validate::{CdtCheck, StreamCheck, validate_cdt_with, validate_stream};
+use sweeptin::input::{StinEvent, StinReader};
+use sweeptin::validate::{CdtCheck, StreamCheck, StreamChecker, StreamReport, validate_cdt_with};
 
 /// Arguments of `sweeptin check`.
 #[derive(clap::Args, Debug)]
@@ -91,7 +92,7 @@ fn check_stream(args: &Args) -> anyhow::Result<()> {
         convex_hull: !args.trimmed,
         delaunay: !args.not_delaunay,
     };
-    let r = validate_stream(&args.mesh, &check)
+    let r = validate_stream(&args.mesh, check)
         .with_context(|| format!("{} is not valid", args.mesh.display()))?;
     println!(
         "{}: valid ({} vertices, {} triangles; checked holding at most {} vertices and {} edges)",
@@ -102,4 +103,19 @@ fn check_stream(args: &Args) -> anyhow::Result<()> {
         r.peak_pending_edges
     );
     Ok(())
+}
+
+/// Feeds the events of the streaming mesh at `path` to a [`StreamChecker`].
+fn validate_stream(path: &std::path::Path, check: StreamCheck) -> sweeptin::Result<StreamReport> {
+    let mut r = StinReader::open(path)?;
+    let mut c = StreamChecker::new(check);
+    while let Some(ev) = r.next()? {
+        match ev {
+            StinEvent::Vertex(p) => c.vertex(p)?,
+            StinEvent::Triangle { ids, points } => c.triangle(ids, points)?,
+            StinEvent::VertexDone(v) => c.done(v)?,
+            StinEvent::Watermark(_) => {}
+        }
+    }
+    c.finish()
 }

@@ -461,9 +461,10 @@ mod tests {
             err_of("1 2 1e999"),
             (1, "z is not a finite number: \"1e999\"".into())
         );
+        // Bytes no text has: said so, not quoted back.
         assert_eq!(
             err_of(b"1 2 3\n4 5 6\xff\n").1,
-            "z is not a number: \"6\u{fffd}\""
+            "binary data, not text: this is not an XYZ text file"
         );
     }
 

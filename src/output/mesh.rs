@@ -301,7 +301,7 @@ mod tests {
         let e = create_mesh_sink(&p, None, &MeshMeta::default())
             .err()
             .unwrap();
-        assert!(matches!(e, Error::Output { .. }), "{e}");
+        assert!(matches!(e, Error::Options(_)), "{e}");
         assert!(e.to_string().contains(".ply"), "{e}");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }

@@ -92,8 +92,7 @@ pub(crate) fn run(
     if rd.points == 0 {
         return Err(Error::NothingLeft {
             files: input.paths.clone(),
-            stats: rd.stats,
-            distinct: 0,
+            what: rd.stats.describe(0),
         });
     }
     let anon = AnonPeak::default();
@@ -140,8 +139,7 @@ pub(crate) fn run(
         return Err(if kept < 3 && filtered {
             Error::NothingLeft {
                 files: input.paths.clone(),
-                stats: rd.stats,
-                distinct: kept,
+                what: rd.stats.describe(kept),
             }
         } else if kept < 3 {
             Error::TooFewPoints {

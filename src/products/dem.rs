@@ -50,7 +50,8 @@ pub struct DemOptions {
     pub nodata: f32,
     /// Output format; by extension when `None`.
     pub format: Option<RasterFormat>,
-    /// Bytes of rows the sink may hold in memory (its share of the run's `--mem`).
+    /// Bytes of rows the sink may hold in memory (its share of the run's `--mem`; by default
+    /// 256 MiB, a quarter of the default budget).
     pub memory: u64,
 }
 
@@ -60,7 +61,7 @@ impl Default for DemOptions {
             grid: GridPlan::default(),
             nodata: -9999.0,
             format: None,
-            memory: crate::pipeline::DEFAULT_MEM / 4,
+            memory: 256 << 20,
         }
     }
 }

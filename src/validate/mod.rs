@@ -72,7 +72,7 @@ use std::sync::atomic::{AtomicU32, Ordering as AtomicOrdering};
 mod cdt;
 mod stream;
 pub use cdt::{CdtCheck, validate_cdt, validate_cdt_with};
-pub use stream::{StreamCheck, StreamReport, validate_stream};
+pub use stream::{StreamCheck, StreamChecker, StreamReport};
 
 /// What a valid mesh is made of.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]

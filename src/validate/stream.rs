@@ -1,4 +1,5 @@
-//! Validation of a streaming mesh (`.stin`) in bounded memory: [`validate_stream`].
+//! Validation of a streaming mesh (`.stin`) in bounded memory: [`StreamChecker`], fed the
+//! stream's events (`sweeptin check mesh.stin` reads them with `input::stin::StinReader`).
 //!
 //! The in-memory validator ([`super::validate`]) holds the whole mesh. A `.stin` says when a
 //! vertex is no longer used (its *vertex done* record), so a checker can keep only what the
@@ -25,8 +26,6 @@ use super::Report;
 use crate::error::{Error, Result};
 use crate::geom::predicates::{CircleSide, Orientation, incircle_exact, orient};
 use crate::idmap::{FastMap, IdMap};
-use crate::input::stin::{StinEvent, StinReader};
-use std::path::Path;
 
 /// What to check (see [`validate_stream`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,8 +56,10 @@ struct Pending {
     opposite: [f64; 2],
 }
 
-/// The checker's state.
-struct Checker {
+/// Checks a streaming mesh as its events come (see the module docs): [`StreamChecker::vertex`],
+/// [`StreamChecker::triangle`], [`StreamChecker::done`] in stream order, then
+/// [`StreamChecker::finish`].
+pub struct StreamChecker {
     check: StreamCheck,
     live: IdMap<Live>,
     positions: FastMap<(u64, u64), u64>,
@@ -73,9 +74,10 @@ struct Checker {
     turning: f64,
     peak_live: usize,
     peak_edges: usize,
+    vertices: u64,
 }
 
-/// What [`validate_stream`] found, with the memory it needed.
+/// What [`StreamChecker`] found, with the memory it needed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct StreamReport {
     /// The counts (as [`super::validate`] reports them; `cocircular_edges` counted too).
@@ -90,8 +92,32 @@ fn invalid(m: String) -> Error {
     Error::Invalid(m)
 }
 
-impl Checker {
-    fn vertex(&mut self, id: u64, p: [f64; 3]) -> Result<()> {
+impl StreamChecker {
+    /// A checker making the checks of `check`.
+    pub fn new(check: StreamCheck) -> StreamChecker {
+        StreamChecker {
+            check,
+            live: IdMap::default(),
+            positions: FastMap::default(),
+            edges: FastMap::default(),
+            star: IdMap::default(),
+            boundary: IdMap::default(),
+            report: Report::default(),
+            used_vertices: 0,
+            turning: 0.0,
+            peak_live: 0,
+            peak_edges: 0,
+            vertices: 0,
+        }
+    }
+
+    /// The next vertex (numbered 0, 1, … in order).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for a vertex at the position of a live one.
+    pub fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
+        let id = self.vertices;
+        self.vertices += 1;
         let xy = [p[0] + 0.0, p[1] + 0.0];
         let key = (xy[0].to_bits(), xy[1].to_bits());
         if let Some(other) = self.positions.insert(key, id) {
@@ -105,7 +131,12 @@ impl Checker {
         Ok(())
     }
 
-    fn triangle(&mut self, n: u64, ids: [u64; 3], points: [[f64; 3]; 3]) -> Result<()> {
+    /// The next triangle: its vertices' numbers and coordinates.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] naming the triangle (orientation, an edge used twice, not Delaunay).
+    pub fn triangle(&mut self, ids: [u64; 3], points: [[f64; 3]; 3]) -> Result<()> {
+        let n = self.report.triangles;
         let p = points.map(|q| [q[0], q[1]]);
         if orient(p[0], p[1], p[2]) != Orientation::CounterClockwise {
             return Err(invalid(format!(
@@ -160,7 +191,11 @@ impl Checker {
         Ok(())
     }
 
-    fn done(&mut self, v: u64) -> Result<()> {
+    /// Vertex `v` is used by no later triangle.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for an unused vertex or a boundary that is not convex there.
+    pub fn done(&mut self, v: u64) -> Result<()> {
         let Some(l) = self.live.remove(&v) else {
             return Ok(());
         };
@@ -234,7 +269,11 @@ impl Checker {
         }
     }
 
-    fn finish(mut self) -> Result<StreamReport> {
+    /// The end of the stream: the vertices still live are done, then the global counts.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for a mesh that is not one convex piece.
+    pub fn finish(mut self) -> Result<StreamReport> {
         let mut rest: Vec<u64> = self.live.keys().copied().collect();
         rest.sort_unstable();
         for v in rest {
@@ -268,66 +307,26 @@ impl Checker {
     }
 }
 
-/// Validates the streaming mesh at `path` in memory bounded by the live part of the stream (see
-/// the module docs for the checks).
-///
-/// # Errors
-/// [`Error::Format`] for a file that is not a valid stream (truncated, inconsistent records);
-/// [`Error::Invalid`] naming the first violation.
-pub fn validate_stream(path: &Path, check: &StreamCheck) -> Result<StreamReport> {
-    let mut r = StinReader::open(path)?;
-    let mut c = Checker {
-        check: *check,
-        live: IdMap::default(),
-        positions: FastMap::default(),
-        edges: FastMap::default(),
-        star: IdMap::default(),
-        boundary: IdMap::default(),
-        report: Report::default(),
-        used_vertices: 0,
-        turning: 0.0,
-        peak_live: 0,
-        peak_edges: 0,
-    };
-    let (mut vertices, mut triangles) = (0u64, 0u64);
-    while let Some(ev) = r.next()? {
-        match ev {
-            StinEvent::Vertex(p) => {
-                c.vertex(vertices, p)?;
-                vertices += 1;
-            }
-            StinEvent::Triangle { ids, points } => {
-                c.triangle(triangles, ids, points)?;
-                triangles += 1;
-            }
-            StinEvent::VertexDone(v) => c.done(v)?,
-            StinEvent::Watermark(_) => {}
-        }
-    }
-    c.finish()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::{MeshMeta, StinWriter};
-    use crate::sink::MeshSink;
 
-    fn write(path: &Path, vertices: &[[f64; 3]], triangles: &[[u64; 3]]) {
-        let mut w = StinWriter::create(path, &MeshMeta::default()).unwrap();
+    /// Feeds a mesh in the order a `.stin` would: vertices, triangles, no done records (the end
+    /// finishes every vertex).
+    fn check(vertices: &[[f64; 3]], triangles: &[[u64; 3]], check: StreamCheck) -> Result<Report> {
+        let mut c = StreamChecker::new(check);
         for v in vertices {
-            w.vertex(*v).unwrap();
+            c.vertex(*v)?;
         }
         for t in triangles {
-            w.triangle(*t).unwrap();
+            c.triangle(*t, t.map(|i| vertices[i as usize]))?;
         }
-        w.finish().unwrap();
+        c.finish().map(|r| r.report)
     }
 
     #[test]
     fn a_square_passes_and_broken_ones_are_named() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("m.stin");
+        let all = StreamCheck::default();
         let sq = [
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],
@@ -336,23 +335,20 @@ mod tests {
             [0.5, 0.4, 1.0],
         ];
         let good = [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]];
-        write(&p, &sq, &good);
-        let r = validate_stream(&p, &StreamCheck::default()).unwrap();
-        assert_eq!((r.report.vertices, r.report.triangles), (5, 4));
-        assert_eq!((r.report.edges, r.report.hull_vertices), (8, 4));
-        // Clockwise triangle.
-        write(&p, &sq, &[[0, 4, 1], [1, 2, 4], [2, 3, 4], [3, 0, 4]]);
-        let e = validate_stream(&p, &StreamCheck::default()).unwrap_err();
+        let r = check(&sq, &good, all).unwrap();
+        assert_eq!((r.vertices, r.triangles), (5, 4));
+        assert_eq!((r.edges, r.hull_vertices), (8, 4));
+        let e = check(&sq, &[[0, 4, 1], [1, 2, 4], [2, 3, 4], [3, 0, 4]], all).unwrap_err();
         assert!(e.to_string().contains("counter-clockwise"), "{e}");
         // A notch: the boundary turns right.
-        write(&p, &sq, &[[0, 1, 4], [1, 2, 4], [2, 3, 4]]);
-        let e = validate_stream(&p, &StreamCheck::default()).unwrap_err();
+        let notch = [[0, 1, 4], [1, 2, 4], [2, 3, 4]];
+        let e = check(&sq, &notch, all).unwrap_err();
         assert!(e.to_string().contains("turns right"), "{e}");
         let trimmed = StreamCheck {
             convex_hull: false,
-            ..StreamCheck::default()
+            ..all
         };
-        validate_stream(&p, &trimmed).unwrap();
+        check(&sq, &notch, trimmed).unwrap();
         // Not Delaunay: the long diagonal of a thin rhombus.
         let rh = [
             [0.0, 0.0, 0.0],
@@ -360,16 +356,15 @@ mod tests {
             [4.0, 0.0, 0.0],
             [2.0, 0.2, 0.0],
         ];
-        write(&p, &rh, &[[0, 1, 2], [0, 2, 3]]);
-        let e = validate_stream(&p, &StreamCheck::default()).unwrap_err();
+        let e = check(&rh, &[[0, 1, 2], [0, 2, 3]], all).unwrap_err();
         assert!(e.to_string().contains("locally Delaunay"), "{e}");
-        write(&p, &rh, &[[0, 1, 3], [1, 2, 3]]);
-        validate_stream(&p, &StreamCheck::default()).unwrap();
-        // An unused vertex.
+        check(&rh, &[[0, 1, 3], [1, 2, 3]], all).unwrap();
+        // An unused vertex; two triangles on one directed edge.
         let mut extra = sq.to_vec();
         extra.push([9.0, 9.0, 0.0]);
-        write(&p, &extra, &good);
-        let e = validate_stream(&p, &StreamCheck::default()).unwrap_err();
+        let e = check(&extra, &good, all).unwrap_err();
         assert!(e.to_string().contains("used by no triangle"), "{e}");
+        let e = check(&sq, &[[0, 1, 4], [0, 1, 2]], all).unwrap_err();
+        assert!(e.to_string().contains("same direction"), "{e}");
     }
 }
