@@ -31,7 +31,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         z_factor: args.z_factor,
     }
     .check()?;
-    super::input::distinct_outputs(&[("-o", &args.output)], &[args.dem.clone()], "hillshade")?;
+    super::input::distinct_outputs(
+        &[("-o", &args.output)],
+        std::slice::from_ref(&args.dem),
+        "hillshade",
+    )?;
     check_output(&args.output)?;
     let o = HillshadeOptions {
         azimuth: args.azimuth,

@@ -540,9 +540,7 @@ fn empty_task(
     match fanout.finish()? {
         ProductSummary::Fanout(s) => Ok(s),
         other => {
-            return Err(
-                sweeptin::Error::Internal(format!("the products' summary is {other:?}")).into(),
-            );
+            Err(sweeptin::Error::Internal(format!("the products' summary is {other:?}")).into())
         }
     }
 }

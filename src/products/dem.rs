@@ -166,16 +166,13 @@ impl Raster {
         let count = count.min(self.spec.rows);
         while self.written < count {
             let row = self.spec.rows - 1 - self.written;
-            match self.band.pop_front() {
-                Some(values) => {
-                    self.cells_with_data +=
-                        values.iter().filter(|v| !self.spec.is_nodata(**v)).count() as u64;
-                    self.writer.write_row(row, &values)?;
-                    self.spare.push(values);
-                }
-                // A row no triangle reached: the writers fill rows never written with nodata,
-                // so nothing is allocated or written for it.
-                None => {}
+            // A row no triangle reached is not in the band: the writers fill rows never
+            // written with nodata, so nothing is allocated or written for it.
+            if let Some(values) = self.band.pop_front() {
+                self.cells_with_data +=
+                    values.iter().filter(|v| !self.spec.is_nodata(**v)).count() as u64;
+                self.writer.write_row(row, &values)?;
+                self.spare.push(values);
             }
             self.written += 1;
         }

@@ -74,18 +74,17 @@ struct Source {
 fn int_bounds(info: &FileInfo) -> Option<[[i64; 2]; 3]> {
     let b = &info.bounds;
     let zero = b.min.iter().chain(&b.max).all(|v| *v == 0.0);
-    if zero || (0..3).any(|k| !(b.min[k] <= b.max[k]) || !(info.scale[k] > 0.0)) {
+    let usable = (0..3).all(|k| b.min[k] <= b.max[k] && info.scale[k] > 0.0);
+    if zero || !usable {
         return None;
     }
-    let mut out = [[0i64; 2]; 3];
-    for k in 0..3 {
+    Some(std::array::from_fn(|k| {
         let (s, o) = (info.scale[k], info.offset[k]);
-        out[k] = [
+        [
             ((b.min[k] - o) / s).floor() as i64 - 1,
             ((b.max[k] - o) / s).ceil() as i64 + 1,
-        ];
-    }
-    Some(out)
+        ]
+    }))
 }
 
 /// The file being read.
