@@ -27,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::geom::predicates::{CircleSide, Orientation, incircle_exact, orient};
 use crate::idmap::{FastMap, IdMap};
 
-/// What to check (see [`validate_stream`]).
+/// What a [`StreamChecker`] checks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StreamCheck {
     /// The boundary is the convex hull and the mesh has no hole (5, 6; off for trimmed meshes).
