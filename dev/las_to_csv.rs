@@ -20,14 +20,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .split_first()
         .ok_or("usage: las_to_csv [--class L] OUT FILE...")?;
     let mut reader = LidarReader::open(files, &filter)?;
-    let q = *reader.quantization();
     let mut w = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(out)?);
     writeln!(w, "x,y,z")?;
     let mut chunk = Vec::with_capacity(1 << 20);
     let mut n = 0u64;
     while reader.read_chunk(&mut chunk, 1 << 20)? > 0 {
         for p in &chunk {
-            let [x, y, z] = q.to_world(p);
+            let [x, y, z] = [p.x, p.y, p.z];
             writeln!(w, "{x},{y},{z}")?;
         }
         n += chunk.len() as u64;

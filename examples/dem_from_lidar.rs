@@ -10,7 +10,7 @@ use sweeptin::input::las::Filter;
 use sweeptin::pipeline::{Input, RunConfig, RunOptions, run};
 use sweeptin::products::contours::{ContourOptions, ContourSink};
 use sweeptin::products::dem::{DemOptions, DemSink};
-use sweeptin::raster::{GridExtent, GridPlan};
+use sweeptin::raster::{Align, GridExtent, GridPlan};
 use sweeptin::sink::{Fanout, ProductSummary, TriangleSink};
 use sweeptin::tiles::TileOptions;
 
@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dem_sink = DemSink::new(
         dem.as_ref(),
         DemOptions {
-            grid: GridPlan::new(1.0, GridExtent::Auto)?,
+            grid: GridPlan::new(1.0, GridExtent::Auto, Align::Edges)?,
             ..DemOptions::default()
         },
     )?;

@@ -9,8 +9,20 @@ cd "$(dirname "$0")/.."
 if ! python3 -c 'import plyfile' 2>/dev/null; then
     python3 -m pip install --quiet --disable-pip-version-check plyfile==1.1.5 || true
 fi
+if ! command -v rio >/dev/null 2>&1 || ! rio cogeo --version >/dev/null 2>&1; then
+    python3 -m pip install --quiet --disable-pip-version-check rio-cogeo==7.0.4 || true
+fi
+if ! python3 -c 'import copclib, laspy, lazrs' 2>/dev/null; then
+    # COPC copies for tests/inputs.rs (scripts/make_copc.py) and laspy as the reference reader.
+    python3 -m pip install --quiet --disable-pip-version-check copclib==2.6.3 laspy==2.7.0 \
+        lazrs==0.8.2 || true
+fi
 if ! command -v gdalinfo >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
     (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gdal-bin >/dev/null) || true
+fi
+
+if ! command -v parallel >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq parallel >/dev/null) || true
 fi
 
 cargo fmt --all -- --check

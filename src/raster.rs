@@ -10,24 +10,64 @@
 //!
 //! # Alignment
 //!
-//! Grids that sweeptin produces are *aligned*: every centre lies on a whole multiple of the cell
-//! size, `x = kx × cell` and `y = ky × cell` for integers `kx`, `ky` (the grid's *lattice*), so
-//! rasters from separate runs over adjacent tiles line up exactly and a mosaic of them equals
-//! one run over the whole area. A grid stores its lattice indices, and every centre is computed
+//! Grids that sweeptin produces are *aligned* to a lattice of the cell size ([`Align`]), so
+//! rasters from separate runs over adjacent tiles line up exactly and a mosaic of them equals one
+//! run over the whole area:
+//! - [`Align::Edges`] (the default): cell **edges** lie on whole multiples of the cell size, and
+//!   centres at `(k + ½) × cell` — the convention of GDAL's `-tap`, LAStools' `-use_tile_bb` and
+//!   lasR, so a 1 km tile at 1 m has 1000 × 1000 cells that cover it exactly;
+//! - [`Align::Centres`]: cell **centres** lie on whole multiples, `x = kx × cell` — the lattice of
+//!   IGN's LiDAR HD DTM tiles (a 50 m tile at 0.5 m has its 100 × 100 centres on the tile's
+//!   0.5 m lattice, its edges a quarter of a metre outside).
+//!
+//! A grid stores its lattice indices `kx`, `ky` and its alignment, and every centre is computed
 //! from them ([`GridSpec::centre_x`], [`GridSpec::centre_y`]): the same bits in every run.
 //!
-//! Which cells a grid has is decided in one place, [`GridPlan`], from a cell size and a
-//! [`GridExtent`]:
+//! Which cells a grid has is decided in one place, [`GridPlan`], from a cell size, a
+//! [`GridExtent`] and an [`Align`]:
 //! - [`GridExtent::Auto`]: every centre inside the bounds of the data;
-//! - [`GridExtent::BBox`]: the centres in `[xmin, xmax) × (ymin, ymax]` — the convention of IGN's
-//!   LiDAR HD DTM tiles, so boxes that touch share no centre and leave none out. The box's sides
-//!   must be multiples of the cell size, or are rounded outwards to them with `snap`.
+//! - [`GridExtent::BBox`]: the centres in `[xmin, xmax) × (ymin, ymax]` (with edge alignment,
+//!   exactly the cells that tile the box), so boxes that touch share no cell and leave none out:
+//!   a cell belongs to the box that holds its centre. The box's sides must be multiples of the
+//!   cell size, or are rounded outwards to them with `snap`.
 
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use std::ops::Range;
 
-/// A north-up grid of square cells whose centres lie on whole multiples of the cell size.
+/// Where a grid's lattice puts the cells (see the module docs).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Align {
+    /// Cell edges on whole multiples of the cell size (GDAL `-tap`, LAStools, lasR).
+    #[default]
+    Edges,
+    /// Cell centres on whole multiples of the cell size.
+    #[value(alias = "centers")]
+    Centres,
+}
+
+impl Align {
+    /// The centre of lattice index `k` is `(k + offset) × cell`.
+    fn offset(self) -> f64 {
+        match self {
+            Align::Edges => 0.5,
+            Align::Centres => 0.0,
+        }
+    }
+}
+
+/// A north-up grid of square cells on the lattice of the cell size ([`Align`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridSpec {
     /// Side of a cell (> 0), in the units of the coordinates.
@@ -44,11 +84,13 @@ pub struct GridSpec {
     kx0: i64,
     /// Lattice index of the southern row's centre (`y = ky0 × cell`).
     ky0: i64,
+    /// Where the lattice puts the cells.
+    align: Align,
 }
 
 impl GridSpec {
     /// The grid whose lower-left cell centre is `(kx0 × cell, ky0 × cell)`: centres on whole
-    /// multiples of the cell size.
+    /// multiples of the cell size ([`Align::Centres`]; [`GridSpec::with_align`] changes it).
     pub fn aligned(cell: f64, kx0: i64, ky0: i64, cols: u32, rows: u32, nodata: f32) -> GridSpec {
         GridSpec {
             cell,
@@ -58,13 +100,37 @@ impl GridSpec {
             crs: None,
             kx0,
             ky0,
+            align: Align::Centres,
         }
+    }
+
+    /// The same lattice indices with alignment `align`: with [`Align::Edges`] the lower-left
+    /// cell covers `[kx0 × cell, (kx0 + 1) × cell] × [ky0 × cell, (ky0 + 1) × cell]`.
+    pub fn with_align(mut self, align: Align) -> GridSpec {
+        self.align = align;
+        self
+    }
+
+    /// The grid's alignment.
+    pub fn align(&self) -> Align {
+        self.align
     }
 
     /// The coordinate of lattice index `k`: the one formula for where centres are.
     #[inline]
     fn at(&self, k: i64) -> f64 {
-        k as f64 * self.cell
+        match self.align {
+            Align::Centres => k as f64 * self.cell,
+            Align::Edges => (k as f64 + 0.5) * self.cell,
+        }
+    }
+
+    /// The lower (western or southern) edge of the cells of lattice index `k`.
+    fn edge(&self, k: i64) -> f64 {
+        match self.align {
+            Align::Centres => self.at(k) - self.cell / 2.0,
+            Align::Edges => k as f64 * self.cell,
+        }
     }
 
     /// Lattice index of the northern row's centre.
@@ -74,11 +140,13 @@ impl GridSpec {
 
     /// Upper-left outer corner `[x, y]` of cell (0, 0) (row 0 is the northern row).
     pub fn origin(&self) -> [f64; 2] {
-        let c = self.cell;
-        [
-            self.at(self.kx0) - c / 2.0,
-            self.at(self.ky_top()) + c / 2.0,
-        ]
+        match self.align {
+            Align::Centres => [
+                self.edge(self.kx0),
+                self.at(self.ky_top()) + self.cell / 2.0,
+            ],
+            Align::Edges => [self.edge(self.kx0), self.edge(self.ky_top() + 1)],
+        }
     }
 
     /// `x` of the centre of column `col`.
@@ -94,9 +162,9 @@ impl GridSpec {
     /// The columns whose centres may lie in `[xmin, xmax]`: all of those, and at most one more
     /// on each side (an exact test decides).
     pub fn cols_over(&self, xmin: f64, xmax: f64) -> Range<u32> {
-        let c = self.cell;
-        let lo = ((xmin / c).floor() as i64).max(self.kx0);
-        let hi = ((xmax / c).ceil() as i64).min(self.kx0 + i64::from(self.cols) - 1);
+        let (c, off) = (self.cell, self.align.offset());
+        let lo = ((xmin / c - off).floor() as i64).max(self.kx0);
+        let hi = ((xmax / c - off).ceil() as i64).min(self.kx0 + i64::from(self.cols) - 1);
         if hi < lo {
             return 0..0;
         }
@@ -106,10 +174,10 @@ impl GridSpec {
     /// The rows whose centres may lie in `[ymin, ymax]`: all of those, and at most one more on
     /// each side (an exact test decides).
     pub fn rows_over(&self, ymin: f64, ymax: f64) -> Range<u32> {
-        let c = self.cell;
+        let (c, off) = (self.cell, self.align.offset());
         let top = self.ky_top();
-        let lo = ((ymin / c).floor() as i64).max(self.ky0);
-        let hi = ((ymax / c).ceil() as i64).min(top);
+        let lo = ((ymin / c - off).floor() as i64).max(self.ky0);
+        let hi = ((ymax / c - off).ceil() as i64).min(top);
         if hi < lo {
             return 0..0;
         }
@@ -119,7 +187,7 @@ impl GridSpec {
     /// How many rows, counted from the southern one, have their centre strictly below `y`.
     pub fn rows_below(&self, y: f64) -> u32 {
         // The lowest lattice index whose coordinate is at least y.
-        let mut k = (y / self.cell).ceil() as i64;
+        let mut k = (y / self.cell - self.align.offset()).ceil() as i64;
         if self.at(k) < y {
             k = k.saturating_add(1);
         }
@@ -171,12 +239,13 @@ pub enum GridExtent {
     },
 }
 
-/// A cell size and an extent, checked once ([`GridPlan::new`]); [`GridPlan::grid`] then gives
-/// the grid's cells.
+/// A cell size, an extent and an alignment, checked once ([`GridPlan::new`]); [`GridPlan::grid`]
+/// then gives the grid's cells.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridPlan {
     cell: f64,
     extent: GridExtent,
+    align: Align,
     /// For a box, its lattice `(kx0, ky0, cols, rows)`, which does not depend on the data.
     fixed: Option<(i64, i64, u32, u32)>,
     /// Most cells a grid may have ([`GridPlan::limit`]; no limit by default).
@@ -189,11 +258,12 @@ pub struct GridPlan {
 pub const DEFAULT_MAX_CELLS: u64 = 1 << 30;
 
 impl Default for GridPlan {
-    /// Cells of 1 over the data's bounds.
+    /// Cells of 1 over the data's bounds, edges on whole numbers.
     fn default() -> Self {
         GridPlan {
             cell: 1.0,
             extent: GridExtent::Auto,
+            align: Align::Edges,
             fixed: None,
             max_cells: u64::MAX,
         }
@@ -204,12 +274,12 @@ impl Default for GridPlan {
 const MULTIPLE_TOLERANCE: f64 = 1e-6;
 
 impl GridPlan {
-    /// Cells of side `cell` over `extent`.
+    /// Cells of side `cell` over `extent`, on the lattice `align` says.
     ///
     /// # Errors
     /// [`Error::Options`] for a cell size that is not a positive number, a box side that is not
     /// a multiple of the cell size (without `snap`), or a box holding no centre or too many.
-    pub fn new(cell: f64, extent: GridExtent) -> Result<GridPlan> {
+    pub fn new(cell: f64, extent: GridExtent, align: Align) -> Result<GridPlan> {
         if !(cell.is_finite() && cell > 0.0) {
             return Err(Error::Options(format!(
                 "the cell size must be a positive number, not {cell}"
@@ -234,16 +304,26 @@ impl GridPlan {
                 };
                 let (x0, y0) = (side(bbox[0], false)?, side(bbox[1], false)?);
                 let (x1, y1) = (side(bbox[2], true)?, side(bbox[3], true)?);
-                // Centres in [xmin, xmax) × (ymin, ymax].
-                Some(lattice(cell, x0, x1 - 1, y0 + 1, y1)?)
+                // Centres in [xmin, xmax) × (ymin, ymax]: with edges on the multiples, the cells
+                // between them.
+                Some(match align {
+                    Align::Centres => lattice(cell, x0, x1 - 1, y0 + 1, y1)?,
+                    Align::Edges => lattice(cell, x0, x1 - 1, y0, y1 - 1)?,
+                })
             }
         };
         Ok(GridPlan {
             cell,
             extent,
+            align,
             fixed,
             max_cells: u64::MAX,
         })
+    }
+
+    /// The alignment.
+    pub fn align(&self) -> Align {
+        self.align
     }
 
     /// The same plan refusing grids of more than `max_cells` cells (checked now for a box, when
@@ -301,18 +381,41 @@ impl GridPlan {
                         total: 0,
                     });
                 }
-                let c = self.cell;
+                let (c, off) = (self.cell, self.align.offset());
+                // The lattice indices whose centres `(k + off) × c` lie in the bounds, decided on
+                // the centres themselves (as `GridSpec` computes them).
+                let at = |k: i64| (k as f64 + off) * c;
+                let first = |v: f64| {
+                    let mut k = (v / c - off).ceil() as i64;
+                    while at(k) < v {
+                        k += 1;
+                    }
+                    while at(k - 1) >= v {
+                        k -= 1;
+                    }
+                    k
+                };
+                let last = |v: f64| {
+                    let mut k = (v / c - off).floor() as i64;
+                    while at(k) > v {
+                        k -= 1;
+                    }
+                    while at(k + 1) <= v {
+                        k += 1;
+                    }
+                    k
+                };
                 lattice(
                     c,
-                    (bounds[0] / c).ceil() as i64,
-                    (bounds[2] / c).floor() as i64,
-                    (bounds[1] / c).ceil() as i64,
-                    (bounds[3] / c).floor() as i64,
+                    first(bounds[0]),
+                    last(bounds[2]),
+                    first(bounds[1]),
+                    last(bounds[3]),
                 )?
             }
         };
         self.check_size(cols, rows)?;
-        Ok(GridSpec::aligned(self.cell, kx0, ky0, cols, rows, nodata))
+        Ok(GridSpec::aligned(self.cell, kx0, ky0, cols, rows, nodata).with_align(self.align))
     }
 }
 
@@ -394,7 +497,7 @@ mod tests {
 
     #[test]
     fn plan_auto_and_bbox() {
-        let auto = GridPlan::new(1.0, GridExtent::Auto).unwrap();
+        let auto = GridPlan::new(1.0, GridExtent::Auto, Align::Centres).unwrap();
         let g = auto.grid([0.5, 0.0, 3.0, 2.2], 0.0).unwrap();
         assert_eq!(lat(&g), (1, 0, 3, 3));
         let b = GridExtent::BBox {
@@ -402,25 +505,28 @@ mod tests {
             snap: false,
         };
         // Centres x 0..3, y 1..2.
-        let g = GridPlan::new(1.0, b).unwrap().grid([0.0; 4], 0.0).unwrap();
+        let g = GridPlan::new(1.0, b, Align::Centres)
+            .unwrap()
+            .grid([0.0; 4], 0.0)
+            .unwrap();
         assert_eq!(lat(&g), (0, 1, 4, 2));
         let off = GridExtent::BBox {
             bbox: [0.2, 0.0, 4.0, 2.0],
             snap: false,
         };
-        let e = GridPlan::new(1.0, off).unwrap_err();
+        let e = GridPlan::new(1.0, off, Align::Centres).unwrap_err();
         assert!(e.to_string().contains("--snap"), "{e}");
         let snapped = GridExtent::BBox {
             bbox: [0.2, -0.5, 3.5, 2.0],
             snap: true,
         };
-        let g = GridPlan::new(1.0, snapped)
+        let g = GridPlan::new(1.0, snapped, Align::Centres)
             .unwrap()
             .grid([0.0; 4], 0.0)
             .unwrap();
         assert_eq!(lat(&g), (0, 0, 4, 3));
-        assert!(GridPlan::new(0.0, GridExtent::Auto).is_err());
-        assert!(GridPlan::new(f64::NAN, GridExtent::Auto).is_err());
+        assert!(GridPlan::new(0.0, GridExtent::Auto, Align::Edges).is_err());
+        assert!(GridPlan::new(f64::NAN, GridExtent::Auto, Align::Edges).is_err());
         assert!(auto.grid([0.2, 0.2, 0.8, 0.8], 0.0).is_err());
         let none = [
             f64::INFINITY,
@@ -432,5 +538,46 @@ mod tests {
             auto.grid(none, 0.0),
             Err(Error::TooFewPoints { .. })
         ));
+    }
+
+    /// Edges on multiples: a 1 km tile at 1 m is 1000 × 1000 cells covering it exactly, the
+    /// same from the data's bounds and from the tile's box; centres at half cells.
+    #[test]
+    fn edge_alignment_tiles_a_box_exactly() {
+        let tile = GridExtent::BBox {
+            bbox: [511_000.0, 122_000.0, 512_000.0, 123_000.0],
+            snap: false,
+        };
+        let g = GridPlan::new(1.0, tile, Align::Edges)
+            .unwrap()
+            .grid([0.0; 4], -9999.0)
+            .unwrap();
+        assert_eq!((g.cols, g.rows), (1000, 1000));
+        assert_eq!(g.origin(), [511_000.0, 123_000.0]);
+        assert_eq!(g.extent(), [511_000.0, 122_000.0, 512_000.0, 123_000.0]);
+        assert_eq!(g.centre_x(0), 511_000.5);
+        assert_eq!(g.centre_y(0), 122_999.5);
+        assert_eq!(g.centre_y(999), 122_000.5);
+        // ARSO's points span 510999.895 – 512000.155: the centres inside are the same cells.
+        let auto = GridPlan::new(1.0, GridExtent::Auto, Align::Edges).unwrap();
+        let a = auto
+            .grid(
+                [510_999.895, 121_999.835, 512_000.155, 123_000.055],
+                -9999.0,
+            )
+            .unwrap();
+        assert_eq!(lat(&a), lat(&g));
+        // Today's lattice is one cell more each way.
+        let c = GridPlan::new(1.0, GridExtent::Auto, Align::Centres)
+            .unwrap()
+            .grid([511_000.0, 122_000.0, 512_000.0, 123_000.0], -9999.0)
+            .unwrap();
+        assert_eq!((c.cols, c.rows), (1001, 1001));
+        // Spans and rows below work on the half-cell centres.
+        let g = GridSpec::aligned(1.0, 10, 20, 5, 4, 0.0).with_align(Align::Edges);
+        assert_eq!(g.cols_over(11.6, 12.4), 1..3);
+        assert_eq!(g.rows_below(20.5), 0);
+        assert_eq!(g.rows_below(20.6), 1);
+        assert_eq!(g.rows_below(100.0), 4);
     }
 }

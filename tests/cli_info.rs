@@ -57,25 +57,29 @@ fn json_with_classes_and_filters() {
     let o = sweeptin(&["--json", "--classes"], &[lidar("lidR_Topography.laz")]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-    let f = &v[0];
+    let f = &v["files"][0];
     assert_eq!(f["point_count"], 73_403);
     assert_eq!(f["version"], serde_json::json!([1, 2]));
+    // The CRS once, no float noise in the bounds (at the file's 0.00025 precision).
     assert_eq!(f["crs"]["epsg"], 2949);
-    assert_eq!(f["crs_definition"], "EPSG:2949");
+    assert!(f.get("crs_definition").is_none());
+    assert_eq!(f["bounds"]["min"][0], 273357.14475);
     assert_eq!(
-        f["classes"],
+        f["stats"]["classes"],
         serde_json::json!({"1": 61_347, "2": 8_159, "9": 3_897})
     );
+    assert_eq!(v["summary"]["points"], 73_403);
     let o = sweeptin(
         &["--json", "--classes", "--class", "2", "--keep-withheld"],
         &[lidar("startinpy_small.laz")],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-    assert_eq!(v[0]["classes"], serde_json::json!({"2": 18_392}));
-    assert_eq!(v[0]["filter_stats"]["kept"], 18_392);
-    assert_eq!(v[0]["filter_stats"]["class"], 39_233 - 18_392);
-    assert_eq!(v[0]["crs"]["epsg"], 7415);
+    let f = &v["files"][0];
+    assert_eq!(f["stats"]["classes"], serde_json::json!({"2": 18_392}));
+    assert_eq!(f["stats"]["filter"]["kept"], 18_392);
+    assert_eq!(f["stats"]["filter"]["class"], 39_233 - 18_392);
+    assert_eq!(f["crs"]["epsg"], 7415);
 }
 
 #[test]
@@ -95,8 +99,9 @@ fn a_bad_file_is_reported_and_the_others_still_shown() {
     let o = sweeptin(&["--json"], &[bad]);
     assert_eq!(o.status.code(), Some(3));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["summary"]["failed"], 1);
     assert!(
-        v[0]["error"]
+        v["files"][0]["error"]
             .as_str()
             .unwrap()
             .contains("not a LAS/LAZ file")

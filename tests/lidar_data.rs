@@ -298,10 +298,9 @@ fn class_counts_match_the_readme() {
             pts.iter().all(|p| p.flags & LidarPoint::WITHHELD == 0),
             "{file}"
         );
-        let q = r.quantization();
         let hb = r.bounds();
         for a in 0..3 {
-            let vals = pts.iter().map(|p| q.to_world(p)[a]);
+            let vals = pts.iter().map(|p| [p.x, p.y, p.z][a]);
             let (lo, hi) = vals.fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(v), h.max(v)));
             assert!(
                 (lo - hb.min[a]).abs() < BOUNDS_TOL,
@@ -357,6 +356,7 @@ fn chunking_does_not_change_the_points() {
     let options = sweeptin::input::las::ReadOptions {
         parallel: false,
         batch_points: 777,
+        ..Default::default()
     };
     let mut r = LidarReader::open_with(&path, &filter, options).unwrap();
     let mut chunked = Vec::new();
@@ -407,8 +407,8 @@ fn returns_filters() {
 fn bbox_filter_is_inclusive() {
     let path = [lidar("startinpy_small.laz")];
     let (all, r) = read_all(&path, &Filter::keep_all());
-    let q = *r.quantization();
-    let world: Vec<[f64; 3]> = all.iter().map(|p| q.to_world(p)).collect();
+    let _ = r;
+    let world: Vec<[f64; 3]> = all.iter().map(|p| [p.x, p.y, p.z]).collect();
     // Point `a` sits on the (xmin, ymin) corner and point `b` on the (xmax, ymax) corner.
     let a = world[100];
     let b = *world
@@ -429,8 +429,8 @@ fn bbox_filter_is_inclusive() {
     let (got, r) = read_all(&path, &filter);
     assert!(!got.is_empty() && got.len() < all.len());
     assert_eq!(got, want);
-    assert!(got.iter().any(|p| q.to_world(p) == a));
-    assert!(got.iter().any(|p| q.to_world(p) == b));
+    assert!(got.iter().any(|p| [p.x, p.y, p.z] == a));
+    assert!(got.iter().any(|p| [p.x, p.y, p.z] == b));
     assert_eq!(r.stats().bbox, (all.len() - got.len()) as u64);
 }
 
@@ -453,9 +453,8 @@ fn adjacent_files_form_one_point_set() {
     assert!(second.iter().all(|p| p.index >= 640_510));
     assert!(pts[..195_988].iter().all(|p| p.index < 640_510));
     // The two crops share the edge x = 85000 m: x < 85000 in the first, > 85000 in the second.
-    let q = r.quantization();
-    assert!(pts[..195_988].iter().all(|p| q.to_world(p)[0] < 85000.0));
-    assert!(second.iter().all(|p| q.to_world(p)[0] > 85000.0));
+    assert!(pts[..195_988].iter().all(|p| p.x < 85000.0));
+    assert!(second.iter().all(|p| p.x > 85000.0));
     assert_eq!(r.crs(), None);
 }
 
@@ -480,7 +479,11 @@ fn ign_mosaic_and_ground_files_agree() {
         let (g_laz, rl) = read_all(&[ign_tile(x, y, false)], &ground);
         let (g_las, rs) = read_all(&[ign_tile(x, y, true)], &Filter::default());
         assert_eq!(rl.quantization(), rs.quantization());
-        let xyz = |v: &[LidarPoint]| v.iter().map(|p| (p.x, p.y, p.z)).collect::<Vec<_>>();
+        let xyz = |v: &[LidarPoint]| {
+            v.iter()
+                .map(|p| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits()))
+                .collect::<Vec<_>>()
+        };
         let (mut a, mut b) = (xyz(&g_laz), xyz(&g_las));
         a.sort_unstable();
         b.sort_unstable();
@@ -496,65 +499,45 @@ fn ign_mosaic_and_ground_files_agree() {
     );
 }
 
-/// Files with different scales and offsets on one lattice combine exactly; others are refused.
+/// Files with any scales and offsets combine in world coordinates: each point keeps the doubles
+/// its own file gives it, whatever it is read with; files declaring different CRSs are refused.
 #[test]
 fn multi_file_combination_rules() {
-    // startinpy_small (offset 84980, 446230) then AHN3 (offset 0), both at 1 mm: the common
-    // origin is the first file's offset, the AHN3 integers shift by whole steps.
+    // startinpy_small (offset 84980, 446230) then AHN3 (offset 0), both at 1 mm.
     let small = lidar("startinpy_small.laz");
     let ahn = lidar("ahn3_delft_cropped_2.laz");
     let (both, r) = read_all(&[small.clone(), ahn.clone()], &Filter::default());
     // One file declares EPSG:7415, the other nothing: accepted, the declared CRS is kept.
     assert_eq!(r.crs().and_then(|c| c.epsg), Some(7415));
-    assert_eq!(r.quantization().offset, [84980.0, 446230.0, 0.0]);
-    let (alone, r_alone) = read_all(std::slice::from_ref(&ahn), &Filter::default());
+    let (alone, _) = read_all(std::slice::from_ref(&ahn), &Filter::default());
     let shifted = &both[39_233..];
     assert_eq!(shifted.len(), alone.len());
     for (s, a) in shifted.iter().zip(&alone) {
-        assert_eq!((s.x, s.y, s.z), (a.x - 84_980_000, a.y - 446_230_000, a.z));
+        assert_eq!((s.x, s.y, s.z), (a.x, a.y, a.z));
         assert_eq!(s.index, a.index + 39_233);
-        let (ws, wa) = (
-            r.quantization().to_world(s),
-            r_alone.quantization().to_world(a),
-        );
-        assert!((0..3).all(|k| (ws[k] - wa[k]).abs() < 1e-6));
     }
-    // AHN3 (1 mm) and IGN (1 cm) share a lattice, but IGN's y (6.8e6 m) needs 6.8e9 steps of
-    // 1 mm: more than 32 bits. Refused when opening, naming the file.
-    let e = LidarReader::open(&[ahn, lidar(FACTS[3].file)], &Filter::default())
-        .unwrap_err()
-        .to_string();
+    // AHN3 (1 mm) with IGN (1 cm, y = 6.8e6 m: 6.8e9 steps of 1 mm, more than 32 bits), and
+    // ARSO (1 cm shifted by 5 mm) with IGN: refused before, combined now (the CRSs differ in
+    // the real world, but AHN3 and ARSO declare none).
+    let ign = lidar(FACTS[3].file);
+    let (mixed, _) = read_all(&[ahn.clone(), ign.clone()], &Filter::default());
+    let (ign_alone, _) = read_all(std::slice::from_ref(&ign), &Filter::default());
+    assert_eq!(mixed.len(), alone.len() + ign_alone.len());
+    assert_eq!(&mixed[alone.len()..].len(), &ign_alone.len());
     assert!(
-        e.contains("ign_test_semis_2023_0300") && e.contains("32-bit"),
-        "{e}"
+        mixed[alone.len()..]
+            .iter()
+            .zip(&ign_alone)
+            .all(|(m, i)| (m.x, m.y, m.z) == (i.x, i.y, i.z))
     );
     // Files declaring different CRSs are refused (IGN: EPSG:2154, Topography: EPSG:2949).
-    let e = LidarReader::open(
-        &[lidar(FACTS[3].file), lidar("lidR_Topography.laz")],
-        &Filter::default(),
-    )
-    .unwrap_err()
-    .to_string();
+    let e = LidarReader::open(&[ign, lidar("lidR_Topography.laz")], &Filter::default())
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("CRS") && e.contains("lidR_Topography.laz"),
         "{e}"
     );
-    // ARSO sits on a 1 cm lattice shifted by 5 mm: it cannot join a 1 cm file with offset 0 …
-    let arso = lidar("arso_TM_511_122_from_ept.laz");
-    let e = LidarReader::open(&[lidar(FACTS[3].file), arso.clone()], &Filter::default())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.contains("arso_TM_511_122") && e.contains("ign_test_semis_2023_0300"),
-        "{e}"
-    );
-    assert!(
-        e.contains("511500.025") && e.contains("not a whole number"),
-        "{e}"
-    );
-    // … but it can join a 1 mm file with offset 0, since 5 mm is a whole number of 1 mm steps.
-    let r = LidarReader::open(&[lidar(FACTS[0].file), arso], &Filter::default()).unwrap();
-    assert_eq!(r.quantization().scale, [0.001; 3]);
 }
 
 /// The big ARSO tile (13.2 M points): run with `cargo test --release -- --ignored arso`.

@@ -109,13 +109,13 @@ fn geotiff_and_ascii_grid_read_by_gdal() {
         return;
     };
     let info: Value = serde_json::from_str(&text).unwrap();
-    // Centres from 511000 to 511100 and 122000 to 122080 every 0.5: the outer corner is half a
-    // cell beyond.
+    // Points from 511000 to 511100 and 122000 to 122080: cell edges on multiples of 0.5 (the
+    // default alignment), so the grid covers exactly that box.
     assert_eq!(
         geotransform(&info),
-        [510_999.75, 0.5, 0.0, 122_080.25, 0.0, -0.5]
+        [511_000.0, 0.5, 0.0, 122_080.0, 0.0, -0.5]
     );
-    assert_eq!(info["size"], serde_json::json!([201, 161]));
+    assert_eq!(info["size"], serde_json::json!([200, 160]));
     assert_eq!(info["bands"][0]["noDataValue"].as_f64(), Some(-9999.0));
     assert_eq!(info["bands"][0]["type"], "Float32");
     let wkt = info["coordinateSystem"]["wkt"].as_str().unwrap();
@@ -123,9 +123,9 @@ fn geotiff_and_ascii_grid_read_by_gdal() {
     assert_eq!(info["metadata"][""]["AREA_OR_POINT"], "Area");
     // Values at cell centres (GDAL's pixel at a georeferenced point is the cell containing it).
     for (x, y) in [
-        (511_000.0, 122_000.0),
-        (511_037.5, 122_012.0),
-        (511_100.0, 122_080.0),
+        (511_000.25, 122_000.25),
+        (511_037.75, 122_012.25),
+        (511_099.75, 122_079.75),
     ] {
         let v = gdal(
             "gdallocationinfo",
@@ -145,7 +145,7 @@ fn geotiff_and_ascii_grid_read_by_gdal() {
     let info: Value = serde_json::from_str(&text).unwrap();
     assert_eq!(
         geotransform(&info),
-        [510_999.75, 0.5, 0.0, 122_080.25, 0.0, -0.5]
+        [511_000.0, 0.5, 0.0, 122_080.0, 0.0, -0.5]
     );
     assert_eq!(info["bands"][0]["noDataValue"].as_f64(), Some(-9999.0));
 }

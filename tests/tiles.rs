@@ -146,6 +146,35 @@ fn a_wide_lake_makes_buffers_grow() {
     assert_tiles_equal_core(&inp, &[Some(32.0)], "lake");
 }
 
+/// A straight data edge made of decimal coordinates (a scan row at a slope of 1 cm per metre,
+/// at UTM-sized offsets, which `write_las` adds): the decimal points are collinear, their binary doubles are not, so the
+/// hull is lined with triangles too flat for their circumdisks to be bounded in floating point,
+/// reaching far along the edge. They are certified exactly (chord box and half-plane, point by
+/// point) with the buffers staying small, where doubling the buffer used to read everything.
+#[test]
+fn flat_triangles_along_a_straight_edge_keep_buffers_small() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut pts = Vec::new();
+    for j in 0..120 {
+        for i in 0..160 {
+            let (x, y) = (i as f64 * 0.5, j as f64 * 0.5 + 0.01 * (i as f64 * 0.5));
+            // Quantised to 1 cm, as a LAS file stores them.
+            let q = |v: f64| (v * 100.0).round() / 100.0;
+            pts.push([q(x), q(y), (i + j) as f64 * 0.01]);
+        }
+    }
+    let p = las_of(dir.path(), "edge.las", &pts);
+    let inp = input(&[p], None);
+    let (_, s) = tiled(&inp, Some(32.0), 2, 1 << 30);
+    let t = s.tiles.unwrap();
+    assert!(t.max_buffer <= 64.0, "buffers stay within two tiles: {t:?}");
+    assert!(
+        t.loaded_points < 3 * s.points_kept,
+        "no tile reads everything: {t:?}"
+    );
+    assert_tiles_equal_core(&inp, &[Some(32.0), Some(16.0)], "straight decimal edge");
+}
+
 #[test]
 fn real_files_equal_the_core() {
     let l = |n: &str| shared(&format!("lidar/{n}"));

@@ -13,10 +13,10 @@ use sweeptin::sink::TriangleSink;
 pub struct Args {
     #[command(flatten)]
     pub input: ProductInput,
-    /// Output raster: .tif (float32 GeoTIFF) or .asc (ESRI ASCII grid). With --bbox it covers
-    /// the cells whose centres lie in [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell).
-    /// `-`, a FIFO or a device takes an ASCII grid (--raster-format asc), not a GeoTIFF (which
-    /// needs seeking).
+    /// Output raster: .tif (float32 GeoTIFF; --format cog for a Cloud Optimized GeoTIFF) or .asc
+    /// (ESRI ASCII grid). With --bbox it covers the cells whose centres lie in
+    /// [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell). `-`, a FIFO or a device
+    /// takes an ASCII grid (--raster-format asc), not a GeoTIFF (which needs seeking).
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
@@ -26,7 +26,8 @@ pub struct Args {
     pub contours: Option<PathBuf>,
     #[command(flatten)]
     pub contour: ContourArgs,
-    /// Also write a hillshade PNG of the result (GeoTIFF output only).
+    /// Also write a hillshade of the result (GeoTIFF or COG output only): a PNG with a .pgw
+    /// world file, or an 8-bit GeoTIFF (.tif).
     #[arg(long, value_name = "PNG")]
     pub hillshade: Option<PathBuf>,
 }
@@ -53,7 +54,7 @@ pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>
     )];
     if let Some(png) = &args.hillshade {
         check_output(png)?;
-        check_hillshade(&args.output, args.dem.raster_format)?;
+        check_hillshade(&args.output, args.dem.raster.format)?;
     }
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour.sink(p)?));

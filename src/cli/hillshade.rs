@@ -1,4 +1,5 @@
-//! `sweeptin hillshade`: a shaded-relief PNG of a DEM GeoTIFF.
+//! `sweeptin hillshade`: shaded relief of a DEM, as a PNG with a world file or a georeferenced
+//! GeoTIFF / COG.
 
 use super::input::check_output;
 use std::path::PathBuf;
@@ -7,11 +8,15 @@ use sweeptin::products::hillshade::{HillshadeOptions, hillshade};
 /// Arguments of `sweeptin hillshade`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A single-band DEM GeoTIFF.
+    /// A single-band DEM (GeoTIFF, COG or ESRI ASCII grid).
     pub dem: PathBuf,
-    /// Output PNG (grey + alpha; nodata is transparent).
+    /// Output: .png (grey + alpha, nodata transparent, with a .pgw world file and a .prj when
+    /// the CRS is known as WKT) or .tif (8-bit GeoTIFF, 0 = nodata, as gdaldem writes; --format
+    /// cog for a Cloud Optimized GeoTIFF).
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub raster: super::products::RasterArgs,
     /// Direction the light comes from, in degrees clockwise from north.
     #[arg(long, default_value_t = 315.0)]
     pub azimuth: f64,
@@ -25,23 +30,19 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    HillshadeOptions {
+    let o = HillshadeOptions {
         azimuth: args.azimuth,
         altitude: args.altitude,
         z_factor: args.z_factor,
-    }
-    .check()?;
+        output: args.raster.options(),
+    };
+    o.check()?;
     super::input::distinct_outputs(
         &[("-o", &args.output)],
         std::slice::from_ref(&args.dem),
         "hillshade",
     )?;
     check_output(&args.output)?;
-    let o = HillshadeOptions {
-        azimuth: args.azimuth,
-        altitude: args.altitude,
-        z_factor: args.z_factor,
-    };
     let s = hillshade(&args.dem, &args.output, &o)?;
     eprintln!(
         "sweeptin: {} -> {}: {} × {} pixels, {} shaded",

@@ -1,25 +1,31 @@
-//! `sweeptin info`: what the headers of LAS/LAZ files say (and, with `--classes`, what their
-//! points are). A bad file is reported and the others still shown; the exit status is then that
-//! of the first failure (3 for a damaged file).
+//! `sweeptin info`: what the headers of LAS/LAZ/COPC files say, lasinfo-style (and, with
+//! `--classes`, what their points are, read on every core), with a summary over many files. A
+//! bad file is reported and the others still shown; the exit status is then that of the first
+//! failure (3 for a damaged file).
 
 use clap::ArgAction;
-use serde_json::{Value, json};
+use serde::Serialize;
 use std::path::{Path, PathBuf};
 use sweeptin::input::las::{
-    BBox, FileInfo, Filter, FilterStats, LidarReader, Returns, parse_classes,
+    BBox, FileInfo, Filter, FilterStats, PointStats, Quantization, Returns, parse_classes, scan,
 };
 
 /// Arguments of `sweeptin info`.
 #[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Example:\n  sweeptin info tiles/*.laz          # headers, and a summary\n  \
+                        sweeptin info --classes tile.laz   # also read the points (all cores)"
+)]
 pub struct Args {
-    /// LAS/LAZ files.
+    /// LAS/LAZ/COPC files (`@list.txt`, quoted globs and `.vpc` files are expanded).
     #[arg(required = true, value_name = "FILE")]
     pub files: Vec<PathBuf>,
-    /// Also read every point and count the classification codes (of the points that pass the
-    /// filters).
-    #[arg(long)]
+    /// Also read every point (of those that pass the filters): counts by classification, return
+    /// number and number of returns, flags, x/y/z, intensity and GPS-time ranges, covered area
+    /// and density.
+    #[arg(long, visible_alias = "stats")]
     pub classes: bool,
-    /// Print JSON (an array with one object per file) instead of text.
+    /// Print JSON (`{"files": [...], "summary": {...}}`) instead of text.
     #[arg(long)]
     pub json: bool,
     #[command(flatten)]
@@ -52,7 +58,8 @@ pub struct FilterArgs {
     /// Keep withheld points (same as `--drop-withheld false`).
     #[arg(long, conflicts_with = "drop_withheld")]
     pub keep_withheld: bool,
-    /// Keep only points inside this box (real-world x, y; edges included).
+    /// Keep only points inside this box (real-world x, y; edges included). Files whose header
+    /// extent misses it are not decoded, nor the COPC octree nodes that miss it.
     #[arg(long, value_name = "XMIN,YMIN,XMAX,YMAX", allow_hyphen_values = true)]
     pub bbox: Option<BBox>,
 }
@@ -69,39 +76,92 @@ impl FilterArgs {
     }
 }
 
-/// One file's report.
+/// One file's report (the JSON object of a file).
+#[derive(Serialize)]
 struct Report {
+    #[serde(flatten)]
     info: FileInfo,
-    /// Class counts and filter statistics, with `--classes`.
-    classes: Option<([u64; 256], FilterStats)>,
+    /// Points per square unit over the header extent.
+    density: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stats: Option<PointStats>,
+}
+
+/// A failed file (in the JSON list).
+#[derive(Serialize)]
+struct Failed {
+    path: PathBuf,
+    error: String,
+}
+
+#[derive(Serialize)]
+#[serde(untagged)]
+enum Entry {
+    Ok(Box<Report>),
+    Failed(Failed),
+}
+
+/// Over all the files read.
+#[derive(Serialize, Default)]
+struct Summary {
+    files: usize,
+    failed: usize,
+    points: u64,
+    /// `[xmin, ymin, zmin, xmax, ymax, zmax]` of the header extents.
+    bounds: Option<[f64; 6]>,
+    /// The CRS, when the files agree.
+    crs: Option<String>,
+    /// Files that declare another CRS than the first.
+    other_crs: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stats: Option<PointStats>,
+}
+
+#[derive(Serialize)]
+struct Output {
+    files: Vec<Entry>,
+    summary: Summary,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let filter = args.filter.to_filter();
-    let mut failed = 0;
+    let mut entries = Vec::new();
+    let mut summary = Summary::default();
     let mut first_error: Option<sweeptin::Error> = None;
-    let mut json_out = Vec::new();
     for (i, path) in args.files.iter().enumerate() {
         match report(path, args.classes, &filter) {
-            Ok(r) if args.json => json_out.push(to_json(&r)),
             Ok(r) => {
-                if i > 0 {
-                    println!();
+                add(&mut summary, &r);
+                if !args.json {
+                    if i > 0 {
+                        println!();
+                    }
+                    print_text(&r);
                 }
-                print_text(&r);
+                entries.push(Entry::Ok(Box::new(r)));
             }
             Err(e) => {
-                failed += 1;
+                summary.failed += 1;
                 eprintln!("sweeptin: error: {e}");
-                if args.json {
-                    json_out.push(json!({ "path": path, "error": e.to_string() }));
-                }
+                entries.push(Entry::Failed(Failed {
+                    path: path.clone(),
+                    error: e.to_string(),
+                }));
                 first_error.get_or_insert(e);
             }
         }
     }
+    summary.files = args.files.len();
+    let failed = summary.failed;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&json_out)?);
+        let out = Output {
+            files: entries,
+            summary,
+        };
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else if args.files.len() > 1 {
+        println!();
+        print_summary(&summary);
     }
     if let Some(e) = first_error {
         // The first failure's kind is the exit status (3 for a bad file).
@@ -114,30 +174,71 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn report(path: &Path, classes: bool, filter: &Filter) -> sweeptin::Result<Report> {
-    let info = FileInfo::read(path)?;
-    let classes = if classes {
-        Some(count_classes(path, filter)?)
+    let mut info = FileInfo::read(path)?;
+    // Header values at the file's precision: no binary noise such as -0.5680000000000001.
+    let q = info.quantization();
+    for a in 0..3 {
+        info.bounds.min[a] = q.round(a, info.bounds.min[a]);
+        info.bounds.max[a] = q.round(a, info.bounds.max[a]);
+    }
+    let r = info.rect();
+    let area = (r[2] - r[0]) * (r[3] - r[1]);
+    let density = (area > 0.0).then(|| round_to(info.point_count as f64 / area, 3));
+    let stats = if classes {
+        let mut s = scan(path, filter, true)?;
+        for a in 0..3 {
+            s.min[a] = q.round(a, s.min[a]);
+            s.max[a] = q.round(a, s.max[a]);
+        }
+        Some(s)
     } else {
         None
     };
-    Ok(Report { info, classes })
+    Ok(Report {
+        info,
+        density,
+        stats,
+    })
 }
 
-fn count_classes(path: &Path, filter: &Filter) -> sweeptin::Result<([u64; 256], FilterStats)> {
-    let mut reader = LidarReader::open(&[path], filter)?;
-    let mut counts = [0u64; 256];
-    let mut chunk = Vec::new();
-    while reader.read_chunk(&mut chunk, 1 << 20)? > 0 {
-        for p in &chunk {
-            counts[usize::from(p.classification)] += 1;
-        }
-        chunk.clear();
+fn round_to(v: f64, decimals: i32) -> f64 {
+    let p = 10f64.powi(decimals);
+    (v * p).round() / p
+}
+
+fn add(s: &mut Summary, r: &Report) {
+    let i = &r.info;
+    s.points += i.point_count;
+    if i.point_count > 0 {
+        let b = i.bounds;
+        let nb = [b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2]];
+        s.bounds = Some(match s.bounds {
+            None => nb,
+            Some(o) => std::array::from_fn(|k| {
+                if k < 3 {
+                    o[k].min(nb[k])
+                } else {
+                    o[k].max(nb[k])
+                }
+            }),
+        });
     }
-    Ok((counts, *reader.stats()))
+    let crs = i.crs.as_ref().map(|c| c.to_string());
+    match (&s.crs, crs) {
+        (None, Some(c)) if s.other_crs == 0 => s.crs = Some(c),
+        (Some(a), Some(c)) if *a != c => s.other_crs += 1,
+        _ => {}
+    }
+    if let Some(st) = &r.stats {
+        match &mut s.stats {
+            None => s.stats = Some(st.clone()),
+            Some(t) => t.merge(st),
+        }
+    }
 }
 
 /// ASPRS standard class names (LAS 1.4 R15, table 17).
-fn class_name(c: u8) -> &'static str {
+fn class_name(c: usize) -> &'static str {
     const NAMES: [&str; 23] = [
         "created, never classified",
         "unclassified",
@@ -163,23 +264,37 @@ fn class_name(c: u8) -> &'static str {
         "snow",
         "temporal exclusion",
     ];
-    NAMES.get(usize::from(c)).copied().unwrap_or("user-defined")
+    NAMES.get(c).copied().unwrap_or("user-defined")
 }
 
-/// Decimals needed to print multiples of `scale` exactly (at most 9).
-fn decimals(scale: f64) -> usize {
-    (0..=9)
-        .find(|&d| {
-            let v = scale * 10f64.powi(d as i32);
-            (v - v.round()).abs() < 1e-6
-        })
-        .unwrap_or(9)
+/// `1234567` as `1,234,567`.
+pub fn thousands(n: u64) -> String {
+    let s = n.to_string();
+    let mut out = String::with_capacity(s.len() + s.len() / 3);
+    for (k, c) in s.chars().enumerate() {
+        if k > 0 && (s.len() - k).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// `v` with the decimals of the file's precision on `axis`.
+fn coord(q: &Quantization, axis: usize, v: f64) -> String {
+    let d = q.decimals(axis);
+    format!("{:.d$}", q.round(axis, v))
 }
 
 fn print_text(r: &Report) {
     let i = &r.info;
+    let q = i.quantization();
     println!("{}", i.path.display());
-    let kind = if i.compressed { "LAZ" } else { "LAS" };
+    let kind = match (&i.copc, i.compressed) {
+        (Some(_), _) => "COPC",
+        (None, true) => "LAZ",
+        (None, false) => "LAS",
+    };
     let extra = if i.extra_bytes > 0 {
         format!(" ({} extra bytes)", i.extra_bytes)
     } else {
@@ -196,17 +311,36 @@ fn print_text(r: &Report) {
         "  points:   {} (legacy field {}{extended})",
         i.point_count, i.legacy_point_count
     );
+    let by_return: Vec<String> = i
+        .points_by_return
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| **n > 0)
+        .map(|(k, n)| format!("{}: {}", k + 1, thousands(*n)))
+        .collect();
+    if !by_return.is_empty() {
+        println!("  returns:  {} (header)", by_return.join(", "));
+    }
     let axes = ["x", "y", "z"];
     let bounds: Vec<String> = (0..3)
         .map(|a| {
-            let d = decimals(i.scale[a]);
             format!(
-                "{} {:.d$} .. {:.d$}",
-                axes[a], i.bounds.min[a], i.bounds.max[a]
+                "{} {} .. {}",
+                axes[a],
+                coord(&q, a, i.bounds.min[a]),
+                coord(&q, a, i.bounds.max[a])
             )
         })
         .collect();
     println!("  bounds:   {}", bounds.join(", "));
+    if let Some(d) = r.density {
+        let rr = i.rect();
+        println!(
+            "  density:  {d:.2} points per square unit over the header extent ({:.0} square \
+             units)",
+            (rr[2] - rr[0]) * (rr[3] - rr[1])
+        );
+    }
     println!(
         "  scale:    {} {} {}   offset: {} {} {}",
         i.scale[0], i.scale[1], i.scale[2], i.offset[0], i.offset[1], i.offset[2]
@@ -222,36 +356,142 @@ fn print_text(r: &Report) {
     if !software.is_empty() {
         println!("  software: {}", software.join(" / "));
     }
+    if let Some((day, year)) = i.creation {
+        println!("  created:  day {day} of {year}");
+    }
+    if i.file_source_id != 0 {
+        println!("  source:   file source id {}", i.file_source_id);
+    }
+    if let Some(c) = &i.copc {
+        println!(
+            "  COPC:     {} octree nodes, depth {}, root spacing {:.3}, cube of side {:.3} centred \
+             on {}",
+            c.nodes,
+            c.depth,
+            c.spacing,
+            2.0 * c.halfsize,
+            (0..3)
+                .map(|a| coord(&q, a, c.center[a]))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
+    for v in &i.vlrs {
+        println!(
+            "  {:<9} {} {} \"{}\" ({} bytes)",
+            if v.extended { "EVLR:" } else { "VLR:" },
+            v.user_id,
+            v.record_id,
+            v.description,
+            v.bytes
+        );
+    }
     for w in &i.warnings {
         println!("  warning:  {w}");
     }
-    if let Some((counts, stats)) = &r.classes {
-        println!("  classes:");
-        for (c, n) in counts.iter().enumerate().filter(|(_, n)| **n > 0) {
-            println!("    {c:>3} {:<28} {n:>12}", class_name(c as u8));
-        }
-        println!(
-            "  filters:  read {}, kept {}; dropped: withheld {}, class {}, returns {}, bbox {}",
-            stats.read, stats.kept, stats.withheld, stats.class, stats.returns, stats.bbox
-        );
+    if let Some(s) = &r.stats {
+        print_stats(s, &q);
     }
 }
 
-fn to_json(r: &Report) -> Value {
-    let mut v = serde_json::to_value(&r.info).unwrap_or(Value::Null);
-    if let Value::Object(m) = &mut v {
-        let def = r.info.crs.as_ref().and_then(|c| c.definition());
-        m.insert("crs_definition".into(), json!(def));
-        if let Some((counts, stats)) = &r.classes {
-            let classes: serde_json::Map<String, Value> = counts
-                .iter()
-                .enumerate()
-                .filter(|(_, n)| **n > 0)
-                .map(|(c, n)| (c.to_string(), json!(n)))
-                .collect();
-            m.insert("classes".into(), Value::Object(classes));
-            m.insert("filter_stats".into(), json!(stats));
+fn print_stats(s: &PointStats, q: &Quantization) {
+    println!("  points kept: {} (read and counted)", thousands(s.points));
+    println!("  classes:");
+    for (c, n) in s.classes.iter().enumerate().filter(|(_, n)| **n > 0) {
+        println!("    {c:>3} {:<28} {:>12}", class_name(c), thousands(*n));
+    }
+    let list = |v: &[u64]| -> String {
+        v.iter()
+            .enumerate()
+            .filter(|(_, n)| **n > 0)
+            .map(|(k, n)| format!("{k}: {}", thousands(*n)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    println!("  return number:      {}", list(&s.by_return));
+    println!("  number of returns:  {}", list(&s.by_returns));
+    println!(
+        "  first {}, last {}, single {}",
+        thousands(s.first),
+        thousands(s.last),
+        thousands(s.single)
+    );
+    let flags = ["synthetic", "key-point", "withheld", "overlap"];
+    let set: Vec<String> = (0..4)
+        .filter(|&k| s.flags[k] > 0)
+        .map(|k| format!("{} {}", flags[k], thousands(s.flags[k])))
+        .collect();
+    if !set.is_empty() {
+        println!("  flags:    {}", set.join(", "));
+    }
+    if s.points > 0 {
+        let axes = ["x", "y", "z"];
+        let r: Vec<String> = (0..3)
+            .map(|a| {
+                format!(
+                    "{} {} .. {}",
+                    axes[a],
+                    coord(q, a, s.min[a]),
+                    coord(q, a, s.max[a])
+                )
+            })
+            .collect();
+        println!("  points span: {}", r.join(", "));
+        println!("  intensity: {} .. {}", s.intensity[0], s.intensity[1]);
+    }
+    if let Some([a, b]) = s.gps_time {
+        println!("  GPS time: {a:.6} .. {b:.6}");
+    }
+    if s.covered_area > 0.0 {
+        println!(
+            "  covered:  {:.0} square units ({} unit cells); density {:.2} points, {:.2} last \
+             returns per square unit",
+            s.covered_area,
+            s.cell,
+            s.points as f64 / s.covered_area,
+            s.last as f64 / s.covered_area
+        );
+    }
+    print_filter(&s.filter);
+}
+
+fn print_filter(f: &FilterStats) {
+    println!(
+        "  filters:  read {}, kept {}; dropped: withheld {}, class {}, returns {}, bbox {}; \
+         skipped without decoding {}",
+        f.read, f.kept, f.withheld, f.class, f.returns, f.bbox, f.skipped
+    );
+}
+
+fn print_summary(s: &Summary) {
+    println!(
+        "summary of {} files ({} could not be read)",
+        s.files, s.failed
+    );
+    println!("  points:   {}", thousands(s.points));
+    if let Some(b) = s.bounds {
+        println!(
+            "  bounds:   x {} .. {}, y {} .. {}, z {} .. {}",
+            b[0], b[3], b[1], b[4], b[2], b[5]
+        );
+        let area = (b[3] - b[0]) * (b[4] - b[1]);
+        if area > 0.0 {
+            println!(
+                "  density:  {:.2} points per square unit over the extent",
+                s.points as f64 / area
+            );
         }
     }
-    v
+    match (&s.crs, s.other_crs) {
+        (Some(c), 0) => println!("  CRS:      {c}"),
+        (Some(c), n) => println!("  CRS:      {c}, and {n} files declare another"),
+        (None, _) => println!("  CRS:      none declared"),
+    }
+    if let Some(st) = &s.stats {
+        println!("  classes:");
+        for (c, n) in st.classes.iter().enumerate().filter(|(_, n)| **n > 0) {
+            println!("    {c:>3} {:<28} {:>12}", class_name(c), thousands(*n));
+        }
+        print_filter(&st.filter);
+    }
 }

@@ -15,9 +15,12 @@ use sweeptin::sink::{Fanout, FanoutSummary, MeshSink, ProductSummary, TriangleSi
 /// Input files and how to read and run them (flattened into each command's arguments).
 #[derive(clap::Args, Debug, Clone)]
 pub struct InputArgs {
-    /// Input points: LAS/LAZ files (adjacent tiles form one point set), XYZ text files
-    /// (`x y z` per line; `-` or a pipe is read once, as it comes), or one streaming mesh
-    /// (.stin) written by `sweeptin tin`.
+    /// Input points: LAS/LAZ/COPC files (adjacent tiles form one point set, whatever their
+    /// scales and offsets), `.vpc` virtual point clouds, `@list.txt` (one path per line,
+    /// relative to the list), quoted globs (`'tiles/*.laz'`), XYZ text files (`x y z` per
+    /// line; `-` or a pipe is read once, as it comes), or one streaming mesh (.stin) written by
+    /// `sweeptin tin`. With --bbox, files whose extent misses the box are not read, and COPC
+    /// files read only the octree nodes it meets.
     #[arg(required = true, value_name = "FILES")]
     pub inputs: Vec<PathBuf>,
     #[command(flatten)]
@@ -228,8 +231,9 @@ pub struct ProductInput {
 #[derive(clap::Args, Debug, Clone, Default)]
 #[command(next_help_heading = "Breaklines and trimming")]
 pub struct LineArgs {
-    /// Breaklines (repeatable): GeoJSON LineString/MultiLineString/Polygon/MultiPolygon or text
-    /// (`x y [z]` per line, a blank line between polylines), in the points' CRS and units. They
+    /// Breaklines (repeatable): GeoJSON LineString/MultiLineString/Polygon/MultiPolygon, a
+    /// GeoPackage or OGR-SQLite layer (`FILE.gpkg:LAYER` when it has several), a Shapefile, or
+    /// text (`x y [z]` per line, a blank line between polylines), in the points' CRS and units. They
     /// become triangle edges; crossings are split, overlaps merged. Lines without z take their
     /// heights from the points' TIN (an extra pass over the points).
     #[arg(long = "breaklines", value_name = "FILE")]
@@ -253,6 +257,11 @@ pub struct LineArgs {
     /// from the TIN are unambiguous. Holds the whole triangulation in memory.
     #[arg(long)]
     pub no_flat_triangles: bool,
+    /// Cut the breaklines to the data (the points' convex hull, exactly) with a warning of how
+    /// much was cut, instead of stopping at a line that runs outside the points (one more pass
+    /// over the points).
+    #[arg(long)]
+    pub clip_breaklines: bool,
 }
 
 impl LineArgs {
@@ -264,7 +273,26 @@ impl LineArgs {
             max_edge: self.max_edge,
             z_tolerance: Some(self.z_tolerance),
             no_flat_triangles: self.no_flat_triangles,
+            clip: self.clip_breaklines,
         }
+    }
+}
+
+/// Prints the warning of `--clip-breaklines` when it cut anything.
+pub fn warn_clipped(run: &RunSummary) {
+    let Some(c) = run.breaklines.as_ref().and_then(|b| b.clipped) else {
+        return;
+    };
+    if c.lines_cut + c.lines_dropped > 0 {
+        eprintln!(
+            "sweeptin: warning: --clip-breaklines cut {} of {} breaklines to the points' convex hull and left out {} lying wholly outside: {:.1} of {:.1} (xy units) of line cut ({:.1} %)",
+            c.lines_cut,
+            c.lines,
+            c.lines_dropped,
+            c.length_cut,
+            c.length,
+            100.0 * c.length_cut / c.length.max(f64::MIN_POSITIVE)
+        );
     }
 }
 
@@ -329,10 +357,23 @@ impl ProductInput {
                     .and_then(|e| e.to_str())
                     .map(str::to_ascii_lowercase)
                     .as_deref(),
-                Some("las" | "laz")
+                Some("las" | "laz" | "vpc")
             )
         })
     }
+}
+
+/// Replaces `paths` by the files they stand for (`@list.txt`, quoted globs; a `.vpc` stays, the
+/// reader knows its files and their extents).
+pub fn expand(paths: &mut Vec<PathBuf>) -> anyhow::Result<()> {
+    *paths = sweeptin::input::files::expand(paths, sweeptin::input::files::Expand::KeepVpc)?;
+    Ok(())
+}
+
+/// As [`expand`], and a `.vpc` replaced by its files (for commands that need every header).
+pub fn expand_files(paths: &mut Vec<PathBuf>) -> anyhow::Result<()> {
+    *paths = sweeptin::input::files::expand(paths, sweeptin::input::files::Expand::VpcFiles)?;
+    Ok(())
 }
 
 /// Fails early (before any heavy work) if an output cannot be created where asked: a missing
@@ -488,6 +529,7 @@ pub fn run_products(
     };
     run.peak_rss_bytes = pipeline::peak_rss();
     warn(&run);
+    warn_clipped(&run);
     Ok((run, products))
 }
 

@@ -12,6 +12,7 @@ mod contours;
 mod crossval;
 mod dem;
 mod hillshade;
+mod index;
 mod info;
 mod input;
 mod plan;
@@ -76,6 +77,9 @@ enum Command {
     /// Join the finished tasks of a plan into one result: a VRT or GeoTIFF mosaic, stitched
     /// contours, summed volumes.
     Merge(plan::MergeArgs),
+    /// Write a virtual point cloud (.vpc) listing LAS/LAZ/COPC files with their extents, counts
+    /// and CRS (headers only), for QGIS, PDAL wrench, lasR and sweeptin's own box reads.
+    Index(index::Args),
 }
 
 /// The last panic's message and place (see `main`).
@@ -146,7 +150,21 @@ pub fn kind(e: &anyhow::Error) -> sweeptin::ErrorKind {
     sweeptin::ErrorKind::Usage
 }
 
-fn dispatch(cli: Cli) -> anyhow::Result<()> {
+fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
+    // `@list.txt`, quoted globs: the files a command's FILES stand for.
+    match &mut cli.command {
+        Command::Tin(a) => input::expand(&mut a.input.inputs)?,
+        Command::Info(a) => input::expand_files(&mut a.files)?,
+        Command::Dem(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Contours(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Volume(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Sample(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Profile(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Products(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Index(a) => input::expand_files(&mut a.files)?,
+        Command::Crossval(a) => input::expand(&mut a.input)?,
+        _ => {}
+    }
     match cli.command {
         Command::Tin(a) => tin::run(a),
         Command::Check(a) => check::run(a),
@@ -163,6 +181,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Plan(a) => plan::plan(a),
         Command::Run(a) => plan::run(a),
         Command::Merge(a) => plan::merge(a),
+        Command::Index(a) => index::run(a),
     }
 }
 

@@ -84,6 +84,9 @@ pub struct MergeArgs {
     /// For a DEM plan merged into one GeoTIFF: a hillshade PNG of the whole mosaic (no seams).
     #[arg(long, value_name = "PNG")]
     pub hillshade: Option<PathBuf>,
+    /// For a DEM plan: the mosaic's format (`tif`, `cog`) and compression (default: the plan's).
+    #[command(flatten)]
+    pub raster: super::products::RasterArgs,
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
@@ -221,8 +224,21 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
 
 pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let (argv, dir) = take_output(&args.command);
-    let job = parse_job(&argv)?;
+    let mut job = parse_job(&argv)?;
     let dir = dir.context("give the plan's directory with -o DIR")?;
+    // `@list.txt`, quoted globs and `.vpc` files: the plan names every file (it reads each
+    // header), each given input standing for its files in the stored command line.
+    let given = job.input().args.inputs.clone();
+    let groups: Vec<Vec<PathBuf>> = given
+        .iter()
+        .map(|g| {
+            sweeptin::input::files::expand(
+                std::slice::from_ref(g),
+                sweeptin::input::files::Expand::VpcFiles,
+            )
+        })
+        .collect::<Result<_, _>>()?;
+    job.input_mut().args.inputs = groups.iter().flatten().cloned().collect();
     check_job(&job)?;
     let a = &job.input().args;
     let tile = a
@@ -253,13 +269,20 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         );
     }
     let buffer = args.buffer.unwrap_or(tile / 10.0);
+    let canonical = |p: &PathBuf| {
+        std::fs::canonicalize(p).with_context(|| format!("cannot read {}", p.display()))
+    };
     let inputs: Vec<PathBuf> = a
         .inputs
         .iter()
-        .map(|p| std::fs::canonicalize(p).with_context(|| format!("cannot read {}", p.display())))
+        .map(canonical)
+        .collect::<anyhow::Result<_>>()?;
+    let abs_groups: Vec<Vec<PathBuf>> = groups
+        .iter()
+        .map(|g| g.iter().map(canonical).collect::<anyhow::Result<_>>())
         .collect::<anyhow::Result<_>>()?;
     // The stored command line names the inputs by absolute path, so tasks run from anywhere.
-    let argv = absolute_inputs(&argv, &a.inputs, &inputs);
+    let argv = absolute_inputs(&argv, &given, &abs_groups);
     // The files must make one point set (one CRS, compatible formats), as for a single run:
     // refused now, from the headers, not by every task later.
     sweeptin::input::las::LidarReader::open(&inputs, &a.filter.to_filter())?;
@@ -300,13 +323,16 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
 }
 
 /// `argv` with each input replaced by its absolute path.
-fn absolute_inputs(argv: &[String], given: &[PathBuf], abs: &[PathBuf]) -> Vec<String> {
+fn absolute_inputs(argv: &[String], given: &[PathBuf], abs: &[Vec<PathBuf>]) -> Vec<String> {
     argv.iter()
-        .map(|s| {
+        .flat_map(|s| {
             given
                 .iter()
                 .position(|g| g.as_os_str() == s.as_str())
-                .map_or_else(|| s.clone(), |i| abs[i].display().to_string())
+                .map_or_else(
+                    || vec![s.clone()],
+                    |i| abs[i].iter().map(|p| p.display().to_string()).collect(),
+                )
         })
         .collect()
 }
@@ -494,7 +520,11 @@ fn task_sinks(
     Ok(match job {
         Job::Dem(d) => {
             d.output = plan.task_output(dir, i, "dem", "tif");
-            d.dem.raster_format = Some(RasterFormat::GeoTiff);
+            // The tasks' tiles are plain GeoTIFFs; the mosaic gets the plan's --format.
+            d.dem.raster = super::products::RasterArgs {
+                format: Some(RasterFormat::GeoTiff),
+                ..Default::default()
+            };
             d.dem.grid_bbox = Some(tile);
             d.hillshade = None;
             if d.contours.is_some() {
@@ -662,12 +692,25 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
             if !matches!(extension(out).as_deref(), Some("vrt" | "tif" | "tiff")) {
                 bail!("-o {}: a DEM mosaic is a .vrt or a .tif", out.display());
             }
+            if args.raster.format == Some(RasterFormat::Ascii) {
+                bail!("--format asc: a DEM mosaic is a GeoTIFF (tif, cog) or a VRT");
+            }
             super::input::check_output(out)?;
             let crs = match crs {
                 Some(c) => Some(c),
                 None => plan_crs(&plan)?,
             };
-            let s = merge::merge_dem(&plan, &dir, out, d.dem.nodata, crs.as_ref())?;
+            let mut output = args.raster.options();
+            if output == Default::default() && extension(out).as_deref() != Some("vrt") {
+                // The plan's own --format / --compress, as one run would have written.
+                output = d.dem.raster.options();
+            }
+            let options = merge::MosaicOptions {
+                nodata: d.dem.nodata,
+                align: d.dem.align,
+                output,
+            };
+            let s = merge::merge_dem(&plan, &dir, out, &options, crs.as_ref())?;
             summary.insert("dem".into(), serde_json::to_value(&s)?);
             if let (Some(c), true) = (&contours, d.contours.is_some()) {
                 let s = merge::merge_contours(&plan, &dir, c, crs.as_ref())?;
@@ -678,7 +721,9 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
                 .clone()
                 .or_else(|| planned(&plan, "hillshade"))
             {
-                if RasterFormat::from_extension(out) != Some(RasterFormat::GeoTiff) {
+                if RasterFormat::from_extension(out) != Some(RasterFormat::GeoTiff)
+                    || output.format == Some(RasterFormat::Ascii)
+                {
                     bail!("--hillshade shades a GeoTIFF mosaic: merge with -o OUT.tif");
                 }
                 let (p, h) = shade(out, &png)?;

@@ -1,6 +1,7 @@
 //! `sweeptin products`: several terrain products from one pass over the triangle stream; and the
 //! option groups and sink builders the single-product commands share.
 
+use super::info::thousands;
 use super::input::{ProductInput, check_output, run_products};
 use anyhow::{Context, bail};
 use serde_json::{Map, Value, json};
@@ -8,7 +9,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use sweeptin::input::las::BBox;
-use sweeptin::output::raster::RasterFormat;
+use sweeptin::output::raster::{Compression, Predictor, RasterFormat, RasterOptions};
 use sweeptin::pipeline::RunSummary;
 use sweeptin::products::boundary::Boundary;
 use sweeptin::products::contours::{ContourOptions, ContourSink};
@@ -17,15 +18,64 @@ use sweeptin::products::hillshade::{HillshadeOptions, HillshadeSummary, hillshad
 use sweeptin::products::profile::ProfileSink;
 use sweeptin::products::sample::SampleSink;
 use sweeptin::products::volume::VolumeSink;
-use sweeptin::raster::{GridExtent, GridPlan};
+use sweeptin::raster::{Align, GridExtent, GridPlan};
 use sweeptin::sink::{FanoutSummary, MeshSummary, ProductSummary, TriangleSink};
+
+/// Compression options of GeoTIFF outputs (DEM, mosaic, hillshade).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct TiffArgs {
+    /// GeoTIFF compression (default: deflate for --format cog, none for a plain GeoTIFF).
+    #[arg(long, value_enum, value_name = "METHOD")]
+    pub compress: Option<Compression>,
+    /// Predictor applied before compression (GDAL's PREDICTOR=1|2|3; default: float for a
+    /// compressed DEM, horizontal for a compressed hillshade).
+    #[arg(long, value_enum, value_name = "KIND")]
+    pub predictor: Option<Predictor>,
+    /// Write BigTIFF even below 4 GiB (chosen by itself beyond).
+    #[arg(long)]
+    pub bigtiff: bool,
+}
+
+/// Raster output options: format and compression.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct RasterArgs {
+    /// Raster format, when the extension does not say it: `tif` (GeoTIFF), `cog` (Cloud
+    /// Optimized GeoTIFF: tiled 512 × 512, compressed, internal overviews; written in bounded
+    /// memory), `asc` (ESRI ASCII grid, with a .prj beside it when the CRS is known as WKT).
+    #[arg(
+        long = "format",
+        visible_alias = "raster-format",
+        value_enum,
+        value_name = "FORMAT"
+    )]
+    pub format: Option<RasterFormat>,
+    #[command(flatten)]
+    pub tiff: TiffArgs,
+}
+
+impl RasterArgs {
+    /// The library's options.
+    pub fn options(&self) -> RasterOptions {
+        RasterOptions {
+            format: self.format,
+            compress: self.tiff.compress,
+            predictor: self.tiff.predictor,
+            bigtiff: self.tiff.bigtiff,
+        }
+    }
+}
 
 /// DEM options.
 #[derive(clap::Args, Debug, Clone)]
 pub struct DemArgs {
-    /// Cell size; cell centres fall on whole multiples of it.
+    /// Cell size; cell edges (or centres, with --align centres) fall on whole multiples of it.
     #[arg(long, default_value_t = GridPlan::default().cell(), value_name = "SIZE")]
     pub cell: f64,
+    /// Where the cells lie: `edges` puts cell edges on multiples of --cell (GDAL -tap,
+    /// LAStools -use_tile_bb, lasR: a 1 km tile at 1 m gives 1000 × 1000 cells); `centres` puts
+    /// cell centres there (IGN's LiDAR HD DTM lattice; a 1 km tile gives 1001 × 1001 cells).
+    #[arg(long, value_enum, default_value_t = Align::Edges)]
+    pub align: Align,
     /// With --bbox: round the box's sides outwards to multiples of the cell size (otherwise they
     /// must be multiples).
     #[arg(long, requires = "bbox")]
@@ -38,9 +88,8 @@ pub struct DemArgs {
     /// Value of cells outside the TIN.
     #[arg(long, default_value_t = DemOptions::default().nodata, allow_hyphen_values = true)]
     pub nodata: f32,
-    /// Raster format, when the extension does not say it.
-    #[arg(long, value_enum)]
-    pub raster_format: Option<RasterFormat>,
+    #[command(flatten)]
+    pub raster: RasterArgs,
     /// Refuse a raster of more cells than this (before reading anything when the extent is
     /// known from --bbox or LAS/LAZ headers). The raster's rows in memory also count against
     /// --mem (a quarter of it).
@@ -106,9 +155,9 @@ impl DemArgs {
         let sink = DemSink::new(
             path,
             DemOptions {
-                grid: GridPlan::new(self.cell, extent)?.limit(self.max_cells)?,
+                grid: GridPlan::new(self.cell, extent, self.align)?.limit(self.max_cells)?,
                 nodata: self.nodata,
-                format: self.raster_format,
+                output: self.raster.options(),
                 memory: mem / 4,
             },
         )?;
@@ -249,7 +298,9 @@ impl Report {
         eprintln!(
             "sweeptin: {} points ({} duplicates merged), {} triangles in {seconds:.2} s \
              (peak memory {peak})",
-            run.points_read, run.duplicates, run.triangles
+            thousands(run.points_read),
+            thousands(run.duplicates),
+            thousands(run.triangles)
         );
         let mut lines: BTreeMap<&str, (Option<&Path>, String)> = BTreeMap::new();
         for (name, s) in &self.products.0 {
@@ -288,8 +339,11 @@ fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
         ProductSummary::Dem(d) => (
             Some(&d.path),
             format!(
-                "{} × {} cells of {:?}, {} with data",
-                d.cols, d.rows, d.cell, d.cells_with_data
+                "{} × {} cells of {}, {} with data",
+                d.cols,
+                d.rows,
+                d.cell,
+                thousands(d.cells_with_data)
             ),
         ),
         ProductSummary::Contours(c) => (
@@ -299,8 +353,9 @@ fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
         ProductSummary::Volume(v) => {
             let t = &v.totals;
             let line = format!(
-                "cut {:?} fill {:?} (areas {:?} / {:?}, covered {:?})",
-                t.cut_volume, t.fill_volume, t.cut_area, t.fill_area, t.area
+                "cut {:.3}, fill {:.3}, net {:.3} (cubic units of the data; cut area {:.3}, fill \
+                 area {:.3}, covered {:.3} square units)",
+                t.cut_volume, t.fill_volume, t.net_volume, t.cut_area, t.fill_area, t.area
             );
             (None, line)
         }
@@ -309,14 +364,16 @@ fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
             format!("{} of {} points inside the TIN", s.answered, s.queries),
         ),
         ProductSummary::Profile(p) => (Some(&p.path), format!("{} points", p.points)),
-        other => (None, format!("{other:?}")),
+        ProductSummary::None | ProductSummary::SurfaceStore(_) | ProductSummary::Fanout(_) => {
+            (None, "done".to_string())
+        }
     }
 }
 
 /// Refuses a hillshade of a DEM that is not a GeoTIFF, before any work.
 pub fn check_hillshade(dem: &Path, format: Option<RasterFormat>) -> anyhow::Result<()> {
     let f = format.or_else(|| RasterFormat::from_extension(dem));
-    if f != Some(RasterFormat::GeoTiff) {
+    if !matches!(f, Some(RasterFormat::GeoTiff | RasterFormat::Cog)) {
         bail!(
             "--hillshade needs a GeoTIFF DEM (.tif), not {}",
             dem.display()
@@ -360,7 +417,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         sinks.push(("dem".into(), args.dem_options.sink(p, bbox, mem, bounds)?));
         if let Some(png) = &args.hillshade {
             check_output(png)?;
-            check_hillshade(p, args.dem_options.raster_format)?;
+            check_hillshade(p, args.dem_options.raster.format)?;
         }
     }
     if let Some(p) = &args.contours {

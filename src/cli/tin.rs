@@ -72,6 +72,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     summary.seconds.finish += fin.elapsed().as_secs_f64();
     summary.peak_rss_bytes = sweeptin::pipeline::peak_rss();
     super::input::warn(&summary);
+    super::input::warn_clipped(&summary);
     if args.input.json {
         println!("{}", serde_json::to_string(&summary)?);
     } else {

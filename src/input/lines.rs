@@ -16,12 +16,18 @@
 //!
 //! A file is GeoJSON when its first non-blank character is `{`, text otherwise.
 //!
+//! # GeoPackage, OGR-SQLite, Shapefile
+//!
+//! Read by [`crate::input::vector`] (a layer named as `FILE:LAYER`) into the same parts as
+//! GeoJSON, and taken the same way.
+//!
 //! # Errors
 //!
 //! Syntax errors name the file and the line ([`Error::Parse`]); a well-formed file with something
 //! that is not a breakline names the file and the feature ([`Error::Format`]).
 
 use super::geojson::{self, is_ring, not_a_ring};
+use super::vector;
 use crate::error::{Error, Result};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -162,6 +168,11 @@ impl Lines {
 /// [`Error::Io`] when the file cannot be read; [`Error::Parse`] for a syntax error (file and
 /// line); [`Error::Format`] for content that is not breaklines (file and feature).
 pub fn read_file(path: &Path) -> Result<Lines> {
+    let (file, _) = vector::split_layer(path);
+    if vector::format_of(&file) != vector::VectorFormat::GeoJson {
+        let doc = vector::read(path)?;
+        return from_parts(doc, Arc::from(path));
+    }
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
     let path: Arc<Path> = Arc::from(path);
@@ -189,7 +200,11 @@ pub fn read_files<P: AsRef<Path>>(paths: &[P]) -> Result<Lines> {
 
 /// Every line and ring of a GeoJSON file ([`geojson::parse`]) as a polyline; points are refused.
 fn read_geojson(bytes: &[u8], path: Arc<Path>) -> Result<Lines> {
-    let doc = geojson::parse(bytes, &path)?;
+    from_parts(geojson::parse(bytes, &path)?, path)
+}
+
+/// The lines and rings of a vector file's parts as polylines; points are refused.
+fn from_parts(doc: geojson::GeoJson, path: Arc<Path>) -> Result<Lines> {
     if let Some((feature, kind)) = doc.points.first() {
         return Err(Error::Format {
             path: path.to_path_buf(),

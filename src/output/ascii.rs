@@ -15,17 +15,17 @@
 //! ```
 //!
 //! Rows are text of varying length and run north to south, while a DEM is produced south to
-//! north, so cells first go to an anonymous binary scratch file (random access, deleted by the
-//! operating system even if the process is killed) and [`GridWriter::finish`] transcribes it, row
-//! by row, into the output. Values are written in the shortest form that reads back as the same
-//! `f32`. The output appears under its final name only when complete.
+//! north, so cells first go to a [`Scratch`] (an anonymous binary file, random access, deleted by
+//! the operating system even if the process is killed) and [`GridWriter::finish`] transcribes it,
+//! row by row, into the output. Values are written in the shortest form that reads back as the
+//! same `f32`. The output appears under its final name only when complete; the DEM sink writes a
+//! `.prj` beside it when the CRS is known as WKT.
 
-use super::raster::{GridWriter, check_cell};
+use super::raster::{GridWriter, Scratch, check_cell};
 use crate::error::{Error, Result};
 use crate::output::AtomicFile;
 use crate::raster::GridSpec;
-use std::fs::File;
-use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// An ESRI ASCII grid being written (see the module docs).
@@ -33,8 +33,7 @@ use std::path::{Path, PathBuf};
 pub struct AsciiGridWriter {
     path: PathBuf,
     spec: GridSpec,
-    scratch: File,
-    written: Vec<bool>,
+    scratch: Scratch,
 }
 
 impl AsciiGridWriter {
@@ -52,22 +51,11 @@ impl AsciiGridWriter {
                 ),
             });
         }
-        let dir = super::target::scratch_dir(path);
-        let scratch = tempfile::tempfile_in(&dir).map_err(|e| Error::write(&dir, e))?;
         Ok(AsciiGridWriter {
             path: path.to_path_buf(),
             spec: spec.clone(),
-            scratch,
-            written: vec![false; spec.rows as usize],
+            scratch: Scratch::new(path, spec.cols, spec.rows, spec.nodata)?,
         })
-    }
-
-    fn offset(&self, row: u32, col: u32) -> u64 {
-        (u64::from(row) * u64::from(self.spec.cols) + u64::from(col)) * 4
-    }
-
-    fn io(&self, e: std::io::Error) -> Error {
-        Error::write(&self.path, e)
     }
 
     fn header(&self) -> String {
@@ -95,74 +83,37 @@ impl GridWriter for AsciiGridWriter {
                 message: format!("row {row} has {} values", values.len()),
             });
         }
-        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        let off = self.offset(row, 0);
-        self.scratch
-            .seek(SeekFrom::Start(off))
-            .and_then(|_| self.scratch.write_all(&bytes))
-            .map_err(|e| Error::write(&self.path, e))?;
-        self.written[row as usize] = true;
-        Ok(())
+        self.scratch.write(row, 0, values)
     }
 
     fn write_cell(&mut self, row: u32, col: u32, value: f32) -> Result<()> {
         check_cell(&self.spec, &self.path, row, col)?;
-        if !self.written[row as usize] {
-            let nodata = vec![self.spec.nodata; self.spec.cols as usize];
-            self.write_row(row, &nodata)?;
-        }
-        let off = self.offset(row, col);
-        self.scratch
-            .seek(SeekFrom::Start(off))
-            .and_then(|_| self.scratch.write_all(&value.to_le_bytes()))
-            .map_err(|e| Error::write(&self.path, e))
+        self.scratch.write(row, col, &[value])
     }
 
     fn read_cell(&mut self, row: u32, col: u32) -> Result<f32> {
         check_cell(&self.spec, &self.path, row, col)?;
-        if !self.written[row as usize] {
-            return Ok(self.spec.nodata);
-        }
-        let off = self.offset(row, col);
-        let mut b = [0u8; 4];
-        self.scratch
-            .seek(SeekFrom::Start(off))
-            .and_then(|_| self.scratch.read_exact(&mut b))
-            .map_err(|e| Error::write(&self.path, e))?;
-        Ok(f32::from_le_bytes(b))
+        let mut v = [0f32];
+        self.scratch.read(row, col, &mut v)?;
+        Ok(v[0])
     }
 
-    fn finish(mut self: Box<Self>) -> Result<u64> {
+    fn finish(self: Box<Self>) -> Result<u64> {
         let mut out = AtomicFile::create(&self.path)?;
         out.write_all(self.header().as_bytes())
             .map_err(|e| out.err(e))?;
         let cols = self.spec.cols as usize;
-        let mut raw = vec![0u8; cols * 4];
+        let mut values = vec![0f32; cols];
         let mut line = String::with_capacity(cols * 8);
-        self.scratch
-            .seek(SeekFrom::Start(0))
-            .map_err(|e| self.io(e))?;
-        let mut reader = std::io::BufReader::with_capacity(1 << 20, &mut self.scratch);
         let mut text = BufWriter::with_capacity(1 << 16, &mut out);
-        for row in 0..self.spec.rows as usize {
+        for row in 0..self.spec.rows {
             line.clear();
-            if self.written[row] {
-                reader
-                    .read_exact(&mut raw)
-                    .map_err(|e| Error::write(&self.path, e))?;
-                for (i, c) in raw.chunks_exact(4).enumerate() {
-                    if i > 0 {
-                        line.push(' ');
-                    }
-                    let v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
-                    line.push_str(&v.to_string());
+            self.scratch.read(row, 0, &mut values)?;
+            for (i, v) in values.iter().enumerate() {
+                if i > 0 {
+                    line.push(' ');
                 }
-            } else {
-                reader
-                    .seek_relative(raw.len() as i64)
-                    .map_err(|e| Error::write(&self.path, e))?;
-                let n = self.spec.nodata.to_string();
-                line.push_str(&vec![n.as_str(); cols].join(" "));
+                line.push_str(&v.to_string());
             }
             line.push('\n');
             text.write_all(line.as_bytes())

@@ -16,7 +16,7 @@
 //! must be written once; [`GeoTiffWriter::finish`] fills the rows never written with nodata.
 
 use super::raster::{GridWriter, check_cell, check_span};
-use crate::crs::HorizontalKind;
+use crate::crs::{Crs, HorizontalKind};
 use crate::error::{Error, Result};
 use crate::output::AtomicFile;
 use crate::raster::GridSpec;
@@ -25,11 +25,11 @@ use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// TIFF field types.
-const SHORT: u16 = 3;
-const LONG: u16 = 4;
+pub(crate) const SHORT: u16 = 3;
+pub(crate) const LONG: u16 = 4;
 const ASCII: u16 = 2;
 const DOUBLE: u16 = 12;
-const LONG8: u16 = 16;
+pub(crate) const LONG8: u16 = 16;
 
 /// A float32 GeoTIFF being written (see the module docs).
 #[derive(Debug)]
@@ -46,14 +46,14 @@ pub struct GeoTiffWriter {
 }
 
 /// One IFD entry before layout.
-struct Entry {
-    tag: u16,
-    kind: u16,
-    count: u64,
-    bytes: Vec<u8>,
+pub(crate) struct Entry {
+    pub(crate) tag: u16,
+    pub(crate) kind: u16,
+    pub(crate) count: u64,
+    pub(crate) bytes: Vec<u8>,
 }
 
-fn shorts(tag: u16, v: &[u16]) -> Entry {
+pub(crate) fn shorts(tag: u16, v: &[u16]) -> Entry {
     Entry {
         tag,
         kind: SHORT,
@@ -62,7 +62,7 @@ fn shorts(tag: u16, v: &[u16]) -> Entry {
     }
 }
 
-fn longs(tag: u16, v: &[u32]) -> Entry {
+pub(crate) fn longs(tag: u16, v: &[u32]) -> Entry {
     Entry {
         tag,
         kind: LONG,
@@ -71,7 +71,7 @@ fn longs(tag: u16, v: &[u32]) -> Entry {
     }
 }
 
-fn doubles(tag: u16, v: &[f64]) -> Entry {
+pub(crate) fn doubles(tag: u16, v: &[f64]) -> Entry {
     Entry {
         tag,
         kind: DOUBLE,
@@ -80,7 +80,7 @@ fn doubles(tag: u16, v: &[f64]) -> Entry {
     }
 }
 
-fn ascii(tag: u16, s: &str) -> Entry {
+pub(crate) fn ascii(tag: u16, s: &str) -> Entry {
     let mut bytes = s.as_bytes().to_vec();
     bytes.push(0);
     Entry {
@@ -91,10 +91,123 @@ fn ascii(tag: u16, s: &str) -> Entry {
     }
 }
 
-/// The GeoKey directory for `spec`'s CRS (always with `GTRasterTypeGeoKey = PixelIsArea`).
-fn geokeys(spec: &GridSpec) -> Vec<u16> {
+/// `offsets` or byte counts as `LONG` (classic TIFF) or `LONG8` (BigTIFF) values.
+pub(crate) fn offsets(tag: u16, v: &[u64], big: bool) -> Entry {
+    if big {
+        Entry {
+            tag,
+            kind: LONG8,
+            count: v.len() as u64,
+            bytes: v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+        }
+    } else {
+        longs(tag, &v.iter().map(|&x| x as u32).collect::<Vec<_>>())
+    }
+}
+
+/// The georeferencing tags of a north-up image whose outer upper-left corner is `origin`, with
+/// cells of `size` (x, y), a CRS and a nodata value: `ModelPixelScale`, `ModelTiepoint`,
+/// `GeoKeyDirectory`, `GDAL_NODATA`.
+pub(crate) fn geo_entries(
+    origin: [f64; 2],
+    size: [f64; 2],
+    crs: Option<&Crs>,
+    nodata: Option<&str>,
+) -> Vec<Entry> {
+    let mut e = vec![
+        doubles(33550, &[size[0], size[1], 0.0]),
+        doubles(33922, &[0.0, 0.0, 0.0, origin[0], origin[1], 0.0]),
+        shorts(34735, &geokeys(crs)),
+    ];
+    if let Some(n) = nodata {
+        e.push(ascii(42113, n));
+    }
+    e
+}
+
+/// Bytes of one IFD and its out-of-line tag data.
+pub(crate) fn ifd_size(entries: &[Entry], big: bool) -> u64 {
+    let (inline, entry_size, count_size) = if big { (8, 20, 8) } else { (4, 12, 2) };
+    let mut n = count_size + entries.len() as u64 * entry_size + inline as u64;
+    for e in entries {
+        if e.bytes.len() > inline {
+            n += e.bytes.len() as u64 + (e.bytes.len() as u64 & 1);
+        }
+    }
+    n
+}
+
+/// Encodes IFDs one after the other from file offset `start` (even), each followed by its tag
+/// data and chained to the next; the entries are sorted by tag here. Returns the bytes and each
+/// IFD's offset.
+pub(crate) fn encode_ifds(ifds: &mut [Vec<Entry>], start: u64, big: bool) -> (Vec<u8>, Vec<u64>) {
+    let (inline, entry_size, count_size) = if big { (8, 20, 8) } else { (4, 12, 2) };
+    let mut out = Vec::new();
+    let mut at = Vec::with_capacity(ifds.len());
+    let mut pos = start;
+    let last = ifds.len().saturating_sub(1);
+    for (i, entries) in ifds.iter_mut().enumerate() {
+        entries.sort_by_key(|e| e.tag);
+        at.push(pos);
+        let size = ifd_size(entries, big);
+        let mut extra_offset = pos + count_size + entries.len() as u64 * entry_size + inline as u64;
+        let mut extra = Vec::new();
+        let word = |out: &mut Vec<u8>, v: u64| {
+            if big {
+                out.extend_from_slice(&v.to_le_bytes());
+            } else {
+                out.extend_from_slice(&(v as u32).to_le_bytes());
+            }
+        };
+        if big {
+            out.extend_from_slice(&(entries.len() as u64).to_le_bytes());
+        } else {
+            out.extend_from_slice(&(entries.len() as u16).to_le_bytes());
+        }
+        for e in entries.iter() {
+            out.extend_from_slice(&e.tag.to_le_bytes());
+            out.extend_from_slice(&e.kind.to_le_bytes());
+            word(&mut out, e.count);
+            if e.bytes.len() <= inline {
+                let mut v = e.bytes.clone();
+                v.resize(inline, 0);
+                out.extend_from_slice(&v);
+            } else {
+                word(&mut out, extra_offset);
+                extra.extend_from_slice(&e.bytes);
+                if e.bytes.len() & 1 == 1 {
+                    extra.push(0);
+                }
+                extra_offset += e.bytes.len() as u64 + (e.bytes.len() as u64 & 1);
+            }
+        }
+        let next = if i < last { pos + size } else { 0 };
+        word(&mut out, next);
+        out.extend_from_slice(&extra);
+        pos += size;
+    }
+    (out, at)
+}
+
+/// The TIFF header pointing at the first IFD.
+pub(crate) fn header(big: bool, first_ifd: u64) -> Vec<u8> {
+    let mut out = b"II".to_vec();
+    if big {
+        out.extend_from_slice(&43u16.to_le_bytes());
+        out.extend_from_slice(&8u16.to_le_bytes());
+        out.extend_from_slice(&0u16.to_le_bytes());
+        out.extend_from_slice(&first_ifd.to_le_bytes());
+    } else {
+        out.extend_from_slice(&42u16.to_le_bytes());
+        out.extend_from_slice(&(first_ifd as u32).to_le_bytes());
+    }
+    out
+}
+
+/// The GeoKey directory for a CRS (always with `GTRasterTypeGeoKey = PixelIsArea`).
+fn geokeys(crs: Option<&Crs>) -> Vec<u16> {
     let mut keys: Vec<[u16; 4]> = vec![[1025, 0, 1, 1]];
-    let horizontal = spec.crs.as_ref().and_then(|c| c.horizontal_epsg());
+    let horizontal = crs.and_then(|c| c.horizontal_epsg());
     let code16 = |c: u32| u16::try_from(c).ok();
     if let Some((code, kind)) = horizontal.and_then(|(c, k)| code16(c).map(|c| (c, k))) {
         let (model, key) = match kind {
@@ -104,12 +217,7 @@ fn geokeys(spec: &GridSpec) -> Vec<u16> {
         keys.push([1024, 0, 1, model]);
         keys.push([key, 0, 1, code]);
     }
-    if let Some(v) = spec
-        .crs
-        .as_ref()
-        .and_then(|c| c.vertical_epsg)
-        .and_then(code16)
-    {
+    if let Some(v) = crs.and_then(|c| c.vertical_epsg).and_then(code16) {
         keys.push([4096, 0, 1, v]);
     }
     keys.sort_unstable();
@@ -119,7 +227,7 @@ fn geokeys(spec: &GridSpec) -> Vec<u16> {
 }
 
 /// Shortest text that reads back as exactly `v` (GDAL parses it with `CPLAtof`).
-fn nodata_text(v: f32) -> String {
+pub(crate) fn nodata_text(v: f32) -> String {
     if v.is_nan() {
         "nan".to_string()
     } else {
@@ -134,6 +242,15 @@ impl GeoTiffWriter {
     /// # Errors
     /// [`Error::Output`] for an empty grid or a bad cell size; [`Error::Write`] naming `path`.
     pub fn create(path: &Path, spec: &GridSpec) -> Result<GeoTiffWriter> {
+        Self::create_with(path, spec, false)
+    }
+
+    /// As [`GeoTiffWriter::create`], in the BigTIFF layout when `bigtiff` (otherwise only when
+    /// the file would pass 4 GiB).
+    ///
+    /// # Errors
+    /// As [`GeoTiffWriter::create`].
+    pub fn create_with(path: &Path, spec: &GridSpec, bigtiff: bool) -> Result<GeoTiffWriter> {
         let bad = |message: String| Error::Output {
             path: path.to_path_buf(),
             message,
@@ -151,7 +268,7 @@ impl GeoTiffWriter {
         let pixels = row_bytes * u64::from(spec.rows);
         // Room for the header, IFD and tag data (about 200 bytes + 8 per row): a generous bound.
         let meta_bound = 4096 + 16 * u64::from(spec.rows);
-        let big = pixels + meta_bound > u64::from(u32::MAX);
+        let big = bigtiff || pixels + meta_bound > u64::from(u32::MAX);
         let (header, data_offset) = Self::layout(spec, big)?;
         let mut file = AtomicFile::create_seekable(path, "a GeoTIFF")?;
         file.write_all(&header).map_err(|e| file.err(e))?;
@@ -182,11 +299,13 @@ impl GeoTiffWriter {
             // 279 StripByteCounts: below.
             shorts(284, &[1]),
             shorts(339, &[3]),
-            doubles(33550, &[spec.cell, spec.cell, 0.0]),
-            doubles(33922, &[0.0, 0.0, 0.0, x0, y0, 0.0]),
-            shorts(34735, &geokeys(spec)),
-            ascii(42113, &nodata_text(spec.nodata)),
         ];
+        entries.extend(geo_entries(
+            [x0, y0],
+            [spec.cell, spec.cell],
+            spec.crs.as_ref(),
+            Some(&nodata_text(spec.nodata)),
+        ));
         let counts = if big {
             Entry {
                 tag: 279,
@@ -418,6 +537,7 @@ mod tests {
     #[test]
     fn geokeys_projected_geographic_vertical_and_none() {
         let mut spec = GridSpec::aligned(1.0, 0, 0, 1, 1, 0.0);
+        let geokeys = |s: &GridSpec| super::geokeys(s.crs.as_ref());
         assert_eq!(geokeys(&spec), [1, 1, 0, 1, 1025, 0, 1, 1]);
         spec.crs = Some(Crs {
             epsg: Some(2154),

@@ -3,9 +3,12 @@
 //! - [`mesh`]: mesh formats and [`create_mesh_sink`], which picks a writer: [`PlyWriter`] (binary
 //!   PLY), [`ObjWriter`] (Wavefront OBJ), [`LandXmlWriter`] (LandXML 1.2), [`StinWriter`]
 //!   (sweeptin's streaming mesh). No writer holds the mesh in memory.
-//! - [`raster`]: the [`GridWriter`] row store and [`create_grid_writer`]: [`geotiff`] (float32
-//!   GeoTIFF) and [`ascii`] (ESRI ASCII grid).
+//! - [`raster`]: the [`GridWriter`] row store, [`RasterOptions`] and [`create_grid_writer`]:
+//!   [`geotiff`] (float32 GeoTIFF written in place), [`cog`] (compressed GeoTIFF and Cloud
+//!   Optimized GeoTIFF, staged and assembled in bounded memory) and [`ascii`] (ESRI ASCII grid
+//!   with a `.prj`); [`world`]: world files and `.prj` files beside images.
 //! - [`geojson`]: a streaming GeoJSON feature writer.
+//! - [`vpc`]: virtual point clouds (`.vpc`) from LAS/LAZ headers.
 //! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C
 //!   ([`install_interrupt_handler`]); [`target`]: what an output path is (a file, a link, a
 //!   stream) and the temporary files of dead runs.
@@ -31,6 +34,7 @@
 
 pub mod ascii;
 pub mod atomic;
+pub mod cog;
 pub mod geojson;
 pub mod geotiff;
 pub mod landxml;
@@ -40,11 +44,13 @@ pub mod ply;
 pub mod raster;
 pub mod stin;
 pub mod target;
+pub mod vpc;
+pub mod world;
 
 pub use atomic::{AtomicFile, RegisteredTempDir, install_interrupt_handler};
 pub use landxml::LandXmlWriter;
 pub use mesh::{MeshFormat, MeshMeta, create_mesh_sink};
 pub use obj::ObjWriter;
 pub use ply::PlyWriter;
-pub use raster::{GridWriter, RasterFormat, create_grid_writer};
+pub use raster::{GridWriter, RasterFormat, RasterOptions, create_grid_writer};
 pub use stin::StinWriter;

@@ -33,7 +33,7 @@ fn has_extension(p: &Path, names: &[&str]) -> bool {
 }
 
 impl Source {
-    /// The kind of `paths`, by extension (`.las`/`.laz`, `.stin`, anything else is XYZ).
+    /// The kind of `paths`, by extension (`.las`/`.laz`/`.vpc`, `.stin`, anything else is XYZ).
     ///
     /// # Errors
     /// [`Error::NoInput`] for no path; [`Error::Format`] for a streaming mesh among other files,
@@ -54,7 +54,7 @@ impl Source {
         }
         let lidar = paths
             .iter()
-            .filter(|p| has_extension(p, &["las", "laz"]))
+            .filter(|p| has_extension(p, &["las", "laz", "vpc"]))
             .count();
         if lidar == paths.len() {
             Ok(Source::Lidar)
@@ -266,6 +266,7 @@ mod tests {
     fn the_kind_of_input_is_decided_once() {
         let kind = |p: &[&str]| Source::of(&input(p).paths);
         assert_eq!(kind(&["a.LAZ", "b.las"]).unwrap(), Source::Lidar);
+        assert_eq!(kind(&["a.vpc", "b.copc.laz"]).unwrap(), Source::Lidar);
         assert_eq!(kind(&["a.xyz", "b.txt"]).unwrap(), Source::Xyz);
         assert_eq!(kind(&["a.stin"]).unwrap(), Source::Stream);
         assert!(matches!(kind(&[]), Err(Error::NoInput)));

@@ -22,6 +22,8 @@ const EVENT_BATCH: usize = 16384;
 /// Points between watermarks.
 const WATERMARK_EVERY: u64 = 1 << 16;
 
+/// The progress bar of a run: points against the headers' total while reading (points read,
+/// not kept), then points swept; the rate in whole units (`1.36 M pts/s`).
 pub(super) fn bar(enabled: bool) -> ProgressBar {
     if !enabled {
         return ProgressBar::hidden();
@@ -30,11 +32,26 @@ pub(super) fn bar(enabled: bool) -> ProgressBar {
     b.set_style(
         ProgressStyle::with_template(
             "{msg:>12} [{elapsed_precise}] {wide_bar} {human_pos}/{human_len} pts \
-             ({per_sec}, ETA {eta})",
+             ({rate}, ETA {eta})",
         )
-        .expect("valid template"),
+        .expect("valid template")
+        .with_key(
+            "rate",
+            |s: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                let _ = w.write_str(&rate(s.per_sec()));
+            },
+        ),
     );
     b
+}
+
+/// A rate of points per second in whole units: `950 pts/s`, `12.5 k pts/s`, `1.36 M pts/s`.
+pub(crate) fn rate(per_sec: f64) -> String {
+    match per_sec {
+        r if !r.is_finite() || r < 1e3 => format!("{:.0} pts/s", r.max(0.0)),
+        r if r < 1e6 => format!("{:.1} k pts/s", r / 1e3),
+        r => format!("{:.2} M pts/s", r / 1e6),
+    }
 }
 
 pub(crate) fn run(
@@ -356,6 +373,14 @@ type Written = (u64, u64, u64, Option<crate::breaklines::flat::FlatStats>);
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rates_in_whole_units() {
+        assert_eq!(rate(1_356_317.194_9), "1.36 M pts/s");
+        assert_eq!(rate(12_480.0), "12.5 k pts/s");
+        assert_eq!(rate(950.4), "950 pts/s");
+        assert_eq!(rate(f64::NAN), "0 pts/s");
+    }
 
     #[test]
     fn a_worker_panic_is_an_internal_error() {

@@ -32,7 +32,7 @@ use config::Source;
 use std::path::PathBuf;
 
 pub use config::RunConfig;
-pub use lines::{FarHeights, LineOptions, LineSummary};
+pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary};
 pub use read::read_points;
 
 /// What to triangulate.

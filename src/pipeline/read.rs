@@ -114,7 +114,6 @@ pub(crate) fn read_into(
         }
         let total = reader.point_count();
         sorter.reserve(total)?;
-        let q = *reader.quantization();
         let crs = reader.crs().cloned();
         let mut buf: Vec<LidarPoint> = Vec::with_capacity(CHUNK);
         let mut n = 0u64;
@@ -126,20 +125,22 @@ pub(crate) fn read_into(
             for p in &buf {
                 // Real-world doubles, exactly as written to the outputs: the triangulation is
                 // Delaunay for the coordinates in the output file (see docs/ARCHITECTURE.md).
-                let w = q.to_world(p);
                 add(
                     sorter,
                     swap,
                     SortRecord {
-                        x: w[0] + 0.0,
-                        y: w[1] + 0.0,
-                        z: w[2],
+                        x: p.x,
+                        y: p.y,
+                        z: p.z,
                         index: p.index,
                     },
                 )?;
             }
             n += buf.len() as u64;
-            progress(n, Some(total));
+            // The bar counts the points read (and skipped outside the box) against the
+            // headers' total, not the points kept.
+            let s = reader.stats();
+            progress(s.read + s.skipped, Some(total));
         }
         return Ok(ReadResult {
             frame: Frame { swap },
@@ -229,9 +230,8 @@ pub fn read_points(input: &Input) -> Result<(Vec<[f64; 3]>, Option<Crs>)> {
     if source == Source::Lidar {
         let mut r = LidarReader::open(&input.paths, &input.filter)?;
         let pts = r.read_all()?;
-        let q = *r.quantization();
         let crs = r.crs().cloned();
-        Ok((pts.iter().map(|p| q.to_world(p)).collect(), crs))
+        Ok((pts.iter().map(|p| [p.x, p.y, p.z]).collect(), crs))
     } else {
         config::check_filter(source, &input.filter, &input.paths)?;
         let mut all = Vec::new();

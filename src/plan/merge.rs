@@ -5,8 +5,8 @@ use super::{Plan, TaskRecord};
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use crate::input::raster::RasterReader;
-use crate::output::raster::{RasterFormat, create_grid_writer};
-use crate::raster::{GridExtent, GridPlan};
+use crate::output::raster::{RasterFormat, RasterOptions, create_grid_writer};
+use crate::raster::{Align, GridExtent, GridPlan};
 use std::path::{Path, PathBuf};
 
 pub use super::stitch::{StitchSummary, stitch};
@@ -66,7 +66,12 @@ pub struct DemMergeSummary {
 }
 
 /// The mosaic's grid: the union of the tiles, on the plan's cell lattice.
-fn mosaic_grid(plan: &Plan, nodata: f32, crs: Option<&Crs>) -> Result<crate::raster::GridSpec> {
+fn mosaic_grid(
+    plan: &Plan,
+    nodata: f32,
+    align: Align,
+    crs: Option<&Crs>,
+) -> Result<crate::raster::GridSpec> {
     let cell = plan
         .cell
         .ok_or_else(|| Error::Options("the plan makes no DEM".into()))?;
@@ -90,6 +95,7 @@ fn mosaic_grid(plan: &Plan, nodata: f32, crs: Option<&Crs>) -> Result<crate::ras
             bbox: b,
             snap: false,
         },
+        align,
     )?
     .grid(b, nodata)?;
     g.crs = crs.cloned();
@@ -104,8 +110,19 @@ fn offset(g: &crate::raster::GridSpec, r: &crate::input::raster::RasterSpec) -> 
     (col, row)
 }
 
+/// How a DEM mosaic is written.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MosaicOptions {
+    /// The value of cells without data.
+    pub nodata: f32,
+    /// The plan's cell alignment (the tasks' rasters were made with it).
+    pub align: Align,
+    /// Format (a `.vrt` extension writes a VRT), compression, predictor, BigTIFF.
+    pub output: RasterOptions,
+}
+
 /// Joins the DEM tiles into `out`: a GDAL VRT (`.vrt`) over the tile GeoTIFFs, or one GeoTIFF
-/// (`.tif`) written row band by row band, in bounded memory.
+/// or COG (`.tif`) written tile by tile into the writer's stage, in bounded memory.
 ///
 /// # Errors
 /// Reading the tiles or writing; [`Error::Options`] for unfinished tasks or an unknown extension.
@@ -113,20 +130,25 @@ pub fn merge_dem(
     plan: &Plan,
     dir: &Path,
     out: &Path,
-    nodata: f32,
+    options: &MosaicOptions,
     crs: Option<&Crs>,
 ) -> Result<DemMergeSummary> {
     let recs = records(plan, dir)?;
     let tiles = outputs(&recs, "dem")?;
-    let g = mosaic_grid(plan, nodata, crs)?;
+    let nodata = options.nodata;
+    let g = mosaic_grid(plan, nodata, options.align, crs)?;
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    if ext.as_deref() == Some("vrt") {
+    if ext.as_deref() == Some("vrt") && options.output.format.is_none() {
         write_vrt(&g, &tiles, out)?;
     } else {
-        let mut w = create_grid_writer(out, Some(RasterFormat::GeoTiff), &g)?;
+        let mut o = options.output;
+        if o.format.is_none() {
+            o.format = Some(RasterFormat::GeoTiff);
+        }
+        let mut w = create_grid_writer(out, &o, &g)?;
         for path in &tiles {
             let mut r = RasterReader::open(path)?;
             let spec = r.spec().clone();

@@ -2,9 +2,10 @@
 //!
 //! # The grid
 //!
-//! Cell centres lie on whole multiples of the cell size, so rasters of adjacent tiles from
-//! separate runs line up exactly and a mosaic of them equals one run over the whole area; the
-//! cells are every centre inside the points' bounds, or those of a box. Which cells a grid has,
+//! Cell edges (or, with [`crate::raster::Align::Centres`], centres) lie on whole multiples of the
+//! cell size, so rasters of adjacent tiles from separate runs line up exactly and a mosaic of them
+//! equals one run over the whole area; the cells are those whose centres lie inside the points'
+//! bounds, or inside a box. Which cells a grid has,
 //! and where their centres are, is decided in [`crate::raster`] ([`GridPlan`], [`GridSpec`]).
 //!
 //! # Which triangle writes a cell
@@ -32,7 +33,7 @@
 
 use super::geom::{Location, Tri};
 use crate::error::{Error, Result};
-use crate::output::raster::{GridWriter, RasterFormat, create_grid_writer};
+use crate::output::raster::{GridWriter, RasterFormat, RasterOptions, create_grid_writer};
 use crate::raster::{GridPlan, GridSpec};
 use crate::sink::{DemSummary, ProductSummary, StreamInfo, TriangleSink};
 use std::collections::VecDeque;
@@ -48,8 +49,8 @@ pub struct DemOptions {
     pub grid: GridPlan,
     /// Value of cells without data.
     pub nodata: f32,
-    /// Output format; by extension when `None`.
-    pub format: Option<RasterFormat>,
+    /// Output format (by extension when not given), compression, predictor, BigTIFF.
+    pub output: RasterOptions,
     /// Bytes of rows the sink may hold in memory (its share of the run's `--mem`; by default
     /// 256 MiB, a quarter of the default budget).
     pub memory: u64,
@@ -60,7 +61,7 @@ impl Default for DemOptions {
         DemOptions {
             grid: GridPlan::default(),
             nodata: -9999.0,
-            format: None,
+            output: RasterOptions::default(),
             memory: 256 << 20,
         }
     }
@@ -179,14 +180,45 @@ impl Raster {
         Ok(())
     }
 
+    /// Might a cell centre lie in the closed box of `t`? (`false` only when none does.)
+    fn any_centre_in(&self, t: &[[f64; 3]; 3]) -> bool {
+        let (xmin, xmax) = (
+            t[0][0].min(t[1][0]).min(t[2][0]),
+            t[0][0].max(t[1][0]).max(t[2][0]),
+        );
+        let (ymin, ymax) = (
+            t[0][1].min(t[1][1]).min(t[2][1]),
+            t[0][1].max(t[1][1]).max(t[2][1]),
+        );
+        let rows = self.spec.rows_over(ymin, ymax);
+        if !rows.clone().any(|row| {
+            let y = self.spec.centre_y(row);
+            y >= ymin && y <= ymax
+        }) {
+            return false;
+        }
+        self.spec.cols_over(xmin, xmax).any(|col| {
+            let x = self.spec.centre_x(col);
+            x >= xmin && x <= xmax
+        })
+    }
+
     fn rasterise(&mut self, t: &Tri) -> Result<()> {
         let [xmin, ymin, xmax, ymax] = t.bbox();
-        // The candidates have a cell of slack on each side: the exact test below decides.
+        // The candidates have a cell of slack on each side; a centre outside the triangle's
+        // box is outside the triangle (exact comparisons), the exact test decides the rest.
         let cols = self.spec.cols_over(xmin, xmax);
         for row in self.spec.rows_over(ymin, ymax).rev() {
             let y = self.spec.centre_y(row);
+            if y < ymin || y > ymax {
+                continue;
+            }
             for col in cols.clone() {
-                let p = [self.spec.centre_x(col), y];
+                let x = self.spec.centre_x(col);
+                if x < xmin || x > xmax {
+                    continue;
+                }
+                let p = [x, y];
                 let loc = t.locate(p);
                 if loc == Location::Outside {
                     continue;
@@ -249,14 +281,10 @@ impl DemSink {
     /// depend on the data) and appears under its name when the stream finishes.
     ///
     /// # Errors
-    /// [`Error::Output`] for an unknown format.
+    /// [`Error::Output`] for an unknown format or options that do not go together
+    /// ([`RasterOptions::resolve`]).
     pub fn new(path: &Path, options: DemOptions) -> Result<DemSink> {
-        if options.format.is_none() && RasterFormat::from_extension(path).is_none() {
-            return Err(Error::Options(format!(
-                "{}: unknown raster format: use a .tif or .asc extension, or --raster-format",
-                path.display()
-            )));
-        }
+        options.output.resolve(path, false)?;
         Ok(DemSink {
             path: path.to_path_buf(),
             options,
@@ -280,7 +308,7 @@ impl TriangleSink for DemSink {
         let mut spec = o.grid.grid(info.bounds, o.nodata)?;
         spec.crs = info.crs.clone();
         let band_limit = band_rows(&spec, o.memory)?;
-        let writer = create_grid_writer(&self.path, o.format, &spec)?;
+        let writer = create_grid_writer(&self.path, &o.output, &spec)?;
         self.raster = Some(Raster {
             writer,
             spec,
@@ -298,10 +326,15 @@ impl TriangleSink for DemSink {
 
     fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
         self.triangles += 1;
+        let r = self.raster()?;
+        // Most triangles of dense lidar hold no cell centre: skip them before any exact test.
+        if !r.any_centre_in(t) {
+            return Ok(());
+        }
         let Some(t) = Tri::new(t) else {
             return Ok(());
         };
-        self.raster()?.rasterise(&t)
+        r.rasterise(&t)
     }
 
     fn watermark(&mut self, y: f64) -> Result<()> {
@@ -327,6 +360,9 @@ impl TriangleSink for DemSink {
         r.apply_late()?;
         let spec = r.writer.spec().clone();
         let bytes = r.writer.finish()?;
+        if self.options.output.resolve(&self.path, false)?.format == RasterFormat::Ascii {
+            crate::output::world::write_prj(&self.path, spec.crs.as_ref())?;
+        }
         Ok(ProductSummary::Dem(DemSummary {
             path: self.path.clone(),
             cols: spec.cols,
@@ -361,7 +397,12 @@ mod tests {
         let mut sink = DemSink::new(
             &path,
             DemOptions {
-                grid: GridPlan::new(1.0, crate::raster::GridExtent::Auto).unwrap(),
+                grid: GridPlan::new(
+                    1.0,
+                    crate::raster::GridExtent::Auto,
+                    crate::raster::Align::Centres,
+                )
+                .unwrap(),
                 ..DemOptions::default()
             },
         )
@@ -415,12 +456,14 @@ mod tests {
         };
         let (a, va) = run(&crate::products::testutil::in_sweep_order(&tris), "a.tif");
         let (b, vb) = run(&shuffled_with_watermarks(&tris, 7), "b.tif");
-        assert_eq!(a.rows, 101);
+        // Edges on whole numbers by default: 100 × 100 cells over [0, 100]².
+        assert_eq!((a.cols, a.rows), (100, 100));
+        assert_eq!(a.origin, [0.0, 100.0]);
         assert!(a.max_rows_in_memory < 15, "{a:?}");
         assert_eq!(a.late_cell_writes, 0);
         assert!(b.late_cell_writes > 0, "{b:?}");
-        assert_eq!(a.cells_with_data, 101 * 101);
-        assert_eq!(b.cells_with_data, 101 * 101);
+        assert_eq!(a.cells_with_data, 100 * 100);
+        assert_eq!(b.cells_with_data, 100 * 100);
         assert!(va.iter().zip(&vb).all(|(x, y)| x.to_bits() == y.to_bits()));
     }
 
@@ -433,7 +476,16 @@ mod tests {
             .collect();
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("n.asc");
-        let mut sink = DemSink::new(&path, DemOptions::default()).unwrap();
+        let options = DemOptions {
+            grid: GridPlan::new(
+                1.0,
+                crate::raster::GridExtent::Auto,
+                crate::raster::Align::Centres,
+            )
+            .unwrap(),
+            ..DemOptions::default()
+        };
+        let mut sink = DemSink::new(&path, options).unwrap();
         let info = StreamInfo {
             crs: None,
             bounds: [0.0, 0.0, 4.0, 4.0],

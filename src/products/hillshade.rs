@@ -1,4 +1,5 @@
-//! Hillshade of a DEM GeoTIFF, as a PNG, so that a result can be seen at a glance.
+//! Hillshade of a DEM, as a PNG (with a world file) so that a result can be seen at a glance, or
+//! as an 8-bit georeferenced GeoTIFF / COG for a GIS.
 //!
 //! The shading is the one `gdaldem hillshade` computes (Horn's slope, Lambertian light): for the
 //! 3 × 3 window `a b c / d e f / g h i` around a cell, with cell sizes `ew`, `ns` and z factor `k`,
@@ -14,19 +15,20 @@
 //! edge cells and the cells next to nodata are shaded too: missing neighbours are extrapolated
 //! linearly from the others (exact on a plane); nodata cells are transparent.
 //!
-//! The DEM is read strip by strip (three rows in memory at a time) with the `tiff` crate, which
-//! decodes any uncompressed, LZW or Deflate single-band GeoTIFF of integer or float samples; tiled
-//! files are read whole. The cell size comes from `ModelPixelScaleTag` and the nodata value from
-//! `GDAL_NODATA`.
+//! The DEM is read a band of rows at a time ([`RasterReader`]: any single-band GeoTIFF the `tiff`
+//! crate decodes, striped or tiled, and ESRI ASCII grids); the cell size, origin, CRS and nodata
+//! value come from it and go to the output's georeferencing.
 
+use crate::crs::Crs;
 use crate::error::{Error, Result};
+use crate::input::raster::RasterReader;
 use crate::output::AtomicFile;
+use crate::output::cog::{TiffGeo, write_u8_image};
+use crate::output::raster::{RasterFormat, RasterOptions};
+use crate::output::world::{write_prj, write_world_file};
 use std::collections::VecDeque;
-use std::fs::File;
-use std::io::{BufReader, Write};
+use std::io::Write;
 use std::path::Path;
-use tiff::decoder::{ChunkType, Decoder, DecodingResult, Limits};
-use tiff::tags::Tag;
 
 /// Light and exaggeration.
 #[derive(Clone, Copy, Debug)]
@@ -37,6 +39,8 @@ pub struct HillshadeOptions {
     pub altitude: f64,
     /// Vertical exaggeration.
     pub z_factor: f64,
+    /// Output format (PNG by a `.png` extension; GeoTIFF or COG) and compression.
+    pub output: RasterOptions,
 }
 
 impl HillshadeOptions {
@@ -68,6 +72,7 @@ impl Default for HillshadeOptions {
             azimuth: 315.0,
             altitude: 45.0,
             z_factor: 1.0,
+            output: RasterOptions::default(),
         }
     }
 }
@@ -83,143 +88,6 @@ pub struct HillshadeSummary {
     pub shaded: u64,
     /// Bytes of the PNG.
     pub bytes: u64,
-}
-
-/// Rows of a single-band TIFF, north to south, as `f64` with nodata as NaN.
-struct Rows {
-    decoder: Decoder<BufReader<File>>,
-    path: std::path::PathBuf,
-    width: usize,
-    height: usize,
-    nodata: Option<f64>,
-    /// The whole image, for tiled files.
-    whole: Option<Vec<f64>>,
-    next_chunk: u32,
-    next_row: usize,
-    ready: VecDeque<Vec<f64>>,
-}
-
-fn to_f64(r: DecodingResult) -> Option<Vec<f64>> {
-    Some(match r {
-        DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::U32(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::U64(v) => v.into_iter().map(|x| x as f64).collect(),
-        DecodingResult::I8(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::I16(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::I32(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::I64(v) => v.into_iter().map(|x| x as f64).collect(),
-        DecodingResult::F32(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::F64(v) => v,
-        _ => return None,
-    })
-}
-
-impl Rows {
-    fn open(path: &Path) -> Result<(Rows, [f64; 2])> {
-        let bad = |m: String| Error::Format {
-            path: path.to_path_buf(),
-            message: m,
-        };
-        let f = File::open(path).map_err(|e| Error::io(path, e))?;
-        let mut d = Decoder::new(BufReader::new(f))
-            .map_err(|e| bad(format!("not a TIFF file: {e}")))?
-            .with_limits(Limits::unlimited());
-        let (w, h) = d.dimensions().map_err(|e| bad(e.to_string()))?;
-        match d.colortype().map_err(|e| bad(e.to_string()))? {
-            tiff::ColorType::Gray(_) => {}
-            other => {
-                return Err(bad(format!(
-                    "a DEM must have one band, this image is {other:?}"
-                )));
-            }
-        }
-        let scale = d
-            .find_tag(Tag::ModelPixelScaleTag)
-            .ok()
-            .flatten()
-            .and_then(|v| v.into_f64_vec().ok())
-            .filter(|v| v.len() >= 2 && v[0] > 0.0 && v[1] > 0.0)
-            .map_or([1.0, 1.0], |v| [v[0], v[1]]);
-        let nodata = d
-            .find_tag(Tag::GdalNodata)
-            .ok()
-            .flatten()
-            .and_then(|v| v.into_string().ok())
-            .and_then(|s| {
-                s.trim_matches(|c: char| c == '\0' || c.is_whitespace())
-                    .parse()
-                    .ok()
-            });
-        let whole = if d.get_chunk_type() == ChunkType::Tile {
-            let img = d.read_image().map_err(|e| bad(e.to_string()))?;
-            Some(to_f64(img).ok_or_else(|| bad("unsupported sample type".into()))?)
-        } else {
-            None
-        };
-        Ok((
-            Rows {
-                decoder: d,
-                path: path.to_path_buf(),
-                width: w as usize,
-                height: h as usize,
-                nodata,
-                whole,
-                next_chunk: 0,
-                next_row: 0,
-                ready: VecDeque::new(),
-            },
-            scale,
-        ))
-    }
-
-    fn clean(&self, mut row: Vec<f64>) -> Vec<f64> {
-        for v in &mut row {
-            if Some(*v) == self.nodata || self.nodata.is_some_and(f64::is_nan) && v.is_nan() {
-                *v = f64::NAN;
-            }
-        }
-        row
-    }
-
-    /// The next row, or `None` after the last.
-    fn next(&mut self) -> Result<Option<Vec<f64>>> {
-        if self.next_row >= self.height {
-            return Ok(None);
-        }
-        if let Some(all) = &self.whole {
-            let r = all[self.next_row * self.width..(self.next_row + 1) * self.width].to_vec();
-            self.next_row += 1;
-            return Ok(Some(self.clean(r)));
-        }
-        if self.ready.is_empty() {
-            let chunk = self
-                .decoder
-                .read_chunk(self.next_chunk)
-                .map_err(|e| Error::Format {
-                    path: self.path.clone(),
-                    message: format!(
-                        "strip {}: {}",
-                        self.next_chunk,
-                        crate::input::raster::tiff_message(&e)
-                    ),
-                })?;
-            self.next_chunk += 1;
-            let values = to_f64(chunk).ok_or_else(|| Error::Format {
-                path: self.path.clone(),
-                message: "unsupported sample type".into(),
-            })?;
-            for r in values.chunks_exact(self.width) {
-                self.ready.push_back(r.to_vec());
-            }
-        }
-        self.next_row += 1;
-        let r = self.ready.pop_front().ok_or_else(|| Error::Format {
-            path: self.path.clone(),
-            message: "a strip holds fewer rows than the image".into(),
-        })?;
-        Ok(Some(self.clean(r)))
-    }
 }
 
 /// The shade of the centre of a 3 × 3 window. Missing (NaN) neighbours are extrapolated so that
@@ -261,66 +129,179 @@ fn shade(w: [[f64; 3]; 3], ew: f64, ns: f64, o: &HillshadeOptions) -> u8 {
     (1.0 + 254.0 * s.max(0.0)).round().clamp(1.0, 255.0) as u8
 }
 
-/// Shades the DEM at `input` into a grey + alpha PNG at `output`.
+/// Rows of a grid read a band at a time (missing cells NaN), north to south.
+struct Rows {
+    reader: RasterReader,
+    next_row: u32,
+    ready: VecDeque<Vec<f64>>,
+}
+
+impl Rows {
+    /// Rows read per band.
+    const BAND: u32 = 256;
+
+    fn next(&mut self) -> Result<Option<Vec<f64>>> {
+        let (w, h) = (self.reader.spec().cols, self.reader.spec().rows);
+        if self.ready.is_empty() && self.next_row < h {
+            let n = Self::BAND.min(h - self.next_row);
+            let v = self.reader.read_window(0, self.next_row, w, n)?;
+            self.ready
+                .extend(v.chunks_exact(w as usize).map(<[f64]>::to_vec));
+            self.next_row += n;
+        }
+        Ok(self.ready.pop_front())
+    }
+}
+
+/// Shades every row of `reader`'s grid, calling `row` with each (values 1–255, 0 where the DEM
+/// has no data); returns the cells shaded.
+fn shade_rows(
+    reader: RasterReader,
+    o: &HillshadeOptions,
+    mut row: impl FnMut(u32, &[u8]) -> Result<()>,
+) -> Result<u64> {
+    let (ew, ns) = reader.spec().cell_size();
+    let w = reader.spec().cols as usize;
+    let mut rows = Rows {
+        reader,
+        next_row: 0,
+        ready: VecDeque::new(),
+    };
+    let mut shaded = 0u64;
+    let mut prev: Option<Vec<f64>> = None;
+    let mut cur = rows.next()?;
+    let mut line = vec![0u8; w];
+    let mut r = 0u32;
+    while let Some(c) = cur.take() {
+        let next = rows.next()?;
+        let cell = |row: Option<&Vec<f64>>, x: Option<usize>| match (row, x) {
+            (Some(r), Some(x)) if x < w => r[x],
+            _ => f64::NAN,
+        };
+        for x in 0..w {
+            if c[x].is_nan() {
+                line[x] = 0;
+                continue;
+            }
+            let (l, m, rr) = (x.checked_sub(1), Some(x), Some(x + 1));
+            let (a, b) = (prev.as_ref(), next.as_ref());
+            let win = [
+                [cell(a, l), cell(a, m), cell(a, rr)],
+                [cell(Some(&c), l), c[x], cell(Some(&c), rr)],
+                [cell(b, l), cell(b, m), cell(b, rr)],
+            ];
+            line[x] = shade(win, ew, ns, o);
+            shaded += 1;
+        }
+        row(r, &line)?;
+        r += 1;
+        prev = Some(c);
+        cur = next;
+    }
+    Ok(shaded)
+}
+
+/// The CRS a grid reader reports (`EPSG:code` or WKT), as the writers take it.
+fn crs_of(text: Option<&str>) -> Option<Crs> {
+    let t = text?;
+    match t.strip_prefix("EPSG:").and_then(|c| c.parse().ok()) {
+        Some(code) => Some(Crs {
+            epsg: Some(code),
+            ..Crs::default()
+        }),
+        None => Crs::from_wkt_bytes(t.as_bytes()),
+    }
+}
+
+/// Shades the DEM at `input` (GeoTIFF, COG or ESRI ASCII grid, read a band of rows at a time)
+/// into `output`: a grey + alpha PNG (nodata transparent) with a world file (`.pgw`) and, when
+/// the CRS is known as WKT, a `.prj`; or, by extension or `o.output.format`, an 8-bit
+/// georeferenced GeoTIFF or COG (0 = nodata, as `gdaldem hillshade` writes).
 ///
 /// # Errors
-/// [`Error::Io`] / [`Error::Format`] naming the file; [`Error::Options`] for options out of range
+/// [`Error::Io`] / [`Error::Format`] naming the file; [`Error::Output`] for a rotated grid or an
+/// unknown output format; [`Error::Options`] for options out of range
 /// ([`HillshadeOptions::check`]).
 pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<HillshadeSummary> {
     o.check()?;
-    let (mut rows, [ew, ns]) = Rows::open(input)?;
-    let (w, h) = (rows.width, rows.height);
+    let reader = RasterReader::open(input)?;
+    let spec = reader.spec().clone();
+    if !spec.is_axis_aligned() {
+        return Err(Error::Format {
+            path: input.to_path_buf(),
+            message: "a rotated or sheared grid cannot be shaded".into(),
+        });
+    }
+    let (w, h) = (spec.cols, spec.rows);
+    let (ew, ns) = spec.cell_size();
+    let origin = [spec.transform[0], spec.transform[3]];
+    let crs = crs_of(spec.crs.as_deref());
+    let png = o.output.format.is_none()
+        && output
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !png {
+        let r = o.output.resolve(output, true)?;
+        if r.format == RasterFormat::Ascii {
+            return Err(Error::Output {
+                path: output.to_path_buf(),
+                message: "a hillshade is written as PNG, GeoTIFF or COG".into(),
+            });
+        }
+        let geo = TiffGeo {
+            origin,
+            size: [ew, ns],
+            crs,
+            nodata: 0.0,
+        };
+        let mut shaded = 0;
+        let bytes = write_u8_image(output, w, h, &geo, &r, |stage| {
+            let mut values = vec![0f32; w as usize];
+            shaded = shade_rows(reader, o, |row, line| {
+                for (v, b) in values.iter_mut().zip(line) {
+                    *v = f32::from(*b);
+                }
+                stage.write(row, 0, &values)
+            })?;
+            Ok(())
+        })?;
+        return Ok(HillshadeSummary {
+            cols: w,
+            rows: h,
+            shaded,
+            bytes,
+        });
+    }
     let mut out = AtomicFile::create(output)?;
     let png_err = |e: png::EncodingError| Error::Output {
         path: output.to_path_buf(),
         message: format!("PNG: {e}"),
     };
-    let mut shaded = 0u64;
+    let shaded;
     {
-        let mut enc = png::Encoder::new(&mut out, w as u32, h as u32);
+        let mut enc = png::Encoder::new(&mut out, w, h);
         enc.set_color(png::ColorType::GrayscaleAlpha);
         enc.set_depth(png::BitDepth::Eight);
         let mut writer = enc.write_header().map_err(png_err)?;
         let mut stream = writer.stream_writer().map_err(png_err)?;
-        let mut prev: Option<Vec<f64>> = None;
-        let mut cur = rows.next()?;
-        let mut line = vec![0u8; w * 2];
-        while let Some(c) = cur.take() {
-            let next = rows.next()?;
-            let cell = |row: Option<&Vec<f64>>, x: Option<usize>| match (row, x) {
-                (Some(r), Some(x)) if x < w => r[x],
-                _ => f64::NAN,
-            };
-            for x in 0..w {
-                if c[x].is_nan() {
-                    line[2 * x] = 0;
-                    line[2 * x + 1] = 0;
-                    continue;
-                }
-                let (l, m, r) = (x.checked_sub(1), Some(x), Some(x + 1));
-                let (a, b) = (prev.as_ref(), next.as_ref());
-                let win = [
-                    [cell(a, l), cell(a, m), cell(a, r)],
-                    [cell(Some(&c), l), c[x], cell(Some(&c), r)],
-                    [cell(b, l), cell(b, m), cell(b, r)],
-                ];
-                line[2 * x] = shade(win, ew, ns, o);
-                line[2 * x + 1] = 255;
-                shaded += 1;
+        let mut ga = vec![0u8; w as usize * 2];
+        shaded = shade_rows(reader, o, |_, line| {
+            for (x, v) in line.iter().enumerate() {
+                ga[2 * x] = *v;
+                ga[2 * x + 1] = if *v == 0 { 0 } else { 255 };
             }
-            stream
-                .write_all(&line)
-                .map_err(|e| Error::write(output, e))?;
-            prev = Some(c);
-            cur = next;
-        }
+            stream.write_all(&ga).map_err(|e| Error::write(output, e))
+        })?;
         stream.finish().map_err(png_err)?;
     }
     out.flush().map_err(|e| Error::write(output, e))?;
     let bytes = out.commit()?;
+    write_world_file(output, origin, [ew, ns])?;
+    write_prj(output, crs.as_ref())?;
     Ok(HillshadeSummary {
-        cols: w as u32,
-        rows: h as u32,
+        cols: w,
+        rows: h,
         shaded,
         bytes,
     })
@@ -332,6 +313,8 @@ mod tests {
     use crate::output::geotiff::GeoTiffWriter;
     use crate::output::raster::GridWriter;
     use crate::raster::GridSpec;
+    use std::fs::File;
+    use std::io::BufReader;
 
     fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
         let d = png::Decoder::new(BufReader::new(File::open(path).unwrap()));
@@ -377,14 +360,33 @@ mod tests {
         for p in px.chunks(2).skip(1) {
             assert_eq!(p, [want, 255]);
         }
+        // The PNG's world file: cell centre of the upper-left cell.
+        let pgw = std::fs::read_to_string(dir.path().join("s.pgw")).unwrap();
+        assert_eq!(pgw, "2.0\n0.0\n0.0\n-2.0\n0.0\n6.0\n");
+        // The same shades as an 8-bit GeoTIFF, 0 where the DEM has no data.
+        let tif = dir.path().join("s.tif");
+        let t = hillshade(&dem, &tif, &HillshadeOptions::default()).unwrap();
+        assert_eq!(t.shaded, 19);
+        let mut d = tiff::decoder::Decoder::new(BufReader::new(File::open(&tif).unwrap())).unwrap();
+        let tiff::decoder::DecodingResult::U8(v) = d.read_image().unwrap() else {
+            panic!("not 8-bit")
+        };
+        let grey: Vec<u8> = px.chunks(2).map(|p| p[0]).collect();
+        assert_eq!(v, grey);
     }
 
     #[test]
-    fn not_a_tiff_is_a_format_error() {
+    fn not_a_grid_is_an_error_naming_the_file() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("x.tif");
         std::fs::write(&p, b"hello").unwrap();
         let e = hillshade(&p, &dir.path().join("o.png"), &HillshadeOptions::default());
-        assert!(matches!(e, Err(Error::Format { .. })));
+        // Neither TIFF nor ESRI ASCII: the grid reader's error, naming the file.
+        let e = e.unwrap_err();
+        assert!(
+            matches!(e, Error::Format { .. } | Error::Parse { .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("x.tif"), "{e}");
     }
 }

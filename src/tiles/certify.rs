@@ -1,15 +1,22 @@
 //! Certificates: which triangles of a tile's run are triangles of the triangulation of *all*
 //! points.
 //!
-//! A tile's run triangulates the points of a rectangle of blocks (the *loaded* blocks). A
-//! triangle of that run is Delaunay for the loaded points: its closed circumdisk holds no other
-//! loaded point (ties go by the global rule of [`crate::geom::predicates`], which depends on
-//! positions only). If the disk also reaches no point outside the loaded blocks, it holds no point
-//! at all, so the triangle is a triangle of the whole triangulation: it is **certified**. The test
-//! is conservative: the disk is the floating-point bound of [`crate::geom::predicates::circumdisk_bounds`]
-//! (never smaller than the true disk), widened by the rounding of the block assignment, and it
-//! asks the block index whether any *block* it touches outside the loaded ones holds a point. An
-//! error can only withhold a certificate, never grant a wrong one.
+//! A tile's run triangulates the points of some blocks (the *loaded* blocks). A triangle of that
+//! run is Delaunay for the loaded points: its closed circumdisk holds no other loaded point (ties
+//! go by the global rule of [`crate::geom::predicates`], which depends on positions only). If the
+//! disk also holds no point of any other block, it holds no point at all, so the triangle is a
+//! triangle of the whole triangulation: it is **certified**.
+//!
+//! The test has two stages. A floating-point bound of the disk
+//! ([`crate::geom::predicates::circumdisk_bounds`], never smaller than the true disk) picks the
+//! blocks not read whose *extent* (the tight box of their points, rounded outward) it reaches;
+//! most disks stay inside the loaded rectangle and the test ends there. The points of each block
+//! it reaches are then tested one by one with the exact, perturbed in-circle predicate: the
+//! certificate fails only when some point really lies in the disk (a *witness*; its block is what
+//! a patch run must read). An error of the bound can only make the second stage test more
+//! points, never grant a wrong certificate. This matters along the data's edges: a ragged edge
+//! makes flat triangles whose huge disks reach far along the edge, but only by a sliver that the
+//! points there stay out of.
 //!
 //! The convex hull needs no certificate of its own: every run also holds the corners of the hull
 //! of all the points ([`super::hull`]), so a run's hull *is* the whole hull, and what lies
@@ -17,6 +24,10 @@
 
 use super::grid::BlockRect;
 use super::index::BlockIndex;
+use crate::error::Result;
+use crate::geom::predicates::{CircleSide, DiskBounds, Orientation, incircle, orient};
+use crate::idmap::FastMap;
+use std::cell::RefCell;
 
 /// The blocks a run read: a rectangle, and single blocks outside it (sorted keys).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -33,8 +44,19 @@ impl Loaded {
     }
 }
 
+/// Points of blocks not read, kept while a run is judged (a block is often tested by many
+/// triangles along a data edge).
+#[derive(Debug, Default)]
+struct Cache {
+    blocks: FastMap<u64, Vec<[f64; 3]>>,
+    points: usize,
+}
+
+/// Cached points beyond which the cache starts afresh.
+const CACHE_POINTS: usize = 1 << 20;
+
 /// Answers certificate questions for one run over the `loaded` blocks.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug)]
 pub(crate) struct Certifier<'a> {
     index: &'a BlockIndex,
     loaded: &'a Loaded,
@@ -43,6 +65,48 @@ pub(crate) struct Certifier<'a> {
     /// Set when a test reached beyond what a plan's task read (see [`BlockIndex::scope`]).
     /// The widest buffer an unread file needs (0: none).
     pub unknown: &'a std::cell::Cell<f64>,
+    cache: RefCell<Cache>,
+    /// Points tested one by one, and the blocks they came from.
+    pub tested: std::cell::Cell<(u64, u64)>,
+    /// Witness blocks a failed certificate reports at most: a few are enough for the next run
+    /// to make progress, and the judge doubles it with every run of a tile (a disk that a sparse
+    /// patch run left huge may hold points of thousands of blocks).
+    pub witnesses: usize,
+}
+
+/// Squared distance from `p` to the box `e` (`[xmin, ymin, xmax, ymax]`).
+#[inline]
+fn box_dist2(e: &[f64; 4], p: [f64; 2]) -> f64 {
+    let dx = (e[0] - p[0]).max(p[0] - e[2]).max(0.0);
+    let dy = (e[1] - p[1]).max(p[1] - e[3]).max(0.0);
+    dx * dx + dy * dy
+}
+
+/// An upper bound of the height of the circular segment that the chord `ab` cuts off the
+/// circumdisk of `a, b, c` on `c`'s side, for an obtuse angle at `c` (centre beyond the chord)
+/// and `l = |ab|`. In the frame of `ab`, `c = (s, δ)`: the centre lies `K = m / 2δ` beyond the
+/// chord with `m = s(l - s) - δ²`, and the height is `(l²/4) / (R + K) ≤ l²δ / 4m`; never more
+/// than `l / 2`. Computed with `δ` rounded up (its cross product cancels) and `m` rounded down.
+fn sagitta_bound(a: [f64; 2], b: [f64; 2], c: [f64; 2], l: f64) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let e = [c[0] - a[0], c[1] - a[1]];
+    let scale = d[0].abs().max(d[1].abs()) * e[0].abs().max(e[1].abs());
+    let cross = (d[0] * e[1] - d[1] * e[0]).abs() + 8.0 * f64::EPSILON * scale;
+    let delta = cross / l * (1.0 + 1e-9) + f64::MIN_POSITIVE;
+    let s = (d[0] * e[0] + d[1] * e[1]) / l;
+    let m = s * (l - s) * (1.0 - 1e-9) - delta * delta;
+    let h = if m > 0.0 {
+        l * l * delta / (4.0 * m) * (1.0 + 1e-9)
+    } else {
+        f64::INFINITY
+    };
+    h.min(l / 2.0) + l * 1e-9
+}
+
+/// Do two closed boxes meet?
+#[inline]
+fn boxes_meet(a: &[f64; 4], b: &[f64; 4]) -> bool {
+    a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3]
 }
 
 /// Where [`Certifier`] puts the blocks that withheld a certificate.
@@ -59,69 +123,74 @@ impl<'a> Certifier<'a> {
             loaded,
             world: index.grid.world(&loaded.rect),
             unknown,
+            cache: RefCell::new(Cache::default()),
+            tested: std::cell::Cell::new((0, 0)),
+            witnesses: 4,
         }
     }
 
-    /// Adds to `out` the non-empty blocks of row `by`, columns `x0 ..= x1` (only those not read
-    /// unless `all`); returns whether there was any.
-    fn blocks_in_row(&self, by: i64, x0: i64, x1: i64, all: bool, out: &mut Missing) -> bool {
+    /// Calls `f` on each non-empty block not read in row `by`, columns `x0 ..= x1`.
+    fn unread_in_row(
+        &self,
+        by: i64,
+        x0: i64,
+        x1: i64,
+        f: &mut dyn FnMut(u64) -> Result<()>,
+    ) -> Result<()> {
         let occ = self.index.occupied();
         let (x0, x1) = (x0.max(occ.x0), x1.min(occ.x1 - 1));
         if x1 < x0 {
-            return false;
+            return Ok(());
         }
         let l = &self.loaded.rect;
-        let spans = if all || by < l.y0 || by >= l.y1 || x1 < l.x0 || x0 >= l.x1 {
+        let spans = if by < l.y0 || by >= l.y1 || x1 < l.x0 || x0 >= l.x1 {
             [(x0, x1 + 1), (0, 0)]
         } else {
             [(x0, x1.min(l.x0 - 1) + 1), (x0.max(l.x1), x1 + 1)]
         };
-        let before = out.len();
         for (a, b) in spans {
             for &k in self.index.keys_in_row(by, a, b) {
-                if all || self.loaded.extra.binary_search(&k).is_err() {
-                    out.push(k);
+                if self.loaded.extra.binary_search(&k).is_err() {
+                    f(k)?;
                 }
             }
         }
-        out.len() > before
+        Ok(())
     }
 
-    /// Is the closed disk of `center` and `radius` (an upper bound of the true radius) free of
-    /// points outside the loaded blocks? The blocks that hold such points go to `out`.
-    pub fn disk_clear(&self, center: [f64; 2], radius: f64, out: &mut Missing) -> bool {
-        self.disk_blocks(center, radius, false, out)
-    }
-
-    /// Adds to `out` every non-empty block the closed disk touches (read or not): what a run that
-    /// must get this disk right has to read.
-    pub fn touched(&self, center: [f64; 2], radius: f64, out: &mut Missing) {
-        self.disk_blocks(center, radius, true, out);
-    }
-
-    fn disk_blocks(&self, center: [f64; 2], radius: f64, all: bool, out: &mut Missing) -> bool {
+    /// Is the triangle `t` (counter-clockwise) certified: does its circumdisk, bounded by `d`,
+    /// hold no point of a block not read? The blocks holding a point inside go to `out`.
+    ///
+    /// # Errors
+    /// Reading a block's points.
+    pub fn clear(&self, t: &[[f64; 2]; 3], d: &DiskBounds, out: &mut Missing) -> Result<bool> {
         let g = &self.index.grid;
-        let [cx, cy] = center;
-        let r = radius + g.margin(cx.abs().max(cy.abs()) + radius);
+        let [cx, cy] = d.center;
+        let r = d.radius + g.margin(cx.abs().max(cy.abs()) + d.radius);
         if !r.is_finite() {
-            return false;
+            return Ok(false);
         }
         let w = &self.world;
-        if !all && cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
-            return true;
+        if cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
+            return Ok(true);
         }
         if let Some(sc) = &self.index.scope
             && let reach = sc.disk_reach([cx, cy], r)
             && reach > 0.0
         {
             self.unknown.set(self.unknown.get().max(reach));
-            return false;
+            return Ok(false);
         }
         let occ = self.index.occupied();
         let b = g.block;
         let by0 = (((cy - r) / b).floor() as i64).max(occ.y0);
         let by1 = (((cy + r) / b).floor() as i64).min(occ.y1 - 1);
-        let mut clear = true;
+        // The blocks not read whose points' box the disk reaches, nearest to the triangle first.
+        let mut near: Vec<(f64, u64)> = Vec::new();
+        let m = [
+            (t[0][0] + t[1][0] + t[2][0]) / 3.0,
+            (t[0][1] + t[1][1] + t[2][1]) / 3.0,
+        ];
         for by in by0..=by1 {
             let (lo, hi) = (by as f64 * b, (by + 1) as f64 * b);
             let dy = if cy < lo {
@@ -137,11 +206,185 @@ impl<'a> Certifier<'a> {
             let hw = (r * r - dy * dy).max(0.0).sqrt() * (1.0 + 1e-12) + r * 1e-12;
             let bx0 = ((cx - hw) / b).floor() as i64;
             let bx1 = ((cx + hw) / b).floor() as i64;
-            if self.blocks_in_row(by, bx0, bx1, all, out) {
-                clear = false;
+            self.unread_in_row(by, bx0, bx1, &mut |k| {
+                if let Some(e) = self.index.extent(k)
+                    && box_dist2(&e, [cx, cy]) <= r * r * (1.0 + 1e-9)
+                {
+                    near.push((box_dist2(&e, m), k));
+                }
+                Ok(())
+            })?;
+        }
+        Ok(self.witnesses_among(near, t, out)? == 0)
+    }
+
+    /// Tests the blocks `near` (keys with a distance), nearest first, until
+    /// [`Certifier::witnesses`] of them hold a point inside the circumdisk of `t`; returns how
+    /// many did (the keys go to `out`).
+    fn witnesses_among(
+        &self,
+        mut near: Vec<(f64, u64)>,
+        t: &[[f64; 2]; 3],
+        out: &mut Missing,
+    ) -> Result<usize> {
+        near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut found = 0;
+        for &(_, k) in &near {
+            if self.witness(k, t)? {
+                out.push(k);
+                found += 1;
+                if found >= self.witnesses {
+                    break;
+                }
             }
         }
-        clear
+        Ok(found)
+    }
+
+    /// The certificate of a triangle too flat for its disk to be bounded in floating point
+    /// ([`crate::geom::predicates::circumdisk_bounds`] gives up). Let `a → b` be its longest
+    /// edge, with `c` on its left. When the angle at `c` is obtuse (always, this flat), the
+    /// circumcentre lies on the right of the line `L` through `a` and `b`, so the disk is within
+    /// (1) the *chord box*: the points on or left of `L` that project into the segment `ab` and
+    /// lie within `|ab| / 2` of `L` (the circular segment cut off by the chord `ab`), and (2) the
+    /// open half-plane right of `L`. Blocks whose points' box meets either are tested point by
+    /// point: those near the triangle first, then the rest of the half-plane, row by row.
+    /// `None` when the angle at `c` cannot be shown obtuse.
+    ///
+    /// # Errors
+    /// Reading a block's points.
+    pub fn flat_clear(&self, t: &[[f64; 2]; 3], out: &mut Missing) -> Result<Option<bool>> {
+        let len2 = |p: [f64; 2], q: [f64; 2]| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
+        let i = (0..3)
+            .max_by(|&i, &j| len2(t[i], t[(i + 1) % 3]).total_cmp(&len2(t[j], t[(j + 1) % 3])))
+            .unwrap_or(0);
+        let (a, b, c) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+        let (ca, cb) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
+        let dot = ca[0] * cb[0] + ca[1] * cb[1];
+        let lens = (ca[0].hypot(ca[1])) * (cb[0].hypot(cb[1]));
+        if dot.is_nan() || dot >= -1e-6 * lens {
+            return Ok(None);
+        }
+        let g = &self.index.grid;
+        let l = len2(a, b).sqrt();
+        let mag = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
+        let slack = g.margin(mag + l) + l * 1e-9;
+        let h = sagitta_bound(a, b, c, l);
+        // The near box: the chord box (the segment `ab` moved up to `h` to the left), two
+        // blocks wider (witnesses on the far side are most often close to the triangle).
+        let n = [-(b[1] - a[1]) / l, (b[0] - a[0]) / l];
+        let (ah, bh) = (
+            [a[0] + n[0] * h, a[1] + n[1] * h],
+            [b[0] + n[0] * h, b[1] + n[1] * h],
+        );
+        let reach = slack + 2.0 * g.block;
+        let near_box = [
+            a[0].min(b[0]).min(ah[0]).min(bh[0]) - reach,
+            a[1].min(b[1]).min(ah[1]).min(bh[1]) - reach,
+            a[0].max(b[0]).max(ah[0]).max(bh[0]) + reach,
+            a[1].max(b[1]).max(ah[1]).max(bh[1]) + reach,
+        ];
+        let beyond = |e: &[f64; 4]| {
+            [[e[0], e[1]], [e[2], e[1]], [e[2], e[3]], [e[0], e[3]]]
+                .into_iter()
+                .any(|p| orient(a, b, p) == Orientation::Clockwise)
+        };
+        let m = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+        let occ = self.index.occupied();
+        let bs = g.block;
+        let rows = |lo: f64, hi: f64| {
+            (
+                ((lo / bs).floor() as i64).max(occ.y0),
+                ((hi / bs).floor() as i64).min(occ.y1 - 1),
+            )
+        };
+        // Near the triangle: the chord box and the half-plane.
+        let mut near: Vec<(f64, u64)> = Vec::new();
+        let (by0, by1) = rows(near_box[1], near_box[3]);
+        for by in by0..=by1 {
+            let bx0 = (near_box[0] / bs).floor() as i64;
+            let bx1 = (near_box[2] / bs).floor() as i64;
+            self.unread_in_row(by, bx0, bx1, &mut |k| {
+                if let Some(e) = self.index.extent(k)
+                    && boxes_meet(&e, &near_box)
+                {
+                    near.push((box_dist2(&e, m), k));
+                }
+                Ok(())
+            })?;
+        }
+        if self.witnesses_among(near, t, out)? > 0 {
+            return Ok(Some(false));
+        }
+        // The rest of the half-plane right of `L`, row by row: in each row the half-plane is
+        // an interval of x (bounded conservatively).
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let mut far: Vec<(f64, u64)> = Vec::new();
+        for by in occ.y0..occ.y1 {
+            let (y0, y1) = (by as f64 * bs - slack, (by + 1) as f64 * bs + slack);
+            let (lo, hi) = if d[1] == 0.0 {
+                // Right of a horizontal line: below it going east, above it going west.
+                let right = if d[0] > 0.0 { y0 <= a[1] } else { y1 >= a[1] };
+                if !right {
+                    continue;
+                }
+                (f64::NEG_INFINITY, f64::INFINITY)
+            } else {
+                // Where L crosses the row's edges; right of L is x > (d.y > 0) or x < that.
+                let xs = [y0, y1].map(|y| a[0] + d[0] * (y - a[1]) / d[1]);
+                let w = (xs[1] - xs[0]).abs() * 1e-9 + slack + bs * 1e-9;
+                if d[1] > 0.0 {
+                    (xs[0].min(xs[1]) - w, f64::INFINITY)
+                } else {
+                    (f64::NEG_INFINITY, xs[0].max(xs[1]) + w)
+                }
+            };
+            let bx0 = if lo.is_finite() {
+                (lo / bs).floor() as i64
+            } else {
+                occ.x0
+            };
+            let bx1 = if hi.is_finite() {
+                (hi / bs).floor() as i64
+            } else {
+                occ.x1 - 1
+            };
+            self.unread_in_row(by, bx0, bx1, &mut |k| {
+                if let Some(e) = self.index.extent(k)
+                    && !boxes_meet(&e, &near_box)
+                    && beyond(&e)
+                {
+                    far.push((box_dist2(&e, m), k));
+                }
+                Ok(())
+            })?;
+        }
+        Ok(Some(self.witnesses_among(far, t, out)? == 0))
+    }
+
+    /// Does block `k` (not read) hold a point inside the circumdisk of `t`? Exact.
+    fn witness(&self, k: u64, t: &[[f64; 2]; 3]) -> Result<bool> {
+        let mut cache = self.cache.borrow_mut();
+        if !cache.blocks.contains_key(&k) {
+            if cache.points > CACHE_POINTS {
+                cache.blocks.clear();
+                cache.points = 0;
+            }
+            let mut pts = Vec::new();
+            self.index.read_block(k, &mut pts)?;
+            cache.points += pts.len();
+            cache.blocks.insert(k, pts);
+        }
+        let pts = &cache.blocks[&k];
+        let (n, nb) = self.tested.get();
+        self.tested.set((n + pts.len() as u64, nb + 1));
+        Ok(pts.iter().any(|p| {
+            let q = [p[0], p[1]];
+            q != t[0]
+                && q != t[1]
+                && q != t[2]
+                && incircle(t[0], t[1], t[2], q) == CircleSide::Inside
+        }))
     }
 }
 
@@ -191,7 +434,17 @@ mod tests {
             })
             .unwrap();
         }
-        BlockIndex::build(grid, s.finish().unwrap(), dir.path()).unwrap()
+        BlockIndex::build(
+            grid,
+            s.finish().unwrap(),
+            dir.path(),
+            crate::sort::DuplicatePolicy::First,
+        )
+        .unwrap()
+    }
+
+    fn bounds(t: &[[f64; 2]; 3]) -> DiskBounds {
+        crate::geom::predicates::circumdisk_bounds(t[0], t[1], t[2]).unwrap()
     }
 
     #[test]
@@ -218,34 +471,45 @@ mod tests {
         let unknown = std::cell::Cell::new(0.0);
         let c = Certifier::new(&ix, &loaded, &unknown);
         let mut m = Missing::new();
-        assert!(c.disk_clear([10.0, 10.0], 5.9, &mut m));
-        assert!(!c.disk_clear([10.0, 10.0], 6.6, &mut m));
-        // The hole is empty, so a disk reaching into it from a loaded side is clear.
-        assert!(c.disk_clear([6.0, 10.0], 1.5, &mut m));
-        // The lower-left outside corner has points.
-        assert!(!c.disk_clear([4.0, 4.0], 0.8, &mut m));
-        // Outside the data everything is empty.
-        assert!(c.disk_clear([40.0, 40.0], 5.0, &mut m));
-        let everything = Loaded {
-            rect: ix.occupied(),
-            extra: vec![],
-        };
-        let all = Certifier::new(&ix, &everything, &unknown);
-        assert!(all.disk_clear([10.0, 10.0], 1e6, &mut m));
-        // What withheld the certificates: blocks outside the loaded rectangle only.
+        // A small triangle well inside the loaded blocks.
+        let t = [[9.0, 9.0], [11.0, 9.0], [10.0, 11.0]];
+        assert!(c.clear(&t, &bounds(&t), &mut m).unwrap());
+        // A wide one over the lower-left outside corner: lattice points there lie in its disk.
+        let t = [[2.0, 2.0], [6.0, 2.0], [4.0, 6.0]];
+        assert!(!c.clear(&t, &bounds(&t), &mut m).unwrap());
         assert!(!m.is_empty());
         for k in &m {
             let (bx, by) = TileGrid::unkey(*k);
             assert!(!loaded.rect.contains(bx, by));
         }
-        // With those blocks read, the corner disk is clear.
+        // A disk that reaches unread blocks only where no point lies in it (the lattice points
+        // around are outside the circle through these three): certified.
+        let t = [[3.9, 10.0], [4.3, 9.8], [4.3, 10.2]];
+        let mut m2 = Missing::new();
+        assert!(c.clear(&t, &bounds(&t), &mut m2).unwrap());
+        assert!(m2.is_empty());
+        // A flat triangle along the lattice's bottom row: its disk is huge, but the lattice
+        // points keep out of it, one by one.
+        let t = [[0.5, 0.5], [1.5, 0.5], [1.0, 0.5 + 1e-7]];
+        let before = c.tested.get().0;
+        assert!(c.clear(&t, &bounds(&t), &mut m2).unwrap());
+        assert!(c.tested.get().0 > before);
+        // Outside the data everything is empty.
+        let t = [[40.0, 40.0], [45.0, 40.0], [42.0, 44.0]];
+        assert!(c.clear(&t, &bounds(&t), &mut m2).unwrap());
+        // With the witness blocks read, the corner triangle is certified.
         m.sort_unstable();
         m.dedup();
         let more = Loaded {
             rect: loaded.rect,
             extra: m.clone(),
         };
-        let mut m2 = Missing::new();
-        assert!(Certifier::new(&ix, &more, &unknown).disk_clear([4.0, 4.0], 0.8, &mut m2));
+        let t = [[2.0, 2.0], [6.0, 2.0], [4.0, 6.0]];
+        let mut m3 = Missing::new();
+        let c2 = Certifier::new(&ix, &more, &unknown);
+        // Still not certified as a *triangle* (points of the read blocks lie in it), but no
+        // unread block is a witness any more.
+        let _ = c2.clear(&t, &bounds(&t), &mut m3).unwrap();
+        assert!(m3.iter().all(|k| !m.contains(k)));
     }
 }

@@ -12,6 +12,7 @@
 use super::grid::{BlockRect, TileGrid};
 use super::hull::hull;
 use crate::error::{Error, Result};
+use crate::sort::DuplicatePolicy;
 use crate::sort::external::{Merge, SortKey};
 use std::cmp::Ordering;
 use std::fs::File;
@@ -52,6 +53,8 @@ pub(crate) struct BlockIndex {
     keys: Vec<u64>,
     /// Record offset of each non-empty block, and the total at the end.
     starts: Vec<u64>,
+    /// Tight box of each non-empty block's points.
+    extents: Vec<Extent>,
     store: Store,
     /// The blocks holding points: their bounding rectangle.
     occupied: BlockRect,
@@ -106,20 +109,60 @@ impl Scope {
     }
 }
 
+/// The tight bounding box of a block's points, as `f32` offsets from the block's lower-left
+/// corner, rounded outward (so the box it stands for always holds every point of the block).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Extent([f32; 4]);
+
+impl Extent {
+    /// The outward-rounded offsets of `b` (`[xmin, ymin, xmax, ymax]`, world) from `corner`.
+    fn new(b: [f64; 4], corner: [f64; 2], block: f64) -> Extent {
+        // The f64 difference errs by an ulp of the corner, the f32 rounding by 2^-24 of a block
+        // (offsets lie within one block): the margin covers both, and the reverse sum in `world`.
+        let m = block * 1e-6 + (corner[0].abs() + corner[1].abs() + block) * 1e-14;
+        Extent([
+            (b[0] - corner[0] - m) as f32,
+            (b[1] - corner[1] - m) as f32,
+            (b[2] - corner[0] + m) as f32,
+            (b[3] - corner[1] + m) as f32,
+        ])
+    }
+
+    /// The world box `[xmin, ymin, xmax, ymax]` (a little wider than the points' box).
+    #[inline]
+    pub fn world(&self, corner: [f64; 2], block: f64) -> [f64; 4] {
+        let m = block * 1e-6 + (corner[0].abs() + corner[1].abs() + block) * 1e-14;
+        let e = &self.0;
+        [
+            corner[0] + f64::from(e[0]) - m,
+            corner[1] + f64::from(e[1]) - m,
+            corner[0] + f64::from(e[2]) + m,
+            corner[1] + f64::from(e[3]) + m,
+        ]
+    }
+}
+
 /// The table, the occupied rectangle and the hull candidates, built as the records stream by.
 #[derive(Debug)]
 struct Builder {
+    grid: TileGrid,
     keys: Vec<u64>,
     starts: Vec<u64>,
+    extents: Vec<Extent>,
+    /// The current block's box, world coordinates.
+    current: [f64; 4],
     n: u64,
     occupied: BlockRect,
 }
 
-impl Default for Builder {
-    fn default() -> Self {
+impl Builder {
+    fn new(grid: TileGrid) -> Self {
         Builder {
+            grid,
             keys: Vec::new(),
             starts: Vec::new(),
+            extents: Vec::new(),
+            current: EMPTY_BOX,
             n: 0,
             occupied: BlockRect {
                 x0: i64::MAX,
@@ -131,10 +174,33 @@ impl Default for Builder {
     }
 }
 
+/// A box holding nothing.
+const EMPTY_BOX: [f64; 4] = [
+    f64::INFINITY,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    f64::NEG_INFINITY,
+];
+
 impl Builder {
+    /// Closes the current block's extent.
+    fn close(&mut self) {
+        if let Some(&k) = self.keys.last()
+            && self.extents.len() < self.keys.len()
+        {
+            let (bx, by) = TileGrid::unkey(k);
+            let g = &self.grid;
+            let corner = [bx as f64 * g.block, by as f64 * g.block];
+            self.extents
+                .push(Extent::new(self.current, corner, g.block));
+            self.current = EMPTY_BOX;
+        }
+    }
+
     #[inline]
     fn note(&mut self, r: &BlockRecord) {
         if self.keys.last() != Some(&r.key) {
+            self.close();
             let (bx, by) = TileGrid::unkey(r.key);
             self.keys.push(r.key);
             self.starts.push(self.n);
@@ -144,6 +210,8 @@ impl Builder {
             o.x1 = o.x1.max(bx + 1);
             o.y1 = o.y1.max(by + 1);
         }
+        let c = &mut self.current;
+        *c = [c[0].min(r.x), c[1].min(r.y), c[2].max(r.x), c[3].max(r.y)];
         self.n += 1;
     }
 }
@@ -154,9 +222,14 @@ impl BlockIndex {
     ///
     /// # Errors
     /// [`Error::Io`] naming `tmp_dir`, or the merge's own error.
-    pub fn build(grid: TileGrid, mut merge: Merge<BlockRecord>, tmp_dir: &Path) -> Result<Self> {
+    pub fn build(
+        grid: TileGrid,
+        mut merge: Merge<BlockRecord>,
+        tmp_dir: &Path,
+        policy: DuplicatePolicy,
+    ) -> Result<Self> {
         let io = |e| Error::io(tmp_dir, e);
-        let mut b = Builder::default();
+        let mut b = Builder::new(grid);
         let store = if let Some(v) = merge.take_memory() {
             let mut pts = Vec::with_capacity(v.len());
             for r in &v {
@@ -187,6 +260,7 @@ impl BlockIndex {
                 dir: tmp_dir.to_path_buf(),
             }
         };
+        b.close();
         b.starts.push(b.n);
         if b.keys.is_empty() {
             b.occupied = BlockRect {
@@ -200,13 +274,51 @@ impl BlockIndex {
             grid,
             keys: b.keys,
             starts: b.starts,
+            extents: b.extents,
             store,
             occupied: b.occupied,
             hull: Vec::new(),
             scope: None,
         };
         index.hull = index.convex_hull()?;
+        index.resolve_hull_heights(policy)?;
         Ok(index)
+    }
+
+    /// Gives each hull corner the height the duplicate policy keeps among the points at its
+    /// position (they all lie in its block), so that a run holding the corner but not its block
+    /// has the same vertex as a run holding the block.
+    fn resolve_hull_heights(&mut self, policy: DuplicatePolicy) -> Result<()> {
+        let mut pts = Vec::new();
+        let mut hull = std::mem::take(&mut self.hull);
+        for c in &mut hull {
+            let (bx, by) = self.grid.block_of(c[0], c[1]);
+            pts.clear();
+            self.read_block(TileGrid::key(bx, by), &mut pts)?;
+            let mut keep: Option<(usize, f64)> = None;
+            for (i, p) in pts.iter().enumerate() {
+                if p[0] == c[0] && p[1] == c[1] {
+                    keep = match keep {
+                        Some(k) if !policy.prefers((p[2], i as u64), (k.1, k.0 as u64)) => Some(k),
+                        _ => Some((i, p[2])),
+                    };
+                }
+            }
+            if let Some((_, z)) = keep {
+                c[2] = z;
+            }
+        }
+        self.hull = hull;
+        Ok(())
+    }
+
+    /// The world box of the points of non-empty block `key` (slightly wider), if it has points.
+    #[inline]
+    pub fn extent(&self, key: u64) -> Option<[f64; 4]> {
+        let i = self.keys.binary_search(&key).ok()?;
+        let (bx, by) = TileGrid::unkey(key);
+        let b = self.grid.block;
+        Some(self.extents[i].world([bx as f64 * b, by as f64 * b], b))
     }
 
     /// The corners of the convex hull of all the points. Only blocks with an empty diagonal
@@ -364,7 +476,7 @@ mod tests {
             })
             .unwrap();
         }
-        BlockIndex::build(grid, s.finish().unwrap(), dir).unwrap()
+        BlockIndex::build(grid, s.finish().unwrap(), dir, DuplicatePolicy::First).unwrap()
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use super::grid::{BlockRect, TileGrid};
 use super::worker::{NOT_OWNED, TileOutput};
-use crate::idmap::{FastMap, FastSet};
+use crate::idmap::FastMap;
 use std::cmp::Ordering;
 
 /// Decides which points the tile owns: clearly inside or outside its rectangle by a margin, or
@@ -42,25 +42,124 @@ fn sweep_cmp(a: &[f64; 3], b: &[f64; 3]) -> Ordering {
 }
 
 /// Fills `out` from one run, `certified` naming the run's triangles that are certified (all the
-/// triangles meeting the tile are). Vertices are in sweep order, so a triangle's lowest vertex is
-/// its least index.
-pub(crate) fn from_run(
+/// triangles meeting the tile are), and `patched`: certified triangles of later runs (world
+/// coordinates, counter-clockwise; a triangle may come from two runs, and a patch's triangle
+/// may be one of the first run's).
+pub(crate) fn from_runs(
     owner: &Owner,
     task: Option<&Owner>,
     t: &crate::Triangulation,
     certified: &[u32],
+    patched: &[[[f64; 3]; 3]],
     out: &mut TileOutput,
 ) {
-    let n = t.vertices.len();
-    let is_owned: Vec<bool> = t.vertices.iter().map(|p| owner.owns(p)).collect();
+    if patched.is_empty() {
+        collect(
+            owner,
+            task,
+            &t.vertices,
+            certified.iter().map(|&k| t.triangles[k as usize]),
+            out,
+        );
+        return;
+    }
+    // The patches' vertices: the first run's (its vertices are in sweep order, so found by
+    // binary search), or new ones appended.
+    let mut vertices = t.vertices.clone();
+    let first = t.vertices.len();
+    let mut shared = vec![false; first];
+    let mut new_ids: FastMap<(u64, u64), u32> = FastMap::default();
+    let mut id_of = |p: &[f64; 3], vertices: &mut Vec<[f64; 3]>| -> u32 {
+        match t.vertices.binary_search_by(|v| sweep_cmp(v, p)) {
+            Ok(i) => {
+                shared[i] = true;
+                i as u32
+            }
+            Err(_) => *new_ids
+                .entry((p[0].to_bits(), p[1].to_bits()))
+                .or_insert_with(|| {
+                    vertices.push(*p);
+                    (vertices.len() - 1) as u32
+                }),
+        }
+    };
+    // A patch's triangle that is also one of the first run's is kept where the first run has it.
+    let mut patch_tris: Vec<[u32; 3]> = Vec::with_capacity(patched.len());
+    let mut keys: FastMap<[u32; 3], bool> = FastMap::default();
+    for p in patched {
+        let v = p.map(|q| id_of(&q, &mut vertices));
+        let mut k = v;
+        k.sort_unstable();
+        if keys.insert(k, false).is_none() {
+            patch_tris.push(v);
+        }
+    }
+    let mut tris: Vec<[u32; 3]> = Vec::with_capacity(certified.len() + patch_tris.len());
+    for &k in certified {
+        let v = t.triangles[k as usize];
+        if v.iter().all(|&i| shared[i as usize]) {
+            let mut s = v;
+            s.sort_unstable();
+            if let Some(dup) = keys.get_mut(&s) {
+                *dup = true;
+            }
+        }
+        tris.push(v);
+    }
+    for v in patch_tris {
+        let mut s = v;
+        s.sort_unstable();
+        if !keys[&s] {
+            tris.push(v);
+        }
+    }
+    // Number the vertices in sweep order again (the new ones are few), so that a triangle's
+    // lowest vertex is its least number.
+    let mut order: Vec<u32> = (first as u32..vertices.len() as u32).collect();
+    order.sort_unstable_by(|&i, &j| sweep_cmp(&vertices[i as usize], &vertices[j as usize]));
+    let mut remap = vec![0u32; vertices.len()];
+    let mut sorted = Vec::with_capacity(vertices.len());
+    let mut news = order.iter().peekable();
+    for i in 0..first {
+        while let Some(&&j) = news.peek()
+            && sweep_cmp(&vertices[j as usize], &vertices[i]) == Ordering::Less
+        {
+            remap[j as usize] = sorted.len() as u32;
+            sorted.push(vertices[j as usize]);
+            news.next();
+        }
+        remap[i] = sorted.len() as u32;
+        sorted.push(vertices[i]);
+    }
+    for &j in news {
+        remap[j as usize] = sorted.len() as u32;
+        sorted.push(vertices[j as usize]);
+    }
+    for t in &mut tris {
+        *t = t.map(|i| remap[i as usize]);
+    }
+    collect(owner, task, &sorted, tris.iter().copied(), out);
+}
+
+/// Fills `out` from triangles (indices into `vertices`, which are in sweep order; each triangle
+/// once) certified for the tile.
+fn collect(
+    owner: &Owner,
+    task: Option<&Owner>,
+    vertices: &[[f64; 3]],
+    tris: impl Iterator<Item = [u32; 3]> + Clone,
+    out: &mut TileOutput,
+) {
+    let n = vertices.len();
+    let is_owned: Vec<bool> = vertices.iter().map(|p| owner.owns(p)).collect();
+    let low = |t: &[u32; 3]| t[0].min(t[1]).min(t[2]) as usize;
     let mut degree = vec![0u32; n];
     let mut foreign = vec![false; n];
-    for &k in certified {
-        let tri = t.triangles[k as usize];
-        let low = tri[0].min(tri[1]).min(tri[2]) as usize;
+    for tri in tris.clone() {
+        let o = is_owned[low(&tri)];
         for &i in &tri {
             degree[i as usize] += 1;
-            if !is_owned[low] {
+            if !o {
                 foreign[i as usize] = true;
             }
         }
@@ -69,19 +168,18 @@ pub(crate) fn from_run(
     let mut add = |i: usize, out: &mut TileOutput| -> u32 {
         if map[i] == u32::MAX {
             map[i] = out.vertices.len() as u32;
-            out.vertices.push(t.vertices[i]);
+            out.vertices.push(vertices[i]);
             out.degree
                 .push(if is_owned[i] { degree[i] } else { NOT_OWNED });
         }
         map[i]
     };
-    for &k in certified {
-        let tri = t.triangles[k as usize];
-        let low = tri[0].min(tri[1]).min(tri[2]) as usize;
-        if is_owned[low] {
+    for tri in tris {
+        let l = low(&tri);
+        if is_owned[l] {
             let o = tri.map(|i| add(i as usize, out));
             out.triangles.push(o);
-        } else if task.is_some_and(|tk| !tk.owns(&t.vertices[low])) {
+        } else if task.is_some_and(|tk| !tk.owns(&vertices[l])) {
             let o = tri.map(|i| add(i as usize, out));
             out.boundary.push(o);
         }
@@ -92,80 +190,4 @@ pub(crate) fn from_run(
         }
     }
     out.points_kept = is_owned.iter().filter(|&&o| o).count() as u64;
-}
-
-/// Fills `out` from certified triangles of several runs (world coordinates, counter-clockwise;
-/// the same triangle may come from two runs).
-pub(crate) fn from_list(
-    owner: &Owner,
-    task: Option<&Owner>,
-    tris: &[[[f64; 3]; 3]],
-    out: &mut TileOutput,
-) {
-    let key = |p: &[f64; 3]| (p[0].to_bits(), p[1].to_bits());
-    let mut ids: FastMap<(u64, u64), u32> = FastMap::default();
-    ids.reserve(tris.len() / 2 + 16);
-    let mut pts: Vec<[f64; 3]> = Vec::with_capacity(tris.len() / 2 + 16);
-    let mut seen = FastSet::default();
-    seen.reserve(tris.len());
-    let mut unique: Vec<[u32; 3]> = Vec::with_capacity(tris.len());
-    for t in tris {
-        let v = t.map(|p| {
-            *ids.entry(key(&p)).or_insert_with(|| {
-                pts.push(p);
-                (pts.len() - 1) as u32
-            })
-        });
-        let mut s = v;
-        s.sort_unstable();
-        if seen.insert(s) {
-            unique.push(v);
-        }
-    }
-    let is_owned: Vec<bool> = pts.iter().map(|p| owner.owns(p)).collect();
-    let low = |t: &[u32; 3]| -> usize {
-        let mut l = t[0];
-        for &i in &t[1..] {
-            if sweep_cmp(&pts[i as usize], &pts[l as usize]) == Ordering::Less {
-                l = i;
-            }
-        }
-        l as usize
-    };
-    let mut degree = vec![0u32; pts.len()];
-    let mut foreign = vec![false; pts.len()];
-    for t in &unique {
-        let o = is_owned[low(t)];
-        for &i in t {
-            degree[i as usize] += 1;
-            if !o {
-                foreign[i as usize] = true;
-            }
-        }
-    }
-    let mut map = vec![u32::MAX; pts.len()];
-    let mut add = |i: usize, out: &mut TileOutput| -> u32 {
-        if map[i] == u32::MAX {
-            map[i] = out.vertices.len() as u32;
-            out.vertices.push(pts[i]);
-            out.degree
-                .push(if is_owned[i] { degree[i] } else { NOT_OWNED });
-        }
-        map[i]
-    };
-    for t in &unique {
-        let l = low(t);
-        if is_owned[l] {
-            let o = t.map(|i| add(i as usize, out));
-            out.triangles.push(o);
-        } else if task.is_some_and(|tk| !tk.owns(&pts[l])) {
-            let o = t.map(|i| add(i as usize, out));
-            out.boundary.push(o);
-        }
-    }
-    for i in 0..pts.len() {
-        if is_owned[i] && foreign[i] {
-            add(i, out);
-        }
-    }
 }

@@ -41,7 +41,7 @@ const BLOCK_POINTS: f64 = 256.0;
 /// Points per tile the tile size aims at (owned points, before the buffer).
 const TILE_POINTS: f64 = (1u64 << 18) as f64;
 /// The first buffer of a tile, in blocks.
-const FIRST_BUFFER: i64 = 2;
+const FIRST_BUFFER: i64 = 1;
 
 /// How to tile.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -154,7 +154,6 @@ fn read_index(
     };
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
-    let q = *reader.quantization();
     let crs = reader.crs().cloned();
     let mut sorter = ExternalSorter::<BlockRecord>::new(mem / 2, tmp);
     let mut bounds = [
@@ -164,15 +163,13 @@ fn read_index(
         f64::NEG_INFINITY,
     ];
     let mut buf: Vec<LidarPoint> = Vec::with_capacity(1 << 16);
-    let mut n = 0u64;
     loop {
         buf.clear();
         if reader.read_chunk(&mut buf, 1 << 16)? == 0 {
             break;
         }
         for p in &buf {
-            let w = q.to_world(p);
-            let (x, y) = (w[0] + 0.0, w[1] + 0.0);
+            let (x, y) = (p.x, p.y);
             bounds = [
                 bounds[0].min(x),
                 bounds[1].min(y),
@@ -184,15 +181,15 @@ fn read_index(
                 key: TileGrid::key(bx, by),
                 x,
                 y,
-                z: w[2],
+                z: p.z,
             })?;
         }
-        n += buf.len() as u64;
-        progress(n, total);
+        let s = reader.stats();
+        progress(s.read + s.skipped, total);
     }
     let merge = sorter.finish()?;
     let sort = merge.stats();
-    let mut index = BlockIndex::build(probe, merge, tmp)?;
+    let mut index = BlockIndex::build(probe, merge, tmp, job.duplicates)?;
     if let Some(sc) = scope {
         index.scope = Some(index::Scope {
             unknown: sc.unread.clone(),

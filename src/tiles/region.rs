@@ -7,7 +7,6 @@
 //! (see [`super::worker`]).
 
 use super::certify::{Certifier, Loaded, Missing};
-use super::grid::TileGrid;
 use super::index::BlockIndex;
 use crate::geom::predicates::{Orientation, circumdisk_bounds, orient};
 
@@ -43,6 +42,11 @@ fn separated(t: &Tri2, r: &[f64; 4]) -> bool {
     })
 }
 
+/// Does the closed counter-clockwise triangle `t` meet the closed rectangle `r`? Exact.
+pub(crate) fn tri_meets_rect(t: &Tri2, r: &[f64; 4]) -> bool {
+    overlap(&bbox(t), r) && !separated(t, r)
+}
+
 /// Do two closed counter-clockwise triangles meet? Exact: they are disjoint exactly when an edge
 /// line of one has the other strictly outside (separating axes of two triangles are their edges).
 pub(crate) fn tris_meet(a: &Tri2, b: &Tri2) -> bool {
@@ -58,22 +62,27 @@ pub(crate) fn tris_meet(a: &Tri2, b: &Tri2) -> bool {
 /// Side of the bucket grid over the failed triangles.
 const CELLS: usize = 64;
 
-/// The part of the plane whose triangles a run must certify.
+/// Failed triangles of an earlier run, bucketed by bounding box.
 #[derive(Debug, Clone)]
-pub(crate) enum Region {
-    /// A closed rectangle `[xmin, ymin, xmax, ymax]` (the tile, widened by the rounding margin).
-    Rect([f64; 4]),
-    /// The union of closed triangles (those a previous run failed), bucketed by bounding box.
-    Tris {
-        bbox: [f64; 4],
-        tris: Vec<Tri2>,
-        cells: Vec<Vec<u32>>,
-    },
+pub(crate) struct Tris {
+    bbox: [f64; 4],
+    tris: Vec<Tri2>,
+    cells: Vec<Vec<u32>>,
 }
 
-impl Region {
+/// The part of the plane whose triangles a run must certify: the tile's closed rectangle
+/// (widened by the rounding margin), and for a patch run also the union of the closed triangles
+/// the earlier runs failed. A triangle must be certified when it meets both; the certified
+/// triangles of all runs then cover the rectangle (see [`super::worker`]).
+#[derive(Debug, Clone)]
+pub(crate) struct Region {
+    pub rect: [f64; 4],
+    pub failed: Option<Tris>,
+}
+
+impl Tris {
     /// The union of the closed triangles `tris` (not empty).
-    pub fn of_tris(tris: Vec<Tri2>) -> Region {
+    pub fn new(tris: Vec<Tri2>) -> Tris {
         let mut b = [
             f64::INFINITY,
             f64::INFINITY,
@@ -90,65 +99,84 @@ impl Region {
             ];
         }
         let mut cells = vec![Vec::new(); CELLS * CELLS];
-        let r = Self::cell_range_of(&b, &b);
-        debug_assert!(r.0 == 0 && r.1 == 0);
         for (i, t) in tris.iter().enumerate() {
-            let (cx0, cy0, cx1, cy1) = Self::cell_range_of(&b, &bbox(t));
+            let (cx0, cy0, cx1, cy1) = cell_range_of(&b, &bbox(t));
             for cy in cy0..=cy1 {
                 for cx in cx0..=cx1 {
                     cells[cy * CELLS + cx].push(i as u32);
                 }
             }
         }
-        Region::Tris {
+        Tris {
             bbox: b,
             tris,
             cells,
         }
     }
 
-    /// The cells of the grid over `all` that the box `b` covers (clamped), inclusive.
-    fn cell_range_of(all: &[f64; 4], b: &[f64; 4]) -> (usize, usize, usize, usize) {
-        let w = (all[2] - all[0]).max(f64::MIN_POSITIVE);
-        let h = (all[3] - all[1]).max(f64::MIN_POSITIVE);
-        let c = |v: f64, lo: f64, span: f64| -> usize {
-            (((v - lo) / span * CELLS as f64).floor().max(0.0) as usize).min(CELLS - 1)
-        };
-        (
-            c(b[0], all[0], w),
-            c(b[1], all[1], h),
-            c(b[2], all[0], w),
-            c(b[3], all[1], h),
-        )
+    /// Does triangle `t` (with bounding box `tb`) meet one of them? Exact.
+    fn meets(&self, t: &Tri2, tb: &[f64; 4]) -> bool {
+        if !overlap(tb, &self.bbox) {
+            return false;
+        }
+        let (cx0, cy0, cx1, cy1) = cell_range_of(&self.bbox, tb);
+        for cy in cy0..=cy1 {
+            for cx in cx0..=cx1 {
+                for &i in &self.cells[cy * CELLS + cx] {
+                    let f = &self.tris[i as usize];
+                    if overlap(tb, &bbox(f)) && tris_meet(t, f) {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
     }
+}
 
+/// The cells of the grid over `all` that the box `b` covers (clamped), inclusive.
+fn cell_range_of(all: &[f64; 4], b: &[f64; 4]) -> (usize, usize, usize, usize) {
+    let w = (all[2] - all[0]).max(f64::MIN_POSITIVE);
+    let h = (all[3] - all[1]).max(f64::MIN_POSITIVE);
+    let c = |v: f64, lo: f64, span: f64| -> usize {
+        (((v - lo) / span * CELLS as f64).floor().max(0.0) as usize).min(CELLS - 1)
+    };
+    (
+        c(b[0], all[0], w),
+        c(b[1], all[1], h),
+        c(b[2], all[0], w),
+        c(b[3], all[1], h),
+    )
+}
+
+impl Region {
     /// Does triangle `t` meet the region? (Exact, the rectangle being widened by its margin.)
     pub fn meets(&self, t: &Tri2) -> bool {
         let tb = bbox(t);
-        match self {
-            Region::Rect(r) => {
-                if !overlap(&tb, r) {
-                    return false;
-                }
-                let within = tb[0] >= r[0] && tb[2] <= r[2] && tb[1] >= r[1] && tb[3] <= r[3];
-                within || !separated(t, r)
-            }
-            Region::Tris { bbox, tris, cells } => {
-                if !overlap(&tb, bbox) {
-                    return false;
-                }
-                let (cx0, cy0, cx1, cy1) = Self::cell_range_of(bbox, &tb);
-                for cy in cy0..=cy1 {
-                    for cx in cx0..=cx1 {
-                        for &i in &cells[cy * CELLS + cx] {
-                            let f = &tris[i as usize];
-                            if overlap(&tb, &super::region::bbox(f)) && tris_meet(t, f) {
-                                return true;
-                            }
-                        }
-                    }
-                }
-                false
+        let r = &self.rect;
+        if !overlap(&tb, r) {
+            return false;
+        }
+        let within = tb[0] >= r[0] && tb[2] <= r[2] && tb[1] >= r[1] && tb[3] <= r[3];
+        if !within && separated(t, r) {
+            return false;
+        }
+        self.failed.as_ref().is_none_or(|f| f.meets(t, &tb))
+    }
+
+    /// The bounding box of what must be certified.
+    pub fn bbox(&self) -> [f64; 4] {
+        let r = self.rect;
+        match &self.failed {
+            None => r,
+            Some(f) => {
+                let b = f.bbox;
+                [
+                    r[0].max(b[0]),
+                    r[1].max(b[1]),
+                    r[2].min(b[2]),
+                    r[3].min(b[3]),
+                ]
             }
         }
     }
@@ -161,33 +189,36 @@ pub(crate) struct Verdict {
     pub certified: Vec<u32>,
     /// Triangles that meet the region and are not.
     pub failed: Vec<u32>,
-    /// Non-empty blocks the next run must read: those the failed triangles' disks touch, and the
-    /// blocks of hull corners the failed triangles use.
+    /// Blocks not read holding a point inside a failed triangle's circumdisk: the next run
+    /// must read them.
     pub blocks: Missing,
     /// A failed triangle too thin for its disk to be bounded: the next run doubles its buffer.
     pub degenerate: bool,
     /// A certificate reached beyond what a plan's task read: the task needs a wider buffer.
     /// (0: it did not.) The buffer that reads the files it reached.
     pub unknown: f64,
+    /// Points (and blocks) tested one by one against disks that left the loaded blocks.
+    pub tested: (u64, u64),
 }
 
-/// Judges the run `t` over `loaded` (its first `own` input points read from blocks, the rest hull
-/// corners) on `region`. A run over every non-empty block (`full`) is the whole triangulation:
-/// everything in it is certified.
+/// Judges the run `t` over `loaded` on `region` (the tile's `run`-th). A run over every
+/// non-empty block (`full`) is the whole triangulation: everything in it is certified.
+///
+/// # Errors
+/// Reading the points of blocks not loaded.
 pub(crate) fn judge(
     index: &BlockIndex,
     t: &crate::Triangulation,
     region: &Region,
     loaded: &Loaded,
-    own: usize,
     full: bool,
-) -> Verdict {
-    let g = index.grid;
+    run: u32,
+) -> crate::error::Result<Verdict> {
     let unknown = std::cell::Cell::new(0.0);
-    let cert = Certifier::new(index, loaded, &unknown);
+    let mut cert = Certifier::new(index, loaded, &unknown);
+    cert.witnesses = 4usize << run.saturating_sub(1).min(8);
     let v = &t.vertices;
     let mut out = Verdict::default();
-    let mut missing = Missing::new();
     for (k, tri) in t.triangles.iter().enumerate() {
         let t2: Tri2 = tri.map(|i| [v[i as usize][0], v[i as usize][1]]);
         if !region.meets(&t2) {
@@ -197,31 +228,16 @@ pub(crate) fn judge(
             out.certified.push(k as u32);
             continue;
         }
-        // A hull corner whose block was not read (they come after the `own` points read): its
-        // height may not be the one the duplicate policy keeps, so the triangle waits for the
-        // block.
-        let mut ok = true;
-        for &i in tri {
-            if t.input_index[i as usize] as usize >= own {
-                let p = v[i as usize];
-                let (bx, by) = g.block_of(p[0], p[1]);
-                out.blocks.push(TileGrid::key(bx, by));
-                ok = false;
-            }
-        }
-        match circumdisk_bounds(t2[0], t2[1], t2[2]) {
-            Some(d) => {
-                missing.clear();
-                if !cert.disk_clear(d.center, d.radius, &mut missing) || !ok {
-                    ok = false;
-                    cert.touched(d.center, d.radius, &mut out.blocks);
+        let ok = match circumdisk_bounds(t2[0], t2[1], t2[2]) {
+            Some(d) => cert.clear(&t2, &d, &mut out.blocks)?,
+            None => match cert.flat_clear(&t2, &mut out.blocks)? {
+                Some(ok) => ok,
+                None => {
+                    out.degenerate = true;
+                    false
                 }
-            }
-            None => {
-                ok = false;
-                out.degenerate = true;
-            }
-        }
+            },
+        };
         if ok {
             out.certified.push(k as u32);
         } else {
@@ -236,16 +252,14 @@ pub(crate) fn judge(
         hull_unknown(&cert, v, region);
     }
     out.unknown = unknown.get();
-    out
+    out.tested = cert.tested.get();
+    Ok(out)
 }
 
 /// Might an unread point lie beyond an edge of the convex hull of `v` whose outer half-plane
 /// meets the region's box? (Sets the certifier's `unknown`.)
 fn hull_unknown(cert: &Certifier, v: &[[f64; 3]], region: &Region) -> bool {
-    let r = match region {
-        Region::Rect(r) => *r,
-        Region::Tris { bbox, .. } => *bbox,
-    };
+    let r = region.bbox();
     let hull = super::hull::hull(&mut v.to_vec());
     let corners = [[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]];
     for i in 0..hull.len() {
@@ -268,15 +282,21 @@ mod tests {
 
     #[test]
     fn regions() {
-        let r = Region::Rect([0.0, 0.0, 10.0, 10.0]);
+        let r = Region {
+            rect: [0.0, 0.0, 10.0, 10.0],
+            failed: None,
+        };
         assert!(r.meets(&[[1.0, 1.0], [2.0, 1.0], [1.0, 2.0]]));
         // Bounding boxes overlap, the triangle does not reach the square.
         assert!(!r.meets(&[[11.0, 5.0], [5.0, 11.0], [11.0, 11.0]]));
         assert!(r.meets(&[[10.0, 5.0], [20.0, 5.0], [20.0, 6.0]]));
-        let f = Region::of_tris(vec![
-            [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-            [[100.0, 100.0], [101.0, 100.0], [100.0, 101.0]],
-        ]);
+        let f = Region {
+            rect: [-1e3, -1e3, 1e3, 1e3],
+            failed: Some(Tris::new(vec![
+                [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+                [[100.0, 100.0], [101.0, 100.0], [100.0, 101.0]],
+            ])),
+        };
         assert!(f.meets(&[[0.5, 0.5], [3.0, 0.5], [0.5, 3.0]]));
         assert!(!f.meets(&[[50.0, 50.0], [51.0, 50.0], [50.0, 51.0]]));
         assert!(f.meets(&[[99.0, 99.0], [101.0, 99.0], [99.0, 101.0]]));

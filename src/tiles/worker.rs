@@ -22,8 +22,8 @@
 use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
 use super::index::BlockIndex;
-use super::keep::{Owner, from_list, from_run};
-use super::region::{Region, Tri2, judge};
+use super::keep::{Owner, from_runs};
+use super::region::{Region, Tri2, Tris, judge, tri_meets_rect};
 use crate::error::{Error, Result};
 use crate::sort::DuplicatePolicy;
 use crate::triangulation::{Options, triangulate};
@@ -86,7 +86,8 @@ pub(crate) fn run_tile(
     let task_owner = task.map(|t| Owner::new(g, *t));
     let w = g.world(&owned);
     let m = g.margin(w.iter().fold(0.0f64, |m, v| m.max(v.abs())));
-    let mut region = Region::Rect([w[0] - m, w[1] - m, w[2] + m, w[3] + m]);
+    let rect = [w[0] - m, w[1] - m, w[2] + m, w[3] + m];
+    let mut region = Region { rect, failed: None };
     let mut loaded = Loaded {
         rect: owned.expand(buffer.max(0)).intersect(&occ),
         extra: Vec::new(),
@@ -130,16 +131,18 @@ pub(crate) fn run_tile(
             }
             Err(e) => return Err(e),
         };
-        let verdict = judge(index, &t, &region, &loaded, own, full);
+        let verdict = judge(index, &t, &region, &loaded, full, out.runs)?;
         if std::env::var_os("SWEEPTIN_DEBUG_TILES").is_some() {
             eprintln!(
                 "tile {tile:?} run {}: {own} points ({} extra blocks): {} certified, {} failed, \
-                 {} blocks wanted{}",
+                 {} blocks wanted, {} points in {} blocks tested{}",
                 out.runs,
                 loaded.extra.len(),
                 verdict.certified.len(),
                 verdict.failed.len(),
                 verdict.blocks.len(),
+                verdict.tested.0,
+                verdict.tested.1,
                 if verdict.degenerate {
                     ", degenerate"
                 } else {
@@ -169,7 +172,7 @@ pub(crate) fn run_tile(
         } else {
             // Patches only grow (the first starts afresh, without the first run's rectangle), so
             // the runs end: each reads at least one block more, or everything.
-            let mut p = patch(index, &failed, verdict.blocks.clone());
+            let mut p = patch(index, &owned, &failed, verdict.blocks.clone());
             if first.is_some() {
                 p.extra.extend_from_slice(&loaded.extra);
                 p.extra.sort_unstable();
@@ -206,41 +209,77 @@ pub(crate) fn run_tile(
         }
         loaded = next;
         if !failed.is_empty() {
-            region = Region::of_tris(failed);
+            region = Region {
+                rect,
+                failed: Some(Tris::new(failed)),
+            };
         }
     }
     let (t, certified) = first.expect("a first run");
-    if patched.is_empty() {
-        from_run(&owner, task_owner.as_ref(), &t, &certified, &mut out);
-    } else {
-        let mut all: Vec<[[f64; 3]; 3]> = certified
-            .iter()
-            .map(|&k| t.triangles[k as usize].map(|i| t.vertices[i as usize]))
-            .collect();
-        drop(t);
-        all.append(&mut patched);
-        from_list(&owner, task_owner.as_ref(), &all, &mut out);
-        out.points_kept = out
-            .degree
-            .iter()
-            .filter(|&&d| d != super::worker::NOT_OWNED)
-            .count() as u64;
-    }
+    from_runs(
+        &owner,
+        task_owner.as_ref(),
+        &t,
+        &certified,
+        &patched,
+        &mut out,
+    );
     Ok(out)
 }
 
-/// The blocks of a patch run: around each cluster of failed triangles (the blocks of its
-/// bounding rectangle, two wider), every non-empty block their circumdisks touch and the blocks
-/// of their hull corners (`blocks`). Clusters, not one
-/// rectangle: the failed triangles may lie far apart (a lens along the data's edge, a lake's
-/// shore).
-fn patch(index: &BlockIndex, failed: &[Tri2], blocks: Vec<u64>) -> Loaded {
+/// The blocks of a patch run: the blocks the failed triangles meet within the tile (and a
+/// block around), and the blocks holding a point inside a failed triangle's circumdisk
+/// (`blocks`). Blocks, not rectangles: a failed triangle may be a long sliver across the tile
+/// (to a corner of the hull far away), and failed triangles may lie far apart (a lens along the
+/// data's edge, a lake's shore).
+fn patch(index: &BlockIndex, owned: &BlockRect, failed: &[Tri2], blocks: Vec<u64>) -> Loaded {
     let g = index.grid;
     let mut extra = blocks;
-    for r in clusters(&g, failed) {
-        let r = r.expand(2).intersect(&index.occupied());
+    let area = owned.expand(1).intersect(&index.occupied());
+    let mut met = Vec::new();
+    for t in failed {
+        let (mut x0, mut y0) = g.block_of(t[0][0], t[0][1]);
+        let (mut x1, mut y1) = (x0, y0);
+        for p in &t[1..] {
+            let (bx, by) = g.block_of(p[0], p[1]);
+            (x0, y0, x1, y1) = (x0.min(bx), y0.min(by), x1.max(bx), y1.max(by));
+        }
+        // A block rectangle one wider: points may lie a rounding outside their block.
+        let r = BlockRect {
+            x0: x0 - 1,
+            y0: y0 - 1,
+            x1: x1 + 2,
+            y1: y1 + 2,
+        }
+        .intersect(&area);
+        let m = g.margin(g.world(&r).iter().fold(0.0f64, |m, v| m.max(v.abs())));
         for by in r.y0..r.y1 {
-            extra.extend_from_slice(index.keys_in_row(by, r.x0, r.x1));
+            for bx in r.x0..r.x1 {
+                let w = g.world(&BlockRect {
+                    x0: bx,
+                    y0: by,
+                    x1: bx + 1,
+                    y1: by + 1,
+                });
+                if tri_meets_rect(t, &[w[0] - m, w[1] - m, w[2] + m, w[3] + m]) {
+                    met.push((bx, by));
+                }
+            }
+        }
+    }
+    met.sort_unstable();
+    met.dedup();
+    let occ = index.occupied();
+    for &(bx, by) in &met {
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                if occ.contains(bx + dx, by + dy) {
+                    let k = TileGrid::key(bx + dx, by + dy);
+                    if index.extent(k).is_some() {
+                        extra.push(k);
+                    }
+                }
+            }
         }
     }
     extra.sort_unstable();
@@ -253,49 +292,6 @@ fn patch(index: &BlockIndex, failed: &[Tri2], blocks: Vec<u64>) -> Loaded {
             y1: 0,
         },
         extra,
-    }
-}
-
-/// The block rectangles of groups of triangles whose rectangles come within a block of each
-/// other.
-fn clusters(g: &super::grid::TileGrid, tris: &[Tri2]) -> Vec<BlockRect> {
-    let mut rects: Vec<BlockRect> = tris
-        .iter()
-        .map(|t| {
-            let (mut x0, mut y0) = g.block_of(t[0][0], t[0][1]);
-            let (mut x1, mut y1) = (x0, y0);
-            for p in &t[1..] {
-                let (bx, by) = g.block_of(p[0], p[1]);
-                (x0, y0, x1, y1) = (x0.min(bx), y0.min(by), x1.max(bx), y1.max(by));
-            }
-            BlockRect {
-                x0,
-                y0,
-                x1: x1 + 1,
-                y1: y1 + 1,
-            }
-        })
-        .collect();
-    // Merge until no two rectangles come within a block (few failed triangles: quadratic is fine).
-    loop {
-        let mut merged = false;
-        let mut i = 0;
-        while i < rects.len() {
-            let mut j = i + 1;
-            while j < rects.len() {
-                if !rects[i].expand(1).intersect(&rects[j]).is_empty() {
-                    let r = rects.swap_remove(j);
-                    rects[i] = rects[i].union(&r);
-                    merged = true;
-                } else {
-                    j += 1;
-                }
-            }
-            i += 1;
-        }
-        if !merged {
-            return rects;
-        }
     }
 }
 

@@ -79,3 +79,21 @@ pub fn optional(rel: &str, test: &str) -> Option<PathBuf> {
         }
     }
 }
+
+/// Can `python3` import every module in `modules`? When it cannot: panics under CI, prints a skip
+/// message and returns `false` locally (scripts/test.sh installs what the tests import).
+pub fn python(modules: &[&str], test: &str) -> bool {
+    let code = format!("import {}", modules.join(", "));
+    let found = std::process::Command::new("python3")
+        .args(["-c", &code])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(
+            !in_ci(),
+            "{test}: python3 with {modules:?} is required under CI=true but missing"
+        );
+        eprintln!("{test}: skipped, python3 cannot import {modules:?}");
+    }
+    found
+}

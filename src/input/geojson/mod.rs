@@ -85,6 +85,15 @@ pub fn read(path: &Path) -> Result<GeoJson> {
     parse(&bytes, path)
 }
 
+/// Reads any vector file users give: GeoJSON, or GeoPackage / OGR-SQLite / Shapefile through
+/// [`crate::input::vector`] (a layer named as `FILE:LAYER`).
+///
+/// # Errors
+/// As [`read`] and [`crate::input::vector::read`].
+fn read_any(path: &Path) -> Result<GeoJson> {
+    super::vector::read(path)
+}
+
 /// Parses the GeoJSON text `bytes` of the file `path` (named in errors).
 ///
 /// # Errors
@@ -118,14 +127,14 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<GeoJson> {
     Ok(r.out)
 }
 
-/// The polygons of a GeoJSON file: `Polygon` and `MultiPolygon` geometries, and lines that are
+/// The polygons of a GeoJSON file (or GeoPackage, OGR-SQLite, Shapefile): `Polygon` and `MultiPolygon` geometries, and lines that are
 /// closed rings (each a polygon of one ring), as `--trim-boundary` reads them; `z` dropped.
 ///
 /// # Errors
 /// As [`read`], and [`Error::Format`] for a line that is not a closed ring, a `Point` or
 /// `MultiPoint`, or a file without any polygon.
 pub fn read_polygons(path: &Path) -> Result<Vec<Polygon>> {
-    let doc = read(path)?;
+    let doc = read_any(path)?;
     if let Some((feature, kind)) = doc.points.first() {
         return Err(format(
             path,
@@ -159,13 +168,13 @@ pub fn read_polygons(path: &Path) -> Result<Vec<Polygon>> {
     Ok(out)
 }
 
-/// The lines of a GeoJSON file (`LineString` and `MultiLineString` geometries; polygons and points
+/// The lines of a GeoJSON file (or GeoPackage, OGR-SQLite, Shapefile) (`LineString` and `MultiLineString` geometries; polygons and points
 /// are left out), with `z` dropped.
 ///
 /// # Errors
 /// As [`read`], and [`Error::Format`] for a file without any line.
 pub fn read_lines(path: &Path) -> Result<Vec<Vec<[f64; 2]>>> {
-    let out: Vec<_> = read(path)?
+    let out: Vec<_> = read_any(path)?
         .parts
         .iter()
         .filter(|p| p.polygon.is_none())
@@ -465,36 +474,17 @@ impl Reader<'_> {
     /// A line, or a ring of polygon `polygon` (closed here), numbered `part` (which moves on).
     fn part(&mut self, tree: Tree, at: At<'_>, part: &mut u32, polygon: Option<u32>) -> Result<()> {
         let list = self.list(tree, at)?;
-        let (index, kind) = (at.index, at.kind);
         let p = *part;
         *part += 1;
-        let mut line = self.positions(list, at, p)?;
-        if polygon.is_some() {
-            if let (Some(&first), Some(&last)) = (line.first(), line.last())
-                && (first[0] != last[0] || first[1] != last[1])
-            {
-                line.push(first);
-            }
-            if line.len() < 4 {
-                return Err(self.format(format!(
-                    "feature {index} part {p}: a polygon ring with fewer than 3 distinct \
-                     positions ({}); a ring needs at least 3 distinct positions",
-                    line.len().saturating_sub(1)
-                )));
-            }
-        } else if line.len() < 2 {
-            return Err(self.format(format!(
-                "feature {index} part {p}: a line needs at least 2 positions, this {kind} has {}",
-                line.len()
-            )));
-        }
-        self.out.parts.push(Part {
-            feature: index,
-            part: p,
+        let line = self.positions(list, at, p)?;
+        push_part(
+            &mut self.out,
+            self.path,
+            (at.index, p),
             polygon,
-            positions: line,
-        });
-        Ok(())
+            at.kind,
+            line,
+        )
     }
 
     fn positions(&self, list: Vec<Tree>, at: At<'_>, part: u32) -> Result<Vec<[f64; 3]>> {
@@ -522,6 +512,55 @@ impl Reader<'_> {
         }
         Ok(out)
     }
+}
+
+/// Adds `line` to `out` as part `at.1` of feature `at.0`: a line (at least 2 positions), or a
+/// ring of polygon `polygon`, closed here if it does not repeat its first position (at least 3
+/// distinct positions). The rule every vector reader applies ([`crate::input::vector`]).
+///
+/// # Errors
+/// [`Error::Format`] naming `path`, the feature and the part.
+pub(crate) fn push_part(
+    out: &mut GeoJson,
+    path: &Path,
+    at: (u64, u32),
+    polygon: Option<u32>,
+    kind: &str,
+    mut line: Vec<[f64; 3]>,
+) -> Result<()> {
+    let (index, p) = at;
+    if polygon.is_some() {
+        if let (Some(&first), Some(&last)) = (line.first(), line.last())
+            && (first[0] != last[0] || first[1] != last[1])
+        {
+            line.push(first);
+        }
+        if line.len() < 4 {
+            return Err(format(
+                path,
+                format!(
+                    "feature {index} part {p}: a polygon ring with fewer than 3 distinct \
+                     positions ({}); a ring needs at least 3 distinct positions",
+                    line.len().saturating_sub(1)
+                ),
+            ));
+        }
+    } else if line.len() < 2 {
+        return Err(format(
+            path,
+            format!(
+                "feature {index} part {p}: a line needs at least 2 positions, this {kind} has {}",
+                line.len()
+            ),
+        ));
+    }
+    out.parts.push(Part {
+        feature: index,
+        part: p,
+        polygon,
+        positions: line,
+    });
+    Ok(())
 }
 
 /// The feature and geometry type being read, for messages.

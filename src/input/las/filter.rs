@@ -1,10 +1,10 @@
 //! Which points to keep: classification, returns, withheld flag, bounding box.
 //!
 //! A point is dropped by the **first** filter that rejects it, in this order: withheld flag,
-//! classification, returns, bounding box; [`FilterStats`] counts the drops per filter.
+//! classification, returns, bounding box; [`FilterStats`] counts the drops per filter. The box
+//! compares the points' real-world doubles (see [`super::world`]) with the box's, edges included.
 
 use super::LidarPoint;
-use super::combine::Quantization;
 use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
@@ -48,6 +48,25 @@ impl BBox {
     /// `[xmin, ymin, xmax, ymax]`.
     pub fn corners(&self) -> [f64; 4] {
         [self.xmin, self.ymin, self.xmax, self.ymax]
+    }
+
+    /// The part of both boxes, `None` when they do not meet.
+    pub fn intersection(&self, other: &BBox) -> Option<BBox> {
+        BBox::new(
+            self.xmin.max(other.xmin),
+            self.ymin.max(other.ymin),
+            self.xmax.min(other.xmax),
+            self.ymax.min(other.ymax),
+        )
+    }
+
+    /// Does the box meet the rectangle `[xmin, ymin, xmax, ymax]` grown by `margin` (edges
+    /// included)?
+    pub fn meets(&self, r: [f64; 4], margin: f64) -> bool {
+        r[0] - margin <= self.xmax
+            && r[2] + margin >= self.xmin
+            && r[1] - margin <= self.ymax
+            && r[3] + margin >= self.ymin
     }
 }
 
@@ -148,8 +167,11 @@ pub struct FilterStats {
     pub class: u64,
     /// Dropped by the returns filter.
     pub returns: u64,
-    /// Dropped by the bounding box.
+    /// Dropped by the bounding box (or the area a reader was asked for), once decoded.
     pub bbox: u64,
+    /// Points of files and COPC nodes wholly outside the box, skipped without being decoded
+    /// (not counted in `read`).
+    pub skipped: u64,
 }
 
 impl FilterStats {
@@ -208,19 +230,32 @@ impl FilterStats {
     }
 }
 
-/// A [`Filter`] turned into table look-ups and integer comparisons in the reader's common
-/// integer coordinates.
+impl std::ops::AddAssign for FilterStats {
+    fn add_assign(&mut self, o: FilterStats) {
+        self.read += o.read;
+        self.kept += o.kept;
+        self.withheld += o.withheld;
+        self.class += o.class;
+        self.returns += o.returns;
+        self.bbox += o.bbox;
+        self.skipped += o.skipped;
+    }
+}
+
+/// A [`Filter`] turned into table look-ups and comparisons.
 #[derive(Clone, Debug)]
 pub(crate) struct CompiledFilter {
     classes: Option<Box<[bool; 256]>>,
     returns: Returns,
     drop_withheld: bool,
-    /// Integer `[xmin, ymin, xmax, ymax]`, inclusive.
-    bbox: Option<[i64; 4]>,
+    /// The filter's box met with the area asked for, `[xmin, ymin, xmax, ymax]`, edges
+    /// included (empty, `xmin > xmax`, when they do not meet).
+    bbox: Option<[f64; 4]>,
 }
 
 impl CompiledFilter {
-    pub(crate) fn new(filter: &Filter, q: &Quantization) -> CompiledFilter {
+    /// The filter, keeping only points inside `area` too.
+    pub(crate) fn new(filter: &Filter, area: Option<BBox>) -> CompiledFilter {
         let classes = filter.classes.as_ref().map(|list| {
             let mut table = Box::new([false; 256]);
             for &c in list {
@@ -228,14 +263,13 @@ impl CompiledFilter {
             }
             table
         });
-        let bbox = filter.bbox.map(|b| {
-            [
-                q.ceil_index(0, b.xmin),
-                q.ceil_index(1, b.ymin),
-                q.floor_index(0, b.xmax),
-                q.floor_index(1, b.ymax),
-            ]
-        });
+        let bbox = match (filter.bbox, area) {
+            (Some(b), Some(a)) => Some(
+                b.intersection(&a)
+                    .map_or([1.0, 1.0, 0.0, 0.0], |i| i.corners()),
+            ),
+            (b, a) => b.or(a).map(|b| b.corners()),
+        };
         CompiledFilter {
             classes,
             returns: filter.returns,
@@ -262,13 +296,28 @@ impl CompiledFilter {
         if !returns_ok {
             return Verdict::Returns;
         }
-        if let Some([x0, y0, x1, y1]) = self.bbox {
-            let (x, y) = (i64::from(p.x), i64::from(p.y));
-            if x < x0 || x > x1 || y < y0 || y > y1 {
-                return Verdict::BBox;
-            }
+        if let Some([x0, y0, x1, y1]) = self.bbox
+            && !(p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1)
+        {
+            return Verdict::BBox;
         }
         Verdict::Keep
+    }
+
+    /// Can no point of the rectangle `[xmin, ymin, xmax, ymax]` grown by `margin` pass the box?
+    /// (A file's header extent or a COPC node's bounds: then it need not be decoded.)
+    pub(crate) fn misses(&self, r: [f64; 4], margin: f64) -> bool {
+        match self.bbox {
+            None => false,
+            Some([x0, y0, x1, y1]) => {
+                x0 > x1
+                    || y0 > y1
+                    || r[0] - margin > x1
+                    || r[2] + margin < x0
+                    || r[1] - margin > y1
+                    || r[3] + margin < y0
+            }
+        }
     }
 }
 
@@ -290,34 +339,30 @@ mod tests {
 
     #[test]
     fn verdicts_follow_the_documented_order() {
-        let q = Quantization {
-            scale: [0.01; 3],
-            offset: [0.0; 3],
-        };
         let f = Filter {
             classes: Some(vec![2]),
             returns: Returns::Last,
             drop_withheld: true,
             bbox: Some(BBox::new(1.0, 1.0, 2.0, 2.0).unwrap()),
         };
-        let c = CompiledFilter::new(&f, &q);
+        let c = CompiledFilter::new(&f, None);
         let p = LidarPoint {
             index: 0,
-            x: 100,
-            y: 200,
-            z: 0,
+            x: 1.0,
+            y: 2.0,
+            z: 0.0,
             classification: 2,
             return_number: 2,
             number_of_returns: 2,
             flags: 0,
         };
         assert_eq!(c.test(&p), Verdict::Keep);
-        assert_eq!(c.test(&LidarPoint { x: 201, ..p }), Verdict::BBox);
-        assert_eq!(c.test(&LidarPoint { x: 99, ..p }), Verdict::BBox);
+        assert_eq!(c.test(&LidarPoint { x: 2.01, ..p }), Verdict::BBox);
+        assert_eq!(c.test(&LidarPoint { x: 0.99, ..p }), Verdict::BBox);
         assert_eq!(
             c.test(&LidarPoint {
                 return_number: 1,
-                x: 0,
+                x: 0.0,
                 ..p
             }),
             Verdict::Returns
@@ -343,7 +388,7 @@ mod tests {
                 returns: Returns::First,
                 ..Filter::default()
             },
-            &q,
+            None,
         );
         assert_eq!(
             first.test(&LidarPoint {
@@ -353,7 +398,7 @@ mod tests {
             Verdict::Keep
         );
         assert_eq!(first.test(&p), Verdict::Returns);
-        let all = CompiledFilter::new(&Filter::keep_all(), &q);
+        let all = CompiledFilter::new(&Filter::keep_all(), None);
         assert_eq!(
             all.test(&LidarPoint {
                 flags: LidarPoint::WITHHELD,
@@ -361,5 +406,29 @@ mod tests {
             }),
             Verdict::Keep
         );
+    }
+
+    #[test]
+    fn an_area_meets_the_box() {
+        let b = BBox::new(0.0, 0.0, 10.0, 10.0).unwrap();
+        let f = Filter {
+            bbox: Some(b),
+            ..Filter::default()
+        };
+        let inside = CompiledFilter::new(&f, BBox::new(5.0, 5.0, 20.0, 20.0));
+        assert!(inside.misses([11.0, 0.0, 12.0, 1.0], 0.0));
+        assert!(!inside.misses([9.0, 9.0, 12.0, 12.0], 0.0));
+        assert!(!inside.misses([10.5, 0.0, 12.0, 10.0], 1.0));
+        let apart = CompiledFilter::new(&f, BBox::new(50.0, 50.0, 60.0, 60.0));
+        assert!(apart.misses([0.0, 0.0, 100.0, 100.0], 0.0));
+        let p = LidarPoint {
+            x: 55.0,
+            y: 55.0,
+            ..LidarPoint::default()
+        };
+        assert_eq!(apart.test(&p), Verdict::BBox);
+        assert!(!CompiledFilter::new(&Filter::default(), None).misses([0.0; 4], 0.0));
+        assert!(b.meets([10.0, 10.0, 11.0, 11.0], 0.0));
+        assert!(!b.meets([10.5, 10.0, 11.0, 11.0], 0.0));
     }
 }

@@ -5,6 +5,9 @@
 //! when they size their buffers, so a damaged header could otherwise make them allocate
 //! absurd amounts of memory or panic. Every problem becomes an [`Error::Format`] naming the file.
 
+use super::copc::{self, CopcInfo, Node};
+use super::vlrs::{self, VlrInfo};
+use super::world::Quantization;
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use serde::Serialize;
@@ -35,6 +38,25 @@ impl Bounds3 {
             max: std::array::from_fn(|a| self.max[a].max(other.max[a])),
         }
     }
+}
+
+/// One LAZ chunk: where its bytes are, how many points it holds, and the file-order index of its
+/// first point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Chunk {
+    pub(crate) offset: u64,
+    pub(crate) bytes: u64,
+    pub(crate) points: u64,
+    pub(crate) first: u64,
+}
+
+/// Where the point records of a file are: LAZ chunks (empty for LAS), and the COPC octree
+/// node of each chunk.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Layout {
+    pub(crate) data_start: u64,
+    pub(crate) chunks: Vec<Chunk>,
+    pub(crate) nodes: Option<Vec<Node>>,
 }
 
 /// What a LAS/LAZ file's header says about it.
@@ -73,6 +95,20 @@ pub struct FileInfo {
     pub generating_software: String,
     /// Oddities that do not stop reading (unreadable CRS VLR, disagreeing point counts…).
     pub warnings: Vec<String>,
+    /// Points per return number, as the header counts them (5 entries before LAS 1.4, 15 in it).
+    pub points_by_return: Vec<u64>,
+    /// File creation day of the year and year, when set.
+    pub creation: Option<(u16, u16)>,
+    /// File source id (often the flight line).
+    pub file_source_id: u16,
+    /// Global encoding bits (bit 0: GPS time is adjusted standard time; bit 4: WKT CRS).
+    pub global_encoding: u16,
+    /// The VLRs, then the EVLRs.
+    pub vlrs: Vec<VlrInfo>,
+    /// The COPC octree, for a COPC file.
+    pub copc: Option<CopcInfo>,
+    #[serde(skip)]
+    pub(crate) layout: Layout,
 }
 
 impl FileInfo {
@@ -84,6 +120,17 @@ impl FileInfo {
     /// LAS/LAZ file, truncated, or its header or chunk table is inconsistent.
     pub fn read(path: impl AsRef<Path>) -> Result<FileInfo> {
         inspect(path.as_ref())
+    }
+
+    /// The file's scale and offset, and how its integers become real-world doubles.
+    pub fn quantization(&self) -> Quantization {
+        Quantization::new(self.scale, self.offset)
+    }
+
+    /// The header extent as `[xmin, ymin, xmax, ymax]`.
+    pub fn rect(&self) -> [f64; 4] {
+        let b = &self.bounds;
+        [b.min[0], b.min[1], b.max[0], b.max[1]]
     }
 }
 
@@ -133,12 +180,44 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
         .map_err(|e| format_error(path, format!("invalid header: {}", las_message(&e))))?;
     let point_count = header.number_of_points();
     let data_start = u64::from(raw.offset_to_point_data);
+    let mut layout = Layout {
+        data_start,
+        ..Layout::default()
+    };
     if header.point_format().is_compressed {
-        check_laz(path, read.get_mut(), &header, file_len, data_start)?;
+        layout.chunks = check_laz(path, read.get_mut(), &header, file_len, data_start)?;
     } else {
         check_las_length(path, &raw, point_count, file_len)?;
     }
-    Ok(describe(path, &raw, &header))
+    let evlrs = match raw.evlr.filter(|e| e.start_of_first_evlr > 0) {
+        Some(e) => vlrs::read_evlrs(
+            path,
+            read.get_mut(),
+            e.start_of_first_evlr,
+            e.number_of_evlrs,
+            file_len,
+            |user, record| {
+                (user == "copc" && record == 1000) || (user == "LASF_Projection" && record == 2112)
+            },
+        )?,
+        None => Vec::new(),
+    };
+    let copc = copc::index(path, &header, &evlrs, &layout.chunks)?.map(|(info, nodes)| {
+        layout.nodes = Some(nodes);
+        info
+    });
+    let mut info = describe(path, &raw, &header);
+    info.vlrs = vlrs::list(&header, &evlrs);
+    // A WKT in an EVLR past the first (copclib writes it last), which `las` does not read.
+    if info.crs.is_none() {
+        info.crs = evlrs
+            .iter()
+            .filter(|e| e.info.user_id == "LASF_Projection" && e.info.record_id == 2112)
+            .find_map(|e| Crs::from_wkt_bytes(e.data.as_ref()?));
+    }
+    info.copc = copc;
+    info.layout = layout;
+    Ok(info)
 }
 
 fn check_signature(path: &Path, read: &mut impl Read, file_len: u64) -> Result<()> {
@@ -311,14 +390,15 @@ fn check_las_length(
     }
 }
 
-/// Checks the LASzip VLR and the chunk table against the file length and the point count.
+/// Checks the LASzip VLR and the chunk table against the file length and the point count;
+/// returns the chunks.
 fn check_laz(
     path: &Path,
     file: &mut File,
     header: &las::Header,
     file_len: u64,
     data_start: u64,
-) -> Result<()> {
+) -> Result<Vec<Chunk>> {
     let has_vlr = header
         .all_vlrs()
         .any(|v| v.user_id == LASZIP_USER_ID && v.record_id == LASZIP_RECORD_ID);
@@ -360,7 +440,7 @@ fn check_laz(
         ));
     }
     if points == 0 {
-        return Ok(()); // nothing will be decompressed
+        return Ok(Vec::new()); // nothing will be decompressed
     }
     if n_chunks == 0 {
         return Err(format_error(
@@ -381,7 +461,24 @@ fn check_laz(
     if let Some(layers) = layer_count(&vlr) {
         check_layers(path, file, &table, &vlr, data_start + 8, layers)?;
     }
-    Ok(())
+    // Fixed-size chunks: the table says `chunk_size` for the last one too, which may hold fewer.
+    let entries: &[laz::laszip::ChunkTableEntry] = table.as_ref();
+    let mut chunks = Vec::with_capacity(entries.len());
+    let (mut offset, mut first) = (data_start + 8, 0u64);
+    for e in entries {
+        let n = e.point_count.min(points - first);
+        if n > 0 {
+            chunks.push(Chunk {
+                offset,
+                bytes: e.byte_count,
+                points: n,
+                first,
+            });
+        }
+        offset += e.byte_count;
+        first += n;
+    }
+    Ok(chunks)
 }
 
 /// Number of layer sizes at the start of each chunk of a *layered* LAZ file (point formats
@@ -553,6 +650,11 @@ fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileIn
     }
     let crs = read_crs(header, &mut warnings);
     let format = header.point_format();
+    let points_by_return = match raw.large_file {
+        Some(l) => l.number_of_points_by_return.to_vec(),
+        None => raw.number_of_points_by_return.map(u64::from).to_vec(),
+    };
+
     let zero = |v: f64| v + 0.0; // turn -0.0 into 0.0
     FileInfo {
         path: path.to_path_buf(),
@@ -574,6 +676,14 @@ fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileIn
         system_identifier: header.system_identifier().to_string(),
         generating_software: header.generating_software().to_string(),
         warnings,
+        points_by_return,
+        creation: (raw.file_creation_year > 0)
+            .then_some((raw.file_creation_day_of_year, raw.file_creation_year)),
+        file_source_id: raw.file_source_id,
+        global_encoding: raw.global_encoding,
+        vlrs: Vec::new(),
+        copc: None,
+        layout: Layout::default(),
     }
 }
 

@@ -1,25 +1,22 @@
-//! LAS/LAZ input: header facts, filters, and a chunked reader over one or more files.
+//! LAS/LAZ/COPC input: header facts, filters, and a chunked reader over one or more files.
 //!
-//! [`LidarReader`] reads one or more LAS/LAZ files as **one point set** (adjacent tiles), in
-//! chunks of bounded size, keeping only the points a [`Filter`] accepts. Each [`LidarPoint`]
-//! carries the **integer coordinates** the file stores, in one integer system common to all the
-//! files (exact: the box filter and the combination of tiles work on them), plus its **global
-//! input index**: files in the order given, points in file order, counting every point read
-//! (filtered points leave gaps). The geometry is not made of these integers but of the
-//! real-world doubles `offset + scale × N` ([`Quantization::to_world`]), computed once when the
-//! pipeline reads the points: the values the outputs get, so that every output is Delaunay in
-//! its own coordinates (docs/ARCHITECTURE.md, "Coordinates").
+//! [`LidarReader`] reads one or more LAS/LAZ files (COPC included, and the files of a `.vpc`
+//! virtual point cloud, see [`vpc`]) as **one point set** (adjacent tiles), in chunks of bounded
+//! size, keeping only the points a [`Filter`] accepts. Each [`LidarPoint`] carries its
+//! **real-world coordinates** (the doubles the outputs get, see [`world`]: each file's integers
+//! are converted with the file's own scale and offset, so files with any scales and offsets
+//! combine) and its **global input index**: files in the order given, points in file order,
+//! counting every point of every file (filtered and skipped points leave gaps).
 //!
 //! ```no_run
 //! use sweeptin::input::las::{Filter, LidarReader};
 //!
 //! let filter = Filter { classes: Some(vec![2]), ..Filter::default() };
-//! let mut reader = LidarReader::open(&["a.laz", "b.laz"], &filter)?;
-//! let quant = *reader.quantization(); // integers -> the real-world doubles
+//! let mut reader = LidarReader::open(&["a.laz", "b.copc.laz"], &filter)?;
 //! let mut chunk = Vec::new();
 //! while reader.read_chunk(&mut chunk, 1 << 20)? > 0 {
 //!     for p in &chunk {
-//!         let [x, y, z] = quant.to_world(p);
+//!         let (x, y, z) = (p.x, p.y, p.z);
 //!         # let _ = (x, y, z);
 //!     }
 //!     chunk.clear();
@@ -28,51 +25,51 @@
 //! # Ok::<(), sweeptin::Error>(())
 //! ```
 //!
-//! # Several files: one integer lattice
+//! # Reading only an area
 //!
-//! Files read together are converted **exactly** into one integer system (see [`combine`] for
-//! the details): per axis, the common scale is the finest scale among the files and the common
-//! offset is the first file's offset; every file's scale must be a whole multiple `k` of the
-//! common scale and its offset must lie a whole number `d` of common steps from the common
-//! offset. A stored integer `N` becomes `k × N + d` (computed in `i64`, required to fit `i32`).
-//! Real-world coordinates are `offset + scale × N` with the [`Quantization`] the reader reports.
-//! Files that cannot be combined this way are refused with an [`crate::Error::Format`] naming
-//! both files and their scales and offsets. Files that declare a CRS must declare the same one.
+//! With a box (`Filter::bbox`, or the area of [`LidarReader::open_area`], which the exact-tiles
+//! engine can use for a tile's buffered extent), files whose header extent misses the box are
+//! never decoded, and a COPC file decodes only the octree nodes that meet it ([`copc`]): the
+//! points kept, and their indices, are exactly those of a full read, only faster.
 //!
 //! # Damaged files
 //!
-//! Every file's header, VLRs and LAZ chunk table are checked against the file's length before
-//! any decoder runs ([`FileInfo::read`]); empty, truncated, corrupt and non-LAS files give an
-//! [`crate::Error::Format`] naming the file, never a panic.
+//! Every file's header, VLRs, LAZ chunk table and COPC hierarchy are checked against the file's
+//! length before any decoder runs ([`FileInfo::read`]); empty, truncated, corrupt and non-LAS
+//! files give an [`crate::Error::Format`] naming the file, never a panic. Files that declare a
+//! CRS must declare the same one.
 
-mod chunks;
-pub mod combine;
-
+pub mod copc;
+mod decode;
 pub mod filter;
 pub mod header;
 mod reader;
+pub mod stats;
+pub mod vlrs;
+pub mod vpc;
+pub mod world;
 
 pub use crate::crs::{Crs, HorizontalKind};
-pub use combine::Quantization;
+pub use copc::CopcInfo;
 pub use filter::{BBox, Filter, FilterStats, Returns, parse_classes};
 pub use header::{Bounds3, FileInfo};
 pub use reader::{LidarReader, ReadOptions};
+pub use stats::{PointStats, scan};
+pub use vlrs::VlrInfo;
+pub use world::Quantization;
 
-/// One lidar point as read: integer coordinates in the reader's common system, the global input
-/// index, and the attributes the filters use.
-///
-/// 24 bytes, no padding (`bytemuck::Pod`), so chunks can be written to disk as they are.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, bytemuck::Pod, bytemuck::Zeroable)]
+/// One lidar point as read: real-world coordinates, the global input index, and the attributes
+/// the filters use.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LidarPoint {
     /// Global input index: files in the order given, then points in file order, from 0.
     pub index: u64,
-    /// Integer x (real x = `offset[0] + scale[0] × x`, see [`Quantization`]).
-    pub x: i32,
-    /// Integer y.
-    pub y: i32,
-    /// Integer z.
-    pub z: i32,
+    /// Real-world x (the file's `offset + scale × X`, rounded once: see [`world`]).
+    pub x: f64,
+    /// Real-world y.
+    pub y: f64,
+    /// Real-world z.
+    pub z: f64,
     /// ASPRS classification code (5 bits in point formats 0–5, 8 bits in 6–10).
     pub classification: u8,
     /// Return number (1-based; 0 in some malformed files).

@@ -1,26 +1,32 @@
-//! The chunked reader over one or more LAS/LAZ files.
+//! The chunked reader over one or more LAS/LAZ/COPC files (and the files of `.vpc` lists).
 
 use super::LidarPoint;
-use super::chunks::ChunkDecoder;
-use super::combine::{FileMap, FileQuant, Quantization, combine};
-use super::filter::{CompiledFilter, Filter, FilterStats, Verdict};
-use super::header::{Bounds3, FileInfo, format_error, inspect, las_message, laz_message};
+use super::decode::{Fields, FileDecoder, spans};
+use super::filter::{BBox, CompiledFilter, Filter, FilterStats, Verdict};
+use super::header::{Bounds3, Chunk, FileInfo, format_error, inspect};
+use super::vpc;
+use super::world::Quantization;
 use crate::crs::Crs;
 use crate::error::{Error, Result};
-use std::fs::File;
-use std::io::{BufReader, Read};
-use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Tuning of a [`LidarReader`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReadOptions {
-    /// Decompress LAZ chunks on several threads (rayon's global pool). Each batch then spans
-    /// several LAZ chunks (usually 50,000 points each), decompressed side by side.
+    /// Decode LAZ chunks (and filter their points) on several threads (rayon's global pool).
+    /// The points and their order are the same either way.
     pub parallel: bool,
-    /// Point records decoded per batch. Memory held by the reader is about
-    /// `batch_points × record length` bytes (a record is 20–67 bytes plus extra bytes).
+    /// Point records decoded per batch (at least one LAZ chunk, and one chunk per thread when
+    /// parallel, up to `4 × batch_points` or 2^20 points). Memory held by the reader is about
+    /// 80 bytes per point of a batch.
     pub batch_points: usize,
+    /// Keep only the points inside this area too (edges included), on top of the filter's box:
+    /// "the points of these files inside this rectangle". Files whose header extent misses it
+    /// are not decoded, nor COPC nodes that miss it.
+    pub area: Option<BBox>,
+    /// Use the octree of COPC files to decode only the nodes that meet the box (`false`: read
+    /// them as plain LAZ; the points kept are the same).
+    pub copc_index: bool,
 }
 
 impl Default for ReadOptions {
@@ -28,30 +34,32 @@ impl Default for ReadOptions {
         ReadOptions {
             parallel: true,
             batch_points: 200_000,
+            area: None,
+            copc_index: true,
         }
     }
 }
 
 /// Reads one or more LAS/LAZ files as one point set, chunk by chunk (see the [module
-/// docs](super) for the coordinate rule and the global index).
+/// docs](super) for the coordinates and the global index).
 ///
 /// The reader is `Send`: it can be opened on one thread and moved to another.
 pub struct LidarReader {
     sources: Vec<Source>,
-    quant: Quantization,
     crs: Option<Crs>,
     filter: CompiledFilter,
     stats: FilterStats,
     options: ReadOptions,
     next_source: usize,
     current: Option<Current>,
+    ready: Vec<LidarPoint>,
+    ready_pos: usize,
 }
 
 impl std::fmt::Debug for LidarReader {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("LidarReader")
             .field("files", &self.sources.len())
-            .field("quantization", &self.quant)
             .field("crs", &self.crs)
             .field("stats", &self.stats)
             .finish_non_exhaustive()
@@ -60,66 +68,134 @@ impl std::fmt::Debug for LidarReader {
 
 /// One input file.
 struct Source {
-    info: FileInfo,
-    map: FileMap,
+    points: u64,
+    bounds: Bounds3,
     /// Global index of the file's first point.
     first_index: u64,
-    /// The header's bounds in the file's own integers, one step wider on each side (`None`
-    /// when the header has no usable bounds): a decoded point outside is corrupt.
-    int_bounds: Option<[[i64; 2]; 3]>,
+    /// Header facts, unless the file was skipped without being opened (a `.vpc` entry outside
+    /// the box).
+    info: Option<FileInfo>,
 }
 
-/// The integer box of `info`'s header bounds, one scale step wider on each side; `None` for a
-/// header without usable bounds (all zero, or min above max).
-fn int_bounds(info: &FileInfo) -> Option<[[i64; 2]; 3]> {
-    let b = &info.bounds;
-    let zero = b.min.iter().chain(&b.max).all(|v| *v == 0.0);
-    let usable = (0..3).all(|k| b.min[k] <= b.max[k] && info.scale[k] > 0.0);
-    if zero || !usable {
-        return None;
-    }
-    Some(std::array::from_fn(|k| {
-        let (s, o) = (info.scale[k], info.offset[k]);
-        [
-            ((b.min[k] - o) / s).floor() as i64 - 1,
-            ((b.max[k] - o) / s).ceil() as i64 + 1,
-        ]
-    }))
-}
-
-/// The file being read.
+/// The file being read: its decoder and the spans left to decode.
 struct Current {
-    source: usize,
-    decoder: Decoder,
-    record_len: usize,
-    extended: bool,
-    /// Decoded records not yet handed out start at `pos` (bytes).
-    buf: Vec<u8>,
-    pos: usize,
-    /// Global index of the record at `pos`.
-    next_index: u64,
-    /// Points per LAZ chunk (fixed-size chunks), to name the chunk of a corrupt point.
-    chunk_size: Option<u64>,
-    /// Records of the file not yet decoded into `buf`.
-    remaining: u64,
+    decoder: FileDecoder,
+    spans: Vec<Chunk>,
+    next: usize,
+    first_index: u64,
+    check: PointCheck,
 }
 
-enum Decoder {
-    Las(BufReader<File>),
-    Laz(Box<laz::LasZipDecompressor<'static, BufReader<File>>>),
-    /// Chunk by chunk, in parallel, each chunk checked (see [`super::chunks`]).
-    Chunks(Box<ChunkDecoder>),
+/// What a decoded record can be checked for: inside the header's bounds (one scale step of
+/// slack, in the file's own integers) and a return number no larger than the number of returns
+/// (when that is known, > 0). A record that fails is corrupt data that happened to decode.
+struct PointCheck {
+    path: PathBuf,
+    compressed: bool,
+    /// `None` when the header has no usable bounds (all zero, or min above max).
+    bounds: Option<[[i64; 2]; 3]>,
+    header: Bounds3,
+    scale: [f64; 3],
+    offset: [f64; 3],
+}
+
+impl PointCheck {
+    fn of(info: &FileInfo) -> PointCheck {
+        let b = &info.bounds;
+        let zero = b.min.iter().chain(&b.max).all(|v| *v == 0.0);
+        let usable = (0..3).all(|k| b.min[k] <= b.max[k] && info.scale[k] > 0.0);
+        let bounds = (!zero && usable).then(|| {
+            std::array::from_fn(|k| {
+                let (s, o) = (info.scale[k], info.offset[k]);
+                [
+                    ((b.min[k] - o) / s).floor() as i64 - 1,
+                    ((b.max[k] - o) / s).ceil() as i64 + 1,
+                ]
+            })
+        });
+        PointCheck {
+            path: info.path.clone(),
+            compressed: info.compressed,
+            bounds,
+            header: info.bounds,
+            scale: info.scale,
+            offset: info.offset,
+        }
+    }
+
+    /// Checks record `rec` (point `n` of the file, in `span`).
+    #[inline]
+    fn test(&self, rec: &[u8], extended: bool, span: &Chunk, n: u64) -> Result<()> {
+        let le = |o: usize| i32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
+        let xyz = [le(0), le(4), le(8)];
+        let in_box = self.bounds.is_none_or(|b| {
+            (0..3).all(|k| i64::from(xyz[k]) >= b[k][0] && i64::from(xyz[k]) <= b[k][1])
+        });
+        let (r, nr) = if extended {
+            (rec[14] & 0x0f, rec[14] >> 4)
+        } else {
+            (rec[14] & 0x07, (rec[14] >> 3) & 0x07)
+        };
+        if in_box && (nr == 0 || r <= nr) {
+            return Ok(());
+        }
+        Err(self.corrupt(xyz, r, nr, span, n, !in_box))
+    }
+
+    #[cold]
+    fn corrupt(&self, xyz: [i32; 3], r: u8, nr: u8, span: &Chunk, n: u64, out: bool) -> Error {
+        let at = if self.compressed {
+            format!("the LAZ chunk at byte {}, point {n}", span.offset)
+        } else {
+            format!("point {n}")
+        };
+        let what = if out {
+            let w = |k: usize| self.offset[k] + self.scale[k] * f64::from(xyz[k]);
+            let h = &self.header;
+            format!(
+                "its position ({}, {}, {}) is outside the header's bounds x {} .. {}, y {} .. {}, \
+                 z {} .. {} (the data is damaged, or the header's bounds are wrong)",
+                w(0),
+                w(1),
+                w(2),
+                h.min[0],
+                h.max[0],
+                h.min[1],
+                h.max[1],
+                h.min[2],
+                h.max[2]
+            )
+        } else {
+            format!("return number {r} of {nr} returns")
+        };
+        format_error(&self.path, format!("corrupt point data ({at}): {what}"))
+    }
 }
 
 impl LidarReader {
-    /// Opens `paths` (read in this order) with the default [`ReadOptions`].
+    /// Opens `paths` (read in this order; a `.vpc` stands for its files) with the default
+    /// [`ReadOptions`].
     ///
     /// # Errors
     /// [`Error::NoInput`] for an empty list; [`Error::Io`] if a file cannot be opened;
-    /// [`Error::Format`] if a file is not a valid LAS/LAZ file, if the files cannot be combined
-    /// exactly into one integer system, or if they declare different CRSs.
+    /// [`Error::Format`] if a file is not a valid LAS/LAZ/COPC file or `.vpc`, or if the files
+    /// declare different CRSs.
     pub fn open<P: AsRef<Path>>(paths: &[P], filter: &Filter) -> Result<LidarReader> {
         LidarReader::open_with(paths, filter, ReadOptions::default())
+    }
+
+    /// Opens `paths` to read only the points inside `area` (and `filter`): what the exact-tiles
+    /// engine needs for a tile's buffered extent. Files and COPC nodes outside it are skipped
+    /// without being decoded; the points and indices are those a full read keeps in `area`.
+    ///
+    /// # Errors
+    /// As [`LidarReader::open`].
+    pub fn open_area<P: AsRef<Path>>(paths: &[P], filter: &Filter, area: BBox) -> Result<Self> {
+        let options = ReadOptions {
+            area: Some(area),
+            ..ReadOptions::default()
+        };
+        LidarReader::open_with(paths, filter, options)
     }
 
     /// Opens `paths` with explicit options.
@@ -134,37 +210,73 @@ impl LidarReader {
         if paths.is_empty() {
             return Err(Error::NoInput);
         }
-        let infos: Vec<FileInfo> = paths
-            .iter()
-            .map(|p| inspect(p.as_ref()))
-            .collect::<Result<_>>()?;
-        let crs = common_crs(&infos)?;
-        let quants: Vec<FileQuant<'_>> = infos
-            .iter()
-            .map(|i| FileQuant {
-                path: &i.path,
-                scale: i.scale,
-                offset: i.offset,
-                bounds: (i.point_count > 0).then_some(i.bounds),
-            })
-            .collect();
-        let (quant, maps) = combine(&quants)?;
-        let mut sources = Vec::with_capacity(infos.len());
+        let compiled = CompiledFilter::new(filter, options.area);
+        let mut sources = Vec::with_capacity(paths.len());
+        let mut declared: Vec<(PathBuf, Crs)> = Vec::new();
         let mut first_index = 0u64;
-        for (info, map) in infos.into_iter().zip(maps) {
-            let count = info.point_count;
-            sources.push(Source {
-                int_bounds: int_bounds(&info),
-                info,
-                map,
-                first_index,
-            });
-            first_index = first_index.saturating_add(count);
+        let mut push = |s: Source| {
+            let n = s.points;
+            sources.push(Source { first_index, ..s });
+            first_index = first_index.saturating_add(n);
+        };
+        for p in paths {
+            let p = p.as_ref();
+            if !vpc::is_vpc(p) {
+                let info = inspect(p)?;
+                if let Some(c) = &info.crs {
+                    declared.push((info.path.clone(), c.clone()));
+                }
+                push(Source {
+                    points: info.point_count,
+                    bounds: info.bounds,
+                    first_index: 0,
+                    info: Some(info),
+                });
+                continue;
+            }
+            for e in vpc::read(p)? {
+                if let Some(c) = &e.crs {
+                    declared.push((p.to_path_buf(), c.clone()));
+                }
+                let rect = [
+                    e.bounds.min[0],
+                    e.bounds.min[1],
+                    e.bounds.max[0],
+                    e.bounds.max[1],
+                ];
+                let info = if e.points > 0 && !compiled.misses(rect, margin(rect, 0.01)) {
+                    let info = inspect(&e.path)?;
+                    if info.point_count != e.points {
+                        return Err(format_error(
+                            &e.path,
+                            format!(
+                                "has {} points, but {} lists {}: the file changed since the list \
+                                 was written (make it again with `sweeptin index`)",
+                                info.point_count,
+                                p.display(),
+                                e.points
+                            ),
+                        ));
+                    }
+                    if let Some(c) = &info.crs {
+                        declared.push((info.path.clone(), c.clone()));
+                    }
+                    Some(info)
+                } else {
+                    None
+                };
+                push(Source {
+                    points: e.points,
+                    bounds: e.bounds,
+                    first_index: 0,
+                    info,
+                });
+            }
         }
+        let crs = common_crs(&declared)?;
         Ok(LidarReader {
             sources,
-            filter: CompiledFilter::new(filter, &quant),
-            quant,
+            filter: compiled,
             crs,
             stats: FilterStats::default(),
             options: ReadOptions {
@@ -173,12 +285,18 @@ impl LidarReader {
             },
             next_source: 0,
             current: None,
+            ready: Vec::new(),
+            ready_pos: 0,
         })
     }
 
-    /// The mapping from the points' integer coordinates to real-world coordinates.
-    pub fn quantization(&self) -> &Quantization {
-        &self.quant
+    /// The scale and offset of the first file opened (each file's points use their own: this
+    /// is what an output that stores integers can reuse).
+    pub fn quantization(&self) -> Option<Quantization> {
+        self.sources
+            .iter()
+            .find_map(|s| s.info.as_ref())
+            .map(FileInfo::quantization)
     }
 
     /// The CRS declared by the files (the first declaration; all must agree), if any.
@@ -186,15 +304,16 @@ impl LidarReader {
         self.crs.as_ref()
     }
 
-    /// Header facts of each file, in reading order.
+    /// Header facts of each file opened, in reading order (files of a `.vpc` outside the box
+    /// are not opened).
     pub fn files(&self) -> impl Iterator<Item = &FileInfo> {
-        self.sources.iter().map(|s| &s.info)
+        self.sources.iter().filter_map(|s| s.info.as_ref())
     }
 
     /// Total number of points in the files, before filtering (an upper bound on what
     /// [`LidarReader::read_chunk`] will return in all).
     pub fn point_count(&self) -> u64 {
-        self.sources.iter().map(|s| s.info.point_count).sum()
+        self.sources.iter().map(|s| s.points).sum()
     }
 
     /// Union of the header bounds of the files that have points (real-world units; all zero
@@ -203,8 +322,8 @@ impl LidarReader {
         let mut it = self
             .sources
             .iter()
-            .filter(|s| s.info.point_count > 0)
-            .map(|s| s.info.bounds);
+            .filter(|s| s.points > 0)
+            .map(|s| s.bounds);
         let first = it.next().unwrap_or(Bounds3 {
             min: [0.0; 3],
             max: [0.0; 3],
@@ -212,7 +331,8 @@ impl LidarReader {
         it.fold(first, |a, b| a.union(&b))
     }
 
-    /// What the filters kept and dropped so far.
+    /// What the filters kept and dropped so far; `read + skipped` against
+    /// [`LidarReader::point_count`] is the progress.
     pub fn stats(&self) -> &FilterStats {
         &self.stats
     }
@@ -221,8 +341,7 @@ impl LidarReader {
     /// appended. Returns 0 once every file has been read (or when `max` is 0).
     ///
     /// # Errors
-    /// [`Error::Io`] or [`Error::Format`] if a file turns out to be damaged while reading, or a
-    /// coordinate does not fit in 32 bits after conversion to the common integer system. After
+    /// [`Error::Io`] or [`Error::Format`] if a file turns out to be damaged while reading. After
     /// an error the reader is finished: later calls return 0. Points appended before the error
     /// stay in `out`.
     pub fn read_chunk(&mut self, out: &mut Vec<LidarPoint>, max: usize) -> Result<usize> {
@@ -230,6 +349,8 @@ impl LidarReader {
         if let Err(e) = self.fill(out, start, max) {
             self.current = None;
             self.next_source = self.sources.len();
+            self.ready.clear();
+            self.ready_pos = 0;
             return Err(e);
         }
         Ok(out.len() - start)
@@ -237,22 +358,17 @@ impl LidarReader {
 
     fn fill(&mut self, out: &mut Vec<LidarPoint>, start: usize, max: usize) -> Result<()> {
         while out.len() - start < max {
-            let cur = match &mut self.current {
-                Some(c) if !c.exhausted() => c,
-                _ => {
-                    self.current = None;
-                    if !self.open_next()? {
-                        break;
-                    }
-                    continue;
-                }
-            };
-            let source = &self.sources[cur.source];
-            if cur.pos == cur.buf.len() {
-                cur.refill(&source.info.path, self.options.batch_points)?;
+            if self.ready_pos < self.ready.len() {
+                let n = (max - (out.len() - start)).min(self.ready.len() - self.ready_pos);
+                out.extend_from_slice(&self.ready[self.ready_pos..self.ready_pos + n]);
+                self.ready_pos += n;
+                continue;
             }
-            let room = max - (out.len() - start);
-            cur.decode_into(out, room, source, &self.filter, &mut self.stats)?;
+            self.ready.clear();
+            self.ready_pos = 0;
+            if !self.decode_batch()? {
+                break;
+            }
         }
         Ok(())
     }
@@ -267,194 +383,142 @@ impl LidarReader {
         Ok(out)
     }
 
-    /// Opens the next file with points; `false` when there is none left.
+    /// Decodes the next batch of spans into `ready`; `false` when every file is done.
+    fn decode_batch(&mut self) -> Result<bool> {
+        loop {
+            if let Some(cur) = &mut self.current
+                && cur.next < cur.spans.len()
+            {
+                let threads = if self.options.parallel {
+                    rayon::current_num_threads()
+                } else {
+                    1
+                };
+                // At least `batch_points` and one span per thread, at most about four batches
+                // (or 2^20 points) in memory at once, whatever the number of cores.
+                let batch = self.options.batch_points as u64;
+                let cap = (4 * batch).max(1 << 20);
+                let (mut end, mut points) = (cur.next, 0u64);
+                while end < cur.spans.len() {
+                    points += cur.spans[end].points;
+                    end += 1;
+                    if (points >= batch && end - cur.next >= threads) || points >= cap {
+                        break;
+                    }
+                }
+                let (filter, base, check) = (&self.filter, cur.first_index, &cur.check);
+                let (quant, len, ext) = (
+                    cur.decoder.quant,
+                    cur.decoder.record_len,
+                    cur.decoder.extended,
+                );
+                let parts = cur.decoder.decode(
+                    &cur.spans[cur.next..end],
+                    self.options.parallel,
+                    Fields::Filter,
+                    |span, raw| {
+                        let mut kept = Vec::with_capacity(span.points as usize);
+                        let mut stats = FilterStats::default();
+                        for (i, rec) in raw.chunks_exact(len).enumerate() {
+                            check.test(rec, ext, span, span.first + i as u64)?;
+                            let p = decode(rec, ext, base + span.first + i as u64, &quant);
+                            let v = filter.test(&p);
+                            stats.count(v);
+                            if v == Verdict::Keep {
+                                kept.push(p);
+                            }
+                        }
+                        Ok((kept, stats))
+                    },
+                )?;
+                cur.next = end;
+                for part in parts {
+                    let (kept, stats) = part?;
+                    self.ready.extend_from_slice(&kept);
+                    self.stats += stats;
+                }
+                return Ok(true);
+            }
+            self.current = None;
+            if !self.open_next()? {
+                return Ok(false);
+            }
+        }
+    }
+
+    /// Opens the next file with points to decode; `false` when there is none left. Points of
+    /// files and COPC nodes outside the box count as skipped.
     fn open_next(&mut self) -> Result<bool> {
         while self.next_source < self.sources.len() {
-            let i = self.next_source;
+            let s = &self.sources[self.next_source];
             self.next_source += 1;
-            if self.sources[i].info.point_count == 0 {
+            let Some(info) = s.info.as_ref().filter(|i| i.point_count > 0) else {
+                self.stats.skipped += s.points;
+                continue;
+            };
+            let rect = info.rect();
+            let m = margin(rect, info.scale[0].max(info.scale[1]));
+            if self.filter.misses(rect, m) {
+                self.stats.skipped += s.points;
                 continue;
             }
-            self.current = Some(Current::open(i, &self.sources[i], self.options.parallel)?);
+            let filter = &self.filter;
+            let keep = |r: [f64; 4]| !filter.misses(r, m);
+            let use_index = self.options.copc_index;
+            let spans = spans(
+                info,
+                self.options.batch_points as u64,
+                use_index.then_some(&keep as &dyn Fn([f64; 4]) -> bool),
+            );
+            let decoded: u64 = spans.iter().map(|c| c.points).sum();
+            self.stats.skipped += info.point_count - decoded;
+            if spans.is_empty() {
+                continue;
+            }
+            self.current = Some(Current {
+                decoder: FileDecoder::open(info)?,
+                spans,
+                next: 0,
+                first_index: s.first_index,
+                check: PointCheck::of(info),
+            });
             return Ok(true);
         }
         Ok(false)
     }
 }
 
+/// How far a point may lie outside its file's header extent or its COPC node's bounds through
+/// rounding (writers compute both in floating point): one coordinate step, plus a relative
+/// 1e-9. Used only to decide what need not be decoded.
+fn margin(r: [f64; 4], step: f64) -> f64 {
+    step + 1e-9 * r.iter().fold(1.0f64, |m, v| m.max(v.abs()))
+}
+
 /// The files' common CRS: files that declare one must declare the same.
-fn common_crs(infos: &[FileInfo]) -> Result<Option<Crs>> {
-    let mut found: Option<(&FileInfo, &Crs)> = None;
-    for info in infos {
-        let Some(crs) = &info.crs else { continue };
-        match found {
-            None => found = Some((info, crs)),
-            Some((first, c)) if !c.same_as(crs) => {
-                return Err(format_error(
-                    &info.path,
-                    format!(
-                        "declares CRS {crs}, but {} declares {c}: files read together must be in \
-                         the same CRS",
-                        first.path.display()
-                    ),
-                ));
-            }
-            Some(_) => {}
-        }
-    }
-    Ok(found.map(|(_, c)| c.clone()))
-}
-
-/// Runs a decoder call, turning a panic inside the third-party decoder into an error.
-fn guarded<T>(path: &Path, f: impl FnOnce() -> Result<T>) -> Result<T> {
-    catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|panic| {
-        let what = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_default();
-        Err(format_error(
-            path,
-            format!("the point data is damaged: the decoder failed ({what})"),
-        ))
-    })
-}
-
-impl Current {
-    fn open(index: usize, source: &Source, parallel: bool) -> Result<Current> {
-        let path = source.info.path.as_path();
-        let file = File::open(path).map_err(|e| Error::io(path, e))?;
-        let mut read = BufReader::with_capacity(1 << 20, file);
-        // Leaves `read` at the start of the point data.
-        let header = las::Header::new(&mut read)
-            .map_err(|e| format_error(path, format!("invalid header: {}", las_message(&e))))?;
-        if header.number_of_points() != source.info.point_count {
+fn common_crs(declared: &[(PathBuf, Crs)]) -> Result<Option<Crs>> {
+    let Some((first_path, first)) = declared.first() else {
+        return Ok(None);
+    };
+    for (path, crs) in &declared[1..] {
+        if !first.same_as(crs) {
             return Err(format_error(
                 path,
-                "the file changed while it was being read",
+                format!(
+                    "declares CRS {crs}, but {} declares {first}: files read together must be in \
+                     the same CRS",
+                    first_path.display()
+                ),
             ));
         }
-        let format = header.point_format();
-        let mut chunk_size = None;
-        let decoder = if format.is_compressed {
-            let vlr = header.laz_vlr().map_err(|e| {
-                format_error(path, format!("invalid LASzip VLR: {}", las_message(&e)))
-            })?;
-            if !vlr.uses_variable_size_chunks() {
-                chunk_size = Some(u64::from(vlr.chunk_size()).max(1));
-            }
-            guarded(path, || {
-                let laz_err = |e: laz::LasZipError| {
-                    format_error(
-                        path,
-                        format!("cannot decompress the points: {}", laz_message(&e)),
-                    )
-                };
-                Ok(if parallel {
-                    Decoder::Chunks(Box::new(ChunkDecoder::open(
-                        path,
-                        read,
-                        vlr,
-                        source.info.point_count,
-                    )?))
-                } else {
-                    Decoder::Laz(Box::new(
-                        laz::LasZipDecompressor::new(read, vlr).map_err(laz_err)?,
-                    ))
-                })
-            })?
-        } else {
-            Decoder::Las(read)
-        };
-        Ok(Current {
-            source: index,
-            decoder,
-            record_len: usize::from(format.len()),
-            extended: format.is_extended,
-            buf: Vec::new(),
-            pos: 0,
-            next_index: source.first_index,
-            chunk_size,
-            remaining: source.info.point_count,
-        })
     }
-
-    fn exhausted(&self) -> bool {
-        self.remaining == 0 && self.pos == self.buf.len()
-    }
-
-    /// Decodes the next batch of records into `buf`.
-    fn refill(&mut self, path: &Path, batch: usize) -> Result<()> {
-        if let Decoder::Chunks(d) = &mut self.decoder {
-            let buf = &mut self.buf;
-            let n = guarded(path, || d.decode(path, batch as u64, buf))?;
-            self.pos = 0;
-            self.remaining -= n;
-            return Ok(());
-        }
-        let n = self.remaining.min(batch as u64) as usize;
-        self.buf.resize(n * self.record_len, 0);
-        self.pos = 0;
-        let buf = &mut self.buf;
-        let decoder = &mut self.decoder;
-        let laz_err = |e: laz::LasZipError| {
-            format_error(
-                path,
-                format!("cannot decompress the points: {}", laz_message(&e)),
-            )
-        };
-        guarded(path, || match decoder {
-            Decoder::Las(read) => read.read_exact(buf).map_err(|e| {
-                if e.kind() == std::io::ErrorKind::UnexpectedEof {
-                    format_error(path, "unexpected end of file: the file is truncated")
-                } else {
-                    Error::io(path, e)
-                }
-            }),
-            Decoder::Laz(d) => d
-                .decompress_many(buf)
-                .map_err(|e| laz_err(laz::LasZipError::IoError(e))),
-            Decoder::Chunks(_) => Err(Error::Internal("chunks are decoded above".into())),
-        })?;
-        self.remaining -= n as u64;
-        Ok(())
-    }
-
-    /// Moves decoded records into `out` through the filter, at most `room` kept points.
-    fn decode_into(
-        &mut self,
-        out: &mut Vec<LidarPoint>,
-        room: usize,
-        source: &Source,
-        filter: &CompiledFilter,
-        stats: &mut FilterStats,
-    ) -> Result<()> {
-        let identity = source.map.is_identity();
-        let mut kept = 0;
-        while kept < room && self.pos < self.buf.len() {
-            let rec = &self.buf[self.pos..self.pos + self.record_len];
-            let mut p = decode(rec, self.extended, self.next_index);
-            check_point(&p, source, self.chunk_size)?;
-            if !identity {
-                convert(&mut p, source)?;
-            }
-            self.pos += self.record_len;
-            self.next_index += 1;
-            let verdict = filter.test(&p);
-            stats.count(verdict);
-            if verdict == Verdict::Keep {
-                out.push(p);
-                kept += 1;
-            }
-        }
-        Ok(())
-    }
+    Ok(Some(first.clone()))
 }
 
 /// Decodes the fields a [`LidarPoint`] carries from one point record (formats 0–10; the record
 /// is at least 20 bytes, 30 for formats 6–10).
 #[inline]
-fn decode(rec: &[u8], extended: bool, index: u64) -> LidarPoint {
+pub(crate) fn decode(rec: &[u8], extended: bool, index: u64, q: &Quantization) -> LidarPoint {
     let le = |o: usize| i32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
     let (b14, b15) = (rec[14], rec[15]);
     let (classification, return_number, number_of_returns, flags) = if extended {
@@ -462,84 +526,16 @@ fn decode(rec: &[u8], extended: bool, index: u64) -> LidarPoint {
     } else {
         (b15 & 0x1f, b14 & 0x07, (b14 >> 3) & 0x07, (b15 >> 5) & 0x07)
     };
+    let [x, y, z] = q.to_world([le(0), le(4), le(8)]);
     LidarPoint {
         index,
-        x: le(0),
-        y: le(4),
-        z: le(8),
+        x,
+        y,
+        z,
         classification,
         return_number,
         number_of_returns,
         flags,
-    }
-}
-
-/// Checks what a decoded point can be checked for: inside the header's bounds (one scale step of
-/// slack) and a return number no larger than the number of returns (when that is known, > 0).
-/// A point that fails is corrupt data that happened to decode.
-#[inline]
-fn check_point(p: &LidarPoint, source: &Source, chunk_size: Option<u64>) -> Result<()> {
-    let in_box = source.int_bounds.is_none_or(|b| {
-        let v = [i64::from(p.x), i64::from(p.y), i64::from(p.z)];
-        (0..3).all(|k| v[k] >= b[k][0] && v[k] <= b[k][1])
-    });
-    let returns_ok = p.number_of_returns == 0 || p.return_number <= p.number_of_returns;
-    if in_box && returns_ok {
-        return Ok(());
-    }
-    Err(corrupt_point(p, source, chunk_size, !in_box))
-}
-
-#[cold]
-fn corrupt_point(p: &LidarPoint, source: &Source, chunk_size: Option<u64>, out: bool) -> Error {
-    let n = p.index - source.first_index;
-    let i = &source.info;
-    let at = match chunk_size.filter(|_| i.compressed) {
-        Some(c) => format!("chunk {}, point {n}", n / c),
-        None => format!("point {n}"),
-    };
-    let what = if out {
-        let w = |k: usize, v: i32| i.offset[k] + i.scale[k] * f64::from(v);
-        format!(
-            "its position ({}, {}, {}) is outside the header's bounds x {} .. {}, y {} .. {}, \
-             z {} .. {} (the data is damaged, or the header's bounds are wrong)",
-            w(0, p.x),
-            w(1, p.y),
-            w(2, p.z),
-            i.bounds.min[0],
-            i.bounds.max[0],
-            i.bounds.min[1],
-            i.bounds.max[1],
-            i.bounds.min[2],
-            i.bounds.max[2]
-        )
-    } else {
-        format!(
-            "return number {} of {} returns",
-            p.return_number, p.number_of_returns
-        )
-    };
-    format_error(&i.path, format!("corrupt point data ({at}): {what}"))
-}
-
-/// Converts a point's integers into the common system.
-#[inline]
-fn convert(p: &mut LidarPoint, source: &Source) -> Result<()> {
-    let m = &source.map;
-    match (m.apply(0, p.x), m.apply(1, p.y), m.apply(2, p.z)) {
-        (Some(x), Some(y), Some(z)) => {
-            (p.x, p.y, p.z) = (x, y, z);
-            Ok(())
-        }
-        _ => Err(format_error(
-            &source.info.path,
-            format!(
-                "point {} (input index {}): its coordinates do not fit in 32-bit integers once \
-                 converted to the common scale and offset of the files read together",
-                p.index - source.first_index,
-                p.index
-            ),
-        )),
     }
 }
 
@@ -555,14 +551,15 @@ mod tests {
 
     #[test]
     fn decode_legacy_and_extended() {
+        let q = Quantization::new([0.01; 3], [0.0; 3]);
         let mut rec = [0u8; 30];
         rec[0..4].copy_from_slice(&(-5i32).to_le_bytes());
         rec[4..8].copy_from_slice(&7i32.to_le_bytes());
         rec[8..12].copy_from_slice(&123456i32.to_le_bytes());
         rec[14] = 2 | (3 << 3); // legacy: return 2 of 3
         rec[15] = 9 | 0x80; // class 9, withheld
-        let p = decode(&rec, false, 42);
-        assert_eq!((p.index, p.x, p.y, p.z), (42, -5, 7, 123456));
+        let p = decode(&rec, false, 42, &q);
+        assert_eq!((p.index, p.x, p.y, p.z), (42, -0.05, 0.07, 1234.56));
         assert_eq!(
             (p.classification, p.return_number, p.number_of_returns),
             (9, 2, 3)
@@ -571,11 +568,28 @@ mod tests {
         rec[14] = 5 | (7 << 4); // extended: return 5 of 7
         rec[15] = 0x04 | 0x08 | 0x30; // withheld + overlap, scanner channel bits
         rec[16] = 66;
-        let p = decode(&rec, true, 0);
+        let p = decode(&rec, true, 0, &q);
         assert_eq!(
             (p.classification, p.return_number, p.number_of_returns),
             (66, 5, 7)
         );
         assert_eq!(p.flags, LidarPoint::WITHHELD | LidarPoint::OVERLAP);
+    }
+
+    #[test]
+    fn crs_must_agree() {
+        let a = Crs {
+            epsg: Some(2154),
+            ..Crs::default()
+        };
+        let b = Crs {
+            epsg: Some(2949),
+            ..Crs::default()
+        };
+        let ok = common_crs(&[("a".into(), a.clone()), ("b".into(), a.clone())]).unwrap();
+        assert_eq!(ok, Some(a.clone()));
+        let e = common_crs(&[("a.laz".into(), a), ("b.laz".into(), b)]).unwrap_err();
+        assert!(e.to_string().contains("b.laz") && e.to_string().contains("a.laz"));
+        assert_eq!(common_crs(&[]).unwrap(), None);
     }
 }

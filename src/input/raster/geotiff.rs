@@ -28,7 +28,7 @@ fn tiff_error(path: &Path, e: tiff::TiffError) -> Error {
 
 /// What a TIFF decoder error means to a user: a read past the end of the file is a truncated or
 /// damaged file, not "failed to fill whole buffer".
-pub(crate) fn tiff_message(e: &tiff::TiffError) -> String {
+fn tiff_message(e: &tiff::TiffError) -> String {
     match e {
         tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
             "the TIFF is truncated or damaged: its data runs past the end of the file".into()

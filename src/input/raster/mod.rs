@@ -21,7 +21,6 @@
 
 mod ascii;
 mod geotiff;
-pub(crate) use geotiff::tiff_message;
 
 use crate::error::{Error, Result};
 use ascii::AsciiSource;

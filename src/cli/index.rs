@@ -1,0 +1,110 @@
+//! `sweeptin index`: a virtual point cloud (`.vpc`) of LAS/LAZ/COPC files, from their headers
+//! only, for QGIS, PDAL wrench and lasR, and as sweeptin's own tile index (a run with `--bbox`
+//! then opens only the files that meet the box).
+
+use super::input::{check_output, distinct_outputs};
+use anyhow::{Context, bail};
+use std::path::PathBuf;
+use sweeptin::input::las::FileInfo;
+
+/// Arguments of `sweeptin index`.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Example:\n  sweeptin index 'tiles/*.laz' -o tiles.vpc\n  \
+                        sweeptin dem tiles.vpc --bbox 770520,6277520,770580,6277580 --cell 0.5 \
+                        -o part.tif"
+)]
+pub struct Args {
+    /// LAS/LAZ/COPC files (`@list.txt`, quoted globs and `.vpc` files are expanded).
+    #[arg(required = true, value_name = "FILES")]
+    pub files: Vec<PathBuf>,
+    /// The virtual point cloud to write (`.vpc`); the files are named relative to its folder.
+    #[arg(short, long, value_name = "VPC")]
+    pub output: PathBuf,
+    /// Print a JSON summary on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// What `index` wrote.
+#[derive(serde::Serialize)]
+struct Summary<'a> {
+    output: &'a std::path::Path,
+    files: usize,
+    points: u64,
+    bounds: [f64; 6],
+    crs: Option<String>,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if !sweeptin::input::las::vpc::is_vpc(&args.output) {
+        bail!(
+            "{}: a virtual point cloud is written as .vpc",
+            args.output.display()
+        );
+    }
+    check_output(&args.output)?;
+    distinct_outputs(&[("-o", &args.output)], &args.files, "the index")?;
+    let infos: Vec<FileInfo> = args
+        .files
+        .iter()
+        .map(|p| FileInfo::read(p).with_context(|| format!("cannot index {}", p.display())))
+        .collect::<anyhow::Result<_>>()?;
+    let crs: Vec<String> = infos
+        .iter()
+        .filter_map(|i| i.crs.as_ref().map(|c| c.to_string()))
+        .collect();
+    if crs.windows(2).any(|w| w[0] != w[1]) {
+        eprintln!(
+            "sweeptin: warning: the files declare different CRSs ({} and {}): a run reads only \
+             files in one CRS",
+            crs[0],
+            crs.iter()
+                .find(|c| **c != crs[0])
+                .map_or("", |c| c.as_str())
+        );
+    }
+    sweeptin::output::vpc::write_vpc(&args.output, &infos)?;
+    let with_points: Vec<&FileInfo> = infos.iter().filter(|i| i.point_count > 0).collect();
+    let mut b = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for i in &with_points {
+        for a in 0..3 {
+            b[a] = b[a].min(i.bounds.min[a]);
+            b[a + 3] = b[a + 3].max(i.bounds.max[a]);
+        }
+    }
+    let s = Summary {
+        output: &args.output,
+        files: infos.len(),
+        points: infos.iter().map(|i| i.point_count).sum(),
+        bounds: if with_points.is_empty() { [0.0; 6] } else { b },
+        crs: infos
+            .iter()
+            .find_map(|i| i.crs.as_ref().map(|c| c.to_string())),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&s)?);
+    } else {
+        println!(
+            "{}: {} files, {} points, x {} .. {}, y {} .. {}{}",
+            s.output.display(),
+            s.files,
+            super::info::thousands(s.points),
+            s.bounds[0],
+            s.bounds[3],
+            s.bounds[1],
+            s.bounds[4],
+            s.crs
+                .as_deref()
+                .map_or(String::new(), |c| format!(", CRS {c}"))
+        );
+    }
+    Ok(())
+}

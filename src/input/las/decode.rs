@@ -1,0 +1,232 @@
+//! Decoding a file's point records span by span, on every core.
+//!
+//! A *span* is a run of point records that decodes on its own: a LAZ chunk (a COPC octree node is
+//! one), or a slice of an uncompressed LAS file. The reader and `info` pick the spans they need
+//! (all of them, or the COPC nodes that meet an area), [`FileDecoder::decode`] reads their bytes,
+//! decompresses them side by side (rayon's global pool) and hands each span's raw records to a
+//! job, in span order, so the results do not depend on the number of threads.
+
+use super::header::{Chunk, FileInfo, format_error, las_message, laz_message};
+use super::world::Quantization;
+use crate::error::{Error, Result};
+use rayon::prelude::*;
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+
+/// One file open for decoding.
+pub(crate) struct FileDecoder {
+    path: PathBuf,
+    file: File,
+    vlr: Option<laz::LazVlr>,
+    pub(crate) record_len: usize,
+    pub(crate) extended: bool,
+    pub(crate) quant: Quantization,
+}
+
+/// Which fields a job needs (LAZ 1.4 layered chunks skip the others).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Fields {
+    /// Coordinates, returns, classification and flags.
+    Filter,
+    /// Those, intensity and GPS time.
+    Stats,
+}
+
+impl Fields {
+    fn selection(self) -> laz::DecompressionSelection {
+        let base = laz::DecompressionSelection::base()
+            .decompress_z()
+            .decompress_classification()
+            .decompress_flags();
+        match self {
+            Fields::Filter => base,
+            Fields::Stats => base.decompress_intensity().decompress_gps_time(),
+        }
+    }
+}
+
+impl FileDecoder {
+    /// Opens the file described by `info` (checked by [`FileInfo::read`]).
+    pub(crate) fn open(info: &FileInfo) -> Result<FileDecoder> {
+        let path = info.path.as_path();
+        let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+        let vlr = if info.compressed {
+            let header = las::Header::new(&mut file)
+                .map_err(|e| format_error(path, format!("invalid header: {}", las_message(&e))))?;
+            if header.number_of_points() != info.point_count {
+                return Err(format_error(
+                    path,
+                    "the file changed while it was being read",
+                ));
+            }
+            Some(header.laz_vlr().map_err(|e| {
+                format_error(path, format!("invalid LASzip VLR: {}", las_message(&e)))
+            })?)
+        } else {
+            None
+        };
+        Ok(FileDecoder {
+            path: info.path.clone(),
+            file,
+            vlr,
+            record_len: usize::from(info.record_length),
+            extended: info.point_format >= 6,
+            quant: info.quantization(),
+        })
+    }
+
+    /// Reads and decompresses `spans`, runs `job` on each span's raw records (`span.points`
+    /// records of `record_len` bytes) and returns the results in span order.
+    pub(crate) fn decode<T: Send>(
+        &mut self,
+        spans: &[Chunk],
+        parallel: bool,
+        fields: Fields,
+        job: impl Fn(&Chunk, &[u8]) -> T + Sync,
+    ) -> Result<Vec<T>> {
+        let mut bytes = Vec::with_capacity(spans.len());
+        for s in spans {
+            let mut b = vec![0u8; s.bytes as usize];
+            self.file
+                .seek(SeekFrom::Start(s.offset))
+                .and_then(|_| self.file.read_exact(&mut b))
+                .map_err(|e| {
+                    if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                        format_error(&self.path, "unexpected end of file: the file is truncated")
+                    } else {
+                        Error::io(&self.path, e)
+                    }
+                })?;
+            bytes.push(b);
+        }
+        let (path, vlr, len) = (self.path.as_path(), self.vlr.as_ref(), self.record_len);
+        let one = |(s, b): (&Chunk, &Vec<u8>)| -> Result<T> {
+            match vlr {
+                None => Ok(job(s, b)),
+                Some(vlr) => {
+                    let mut raw = vec![0u8; s.points as usize * len];
+                    let entry = laz::laszip::ChunkTableEntry {
+                        point_count: s.points,
+                        byte_count: s.bytes,
+                    };
+                    decode_chunk(b, &mut raw, vlr, entry, fields.selection()).map_err(|what| {
+                        format_error(
+                            path,
+                            format!(
+                                "corrupt LAZ data in the chunk at byte {} (points {} to {}): {what}",
+                                s.offset,
+                                s.first,
+                                s.first + s.points.max(1) - 1
+                            ),
+                        )
+                    })?;
+                    Ok(job(s, &raw))
+                }
+            }
+        };
+        guarded(path, || {
+            if parallel {
+                spans.par_iter().zip(&bytes).map(one).collect()
+            } else {
+                spans.iter().zip(&bytes).map(one).collect()
+            }
+        })
+    }
+}
+
+/// Decodes one LAZ chunk, `bytes`, into `out` (its points' records) with a decompressor that
+/// sees only them, and checks that it used exactly them. A decoder running over damaged bytes
+/// takes them for data (a zeroed chunk decodes into 50,000 copies of one point): a chunk whose
+/// points end before its bytes do, or need more bytes than it has, is corrupt — which a file's
+/// length alone cannot tell (that is "truncated").
+fn decode_chunk(
+    bytes: &[u8],
+    out: &mut [u8],
+    vlr: &laz::LazVlr,
+    entry: laz::laszip::ChunkTableEntry,
+    selection: laz::DecompressionSelection,
+) -> std::result::Result<(), String> {
+    // The layout a decompressor expects: the offset of the chunk table, the chunk, the table.
+    let mut buf = Vec::with_capacity(8 + bytes.len() + 32);
+    buf.extend_from_slice(&((8 + bytes.len()) as i64).to_le_bytes());
+    buf.extend_from_slice(bytes);
+    let mut table = laz::laszip::ChunkTable::with_capacity(1);
+    table.push(entry);
+    table
+        .write_to(&mut buf, vlr)
+        .map_err(|e| format!("cannot set up its decoder: {e}"))?;
+    let mut d =
+        laz::LasZipDecompressor::selective(std::io::Cursor::new(&buf[..]), vlr.clone(), selection)
+            .map_err(|e| laz_message(&e))?;
+    d.decompress_many(out).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::UnexpectedEof {
+            format!(
+                "its {} points need more than its {} bytes",
+                entry.point_count,
+                bytes.len()
+            )
+        } else {
+            e.to_string()
+        }
+    })?;
+    let used = d.get().position() - 8;
+    if used != bytes.len() as u64 {
+        return Err(format!(
+            "its {} points decode from {used} of its {} bytes",
+            entry.point_count,
+            bytes.len()
+        ));
+    }
+    Ok(())
+}
+
+/// The spans of `info` to decode: every LAZ chunk, or slices of about `batch` LAS records; with
+/// `keep`, only the COPC nodes whose rectangle it keeps (all chunks of a file without an index).
+pub(crate) fn spans(
+    info: &FileInfo,
+    batch: u64,
+    keep: Option<&dyn Fn([f64; 4]) -> bool>,
+) -> Vec<Chunk> {
+    let layout = &info.layout;
+    if !info.compressed {
+        let len = u64::from(info.record_length);
+        let batch = batch.max(1);
+        return (0..info.point_count.div_ceil(batch))
+            .map(|k| {
+                let first = k * batch;
+                let points = batch.min(info.point_count - first);
+                Chunk {
+                    offset: layout.data_start + first * len,
+                    bytes: points * len,
+                    points,
+                    first,
+                }
+            })
+            .collect();
+    }
+    match (keep, &layout.nodes) {
+        (Some(keep), Some(nodes)) => nodes
+            .iter()
+            .filter(|n| keep(n.rect))
+            .map(|n| layout.chunks[n.chunk])
+            .collect(),
+        _ => layout.chunks.clone(),
+    }
+}
+
+/// Runs a decoder call, turning a panic inside the third-party decoder into an error.
+pub(crate) fn guarded<T>(path: &Path, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(format_error(
+            path,
+            format!("the point data is damaged: the decoder failed ({what})"),
+        ))
+    })
+}

@@ -1,0 +1,26 @@
+//! Writing a virtual point cloud (`.vpc`) from LAS/LAZ headers: the STAC ItemCollection that
+//! PDAL wrench, lasR and QGIS read (see [`crate::input::las::vpc`] for the format).
+
+use super::atomic::AtomicFile;
+use crate::error::Result;
+use crate::input::las::FileInfo;
+use crate::input::las::vpc::{ItemCollection, item};
+use std::path::Path;
+
+/// Writes `path` listing `files` (their header facts), with paths relative to the `.vpc`'s
+/// folder; returns the size written.
+///
+/// # Errors
+/// [`crate::Error::Io`] naming `path`; nothing is left under `path` on error.
+pub fn write_vpc(path: &Path, files: &[FileInfo]) -> Result<u64> {
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let collection = ItemCollection {
+        kind: "FeatureCollection".into(),
+        features: files.iter().map(|f| item(f, dir)).collect(),
+    };
+    let mut out = AtomicFile::create(path)?;
+    serde_json::to_writer_pretty(&mut out, &collection)
+        .map_err(|e| out.err(std::io::Error::other(e)))?;
+    std::io::Write::write_all(&mut out, b"\n").map_err(|e| out.err(e))?;
+    out.commit()
+}

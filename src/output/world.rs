@@ -1,0 +1,98 @@
+//! Side files that georeference an image for GIS software: the ESRI world file (`.pgw` beside a
+//! PNG) and the `.prj` (the CRS as WKT, beside an `.asc` grid or a PNG). Each is written
+//! atomically, like every output.
+
+use crate::crs::Crs;
+use crate::error::Result;
+use crate::output::AtomicFile;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The world file's path for `image`: the extension's first and last letters and `w`
+/// (`shade.png` → `shade.pgw`, `dem.tif` → `dem.tfw`).
+pub fn world_file_path(image: &Path) -> PathBuf {
+    let ext = image
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let mut chars = ext.chars();
+    let w = match (chars.next(), chars.last()) {
+        (Some(a), Some(b)) => format!("{a}{b}w"),
+        (Some(a), None) => format!("{a}w"),
+        _ => "wld".to_string(),
+    };
+    image.with_extension(w)
+}
+
+/// Writes the world file of a north-up image whose outer upper-left corner is `origin`, with
+/// cells `size = [width, height]`: six lines, the cell width, two zero rotations, minus the cell
+/// height, then the **centre** of the upper-left cell (ESRI's convention). Returns its path.
+///
+/// # Errors
+/// [`crate::Error::Io`] naming the file.
+pub fn write_world_file(image: &Path, origin: [f64; 2], size: [f64; 2]) -> Result<PathBuf> {
+    let path = world_file_path(image);
+    let text = format!(
+        "{:?}\n0.0\n0.0\n{:?}\n{:?}\n{:?}\n",
+        size[0],
+        -size[1],
+        origin[0] + size[0] / 2.0,
+        origin[1] - size[1] / 2.0
+    );
+    write(&path, text.as_bytes())?;
+    Ok(path)
+}
+
+/// Writes `<file>.prj` (the extension replaced) with the CRS's WKT, when a WKT is known; GDAL and
+/// ESRI software read a `.prj` as WKT only, so a CRS known only by its EPSG code writes none.
+/// Returns the path written, if any.
+///
+/// # Errors
+/// [`crate::Error::Io`] naming the file.
+pub fn write_prj(file: &Path, crs: Option<&Crs>) -> Result<Option<PathBuf>> {
+    let Some(wkt) = crs.and_then(|c| c.wkt.as_deref()) else {
+        return Ok(None);
+    };
+    let path = file.with_extension("prj");
+    write(&path, wkt.trim_end_matches('\0').as_bytes())?;
+    Ok(Some(path))
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut f = AtomicFile::create(path)?;
+    f.write_all(bytes).map_err(|e| f.err(e))?;
+    f.commit()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn world_file_names_and_centre_of_the_first_cell() {
+        assert_eq!(world_file_path(Path::new("a/s.png")), Path::new("a/s.pgw"));
+        assert_eq!(world_file_path(Path::new("d.tif")), Path::new("d.tfw"));
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("s.png");
+        let p = write_world_file(&png, [100.0, 200.0], [0.5, 0.5]).unwrap();
+        let text = std::fs::read_to_string(p).unwrap();
+        assert_eq!(text, "0.5\n0.0\n0.0\n-0.5\n100.25\n199.75\n");
+        let none = write_prj(
+            &png,
+            Some(&Crs {
+                epsg: Some(2154),
+                ..Crs::default()
+            }),
+        )
+        .unwrap();
+        assert_eq!(none, None);
+        let wkt = Crs {
+            wkt: Some("PROJCS[\"x\"]".into()),
+            ..Crs::default()
+        };
+        let p = write_prj(&png, Some(&wkt)).unwrap().unwrap();
+        assert_eq!(std::fs::read_to_string(p).unwrap(), "PROJCS[\"x\"]");
+    }
+}
