@@ -18,6 +18,7 @@ mod input;
 mod plan;
 mod products;
 mod profile;
+mod run_all;
 mod sample;
 mod simplify;
 mod tin;

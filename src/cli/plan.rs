@@ -353,7 +353,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.plan)?;
     let dir = plan_dir(&args.plan)?;
     if args.all {
-        return run_all(&plan, &dir, &args);
+        return super::run_all::run_all(&plan, &dir, &args);
     }
     let from_env = match args.task {
         Some(_) => None,
@@ -575,74 +575,6 @@ fn empty_task(
     }
 }
 
-/// `--all`: every task (not yet finished, with --resume), --jobs at a time, each in its own
-/// process so that one failing task does not stop the others.
-fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
-    let exe = std::env::current_exe().context("cannot find the sweeptin executable")?;
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let jobs = args.jobs.max(1);
-    let threads = args.threads.unwrap_or((cores / jobs).max(1));
-    let mut todo = Vec::new();
-    for t in &plan.tiles {
-        if args.resume && finished(plan, dir, t.index) {
-            continue;
-        }
-        todo.push(t.index);
-    }
-    let start = Instant::now();
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let failed = std::sync::Mutex::new(Vec::new());
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    std::thread::scope(|s| {
-        for _ in 0..jobs.min(todo.len()) {
-            s.spawn(|| {
-                loop {
-                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    let Some(&i) = todo.get(k) else { break };
-                    let status = std::process::Command::new(&exe)
-                        .arg("run")
-                        .arg(&args.plan)
-                        .args(["--task", &i.to_string(), "--quiet"])
-                        .args(["--threads", &threads.to_string()])
-                        .status();
-                    let ok = matches!(&status, Ok(s) if s.success());
-                    if !ok {
-                        let code = status.ok().and_then(|s| s.code()).unwrap_or(5);
-                        failed
-                            .lock()
-                            .unwrap_or_else(|e| e.into_inner())
-                            .push((i, code));
-                    }
-                    let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    if !args.quiet {
-                        eprintln!("sweeptin: {n}/{} tasks finished", todo.len());
-                    }
-                }
-            });
-        }
-    });
-    let mut failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
-    failed.sort_unstable();
-    if let Some(&(_, code)) = failed.first() {
-        return Err(sweeptin::Error::TasksFailed {
-            failed: failed.iter().map(|&(i, _)| i).collect(),
-            total: todo.len(),
-            kind: sweeptin::ErrorKind::from_exit_code(code)
-                .unwrap_or(sweeptin::ErrorKind::Internal),
-        }
-        .into());
-    }
-    if !args.quiet {
-        eprintln!(
-            "sweeptin: {} tasks in {:.2} s; next: sweeptin merge {} -o OUT",
-            todo.len(),
-            start.elapsed().as_secs_f64(),
-            args.plan.display()
-        );
-    }
-    Ok(())
-}
-
 pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.plan)?;
     let dir = plan_dir(&args.plan)?;
@@ -814,7 +746,7 @@ fn extension(p: &Path) -> Option<String> {
 
 /// Has task `i` finished, with its record readable and every output it names present? (What
 /// `--resume` skips; anything less runs again.)
-fn finished(plan: &Plan, dir: &Path, i: usize) -> bool {
+pub(super) fn finished(plan: &Plan, dir: &Path, i: usize) -> bool {
     match plan.record(dir, i) {
         Ok(Some(r)) => r.outputs.iter().all(|(_, p)| dir.join(p).is_file()),
         _ => false,
