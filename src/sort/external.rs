@@ -89,9 +89,15 @@ pub struct SortStats {
 }
 
 impl<R: SortKey> ExternalSorter<R> {
-    /// A sorter whose chunk uses at most `chunk_bytes` of memory, spilling under `tmp_dir`.
+    /// A sorter whose chunk uses at most `chunk_bytes` of memory, spilling under `tmp_dir`. A
+    /// stable sort needs scratch space of half the chunk: its chunk then takes two thirds.
     pub fn new(chunk_bytes: u64, tmp_dir: &Path) -> Self {
-        let capacity = ((chunk_bytes as usize) / std::mem::size_of::<R>()).max(MIN_CHUNK);
+        let bytes = if R::STABLE {
+            chunk_bytes / 3 * 2
+        } else {
+            chunk_bytes
+        };
+        let capacity = ((bytes as usize) / std::mem::size_of::<R>()).max(MIN_CHUNK);
         ExternalSorter {
             chunk: Vec::new(),
             capacity,

@@ -373,6 +373,17 @@ impl BlockIndex {
         self.occupied
     }
 
+    /// Bytes the index holds in memory: the block table, and the points when they are not in
+    /// a file.
+    pub fn memory_bytes(&self) -> u64 {
+        let table = self.keys.len() * (8 + 8 + std::mem::size_of::<Extent>());
+        let points = match &self.store {
+            Store::Memory(v) => v.len() * 24,
+            Store::File { .. } => 0,
+        };
+        (table + points) as u64
+    }
+
     /// Number of non-empty blocks.
     pub fn blocks(&self) -> usize {
         self.keys.len()

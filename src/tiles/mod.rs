@@ -36,10 +36,16 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 use worker::TileOutput;
 
-/// Average points per block the block size aims at.
-const BLOCK_POINTS: f64 = 256.0;
-/// Points per tile the tile size aims at (owned points, before the buffer).
-const TILE_POINTS: f64 = (1u64 << 18) as f64;
+/// Average points per block the block size aims at (at least; see [`block_points`]).
+const BLOCK_POINTS: f64 = 64.0;
+/// Non-empty blocks the block table aims to stay under (32 bytes each: key, start, extent).
+const MAX_BLOCKS: f64 = (1u64 << 21) as f64;
+/// Blocks per tile the tile size aims at (a tile of 32 × 32 blocks: a buffer of one block adds
+/// about 13 %).
+const TILE_BLOCKS: f64 = 1024.0;
+/// Bytes a tile's run holds per point read, at its peak (the points, the in-memory sweep, the
+/// triangulation, the certificates and the tile's output), for the memory budget.
+const RUN_BYTES_PER_POINT: f64 = 256.0;
 /// The first buffer of a tile, in blocks.
 const FIRST_BUFFER: i64 = 1;
 
@@ -94,6 +100,8 @@ pub struct TileStats {
     pub uncertified_owned: u64,
     /// Worker threads.
     pub threads: u64,
+    /// Tiles allowed in flight (running or waiting to be written) within `--mem`.
+    pub window: u64,
 }
 
 /// What [`run`] hands back to the pipeline.
@@ -144,13 +152,15 @@ fn read_index(
     let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
     let base = options.base.unwrap_or(1.0);
     let density = total as f64 / area;
+    let block_points = block_points(total);
+    let tile_points = block_points * TILE_BLOCKS;
     let block = match options.tile {
         Some(t) => {
-            let k = side_for(base, density, BLOCK_POINTS);
+            let k = side_for(base, density, block_points);
             let s = ((t / pow2(base, k)).log2().round().max(0.0) as u32).min(12);
             t / f64::from(1u32 << s)
         }
-        None => pow2(base, side_for(base, density, BLOCK_POINTS).max(-30)),
+        None => pow2(base, side_for(base, density, block_points).max(-30)),
     };
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
@@ -197,14 +207,14 @@ fn read_index(
             buffer: sc.buffer,
         });
     }
-    // The tile: as given, or about TILE_POINTS at the density over the non-empty blocks; for a
-    // task, its plan tile halved until it holds about TILE_POINTS.
+    // The tile: as given, or about `tile_points` at the density over the non-empty blocks; for
+    // a task, its plan tile halved until it holds about `tile_points`.
     let tile = match options.tile {
         Some(t) if scope.is_some() => {
             let covered = index.blocks().max(1) as f64 * block * block;
             let d = index.len() as f64 / covered;
             let mut sub = t;
-            while sub / 2.0 >= block && sub / 2.0 >= base && sub * sub * d > 2.0 * TILE_POINTS {
+            while sub / 2.0 >= block && sub / 2.0 >= base && sub * sub * d > 2.0 * tile_points {
                 sub /= 2.0;
             }
             sub
@@ -213,7 +223,7 @@ fn read_index(
         None => {
             let covered = index.blocks().max(1) as f64 * block * block;
             let d = index.len() as f64 / covered;
-            let k = side_for(block, d, TILE_POINTS).clamp(0, 12);
+            let k = side_for(block, d, tile_points).clamp(0, 12);
             // A whole multiple of the base (blocks may be finer than the base).
             let mut t = pow2(block, k);
             while t < base {
@@ -227,6 +237,26 @@ fn read_index(
     debug_assert_eq!(index.grid.block, block);
     let _ = sort;
     Ok((index, crs, bounds))
+}
+
+/// Points per block: [`BLOCK_POINTS`], or more for inputs so large that the block table would
+/// pass [`MAX_BLOCKS`]. A function of the input's point count only (the output must not depend
+/// on anything else).
+fn block_points(total: u64) -> f64 {
+    BLOCK_POINTS.max(total as f64 / MAX_BLOCKS)
+}
+
+/// How many tiles may be in flight (running, or waiting to be written) within the memory
+/// budget `mem` (after what the index holds), with `threads` workers: at most `threads + 2`,
+/// at least one.
+fn window(index: &BlockIndex, mem: u64, threads: usize) -> usize {
+    let per_block = index.len() as f64 / index.blocks().max(1) as f64;
+    // A tile's first run: its blocks and a buffer of one block around.
+    let side = f64::from(1u32 << index.grid.shift.min(15)) + 2.0;
+    let points = per_block * side * side;
+    let run = (points * RUN_BYTES_PER_POINT).max(1.0);
+    let free = mem.saturating_sub(index.memory_bytes()) as f64;
+    ((free / run) as usize).clamp(1, threads + 2)
 }
 
 /// Runs a tiled triangulation of `job` into `mesh` and `sinks`.
@@ -317,7 +347,8 @@ pub(crate) fn run(
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     // At most this many tiles in flight or waiting to be written.
-    let window = threads + 2;
+    let window = window(&index, job.mem, threads);
+    stats.window = window as u64;
     let (tx, rx) = crossbeam_channel::bounded::<(usize, Result<TileOutput>)>(window);
     let task = task.as_ref();
     let (tok_tx, tok_rx) = crossbeam_channel::bounded::<()>(window);
