@@ -127,11 +127,14 @@ impl FileDecoder {
             }
         };
         guarded(path, || {
-            if parallel {
+            // Every span's result, then the first error in span order: the message does not
+            // depend on which thread failed first.
+            let all: Vec<Result<T>> = if parallel {
                 spans.par_iter().zip(&bytes).map(one).collect()
             } else {
                 spans.iter().zip(&bytes).map(one).collect()
-            }
+            };
+            all.into_iter().collect()
         })
     }
 }
@@ -157,21 +160,35 @@ fn decode_chunk(
     table
         .write_to(&mut buf, vlr)
         .map_err(|e| format!("cannot set up its decoder: {e}"))?;
-    let mut d =
-        laz::LasZipDecompressor::selective(std::io::Cursor::new(&buf[..]), vlr.clone(), selection)
-            .map_err(|e| laz_message(&e))?;
-    d.decompress_many(out).map_err(|e| {
-        if e.kind() == std::io::ErrorKind::UnexpectedEof {
-            format!(
-                "its {} points need more than its {} bytes",
-                entry.point_count,
-                bytes.len()
-            )
-        } else {
-            e.to_string()
-        }
+    let run = || -> std::result::Result<u64, String> {
+        let mut d = laz::LasZipDecompressor::selective(
+            std::io::Cursor::new(&buf[..]),
+            vlr.clone(),
+            selection,
+        )
+        .map_err(|e| laz_message(&e))?;
+        d.decompress_many(out).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                format!(
+                    "its {} points need more than its {} bytes",
+                    entry.point_count,
+                    bytes.len()
+                )
+            } else {
+                e.to_string()
+            }
+        })?;
+        Ok(d.get().position() - 8)
+    };
+    // The decoder asserts on some damaged input: that too is this chunk's corruption.
+    let used = catch_unwind(AssertUnwindSafe(run)).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(format!("the decoder failed on it ({what})"))
     })?;
-    let used = d.get().position() - 8;
     if used != bytes.len() as u64 {
         return Err(format!(
             "its {} points decode from {used} of its {} bytes",

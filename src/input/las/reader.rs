@@ -107,9 +107,10 @@ impl PointCheck {
         let bounds = (!zero && usable).then(|| {
             std::array::from_fn(|k| {
                 let (s, o) = (info.scale[k], info.offset[k]);
+                // Saturating: damaged headers hold any doubles.
                 [
-                    ((b.min[k] - o) / s).floor() as i64 - 1,
-                    ((b.max[k] - o) / s).ceil() as i64 + 1,
+                    (((b.min[k] - o) / s).floor() as i64).saturating_sub(1),
+                    (((b.max[k] - o) / s).ceil() as i64).saturating_add(1),
                 ]
             })
         });
