@@ -485,3 +485,62 @@ fn one_run_never_writes_over_its_input_or_one_output_over_another() {
         assert!(!out.exists(), "{flag}: an output was written");
     }
 }
+
+/// A plan over a COPC file: each task decodes only the octree nodes of its tile and buffer
+/// (the rest of the file counts as unknown, like a file it does not read, and a certificate that
+/// reaches it widens the buffer to cover what it reached), and the mosaic still equals one run
+/// cell for cell.
+#[test]
+fn tasks_of_a_copc_file_read_their_area_only() {
+    let copc = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/lidR_Topography.copc.laz");
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("job");
+    sweeptin(
+        &[
+            "plan",
+            "--buffer",
+            "8",
+            "dem",
+            s(&copc),
+            "--cell",
+            "1",
+            "--tile",
+            "64",
+            "-o",
+            s(&job),
+        ],
+        "plan of a COPC file",
+    );
+    let plan = job.join("plan.json");
+    let (bbox, n) = plan_extent(&plan);
+    assert!(n >= 9, "{n} tasks");
+    sweeptin(
+        &["run", s(&plan), "--all", "--jobs", "2", "--quiet"],
+        "run --all",
+    );
+    let mosaic = t.path().join("mosaic.tif");
+    sweeptin(&["merge", s(&plan), "-o", s(&mosaic)], "merge");
+    let single = t.path().join("single.tif");
+    sweeptin(
+        &[
+            "dem",
+            s(&copc),
+            "--cell",
+            "1",
+            "--bbox",
+            &bbox,
+            "--buffer",
+            "10000",
+            "-o",
+            s(&single),
+            "--quiet",
+        ],
+        "one run",
+    );
+    assert_eq!(cells(&mosaic), cells(&single), "mosaic == one run");
+    // Tasks along the data's edge widened their buffers (the file's parts they did not read
+    // may hold points), and every task finished.
+    let recs = records(&job, n);
+    assert!(recs.iter().all(|r| r["status"] == "done"));
+    assert!(recs.iter().any(|r| r["runs"].as_u64().unwrap() > 1));
+}

@@ -48,16 +48,18 @@ pub struct InputArgs {
     /// several equally Delaunay diagonals is chosen.
     #[arg(long, value_enum, value_name = "AXIS", default_value_t = SweepAxis::Auto)]
     pub sweep_axis: SweepAxis,
-    /// How to triangulate. `sweep` (the default) runs one streaming sweep on one core, whose
-    /// memory follows the advancing front (bounded whatever the input). `tiles` (LAS/LAZ points
-    /// without breaklines or trimming polygons) cuts the data into exact tiles run on every core
-    /// (--threads), each certified to equal the triangulation of all the points; it is not yet
-    /// the default because data with long, exactly straight edges (cut tiles, scan lines) can
-    /// make a tile read far more than its buffer, up to the whole input. Both give the same
-    /// triangles, in a different order. [default: sweep]
-    #[arg(long, value_enum, value_name = "ENGINE")]
-    pub engine: Option<Engine>,
-    /// Threads for `--engine tiles` (default: every core). The output is the same for any number.
+    /// How to triangulate. `auto` (the default) runs exact tiles on every core (--threads)
+    /// when the input allows it (LAS/LAZ points without breaklines, trimming polygons or
+    /// --no-flat-triangles), and one streaming sweep otherwise. `tiles` cuts the data into
+    /// tiles, each run with a buffer and certified triangle by triangle to equal the
+    /// triangulation of all the points (a tile whose buffer is not enough reads more); its
+    /// memory is bounded by --mem. `sweep` runs one streaming sweep on one core, whose memory
+    /// follows the advancing front. All give the same triangles (and the same DEM, contours and
+    /// volumes, byte for byte); a mesh lists them in another order.
+    #[arg(long, value_enum, value_name = "ENGINE", default_value_t = Engine::Auto)]
+    pub engine: Engine,
+    /// Threads (default: every core): the tiled engine's tile workers, and the decoding and
+    /// sorting of every engine. The output is the same for any number.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub threads: usize,
     /// Tile side for the tiled engine, in the data's units (a multiple of the DEM cell); default:
@@ -111,21 +113,24 @@ impl InputArgs {
         }
     }
 
-    /// The library's run options.
+    /// The library's run options. `--threads N` also sizes the thread pool that decodes and
+    /// sorts (once per process), so that `--threads 1` runs on one core.
     pub fn options(&self) -> RunOptions {
+        if self.threads > 0 {
+            // Only the first call can size the global pool; later ones keep it.
+            let _ = rayon::ThreadPoolBuilder::new()
+                .num_threads(self.threads)
+                .build_global();
+        }
         RunOptions {
             mem: self.mem.0,
             tmp_dir: self.tmp_dir.clone(),
             progress: !self.quiet && !self.json,
             sweep_axis: self.sweep_axis,
             // A task of a plan always runs in tiles.
-            tiles: match self.engine.unwrap_or(if self.task.is_some() {
-                Engine::Tiles
-            } else {
-                Engine::Sweep
-            }) {
-                Engine::Sweep => None,
-                Engine::Tiles => Some(sweeptin::tiles::TileOptions {
+            tiles: match (self.engine, self.task.is_some()) {
+                (Engine::Sweep, false) => None,
+                _ => Some(sweeptin::tiles::TileOptions {
                     threads: self.threads,
                     tile: self.tile,
                     base: None,
@@ -179,9 +184,11 @@ impl std::fmt::Display for Size {
 /// The triangulation engine (see `--engine`).
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Engine {
-    /// Exact tiles on every core where the input allows it; one sweep otherwise (opt-in).
+    /// Exact tiles where the input allows it, one sweep otherwise (the default).
+    Auto,
+    /// Exact tiles on every core where the input allows it; one sweep otherwise.
     Tiles,
-    /// One streaming sweep (the default).
+    /// One streaming sweep.
     Sweep,
 }
 

@@ -194,7 +194,7 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
             }
         );
     }
-    if a.engine == Some(super::input::Engine::Sweep) {
+    if a.engine == super::input::Engine::Sweep {
         bail!("a plan runs the tiled engine: leave --engine sweep out");
     }
     if a.sweep_axis == sweeptin::pipeline::SweepAxis::X {
@@ -509,7 +509,7 @@ fn task_sinks(
         let a = &mut job.input_mut().args;
         a.inputs = plan.task_files(i, buffer)?;
         a.task = Some(plan.scope(i, buffer)?);
-        a.engine = Some(super::input::Engine::Tiles);
+        a.engine = super::input::Engine::Tiles;
         a.tile = Some(plan.tile);
         a.quiet = args.quiet || args.json || args.all;
         a.json = false;

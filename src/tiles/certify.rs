@@ -398,16 +398,22 @@ impl Certifier<'_> {
         let Some(sc) = &self.index.scope else {
             return false;
         };
-        let reach = sc
+        let beyond = |u: &&[f64; 4]| {
+            [[u[0], u[1]], [u[2], u[1]], [u[2], u[3]], [u[0], u[3]]]
+                .into_iter()
+                .any(|c| orient(a, b, c) == Orientation::Clockwise)
+        };
+        let files = sc
             .unknown
             .iter()
-            .filter(|u| {
-                [[u[0], u[1]], [u[2], u[1]], [u[2], u[3]], [u[0], u[3]]]
-                    .into_iter()
-                    .any(|c| orient(a, b, c) == Orientation::Clockwise)
-            })
-            .map(|u| sc.reach(u))
-            .fold(0.0, f64::max);
+            .filter(beyond)
+            .map(|u| sc.reach_of(u, true));
+        let parts = sc
+            .beyond
+            .iter()
+            .filter(beyond)
+            .map(|u| sc.reach_of(u, false));
+        let reach = files.chain(parts).fold(0.0, f64::max);
         self.unknown.set(self.unknown.get().max(reach));
         reach > 0.0
     }

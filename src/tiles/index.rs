@@ -68,33 +68,51 @@ pub(crate) struct BlockIndex {
 #[derive(Debug, Clone)]
 pub(crate) struct Scope {
     /// Extents of the files the task did not read (closed rectangles, from their headers):
-    /// points may lie there.
+    /// points may lie there. A buffer that reaches one reads the whole file.
     pub unknown: Vec<[f64; 4]>,
+    /// Parts of the extents of files the task read only around its tile (COPC): points may lie
+    /// there too, and only a buffer that covers them reads them.
+    pub beyond: Vec<[f64; 4]>,
     /// The task's tile.
     pub tile: [f64; 4],
     /// How far around its tile the task read.
     pub buffer: f64,
 }
 
+/// Does the closed disk of centre `c` and radius `r` meet the closed rectangle `u`? (A little
+/// generously: a disk that nearly touches it counts.)
+fn disk_meets(u: &[f64; 4], c: [f64; 2], r: f64) -> bool {
+    let slack = 1e-9 * (r + c[0].abs().max(c[1].abs()));
+    let dx = (u[0] - c[0]).max(c[0] - u[2]).max(0.0);
+    let dy = (u[1] - c[1]).max(c[1] - u[3]).max(0.0);
+    (dx * dx + dy * dy).sqrt() <= r + slack
+}
+
 impl Scope {
     /// Does the task know every point there is?
     pub fn complete(&self) -> bool {
-        self.unknown.is_empty()
+        self.unknown.is_empty() && self.beyond.is_empty()
     }
 
-    /// The buffer that would read the unread files meeting the closed disk of centre `c` and
-    /// radius `r` (conservative: a disk that nearly touches one counts), or 0 when none does.
+    /// The buffer that would read the points not read that may lie in the closed disk of centre
+    /// `c` and radius `r` (conservative), or 0 when there are none.
     pub fn disk_reach(&self, c: [f64; 2], r: f64) -> f64 {
-        let slack = 1e-9 * (r + c[0].abs().max(c[1].abs()));
-        self.unknown
+        let files = self
+            .unknown
             .iter()
-            .filter(|u| {
-                let dx = (u[0] - c[0]).max(c[0] - u[2]).max(0.0);
-                let dy = (u[1] - c[1]).max(c[1] - u[3]).max(0.0);
-                (dx * dx + dy * dy).sqrt() <= r + slack
-            })
-            .map(|u| self.reach(u))
-            .fold(0.0, f64::max)
+            .filter(|u| disk_meets(u, c, r))
+            .map(|u| self.reach(u));
+        // A part of a file read around the tile: the buffer must cover the disk's box there.
+        let parts = self.beyond.iter().filter(|u| disk_meets(u, c, r)).map(|u| {
+            let b = [
+                (c[0] - r).max(u[0]),
+                (c[1] - r).max(u[1]),
+                (c[0] + r).min(u[2]),
+                (c[1] + r).min(u[3]),
+            ];
+            self.cover(&b)
+        });
+        files.chain(parts).fold(0.0, f64::max)
     }
 
     /// The buffer around the tile that reaches the rectangle `u` (a little more, so that the
@@ -106,6 +124,22 @@ impl Scope {
             .max(u[1] - t[3])
             .max(t[1] - u[3]);
         d.max(0.0) * (1.0 + 1e-9) + 1e-9
+    }
+
+    /// The buffer around the tile that covers the rectangle `u` whole (a little more).
+    pub fn cover(&self, u: &[f64; 4]) -> f64 {
+        let t = &self.tile;
+        let d = (u[2] - t[2])
+            .max(t[0] - u[0])
+            .max(u[3] - t[3])
+            .max(t[1] - u[1]);
+        d.max(0.0) * (1.0 + 1e-9) + 1e-9
+    }
+
+    /// The buffer that reads what may lie in the rectangle `u` of [`Scope::unknown`] (`file`) or
+    /// [`Scope::beyond`] (not `file`).
+    pub fn reach_of(&self, u: &[f64; 4], file: bool) -> f64 {
+        if file { self.reach(u) } else { self.cover(u) }
     }
 }
 

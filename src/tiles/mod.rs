@@ -142,11 +142,8 @@ fn read_index(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4])> {
     let scope = options.scope.as_ref();
-    // A task is given the files near its tile, and keeps all their points (decoding a file costs
-    // the same whatever is kept, and the points far out settle the triangles along the data's
-    // edge without another run).
     let (mem, tmp) = (job.mem, job.tmp);
-    let mut reader = LidarReader::open(job.paths, job.filter)?;
+    let (mut reader, outside) = open_for(job, scope)?;
     let b = reader.bounds();
     let total = reader.point_count();
     let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
@@ -165,6 +162,7 @@ fn read_index(
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
     let crs = reader.crs().cloned();
+    let t0 = Instant::now();
     let mut sorter = ExternalSorter::<BlockRecord>::new(mem / 2, tmp);
     let mut bounds = [
         f64::INFINITY,
@@ -172,13 +170,8 @@ fn read_index(
         f64::NEG_INFINITY,
         f64::NEG_INFINITY,
     ];
-    let mut buf: Vec<LidarPoint> = Vec::with_capacity(1 << 16);
-    loop {
-        buf.clear();
-        if reader.read_chunk(&mut buf, 1 << 16)? == 0 {
-            break;
-        }
-        for p in &buf {
+    prefetched(&mut reader, |buf, done| {
+        for p in buf {
             let (x, y) = (p.x, p.y);
             bounds = [
                 bounds[0].min(x),
@@ -194,15 +187,26 @@ fn read_index(
                 z: p.z,
             })?;
         }
-        let s = reader.stats();
-        progress(s.read + s.skipped, total);
-    }
+        progress(done, total);
+        Ok(())
+    })?;
+    let t_read = Instant::now();
     let merge = sorter.finish()?;
+    let t_fin = Instant::now();
     let sort = merge.stats();
     let mut index = BlockIndex::build(probe, merge, tmp, job.duplicates)?;
+    if std::env::var_os("SWEEPTIN_DEBUG_PHASES").is_some() {
+        eprintln!(
+            "phase1: read {:?} finish {:?} build {:?}",
+            t_read - t0,
+            t_fin - t_read,
+            t_fin.elapsed()
+        );
+    }
     if let Some(sc) = scope {
         index.scope = Some(index::Scope {
             unknown: sc.unread.clone(),
+            beyond: outside,
             tile: sc.tile,
             buffer: sc.buffer,
         });
@@ -237,6 +241,106 @@ fn read_index(
     debug_assert_eq!(index.grid.block, block);
     let _ = sort;
     Ok((index, crs, bounds))
+}
+
+/// Opens the files of `job`. A task of a plan whose files are all COPC reads only the points of
+/// its tile and buffer (their octrees skip the rest) and returns the rest of each file's extent
+/// as rectangles where points it did not read may lie, like the files it does not read at all.
+/// Other tasks keep every point of their files (decoding LAZ costs the same whatever is kept,
+/// and the points farther out settle the triangles along the data's edge without another run).
+fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Vec<[f64; 4]>)> {
+    if let Some(sc) = scope {
+        let infos = job
+            .paths
+            .iter()
+            .map(crate::input::las::FileInfo::read)
+            .collect::<Result<Vec<_>>>()?;
+        let (t, b) = (sc.tile, sc.buffer);
+        let area = [t[0] - b, t[1] - b, t[2] + b, t[3] + b];
+        if !infos.is_empty()
+            && infos.iter().all(|i| i.copc.is_some())
+            && let Some(bbox) = crate::input::las::BBox::new(area[0], area[1], area[2], area[3])
+        {
+            let reader = LidarReader::open_area(job.paths, job.filter, bbox)?;
+            let outside = infos
+                .iter()
+                .flat_map(|i| outside_of(i.rect(), area))
+                .collect();
+            return Ok((reader, outside));
+        }
+    }
+    Ok((LidarReader::open(job.paths, job.filter)?, Vec::new()))
+}
+
+/// The parts of the closed rectangle `e` outside the closed rectangle `a`, as at most four closed
+/// rectangles (sharing `a`'s edges: points on them are read, and counted as unknown too).
+fn outside_of(e: [f64; 4], a: [f64; 4]) -> Vec<[f64; 4]> {
+    let mut out = Vec::new();
+    if e[1] < a[1] {
+        out.push([e[0], e[1], e[2], a[1].min(e[3])]);
+    }
+    if e[3] > a[3] {
+        out.push([e[0], a[3].max(e[1]), e[2], e[3]]);
+    }
+    let (y0, y1) = (e[1].max(a[1]), e[3].min(a[3]));
+    if y0 <= y1 {
+        if e[0] < a[0] {
+            out.push([e[0], y0, a[0].min(e[2]), y1]);
+        }
+        if e[2] > a[2] {
+            out.push([a[2].max(e[0]), y0, e[2], y1]);
+        }
+    }
+    out
+}
+
+/// Points per batch handed from the reader's thread.
+const BATCH: usize = 1 << 16;
+
+/// Reads every point of `reader` on a thread of its own, a few batches ahead, and hands each
+/// batch to `f` with the points read (or skipped) so far: decoding (on every core) goes on while
+/// `f` works (the sort's chunks are sorted and spilled meanwhile).
+fn prefetched(
+    reader: &mut LidarReader,
+    mut f: impl FnMut(&[LidarPoint], u64) -> Result<()>,
+) -> Result<()> {
+    let (full_tx, full_rx) = crossbeam_channel::bounded::<Result<(Vec<LidarPoint>, u64)>>(2);
+    let (free_tx, free_rx) = crossbeam_channel::bounded::<Vec<LidarPoint>>(4);
+    std::thread::scope(|scope| {
+        scope.spawn(move || {
+            loop {
+                let mut buf = free_rx
+                    .try_recv()
+                    .unwrap_or_else(|_| Vec::with_capacity(BATCH));
+                buf.clear();
+                let r = reader.read_chunk(&mut buf, BATCH).map(|n| {
+                    let s = reader.stats();
+                    (n, s.read + s.skipped)
+                });
+                let (stop, msg) = match r {
+                    Ok((0, _)) => (true, None),
+                    Ok((_, done)) => (false, Some(Ok((buf, done)))),
+                    Err(e) => (true, Some(Err(e))),
+                };
+                if let Some(m) = msg
+                    && full_tx.send(m).is_err()
+                {
+                    break;
+                }
+                if stop {
+                    break;
+                }
+            }
+        });
+        // Dropped on an error before the scope waits for the reader, which then stops.
+        let (rx, free) = (full_rx, free_tx);
+        for m in rx.iter() {
+            let (buf, done) = m?;
+            f(&buf, done)?;
+            let _ = free.try_send(buf);
+        }
+        Ok(())
+    })
 }
 
 /// Points per block: [`BLOCK_POINTS`], or more for inputs so large that the block table would
