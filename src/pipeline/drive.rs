@@ -152,7 +152,7 @@ pub(crate) fn run(
     let triangulate_write = phase2.elapsed().as_secs_f64();
     pb.finish_and_clear();
     if triangles == 0 {
-        let filtered = rd.stats.read > rd.stats.kept;
+        let filtered = rd.stats.read > rd.stats.kept || rd.stats.skipped > 0;
         return Err(if kept < 3 && filtered {
             Error::NothingLeft {
                 files: input.paths.clone(),

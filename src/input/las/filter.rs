@@ -179,7 +179,7 @@ impl FilterStats {
     /// left after the filters: of 39233 point(s) read, 39233 by --class", with the distinct
     /// positions among the points kept when some were.
     pub fn describe(&self, distinct: u64) -> String {
-        if self.read == 0 {
+        if self.read == 0 && self.skipped == 0 {
             return "the files hold no point".into();
         }
         let mut dropped = Vec::new();
@@ -188,6 +188,10 @@ impl FilterStats {
             (self.class, "by --class"),
             (self.returns, "by --returns"),
             (self.bbox, "outside --bbox"),
+            (
+                self.skipped,
+                "in files or COPC nodes outside --bbox (not read)",
+            ),
         ] {
             if n > 0 {
                 dropped.push(format!("{n} {what}"));
