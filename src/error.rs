@@ -2,7 +2,8 @@
 //!
 //! Every fallible function in `sweeptin` returns [`Result<T>`]. Variants carry the data a user
 //! needs to find the problem: the file, the line or point index, and what is wrong with it.
-//! The binary turns them into messages with `anyhow` and exits with code 2.
+//! Each error has a [`Error::kind`] (usage, bad input data, output or temporary I/O, internal,
+//! interrupted), which the binary turns into its exit status ([`ErrorKind::exit_code`]).
 
 use std::path::PathBuf;
 
@@ -79,7 +80,7 @@ pub enum Error {
         index: u64,
     },
 
-    /// Reading or writing a file failed.
+    /// Reading an input file failed.
     #[error("{}: {source}", path.display())]
     Io {
         /// The file.
@@ -159,17 +160,149 @@ pub enum Error {
         reach: f64,
     },
 
+    /// Writing an output, a temporary or a spill file failed (disk full, read-only, permissions),
+    /// or it cannot be written where asked (a directory, a block device, a stream for a format
+    /// that needs seeking).
+    #[error("{}: {source}", path.display())]
+    Write {
+        /// The output (or temporary) file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// The filters left fewer than three distinct points to triangulate.
+    #[error("{}: {what}", names(.files))]
+    NothingLeft {
+        /// The input files.
+        files: Vec<PathBuf>,
+        /// What each filter dropped (`FilterStats::describe` in `input::las`).
+        what: String,
+    },
+
+    /// A buffer the job needs cannot be allocated (or would exceed the memory budget).
+    #[error("cannot allocate {bytes} bytes for {what}: {hint}")]
+    OutOfMemory {
+        /// What the memory was for.
+        what: String,
+        /// How much was asked.
+        bytes: u64,
+        /// What to do about it.
+        hint: String,
+    },
+
+    /// Tasks of a plan failed (`sweeptin run --all`); `kind` is the first failure's.
+    #[error(
+        "{} of {total} tasks failed: {failed:?} (run them again with --resume)",
+        failed.len()
+    )]
+    TasksFailed {
+        /// The tasks that failed.
+        failed: Vec<usize>,
+        /// Tasks run.
+        total: usize,
+        /// What kind of failure the lowest-numbered failed task had.
+        kind: ErrorKind,
+    },
+
     /// A bug in sweeptin: an internal invariant does not hold. Please report it with the input.
     #[error("internal error (a bug in sweeptin, please report it with the input): {0}")]
     Internal(String),
 }
 
+/// What kind of failure an [`Error`] is; the command line exits with [`ErrorKind::exit_code`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+#[non_exhaustive]
+pub enum ErrorKind {
+    /// The command asks for something impossible: bad or conflicting options, an unknown format,
+    /// an output that names an input or another output, a job over its limits (exit 2).
+    Usage,
+    /// The input data is bad: unreadable, damaged, not in its format, or with nothing to
+    /// triangulate (exit 3).
+    Input,
+    /// An output, temporary or spill file cannot be written, or memory cannot be had: the
+    /// environment (disk full, read-only, permissions, memory limit) (exit 4).
+    Output,
+    /// A bug in sweeptin (exit 5).
+    Internal,
+    /// Interrupted by a signal (exit 130 for SIGINT; 128 + the signal's number in general).
+    Interrupted,
+}
+
+impl ErrorKind {
+    /// The process exit status of this kind: 2 usage, 3 bad input data, 4 output or temporary
+    /// I/O, 5 internal error, 130 interrupted.
+    pub const fn exit_code(self) -> u8 {
+        match self {
+            ErrorKind::Usage => 2,
+            ErrorKind::Input => 3,
+            ErrorKind::Output => 4,
+            ErrorKind::Internal => 5,
+            ErrorKind::Interrupted => 130,
+        }
+    }
+
+    /// The kind an exit status stands for (a child `sweeptin` process's); `None` for 0.
+    pub const fn from_exit_code(code: i32) -> Option<ErrorKind> {
+        match code {
+            0 => None,
+            2 => Some(ErrorKind::Usage),
+            3 => Some(ErrorKind::Input),
+            4 => Some(ErrorKind::Output),
+            129..=159 => Some(ErrorKind::Interrupted),
+            _ => Some(ErrorKind::Internal),
+        }
+    }
+}
+
+/// The files' names, comma-separated.
+fn names(files: &[PathBuf]) -> String {
+    let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+    names.join(", ")
+}
+
 impl Error {
-    /// Wraps an I/O error with the path it concerns.
+    /// Wraps an I/O error reading an input with the path it concerns.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
             source,
+        }
+    }
+
+    /// Wraps an I/O error writing an output, temporary or spill file with the path it concerns.
+    pub fn write(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Write {
+            path: path.into(),
+            source,
+        }
+    }
+
+    /// What kind of failure this is (the exit status of the command line).
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            Error::NoInput | Error::Options(_) => ErrorKind::Usage,
+            Error::NonFinite { .. }
+            | Error::CoordinateOutOfRange { .. }
+            | Error::TooFewPoints { .. }
+            | Error::AllCollinear { .. }
+            | Error::TooManyPoints { .. }
+            | Error::Io { .. }
+            | Error::Parse { .. }
+            | Error::Format { .. }
+            | Error::BadLine { .. }
+            | Error::Invalid(_)
+            | Error::NothingLeft { .. } => ErrorKind::Input,
+            Error::Output { .. } | Error::Write { .. } | Error::OutOfMemory { .. } => {
+                ErrorKind::Output
+            }
+            Error::OutOfOrder { .. } | Error::BufferTooSmall { .. } | Error::Internal(_) => {
+                ErrorKind::Internal
+            }
+            Error::Interrupted => ErrorKind::Interrupted,
+            Error::TasksFailed { kind, .. } => *kind,
         }
     }
 

@@ -41,6 +41,6 @@ pub mod tin;
 pub mod triangulation;
 pub mod validate;
 
-pub use error::{Error, Result};
+pub use error::{Error, ErrorKind, Result};
 pub use sort::DuplicatePolicy;
 pub use triangulation::{Options, Triangulation, triangulate, triangulate_cdt};

@@ -248,7 +248,14 @@ pub struct GridPlan {
     align: Align,
     /// For a box, its lattice `(kx0, ky0, cols, rows)`, which does not depend on the data.
     fixed: Option<(i64, i64, u32, u32)>,
+    /// Most cells a grid may have ([`GridPlan::limit`]; no limit by default).
+    max_cells: u64,
 }
+
+/// The command line's default for `--max-cells`: 2³⁰ cells, 4 GiB of float32 (a 1 km tile at
+/// 3 cm, 32 km × 32 km at 1 m); larger rasters are made by plans of tiles, or with the option
+/// raised.
+pub const DEFAULT_MAX_CELLS: u64 = 1 << 30;
 
 impl Default for GridPlan {
     /// Cells of 1 over the data's bounds, edges on whole numbers.
@@ -258,6 +265,7 @@ impl Default for GridPlan {
             extent: GridExtent::Auto,
             align: Align::Edges,
             fixed: None,
+            max_cells: u64::MAX,
         }
     }
 }
@@ -309,12 +317,41 @@ impl GridPlan {
             extent,
             align,
             fixed,
+            max_cells: u64::MAX,
         })
     }
 
     /// The alignment.
     pub fn align(&self) -> Align {
         self.align
+    }
+
+    /// The same plan refusing grids of more than `max_cells` cells (checked now for a box, when
+    /// the data's bounds are known for [`GridExtent::Auto`]).
+    ///
+    /// # Errors
+    /// [`Error::Options`] when the box's grid has more cells, naming its size.
+    pub fn limit(mut self, max_cells: u64) -> Result<GridPlan> {
+        self.max_cells = max_cells;
+        if let Some((_, _, cols, rows)) = self.fixed {
+            self.check_size(cols, rows)?;
+        }
+        Ok(self)
+    }
+
+    fn check_size(&self, cols: u32, rows: u32) -> Result<()> {
+        let cells = u64::from(cols) * u64::from(rows);
+        if cells > self.max_cells {
+            return Err(Error::Options(format!(
+                "the grid would have {cols} × {rows} = {cells} cells of {} ({:.1} GiB as \
+                 float32), more than --max-cells {}: use a larger --cell or a smaller --bbox, \
+                 cut the job into tiles (sweeptin plan), or raise --max-cells",
+                self.cell,
+                cells as f64 * 4.0 / f64::from(1u32 << 30),
+                self.max_cells
+            )));
+        }
+        Ok(())
     }
 
     /// The cell size.
@@ -332,7 +369,8 @@ impl GridPlan {
     ///
     /// # Errors
     /// [`Error::TooFewPoints`] when `bounds` are empty (no data) and the extent is `Auto`;
-    /// [`Error::Options`] when no centre of this cell size lies inside them, or too many.
+    /// [`Error::Options`] when no centre of this cell size lies inside them, or too many (more
+    /// than [`GridPlan::limit`]).
     pub fn grid(&self, bounds: [f64; 4], nodata: f32) -> Result<GridSpec> {
         let (kx0, ky0, cols, rows) = match self.fixed {
             Some(l) => l,
@@ -376,6 +414,7 @@ impl GridPlan {
                 )?
             }
         };
+        self.check_size(cols, rows)?;
         Ok(GridSpec::aligned(self.cell, kx0, ky0, cols, rows, nodata).with_align(self.align))
     }
 }

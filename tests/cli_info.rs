@@ -88,7 +88,7 @@ fn a_bad_file_is_reported_and_the_others_still_shown() {
     let bad = dir.path().join("notes.laz");
     std::fs::write(&bad, "just text\n").unwrap();
     let o = sweeptin(&[], &[bad.clone(), lidar("startinpy_small.laz")]);
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(3), "bad input data");
     assert!(stdout(&o).contains("point format 8"));
     let err = stderr(&o);
     assert!(
@@ -97,7 +97,7 @@ fn a_bad_file_is_reported_and_the_others_still_shown() {
     );
     assert!(err.contains("1 of 2 files"), "{err}");
     let o = sweeptin(&["--json"], &[bad]);
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(3));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(v["summary"]["failed"], 1);
     assert!(

@@ -84,13 +84,13 @@ fn tin_then_check_succeeds_for_every_format() {
 }
 
 #[test]
-fn bad_xyz_line_exit_2_names_file_and_line_and_leaves_nothing() {
+fn bad_xyz_line_exit_3_names_file_and_line_and_leaves_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("bad.xyz");
     std::fs::write(&input, "x y z\n0 0 0\n1 0 0\n0 1 zero\n1 1 1\n").unwrap();
     let out = dir.path().join("out.ply");
     let o = run(&["tin", input.to_str().unwrap(), "-o", out.to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(3));
     let err = stderr(&o);
     assert!(err.contains("bad.xyz:4:"), "{err}");
     assert!(err.contains("\"zero\""), "{err}");
@@ -102,13 +102,13 @@ fn bad_xyz_line_exit_2_names_file_and_line_and_leaves_nothing() {
 }
 
 #[test]
-fn output_to_missing_directory_exit_2() {
+fn output_to_missing_directory_exit_4() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("pts.xyz");
     write_points(&input);
     let out = dir.path().join("no-such-dir").join("out.ply");
     let o = run(&["tin", input.to_str().unwrap(), "-o", out.to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(4));
     let err = stderr(&o);
     assert!(err.contains("no-such-dir/out.ply"), "{err}");
     assert_eq!(names(dir.path()), ["pts.xyz"]);
@@ -127,7 +127,7 @@ fn unknown_output_extension_exit_2() {
 }
 
 #[test]
-fn check_on_damaged_ply_exit_2() {
+fn check_on_damaged_ply_exit_3() {
     let dir = tempfile::tempdir().unwrap();
     let ply = dir.path().join("broken.ply");
     std::fs::write(
@@ -138,7 +138,7 @@ fn check_on_damaged_ply_exit_2() {
     )
     .unwrap();
     let o = run(&["check", ply.to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(3));
     let err = stderr(&o);
     assert!(
         err.contains("broken.ply") && err.contains("only triangles"),

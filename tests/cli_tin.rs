@@ -1,5 +1,5 @@
-//! `sweeptin tin` on bad input: a clear message naming the file, exit code 2, no output file and
-//! no temporary file left behind.
+//! `sweeptin tin` on bad input: a clear message naming the file, exit code 3 (bad input data; 2
+//! for a bad option), no output file and no temporary file left behind.
 
 use std::path::Path;
 use std::process::Command;
@@ -50,7 +50,7 @@ fn bad_inputs_fail_cleanly() {
             "collinear",
         ),
         ("two.xyz", b"0 0 0\n1 1 0\n1 1 5\n".to_vec(), "fewer than 3"),
-        ("empty.xyz", b"".to_vec(), "fewer than 3"),
+        ("empty.xyz", b"".to_vec(), "hold no point"),
         ("nan.xyz", b"0 0 0\n1 nan 0\n2 1 0\n".to_vec(), "nan.xyz:2"),
     ];
     for (name, bytes, expect) in cases {
@@ -58,7 +58,7 @@ fn bad_inputs_fail_cleanly() {
         std::fs::write(&path, bytes).unwrap();
         let out = tempfile::tempdir().unwrap();
         let (code, err) = run_tin(&path, out.path());
-        assert_eq!(code, 2, "{name}: {err}");
+        assert_eq!(code, 3, "{name}: {err}");
         assert!(
             err.contains(expect),
             "{name}: message should mention {expect:?}: {err}"
@@ -66,7 +66,7 @@ fn bad_inputs_fail_cleanly() {
     }
     let out = tempfile::tempdir().unwrap();
     let (code, err) = run_tin(&inputs.path().join("missing.laz"), out.path());
-    assert_eq!(code, 2);
+    assert_eq!(code, 3);
     assert!(err.contains("missing.laz"), "{err}");
 }
 
@@ -103,7 +103,7 @@ fn bad_breaklines_fail_cleanly() {
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert_eq!(o.status.code(), Some(3), "{name}: {err}");
         assert!(err.contains(expect), "{name}: {err}");
         assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0, "{name}");
     }

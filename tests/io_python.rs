@@ -1,6 +1,9 @@
 //! "Real PLY that mesh tools open": a PLY written by sweeptin is read back with Python's `plyfile`
 //! (install: `python3 -m pip install plyfile==1.1.5`). Without Python or the package the test
-//! prints SKIP and passes.
+//! fails under `CI=true`; locally it prints SKIP and returns.
+
+#[path = "support/data.rs"]
+mod data;
 
 use std::process::Command;
 use sweeptin::output::{MeshMeta, create_mesh_sink};
@@ -34,6 +37,10 @@ fn python_with_plyfile() -> Option<&'static str> {
 #[test]
 fn plyfile_reads_our_ply() {
     let Some(python) = python_with_plyfile() else {
+        assert!(
+            !data::in_ci(),
+            "plyfile_reads_our_ply: python3 with plyfile is required under CI=true"
+        );
         eprintln!(
             "SKIP plyfile_reads_our_ply: python3 with the plyfile package not found \
              (python3 -m pip install plyfile==1.1.5)"
@@ -121,6 +128,10 @@ fn landxml_is_well_formed_xml() {
             .output()
             .is_ok_and(|o| o.status.success())
     }) else {
+        assert!(
+            !data::in_ci(),
+            "landxml_is_well_formed_xml: python3 is required under CI=true"
+        );
         eprintln!("SKIP landxml_is_well_formed_xml: python3 not found");
         return;
     };

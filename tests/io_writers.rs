@@ -308,7 +308,10 @@ fn output_in_missing_directory_is_an_io_error() {
     for name in ["a.ply", "a.obj", "a.xml"] {
         let path = dir.path().join("missing").join(name);
         let e = create_mesh_sink(&path, None, &meta()).err().unwrap();
-        assert!(matches!(&e, Error::Io { path: p, .. } if p == &path), "{e}");
+        assert!(
+            matches!(&e, Error::Write { path: p, .. } if p == &path),
+            "{e}"
+        );
     }
 }
 

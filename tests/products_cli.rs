@@ -403,7 +403,7 @@ fn one_polygon_file_for_trim_boundary_and_volume_boundary() {
     .unwrap();
     let o = run(&["volume", s(&pts), "--plane", "0", "--boundary", s(&bad)]);
     let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert_eq!(o.status.code(), Some(3), "{e}");
     assert!(e.contains("point.geojson") && e.contains("Point"), "{e}");
     let o = run(&[
         "tin",
@@ -415,7 +415,7 @@ fn one_polygon_file_for_trim_boundary_and_volume_boundary() {
         "-q",
     ]);
     let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert_eq!(o.status.code(), Some(3), "{e}");
     assert!(e.contains("point.geojson") && e.contains("Point"), "{e}");
 }
 

@@ -3,7 +3,8 @@
 //! Where the Delaunay triangulation is unique (uniform, clustered: no four cocircular points) the
 //! triangle sets must be equal. On the degenerate inputs (lidar-like, grids, rings) only the
 //! number of triangles is fixed (2n − 2 − h for n distinct points, h on the hull), so the counts
-//! must agree and every triangle must be strictly counter-clockwise.
+//! must agree, every triangle must be strictly counter-clockwise, and the independent exact
+//! validator (`sweeptin::validate`) must accept the mesh as a Delaunay triangulation.
 
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
 use sweeptin::geom::predicates::{Orientation, orient};
@@ -73,6 +74,9 @@ fn degenerate_inputs_match_spade_counts() {
     ] {
         let t = triangulate(&pts, &Options::default()).unwrap();
         all_ccw(&t);
+        let r = sweeptin::validate::validate(&t.vertices, &t.triangles)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(r.triangles as usize, t.triangles.len(), "{name}");
         assert_eq!(t.triangles.len(), spade(&pts).len(), "{name}");
         assert_eq!(
             t.vertices.len() as u64 + t.duplicates,

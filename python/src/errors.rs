@@ -3,38 +3,61 @@
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sweeptin::Error;
+use sweeptin::{Error, ErrorKind};
 
-/// The exception class (by name in `sweeptin._errors`) of each library error.
+/// The exception class (by name in `sweeptin._errors`) of each library error: a finer class
+/// where one fits, otherwise the class of its kind ([`Error::kind`], the command line's exit
+/// status).
 fn class_of(e: &Error) -> &'static str {
     match e {
-        Error::TooFewPoints { .. } | Error::AllCollinear { .. } => "NoTriangleError",
-        Error::NonFinite { .. }
-        | Error::CoordinateOutOfRange { .. }
-        | Error::TooManyPoints { .. }
-        | Error::OutOfOrder { .. }
-        | Error::Parse { .. }
-        | Error::Format { .. }
-        | Error::BadLine { .. }
-        | Error::Invalid(_) => "InputError",
+        Error::TooFewPoints { .. } | Error::AllCollinear { .. } | Error::NothingLeft { .. } => {
+            "NoTriangleError"
+        }
         Error::NoInput | Error::Options(_) => "OptionsError",
-        Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
+        Error::Io { source, .. } | Error::Write { source, .. }
+            if source.kind() == std::io::ErrorKind::NotFound =>
+        {
             "MissingFileError"
         }
-        Error::Io { .. } => "FileError",
-        Error::Output { .. } => "OutputError",
-        Error::BufferTooSmall { .. } | Error::Internal(_) => "InternalError",
-        Error::Interrupted => "Interrupted",
-        _ => "SweeptinError",
+        Error::Io { .. } | Error::Write { .. } => "FileError",
+        Error::OutOfMemory { .. } => "OutOfMemoryError",
+        _ => match e.kind() {
+            ErrorKind::Usage => "OptionsError",
+            ErrorKind::Input => "InputError",
+            ErrorKind::Output => "OutputError",
+            ErrorKind::Interrupted => "Interrupted",
+            _ => "InternalError",
+        },
     }
+}
+
+/// The kind's name (`usage`, `input`, `output`, `internal`, `interrupted`) and exit status.
+fn kind_of(e: &Error) -> (&'static str, u8) {
+    let k = e.kind();
+    let name = match k {
+        ErrorKind::Usage => "usage",
+        ErrorKind::Input => "input",
+        ErrorKind::Output => "output",
+        ErrorKind::Interrupted => "interrupted",
+        _ => "internal",
+    };
+    (name, k.exit_code())
 }
 
 /// Attributes that locate the problem: `path`, `line`, `index`.
 fn attributes<'py>(py: Python<'py>, e: &Error) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     match e {
-        Error::Io { path, .. } | Error::Format { path, .. } | Error::Output { path, .. } => {
+        Error::Io { path, .. }
+        | Error::Write { path, .. }
+        | Error::Format { path, .. }
+        | Error::Output { path, .. } => {
             d.set_item("path", path)?;
+        }
+        Error::NothingLeft { files, .. } => {
+            if let [one] = files.as_slice() {
+                d.set_item("path", one)?;
+            }
         }
         Error::Parse { path, line, .. } => {
             d.set_item("path", path)?;
@@ -45,6 +68,9 @@ fn attributes<'py>(py: Python<'py>, e: &Error) -> PyResult<Bound<'py, PyDict>> {
         }
         _ => {}
     }
+    let (kind, exit_code) = kind_of(e);
+    d.set_item("kind", kind)?;
+    d.set_item("exit_code", exit_code)?;
     Ok(d)
 }
 

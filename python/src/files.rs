@@ -46,6 +46,20 @@ pub(crate) struct InputOpts {
 }
 
 impl InputOpts {
+    /// As the command line, before any work: the `outputs` are distinct from each other and
+    /// from every file the run reads (points, breaklines, boundary, holes), and each can be
+    /// created where asked.
+    fn check_outputs(&self, outputs: &[(&str, &std::path::Path)]) -> PyResult<()> {
+        let mut inputs = self.files.clone();
+        inputs.extend(self.breaklines.iter().cloned());
+        inputs.extend(self.trim_boundary.iter().chain(&self.holes).cloned());
+        sweeptin::output::distinct_outputs(outputs, &inputs, "the run").map_err(to_py)?;
+        for (_, o) in outputs {
+            sweeptin::output::check_output(o).map_err(to_py)?;
+        }
+        Ok(())
+    }
+
     fn bbox(&self) -> PyResult<Option<BBox>> {
         self.bbox
             .map(|[x0, y0, x1, y1]| {
@@ -186,6 +200,7 @@ pub(crate) struct DemOpts {
     compress: Option<String>,
     predictor: Option<String>,
     bigtiff: bool,
+    max_cells: u64,
 }
 
 /// `{"run": …, "products": …}` as JSON text.
@@ -213,7 +228,7 @@ pub(crate) fn run_products(
     if let Some(c) = &contours {
         outputs.push(("contours", &c.0));
     }
-    sweeptin::output::distinct_outputs(&outputs, &opts.files, "the run").map_err(to_py)?;
+    opts.check_outputs(&outputs)?;
     let bbox = opts.bbox()?;
     let mut sinks: Vec<(String, Box<dyn TriangleSink>)> = Vec::new();
     if let Some(d) = dem {
@@ -224,7 +239,9 @@ pub(crate) fn run_products(
             },
             None => GridExtent::Auto,
         };
-        let grid = GridPlan::new(d.cell, extent, align(&d.align)?).map_err(to_py)?;
+        let grid = GridPlan::new(d.cell, extent, align(&d.align)?)
+            .and_then(|g| g.limit(d.max_cells))
+            .map_err(to_py)?;
         let options = DemOptions {
             grid,
             nodata: d.nodata,
@@ -234,8 +251,18 @@ pub(crate) fn run_products(
                 d.predictor.as_deref(),
                 d.bigtiff,
             )?,
+            // As the command line: the raster's rows hold at most a quarter of `mem`.
+            memory: opts.mem / 4,
         };
         let sink = DemSink::new(&d.out, options).map_err(to_py)?;
+        // Its size against `max_cells` and the memory, before any work: from the box, or
+        // from the LAS/LAZ headers.
+        match (extent, config.header_bounds()) {
+            (GridExtent::Auto, Some(b)) => sink.check_size(b),
+            (GridExtent::Auto, None) => Ok(()),
+            _ => sink.check_size([0.0; 4]),
+        }
+        .map_err(to_py)?;
         sinks.push(("dem".into(), Box::new(sink)));
     }
     if let Some((path, interval, base)) = contours {
@@ -281,7 +308,7 @@ pub(crate) fn run_products(
 #[pyo3(signature = (opts, out))]
 pub(crate) fn run_tin(py: Python<'_>, opts: InputOpts, out: PathBuf) -> PyResult<String> {
     let (config, crs) = opts.config()?;
-    sweeptin::output::distinct_outputs(&[("out", &out)], &opts.files, "the run").map_err(to_py)?;
+    opts.check_outputs(&[("out", &out)])?;
     let cancel = Cancel::default();
     let (mut run, mesh) = interruptible(py, &cancel, || {
         let crs = match crs {

@@ -251,7 +251,7 @@ impl Tin {
         let (v, t): (&[[f64; 3]], &[[u32; 3]]) = (rows(&v, "vertices")?, rows(&t, "triangles")?);
         py.detach(|| -> sweeptin::Result<String> {
             let dir =
-                tempfile::tempdir().map_err(|e| sweeptin::Error::io(std::env::temp_dir(), e))?;
+                tempfile::tempdir().map_err(|e| sweeptin::Error::write(std::env::temp_dir(), e))?;
             let path = dir.path().join("contours.geojson");
             let mut sink = ContourSink::new(
                 &path,

@@ -43,6 +43,7 @@ from ._errors import (
     MissingFileError,
     NoTriangleError,
     OptionsError,
+    OutOfMemoryError,
     OutputError,
     SweeptinError,
 )
@@ -71,6 +72,7 @@ __all__ = [
     "FileError",
     "MissingFileError",
     "OutputError",
+    "OutOfMemoryError",
     "InternalError",
 ]
 
@@ -346,6 +348,7 @@ def dem(
     contours: PathLike | None = None,
     interval: float = 1.0,
     base: float = 0.0,
+    max_cells: int = 1 << 30,
     **options: Any,
 ) -> dict[str, Any]:
     """``sweeptin dem``: a DEM raster (``.tif`` float32 GeoTIFF or ``.asc``) of the TIN of the
@@ -359,7 +362,9 @@ def dem(
     GeoTIFF) or ``"asc"`` (default: by the extension); ``compress`` (``"deflate"``,
     ``"zstd"``, ``"lzw"``, ``"none"``), ``predictor`` (``"float"``, ``"horizontal"``,
     ``"none"``) and ``bigtiff`` as the command line's ``--compress``, ``--predictor`` and
-    ``--bigtiff``.
+    ``--bigtiff``. ``max_cells`` as ``--max-cells``: a raster of more cells is refused before
+    any work (from ``bbox`` or the LAS/LAZ headers), and so is one whose rows do not fit in a
+    quarter of ``mem``.
 
     Returns the run's summary: ``{"run": {...}, "products": {"dem": {...}, ...}}``, the same
     fields as the command line's ``--json``."""
@@ -371,6 +376,7 @@ def dem(
         "snap": bool(snap),
         "align": align,
         **_raster(format, compress, predictor, bigtiff),
+        "max_cells": int(max_cells),
     }
     c = None if contours is None else (os.fspath(contours), float(interval), float(base))
     return json.loads(_native.run_products(o, dem=d, contours=c))

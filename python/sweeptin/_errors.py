@@ -3,7 +3,10 @@
 Every one is a :class:`SweeptinError`, and also the built-in class a Python user would catch
 for that kind of problem (``ValueError`` for bad data or options, ``OSError`` for files).
 Where the library knows it, the exception carries ``path`` (the file), ``line`` (1-based) or
-``index`` (0-based point index) as attributes.
+``index`` (0-based point index) as attributes. Every one raised by the library also carries
+``kind`` (``"usage"``, ``"input"``, ``"output"``, ``"internal"``) and ``exit_code`` (2, 3, 4,
+5): the command line's exit status for the same failure, for batch scripts that report as it
+does.
 """
 
 from __future__ import annotations
@@ -15,6 +18,8 @@ class SweeptinError(Exception):
     path: str | None = None
     line: int | None = None
     index: int | None = None
+    kind: str | None = None
+    exit_code: int | None = None
 
 
 class InputError(SweeptinError, ValueError):
@@ -23,8 +28,8 @@ class InputError(SweeptinError, ValueError):
 
 
 class NoTriangleError(InputError):
-    """No triangle exists: fewer than 3 distinct (x, y) positions, or all of them on one line
-    (for instance after the filters left too few points)."""
+    """No triangle exists: fewer than 3 distinct (x, y) positions, or all of them on one line,
+    or the filters left too few points (the message says what each filter dropped)."""
 
 
 class OptionsError(SweeptinError, ValueError):
@@ -33,7 +38,9 @@ class OptionsError(SweeptinError, ValueError):
 
 
 class FileError(SweeptinError, OSError):
-    """Reading or writing a file failed (the operating system's error)."""
+    """Reading or writing a file failed (the operating system's error: disk full, read-only,
+    permissions); ``kind`` says which (``"input"`` reading, ``"output"`` writing an output or a
+    temporary file)."""
 
 
 class MissingFileError(FileError, FileNotFoundError):
@@ -41,7 +48,13 @@ class MissingFileError(FileError, FileNotFoundError):
 
 
 class OutputError(SweeptinError, OSError):
-    """An output cannot be written as asked (unknown format, a limit of the format)."""
+    """An output cannot be written as asked (unknown format, a limit of the format, a
+    directory or device in the way)."""
+
+
+class OutOfMemoryError(SweeptinError, MemoryError):
+    """A buffer the job needs cannot be allocated within memory (or within ``mem``): the
+    message says what for and what to do."""
 
 
 class InternalError(SweeptinError, RuntimeError):
@@ -56,5 +69,6 @@ __all__ = [
     "FileError",
     "MissingFileError",
     "OutputError",
+    "OutOfMemoryError",
     "InternalError",
 ]

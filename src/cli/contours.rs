@@ -19,6 +19,9 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    args.input
+        .args
+        .check_outputs(&[("-o", &args.output)], &[])?;
     let sinks = vec![("contours".to_string(), args.contour.sink(&args.output)?)];
     let config = args.input.config(None)?;
     let (run, products) = run_products(&args.input, &config, None, sinks)?;

@@ -31,6 +31,9 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    if args.samples == 0 {
+        return Err(sweeptin::Error::Options("--samples must be at least 1".into()).into());
+    }
     let input = Input {
         paths: args.input.clone(),
         filter: args.filter.to_filter(),

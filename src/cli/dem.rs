@@ -15,7 +15,8 @@ pub struct Args {
     pub input: ProductInput,
     /// Output raster: .tif (float32 GeoTIFF; --format cog for a Cloud Optimized GeoTIFF) or .asc
     /// (ESRI ASCII grid). With --bbox it covers the cells whose centres lie in
-    /// [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell).
+    /// [XMIN, XMAX) × (YMIN, YMAX] (boxes that touch share no cell). `-`, a FIFO or a device
+    /// takes an ASCII grid (--raster-format asc), not a GeoTIFF (which needs seeking).
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
@@ -40,10 +41,17 @@ pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>
     if let Some(h) = &args.hillshade {
         outputs.push(("--hillshade", h));
     }
-    super::input::distinct_outputs(&outputs, &args.input.args.inputs, "the run")?;
+    args.input.args.check_outputs(&outputs, &[])?;
     let bbox = args.input.args.filter.bbox;
-    let mut sinks: Vec<(String, Box<dyn TriangleSink>)> =
-        vec![("dem".into(), args.dem.sink(&args.output, bbox)?)];
+    let mut sinks: Vec<(String, Box<dyn TriangleSink>)> = vec![(
+        "dem".into(),
+        args.dem.sink(
+            &args.output,
+            bbox,
+            args.input.args.mem.0,
+            args.input.header_bounds(),
+        )?,
+    )];
     if let Some(png) = &args.hillshade {
         check_output(png)?;
         check_hillshade(&args.output, args.dem.raster.format)?;

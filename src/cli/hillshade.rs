@@ -20,22 +20,29 @@ pub struct Args {
     /// Direction the light comes from, in degrees clockwise from north.
     #[arg(long, default_value_t = 315.0)]
     pub azimuth: f64,
-    /// Height of the light above the horizon, in degrees.
+    /// Height of the light above the horizon, in degrees (0 to 90).
     #[arg(long, default_value_t = 45.0)]
     pub altitude: f64,
-    /// Vertical exaggeration.
+    /// Vertical exaggeration (> 0; for a DEM in degrees of latitude/longitude, about
+    /// 0.00001 so that metres of height match degrees of extent).
     #[arg(long, default_value_t = 1.0)]
     pub z_factor: f64,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    check_output(&args.output)?;
     let o = HillshadeOptions {
         azimuth: args.azimuth,
         altitude: args.altitude,
         z_factor: args.z_factor,
         output: args.raster.options(),
     };
+    o.check()?;
+    super::input::distinct_outputs(
+        &[("-o", &args.output)],
+        std::slice::from_ref(&args.dem),
+        "hillshade",
+    )?;
+    check_output(&args.output)?;
     let s = hillshade(&args.dem, &args.output, &o)?;
     eprintln!(
         "sweeptin: {} -> {}: {} × {} pixels, {} shaded",

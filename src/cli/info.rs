@@ -1,8 +1,8 @@
 //! `sweeptin info`: what the headers of LAS/LAZ/COPC files say, lasinfo-style (and, with
 //! `--classes`, what their points are, read on every core), with a summary over many files. A
-//! bad file is reported and the others still shown; the exit code is then 2.
+//! bad file is reported and the others still shown; the exit status is then that of the first
+//! failure (3 for a damaged file).
 
-use anyhow::bail;
 use clap::ArgAction;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -127,6 +127,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let filter = args.filter.to_filter();
     let mut entries = Vec::new();
     let mut summary = Summary::default();
+    let mut first_error: Option<sweeptin::Error> = None;
     for (i, path) in args.files.iter().enumerate() {
         match report(path, args.classes, &filter) {
             Ok(r) => {
@@ -146,6 +147,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     path: path.clone(),
                     error: e.to_string(),
                 }));
+                first_error.get_or_insert(e);
             }
         }
     }
@@ -161,8 +163,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!();
         print_summary(&summary);
     }
-    if failed > 0 {
-        bail!("{failed} of {} files could not be read", args.files.len());
+    if let Some(e) = first_error {
+        // The first failure's kind is the exit status (3 for a bad file).
+        return Err(anyhow::Error::from(e).context(format!(
+            "{failed} of {} files could not be read",
+            args.files.len()
+        )));
     }
     Ok(())
 }

@@ -3,11 +3,11 @@
 //! progress and the JSON summary.
 
 use super::info::FilterArgs;
-use anyhow::{Context, bail};
 use std::path::{Path, PathBuf};
 use sweeptin::breaklines::CleanOptions;
 use sweeptin::crs::Crs;
 use sweeptin::input::las::BBox;
+use sweeptin::output::target::Destination;
 use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunConfig, RunOptions, RunSummary, SweepAxis};
 use sweeptin::sink::{Fanout, FanoutSummary, MeshSink, ProductSummary, TriangleSink};
 
@@ -17,8 +17,9 @@ pub struct InputArgs {
     /// Input points: LAS/LAZ/COPC files (adjacent tiles form one point set, whatever their
     /// scales and offsets), `.vpc` virtual point clouds, `@list.txt` (one path per line,
     /// relative to the list), quoted globs (`'tiles/*.laz'`), XYZ text files (`x y z` per
-    /// line), or one streaming mesh (.stin) written by `sweeptin tin`. With --bbox, files whose
-    /// extent misses the box are not read, and COPC files read only the octree nodes it meets.
+    /// line; `-` or a pipe is read once, as it comes), or one streaming mesh (.stin) written by
+    /// `sweeptin tin`. With --bbox, files whose extent misses the box are not read, and COPC
+    /// files read only the octree nodes it meets.
     #[arg(required = true, value_name = "FILES")]
     pub inputs: Vec<PathBuf>,
     #[command(flatten)]
@@ -77,10 +78,34 @@ pub struct InputArgs {
 }
 
 impl InputArgs {
+    /// Every file the run reads: the points, breaklines, boundary and holes (outputs must be
+    /// none of them).
+    pub fn all_inputs(&self) -> Vec<PathBuf> {
+        let l = &self.lines;
+        let mut v = self.inputs.clone();
+        v.extend(l.breaklines.iter().cloned());
+        v.extend(l.boundary.iter().chain(&l.holes).cloned());
+        v
+    }
+
+    /// The checks every command that writes files makes before any work: `outputs` are
+    /// distinct from each other and from every file read (the run's and `more`), and none goes
+    /// to standard output with `--json`.
+    pub fn check_outputs(&self, outputs: &[(&str, &Path)], more: &[&Path]) -> anyhow::Result<()> {
+        let mut inputs = self.all_inputs();
+        inputs.extend(more.iter().map(|p| p.to_path_buf()));
+        distinct_outputs(outputs, &inputs, "the run")?;
+        stdout_free(outputs, self.json)?;
+        for (_, o) in outputs {
+            check_output(o)?;
+        }
+        Ok(())
+    }
+
     /// The library's description of the input.
     pub fn input(&self) -> Input {
         Input {
-            paths: self.inputs.clone(),
+            paths: self.inputs.iter().map(|p| stdin_path(p)).collect(),
             filter: self.filter.to_filter(),
             duplicates: self.duplicates,
             lines: self.lines.to_options(),
@@ -117,6 +142,15 @@ impl InputArgs {
     /// The run's configuration, checked.
     pub fn config(&self, input: Input) -> anyhow::Result<RunConfig> {
         Ok(RunConfig::new(input, self.options())?)
+    }
+}
+
+/// `-` as an input is standard input (`/dev/stdin`), as in most command-line tools.
+pub fn stdin_path(p: &Path) -> PathBuf {
+    if p.as_os_str() == "-" {
+        PathBuf::from("/dev/stdin")
+    } else {
+        p.to_path_buf()
     }
 }
 
@@ -264,6 +298,17 @@ impl ProductInput {
         self.crs.as_deref().map(parse_crs).transpose()
     }
 
+    /// The extent of the points from the LAS/LAZ headers (`None` for other inputs or when a
+    /// header cannot be read: the run then reports it).
+    pub fn header_bounds(&self) -> Option<[f64; 4]> {
+        if !self.all_lidar() {
+            return None;
+        }
+        let r = sweeptin::input::las::LidarReader::open(&self.args.inputs, &Default::default());
+        let b = r.ok()?.bounds();
+        Some([b.min[0], b.min[1], b.max[0], b.max[1]])
+    }
+
     /// Are all the inputs LAS/LAZ (so that the box filter applies)?
     pub fn all_lidar(&self) -> bool {
         self.args.inputs.iter().all(|p| {
@@ -291,33 +336,64 @@ pub fn expand_files(paths: &mut Vec<PathBuf>) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Fails early (before any heavy work) if an output cannot be created where asked.
+/// Fails early (before any heavy work) if an output cannot be created where asked
+/// ([`sweeptin::output::check_output`]).
 pub fn check_output(path: &Path) -> anyhow::Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
-        bail!(
-            "{}: cannot write: the directory {} does not exist",
-            path.display(),
-            dir.display()
-        );
-    }
-    if path.is_dir() {
-        bail!("{}: cannot write: it is a directory", path.display());
+    Ok(sweeptin::output::check_output(path)?)
+}
+
+/// Refuses an output on standard output (`-o -`, `/dev/stdout`) together with `--json`, whose
+/// summary goes there too.
+pub fn stdout_free(outputs: &[(&str, &Path)], json: bool) -> anyhow::Result<()> {
+    for (flag, o) in outputs {
+        if json && let Ok(Destination::Stream { fd: Some(1), .. }) = Destination::of(o) {
+            return Err(sweeptin::Error::Options(format!(
+                "{flag} {}: the output goes to standard output, where --json prints the summary: \
+                 leave --json out or write the output to a file",
+                o.display()
+            ))
+            .into());
+        }
     }
     Ok(())
 }
 
-/// Refuses outputs that are the same file as each other or as one of the `inputs` of `of` (the
-/// run, the plan): [`sweeptin::output::distinct_outputs`].
+/// Refuses, before any work, outputs that are the same file as each other or as one of the
+/// `inputs` of `of` (the run, the plan): [`sweeptin::output::distinct_outputs`].
 pub fn distinct_outputs(
     outputs: &[(&str, &Path)],
     inputs: &[PathBuf],
     of: &str,
 ) -> anyhow::Result<()> {
     Ok(sweeptin::output::distinct_outputs(outputs, inputs, of)?)
+}
+
+/// The error of a run over `inputs`: library errors name their file, line or option, and are
+/// shown as they are; those about the point set as a whole (too few points, all collinear, a
+/// coordinate out of range) are prefixed with the inputs' names.
+pub fn run_error(e: sweeptin::Error, inputs: &[PathBuf]) -> anyhow::Error {
+    use sweeptin::Error as E;
+    match e {
+        E::TooFewPoints { .. }
+        | E::AllCollinear { .. }
+        | E::NonFinite { .. }
+        | E::CoordinateOutOfRange { .. } => {
+            let names: Vec<String> = inputs.iter().map(|f| f.display().to_string()).collect();
+            anyhow::Error::from(e).context(format!("cannot triangulate {}", names.join(", ")))
+        }
+        other => other.into(),
+    }
+}
+
+/// Prints the run's warnings on standard error: breakline heights far from the points'.
+pub fn warn(run: &RunSummary) {
+    if let Some(f) = run.breaklines.as_ref().and_then(|b| b.far_heights) {
+        eprintln!(
+            "sweeptin: warning: {} breakline vertices have heights from {} to {}, far outside \
+             the points' ({} to {}): check the lines' units and vertical datum",
+            f.vertices, f.lines_z[0], f.lines_z[1], f.points_z[0], f.points_z[1]
+        );
+    }
 }
 
 /// Runs the pipeline of `config` into `sinks` (one pass) and the optional mesh sink; returns the
@@ -329,19 +405,18 @@ pub fn run_products(
     sinks: Vec<(String, Box<dyn TriangleSink>)>,
 ) -> anyhow::Result<(RunSummary, FanoutSummary)> {
     let mut fanout = Fanout::new(sinks).with_crs(p.crs()?);
-    let names: Vec<String> = p
-        .args
-        .inputs
-        .iter()
-        .map(|f| f.display().to_string())
-        .collect();
     let mut run = pipeline::run(config, mesh, &mut [&mut fanout])
-        .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
+        .map_err(|e| run_error(e, &p.args.inputs))?;
     let products = match run.products.pop() {
         Some(ProductSummary::Fanout(s)) if run.products.is_empty() => s,
-        other => bail!("internal error: the products' summary is {other:?}"),
+        other => {
+            return Err(
+                sweeptin::Error::Internal(format!("the products' summary is {other:?}")).into(),
+            );
+        }
     };
     run.peak_rss_bytes = pipeline::peak_rss();
+    warn(&run);
     warn_clipped(&run);
     Ok((run, products))
 }

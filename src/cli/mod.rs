@@ -1,7 +1,8 @@
 //! Command-line interface: parse flags, build a validated configuration, call the library.
-//! Errors are printed with their whole chain; the exit code is 2 on any error, 0 on success
-//! (and 0 when the reader of our standard output went away), 130 when interrupted (Ctrl-C,
-//! SIGTERM), after deleting temporary files.
+//! Errors are printed with their whole chain; the exit status is the library error's kind
+//! ([`sweeptin::ErrorKind::exit_code`], listed in [`EXIT_STATUS`]), 0 on success (and 0 when the
+//! reader of our standard output went away), 128 + the signal when interrupted, after deleting
+//! temporary files.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -17,14 +18,27 @@ mod input;
 mod plan;
 mod products;
 mod profile;
+mod run_all;
 mod sample;
 mod simplify;
 mod tin;
 mod volume;
 
+/// The exit statuses, shown after the top-level `--help` (and in the README).
+pub const EXIT_STATUS: &str = "\
+Exit status:
+  0    done (also when the reader of standard output went away)
+  2    usage: bad or conflicting options, unknown format, an output naming an input or another
+       output, a job over its limits (--max-cells, --mem)
+  3    bad input data: unreadable, damaged or not in its format, or nothing left to triangulate
+  4    output or temporary I/O: disk full, read-only, permissions, a directory or device in the
+       way, memory that cannot be had
+  5    internal error (a bug in sweeptin: please report it with the input)
+  130  interrupted by Ctrl-C (SIGINT); 143 by SIGTERM, 129 by SIGHUP (temporary files removed)";
+
 /// Exact, bounded-memory Delaunay terrain models from lidar point clouds.
 #[derive(Parser, Debug)]
-#[command(name = "sweeptin", version, about, long_about = None)]
+#[command(name = "sweeptin", version, about, long_about = None, after_help = EXIT_STATUS)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -69,47 +83,35 @@ enum Command {
     Index(index::Args),
 }
 
+/// The last panic's message and place (see `main`).
+static LAST_PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
 /// Runs the command line; returns the process exit code.
 pub fn main() -> ExitCode {
-    let mut cli = Cli::parse();
+    let cli = Cli::parse();
     // Ctrl-C / SIGTERM: delete temporary files, exit 130. Without it outputs stay atomic anyway.
     if let Err(e) = sweeptin::output::install_interrupt_handler() {
         eprintln!("sweeptin: warning: {e}");
     }
-    // `@list.txt`, quoted globs: the files a command's FILES stand for.
-    let expanded = match &mut cli.command {
-        Command::Tin(a) => input::expand(&mut a.input.inputs),
-        Command::Info(a) => input::expand_files(&mut a.files),
-        Command::Dem(a) => input::expand(&mut a.input.args.inputs),
-        Command::Contours(a) => input::expand(&mut a.input.args.inputs),
-        Command::Volume(a) => input::expand(&mut a.input.args.inputs),
-        Command::Sample(a) => input::expand(&mut a.input.args.inputs),
-        Command::Profile(a) => input::expand(&mut a.input.args.inputs),
-        Command::Products(a) => input::expand(&mut a.input.args.inputs),
-        Command::Index(a) => input::expand_files(&mut a.files),
-        Command::Crossval(a) => input::expand(&mut a.input),
-        _ => Ok(()),
-    };
-    let result = match (expanded, cli.command) {
-        (Err(e), _) => Err(e),
-        (Ok(()), command) => match command {
-            Command::Tin(a) => tin::run(a),
-            Command::Check(a) => check::run(a),
-            Command::Info(a) => info::run(a),
-            Command::Dem(a) => dem::run(a),
-            Command::Contours(a) => contours::run(a),
-            Command::Volume(a) => volume::run(a),
-            Command::Sample(a) => sample::run(a),
-            Command::Profile(a) => profile::run(a),
-            Command::Hillshade(a) => hillshade::run(a),
-            Command::Products(a) => products::run(a),
-            Command::Simplify(a) => simplify::run(a),
-            Command::Crossval(a) => crossval::run(a),
-            Command::Plan(a) => plan::plan(a),
-            Command::Run(a) => plan::run(a),
-            Command::Merge(a) => plan::merge(a),
-            Command::Index(a) => index::run(a),
-        },
+    // A panic is reported once, as an internal error (exit 5), by whoever catches it: the
+    // library turns its threads' panics and its decoders' into errors. The hook only keeps the
+    // message and place (and prints a backtrace when RUST_BACKTRACE asks for one).
+    std::panic::set_hook(Box::new(|info| {
+        if std::env::var_os("RUST_BACKTRACE").is_some_and(|v| v != "0") {
+            eprintln!("{info}\n{}", std::backtrace::Backtrace::force_capture());
+        }
+        *LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()) = Some(info.to_string());
+    }));
+    let result = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dispatch(cli))) {
+        Ok(r) => r,
+        Err(_) => {
+            let what = LAST_PANIC
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .take()
+                .unwrap_or_else(|| "(no message)".into());
+            Err(sweeptin::Error::Internal(what.replace('\n', " ")).into())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -127,8 +129,60 @@ pub fn main() -> ExitCode {
                 }
                 shown = text;
             }
-            ExitCode::from(2)
+            ExitCode::from(kind(&e).exit_code())
         }
+    }
+}
+
+/// What kind of failure `e` is: the kind of the library error in its chain; an I/O error of the
+/// binary's own (writing standard output) is an output failure; anything else the binary
+/// refused itself is a usage error.
+pub fn kind(e: &anyhow::Error) -> sweeptin::ErrorKind {
+    if let Some(k) = e
+        .chain()
+        .find_map(|c| c.downcast_ref::<sweeptin::Error>())
+        .map(sweeptin::Error::kind)
+    {
+        return k;
+    }
+    if e.chain().any(|c| c.is::<std::io::Error>()) {
+        return sweeptin::ErrorKind::Output;
+    }
+    sweeptin::ErrorKind::Usage
+}
+
+fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
+    // `@list.txt`, quoted globs: the files a command's FILES stand for.
+    match &mut cli.command {
+        Command::Tin(a) => input::expand(&mut a.input.inputs)?,
+        Command::Info(a) => input::expand_files(&mut a.files)?,
+        Command::Dem(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Contours(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Volume(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Sample(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Profile(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Products(a) => input::expand(&mut a.input.args.inputs)?,
+        Command::Index(a) => input::expand_files(&mut a.files)?,
+        Command::Crossval(a) => input::expand(&mut a.input)?,
+        _ => {}
+    }
+    match cli.command {
+        Command::Tin(a) => tin::run(a),
+        Command::Check(a) => check::run(a),
+        Command::Info(a) => info::run(a),
+        Command::Dem(a) => dem::run(a),
+        Command::Contours(a) => contours::run(a),
+        Command::Volume(a) => volume::run(a),
+        Command::Sample(a) => sample::run(a),
+        Command::Profile(a) => profile::run(a),
+        Command::Hillshade(a) => hillshade::run(a),
+        Command::Products(a) => products::run(a),
+        Command::Simplify(a) => simplify::run(a),
+        Command::Crossval(a) => crossval::run(a),
+        Command::Plan(a) => plan::plan(a),
+        Command::Run(a) => plan::run(a),
+        Command::Merge(a) => plan::merge(a),
+        Command::Index(a) => index::run(a),
     }
 }
 

@@ -7,7 +7,6 @@ use super::{Cli, Command};
 use anyhow::{Context, bail};
 use clap::Parser;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 use sweeptin::plan::{Levels, Plan, Product, TaskOptions, TaskRecord, merge, task_from_env};
 
 /// Arguments of `sweeptin plan`.
@@ -307,6 +306,14 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     // The stored command line (for people) names the inputs by absolute path.
     let argv = absolute_inputs(&argv, &given, &abs_groups);
     let plan = Plan::new(job.typed()?, argv, outputs, &inputs, tile, buffer)?;
+    if let (Job::Dem(d), Some(t)) = (&job, plan.tiles.first()) {
+        // A task's raster (one tile) against --max-cells, as one run checks its raster.
+        let extent = sweeptin::raster::GridExtent::BBox {
+            bbox: t.bounds,
+            snap: false,
+        };
+        sweeptin::raster::GridPlan::new(d.dem.cell, extent, d.dem.align)?.limit(d.dem.max_cells)?;
+    }
     if dir.exists() && !dir.is_dir() {
         bail!("{}: not a directory", dir.display());
     }
@@ -361,7 +368,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.plan)?;
     let dir = Plan::dir_of(&args.plan)?;
     if args.all {
-        return run_all(&plan, &dir, &args);
+        return super::run_all::run_all(&plan, &dir, &args);
     }
     let from_env = match args.task {
         Some(_) => None,
@@ -423,69 +430,6 @@ fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result
         );
     }
     Ok(r)
-}
-
-/// `--all`: every task (not yet finished, with --resume), --jobs at a time, each in its own
-/// process so that one failing task does not stop the others.
-fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
-    let exe = std::env::current_exe().context("cannot find the sweeptin executable")?;
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let jobs = args.jobs.max(1);
-    let threads = args.threads.unwrap_or((cores / jobs).max(1));
-    let mut todo = Vec::new();
-    for t in &plan.tiles {
-        if args.resume && plan.finished(dir, t.index) {
-            continue;
-        }
-        todo.push(t.index);
-    }
-    let start = Instant::now();
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let failed = std::sync::Mutex::new(Vec::new());
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    std::thread::scope(|s| {
-        for _ in 0..jobs.min(todo.len()) {
-            s.spawn(|| {
-                loop {
-                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    let Some(&i) = todo.get(k) else { break };
-                    let status = std::process::Command::new(&exe)
-                        .arg("run")
-                        .arg(&args.plan)
-                        .args(["--task", &i.to_string(), "--quiet"])
-                        .args(["--threads", &threads.to_string()])
-                        .status();
-                    let ok = matches!(&status, Ok(s) if s.success());
-                    if !ok {
-                        failed.lock().unwrap_or_else(|e| e.into_inner()).push(i);
-                    }
-                    let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    if !args.quiet {
-                        eprintln!("sweeptin: {n}/{} tasks finished", todo.len());
-                    }
-                }
-            });
-        }
-    });
-    let mut failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
-    failed.sort_unstable();
-    if !failed.is_empty() {
-        bail!(
-            "{} of {} tasks failed: {:?} (run them again with --resume)",
-            failed.len(),
-            todo.len(),
-            failed
-        );
-    }
-    if !args.quiet {
-        eprintln!(
-            "sweeptin: {} tasks in {:.2} s; next: sweeptin merge {} -o OUT",
-            todo.len(),
-            start.elapsed().as_secs_f64(),
-            args.plan.display()
-        );
-    }
-    Ok(())
 }
 
 pub fn merge(args: MergeArgs) -> anyhow::Result<()> {

@@ -90,9 +90,31 @@ pub struct DemArgs {
     pub nodata: f32,
     #[command(flatten)]
     pub raster: RasterArgs,
+    /// Refuse a raster of more cells than this (before reading anything when the extent is
+    /// known from --bbox or LAS/LAZ headers). The raster's rows in memory also count against
+    /// --mem (a quarter of it).
+    #[arg(long, value_name = "N", default_value_t = sweeptin::raster::DEFAULT_MAX_CELLS,
+          value_parser = parse_count)]
+    pub max_cells: u64,
     /// Set by `sweeptin run`: the raster covers this box (a plan's tile), whatever is read.
     #[arg(skip)]
     pub grid_bbox: Option<[f64; 4]>,
+}
+
+/// Parses a count: `4294967296`, `4e9`, `4G` (decimal multiples k, M, G, T).
+fn parse_count(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (num, mult) = match t.chars().last().map(|c| c.to_ascii_uppercase()) {
+        Some('K') => (&t[..t.len() - 1], 1e3),
+        Some('M') => (&t[..t.len() - 1], 1e6),
+        Some('G') => (&t[..t.len() - 1], 1e9),
+        Some('T') => (&t[..t.len() - 1], 1e12),
+        _ => (t, 1.0),
+    };
+    match num.parse::<f64>() {
+        Ok(v) if v.is_finite() && v * mult >= 1.0 && v * mult <= 1.8e19 => Ok((v * mult) as u64),
+        _ => Err(format!("'{s}' is not a count like 100000000, 1e8 or 100M")),
+    }
 }
 
 impl DemArgs {
@@ -108,8 +130,16 @@ impl DemArgs {
         Ok(BBox::new(x0 - d, y0 - d, x1 + d, y1 + d))
     }
 
-    /// A DEM sink writing to `path`, over `bbox` (the `--bbox` of the input) when given.
-    pub fn sink(&self, path: &Path, bbox: Option<BBox>) -> anyhow::Result<Box<dyn TriangleSink>> {
+    /// A DEM sink writing to `path`, over `bbox` (the `--bbox` of the input) when given, holding
+    /// at most a quarter of `mem` in memory; its size is checked against `--max-cells` and the
+    /// memory now when the extent is known (`bbox`, or the data's `bounds` from headers).
+    pub fn sink(
+        &self,
+        path: &Path,
+        bbox: Option<BBox>,
+        mem: u64,
+        bounds: Option<[f64; 4]>,
+    ) -> anyhow::Result<Box<dyn TriangleSink>> {
         check_output(path)?;
         let extent = match (self.grid_bbox, bbox) {
             (Some(b), _) => GridExtent::BBox {
@@ -122,14 +152,21 @@ impl DemArgs {
             },
             (None, None) => GridExtent::Auto,
         };
-        Ok(Box::new(DemSink::new(
+        let sink = DemSink::new(
             path,
             DemOptions {
-                grid: GridPlan::new(self.cell, extent, self.align)?,
+                grid: GridPlan::new(self.cell, extent, self.align)?.limit(self.max_cells)?,
                 nodata: self.nodata,
                 output: self.raster.options(),
+                memory: mem / 4,
             },
-        )?))
+        )?;
+        if let Some(b) = bounds.filter(|_| extent == GridExtent::Auto) {
+            sink.check_size(b)?;
+        } else if extent != GridExtent::Auto {
+            sink.check_size([0.0; 4])?;
+        }
+        Ok(Box::new(sink))
     }
 }
 
@@ -354,10 +391,30 @@ pub fn shade(dem: &Path, png: &Path) -> anyhow::Result<(PathBuf, HillshadeSummar
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    let mut outputs: Vec<(&str, &Path)> = Vec::new();
+    for (flag, p) in [
+        ("--dem", &args.dem),
+        ("--hillshade", &args.hillshade),
+        ("--contours", &args.contours),
+        ("--sample-out", &args.sample_out),
+        ("--profile-out", &args.profile_out),
+        ("--mesh", &args.mesh),
+    ] {
+        if let Some(p) = p {
+            outputs.push((flag, p));
+        }
+    }
+    let read: Vec<&Path> = [&args.sample_points, &args.profile_line, &args.boundary]
+        .into_iter()
+        .flatten()
+        .map(PathBuf::as_path)
+        .collect();
+    args.input.args.check_outputs(&outputs, &read)?;
     let mut sinks: Vec<(String, Box<dyn TriangleSink>)> = Vec::new();
     let bbox = args.input.args.filter.bbox;
     if let Some(p) = &args.dem {
-        sinks.push(("dem".into(), args.dem_options.sink(p, bbox)?));
+        let (mem, bounds) = (args.input.args.mem.0, args.input.header_bounds());
+        sinks.push(("dem".into(), args.dem_options.sink(p, bbox, mem, bounds)?));
         if let Some(png) = &args.hillshade {
             check_output(png)?;
             check_hillshade(p, args.dem_options.raster.format)?;
@@ -365,6 +422,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour_options.sink(p)?));
+    }
+    if let Some(z) = args.volume_plane.filter(|z| !z.is_finite()) {
+        return Err(sweeptin::Error::Options(format!(
+            "--volume-plane {z}: must be a finite height"
+        ))
+        .into());
     }
     if let Some(z) = args.volume_plane {
         let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;

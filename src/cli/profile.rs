@@ -1,6 +1,6 @@
 //! `sweeptin profile`: the section of the TIN along polylines, with chainage.
 
-use super::input::{ProductInput, check_output, run_products};
+use super::input::{ProductInput, run_products};
 use super::products::{Report, finish_report};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -21,7 +21,9 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
-    check_output(&args.output)?;
+    args.input
+        .args
+        .check_outputs(&[("-o", &args.output)], &[&args.line])?;
     let lines = sweeptin::input::geojson::read_lines(&args.line)?;
     let sink = ProfileSink::new(lines, &args.output)?;
     let config = args.input.config(None)?;

@@ -1,6 +1,6 @@
 //! `sweeptin sample`: heights of the TIN at query points.
 
-use super::input::{ProductInput, check_output, run_products};
+use super::input::{ProductInput, run_products};
 use super::products::{Report, finish_report};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -22,7 +22,9 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
-    check_output(&args.output)?;
+    args.input
+        .args
+        .check_outputs(&[("-o", &args.output)], &[&args.points])?;
     let sink = SampleSink::new(&args.points, &args.output)?;
     if !sink.sorted() {
         eprintln!(

@@ -50,6 +50,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (_, _, Some(n)) => Stop::MaxPoints(n),
         _ => unreachable!("clap requires one bound"),
     };
+    super::input::distinct_outputs(
+        &[("-o", &args.output)],
+        std::slice::from_ref(&args.input),
+        "simplify",
+    )?;
+    super::input::stdout_free(&[("-o", &args.output)], args.json)?;
+    super::input::check_output(&args.output)?;
     let mut reader = RasterReader::open(&args.input)?;
     let spec = reader.spec().clone();
     let meta = MeshMeta {

@@ -1,7 +1,6 @@
 //! `sweeptin tin`: points in, Delaunay TIN out.
 
 use super::input::InputArgs;
-use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::output::{MeshFormat, MeshMeta, create_mesh_sink};
@@ -13,6 +12,8 @@ pub struct Args {
     pub input: InputArgs,
     /// Output mesh: .ply (binary PLY), .obj (Wavefront OBJ), .xml (LandXML 1.2 surface for
     /// civil-design software) or .stin (streaming mesh, for the terrain-product commands).
+    /// It appears only when complete; a symbolic link's target is replaced (keeping its
+    /// permissions); `-`, a FIFO or a device (with --format) is written as a stream.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output format, when the extension does not say it.
@@ -35,6 +36,10 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    let boundary: Vec<&std::path::Path> =
+        args.boundary_polygon.iter().map(|p| p.as_path()).collect();
+    args.input
+        .check_outputs(&[("-o", &args.output)], &boundary)?;
     let mut input = args.input.input();
     if let Some(b) = &args.boundary_polygon {
         input.lines.boundary = Some(b.clone());
@@ -61,11 +66,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // file is removed on every error below.
     let mut sink = create_mesh_sink(&args.output, args.format, &meta)?;
     let mut summary = sweeptin::pipeline::run(&config, Some(&mut *sink), &mut [])
-        .with_context(|| format!("cannot triangulate {}", args.input.inputs[0].display()))?;
+        .map_err(|e| super::input::run_error(e, &args.input.inputs))?;
     let fin = Instant::now();
     let written = sink.finish()?;
     summary.seconds.finish += fin.elapsed().as_secs_f64();
     summary.peak_rss_bytes = sweeptin::pipeline::peak_rss();
+    super::input::warn(&summary);
     super::input::warn_clipped(&summary);
     if args.input.json {
         println!("{}", serde_json::to_string(&summary)?);

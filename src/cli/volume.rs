@@ -3,7 +3,6 @@
 
 use super::input::{ProductInput, run_products};
 use super::products::read_boundary;
-use anyhow::{Context, bail};
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::pipeline::{self, Input, RunConfig};
@@ -33,6 +32,11 @@ pub struct Args {
 
 /// The volume sink against the plane (`None` when the reference is a surface).
 pub fn plane_sink(args: &Args) -> anyhow::Result<Option<Box<dyn TriangleSink>>> {
+    if let Some(z) = args.plane.filter(|z| !z.is_finite()) {
+        return Err(
+            sweeptin::Error::Options(format!("--plane {z}: must be a finite height")).into(),
+        );
+    }
     let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;
     Ok(args
         .plane
@@ -60,19 +64,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 },
                 config.options().clone(),
             )?;
-            let names: Vec<String> = args
-                .surface
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect();
             pipeline::run(&reference, None, &mut [&mut store])
-                .with_context(|| format!("cannot triangulate {}", names.join(", ")))?;
+                .map_err(|e| super::input::run_error(e, &args.surface))?;
             Box::new(OverlaySink::new(store.into_reader()?, boundary))
         }
     };
     let (run, products) = run_products(&args.input, &config, None, vec![("volume".into(), sink)])?;
     let Some(ProductSummary::Volume(v)) = products.get("volume") else {
-        bail!("internal error: no volume summary in {products:?}");
+        return Err(sweeptin::Error::Internal(format!("no volume summary in {products:?}")).into());
     };
     if args.input.args.json {
         let mut out = serde_json::to_value(v)?;

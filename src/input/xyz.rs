@@ -121,6 +121,12 @@ impl<R: Read> XyzReader<R> {
             self.line += 1;
             let mut bytes = &self.buf[from..to];
             if self.line == 1 {
+                if let Some(kind) = super::sniff(&self.buf[from..self.end]) {
+                    return Err(Error::Format {
+                        path: self.path.clone(),
+                        message: format!("is {kind}, not XYZ text (x y z per line)"),
+                    });
+                }
                 bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
             }
             match parse_line(bytes) {
@@ -132,6 +138,11 @@ impl<R: Read> XyzReader<R> {
                 }
                 Err(LineError::NotANumber { field: 0, .. }) if !self.seen_data => {
                     self.seen_data = true; // a header line
+                }
+                Err(_) if is_binary(bytes) => {
+                    return Err(self.parse_error(
+                        "binary data, not text: this is not an XYZ text file".into(),
+                    ));
                 }
                 Err(e) => return Err(self.parse_error(e.to_string())),
             }
@@ -195,6 +206,14 @@ impl<R: Read> XyzReader<R> {
             message,
         }
     }
+}
+
+/// Does a line hold bytes no text file has (NUL and other control characters, or invalid
+/// UTF-8)?
+fn is_binary(line: &[u8]) -> bool {
+    line.iter()
+        .any(|&b| b < 0x20 && !matches!(b, b'\t' | b'\r' | 0x0c))
+        || std::str::from_utf8(line).is_err()
 }
 
 /// What is wrong with a line.
@@ -442,9 +461,10 @@ mod tests {
             err_of("1 2 1e999"),
             (1, "z is not a finite number: \"1e999\"".into())
         );
+        // Bytes no text has: said so, not quoted back.
         assert_eq!(
             err_of(b"1 2 3\n4 5 6\xff\n").1,
-            "z is not a number: \"6\u{fffd}\""
+            "binary data, not text: this is not an XYZ text file"
         );
     }
 

@@ -40,7 +40,7 @@ impl AsciiGridWriter {
     /// Creates the scratch file next to `path` (the output itself is created by `finish`).
     ///
     /// # Errors
-    /// [`Error::Output`] for an empty grid; [`Error::Io`] naming `path`'s directory.
+    /// [`Error::Output`] for an empty grid; [`Error::Write`] naming `path`'s directory.
     pub fn create(path: &Path, spec: &GridSpec) -> Result<AsciiGridWriter> {
         if spec.is_empty() || !(spec.cell > 0.0 && spec.cell.is_finite()) {
             return Err(Error::Output {
@@ -117,9 +117,9 @@ impl GridWriter for AsciiGridWriter {
             }
             line.push('\n');
             text.write_all(line.as_bytes())
-                .map_err(|e| Error::io(&self.path, e))?;
+                .map_err(|e| Error::write(&self.path, e))?;
         }
-        text.flush().map_err(|e| Error::io(&self.path, e))?;
+        text.flush().map_err(|e| Error::write(&self.path, e))?;
         drop(text);
         out.commit()
     }

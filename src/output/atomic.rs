@@ -1,19 +1,23 @@
 //! Atomic output files and clean-up of temporary files on Ctrl-C.
 //!
 //! Every output `sweeptin` writes goes through an [`AtomicFile`]: the bytes go to a hidden temporary
-//! file in the same directory as the final path (`.NAME.sweeptin-XXXXXX.tmp`), and only
+//! file in the same directory as the final path (`.NAME.sweeptin-HOST.PID-XXXXXX.tmp`), and only
 //! [`AtomicFile::commit`] flushes, fsyncs and renames it onto the final path. A crash, an error or
-//! an interruption therefore never leaves a partial file under the final name.
+//! an interruption therefore never leaves a partial file under the final name; the temporary file
+//! of a killed run is removed by the next run to the same output ([`super::target`]). FIFOs,
+//! devices and standard output are written directly ([`AtomicFile::is_stream`]).
 //!
 //! Temporary paths that must not outlive the process are kept in a process-wide registry
 //! ([`register_temp`]). [`install_interrupt_handler`] makes Ctrl-C (SIGINT), SIGTERM and SIGHUP
-//! delete every registered path ([`cleanup_registered_temps`]) and exit with code 130. Modules that
+//! delete every registered path ([`cleanup_registered_temps`]) and exit with 128 + the signal's
+//! number (130, 143, 129), the shell's convention. Modules that
 //! spill to disk (the external sort under `--tmp-dir`) use [`RegisteredTempDir`] or register their
 //! own paths.
 //!
 //! Spool files that are only read back by the process that wrote them should instead be anonymous
 //! ([`tempfile::tempfile_in`]): the operating system deletes those even after `kill -9`.
 
+use super::target::{Destination, remove_stale_temps, temp_prefix};
 use crate::error::{Error, Result};
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -25,7 +29,8 @@ use std::sync::{Mutex, MutexGuard};
 /// Size of the write buffer of an [`AtomicFile`].
 const WRITE_BUFFER: usize = 1 << 20;
 
-/// Exit code after an interruption (128 + SIGINT, the shell convention).
+/// Exit code after an interruption by Ctrl-C (128 + SIGINT, the shell convention); SIGTERM
+/// gives 143 and SIGHUP 129.
 pub const INTERRUPTED_EXIT_CODE: i32 = 130;
 
 /// What a registered temporary path is, which decides how it is deleted.
@@ -136,26 +141,47 @@ pub fn cleanup_registered_temps() -> usize {
 
 static HANDLER_INSTALLED: AtomicBool = AtomicBool::new(false);
 
-/// Installs the process-wide Ctrl-C / SIGTERM / SIGHUP handler: it deletes every registered
-/// temporary path, prints one line on stderr and exits with code [`INTERRUPTED_EXIT_CODE`].
-/// Calling it again is harmless.
+/// Installs the process-wide Ctrl-C / SIGTERM / SIGHUP handler: a thread that waits for one of
+/// them, deletes every registered temporary path, prints one line on stderr and exits with
+/// 128 + the signal's number (130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP). Calling it again
+/// is harmless.
 ///
 /// # Errors
-/// [`Error::Internal`] if the operating system refuses the handler, or another library already
-/// installed one through `ctrlc`.
+/// [`Error::Internal`] if the operating system refuses the handler.
 pub fn install_interrupt_handler() -> Result<()> {
     if HANDLER_INSTALLED.swap(true, Ordering::SeqCst) {
         return Ok(());
     }
-    ctrlc::set_handler(|| {
-        let removed = cleanup_registered_temps();
-        eprintln!("sweeptin: interrupted; removed {removed} temporary file(s)");
-        std::process::exit(INTERRUPTED_EXIT_CODE);
-    })
-    .map_err(|e| {
+    let failed = |e: io::Error| {
         HANDLER_INSTALLED.store(false, Ordering::SeqCst);
         Error::Internal(format!("cannot install the interrupt handler: {e}"))
-    })
+    };
+    #[cfg(unix)]
+    {
+        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+        let mut signals =
+            signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]).map_err(failed)?;
+        std::thread::Builder::new()
+            .name("signals".into())
+            .spawn(move || {
+                if let Some(signal) = signals.forever().next() {
+                    let removed = cleanup_registered_temps();
+                    let name = match signal {
+                        SIGINT => "SIGINT",
+                        SIGTERM => "SIGTERM",
+                        _ => "SIGHUP",
+                    };
+                    eprintln!(
+                        "sweeptin: interrupted by {name}; removed {removed} temporary file(s)"
+                    );
+                    std::process::exit(128 + signal);
+                }
+            })
+            .map_err(failed)?;
+    }
+    #[cfg(not(unix))]
+    let _ = failed;
+    Ok(())
 }
 
 /// A temporary directory that is deleted (with its contents) when dropped, and also when the
@@ -171,13 +197,13 @@ impl RegisteredTempDir {
     /// Creates `PARENT/.sweeptin-XXXXXX.tmp/`.
     ///
     /// # Errors
-    /// [`Error::Io`] naming `parent` if the directory cannot be created.
+    /// [`Error::Write`] naming `parent` if the directory cannot be created.
     pub fn new_in(parent: &Path) -> Result<Self> {
         let dir = tempfile::Builder::new()
             .prefix(".sweeptin-")
             .suffix(".tmp")
             .tempdir_in(parent)
-            .map_err(|e| Error::io(parent, e))?;
+            .map_err(|e| Error::write(parent, e))?;
         let registration = register_temp(dir.path(), TempKind::Dir);
         Ok(RegisteredTempDir {
             dir,
@@ -193,52 +219,129 @@ impl RegisteredTempDir {
 
 /// An output file that appears under its final name only when complete.
 ///
-/// Writes go, buffered, to a hidden temporary file next to the final path; [`commit`](Self::commit)
-/// moves it into place. Dropping an `AtomicFile` without committing deletes the temporary file and
-/// leaves any existing file at the final path untouched.
+/// Writes go, buffered, to a hidden temporary file next to the final path (the target of a
+/// symbolic link); [`commit`](Self::commit) moves it into place. Dropping an `AtomicFile` without
+/// committing deletes the temporary file and leaves any existing file at the final path
+/// untouched. A FIFO, a character device or standard output is written directly instead
+/// ([`AtomicFile::is_stream`]; see [`super::target`] for the whole rule).
 ///
 /// `Write` and `Seek` errors are plain [`io::Error`]s; wrap them with [`AtomicFile::err`] to name
-/// the final path.
+/// the final path. A stream cannot seek: its `Seek` fails (writers that need it open with
+/// [`AtomicFile::create_seekable`]).
 #[derive(Debug)]
 pub struct AtomicFile {
     path: PathBuf,
-    // Field order matters: the temporary file is deleted before it is unregistered.
-    writer: BufWriter<tempfile::NamedTempFile>,
-    _registration: TempRegistration,
+    inner: Inner,
+}
+
+#[derive(Debug)]
+enum Inner {
+    Replace {
+        target: PathBuf,
+        mode: Option<u32>,
+        // Field order matters: the temporary file is deleted before it is unregistered.
+        writer: BufWriter<tempfile::NamedTempFile>,
+        _registration: TempRegistration,
+    },
+    Stream {
+        writer: BufWriter<StreamOut>,
+        written: u64,
+    },
+}
+
+/// Where a stream's bytes go: the process's own standard output or error, or an opened FIFO or
+/// device.
+#[derive(Debug)]
+enum StreamOut {
+    Stdout(io::Stdout),
+    Stderr(io::Stderr),
+    File(File),
+}
+
+impl Write for StreamOut {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match self {
+            StreamOut::Stdout(s) => s.write(buf),
+            StreamOut::Stderr(s) => s.write(buf),
+            StreamOut::File(f) => f.write(buf),
+        }
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        match self {
+            StreamOut::Stdout(s) => s.flush(),
+            StreamOut::Stderr(s) => s.flush(),
+            StreamOut::File(f) => f.flush(),
+        }
+    }
 }
 
 impl AtomicFile {
-    /// Starts writing `path`: creates `.NAME.sweeptin-XXXXXX.tmp` in the same directory.
+    /// Starts writing `path` (see [`super::target::Destination::of`] for what happens with each
+    /// kind of path): a temporary file `.NAME.sweeptin-HOST.PID-XXXXXX.tmp` beside the final
+    /// file, after deleting those that dead runs left there; or the stream, opened for writing.
     ///
     /// # Errors
-    /// [`Error::Io`] naming `path` if the directory does not exist or is not writable;
-    /// [`Error::Output`] if `path` has no file name.
+    /// [`Error::Write`] naming `path` if the directory does not exist or is not writable, or the
+    /// stream cannot be opened; [`Error::Output`] if `path` has no file name, or is a directory,
+    /// a block device or a socket.
     pub fn create(path: impl Into<PathBuf>) -> Result<Self> {
         let path = path.into();
-        let Some(name) = path.file_name() else {
+        if path.file_name().is_none() && path.as_os_str() != "-" {
             return Err(Error::Output {
                 path,
                 message: "not a file name".into(),
             });
-        };
-        // An output replaces a regular file only: never a symlink (nor what it points to), a
-        // FIFO, a device or a directory.
-        if let Ok(m) = std::fs::symlink_metadata(&path)
-            && !m.file_type().is_file()
-        {
-            let what = if m.file_type().is_symlink() {
-                "a symbolic link"
-            } else if m.is_dir() {
-                "a directory"
-            } else {
-                "a FIFO, socket or device"
-            };
-            return Err(Error::Output {
-                path,
-                message: format!("it is {what}, not a regular file: an output never replaces it"),
-            });
         }
-        let prefix = format!(".{}.sweeptin-", name.to_string_lossy());
+        let inner = match Destination::of(&path)? {
+            Destination::File { target, mode } => Self::temp_beside(&path, target, mode)?,
+            Destination::Stream { fd, .. } => {
+                let out = match fd {
+                    Some(1) => StreamOut::Stdout(io::stdout()),
+                    Some(_) => StreamOut::Stderr(io::stderr()),
+                    None => StreamOut::File(
+                        std::fs::OpenOptions::new()
+                            .write(true)
+                            .truncate(true)
+                            .open(&path)
+                            .map_err(|e| Error::write(&path, e))?,
+                    ),
+                };
+                Inner::Stream {
+                    writer: BufWriter::with_capacity(WRITE_BUFFER, out),
+                    written: 0,
+                }
+            }
+        };
+        Ok(AtomicFile { path, inner })
+    }
+
+    /// Like [`AtomicFile::create`], for a format that needs seeking (`what`, such as "a GeoTIFF"):
+    /// a FIFO, a device or standard output is refused before anything is written.
+    ///
+    /// # Errors
+    /// As [`AtomicFile::create`]; [`Error::Options`] for a stream.
+    pub fn create_seekable(path: impl Into<PathBuf>, what: &str) -> Result<Self> {
+        let path = path.into();
+        if let Destination::Stream { what: kind, .. } = Destination::of(&path)? {
+            return Err(Error::Options(format!(
+                "{}: {what} cannot be written to {kind} (the format needs seeking): write it to \
+                 a file",
+                path.display()
+            )));
+        }
+        Self::create(path)
+    }
+
+    fn temp_beside(path: &Path, target: PathBuf, mode: Option<u32>) -> Result<Inner> {
+        let Some(name) = target.file_name() else {
+            return Err(Error::Output {
+                path: path.to_path_buf(),
+                message: "not a file name".into(),
+            });
+        };
+        remove_stale_temps(&target);
+        let prefix = temp_prefix(&name.to_string_lossy());
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(".tmp").rand_bytes(6);
         #[cfg(unix)]
@@ -248,7 +351,7 @@ impl AtomicFile {
             use std::os::unix::fs::PermissionsExt;
             builder.permissions(std::fs::Permissions::from_mode(0o666));
         }
-        let dir = parent_dir(&path);
+        let dir = parent_dir(&target);
         let temp = builder.tempfile_in(dir).map_err(|e| {
             // tempfile's own message names the random temporary path; say what the user needs.
             if !dir.is_dir() {
@@ -256,76 +359,123 @@ impl AtomicFile {
                     io::ErrorKind::NotFound,
                     format!("directory {} does not exist", dir.display()),
                 );
-                return Error::io(&path, e);
+                return Error::write(path, e);
             }
-            Error::io(&path, e)
+            Error::write(path, e)
         })?;
         let registration = register_temp(temp.path(), TempKind::File);
-        Ok(AtomicFile {
-            path,
+        Ok(Inner::Replace {
+            target,
+            mode,
             writer: BufWriter::with_capacity(WRITE_BUFFER, temp),
             _registration: registration,
         })
     }
 
-    /// The final path.
+    /// The final path, as given.
     pub fn path(&self) -> &Path {
         &self.path
     }
 
-    /// The temporary file being written.
-    pub fn temp_path(&self) -> &Path {
-        self.writer.get_ref().path()
+    /// Is this output written directly to a FIFO, a device or standard output (no temporary
+    /// file, no seeking)?
+    pub fn is_stream(&self) -> bool {
+        matches!(self.inner, Inner::Stream { .. })
+    }
+
+    /// The temporary file being written (`None` for a stream).
+    pub fn temp_path(&self) -> Option<&Path> {
+        match &self.inner {
+            Inner::Replace { writer, .. } => Some(writer.get_ref().path()),
+            Inner::Stream { .. } => None,
+        }
     }
 
     /// Wraps an I/O error with the final path.
     pub fn err(&self, e: io::Error) -> Error {
-        Error::io(&self.path, e)
+        Error::write(&self.path, e)
     }
 
     /// Flushes, fsyncs and renames the temporary file onto the final path (replacing any file
-    /// there); returns the size of the file in bytes.
+    /// there, keeping its permissions); returns the size of the file in bytes. A stream is
+    /// flushed; its size is the bytes written.
     ///
     /// # Errors
-    /// [`Error::Io`] naming the final path; the temporary file is then deleted.
+    /// [`Error::Write`] naming the final path; the temporary file is then deleted.
     pub fn commit(self) -> Result<u64> {
-        let AtomicFile {
-            path,
-            writer,
-            _registration,
-        } = self;
-        let temp = writer
-            .into_inner()
-            .map_err(|e| Error::io(&path, e.into_error()))?;
-        temp.as_file().sync_all().map_err(|e| Error::io(&path, e))?;
-        let bytes = temp
-            .as_file()
-            .metadata()
-            .map_err(|e| Error::io(&path, e))?
-            .len();
-        temp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
-        sync_dir(parent_dir(&path));
-        Ok(bytes)
+        let AtomicFile { path, inner } = self;
+        match inner {
+            Inner::Stream {
+                mut writer,
+                written,
+            } => {
+                writer.flush().map_err(|e| Error::write(&path, e))?;
+                Ok(written)
+            }
+            Inner::Replace {
+                target,
+                mode,
+                writer,
+                _registration,
+            } => {
+                let temp = writer
+                    .into_inner()
+                    .map_err(|e| Error::write(&path, e.into_error()))?;
+                #[cfg(unix)]
+                if let Some(mode) = mode {
+                    use std::os::unix::fs::PermissionsExt;
+                    let perms = std::fs::Permissions::from_mode(mode);
+                    std::fs::set_permissions(temp.path(), perms)
+                        .map_err(|e| Error::write(&path, e))?;
+                }
+                #[cfg(not(unix))]
+                let _ = mode;
+                temp.as_file()
+                    .sync_all()
+                    .map_err(|e| Error::write(&path, e))?;
+                let bytes = temp
+                    .as_file()
+                    .metadata()
+                    .map_err(|e| Error::write(&path, e))?
+                    .len();
+                temp.persist(&target)
+                    .map_err(|e| Error::write(&path, e.error))?;
+                sync_dir(parent_dir(&target));
+                Ok(bytes)
+            }
+        }
     }
 }
 
 impl Write for AtomicFile {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        self.writer.write(buf)
-    }
-
-    fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
-        self.writer.write_all(buf)
+        match &mut self.inner {
+            Inner::Replace { writer, .. } => writer.write(buf),
+            Inner::Stream { writer, written } => {
+                let n = writer.write(buf)?;
+                *written += n as u64;
+                Ok(n)
+            }
+        }
     }
 
     fn flush(&mut self) -> io::Result<()> {
-        self.writer.flush()
+        match &mut self.inner {
+            Inner::Replace { writer, .. } => writer.flush(),
+            Inner::Stream { writer, .. } => writer.flush(),
+        }
     }
 }
 
 impl Seek for AtomicFile {
     fn seek(&mut self, pos: SeekFrom) -> io::Result<u64> {
-        self.writer.seek(pos)
+        match &mut self.inner {
+            Inner::Replace { writer, .. } => writer.seek(pos),
+            Inner::Stream { .. } => Err(io::Error::new(
+                io::ErrorKind::Unsupported,
+                "cannot seek in a stream (a FIFO, a device or standard output)",
+            )),
+        }
     }
 }
 
@@ -367,15 +517,20 @@ mod tests {
 
     #[test]
     #[cfg(unix)]
-    fn symlinks_and_directories_are_never_replaced() {
+    fn a_symlink_is_followed_and_directories_are_never_replaced() {
+        use std::os::unix::fs::PermissionsExt;
         let dir = tempfile::tempdir().unwrap();
         let target = dir.path().join("precious.txt");
         std::fs::write(&target, b"keep").unwrap();
+        std::fs::set_permissions(&target, std::fs::Permissions::from_mode(0o604)).unwrap();
         let link = dir.path().join("out.tif");
         std::os::unix::fs::symlink(&target, &link).unwrap();
-        let e = AtomicFile::create(&link).unwrap_err().to_string();
-        assert!(e.contains("symbolic link"), "{e}");
-        assert_eq!(std::fs::read(&target).unwrap(), b"keep");
+        let mut f = AtomicFile::create(&link).unwrap();
+        f.write_all(b"new").unwrap();
+        f.commit().unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        let mode = std::fs::metadata(&target).unwrap().permissions().mode();
+        assert_eq!(mode & 0o7777, 0o604);
         assert!(
             std::fs::symlink_metadata(&link)
                 .unwrap()
@@ -387,6 +542,12 @@ mod tests {
             e.contains("directory") || e.contains("not a file name"),
             "{e}"
         );
+        let null = AtomicFile::create("/dev/null").unwrap();
+        assert!(null.is_stream());
+        let e = AtomicFile::create_seekable("/dev/null", "a GeoTIFF")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("needs seeking"), "{e}");
     }
 
     #[test]
@@ -394,9 +555,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("out.txt");
         let mut f = AtomicFile::create(&out).unwrap();
-        let temp = f.temp_path().to_path_buf();
+        let temp = f.temp_path().unwrap().to_path_buf();
         let temp_name = temp.file_name().unwrap().to_string_lossy().into_owned();
         assert!(temp_name.starts_with(".out.txt.sweeptin-") && temp_name.ends_with(".tmp"));
+        assert!(temp_name.contains(&format!(".{}-", std::process::id())));
         assert!(is_registered(&temp));
         f.write_all(b"hello").unwrap();
         assert!(!out.exists(), "final path must not exist before commit");
@@ -412,7 +574,7 @@ mod tests {
         let out = dir.path().join("out.txt");
         std::fs::write(&out, b"old").unwrap();
         let mut f = AtomicFile::create(&out).unwrap();
-        let temp = f.temp_path().to_path_buf();
+        let temp = f.temp_path().unwrap().to_path_buf();
         f.write_all(b"partial").unwrap();
         drop(f);
         assert_eq!(std::fs::read(&out).unwrap(), b"old");
@@ -425,7 +587,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("no/such/dir/out.ply");
         let e = AtomicFile::create(&out).unwrap_err();
-        assert!(matches!(&e, Error::Io { path, .. } if path == &out), "{e}");
+        assert!(
+            matches!(&e, Error::Write { path, .. } if path == &out),
+            "{e}"
+        );
         assert!(e.to_string().contains("no/such/dir/out.ply"), "{e}");
     }
 

@@ -279,10 +279,10 @@ pub(crate) fn write_tiff(
         .map(|s| Level::new(s.cols(), s.rows(), cog, samples))
         .collect();
     // Chunks, smallest overview first.
-    let dir = super::atomic::parent_dir(path);
-    let chunk_file = tempfile::tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
+    let dir = super::target::scratch_dir(path);
+    let chunk_file = tempfile::tempfile_in(&dir).map_err(|e| Error::write(&dir, e))?;
     let mut out = BufWriter::with_capacity(1 << 20, chunk_file);
-    let io = |e: std::io::Error| Error::io(path, e);
+    let io = |e: std::io::Error| Error::write(path, e);
     let mut pos = 0u64;
     for (stage, level) in stages.iter().zip(levels.iter_mut()).rev() {
         let ids: Vec<(u32, u32)> = (0..level.down())

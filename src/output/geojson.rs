@@ -35,7 +35,7 @@ impl FeatureWriter {
     /// Starts a collection named `name` at `path` (under a temporary name until `finish`).
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming `path`.
+    /// [`crate::Error::Write`] naming `path`.
     pub fn create(path: &Path, name: &str, crs: Option<&Crs>) -> Result<FeatureWriter> {
         let mut file = AtomicFile::create(path)?;
         let mut head = format!(
@@ -58,7 +58,7 @@ impl FeatureWriter {
     /// Writes one `LineString` feature with `properties` (a JSON object).
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the output.
+    /// [`crate::Error::Write`] naming the output.
     pub fn line_string(
         &mut self,
         properties: &Value,
@@ -75,7 +75,7 @@ impl FeatureWriter {
     /// with [`FeatureWriter::end_line`] (for lines too long to hold in memory).
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the output.
+    /// [`crate::Error::Write`] naming the output.
     pub fn start_line(&mut self, properties: &Value) -> Result<()> {
         if self.features > 0 {
             self.buf.push_str(",\n");
@@ -91,7 +91,7 @@ impl FeatureWriter {
     /// One point of the current line.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the output.
+    /// [`crate::Error::Write`] naming the output.
     pub fn point(&mut self, [x, y]: [f64; 2]) -> Result<()> {
         use std::fmt::Write as _;
         if self.points > 0 {
@@ -108,7 +108,7 @@ impl FeatureWriter {
     /// Ends the current line.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the output.
+    /// [`crate::Error::Write`] naming the output.
     pub fn end_line(&mut self) -> Result<()> {
         self.buf.push_str("]}}");
         self.features += 1;
@@ -131,7 +131,7 @@ impl FeatureWriter {
     /// Closes the collection and moves the file into place; returns its size in bytes.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the output.
+    /// [`crate::Error::Write`] naming the output.
     pub fn finish(mut self) -> Result<u64> {
         self.file
             .write_all(b"\n]}\n")

@@ -240,7 +240,7 @@ impl GeoTiffWriter {
     /// everything but the pixels.
     ///
     /// # Errors
-    /// [`Error::Output`] for an empty grid or a bad cell size; [`Error::Io`] naming `path`.
+    /// [`Error::Output`] for an empty grid or a bad cell size; [`Error::Write`] naming `path`.
     pub fn create(path: &Path, spec: &GridSpec) -> Result<GeoTiffWriter> {
         Self::create_with(path, spec, false)
     }
@@ -270,7 +270,7 @@ impl GeoTiffWriter {
         let meta_bound = 4096 + 16 * u64::from(spec.rows);
         let big = bigtiff || pixels + meta_bound > u64::from(u32::MAX);
         let (header, data_offset) = Self::layout(spec, big)?;
-        let mut file = AtomicFile::create(path)?;
+        let mut file = AtomicFile::create_seekable(path, "a GeoTIFF")?;
         file.write_all(&header).map_err(|e| file.err(e))?;
         Ok(GeoTiffWriter {
             file,
@@ -448,8 +448,12 @@ impl GridWriter for GeoTiffWriter {
         let f = &mut self.file;
         f.flush().map_err(|e| f.err(e))?;
         if self.reader.is_none() {
-            let temp = self.file.temp_path().to_path_buf();
-            self.reader = Some(File::open(&temp).map_err(|e| Error::io(&temp, e))?);
+            let temp = self
+                .file
+                .temp_path()
+                .map(Path::to_path_buf)
+                .ok_or_else(|| Error::Internal("a GeoTIFF being written to a stream".into()))?;
+            self.reader = Some(File::open(&temp).map_err(|e| Error::write(&temp, e))?);
         }
         let path = &self.path;
         let reader = self.reader.as_mut().expect("opened above");
@@ -457,7 +461,7 @@ impl GridWriter for GeoTiffWriter {
         reader
             .seek(SeekFrom::Start(offset))
             .and_then(|_| reader.read_exact(&mut b))
-            .map_err(|e| Error::io(path, e))?;
+            .map_err(|e| Error::write(path, e))?;
         for (v, c) in out.iter_mut().zip(b.chunks_exact(4)) {
             *v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
         }

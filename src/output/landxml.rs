@@ -26,7 +26,7 @@
 //! temporary file and appended at [`finish`](MeshSink::finish); vertices are written straight
 //! away. Memory use is bounded by the I/O buffers.
 
-use super::atomic::{AtomicFile, parent_dir};
+use super::atomic::AtomicFile;
 use super::mesh::{MeshMeta, SinkState, SpooledOutput, one_line, rewind_spool};
 use crate::error::Result;
 use crate::sink::{MeshSink, MeshSummary};
@@ -48,15 +48,15 @@ impl LandXmlWriter {
     /// output's directory.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming `path` if the output or the spool file cannot be created.
+    /// [`crate::Error::Write`] naming `path` if the output or the spool file cannot be created.
     pub fn create(path: &Path, meta: &MeshMeta) -> Result<Self> {
-        Self::create_with_spool_dir(path, meta, parent_dir(path))
+        Self::create_with_spool_dir(path, meta, &super::target::scratch_dir(path))
     }
 
     /// Like [`create`](Self::create), with the face spool file in `spool_dir`.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] if the output or the spool file cannot be created.
+    /// [`crate::Error::Write`] if the output or the spool file cannot be created.
     pub fn create_with_spool_dir(path: &Path, meta: &MeshMeta, spool_dir: &Path) -> Result<Self> {
         let SpooledOutput {
             state,

@@ -99,7 +99,7 @@ impl MeshFormat {
 /// files the operating system deletes even if the process is killed.
 ///
 /// # Errors
-/// [`Error::Output`] for an unknown extension; [`Error::Io`] naming `path` if its directory does
+/// [`Error::Output`] for an unknown extension; [`Error::Write`] naming `path` if its directory does
 /// not exist or is not writable.
 pub fn create_mesh_sink(
     path: &Path,
@@ -109,12 +109,11 @@ pub fn create_mesh_sink(
     let format = match format.or_else(|| MeshFormat::from_extension(path)) {
         Some(f) => f,
         None => {
-            return Err(Error::Output {
-                path: path.to_path_buf(),
-                message: "unknown mesh format: use the extension .ply, .obj, .xml \
-                          (LandXML) or .stin (streaming mesh), or name the format"
-                    .into(),
-            });
+            return Err(Error::Options(format!(
+                "{}: unknown mesh format: use the extension .ply, .obj, .xml (LandXML) or .stin \
+                 (streaming mesh), or name the format with --format",
+                path.display()
+            )));
         }
     };
     Ok(match format {
@@ -143,7 +142,7 @@ impl SpooledOutput {
     /// own directory, [`super::atomic::parent_dir`]).
     ///
     /// # Errors
-    /// [`Error::Io`] naming `path` if the output or the spool file cannot be created.
+    /// [`Error::Write`] naming `path` if the output or the spool file cannot be created.
     pub fn create(path: &Path, spool_dir: &Path) -> Result<Self> {
         let state = SinkState::new(path);
         let out = AtomicFile::create(path)?;
@@ -159,7 +158,7 @@ impl SpooledOutput {
 /// The faces spooled by a [`SpooledOutput`], flushed and rewound for reading back.
 ///
 /// # Errors
-/// [`Error::Io`] naming the output.
+/// [`Error::Write`] naming the output.
 pub(crate) fn rewind_spool(state: &SinkState, faces: BufWriter<File>) -> Result<BufReader<File>> {
     let mut spool = faces.into_inner().map_err(|e| state.io(e.into_error()))?;
     spool.seek(SeekFrom::Start(0)).map_err(|e| state.io(e))?;
@@ -193,7 +192,7 @@ impl SinkState {
     }
 
     pub fn io(&self, e: std::io::Error) -> Error {
-        Error::io(&self.path, e)
+        Error::write(&self.path, e)
     }
 
     fn check_open(&self) -> Result<()> {
@@ -302,7 +301,7 @@ mod tests {
         let e = create_mesh_sink(&p, None, &MeshMeta::default())
             .err()
             .unwrap();
-        assert!(matches!(e, Error::Output { .. }), "{e}");
+        assert!(matches!(e, Error::Options(_)), "{e}");
         assert!(e.to_string().contains(".ply"), "{e}");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }

@@ -10,7 +10,8 @@
 //! - [`geojson`]: a streaming GeoJSON feature writer.
 //! - [`vpc`]: virtual point clouds (`.vpc`) from LAS/LAZ headers.
 //! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C
-//!   ([`install_interrupt_handler`]).
+//!   ([`install_interrupt_handler`]); [`target`]: what an output path is (a file, a link, a
+//!   stream) and the temporary files of dead runs.
 //!
 //! ```
 //! use sweeptin::output::{create_mesh_sink, MeshMeta};
@@ -42,6 +43,7 @@ pub mod obj;
 pub mod ply;
 pub mod raster;
 pub mod stin;
+pub mod target;
 pub mod vpc;
 pub mod world;
 
@@ -52,43 +54,4 @@ pub use obj::ObjWriter;
 pub use ply::PlyWriter;
 pub use raster::{GridWriter, MemoryGrid, RasterFormat, RasterOptions, create_grid_writer};
 pub use stin::StinWriter;
-
-/// Refuses outputs (`(flag, path)`) that are the same file as each other or as one of the
-/// `inputs` of `of` (the run, the plan), compared by absolute path and, where it exists, by the
-/// file itself: an output never overwrites an input or another output.
-///
-/// # Errors
-/// [`crate::Error::Options`] naming the clash.
-pub fn distinct_outputs(
-    outputs: &[(&str, &std::path::Path)],
-    inputs: &[std::path::PathBuf],
-    of: &str,
-) -> crate::Result<()> {
-    use std::path::Path;
-    let same = |a: &Path, b: &Path| {
-        let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-        if abs(a) == abs(b) {
-            return true;
-        }
-        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
-            (Ok(x), Ok(y)) => x == y,
-            _ => false,
-        }
-    };
-    for (k, (flag, o)) in outputs.iter().enumerate() {
-        if let Some(i) = inputs.iter().find(|i| same(o, i)) {
-            return Err(crate::Error::Options(format!(
-                "{flag} {}: that is an input of {of} ({}); an output never overwrites one",
-                o.display(),
-                i.display()
-            )));
-        }
-        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same(o, p)) {
-            return Err(crate::Error::Options(format!(
-                "{flag} and {other} name the same file {}",
-                o.display()
-            )));
-        }
-    }
-    Ok(())
-}
+pub use target::{check_output, distinct_outputs};

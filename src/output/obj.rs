@@ -24,7 +24,7 @@ impl ObjWriter {
     /// Starts writing `path`.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming `path` if the output cannot be created.
+    /// [`crate::Error::Write`] naming `path` if the output cannot be created.
     pub fn create(path: &Path, meta: &MeshMeta) -> Result<Self> {
         let state = SinkState::new(path);
         let mut out = AtomicFile::create(path)?;

@@ -9,12 +9,15 @@
 //! 4. at [`finish`](MeshSink::finish), rewrites the header in place with the true counts and
 //!    appends the spooled faces; then commits the [`AtomicFile`].
 //!
-//! Memory use is two I/O buffers, whatever the mesh size.
+//! A stream (a FIFO, a device, standard output) cannot be rewritten in place: the vertices are
+//! then spooled too, and the whole file is written at the end.
+//!
+//! Memory use is two (three) I/O buffers, whatever the mesh size.
 //!
 //! Layout: `element vertex N` with `property double x`, `y`, `z`; `element face M` with
 //! `property list uchar uint vertex_indices`.
 
-use super::atomic::{AtomicFile, parent_dir};
+use super::atomic::AtomicFile;
 use super::mesh::{MeshMeta, SinkState, SpooledOutput, rewind_spool};
 use crate::error::Result;
 use crate::sink::{MeshSink, MeshSummary};
@@ -35,6 +38,8 @@ pub struct PlyWriter {
     comments: Vec<String>,
     out: Option<AtomicFile>,
     faces: Option<BufWriter<File>>,
+    /// Spooled vertices, when the output is a stream.
+    vertices: Option<BufWriter<File>>,
     header_len: usize,
 }
 
@@ -42,15 +47,15 @@ impl PlyWriter {
     /// Starts writing `path`; faces are spooled to the output's directory.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming `path` if the output or the spool file cannot be created.
+    /// [`crate::Error::Write`] naming `path` if the output or the spool file cannot be created.
     pub fn create(path: &Path, meta: &MeshMeta) -> Result<Self> {
-        Self::create_with_spool_dir(path, meta, parent_dir(path))
+        Self::create_with_spool_dir(path, meta, &super::target::scratch_dir(path))
     }
 
     /// Like [`create`](Self::create), with the face spool file in `spool_dir`.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] if the output or the spool file cannot be created.
+    /// [`crate::Error::Write`] if the output or the spool file cannot be created.
     pub fn create_with_spool_dir(path: &Path, meta: &MeshMeta, spool_dir: &Path) -> Result<Self> {
         let SpooledOutput {
             state,
@@ -59,12 +64,19 @@ impl PlyWriter {
         } = SpooledOutput::create(path, spool_dir)?;
         let comments = meta.comment_lines();
         let header = header(&comments, 0, 0);
-        out.write_all(header.as_bytes()).map_err(|e| state.io(e))?;
+        let vertices = if out.is_stream() {
+            let spool = tempfile::tempfile_in(spool_dir).map_err(|e| state.io(e))?;
+            Some(BufWriter::with_capacity(1 << 20, spool))
+        } else {
+            out.write_all(header.as_bytes()).map_err(|e| state.io(e))?;
+            None
+        };
         Ok(PlyWriter {
             state,
             comments,
             out: Some(out),
             faces: Some(faces),
+            vertices,
             header_len: header.len(),
         })
     }
@@ -84,9 +96,19 @@ impl PlyWriter {
                 header.len()
             )));
         }
-        out.seek(SeekFrom::Start(0)).map_err(io)?;
-        out.write_all(header.as_bytes()).map_err(io)?;
-        out.seek(SeekFrom::End(0)).map_err(io)?;
+        match self.vertices.take() {
+            Some(vertices) => {
+                // A stream: header, vertices, faces, in order.
+                let mut vertices = rewind_spool(&self.state, vertices)?;
+                out.write_all(header.as_bytes()).map_err(io)?;
+                std::io::copy(&mut vertices, &mut out).map_err(io)?;
+            }
+            None => {
+                out.seek(SeekFrom::Start(0)).map_err(io)?;
+                out.write_all(header.as_bytes()).map_err(io)?;
+                out.seek(SeekFrom::End(0)).map_err(io)?;
+            }
+        }
         let copied = std::io::copy(&mut spool, &mut out).map_err(io)?;
         if copied != self.state.triangles * FACE_BYTES as u64 {
             return Err(crate::Error::Internal(format!(
@@ -127,7 +149,10 @@ impl MeshSink for PlyWriter {
             chunk.copy_from_slice(&c.to_le_bytes());
         }
         match self.out.as_mut() {
-            Some(out) => out.write_all(&rec).map_err(|e| self.state.io(e)),
+            Some(out) => match self.vertices.as_mut() {
+                Some(spool) => spool.write_all(&rec).map_err(|e| self.state.io(e)),
+                None => out.write_all(&rec).map_err(|e| self.state.io(e)),
+            },
             None => Err(self.state.error("the mesh writer was already finished")),
         }
     }

@@ -18,7 +18,7 @@ pub trait GridWriter: Send {
     /// Writes a whole row (`values.len() == cols`; row 0 is the northern row).
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the output; [`crate::Error::Output`] for a bad row or length.
+    /// [`crate::Error::Write`] naming the output; [`crate::Error::Output`] for a bad row or length.
     fn write_row(&mut self, row: u32, values: &[f32]) -> Result<()>;
 
     /// Writes one cell.
@@ -59,7 +59,7 @@ pub trait GridWriter: Send {
     /// Completes the file and moves it into place; returns its size in bytes.
     ///
     /// # Errors
-    /// [`crate::Error::Io`] naming the output.
+    /// [`crate::Error::Write`] naming the output.
     fn finish(self: Box<Self>) -> Result<u64>;
 
     /// The cells, row 0 (north) first, of a grid kept in memory ([`MemoryGrid`]); `None` for a
@@ -81,16 +81,17 @@ impl MemoryGrid {
     /// A grid of `spec`, every cell nodata.
     ///
     /// # Errors
-    /// [`crate::Error::Options`] when the cells do not fit in memory.
+    /// [`crate::Error::OutOfMemory`] when the cells do not fit in memory.
     pub fn new(spec: &GridSpec) -> Result<MemoryGrid> {
         let n = usize::try_from(spec.len()).unwrap_or(usize::MAX);
         let mut values = Vec::new();
-        values.try_reserve_exact(n).map_err(|_| {
-            crate::Error::Options(format!(
-                "a {} × {} raster does not fit in memory",
-                spec.cols, spec.rows
-            ))
-        })?;
+        values
+            .try_reserve_exact(n)
+            .map_err(|_| crate::Error::OutOfMemory {
+                what: format!("a {} × {} raster in memory", spec.cols, spec.rows),
+                bytes: spec.len().saturating_mul(4),
+                hint: "use a larger cell or a smaller box, or write the DEM to a file".into(),
+            })?;
         values.resize(n, spec.nodata);
         Ok(MemoryGrid {
             spec: spec.clone(),
@@ -273,13 +274,11 @@ impl RasterOptions {
     /// hillshade) rather than float32.
     ///
     /// # Errors
-    /// [`Error::Output`] naming `path` for an unknown format, compression or predictor options
+    /// [`Error::Options`] naming `path` for an unknown format, compression or predictor options
     /// on an ESRI ASCII grid, or a predictor that does not suit the samples.
     pub fn resolve(&self, path: &Path, integer: bool) -> Result<ResolvedRaster> {
-        let bad = |message: String| Error::Output {
-            path: path.to_path_buf(),
-            message,
-        };
+        // A format or option that does not fit the output is a usage error (exit 2).
+        let bad = |message: String| Error::Options(format!("{}: {message}", path.display()));
         let format = self
             .format
             .or_else(|| RasterFormat::from_extension(path))
@@ -396,8 +395,8 @@ impl Scratch {
     /// # Errors
     /// [`Error::Io`] naming the directory.
     pub fn new(path: &Path, cols: u32, rows: u32, fill: f32) -> Result<Scratch> {
-        let dir = super::atomic::parent_dir(path);
-        let file = tempfile::tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
+        let dir = super::target::scratch_dir(path);
+        let file = tempfile::tempfile_in(&dir).map_err(|e| Error::write(&dir, e))?;
         Ok(Scratch {
             file,
             cols,
@@ -444,7 +443,7 @@ impl Scratch {
         };
         self.file
             .write_all_at(&bytes, self.offset(row, col))
-            .map_err(|e| Error::io(&self.path, e))
+            .map_err(|e| Error::write(&self.path, e))
     }
 
     /// Reads `out.len()` cells of `row` from column `col` on.
@@ -459,7 +458,7 @@ impl Scratch {
         let mut bytes = vec![0u8; out.len() * 4];
         self.file
             .read_exact_at(&mut bytes, self.offset(row, col))
-            .map_err(|e| Error::io(&self.path, e))?;
+            .map_err(|e| Error::write(&self.path, e))?;
         for (v, c) in out.iter_mut().zip(bytes.chunks_exact(4)) {
             *v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
         }

@@ -1,6 +1,7 @@
 //! Side files that georeference an image for GIS software: the ESRI world file (`.pgw` beside a
 //! PNG) and the `.prj` (the CRS as WKT, beside an `.asc` grid or a PNG). Each is written
-//! atomically, like every output.
+//! atomically, like every output; an image written to a stream (`-`, a FIFO, a device) has no
+//! side files (there is nowhere beside it: never `/dev/null.prj`).
 
 use crate::crs::Crs;
 use crate::error::Result;
@@ -27,11 +28,15 @@ pub fn world_file_path(image: &Path) -> PathBuf {
 
 /// Writes the world file of a north-up image whose outer upper-left corner is `origin`, with
 /// cells `size = [width, height]`: six lines, the cell width, two zero rotations, minus the cell
-/// height, then the **centre** of the upper-left cell (ESRI's convention). Returns its path.
+/// height, then the **centre** of the upper-left cell (ESRI's convention). Returns its path
+/// (`None` for an image written to a stream).
 ///
 /// # Errors
-/// [`crate::Error::Io`] naming the file.
-pub fn write_world_file(image: &Path, origin: [f64; 2], size: [f64; 2]) -> Result<PathBuf> {
+/// [`crate::Error::Write`] naming the file.
+pub fn write_world_file(image: &Path, origin: [f64; 2], size: [f64; 2]) -> Result<Option<PathBuf>> {
+    if !beside_a_file(image) {
+        return Ok(None);
+    }
     let path = world_file_path(image);
     let text = format!(
         "{:?}\n0.0\n0.0\n{:?}\n{:?}\n{:?}\n",
@@ -41,19 +46,30 @@ pub fn write_world_file(image: &Path, origin: [f64; 2], size: [f64; 2]) -> Resul
         origin[1] - size[1] / 2.0
     );
     write(&path, text.as_bytes())?;
-    Ok(path)
+    Ok(Some(path))
+}
+
+/// Is `image` written to a file (so that side files can go beside it)?
+fn beside_a_file(image: &Path) -> bool {
+    matches!(
+        super::target::Destination::of(image),
+        Ok(super::target::Destination::File { .. })
+    )
 }
 
 /// Writes `<file>.prj` (the extension replaced) with the CRS's WKT, when a WKT is known; GDAL and
 /// ESRI software read a `.prj` as WKT only, so a CRS known only by its EPSG code writes none.
-/// Returns the path written, if any.
+/// Returns the path written, if any (none beside a stream).
 ///
 /// # Errors
-/// [`crate::Error::Io`] naming the file.
+/// [`crate::Error::Write`] naming the file.
 pub fn write_prj(file: &Path, crs: Option<&Crs>) -> Result<Option<PathBuf>> {
     let Some(wkt) = crs.and_then(|c| c.wkt.as_deref()) else {
         return Ok(None);
     };
+    if !beside_a_file(file) {
+        return Ok(None);
+    }
     let path = file.with_extension("prj");
     write(&path, wkt.trim_end_matches('\0').as_bytes())?;
     Ok(Some(path))
@@ -76,7 +92,9 @@ mod tests {
         assert_eq!(world_file_path(Path::new("d.tif")), Path::new("d.tfw"));
         let dir = tempfile::tempdir().unwrap();
         let png = dir.path().join("s.png");
-        let p = write_world_file(&png, [100.0, 200.0], [0.5, 0.5]).unwrap();
+        let p = write_world_file(&png, [100.0, 200.0], [0.5, 0.5])
+            .unwrap()
+            .unwrap();
         let text = std::fs::read_to_string(p).unwrap();
         assert_eq!(text, "0.5\n0.0\n0.0\n-0.5\n100.25\n199.75\n");
         let none = write_prj(

@@ -12,6 +12,7 @@
 
 use super::{Input, RunOptions};
 use crate::error::{Error, Result};
+use crate::input::las::{Filter, Returns};
 use std::path::{Path, PathBuf};
 
 /// What kind of files the points come from.
@@ -65,6 +66,75 @@ impl Source {
     }
 }
 
+/// Refuses filters that do not apply to `source`: `--class` and `--returns` need LAS/LAZ
+/// attributes that XYZ text does not have; a streaming mesh (`.stin`) holds triangles, not
+/// points to filter.
+///
+/// # Errors
+/// [`Error::Options`] naming the filter and the file.
+pub(crate) fn check_filter(source: Source, f: &Filter, paths: &[PathBuf]) -> Result<()> {
+    let name = paths
+        .first()
+        .map(|p| p.display().to_string())
+        .unwrap_or_default();
+    let mut lidar_only = Vec::new();
+    if f.classes.is_some() {
+        lidar_only.push("--class");
+    }
+    if f.returns != Returns::All {
+        lidar_only.push("--returns");
+    }
+    match source {
+        Source::Xyz if !lidar_only.is_empty() => Err(Error::Options(format!(
+            "{}: {} need(s) the LAS/LAZ point attributes, which XYZ text does not have",
+            name,
+            lidar_only.join(" and ")
+        ))),
+        Source::Stream if !lidar_only.is_empty() || f.bbox.is_some() => {
+            Err(Error::Options(format!(
+                "{name}: a streaming mesh holds triangles, not points: --bbox, --class and \
+                 --returns apply to LAS/LAZ and XYZ points"
+            )))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Refuses numeric options that mean nothing: a `--max-edge` that is not a positive length, a
+/// `--z-tolerance` that is not a distance, a `--tile` that is not a positive size.
+///
+/// # Errors
+/// [`Error::Options`] naming the option and the value.
+fn check_numbers(input: &Input, options: &RunOptions) -> Result<()> {
+    let l = &input.lines;
+    if let Some(m) = l.max_edge.filter(|m| !(m.is_finite() && *m > 0.0)) {
+        return Err(Error::Options(format!(
+            "--max-edge {m}: must be a positive length"
+        )));
+    }
+    if let Some(t) = l.z_tolerance.filter(|t| !(t.is_finite() && *t >= 0.0)) {
+        return Err(Error::Options(format!(
+            "--z-tolerance {t}: must be a height difference >= 0"
+        )));
+    }
+    let tile = options.tiles.as_ref().and_then(|t| t.tile);
+    if let Some(t) = tile.filter(|t| !(t.is_finite() && *t > 0.0)) {
+        return Err(Error::Options(format!(
+            "--tile {t}: must be a positive size"
+        )));
+    }
+    Ok(())
+}
+
+/// The inputs among `paths` that are pipes or devices (readable once, no seeking).
+fn streams(paths: &[PathBuf]) -> Vec<PathBuf> {
+    paths
+        .iter()
+        .filter(|p| std::fs::metadata(p).is_ok_and(|m| !m.is_file() && !m.is_dir()))
+        .cloned()
+        .collect()
+}
+
 /// A run's input and options, checked (see the module docs). Build it with [`RunConfig::new`]
 /// and hand it to [`super::run`].
 #[derive(Clone, Debug)]
@@ -73,6 +143,8 @@ pub struct RunConfig {
     options: RunOptions,
     source: Source,
     tmp_dir: PathBuf,
+    /// Inputs that are pipes or devices: they can be read once only.
+    streams: Vec<PathBuf>,
 }
 
 impl RunConfig {
@@ -84,6 +156,16 @@ impl RunConfig {
     /// temporary directory that does not exist.
     pub fn new(input: Input, options: RunOptions) -> Result<RunConfig> {
         let source = Source::of(&input.paths)?;
+        check_filter(source, &input.filter, &input.paths)?;
+        check_numbers(&input, &options)?;
+        let streams = streams(&input.paths);
+        if let (Some(s), Source::Lidar | Source::Stream) = (streams.first(), source) {
+            return Err(Error::Options(format!(
+                "{}: is a pipe or a device, which can be read only once: a LAS/LAZ file or a \
+                 streaming mesh is read more than once (headers, then points), so give a file",
+                s.display()
+            )));
+        }
         if source == Source::Stream && !input.lines.is_empty() {
             return Err(Error::Format {
                 path: input.paths[0].clone(),
@@ -94,7 +176,7 @@ impl RunConfig {
         }
         let tmp_dir = options.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
         if !tmp_dir.is_dir() {
-            return Err(Error::io(
+            return Err(Error::write(
                 &tmp_dir,
                 std::io::Error::new(
                     std::io::ErrorKind::NotFound,
@@ -107,6 +189,7 @@ impl RunConfig {
             options,
             source,
             tmp_dir,
+            streams,
         })
     }
 
@@ -123,6 +206,11 @@ impl RunConfig {
     /// The kind of input files.
     pub(crate) fn source(&self) -> Source {
         self.source
+    }
+
+    /// The first input that is a pipe or a device (read once only), if any.
+    pub(crate) fn stream_input(&self) -> Option<&Path> {
+        self.streams.first().map(PathBuf::as_path)
     }
 
     /// Where spill files go (an existing directory).
@@ -157,6 +245,18 @@ impl RunConfig {
             }
             Source::Xyz => Ok(None),
         }
+    }
+
+    /// The extent of the points `[xmin, ymin, xmax, ymax]` from the LAS/LAZ headers, without
+    /// reading a point (`None` for other inputs, or when a header cannot be read: the run then
+    /// reports it). What a DEM's size is checked against before any work.
+    pub fn header_bounds(&self) -> Option<[f64; 4]> {
+        if self.source != Source::Lidar {
+            return None;
+        }
+        let r = crate::input::las::LidarReader::open(&self.input.paths, &Default::default());
+        let b = r.ok()?.bounds();
+        Some([b.min[0], b.min[1], b.max[0], b.max[1]])
     }
 }
 

@@ -2,7 +2,7 @@
 //! merging, sweeping and writing overlap and memory stays bounded.
 
 use super::emit::{Collected, Emitter};
-use super::lines::{LINE_FLAG, LineSummary, Prepared};
+use super::lines::{FarHeights, LINE_FLAG, LineSummary, Prepared};
 use super::read::{self, ReadResult};
 use super::{
     AnonPeak, Frame, RunConfig, RunSummary, StreamInfo, SweepAxis, Timings, TriangleSink, peak_rss,
@@ -107,9 +107,9 @@ pub(crate) fn run(
         expected += g.vertices.len() as u64;
     }
     if rd.points == 0 {
-        return Err(Error::TooFewPoints {
-            distinct: 0,
-            total: 0,
+        return Err(Error::NothingLeft {
+            files: input.paths.clone(),
+            what: rd.stats.describe(0),
         });
     }
     let anon = AnonPeak::default();
@@ -152,7 +152,13 @@ pub(crate) fn run(
     let triangulate_write = phase2.elapsed().as_secs_f64();
     pb.finish_and_clear();
     if triangles == 0 {
-        return Err(if kept < 3 {
+        let filtered = rd.stats.read > rd.stats.kept || rd.stats.skipped > 0;
+        return Err(if kept < 3 && filtered {
+            Error::NothingLeft {
+                files: input.paths.clone(),
+                what: rd.stats.describe(kept),
+            }
+        } else if kept < 3 {
             Error::TooFewPoints {
                 distinct: kept,
                 total: rd.points,
@@ -194,6 +200,7 @@ pub(crate) fn run(
             constraints: cstats,
             trimmed_triangles: trimmed,
             flat,
+            far_heights: FarHeights::of(l, rd.z_range),
             ..l.summary.clone()
         }),
         tiles: None,
@@ -331,6 +338,10 @@ fn write_events(
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<Written> {
+    // Fault injection for the test of the exit status after a panic in a worker thread.
+    if std::env::var_os("SWEEPTIN_TEST_PANIC").is_some_and(|v| v == "writer") {
+        panic!("injected panic (SWEEPTIN_TEST_PANIC=writer)");
+    }
     let mut emit = Emitter::new(frame, mesh, sinks, lines.map(|l| &l.trim));
     let flat_graph = lines.filter(|l| l.flat).map(|l| {
         l.pslg

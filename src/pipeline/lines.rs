@@ -95,6 +95,46 @@ pub struct LineSummary {
     pub flat: Option<FlatStats>,
     /// What `--clip-breaklines` cut.
     pub clipped: Option<ClipSummary>,
+    /// Breakline heights far outside the points' (a warning: wrong units or vertical datum?).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub far_heights: Option<FarHeights>,
+}
+
+/// Breakline vertices whose z lies farther outside the points' range of heights than that range
+/// is tall (at least 1 unit): lines in another unit or vertical datum, or placeholder heights.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FarHeights {
+    /// How many vertices.
+    pub vertices: u64,
+    /// Lowest and highest z of those vertices.
+    pub lines_z: [f64; 2],
+    /// Lowest and highest z of the points.
+    pub points_z: [f64; 2],
+}
+
+impl FarHeights {
+    /// The breakline vertices of `p` far from the points' heights `points_z` (see the type).
+    pub(crate) fn of(p: &Prepared, points_z: [f64; 2]) -> Option<FarHeights> {
+        let g = p.pslg.as_ref()?;
+        let [lo, hi] = points_z;
+        if !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        let margin = (hi - lo).max(1.0);
+        let mut far = FarHeights {
+            vertices: 0,
+            lines_z: [f64::INFINITY, f64::NEG_INFINITY],
+            points_z,
+        };
+        for v in &g.vertices {
+            let z = v[2];
+            if z < lo - margin || z > hi + margin {
+                far.vertices += 1;
+                far.lines_z = [far.lines_z[0].min(z), far.lines_z[1].max(z)];
+            }
+        }
+        (far.vertices > 0).then_some(far)
+    }
 }
 
 /// What `--clip-breaklines` cut off the breaklines (outside the points' convex hull).

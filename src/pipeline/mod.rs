@@ -32,7 +32,7 @@ use config::Source;
 use std::path::PathBuf;
 
 pub use config::RunConfig;
-pub use lines::{ClipSummary, LineOptions, LineSummary};
+pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary};
 pub use read::read_points;
 
 /// What to triangulate.
@@ -234,6 +234,32 @@ impl AnonPeak {
     }
 }
 
+/// When the tiled engine finds fewer than three points: [`Error::NothingLeft`] naming what each
+/// filter dropped, as the streaming sweep reports it. The engine does not hand its filter counts
+/// out, so they are counted here by a read of the points (on this failure path only; a COPC
+/// file read with `--bbox` decodes only the nodes the box meets). `e` when no filter dropped any
+/// point, or when the count fails.
+fn nothing_left(config: &RunConfig, distinct: u64, e: Error) -> Error {
+    let input = config.input();
+    let count = || -> Result<crate::input::las::FilterStats> {
+        let mut r = crate::input::las::LidarReader::open(&input.paths, &input.filter)?;
+        let mut chunk = Vec::new();
+        while r.read_chunk(&mut chunk, 1 << 16)? > 0 {
+            chunk.clear();
+        }
+        Ok(*r.stats())
+    };
+    match count() {
+        Ok(stats) if stats.read == 0 || stats.read > stats.kept || stats.skipped > 0 => {
+            Error::NothingLeft {
+                files: input.paths.clone(),
+                what: stats.describe(distinct),
+            }
+        }
+        _ => e,
+    }
+}
+
 /// Triangulates the input of `config` and delivers the result to `mesh` (if any) and every
 /// sink, streaming.
 ///
@@ -254,7 +280,12 @@ pub fn run(
         .as_ref()
         .filter(|_| tiled::applies(config))
     {
-        return tiled::run(config, t, mesh, sinks);
+        let task = t.scope.is_some();
+        return tiled::run(config, t, mesh, sinks).map_err(|e| match e {
+            // A plan's task reports an empty tile as it is (it records "empty").
+            Error::TooFewPoints { distinct, .. } if !task => nothing_left(config, distinct, e),
+            e => e,
+        });
     }
     if config
         .options()
@@ -274,6 +305,14 @@ pub fn run(
     }
     let points_only = config.points_only();
     let prepared = lines::prepare(lines, &mut |sink| {
+        if let Some(s) = config.stream_input() {
+            return Err(Error::Options(format!(
+                "{}: lines without z take their heights from a first pass over the points, but \
+                 this input is a pipe or a device, which can be read only once: give the points \
+                 as a file, or the lines with z",
+                s.display()
+            )));
+        }
         drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
     })?;
     drive::run(config, Some(&prepared), mesh, sinks)

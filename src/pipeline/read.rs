@@ -1,10 +1,10 @@
 //! Phase 1: read every input point (with filters) into the external sorter, in the local frame.
 
-use super::config::Source;
+use super::config::{self, Source};
 use super::{Frame, Input, RunConfig, STRIP_RATIO, SweepAxis};
 use crate::error::{Error, Result};
 use crate::geom::predicates;
-use crate::input::las::{Crs, LidarPoint, LidarReader};
+use crate::input::las::{Crs, FilterStats, LidarPoint, LidarReader};
 use crate::input::xyz::XyzReader;
 use crate::sort::external::{ExternalSorter, SortRecord};
 
@@ -15,7 +15,11 @@ pub(crate) struct ReadResult {
     pub crs: Option<Crs>,
     /// Local-frame extent of the points read: `[xmin, ymin, xmax, ymax]`.
     pub bounds: [f64; 4],
+    /// Lowest and highest z of the points read.
+    pub z_range: [f64; 2],
     pub points: u64,
+    /// What the filters read, kept and dropped.
+    pub stats: FilterStats,
     /// Every `2^k`-th point's local x (at most [`SAMPLE`] values), for the front's index.
     pub x_sample: Vec<f64>,
 }
@@ -82,7 +86,9 @@ pub(crate) fn read_into(
         seen: 0,
     };
     let mut swap = axis == SweepAxis::X;
+    let mut z_range = [f64::INFINITY, f64::NEG_INFINITY];
     let mut add = |s: &mut ExternalSorter, swap: bool, r: SortRecord| -> Result<()> {
+        z_range = [z_range[0].min(r.z), z_range[1].max(r.z)];
         let r = if swap {
             SortRecord {
                 x: r.y,
@@ -107,6 +113,7 @@ pub(crate) fn read_into(
             swap = w > STRIP_RATIO * h;
         }
         let total = reader.point_count();
+        sorter.reserve(total)?;
         let crs = reader.crs().cloned();
         let mut buf: Vec<LidarPoint> = Vec::with_capacity(CHUNK);
         let mut n = 0u64;
@@ -139,10 +146,15 @@ pub(crate) fn read_into(
             frame: Frame { swap },
             crs,
             bounds,
+            z_range,
             points: n,
+            stats: *reader.stats(),
             x_sample: sample.xs,
         });
     }
+    // XYZ text: the box filter (the only one that applies, `RunConfig::new` refuses the others).
+    let bbox = input.filter.bbox.map(|b| b.corners());
+    let mut stats = FilterStats::default();
     let mut n = 0u64;
     let mut buf: Vec<[f64; 3]> = Vec::with_capacity(CHUNK);
     for path in &input.paths {
@@ -153,6 +165,14 @@ pub(crate) fn read_into(
                 break;
             }
             for p in &buf {
+                stats.read += 1;
+                if let Some([x0, y0, x1, y1]) = bbox
+                    && !(p[0] >= x0 && p[0] <= x1 && p[1] >= y0 && p[1] <= y1)
+                {
+                    stats.bbox += 1;
+                    continue;
+                }
+                stats.kept += 1;
                 for v in [p[0], p[1]] {
                     if !predicates::check_coord(v) {
                         return Err(Error::Format {
@@ -174,19 +194,21 @@ pub(crate) fn read_into(
                         x: p[0] + 0.0,
                         y: p[1] + 0.0,
                         z: p[2],
-                        index: n,
+                        index: stats.read - 1,
                     },
                 )?;
                 n += 1;
             }
-            progress(n, None);
+            progress(stats.read, None);
         }
     }
     Ok(ReadResult {
         frame: Frame { swap },
         crs: None,
         bounds,
+        z_range,
         points: n,
+        stats,
         x_sample: sample.xs,
     })
 }
@@ -211,9 +233,13 @@ pub fn read_points(input: &Input) -> Result<(Vec<[f64; 3]>, Option<Crs>)> {
         let crs = r.crs().cloned();
         Ok((pts.iter().map(|p| [p.x, p.y, p.z]).collect(), crs))
     } else {
+        config::check_filter(source, &input.filter, &input.paths)?;
         let mut all = Vec::new();
         for p in &input.paths {
             all.extend(crate::input::xyz::read_xyz(p)?);
+        }
+        if let Some([x0, y0, x1, y1]) = input.filter.bbox.map(|b| b.corners()) {
+            all.retain(|p| p[0] >= x0 && p[0] <= x1 && p[1] >= y0 && p[1] <= y1);
         }
         Ok((all, None))
     }

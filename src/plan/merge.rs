@@ -368,7 +368,8 @@ fn mosaic_options(plan: &Plan, out: &Path, given: &RasterOptions) -> Result<Mosa
         (Some("vrt"), true) => default,
         (Some("vrt"), false) => {
             return Err(Error::Options(format!(
-                "{}: a .vrt mosaic points at the tiles as they are: leave --format, --compress,                  --predictor and --bigtiff out, or merge into a .tif",
+                "{}: a .vrt mosaic points at the tiles as they are: leave --format, --compress, \
+                 --predictor and --bigtiff out, or merge into a .tif",
                 out.display()
             )));
         }
@@ -412,6 +413,7 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     protected.push(dir.join("plan.json"));
     crate::output::distinct_outputs(&outs, &protected, "the plan")?;
     for (what, o) in &outs {
+        crate::output::check_output(o)?;
         let abs = std::path::absolute(o).unwrap_or_else(|_| o.to_path_buf());
         if abs.starts_with(dir.join("tiles")) {
             return Err(Error::Options(format!(

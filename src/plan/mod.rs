@@ -268,7 +268,7 @@ impl Plan {
                 dir.display()
             )));
         }
-        std::fs::create_dir_all(dir.join("tiles")).map_err(|e| Error::io(dir, e))?;
+        std::fs::create_dir_all(dir.join("tiles")).map_err(|e| Error::write(dir, e))?;
         write_atomic(&path, text.as_bytes())?;
         Ok(path)
     }
@@ -458,7 +458,7 @@ fn overlaps(a: &[f64; 4], b: &[f64; 4]) -> bool {
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     use std::io::Write;
     let mut f = crate::output::AtomicFile::create(path)?;
-    f.write_all(bytes).map_err(|e| Error::io(path, e))?;
+    f.write_all(bytes).map_err(|e| Error::write(path, e))?;
     f.commit()?;
     Ok(())
 }

@@ -381,6 +381,8 @@ impl Plan {
                         format: Some(RasterFormat::GeoTiff),
                         ..RasterOptions::default()
                     },
+                    // As one run: the raster's rows hold at most a quarter of the budget.
+                    memory: self.job.mem / 4,
                 };
                 let path = self.task_output(dir, i, "dem", "tif");
                 sinks.push(("dem".into(), Box::new(DemSink::new(&path, options)?)));

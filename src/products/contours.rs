@@ -304,17 +304,14 @@ impl ContourSink {
     /// A contour sink writing to `path` (created when the stream begins).
     ///
     /// # Errors
-    /// [`Error::Output`] for an interval that is not a positive number or a non-finite base.
+    /// [`Error::Options`] for an interval that is not a positive number or a non-finite base.
     pub fn new(path: &Path, options: ContourOptions) -> Result<ContourSink> {
         if !(options.interval.is_finite() && options.interval > 0.0 && options.base.is_finite()) {
-            return Err(Error::Output {
-                path: path.to_path_buf(),
-                message: format!(
-                    "the contour interval must be a positive number and the base finite \
-                     (interval {}, base {})",
-                    options.interval, options.base
-                ),
-            });
+            return Err(Error::Options(format!(
+                "the contour interval must be a positive number and the base finite \
+                 (--interval {}, --base {})",
+                options.interval, options.base
+            )));
         }
         Ok(ContourSink {
             path: path.to_path_buf(),
@@ -409,7 +406,7 @@ impl ContourSink {
                 Piece::Disk { offset, len } => {
                     let path = self.path.clone();
                     let file = self.scratch.as_mut().expect("spilled points have a file");
-                    let io = |e| Error::io(&path, e);
+                    let io = |e| Error::write(&path, e);
                     file.seek(SeekFrom::Start(*offset)).map_err(io)?;
                     let mut r = BufReader::with_capacity(1 << 16, &mut *file);
                     let mut b = [0u8; 16];
@@ -428,16 +425,13 @@ impl ContourSink {
     /// Moves the inner points of every open polyline to the scratch file.
     fn spill(&mut self) -> Result<()> {
         if self.scratch.is_none() {
-            let dir = match self.path.parent() {
-                Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-                _ => PathBuf::from("."),
-            };
-            self.scratch = Some(tempfile::tempfile_in(&dir).map_err(|e| Error::io(&dir, e))?);
+            let dir = crate::output::target::scratch_dir(&self.path);
+            self.scratch = Some(tempfile::tempfile_in(&dir).map_err(|e| Error::write(&dir, e))?);
         }
         let file = self.scratch.as_mut().expect("created above");
         let path = &self.path;
         file.seek(SeekFrom::End(0))
-            .map_err(|e| Error::io(path, e))?;
+            .map_err(|e| Error::write(path, e))?;
         let mut w = std::io::BufWriter::with_capacity(1 << 16, &mut *file);
         for poly in self.stitcher.polys.iter_mut().flatten() {
             for piece in poly.pieces.iter_mut() {
@@ -448,7 +442,7 @@ impl ContourSink {
                 for q in v.iter() {
                     w.write_all(&q[0].to_le_bytes())
                         .and_then(|_| w.write_all(&q[1].to_le_bytes()))
-                        .map_err(|e| Error::io(path, e))?;
+                        .map_err(|e| Error::write(path, e))?;
                 }
                 let len = v.len() as u64;
                 self.mem_points -= v.len();
@@ -460,7 +454,7 @@ impl ContourSink {
                 self.scratch_len += len * 16;
             }
         }
-        w.flush().map_err(|e| Error::io(path, e))
+        w.flush().map_err(|e| Error::write(path, e))
     }
 
     fn segment(&mut self, k: i64, t: &Tri) -> Result<()> {
@@ -525,14 +519,12 @@ impl TriangleSink for ContourSink {
         let k_lo = ((zmin - base) / interval).floor() as i64 - 1;
         let k_hi = ((zmax - base) / interval).ceil() as i64 + 1;
         if k_hi - k_lo > MAX_LEVELS_PER_TRIANGLE {
-            return Err(Error::Output {
-                path: self.path.clone(),
-                message: format!(
-                    "a triangle spans {} contour levels (z {zmin} .. {zmax}, interval {interval}): \
-                     the interval is too small",
-                    k_hi - k_lo
-                ),
-            });
+            return Err(Error::Options(format!(
+                "{}: a triangle spans {} contour levels (z {zmin} .. {zmax}, --interval \
+                 {interval}): the interval is too small",
+                self.path.display(),
+                k_hi - k_lo
+            )));
         }
         for k in k_lo..=k_hi {
             let l = self.level(k);

@@ -22,7 +22,10 @@
 //! # Memory
 //!
 //! Rows live in memory from the lowest row not yet written (the sweep's watermark) up to the top
-//! of the highest triangle seen: a band of rows. [`TriangleSink::watermark`] writes the rows below
+//! of the highest triangle seen: a band of rows, at most [`DemOptions::memory`] bytes of them
+//! (the lowest rows go to the file early when the band would grow past it, and later cells
+//! there are late writes, below). A grid whose rows (two of them, and the GeoTIFF's strip
+//! tables) do not fit in that budget is refused before anything is allocated. [`TriangleSink::watermark`] writes the rows below
 //! it to the file. A late triangle below the watermark writes its cells into the file (random
 //! access), so it is handled exactly: its cells are queued (at most [`LATE_BATCH`] at a time)
 //! and applied in arrival order, one read and one write per row span, when the queue is full and
@@ -50,6 +53,9 @@ pub struct DemOptions {
     pub nodata: f32,
     /// Output format (by extension when not given), compression, predictor, BigTIFF.
     pub output: RasterOptions,
+    /// Bytes of rows the sink may hold in memory (its share of the run's `--mem`; by default
+    /// 256 MiB, a quarter of the default budget).
+    pub memory: u64,
 }
 
 impl Default for DemOptions {
@@ -58,6 +64,7 @@ impl Default for DemOptions {
             grid: GridPlan::default(),
             nodata: -9999.0,
             output: RasterOptions::default(),
+            memory: 256 << 20,
         }
     }
 }
@@ -81,6 +88,8 @@ struct Raster {
     late: Vec<(u32, u32, f32, bool)>,
     /// Largest number of rows held at once.
     max_band: usize,
+    /// Most rows the band may hold (from the memory budget).
+    band_limit: usize,
 }
 
 impl Raster {
@@ -89,8 +98,14 @@ impl Raster {
         row + self.written < self.spec.rows
     }
 
-    fn band_row(&mut self, row: u32) -> &mut Vec<f32> {
-        let i = (self.spec.rows - 1 - self.written - row) as usize;
+    fn band_row(&mut self, row: u32) -> Result<&mut Vec<f32>> {
+        let mut i = (self.spec.rows - 1 - self.written - row) as usize;
+        if i >= self.band_limit {
+            // Over budget: the lowest rows go to the file now; their later cells are late writes.
+            let extra = (i + 1 - self.band_limit) as u32;
+            self.flush_below(self.written + extra)?;
+            i = (self.spec.rows - 1 - self.written - row) as usize;
+        }
         while self.band.len() <= i {
             let mut values = self.spare.pop().unwrap_or_default();
             values.clear();
@@ -98,14 +113,14 @@ impl Raster {
             self.band.push_back(values);
         }
         self.max_band = self.max_band.max(self.band.len());
-        &mut self.band[i]
+        Ok(&mut self.band[i])
     }
 
     /// Sets cell `(col, row)`; a `weak` value only fills a cell that has no value yet.
     fn put(&mut self, col: u32, row: u32, value: f32, weak: bool) -> Result<()> {
         if self.in_band(row) {
             let nodata = self.spec.nodata;
-            let cell = &mut self.band_row(row)[col as usize];
+            let cell = &mut self.band_row(row)?[col as usize];
             if !weak || cell.to_bits() == nodata.to_bits() {
                 *cell = value;
             }
@@ -154,17 +169,13 @@ impl Raster {
         let count = count.min(self.spec.rows);
         while self.written < count {
             let row = self.spec.rows - 1 - self.written;
-            match self.band.pop_front() {
-                Some(values) => {
-                    self.cells_with_data +=
-                        values.iter().filter(|v| !self.spec.is_nodata(**v)).count() as u64;
-                    self.writer.write_row(row, &values)?;
-                    self.spare.push(values);
-                }
-                None => {
-                    let empty = vec![self.spec.nodata; self.spec.cols as usize];
-                    self.writer.write_row(row, &empty)?;
-                }
+            // A row no triangle reached is not in the band: the writers fill rows never
+            // written with nodata, so nothing is allocated or written for it.
+            if let Some(values) = self.band.pop_front() {
+                self.cells_with_data +=
+                    values.iter().filter(|v| !self.spec.is_nodata(**v)).count() as u64;
+                self.writer.write_row(row, &values)?;
+                self.spare.push(values);
             }
             self.written += 1;
         }
@@ -219,6 +230,43 @@ impl Raster {
             }
         }
         Ok(())
+    }
+}
+
+/// Rows the band of `spec` may hold within `memory` bytes, after the writers' per-row tables
+/// (the GeoTIFF's strip offsets and sizes, 16 bytes a row, and a flag a row).
+///
+/// # Errors
+/// [`Error::Options`] when fewer than two rows fit, naming the sizes.
+fn band_rows(spec: &GridSpec, memory: u64) -> Result<usize> {
+    let row = u64::from(spec.cols) * 4;
+    let tables = u64::from(spec.rows) * 17;
+    let rows = memory.saturating_sub(tables) / row.max(1);
+    if rows < 2 {
+        return Err(Error::Options(format!(
+            "a DEM of {} × {} cells needs at least {} MiB ({} bytes a row, two rows, and {} \
+             bytes of row tables), more than its share of --mem ({} MiB): raise --mem, or use a \
+             larger --cell or a smaller --bbox",
+            spec.cols,
+            spec.rows,
+            (2 * row + tables).div_ceil(1 << 20),
+            row,
+            tables,
+            memory >> 20
+        )));
+    }
+    Ok(usize::try_from(rows).unwrap_or(usize::MAX))
+}
+
+impl DemSink {
+    /// Checks, before any data, that the grid over `bounds` (the data's, from file headers) is
+    /// within the limits: the plan's `--max-cells` and the memory budget.
+    ///
+    /// # Errors
+    /// [`Error::Options`] naming the sizes.
+    pub fn check_size(&self, bounds: [f64; 4]) -> Result<()> {
+        let spec = self.options.grid.grid(bounds, self.options.nodata)?;
+        band_rows(&spec, self.options.memory).map(|_| ())
     }
 }
 
@@ -282,6 +330,7 @@ impl TriangleSink for DemSink {
         let o = &self.options;
         let mut spec = o.grid.grid(info.bounds, o.nodata)?;
         spec.crs = info.crs.clone();
+        let band_limit = band_rows(&spec, o.memory)?;
         let writer: Box<dyn GridWriter> = match self.memory {
             Some(_) => Box::new(MemoryGrid::new(&spec)?),
             None => create_grid_writer(&self.path, &o.output, &spec)?,
@@ -296,6 +345,7 @@ impl TriangleSink for DemSink {
             late_cells: 0,
             late: Vec::new(),
             max_band: 0,
+            band_limit,
         });
         Ok(())
     }

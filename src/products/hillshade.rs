@@ -43,6 +43,29 @@ pub struct HillshadeOptions {
     pub output: RasterOptions,
 }
 
+impl HillshadeOptions {
+    /// Checks the options: an azimuth in [0, 360], an altitude in [0, 90] degrees, a positive
+    /// finite z factor (anything else shades every cell the same).
+    ///
+    /// # Errors
+    /// [`Error::Options`] naming the option and the value.
+    pub fn check(&self) -> Result<()> {
+        let bad = |what: &str, v: f64, range: &str| {
+            Err(Error::Options(format!("--{what} {v}: must be {range}")))
+        };
+        if !(0.0..=360.0).contains(&self.azimuth) {
+            return bad("azimuth", self.azimuth, "from 0 to 360 degrees");
+        }
+        if !(0.0..=90.0).contains(&self.altitude) {
+            return bad("altitude", self.altitude, "from 0 to 90 degrees");
+        }
+        if !(self.z_factor.is_finite() && self.z_factor > 0.0) {
+            return bad("z-factor", self.z_factor, "a positive number");
+        }
+        Ok(())
+    }
+}
+
 impl Default for HillshadeOptions {
     fn default() -> Self {
         HillshadeOptions {
@@ -197,8 +220,10 @@ fn crs_of(text: Option<&str>) -> Option<Crs> {
 ///
 /// # Errors
 /// [`Error::Io`] / [`Error::Format`] naming the file; [`Error::Output`] for a rotated grid or an
-/// unknown output format.
+/// unknown output format; [`Error::Options`] for options out of range
+/// ([`HillshadeOptions::check`]).
 pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<HillshadeSummary> {
+    o.check()?;
     let reader = RasterReader::open(input)?;
     let spec = reader.spec().clone();
     if !spec.is_axis_aligned() {
@@ -266,11 +291,11 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
                 ga[2 * x] = *v;
                 ga[2 * x + 1] = if *v == 0 { 0 } else { 255 };
             }
-            stream.write_all(&ga).map_err(|e| Error::io(output, e))
+            stream.write_all(&ga).map_err(|e| Error::write(output, e))
         })?;
         stream.finish().map_err(png_err)?;
     }
-    out.flush().map_err(|e| Error::io(output, e))?;
+    out.flush().map_err(|e| Error::write(output, e))?;
     let bytes = out.commit()?;
     write_world_file(output, origin, [ew, ns])?;
     write_prj(output, crs.as_ref())?;

@@ -108,7 +108,7 @@ impl BandStore {
                 bytes.extend_from_slice(&c.to_le_bytes());
             }
         }
-        f.write_all(&bytes).map_err(|e| Error::io(dir, e))?;
+        f.write_all(&bytes).map_err(|e| Error::write(dir, e))?;
         self.index[b].push((self.written, buf.len() as u32));
         self.written += bytes.len() as u64;
         Ok(())
@@ -117,7 +117,7 @@ impl BandStore {
     /// Ends phase 1: the store, ready to be read by an [`OverlaySink`].
     ///
     /// # Errors
-    /// [`Error::Io`] if the scratch file cannot be written; [`Error::Internal`] before `finish`.
+    /// [`Error::Write`] if the scratch file cannot be written; [`Error::Internal`] before `finish`.
     pub fn into_reader(mut self) -> Result<BandReader> {
         let bands = self
             .bands
@@ -132,7 +132,7 @@ impl BandStore {
             .take()
             .expect("opened in begin")
             .into_inner()
-            .map_err(|e| Error::io(&dir, e.into_error()))?;
+            .map_err(|e| Error::write(&dir, e.into_error()))?;
         Ok(BandReader {
             file,
             dir,
@@ -159,7 +159,7 @@ impl TriangleSink for BandStore {
             x: [xmin, xmax],
         });
         self.index = vec![Vec::new(); count];
-        let f = tempfile::tempfile_in(&self.dir).map_err(|e| Error::io(&self.dir, e))?;
+        let f = tempfile::tempfile_in(&self.dir).map_err(|e| Error::write(&self.dir, e))?;
         self.file = Some(BufWriter::with_capacity(1 << 20, f));
         Ok(())
     }
@@ -237,7 +237,7 @@ impl BandReader {
             self.file
                 .seek(SeekFrom::Start(offset))
                 .and_then(|_| self.file.read_exact(&mut bytes))
-                .map_err(|e| Error::io(&self.dir, e))?;
+                .map_err(|e| Error::write(&self.dir, e))?;
             for r in bytes.chunks_exact(RECORD) {
                 let f =
                     |i: usize| f64::from_le_bytes(r[8 + 8 * i..16 + 8 * i].try_into().expect("8"));

@@ -223,7 +223,7 @@ impl ProfileSink {
         self.hits.dedup_by(|b, a| a.line == b.line && a.xy == b.xy);
         let mut out = AtomicFile::create(&self.output)?;
         let mut w = BufWriter::with_capacity(1 << 16, &mut out);
-        let io = |e| Error::io(&self.output, e);
+        let io = |e| Error::write(&self.output, e);
         writeln!(w, "line,chainage,x,y,z").map_err(io)?;
         let mut chain = Vec::new();
         for l in &self.lines {

@@ -20,6 +20,9 @@
 //! the front plus those outside the TIN but inside its bounding box. Unsorted queries are all
 //! loaded at the start (memory proportional to their number). Answers go to an anonymous scratch
 //! file (8 bytes per query) and the output is written at the end in the queries' order.
+//!
+//! The queries are read three times (checked, loaded, copied to the output): queries from a pipe
+//! or a device (`/dev/stdin`, `<(…)`) are first copied, once, to a temporary file.
 
 use super::geom::{Location, Tri};
 use crate::error::{Error, Result};
@@ -142,9 +145,41 @@ impl QueryReader {
     }
 }
 
+/// A copy of `path` in the temporary directory when it is a pipe or a device (registered for
+/// deletion on interruption); `None` for a regular file.
+fn spool_stream(
+    path: &Path,
+) -> Result<Option<(tempfile::TempPath, crate::output::atomic::TempRegistration)>> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_file() {
+        return Ok(None);
+    }
+    if meta.is_dir() {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: "is a directory, not a file of query points".into(),
+        });
+    }
+    let dir = std::env::temp_dir();
+    let mut temp = tempfile::Builder::new()
+        .prefix(".sweeptin-queries-")
+        .tempfile_in(&dir)
+        .map_err(|e| Error::write(&dir, e))?;
+    let registration =
+        crate::output::atomic::register_temp(temp.path(), crate::output::atomic::TempKind::File);
+    let mut src = File::open(path).map_err(|e| Error::io(path, e))?;
+    std::io::copy(&mut src, temp.as_file_mut()).map_err(|e| Error::write(&dir, e))?;
+    Ok(Some((temp.into_temp_path(), registration)))
+}
+
 /// A [`TriangleSink`] answering height queries (see the module docs).
 pub struct SampleSink {
+    /// The file the queries are read from (a copy of a pipe's).
     queries: PathBuf,
+    /// The queries as the user named them (for messages).
+    name: PathBuf,
+    /// The copy of queries given as a pipe or a device, deleted with the sink.
+    _spool: Option<(tempfile::TempPath, crate::output::atomic::TempRegistration)>,
     output: PathBuf,
     count: u64,
     sorted: bool,
@@ -169,7 +204,11 @@ impl SampleSink {
     /// # Errors
     /// [`Error::Io`] / [`Error::Parse`] naming the queries file and line.
     pub fn new(queries: &Path, output: &Path) -> Result<SampleSink> {
+        let spool = spool_stream(queries)?;
+        let name = queries;
+        let queries = spool.as_ref().map_or(queries, |(p, _)| &**p);
         let mut r = QueryReader::open(queries)?;
+        r.path = name.to_path_buf();
         let mut count = 0;
         let mut sorted = true;
         let mut last = f64::NEG_INFINITY;
@@ -180,6 +219,8 @@ impl SampleSink {
         }
         Ok(SampleSink {
             queries: queries.to_path_buf(),
+            name: name.to_path_buf(),
+            _spool: spool,
             output: output.to_path_buf(),
             count,
             sorted,
@@ -212,7 +253,7 @@ impl SampleSink {
         let f = self.answers.as_mut().expect("created in begin");
         f.seek(SeekFrom::Start(n * 8))
             .and_then(|_| f.write_all(&z.to_le_bytes()))
-            .map_err(|e| Error::io(&self.output, e))?;
+            .map_err(|e| Error::write(&self.output, e))?;
         self.answered += 1;
         Ok(())
     }
@@ -275,15 +316,15 @@ impl SampleSink {
         let answers = self.answers.as_mut().expect("created in begin");
         answers
             .seek(SeekFrom::Start(0))
-            .map_err(|e| Error::io(&self.output, e))?;
+            .map_err(|e| Error::write(&self.output, e))?;
         let mut answers = BufReader::with_capacity(1 << 16, answers);
-        let f = File::open(&self.queries).map_err(|e| Error::io(&self.queries, e))?;
+        let f = File::open(&self.queries).map_err(|e| Error::io(&self.name, e))?;
         let mut out = AtomicFile::create(&self.output)?;
         let mut w = BufWriter::with_capacity(1 << 16, &mut out);
-        let io = |e| Error::io(&self.output, e);
+        let io = |e| Error::write(&self.output, e);
         let mut seen_data = false;
         for line in BufReader::with_capacity(1 << 16, f).lines() {
-            let line = line.map_err(|e| Error::io(&self.queries, e))?;
+            let line = line.map_err(|e| Error::io(&self.name, e))?;
             let sep = if line.contains(',') {
                 ","
             } else if line.contains(';') {
@@ -312,7 +353,7 @@ impl SampleSink {
                 }
                 Err(message) => {
                     return Err(Error::Parse {
-                        path: self.queries.clone(),
+                        path: self.name.clone(),
                         line: 0,
                         message: format!("the file changed while it was read: {message}"),
                     });
@@ -334,21 +375,20 @@ impl TriangleSink for SampleSink {
         } else {
             1.0
         };
-        let dir = match self.output.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let f = tempfile::tempfile_in(&dir).map_err(|e| Error::io(&dir, e))?;
+        let dir = crate::output::target::scratch_dir(&self.output);
+        let f = tempfile::tempfile_in(&dir).map_err(|e| Error::write(&dir, e))?;
         let mut w = BufWriter::with_capacity(1 << 16, f);
         for _ in 0..self.count {
             w.write_all(&f64::NAN.to_le_bytes())
-                .map_err(|e| Error::io(&dir, e))?;
+                .map_err(|e| Error::write(&dir, e))?;
         }
         self.answers = Some(
             w.into_inner()
-                .map_err(|e| Error::io(&dir, e.into_error()))?,
+                .map_err(|e| Error::write(&dir, e.into_error()))?,
         );
-        self.reader = Some(QueryReader::open(&self.queries)?);
+        let mut reader = QueryReader::open(&self.queries)?;
+        reader.path = self.name.clone();
+        self.reader = Some(reader);
         if !self.sorted {
             self.load_until(f64::INFINITY)?;
         }

@@ -118,14 +118,12 @@ impl<R: SortKey> ExternalSorter<R> {
     /// Adds a point.
     ///
     /// # Errors
-    /// [`Error::Io`] if a spill fails.
+    /// [`Error::Write`] if a spill fails; [`Error::OutOfMemory`] if the chunk cannot grow (a
+    /// memory limit below the budget): a message and clean-up instead of an abort.
     #[inline]
     pub fn push(&mut self, r: R) -> Result<()> {
         if self.chunk.len() == self.chunk.capacity() {
-            // Grow by doubling, never past the chunk's capacity.
-            let cap = self.chunk.capacity();
-            self.chunk
-                .reserve_exact(cap.max(1 << 20).min(self.capacity - cap));
+            self.grow()?;
         }
         self.chunk.push(r);
         self.stats.points += 1;
@@ -133,6 +131,44 @@ impl<R: SortKey> ExternalSorter<R> {
             self.spill()?;
         }
         Ok(())
+    }
+
+    /// Allocates the chunk for `points` points (as many as the input has, when its headers say;
+    /// at most the chunk's capacity) before reading, so that a memory limit below the budget
+    /// fails at once, with a message, rather than after minutes of reading.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`] naming the size.
+    pub fn reserve(&mut self, points: u64) -> Result<()> {
+        let want = usize::try_from(points)
+            .unwrap_or(usize::MAX)
+            .min(self.capacity);
+        self.reserve_more(want.saturating_sub(self.chunk.len()))
+    }
+
+    /// Doubles the chunk's allocation (up to its capacity), failing cleanly.
+    #[cold]
+    fn grow(&mut self) -> Result<()> {
+        let have = self.chunk.capacity();
+        let more = have
+            .max(1 << 20)
+            .min(self.capacity - self.chunk.len())
+            .max(1);
+        self.reserve_more(more)
+    }
+
+    fn reserve_more(&mut self, more: usize) -> Result<()> {
+        let have = self.chunk.capacity();
+        self.chunk.try_reserve_exact(more).map_err(|_| {
+            let bytes = ((have + more) * std::mem::size_of::<R>()) as u64;
+            Error::OutOfMemory {
+                what: format!("the sort's chunk of {} points", have + more),
+                bytes,
+                hint: "the process has less memory than --mem asks (ulimit -v, a cgroup or \
+                       a batch job's limit): give a smaller --mem"
+                    .into(),
+            }
+        })
     }
 
     fn sort_chunk(&mut self) {
@@ -145,7 +181,7 @@ impl<R: SortKey> ExternalSorter<R> {
 
     fn spill(&mut self) -> Result<()> {
         self.sort_chunk();
-        let io = |e| Error::io(&self.tmp_dir, e);
+        let io = |e| Error::write(&self.tmp_dir, e);
         let file = tempfile::tempfile_in(&self.tmp_dir).map_err(io)?;
         let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
         w.write_all(bytemuck::cast_slice(&self.chunk)).map_err(io)?;
@@ -161,7 +197,7 @@ impl<R: SortKey> ExternalSorter<R> {
     /// Ends the input: returns the points in sweep order.
     ///
     /// # Errors
-    /// [`Error::Io`] if the last spill or a mapping fails.
+    /// [`Error::Write`] if the last spill or a mapping fails.
     pub fn finish(mut self) -> Result<Merge<R>> {
         if self.runs.is_empty() {
             self.sort_chunk();
@@ -175,7 +211,7 @@ impl<R: SortKey> ExternalSorter<R> {
             self.spill()?;
         }
         self.chunk = Vec::new();
-        let io = |e| Error::io(&self.tmp_dir, e);
+        let io = |e| Error::write(&self.tmp_dir, e);
         let mut runs = Vec::with_capacity(self.runs.len());
         for f in std::mem::take(&mut self.runs) {
             let m = MappedRecords::<R>::map(f).map_err(io)?;
@@ -302,7 +338,7 @@ impl<R: SortKey> Iterator for Merge<R> {
                     Err(e) => {
                         drop(top);
                         heap.clear();
-                        self.error = Some(Error::io(dir.as_path(), e));
+                        self.error = Some(Error::write(dir.as_path(), e));
                         return None;
                     }
                 }

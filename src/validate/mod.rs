@@ -70,7 +70,9 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering as AtomicOrdering};
 
 mod cdt;
+mod stream;
 pub use cdt::{CdtCheck, validate_cdt, validate_cdt_with};
+pub use stream::{StreamCheck, StreamChecker, StreamReport};
 
 /// What a valid mesh is made of.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]

@@ -111,14 +111,14 @@ impl FileDecoder {
                         point_count: s.points,
                         byte_count: s.bytes,
                     };
-                    laz::par_decompress_selective(b, &mut raw, vlr, &[entry], fields.selection())
-                        .map_err(|e| {
+                    decode_chunk(b, &mut raw, vlr, entry, fields.selection()).map_err(|what| {
                         format_error(
                             path,
                             format!(
-                                "cannot decompress the points of the LAZ chunk at byte {}: {}",
+                                "corrupt LAZ data in the chunk at byte {} (points {} to {}): {what}",
                                 s.offset,
-                                laz_message(&e)
+                                s.first,
+                                s.first + s.points.max(1) - 1
                             ),
                         )
                     })?;
@@ -127,13 +127,76 @@ impl FileDecoder {
             }
         };
         guarded(path, || {
-            if parallel {
+            // Every span's result, then the first error in span order: the message does not
+            // depend on which thread failed first.
+            let all: Vec<Result<T>> = if parallel {
                 spans.par_iter().zip(&bytes).map(one).collect()
             } else {
                 spans.iter().zip(&bytes).map(one).collect()
-            }
+            };
+            all.into_iter().collect()
         })
     }
+}
+
+/// Decodes one LAZ chunk, `bytes`, into `out` (its points' records) with a decompressor that
+/// sees only them, and checks that it used exactly them. A decoder running over damaged bytes
+/// takes them for data (a zeroed chunk decodes into 50,000 copies of one point): a chunk whose
+/// points end before its bytes do, or need more bytes than it has, is corrupt — which a file's
+/// length alone cannot tell (that is "truncated").
+fn decode_chunk(
+    bytes: &[u8],
+    out: &mut [u8],
+    vlr: &laz::LazVlr,
+    entry: laz::laszip::ChunkTableEntry,
+    selection: laz::DecompressionSelection,
+) -> std::result::Result<(), String> {
+    // The layout a decompressor expects: the offset of the chunk table, the chunk, the table.
+    let mut buf = Vec::with_capacity(8 + bytes.len() + 32);
+    buf.extend_from_slice(&((8 + bytes.len()) as i64).to_le_bytes());
+    buf.extend_from_slice(bytes);
+    let mut table = laz::laszip::ChunkTable::with_capacity(1);
+    table.push(entry);
+    table
+        .write_to(&mut buf, vlr)
+        .map_err(|e| format!("cannot set up its decoder: {e}"))?;
+    let run = || -> std::result::Result<u64, String> {
+        let mut d = laz::LasZipDecompressor::selective(
+            std::io::Cursor::new(&buf[..]),
+            vlr.clone(),
+            selection,
+        )
+        .map_err(|e| laz_message(&e))?;
+        d.decompress_many(out).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                format!(
+                    "its {} points need more than its {} bytes",
+                    entry.point_count,
+                    bytes.len()
+                )
+            } else {
+                e.to_string()
+            }
+        })?;
+        Ok(d.get().position() - 8)
+    };
+    // The decoder asserts on some damaged input: that too is this chunk's corruption.
+    let used = catch_unwind(AssertUnwindSafe(run)).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(format!("the decoder failed on it ({what})"))
+    })?;
+    if used != bytes.len() as u64 {
+        return Err(format!(
+            "its {} points decode from {used} of its {} bytes",
+            entry.point_count,
+            bytes.len()
+        ));
+    }
+    Ok(())
 }
 
 /// The spans of `info` to decode: every LAZ chunk, or slices of about `batch` LAS records; with

@@ -176,6 +176,42 @@ pub struct FilterStats {
     pub skipped: u64,
 }
 
+impl FilterStats {
+    /// What the filters left and dropped, for the message when too little is left: "no point
+    /// left after the filters: of 39233 point(s) read, 39233 by --class", with the distinct
+    /// positions among the points kept when some were.
+    pub fn describe(&self, distinct: u64) -> String {
+        if self.read == 0 && self.skipped == 0 {
+            return "the files hold no point".into();
+        }
+        let mut dropped = Vec::new();
+        for (n, what) in [
+            (self.withheld, "withheld (--keep-withheld keeps them)"),
+            (self.class, "by --class"),
+            (self.returns, "by --returns"),
+            (self.bbox, "outside --bbox"),
+            (
+                self.skipped,
+                "in files or COPC nodes outside --bbox (not read)",
+            ),
+        ] {
+            if n > 0 {
+                dropped.push(format!("{n} {what}"));
+            }
+        }
+        let what = format!("of {} point(s) read, {}", self.read, dropped.join(", "));
+        if self.kept == 0 {
+            return format!("no point left after the filters: {what}");
+        }
+        format!(
+            "fewer than 3 distinct points left after the filters ({distinct} distinct): {what}; \
+             {} kept, {} of them exact (x, y) duplicates",
+            self.kept,
+            self.kept.saturating_sub(distinct)
+        )
+    }
+}
+
 /// Why a point was dropped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Verdict {

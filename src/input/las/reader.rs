@@ -83,6 +83,94 @@ struct Current {
     spans: Vec<Chunk>,
     next: usize,
     first_index: u64,
+    check: PointCheck,
+}
+
+/// What a decoded record can be checked for: inside the header's bounds (one scale step of
+/// slack, in the file's own integers) and a return number no larger than the number of returns
+/// (when that is known, > 0). A record that fails is corrupt data that happened to decode.
+struct PointCheck {
+    path: PathBuf,
+    compressed: bool,
+    /// `None` when the header has no usable bounds (all zero, or min above max).
+    bounds: Option<[[i64; 2]; 3]>,
+    header: Bounds3,
+    scale: [f64; 3],
+    offset: [f64; 3],
+}
+
+impl PointCheck {
+    fn of(info: &FileInfo) -> PointCheck {
+        let b = &info.bounds;
+        let zero = b.min.iter().chain(&b.max).all(|v| *v == 0.0);
+        let usable = (0..3).all(|k| b.min[k] <= b.max[k] && info.scale[k] > 0.0);
+        let bounds = (!zero && usable).then(|| {
+            std::array::from_fn(|k| {
+                let (s, o) = (info.scale[k], info.offset[k]);
+                // Saturating: damaged headers hold any doubles.
+                [
+                    (((b.min[k] - o) / s).floor() as i64).saturating_sub(1),
+                    (((b.max[k] - o) / s).ceil() as i64).saturating_add(1),
+                ]
+            })
+        });
+        PointCheck {
+            path: info.path.clone(),
+            compressed: info.compressed,
+            bounds,
+            header: info.bounds,
+            scale: info.scale,
+            offset: info.offset,
+        }
+    }
+
+    /// Checks record `rec` (point `n` of the file, in `span`).
+    #[inline]
+    fn test(&self, rec: &[u8], extended: bool, span: &Chunk, n: u64) -> Result<()> {
+        let le = |o: usize| i32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
+        let xyz = [le(0), le(4), le(8)];
+        let in_box = self.bounds.is_none_or(|b| {
+            (0..3).all(|k| i64::from(xyz[k]) >= b[k][0] && i64::from(xyz[k]) <= b[k][1])
+        });
+        let (r, nr) = if extended {
+            (rec[14] & 0x0f, rec[14] >> 4)
+        } else {
+            (rec[14] & 0x07, (rec[14] >> 3) & 0x07)
+        };
+        if in_box && (nr == 0 || r <= nr) {
+            return Ok(());
+        }
+        Err(self.corrupt(xyz, r, nr, span, n, !in_box))
+    }
+
+    #[cold]
+    fn corrupt(&self, xyz: [i32; 3], r: u8, nr: u8, span: &Chunk, n: u64, out: bool) -> Error {
+        let at = if self.compressed {
+            format!("the LAZ chunk at byte {}, point {n}", span.offset)
+        } else {
+            format!("point {n}")
+        };
+        let what = if out {
+            let w = |k: usize| self.offset[k] + self.scale[k] * f64::from(xyz[k]);
+            let h = &self.header;
+            format!(
+                "its position ({}, {}, {}) is outside the header's bounds x {} .. {}, y {} .. {}, \
+                 z {} .. {} (the data is damaged, or the header's bounds are wrong)",
+                w(0),
+                w(1),
+                w(2),
+                h.min[0],
+                h.max[0],
+                h.min[1],
+                h.max[1],
+                h.min[2],
+                h.max[2]
+            )
+        } else {
+            format!("return number {r} of {nr} returns")
+        };
+        format_error(&self.path, format!("corrupt point data ({at}): {what}"))
+    }
 }
 
 impl LidarReader {
@@ -319,7 +407,7 @@ impl LidarReader {
                         break;
                     }
                 }
-                let (filter, base) = (&self.filter, cur.first_index);
+                let (filter, base, check) = (&self.filter, cur.first_index, &cur.check);
                 let (quant, len, ext) = (
                     cur.decoder.quant,
                     cur.decoder.record_len,
@@ -333,6 +421,7 @@ impl LidarReader {
                         let mut kept = Vec::with_capacity(span.points as usize);
                         let mut stats = FilterStats::default();
                         for (i, rec) in raw.chunks_exact(len).enumerate() {
+                            check.test(rec, ext, span, span.first + i as u64)?;
                             let p = decode(rec, ext, base + span.first + i as u64, &quant);
                             let v = filter.test(&p);
                             stats.count(v);
@@ -340,11 +429,12 @@ impl LidarReader {
                                 kept.push(p);
                             }
                         }
-                        (kept, stats)
+                        Ok((kept, stats))
                     },
                 )?;
                 cur.next = end;
-                for (kept, stats) in parts {
+                for part in parts {
+                    let (kept, stats) = part?;
                     self.ready.extend_from_slice(&kept);
                     self.stats += stats;
                 }
@@ -391,6 +481,7 @@ impl LidarReader {
                 spans,
                 next: 0,
                 first_index: s.first_index,
+                check: PointCheck::of(info),
             });
             return Ok(true);
         }

@@ -22,7 +22,13 @@ pub(super) fn open_ascii(path: &Path, file: File) -> Result<RasterReader> {
     loop {
         let start = offset;
         line.clear();
-        let n = r.read_line(&mut line).map_err(|e| Error::io(path, e))?;
+        let n = r.read_line(&mut line).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::InvalidData {
+                format(path, "binary data, not text: not an ESRI ASCII grid")
+            } else {
+                Error::io(path, e)
+            }
+        })?;
         if n == 0 {
             break;
         }

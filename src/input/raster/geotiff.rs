@@ -19,8 +19,21 @@ pub(super) struct TiffSource {
 
 fn tiff_error(path: &Path, e: tiff::TiffError) -> Error {
     match e {
-        tiff::TiffError::IoError(io) => Error::io(path, io),
-        other => format(path, format!("cannot read the TIFF: {other}")),
+        tiff::TiffError::IoError(io) if io.kind() != std::io::ErrorKind::UnexpectedEof => {
+            Error::io(path, io)
+        }
+        other => format(path, tiff_message(&other)),
+    }
+}
+
+/// What a TIFF decoder error means to a user: a read past the end of the file is a truncated or
+/// damaged file, not "failed to fill whole buffer".
+fn tiff_message(e: &tiff::TiffError) -> String {
+    match e {
+        tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "the TIFF is truncated or damaged: its data runs past the end of the file".into()
+        }
+        other => format!("cannot read the TIFF: {other}"),
     }
 }
 

@@ -203,17 +203,23 @@ impl RasterReader {
     pub fn open(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
         let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
-        let mut magic = [0u8; 4];
-        let n = read_up_to(&mut file, &mut magic).map_err(|e| Error::io(path, e))?;
+        let mut head = [0u8; 16];
+        let n = read_up_to(&mut file, &mut head).map_err(|e| Error::io(path, e))?;
+        let magic = [head[0], head[1], head[2], head[3]];
         file.seek(SeekFrom::Start(0))
             .map_err(|e| Error::io(path, e))?;
-        if n == 4
+        if n >= 4
             && (&magic == b"II*\0"
                 || &magic == b"MM\0*"
                 || &magic == b"II+\0"
                 || &magic == b"MM\0+")
         {
             geotiff::open_tiff(path, file)
+        } else if let Some(kind) = crate::input::sniff(&head[..n]) {
+            Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!("is {kind}, not a GeoTIFF or an ESRI ASCII grid"),
+            })
         } else {
             ascii::open_ascii(path, file)
         }

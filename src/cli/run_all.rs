@@ -1,0 +1,77 @@
+//! `sweeptin run PLAN --all`: every task of a plan, each in its own child process (`sweeptin run
+//! --task I`), so that one failing task does not stop the others; the exit status is the lowest
+//! failed task's.
+
+use super::plan::RunArgs;
+use anyhow::Context;
+use std::path::Path;
+use std::time::Instant;
+use sweeptin::plan::Plan;
+
+/// `--all`: every task (not yet finished, with --resume), --jobs at a time, each in its own
+/// process so that one failing task does not stop the others.
+pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
+    let exe = std::env::current_exe().context("cannot find the sweeptin executable")?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let jobs = args.jobs.max(1);
+    let threads = args.threads.unwrap_or((cores / jobs).max(1));
+    let mut todo = Vec::new();
+    for t in &plan.tiles {
+        if args.resume && plan.finished(dir, t.index) {
+            continue;
+        }
+        todo.push(t.index);
+    }
+    let start = Instant::now();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let failed = std::sync::Mutex::new(Vec::new());
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    std::thread::scope(|s| {
+        for _ in 0..jobs.min(todo.len()) {
+            s.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(&i) = todo.get(k) else { break };
+                    let status = std::process::Command::new(&exe)
+                        .arg("run")
+                        .arg(&args.plan)
+                        .args(["--task", &i.to_string(), "--quiet"])
+                        .args(["--threads", &threads.to_string()])
+                        .status();
+                    let ok = matches!(&status, Ok(s) if s.success());
+                    if !ok {
+                        let code = status.ok().and_then(|s| s.code()).unwrap_or(5);
+                        failed
+                            .lock()
+                            .unwrap_or_else(|e| e.into_inner())
+                            .push((i, code));
+                    }
+                    let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    if !args.quiet {
+                        eprintln!("sweeptin: {n}/{} tasks finished", todo.len());
+                    }
+                }
+            });
+        }
+    });
+    let mut failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
+    failed.sort_unstable();
+    if let Some(&(_, code)) = failed.first() {
+        return Err(sweeptin::Error::TasksFailed {
+            failed: failed.iter().map(|&(i, _)| i).collect(),
+            total: todo.len(),
+            kind: sweeptin::ErrorKind::from_exit_code(code)
+                .unwrap_or(sweeptin::ErrorKind::Internal),
+        }
+        .into());
+    }
+    if !args.quiet {
+        eprintln!(
+            "sweeptin: {} tasks in {:.2} s; next: sweeptin merge {} -o OUT",
+            todo.len(),
+            start.elapsed().as_secs_f64(),
+            args.plan.display()
+        );
+    }
+    Ok(())
+}

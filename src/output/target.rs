@@ -1,0 +1,394 @@
+//! Where an output's bytes go, decided once from what is at the output path
+//! ([`Destination::of`]), and the temporary files of dead runs.
+//!
+//! | at the path | what happens |
+//! |---|---|
+//! | nothing, or a regular file | a temporary file beside it, renamed onto it when complete; an existing file keeps its permissions |
+//! | a symbolic link | followed (links to links too): its **target** is replaced as above, the link stays; a dangling link's target is created |
+//! | a FIFO, a character device (`/dev/null`, a terminal), `-` (standard output), `/dev/stdout`, `/dev/stderr` | written directly, as the bytes are produced ([`Destination::Stream`]); formats that need seeking (GeoTIFF) refuse it |
+//! | a directory, a block device, a socket | refused: an output never replaces them |
+//!
+//! Temporary files are named `.NAME.sweeptin-HOST.PID-XXXXXX.tmp` ([`temp_prefix`]). A run that
+//! was killed (`kill -9`, the OOM killer) cannot delete its own; the next run writing the same
+//! output does ([`remove_stale_temps`]), when the file was made on this host by a process that is
+//! no longer running.
+
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// Where the bytes of an output go.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Destination {
+    /// A regular file (existing or not): written under a temporary name beside it and renamed
+    /// onto it when complete.
+    File {
+        /// The file to replace (a symbolic link's target, resolved).
+        target: PathBuf,
+        /// Permission bits of the existing file, kept by the replacement.
+        mode: Option<u32>,
+    },
+    /// A FIFO, a character device or standard output: written directly, in order.
+    Stream {
+        /// Standard output or standard error (`-`, `/dev/stdout`, `/dev/stderr`): the process's
+        /// own descriptor (1 or 2), not a new opening of it.
+        fd: Option<u8>,
+        /// What it is, for messages ("a FIFO", "a character device", "standard output").
+        what: &'static str,
+    },
+}
+
+impl Destination {
+    /// Decides where `path`'s bytes go (see the module docs).
+    ///
+    /// # Errors
+    /// [`Error::Output`] for a directory, a block device or a socket (or a link to one), or a
+    /// chain of more than 40 symbolic links; [`Error::Write`] when the path cannot be examined.
+    pub fn of(path: &Path) -> Result<Destination> {
+        if path.as_os_str() == "-" {
+            return Ok(Destination::Stream {
+                fd: Some(1),
+                what: "standard output",
+            });
+        }
+        let refuse = |what: &str| Error::Output {
+            path: path.to_path_buf(),
+            message: format!("it is {what}: an output never replaces one (give a file name)"),
+        };
+        let mut at = path.to_path_buf();
+        for _ in 0..40 {
+            let meta = match std::fs::symlink_metadata(&at) {
+                Ok(m) => m,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                    return Ok(Destination::File {
+                        target: at,
+                        mode: None,
+                    });
+                }
+                Err(e) => return Err(Error::write(path, e)),
+            };
+            let t = meta.file_type();
+            if t.is_symlink() {
+                let link = std::fs::read_link(&at).map_err(|e| Error::write(path, e))?;
+                if let Some(fd) = std_descriptor(&link) {
+                    return Ok(Destination::Stream {
+                        fd: Some(fd),
+                        what: if fd == 1 {
+                            "standard output"
+                        } else {
+                            "standard error"
+                        },
+                    });
+                }
+                at = match at.parent() {
+                    Some(dir) if link.is_relative() => dir.join(link),
+                    _ => link,
+                };
+                continue;
+            }
+            if t.is_file() {
+                return Ok(Destination::File {
+                    target: at,
+                    mode: mode_of(&meta),
+                });
+            }
+            if t.is_dir() {
+                return Err(refuse("a directory"));
+            }
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::FileTypeExt;
+                if t.is_fifo() {
+                    return Ok(Destination::Stream {
+                        fd: None,
+                        what: "a FIFO",
+                    });
+                }
+                if t.is_char_device() {
+                    return Ok(Destination::Stream {
+                        fd: None,
+                        what: "a character device",
+                    });
+                }
+                if t.is_block_device() {
+                    return Err(refuse("a block device"));
+                }
+            }
+            return Err(refuse("a socket or special file"));
+        }
+        Err(refuse("a chain of more than 40 symbolic links"))
+    }
+
+    /// Is it written directly (no temporary file, no seeking)?
+    pub fn is_stream(&self) -> bool {
+        matches!(self, Destination::Stream { .. })
+    }
+}
+
+/// `Some(1)` / `Some(2)` for a link to this process's standard output / error
+/// (`/proc/self/fd/1`, `/dev/fd/2`, …).
+fn std_descriptor(link: &Path) -> Option<u8> {
+    let s = link.to_str()?;
+    let fd = s
+        .strip_prefix("/proc/self/fd/")
+        .or_else(|| s.strip_prefix("/dev/fd/"))?;
+    match fd {
+        "1" => Some(1),
+        "2" => Some(2),
+        _ => None,
+    }
+}
+
+#[cfg(unix)]
+fn mode_of(meta: &std::fs::Metadata) -> Option<u32> {
+    use std::os::unix::fs::PermissionsExt;
+    Some(meta.permissions().mode() & 0o7777)
+}
+
+#[cfg(not(unix))]
+fn mode_of(_meta: &std::fs::Metadata) -> Option<u32> {
+    None
+}
+
+/// The directory where scratch files of the output `path` go: beside a regular file (so a
+/// large scratch file is on the disk the output goes to), the system's temporary directory for
+/// a stream (never `/dev`).
+pub fn scratch_dir(path: &Path) -> PathBuf {
+    match Destination::of(path) {
+        Ok(Destination::File { target, .. }) => super::atomic::parent_dir(&target).to_path_buf(),
+        _ => std::env::temp_dir(),
+    }
+}
+
+/// Fails early (before any heavy work) if an output cannot be created at `path`: a directory,
+/// block device or socket in the way ([`Destination::of`]), or a missing directory. Streams
+/// pass.
+///
+/// # Errors
+/// [`Error::Output`] for what is in the way, [`Error::Write`] for a missing directory.
+pub fn check_output(path: &Path) -> Result<()> {
+    let Destination::File { target, .. } = Destination::of(path)? else {
+        return Ok(());
+    };
+    let dir = super::atomic::parent_dir(&target);
+    if !dir.is_dir() {
+        let e = std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            format!(
+                "cannot write: the directory {} does not exist",
+                dir.display()
+            ),
+        );
+        return Err(Error::write(path, e));
+    }
+    Ok(())
+}
+
+/// Is `a` the same file as `b`: the same absolute path, the same file (device and inode) when
+/// both exist, or the same file an output there would write (through symbolic links)?
+fn same_file(a: &Path, b: &Path) -> bool {
+    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    if abs(a) == abs(b) {
+        return true;
+    }
+    #[cfg(unix)]
+    if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+        use std::os::unix::fs::MetadataExt;
+        return (x.dev(), x.ino()) == (y.dev(), y.ino());
+    }
+    let target = |p: &Path| match Destination::of(p) {
+        Ok(Destination::File { target, .. }) => Some(abs(&target)),
+        _ => std::fs::canonicalize(p).ok(),
+    };
+    matches!((target(a), target(b)), (Some(x), Some(y)) if x == y)
+}
+
+/// Is `p` a character device (`/dev/null`): several outputs may all go there.
+fn is_char_device(p: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        std::fs::metadata(p).is_ok_and(|m| m.file_type().is_char_device())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = p;
+        false
+    }
+}
+
+/// Refuses, before any work, outputs (`(flag, path)`) that are the same file as each other or
+/// as one of the `inputs` of `of` (the run, the plan): compared by absolute path, by device and
+/// inode where they exist, and through symbolic links. Several outputs may go to one character
+/// device (`/dev/null`). An output never overwrites an input or another output.
+///
+/// # Errors
+/// [`Error::Options`] naming the clash.
+pub fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[PathBuf], of: &str) -> Result<()> {
+    for (k, (flag, o)) in outputs.iter().enumerate() {
+        if let Some(i) = inputs.iter().find(|i| same_file(o, i)) {
+            return Err(Error::Options(format!(
+                "{flag} {}: that is an input of {of} ({}); an output never overwrites one",
+                o.display(),
+                i.display()
+            )));
+        }
+        if is_char_device(o) {
+            continue;
+        }
+        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same_file(o, p)) {
+            return Err(Error::Options(format!(
+                "{flag} and {other} name the same file {}",
+                o.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// This host's name, reduced to `[A-Za-z0-9-]` (from `/proc/sys/kernel/hostname`; `host`
+/// when unknown).
+fn host() -> String {
+    let name = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_default();
+    let clean: String = name
+        .trim()
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+        .take(64)
+        .collect();
+    if clean.is_empty() {
+        "host".into()
+    } else {
+        clean
+    }
+}
+
+/// The name prefix of the temporary files of `file_name` made by this process:
+/// `.NAME.sweeptin-HOST.PID-` (six random characters and `.tmp` follow).
+pub fn temp_prefix(file_name: &str) -> String {
+    format!(".{file_name}.sweeptin-{}.{}-", host(), std::process::id())
+}
+
+/// Is the process `pid` of this host still running? (`/proc/PID` exists; without `/proc`,
+/// every process counts as running, so nothing is removed.)
+fn running(pid: u32) -> bool {
+    if !Path::new("/proc/self").exists() {
+        return true;
+    }
+    Path::new("/proc").join(pid.to_string()).exists()
+}
+
+/// Deletes the temporary files that runs of this host, now dead, left beside `target` (see the
+/// module docs); returns how many. Files of live processes, of other hosts, and anything not
+/// named like a temporary file of `target` are left alone. Errors are ignored: this is
+/// housekeeping.
+pub fn remove_stale_temps(target: &Path) -> usize {
+    let (Some(name), dir) = (target.file_name(), super::atomic::parent_dir(target)) else {
+        return 0;
+    };
+    let lead = format!(".{}.sweeptin-", name.to_string_lossy());
+    let (me, here) = (std::process::id(), host());
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let file = entry.file_name();
+        let Some(rest) = file
+            .to_str()
+            .and_then(|f| f.strip_prefix(&lead))
+            .and_then(|f| f.strip_suffix(".tmp"))
+        else {
+            continue;
+        };
+        // HOST.PID-XXXXXX
+        let Some((host_pid, _random)) = rest.rsplit_once('-') else {
+            continue;
+        };
+        let Some((h, pid)) = host_pid.rsplit_once('.') else {
+            continue;
+        };
+        let Ok(pid) = pid.parse::<u32>() else {
+            continue;
+        };
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        if h == here && pid != me && is_file && !running(pid) {
+            removed += usize::from(std::fs::remove_file(entry.path()).is_ok());
+        }
+    }
+    removed
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn what_is_at_the_path_decides() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let file = d.join("a.ply");
+        assert_eq!(
+            Destination::of(&file).unwrap(),
+            Destination::File {
+                target: file.clone(),
+                mode: None
+            }
+        );
+        std::fs::write(&file, b"x").unwrap();
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&file, std::fs::Permissions::from_mode(0o640)).unwrap();
+        assert_eq!(
+            Destination::of(&file).unwrap(),
+            Destination::File {
+                target: file.clone(),
+                mode: Some(0o640)
+            }
+        );
+        // A link to a link to the file; a dangling relative link.
+        std::os::unix::fs::symlink("a.ply", d.join("l1")).unwrap();
+        std::os::unix::fs::symlink(d.join("l1"), d.join("l2")).unwrap();
+        let Destination::File { target, .. } = Destination::of(&d.join("l2")).unwrap() else {
+            panic!("not a file")
+        };
+        assert_eq!(target, file);
+        std::os::unix::fs::symlink("new.ply", d.join("dangling")).unwrap();
+        let Destination::File { target, mode } = Destination::of(&d.join("dangling")).unwrap()
+        else {
+            panic!("not a file")
+        };
+        assert_eq!((target, mode), (d.join("new.ply"), None));
+        assert!(Destination::of(Path::new("-")).unwrap().is_stream());
+        assert!(Destination::of(Path::new("/dev/null")).unwrap().is_stream());
+        let e = Destination::of(d).unwrap_err().to_string();
+        assert!(e.contains("a directory"), "{e}");
+        std::os::unix::fs::symlink("l3", d.join("l3")).unwrap();
+        let e = Destination::of(&d.join("l3")).unwrap_err().to_string();
+        assert!(e.contains("symbolic links"), "{e}");
+    }
+
+    #[test]
+    fn stale_temps_of_dead_processes_only() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("dem.tif");
+        let h = host();
+        // pid 0 is never a user process; our own pid is running.
+        let dead = dir
+            .path()
+            .join(format!(".dem.tif.sweeptin-{h}.4000000000-abcdef.tmp"));
+        let mine = dir
+            .path()
+            .join(format!("{}xyzxyz.tmp", temp_prefix("dem.tif")));
+        let other_host = dir
+            .path()
+            .join(".dem.tif.sweeptin-elsewhere.4000000000-abcdef.tmp");
+        let other_output = dir
+            .path()
+            .join(format!(".x.tif.sweeptin-{h}.4000000000-abcdef.tmp"));
+        for f in [&dead, &mine, &other_host, &other_output] {
+            std::fs::write(f, b"x").unwrap();
+        }
+        assert_eq!(remove_stale_temps(&out), 1);
+        assert!(!dead.exists());
+        assert!(mine.exists() && other_host.exists() && other_output.exists());
+    }
+}

@@ -1,0 +1,356 @@
+//! Issue 13, items 6–10: nonsense numbers, damaged files that decode, messages that say what is
+//! wrong, temporary files of killed runs, and the bounded checker of streaming meshes; through the
+//! command line. docs/RELIABILITY.md lists the cases and these tests.
+
+#[path = "support/data.rs"]
+mod data;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn sweeptin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+}
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    sweeptin().current_dir(dir).args(args).output().unwrap()
+}
+
+fn err(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn code(o: &Output) -> i32 {
+    o.status.code().unwrap_or(-1)
+}
+
+/// `grid.xyz`: 50 × 50 points 1 m apart.
+fn grid(dir: &Path) -> PathBuf {
+    let p = dir.join("grid.xyz");
+    let mut s = String::new();
+    for i in 0..50 {
+        for j in 0..50 {
+            s.push_str(&format!("{i} {j} {}\n", f64::from((i * j) % 7) / 10.0));
+        }
+    }
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+// ---- Item 6: nonsense numbers ----------------------------------------------------------------
+
+#[test]
+fn nonsense_numbers_are_refused_and_far_heights_warned() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    grid(dir);
+    let o = run(dir, &["dem", "grid.xyz", "-o", "d.tif", "-q"]);
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    let cases: &[&[&str]] = &[
+        &["hillshade", "d.tif", "-o", "h.png", "--z-factor", "nan"],
+        &["hillshade", "d.tif", "-o", "h.png", "--z-factor", "inf"],
+        &["hillshade", "d.tif", "-o", "h.png", "--z-factor", "0"],
+        &["hillshade", "d.tif", "-o", "h.png", "--altitude", "nan"],
+        &["hillshade", "d.tif", "-o", "h.png", "--altitude", "1000"],
+        &["hillshade", "d.tif", "-o", "h.png", "--altitude=-90"],
+        &["hillshade", "d.tif", "-o", "h.png", "--azimuth", "inf"],
+        &["tin", "grid.xyz", "-o", "t.ply", "--max-edge", "0"],
+        &["tin", "grid.xyz", "-o", "t.ply", "--max-edge", "nan"],
+        &["tin", "grid.xyz", "-o", "t.ply", "--z-tolerance", "nan"],
+        &["volume", "grid.xyz", "--plane", "nan"],
+        &["crossval", "grid.xyz", "--samples", "0"],
+    ];
+    for args in cases {
+        let o = run(dir, args);
+        assert_eq!(code(&o), 2, "{args:?}: {}", err(&o));
+        let e = err(&o);
+        assert!(!e.contains("18446744073709551615"), "{args:?}: {e}");
+        assert!(!e.contains("cannot triangulate"), "{args:?}: {e}");
+    }
+    assert_eq!(names(dir), ["d.tif", "grid.xyz"]);
+    // Breakline heights a million metres away from points at 0–0.6 m: a warning, not silence.
+    std::fs::write(dir.join("l.txt"), "5 5 1000000\n40 40 -1000000\n").unwrap();
+    let o = run(
+        dir,
+        &["tin", "grid.xyz", "--breaklines", "l.txt", "-o", "t.ply"],
+    );
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    assert!(err(&o).contains("far outside"), "{}", err(&o));
+}
+
+// ---- Item 7: damaged LAZ that decodes --------------------------------------------------------
+
+#[test]
+fn damaged_lidar_is_corrupt_not_truncated_nor_duplicates() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let good = std::fs::read(data::shared("lidar/ahn3_delft_cropped_2.laz")).unwrap();
+    let n = good.len();
+    let mut zeroed = good.clone();
+    zeroed[n * 2 / 5..n * 3 / 5].fill(0);
+    let mut flipped = good.clone();
+    let mut r = 1u64;
+    for _ in 0..200 {
+        r = r
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let k = n / 10 + (r >> 33) as usize % (n * 8 / 10);
+        flipped[k] ^= 0xff;
+    }
+    std::fs::write(dir.join("zeroed.laz"), &zeroed).unwrap();
+    std::fs::write(dir.join("flipped.laz"), &flipped).unwrap();
+    std::fs::write(dir.join("cut.laz"), &good[..n * 9 / 10]).unwrap();
+    for (file, want) in [
+        ("zeroed.laz", "corrupt"),
+        ("flipped.laz", "corrupt"),
+        ("cut.laz", "truncated"),
+    ] {
+        let o = run(dir, &["tin", file, "-o", "t.ply"]);
+        assert_eq!(code(&o), 3, "{file}: {}", err(&o));
+        let e = err(&o);
+        assert!(e.contains(want) && e.contains(file), "{file}: {e}");
+        if want == "corrupt" {
+            assert!(
+                e.contains("chunk") && !e.contains("truncated"),
+                "{file}: {e}"
+            );
+        }
+    }
+    // An uncompressed LAS whose points leave the header's bounds, or claim return 3 of 1.
+    let las = std::fs::read(data::shared(
+        "lidar/ign_50m_tiles/test_data_77055_627760_LA93_IGN69_ground.las",
+    ))
+    .unwrap();
+    let f64_at = |b: &[u8], at: usize| f64::from_le_bytes(b[at..at + 8].try_into().unwrap());
+    let mut narrow = las.clone();
+    let min_x = f64_at(&las, 187);
+    narrow[179..187].copy_from_slice(&(min_x + 1.0).to_le_bytes()); // max x = min x + 1 m
+    std::fs::write(dir.join("bounds.las"), &narrow).unwrap();
+    let mut returns = las.clone();
+    let data_at = u32::from_le_bytes(las[96..100].try_into().unwrap()) as usize;
+    returns[data_at + 14] = 3 | (1 << 3); // point 0: return 3 of 1
+    std::fs::write(dir.join("returns.las"), &returns).unwrap();
+    for (file, want) in [
+        ("bounds.las", "outside the header's bounds"),
+        ("returns.las", "return number 3 of 1"),
+    ] {
+        let o = run(dir, &["tin", file, "-o", "t.ply"]);
+        assert_eq!(code(&o), 3, "{file}: {}", err(&o));
+        let e = err(&o);
+        assert!(
+            e.contains("corrupt point data") && e.contains(want),
+            "{file}: {e}"
+        );
+    }
+    assert!(!dir.join("t.ply").exists());
+}
+
+// ---- Item 8: messages ------------------------------------------------------------------------
+
+#[test]
+fn messages_say_what_the_file_is_and_name_it_once() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    grid(dir);
+    let o = run(dir, &["dem", "grid.xyz", "-o", "d.tif", "-q"]);
+    assert_eq!(code(&o), 0);
+    let tif = std::fs::read(dir.join("d.tif")).unwrap();
+    std::fs::write(dir.join("cut.tif"), &tif[..tif.len() / 2]).unwrap();
+    let o = run(dir, &["hillshade", "d.tif", "-o", "h.png"]);
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    let npz = data::shared("dem/matplotlib_topobathy.npz");
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["tin", "d.tif", "-o", "t.ply"],
+            "is a TIFF image, not XYZ text",
+        ),
+        (
+            &["simplify", "h.png", "-o", "s.ply", "--max-error", "1"],
+            "is a PNG image",
+        ),
+        (
+            &[
+                "simplify",
+                npz.to_str().unwrap(),
+                "-o",
+                "s.ply",
+                "--max-error",
+                "1",
+            ],
+            "ZIP archive",
+        ),
+        (
+            &["simplify", "cut.tif", "-o", "s.ply", "--max-error", "1"],
+            "truncated",
+        ),
+        (&["hillshade", "cut.tif", "-o", "h2.png"], "truncated"),
+    ];
+    for (args, want) in cases {
+        let o = run(dir, args);
+        assert_eq!(code(&o), 3, "{args:?}: {}", err(&o));
+        let e = err(&o);
+        assert!(e.contains(want), "{args:?}: {e}");
+        assert!(
+            !e.contains("failed to fill") && !e.contains("UTF-8"),
+            "{args:?}: {e}"
+        );
+        assert!(
+            !e.contains('\u{0}') && !e.contains('\u{fffd}'),
+            "{args:?}: {e}"
+        );
+    }
+    // A breakline error names its file once, without "cannot triangulate" around it.
+    std::fs::write(
+        dir.join("bad.geojson"),
+        r#"{"type":"Point","coordinates":[1,2]}"#,
+    )
+    .unwrap();
+    let o = run(
+        dir,
+        &[
+            "tin",
+            "grid.xyz",
+            "--breaklines",
+            "bad.geojson",
+            "-o",
+            "t.ply",
+        ],
+    );
+    assert_eq!(code(&o), 3, "{}", err(&o));
+    let e = err(&o);
+    assert_eq!(e.matches("bad.geojson").count(), 1, "{e}");
+    assert!(
+        !e.contains("cannot triangulate") && !e.contains("grid.xyz"),
+        "{e}"
+    );
+}
+
+// ---- Item 9: temporary files of killed runs, memory limits -----------------------------------
+
+#[cfg(unix)]
+#[test]
+fn a_killed_runs_temporary_file_is_removed_by_the_next_run() {
+    use std::time::{Duration, Instant};
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    grid(dir);
+    let fifo = dir.join("points.xyz");
+    assert!(
+        Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
+    // The run creates its temporary output, then blocks opening the FIFO: kill -9 it there.
+    let mut child = sweeptin()
+        .current_dir(dir)
+        .args(["tin", "points.xyz", "-o", "out.ply", "-q"])
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    let started = Instant::now();
+    let temp = loop {
+        if let Some(t) = names(dir)
+            .into_iter()
+            .find(|n| n.starts_with(".out.ply.sweeptin-"))
+        {
+            break t;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(30),
+            "no temporary file"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    assert!(
+        temp.contains(&format!(".{pid}-")),
+        "{temp} lacks the pid {pid}"
+    );
+    child.kill().unwrap(); // SIGKILL: no clean-up possible
+    child.wait().unwrap();
+    assert!(dir.join(&temp).exists());
+    let o = run(dir, &["tin", "grid.xyz", "-o", "out.ply", "-q"]);
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    assert_eq!(names(dir), ["grid.xyz", "out.ply", "points.xyz"]);
+}
+
+/// Under a memory limit below --mem the sort's chunk cannot be had: a message and exit 4, before
+/// reading, with no temporary file left (it was an abort, exit 134, with the file left).
+#[cfg(unix)]
+#[test]
+fn a_memory_limit_below_the_budget_is_a_message_not_an_abort() {
+    let d = tempfile::tempdir().unwrap();
+    let arso = data::shared("lidar/arso_TM_511_122_from_ept.laz");
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 400000 && exec '{}' tin '{}' -o '{}' --mem 8G -q",
+            env!("CARGO_BIN_EXE_sweeptin"),
+            arso.display(),
+            d.path().join("out.ply").display()
+        ))
+        .output()
+        .unwrap();
+    assert_eq!(code(&o), 4, "{}", err(&o));
+    assert!(err(&o).contains("cannot allocate"), "{}", err(&o));
+    assert!(names(d.path()).is_empty(), "{:?}", names(d.path()));
+}
+
+// ---- Item 10: the bounded checker of streaming meshes ----------------------------------------
+
+#[test]
+fn streaming_meshes_are_checked_in_bounded_memory() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let laz = data::shared("lidar/startinpy_small.laz");
+    let o = sweeptin()
+        .current_dir(dir)
+        .args(["tin", "-q", "-o", "m.stin"])
+        .arg(&laz)
+        .output()
+        .unwrap();
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    let o = run(dir, &["check", "m.stin"]);
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("valid (39232 vertices, 78430 triangles"),
+        "{out}"
+    );
+    let held: u64 = out
+        .split("at most ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap();
+    assert!(
+        held < 39232 / 4,
+        "held {held} vertices: not bounded by the front"
+    );
+    // Swap two corners of a triangle record: clockwise, named.
+    let mut b = std::fs::read(dir.join("m.stin")).unwrap();
+    let at = (32..b.len())
+        .step_by(32)
+        .find(|&i| b[i] == 2)
+        .expect("a triangle record");
+    let (c1, c2) = (b[at + 16..at + 24].to_vec(), b[at + 24..at + 32].to_vec());
+    b[at + 16..at + 24].copy_from_slice(&c2);
+    b[at + 24..at + 32].copy_from_slice(&c1);
+    std::fs::write(dir.join("bad.stin"), &b).unwrap();
+    let o = run(dir, &["check", "bad.stin"]);
+    assert_eq!(code(&o), 3, "{}", err(&o));
+    assert!(err(&o).contains("counter-clockwise"), "{}", err(&o));
+    let help = run(dir, &["check", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("Memory:") && help.contains(".stin"), "{help}");
+}
