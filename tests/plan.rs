@@ -510,6 +510,53 @@ fn one_run_never_writes_over_its_input_or_one_output_over_another() {
     }
 }
 
+/// `run --all` exits with the kind of its lowest failed task (here 3, bad input: a file of the
+/// plan went missing), names the failed tasks and how to run them again; `--resume` then runs
+/// them alone. `plan dem --max-cells` is checked against one task's raster.
+#[test]
+fn failed_tasks_set_the_exit_status_and_resume_runs_them_again() {
+    let t = tempfile::tempdir().unwrap();
+    let input = t.path().join("in.laz");
+    std::fs::copy(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz"),
+        &input,
+    )
+    .unwrap();
+    let job = t.path().join("job");
+    let plan_args = ["plan", "dem", s(&input), "--cell", "0.5", "--tile", "32"];
+    let out = bin()
+        .args(plan_args)
+        .args(["--max-cells", "1000", "-o", s(&job)])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--max-cells"));
+    assert!(!job.join("plan.json").exists());
+    sweeptin(&[&plan_args[..], &["-o", s(&job)]].concat(), "plan");
+    let plan = job.join("plan.json");
+    let (_, n) = plan_extent(&plan);
+    let away = t.path().join("away.laz");
+    std::fs::rename(&input, &away).unwrap();
+    let out = bin()
+        .args(["run", s(&plan), "--all", "-q"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains(&format!("{n} of {n} tasks failed")) && err.contains("--resume"),
+        "{err}"
+    );
+    std::fs::rename(&away, &input).unwrap();
+    sweeptin(
+        &["run", s(&plan), "--all", "--resume", "-q"],
+        "run --resume",
+    );
+    for r in records(&job, n) {
+        assert!(r["status"] == "done" || r["status"] == "empty", "{r}");
+    }
+}
+
 /// A plan over a COPC file: each task decodes only the octree nodes of its tile and buffer
 /// (the rest of the file counts as unknown, like a file it does not read, and a certificate that
 /// reaches it widens the buffer to cover what it reached), and the mosaic still equals one run

@@ -103,8 +103,16 @@ def test_file_errors(small, tmp_path):
     assert isinstance(e.value, FileNotFoundError) and str(e.value.path).endswith("nope.laz")
     with pytest.raises(sweeptin.OptionsError, match="input"):
         sweeptin.contours(path, path)  # would overwrite its input
-    with pytest.raises(sweeptin.NoTriangleError):
-        sweeptin.volume(path, plane=0, classes=[200])
+    with pytest.raises(sweeptin.NoTriangleError, match="class") as e:
+        sweeptin.volume(path, plane=0, classes=[200])  # the filters leave nothing
+    assert (e.value.kind, e.value.exit_code) == ("input", 3)
+    # Outputs checked before any work, as the command line does (exit 4 there).
+    with pytest.raises(sweeptin.MissingFileError) as e:
+        sweeptin.dem(path, tmp_path / "no" / "dir" / "x.tif")
+    assert (e.value.kind, e.value.exit_code) == ("output", 4)
+    with pytest.raises(sweeptin.OptionsError, match="max-cells") as e:
+        sweeptin.dem(path, tmp_path / "x.tif", cell=0.01, max_cells=1000)
+    assert e.value.exit_code == 2
     bad = tmp_path / "bad.xyz"
     bad.write_text("0 0 0\n1 0 1\n0 1 oops\n")
     with pytest.raises(sweeptin.InputError) as e:

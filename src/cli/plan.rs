@@ -312,7 +312,14 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
             bbox: t.bounds,
             snap: false,
         };
-        sweeptin::raster::GridPlan::new(d.dem.cell, extent, d.dem.align)?.limit(d.dem.max_cells)?;
+        sweeptin::raster::GridPlan::new(d.dem.cell, extent, d.dem.align)?
+            .limit(d.dem.max_cells)
+            .with_context(|| {
+                format!(
+                    "a task's raster covers one tile ({tile} a side): use a smaller --tile, or \
+                     raise --max-cells"
+                )
+            })?;
     }
     if dir.exists() && !dir.is_dir() {
         bail!("{}: not a directory", dir.display());
