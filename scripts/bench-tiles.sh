@@ -38,6 +38,10 @@ rss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", t).group(1))
 try:
     d = json.load(open(js)); run = d.get("run", d); tiles = run.get("tiles") or {}
     extra = f"{tiles.get('tiles', '–')} tiles, {tiles.get('reruns', '–')} re-runs, buffer ≤ {tiles.get('max_buffer', '–')}"
+    cpu = tiles.get("cpu")
+    if cpu:
+        per = lambda k: f"{cpu[k] / (float(points) / 1e6) * 1e3:.0f}"
+        extra += " · CPU ms/M pts: " + ", ".join(f"{k} {per(k)}" for k in ("read_sort", "index", "blocks", "triangulate", "certify", "keep", "write"))
 except Exception:
     extra = ""
 n = float(points)
@@ -49,6 +53,7 @@ echo "| job | wall | user CPU | peak RSS | points/s | user CPU per M points | ti
 echo "|---|---:|---:|---:|---:|---:|---|"
 if [ -f "$ARSO" ]; then
     N=13216491; G=9000000
+    row "ARSO info --classes (decoding only)" $N "$BIN" info "$ARSO" --classes --json
     for t in 1 2; do
         row "ARSO dem --cell 1, --threads $t" $N "$BIN" dem "$ARSO" --cell 1 -o "$OUT/a.tif" --mem "$MEM" --engine tiles --threads $t --json
     done

@@ -18,6 +18,7 @@
 #![warn(missing_docs)]
 
 pub mod breaklines;
+pub(crate) mod clock;
 pub mod crs;
 pub mod error;
 pub mod finalise;

@@ -102,6 +102,39 @@ pub struct TileStats {
     pub threads: u64,
     /// Tiles allowed in flight (running or waiting to be written) within `--mem`.
     pub window: u64,
+    /// CPU time by stage.
+    pub cpu: TileCpu,
+}
+
+/// CPU seconds by stage of a tiled run (Linux; zeros elsewhere). Reading is the whole
+/// process's CPU while it reads (decoding on every core, the block sort's chunks), the others
+/// the threads that do each stage.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct TileCpu {
+    /// Decoding, filtering and sorting into blocks (the sort's chunks and spills).
+    pub read_sort: f64,
+    /// Merging the sorted runs into the block index, and the hull.
+    pub index: f64,
+    /// Reading tiles' blocks back from the index (workers).
+    pub blocks: f64,
+    /// Triangulating tiles' points in memory (workers: the sweep and its sort).
+    pub triangulate: f64,
+    /// Certifying triangles (workers).
+    pub certify: f64,
+    /// Collecting what each tile owns, patches combined (workers).
+    pub keep: f64,
+    /// The writer thread: the products (rasterisation, contours, …) and the mesh output.
+    pub write: f64,
+}
+
+impl TileCpu {
+    /// Adds a tile's worker times.
+    fn add(&mut self, t: &TileCpu) {
+        self.blocks += t.blocks;
+        self.triangulate += t.triangulate;
+        self.certify += t.certify;
+        self.keep += t.keep;
+    }
 }
 
 /// What [`run`] hands back to the pipeline.
@@ -140,7 +173,7 @@ fn read_index(
     job: &TileJob,
     options: &TileOptions,
     progress: &mut dyn FnMut(u64, u64),
-) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4])> {
+) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4], TileCpu)> {
     let scope = options.scope.as_ref();
     let (mem, tmp) = (job.mem, job.tmp);
     let (mut reader, outside) = open_for(job, scope)?;
@@ -163,6 +196,7 @@ fn read_index(
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
     let crs = reader.crs().cloned();
     let t0 = Instant::now();
+    let c0 = crate::clock::process_cpu();
     let mut sorter = ExternalSorter::<BlockRecord>::new(mem / 2, tmp);
     let mut bounds = [
         f64::INFINITY,
@@ -192,9 +226,15 @@ fn read_index(
     })?;
     let t_read = Instant::now();
     let merge = sorter.finish()?;
+    let c1 = crate::clock::process_cpu();
     let t_fin = Instant::now();
     let sort = merge.stats();
     let mut index = BlockIndex::build(probe, merge, tmp, job.duplicates)?;
+    let cpu = TileCpu {
+        read_sort: c1 - c0,
+        index: crate::clock::process_cpu() - c1,
+        ..TileCpu::default()
+    };
     if std::env::var_os("SWEEPTIN_DEBUG_PHASES").is_some() {
         eprintln!(
             "phase1: read {:?} finish {:?} build {:?}",
@@ -240,7 +280,7 @@ fn read_index(
     index.grid = TileGrid::new(tile, shift)?;
     debug_assert_eq!(index.grid.block, block);
     let _ = sort;
-    Ok((index, crs, bounds))
+    Ok((index, crs, bounds, cpu))
 }
 
 /// Opens the files of `job`. A task of a plan whose files are all COPC reads only the points of
@@ -382,7 +422,8 @@ pub(crate) fn run(
         options.base = sinks.iter().find_map(|s| s.grid_cell());
     }
     let options = &options;
-    let (index, crs, bounds) = read_index(job, options, &mut |n, t| progress("reading", n, t))?;
+    let (index, crs, bounds, cpu) =
+        read_index(job, options, &mut |n, t| progress("reading", n, t))?;
     let read_sort = start.elapsed().as_secs_f64();
     if index.len() == 0 {
         // A task that read no point may still lie under triangles of points farther out.
@@ -445,6 +486,7 @@ pub(crate) fn run(
         tile_size: g.tile,
         block_size: g.block,
         threads: threads as u64,
+        cpu,
         ..TileStats::default()
     };
     let (mut read, mut kept) = (0u64, 0u64);
@@ -488,6 +530,7 @@ pub(crate) fn run(
         drop(tx);
         let mut pending = std::collections::BTreeMap::new();
         let mut done = 0usize;
+        let writer_cpu = crate::clock::thread_cpu();
         let mut row = order.first().map(|t| t.1);
         let outcome = (|| -> Result<()> {
             while done < total {
@@ -508,6 +551,7 @@ pub(crate) fn run(
                     stats.reruns += u64::from(t.runs.saturating_sub(1));
                     stats.loaded_points += t.loaded_points;
                     stats.max_buffer = stats.max_buffer.max(t.buffer_blocks as f64 * g.block);
+                    stats.cpu.add(&t.cpu);
                     done += 1;
                     progress("triangulating", done as u64, total as u64);
                     let _ = tok_tx.send(());
@@ -515,6 +559,7 @@ pub(crate) fn run(
             }
             Ok(())
         })();
+        stats.cpu.write = crate::clock::thread_cpu() - writer_cpu;
         if outcome.is_err() {
             stop.store(true, Ordering::Relaxed);
         }

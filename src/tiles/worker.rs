@@ -56,6 +56,8 @@ pub(crate) struct TileOutput {
     pub buffer_blocks: i64,
     /// Points triangulated, all runs together.
     pub loaded_points: u64,
+    /// CPU time of the tile's stages.
+    pub cpu: super::TileCpu,
 }
 
 /// Runs tile `(tx, ty)`, starting with a buffer of `buffer` blocks.
@@ -100,10 +102,15 @@ pub(crate) fn run_tile(
     loop {
         out.runs += 1;
         pts.clear();
-        index.read(&loaded.rect, &mut pts)?;
-        for &k in &loaded.extra {
-            index.read_block(k, &mut pts)?;
-        }
+        let mut blocks = 0.0;
+        crate::clock::timed(&mut blocks, || -> Result<()> {
+            index.read(&loaded.rect, &mut pts)?;
+            for &k in &loaded.extra {
+                index.read_block(k, &mut pts)?;
+            }
+            Ok(())
+        })?;
+        out.cpu.blocks += blocks;
         let own = pts.len();
         out.loaded_points += own as u64;
         out.buffer_blocks = out.buffer_blocks.max(buffer_of(&owned, &loaded.rect));
@@ -117,7 +124,12 @@ pub(crate) fn run_tile(
         // Every point there is: all the blocks, and (for a task) nothing unread in the files.
         let full =
             loaded.rect.contains_rect(&occ) && index.scope.as_ref().is_none_or(|sc| sc.complete());
-        let t = match triangulate(&pts, &Options { duplicates: policy }) {
+        let mut cpu = 0.0;
+        let t = crate::clock::timed(&mut cpu, || {
+            triangulate(&pts, &Options { duplicates: policy })
+        });
+        out.cpu.triangulate += cpu;
+        let t = match t {
             Ok(t) => t,
             Err(Error::TooFewPoints { .. } | Error::AllCollinear { .. }) if !full => {
                 if loaded.rect.contains_rect(&occ) {
@@ -131,7 +143,11 @@ pub(crate) fn run_tile(
             }
             Err(e) => return Err(e),
         };
-        let verdict = judge(index, &t, &region, &loaded, full, out.runs)?;
+        let mut cpu = 0.0;
+        let verdict = crate::clock::timed(&mut cpu, || {
+            judge(index, &t, &region, &loaded, full, out.runs)
+        })?;
+        out.cpu.certify += cpu;
         if std::env::var_os("SWEEPTIN_DEBUG_TILES").is_some() {
             eprintln!(
                 "tile {tile:?} run {}: {own} points ({} extra blocks): {} certified, {} failed, \
@@ -216,14 +232,18 @@ pub(crate) fn run_tile(
         }
     }
     let (t, certified) = first.expect("a first run");
-    from_runs(
-        &owner,
-        task_owner.as_ref(),
-        &t,
-        &certified,
-        &patched,
-        &mut out,
-    );
+    let mut cpu = 0.0;
+    crate::clock::timed(&mut cpu, || {
+        from_runs(
+            &owner,
+            task_owner.as_ref(),
+            &t,
+            &certified,
+            &patched,
+            &mut out,
+        );
+    });
+    out.cpu.keep += cpu;
     Ok(out)
 }
 
