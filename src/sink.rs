@@ -62,6 +62,32 @@ pub trait MeshSink {
         false
     }
 
+    /// Does this writer take a tiled run's tiles whole ([`MeshSink::piece`]) instead of numbered
+    /// vertices? Only the pieces file of a plan's `tin` task does
+    /// ([`crate::output::pieces::PieceWriter`]).
+    fn takes_pieces(&self) -> bool {
+        false
+    }
+
+    /// One tile of a tiled run, whole: its owned triangles (indices into `vertices`), and for
+    /// each vertex its number of triangles in the whole mesh when the tile owns it, `u32::MAX`
+    /// otherwise. Called instead of the other methods when [`MeshSink::takes_pieces`].
+    ///
+    /// # Errors
+    /// [`crate::Error::Output`] from a writer that takes numbered vertices; as
+    /// [`MeshSink::triangle`].
+    fn piece(
+        &mut self,
+        _tile: (i64, i64),
+        _vertices: &[[f64; 3]],
+        _degree: &[u32],
+        _triangles: &[[u32; 3]],
+    ) -> Result<()> {
+        Err(crate::Error::Internal(
+            "this mesh writer takes numbered vertices, not pieces".into(),
+        ))
+    }
+
     /// Writes everything out and renames into place; reports errors instead of hiding them in Drop.
     ///
     /// # Errors

@@ -318,6 +318,81 @@ fn volume_of_a_plan_equals_one_run() {
     }
 }
 
+/// A TIN plan's merged mesh has the triangles of one run (each vertex once), with and without
+/// `--max-edge`, in every mesh format the merge picks by extension.
+#[test]
+fn a_tin_plan_merges_into_the_mesh_of_one_run() {
+    let dir_data = data::shared("lidar/ign_50m_tiles");
+    let mut files: Vec<String> = std::fs::read_dir(&dir_data)
+        .unwrap()
+        .map(|e| e.unwrap().path().display().to_string())
+        .filter(|p| p.ends_with(".laz"))
+        .collect();
+    files.sort();
+    let t = tempfile::tempdir().unwrap();
+    let keys = |p: &Path, whole: bool| {
+        let (v, tris) = sweeptin::input::read_ply(p).unwrap();
+        if whole {
+            // (A mesh trimmed by --max-edge may be pinched.)
+            sweeptin::validate::validate(&v, &tris).unwrap();
+        }
+        mesh::key_set(&v, tris.iter().map(|t| t.map(|i| i as usize)))
+    };
+    for (n, extra) in [(0, &[][..]), (1, &["--max-edge", "2"][..])] {
+        let job = t.path().join(format!("job{n}"));
+        let one = t.path().join(format!("one{n}.ply"));
+        let mut args: Vec<&str> = vec!["tin"];
+        args.extend(files[..4].iter().map(String::as_str));
+        args.extend(["--class", "2"]);
+        args.extend(extra);
+        let mut single = args.clone();
+        single.extend(["-o", s(&one), "-q"]);
+        sweeptin(&single, "one tin run");
+        let mut plan = vec!["plan"];
+        plan.extend(&args);
+        plan.extend(["--tile", "50", "-o", s(&job)]);
+        sweeptin(&plan, "plan tin");
+        let p = job.join("plan.json");
+        sweeptin(&["run", s(&p), "--all", "--jobs", "2", "-q"], "run");
+        let merged = t.path().join(format!("m{n}.ply"));
+        let out = sweeptin(&["merge", s(&p), "-o", s(&merged), "--json"], "merge");
+        let m: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(
+            keys(&merged, n == 0),
+            keys(&one, n == 0),
+            "{extra:?}: the triangles of one run"
+        );
+        assert_eq!(m["tasks"].as_u64().unwrap() as usize, {
+            let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
+            v["tiles"].as_array().unwrap().len()
+        });
+        if n == 1 {
+            assert!(m["tin"]["trimmed"].as_u64().unwrap() > 0, "{m}");
+        }
+    }
+    // The plan's mesh as a streaming mesh feeds the products like one run's.
+    let p = t.path().join("job0/plan.json");
+    let stin = t.path().join("m.stin");
+    sweeptin(&["merge", s(&p), "-o", s(&stin)], "merge to .stin");
+    let (a, b) = (t.path().join("a.tif"), t.path().join("b.tif"));
+    sweeptin(
+        &["dem", s(&stin), "--cell", "1", "-o", s(&a), "-q"],
+        "dem of the .stin",
+    );
+    let mut direct = vec!["dem"];
+    direct.extend(files[..4].iter().map(String::as_str));
+    direct.extend(["--class", "2", "--cell", "1", "-o", s(&b), "-q"]);
+    sweeptin(&direct, "dem");
+    assert_eq!(cells(&a), cells(&b));
+    // What the merge refuses.
+    let bad = bin()
+        .args(["merge", s(&p), "-o", s(&t.path().join("m.tif"))])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("mesh format"));
+}
+
 #[test]
 fn empty_tasks_pass_and_what_a_plan_cannot_do_is_refused() {
     let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");

@@ -82,9 +82,10 @@ pub(crate) fn make_plan(
                 .transpose()
                 .map_err(to_py)?,
         },
+        "tin" => Product::Tin,
         p => {
             return Err(value_error(format!(
-                "product={p:?}: a plan makes 'dem', 'contours' or 'volume'"
+                "product={p:?}: a plan makes 'dem', 'contours', 'volume' or 'tin'"
             )));
         }
     };

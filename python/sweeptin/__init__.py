@@ -514,8 +514,8 @@ def plan(
     mem: int | str = "1G",
     tmp_dir: PathLike | None = None,
 ) -> Plan:
-    """``sweeptin plan``: cuts a ``"dem"``, ``"contours"`` or ``"volume"`` job over LAS/LAZ
-    files into tiles of side ``tile`` (a multiple of ``cell``), one task each, and writes
+    """``sweeptin plan``: cuts a ``"dem"``, ``"contours"``, ``"volume"`` or ``"tin"`` job over
+    LAS/LAZ files into tiles of side ``tile`` (a multiple of ``cell``), one task each, and writes
     ``DIR/plan.json`` (from the files' headers only). ``buffer``: the first buffer of every
     task (default a tenth of the tile; a task widens it by itself when needed, so this never
     changes the result). A DEM plan may also make ``contours`` (the path ``merge`` writes).
@@ -524,7 +524,8 @@ def plan(
     ``.vpc`` virtual point clouds, ``@list.txt`` files and globs; the plan stores every file by
     absolute path. Run the tasks with :func:`run_task` (any order, any machine: ``sweeptin
     run`` too) and join them with :func:`merge`; the result equals one run over all the
-    files."""
+    files (a ``"tin"`` plan's merge writes one mesh, ``.ply``, ``.obj``, ``.xml`` or ``.stin``
+    by its extension, with the triangles of one run)."""
     job = {
         "product": product,
         "cell": float(cell),
@@ -588,8 +589,9 @@ def merge(
     ``compress``, ``predictor`` or ``bigtiff`` are given here) with the DEM's contours
     (``contours=``, default: the path the plan was given) and a ``hillshade`` of a ``.tif``
     mosaic (``.png`` with a world file, or an 8-bit ``.tif``); the stitched contours ``out``
-    (``.geojson``); or the summed volumes (no ``out``). Returns the summary
-    (``dem``/``contours``/``hillshade``/``volume``, ``tasks``, ``empty_tasks``,
+    (``.geojson``); the TIN ``out`` (``.ply``, ``.obj``, ``.xml`` or ``.stin``, each vertex
+    once); or the summed volumes (no ``out``). Returns the summary
+    (``dem``/``contours``/``hillshade``/``volume``/``tin``, ``tasks``, ``empty_tasks``,
     ``max_buffer``)."""
     opts = {
         "out": None if out is None else os.fspath(out),

@@ -105,6 +105,16 @@ def test_volume_plan_sums_exactly(ign, tmp_path):
         assert v[k] == one[k], k
 
 
+def test_tin_plan_merges_to_the_triangles_of_one_run(ign, tmp_path):
+    plan = sweeptin.plan("tin", ign[:2], tmp_path / "t", tile=50, classes=[2])
+    for i in plan.tasks:
+        sweeptin.run_task(plan, i)
+    s = sweeptin.merge(plan, tmp_path / "m.ply")["tin"]
+    one = sweeptin.tin(ign[:2], tmp_path / "one.ply", classes=[2])
+    mesh = one["products"]["mesh"]
+    assert (s["triangles"], s["vertices"]) == (mesh["triangles"], mesh["vertices"])
+
+
 def test_plan_inputs_from_a_vpc_a_list_and_a_glob(ign, cli, tmp_path):
     """The library expands the inputs (as the command line does): a plan names every file of a
     .vpc, an @list or a glob, by absolute path."""

@@ -2,7 +2,7 @@
 //! run as tasks of a batch engine (or locally), and joined into one seamless result. See
 //! [`sweeptin::plan`] and `docs/SCALING.md`.
 
-use super::input::{ProductInput, distinct_outputs};
+use super::input::{InputArgs, ProductInput, distinct_outputs};
 use super::{Cli, Command};
 use anyhow::{Context, bail};
 use clap::Parser;
@@ -22,7 +22,7 @@ pub struct PlanArgs {
     /// again, so this only tunes the work, never the result.
     #[arg(long, value_name = "DISTANCE")]
     pub buffer: Option<f64>,
-    /// The product command (`dem`, `contours` or `volume --plane Z`) with its input files and
+    /// The product command (`dem`, `contours`, `volume --plane Z` or `tin`) with its input files and
     /// options as for a single run, plus `--tile SIZE` (the plan's tile side, a multiple of the
     /// cell) and `-o DIR` (where the plan and the tiles' outputs go).
     #[arg(
@@ -69,7 +69,8 @@ pub struct MergeArgs {
     /// The plan (`DIR/plan.json`).
     pub plan: PathBuf,
     /// The mosaic: `OUT.vrt` (a GDAL VRT over the tile GeoTIFFs) or `OUT.tif` (one GeoTIFF) for
-    /// a DEM plan; `OUT.geojson` for a contour plan; not needed for a volume plan.
+    /// a DEM plan; `OUT.geojson` for a contour plan; `OUT.ply`, `.obj`, `.xml` (LandXML) or
+    /// `.stin` for a TIN plan (one mesh, each vertex once); not needed for a volume plan.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// For a DEM plan made with --contours: the stitched contour lines (default: the path the
@@ -94,22 +95,52 @@ enum Job {
     Dem(Box<super::dem::Args>),
     Contours(Box<super::contours::Args>),
     Volume(Box<super::volume::Args>),
+    Tin(Box<super::tin::Args>),
 }
 
 impl Job {
-    fn input(&self) -> &ProductInput {
+    fn product_input(&self) -> Option<&ProductInput> {
         match self {
-            Job::Dem(a) => &a.input,
-            Job::Contours(a) => &a.input,
-            Job::Volume(a) => &a.input,
+            Job::Dem(a) => Some(&a.input),
+            Job::Contours(a) => Some(&a.input),
+            Job::Volume(a) => Some(&a.input),
+            Job::Tin(_) => None,
         }
     }
 
-    fn input_mut(&mut self) -> &mut ProductInput {
+    /// The input options.
+    fn args(&self) -> &InputArgs {
         match self {
-            Job::Dem(a) => &mut a.input,
-            Job::Contours(a) => &mut a.input,
-            Job::Volume(a) => &mut a.input,
+            Job::Dem(a) => &a.input.args,
+            Job::Contours(a) => &a.input.args,
+            Job::Volume(a) => &a.input.args,
+            Job::Tin(a) => &a.input,
+        }
+    }
+
+    fn args_mut(&mut self) -> &mut InputArgs {
+        match self {
+            Job::Dem(a) => &mut a.input.args,
+            Job::Contours(a) => &mut a.input.args,
+            Job::Volume(a) => &mut a.input.args,
+            Job::Tin(a) => &mut a.input,
+        }
+    }
+
+    /// `--crs`.
+    fn crs(&self) -> Option<String> {
+        match self {
+            Job::Tin(a) => a.crs.clone(),
+            _ => self.product_input().and_then(|p| p.crs.clone()),
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        match self {
+            Job::Dem(_) => "dem",
+            Job::Contours(_) => "contours",
+            Job::Volume(_) => "volume",
+            Job::Tin(_) => "tin",
         }
     }
 
@@ -140,8 +171,9 @@ impl Job {
                     })
                     .transpose()?,
             },
+            Job::Tin(_) => Product::Tin,
         };
-        let a = &self.input().args;
+        let a = self.args();
         let f = a.filter.to_filter();
         Ok(sweeptin::plan::Job {
             product,
@@ -150,7 +182,7 @@ impl Job {
             drop_withheld: f.drop_withheld,
             duplicates: a.duplicates,
             max_edge: a.lines.max_edge,
-            crs: self.input().crs.clone(),
+            crs: self.crs(),
             mem: a.mem.0,
             tmp_dir: a.tmp_dir.clone(),
         })
@@ -182,15 +214,12 @@ fn take_output(argv: &[String]) -> (Vec<String>, Option<PathBuf>) {
 /// Parses a plan's command line (`dem FILES… options`, without `-o`) into its command.
 fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
     let name = argv.first().map(String::as_str).unwrap_or("");
-    if !matches!(name, "dem" | "contours" | "volume") {
-        bail!(
-            "a plan runs `dem`, `contours` or `volume --plane Z`, not `{name}` (a single mesh \
-             of many tiles is made by one `sweeptin tin` run, on every core)"
-        );
+    if !matches!(name, "dem" | "contours" | "volume" | "tin") {
+        bail!("a plan runs `dem`, `contours`, `volume --plane Z` or `tin`, not `{name}`");
     }
     let mut full = vec!["sweeptin".to_string()];
     full.extend(argv.iter().cloned());
-    if matches!(name, "dem" | "contours") {
+    if matches!(name, "dem" | "contours" | "tin") {
         // A placeholder: every task writes under the plan's directory.
         full.extend(["-o".to_string(), "plan-output".to_string()]);
     }
@@ -211,13 +240,14 @@ fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
         Command::Dem(a) => Job::Dem(Box::new(a)),
         Command::Contours(a) => Job::Contours(Box::new(a)),
         Command::Volume(a) => Job::Volume(Box::new(a)),
+        Command::Tin(a) => Job::Tin(Box::new(a)),
         _ => unreachable!("checked above"),
     })
 }
 
 /// Refuses what a plan cannot run exactly, before anything is written.
 fn check_job(job: &Job) -> anyhow::Result<()> {
-    let a = &job.input().args;
+    let a = job.args();
     if a.filter.bbox.is_some() {
         bail!("a plan covers its files whole: leave --bbox out (the tiles cut the area)");
     }
@@ -227,11 +257,7 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
         bail!(
             "breaklines, --trim-boundary, --holes and --no-flat-triangles are not yet proved exact \
              in tiles, so a plan refuses them: run the job as one `sweeptin {}` (one sweep)",
-            match job {
-                Job::Dem(_) => "dem",
-                Job::Contours(_) => "contours",
-                Job::Volume(_) => "volume",
-            }
+            job.name()
         );
     }
     if a.engine == super::input::Engine::Sweep {
@@ -257,6 +283,13 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
         Job::Volume(v) if v.plane.is_none() => {
             bail!("a plan computes volumes against a plane (--plane Z); --surface needs one run")
         }
+        Job::Tin(t) if t.boundary_polygon.is_some() => bail!(
+            "--boundary (trimming polygons) is not yet proved exact in tiles, so a plan refuses \
+             it: run the job as one `sweeptin tin` (one sweep)"
+        ),
+        Job::Tin(t) if t.format.is_some() => {
+            bail!("a TIN plan's mesh format is chosen at `sweeptin merge -o OUT.ply|obj|xml|stin`")
+        }
         _ => {}
     }
     Ok(())
@@ -268,7 +301,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let dir = dir.context("give the plan's directory with -o DIR")?;
     // `@list.txt`, quoted globs and `.vpc` files: the plan names every file (it reads each
     // header), each given input standing for its files in the stored command line.
-    let given = job.input().args.inputs.clone();
+    let given = job.args().inputs.clone();
     let groups: Vec<Vec<PathBuf>> = given
         .iter()
         .map(|g| {
@@ -278,9 +311,9 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
             )
         })
         .collect::<Result<_, _>>()?;
-    job.input_mut().args.inputs = groups.iter().flatten().cloned().collect();
+    job.args_mut().inputs = groups.iter().flatten().cloned().collect();
     check_job(&job)?;
-    let a = &job.input().args;
+    let a = job.args();
     let tile = a
         .tile
         .context("give the plan's tile side with --tile SIZE (e.g. --tile 1000)")?;

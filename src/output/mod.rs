@@ -8,6 +8,7 @@
 //!   Optimized GeoTIFF, staged and assembled in bounded memory) and [`ascii`] (ESRI ASCII grid
 //!   with a `.prj`); [`world`]: world files and `.prj` files beside images.
 //! - [`geojson`]: a streaming GeoJSON feature writer.
+//! - [`pieces`]: the tiles of a plan's `tin` task, for the merge.
 //! - [`vpc`]: virtual point clouds (`.vpc`) from LAS/LAZ headers.
 //! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C
 //!   ([`install_interrupt_handler`]); [`target`]: what an output path is (a file, a link, a
@@ -40,6 +41,7 @@ pub mod geotiff;
 pub mod landxml;
 pub mod mesh;
 pub mod obj;
+pub mod pieces;
 pub mod ply;
 pub mod raster;
 pub mod stin;

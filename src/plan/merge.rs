@@ -305,6 +305,9 @@ pub struct MergeSummary {
     /// The summed volumes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub volume: Option<crate::sink::CutFillTotals>,
+    /// The joined TIN.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tin: Option<super::mesh::TinMergeSummary>,
     /// Tasks joined.
     pub tasks: usize,
     /// Tasks that found no point.
@@ -505,6 +508,15 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
                 )));
             }
             summary.volume = Some(merge_volume(plan, dir)?);
+        }
+        Product::Tin => {
+            let out = need(out, "mesh (OUT.ply, OUT.obj, OUT.xml or OUT.stin)")?;
+            let crs = match crs {
+                Some(c) => Some(c),
+                None => plan_crs(plan)?,
+            };
+            let def = crs.as_ref().and_then(Crs::definition);
+            summary.tin = Some(super::mesh::merge_tin(plan, &recs, out, def)?);
         }
     }
     Ok(summary)

@@ -10,13 +10,15 @@
 //! again with a wider one. Tasks write their outputs under `DIR/tiles/` atomically, with a
 //! `task_<i>.json` marker last, so a task can be re-run at any time and finished tasks skipped.
 //! [`merge`] then checks that every task finished and joins the outputs: a GDAL VRT or one
-//! GeoTIFF for the DEM, contour lines stitched across tile edges, volumes summed exactly.
+//! GeoTIFF for the DEM, contour lines stitched across tile edges, volumes summed exactly, the
+//! TIN's pieces joined into one mesh ([`mesh`]).
 //!
 //! Tile edges lie on whole multiples of the tile size, which is a whole multiple of the cell, so
 //! plans with the same tile size agree tile for tile, and every raster cell (by its centre) and
 //! every triangle (by its lowest vertex in sweep order) has exactly one owner tile.
 
 pub mod merge;
+pub mod mesh;
 mod stitch;
 mod task;
 

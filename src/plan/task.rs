@@ -8,12 +8,14 @@ use super::{Plan, TaskRecord};
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use crate::input::las::{Filter, Returns};
+use crate::output::pieces::PieceWriter;
 use crate::output::raster::{RasterFormat, RasterOptions};
 use crate::pipeline::{Input, LineOptions, RunConfig, RunOptions, RunSummary, SweepAxis};
 use crate::products::contours::{ContourOptions, ContourSink};
 use crate::products::dem::{DemOptions, DemSink};
 use crate::products::volume::VolumeSink;
 use crate::raster::{Align, GridExtent, GridPlan};
+use crate::sink::MeshSink as _;
 use crate::sink::{Fanout, FanoutSummary, ProductSummary, StreamInfo, TriangleSink};
 use crate::sort::memory::DuplicatePolicy;
 use serde::{Deserialize, Serialize};
@@ -62,6 +64,10 @@ pub enum Product {
     },
     /// Contour lines.
     Contours(Levels),
+    /// The TIN itself: each task writes its tiles' triangles as mesh pieces
+    /// ([`crate::output::pieces`]); `merge` joins them into one mesh (PLY, OBJ, LandXML or a
+    /// streaming mesh, by the output's extension), each vertex once.
+    Tin,
     /// Cut and fill against the plane `z = plane`, within an optional boundary polygon.
     Volume {
         /// The plane's height.
@@ -145,6 +151,7 @@ impl Job {
             Product::Dem { .. } => "dem",
             Product::Contours(_) => "contours",
             Product::Volume { .. } => "volume",
+            Product::Tin => "tin",
         }
     }
 
@@ -216,7 +223,7 @@ impl Job {
                     "the volume's plane must be finite, not {plane}"
                 )));
             }
-            Product::Volume { .. } => {}
+            Product::Volume { .. } | Product::Tin => {}
         }
         if let Some(m) = self.max_edge {
             positive(m, "--max-edge")?;
@@ -293,11 +300,17 @@ impl Plan {
             self.check_files(i, buffer)?;
             let config = self.task_config(i, buffer, options)?;
             let mut fanout = Fanout::new(self.task_sinks(dir, i)?).with_crs(crs.clone());
-            match crate::pipeline::run(&config, None, &mut [&mut fanout]) {
+            let mut pieces = self.task_pieces(dir, i)?;
+            let mesh = pieces
+                .as_mut()
+                .map(|p| p as &mut (dyn crate::sink::MeshSink + Send));
+            match crate::pipeline::run(&config, mesh, &mut [&mut fanout]) {
                 Ok(mut run) => {
                     let products = fanout_summary(run.products.pop())?;
                     let status = if run.triangles == 0 { "empty" } else { "done" };
-                    break record_of(i, status, buffer, runs, &run, &products);
+                    let mut r = record_of(i, status, buffer, runs, &run, &products);
+                    self.finish_pieces(dir, i, pieces, &mut r)?;
+                    break r;
                 }
                 Err(Error::BufferTooSmall { reach, .. }) if runs < 40 => {
                     // Straight to the files the certificates reached, or double.
@@ -313,7 +326,9 @@ impl Plan {
                 Err(Error::TooFewPoints { .. }) => {
                     let products = self.empty_task(dir, i, &config, crs.clone())?;
                     let run = RunSummary::default();
-                    break record_of(i, "empty", buffer, runs, &run, &products);
+                    let mut r = record_of(i, "empty", buffer, runs, &run, &products);
+                    self.finish_pieces(dir, i, self.task_pieces(dir, i)?, &mut r)?;
+                    break r;
                 }
                 Err(e) => return Err(e),
             }
@@ -398,8 +413,36 @@ impl Plan {
                     .transpose()?;
                 sinks.push(("volume".into(), Box::new(VolumeSink::new(*plane, boundary))));
             }
+            // Its mesh sink: see `task_pieces`.
+            Product::Tin => {}
         }
         Ok(sinks)
+    }
+
+    /// For a TIN plan: the pieces file task `i` writes (as its mesh sink).
+    fn task_pieces(&self, dir: &Path, i: usize) -> Result<Option<PieceWriter>> {
+        match self.job.product {
+            Product::Tin => Ok(Some(PieceWriter::create(
+                &self.task_output(dir, i, "tin", "pieces"),
+            )?)),
+            _ => Ok(None),
+        }
+    }
+
+    /// Finishes the pieces file of task `i` (if its plan makes a TIN) and names it in `r`.
+    fn finish_pieces(
+        &self,
+        dir: &Path,
+        i: usize,
+        pieces: Option<PieceWriter>,
+        r: &mut TaskRecord,
+    ) -> Result<()> {
+        if let Some(mut p) = pieces {
+            p.finish()?;
+            r.outputs
+                .push(("tin".into(), self.task_output(dir, i, "tin", "pieces")));
+        }
+        Ok(())
     }
 
     /// The outputs of a task with no point: a nodata raster over its tile, no contours, no

@@ -100,8 +100,12 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
         let n = kept.iter().filter(|&&k| k).count() as u64;
         self.triangles += n;
         self.trimmed += t.triangles.len() as u64 - n;
-        if self.mesh.is_none() {
+        let Some(mesh) = self.mesh.as_mut() else {
             return Ok(());
+        };
+        if mesh.takes_pieces() {
+            // A plan's task: the merge numbers the vertices of all the tasks' pieces.
+            return mesh.piece(t.tile, &t.vertices, &t.degree, &t.triangles);
         }
         // Degrees of the owned vertices first: some were used by earlier tiles already.
         for (i, &d) in t.degree.iter().enumerate() {
@@ -179,6 +183,27 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             m.watermark(y)?;
         }
         Ok(())
+    }
+
+    /// Ends the vertices still waiting whose `(x, y)` no tile of the run owns (`orphan`): all
+    /// their triangles, owned by other tiles, are written. (A plan has no task for the tiles
+    /// just beyond the data's last row and column, which own the points on its top and right
+    /// edges but no triangle.) Returns how many.
+    ///
+    /// # Errors
+    /// The mesh writer's.
+    pub fn release(&mut self, orphan: impl Fn(f64, f64) -> bool) -> Result<u64> {
+        let mut keys: Vec<(u64, u64)> = self
+            .live
+            .keys()
+            .filter(|k| orphan(f64::from_bits(k.0), f64::from_bits(k.1)))
+            .copied()
+            .collect();
+        keys.sort_unstable_by_key(|k| self.live[k].id);
+        for &k in &keys {
+            self.done(k)?;
+        }
+        Ok(keys.len() as u64)
     }
 
     /// Vertices still waiting for triangles (none after the last tile).

@@ -1,0 +1,118 @@
+//! Joining a TIN plan: every task's mesh pieces ([`crate::output::pieces`]) into one mesh.
+//!
+//! Tasks are taken in plan order (rows of tiles south to north, west to east in a row), each
+//! task's pieces in the order it wrote them, through the same writer as one tiled run
+//! ([`crate::tiles::emit::TileWriter`]): a vertex is numbered when a triangle first uses it and
+//! forgotten when the piece of the tile that owns it has said how many triangles use it and
+//! that many were written, so only the vertices along task edges wait. The mesh is the triangle
+//! set of one run (each triangle once, from the task owning its lowest vertex); its order is the
+//! plan's order, so the same plan always gives the same bytes.
+
+use super::{Plan, TaskRecord};
+use crate::error::{Error, Result};
+use crate::output::pieces::PieceReader;
+use crate::output::{MeshMeta, create_mesh_sink};
+use crate::sink::MeshSummary;
+use crate::tiles::emit::TileWriter;
+use crate::tiles::worker::TileOutput;
+use std::path::{Path, PathBuf};
+
+/// What merging a TIN plan wrote.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct TinMergeSummary {
+    /// The mesh written.
+    pub path: PathBuf,
+    /// Vertices and triangles written, and the file's size.
+    pub vertices: u64,
+    /// See `vertices`.
+    pub triangles: u64,
+    /// See `vertices`.
+    pub bytes: u64,
+    /// Triangles `--max-edge` dropped.
+    pub trimmed: u64,
+    /// Most vertices waiting for their last triangle at once (those along task edges).
+    pub peak_waiting_vertices: u64,
+}
+
+/// Joins the pieces of `records` (every task of `plan`, in order) into the mesh `out`, whose
+/// format its extension names (`.ply`, `.obj`, `.xml`, `.stin`).
+///
+/// # Errors
+/// [`Error::Options`] for an unknown mesh extension; [`Error::Format`] for a damaged pieces
+/// file; [`Error::Internal`] when vertices are left waiting (pieces of another plan); the
+/// writer's errors.
+pub(super) fn merge_tin(
+    plan: &Plan,
+    records: &[TaskRecord],
+    out: &Path,
+    crs: Option<String>,
+) -> Result<TinMergeSummary> {
+    let meta = MeshMeta {
+        crs,
+        comments: vec![format!(
+            "sweeptin {} Delaunay TIN, merged from {} tasks of a plan",
+            env!("CARGO_PKG_VERSION"),
+            records.len()
+        )],
+    };
+    let mut sink = create_mesh_sink(out, None, &meta)?;
+    let trim = match plan.job.max_edge {
+        Some(l) => Some(crate::breaklines::Trim::new(None, &[], Some(l))?),
+        None => None,
+    };
+    let mut no_sinks: [&mut dyn crate::sink::TriangleSink; 0] = [];
+    let mut writer = TileWriter::new(Some(&mut *sink), &mut no_sinks, trim);
+    let mut row = None;
+    for (t, r) in plan.tiles.iter().zip(records) {
+        let path = r
+            .outputs
+            .iter()
+            .find(|(n, _)| n == "tin")
+            .map(|(_, p)| p.clone())
+            .ok_or_else(|| Error::Options(format!("task {} recorded no mesh pieces", r.index)))?;
+        if row != Some(t.ty) {
+            // Later tasks' triangles have their lowest vertex in this row of tiles or above.
+            writer.watermark(t.bounds[1])?;
+            row = Some(t.ty);
+        }
+        let mut pieces = PieceReader::open(&path)?;
+        while let Some(p) = pieces.next_piece()? {
+            writer.tile(&TileOutput {
+                tile: p.tile,
+                vertices: p.vertices,
+                triangles: p.triangles,
+                degree: p.degree,
+                ..TileOutput::default()
+            })?;
+        }
+    }
+    let inside = |x: f64, y: f64| {
+        plan.tiles.iter().any(|t| {
+            let b = &t.bounds;
+            x >= b[0] && x < b[2] && y >= b[1] && y < b[3]
+        })
+    };
+    writer.release(|x, y| !inside(x, y))?;
+    if writer.pending() != 0 {
+        return Err(Error::Internal(format!(
+            "{} vertices were left waiting for triangles after the last task: are the tasks' \
+             pieces all of this plan?",
+            writer.pending()
+        )));
+    }
+    let (trimmed, peak) = (writer.trimmed, writer.peak_live as u64);
+    drop(writer);
+    let MeshSummary {
+        vertices,
+        triangles,
+        bytes,
+    } = sink.finish()?;
+    Ok(TinMergeSummary {
+        path: out.to_path_buf(),
+        vertices,
+        triangles,
+        bytes,
+        trimmed,
+        peak_waiting_vertices: peak,
+    })
+}
