@@ -542,12 +542,14 @@ fn empty_tasks_pass_and_what_a_plan_cannot_do_is_refused() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("already holds another plan"));
+    // A TIN plan refuses trimming polygons and a mesh format (the merge picks it).
     let out = bin()
-        .args(["plan", "tin", s(&sample), "--tile", "16", "-o"])
+        .args(["plan", "tin", s(&sample), "--format", "ply", "--tile", "16", "-o"])
         .arg(t.path().join("tin"))
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("sweeptin merge -o OUT.ply"));
 }
 
 #[test]
