@@ -255,16 +255,16 @@ fn trim(out: &mut Thinned, trim: &crate::breaklines::Trim) -> u64 {
             if used[*i as usize] == u32::MAX {
                 used[*i as usize] = vertices.len() as u32;
                 vertices.push(out.vertices[*i as usize]);
-                index.push(out.point_index[*i as usize]);
+                index.push(out.is_point[*i as usize]);
             }
             *i = used[*i as usize];
         }
     }
     out.vertices = vertices;
-    out.point_index = index;
+    out.is_point = index;
     out.stats.triangles = out.triangles.len() as u64;
     out.stats.vertices = out.vertices.len() as u64;
-    out.stats.kept = out.point_index.iter().filter(|&&i| i != u32::MAX).count() as u64;
+    out.stats.kept = out.is_point.iter().filter(|&&p| p).count() as u64;
     out.stats.line_vertices = out.stats.vertices - out.stats.kept;
     out.stats.kept_ratio = out.stats.kept as f64 / out.stats.points.max(1) as f64;
     (before - out.triangles.len()) as u64

@@ -51,6 +51,7 @@ use super::queue::TriangleQueue;
 use crate::error::{Error, Result};
 use crate::geom::predicates::{Orientation, Vertical, VerticalPlane, orient};
 use crate::tin::{PointLocation, Tin, TriId, VertexId};
+use rayon::prelude::*;
 
 const NONE: u32 = u32::MAX;
 
@@ -113,8 +114,8 @@ pub struct Thinned {
     pub vertices: Vec<[f64; 3]>,
     /// Triangles, counter-clockwise.
     pub triangles: Vec<[u32; 3]>,
-    /// For each vertex, its index in the input points, or `u32::MAX` for a breakline vertex.
-    pub point_index: Vec<u32>,
+    /// For each vertex: is it an input point (`false`: a breakline vertex)?
+    pub is_point: Vec<bool>,
     /// Numbers.
     pub stats: ThinStats,
 }
@@ -208,12 +209,35 @@ const NO_CAND: Cand = Cand {
     error: 0.0,
 };
 
-struct Thinner<'a> {
-    pts: &'a [[f64; 3]],
+/// A point and its bucket link (the next point in the same triangle): one cache line holds
+/// both, and the buckets are walked by these links.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    p: [f64; 3],
+    next: u32,
+    /// Morton key of the position (see [`Thinner::new`]).
+    key: u32,
+}
+
+/// `next` of a hull vertex while the nodes are reordered.
+const HULL_MARK: u32 = NONE - 1;
+
+/// Interleaves the bits of two 16-bit values (Morton / Z order).
+fn morton(x: u32, y: u32) -> u32 {
+    fn spread(mut v: u32) -> u32 {
+        v &= 0xFFFF;
+        v = (v | (v << 8)) & 0x00FF_00FF;
+        v = (v | (v << 4)) & 0x0F0F_0F0F;
+        v = (v | (v << 2)) & 0x3333_3333;
+        (v | (v << 1)) & 0x5555_5555
+    }
+    spread(x) | (spread(y) << 1)
+}
+
+struct Thinner {
     tol: f64,
     tin: Tin,
-    /// Bucket links: the next point in the same triangle.
-    next: Vec<u32>,
+    nodes: Vec<Node>,
     /// First point of each triangle slot's bucket.
     head: Vec<u32>,
     cand: Vec<Cand>,
@@ -223,15 +247,15 @@ struct Thinner<'a> {
     fixed: Vec<bool>,
     heap: TriangleQueue,
     touched: Vec<TriId>,
-    gathered: Vec<u32>,
+    gathered: Vec<(u32, [f64; 3])>,
     segments: u64,
     insertions: u64,
     removed: u64,
     exact_tests: u64,
 }
 
-impl<'a> Thinner<'a> {
-    fn new(pts: &'a [[f64; 3]], lines: ThinLines<'_>, tol: f64) -> Result<Self> {
+impl Thinner {
+    fn new(pts: &[[f64; 3]], lines: ThinLines<'_>, tol: f64) -> Result<Self> {
         let h = hull(pts);
         if h.len() < 3 && lines.vertices.is_empty() {
             // The core's own error: too few points, or all collinear.
@@ -263,10 +287,9 @@ impl<'a> Thinner<'a> {
         }
         let fixed = vec![true; vpoint.len()];
         let mut t = Thinner {
-            pts,
             tol,
             tin,
-            next: vec![NONE; pts.len()],
+            nodes: Self::spatial_order(pts, &h),
             head: Vec::new(),
             cand: Vec::new(),
             vpoint,
@@ -279,8 +302,49 @@ impl<'a> Thinner<'a> {
             removed: 0,
             exact_tests: 0,
         };
-        t.bucket_all(&h)?;
+        t.bucket_all()?;
         Ok(t)
+    }
+
+    /// The points in Morton order of their position on a 2^16 × 2^16 lattice over their extent
+    /// (ties by `y`, then `x`: a total order of distinct positions, so the order depends only on
+    /// the point set), hull vertices marked. The buckets are linked lists through this array:
+    /// in this order the points of a small triangle sit close together in memory, which makes
+    /// walking them several times faster than in sweep order, where they are spread over every
+    /// point of the same `y` range.
+    fn spatial_order(pts: &[[f64; 3]], hull: &[u32]) -> Vec<Node> {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in pts {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let scale = [0, 1].map(|k| {
+            let w = hi[k] - lo[k];
+            if w > 0.0 { 65535.0 / w } else { 0.0 }
+        });
+        let mut nodes: Vec<Node> = pts
+            .iter()
+            .map(|&p| {
+                let q = [0, 1].map(|k| (((p[k] - lo[k]) * scale[k]) as u32).min(65535));
+                Node {
+                    p,
+                    next: NONE,
+                    key: morton(q[0], q[1]),
+                }
+            })
+            .collect();
+        for &i in hull {
+            nodes[i as usize].next = HULL_MARK;
+        }
+        nodes.par_sort_unstable_by(|a, b| {
+            a.key
+                .cmp(&b.key)
+                .then(a.p[1].total_cmp(&b.p[1]))
+                .then(a.p[0].total_cmp(&b.p[0]))
+        });
+        nodes
     }
 
     fn grow(&mut self) {
@@ -292,19 +356,21 @@ impl<'a> Thinner<'a> {
     }
 
     /// Puts every point that is not a vertex in the bucket of its triangle, and scans them all.
-    fn bucket_all(&mut self, hull: &[u32]) -> Result<()> {
+    fn bucket_all(&mut self) -> Result<()> {
         self.grow();
-        let mut is_vertex = vec![false; self.pts.len()];
-        for &i in hull {
-            is_vertex[i as usize] = true;
-        }
         // Walk locations from the last point's triangle; the buckets are filled in reverse so
         // that each list ends in input order (any order would do; this one is fixed).
-        for i in (0..self.pts.len() as u32).rev() {
-            if is_vertex[i as usize] {
+        for i in (0..self.nodes.len() as u32).rev() {
+            if self.nodes[i as usize].next == HULL_MARK {
+                self.nodes[i as usize].next = NONE;
+                let p = self.nodes[i as usize].p;
+                match self.tin.locate([p[0], p[1]]) {
+                    PointLocation::OnVertex(v) => self.vpoint[v.0 as usize] = i,
+                    _ => return Err(Error::Internal("thin: a hull vertex got lost".into())),
+                }
                 continue;
             }
-            let p = self.pts[i as usize];
+            let p = self.nodes[i as usize].p;
             let t = match self.tin.locate([p[0], p[1]]) {
                 PointLocation::Inside(t) => t,
                 PointLocation::OnEdge(e) => e.tri(),
@@ -320,7 +386,7 @@ impl<'a> Thinner<'a> {
                     )));
                 }
             };
-            self.next[i as usize] = self.head[t.0 as usize];
+            self.nodes[i as usize].next = self.head[t.0 as usize];
             self.head[t.0 as usize] = i;
         }
         let all: Vec<TriId> = self.tin.triangles().collect();
@@ -341,14 +407,15 @@ impl<'a> Thinner<'a> {
         let mut c = NO_CAND;
         let mut i = self.head[t.0 as usize];
         while i != NONE {
-            let v = self.check(&plane, i);
+            let n = self.nodes[i as usize];
+            let v = self.check(&plane, n.p);
             if !v.within && (c.point == NONE || v.error > c.error) {
                 c = Cand {
                     point: i,
                     error: v.error,
                 };
             }
-            i = self.next[i as usize];
+            i = n.next;
         }
         self.cand[t.0 as usize] = c;
         self.heap
@@ -362,7 +429,7 @@ impl<'a> Thinner<'a> {
         while let Some(t) = self.heap.pop() {
             let t = TriId(t);
             let q = self.cand[t.0 as usize].point;
-            let v = self.tin.insert_in_triangle(t, self.pts[q as usize])?;
+            let v = self.tin.insert_in_triangle(t, self.nodes[q as usize].p)?;
             self.register(v, q);
             self.insertions += 1;
             self.redistribute(Some(q))?;
@@ -393,36 +460,44 @@ impl<'a> Thinner<'a> {
         for &t in &touched {
             let mut i = std::mem::replace(&mut self.head[t.0 as usize], NONE);
             while i != NONE {
+                let n = self.nodes[i as usize];
                 if Some(i) != skip {
-                    gathered.push(i);
+                    gathered.push((i, n.p));
                 }
-                i = self.next[i as usize];
+                i = n.next;
             }
         }
         touched.retain(|&t| self.tin.is_live(t));
         self.place(&gathered, &touched)?;
-        for &t in &touched {
-            self.rescan(t);
-        }
         gathered.clear();
         self.gathered = gathered;
         self.touched = touched;
         Ok(())
     }
 
-    /// Puts each of `points` in the bucket of the first of `tris` that contains it (closed).
-    fn place(&mut self, points: &[u32], tris: &[TriId]) -> Result<()> {
-        let corners: Vec<[[f64; 2]; 3]> = tris
+    /// Puts each of `points` in the bucket of the first of `tris` that contains it (closed),
+    /// and rescans `tris` on the way (their buckets must have been emptied first). Returns whether
+    /// every point is within the bound.
+    fn place(&mut self, points: &[(u32, [f64; 3])], tris: &[TriId]) -> Result<bool> {
+        let geo: Vec<([[f64; 2]; 3], VerticalPlane)> = tris
             .iter()
-            .map(|&t| self.tin.tri_vertices(t).map(|v| self.tin.xy(v)))
+            .map(|&t| {
+                let p = self.tin.tri_vertices(t).map(|v| self.tin.point(v));
+                (
+                    p.map(|q| [q[0], q[1]]),
+                    VerticalPlane::new(p[0], p[1], p[2]),
+                )
+            })
             .collect();
+        for &t in tris {
+            self.cand[t.0 as usize] = NO_CAND;
+        }
         let mut last = 0;
-        for &i in points {
-            let p = self.pts[i as usize];
+        for &(i, p) in points {
             let q = [p[0], p[1]];
             let k = (0..tris.len())
                 .map(|k| (k + last) % tris.len())
-                .find(|&k| contains(&corners[k], q))
+                .find(|&k| contains(&geo[k].0, q))
                 .ok_or_else(|| {
                     Error::Internal(format!(
                         "thin: point {i} ({}, {}) left the triangles that replaced its own",
@@ -431,30 +506,30 @@ impl<'a> Thinner<'a> {
                 })?;
             last = k;
             let t = tris[k].0 as usize;
-            self.next[i as usize] = self.head[t];
+            self.nodes[i as usize].next = self.head[t];
             self.head[t] = i;
-        }
-        Ok(())
-    }
-
-    /// Are all the points in the buckets of `tris` within the bound?
-    fn all_within(&mut self, tris: &[TriId]) -> bool {
-        for &t in tris {
-            let plane = self.plane(t);
-            let mut i = self.head[t.0 as usize];
-            while i != NONE {
-                if !self.check(&plane, i).within {
-                    return false;
-                }
-                i = self.next[i as usize];
+            let v = self.check(&geo[k].1, p);
+            let c = &mut self.cand[t];
+            if !v.within && (c.point == NONE || v.error > c.error) {
+                *c = Cand {
+                    point: i,
+                    error: v.error,
+                };
             }
         }
-        true
+        let mut ok = true;
+        for &t in tris {
+            let c = self.cand[t.0 as usize];
+            ok &= c.point == NONE;
+            self.heap
+                .set(t.0, (c.point != NONE).then(|| error_key(c.error)));
+        }
+        Ok(ok)
     }
 
     #[inline]
-    fn check(&mut self, plane: &VerticalPlane, i: u32) -> Vertical {
-        let v = plane.check(self.pts[i as usize], self.tol);
+    fn check(&mut self, plane: &VerticalPlane, p: [f64; 3]) -> Vertical {
+        let v = plane.check(p, self.tol);
         self.exact_tests += u64::from(v.exact);
         v
     }
@@ -464,7 +539,7 @@ impl<'a> Thinner<'a> {
     fn decimate(&mut self) -> Result<()> {
         self.tin.set_vertex_tracking(true);
         self.tin.record_touched(false);
-        let mut points: Vec<u32> = Vec::new();
+        let mut points: Vec<(u32, [f64; 3])> = Vec::new();
         let mut tris: Vec<[VertexId; 3]> = Vec::new();
         for v in 0..self.vpoint.len() as u32 {
             let v = VertexId(v);
@@ -474,7 +549,7 @@ impl<'a> Thinner<'a> {
             // The points of the star, and the vertex's own point.
             points.clear();
             let own = self.vpoint[v.0 as usize];
-            points.push(own);
+            points.push((own, self.tin.point(v)));
             let spokes = self.tin.out_edges(v);
             if self.tin.twin(spokes[0]).is_none() {
                 self.fixed[v.0 as usize] = true;
@@ -483,8 +558,9 @@ impl<'a> Thinner<'a> {
             for &e in &spokes {
                 let mut i = self.head[e.tri().0 as usize];
                 while i != NONE {
-                    points.push(i);
-                    i = self.next[i as usize];
+                    let n = self.nodes[i as usize];
+                    points.push((i, n.p));
+                    i = n.next;
                 }
             }
             // Preview: the triangles that would fill the hole.
@@ -514,8 +590,7 @@ impl<'a> Thinner<'a> {
             fresh.sort_unstable();
             fresh.dedup();
             fresh.retain(|&t| self.tin.is_live(t));
-            self.place(&points, &fresh)?;
-            if self.all_within(&fresh) {
+            if self.place(&points, &fresh)? {
                 self.removed += 1;
                 self.vpoint[v.0 as usize] = NONE;
             } else {
@@ -531,7 +606,7 @@ impl<'a> Thinner<'a> {
         Ok(())
     }
 
-    fn preview_ok(&mut self, points: &[u32], tris: &[[VertexId; 3]]) -> bool {
+    fn preview_ok(&mut self, points: &[(u32, [f64; 3])], tris: &[[VertexId; 3]]) -> bool {
         let geo: Vec<([[f64; 2]; 3], VerticalPlane)> = tris
             .iter()
             .map(|t| {
@@ -543,8 +618,7 @@ impl<'a> Thinner<'a> {
             })
             .collect();
         let mut last = 0;
-        for &i in points {
-            let p = self.pts[i as usize];
+        for &(_, p) in points {
             let Some(k) = (0..geo.len())
                 .map(|k| (k + last) % geo.len())
                 .find(|&k| contains(&geo[k].0, [p[0], p[1]]))
@@ -569,13 +643,14 @@ impl<'a> Thinner<'a> {
             let plane = self.plane(t);
             let mut i = self.head[t.0 as usize];
             while i != NONE {
-                let c = plane.check(self.pts[i as usize], self.tol);
+                let n = self.nodes[i as usize];
+                let c = plane.check(n.p, self.tol);
                 if !c.within {
                     beyond += 1;
                 }
                 max = max.max(c.error);
                 sum += c.error * c.error;
-                i = self.next[i as usize];
+                i = n.next;
             }
         }
         if beyond > 0 {
@@ -588,14 +663,14 @@ impl<'a> Thinner<'a> {
         for v in self.tin.vertices() {
             remap[v.0 as usize] = out.vertices.len() as u32;
             out.vertices.push(self.tin.point(v));
-            out.point_index.push(self.vpoint[v.0 as usize]);
+            out.is_point.push(self.vpoint[v.0 as usize] != NONE);
         }
         out.triangles = tris
             .iter()
             .map(|&t| self.tin.tri_vertices(t).map(|v| remap[v.0 as usize]))
             .collect();
-        let n = self.pts.len() as u64;
-        let kept = out.point_index.iter().filter(|&&i| i != NONE).count() as u64;
+        let n = self.nodes.len() as u64;
+        let kept = out.is_point.iter().filter(|&&p| p).count() as u64;
         out.stats = ThinStats {
             points: n,
             kept,
