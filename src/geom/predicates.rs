@@ -708,4 +708,36 @@ mod tests {
         assert!(!check_coord(1e20));
         assert!(!check_coord(f64::NAN));
     }
+
+    #[test]
+    fn vertical_tolerance_is_decided_exactly_at_the_boundary() {
+        // A tilted plane z = 0.25 x + 0.5 y over UTM-sized coordinates (exact in binary).
+        let (x0, y0) = (511_000.0, 122_000.0);
+        let z = |x: f64, y: f64| 300.0 + 0.25 * (x - x0) + 0.5 * (y - y0);
+        let a = [x0, y0, z(x0, y0)];
+        let b = [x0 + 8.0, y0, z(x0 + 8.0, y0)];
+        let c = [x0, y0 + 8.0, z(x0, y0 + 8.0)];
+        for plane in [VerticalPlane::new(a, b, c), VerticalPlane::new(a, c, b)] {
+            let (px, py) = (x0 + 2.0, y0 + 3.0);
+            let on = z(px, py);
+            // Exactly at the tolerance (0.125 is exact): within, above and below.
+            for d in [0.125, -0.125] {
+                let v = plane.check([px, py, on + d], 0.125);
+                assert!(v.within, "{d}");
+                assert!(v.exact, "the boundary needs the exact test");
+            }
+            // One unit in the last place beyond: not within.
+            let beyond = (on + 0.125).next_up();
+            assert!(!plane.check([px, py, beyond], 0.125).within);
+            assert!(!plane.check([px, py, on - 0.126], 0.125).within);
+            // Far inside and far outside: decided by the floating-point bound.
+            let v = plane.check([px, py, on + 0.01], 0.125);
+            assert!(v.within && !v.exact && (v.error - 0.01).abs() < 1e-9);
+            let v = plane.check([px, py, on + 1.0], 0.125);
+            assert!(!v.within && !v.exact);
+            // Tolerance 0: only points exactly on the plane.
+            assert!(plane.check([px, py, on], 0.0).within);
+            assert!(!plane.check([px, py, on.next_up()], 0.0).within);
+        }
+    }
 }

@@ -84,7 +84,7 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
             }
             pts.extend(chunk.iter().map(|p| [p.x, p.y, p.z]));
         }
-        summary.filters = Some(r.stats().clone());
+        summary.filters = Some(*r.stats());
         pts
     } else {
         let (pts, _) = super::read_points(input)?;
