@@ -259,7 +259,7 @@ fn the_core_keeps_breaklines_and_every_point_at_zero_tolerance() {
     let pts = distinct(&creased(3000, 7));
     let line = [[50.0, -1.0, 1.0], [50.0, 101.0, 1.0]];
     let t = thin(
-        &pts,
+        pts.clone(),
         ThinLines {
             vertices: &line,
             segments: &[[0, 1]],
@@ -274,10 +274,23 @@ fn the_core_keeps_breaklines_and_every_point_at_zero_tolerance() {
     assert!(max <= 0.02 + 1e-12, "{max}");
     assert!(t.stats.kept < pts.len() as u64 / 5, "{:?}", t.stats);
     // Tolerance 0 on noisy heights: every point stays, and the TIN is their Delaunay TIN.
-    let all = thin(&pts, ThinLines::default(), &ThinOptions::max_error(0.0)).unwrap();
+    let all = thin(
+        pts.clone(),
+        ThinLines::default(),
+        &ThinOptions::max_error(0.0),
+    )
+    .unwrap();
     assert_eq!(all.stats.kept, pts.len() as u64);
     assert_eq!(all.stats.max_error, 0.0);
     assert_spade_delaunay(&all);
+    // A budget the points alone outgrow stops the run with a usage error naming --mem.
+    let tight = ThinOptions {
+        mem: Some(10_000),
+        ..ThinOptions::max_error(0.0)
+    };
+    let e = thin(pts, ThinLines::default(), &tight).unwrap_err();
+    assert_eq!(e.kind(), sweeptin::ErrorKind::Usage);
+    assert!(e.to_string().contains("--mem"), "{e}");
 }
 
 fn sweeptin_cmd() -> Command {

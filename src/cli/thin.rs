@@ -58,6 +58,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let options = ThinOptions {
         max_error: args.max_error,
         decimate: !args.no_decimate,
+        mem: Some(args.input.mem.0),
     };
     let crs = match &args.crs {
         Some(c) => Some(c.clone()),

@@ -15,7 +15,9 @@ use crate::simplify::{ThinLines, ThinOptions, Thinned};
 use crate::sort::memory::DuplicatePolicy;
 use rayon::prelude::*;
 
-/// Peak bytes per point of a thinning run (points, sort order, distinct copy, bucket links).
+/// Peak bytes per point (of the headers' count, before filters) while reading and sorting: the
+/// points, their sort order and distinct copy, then the points with their bucket links (ARSO:
+/// 548 MiB for 13.2 M points in the headers, 9.0 M ground points read).
 pub const THIN_BYTES_PER_POINT: u64 = 64;
 
 /// What `sweeptin thin` did (its `--json` summary).
@@ -132,8 +134,7 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
         vertices: &line_vertices,
         segments: &segments,
     };
-    let mut out = crate::simplify::thin(&points, lines, options)?;
-    drop(points);
+    let mut out = crate::simplify::thin(points, lines, options)?;
     if let Some(p) = &prepared {
         summary.breaklines = Some(p.summary.clone());
         if !p.trim.keeps_all() {
