@@ -444,7 +444,7 @@ pub fn circumdisk_bounds(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> Option<DiskBo
 }
 
 /// A triangle's plane in 3-D, for deciding whether points lie within a vertical distance of it
-/// (the thinning's tolerance test, [`crate::simplify::thin`]).
+/// (the thinning's tolerance test, [`crate::simplify::thin()`]).
 ///
 /// For a counter-clockwise triangle `a, b, c` and a point `p`, Shewchuk's 3-D orientation
 /// `orient3d(a, b, c, p) = D2 · (plane(p) − p.z)` with `D2 = orient2d(a, b, c) > 0`, so the

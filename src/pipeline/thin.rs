@@ -1,8 +1,8 @@
 //! The input side of `sweeptin thin`: the points of a run (filters, `--bbox`, duplicates merged
 //! by `--duplicates`), its breaklines (cleaned and draped as for `tin`), and the thinning itself
-//! ([`crate::simplify::thin`]), whose result the caller writes to a mesh sink.
+//! ([`crate::simplify::thin()`]), whose result the caller writes to a mesh sink.
 //!
-//! The thinning holds every point in memory (see [`crate::simplify::thin`] for why): about
+//! The thinning holds every point in memory (see [`mod@crate::simplify::thin`] for why): about
 //! [`THIN_BYTES_PER_POINT`] bytes per point at the peak (reading and sorting). The job is checked
 //! against `--mem` from the LAS/LAZ headers' point counts before anything is read, and refused
 //! when it does not fit.
@@ -50,7 +50,7 @@ pub struct ThinSummary {
 /// # Errors
 /// [`Error::Options`] when the job cannot fit in `--mem`, for a streaming mesh as input, or for
 /// `--max-edge` and `--no-flat-triangles` (which would uncover points); reader and breakline
-/// errors; the errors of [`crate::simplify::thin`].
+/// errors; the errors of [`crate::simplify::thin()`].
 pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinSummary)> {
     let input = config.input();
     let l = &input.lines;

@@ -5,8 +5,8 @@
 //! lidar points in place of grid cells, by the classic *bucket* method: every point not yet in the
 //! TIN is kept in the bucket of the triangle that contains it (a linked list through the points),
 //! and each triangle's candidate is the point of largest vertical error in its bucket among those
-//! not within the tolerance. The worst candidate of all ([`super::queue::TriangleQueue`], the same
-//! indexed heap) is inserted with exact Delaunay insertion ([`Tin::insert_in_triangle`], Lawson
+//! not within the tolerance. The worst candidate of all (the grid simplifier's `TriangleQueue`,
+//! the same indexed heap) is inserted with exact Delaunay insertion ([`Tin::insert_in_triangle`], Lawson
 //! flips, the crate's tie rule); the points of the triangles the insertion created or flipped are
 //! moved to the new triangles (located exactly with [`orient`]) and those triangles rescanned.
 //! It stops when every point is within the tolerance. A redundancy pass
