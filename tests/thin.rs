@@ -337,3 +337,71 @@ fn same_bytes_whatever_mem_and_threads_and_clear_refusals() {
         assert!(!dir.path().join("c.ply").exists());
     }
 }
+
+/// A closed square ring with a vertex every 5 units, as 2-D text (draped from the points).
+fn ring(x0: f64, y0: f64, x1: f64, y1: f64) -> String {
+    let corners = [[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]];
+    let mut s = String::new();
+    for w in corners.windows(2) {
+        let n = (((w[1][0] - w[0][0]).abs() + (w[1][1] - w[0][1]).abs()) / 5.0) as usize;
+        for k in 0..n {
+            let t = k as f64 / n as f64;
+            let p = [0, 1].map(|j| w[0][j] + t * (w[1][j] - w[0][j]));
+            s.push_str(&format!("{} {}\n", p[0], p[1]));
+        }
+    }
+    s.push_str(&format!("{x0} {y0}\n\n"));
+    s
+}
+
+#[test]
+fn trimming_keeps_the_survey_area_within_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = distinct(&creased(4000, 3));
+    let xyz = dir.path().join("pts.xyz");
+    let text: String = pts
+        .iter()
+        .map(|p| format!("{} {} {}\n", p[0], p[1], p[2]))
+        .collect();
+    std::fs::write(&xyz, text).unwrap();
+    let (b, h) = (dir.path().join("b.txt"), dir.path().join("h.txt"));
+    std::fs::write(&b, ring(10.0, 10.0, 90.0, 90.0)).unwrap();
+    std::fs::write(&h, ring(40.0, 40.0, 60.0, 60.0)).unwrap();
+    let lines = LineOptions {
+        boundary: Some(b),
+        holes: Some(h),
+        ..LineOptions::default()
+    };
+    let tol = 0.02;
+    let (t, summary) = sweeptin::pipeline::thin(
+        &config(&[xyz], Filter::default(), lines),
+        &ThinOptions::max_error(tol),
+    )
+    .unwrap();
+    assert!(summary.trimmed_triangles > 0);
+    let check = sweeptin::validate::CdtCheck {
+        convex_hull: false,
+        delaunay: true,
+    };
+    sweeptin::validate::validate_cdt_with(&t.vertices, &t.triangles, &[], &check).unwrap();
+    for tri in &t.triangles {
+        let c = [0, 1].map(|k| tri.iter().map(|&i| t.vertices[i as usize][k]).sum::<f64>() / 3.0);
+        let inside = |lo: f64, hi: f64| (lo..=hi).contains(&c[0]) && (lo..=hi).contains(&c[1]);
+        assert!(
+            inside(10.0, 90.0) && !inside(40.0, 60.0),
+            "triangle at {c:?}"
+        );
+    }
+    // Points strictly inside the survey area and outside the hole: covered and within.
+    let area: Vec<[f64; 3]> = pts
+        .iter()
+        .filter(|p| {
+            let inside = |lo: f64, hi: f64| p[0] > lo && p[0] < hi && p[1] > lo && p[1] < hi;
+            inside(10.0, 90.0) && !(p[0] >= 40.0 && p[0] <= 60.0 && p[1] >= 40.0 && p[1] <= 60.0)
+        })
+        .copied()
+        .collect();
+    let (max, uncovered) = tin_errors(&t.vertices, &t.triangles, &area);
+    assert_eq!(uncovered, 0);
+    assert!(max <= tol + 1e-9, "max error {max}");
+}
