@@ -21,6 +21,7 @@ mod profile;
 mod run_all;
 mod sample;
 mod simplify;
+mod thin;
 mod tin;
 mod volume;
 
@@ -81,6 +82,9 @@ enum Command {
     /// Write a virtual point cloud (.vpc) listing LAS/LAZ/COPC files with their extents, counts
     /// and CRS (headers only), for QGIS, PDAL wrench, lasR and sweeptin's own box reads.
     Index(index::Args),
+    /// Thin points into the fewest-point TIN that keeps every point within a vertical tolerance
+    /// (--max-error), breaklines kept as edges.
+    Thin(thin::Args),
 }
 
 /// The last panic's message and place (see `main`).
@@ -164,6 +168,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         Command::Products(a) => input::expand(&mut a.input.args.inputs)?,
         Command::Index(a) => input::expand_files(&mut a.files)?,
         Command::Crossval(a) => input::expand(&mut a.input)?,
+        Command::Thin(a) => input::expand(&mut a.input.inputs)?,
         _ => {}
     }
     match cli.command {
@@ -183,6 +188,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         Command::Run(a) => plan::run(a),
         Command::Merge(a) => plan::merge(a),
         Command::Index(a) => index::run(a),
+        Command::Thin(a) => thin::run(a),
     }
 }
 

@@ -443,6 +443,143 @@ pub fn circumdisk_bounds(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> Option<DiskBo
     }
 }
 
+/// A triangle's plane in 3-D, for deciding whether points lie within a vertical distance of it
+/// (the thinning's tolerance test, [`crate::simplify::thin()`]).
+///
+/// For a counter-clockwise triangle `a, b, c` and a point `p`, Shewchuk's 3-D orientation
+/// `orient3d(a, b, c, p) = D2 · (plane(p) − p.z)` with `D2 = orient2d(a, b, c) > 0`, so the
+/// vertical distance is `|orient3d| / D2`. [`VerticalPlane::check`] first bounds both
+/// determinants in floating point with Shewchuk's error bounds for their first stage (`(7 + 56ε)ε`
+/// times the permanent for `orient3d`, `(3 + 16ε)ε` for `orient2d`), which certifies most points as
+/// within or beyond the tolerance; the rest are decided by [`robust`]'s exact `orient3d` on the
+/// points `(p.x, p.y, lo)` and `(p.x, p.y, hi)`, where `lo ≥ z − tol` and `hi ≤ z + tol` are
+/// `z ∓ tol` rounded towards `z`: the point is within when the plane passes between them. So a
+/// point is reported within only when it provably is; a point within by less than one unit in the
+/// last place of its `z` may be reported beyond (and then kept by the thinning), never the reverse.
+#[derive(Clone, Copy, Debug)]
+pub struct VerticalPlane {
+    a: [f64; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+    /// `orient2d(a, b, c)` in floating point, and a bound on its error.
+    d2: f64,
+    d2_err: f64,
+}
+
+/// What [`VerticalPlane::check`] found for one point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vertical {
+    /// The vertical distance `|plane(p) − p.z|` in floating point (for ranking and statistics,
+    /// not for decisions).
+    pub error: f64,
+    /// The point is (provably) within the tolerance.
+    pub within: bool,
+    /// The floating-point bound could not decide: exact `orient3d` did.
+    pub exact: bool,
+}
+
+impl VerticalPlane {
+    /// The plane of the counter-clockwise triangle `a, b, c` (which must not be degenerate).
+    #[inline]
+    pub fn new(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> VerticalPlane {
+        const CCW_A: f64 = (3.0 + 16.0 * SHEWCHUK_EPS) * SHEWCHUK_EPS;
+        let l = (a[0] - c[0]) * (b[1] - c[1]);
+        let r = (a[1] - c[1]) * (b[0] - c[0]);
+        VerticalPlane {
+            a,
+            b,
+            c,
+            d2: l - r,
+            d2_err: CCW_A * (l.abs() + r.abs()),
+        }
+    }
+
+    /// Is `p` (inside the triangle, or anywhere) within `tol` of the plane vertically?
+    #[inline]
+    pub fn check(&self, p: [f64; 3], tol: f64) -> Vertical {
+        const O3D_A: f64 = (7.0 + 56.0 * SHEWCHUK_EPS) * SHEWCHUK_EPS;
+        // A relative margin for the few roundings of the bounds themselves.
+        const MARGIN: f64 = 1e-12;
+        let (a, b, c) = (self.a, self.b, self.c);
+        let (adx, bdx, cdx) = (a[0] - p[0], b[0] - p[0], c[0] - p[0]);
+        let (ady, bdy, cdy) = (a[1] - p[1], b[1] - p[1], c[1] - p[1]);
+        let (adz, bdz, cdz) = (a[2] - p[2], b[2] - p[2], c[2] - p[2]);
+        let (bdxcdy, cdxbdy) = (bdx * cdy, cdx * bdy);
+        let (cdxady, adxcdy) = (cdx * ady, adx * cdy);
+        let (adxbdy, bdxady) = (adx * bdy, bdx * ady);
+        let det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) + cdz * (adxbdy - bdxady);
+        let permanent = (bdxcdy.abs() + cdxbdy.abs()) * adz.abs()
+            + (cdxady.abs() + adxcdy.abs()) * bdz.abs()
+            + (adxbdy.abs() + bdxady.abs()) * cdz.abs();
+        let err3 = O3D_A * permanent;
+        let error = (det / self.d2).abs();
+        let d2 = self.d2.abs();
+        if d2 > self.d2_err {
+            let upper = (det.abs() + err3) / (d2 - self.d2_err) * (1.0 + MARGIN);
+            if upper <= tol {
+                return Vertical {
+                    error,
+                    within: true,
+                    exact: false,
+                };
+            }
+            let lower = (det.abs() - err3) / (d2 + self.d2_err) * (1.0 - MARGIN);
+            if lower > tol {
+                return Vertical {
+                    error,
+                    within: false,
+                    exact: false,
+                };
+            }
+        }
+        Vertical {
+            error,
+            within: self.within_exact(p, tol),
+            exact: true,
+        }
+    }
+
+    /// The exact test: does the plane pass between `(p.x, p.y, lo)` and `(p.x, p.y, hi)`?
+    fn within_exact(&self, p: [f64; 3], tol: f64) -> bool {
+        let (lo, hi) = (sub_up(p[2], tol), add_down(p[2], tol));
+        if lo > hi {
+            return false;
+        }
+        let c3 = |q: [f64; 3]| robust::Coord3D {
+            x: q[0],
+            y: q[1],
+            z: q[2],
+        };
+        let s = self.d2.signum();
+        let below = robust::orient3d(c3(self.a), c3(self.b), c3(self.c), c3([p[0], p[1], lo]));
+        let above = robust::orient3d(c3(self.a), c3(self.b), c3(self.c), c3([p[0], p[1], hi]));
+        // Counter-clockwise: positive when the point is below the plane.
+        s * below >= 0.0 && s * above <= 0.0
+    }
+}
+
+/// Shewchuk's ε: half a unit in the last place of 1.
+const SHEWCHUK_EPS: f64 = f64::EPSILON / 2.0;
+
+/// `z − t` rounded up (never below the exact difference).
+fn sub_up(z: f64, t: f64) -> f64 {
+    let s = z - t;
+    // Two-sum: `s + err` is exactly `z − t`.
+    let bv = s - z;
+    let av = s - bv;
+    let err = (z - av) + (-t - bv);
+    if err > 0.0 { s.next_up() } else { s }
+}
+
+/// `z + t` rounded down (never above the exact sum).
+fn add_down(z: f64, t: f64) -> f64 {
+    let s = z + t;
+    let bv = s - z;
+    let av = s - bv;
+    let err = (z - av) + (t - bv);
+    if err < 0.0 { s.next_down() } else { s }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -570,5 +707,37 @@ mod tests {
         assert!(!check_coord(1e-40));
         assert!(!check_coord(1e20));
         assert!(!check_coord(f64::NAN));
+    }
+
+    #[test]
+    fn vertical_tolerance_is_decided_exactly_at_the_boundary() {
+        // A tilted plane z = 0.25 x + 0.5 y over UTM-sized coordinates (exact in binary).
+        let (x0, y0) = (511_000.0, 122_000.0);
+        let z = |x: f64, y: f64| 300.0 + 0.25 * (x - x0) + 0.5 * (y - y0);
+        let a = [x0, y0, z(x0, y0)];
+        let b = [x0 + 8.0, y0, z(x0 + 8.0, y0)];
+        let c = [x0, y0 + 8.0, z(x0, y0 + 8.0)];
+        for plane in [VerticalPlane::new(a, b, c), VerticalPlane::new(a, c, b)] {
+            let (px, py) = (x0 + 2.0, y0 + 3.0);
+            let on = z(px, py);
+            // Exactly at the tolerance (0.125 is exact): within, above and below.
+            for d in [0.125, -0.125] {
+                let v = plane.check([px, py, on + d], 0.125);
+                assert!(v.within, "{d}");
+                assert!(v.exact, "the boundary needs the exact test");
+            }
+            // One unit in the last place beyond: not within.
+            let beyond = (on + 0.125).next_up();
+            assert!(!plane.check([px, py, beyond], 0.125).within);
+            assert!(!plane.check([px, py, on - 0.126], 0.125).within);
+            // Far inside and far outside: decided by the floating-point bound.
+            let v = plane.check([px, py, on + 0.01], 0.125);
+            assert!(v.within && !v.exact && (v.error - 0.01).abs() < 1e-9);
+            let v = plane.check([px, py, on + 1.0], 0.125);
+            assert!(!v.within && !v.exact);
+            // Tolerance 0: only points exactly on the plane.
+            assert!(plane.check([px, py, on], 0.0).within);
+            assert!(!plane.check([px, py, on.next_up()], 0.0).within);
+        }
     }
 }

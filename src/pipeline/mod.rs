@@ -22,6 +22,7 @@ mod emit;
 mod lines;
 mod read;
 mod replay;
+mod thin;
 mod tiled;
 
 use crate::error::{Error, Result};
@@ -34,6 +35,7 @@ use std::path::PathBuf;
 pub use config::RunConfig;
 pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary};
 pub use read::read_points;
+pub use thin::{THIN_BYTES_PER_POINT, ThinSummary, thin};
 
 /// What to triangulate.
 #[derive(Clone, Debug)]

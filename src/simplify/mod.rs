@@ -48,6 +48,8 @@ use scan::{CellTriangle, NO_CELL};
 
 mod queue;
 pub mod scan;
+pub mod thin;
+pub use thin::{ThinLines, ThinOptions, ThinStats, Thinned, thin};
 
 /// When to stop refining.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
