@@ -18,6 +18,7 @@ mod input;
 mod plan;
 mod products;
 mod profile;
+mod refine;
 mod run_all;
 mod sample;
 mod simplify;
@@ -81,6 +82,9 @@ enum Command {
     /// Write a virtual point cloud (.vpc) listing LAS/LAZ/COPC files with their extents, counts
     /// and CRS (headers only), for QGIS, PDAL wrench, lasR and sweeptin's own box reads.
     Index(index::Args),
+    /// Quality mesh: refine a TIN (mesh or points, with breaklines) until every angle is at
+    /// least --min-angle (Ruppert / Triangle -q), for hydraulic and FEM models.
+    Refine(refine::Args),
 }
 
 /// The last panic's message and place (see `main`).
@@ -164,6 +168,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         Command::Products(a) => input::expand(&mut a.input.args.inputs)?,
         Command::Index(a) => input::expand_files(&mut a.files)?,
         Command::Crossval(a) => input::expand(&mut a.input)?,
+        Command::Refine(a) => input::expand(&mut a.input.inputs)?,
         _ => {}
     }
     match cli.command {
@@ -183,6 +188,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         Command::Run(a) => plan::run(a),
         Command::Merge(a) => plan::merge(a),
         Command::Index(a) => index::run(a),
+        Command::Refine(a) => refine::run(a),
     }
 }
 

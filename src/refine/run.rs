@@ -163,8 +163,11 @@ impl<'a> Refiner<'a> {
             .tin
             .find_edge(a, b)
             .or_else(|| self.tin.find_edge(b, a))?;
-        let apex = self.tin.org(e.prev());
-        (apex == c && self.inside[e.tri().0 as usize]).then(|| e.tri())
+        [Some(e), self.tin.twin(e)]
+            .into_iter()
+            .flatten()
+            .find(|&f| self.tin.org(f.prev()) == c && self.inside[f.tri().0 as usize])
+            .map(EdgeId::tri)
     }
 
     fn area(&self, t: TriId) -> f64 {
@@ -216,7 +219,14 @@ impl<'a> Refiner<'a> {
                     let pj = self.tin.xy(j);
                     let dist = |q: [f64; 2]| len([q[0] - pj[0], q[1] - pj[1]]);
                     let (d1, d2) = (dist(p[k]), dist(p[(k + 1) % 3]));
-                    if d1 < 1.001 * d2 && d1 > 0.999 * d2 {
+                    let (u, w) = (
+                        [p[k][0] - pj[0], p[k][1] - pj[1]],
+                        [p[(k + 1) % 3][0] - pj[0], p[(k + 1) % 3][1] - pj[1]],
+                    );
+                    // Only at an input angle below 60° (cos² > 1/4 with a positive cosine).
+                    let dot = u[0] * w[0] + u[1] * w[1];
+                    let small = dot > 0.0 && dot * dot > 0.25 * d1 * d2;
+                    if small && d1 < 1.001 * d2 && d1 > 0.999 * d2 {
                         return None;
                     }
                 }
