@@ -7,8 +7,8 @@
 //!   only the triangles the algorithm documents as unfixable (at input angles below 60°) may
 //!   fall short, and they are counted in `stats.skinny`;
 //! * every input segment is the union of output edges, each flagged constrained, whose
-//!   intermediate vertices lie on the segment (within 1e-12 of its length: a split point is
-//!   rounded once) and advance along it;
+//!   intermediate vertices lie on the segment (within a few units in the last place of their
+//!   coordinates plus 1e-12 of its length: a split point is rounded once) and advance along it;
 //! * every Steiner point's z is the original surface's at its xy (free points: the input
 //!   triangle holding it, found here by brute force) or the segment's line (segment points);
 //! * the output is the constrained Delaunay triangulation of its own vertices and constrained
@@ -126,8 +126,11 @@ fn check(
         let along = |v: u32| {
             let p = r.vertices[v as usize];
             let w = [p[0] - s[0][0], p[1] - s[0][1]];
-            let off = (w[0] * d[1] - w[1] * d[0]).abs() / len2;
-            ((w[0] * d[0] + w[1] * d[1]) / len2, off)
+            // Distance to the line, against a few units in the last place of the coordinates
+            // (a split point is rounded once) plus 1e-12 of the length.
+            let dist = (w[0] * d[1] - w[1] * d[0]).abs() / len2.sqrt();
+            let tol = 1e-14 * (p[0].abs() + p[1].abs()) + 1e-12 * len2.sqrt();
+            ((w[0] * d[0] + w[1] * d[1]) / len2, dist / tol)
         };
         let (mut v, mut t) = (a, 0.0);
         while v != b {
@@ -136,7 +139,7 @@ fn check(
                 .copied()
                 .filter(|&w| {
                     let (tw, off) = along(w);
-                    off < 1e-12 && tw > t && tw <= 1.0 + 1e-12
+                    off <= 1.0 && tw > t && tw <= 1.0 + 1e-12
                 })
                 .min_by(|&x, &y| along(x).0.total_cmp(&along(y).0))
                 .unwrap_or_else(|| panic!("segment {s:?} is not made of output edges"));
@@ -277,4 +280,122 @@ fn square_with_breakline_and_hole() {
     let again = refine(&v, &t, &lines, &o).unwrap();
     assert_eq!(again.vertices, r.vertices);
     assert_eq!(again.triangles, r.triangles);
+}
+
+#[test]
+fn small_input_angles_terminate() {
+    // A square with two segments from its corner at about 8° and 4° from its bottom edge: input
+    // angles that no refinement can fix. It must end, leave only triangles at those wedges under
+    // the bound, and meet it everywhere else.
+    let mut pts: Vec<[f64; 3]> = [(0.0, 0.0), (100.0, 0.0), (100.0, 100.0), (0.0, 100.0)]
+        .iter()
+        .map(|&(x, y)| [x, y, plane(x, y)])
+        .collect();
+    let mut segs = ring(0, 4);
+    for &(x, y) in &[(100.0, 14.0), (90.0, 6.3)] {
+        pts.push([x, y, plane(x, y)]);
+        segs.push([0, pts.len() as u32 - 1]);
+    }
+    let (v, t) = domain(&pts, &segs, &[]);
+    let lines = as_lines(&pts, &segs[4..]);
+    let r = refine(&v, &t, &lines, &RefineOptions::default()).unwrap();
+    check(&r, &v, &t, &coords(&pts, &segs), 30.0);
+    assert!(r.stats.skinny > 0 && r.stats.skinny < 20, "{:?}", r.stats);
+    // Every skinny triangle sits in a wedge: each of its vertices is on a segment from the
+    // corner (or is the corner).
+    let on_ray = |p: [f64; 3]| {
+        [[100.0, 0.0], [100.0, 14.0], [90.0, 6.3]]
+            .iter()
+            .any(|d: &[f64; 2]| (p[0] * d[1] - p[1] * d[0]).abs() <= 1e-9 * 100.0 * 100.0)
+    };
+    for tri in &r.triangles {
+        let p = tri.map(|i| r.vertices[i as usize]);
+        if !meets(p, 30.0) {
+            assert!(
+                p.iter().all(|&q| on_ray(q)),
+                "skinny triangle {p:?} off the wedges"
+            );
+        }
+    }
+}
+
+#[test]
+fn max_area_bounds_every_triangle() {
+    let (pts, segs, holes) = square_pslg();
+    let (v, t) = domain(&pts, &segs, &holes);
+    let o = RefineOptions {
+        min_angle: 25.0,
+        max_area: Some(20.0),
+        max_steiner: None,
+    };
+    let r = refine(&v, &t, &as_lines(&pts, &segs[8..]), &o).unwrap();
+    check(&r, &v, &t, &coords(&pts, &segs), 25.0);
+    assert_eq!(r.stats.skinny, 0);
+    assert!(r.stats.max_area <= 20.0, "{:?}", r.stats);
+    assert!(r.triangles.len() >= 9600 / 20);
+}
+
+#[test]
+fn bad_input_is_refused() {
+    let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let bad = |t: &[[u32; 3]], o: &RefineOptions| refine(&v, t, &[], o).unwrap_err().to_string();
+    let o = RefineOptions::default();
+    assert!(bad(&[[0, 2, 1]], &o).contains("clockwise"));
+    assert!(bad(&[[0, 1, 3]], &o).contains("beyond"));
+    let steep = RefineOptions {
+        min_angle: 40.0,
+        ..o
+    };
+    assert!(bad(&[[0, 1, 2]], &steep).contains("34"));
+    // A breakline that leaves the mesh is left out and counted.
+    let out = [[[0.2, 0.2, f64::NAN], [3.0, 3.0, f64::NAN]]];
+    let r = refine(&v, &[[0, 1, 2]], &out, &o).unwrap();
+    assert_eq!(r.stats.breakline_segments_outside, 1);
+}
+
+/// The BGT partition of Delft (real breaklines: a planar partition with segments down to 1 mm
+/// and many small angles), in an 60 m window, refined at 30° and checked like the synthetic
+/// graphs.
+#[test]
+fn real_bgt_breaklines() {
+    let path = data::shared("lines/bgt_delft_all_layers.geojson");
+    let g = sweeptin::breaklines::read_files(&[path])
+        .unwrap()
+        .clean(&Default::default())
+        .unwrap();
+    let (lo, hi) = ([84920.0, 447500.0], [84980.0, 447560.0]);
+    let inside = |p: [f64; 3]| {
+        p[0] > lo[0] + 0.5 && p[0] < hi[0] - 0.5 && p[1] > lo[1] + 0.5 && p[1] < hi[1] - 0.5
+    };
+    let mut pts: Vec<[f64; 3]> = [lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]]
+        .iter()
+        .map(|p| [p[0], p[1], plane(p[0] - lo[0], p[1] - lo[1])])
+        .collect();
+    let mut segs = ring(0, 4);
+    let mut id = std::collections::HashMap::new();
+    for s in &g.segments {
+        let [a, b] = s.map(|v| g.vertices[v as usize]);
+        if !(inside(a) && inside(b)) {
+            continue;
+        }
+        let ends = s.map(|v| {
+            *id.entry(v).or_insert_with(|| {
+                let p = g.vertices[v as usize];
+                pts.push([p[0], p[1], plane(p[0] - lo[0], p[1] - lo[1])]);
+                pts.len() as u32 - 1
+            })
+        });
+        segs.push(ends);
+    }
+    assert!(segs.len() > 100, "{} segments in the window", segs.len());
+    let (v, t) = domain(&pts, &segs, &[]);
+    // 2-D breaklines: their heights come from the mesh.
+    let lines: Vec<[[f64; 3]; 2]> = segs[4..]
+        .iter()
+        .map(|s| s.map(|i| [pts[i as usize][0], pts[i as usize][1], f64::NAN]))
+        .collect();
+    let r = refine(&v, &t, &lines, &RefineOptions::default()).unwrap();
+    check(&r, &v, &t, &coords(&pts, &segs), 30.0);
+    eprintln!("real_bgt_breaklines: {:?}", r.stats);
+    assert!(r.stats.skinny * 100 < r.stats.triangles, "{:?}", r.stats);
 }
