@@ -16,6 +16,8 @@ pub(super) struct Refiner<'a> {
     inside: Vec<bool>,
     /// Per vertex id.
     kind: Vec<VertexKind>,
+    /// Per vertex id: an input triangle at or near it (where height walks start), or `NONE`.
+    near: Vec<u32>,
     /// Per vertex id: the input segment a segment vertex lies on, else `NONE`.
     seg_of: Vec<u32>,
     /// Input segments (vertex ids of their ends), and their index by sorted ends.
@@ -39,10 +41,21 @@ impl<'a> Refiner<'a> {
     pub fn new(
         mut tin: Tin,
         surface: super::Surface<'a>,
+        input_index: &[u32],
         o: &RefineOptions,
         stats: RefineStats,
     ) -> Refiner<'a> {
         let n = tin.vertex_slots();
+        let near = input_index
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| match surface.corner(j) {
+                NONE => surface
+                    .height_near(tin.xy(VertexId(i as u32)), NONE)
+                    .map_or(NONE, |(_, t)| t),
+                t => t,
+            })
+            .collect();
         let mut seg_index = HashMap::new();
         let mut segs = Vec::new();
         for t in tin.triangles().collect::<Vec<_>>() {
@@ -60,6 +73,7 @@ impl<'a> Refiner<'a> {
         Refiner {
             inside: vec![false; tin.triangle_slots()],
             kind: vec![VertexKind::Input; n],
+            near,
             seg_of: vec![NONE; n],
             segs,
             seg_index,
@@ -151,23 +165,22 @@ impl<'a> Refiner<'a> {
         }
     }
 
-    /// The live triangle a queue entry stands for, if it still exists.
+    /// The live triangle a queue entry stands for, if its slot still holds it.
     fn current(&self, bad: &Bad) -> Option<TriId> {
-        let ids = bad.ids.0;
         let t = TriId(bad.slot);
-        if self.tin.is_live(t) && sorted(self.tin.tri_vertices(t)) == ids {
-            return Some(t);
+        (self.tin.is_live(t)
+            && self.inside[t.0 as usize]
+            && self.tin.tri_vertices(t).map(|v| v.0) == bad.ids)
+            .then_some(t)
+    }
+
+    /// Queues `t` again (after an operation that did not touch it).
+    fn requeue(&mut self, bad: Bad) {
+        if let Some(t) = self.current(&bad)
+            && let Some((len2, _)) = self.quality(t)
+        {
+            self.queue.push(len2, bad);
         }
-        let [a, b, c] = ids.map(VertexId);
-        let e = self
-            .tin
-            .find_edge(a, b)
-            .or_else(|| self.tin.find_edge(b, a))?;
-        [Some(e), self.tin.twin(e)]
-            .into_iter()
-            .flatten()
-            .find(|&f| self.tin.org(f.prev()) == c && self.inside[f.tri().0 as usize])
-            .map(EdgeId::tri)
     }
 
     fn area(&self, t: TriId) -> f64 {
@@ -175,32 +188,13 @@ impl<'a> Refiner<'a> {
         0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
     }
 
-    /// `Some(priority)` when `t` must be split; also the index (0..3) of its shortest edge.
-    fn quality(&self, t: TriId) -> Option<(u64, usize)> {
+    /// `Some((squared length of its shortest edge, which edge 0..3))` when `t` must be split.
+    fn quality(&self, t: TriId) -> Option<(f64, usize)> {
         let v = self.tin.tri_vertices(t);
         let p = v.map(|v| self.tin.xy(v));
-        let d = |i: usize, j: usize| [p[j][0] - p[i][0], p[j][1] - p[i][1]];
-        let len = |u: [f64; 2]| u[0] * u[0] + u[1] * u[1];
-        let l = [len(d(0, 1)), len(d(1, 2)), len(d(2, 0))];
-        let k = if l[0] <= l[1] && l[0] <= l[2] {
-            0
-        } else if l[1] <= l[2] {
-            1
-        } else {
-            2
-        };
-        // The smallest angle is at the apex opposite edge k.
-        let apex = (k + 2) % 3;
-        let (u, w) = (d(apex, k), d(apex, (k + 1) % 3));
-        let dot = u[0] * w[0] + u[1] * w[1];
-        let cos2 = if dot > 0.0 {
-            dot * dot / (len(u) * len(w))
-        } else {
-            0.0
-        };
-        let area = 0.5 * (u[0] * w[1] - u[1] * w[0]).abs();
+        let (cos2, area, l, k) = shape(p);
         if area > self.max_area {
-            return Some((cos2.to_bits(), k));
+            return Some((l, k));
         }
         if cos2 <= self.good {
             return None;
@@ -217,7 +211,7 @@ impl<'a> Refiner<'a> {
                 let join = [s[0], s[1]].into_iter().find(|j| r.contains(j));
                 if let Some(j) = join {
                     let pj = self.tin.xy(j);
-                    let dist = |q: [f64; 2]| len([q[0] - pj[0], q[1] - pj[1]]);
+                    let dist = |q: [f64; 2]| (q[0] - pj[0]).powi(2) + (q[1] - pj[1]).powi(2);
                     let (d1, d2) = (dist(p[k]), dist(p[(k + 1) % 3]));
                     let (u, w) = (
                         [p[k][0] - pj[0], p[k][1] - pj[1]],
@@ -232,7 +226,7 @@ impl<'a> Refiner<'a> {
                 }
             }
         }
-        Some((cos2.to_bits(), k))
+        Some((l, k))
     }
 
     /// Queues the bad triangles among `tris` and checks their constrained edges.
@@ -241,18 +235,16 @@ impl<'a> Refiner<'a> {
             if !self.tin.is_live(t) || !self.inside[t.0 as usize] {
                 continue;
             }
-            if let Some((key, _)) = self.quality(t) {
-                self.queue.push(Bad {
-                    key,
-                    ids: std::cmp::Reverse(sorted(self.tin.tri_vertices(t))),
-                    slot: t.0,
-                });
+            if let Some((len2, _)) = self.quality(t) {
+                let ids = self.tin.tri_vertices(t).map(|v| v.0);
+                self.queue.push(len2, Bad { ids, slot: t.0 });
             }
             for e in [t.edge(), t.edge().next(), t.edge().prev()] {
                 if self.tin.is_constrained(e) && self.encroached_by(e, self.tin.org(e.prev())) {
                     self.enc.push(Encroached {
                         a: self.tin.org(e),
                         b: self.tin.dst(e),
+                        hint: e,
                         force: false,
                     });
                 }
@@ -286,7 +278,13 @@ impl<'a> Refiner<'a> {
     fn split_encroached(&mut self) -> Result<bool> {
         let mut split_any = false;
         while let Some(s) = self.enc.pop() {
-            let Some(e) = self.tin.find_edge(s.a, s.b) else {
+            let e = s.hint;
+            let e = if self.tin.is_live(e.tri()) && self.tin.org(e) == s.a && self.tin.dst(e) == s.b
+            {
+                e
+            } else if let Some(e) = self.tin.find_edge(s.a, s.b) {
+                e
+            } else {
                 continue;
             };
             if !self.tin.is_constrained(e) || !(s.force || self.is_encroached(e)) {
@@ -362,7 +360,7 @@ impl<'a> Refiner<'a> {
             self.stats.unsplittable += 1;
             return Ok(false);
         };
-        self.new_vertex(VertexKind::Segment, s);
+        self.new_vertex(VertexKind::Segment, s, self.near[a.0 as usize]);
         self.stats.segment_points += 1;
         // The star of v: counter-clockwise from v → b to v → a is the left side of a → b.
         self.grow();
@@ -383,8 +381,9 @@ impl<'a> Refiner<'a> {
         Ok(true)
     }
 
-    fn new_vertex(&mut self, kind: VertexKind, seg: u32) {
+    fn new_vertex(&mut self, kind: VertexKind, seg: u32, near: u32) {
         self.kind.push(kind);
+        self.near.push(near);
         self.seg_of.push(seg);
     }
 
@@ -416,7 +415,7 @@ impl<'a> Refiner<'a> {
             }
             Walk::Blocked(e) => {
                 if self.split_segment(e)? {
-                    self.queue.push(bad);
+                    self.requeue(bad);
                 }
                 return Ok(());
             }
@@ -427,23 +426,24 @@ impl<'a> Refiner<'a> {
             let (a, b) = (self.tin.xy(self.tin.org(e)), self.tin.xy(self.tin.dst(e)));
             if self.tin.is_constrained(e) && orient(a, b, c) == Orientation::Collinear {
                 if self.split_segment(e)? {
-                    self.queue.push(bad);
+                    self.requeue(bad);
                 }
                 return Ok(());
             }
         }
-        let z = match self.surface.height(c) {
-            Some(z) => z,
+        let start = self.near[self.tin.tri_vertices(target)[0].0 as usize];
+        let (z, near) = match self.surface.height_near(c, start) {
+            Some(found) => found,
             None => {
                 let [a, b, d] = self.tin.tri_vertices(target).map(|v| self.tin.point(v));
-                planar(a, b, d, c)
+                (planar(a, b, d, c), NONE)
             }
         };
         let Ok(v) = self.tin.insert_in_triangle(target, [c[0], c[1], z]) else {
             self.stats.unsplittable += 1;
             return Ok(());
         };
-        self.new_vertex(VertexKind::Free, NONE);
+        self.new_vertex(VertexKind::Free, NONE, near);
         self.grow();
         let mut touched = Vec::new();
         self.tin.take_touched(&mut touched);
@@ -451,13 +451,24 @@ impl<'a> Refiner<'a> {
             self.inside[s.0 as usize] = true;
         }
         // Subsegments the new point encroaches: take it out again and split them.
+        // (Every triangle of v's star was touched; the edge opposite v is on the cavity's rim.)
         let mut hit = Vec::new();
-        for f in self.tin.out_edges(v) {
-            let g = f.next();
-            if self.tin.is_constrained(g) && self.encroached_by(g, v) {
+        for &s in &touched {
+            if !self.tin.is_live(s) {
+                continue;
+            }
+            let e = s.edge();
+            let Some(f) = [e, e.next(), e.prev()]
+                .into_iter()
+                .find(|&f| self.tin.org(f.prev()) == v)
+            else {
+                continue;
+            };
+            if self.tin.is_constrained(f) && self.encroached_by(f, v) {
                 hit.push(Encroached {
-                    a: self.tin.org(g),
-                    b: self.tin.dst(g),
+                    a: self.tin.org(f),
+                    b: self.tin.dst(f),
+                    hint: f,
                     force: true,
                 });
             }
@@ -471,10 +482,13 @@ impl<'a> Refiner<'a> {
                 self.inside[s.0 as usize] = true;
             }
             self.stats.rejected_centres += 1;
+            // The hole is filled with the triangles of before, `t` among them: queued again.
+            self.touched = touched;
+            self.after_change();
+            hit.sort_unstable_by_key(|h| (h.a.0, h.b.0));
+            hit.dedup_by_key(|h| (h.a.0, h.b.0));
             self.enc.extend(hit);
-            if self.split_encroached()? {
-                self.queue.push(bad);
-            } else {
+            if !self.split_encroached()? {
                 self.stats.unsplittable += 1;
             }
             return Ok(());
@@ -576,15 +590,20 @@ impl<'a> Refiner<'a> {
             }
         }
         let mut stats = self.stats.clone();
-        stats.min_angle = 180.0;
+        let mut worst = (-1.0, TriId(NONE));
         for &t in &tris {
             let v = tin.tri_vertices(t);
             out.triangles.push(v.map(|v| remap[v.0 as usize]));
-            let angle = super::min_angle(v.map(|v| tin.point(v)));
-            stats.min_angle = stats.min_angle.min(angle);
-            stats.max_area = stats.max_area.max(self.area(t));
-            if angle < self.bound {
+            // The exact angle (atan2) only near the bound and for the worst triangle.
+            let (cos2, area, _, _) = shape(v.map(|v| tin.xy(v)));
+            stats.max_area = stats.max_area.max(area);
+            if cos2 > self.good * (1.0 - 1e-9)
+                && super::min_angle(v.map(|v| tin.point(v))) < self.bound
+            {
                 stats.skinny += 1;
+            }
+            if cos2 > worst.0 {
+                worst = (cos2, t);
             }
             for e in [t.edge(), t.edge().next(), t.edge().prev()] {
                 if tin.is_constrained(e) {
@@ -595,6 +614,11 @@ impl<'a> Refiner<'a> {
         }
         out.constrained.sort_unstable();
         out.constrained.dedup();
+        stats.min_angle = if worst.1.0 == NONE {
+            0.0
+        } else {
+            super::min_angle(tin.tri_vertices(worst.1).map(|v| tin.point(v)))
+        };
         stats.vertices = out.vertices.len() as u64;
         stats.triangles = out.triangles.len() as u64;
         out.stats = stats;
@@ -602,8 +626,27 @@ impl<'a> Refiner<'a> {
     }
 }
 
-fn sorted(v: [VertexId; 3]) -> [u32; 3] {
-    let mut s = v.map(|v| v.0);
-    s.sort_unstable();
-    s
+/// `(cos² of the smallest angle (0 if it is not acute), area, squared length of the shortest
+/// edge, which edge that is: k from corner k to k + 1)` of a counter-clockwise triangle.
+fn shape(p: [[f64; 2]; 3]) -> (f64, f64, f64, usize) {
+    let d = |i: usize, j: usize| [p[j][0] - p[i][0], p[j][1] - p[i][1]];
+    let len = |u: [f64; 2]| u[0] * u[0] + u[1] * u[1];
+    let l = [len(d(0, 1)), len(d(1, 2)), len(d(2, 0))];
+    let k = if l[0] <= l[1] && l[0] <= l[2] {
+        0
+    } else if l[1] <= l[2] {
+        1
+    } else {
+        2
+    };
+    // The smallest angle is at the apex opposite edge k.
+    let apex = (k + 2) % 3;
+    let (u, w) = (d(apex, k), d(apex, (k + 1) % 3));
+    let dot = u[0] * w[0] + u[1] * w[1];
+    let cos2 = if dot > 0.0 {
+        dot * dot / (len(u) * len(w))
+    } else {
+        0.0
+    };
+    (cos2, 0.5 * (u[0] * w[1] - u[1] * w[0]).abs(), l[k], k)
 }

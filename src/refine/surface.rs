@@ -10,6 +10,12 @@ use crate::tin::planar;
 pub(super) struct Surface<'a> {
     vertices: &'a [[f64; 3]],
     triangles: &'a [[u32; 3]],
+    /// Twin of each half-edge `3t + k` (from corner `k` to `k + 1`), `u32::MAX` on the boundary.
+    twins: Vec<u32>,
+    /// One triangle of each vertex (`u32::MAX` for a vertex in none).
+    corner: Vec<u32>,
+    /// Bounding box of each triangle: `[min x, min y, max x, max y]` (a quick rejection).
+    boxes: Vec<[f64; 4]>,
     grid: Grid,
     buckets: Buckets,
 }
@@ -27,8 +33,10 @@ impl<'a> Surface<'a> {
                 }
             }
         }
-        let grid = Grid::new(lo, hi, triangles.len().max(1));
-        let mut pairs = Vec::with_capacity(2 * triangles.len());
+        // Four cells a triangle: few candidates per query, even among long thin triangles.
+        let grid = Grid::new(lo, hi, 4 * triangles.len().max(1));
+        let mut pairs = Vec::with_capacity(4 * triangles.len());
+        let mut boxes = Vec::with_capacity(triangles.len());
         for (i, t) in triangles.iter().enumerate() {
             let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
             for &v in t {
@@ -39,11 +47,32 @@ impl<'a> Surface<'a> {
                 }
             }
             grid.box_cells(a, b, |c| pairs.push((u64::from(c) << 32) | i as u64));
+            boxes.push([a[0], a[1], b[0], b[1]]);
         }
         let buckets = Buckets::from_pairs(grid.len(), pairs);
+        let mut edges: Vec<(u64, u32)> = Vec::with_capacity(3 * triangles.len());
+        let mut corner = vec![u32::MAX; vertices.len()];
+        for (i, t) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                edges.push(((u64::from(a) << 32) | u64::from(b), (3 * i + k) as u32));
+                corner[a as usize] = i as u32;
+            }
+        }
+        edges.sort_unstable();
+        let mut twins = vec![u32::MAX; 3 * triangles.len()];
+        for &(key, e) in &edges {
+            let rev = (key << 32) | (key >> 32);
+            if let Ok(j) = edges.binary_search_by_key(&rev, |&(k, _)| k) {
+                twins[e as usize] = edges[j].1;
+            }
+        }
         Surface {
             vertices,
             triangles,
+            twins,
+            corner,
+            boxes,
             grid,
             buckets,
         }
@@ -60,6 +89,10 @@ impl<'a> Surface<'a> {
             .iter()
             .copied()
             .find(|&i| {
+                let b = self.boxes[i as usize];
+                if p[0] < b[0] || p[1] < b[1] || p[0] > b[2] || p[1] > b[3] {
+                    return false;
+                }
                 let [a, b, c] = self.triangles[i as usize];
                 let (a, b, c) = (xy(a), xy(b), xy(c));
                 orient(a, b, p) != Orientation::Clockwise
@@ -71,8 +104,46 @@ impl<'a> Surface<'a> {
     /// Height of the input surface at `p` (linear in the triangle that holds it), or `None`
     /// outside the input mesh.
     pub fn height(&self, p: [f64; 2]) -> Option<f64> {
-        let t = self.triangle_at(p)?;
+        self.height_near(p, u32::MAX).map(|(z, _)| z)
+    }
+
+    /// A triangle of input vertex `v`, to start [`Surface::height_near`] from.
+    pub fn corner(&self, v: u32) -> u32 {
+        self.corner.get(v as usize).copied().unwrap_or(u32::MAX)
+    }
+
+    /// [`Surface::height`] and the triangle holding `p`, found by a visibility walk from triangle
+    /// `start` (exact orientations; any triangle, or `u32::MAX`), or by the grid when the walk
+    /// reaches the boundary or takes long (both find a triangle whose closed area holds `p`).
+    pub fn height_near(&self, p: [f64; 2], start: u32) -> Option<(f64, u32)> {
+        let xy = |v: u32| {
+            let q = self.vertices[v as usize];
+            [q[0], q[1]]
+        };
+        let mut found = None;
+        let mut t = start;
+        if (t as usize) < self.triangles.len() {
+            'walk: for _ in 0..256 {
+                let tri = self.triangles[t as usize];
+                for k in 0..3 {
+                    if orient(xy(tri[k]), xy(tri[(k + 1) % 3]), p) == Orientation::Clockwise {
+                        let twin = self.twins[3 * t as usize + k];
+                        if twin == u32::MAX {
+                            break 'walk;
+                        }
+                        t = twin / 3;
+                        continue 'walk;
+                    }
+                }
+                found = Some(t);
+                break;
+            }
+        }
+        let t = match found {
+            Some(t) => t,
+            None => self.triangle_at(p)?,
+        };
         let [a, b, c] = self.triangles[t as usize].map(|v| self.vertices[v as usize]);
-        Some(planar(a, b, c, p))
+        Some((planar(a, b, c, p), t))
     }
 }
