@@ -30,7 +30,8 @@
 //!    found by a straight walk from the triangle (exact [`orient`] tests); a constrained edge in
 //!    the way is split instead, and so is every subsegment the new point would encroach (the
 //!    point is then removed again, [`Tin::remove`], and the triangle tried later). Its z is
-//!    interpolated on the original surface at its xy.
+//!    interpolated on the original surface at its xy (once the mesh is done: the points in rows
+//!    of a grid, each found by a short walk in the input mesh from the one before).
 //!
 //! **Order.** The bad triangles wait in Triangle's queue: by the length of their shortest edge,
 //! the shortest first, in classes of half powers of two of its square; first in, first out
@@ -253,7 +254,7 @@ pub fn refine(
         id[j as usize] = i as u32;
     }
     let mut tin = Tin::from_triangulation(&cdt)?;
-    let input_index = cdt.input_index;
+    drop(cdt);
     for s in &segments {
         let [a, b] = s.map(|v| VertexId(id[v as usize]));
         tin.insert_segment(a, b).map_err(|e| {
@@ -268,7 +269,7 @@ pub fn refine(
             ))
         })?;
     }
-    let mut r = run::Refiner::new(tin, surface, &input_index, options, stats);
+    let mut r = run::Refiner::new(tin, surface, options, stats);
     r.classify();
     r.run()?;
     Ok(r.finish())

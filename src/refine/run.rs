@@ -4,7 +4,7 @@
 use super::{Bad, Encroached, Queue, RefineOptions, RefineStats, Refined, VertexKind, Walk};
 use crate::error::{Error, Result};
 use crate::geom::predicates::{Orientation, orient};
-use crate::tin::{EdgeId, Tin, TriId, VertexId, planar};
+use crate::tin::{EdgeId, Tin, TriId, VertexId};
 use std::collections::HashMap;
 
 const NONE: u32 = u32::MAX;
@@ -16,8 +16,6 @@ pub(super) struct Refiner<'a> {
     inside: Vec<bool>,
     /// Per vertex id.
     kind: Vec<VertexKind>,
-    /// Per vertex id: an input triangle at or near it (where height walks start), or `NONE`.
-    near: Vec<u32>,
     /// Per vertex id: the input segment a segment vertex lies on, else `NONE`.
     seg_of: Vec<u32>,
     /// Input segments (vertex ids of their ends), and their index by sorted ends.
@@ -41,21 +39,11 @@ impl<'a> Refiner<'a> {
     pub fn new(
         mut tin: Tin,
         surface: super::Surface<'a>,
-        input_index: &[u32],
         o: &RefineOptions,
         stats: RefineStats,
     ) -> Refiner<'a> {
         let n = tin.vertex_slots();
-        let near = input_index
-            .iter()
-            .enumerate()
-            .map(|(i, &j)| match surface.corner(j) {
-                NONE => surface
-                    .height_near(tin.xy(VertexId(i as u32)), NONE)
-                    .map_or(NONE, |(_, t)| t),
-                t => t,
-            })
-            .collect();
+
         let mut seg_index = HashMap::new();
         let mut segs = Vec::new();
         for t in tin.triangles().collect::<Vec<_>>() {
@@ -73,7 +61,6 @@ impl<'a> Refiner<'a> {
         Refiner {
             inside: vec![false; tin.triangle_slots()],
             kind: vec![VertexKind::Input; n],
-            near,
             seg_of: vec![NONE; n],
             segs,
             seg_index,
@@ -360,7 +347,7 @@ impl<'a> Refiner<'a> {
             self.stats.unsplittable += 1;
             return Ok(false);
         };
-        self.new_vertex(VertexKind::Segment, s, self.near[a.0 as usize]);
+        self.new_vertex(VertexKind::Segment, s);
         self.stats.segment_points += 1;
         // The star of v: counter-clockwise from v → b to v → a is the left side of a → b.
         self.grow();
@@ -381,9 +368,8 @@ impl<'a> Refiner<'a> {
         Ok(true)
     }
 
-    fn new_vertex(&mut self, kind: VertexKind, seg: u32, near: u32) {
+    fn new_vertex(&mut self, kind: VertexKind, seg: u32) {
         self.kind.push(kind);
-        self.near.push(near);
         self.seg_of.push(seg);
     }
 
@@ -431,19 +417,12 @@ impl<'a> Refiner<'a> {
                 return Ok(());
             }
         }
-        let start = self.near[self.tin.tri_vertices(target)[0].0 as usize];
-        let (z, near) = match self.surface.height_near(c, start) {
-            Some(found) => found,
-            None => {
-                let [a, b, d] = self.tin.tri_vertices(target).map(|v| self.tin.point(v));
-                (planar(a, b, d, c), NONE)
-            }
-        };
-        let Ok(v) = self.tin.insert_in_triangle(target, [c[0], c[1], z]) else {
+        // Its height comes from the input surface when the mesh is finished (`finish`).
+        let Ok(v) = self.tin.insert_in_triangle(target, [c[0], c[1], 0.0]) else {
             self.stats.unsplittable += 1;
             return Ok(());
         };
-        self.new_vertex(VertexKind::Free, NONE, near);
+        self.new_vertex(VertexKind::Free, NONE);
         self.grow();
         let mut touched = Vec::new();
         self.tin.take_touched(&mut touched);
@@ -582,12 +561,24 @@ impl<'a> Refiner<'a> {
         }
         let mut remap = vec![NONE; used.len()];
         let mut out = Refined::default();
+        let mut free = Vec::new();
         for (i, &u) in used.iter().enumerate() {
             if u {
                 remap[i] = out.vertices.len() as u32;
+                if self.kind[i] == VertexKind::Free {
+                    free.push(out.vertices.len());
+                }
                 out.vertices.push(tin.point(VertexId(i as u32)));
                 out.kinds.push(self.kind[i]);
             }
+        }
+        // Heights of the points inside, on the input surface, in one sweep of short walks.
+        let xy: Vec<[f64; 2]> = free
+            .iter()
+            .map(|&i| [out.vertices[i][0], out.vertices[i][1]])
+            .collect();
+        for (&i, z) in free.iter().zip(super::surface::heights(&self.surface, &xy)) {
+            out.vertices[i][2] = z;
         }
         let mut stats = self.stats.clone();
         let mut worst = (-1.0, TriId(NONE));
