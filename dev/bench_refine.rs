@@ -117,7 +117,10 @@ fn prep(kind: &str, file: &str, segments: usize, seed: u64) -> Result<()> {
     Ok(())
 }
 
-fn read(file: &str) -> Result<(Vec<[f64; 3]>, Vec<[u32; 2]>)> {
+/// Vertices and segments of a PSLG.
+type Graph = (Vec<[f64; 3]>, Vec<[u32; 2]>);
+
+fn read(file: &str) -> Result<Graph> {
     let mut bytes = Vec::new();
     std::fs::File::open(file)?.read_to_end(&mut bytes)?;
     if bytes.len() < 24 || &bytes[..8] != MAGIC {

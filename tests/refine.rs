@@ -226,7 +226,10 @@ fn check(
 }
 
 /// A square with a zig-zag breakline and a square hole.
-fn square_pslg() -> (Vec<[f64; 3]>, Vec<[u32; 2]>, Vec<[f64; 4]>) {
+/// Points, segments and hole boxes of a PSLG.
+type Pslg = (Vec<[f64; 3]>, Vec<[u32; 2]>, Vec<[f64; 4]>);
+
+fn square_pslg() -> Pslg {
     let mut pts: Vec<[f64; 3]> = vec![];
     for &(x, y) in &[(0.0, 0.0), (100.0, 0.0), (100.0, 100.0), (0.0, 100.0)] {
         pts.push([x, y, plane(x, y)]);
@@ -398,4 +401,119 @@ fn real_bgt_breaklines() {
     check(&r, &v, &t, &coords(&pts, &segs), 30.0);
     eprintln!("real_bgt_breaklines: {:?}", r.stats);
     assert!(r.stats.skinny * 100 < r.stats.triangles, "{:?}", r.stats);
+}
+
+fn sweeptin(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// `sweeptin refine MESH.ply --breaklines F -o OUT.2dm --json`, and its refusals.
+#[test]
+fn cli_mesh_to_2dm() {
+    use sweeptin::sink::MeshSink;
+    let dir = tempfile::tempdir().unwrap();
+    let (pts, segs, holes) = square_pslg();
+    let (v, t) = domain(&pts, &segs, &holes);
+    let ply = dir.path().join("in.ply");
+    let mut w = sweeptin::output::PlyWriter::create(&ply, &Default::default()).unwrap();
+    v.iter().for_each(|&p| w.vertex(p).unwrap());
+    t.iter()
+        .for_each(|&tri| w.triangle(tri.map(u64::from)).unwrap());
+    w.finish().unwrap();
+    // The zig-zag as a 2-D GeoJSON line: its heights come from the mesh.
+    let zig: Vec<String> = (8..14)
+        .map(|i| format!("[{}, {}]", pts[i][0], pts[i][1]))
+        .collect();
+    let lines = dir.path().join("zig.geojson");
+    std::fs::write(
+        &lines,
+        format!(
+            r#"{{"type": "FeatureCollection", "features": [{{"type": "Feature", "properties": {{}},
+              "geometry": {{"type": "LineString", "coordinates": [{}]}}}}]}}"#,
+            zig.join(", ")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out.2dm");
+    let (p, l, o) = (
+        ply.to_str().unwrap(),
+        lines.to_str().unwrap(),
+        out.to_str().unwrap(),
+    );
+    let r = sweeptin(&["refine", p, "--breaklines", l, "-o", o, "--json"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    let stats = &json["stats"];
+    assert!(stats["min_angle"].as_f64().unwrap() >= 30.0, "{json}");
+    assert_eq!(stats["skinny"], 0);
+    assert_eq!(stats["breakline_segments"], 5);
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.starts_with("MESH2D\n"));
+    let count = |card: &str| text.lines().filter(|l| l.starts_with(card)).count() as u64;
+    assert_eq!(count("ND "), stats["vertices"].as_u64().unwrap());
+    assert_eq!(count("E3T "), stats["triangles"].as_u64().unwrap());
+    // The same mesh as the library makes, byte for byte in PLY.
+    let lib = refine(
+        &v,
+        &t,
+        &as_lines(&pts, &segs[8..]),
+        &RefineOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(lib.stats.vertices, stats["vertices"].as_u64().unwrap());
+    // Refusals: a bound past 34° and --boundary on a mesh (usage, 2); a clockwise mesh (input, 3).
+    let r = sweeptin(&["refine", p, "--min-angle", "40", "-o", o]);
+    assert_eq!(r.status.code(), Some(2));
+    let r = sweeptin(&["refine", p, "--boundary", l, "-o", o]);
+    assert_eq!(
+        r.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let bad = dir.path().join("cw.ply");
+    let mut w = sweeptin::output::PlyWriter::create(&bad, &Default::default()).unwrap();
+    for q in [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]] {
+        w.vertex(q).unwrap();
+    }
+    w.triangle([0, 1, 2]).unwrap();
+    w.finish().unwrap();
+    let o2 = dir.path().join("cw.2dm");
+    let r = sweeptin(&["refine", bad.to_str().unwrap(), "-o", o2.to_str().unwrap()]);
+    assert_eq!(r.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("clockwise"), "{err}");
+    assert!(!o2.exists());
+}
+
+/// Real lidar ground points (IGN, 22,332 points) as FILES: triangulated as `tin` does, refined.
+#[test]
+fn cli_real_points() {
+    let las = data::shared("lidar/ign_50m_tiles/test_data_77055_627760_LA93_IGN69_ground.las");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mesh.ply");
+    let r = sweeptin(&[
+        "refine",
+        las.to_str().unwrap(),
+        "--min-angle",
+        "28",
+        "--max-area",
+        "4",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    let s = &json["stats"];
+    assert_eq!(s["input_vertices"], 22332, "{json}");
+    assert!(s["min_angle"].as_f64().unwrap() >= 28.0, "{json}");
+    assert!(s["max_area"].as_f64().unwrap() <= 4.0, "{json}");
+    assert_eq!(s["skinny"], 0);
+    let (v, t) = sweeptin::input::read_ply(&out).unwrap();
+    assert_eq!(v.len() as u64, s["vertices"].as_u64().unwrap());
+    assert!(t.iter().all(|tri| meets(tri.map(|i| v[i as usize]), 28.0)));
 }

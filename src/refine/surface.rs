@@ -37,7 +37,7 @@ impl<'a> Surface<'a> {
         edges.sort_unstable();
         let mut twins = vec![u32::MAX; 3 * triangles.len()];
         for &(key, e) in &edges {
-            let rev = (key << 32) | (key >> 32);
+            let rev = key.rotate_right(32);
             if let Ok(j) = edges.binary_search_by_key(&rev, |&(k, _)| k) {
                 twins[e as usize] = edges[j].1;
             }
