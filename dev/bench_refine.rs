@@ -18,17 +18,16 @@
 //! File layout (little-endian): `SWPSLG01`, u64 vertex count, u64 segment count, then `x, y, z`
 //! f64 per vertex and two u32 per segment.
 //!
-//! `sweeptin` times, per repetition, what `triangle -pq` does: the constrained Delaunay
-//! triangulation of the graph (`triangulate_cdt`) and its refinement (`refine`, which builds its
-//! own CDT again from that mesh and interpolates every Steiner point's z: extra work Triangle
-//! does not do). Prints one JSON line: minimum seconds, vertices, triangles, smallest angle,
-//! triangles under the bound.
+//! `sweeptin` times, per repetition, what `triangle -pq` does: `refine_pslg` (the constrained
+//! Delaunay triangulation of the graph and its refinement; it also interpolates every Steiner
+//! point's z, which Triangle does not do). Prints one JSON line: minimum seconds, vertices,
+//! triangles, smallest angle, triangles under the bound.
 
 use anyhow::{Context, Result, bail};
 use std::io::{Read, Write};
 use std::time::Instant;
 use sweeptin::breaklines::{CleanOptions, clean, read_files};
-use sweeptin::refine::{RefineOptions, refine};
+use sweeptin::refine::{RefineOptions, refine_pslg};
 
 const MAGIC: &[u8; 8] = b"SWPSLG01";
 
@@ -150,13 +149,11 @@ fn run(file: &str, repeat: usize, angle: f64) -> Result<()> {
         ..RefineOptions::default()
     };
     // The segments again, by their coordinates, as refine takes breaklines (not timed).
-    let lines: Vec<[[f64; 3]; 2]> = segs.iter().map(|s| s.map(|v| pts[v as usize])).collect();
     let mut best = f64::INFINITY;
     let mut result = None;
     for _ in 0..repeat {
         let t0 = Instant::now();
-        let cdt = sweeptin::triangulate_cdt(&pts, &segs, &sweeptin::Options::default())?;
-        let r = refine(&cdt.vertices, &cdt.triangles, &lines, &options)?;
+        let r = refine_pslg(&pts, &segs, &options)?;
         best = best.min(t0.elapsed().as_secs_f64());
         result = Some(r);
     }

@@ -21,7 +21,7 @@ mod data;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation as _};
 use std::collections::HashSet;
 use sweeptin::geom::predicates::{CircleSide, incircle_exact};
-use sweeptin::refine::{RefineOptions, Refined, VertexKind, refine};
+use sweeptin::refine::{RefineOptions, Refined, VertexKind, refine, refine_pslg};
 
 /// A domain mesh: the CDT of `points` and `segments` without the triangles whose centroid lies
 /// in one of the `holes` (axis-aligned boxes).
@@ -516,4 +516,33 @@ fn cli_real_points() {
     let (v, t) = sweeptin::input::read_ply(&out).unwrap();
     assert_eq!(v.len() as u64, s["vertices"].as_u64().unwrap());
     assert!(t.iter().all(|tri| meets(tri.map(|i| v[i as usize]), 28.0)));
+}
+
+/// `refine_pslg` (Triangle's `-pq`: the graph's CDT, outside regions eaten from the hull) makes
+/// the same mesh as `refine` on that CDT with the segments as breaklines.
+#[test]
+fn pslg_in_quality_mesh_out() {
+    let (pts, segs, _) = square_pslg();
+    // The hole's ring stays a breakline: no hole without hole points.
+    let r = refine_pslg(&pts, &segs, &RefineOptions::default()).unwrap();
+    let (v, t) = domain(&pts, &segs, &[]);
+    check(&r, &v, &t, &coords(&pts, &segs), 30.0);
+    let m = refine(
+        &v,
+        &t,
+        &as_lines(&pts, &segs[4..]),
+        &RefineOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(m.triangles.len(), r.triangles.len());
+    // A graph open to the hull: a polygon inside a point cloud's hull is refined inside only.
+    let mut p2 = pts[..8].to_vec();
+    p2.push([-50.0, -50.0, 0.0]);
+    let inner = ring(4, 4);
+    let r = refine_pslg(&p2, &inner, &RefineOptions::default()).unwrap();
+    assert!(
+        r.vertices.iter().all(|p| p[0] >= 60.0 && p[0] <= 80.0),
+        "{:?}",
+        r.stats
+    );
 }

@@ -249,13 +249,62 @@ pub fn refine(
             cdt.duplicates
         )));
     }
-    let mut id = vec![0u32; points.len()];
-    for (i, &j) in cdt.input_index.iter().enumerate() {
-        id[j as usize] = i as u32;
+    let mut tin = Tin::from_triangulation(&cdt)?;
+    constrain(&mut tin, &cdt.input_index, &points, &segments)?;
+    drop(cdt);
+    let mut r = run::Refiner::new(tin, surface, options, stats);
+    r.classify(run::Domain::Mesh);
+    r.run()?;
+    Ok(r.finish())
+}
+
+/// Refines the planar straight-line graph `points`/`segments` (Triangle's `-pq`): its
+/// constrained Delaunay triangulation, less every region reached from a hull edge that is not a
+/// segment (so a graph closed by segments is refined inside them; holes are not supported), with
+/// Steiner heights interpolated on that triangulation. See [`refine`].
+///
+/// # Errors
+/// As [`refine`]; crossing segments are [`Error::Refine`].
+pub fn refine_pslg(
+    points: &[[f64; 3]],
+    segments: &[[u32; 2]],
+    options: &RefineOptions,
+) -> Result<Refined> {
+    options.validate()?;
+    let cdt = crate::triangulate_cdt(points, segments, &crate::Options::default())?;
+    if cdt.duplicates > 0 {
+        return Err(Error::Refine(format!(
+            "the graph has {} vertices at the position of another",
+            cdt.duplicates
+        )));
     }
     let mut tin = Tin::from_triangulation(&cdt)?;
-    drop(cdt);
-    for s in &segments {
+    constrain(&mut tin, &cdt.input_index, points, segments)?;
+    let stats = RefineStats {
+        input_vertices: points.len() as u64,
+        breakline_segments: segments.len() as u64,
+        ..RefineStats::default()
+    };
+    let surface = Surface::new(&cdt.vertices, &cdt.triangles);
+    let mut r = run::Refiner::new(tin, surface, options, stats);
+    r.classify(run::Domain::Hull);
+    r.run()?;
+    Ok(r.finish())
+}
+
+/// Marks `segments` (indices into `points`, whose triangulation vertex `i` is input point
+/// `input_index[i]`) constrained in `tin`.
+fn constrain(
+    tin: &mut Tin,
+    input_index: &[u32],
+    points: &[[f64; 3]],
+    segments: &[[u32; 2]],
+) -> Result<()> {
+    let mut id = vec![0u32; points.len()];
+    for (i, &j) in input_index.iter().enumerate() {
+        id[j as usize] = i as u32;
+    }
+    for s in segments {
         let [a, b] = s.map(|v| VertexId(id[v as usize]));
         tin.insert_segment(a, b).map_err(|e| {
             let p = |v: u32| points[v as usize];
@@ -269,10 +318,7 @@ pub fn refine(
             ))
         })?;
     }
-    let mut r = run::Refiner::new(tin, surface, options, stats);
-    r.classify();
-    r.run()?;
-    Ok(r.finish())
+    Ok(())
 }
 
 /// Checks the input mesh and indexes its surface.

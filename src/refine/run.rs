@@ -9,6 +9,15 @@ use std::collections::HashMap;
 
 const NONE: u32 = u32::MAX;
 
+/// Which regions between constrained edges are refined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Domain {
+    /// Those inside the input mesh.
+    Mesh,
+    /// Those not reached from an unconstrained hull edge (Triangle's `-p`).
+    Hull,
+}
+
 pub(super) struct Refiner<'a> {
     tin: Tin,
     surface: super::Surface<'a>,
@@ -87,7 +96,7 @@ impl<'a> Refiner<'a> {
 
     /// Marks the regions between constrained edges in or out of the domain, then queues what
     /// needs work.
-    pub fn classify(&mut self) {
+    pub fn classify(&mut self, domain: Domain) {
         let slots = self.tin.triangle_slots();
         let mut seen = vec![false; slots];
         let mut stack = Vec::new();
@@ -112,14 +121,23 @@ impl<'a> Refiner<'a> {
                     }
                 }
             }
-            let best = region
-                .iter()
-                .copied()
-                .max_by(|&a, &b| self.area(a).total_cmp(&self.area(b)))
-                .expect("a region has a triangle");
-            let [a, b, c] = self.tin.tri_vertices(best).map(|v| self.tin.xy(v));
-            let centroid = [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0];
-            let inside = self.surface.triangle_at(centroid).is_some();
+            let inside = match domain {
+                Domain::Mesh => {
+                    let best = region
+                        .iter()
+                        .copied()
+                        .max_by(|&a, &b| self.area(a).total_cmp(&self.area(b)))
+                        .expect("a region has a triangle");
+                    let [a, b, c] = self.tin.tri_vertices(best).map(|v| self.tin.xy(v));
+                    let centroid = [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0];
+                    self.surface.triangle_at(centroid).is_some()
+                }
+                Domain::Hull => !region.iter().any(|t| {
+                    [t.edge(), t.edge().next(), t.edge().prev()]
+                        .into_iter()
+                        .any(|e| self.tin.twin(e).is_none() && !self.tin.is_constrained(e))
+                }),
+            };
             for t in region {
                 self.inside[t.0 as usize] = inside;
             }
