@@ -191,7 +191,20 @@ pub(super) fn heights(surface: &Surface<'_>, p: &[[f64; 2]]) -> Vec<f64> {
         .collect();
     order.sort_unstable();
     let mut out = vec![f64::NAN; p.len()];
-    let mut t = u32::MAX;
+    // Start at the triangle whose first corner is nearest the first point (no grid needed).
+    let mut t = match order.first() {
+        None => return out,
+        Some(&(_, i)) => {
+            let q = p[i as usize];
+            let d = |t: &[u32; 3]| {
+                let v = surface.vertices[t[0] as usize];
+                (v[0] - q[0]).powi(2) + (v[1] - q[1]).powi(2)
+            };
+            (0..surface.triangles.len())
+                .min_by(|&a, &b| d(&surface.triangles[a]).total_cmp(&d(&surface.triangles[b])))
+                .map_or(u32::MAX, |t| t as u32)
+        }
+    };
     for (_, i) in order {
         let q = p[i as usize];
         match surface.height_near(q, t) {
