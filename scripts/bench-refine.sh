@@ -9,7 +9,8 @@
 #   bgt        the real BGT partition of Delft (../shared/data/lines/bgt_delft_all_layers.geojson)
 #   contours   synth::contours(--segments, seed 1) (default 100,000 segments)
 # Each round runs each tool once per input, alternating, one process each (so a busy machine
-# slows both alike); the table keeps each tool's fastest round and the ratios of those minima.
+# slows both alike); the table keeps each tool's fastest round, the ratio of those minima, and
+# the median over rounds of the two tools' time ratio in the same round (steadier under load).
 # sweeptin's time is triangulate_cdt + refine (which builds its CDT again and interpolates every
 # Steiner point's z); Triangle's is its triangulate() call.
 # --out DIR  where results.jsonl, the logs and table.md go (default bench-out/refine-<date>).
@@ -86,18 +87,27 @@ python3 - "$results" "$angle" "$triangle_version" "$load_before" "$load_after" "
     << 'EOF' | tee "$out/table.md"
 import json, sys
 path, angle, version, before, after, rounds = sys.argv[1:7]
-best = {}
+best, runs = {}, {}
 for line in open(path):
     r = json.loads(line)
     name = r["input"].rsplit("refine-", 1)[-1].removesuffix(".bin")
     key = (name, r["tool"])
+    runs.setdefault(key, []).append(r["seconds"])
     if key not in best or r["seconds"] < best[key]["seconds"]:
         best[key] = r
+
+
+def paired(name):
+    """Median over rounds of sweeptin's time / Triangle's in the same round."""
+    pairs = sorted(a / b for a, b in zip(runs.get((name, "sweeptin"), []),
+                                         runs.get((name, "triangle"), [])))
+    return pairs[len(pairs) // 2] if pairs else float("nan")
 print(f"Quality refinement at {angle}°: sweeptin beside Triangle ({version}, -pzQq{angle}); "
       f"fastest of {rounds} alternating rounds; load average {before} before, {after} after.\n")
 print("| input | PSLG vertices / segments | tool | vertices | triangles | smallest angle | "
-      "triangles < bound | seconds | triangles ÷ Triangle's | time ÷ Triangle's |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+      "triangles < bound | seconds | triangles ÷ Triangle's | time ÷ Triangle's | "
+      "median of the rounds' time ratios |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 for name in ["bgt", "contours"]:
     t = best.get((name, "triangle"))
     for tool in ["sweeptin", "triangle"]:
@@ -108,5 +118,5 @@ for name in ["bgt", "contours"]:
         ratio_t = f"{r['seconds'] / t['seconds']:.2f}" if t else ""
         print(f"| {name} | {r['points']} / {r['segments']} | {tool} | {r['vertices']} | "
               f"{r['triangles']} | {r['min_angle']:.2f}° | {r['skinny']} | {r['seconds']:.3f} | "
-              f"{ratio_n} | {ratio_t} |")
+              f"{ratio_n} | {ratio_t} | {paired(name) if tool == 'sweeptin' else 1:.2f} |")
 EOF

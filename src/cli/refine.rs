@@ -16,11 +16,11 @@ use sweeptin::sink::{MeshSink, MeshSummary};
 How: Ruppert's Delaunay refinement with Üngör's off-centres, as Triangle's -q (Shewchuk). The
 domain is the input TIN's triangles: its outline and holes (--trim-boundary, --boundary, --holes,
 --max-edge trimming of point inputs) stay exactly, and so do the breaklines. Steiner points go to
-the circumcentre or off-centre of the worst triangle first (ties: smallest vertex numbers), or to
-the middle of a breakline or boundary segment they would encroach (a power of two from the end
-where two segments meet). A point inside takes the height of the input TIN at its position; a
-point on a segment the height of the segment's line. Exact orientation and in-circle tests keep
-the mesh constrained Delaunay.
+the circumcentre or off-centre of a bad triangle (those with the shortest edge first, in
+Triangle's order), or to the middle of a breakline or boundary segment they would encroach (a
+power of two from the end where two segments meet). A point inside takes the height of the input
+TIN at its position; a point on a segment the height of the segment's line. Exact orientation and
+in-circle tests keep the mesh constrained Delaunay; the same input gives the same mesh.
 
 Small angles: an angle between two input segments below --min-angle cannot be fixed; near input
 angles below 60° a few triangles are left under the bound (as Triangle does), and counted as

@@ -23,12 +23,13 @@
 //!    around a small input angle stay equidistant from its vertex. The split point is computed in
 //!    floating point and inserted topologically on the edge ([`Tin::split_edge_at`]); its z is
 //!    interpolated along the subsegment.
-//! 3. **Bad triangles, worst first.** A triangle is bad when its area exceeds `max_area`, or when
+//! 3. **Bad triangles.** A triangle is bad when its area exceeds `max_area`, or when
 //!    its smallest angle is below `min_angle`. It gets a Steiner point at its circumcentre, or at
 //!    Üngör's off-centre when that is nearer (on the bisector of its shortest edge, where the new
 //!    triangle on that edge just meets the bound): fewer points than circumcentres. The point is
-//!    found by a straight walk from the triangle (exact [`orient`] tests); a constrained edge in
-//!    the way is split instead, and so is every subsegment the new point would encroach (the
+//!    found by a straight walk from the triangle (exact
+//!    [`orient`](crate::geom::predicates::orient) tests); a constrained edge in the way is split
+//!    instead, and so is every subsegment the new point would encroach (the
 //!    point is then removed again, [`Tin::remove`], and the triangle tried later). Its z is
 //!    interpolated on the original surface at its xy (once the mesh is done: the points in rows
 //!    of a grid, each found by a short walk in the input mesh from the one before).
