@@ -85,9 +85,9 @@ impl Tin {
     /// Delaunay property is then restored by flips.
     ///
     /// # Errors
-    /// [`Error::Invalid`] unless every new triangle is strictly counter-clockwise (`p` strictly
-    /// inside the quadrilateral of `e`'s triangles, or the triangle of a hull edge, off the other
-    /// edges); as [`Tin::insert`].
+    /// [`Error::Invalid`] unless every new triangle is strictly counter-clockwise (a hull edge's
+    /// point may lie a rounding error outside the hull: the hull is then a hair from convex, which
+    /// only [`Tin::locate`] outside the hull would notice); as [`Tin::insert`].
     pub fn split_edge_at(&mut self, e: EdgeId, p: [f64; 3]) -> Result<VertexId> {
         check_point(p, self.xy.len() as u64)?;
         let q = [p[0], p[1]];
