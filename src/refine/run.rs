@@ -153,12 +153,10 @@ impl<'a> Refiner<'a> {
             let Some(bad) = self.queue.pop() else {
                 return Ok(());
             };
+            // (Still there, so still bad: the test depends on the triangle's vertices only.)
             let Some(t) = self.current(&bad) else {
                 continue;
             };
-            if self.quality(t).is_none() {
-                continue;
-            }
             self.fix_triangle(t, bad)?;
             let steiner = self.stats.free_points + self.stats.segment_points;
             if steiner > self.max_steiner {
