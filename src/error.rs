@@ -143,6 +143,10 @@ pub enum Error {
     #[error("mesh is not a valid Delaunay triangulation: {0}")]
     Invalid(String),
 
+    /// Quality refinement cannot be done on this input (see `refine`).
+    #[error("cannot refine: {0}")]
+    Refine(String),
+
     /// The operation was interrupted (Ctrl-C).
     #[error("interrupted")]
     Interrupted,
@@ -294,6 +298,7 @@ impl Error {
             | Error::Format { .. }
             | Error::BadLine { .. }
             | Error::Invalid(_)
+            | Error::Refine(_)
             | Error::NothingLeft { .. } => ErrorKind::Input,
             Error::Output { .. } | Error::Write { .. } | Error::OutOfMemory { .. } => {
                 ErrorKind::Output

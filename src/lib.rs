@@ -31,6 +31,7 @@ pub mod pipeline;
 pub mod plan;
 pub mod products;
 pub mod raster;
+pub mod refine;
 pub mod simplify;
 pub mod sink;
 pub mod sort;

@@ -544,7 +544,16 @@ fn empty_tasks_pass_and_what_a_plan_cannot_do_is_refused() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("already holds another plan"));
     // A TIN plan refuses trimming polygons and a mesh format (the merge picks it).
     let out = bin()
-        .args(["plan", "tin", s(&sample), "--format", "ply", "--tile", "16", "-o"])
+        .args([
+            "plan",
+            "tin",
+            s(&sample),
+            "--format",
+            "ply",
+            "--tile",
+            "16",
+            "-o",
+        ])
         .arg(t.path().join("tin"))
         .output()
         .unwrap();

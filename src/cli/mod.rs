@@ -18,6 +18,7 @@ mod input;
 mod plan;
 mod products;
 mod profile;
+mod refine;
 mod run_all;
 mod sample;
 mod simplify;
@@ -85,6 +86,9 @@ enum Command {
     /// Thin points into the fewest-point TIN that keeps every point within a vertical tolerance
     /// (--max-error), breaklines kept as edges.
     Thin(thin::Args),
+    /// Quality mesh: refine a TIN (mesh or points, with breaklines) until every angle is at
+    /// least --min-angle (Ruppert / Triangle -q), for hydraulic and FEM models.
+    Refine(refine::Args),
 }
 
 /// The last panic's message and place (see `main`).
@@ -169,6 +173,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         Command::Index(a) => input::expand_files(&mut a.files)?,
         Command::Crossval(a) => input::expand(&mut a.input)?,
         Command::Thin(a) => input::expand(&mut a.input.inputs)?,
+        Command::Refine(a) => input::expand(&mut a.input.inputs)?,
         _ => {}
     }
     match cli.command {
@@ -189,6 +194,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         Command::Merge(a) => plan::merge(a),
         Command::Index(a) => index::run(a),
         Command::Thin(a) => thin::run(a),
+        Command::Refine(a) => refine::run(a),
     }
 }
 

@@ -66,10 +66,14 @@ pub enum MeshFormat {
     /// sweeptin's streaming mesh (`.stin`): fixed-size records, readable with bounded memory (see
     /// `docs/FORMATS.md`).
     Stream,
+    /// SMS 2DM (`.2dm`), the 2-D mesh HEC-RAS, TELEMAC's tools, TUFLOW FV and QGIS read.
+    #[value(name = "2dm")]
+    Sms2dm,
 }
 
 impl MeshFormat {
-    /// The format for a file extension (case-insensitive): `ply`, `obj`, `xml` or `landxml`.
+    /// The format for a file extension (case-insensitive): `ply`, `obj`, `xml` or `landxml`,
+    /// `stin`, `2dm`.
     pub fn from_extension(path: &Path) -> Option<Self> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
@@ -77,6 +81,7 @@ impl MeshFormat {
             "obj" => Some(MeshFormat::Obj),
             "xml" | "landxml" => Some(MeshFormat::LandXml),
             "stin" => Some(MeshFormat::Stream),
+            "2dm" => Some(MeshFormat::Sms2dm),
             _ => None,
         }
     }
@@ -88,6 +93,7 @@ impl MeshFormat {
             MeshFormat::Obj => "OBJ",
             MeshFormat::LandXml => "LandXML",
             MeshFormat::Stream => "streaming mesh",
+            MeshFormat::Sms2dm => "SMS 2DM",
         }
     }
 }
@@ -110,8 +116,8 @@ pub fn create_mesh_sink(
         Some(f) => f,
         None => {
             return Err(Error::Options(format!(
-                "{}: unknown mesh format: use the extension .ply, .obj, .xml (LandXML) or .stin \
-                 (streaming mesh), or name the format with --format",
+                "{}: unknown mesh format: use the extension .ply, .obj, .xml (LandXML), .stin \
+                 (streaming mesh) or .2dm (SMS 2DM), or name the format with --format",
                 path.display()
             )));
         }
@@ -121,6 +127,7 @@ pub fn create_mesh_sink(
         MeshFormat::Obj => Box::new(super::obj::ObjWriter::create(path, meta)?),
         MeshFormat::LandXml => Box::new(super::landxml::LandXmlWriter::create(path, meta)?),
         MeshFormat::Stream => Box::new(super::stin::StinWriter::create(path, meta)?),
+        MeshFormat::Sms2dm => Box::new(super::sms2dm::Sms2dmWriter::create(path, meta)?),
     })
 }
 

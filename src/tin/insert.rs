@@ -79,6 +79,37 @@ impl Tin {
         Ok(v)
     }
 
+    /// Inserts `p` on the edge `e`, splitting it (and its twin): the new vertex takes the edge's
+    /// place in both triangles and the halves keep its constrained flag, even when rounding left
+    /// `p` a little off the edge's line (a segment's split point, as Triangle inserts it). The
+    /// Delaunay property is then restored by flips.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] unless every new triangle is strictly counter-clockwise (a hull edge's
+    /// point may lie a rounding error outside the hull: the hull is then a hair from convex, which
+    /// only [`Tin::locate`] outside the hull would notice); as [`Tin::insert`].
+    pub fn split_edge_at(&mut self, e: EdgeId, p: [f64; 3]) -> Result<VertexId> {
+        check_point(p, self.xy.len() as u64)?;
+        let q = [p[0], p[1]];
+        let (a, b, c) = (self.org(e), self.dst(e), self.org(e.prev()));
+        let mut ok = self.orient_p(self.p(a), q, self.p(c)) == Orientation::CounterClockwise
+            && self.orient_p(q, self.p(b), self.p(c)) == Orientation::CounterClockwise;
+        if let Some(f) = self.twin(e) {
+            let d = self.org(f.prev());
+            ok &= self.orient_p(self.p(b), q, self.p(d)) == Orientation::CounterClockwise
+                && self.orient_p(q, self.p(a), self.p(d)) == Orientation::CounterClockwise;
+        }
+        if !ok {
+            return Err(Error::Invalid(format!(
+                "split point ({}, {}) does not split the edge {} – {}",
+                p[0], p[1], a.0, b.0
+            )));
+        }
+        let v = self.push_vertex(p)?;
+        self.insert_located(v, PointLocation::OnEdge(e))?;
+        Ok(v)
+    }
+
     pub(super) fn insert_located(&mut self, v: VertexId, loc: PointLocation) -> Result<()> {
         let mut stack = Vec::with_capacity(16);
         match loc {
@@ -124,7 +155,11 @@ impl Tin {
         self.pair(ta.next(), tb.prev());
         stack.extend([ta.prev(), tb.next()]);
         match twin {
-            None => {}
+            None => {
+                // A hull edge: the halves stay on the hull, constrained if it was.
+                self.mesh.link[ta.idx()] |= flag;
+                self.mesh.link[tb.idx()] |= flag;
+            }
             Some(f) => {
                 let d = self.org(f.prev());
                 let (lad, ldb) = (

@@ -43,7 +43,8 @@ impl Tin {
             if a == b {
                 continue;
             }
-            if let Some(e) = self.find_edge(a, b) {
+            // (A hull edge has one half-edge only, maybe b → a.)
+            if let Some(e) = self.find_edge(a, b).or_else(|| self.find_edge(b, a)) {
                 self.mesh.constrain(e);
                 continue;
             }

@@ -409,3 +409,37 @@ fn from_twins_equals_from_triangles() {
     bad[i] = u32::MAX;
     assert!(Tin::from_twins(&t.vertices, &t.triangles, &bad).is_err());
 }
+
+/// A hull edge named backwards can be constrained, and splitting a constrained hull edge keeps
+/// both halves constrained (found by `refine`, which splits boundary segments).
+#[test]
+fn constrained_hull_edge_split() {
+    let pts = [
+        [0.0, 0.0, 0.0],
+        [4.0, 0.0, 1.0],
+        [4.0, 4.0, 2.0],
+        [0.0, 4.0, 3.0],
+    ];
+    let mut tin = Tin::from_points(&pts).unwrap();
+    let v = |p: [f64; 2]| tin.vertices().find(|&v| tin.xy(v) == p).unwrap();
+    let (a, b) = (v([0.0, 0.0]), v([4.0, 0.0]));
+    // The hull half-edge is a → b (counter-clockwise hull): name it b → a.
+    assert!(tin.find_edge(b, a).is_none());
+    tin.insert_segment(b, a).unwrap();
+    let e = tin.find_edge(a, b).unwrap();
+    assert!(tin.is_constrained(e) && tin.twin(e).is_none());
+    let m = tin.split_edge_at(e, [2.0, 0.0, 0.5]).unwrap();
+    for (p, q) in [(a, m), (m, b)] {
+        let h = tin.find_edge(p, q).unwrap();
+        assert!(
+            tin.is_constrained(h),
+            "half {} – {} lost its flag",
+            p.0,
+            q.0
+        );
+    }
+    // A split point that would fold a triangle over is refused, and nothing changes.
+    let e = tin.find_edge(m, b).unwrap();
+    assert!(tin.split_edge_at(e, [10.0, 10.0, 0.0]).is_err());
+    assert_eq!(tin.vertex_count(), 5);
+}
