@@ -27,7 +27,7 @@
 //! away. Memory use is bounded by the I/O buffers.
 
 use super::atomic::AtomicFile;
-use super::mesh::{MeshMeta, SinkState, SpooledOutput, one_line, rewind_spool};
+use super::mesh::{MeshMeta, SinkState, SpooledOutput, face_record, one_line, rewind_spool};
 use crate::error::Result;
 use crate::sink::{MeshSink, MeshSummary};
 use std::fs::File;
@@ -121,22 +121,12 @@ impl MeshSink for LandXmlWriter {
             "<P id=\"{}\">{} {} {}</P>",
             self.state.vertices, p[1], p[0], p[2]
         );
-        match self.out.as_mut() {
-            Some(out) => out.write_all(&self.line).map_err(|e| self.state.io(e)),
-            None => Err(self.state.error("the mesh writer was already finished")),
-        }
+        self.state.put(self.out.as_mut(), &self.line)
     }
 
     fn triangle(&mut self, t: [u64; 3]) -> Result<()> {
         self.state.triangle(t, u64::MAX - 1)?;
-        let mut rec = [0u8; 24];
-        for (chunk, i) in rec.chunks_exact_mut(8).zip(t) {
-            chunk.copy_from_slice(&i.to_le_bytes());
-        }
-        match self.faces.as_mut() {
-            Some(faces) => faces.write_all(&rec).map_err(|e| self.state.io(e)),
-            None => Err(self.state.error("the mesh writer was already finished")),
-        }
+        self.state.put(self.faces.as_mut(), &face_record(t))
     }
 
     fn finish(&mut self) -> Result<MeshSummary> {

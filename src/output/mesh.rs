@@ -202,6 +202,14 @@ impl SinkState {
         Error::write(&self.path, e)
     }
 
+    /// Writes `bytes` to `w` (the output, or a spool), which is gone once the writer finished.
+    pub fn put<W: std::io::Write>(&self, w: Option<&mut W>, bytes: &[u8]) -> Result<()> {
+        match w {
+            Some(w) => w.write_all(bytes).map_err(|e| self.io(e)),
+            None => Err(self.error("the mesh writer was already finished")),
+        }
+    }
+
     fn check_open(&self) -> Result<()> {
         if self.finished {
             return Err(self.error("the mesh writer was already finished"));
@@ -258,6 +266,16 @@ impl SinkState {
             bytes,
         }
     }
+}
+
+/// A face's spool record: its three vertex numbers as little-endian `u64` (LandXML and SMS 2DM
+/// read them back after the vertices).
+pub(crate) fn face_record(t: [u64; 3]) -> [u8; 24] {
+    let mut rec = [0u8; 24];
+    for (chunk, i) in rec.chunks_exact_mut(8).zip(t) {
+        chunk.copy_from_slice(&i.to_le_bytes());
+    }
+    rec
 }
 
 #[cfg(test)]

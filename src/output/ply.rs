@@ -163,10 +163,7 @@ impl MeshSink for PlyWriter {
         for (chunk, i) in rec[1..].chunks_exact_mut(4).zip(t) {
             chunk.copy_from_slice(&(i as u32).to_le_bytes());
         }
-        match self.faces.as_mut() {
-            Some(faces) => faces.write_all(&rec).map_err(|e| self.state.io(e)),
-            None => Err(self.state.error("the mesh writer was already finished")),
-        }
+        self.state.put(self.faces.as_mut(), &rec)
     }
 
     fn finish(&mut self) -> Result<MeshSummary> {
