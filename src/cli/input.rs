@@ -141,7 +141,15 @@ impl InputArgs {
 
     /// The run's configuration, checked.
     pub fn config(&self, input: Input) -> anyhow::Result<RunConfig> {
-        Ok(RunConfig::new(input, self.options())?)
+        let config = RunConfig::new(input, self.options())?;
+        if self.engine == Engine::Tiles && !config.runs_in_tiles() && !self.quiet {
+            eprintln!(
+                "sweeptin: note: --engine tiles: this input runs in one exact streaming sweep \
+                 instead (the tiles are proved for LAS/LAZ points without breaklines, trimming \
+                 polygons or --no-flat-triangles, swept along y)"
+            );
+        }
+        Ok(config)
     }
 }
 

@@ -203,6 +203,13 @@ impl RunConfig {
         &self.options
     }
 
+    /// Does this run use the exact tiles (asked for, and the input allows them: LAS/LAZ points
+    /// without breaklines, trimming polygons or `--no-flat-triangles`, swept along y)? When it
+    /// does not, it runs one exact streaming sweep.
+    pub fn runs_in_tiles(&self) -> bool {
+        self.options.tiles.is_some() && super::tiled::applies(self)
+    }
+
     /// The kind of input files.
     pub(crate) fn source(&self) -> Source {
         self.source
