@@ -193,7 +193,7 @@ pub enum Engine {
 
 /// Parses a human size ([`pipeline::parse_size`]).
 pub fn parse_size(s: &str) -> Result<u64, String> {
-    pipeline::parse_size(s)
+    pipeline::parse_size(s).map_err(|e| e.to_string())
 }
 
 /// The input options of the terrain-product commands: [`InputArgs`] plus the CRS to record and
