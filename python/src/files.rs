@@ -107,7 +107,7 @@ impl InputOpts {
         // otherwise; `sweep` always runs one streaming sweep.
         let tiles = match self.engine.as_str() {
             "sweep" => None,
-            "auto" | "tiles" => Some(sweeptin::tiles::TileOptions {
+            "auto" | "tiles" => Some(sweeptin::TileOptions {
                 threads: self.threads,
                 tile: self.tile,
                 base: None,

@@ -70,7 +70,7 @@ pub struct InputArgs {
     pub quiet: bool,
     /// Set by `sweeptin run`: this run is one task of a plan.
     #[arg(skip)]
-    pub task: Option<sweeptin::tiles::TaskScope>,
+    pub task: Option<sweeptin::TaskScope>,
     /// Print a one-object JSON summary on stdout (points, triangles, seconds per phase, peak
     /// memory) for batch jobs.
     #[arg(long)]
@@ -129,7 +129,7 @@ impl InputArgs {
             // A task of a plan always runs in tiles.
             tiles: match (self.engine, self.task.is_some()) {
                 (Engine::Sweep, false) => None,
-                _ => Some(sweeptin::tiles::TileOptions {
+                _ => Some(sweeptin::TileOptions {
                     threads: self.threads,
                     tile: self.tile,
                     base: None,

@@ -2,7 +2,7 @@
 //!
 //! Tasks are taken in plan order (rows of tiles south to north, west to east in a row), each
 //! task's pieces in the order it wrote them, through the same writer as one tiled run
-//! ([`crate::tiles::emit::TileWriter`]): a vertex is numbered when a triangle first uses it and
+//! (`tiles::emit::TileWriter`): a vertex is numbered when a triangle first uses it and
 //! forgotten when the piece of the tile that owns it has said how many triangles use it and
 //! that many were written, so only the vertices along task edges wait. The mesh is the triangle
 //! set of one run (each triangle once, from the task owning its lowest vertex); its order is the
