@@ -34,6 +34,7 @@
 //! engine defines (summaries, tile options, [`Tin`]) are re-exported below.
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
+#![cfg_attr(not(feature = "dev"), warn(unreachable_pub))]
 
 /// Declares the engine's modules: `pub(crate)` in a normal build; `pub` with the `dev` feature
 /// (tests, benchmarks, `dev/` tools), hidden from the documentation.
@@ -45,6 +46,7 @@ macro_rules! internal {
         pub mod $name;
         $(#[$attr])*
         #[cfg(not(feature = "dev"))]
+        #[allow(unreachable_pub, reason = "the dev feature makes these modules public")]
         pub(crate) mod $name;
     )*};
 }

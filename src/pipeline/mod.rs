@@ -227,12 +227,12 @@ pub fn anon_rss() -> Option<u64> {
 pub(crate) struct AnonPeak(std::sync::atomic::AtomicU64);
 
 impl AnonPeak {
-    pub fn sample(&self) {
+    pub(crate) fn sample(&self) {
         if let Some(a) = anon_rss() {
             self.0.fetch_max(a, std::sync::atomic::Ordering::Relaxed);
         }
     }
-    pub fn get(&self) -> Option<u64> {
+    pub(crate) fn get(&self) -> Option<u64> {
         let v = self.0.load(std::sync::atomic::Ordering::Relaxed);
         (v > 0).then_some(v)
     }
