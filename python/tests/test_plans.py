@@ -139,7 +139,7 @@ def test_plan_errors(ign, small, tmp_path):
     with pytest.raises(sweeptin.OptionsError, match="multiple"):
         sweeptin.plan("dem", ign, tmp_path / "d", tile=50.3, cell=0.5)
     with pytest.raises(sweeptin.OptionsError, match="plan makes"):
-        sweeptin.plan("tin", ign, tmp_path / "d", tile=50)
+        sweeptin.plan("profile", ign, tmp_path / "d", tile=50)
     xyz = tmp_path / "p.xyz"
     xyz.write_text("0 0 0\n1 0 0\n0 1 0\n")
     with pytest.raises(sweeptin.InputError, match="LAS/LAZ"):
