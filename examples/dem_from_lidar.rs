@@ -6,13 +6,13 @@
 //! ```
 
 use std::path::PathBuf;
+use sweeptin::TileOptions;
 use sweeptin::input::las::Filter;
 use sweeptin::pipeline::{Input, RunConfig, RunOptions, run};
 use sweeptin::products::contours::{ContourOptions, ContourSink};
 use sweeptin::products::dem::{DemOptions, DemSink};
 use sweeptin::raster::{Align, GridExtent, GridPlan};
 use sweeptin::sink::{Fanout, ProductSummary, TriangleSink};
-use sweeptin::tiles::TileOptions;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();

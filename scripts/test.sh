@@ -27,6 +27,8 @@ fi
 
 cargo fmt --all -- --check
 cargo clippy --all-targets --locked -- -D warnings
+# The library as users build it (no `dev` feature: the engine is pub(crate)): no dead code.
+cargo clippy --lib --locked -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked --quiet
 cargo test --locked --quiet
 # The Python package (python/): its own venv under target/, the extension built once in release.

@@ -28,7 +28,7 @@ pub enum Error {
     },
 
     /// A coordinate is finite but outside the range in which the exact predicates are exact
-    /// (see [`crate::geom::predicates::MAX_COORD`] and [`crate::geom::predicates::MIN_NONZERO_COORD`]).
+    /// (see `geom::predicates::MAX_COORD` and `geom::predicates::MIN_NONZERO_COORD`).
     #[error(
         "point {index}: coordinate {value} is outside the supported range \
          (|v| <= {max:e} and either 0 or |v| >= {min:e}, after removing the local origin)"

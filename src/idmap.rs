@@ -8,7 +8,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 /// Fibonacci hashing of a `u64`: multiplication by 2^64 / φ. Sequential keys get distinct low bits
 /// (the bucket) and well-mixed high bits (the map's tag bits).
 #[derive(Clone, Copy, Debug, Default)]
-pub struct IdHasher(u64);
+pub(crate) struct IdHasher(u64);
 
 impl Hasher for IdHasher {
     #[inline]
@@ -30,14 +30,14 @@ impl Hasher for IdHasher {
 }
 
 /// A `HashMap` from vertex numbers.
-pub type IdMap<V> = HashMap<u64, V, BuildHasherDefault<IdHasher>>;
+pub(crate) type IdMap<V> = HashMap<u64, V, BuildHasherDefault<IdHasher>>;
 
 /// A `HashMap` keyed by our own integers or coordinate bits (positions of points, triangles as
 /// their corners' positions), hashed as [`IdMap`] is.
-pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<IdHasher>>;
+pub(crate) type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<IdHasher>>;
 
 /// A set keyed as [`FastMap`].
-pub type FastSet<K> = std::collections::HashSet<K, BuildHasherDefault<IdHasher>>;
+pub(crate) type FastSet<K> = std::collections::HashSet<K, BuildHasherDefault<IdHasher>>;
 
 #[cfg(test)]
 mod tests {

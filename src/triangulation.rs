@@ -31,13 +31,13 @@ pub struct Triangulation {
 /// Delaunay triangulation of `points` (`[x, y, z]`; `z` is carried along).
 ///
 /// The result is the unique Delaunay triangulation under the tie-breaking rule documented in
-/// [`crate::geom::predicates`]: it depends only on the set of distinct `(x, y)` positions (and, among
+/// `geom::predicates`: it depends only on the set of distinct `(x, y)` positions (and, among
 /// duplicates, on the policy), not on input order or thread count.
 ///
 /// # Errors
 /// [`Error::NonFinite`] / [`Error::CoordinateOutOfRange`] naming the first bad point,
 /// [`Error::TooFewPoints`] with fewer than 3 distinct positions, [`Error::AllCollinear`] when no
-/// triangle exists, [`Error::TooManyPoints`] beyond [`memory::MAX_POINTS`].
+/// triangle exists, [`Error::TooManyPoints`] beyond `sort::memory::MAX_POINTS`.
 pub fn triangulate(points: &[[f64; 3]], options: &Options) -> Result<Triangulation> {
     sweep_in_memory(points, &[], options, false).map(|(t, _)| t)
 }
@@ -46,7 +46,7 @@ pub fn triangulate(points: &[[f64; 3]], options: &Options) -> Result<Triangulati
 /// `twins[3t + k]` is the half-edge across edge `k` of triangle `t` (the edge from its vertex
 /// `k` to vertex `k + 1`): `3u + j` for edge `j` of the neighbour `u`, or `u32::MAX` on the
 /// convex hull. The sweep has it already, so this costs 12 bytes per triangle and no search
-/// (what [`crate::tin::Tin::from_twins`] takes to walk the triangulation).
+/// (what [`crate::Tin::from_twins`] takes to walk the triangulation).
 ///
 /// # Errors
 /// As [`triangulate_cdt`].
@@ -81,7 +81,7 @@ fn check_segments(points: &[[f64; 3]], segments: &[[u32; 2]]) -> Result<()> {
 ///
 /// Segments must not cross each other (clean them first: `sweeptin::breaklines` splits crossings);
 /// a segment that does is left out and counted in
-/// [`ConstraintStats::crossing_skipped`](crate::sweep::ConstraintStats). A segment between two
+/// [`ConstraintStats::crossing_skipped`](crate::ConstraintStats). A segment between two
 /// duplicates of one position is ignored; endpoints merged as duplicates refer to the survivor.
 ///
 /// # Errors

@@ -190,3 +190,47 @@ fn files_stay_small() {
         );
     }
 }
+
+#[test]
+fn the_engine_is_not_public_api() {
+    // The engine is `pub(crate)` in a normal build; the `dev` feature (the crate's own tests,
+    // benchmarks and `dev/` tools) makes it `pub` through lib.rs's `internal!` macro.
+    let lib = std::fs::read_to_string(src().join("lib.rs")).unwrap();
+    let lines: Vec<&str> = lib.lines().map(str::trim).collect();
+    let block = lines
+        .iter()
+        .position(|l| *l == "internal! {")
+        .expect("lib.rs declares the engine's modules with `internal! { … }`");
+    let end = block + lines[block..].iter().position(|l| *l == "}").unwrap();
+    let internal = &lines[block + 1..end];
+    for name in ["finalise", "geom", "mesh", "sort", "sweep", "tiles", "tin"] {
+        assert!(
+            internal.contains(&format!("mod {name};").as_str()),
+            "lib.rs: `{name}` is not declared in `internal!`"
+        );
+    }
+    for name in ["clock", "idmap"] {
+        assert!(
+            lines.contains(&format!("pub(crate) mod {name};").as_str()),
+            "lib.rs: `{name}` is not `pub(crate)`"
+        );
+    }
+    for (i, l) in lines.iter().enumerate() {
+        let Some(name) = l.strip_prefix("pub mod ").and_then(|n| n.strip_suffix(';')) else {
+            continue;
+        };
+        let internal = [
+            "clock", "finalise", "geom", "idmap", "mesh", "sort", "sweep", "tiles", "tin",
+        ];
+        assert!(
+            !internal.contains(&name),
+            "lib.rs declares the internal module `{name}` as `pub mod`"
+        );
+        if name == "synth" {
+            assert!(
+                lines[i.saturating_sub(2)..i].contains(&"#[cfg(any(test, feature = \"dev\"))]"),
+                "lib.rs: `synth` is only for tests and `dev` builds"
+            );
+        }
+    }
+}

@@ -107,7 +107,7 @@ impl InputOpts {
         // otherwise; `sweep` always runs one streaming sweep.
         let tiles = match self.engine.as_str() {
             "sweep" => None,
-            "auto" | "tiles" => Some(sweeptin::tiles::TileOptions {
+            "auto" | "tiles" => Some(sweeptin::TileOptions {
                 threads: self.threads,
                 tile: self.tile,
                 base: None,
@@ -476,5 +476,5 @@ impl TriangleStream {
 /// Parses a memory size (`"512M"`, `"4G"`) as `--mem` does.
 #[pyfunction]
 pub(crate) fn parse_size(s: &str) -> PyResult<u64> {
-    pipeline::parse_size(s).map_err(value_error)
+    pipeline::parse_size(s).map_err(crate::to_py)
 }

@@ -83,7 +83,7 @@ pub struct Tin {
     /// The sweep's adjacency (`twins[3t + k]`), 12 bytes per triangle, for `interpolate`.
     twins: Vec<u32>,
     /// The walkable TIN for `interpolate`, built from `twins` on first use.
-    walk: Mutex<Option<sweeptin::tin::Tin>>,
+    walk: Mutex<Option<sweeptin::Tin>>,
 }
 
 #[pyfunction]
@@ -198,7 +198,7 @@ impl Tin {
             .detach(|| {
                 let mut guard = walk.lock().unwrap_or_else(|e| e.into_inner());
                 if guard.is_none() {
-                    *guard = Some(sweeptin::tin::Tin::from_twins(v, t, twins)?);
+                    *guard = Some(sweeptin::Tin::from_twins(v, t, twins)?);
                 }
                 let tin = guard.as_mut().expect("built above");
                 Ok(sweeptin::products::sample::heights(tin, q))

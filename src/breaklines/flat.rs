@@ -9,7 +9,7 @@
 //! triangulation: for every flat triangle it flips one of its unconstrained edges, when
 //!
 //! * the quadrilateral of the two triangles across that edge is strictly convex (both new
-//!   triangles strictly counter-clockwise, decided by exact [`orient`]), so the result is still a
+//!   triangles strictly counter-clockwise, decided by exact `orient`), so the result is still a
 //!   triangulation, and
 //! * neither new triangle is flat,
 //!

@@ -12,7 +12,7 @@
 //! 2. [`clean`](clean::clean): polylines → [`Pslg`] (a planar straight-line graph): exact duplicate
 //!    vertices merged, zero-length segments dropped, crossings split at a new vertex, collinear
 //!    overlaps merged, segments split where a vertex lies on them, repeated until nothing changes.
-//!    Every decision is exact ([`crate::geom::predicates::orient`]); only the coordinates of crossing
+//!    Every decision is exact (`geom::predicates::orient`); only the coordinates of crossing
 //!    points are rounded, once.
 //! 3. [`trim`]: which triangles to keep (`--boundary`, `--holes`, `--max-edge`).
 //!

@@ -15,7 +15,7 @@
 //! is strictly inside triangle `abc` whatever its orientation, and evaluates the ray test on it
 //! exactly: "is vertex `v` above `p`" is a comparison of `y` values (ties broken by `b.y`, then
 //! `c.y`), and the side of `p` relative to a ring edge `uv` is the first non-zero of
-//! `orient(u, v, a)`, `orient(u, v, b)`, `orient(u, v, c)` ([`crate::geom::predicates::orient`]). No
+//! `orient(u, v, a)`, `orient(u, v, b)`, `orient(u, v, c)` (`geom::predicates::orient`). No
 //! coordinate of a test point is ever rounded. *Caveat*: if a ring is **not** inserted as a
 //! constraint and crosses a triangle, the answer is the one for the part of the triangle at its
 //! first corner.

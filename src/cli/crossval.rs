@@ -4,8 +4,8 @@ use super::info::FilterArgs;
 use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
+use sweeptin::Tin;
 use sweeptin::pipeline::{Input, read_points};
-use sweeptin::tin::Tin;
 
 /// Arguments of `sweeptin crossval`.
 #[derive(clap::Args, Debug)]

@@ -39,7 +39,7 @@ pub struct ClassList(pub Vec<u8>);
 impl std::str::FromStr for ClassList {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        parse_classes(s).map(ClassList)
+        parse_classes(s).map(ClassList).map_err(|e| e.to_string())
     }
 }
 

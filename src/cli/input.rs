@@ -70,7 +70,7 @@ pub struct InputArgs {
     pub quiet: bool,
     /// Set by `sweeptin run`: this run is one task of a plan.
     #[arg(skip)]
-    pub task: Option<sweeptin::tiles::TaskScope>,
+    pub task: Option<sweeptin::TaskScope>,
     /// Print a one-object JSON summary on stdout (points, triangles, seconds per phase, peak
     /// memory) for batch jobs.
     #[arg(long)]
@@ -129,7 +129,7 @@ impl InputArgs {
             // A task of a plan always runs in tiles.
             tiles: match (self.engine, self.task.is_some()) {
                 (Engine::Sweep, false) => None,
-                _ => Some(sweeptin::tiles::TileOptions {
+                _ => Some(sweeptin::TileOptions {
                     threads: self.threads,
                     tile: self.tile,
                     base: None,
@@ -201,7 +201,7 @@ pub enum Engine {
 
 /// Parses a human size ([`pipeline::parse_size`]).
 pub fn parse_size(s: &str) -> Result<u64, String> {
-    pipeline::parse_size(s)
+    pipeline::parse_size(s).map_err(|e| e.to_string())
 }
 
 /// The input options of the terrain-product commands: [`InputArgs`] plus the CRS to record and

@@ -361,6 +361,7 @@ impl Finalizer {
 }
 
 impl Hooks for Finalizer {
+    #[cfg(any(test, feature = "dev"))]
     const FINALISES: bool = true;
 
     #[inline(always)]
@@ -563,6 +564,7 @@ impl StreamingSweep {
     ///
     /// # Errors
     /// [`Error::Internal`] describing the first violation.
+    #[cfg(any(test, feature = "dev"))]
     pub fn check(&self) -> Result<()> {
         self.sweep.check()
     }

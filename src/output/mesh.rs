@@ -150,7 +150,7 @@ impl SpooledOutput {
     ///
     /// # Errors
     /// [`Error::Write`] naming `path` if the output or the spool file cannot be created.
-    pub fn create(path: &Path, spool_dir: &Path) -> Result<Self> {
+    pub(crate) fn create(path: &Path, spool_dir: &Path) -> Result<Self> {
         let state = SinkState::new(path);
         let out = AtomicFile::create(path)?;
         let spool = tempfile::tempfile_in(spool_dir).map_err(|e| state.io(e))?;
@@ -182,7 +182,7 @@ pub(crate) struct SinkState {
 }
 
 impl SinkState {
-    pub fn new(path: &Path) -> Self {
+    pub(crate) fn new(path: &Path) -> Self {
         SinkState {
             path: path.to_path_buf(),
             vertices: 0,
@@ -191,14 +191,14 @@ impl SinkState {
         }
     }
 
-    pub fn error(&self, message: impl Into<String>) -> Error {
+    pub(crate) fn error(&self, message: impl Into<String>) -> Error {
         Error::Output {
             path: self.path.clone(),
             message: message.into(),
         }
     }
 
-    pub fn io(&self, e: std::io::Error) -> Error {
+    pub(crate) fn io(&self, e: std::io::Error) -> Error {
         Error::write(&self.path, e)
     }
 
@@ -218,7 +218,7 @@ impl SinkState {
     }
 
     /// Checks a vertex and counts it.
-    pub fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
+    pub(crate) fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
         self.check_open()?;
         if !p.iter().all(|c| c.is_finite()) {
             return Err(self.error(format!(
@@ -231,7 +231,7 @@ impl SinkState {
     }
 
     /// Checks a triangle (every index already pushed and at most `max_index`) and counts it.
-    pub fn triangle(&mut self, t: [u64; 3], max_index: u64) -> Result<()> {
+    pub(crate) fn triangle(&mut self, t: [u64; 3], max_index: u64) -> Result<()> {
         self.check_open()?;
         for &i in &t {
             if i >= self.vertices {
@@ -253,13 +253,13 @@ impl SinkState {
     }
 
     /// Marks the sink finished; errors if it already was.
-    pub fn finish(&mut self) -> Result<()> {
+    pub(crate) fn finish(&mut self) -> Result<()> {
         self.check_open()?;
         self.finished = true;
         Ok(())
     }
 
-    pub fn summary(&self, bytes: u64) -> MeshSummary {
+    pub(crate) fn summary(&self, bytes: u64) -> MeshSummary {
         MeshSummary {
             vertices: self.vertices,
             triangles: self.triangles,

@@ -33,7 +33,7 @@ pub(crate) struct Emitter<'m, 's, 't> {
 }
 
 impl<'m, 's, 't> Emitter<'m, 's, 't> {
-    pub fn new(
+    pub(super) fn new(
         frame: Frame,
         mesh: Option<&'m mut (dyn MeshSink + Send)>,
         sinks: &'s mut [&'t mut dyn TriangleSink],
@@ -56,12 +56,12 @@ impl<'m, 's, 't> Emitter<'m, 's, 't> {
     }
 
     /// Vertices and triangles written, triangles trimmed.
-    pub fn counts(&self) -> (u64, u64, u64) {
+    pub(super) fn counts(&self) -> (u64, u64, u64) {
         (self.next_out, self.triangles, self.trimmed)
     }
 
     /// One event of the sweep (the sweep's frame).
-    pub fn event(&mut self, ev: Event) -> Result<()> {
+    pub(super) fn event(&mut self, ev: Event) -> Result<()> {
         match ev {
             Event::Vertex { xy, z, .. } => self.vertex(self.frame.world(xy, z)),
             // A sweep along x works on the mirror image: counter-clockwise there is clockwise here.
@@ -168,7 +168,7 @@ pub(crate) struct Collected {
 
 impl Collected {
     /// Records one event (watermarks and vertex releases are dropped: everything is held).
-    pub fn event(&mut self, ev: Event) {
+    pub(super) fn event(&mut self, ev: Event) {
         match ev {
             Event::Vertex { xy, z, index } => {
                 self.vertices.push([xy[0], xy[1], z]);
@@ -185,7 +185,7 @@ impl Collected {
 
     /// Flips flat triangles away (`segments` and `lines`: the breakline graph), then replays the
     /// result into `emit`.
-    pub fn finish(
+    pub(super) fn finish(
         mut self,
         segments: &[[u32; 2]],
         lines: &[u32],

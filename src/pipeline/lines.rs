@@ -165,7 +165,7 @@ pub(crate) struct Prepared {
 
 impl Prepared {
     /// The sweep's view of the graph.
-    pub fn graph(&self) -> Option<ConstraintGraph> {
+    pub(crate) fn graph(&self) -> Option<ConstraintGraph> {
         self.pslg.as_ref().map(|g| {
             let xy = g
                 .vertices

@@ -106,8 +106,8 @@ pub const DEFAULT_MEM: u64 = 1 << 30;
 /// `iB` or a space (binary multiples: 1K = 1024), as `--mem` and the Python package take it.
 ///
 /// # Errors
-/// A message saying what is wrong with `s`.
-pub fn parse_size(s: &str) -> std::result::Result<u64, String> {
+/// [`Error::Options`] saying what is wrong with `s`.
+pub fn parse_size(s: &str) -> Result<u64> {
     let t = s.trim();
     let split = t
         .find(|c: char| !(c.is_ascii_digit() || c == '.'))
@@ -115,7 +115,7 @@ pub fn parse_size(s: &str) -> std::result::Result<u64, String> {
     let (num, unit) = t.split_at(split);
     let v: f64 = num
         .parse()
-        .map_err(|_| format!("'{s}' is not a size like 512M or 4G"))?;
+        .map_err(|_| Error::Options(format!("'{s}' is not a size like 512M or 4G")))?;
     let mult: u64 = match unit.trim().to_ascii_uppercase().as_str() {
         "" | "B" => 1,
         "K" | "KB" | "KIB" => 1 << 10,
@@ -123,14 +123,16 @@ pub fn parse_size(s: &str) -> std::result::Result<u64, String> {
         "G" | "GB" | "GIB" => 1 << 30,
         "T" | "TB" | "TIB" => 1 << 40,
         _ => {
-            return Err(format!(
+            return Err(Error::Options(format!(
                 "'{s}': unknown size unit '{unit}' (use K, M, G or T)"
-            ));
+            )));
         }
     };
     let bytes = v * mult as f64;
     if !(1.0..=1e18).contains(&bytes) {
-        return Err(format!("'{s}' is not a sensible memory size"));
+        return Err(Error::Options(format!(
+            "'{s}' is not a sensible memory size"
+        )));
     }
     Ok(bytes as u64)
 }
@@ -225,12 +227,12 @@ pub fn anon_rss() -> Option<u64> {
 pub(crate) struct AnonPeak(std::sync::atomic::AtomicU64);
 
 impl AnonPeak {
-    pub fn sample(&self) {
+    pub(crate) fn sample(&self) {
         if let Some(a) = anon_rss() {
             self.0.fetch_max(a, std::sync::atomic::Ordering::Relaxed);
         }
     }
-    pub fn get(&self) -> Option<u64> {
+    pub(crate) fn get(&self) -> Option<u64> {
         let v = self.0.load(std::sync::atomic::Ordering::Relaxed);
         (v > 0).then_some(v)
     }

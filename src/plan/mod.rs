@@ -4,7 +4,7 @@
 //! A [`Plan`] is written as `DIR/plan.json` from the input files' headers only (no point is
 //! decoded): the product command and its options, the tile grid, and for every tile the files
 //! whose extent reaches into it or its buffer. A task needs nothing else. It runs the tiled engine
-//! on its tile alone ([`crate::tiles::TaskScope`]): it reads the files near its tile, keeps the
+//! on its tile alone ([`crate::TaskScope`]): it reads the files near its tile, keeps the
 //! points up to the buffer, and delivers exactly what its tile owns, certified to be what a run
 //! over all the points gives; when a certificate needs points beyond the buffer the task runs
 //! again with a wider one. Tasks write their outputs under `DIR/tiles/` atomically, with a

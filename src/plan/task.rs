@@ -81,7 +81,7 @@ pub enum Product {
 mod nodata {
     use serde::{Deserialize, Deserializer, Serializer, de::Error as _};
 
-    pub fn serialize<S: Serializer>(v: &f32, s: S) -> Result<S::Ok, S::Error> {
+    pub(super) fn serialize<S: Serializer>(v: &f32, s: S) -> Result<S::Ok, S::Error> {
         if v.is_finite() {
             s.serialize_f32(*v)
         } else {
@@ -89,7 +89,7 @@ mod nodata {
         }
     }
 
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
         #[derive(Deserialize)]
         #[serde(untagged)]
         enum V {

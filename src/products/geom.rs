@@ -3,7 +3,7 @@
 //! - [`Tri`]: a triangle as the products see it: counter-clockwise and **rotated to a canonical
 //!   first vertex** (the smallest by `(x, y)`), so every computation on it gives the same bits
 //!   whatever rotation the stream delivered.
-//! - [`Tri::locate`]: exact point location (through [`crate::geom::predicates::orient`]): inside, on an
+//! - [`Tri::locate`]: exact point location (through `geom::predicates::orient`): inside, on an
 //!   edge, on a vertex, outside.
 //! - [`Tri::value_at`]: linear interpolation that gives **the same bits from every triangle
 //!   containing the point**: on an edge the value depends only on the edge's two endpoints (taken

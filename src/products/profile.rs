@@ -2,7 +2,7 @@
 //! line crosses, plus chainage.
 //!
 //! For every line segment `p → q` and every triangle, the sink records (exactly, through
-//! [`crate::geom::predicates::orient`]):
+//! `geom::predicates::orient`):
 //! - where the segment properly crosses a triangle edge — the point computed from the edge and the
 //!   segment alone, so the two triangles sharing the edge record the same bits;
 //! - where the segment passes exactly through a TIN vertex (the vertex itself, its `z`);

@@ -35,7 +35,7 @@ use std::path::{Path, PathBuf};
 
 /// Heights of an in-memory TIN at the points `xy` (NaN outside it), with the same values as
 /// the streamed [`SampleSink`] and the DEM: each point is found by a walk from the previous one
-/// ([`crate::tin::Tin::locate`], exact), then valued by [`Tri::value_at`] (on an edge or vertex
+/// ([`crate::Tin::locate`], exact), then valued by [`Tri::value_at`] (on an edge or vertex
 /// from that edge or vertex alone).
 pub fn heights(tin: &mut crate::tin::Tin, xy: &[[f64; 2]]) -> Vec<f64> {
     use crate::tin::PointLocation;

@@ -28,7 +28,7 @@
 //!    Üngör's off-centre when that is nearer (on the bisector of its shortest edge, where the new
 //!    triangle on that edge just meets the bound): fewer points than circumcentres. The point is
 //!    found by a straight walk from the triangle (exact
-//!    [`orient`](crate::geom::predicates::orient) tests); a constrained edge in the way is split
+//!    `orient` tests); a constrained edge in the way is split
 //!    instead, and so is every subsegment the new point would encroach (the
 //!    point is then removed again, [`Tin::remove`], and the triangle tried later). Its z is
 //!    interpolated on the original surface at its xy (once the mesh is done: the points in rows

@@ -45,7 +45,7 @@ pub(super) struct Refiner<'a> {
 }
 
 impl<'a> Refiner<'a> {
-    pub fn new(
+    pub(super) fn new(
         mut tin: Tin,
         surface: super::Surface<'a>,
         o: &RefineOptions,
@@ -96,7 +96,7 @@ impl<'a> Refiner<'a> {
 
     /// Marks the regions between constrained edges in or out of the domain, then queues what
     /// needs work.
-    pub fn classify(&mut self, domain: Domain) {
+    pub(super) fn classify(&mut self, domain: Domain) {
         let slots = self.tin.triangle_slots();
         let mut seen = vec![false; slots];
         let mut stack = Vec::new();
@@ -147,7 +147,7 @@ impl<'a> Refiner<'a> {
         self.tin.take_touched(&mut Vec::new());
     }
 
-    pub fn run(&mut self) -> Result<()> {
+    pub(super) fn run(&mut self) -> Result<()> {
         loop {
             self.split_encroached()?;
             let Some(bad) = self.queue.pop() else {
@@ -563,7 +563,7 @@ impl<'a> Refiner<'a> {
     }
 
     /// The domain's triangles and their vertices, renumbered in vertex-id order.
-    pub fn finish(self) -> Refined {
+    pub(super) fn finish(self) -> Refined {
         let tin = &self.tin;
         let tris: Vec<TriId> = tin
             .triangles()

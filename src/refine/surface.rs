@@ -26,7 +26,7 @@ struct Index {
 
 impl<'a> Surface<'a> {
     /// The surface of `triangles` (counter-clockwise, indices checked by the caller).
-    pub fn new(vertices: &'a [[f64; 3]], triangles: &'a [[u32; 3]]) -> Surface<'a> {
+    pub(super) fn new(vertices: &'a [[f64; 3]], triangles: &'a [[u32; 3]]) -> Surface<'a> {
         let mut edges: Vec<(u64, u32)> = Vec::with_capacity(3 * triangles.len());
         for (i, t) in triangles.iter().enumerate() {
             for k in 0..3 {
@@ -89,7 +89,7 @@ impl<'a> Surface<'a> {
     }
 
     /// The first input triangle (lowest index) whose closed area holds `p`, exactly.
-    pub fn triangle_at(&self, p: [f64; 2]) -> Option<u32> {
+    pub(super) fn triangle_at(&self, p: [f64; 2]) -> Option<u32> {
         let xy = |v: u32| {
             let q = self.vertices[v as usize];
             [q[0], q[1]]
@@ -115,14 +115,14 @@ impl<'a> Surface<'a> {
 
     /// Height of the input surface at `p` (linear in the triangle that holds it), or `None`
     /// outside the input mesh.
-    pub fn height(&self, p: [f64; 2]) -> Option<f64> {
+    pub(super) fn height(&self, p: [f64; 2]) -> Option<f64> {
         self.height_near(p, u32::MAX).map(|(z, _)| z)
     }
 
     /// [`Surface::height`] and the triangle holding `p`, found by a visibility walk from triangle
     /// `start` (exact orientations; any triangle, or `u32::MAX`), or by the grid when the walk
     /// reaches the boundary or takes long (both find a triangle whose closed area holds `p`).
-    pub fn height_near(&self, p: [f64; 2], start: u32) -> Option<(f64, u32)> {
+    pub(super) fn height_near(&self, p: [f64; 2], start: u32) -> Option<(f64, u32)> {
         let xy = |v: u32| {
             let q = self.vertices[v as usize];
             [q[0], q[1]]

@@ -8,7 +8,7 @@
 //!    whose centres lie in it (equation 4 of the paper with the vertical distance; only the cells
 //!    inside the triangle are scanned, by exact integer rasterisation);
 //! 3. keep the candidates in a priority queue; insert the worst with exact Delaunay insertion
-//!    ([`crate::tin::Tin`], Lawson flips, the crate's tie rule); rescan only the triangles the
+//!    ([`crate::Tin`], Lawson flips, the crate's tie rule); rescan only the triangles the
 //!    insertion created or flipped;
 //! 4. stop when the worst error is within the bound, or at a point or triangle budget.
 //!

@@ -6,14 +6,14 @@ const NOT_QUEUED: u32 = u32::MAX;
 
 /// Max-heap of `(key << 32) | triangle` entries, with each triangle's position.
 #[derive(Debug, Default)]
-pub struct TriangleQueue {
+pub(super) struct TriangleQueue {
     heap: Vec<u64>,
     pos: Vec<u32>,
 }
 
 impl TriangleQueue {
     /// Sets triangle `t`'s key (`Some`), or takes it out of the queue (`None`).
-    pub fn set(&mut self, t: u32, key: Option<u32>) {
+    pub(super) fn set(&mut self, t: u32, key: Option<u32>) {
         if t as usize >= self.pos.len() {
             self.pos.resize(t as usize + 1, NOT_QUEUED);
         }
@@ -41,12 +41,12 @@ impl TriangleQueue {
     }
 
     /// The triangle with the largest key (ties: the largest id).
-    pub fn peek(&self) -> Option<u32> {
+    pub(super) fn peek(&self) -> Option<u32> {
         self.heap.first().map(|&e| e as u32)
     }
 
     /// Removes the top triangle.
-    pub fn pop(&mut self) -> Option<u32> {
+    pub(super) fn pop(&mut self) -> Option<u32> {
         let t = self.peek()?;
         self.remove_at(0);
         Some(t)

@@ -8,14 +8,14 @@
 //! not within the tolerance. The worst candidate of all (the grid simplifier's `TriangleQueue`,
 //! the same indexed heap) is inserted with exact Delaunay insertion ([`Tin::insert_in_triangle`], Lawson
 //! flips, the crate's tie rule); the points of the triangles the insertion created or flipped are
-//! moved to the new triangles (located exactly with [`orient`]) and those triangles rescanned.
+//! moved to the new triangles (located exactly with `orient`) and those triangles rescanned.
 //! It stops when every point is within the tolerance. A redundancy pass
 //! ([`ThinOptions::decimate`]) then removes every vertex whose removal keeps all points within
 //! (Herva 2009, §5.6: both insertion and removal, exact).
 //!
 //! # Start, hull and breaklines
 //! The start is the Delaunay triangulation of the points' convex hull vertices (exactly: a
-//! monotone chain with [`orient`]) and the breakline vertices, with the breakline segments
+//! monotone chain with `orient`) and the breakline vertices, with the breakline segments
 //! inserted as constrained edges ([`Tin::insert_segment`]); so every point lies in the TIN and the
 //! breaklines stay edges (a point inserted on one splits it into two constrained pieces). Hull and
 //! breakline vertices are never removed.
@@ -23,7 +23,7 @@
 //! # "Within", exactly
 //! A point is within when its vertical distance to the plane of the triangle containing it (in
 //! the closed sense: on a shared edge both planes agree) is at most the tolerance, decided by
-//! [`VerticalPlane::check`]: a certified floating-point bound, and exact `orient3d` signs when the
+//! `VerticalPlane::check`: a certified floating-point bound, and exact `orient3d` signs when the
 //! bound cannot decide. A point is accepted only when it provably lies within; a point closer than
 //! one unit in the last place of its `z` to the tolerance may be treated as beyond (and kept),
 //! never the reverse. Errors reported ([`ThinStats::max_error`], `rms_error`) are the

@@ -111,6 +111,7 @@ impl<R: SortKey> ExternalSorter<R> {
     }
 
     /// Room left in the current chunk before it spills.
+    #[cfg(any(test, feature = "dev"))]
     pub fn room(&self) -> usize {
         self.capacity - self.chunk.len()
     }

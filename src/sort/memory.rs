@@ -70,6 +70,7 @@ impl Prepared {
     }
 
     /// No points at all?
+    #[cfg(any(test, feature = "dev"))]
     pub fn is_empty(&self) -> bool {
         self.index.is_empty()
     }

@@ -121,11 +121,13 @@ impl<T: Pod> MappedRecords<T> {
     }
 
     /// Number of records.
+    #[cfg(any(test, feature = "dev"))]
     pub fn len(&self) -> usize {
         self.len
     }
 
     /// No records?
+    #[cfg(any(test, feature = "dev"))]
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }

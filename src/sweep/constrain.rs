@@ -92,6 +92,7 @@ impl ConstraintGraph {
     }
 
     /// Number of segments.
+    #[cfg(any(test, feature = "dev"))]
     pub fn segment_count(&self) -> usize {
         self.lower.len()
     }

@@ -216,11 +216,13 @@ impl Front {
 
     /// Number of nodes, `P-1` and `P-2` included.
     #[inline]
+    #[cfg(any(test, feature = "dev"))]
     pub fn len(&self) -> usize {
         self.len
     }
 
     /// The front always holds at least `P-1` and `P-2`.
+    #[cfg(any(test, feature = "dev"))]
     pub fn is_empty(&self) -> bool {
         false
     }
@@ -378,6 +380,7 @@ impl Front {
     }
 
     /// Iterates the nodes from `P-1` to `P-2`.
+    #[cfg(any(test, feature = "dev"))]
     pub fn iter(&self) -> impl Iterator<Item = NodeId> + '_ {
         let mut n = self.head;
         std::iter::from_fn(move || {

@@ -22,6 +22,7 @@ pub(crate) mod sealed {
     pub trait Hooks: std::fmt::Debug + Clone {
         /// Do triangles leave the mesh before the end? Then edges facing them are boundary
         /// edges too (see [`crate::sweep::Sweep::check`]).
+        #[cfg(any(test, feature = "dev"))]
         const FINALISES: bool;
 
         /// A freed triangle slot to reuse for the next new triangle, if any.
@@ -56,6 +57,7 @@ pub(crate) mod sealed {
 pub struct Batch;
 
 impl sealed::Hooks for Batch {
+    #[cfg(any(test, feature = "dev"))]
     const FINALISES: bool = false;
 
     #[inline(always)]

@@ -14,6 +14,7 @@
 //! The same core, monomorphised over its [`Mode`] ([`hooks`]), is the streaming sweep of
 //! [`crate::finalise`].
 
+#[cfg(any(test, feature = "dev"))]
 pub mod check;
 pub mod constrain;
 pub mod front;
@@ -123,6 +124,7 @@ impl Sweep<Batch> {
     /// # Errors
     /// [`Error::Internal`] if inserting a breakline ended by the point breaks an invariant (a bug;
     /// the sweep must not be used further).
+    #[cfg(any(test, feature = "dev"))]
     pub fn step(&mut self) -> Result<bool> {
         if self.next as usize >= self.pts.len() {
             return Ok(false);

@@ -12,7 +12,7 @@ impl Tin {
     ///
     /// # Errors
     /// [`Error::NonFinite`] / [`Error::CoordinateOutOfRange`] for a bad coordinate,
-    /// [`Error::TooManyPoints`] past [`crate::mesh::MAX_VERTICES`] vertex ids, [`Error::Invalid`]
+    /// [`Error::TooManyPoints`] past `mesh::MAX_VERTICES` vertex ids, [`Error::Invalid`]
     /// on an empty TIN.
     pub fn insert(&mut self, p: [f64; 3]) -> Result<VertexId> {
         check_point(p, self.xy.len() as u64)?;

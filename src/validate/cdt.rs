@@ -1,7 +1,7 @@
 //! Validation of a constrained Delaunay triangulation against its input segments.
 //!
 //! An input segment `s0 → s1` is *covered* when both ends are mesh vertices and a chain of mesh
-//! edges leads from `s0` to `s1` through vertices exactly on the segment (exact [`orient`] = 0),
+//! edges leads from `s0` to `s1` through vertices exactly on the segment (exact `orient` = 0),
 //! each strictly further along than the one before (exact coordinate comparisons). An edge is
 //! exempt from the Delaunay test exactly when it lies on an input segment (both ends on the
 //! segment's line and within its extent). Segment tests use the coordinates as given (not the local

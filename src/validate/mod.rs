@@ -3,14 +3,14 @@
 //! [`validate`] (Delaunay) and [`validate_constrained`] (constrained Delaunay) take a mesh as plain
 //! arrays (`vertices`, counter-clockwise `triangles`) and share nothing with the sweep's data
 //! structures: adjacency is rebuilt here from scratch, and the convex hull is computed
-//! independently. Every geometric decision is exact ([`crate::geom::predicates::orient`] and
-//! [`crate::geom::predicates::incircle_exact`], unperturbed: cocircular quadruples are accepted either
+//! independently. Every geometric decision is exact (`geom::predicates::orient` and
+//! `geom::predicates::incircle_exact`, unperturbed: cocircular quadruples are accepted either
 //! way, so any Delaunay triangulation passes, not only the one sweeptin's tie-breaking rule picks).
 //!
 //! # What is checked
 //!
 //! 1. every coordinate is finite, and `x, y` are in the predicates' exact range (after removing the
-//!    local origin when that is exact, as [`crate::sort::memory`] does);
+//!    local origin when that is exact, as `sort::memory` does);
 //! 2. every index is in range and no triangle repeats a vertex;
 //! 3. no two vertices share the same `(x, y)`;
 //! 4. every triangle is strictly counter-clockwise;

@@ -8,7 +8,7 @@
 //! 2. **Zero-length segments** (consecutive vertices at the same `(x, y)`) are dropped.
 //! 3. **Duplicate segments** (the same two vertices, either direction, as the shared edges of a
 //!    planar partition) are merged; the first polyline is recorded as the segment's line.
-//! 4. **A vertex exactly on the interior of a segment** (exact [`orient`] = 0 and strictly between
+//! 4. **A vertex exactly on the interior of a segment** (exact `orient` = 0 and strictly between
 //!    the ends) splits the segment there. The vertex keeps its `z`; if it has none it takes the `z`
 //!    interpolated along the segment; if the two differ by more than `z_tolerance` it is reported
 //!    ([`ZConflictKind::OnLine`]).
@@ -16,7 +16,7 @@
 //!    splits it, and the identical pieces merge (rule 3).
 //! 6. **Proper crossings** (the interiors cross at one point, decided by four exact orientations)
 //!    are split at the crossing point, computed once in floating point from the adaptive
-//!    determinants ([`crate::geom::predicates::orient_det`]) with the two segments and their ends in a
+//!    determinants (`geom::predicates::orient_det`) with the two segments and their ends in a
 //!    canonical (coordinate) order, so the point depends only on the geometry, not on input order;
 //!    it is clamped into both segments' bounding boxes. Its `z` is interpolated linearly along each
 //!    segment; the mean of the known values is kept, and two values that differ by more than
@@ -41,8 +41,6 @@
 //! Exactness: every topological decision (does it cross, touch, overlap, lie on) is an exact
 //! orientation or an exact coordinate comparison; only rule 6 rounds (a new point) and rule 7
 //! measures a distance in floating point.
-//!
-//! [`orient`]: crate::geom::predicates::orient
 //!
 //! Determinism: vertices are merged by sorting, candidate pairs come from a grid whose buckets are
 //! sorted, pair tests run in parallel but their results are collected in pair order, and no hash

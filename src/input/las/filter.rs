@@ -5,6 +5,7 @@
 //! compares the points' real-world doubles (see [`super::world`]) with the box's, edges included.
 
 use super::LidarPoint;
+use crate::error::{Error, Result};
 use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
@@ -73,25 +74,29 @@ impl BBox {
 }
 
 impl FromStr for BBox {
-    type Err = String;
+    type Err = Error;
 
     /// Parses `xmin,ymin,xmax,ymax`.
-    fn from_str(s: &str) -> Result<BBox, String> {
+    fn from_str(s: &str) -> Result<BBox> {
         let v: Vec<f64> = s
             .split(',')
             .map(|t| t.trim().parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|e| format!("bounding box \"{s}\": {e} (expected xmin,ymin,xmax,ymax)"))?;
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|e| {
+                Error::Options(format!(
+                    "bounding box \"{s}\": {e} (expected xmin,ymin,xmax,ymax)"
+                ))
+            })?;
         if v.len() != 4 {
-            return Err(format!(
+            return Err(Error::Options(format!(
                 "bounding box \"{s}\": expected 4 numbers xmin,ymin,xmax,ymax, got {}",
                 v.len()
-            ));
+            )));
         }
         BBox::new(v[0], v[1], v[2], v[3]).ok_or_else(|| {
-            format!(
+            Error::Options(format!(
                 "bounding box \"{s}\": values must be finite with xmin <= xmax and ymin <= ymax"
-            )
+            ))
         })
     }
 }
@@ -105,15 +110,15 @@ impl fmt::Display for BBox {
 /// Parses a classification list such as `2,9` (each 0–255).
 ///
 /// # Errors
-/// A message naming the bad item.
-pub fn parse_classes(s: &str) -> Result<Vec<u8>, String> {
+/// [`Error::Options`] naming the bad item.
+pub fn parse_classes(s: &str) -> Result<Vec<u8>> {
     s.split(',')
         .map(|t| {
             t.trim().parse::<u8>().map_err(|_| {
-                format!(
+                Error::Options(format!(
                     "classification \"{}\": expected a number from 0 to 255",
                     t.trim()
-                )
+                ))
             })
         })
         .collect()
@@ -340,7 +345,12 @@ mod tests {
         assert!("1,2,x,4".parse::<BBox>().is_err());
         assert!("1,2,inf,4".parse::<BBox>().is_err());
         assert_eq!(parse_classes("2, 9").unwrap(), vec![2, 9]);
-        assert!(parse_classes("2,256").unwrap_err().contains("256"));
+        assert!(
+            parse_classes("2,256")
+                .unwrap_err()
+                .to_string()
+                .contains("256")
+        );
     }
 
     #[test]
