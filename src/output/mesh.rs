@@ -203,7 +203,7 @@ impl SinkState {
     }
 
     /// Writes `bytes` to `w` (the output, or a spool), which is gone once the writer finished.
-    pub fn put<W: std::io::Write>(&self, w: Option<&mut W>, bytes: &[u8]) -> Result<()> {
+    pub(crate) fn put<W: std::io::Write>(&self, w: Option<&mut W>, bytes: &[u8]) -> Result<()> {
         match w {
             Some(w) => w.write_all(bytes).map_err(|e| self.io(e)),
             None => Err(self.error("the mesh writer was already finished")),
