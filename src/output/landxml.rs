@@ -27,11 +27,13 @@
 //! away. Memory use is bounded by the I/O buffers.
 
 use super::atomic::AtomicFile;
-use super::mesh::{MeshMeta, SinkState, SpooledOutput, face_record, one_line, rewind_spool};
+use super::mesh::{
+    MeshMeta, SinkState, SpooledOutput, face_record, one_line, read_face_record, rewind_spool,
+};
 use crate::error::Result;
 use crate::sink::{MeshSink, MeshSummary};
 use std::fs::File;
-use std::io::{BufWriter, Read, Write};
+use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// A [`MeshSink`] writing a LandXML 1.2 TIN surface.
@@ -85,20 +87,16 @@ impl LandXmlWriter {
         let mut reader = rewind_spool(&self.state, faces)?;
         let io = |e| self.state.io(e);
         out.write_all(b"</Pnts>\n<Faces>\n").map_err(io)?;
-        let mut rec = [0u8; 24];
         let mut digits = itoa::Buffer::new();
         for _ in 0..self.state.triangles {
-            reader.read_exact(&mut rec).map_err(io)?;
+            let face = read_face_record(&mut reader).map_err(io)?;
             self.line.clear();
             self.line.extend_from_slice(b"<F>");
-            for (k, chunk) in rec.chunks_exact(8).enumerate() {
+            for (k, v) in face.into_iter().enumerate() {
                 if k > 0 {
                     self.line.push(b' ');
                 }
-                let mut b = [0u8; 8];
-                b.copy_from_slice(chunk);
-                let id = u64::from_le_bytes(b) + 1;
-                self.line.extend_from_slice(digits.format(id).as_bytes());
+                self.line.extend_from_slice(digits.format(v + 1).as_bytes());
             }
             self.line.extend_from_slice(b"</F>\n");
             out.write_all(&self.line).map_err(io)?;

@@ -268,6 +268,15 @@ impl SinkState {
     }
 }
 
+/// Reads back one face spooled by [`face_record`].
+pub(crate) fn read_face_record(r: &mut impl std::io::Read) -> std::io::Result<[u64; 3]> {
+    let mut rec = [0u8; 24];
+    r.read_exact(&mut rec)?;
+    Ok(std::array::from_fn(|k| {
+        u64::from_le_bytes(rec[8 * k..8 * k + 8].try_into().expect("8 bytes"))
+    }))
+}
+
 /// A face's spool record: its three vertex numbers as little-endian `u64` (LandXML and SMS 2DM
 /// read them back after the vertices).
 pub(crate) fn face_record(t: [u64; 3]) -> [u8; 24] {

@@ -18,11 +18,13 @@
 //! [`finish`](MeshSink::finish); memory use is bounded by the I/O buffers.
 
 use super::atomic::AtomicFile;
-use super::mesh::{MeshMeta, SinkState, SpooledOutput, face_record, rewind_spool};
+use super::mesh::{
+    MeshMeta, SinkState, SpooledOutput, face_record, read_face_record, rewind_spool,
+};
 use crate::error::Result;
 use crate::sink::{MeshSink, MeshSummary};
 use std::fs::File;
-use std::io::{BufWriter, Read, Write};
+use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// A [`MeshSink`] writing an SMS 2DM mesh.
@@ -70,19 +72,15 @@ impl Sms2dmWriter {
         };
         let mut reader = rewind_spool(&self.state, faces)?;
         let io = |e| self.state.io(e);
-        let mut rec = [0u8; 24];
         let mut digits = itoa::Buffer::new();
         for i in 0..self.state.triangles {
-            reader.read_exact(&mut rec).map_err(io)?;
+            let face = read_face_record(&mut reader).map_err(io)?;
             self.line.clear();
             self.line.extend_from_slice(b"E3T ");
             self.line.extend_from_slice(digits.format(i + 1).as_bytes());
-            for chunk in rec.chunks_exact(8) {
-                let mut b = [0u8; 8];
-                b.copy_from_slice(chunk);
+            for v in face {
                 self.line.push(b' ');
-                self.line
-                    .extend_from_slice(digits.format(u64::from_le_bytes(b) + 1).as_bytes());
+                self.line.extend_from_slice(digits.format(v + 1).as_bytes());
             }
             self.line.extend_from_slice(b" 1\n");
             out.write_all(&self.line).map_err(io)?;
