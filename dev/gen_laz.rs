@@ -4,6 +4,8 @@
 //! LAS scale 0.01 and the generator's offsets; the integers are exactly the generated coordinates.
 //! `--strip K` cuts the square tile into K horizontal bands (whole metres) and lays them side by
 //! side along x: a corridor K² times wider than tall, with the same density and scan pattern.
+//! `--offset DX,DY` moves the tile by whole metres (the LAS offsets move with it), so that several
+//! files with other seeds make a mosaic of generated tiles (`scripts/bench-billion.sh`).
 
 use las::{Builder, Point, Transform, Vector, Writer};
 
@@ -11,7 +13,7 @@ fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     anyhow::ensure!(
         args.len() >= 3,
-        "usage: gen_laz <n> <out.laz|out.las> [--seed S] [--strip K]"
+        "usage: gen_laz <n> <out.laz|out.las> [--seed S] [--strip K] [--offset DX,DY]"
     );
     let n = sweeptin::synth::parse_count(&args[1]).expect("a count like 10M");
     let seed = args
@@ -22,6 +24,20 @@ fn main() -> anyhow::Result<()> {
         .iter()
         .position(|a| a == "--strip")
         .map_or(1, |i| args[i + 1].parse::<u32>().expect("strip factor"));
+    let (dx, dy) = args
+        .iter()
+        .position(|a| a == "--offset")
+        .map_or((0.0, 0.0), |i| {
+            let v: Vec<f64> = args[i + 1]
+                .split(',')
+                .map(|s| s.parse().expect("offset DX,DY in whole metres"))
+                .collect();
+            assert!(
+                v.len() == 2 && v.iter().all(|d| d.fract() == 0.0),
+                "offset DX,DY in whole metres"
+            );
+            (v[0], v[1])
+        });
     let mut pts = sweeptin::synth::lidar_like(n, seed);
     if strip > 1 {
         let (y0, x0) = (sweeptin::synth::LIDAR_Y0, sweeptin::synth::LIDAR_X0);
@@ -35,16 +51,21 @@ fn main() -> anyhow::Result<()> {
             p[1] -= k * band;
         }
     }
+    // Whole metres: the 1 cm grid of the coordinates is kept exactly.
+    for p in &mut pts {
+        p[0] += dx;
+        p[1] += dy;
+    }
     let mut b = Builder::from((1, 2));
     b.point_format = las::point::Format::new(1)?;
     b.transforms = Vector {
         x: Transform {
             scale: 0.01,
-            offset: sweeptin::synth::LIDAR_X0,
+            offset: sweeptin::synth::LIDAR_X0 + dx,
         },
         y: Transform {
             scale: 0.01,
-            offset: sweeptin::synth::LIDAR_Y0,
+            offset: sweeptin::synth::LIDAR_Y0 + dy,
         },
         z: Transform {
             scale: 0.01,

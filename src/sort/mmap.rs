@@ -15,6 +15,13 @@
 //! merging 20 runs, 100 MiB merging 48). The map only ever covers a [`WINDOW`]-byte window of the
 //! file, pre-faulted with `MAP_POPULATE`; moving on unmaps the old window. A fault can map no page
 //! outside the mapping, so at most k × [`WINDOW`] bytes of the runs are resident.
+//!
+//! # Disk space given back as the merge goes
+//!
+//! The records are read once, front to back. On Linux the bytes behind the window are released
+//! with `fallocate(PUNCH_HOLE)` every [`PUNCH`] bytes, so the runs shrink on disk while the merge
+//! writes its output: a billion points need the runs' size of temporary disk, not the runs' plus
+//! the merged output's. (Reading a released part again is refused: the records are gone.)
 #![allow(unsafe_code)]
 
 use bytemuck::Pod;
@@ -25,6 +32,9 @@ use std::marker::PhantomData;
 /// Bytes of a run mapped at a time (a multiple of the page size and of every record size used).
 pub const WINDOW: usize = 256 * 1024;
 
+/// Bytes of consumed records released from the disk at a time (a multiple of [`WINDOW`]).
+pub const PUNCH: usize = 64 * WINDOW;
+
 /// A file of fixed-size records, read front to back through a sliding read-only memory map.
 #[derive(Debug)]
 pub struct MappedRecords<T: Pod> {
@@ -33,6 +43,8 @@ pub struct MappedRecords<T: Pod> {
     map: Option<Mmap>,
     start: usize,
     len: usize,
+    /// Bytes from the start of the file given back to the file system (read no more).
+    released: usize,
     _t: PhantomData<T>,
 }
 
@@ -58,6 +70,7 @@ impl<T: Pod> MappedRecords<T> {
             map: None,
             start: 0,
             len: bytes / size,
+            released: 0,
             _t: PhantomData,
         };
         m.slide(0)?;
@@ -69,8 +82,19 @@ impl<T: Pod> MappedRecords<T> {
         let size = std::mem::size_of::<T>();
         let per = WINDOW / size;
         let start = i / per * per;
+        if start * size < self.released {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "spill records read again after their disk space was released",
+            ));
+        }
         self.map = None; // unmap the old window first: never two windows resident
         self.start = start;
+        if start * size >= self.released + PUNCH {
+            let upto = start * size / PUNCH * PUNCH;
+            release(&self.file, self.released, upto - self.released);
+            self.released = upto;
+        }
         if start >= self.len {
             return Ok(());
         }
@@ -87,6 +111,12 @@ impl<T: Pod> MappedRecords<T> {
         };
         self.map = Some(map);
         Ok(())
+    }
+
+    /// Bytes given back to the file system so far (Linux; 0 elsewhere).
+    #[cfg(test)]
+    fn released(&self) -> usize {
+        self.released
     }
 
     /// The records of the current window (from record [`MappedRecords::window_start`] on).
@@ -133,6 +163,18 @@ impl<T: Pod> MappedRecords<T> {
     }
 }
 
+/// Gives the bytes `offset .. offset + len` of `file` back to the file system (a hole: the size
+/// stays). Best effort: a file system without holes keeps the bytes, which only costs space.
+#[cfg(target_os = "linux")]
+fn release(file: &File, offset: usize, len: usize) {
+    use rustix::fs::{FallocateFlags, fallocate};
+    let flags = FallocateFlags::PUNCH_HOLE | FallocateFlags::KEEP_SIZE;
+    let _ = fallocate(file, flags, offset as u64, len as u64);
+}
+
+#[cfg(not(target_os = "linux"))]
+fn release(_file: &File, _offset: usize, _len: usize) {}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -151,8 +193,33 @@ mod tests {
             assert_eq!(m.get(i).unwrap(), Some(*want));
         }
         assert_eq!(m.get(n).unwrap(), None);
-        // Going back maps the earlier window again.
+        // Going back within what is still on disk maps the earlier window again.
         assert_eq!(m.get(3).unwrap(), Some(3));
+    }
+
+    #[test]
+    fn consumed_records_leave_the_disk() {
+        use std::os::unix::fs::MetadataExt;
+        let per = WINDOW / 8;
+        let n = PUNCH / 8 * 3 + per / 2;
+        let mut f = tempfile::tempfile().unwrap();
+        let data: Vec<u64> = (0..n as u64).collect();
+        f.write_all(bytemuck::cast_slice(&data)).unwrap();
+        f.sync_all().unwrap();
+        let probe = f.try_clone().unwrap();
+        let blocks = |f: &File| f.metadata().unwrap().blocks() * 512;
+        let before = blocks(&probe);
+        let mut m = MappedRecords::<u64>::map(f).unwrap();
+        for (i, want) in data.iter().enumerate() {
+            assert_eq!(m.get(i).unwrap(), Some(*want));
+        }
+        if cfg!(target_os = "linux") {
+            assert_eq!(m.released(), 3 * PUNCH);
+            // tmpfs and ext4 both punch holes; the allocated size shrinks by what was released.
+            assert!(blocks(&probe) <= before - 3 * PUNCH as u64, "no hole punched");
+            let e = m.get(0).unwrap_err();
+            assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+        }
     }
 
     #[test]
