@@ -1,10 +1,12 @@
 //! External sort of points into sweep order (by `y`, then `x`, then input index), with bounded
 //! memory.
 //!
-//! Points are collected in a chunk sized from the memory budget. A full chunk is sorted in RAM
-//! (rayon) and spilled as fixed-size little-endian records ([`SortRecord`], `#[repr(C)]`, 32 bytes)
-//! to an anonymous temporary file under the chosen directory (already unlinked: nothing is left
-//! behind even if the process is killed). At the end the runs are k-way merged,
+//! Points are collected in chunks sized from the memory budget: two halves of it. When both are
+//! full, each full half is sorted in RAM (rayon) and spilled as fixed-size little-endian records
+//! ([`SortRecord`], `#[repr(C)]`, 32 bytes) to an anonymous temporary file under the chosen
+//! directory (already unlinked: nothing is left behind even if the process is killed) by a
+//! spilling thread, while the caller fills the other half: reading (LAZ decoding) goes on while a
+//! run is sorted and written. At the end the runs are k-way merged,
 //! each read through a small sliding memory map ([`crate::sort::mmap`]), so the merge's resident file
 //! pages stay at a few hundred KiB per run. When everything fits
 //! in one chunk, nothing is spilled. The merged order is a total order, so the result never
@@ -68,11 +70,85 @@ const MIN_CHUNK: usize = 1 << 10;
 /// Collects points, spilling sorted runs when the chunk is full.
 #[derive(Debug)]
 pub struct ExternalSorter<R: SortKey = SortRecord> {
+    /// The half being filled.
     chunk: Vec<R>,
+    /// The other half, full, while nothing is spilled yet.
+    held: Vec<R>,
+    /// Records per half.
     capacity: usize,
-    runs: Vec<File>,
+    /// The spilling thread, once the first run is spilled.
+    spiller: Option<Spiller<R>>,
     tmp_dir: PathBuf,
     stats: SortStats,
+}
+
+/// The thread that sorts full halves and writes them as runs, in the order it gets them, and
+/// hands each emptied half back.
+#[derive(Debug)]
+struct Spiller<R: SortKey> {
+    full: Option<crossbeam_channel::Sender<Vec<R>>>,
+    empty: crossbeam_channel::Receiver<Vec<R>>,
+    thread: Option<std::thread::JoinHandle<Result<Vec<File>>>>,
+}
+
+impl<R: SortKey> Spiller<R> {
+    fn start(tmp_dir: &Path) -> Self {
+        // A rendezvous: the caller's next half waits until the thread is free, so at most two
+        // halves exist (the one being spilled, the one being filled).
+        let (full, rx) = crossbeam_channel::bounded::<Vec<R>>(0);
+        let (tx, empty) = crossbeam_channel::bounded::<Vec<R>>(1);
+        let dir = tmp_dir.to_path_buf();
+        let thread = std::thread::spawn(move || -> Result<Vec<File>> {
+            let mut runs = Vec::new();
+            for mut chunk in rx {
+                runs.push(write_run(&mut chunk, &dir)?);
+                chunk.clear();
+                // Never waits: the sorter takes each half back before handing over the next
+                // (a half it does not want any more is freed here).
+                let _ = tx.try_send(chunk);
+            }
+            Ok(runs)
+        });
+        Spiller {
+            full: Some(full),
+            empty,
+            thread: Some(thread),
+        }
+    }
+
+    /// Hands a full half over; `Err` when the thread has stopped (see [`Spiller::finish`]).
+    fn send(&self, chunk: Vec<R>) -> std::result::Result<(), ()> {
+        self.full.as_ref().ok_or(())?.send(chunk).map_err(|_| ())
+    }
+
+    /// The runs in order, or the error that stopped the thread.
+    fn finish(&mut self) -> Result<Vec<File>> {
+        self.full = None;
+        let thread = self.thread.take().expect("finished once");
+        thread
+            .join()
+            .unwrap_or_else(|p| Err(Error::panicked("the sort's spilling thread", &*p)))
+    }
+}
+
+/// Sorts `chunk` and writes it to a new anonymous file under `dir`.
+fn write_run<R: SortKey>(chunk: &mut [R], dir: &Path) -> Result<File> {
+    sort_records(chunk);
+    let io = |e| Error::write(dir, e);
+    let file = tempfile::tempfile_in(dir).map_err(io)?;
+    let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
+    w.write_all(bytemuck::cast_slice(chunk)).map_err(io)?;
+    w.flush().map_err(io)?;
+    drop(w);
+    Ok(file)
+}
+
+fn sort_records<R: SortKey>(chunk: &mut [R]) {
+    if R::STABLE {
+        chunk.par_sort_by(R::order);
+    } else {
+        chunk.par_sort_unstable_by(R::order);
+    }
 }
 
 /// What the sort did.
@@ -89,19 +165,21 @@ pub struct SortStats {
 }
 
 impl<R: SortKey> ExternalSorter<R> {
-    /// A sorter whose chunk uses at most `chunk_bytes` of memory, spilling under `tmp_dir`. A
-    /// stable sort needs scratch space of half the chunk: its chunk then takes two thirds.
+    /// A sorter whose two halves use at most `chunk_bytes` of memory, spilling under `tmp_dir`.
+    /// A stable sort needs scratch space of half what it sorts (one half at a time): the halves
+    /// then take four fifths.
     pub fn new(chunk_bytes: u64, tmp_dir: &Path) -> Self {
         let bytes = if R::STABLE {
-            chunk_bytes / 3 * 2
+            chunk_bytes / 5 * 4
         } else {
             chunk_bytes
         };
-        let capacity = ((bytes as usize) / std::mem::size_of::<R>()).max(MIN_CHUNK);
+        let capacity = ((bytes as usize) / 2 / std::mem::size_of::<R>()).max(MIN_CHUNK);
         ExternalSorter {
             chunk: Vec::new(),
+            held: Vec::new(),
             capacity,
-            runs: Vec::new(),
+            spiller: None,
             tmp_dir: tmp_dir.to_path_buf(),
             stats: SortStats {
                 chunk_records: capacity as u64,
@@ -110,7 +188,7 @@ impl<R: SortKey> ExternalSorter<R> {
         }
     }
 
-    /// Room left in the current chunk before it spills.
+    /// Room left in the current half before it is full.
     #[cfg(any(test, feature = "dev"))]
     pub fn room(&self) -> usize {
         self.capacity - self.chunk.len()
@@ -129,9 +207,48 @@ impl<R: SortKey> ExternalSorter<R> {
         self.chunk.push(r);
         self.stats.points += 1;
         if self.chunk.len() >= self.capacity {
-            self.spill()?;
+            self.full()?;
         }
         Ok(())
+    }
+
+    /// The current half is full: hold it while nothing is spilled (the input may still fit in
+    /// memory), else hand it to the spilling thread and take an emptied half back.
+    #[cold]
+    fn full(&mut self) -> Result<()> {
+        if self.spiller.is_none() && self.held.is_empty() {
+            self.held = std::mem::take(&mut self.chunk);
+            return Ok(());
+        }
+        if self.spiller.is_none() {
+            self.spiller = Some(Spiller::start(&self.tmp_dir));
+            let held = std::mem::take(&mut self.held);
+            self.hand_over(held)?;
+        }
+        let chunk = std::mem::take(&mut self.chunk);
+        self.hand_over(chunk)?;
+        let spiller = self.spiller.as_mut().expect("started");
+        match spiller.empty.recv() {
+            Ok(v) => self.chunk = v,
+            Err(_) => return Err(self.stopped()),
+        }
+        Ok(())
+    }
+
+    /// Gives a full half to the spilling thread.
+    fn hand_over(&mut self, chunk: Vec<R>) -> Result<()> {
+        self.stats.runs += 1;
+        self.stats.spilled_bytes += std::mem::size_of_val(&chunk[..]) as u64;
+        let spiller = self.spiller.as_ref().expect("started");
+        spiller.send(chunk).map_err(|()| self.stopped())
+    }
+
+    /// The error that stopped the spilling thread.
+    fn stopped(&mut self) -> Error {
+        match self.spiller.as_mut().map(Spiller::finish) {
+            Some(Err(e)) => e,
+            _ => Error::Internal("the sort's spilling thread stopped".into()),
+        }
     }
 
     /// Allocates the chunk for `points` points (as many as the input has, when its headers say;
@@ -172,49 +289,44 @@ impl<R: SortKey> ExternalSorter<R> {
         })
     }
 
-    fn sort_chunk(&mut self) {
-        if R::STABLE {
-            self.chunk.par_sort_by(R::order);
-        } else {
-            self.chunk.par_sort_unstable_by(R::order);
-        }
-    }
-
-    fn spill(&mut self) -> Result<()> {
-        self.sort_chunk();
-        let io = |e| Error::write(&self.tmp_dir, e);
-        let file = tempfile::tempfile_in(&self.tmp_dir).map_err(io)?;
-        let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
-        w.write_all(bytemuck::cast_slice(&self.chunk)).map_err(io)?;
-        w.flush().map_err(io)?;
-        drop(w);
-        self.stats.runs += 1;
-        self.stats.spilled_bytes += std::mem::size_of_val(&self.chunk[..]) as u64;
-        self.chunk.clear();
-        self.runs.push(file);
-        Ok(())
-    }
-
     /// Ends the input: returns the points in sweep order.
     ///
     /// # Errors
     /// [`Error::Write`] if the last spill or a mapping fails.
     pub fn finish(mut self) -> Result<Merge<R>> {
-        if self.runs.is_empty() {
-            self.sort_chunk();
+        let Some(mut spiller) = self.spiller.take() else {
+            // Nothing spilled: both halves in memory, as one sorted vector (no copy when the
+            // allocator can grow the first in place).
+            let mut v = std::mem::take(&mut self.held);
+            if v.is_empty() {
+                v = std::mem::take(&mut self.chunk);
+            } else if !self.chunk.is_empty() {
+                let more = self.chunk.len();
+                v.try_reserve_exact(more).map_err(|_| Error::OutOfMemory {
+                    what: format!("the sort's chunk of {} points", v.len() + more),
+                    bytes: ((v.len() + more) * std::mem::size_of::<R>()) as u64,
+                    hint: "give a smaller --mem".into(),
+                })?;
+                v.append(&mut self.chunk);
+            }
+            sort_records(&mut v);
             return Ok(Merge {
-                source: Source::Memory(std::mem::take(&mut self.chunk), 0),
+                source: Source::Memory(v, 0),
                 stats: self.stats,
                 error: None,
             });
-        }
+        };
         if !self.chunk.is_empty() {
-            self.spill()?;
+            let chunk = std::mem::take(&mut self.chunk);
+            self.stats.runs += 1;
+            self.stats.spilled_bytes += std::mem::size_of_val(&chunk[..]) as u64;
+            // A stopped thread reports its error from `finish` below.
+            let _ = spiller.send(chunk);
         }
-        self.chunk = Vec::new();
+        let files = spiller.finish()?;
         let io = |e| Error::write(&self.tmp_dir, e);
-        let mut runs = Vec::with_capacity(self.runs.len());
-        for f in std::mem::take(&mut self.runs) {
+        let mut runs = Vec::with_capacity(files.len());
+        for f in files {
             let m = MappedRecords::<R>::map(f).map_err(io)?;
             runs.push(Run { map: m, pos: 0 });
         }
