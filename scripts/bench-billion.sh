@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # One billion points → 1 m DEM in one process on this machine (issue 11's scale target):
-# ten generated 100M-point LAZ tiles (gen_laz, seeds 1–10, a 5 × 2 mosaic at a 4600 m pitch,
-# ≈ 1.2 GB of LAZ) triangulated by the exact tiles on every core with `--mem 512M`, under
+# ten generated 100M-point LAZ tiles (≈ 1.2 GB of LAZ) in a 5 × 2 mosaic of abutting tiles, as
+# a lidar programme's tiles are: one gen_laz tile (seed 1) and nine copies moved by whole tile
+# pitches through their LAS offsets (header fields only: the points are the same integers),
+# so the tiles meet along their edges (gaps under 1 m) — triangulated by the exact tiles on every core with `--mem 512M`, under
 # /usr/bin/time -v, while the free space of the temporary directory is sampled every 2 s (the
 # spill files are unlinked, so only the file system's free space shows them).
 # Prints the time, peak RSS, peak temporary disk and the run's --json summary.
@@ -27,10 +29,27 @@ command -v /usr/bin/time >/dev/null || { apt-get install -y -qq time >/dev/null;
 cargo build --release --quiet --bin sweeptin --example gen_laz
 BIN=target/release/sweeptin
 FILES=()
+FIRST="$OUT/m0_0.laz"
+[ -f "$FIRST" ] || target/release/examples/gen_laz 100M "$FIRST" --seed 1
 for k in $(seq 0 $((TILES - 1))); do
     i=$((k % 5)); j=$((k / 5))
-    f="$OUT/t${i}_${j}.laz"
-    [ -f "$f" ] || target/release/examples/gen_laz 100M "$f" --seed $((k + 1)) --offset $((i * 4600)),$((j * 4600))
+    f="$OUT/m${i}_${j}.laz"
+    [ -f "$f" ] || python3 - "$FIRST" "$f" "$i" "$j" <<'PY'
+import math, shutil, struct, sys
+src, dst, i, j = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+with open(src, "rb") as fh:
+    h = bytearray(fh.read(227))
+f = lambda at: struct.unpack_from("<d", h, at)[0]
+# LAS header: x/y offsets at 155/163, max/min x at 179/187, max/min y at 195/203.
+px, py = math.ceil(f(179) - f(187)), math.ceil(f(195) - f(203))
+dx, dy = i * px, j * py
+for at, d in ((155, dx), (163, dy), (179, dx), (187, dx), (195, dy), (203, dy)):
+    struct.pack_into("<d", h, at, f(at) + d)
+shutil.copyfile(src, dst + ".part")
+with open(dst + ".part", "r+b") as fh:
+    fh.write(h)
+import os; os.replace(dst + ".part", dst)
+PY
     FILES+=("$f")
 done
 free_kb() { df -Pk "$TMP" | awk 'NR == 2 { print $4 }'; }

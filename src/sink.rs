@@ -137,6 +137,11 @@ pub trait TriangleSink: Send {
     fn grid_cell(&self) -> Option<f64> {
         None
     }
+    /// The memory this sink may hold at most (a DEM's rows in memory: its share of `--mem`), so
+    /// that a tiled run keeps its tiles in flight within what is left of the budget.
+    fn memory_share(&self) -> u64 {
+        0
+    }
     /// In a task of a plan: a triangle that meets the task's tile but belongs to another task.
     /// A grid needs it for its own cells; every other product ignores it (the default), since the
     /// other task counts it.
@@ -412,6 +417,10 @@ impl TriangleSink for Fanout {
 
     fn grid_cell(&self) -> Option<f64> {
         self.sinks.iter().find_map(|(_, s)| s.grid_cell())
+    }
+
+    fn memory_share(&self) -> u64 {
+        self.sinks.iter().map(|(_, s)| s.memory_share()).sum()
     }
 
     fn finish(&mut self) -> Result<ProductSummary> {

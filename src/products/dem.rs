@@ -373,6 +373,10 @@ impl TriangleSink for DemSink {
         Some(self.options.grid.cell())
     }
 
+    fn memory_share(&self) -> u64 {
+        self.options.memory
+    }
+
     fn boundary_triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
         self.triangle(t)
     }

@@ -74,6 +74,22 @@ pub(crate) struct Certifier<'a> {
     pub witnesses: usize,
 }
 
+/// A squared distance, ordered by `total_cmp` (the order of the full sort it replaces).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Dist(f64);
+
+impl Eq for Dist {}
+impl PartialOrd for Dist {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Dist {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&o.0)
+    }
+}
+
 /// Squared distance from `p` to the box `e` (`[xmin, ymin, xmax, ymax]`).
 #[inline]
 fn box_dist2(e: &[f64; 4], p: [f64; 2]) -> f64 {
@@ -185,12 +201,8 @@ impl<'a> Certifier<'a> {
         let b = g.block;
         let by0 = (((cy - r) / b).floor() as i64).max(occ.y0);
         let by1 = (((cy + r) / b).floor() as i64).min(occ.y1 - 1);
-        // The blocks not read whose points' box the disk reaches, nearest to the triangle first.
-        let mut near: Vec<(f64, u64)> = Vec::new();
-        let m = [
-            (t[0][0] + t[1][0] + t[2][0]) / 3.0,
-            (t[0][1] + t[1][1] + t[2][1]) / 3.0,
-        ];
+        // Each row's span of blocks under the disk.
+        let mut rows = Vec::with_capacity((by1 - by0 + 1).max(0) as usize);
         for by in by0..=by1 {
             let (lo, hi) = (by as f64 * b, (by + 1) as f64 * b);
             let dy = if cy < lo {
@@ -204,18 +216,100 @@ impl<'a> Certifier<'a> {
                 continue;
             }
             let hw = (r * r - dy * dy).max(0.0).sqrt() * (1.0 + 1e-12) + r * 1e-12;
-            let bx0 = ((cx - hw) / b).floor() as i64;
-            let bx1 = ((cx + hw) / b).floor() as i64;
-            self.unread_in_row(by, bx0, bx1, &mut |k| {
-                if let Some(e) = self.index.extent(k)
-                    && box_dist2(&e, [cx, cy]) <= r * r * (1.0 + 1e-9)
-                {
-                    near.push((box_dist2(&e, m), k));
-                }
-                Ok(())
-            })?;
+            rows.push((by, ((cx - hw) / b).floor() as i64, ((cx + hw) / b).floor() as i64));
         }
-        Ok(self.witnesses_among(near, t, out)? == 0)
+        Ok(self.nearest_witnesses(t, [cx, cy], r, &rows, out)? == 0)
+    }
+
+    /// Tests the blocks not read under the disk of centre `c` and radius `r` (`rows`: each row
+    /// of blocks with its span) whose points' box the disk reaches, nearest to the triangle's
+    /// centroid first (ties by key), until [`Certifier::witnesses`] of them hold a point inside
+    /// the circumdisk of `t`; returns how many did (the keys go to `out`).
+    ///
+    /// The blocks are gathered box by box around the triangle, each box twice as wide as the
+    /// last, and a block is tested only once no block outside the gathered boxes can be nearer:
+    /// the same blocks in the same order as sorting every block under the disk, but a disk that
+    /// spans the whole input (a triangle to a far hull corner) stops at its first witnesses
+    /// instead of listing millions of blocks.
+    fn nearest_witnesses(
+        &self,
+        t: &[[f64; 2]; 3],
+        c: [f64; 2],
+        r: f64,
+        rows: &[(i64, i64, i64)],
+        out: &mut Missing,
+    ) -> Result<usize> {
+        use std::cmp::Reverse;
+        let g = &self.index.grid;
+        let b = g.block;
+        let m = [
+            (t[0][0] + t[1][0] + t[2][0]) / 3.0,
+            (t[0][1] + t[1][1] + t[2][1]) / 3.0,
+        ];
+        // What the blocks' boxes may stick out of their blocks (rounding), generously.
+        let slack = 4.0 * g.margin(m[0].abs().max(m[1].abs()) + b) + 4.0 * b * 1e-6;
+        let cell = |v: f64| (v / b).floor() as i64;
+        let (tx0, tx1) = (cell(t[0][0].min(t[1][0]).min(t[2][0])), cell(t[0][0].max(t[1][0]).max(t[2][0])));
+        let (ty0, ty1) = (cell(t[0][1].min(t[1][1]).min(t[2][1])), cell(t[0][1].max(t[1][1]).max(t[2][1])));
+        let all = rows.iter().fold((i64::MAX, i64::MAX, i64::MIN, i64::MIN), |a, &(by, x0, x1)| {
+            (a.0.min(x0), a.1.min(by), a.2.max(x1), a.3.max(by))
+        });
+        let mut heap: std::collections::BinaryHeap<Reverse<(Dist, u64)>> = Default::default();
+        let mut prev: Option<(i64, i64, i64, i64)> = None;
+        let mut found = 0;
+        let mut grow = 2i64;
+        loop {
+            let bx = (tx0 - grow, ty0 - grow, tx1 + grow, ty1 + grow);
+            let covers = bx.0 <= all.0 && bx.1 <= all.1 && bx.2 >= all.2 && bx.3 >= all.3;
+            for &(by, x0, x1) in rows {
+                if by < bx.1 || by > bx.3 {
+                    continue;
+                }
+                let (a, z) = (x0.max(bx.0), x1.min(bx.2));
+                let spans = match prev {
+                    Some(p) if by >= p.1 && by <= p.3 => [(a, z.min(p.0 - 1)), (a.max(p.2 + 1), z)],
+                    _ => [(a, z), (1, 0)],
+                };
+                for (x0, x1) in spans {
+                    if x1 < x0 {
+                        continue;
+                    }
+                    self.unread_in_row(by, x0, x1, &mut |k| {
+                        if let Some(e) = self.index.extent(k)
+                            && box_dist2(&e, c) <= r * r * (1.0 + 1e-9)
+                        {
+                            heap.push(Reverse((Dist(box_dist2(&e, m)), k)));
+                        }
+                        Ok(())
+                    })?;
+                }
+            }
+            // No block outside the box is nearer to the centroid than its nearest side.
+            let near = (m[0] - bx.0 as f64 * b)
+                .min((bx.2 + 1) as f64 * b - m[0])
+                .min(m[1] - bx.1 as f64 * b)
+                .min((bx.3 + 1) as f64 * b - m[1])
+                - slack;
+            let bound = if near > 0.0 { near * near } else { 0.0 };
+            while let Some(Reverse((d, k))) = heap.peek().copied() {
+                if !covers && d.0 >= bound {
+                    break;
+                }
+                heap.pop();
+                if self.witness(k, t)? {
+                    out.push(k);
+                    found += 1;
+                    if found >= self.witnesses {
+                        return Ok(found);
+                    }
+                }
+            }
+            if covers {
+                return Ok(found);
+            }
+            prev = Some(bx);
+            grow *= 2;
+        }
     }
 
     /// Tests the blocks `near` (keys with a distance), nearest first, until

@@ -391,8 +391,8 @@ fn block_points(total: u64) -> f64 {
 }
 
 /// How many tiles may be in flight (running, or waiting to be written) within the memory
-/// budget `mem` (after what the index holds), with `threads` workers: at most `threads + 2`,
-/// at least one.
+/// budget `mem` (what the sinks keep, a DEM's rows, already taken off; then what the index
+/// holds), with `threads` workers: at most `threads + 2`, at least one.
 fn window(index: &BlockIndex, mem: u64, threads: usize) -> usize {
     let per_block = index.len() as f64 / index.blocks().max(1) as f64;
     // A tile's first run: its blocks and a buffer of one block around.
@@ -481,6 +481,7 @@ pub(crate) fn run(
         Some(l) => Some(crate::breaklines::Trim::new(None, &[], Some(l))?),
         None => None,
     };
+    let shares: u64 = sinks.iter().map(|s| s.memory_share()).sum();
     let mut writer = emit::TileWriter::new(mesh, sinks, trim);
     let mut stats = TileStats {
         tile_size: g.tile,
@@ -493,7 +494,7 @@ pub(crate) fn run(
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     // At most this many tiles in flight or waiting to be written.
-    let window = window(&index, job.mem, threads);
+    let window = window(&index, job.mem.saturating_sub(shares), threads);
     stats.window = window as u64;
     let (tx, rx) = crossbeam_channel::bounded::<(usize, Result<TileOutput>)>(window);
     let task = task.as_ref();
