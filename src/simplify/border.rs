@@ -70,9 +70,9 @@ fn split(h: &[f64], i: usize, j: usize, limit: f64) -> Option<usize> {
             .fold((0.0, 0.0), |(s, c), k| (s + k as f64, c + 1.0));
         let centre = sum / count;
         let mut best: Option<(f64, usize)> = None;
-        for k in i + 1..j {
+        for (k, z) in h.iter().enumerate().take(j).skip(i + 1) {
             let d = (k as f64 - centre).abs();
-            if !h[k].is_nan() && best.is_none_or(|(b, _)| d < b) {
+            if !z.is_nan() && best.is_none_or(|(b, _)| d < b) {
                 best = Some((d, k));
             }
         }

@@ -165,8 +165,8 @@ fn plan(reader: &RasterReader, grid: &GridOptions) -> Result<Layout> {
         n => n,
     };
     let mib = |b: u64| b.div_ceil(1 << 20);
-    let read = reader.read_bytes();
     if cols.len() == 2 && rows.len() == 2 {
+        let read = reader.read_bytes(spec.rows);
         let cells = spec.cells();
         let need = FIXED_BYTES + read + cells * (BAND_BYTES_PER_CELL + WINDOW_BYTES_PER_CELL);
         if need > grid.mem {
@@ -190,6 +190,7 @@ fn plan(reader: &RasterReader, grid: &GridOptions) -> Result<Layout> {
     let tallest = rows.windows(2).map(|w| w[1] - w[0] + 1).max().unwrap_or(2);
     let widest = cols.windows(2).map(|w| w[1] - w[0] + 1).max().unwrap_or(2);
     let band = u64::from(spec.cols) * u64::from(tallest) * BAND_BYTES_PER_CELL;
+    let read = reader.read_bytes(tallest);
     let window = u64::from(widest) * u64::from(tallest) * WINDOW_BYTES_PER_CELL;
     let stitch = Stitch::bytes(&cols, tallest);
     let base = FIXED_BYTES + read + stitch;
@@ -209,7 +210,7 @@ fn plan(reader: &RasterReader, grid: &GridOptions) -> Result<Layout> {
             mib(window),
             mib(grid.mem),
             grid.window,
-            if read > band {
+            if reader.chunk_bytes() > band {
                 "; the file's strips or tiles are large: retile it (gdal_translate -co TILED=YES)"
             } else {
                 ""

@@ -308,15 +308,20 @@ impl RasterReader {
         }
     }
 
-    /// Bytes [`RasterReader::read_rows`] holds besides its result, at most: one band of rows as
-    /// `f64`, and one decoded TIFF strip or tile (as stored and as `f64`).
-    pub fn read_bytes(&self) -> u64 {
-        let band = u64::from(self.spec.cols) * u64::from(self.read_band_rows()) * 8;
-        let chunk = match &self.source {
+    /// Bytes [`RasterReader::read_rows`] holds besides its result when reading `rows` rows, at
+    /// most: one band of rows as `f64`, and one decoded TIFF strip or tile (as stored and as
+    /// `f64`, see [`RasterReader::chunk_bytes`]).
+    pub fn read_bytes(&self, rows: u32) -> u64 {
+        let band = u64::from(self.spec.cols) * u64::from(self.read_band_rows().min(rows)) * 8;
+        band + self.chunk_bytes()
+    }
+
+    /// Bytes one decoded TIFF strip or tile takes (as stored and as `f64`); 0 for a text grid.
+    pub fn chunk_bytes(&self) -> u64 {
+        match &self.source {
             Source::Tiff(t) => u64::from(t.chunk_w) * u64::from(t.chunk_h) * 16,
             Source::Ascii(_) => 0,
-        };
-        band + chunk
+        }
     }
 
     /// Reads the `cols × rows` window whose top-left cell is `(col0, row0)`, row-major, missing
