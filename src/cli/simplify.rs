@@ -27,7 +27,7 @@ its own (in 1-D, to the same bound), so both windows on it keep the same vertice
 TIN is conforming; then every window is refined from its border vertices, on every core \
 (--threads), and written as soon as it and the windows before it are done. The grid is read a \
 band of windows at a time (tiled or striped GeoTIFF, ESRI ASCII), so memory is about one band \
-of heights (12 bytes a cell at most) plus up to 200 bytes a cell of each window in progress, \
+of heights (12 bytes a cell at most) plus up to 256 bytes a cell of each window in progress, \
 checked against --mem before anything is read. The output depends on --window only, never on \
 --mem or --threads; a grid that fits in one window is simplified whole (as before windows). \
 Point and triangle budgets (--max-points, --max-triangles) need the whole grid in one window.

@@ -13,12 +13,12 @@ use crate::sink::MeshSink;
 use std::collections::BTreeMap;
 use std::sync::{Arc, Condvar, Mutex};
 
-/// The default window: 256 × 256 cell intervals (257 × 257 cells with the shared borders).
-pub const DEFAULT_WINDOW: u32 = 256;
+/// The default window: 128 × 128 cell intervals (129 × 129 cells with the shared borders).
+pub const DEFAULT_WINDOW: u32 = 128;
 
 /// Bytes a window's refinement may hold per cell of the window, at worst (every cell a vertex):
 /// the TIN, the candidates and the queue, then the kept triangles waiting to be written.
-pub const WINDOW_BYTES_PER_CELL: u64 = 200;
+pub const WINDOW_BYTES_PER_CELL: u64 = 256;
 
 /// Bytes a band of heights holds per cell at worst (`f32`, then widened to `f64`).
 const BAND_BYTES_PER_CELL: u64 = 12;
