@@ -43,7 +43,7 @@ fn windowed(path: &Path, bound: f64, window: u32, threads: usize) -> (Collect, S
     let grid = GridOptions {
         window,
         threads,
-        ..GridOptions::new(Options::max_error(bound))
+        ..GridOptions::new(Options::max_error(bound), 1 << 30)
     };
     let mut mesh = Collect::default();
     let stats = simplify_raster(&mut r, &grid, &mut mesh, None).unwrap();

@@ -66,12 +66,12 @@ pub struct GridOptions {
 }
 
 impl GridOptions {
-    /// `options` with the default window, 1 GiB and every core.
-    pub fn new(options: Options) -> Self {
+    /// `options` within `mem` bytes, with the default window, on every core.
+    pub fn new(options: Options, mem: u64) -> Self {
         GridOptions {
             options,
             window: DEFAULT_WINDOW,
-            mem: crate::pipeline::DEFAULT_MEM,
+            mem,
             threads: 0,
         }
     }
@@ -127,6 +127,12 @@ pub fn simplify_raster(
         return Err(Error::Options(format!(
             "--window {}: give at least 4 cells",
             grid.window
+        )));
+    }
+    if spec.cols < 2 || spec.rows < 2 {
+        return Err(Error::Invalid(format!(
+            "a {}×{} grid has no triangle: it needs at least 2 rows and 2 columns",
+            spec.cols, spec.rows
         )));
     }
     let layout = plan(reader, grid)?;
