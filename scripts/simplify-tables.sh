@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Soomart & Paitoonwattanakij's tables 1–2, reproduced with sweeptin simplify on one DEM.
-# usage: scripts/simplify-tables.sh DEM "E1 E2 …"   (prints two markdown tables)
+# usage: scripts/simplify-tables.sh DEM "E1 E2 …"   (prints two markdown tables; one window, the whole grid)
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 dem=$1
@@ -13,7 +13,7 @@ for mode in greedy removal; do
   flag=""
   [ "$mode" = greedy ] && flag="--no-decimate"
   for e in $bounds; do
-    "$bin" simplify "$dem" -o "$out/t.ply" --max-error "$e" $flag --json >"$out/$mode-$e.json" 2>/dev/null
+    "$bin" simplify "$dem" -o "$out/t.ply" --max-error "$e" $flag --window 1000000 --json >"$out/$mode-$e.json" 2>/dev/null
   done
 done
 python3 - "$out" "$bounds" <<'PY'

@@ -3,6 +3,9 @@
 
 #[path = "support/data.rs"]
 mod data;
+#[path = "support/grid_tin.rs"]
+mod grid_tin;
+use grid_tin::Check;
 use std::path::PathBuf;
 use sweeptin::input::raster::RasterReader;
 use sweeptin::input::raster::RasterSpec;
@@ -12,71 +15,9 @@ fn dem(name: &str) -> Option<PathBuf> {
     data::optional(&format!("dem/{name}"), "simplify")
 }
 
-/// What the rasterisation found.
-#[derive(Debug, Default)]
-struct Check {
-    max_error: f64,
-    uncovered_valid: usize,
-    covered_missing: usize,
-}
-
-/// Rasterises the TIN onto the grid: every valid cell centre inside (or on) a triangle gets the
-/// triangle's linear interpolation; vertices count as covered.
 fn rasterise(spec: &RasterSpec, h: &[f64], tin: &Simplified) -> Check {
-    let (cols, rows) = (spec.cols as usize, spec.rows as usize);
-    let t = spec.transform;
-    let det = t[1] * t[5] - t[2] * t[4];
-    // World → fractional cell index (centre of cell (c, r) at c + 0.5, r + 0.5).
-    let to_cell = |x: f64, y: f64| {
-        let (dx, dy) = (x - t[0], y - t[3]);
-        (
-            (t[5] * dx - t[2] * dy) / det,
-            (-t[4] * dx + t[1] * dy) / det,
-        )
-    };
-    let mut covered = vec![false; cols * rows];
-    let mut out = Check::default();
-    for v in &tin.vertices {
-        let (c, r) = to_cell(v[0], v[1]);
-        covered[(r - 0.5).round() as usize * cols + (c - 0.5).round() as usize] = true;
-    }
-    for tri in &tin.triangles {
-        let [a, b, c] = tri.map(|i| tin.vertices[i as usize]);
-        let pa = to_cell(a[0], a[1]);
-        let pb = to_cell(b[0], b[1]);
-        let pc = to_cell(c[0], c[1]);
-        let area = (pb.0 - pa.0) * (pc.1 - pa.1) - (pb.1 - pa.1) * (pc.0 - pa.0);
-        let lo_c = pa.0.min(pb.0).min(pc.0).floor().max(0.0) as usize;
-        let hi_c = (pa.0.max(pb.0).max(pc.0).ceil() as usize).min(cols);
-        let lo_r = pa.1.min(pb.1).min(pc.1).floor().max(0.0) as usize;
-        let hi_r = (pa.1.max(pb.1).max(pc.1).ceil() as usize).min(rows);
-        for r in lo_r..hi_r {
-            for col in lo_c..hi_c {
-                let (x, y) = (col as f64 + 0.5, r as f64 + 0.5);
-                let wa = ((pb.0 - x) * (pc.1 - y) - (pb.1 - y) * (pc.0 - x)) / area;
-                let wb = ((pc.0 - x) * (pa.1 - y) - (pc.1 - y) * (pa.0 - x)) / area;
-                let wc = 1.0 - wa - wb;
-                let eps = 1e-9;
-                if wa < -eps || wb < -eps || wc < -eps {
-                    continue;
-                }
-                let i = r * cols + col;
-                if h[i].is_nan() {
-                    if wa > eps && wb > eps && wc > eps {
-                        out.covered_missing += 1;
-                    }
-                    continue;
-                }
-                covered[i] = true;
-                let z = wa * a[2] + wb * b[2] + wc * c[2];
-                out.max_error = out.max_error.max((z - h[i]).abs());
-            }
-        }
-    }
-    out.uncovered_valid = (0..cols * rows)
-        .filter(|&i| !h[i].is_nan() && !covered[i])
-        .count();
-    out
+    let tris: Vec<[u64; 3]> = tin.triangles.iter().map(|t| t.map(u64::from)).collect();
+    grid_tin::rasterise(spec, h, &tin.vertices, &tris)
 }
 
 fn check_file(name: &str, bounds: &[f64]) {

@@ -1,16 +1,39 @@
 //! `sweeptin simplify`: grid DEM in, TIN within an error bound out.
 
+use super::input::Size;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
-use sweeptin::input::raster::{Heights, RasterReader};
+use sweeptin::input::raster::RasterReader;
 use sweeptin::output::{MeshFormat, MeshMeta, create_mesh_sink};
-use sweeptin::simplify::{Options, Stop, simplify};
+use sweeptin::pipeline::DEFAULT_MEM;
+use sweeptin::simplify::{
+    DEFAULT_WINDOW, GridOptions, GridProgress, Options, Stop, simplify_raster,
+};
 
 /// Arguments of `sweeptin simplify`.
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("bound").required(true).args(["max_error", "max_triangles", "max_points"])))]
+#[command(after_help = "\
+Greedy insertion (Garland & Heckbert, as hmm and delatin): start from the grid's corners, insert \
+the cell farthest (vertically) from the TIN with exact Delaunay insertion, repeat until every \
+valid cell is within --max-error, then remove the points the bound does not need. Missing cells \
+(nodata) are never covered by a triangle.
+
+Memory: a grid wider or taller than --window cells is cut into windows of at most --window × \
+--window cell intervals that share their border lines. Each border line is first simplified on \
+its own (in 1-D, to the same bound), so both windows on it keep the same vertices there and the \
+TIN is conforming; then every window is refined from its border vertices, on every core \
+(--threads), and written as soon as it and the windows before it are done. The grid is read a \
+band of windows at a time (tiled or striped GeoTIFF, ESRI ASCII), so memory is about one band \
+of heights (12 bytes a cell at most) plus up to 256 bytes a cell of each window in progress, \
+checked against --mem before anything is read. The output depends on --window only, never on \
+--mem or --threads; a grid that fits in one window is simplified whole (as before windows). \
+Point and triangle budgets (--max-points, --max-triangles) need the whole grid in one window.
+
+Example: a 1 m lidar DTM within 10 cm, in 2 GB:
+  sweeptin simplify dtm.tif --max-error 0.1 -o tin.ply --mem 2G --json")]
 pub struct Args {
     /// Input grid: GeoTIFF (single band, integer or float, GDAL_NODATA honoured) or ESRI ASCII
     /// grid (.asc).
@@ -33,6 +56,18 @@ pub struct Args {
     /// Keep every point the greedy insertion chose (no redundant-point removal pass).
     #[arg(long)]
     pub no_decimate: bool,
+    /// Window side in cells (cell intervals): larger grids are simplified window by window with
+    /// shared border lines (a few more points than one window: the borders are simplified in
+    /// 1-D). The output depends on it, never on --mem or --threads.
+    #[arg(long, value_name = "CELLS", default_value_t = DEFAULT_WINDOW)]
+    pub window: u32,
+    /// Memory budget (e.g. 512M, 4G): a job whose band of windows cannot fit is refused before
+    /// reading; with room, more windows run at once and the next band is read ahead.
+    #[arg(long, value_name = "SIZE", default_value_t = Size(DEFAULT_MEM))]
+    pub mem: Size,
+    /// Threads refining windows (default: every core). The output is the same for any number.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub threads: usize,
     /// No progress spinner.
     #[arg(short, long)]
     pub quiet: bool,
@@ -68,10 +103,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     // Open the output first: a bad output path fails before any heavy work.
     let mut sink = create_mesh_sink(&args.output, args.format, &meta)?;
-    // Kept as f32 when exact (all integer grids up to 16 bits, float32 grids): half the memory
-    // and bandwidth of f64.
-    let heights = reader.read_heights()?;
-    let read_s = start.elapsed().as_secs_f64();
     let bar = if args.quiet || args.json {
         ProgressBar::hidden()
     } else {
@@ -80,28 +111,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         b.enable_steady_tick(Duration::from_millis(200));
         b
     };
-    let mut progress = |points: u64, error: f64| {
-        bar.set_message(format!("{points} points, worst error {error:.3}"));
+    let mut progress = |p: GridProgress| match p {
+        GridProgress::Refining { points, error } => {
+            bar.set_message(format!("{points} points, worst error {error:.3}"))
+        }
+        GridProgress::Windows {
+            done,
+            total,
+            points,
+        } => bar.set_message(format!("window {done}/{total}, {points} points")),
     };
-    let options = Options {
-        stop,
-        decimate: !args.no_decimate,
+    let grid = GridOptions {
+        options: Options {
+            stop,
+            decimate: !args.no_decimate,
+        },
+        window: args.window,
+        mem: args.mem.0,
+        threads: args.threads,
     };
-    let result = match &heights {
-        Heights::F32(h) => simplify(&spec, h, &options, Some(&mut progress)),
-        Heights::F64(h) => simplify(&spec, h, &options, Some(&mut progress)),
-    };
-    let tin = result.with_context(|| format!("cannot simplify {}", args.input.display()))?;
+    let result = simplify_raster(&mut reader, &grid, sink.as_mut(), Some(&mut progress));
+    let s = result.with_context(|| format!("cannot simplify {}", args.input.display()))?;
     bar.finish_and_clear();
-    drop(heights);
-    for &v in &tin.vertices {
-        sink.vertex(v)?;
-    }
-    for t in &tin.triangles {
-        sink.triangle(t.map(u64::from))?;
-    }
     let written = sink.finish()?;
-    let s = &tin.stats;
+    let s = &s;
     let total_s = start.elapsed().as_secs_f64();
     if args.json {
         let summary = serde_json::json!({
@@ -109,11 +142,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "output": args.output,
             "grid": { "cols": spec.cols, "rows": spec.rows, "crs": spec.crs },
             "sample_type": reader.sample_type(),
-            "options": options,
+            "options": grid,
             "stats": s,
             "bytes": written.bytes,
-            "read_seconds": read_s,
             "total_seconds": total_s,
+            "peak_rss_bytes": sweeptin::pipeline::peak_rss(),
         });
         println!("{}", serde_json::to_string_pretty(&summary)?);
         return Ok(());

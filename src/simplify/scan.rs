@@ -9,6 +9,75 @@ pub trait Height: Copy + Into<f64> + Send + Sync + 'static {}
 impl Height for f32 {}
 impl Height for f64 {}
 
+/// A rectangle of cells, bounds included.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Clip {
+    /// First and last column.
+    pub c0: i64,
+    /// Last column.
+    pub c1: i64,
+    /// First row.
+    pub r0: i64,
+    /// Last row.
+    pub r1: i64,
+}
+
+impl Clip {
+    /// The whole of a `cols × rows` grid.
+    pub fn all(cols: i64, rows: i64) -> Self {
+        Clip {
+            c0: 0,
+            c1: cols - 1,
+            r0: 0,
+            r1: rows - 1,
+        }
+    }
+
+    /// Does it hold cell `(col, row)`?
+    #[inline]
+    pub fn holds(&self, col: i64, row: i64) -> bool {
+        col >= self.c0 && col <= self.c1 && row >= self.r0 && row <= self.r1
+    }
+}
+
+/// The cells a refinement reads: `heights` row-major, `stride` values a row (cell `(col, row)`
+/// at `row · stride + col`), the cells that exist (`all`) and those that may become vertices
+/// (`cand`: all of them for a whole grid; a window's interior, its border lines being fixed).
+#[derive(Clone, Copy, Debug)]
+pub struct Cells<'a, T> {
+    /// The heights, NaN = missing.
+    pub heights: &'a [T],
+    /// Values per row.
+    pub stride: i64,
+    /// The cells of the grid or window.
+    pub all: Clip,
+    /// The cells a scan may choose.
+    pub cand: Clip,
+    /// Are some cells missing?
+    pub may_miss: bool,
+}
+
+impl<'a, T: Height> Cells<'a, T> {
+    /// A whole `cols`-wide grid.
+    pub fn grid(heights: &'a [T], cols: i64) -> Self {
+        let rows = heights.len() as i64 / cols.max(1);
+        let all = Clip::all(cols, rows);
+        Cells {
+            heights,
+            stride: cols,
+            all,
+            cand: all,
+            may_miss: heights.iter().any(|&h| h.into().is_nan()),
+        }
+    }
+
+    /// Height of cell `(col, row)` (NaN when missing).
+    #[inline]
+    pub fn at(&self, col: i64, row: i64) -> f64 {
+        self.heights[(row * self.stride + col) as usize].into()
+    }
+}
+
 /// A triangle in cell-index space: three cells and their heights (NaN for a missing corner).
 #[derive(Clone, Copy, Debug)]
 pub struct CellTriangle {
@@ -78,13 +147,13 @@ impl CellTriangle {
     }
 
     /// Calls `f(row, first_col, last_col)` for every row with cells whose centres lie in the
-    /// closed triangle (which must be counter-clockwise, see [`CellTriangle::ccw`]); columns are
-    /// clamped to `0..cols`.
+    /// closed triangle (which must be counter-clockwise, see [`CellTriangle::ccw`]); rows and
+    /// columns are clamped to `clip`.
     #[inline]
-    pub fn rows(&self, cols: i64, mut f: impl FnMut(i64, i64, i64)) {
+    pub fn rows(&self, clip: Clip, mut f: impl FnMut(i64, i64, i64)) {
         let [a, b, c] = self.v;
-        let rmin = a[1].min(b[1]).min(c[1]);
-        let rmax = a[1].max(b[1]).max(c[1]);
+        let rmin = a[1].min(b[1]).min(c[1]).max(clip.r0);
+        let rmax = a[1].max(b[1]).max(c[1]).min(clip.r1);
         // Inside (left of p → q, or on it): dy·(x - px) <= dx·(r - py). With D = |dy| and
         // F(r) = floor(dx·(r - py) / D): x <= px + F(r) when dy > 0, x >= px - F(r) when dy < 0.
         // F is stepped exactly from row to row (quotient and remainder), with no division.
@@ -109,7 +178,7 @@ impl CellTriangle {
             };
         }
         for r in rmin..=rmax {
-            let (mut lo, mut hi) = (0i64, cols - 1);
+            let (mut lo, mut hi) = (clip.c0, clip.c1);
             for s in &mut steps {
                 match s.kind {
                     1 => hi = hi.min(s.base + s.q),
@@ -162,10 +231,11 @@ impl CellTriangle {
         self.v.iter().any(|v| v[0] == col && v[1] == row)
     }
 
-    /// Scans the cells of the closed triangle in `heights` (row-major, `cols` wide, NaN = missing):
-    /// the valid non-vertex cell of largest vertical error; or, when the triangle covers missing
-    /// cells, the valid non-vertex cell nearest to their centroid, with error `+∞`.
-    pub fn scan<T: Height>(&self, heights: &[T], cols: i64, may_miss: bool) -> ScanResult {
+    /// Scans the cells of the closed triangle: the valid non-vertex cell of `cells.cand` with the
+    /// largest vertical error; or, when the triangle covers missing cells (anywhere in
+    /// `cells.all`), the valid non-vertex cell of `cells.cand` nearest to their centroid, with
+    /// error `+∞`.
+    pub fn scan<T: Height>(&self, cells: &Cells<'_, T>) -> ScanResult {
         let (gx, gy) = self.plane();
         let [a, ..] = self.v;
         let z0 = self.z[0];
@@ -177,10 +247,11 @@ impl CellTriangle {
         };
         let (mut sx, mut sy) = (0.0f64, 0.0f64);
         let vrows = [self.v[0][1], self.v[1][1], self.v[2][1]];
-        self.rows(cols, |r, lo, hi| {
-            let start = (r * cols) as usize;
-            let row = &heights[start + lo as usize..=start + hi as usize];
-            if may_miss {
+        let (heights, stride, cand) = (cells.heights, cells.stride, cells.cand);
+        self.rows(cells.all, |r, lo, hi| {
+            let start = (r * stride) as usize;
+            if cells.may_miss {
+                let row = &heights[start + lo as usize..=start + hi as usize];
                 let n = row.iter().filter(|&&h| h.into().is_nan()).count();
                 if n > 0 {
                     best.missing += n as u32;
@@ -192,9 +263,14 @@ impl CellTriangle {
                     }
                 }
             }
-            if corner_missing || best.missing > 0 {
+            if corner_missing || best.missing > 0 || r < cand.r0 || r > cand.r1 {
                 return;
             }
+            let (lo, hi) = (lo.max(cand.c0), hi.min(cand.c1));
+            if lo > hi {
+                return;
+            }
+            let row = &heights[start + lo as usize..=start + hi as usize];
             let zr = z0 + gy * (r - a[1]) as f64;
             let (e, k) = row_max(row, zr, gx, (lo - a[0]) as f64, best.error);
             if e > best.error {
@@ -216,26 +292,26 @@ impl CellTriangle {
         });
         if best.missing > 0 {
             let n = f64::from(best.missing.max(1));
-            self.nearest_valid(heights, cols, [sx / n, sy / n], &mut best);
+            self.nearest_valid(cells, [sx / n, sy / n], &mut best);
         }
         best
     }
 
-    /// Does some valid cell of the closed triangle lie farther than `bound` from its plane, or
-    /// is some cell missing? Stops at the first such cell.
-    pub fn exceeds<T: Height>(&self, heights: &[T], cols: i64, bound: f64) -> bool {
+    /// Does some valid cell of the closed triangle (in `cells.all`) lie farther than `bound`
+    /// from its plane, or is some cell missing? Stops at the first such cell.
+    pub fn exceeds<T: Height>(&self, cells: &Cells<'_, T>, bound: f64) -> bool {
         if self.z.iter().any(|z| z.is_nan()) {
             return true;
         }
         let (gx, gy) = self.plane();
         let [a, ..] = self.v;
         let mut out = false;
-        self.rows(cols, |r, lo, hi| {
+        self.rows(cells.all, |r, lo, hi| {
             if out {
                 return;
             }
-            let start = (r * cols) as usize;
-            let row = &heights[start + lo as usize..=start + hi as usize];
+            let start = (r * cells.stride) as usize;
+            let row = &cells.heights[start + lo as usize..=start + hi as usize];
             let zr = self.z[0] + gy * (r - a[1]) as f64;
             let x0 = (lo - a[0]) as f64;
             out = row.iter().enumerate().any(|(k, &h)| {
@@ -247,21 +323,21 @@ impl CellTriangle {
         out
     }
 
-    /// For a triangle over missing cells: the valid non-vertex cell nearest to `centre`.
+    /// For a triangle over missing cells: the valid non-vertex cell of `cells.cand` nearest to
+    /// `centre`.
     fn nearest_valid<T: Height>(
         &self,
-        heights: &[T],
-        cols: i64,
+        cells: &Cells<'_, T>,
         centre: [f64; 2],
         best: &mut ScanResult,
     ) {
         let mut d_best = f64::INFINITY;
         best.cell = NO_CELL;
         best.error = 0.0;
-        self.rows(cols, |r, lo, hi| {
+        self.rows(cells.cand, |r, lo, hi| {
             for c in lo..=hi {
-                let i = (r * cols + c) as usize;
-                if heights[i].into().is_nan() || self.is_vertex(c, r) {
+                let i = (r * cells.stride + c) as usize;
+                if cells.heights[i].into().is_nan() || self.is_vertex(c, r) {
                     continue;
                 }
                 let d = (c as f64 - centre[0]).powi(2) + (r as f64 - centre[1]).powi(2);
@@ -334,8 +410,9 @@ mod tests {
 
     fn cells(t: &CellTriangle, cols: i64) -> Vec<(i64, i64)> {
         let mut out = Vec::new();
-        t.ccw()
-            .rows(cols, |r, lo, hi| out.extend((lo..=hi).map(|c| (c, r))));
+        t.ccw().rows(Clip::all(cols, cols), |r, lo, hi| {
+            out.extend((lo..=hi).map(|c| (c, r)))
+        });
         out
     }
 
@@ -401,7 +478,7 @@ mod tests {
             v: [[0, 0], [4, 0], [0, 4]],
             z: [0.0; 3],
         };
-        let s = t.ccw().scan(&h, cols, false);
+        let s = t.ccw().scan(&Cells::grid(&h, cols));
         assert_eq!(s.cell, 5 + 3);
         assert_eq!(s.error, 4.0);
         h[4] = 100.0; // a vertex: ignored
@@ -409,6 +486,6 @@ mod tests {
             v: [[0, 0], [4, 0], [0, 4]],
             z: [0.0, 0.0, 0.0],
         };
-        assert_eq!(t2.ccw().scan(&h, cols, false).cell, 5 + 3);
+        assert_eq!(t2.ccw().scan(&Cells::grid(&h, cols)).cell, 5 + 3);
     }
 }

@@ -1,4 +1,5 @@
 use super::*;
+use scan::CellTriangle;
 
 fn grid(cols: u32, rows: u32, f: impl Fn(f64, f64) -> f64) -> (RasterSpec, Vec<f64>) {
     let spec = RasterSpec::north_up(cols, rows, 1000.0, 2000.0, 2.0);
@@ -83,7 +84,7 @@ fn missing_cells_are_not_covered() {
             z: [0.0; 3],
         }
         .ccw();
-        ct.rows(30, |r, lo, hi| {
+        ct.rows(scan::Clip::all(30, 30), |r, lo, hi| {
             for c in lo..=hi {
                 assert!(
                     !h[(r * 30 + c) as usize].is_nan(),

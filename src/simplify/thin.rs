@@ -47,8 +47,8 @@
 //! output is the unique (constrained) Delaunay triangulation of the kept points under the crate's
 //! tie rule.
 
-use super::error_key;
 use super::queue::TriangleQueue;
+use super::refiner::error_key;
 use crate::error::{Error, Result};
 use crate::geom::predicates::{Orientation, Vertical, VerticalPlane, orient};
 use crate::tin::{PointLocation, Tin, TriId, VertexId};

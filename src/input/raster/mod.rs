@@ -255,21 +255,26 @@ impl RasterReader {
     /// # Errors
     /// As [`RasterReader::read_window`].
     pub fn read_heights(&mut self) -> Result<Heights> {
-        let (cols, rows) = (self.spec.cols, self.spec.rows);
-        let band = match &self.source {
-            // Whole chunks: a strip or tile row is decoded once.
-            Source::Tiff(t) => t
-                .chunk_h
-                .max(1)
-                .saturating_mul(256u32.div_ceil(t.chunk_h.max(1))),
-            Source::Ascii(_) => 256,
-        };
+        let rows = self.spec.rows;
+        self.read_rows(0, rows)
+    }
+
+    /// Reads the full-width rows `row0 .. row0 + rows` as compactly as they are exact
+    /// ([`Heights`]), a band of [`RasterReader::read_band_rows`] rows at a time: the peak memory
+    /// is the result plus one band as `f64` (see [`RasterReader::read_bytes`]).
+    ///
+    /// # Errors
+    /// As [`RasterReader::read_window`].
+    pub fn read_rows(&mut self, row0: u32, rows: u32) -> Result<Heights> {
+        let cols = self.spec.cols;
+        let band = self.read_band_rows();
         let n = cols as usize * rows as usize;
         let mut out = Heights::F32(Vec::with_capacity(n));
-        let mut r0 = 0;
-        while r0 < rows {
-            let h = band.min(rows - r0);
-            let w = self.read_window(0, r0, cols, h)?;
+        let (mut r, end) = (row0, row0.saturating_add(rows));
+        while r < end {
+            // Bands aligned on the file's chunks: a strip or tile row is decoded once.
+            let h = (band - r % band).min(end - r);
+            let w = self.read_window(0, r, cols, h)?;
             if let Heights::F32(v) = &mut out {
                 let start = v.len();
                 v.extend(w.iter().map(|&x| x as f32));
@@ -286,9 +291,37 @@ impl RasterReader {
             if let Heights::F64(v) = &mut out {
                 v.extend_from_slice(&w);
             }
-            r0 += h;
+            r += h;
         }
         Ok(out)
+    }
+
+    /// The rows [`RasterReader::read_rows`] reads at a time: whole strips or tile rows, about
+    /// 256 rows.
+    pub fn read_band_rows(&self) -> u32 {
+        match &self.source {
+            Source::Tiff(t) => t
+                .chunk_h
+                .max(1)
+                .saturating_mul(256u32.div_ceil(t.chunk_h.max(1))),
+            Source::Ascii(_) => 256,
+        }
+    }
+
+    /// Bytes [`RasterReader::read_rows`] holds besides its result when reading `rows` rows, at
+    /// most: one band of rows as `f64`, and one decoded TIFF strip or tile (as stored and as
+    /// `f64`, see [`RasterReader::chunk_bytes`]).
+    pub fn read_bytes(&self, rows: u32) -> u64 {
+        let band = u64::from(self.spec.cols) * u64::from(self.read_band_rows().min(rows)) * 8;
+        band + self.chunk_bytes()
+    }
+
+    /// Bytes one decoded TIFF strip or tile takes (as stored and as `f64`); 0 for a text grid.
+    pub fn chunk_bytes(&self) -> u64 {
+        match &self.source {
+            Source::Tiff(t) => u64::from(t.chunk_w) * u64::from(t.chunk_h) * 16,
+            Source::Ascii(_) => 0,
+        }
     }
 
     /// Reads the `cols × rows` window whose top-left cell is `(col0, row0)`, row-major, missing
