@@ -24,6 +24,7 @@
 
 use super::grid::BlockRect;
 use super::index::BlockIndex;
+use super::lines::{RunLines, visible};
 use crate::error::Result;
 use crate::geom::predicates::{CircleSide, DiskBounds, Orientation, incircle, orient};
 use crate::idmap::FastMap;
@@ -72,6 +73,8 @@ pub(crate) struct Certifier<'a> {
     /// to make progress, and the judge doubles it with every run of a tile (a disk that a sparse
     /// patch run left huge may hold points of thousands of blocks).
     pub witnesses: usize,
+    /// The breaklines the run loaded, if any (see [`super::lines`]).
+    pub lines: Option<&'a RunLines<'a>>,
 }
 
 /// Squared distance from `p` to the box `e` (`[xmin, ymin, xmax, ymax]`).
@@ -109,6 +112,52 @@ fn boxes_meet(a: &[f64; 4], b: &[f64; 4]) -> bool {
     a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3]
 }
 
+/// The box of the part of the circumdisk of the counter-clockwise triangle `t` that its
+/// constrained edges (`hidden`) leave visible, when one of them has an obtuse angle opposite
+/// (the centre lies beyond it, so the visible part is within the cap on the triangle's side:
+/// the chord box of [`Certifier::flat_clear`]); the intersection of such boxes. `None`: the
+/// whole disk.
+fn cap_box(t: &[[f64; 2]; 3], hidden: [bool; 3], g: &super::grid::TileGrid) -> Option<[f64; 4]> {
+    let mut out: Option<[f64; 4]> = None;
+    for k in (0..3).filter(|&k| hidden[k]) {
+        let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+        let (ca, cb) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
+        let dot = ca[0] * cb[0] + ca[1] * cb[1];
+        let lens = (ca[0].hypot(ca[1])) * (cb[0].hypot(cb[1]));
+        if dot.is_nan() || dot >= -1e-6 * lens {
+            continue;
+        }
+        let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let mag = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
+        let slack = g.margin(mag + l) + l * 1e-9;
+        let h = sagitta_bound(a, b, c, l);
+        let n = [-(b[1] - a[1]) / l, (b[0] - a[0]) / l];
+        let (ah, bh) = (
+            [a[0] + n[0] * h, a[1] + n[1] * h],
+            [b[0] + n[0] * h, b[1] + n[1] * h],
+        );
+        let bx = [
+            a[0].min(b[0]).min(ah[0]).min(bh[0]) - slack,
+            a[1].min(b[1]).min(ah[1]).min(bh[1]) - slack,
+            a[0].max(b[0]).max(ah[0]).max(bh[0]) + slack,
+            a[1].max(b[1]).max(ah[1]).max(bh[1]) + slack,
+        ];
+        if !bx.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        out = Some(match out {
+            None => bx,
+            Some(o) => [
+                o[0].max(bx[0]),
+                o[1].max(bx[1]),
+                o[2].min(bx[2]),
+                o[3].min(bx[3]),
+            ],
+        });
+    }
+    out
+}
+
 /// Where [`Certifier`] puts the blocks that withheld a certificate.
 pub(crate) type Missing = Vec<u64>;
 
@@ -126,6 +175,7 @@ impl<'a> Certifier<'a> {
             cache: RefCell::new(Cache::default()),
             tested: std::cell::Cell::new((0, 0)),
             witnesses: 4,
+            lines: None,
         }
     }
 
@@ -181,10 +231,22 @@ impl<'a> Certifier<'a> {
             self.unknown.set(self.unknown.get().max(reach));
             return Ok(false);
         }
+        // With breaklines: what the triangle's constrained edges hide, and the box of the part
+        // of the disk they leave visible (the cap on the triangle's side of a chord whose centre
+        // lies beyond it).
+        let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
+        let cap = cap_box(t, hidden, g);
+        let disk = [cx - r, cy - r, cx + r, cy + r];
+        let b = cap.unwrap_or(disk);
+        if let Some(l) = self.lines
+            && !self.lines_clear(l, t, hidden, &b, out)
+        {
+            return Ok(false);
+        }
         let occ = self.index.occupied();
-        let b = g.block;
-        let by0 = (((cy - r) / b).floor() as i64).max(occ.y0);
-        let by1 = (((cy + r) / b).floor() as i64).min(occ.y1 - 1);
+        let bs = g.block;
+        let by0 = (((cy - r).max(b[1]) / bs).floor() as i64).max(occ.y0);
+        let by1 = (((cy + r).min(b[3]) / bs).floor() as i64).min(occ.y1 - 1);
         // The blocks not read whose points' box the disk reaches, nearest to the triangle first.
         let mut near: Vec<(f64, u64)> = Vec::new();
         let m = [
@@ -192,7 +254,7 @@ impl<'a> Certifier<'a> {
             (t[0][1] + t[1][1] + t[2][1]) / 3.0,
         ];
         for by in by0..=by1 {
-            let (lo, hi) = (by as f64 * b, (by + 1) as f64 * b);
+            let (lo, hi) = (by as f64 * bs, (by + 1) as f64 * bs);
             let dy = if cy < lo {
                 lo - cy
             } else if cy > hi {
@@ -204,18 +266,40 @@ impl<'a> Certifier<'a> {
                 continue;
             }
             let hw = (r * r - dy * dy).max(0.0).sqrt() * (1.0 + 1e-12) + r * 1e-12;
-            let bx0 = ((cx - hw) / b).floor() as i64;
-            let bx1 = ((cx + hw) / b).floor() as i64;
+            let bx0 = ((cx - hw).max(b[0]) / bs).floor() as i64;
+            let bx1 = ((cx + hw).min(b[2]) / bs).floor() as i64;
             self.unread_in_row(by, bx0, bx1, &mut |k| {
                 if let Some(e) = self.index.extent(k)
                     && box_dist2(&e, [cx, cy]) <= r * r * (1.0 + 1e-9)
+                    && (cap.is_none() || boxes_meet(&e, &b))
                 {
                     near.push((box_dist2(&e, m), k));
                 }
                 Ok(())
             })?;
         }
-        Ok(self.witnesses_among(near, t, out)? == 0)
+        Ok(self.witnesses_among(near, t, hidden, out)? == 0)
+    }
+
+    /// The breakline half of a certificate: no vertex the run did not load lies in the part of
+    /// the circumdisk of `t` visible from it (within the box `b`), and no segment the run did
+    /// not load crosses `t`. A block to read goes to `out` otherwise.
+    fn lines_clear(
+        &self,
+        l: &RunLines,
+        t: &[[f64; 2]; 3],
+        hidden: [bool; 3],
+        b: &[f64; 4],
+        out: &mut Missing,
+    ) -> bool {
+        let g = &self.index.grid;
+        match l.witness(t, hidden, b, g).or_else(|| l.crossing(t, g)) {
+            Some(k) => {
+                out.push(k);
+                false
+            }
+            None => true,
+        }
     }
 
     /// Tests the blocks `near` (keys with a distance), nearest first, until
@@ -225,12 +309,13 @@ impl<'a> Certifier<'a> {
         &self,
         mut near: Vec<(f64, u64)>,
         t: &[[f64; 2]; 3],
+        hidden: [bool; 3],
         out: &mut Missing,
     ) -> Result<usize> {
         near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut found = 0;
         for &(_, k) in &near {
-            if self.witness(k, t)? {
+            if self.witness(k, t, hidden)? {
                 out.push(k);
                 found += 1;
                 if found >= self.witnesses {
@@ -284,6 +369,20 @@ impl<'a> Certifier<'a> {
             a[0].max(b[0]).max(ah[0]).max(bh[0]) + reach,
             a[1].max(b[1]).max(ah[1]).max(bh[1]) + reach,
         ];
+        // With breaklines: a constrained long edge hides the half-plane beyond it.
+        let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
+        if let Some(l) = self.lines {
+            let all = [
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::INFINITY,
+            ];
+            let b = if hidden[i] { near_box } else { all };
+            if !self.lines_clear(l, t, hidden, &b, out) {
+                return Ok(Some(false));
+            }
+        }
         let beyond = |e: &[f64; 4]| {
             [[e[0], e[1]], [e[2], e[1]], [e[2], e[3]], [e[0], e[3]]]
                 .into_iter()
@@ -313,8 +412,11 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        if self.witnesses_among(near, t, out)? > 0 {
+        if self.witnesses_among(near, t, hidden, out)? > 0 {
             return Ok(Some(false));
+        }
+        if hidden[i] {
+            return Ok(Some(true));
         }
         // The rest of the half-plane right of `L`, row by row: in each row the half-plane is
         // an interval of x (bounded conservatively).
@@ -359,11 +461,11 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        Ok(Some(self.witnesses_among(far, t, out)? == 0))
+        Ok(Some(self.witnesses_among(far, t, hidden, out)? == 0))
     }
 
     /// Does block `k` (not read) hold a point inside the circumdisk of `t`? Exact.
-    fn witness(&self, k: u64, t: &[[f64; 2]; 3]) -> Result<bool> {
+    fn witness(&self, k: u64, t: &[[f64; 2]; 3], hidden: [bool; 3]) -> Result<bool> {
         let mut cache = self.cache.borrow_mut();
         if !cache.blocks.contains_key(&k) {
             if cache.points > CACHE_POINTS {
@@ -384,6 +486,7 @@ impl<'a> Certifier<'a> {
                 && q != t[1]
                 && q != t[2]
                 && incircle(t[0], t[1], t[2], q) == CircleSide::Inside
+                && visible(t, hidden, q)
         }))
     }
 }

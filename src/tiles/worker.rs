@@ -23,10 +23,11 @@ use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
 use super::index::BlockIndex;
 use super::keep::{Owner, from_runs};
+use super::lines::TileLines;
 use super::region::{Region, Tri2, Tris, judge, tri_meets_rect};
 use crate::error::{Error, Result};
 use crate::sort::DuplicatePolicy;
-use crate::triangulation::{Options, triangulate};
+use crate::triangulation::{Options, triangulate, triangulate_cdt};
 
 /// Degree of a vertex this tile does not own (unknown here).
 pub(crate) const NOT_OWNED: u32 = u32::MAX;
@@ -70,6 +71,7 @@ pub(crate) fn run_tile(
     policy: DuplicatePolicy,
     buffer: i64,
     task: Option<&BlockRect>,
+    lines: Option<&TileLines>,
 ) -> Result<TileOutput> {
     let g = index.grid;
     let owned = g.tile_blocks(tile.0, tile.1);
@@ -80,7 +82,7 @@ pub(crate) fn run_tile(
     out.points_read = index.count(&owned);
     // A tile without points owns nothing; in a task it still delivers the triangles of other
     // tasks that cover it.
-    if out.points_read == 0 && task.is_none() {
+    if out.points_read == 0 && task.is_none() && lines.is_none() {
         return Ok(out);
     }
     let occ = index.occupied();
@@ -121,12 +123,26 @@ pub(crate) fn run_tile(
                 pts.push(*p);
             }
         }
-        // Every point there is: all the blocks, and (for a task) nothing unread in the files.
-        let full =
-            loaded.rect.contains_rect(&occ) && index.scope.as_ref().is_none_or(|sc| sc.complete());
+        // The segments meeting the blocks read, whole, with their ends (after the points: a
+        // vertex at a point's position is one vertex, the line read last).
+        let run_lines = lines.map(|l| l.run(&g, &loaded.rect, &loaded.extra));
+        let segments = run_lines
+            .as_ref()
+            .map(|l| l.append(&mut pts))
+            .unwrap_or_default();
+        // Every point there is: all the blocks, every segment, and (for a task) nothing unread
+        // in the files.
+        let full = loaded.rect.contains_rect(&occ)
+            && index.scope.as_ref().is_none_or(|sc| sc.complete())
+            && run_lines.as_ref().is_none_or(|l| l.all());
         let mut cpu = 0.0;
         let t = crate::clock::timed(&mut cpu, || {
-            triangulate(&pts, &Options { duplicates: policy })
+            let options = Options { duplicates: policy };
+            if segments.is_empty() {
+                triangulate(&pts, &options)
+            } else {
+                triangulate_cdt(&pts, &segments, &options)
+            }
         });
         out.cpu.triangulate += cpu;
         let t = match t {
@@ -143,9 +159,23 @@ pub(crate) fn run_tile(
             }
             Err(e) => return Err(e),
         };
+        if t.constraint_stats.crossing_skipped > 0 {
+            return Err(Error::Internal(format!(
+                "tile {tile:?}: {} breakline segments of a cleaned graph crossed",
+                t.constraint_stats.crossing_skipped
+            )));
+        }
         let mut cpu = 0.0;
         let verdict = crate::clock::timed(&mut cpu, || {
-            judge(index, &t, &region, &loaded, full, out.runs)
+            judge(
+                index,
+                &t,
+                &region,
+                &loaded,
+                full,
+                out.runs,
+                run_lines.as_ref(),
+            )
         })?;
         out.cpu.certify += cpu;
         if std::env::var_os("SWEEPTIN_DEBUG_TILES").is_some() {

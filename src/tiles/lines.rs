@@ -1,0 +1,367 @@
+//! Breaklines in exact tiles: the cleaned graph of the run (held in memory, as the sweep holds
+//! it), the segments a tile's run loads, and the two checks a certificate needs for the others
+//! (the rule and its proof are in [`super::worker`]).
+//!
+//! A run *loads* every segment that meets the world rectangle of one of its blocks (grown by the
+//! grid's rounding margin, so that it holds every point assigned to those blocks), whole, with
+//! both endpoints, wherever they lie; and every graph vertex inside those rectangles. A vertex
+//! the run did not load lies outside them, so a circumdisk inside the loaded rectangle holds
+//! none, and a triangle inside it meets no segment the run did not load: the certificate's fast
+//! path stays valid. The slow path asks [`RunLines::witness`] and [`RunLines::crossing`].
+//!
+//! A graph vertex at exactly the position of a lidar point is one vertex whose `z` follows
+//! `--duplicates` with the line read after every point (as in the sweep): [`TileLines::merge`]
+//! settles that `z` once, so every run gives the vertex the same `z` whether or not it loaded the
+//! point.
+
+use super::grid::{BlockRect, TileGrid};
+use super::index::BlockIndex;
+use super::region::{Tri2, tri_meets_rect};
+use crate::error::Result;
+use crate::geom::grid::{Buckets, Grid};
+use crate::geom::predicates::{CircleSide, Orientation, incircle, orient};
+use crate::idmap::FastMap;
+use crate::sort::DuplicatePolicy;
+
+/// The breakline graph of a tiled run (cleaned, every `z` known), bucketed for queries.
+#[derive(Debug)]
+pub(crate) struct TileLines {
+    /// Vertices `[x, y, z]`.
+    pub vertices: Vec<[f64; 3]>,
+    /// Segments (vertex pairs).
+    pub segments: Vec<[u32; 2]>,
+    xy: Vec<[f64; 2]>,
+    bbox: Option<[f64; 4]>,
+    grid: Grid,
+    segs: Buckets,
+    verts: Buckets,
+}
+
+impl TileLines {
+    /// The graph of `vertices` and `segments` (a planar graph: see [`crate::breaklines::clean`]).
+    pub fn new(vertices: &[[f64; 3]], segments: &[[u32; 2]]) -> TileLines {
+        // As the sweep sees them: -0 is 0.
+        let vertices: Vec<[f64; 3]> = vertices
+            .iter()
+            .map(|v| [v[0] + 0.0, v[1] + 0.0, v[2]])
+            .collect();
+        let xy: Vec<[f64; 2]> = vertices.iter().map(|v| [v[0], v[1]]).collect();
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in &xy {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        if xy.is_empty() {
+            (lo, hi) = ([0.0; 2], [0.0; 2]);
+        }
+        let grid = Grid::new(lo, hi, segments.len().max(xy.len()));
+        let segs = Buckets::segments(&grid, &xy, segments);
+        let verts = Buckets::points(&grid, &xy);
+        let bbox = (!xy.is_empty()).then_some([lo[0], lo[1], hi[0], hi[1]]);
+        TileLines {
+            vertices,
+            segments: segments.to_vec(),
+            xy,
+            bbox,
+            grid,
+            segs,
+            verts,
+        }
+    }
+
+    /// The bounding box of the vertices `[xmin, ymin, xmax, ymax]` (`None` without vertices).
+    pub fn bounds(&self) -> Option<[f64; 4]> {
+        self.bbox
+    }
+
+    /// The blocks of the vertices, as a rectangle (empty without vertices).
+    pub fn blocks(&self, g: &TileGrid) -> BlockRect {
+        let mut r = BlockRect {
+            x0: i64::MAX,
+            y0: i64::MAX,
+            x1: i64::MIN,
+            y1: i64::MIN,
+        };
+        for p in &self.xy {
+            let (bx, by) = g.block_of(p[0], p[1]);
+            r = BlockRect {
+                x0: r.x0.min(bx),
+                y0: r.y0.min(by),
+                x1: r.x1.max(bx + 1),
+                y1: r.y1.max(by + 1),
+            };
+        }
+        r
+    }
+
+
+    /// Gives each vertex at exactly the position of a point of `index` the `z` that
+    /// `--duplicates` keeps, the line counting as read after every point.
+    ///
+    /// # Errors
+    /// Reading the index.
+    pub fn merge(&mut self, index: &BlockIndex, policy: DuplicatePolicy) -> Result<()> {
+        let g = index.grid;
+        let mut order: Vec<(u64, u32)> = self
+            .xy
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let (bx, by) = g.block_of(p[0], p[1]);
+                (TileGrid::key(bx, by), i as u32)
+            })
+            .collect();
+        order.sort_unstable();
+        let mut pts = Vec::new();
+        let mut at: FastMap<(u64, u64), f64> = FastMap::default();
+        let mut block = None;
+        for (k, i) in order {
+            if block != Some(k) {
+                block = Some(k);
+                pts.clear();
+                index.read_block(k, &mut pts)?;
+                at.clear();
+                at.extend(
+                    pts.iter()
+                        .map(|p| (((p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits()), p[2])),
+                );
+            }
+            let v = &mut self.vertices[i as usize];
+            if let Some(&z) = at.get(&(v[0].to_bits(), v[1].to_bits()))
+                && !policy.prefers((v[2], 1), (z, 0))
+            {
+                v[2] = z;
+            }
+        }
+        Ok(())
+    }
+
+    /// The `z` of the vertex at exactly `(x, y)`, if there is one.
+    pub fn z_at(&self, p: [f64; 2]) -> Option<f64> {
+        let p = [p[0] + 0.0, p[1] + 0.0];
+        self.verts
+            .cell(self.grid.cell_of(p))
+            .iter()
+            .map(|&v| v as usize)
+            .find(|&v| self.xy[v] == p)
+            .map(|v| self.vertices[v][2])
+    }
+
+    /// What a run over the blocks of `rect` and `extra` loads.
+    pub fn run(&self, g: &TileGrid, rect: &BlockRect, extra: &[u64]) -> RunLines<'_> {
+        let mut run = RunLines {
+            lines: self,
+            seg: vec![false; self.segments.len()],
+            vert: vec![false; self.xy.len()],
+        };
+        let mut rects = Vec::with_capacity(extra.len() + 1);
+        if !rect.is_empty() {
+            rects.push(*rect);
+        }
+        rects.extend(extra.iter().map(|&k| {
+            let (bx, by) = TileGrid::unkey(k);
+            BlockRect {
+                x0: bx,
+                y0: by,
+                x1: bx + 1,
+                y1: by + 1,
+            }
+        }));
+        for r in &rects {
+            let w = g.world(r);
+            let m = g.margin(w.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+            let w = [w[0] - m, w[1] - m, w[2] + m, w[3] + m];
+            let (lo, hi) = ([w[0], w[1]], [w[2], w[3]]);
+            // Cells are clamped into the grid: skip rectangles that miss it.
+            let Some(gb) = self.bbox else { break };
+            if w[2] < gb[0] || w[0] > gb[2] || w[3] < gb[1] || w[1] > gb[3] {
+                continue;
+            }
+            self.grid.box_cells(lo, hi, |c| {
+                for &s in self.segs.cell(c) {
+                    if !run.seg[s as usize] {
+                        let [a, b] = self.segments[s as usize].map(|v| self.xy[v as usize]);
+                        if tri_meets_rect(&[a, b, b], &w) {
+                            run.seg[s as usize] = true;
+                        }
+                    }
+                }
+                for &v in self.verts.cell(c) {
+                    let p = self.xy[v as usize];
+                    if p[0] >= w[0] && p[0] <= w[2] && p[1] >= w[1] && p[1] <= w[3] {
+                        run.vert[v as usize] = true;
+                    }
+                }
+            });
+        }
+        for (s, _) in run.seg.iter().enumerate().filter(|(_, l)| **l) {
+            for v in self.segments[s] {
+                run.vert[v as usize] = true;
+            }
+        }
+        run
+    }
+}
+
+/// What one run of a tile loaded of the breaklines.
+#[derive(Debug)]
+pub(crate) struct RunLines<'a> {
+    lines: &'a TileLines,
+    seg: Vec<bool>,
+    vert: Vec<bool>,
+}
+
+/// Is `q` visible from the interior of the counter-clockwise triangle `t`, as far as its own
+/// constrained edges (`hidden[k]` for the edge from `t[k]` to `t[k + 1]`) go? A point strictly
+/// beyond such an edge's line and inside the circumdisk lies in the cap the edge cuts off, where
+/// every path from the triangle crosses the edge. Exact.
+pub(crate) fn visible(t: &Tri2, hidden: [bool; 3], q: [f64; 2]) -> bool {
+    !(0..3).any(|k| hidden[k] && orient(t[k], t[(k + 1) % 3], q) == Orientation::Clockwise)
+}
+
+impl RunLines<'_> {
+    /// Appends the loaded vertices to `pts` and returns the loaded segments as indices into it.
+    pub fn append(&self, pts: &mut Vec<[f64; 3]>) -> Vec<[u32; 2]> {
+        let base = pts.len() as u32;
+        let mut id = vec![u32::MAX; self.vert.len()];
+        for (v, _) in self.vert.iter().enumerate().filter(|(_, l)| **l) {
+            id[v] = base + (pts.len() as u32 - base);
+            pts.push(self.lines.vertices[v]);
+        }
+        self.seg
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| **l)
+            .map(|(s, _)| self.lines.segments[s].map(|v| id[v as usize]))
+            .collect()
+    }
+
+    /// Did the run load every segment?
+    pub fn all(&self) -> bool {
+        self.seg.iter().all(|&l| l)
+    }
+
+    /// Is the edge `u`-`w` of a triangle of the run a piece of a loaded segment (a constrained
+    /// edge of the run)? Exact.
+    pub fn constrained(&self, u: [f64; 2], w: [f64; 2]) -> bool {
+        let l = self.lines;
+        if l.xy.is_empty() {
+            return false;
+        }
+        l.segs.cell(l.grid.cell_of(u)).iter().any(|&s| {
+            self.seg[s as usize] && {
+                let [a, b] = l.segments[s as usize].map(|v| l.xy[v as usize]);
+                on_segment(a, b, u) && on_segment(a, b, w)
+            }
+        })
+    }
+
+    /// The constrained edges of the counter-clockwise triangle `t` (see [`visible`]).
+    pub fn hidden(&self, t: &Tri2) -> [bool; 3] {
+        std::array::from_fn(|k| self.constrained(t[k], t[(k + 1) % 3]))
+    }
+
+    /// A vertex the run did not load inside the circumdisk of `t` (within the box `b`, which
+    /// holds the part of the disk that `hidden` leaves visible) and visible from it: the key of
+    /// its block.
+    pub fn witness(
+        &self,
+        t: &Tri2,
+        hidden: [bool; 3],
+        b: &[f64; 4],
+        g: &TileGrid,
+    ) -> Option<u64> {
+        let l = self.lines;
+        let gb = l.bounds()?;
+        if b[2] < gb[0] || b[0] > gb[2] || b[3] < gb[1] || b[1] > gb[3] {
+            return None;
+        }
+        let mut found = None;
+        l.grid.box_cells([b[0], b[1]], [b[2], b[3]], |c| {
+            if found.is_some() {
+                return;
+            }
+            for &v in l.verts.cell(c) {
+                let q = l.xy[v as usize];
+                if !self.vert[v as usize]
+                    && incircle(t[0], t[1], t[2], q) == CircleSide::Inside
+                    && visible(t, hidden, q)
+                {
+                    found = Some(q);
+                    return;
+                }
+            }
+        });
+        found.map(|q| {
+            let (bx, by) = g.block_of(q[0], q[1]);
+            TileGrid::key(bx, by)
+        })
+    }
+
+    /// A segment the run did not load that crosses the interior of `t`: the key of the block of
+    /// one of its ends (reading that block loads the segment).
+    pub fn crossing(&self, t: &Tri2, g: &TileGrid) -> Option<u64> {
+        let l = self.lines;
+        if l.xy.is_empty() {
+            return None;
+        }
+        let lo = [
+            t[0][0].min(t[1][0]).min(t[2][0]),
+            t[0][1].min(t[1][1]).min(t[2][1]),
+        ];
+        let hi = [
+            t[0][0].max(t[1][0]).max(t[2][0]),
+            t[0][1].max(t[1][1]).max(t[2][1]),
+        ];
+        let gb = l.bounds()?;
+        if hi[0] < gb[0] || lo[0] > gb[2] || hi[1] < gb[1] || lo[1] > gb[3] {
+            return None;
+        }
+        let mut found = None;
+        l.grid.box_cells(lo, hi, |c| {
+            if found.is_some() {
+                return;
+            }
+            for &s in l.segs.cell(c) {
+                if self.seg[s as usize] {
+                    continue;
+                }
+                let [a, b] = l.segments[s as usize].map(|v| l.xy[v as usize]);
+                if crosses_interior(t, a, b) {
+                    let (bx, by) = g.block_of(a[0], a[1]);
+                    found = Some(TileGrid::key(bx, by));
+                    return;
+                }
+            }
+        });
+        found
+    }
+}
+
+/// Does the closed segment `a`-`b` meet the open interior of the counter-clockwise triangle
+/// `t`? Exact: they are disjoint when a line through an edge of either has the other on one
+/// closed side.
+pub(crate) fn crosses_interior(t: &Tri2, a: [f64; 2], b: [f64; 2]) -> bool {
+    use Orientation::CounterClockwise as Ccw;
+    for k in 0..3 {
+        let (p, q) = (t[k], t[(k + 1) % 3]);
+        if orient(p, q, a) != Ccw && orient(p, q, b) != Ccw {
+            return false;
+        }
+    }
+    let o = t.map(|c| orient(a, b, c));
+    let left = o.iter().all(|&s| s != Orientation::Clockwise);
+    let right = o.iter().all(|&s| s != Ccw);
+    !(left || right)
+}
+
+/// `p` on the closed segment `a`-`b` (exact).
+fn on_segment(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> bool {
+    orient(a, b, p) == Orientation::Collinear
+        && a[0].min(b[0]) <= p[0]
+        && p[0] <= a[0].max(b[0])
+        && a[1].min(b[1]) <= p[1]
+        && p[1] <= a[1].max(b[1])
+}
