@@ -24,7 +24,7 @@
 
 use super::grid::BlockRect;
 use super::index::BlockIndex;
-use super::lines::{RunLines, visible};
+use super::lines::{RunLines, Sight};
 use crate::error::Result;
 use crate::geom::predicates::{CircleSide, DiskBounds, Orientation, incircle, orient};
 use crate::idmap::FastMap;
@@ -238,8 +238,11 @@ impl<'a> Certifier<'a> {
         let cap = cap_box(t, hidden, g);
         let disk = [cx - r, cy - r, cx + r, cy + r];
         let b = cap.unwrap_or(disk);
+        let sight = self
+            .lines
+            .map_or_else(Sight::default, |l| l.sight(hidden, &b));
         if let Some(l) = self.lines
-            && !self.lines_clear(l, t, hidden, &b, out)
+            && !self.lines_clear(l, t, &sight, &b, out)
         {
             return Ok(false);
         }
@@ -278,7 +281,7 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        Ok(self.witnesses_among(near, t, hidden, out)? == 0)
+        Ok(self.witnesses_among(near, t, &sight, out)? == 0)
     }
 
     /// The breakline half of a certificate: no vertex the run did not load lies in the part of
@@ -288,18 +291,15 @@ impl<'a> Certifier<'a> {
         &self,
         l: &RunLines,
         t: &[[f64; 2]; 3],
-        hidden: [bool; 3],
+        sight: &Sight,
         b: &[f64; 4],
         out: &mut Missing,
     ) -> bool {
         let g = &self.index.grid;
-        match l.witness(t, hidden, b, g).or_else(|| l.crossing(t, g)) {
-            Some(k) => {
-                out.push(k);
-                false
-            }
-            None => true,
-        }
+        let missing = l.missing(t, sight, b, g, self.witnesses);
+        let clear = missing.is_empty();
+        out.extend(missing);
+        clear
     }
 
     /// Tests the blocks `near` (keys with a distance), nearest first, until
@@ -309,19 +309,27 @@ impl<'a> Certifier<'a> {
         &self,
         mut near: Vec<(f64, u64)>,
         t: &[[f64; 2]; 3],
-        hidden: [bool; 3],
+        sight: &Sight,
         out: &mut Missing,
     ) -> Result<usize> {
         near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut found = 0;
         for &(_, k) in &near {
-            if self.witness(k, t, hidden)? {
+            if self.witness(k, t, sight)? {
                 out.push(k);
                 found += 1;
                 if found >= self.witnesses {
                     break;
                 }
             }
+        }
+        // Behind a constrained edge the visible part of the disk is the cap on the triangle's
+        // side, and the triangle of the whole triangulation on that edge has its cap inside
+        // this one (circles through the edge's ends are nested on one side): a patch that
+        // reads every block reaching it settles the edge at once, instead of one witness at a
+        // time along a long segment.
+        if found > 0 && sight.hidden.iter().any(|&h| h) {
+            out.extend(near.iter().map(|&(_, k)| k));
         }
         Ok(found)
     }
@@ -371,6 +379,7 @@ impl<'a> Certifier<'a> {
         ];
         // With breaklines: a constrained long edge hides the half-plane beyond it.
         let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
+        let mut sight = Sight::default();
         if let Some(l) = self.lines {
             let all = [
                 f64::NEG_INFINITY,
@@ -379,7 +388,8 @@ impl<'a> Certifier<'a> {
                 f64::INFINITY,
             ];
             let b = if hidden[i] { near_box } else { all };
-            if !self.lines_clear(l, t, hidden, &b, out) {
+            sight = l.sight(hidden, &b);
+            if !self.lines_clear(l, t, &sight, &b, out) {
                 return Ok(Some(false));
             }
         }
@@ -412,7 +422,7 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        if self.witnesses_among(near, t, hidden, out)? > 0 {
+        if self.witnesses_among(near, t, &sight, out)? > 0 {
             return Ok(Some(false));
         }
         if hidden[i] {
@@ -461,11 +471,11 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        Ok(Some(self.witnesses_among(far, t, hidden, out)? == 0))
+        Ok(Some(self.witnesses_among(far, t, &sight, out)? == 0))
     }
 
     /// Does block `k` (not read) hold a point inside the circumdisk of `t`? Exact.
-    fn witness(&self, k: u64, t: &[[f64; 2]; 3], hidden: [bool; 3]) -> Result<bool> {
+    fn witness(&self, k: u64, t: &[[f64; 2]; 3], sight: &Sight) -> Result<bool> {
         let mut cache = self.cache.borrow_mut();
         if !cache.blocks.contains_key(&k) {
             if cache.points > CACHE_POINTS {
@@ -486,7 +496,7 @@ impl<'a> Certifier<'a> {
                 && q != t[1]
                 && q != t[2]
                 && incircle(t[0], t[1], t[2], q) == CircleSide::Inside
-                && visible(t, hidden, q)
+                && sight.visible(t, q)
         }))
     }
 }

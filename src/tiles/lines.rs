@@ -213,12 +213,46 @@ pub(crate) struct RunLines<'a> {
     vert: Vec<bool>,
 }
 
-/// Is `q` visible from the interior of the counter-clockwise triangle `t`, as far as its own
-/// constrained edges (`hidden[k]` for the edge from `t[k]` to `t[k + 1]`) go? A point strictly
-/// beyond such an edge's line and inside the circumdisk lies in the cap the edge cuts off, where
-/// every path from the triangle crosses the edge. Exact.
-pub(crate) fn visible(t: &Tri2, hidden: [bool; 3], q: [f64; 2]) -> bool {
-    !(0..3).any(|k| hidden[k] && orient(t[k], t[(k + 1) % 3], q) == Orientation::Clockwise)
+/// What blocks the sight from the interior of a counter-clockwise triangle `t` of a run: its
+/// constrained edges (`hidden[k]` for the edge from `t[k]` to `t[k + 1]`) and the loaded
+/// segments near it. Only points visible from `t` can withhold its certificate; every blocking
+/// segment here is a segment of the whole input too, so what it hides in the run it hides there.
+#[derive(Debug, Default)]
+pub(crate) struct Sight {
+    pub hidden: [bool; 3],
+    blockers: Vec<[[f64; 2]; 2]>,
+}
+
+impl Sight {
+    /// Is `q` visible from the interior of `t`? `false` only when provably hidden: strictly
+    /// beyond a constrained edge's line (inside the circumdisk that is the cap the edge cuts
+    /// off, where every path from the triangle crosses the edge), or behind a loaded segment
+    /// `u-v` that has `t` on one closed side and `q` strictly on the other, and meets every
+    /// segment from `q` to a corner of `t` (then it meets every sight line from the interior).
+    /// Exact.
+    pub fn visible(&self, t: &Tri2, q: [f64; 2]) -> bool {
+        use Orientation::{Clockwise, Collinear, CounterClockwise};
+        if (0..3).any(|k| self.hidden[k] && orient(t[k], t[(k + 1) % 3], q) == Clockwise) {
+            return false;
+        }
+        !self.blockers.iter().any(|&[u, v]| {
+            let side = orient(u, v, q);
+            if side == Collinear {
+                return false;
+            }
+            let other = if side == Clockwise {
+                CounterClockwise
+            } else {
+                Clockwise
+            };
+            t.iter().all(|&c| orient(u, v, c) != side)
+                && t.iter().any(|&c| orient(u, v, c) == other)
+                && t.iter().all(|&c| {
+                    let (a, b) = (orient(q, c, u), orient(q, c, v));
+                    a == Collinear || b == Collinear || a != b
+                })
+        })
+    }
 }
 
 impl RunLines<'_> {
@@ -258,54 +292,67 @@ impl RunLines<'_> {
         })
     }
 
-    /// The constrained edges of the counter-clockwise triangle `t` (see [`visible`]).
+    /// The constrained edges of the counter-clockwise triangle `t`.
     pub fn hidden(&self, t: &Tri2) -> [bool; 3] {
         std::array::from_fn(|k| self.constrained(t[k], t[(k + 1) % 3]))
     }
 
-    /// A vertex the run did not load inside the circumdisk of `t` (within the box `b`, which
-    /// holds the part of the disk that `hidden` leaves visible) and visible from it: the key of
-    /// its block.
-    pub fn witness(
-        &self,
-        t: &Tri2,
-        hidden: [bool; 3],
-        b: &[f64; 4],
-        g: &TileGrid,
-    ) -> Option<u64> {
+    /// What blocks the sight from `t` (see [`Sight`]) to points in the box `b`: its
+    /// constrained edges `hidden` and the loaded segments meeting `b`.
+    pub fn sight(&self, hidden: [bool; 3], b: &[f64; 4]) -> Sight {
         let l = self.lines;
-        let gb = l.bounds()?;
-        if b[2] < gb[0] || b[0] > gb[2] || b[3] < gb[1] || b[1] > gb[3] {
-            return None;
+        let mut ids: Vec<u32> = Vec::new();
+        if let Some(gb) = l.bbox
+            && !(b[2] < gb[0] || b[0] > gb[2] || b[3] < gb[1] || b[1] > gb[3])
+        {
+            l.grid.box_cells([b[0], b[1]], [b[2], b[3]], |c| {
+                ids.extend(l.segs.cell(c).iter().filter(|&&s| self.seg[s as usize]));
+            });
         }
-        let mut found = None;
-        l.grid.box_cells([b[0], b[1]], [b[2], b[3]], |c| {
-            if found.is_some() {
-                return;
-            }
-            for &v in l.verts.cell(c) {
-                let q = l.xy[v as usize];
-                if !self.vert[v as usize]
-                    && incircle(t[0], t[1], t[2], q) == CircleSide::Inside
-                    && visible(t, hidden, q)
-                {
-                    found = Some(q);
-                    return;
-                }
-            }
-        });
-        found.map(|q| {
-            let (bx, by) = g.block_of(q[0], q[1]);
-            TileGrid::key(bx, by)
-        })
+        ids.sort_unstable();
+        ids.dedup();
+        let blockers = ids
+            .into_iter()
+            .map(|s| l.segments[s as usize].map(|v| l.xy[v as usize]))
+            .collect();
+        Sight { hidden, blockers }
     }
 
-    /// A segment the run did not load that crosses the interior of `t`: the key of the block of
-    /// one of its ends (reading that block loads the segment).
-    pub fn crossing(&self, t: &Tri2, g: &TileGrid) -> Option<u64> {
+    /// The vertices the run did not load inside the circumdisk of `t` (within the box `b`,
+    /// which holds the part of the disk its constrained edges leave visible) and visible from
+    /// it (`sight`), and
+    /// the segments it did not load that cross the interior of `t`: the keys of the blocks to
+    /// read (a vertex's, a segment's first end's: reading it loads the segment), at most `max`.
+    pub fn missing(
+        &self,
+        t: &Tri2,
+        sight: &Sight,
+        b: &[f64; 4],
+        g: &TileGrid,
+        max: usize,
+    ) -> Vec<u64> {
         let l = self.lines;
-        if l.xy.is_empty() {
-            return None;
+        let mut out = Vec::new();
+        let Some(gb) = l.bbox else {
+            return out;
+        };
+        let key = |q: [f64; 2]| {
+            let (bx, by) = g.block_of(q[0], q[1]);
+            TileGrid::key(bx, by)
+        };
+        if !(b[2] < gb[0] || b[0] > gb[2] || b[3] < gb[1] || b[1] > gb[3]) {
+            l.grid.box_cells([b[0], b[1]], [b[2], b[3]], |c| {
+                for &v in l.verts.cell(c) {
+                    let q = l.xy[v as usize];
+                    if out.len() < max
+                        && !self.vert[v as usize]
+                        && incircle(t[0], t[1], t[2], q) == CircleSide::Inside
+                        && sight.visible(t, q)
+                    {
+                        out.push(key(q));
+                    }
+                }
+            });
         }
         let lo = [
             t[0][0].min(t[1][0]).min(t[2][0]),
@@ -315,28 +362,21 @@ impl RunLines<'_> {
             t[0][0].max(t[1][0]).max(t[2][0]),
             t[0][1].max(t[1][1]).max(t[2][1]),
         ];
-        let gb = l.bounds()?;
         if hi[0] < gb[0] || lo[0] > gb[2] || hi[1] < gb[1] || lo[1] > gb[3] {
-            return None;
+            return out;
         }
-        let mut found = None;
         l.grid.box_cells(lo, hi, |c| {
-            if found.is_some() {
-                return;
-            }
             for &s in l.segs.cell(c) {
-                if self.seg[s as usize] {
+                if out.len() >= max || self.seg[s as usize] {
                     continue;
                 }
                 let [a, b] = l.segments[s as usize].map(|v| l.xy[v as usize]);
                 if crosses_interior(t, a, b) {
-                    let (bx, by) = g.block_of(a[0], a[1]);
-                    found = Some(TileGrid::key(bx, by));
-                    return;
+                    out.push(key(a));
                 }
             }
         });
-        found
+        out
     }
 }
 
