@@ -306,3 +306,168 @@ fn trimming_rings_in_small_tiles_equal_the_sweep() {
     let want = assert_tiles_equal_sweep(&inp, &[Some(8.0), None], "rings");
     assert!(want.len() > 1000);
 }
+
+/// The crop of the two IGN LiDAR HD tiles (sharing x = 300 000) the tests use: 800 m × 600 m
+/// around their common edge (the CI runs debug builds).
+const IGN_BOX: [f64; 4] = [299_600.0, 6_801_200.0, 300_400.0, 6_801_800.0];
+
+/// The IGN pair cropped to [`IGN_BOX`], IGN's constraint lines (2-D, spread over 50 km: cut to
+/// the data and draped), a long line with z across the crop (one segment crossing eight tiles of
+/// 100 m), and a line with z along the tile edge x = 300 000 (cut to the data too).
+fn ign_case(dir: &Path) -> (Input, Vec<String>) {
+    let l = |n: &str| data::shared(&format!("lidar/{n}"));
+    let paths = vec![
+        l("ign_test_semis_2023_0299_6802_LA93_IGN69.laz"),
+        l("ign_test_semis_2023_0300_6802_LA93_IGN69.laz"),
+    ];
+    let ign_lines = data::shared("lines/ign_NUALHD_1-0_DF_lignes_contrainte.geojson");
+    let extra = dir.join("extra.txt");
+    write_lines(
+        &extra,
+        &[
+            vec![
+                [299_020.5, 6_801_030.25, 150.0],
+                [300_975.75, 6_801_960.5, 160.0],
+            ],
+            (0..9)
+                .map(|k| [300_000.0, 6_801_050.0 + 100.0 * k as f64, 140.0 + k as f64])
+                .collect(),
+        ],
+    );
+    let lines = LineOptions {
+        breaklines: vec![ign_lines.clone(), extra.clone()],
+        clip: true,
+        ..LineOptions::default()
+    };
+    let b = IGN_BOX;
+    let mut inp = input(&paths, lines, DuplicatePolicy::First);
+    inp.filter.bbox = sweeptin::input::las::BBox::new(b[0], b[1], b[2], b[3]);
+    let args = vec![
+        "--bbox".to_string(),
+        format!("{},{},{},{}", b[0], b[1], b[2], b[3]),
+        "--breaklines".to_string(),
+        ign_lines.to_string_lossy().into_owned(),
+        "--breaklines".to_string(),
+        extra.to_string_lossy().into_owned(),
+        "--clip-breaklines".to_string(),
+    ];
+    (inp, args)
+}
+
+/// Real lidar with real breaklines: the tiled CDT (tiles of 100 m, a line across eight of them
+/// and one along a tile edge) is the sweep's, on IGN LiDAR HD with IGN's constraint lines.
+/// (AHN3 Delft with the 13 131-vertex BGT partition is compared in release by
+/// scripts/bench-cdttiles.sh: too slow for a debug test.)
+#[test]
+fn real_lidar_with_real_breaklines_equals_the_sweep() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ign, _) = ign_case(dir.path());
+    let (sweep, s) = collect(&ign, None, 1 << 30);
+    let want = sweep.keys();
+    let b = s.breaklines.as_ref().unwrap();
+    assert!(b.segments >= 10, "{b:?}");
+    for threads in [1, 2] {
+        let (c, s) = collect(&ign, Some((Some(100.0), threads)), 1 << 30);
+        assert!(c.keys() == want, "IGN, {threads} threads");
+        let t = s.tiles.unwrap();
+        assert!(t.tiles >= 40, "{t:?}");
+        assert_eq!(t.uncertified_owned, 0);
+    }
+}
+
+fn cli(args: &[String]) -> std::process::Output {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+/// The CLI on the IGN crop with breaklines and a trimming polygon (2-D, draped): the DEM of
+/// `--engine tiles` is the sweep's byte for byte, and the DEM and the PLY mesh are the same bytes
+/// for `--threads 1` and `2` and two `--mem` budgets.
+#[test]
+fn cli_dem_and_mesh_with_breaklines_do_not_depend_on_engine_threads_or_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ign, lines) = ign_case(dir.path());
+    let d = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
+    // An ellipse over the crop (48 vertices), without z.
+    let boundary = dir.path().join("boundary.txt");
+    let ring: Vec<String> = (0..=48)
+        .map(|k| {
+            let t = std::f64::consts::TAU * (k % 48) as f64 / 48.0 + 0.3;
+            format!(
+                "{:.2} {:.2}",
+                300_000.0 + 380.0 * t.cos(),
+                6_801_500.0 + 280.0 * t.sin()
+            )
+        })
+        .collect();
+    std::fs::write(&boundary, ring.join("\n") + "\n").unwrap();
+    let mut base: Vec<String> = ign
+        .paths
+        .iter()
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    base.extend(lines);
+    base.extend([
+        "--trim-boundary".into(),
+        boundary.to_string_lossy().into_owned(),
+    ]);
+    base.push("-q".into());
+    let run = |cmd: &str, out: &str, extra: &[&str]| -> Vec<u8> {
+        let mut a = vec![cmd.to_string()];
+        a.extend(base.iter().cloned());
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a.extend(["-o".to_string(), d(out)]);
+        let o = cli(&a);
+        assert!(
+            !String::from_utf8_lossy(&o.stderr).contains("one exact streaming sweep"),
+            "{a:?} fell back to the sweep"
+        );
+        std::fs::read(d(out)).unwrap()
+    };
+    let sweep = run("dem", "s.tif", &["--cell", "1", "--engine", "sweep"]);
+    let tiled = [
+        run(
+            "dem",
+            "t1.tif",
+            &["--cell", "1", "--engine", "tiles", "--threads", "1"],
+        ),
+        run(
+            "dem",
+            "t2.tif",
+            &[
+                "--cell",
+                "1",
+                "--threads",
+                "2",
+                "--mem",
+                "64M",
+                "--tile",
+                "100",
+            ],
+        ),
+    ];
+    for t in &tiled {
+        assert!(*t == sweep, "the tiled DEM differs from the sweep's");
+    }
+    let meshes = [
+        run(
+            "tin",
+            "m1.ply",
+            &["--engine", "tiles", "--threads", "1", "--tile", "100"],
+        ),
+        run(
+            "tin",
+            "m2.ply",
+            &["--threads", "2", "--mem", "64M", "--tile", "100"],
+        ),
+    ];
+    assert!(meshes[0] == meshes[1], "meshes differ");
+}

@@ -75,6 +75,10 @@ pub(crate) struct Certifier<'a> {
     pub witnesses: usize,
     /// The breaklines the run loaded, if any (see [`super::lines`]).
     pub lines: Option<&'a RunLines<'a>>,
+    /// With breaklines: the run's triangulation and adjacency, and the triangle being judged
+    /// (for [`Sight::region`]).
+    pub mesh: Option<(&'a crate::Triangulation, &'a [u32])>,
+    pub tri: std::cell::Cell<u32>,
 }
 
 /// Squared distance from `p` to the box `e` (`[xmin, ymin, xmax, ymax]`).
@@ -104,6 +108,29 @@ fn sagitta_bound(a: [f64; 2], b: [f64; 2], c: [f64; 2], l: f64) -> f64 {
         f64::INFINITY
     };
     h.min(l / 2.0) + l * 1e-9
+}
+
+/// Squared distance from `c` to the segment `x`-`y` (floating point).
+fn seg_dist2(c: [f64; 2], x: [f64; 2], y: [f64; 2]) -> f64 {
+    let d = [y[0] - x[0], y[1] - x[1]];
+    let l2 = d[0] * d[0] + d[1] * d[1];
+    let s = if l2 > 0.0 {
+        (((c[0] - x[0]) * d[0] + (c[1] - x[1]) * d[1]) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let p = [x[0] + s * d[0], x[1] + s * d[1]];
+    (c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)
+}
+
+/// The bounding box of a triangle.
+fn tri_box(t: &[[f64; 2]; 3]) -> [f64; 4] {
+    [
+        t[0][0].min(t[1][0]).min(t[2][0]),
+        t[0][1].min(t[1][1]).min(t[2][1]),
+        t[0][0].max(t[1][0]).max(t[2][0]),
+        t[0][1].max(t[1][1]).max(t[2][1]),
+    ]
 }
 
 /// Do two closed boxes meet?
@@ -176,6 +203,8 @@ impl<'a> Certifier<'a> {
             tested: std::cell::Cell::new((0, 0)),
             witnesses: 4,
             lines: None,
+            mesh: None,
+            tri: std::cell::Cell::new(0),
         }
     }
 
@@ -237,10 +266,20 @@ impl<'a> Certifier<'a> {
         let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
         let cap = cap_box(t, hidden, g);
         let disk = [cx - r, cy - r, cx + r, cy + r];
-        let b = cap.unwrap_or(disk);
-        let sight = self
-            .lines
-            .map_or_else(Sight::default, |l| l.sight(hidden, &b));
+        let b0 = cap.unwrap_or(disk);
+        let (c, r2) = ([cx, cy], r * r * (1.0 + 1e-9));
+        let sight = self.sight(hidden, |x, y| {
+            boxes_meet(&tri_box(&[x, y, y]), &b0) && seg_dist2(c, x, y) <= r2
+        });
+        let b = match sight.region_box() {
+            Some(rb) => [
+                rb[0].max(b0[0]),
+                rb[1].max(b0[1]),
+                rb[2].min(b0[2]),
+                rb[3].min(b0[3]),
+            ],
+            None => b0,
+        };
         if let Some(l) = self.lines
             && !self.lines_clear(l, t, &sight, &b, out)
         {
@@ -274,7 +313,7 @@ impl<'a> Certifier<'a> {
             self.unread_in_row(by, bx0, bx1, &mut |k| {
                 if let Some(e) = self.index.extent(k)
                     && box_dist2(&e, [cx, cy]) <= r * r * (1.0 + 1e-9)
-                    && (cap.is_none() || boxes_meet(&e, &b))
+                    && boxes_meet(&e, &b)
                 {
                     near.push((box_dist2(&e, m), k));
                 }
@@ -282,6 +321,65 @@ impl<'a> Certifier<'a> {
             })?;
         }
         Ok(self.witnesses_among(near, t, &sight, out)? == 0)
+    }
+
+    /// What blocks the sight from `t` (no breaklines: nothing): the region of the run's
+    /// triangles reachable across unconstrained edges that `meets` ([`Sight::region`]), or
+    /// (a region too large) only its constrained edges.
+    fn sight(&self, hidden: [bool; 3], meets: impl Fn([f64; 2], [f64; 2]) -> bool) -> Sight {
+        let Some(l) = self.lines else {
+            return Sight::default();
+        };
+        let region = self
+            .mesh
+            .and_then(|(tri, twins)| Sight::region(l, tri, twins, self.tri.get(), meets));
+        match region {
+            Some(r) => Sight::within(hidden, r),
+            None => Sight::near(hidden, l.blockers(&self.tri_xy())),
+        }
+    }
+
+    /// The triangle being judged (see [`Certifier::tri`]).
+    fn tri_xy(&self) -> [[f64; 2]; 3] {
+        let Some((t, _)) = self.mesh else {
+            return [[0.0; 2]; 3];
+        };
+        let v = &t.vertices;
+        t.triangles[self.tri.get() as usize].map(|i| [v[i as usize][0], v[i as usize][1]])
+    }
+
+    /// The certificate within a sight's region: no point of a block not read, inside the
+    /// region's box `b`, lies in the circumdisk of `t` and in the region.
+    fn region_clear(
+        &self,
+        t: &[[f64; 2]; 3],
+        sight: &Sight,
+        b: &[f64; 4],
+        out: &mut Missing,
+    ) -> Result<bool> {
+        let g = &self.index.grid;
+        let occ = self.index.occupied();
+        let bs = g.block;
+        let by0 = ((b[1] / bs).floor() as i64).max(occ.y0);
+        let by1 = ((b[3] / bs).floor() as i64).min(occ.y1 - 1);
+        let m = [
+            (t[0][0] + t[1][0] + t[2][0]) / 3.0,
+            (t[0][1] + t[1][1] + t[2][1]) / 3.0,
+        ];
+        let mut near: Vec<(f64, u64)> = Vec::new();
+        for by in by0..=by1 {
+            let bx0 = (b[0] / bs).floor() as i64;
+            let bx1 = (b[2] / bs).floor() as i64;
+            self.unread_in_row(by, bx0, bx1, &mut |k| {
+                if let Some(e) = self.index.extent(k)
+                    && boxes_meet(&e, b)
+                {
+                    near.push((box_dist2(&e, m), k));
+                }
+                Ok(())
+            })?;
+        }
+        Ok(self.witnesses_among(near, t, sight, out)? == 0)
     }
 
     /// The breakline half of a certificate: no vertex the run did not load lies in the part of
@@ -387,10 +485,21 @@ impl<'a> Certifier<'a> {
                 f64::INFINITY,
                 f64::INFINITY,
             ];
-            let b = if hidden[i] { near_box } else { all };
-            sight = l.sight(hidden, &b);
+            let b0 = if hidden[i] { near_box } else { all };
+            // The disk lies in the chord box and the open half-plane right of `a → b`.
+            sight = self.sight(hidden, |x, y| {
+                boxes_meet(&tri_box(&[x, y, y]), &near_box)
+                    || (!hidden[i]
+                        && [x, y]
+                            .iter()
+                            .any(|&p| orient(a, b, p) == Orientation::Clockwise))
+            });
+            let b = sight.region_box().unwrap_or(b0);
             if !self.lines_clear(l, t, &sight, &b, out) {
                 return Ok(Some(false));
+            }
+            if let Some(rb) = sight.region_box() {
+                return self.region_clear(t, &sight, &rb, out).map(Some);
             }
         }
         let beyond = |e: &[f64; 4]| {

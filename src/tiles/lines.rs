@@ -214,48 +214,210 @@ pub(crate) struct RunLines<'a> {
 }
 
 /// What blocks the sight from the interior of a counter-clockwise triangle `t` of a run: its
-/// constrained edges (`hidden[k]` for the edge from `t[k]` to `t[k + 1]`) and the loaded
-/// segments near it. Only points visible from `t` can withhold its certificate; every blocking
-/// segment here is a segment of the whole input too, so what it hides in the run it hides there.
+/// constrained edges (`hidden[k]` for the edge from `t[k]` to `t[k + 1]`) and the run's other
+/// constrained edges, through the region of the run's triangles that sight lines inside the
+/// circumdisk can reach. Only points visible from `t` can withhold its certificate; a
+/// constrained edge of the run is a piece of an input segment, so what it hides in the run it
+/// hides in the whole triangulation.
 #[derive(Debug, Default)]
 pub(crate) struct Sight {
     pub hidden: [bool; 3],
+    /// Loaded segments near the triangle, tested when there is no region.
     blockers: Vec<[[f64; 2]; 2]>,
+    /// The triangles of the run reachable from `t` across unconstrained edges within the
+    /// circumdisk (see [`Sight::within`]); their bounding box.
+    region: Option<Region>,
 }
 
+/// The triangles of a [`Sight::region`], bucketed by bounding box.
+#[derive(Debug)]
+struct Region {
+    tris: Vec<Tri2>,
+    bbox: [f64; 4],
+    grid: Grid,
+    buckets: Buckets,
+}
+
+/// Triangles a [`Sight::within`] region holds at most (beyond, only the constrained edges of
+/// the triangle hide: the wide disks of slivers along the hull, whose part inside the data is
+/// thin, are tested point by point).
+pub(crate) const REGION_MAX: usize = 4096;
+
 impl Sight {
-    /// Is `q` visible from the interior of `t`? `false` only when provably hidden: strictly
-    /// beyond a constrained edge's line (inside the circumdisk that is the cap the edge cuts
-    /// off, where every path from the triangle crosses the edge), or behind a loaded segment
-    /// `u-v` that has `t` on one closed side and `q` strictly on the other, and meets every
-    /// segment from `q` to a corner of `t` (then it meets every sight line from the interior).
-    /// Exact.
+    /// A sight hidden by the triangle's own constrained edges and the loaded segments near
+    /// it (see [`RunLines::blockers`]).
+    pub fn near(hidden: [bool; 3], blockers: Vec<[[f64; 2]; 2]>) -> Sight {
+        Sight {
+            hidden,
+            blockers,
+            region: None,
+        }
+    }
+    /// The sight from triangle `k` of the run `tri` (with `twins`, its adjacency): the run's
+    /// triangles reachable from it across edges that are not constrained and that `meets` (a
+    /// closed region holding the circumdisk). A point visible from `t` inside the disk lies in
+    /// one of them: its sight line stays in the disk (convex), crosses no constrained edge (a
+    /// segment of the input), and passes no vertex of the run (that vertex would lie in the
+    /// disk, visible, against `t` being constrained Delaunay in the run), so it goes from
+    /// triangle to triangle across unconstrained edges, each crossed inside the disk. `None`
+    /// beyond [`REGION_MAX`] triangles.
+    pub fn region(
+        lines: &RunLines,
+        tri: &crate::Triangulation,
+        twins: &[u32],
+        k: u32,
+        meets: impl Fn([f64; 2], [f64; 2]) -> bool,
+    ) -> Option<(Vec<Tri2>, [f64; 4])> {
+        let v = &tri.vertices;
+        let at = |u: u32| tri.triangles[u as usize].map(|i| [v[i as usize][0], v[i as usize][1]]);
+        let mut seen: crate::idmap::FastSet<u32> = crate::idmap::FastSet::default();
+        seen.insert(k);
+        let mut stack = vec![k];
+        let mut out = Vec::new();
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        while let Some(u) = stack.pop() {
+            let tu = at(u);
+            for p in &tu {
+                b = [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])];
+            }
+            out.push(tu);
+            if out.len() > REGION_MAX {
+                return None;
+            }
+            for e in 0..3 {
+                let tw = twins[3 * u as usize + e];
+                let (x, y) = (tu[e], tu[(e + 1) % 3]);
+                if tw == u32::MAX || !meets(x, y) || lines.constrained(x, y) {
+                    continue;
+                }
+                let n = tw / 3;
+                if seen.insert(n) {
+                    stack.push(n);
+                }
+            }
+        }
+        Some((out, b))
+    }
+
+    /// A sight bounded by a [`Sight::region`].
+    pub fn within(hidden: [bool; 3], (tris, bbox): (Vec<Tri2>, [f64; 4])) -> Sight {
+        let grid = Grid::new([bbox[0], bbox[1]], [bbox[2], bbox[3]], tris.len());
+        let mut pairs = Vec::new();
+        for (i, t) in tris.iter().enumerate() {
+            let lo = [
+                t[0][0].min(t[1][0]).min(t[2][0]),
+                t[0][1].min(t[1][1]).min(t[2][1]),
+            ];
+            let hi = [
+                t[0][0].max(t[1][0]).max(t[2][0]),
+                t[0][1].max(t[1][1]).max(t[2][1]),
+            ];
+            grid.box_cells(lo, hi, |c| pairs.push((u64::from(c) << 32) | i as u64));
+        }
+        let buckets = Buckets::from_pairs(grid.len(), pairs);
+        Sight {
+            hidden,
+            blockers: Vec::new(),
+            region: Some(Region {
+                tris,
+                bbox,
+                grid,
+                buckets,
+            }),
+        }
+    }
+
+    /// The bounding box of the region, if there is one.
+    pub fn region_box(&self) -> Option<[f64; 4]> {
+        self.region.as_ref().map(|r| r.bbox)
+    }
+
+    /// Is `q` (a point inside the circumdisk) visible from the interior of `t`? `false` only
+    /// when provably hidden: strictly beyond a constrained edge's line (in the cap the edge
+    /// cuts off, where every path from the triangle crosses the edge), outside the region, or
+    /// behind a blocker. Exact.
     pub fn visible(&self, t: &Tri2, q: [f64; 2]) -> bool {
-        use Orientation::{Clockwise, Collinear, CounterClockwise};
+        use Orientation::Clockwise;
         if (0..3).any(|k| self.hidden[k] && orient(t[k], t[(k + 1) % 3], q) == Clockwise) {
             return false;
         }
-        !self.blockers.iter().any(|&[u, v]| {
-            let side = orient(u, v, q);
-            if side == Collinear {
-                return false;
-            }
-            let other = if side == Clockwise {
-                CounterClockwise
-            } else {
-                Clockwise
-            };
-            t.iter().all(|&c| orient(u, v, c) != side)
-                && t.iter().any(|&c| orient(u, v, c) == other)
-                && t.iter().all(|&c| {
-                    let (a, b) = (orient(q, c, u), orient(q, c, v));
-                    a == Collinear || b == Collinear || a != b
-                })
-        })
+        if let Some(r) = &self.region {
+            let b = r.bbox;
+            // Cells are half-open and clamped: a point of a closed triangle is in a cell the
+            // triangle's box registered.
+            return q[0] >= b[0]
+                && q[0] <= b[2]
+                && q[1] >= b[1]
+                && q[1] <= b[3]
+                && r.buckets.cell(r.grid.cell_of(q)).iter().any(|&i| {
+                    let u = &r.tris[i as usize];
+                    (0..3).all(|k| orient(u[k], u[(k + 1) % 3], q) != Clockwise)
+                });
+        }
+        !self.blockers.iter().any(|&[u, v]| blocks(u, v, t, q))
     }
 }
 
+/// Does the segment `u-v` hide `q` from the interior of `t`? When `t` lies on one closed side
+/// of its line, `q` strictly on the other, and it meets the segment from `q` to every corner of
+/// `t`, every sight line from the interior crosses it inside. Exact.
+fn blocks(u: [f64; 2], v: [f64; 2], t: &Tri2, q: [f64; 2]) -> bool {
+    use Orientation::{Clockwise, Collinear, CounterClockwise};
+    let side = orient(u, v, q);
+    if side == Collinear {
+        return false;
+    }
+    let other = if side == Clockwise {
+        CounterClockwise
+    } else {
+        Clockwise
+    };
+    t.iter().all(|&c| orient(u, v, c) != side)
+        && t.iter().any(|&c| orient(u, v, c) == other)
+        && t.iter().all(|&c| {
+            let (a, b) = (orient(q, c, u), orient(q, c, v));
+            a == Collinear || b == Collinear || a != b
+        })
+}
+
 impl RunLines<'_> {
+    /// The loaded segments that meet the box of `t` grown by its size on every side (the
+    /// segments most likely to hide parts of a wide disk from it), at most 64.
+    pub fn blockers(&self, t: &Tri2) -> Vec<[[f64; 2]; 2]> {
+        let l = self.lines;
+        let Some(gb) = l.bbox else {
+            return Vec::new();
+        };
+        let lo = [
+            t[0][0].min(t[1][0]).min(t[2][0]),
+            t[0][1].min(t[1][1]).min(t[2][1]),
+        ];
+        let hi = [
+            t[0][0].max(t[1][0]).max(t[2][0]),
+            t[0][1].max(t[1][1]).max(t[2][1]),
+        ];
+        let d = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let (lo, hi) = ([lo[0] - d, lo[1] - d], [hi[0] + d, hi[1] + d]);
+        if hi[0] < gb[0] || lo[0] > gb[2] || hi[1] < gb[1] || lo[1] > gb[3] {
+            return Vec::new();
+        }
+        let mut ids: Vec<u32> = Vec::new();
+        l.grid.box_cells(lo, hi, |c| {
+            ids.extend(l.segs.cell(c).iter().filter(|&&s| self.seg[s as usize]));
+        });
+        ids.sort_unstable();
+        ids.dedup();
+        ids.truncate(64);
+        ids.into_iter()
+            .map(|s| l.segments[s as usize].map(|v| l.xy[v as usize]))
+            .collect()
+    }
+
     /// Appends the loaded vertices to `pts` and returns the loaded segments as indices into it.
     pub fn append(&self, pts: &mut Vec<[f64; 3]>) -> Vec<[u32; 2]> {
         let base = pts.len() as u32;
@@ -295,27 +457,6 @@ impl RunLines<'_> {
     /// The constrained edges of the counter-clockwise triangle `t`.
     pub fn hidden(&self, t: &Tri2) -> [bool; 3] {
         std::array::from_fn(|k| self.constrained(t[k], t[(k + 1) % 3]))
-    }
-
-    /// What blocks the sight from `t` (see [`Sight`]) to points in the box `b`: its
-    /// constrained edges `hidden` and the loaded segments meeting `b`.
-    pub fn sight(&self, hidden: [bool; 3], b: &[f64; 4]) -> Sight {
-        let l = self.lines;
-        let mut ids: Vec<u32> = Vec::new();
-        if let Some(gb) = l.bbox
-            && !(b[2] < gb[0] || b[0] > gb[2] || b[3] < gb[1] || b[1] > gb[3])
-        {
-            l.grid.box_cells([b[0], b[1]], [b[2], b[3]], |c| {
-                ids.extend(l.segs.cell(c).iter().filter(|&&s| self.seg[s as usize]));
-            });
-        }
-        ids.sort_unstable();
-        ids.dedup();
-        let blockers = ids
-            .into_iter()
-            .map(|s| l.segments[s as usize].map(|v| l.xy[v as usize]))
-            .collect();
-        Sight { hidden, blockers }
     }
 
     /// The vertices the run did not load inside the circumdisk of `t` (within the box `b`,

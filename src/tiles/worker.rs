@@ -27,7 +27,7 @@ use super::lines::TileLines;
 use super::region::{Region, Tri2, Tris, judge, tri_meets_rect};
 use crate::error::{Error, Result};
 use crate::sort::DuplicatePolicy;
-use crate::triangulation::{Options, triangulate, triangulate_cdt};
+use crate::triangulation::{Options, triangulate, triangulate_with_twins};
 
 /// Degree of a vertex this tile does not own (unknown here).
 pub(crate) const NOT_OWNED: u32 = u32::MAX;
@@ -138,14 +138,14 @@ pub(crate) fn run_tile(
         let mut cpu = 0.0;
         let t = crate::clock::timed(&mut cpu, || {
             let options = Options { duplicates: policy };
-            if segments.is_empty() {
-                triangulate(&pts, &options)
+            if run_lines.is_none() {
+                triangulate(&pts, &options).map(|t| (t, Vec::new()))
             } else {
-                triangulate_cdt(&pts, &segments, &options)
+                triangulate_with_twins(&pts, &segments, &options)
             }
         });
         out.cpu.triangulate += cpu;
-        let t = match t {
+        let (t, twins) = match t {
             Ok(t) => t,
             Err(Error::TooFewPoints { .. } | Error::AllCollinear { .. }) if !full => {
                 if loaded.rect.contains_rect(&occ) {
@@ -174,7 +174,7 @@ pub(crate) fn run_tile(
                 &loaded,
                 full,
                 out.runs,
-                run_lines.as_ref(),
+                run_lines.as_ref().map(|l| (l, &twins[..])),
             )
         })?;
         out.cpu.certify += cpu;
