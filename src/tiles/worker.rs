@@ -18,6 +18,31 @@
 //! meet `R`: every owned triangle is there, and every owned vertex has its whole star (its degree).
 //! Parts of `R` outside them are outside the whole hull. When the blocks read are every non-empty
 //! block, every certificate holds, so this ends.
+//!
+//! **Breaklines (constrained Delaunay).** Let `B` be the blocks a run reads. The run triangulates
+//! its points plus every (cleaned, z-settled) segment that meets `B`, whole, with both ends
+//! wherever they lie (ends are points of the whole input; the tie rule is stated in positions,
+//! so it is the global one), and the corners of the hull of all points *and* line vertices
+//! ([`super::lines`]). A triangle `t` of the run's CDT is a triangle of the whole CDT when
+//! (a) no point or line vertex the run did not load lies in its circumdisk where it is visible
+//! from `t` (the certificate above, with segment ends as data too), and (b) no segment the run
+//! did not load crosses `t` (checked exactly with [`crate::geom::predicates`] on the graph's
+//! segment grid). Proof: by (b) every segment of the input that crosses `t` is loaded, and `t`
+//! is a CDT triangle of the run, so none does. A vertex of the input inside the disk and visible
+//! from `t`'s interior in the whole input is loaded by (a), and visible in the run too (the run's
+//! segments are a subset of the input's), against `t` being constrained Delaunay in the run. So
+//! `t` is constrained Delaunay for the whole input, and the whole CDT (unique under the tie rule)
+//! holds it. "Visible" in (a) is decided conservatively: a point is hidden only when it lies
+//! strictly beyond a constrained edge of `t` (in the cap that edge cuts off the disk), outside
+//! the region of run triangles reachable from `t` across unconstrained edges that meet the disk
+//! (a sight line inside the disk crosses no vertex of the run, else that vertex would be visible
+//! in the disk, so it walks through that region), or behind one loaded segment that meets every
+//! segment from the point to a corner of `t` ([`super::lines::Sight`]). A point exactly on a
+//! loaded segment lies on the chord of the triangles beside it, so it is never hidden: a run
+//! that did not load it cannot certify them. A line vertex at a point's position is one vertex
+//! whose `z` follows `--duplicates` (the line read last) in every run. The rest of the argument
+//! (patches, coverage, ownership) is the unconstrained one. `--no-flat-triangles` stays on the
+//! sweep: its flips look across triangles that other tiles own, which no certificate covers.
 
 use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
