@@ -48,11 +48,13 @@ pub struct InputArgs {
     #[arg(long, value_enum, value_name = "AXIS", default_value_t = SweepAxis::Auto)]
     pub sweep_axis: SweepAxis,
     /// How to triangulate. `auto` (the default) runs exact tiles on every core (--threads)
-    /// when the input allows it (LAS/LAZ points without breaklines, trimming polygons or
-    /// --no-flat-triangles), and one streaming sweep otherwise. `tiles` cuts the data into
+    /// for LAS/LAZ points without breaklines or trimming polygons, and one streaming sweep
+    /// otherwise (`--engine tiles` runs lines in tiles too; not --no-flat-triangles). `tiles` cuts the data into
     /// tiles, each run with a buffer and certified triangle by triangle to equal the
-    /// triangulation of all the points (a tile whose buffer is not enough reads more); its
-    /// memory is bounded by --mem. `sweep` runs one streaming sweep on one core, whose memory
+    /// triangulation of all the points (a tile whose buffer is not enough reads more; a
+    /// breakline that meets a tile's run goes into it whole); its memory is bounded by --mem.
+    /// Dense breakline networks (a planar partition of polygons) make tiles read far beyond
+    /// their buffers, and the sweep can be faster there. `sweep` runs one streaming sweep on one core, whose memory
     /// follows the advancing front. All give the same triangles (and the same DEM, contours and
     /// volumes, byte for byte); a mesh lists them in another order.
     #[arg(long, value_enum, value_name = "ENGINE", default_value_t = Engine::Auto)]
@@ -141,12 +143,22 @@ impl InputArgs {
 
     /// The run's configuration, checked.
     pub fn config(&self, input: Input) -> anyhow::Result<RunConfig> {
-        let config = RunConfig::new(input, self.options())?;
+        let mut options = self.options();
+        let l = &input.lines;
+        let lines = !l.breaklines.is_empty() || l.boundary.is_some() || l.holes.is_some();
+        if self.engine == Engine::Auto && self.task.is_none() && lines {
+            // Exact in tiles too, but dense line networks make tiles read far beyond their
+            // buffers (docs/BENCHMARKS.md: 6× the sweep's time on Delft's BGT): `auto` keeps
+            // the sweep for lines; `--engine tiles` asks for tiles.
+            options.tiles = None;
+        }
+        let config = RunConfig::new(input, options)?;
         if self.engine == Engine::Tiles && !config.runs_in_tiles() && !self.quiet {
             eprintln!(
                 "sweeptin: note: --engine tiles: this input runs in one exact streaming sweep \
-                 instead (the tiles are proved for LAS/LAZ points without breaklines, trimming \
-                 polygons or --no-flat-triangles, swept along y)"
+                 instead (the tiles are proved for LAS/LAZ points, with breaklines and trimming \
+                 polygons but without --no-flat-triangles, swept along y; a plan's task takes no \
+                 lines)"
             );
         }
         Ok(config)
@@ -224,7 +236,8 @@ pub struct LineArgs {
     /// GeoPackage or OGR-SQLite layer (`FILE.gpkg:LAYER` when it has several), a Shapefile, or
     /// text (`x y [z]` per line, a blank line between polylines), in the points' CRS and units. They
     /// become triangle edges; crossings are split, overlaps merged. Lines without z take their
-    /// heights from the points' TIN (an extra pass over the points).
+    /// heights from the points' TIN (an extra pass over the points). They run in exact tiles
+    /// too (each tile's run takes every line that meets it whole; not in a plan's tasks).
     #[arg(long = "breaklines", value_name = "FILE")]
     pub breaklines: Vec<PathBuf>,
     /// Keep only the triangles inside these polygons (survey limit); the rings become breaklines.

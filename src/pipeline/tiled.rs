@@ -8,15 +8,21 @@ use crate::sink::{MeshSink, TriangleSink};
 use crate::tiles::TileOptions;
 use std::time::Instant;
 
-/// Can `input` run in tiles? (LAS/LAZ points; no breaklines, trimming polygons or flat-triangle
-/// pass, which need the sweep; `--max-edge` is fine.)
+/// Can `input` run in tiles? LAS/LAZ points, with breaklines, trimming polygons and
+/// `--max-edge` (see [`crate::tiles::worker`] for why constrained tiles are exact); not the
+/// flat-triangle pass (its flips need neighbours across the whole triangulation), and not a
+/// plan's task with lines (a task does not know the lines of other tasks' areas).
 pub(crate) fn applies(config: &RunConfig) -> bool {
     let l = &config.input().lines;
+    let lines = !l.breaklines.is_empty() || l.boundary.is_some() || l.holes.is_some();
+    let task = config
+        .options()
+        .tiles
+        .as_ref()
+        .is_some_and(|t| t.scope.is_some());
     config.source() == Source::Lidar
-        && l.breaklines.is_empty()
-        && l.boundary.is_none()
-        && l.holes.is_none()
         && !l.no_flat_triangles
+        && !(lines && task)
         && config.options().sweep_axis != SweepAxis::X
 }
 
@@ -41,14 +47,28 @@ pub(crate) fn run(
         pb.set_position(n);
     };
     let input = config.input();
+    let l = &input.lines;
+    // Breaklines and rings: read, cleaned and draped (lines without z: a points-only tiled run
+    // first), as for the sweep.
+    let prepared = if l.breaklines.is_empty() && l.boundary.is_none() && l.holes.is_none() {
+        None
+    } else {
+        let points_only = config.points_only();
+        Some(super::lines::prepare(l, &mut |sink| {
+            run(&points_only, tiles, None, &mut [sink]).map(|_| ())
+        })?)
+    };
     let job = crate::tiles::TileJob {
         paths: &input.paths,
         filter: &input.filter,
         duplicates: input.duplicates,
         max_edge: input.lines.max_edge,
+        lines: prepared.as_ref().and_then(|p| p.pslg.as_ref()),
+        trim: prepared.as_ref().map(|p| &p.trim),
         mem: options.mem,
         tmp: config.tmp_dir(),
     };
+    let line_vertices = job.lines.map_or(0, |g| g.vertices.len() as u64);
     let r = crate::tiles::run(&job, tiles, &mut progress, mesh, sinks)?;
     pb.finish_and_clear();
     anon.sample();
@@ -61,7 +81,8 @@ pub(crate) fn run(
     Ok(RunSummary {
         points_read: r.points_read,
         points_kept: r.points_kept,
-        duplicates: r.points_read - r.points_kept,
+        // Kept vertices include the breaklines' (a line vertex at a point is one vertex).
+        duplicates: (r.points_read + line_vertices).saturating_sub(r.points_kept),
         triangles: r.triangles,
         vertices: r.vertices,
         seconds: Timings {
@@ -76,10 +97,16 @@ pub(crate) fn run(
         crs: r.crs.as_ref().and_then(|c| c.definition()),
         sweep_axis: SweepAxis::Y,
         tiles: Some(r.tiles),
-        breaklines: config.input().lines.max_edge.map(|_| super::LineSummary {
-            trimmed_triangles: r.trimmed,
-            ..super::LineSummary::default()
-        }),
+        breaklines: match prepared {
+            Some(p) => Some(super::LineSummary {
+                trimmed_triangles: r.trimmed,
+                ..p.summary
+            }),
+            None => config.input().lines.max_edge.map(|_| super::LineSummary {
+                trimmed_triangles: r.trimmed,
+                ..super::LineSummary::default()
+            }),
+        },
         ..RunSummary::default()
     })
 }

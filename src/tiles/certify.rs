@@ -24,6 +24,7 @@
 
 use super::grid::BlockRect;
 use super::index::BlockIndex;
+use super::lines::{RunLines, Sight};
 use crate::error::Result;
 use crate::geom::predicates::{CircleSide, DiskBounds, Orientation, incircle, orient};
 use crate::idmap::FastMap;
@@ -72,22 +73,12 @@ pub(crate) struct Certifier<'a> {
     /// to make progress, and the judge doubles it with every run of a tile (a disk that a sparse
     /// patch run left huge may hold points of thousands of blocks).
     pub witnesses: usize,
-}
-
-/// A squared distance, ordered by `total_cmp` (the order of the full sort it replaces).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Dist(f64);
-
-impl Eq for Dist {}
-impl PartialOrd for Dist {
-    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Dist {
-    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&o.0)
-    }
+    /// The breaklines the run loaded, if any (see [`super::lines`]).
+    pub lines: Option<&'a RunLines<'a>>,
+    /// With breaklines: the run's triangulation and adjacency, and the triangle being judged
+    /// (for [`Sight::region`]).
+    pub mesh: Option<(&'a crate::Triangulation, &'a [u32])>,
+    pub tri: std::cell::Cell<u32>,
 }
 
 /// Squared distance from `p` to the box `e` (`[xmin, ymin, xmax, ymax]`).
@@ -119,10 +110,79 @@ fn sagitta_bound(a: [f64; 2], b: [f64; 2], c: [f64; 2], l: f64) -> f64 {
     h.min(l / 2.0) + l * 1e-9
 }
 
+/// Squared distance from `c` to the segment `x`-`y` (floating point).
+fn seg_dist2(c: [f64; 2], x: [f64; 2], y: [f64; 2]) -> f64 {
+    let d = [y[0] - x[0], y[1] - x[1]];
+    let l2 = d[0] * d[0] + d[1] * d[1];
+    let s = if l2 > 0.0 {
+        (((c[0] - x[0]) * d[0] + (c[1] - x[1]) * d[1]) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let p = [x[0] + s * d[0], x[1] + s * d[1]];
+    (c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)
+}
+
+/// The bounding box of a triangle.
+fn tri_box(t: &[[f64; 2]; 3]) -> [f64; 4] {
+    [
+        t[0][0].min(t[1][0]).min(t[2][0]),
+        t[0][1].min(t[1][1]).min(t[2][1]),
+        t[0][0].max(t[1][0]).max(t[2][0]),
+        t[0][1].max(t[1][1]).max(t[2][1]),
+    ]
+}
+
 /// Do two closed boxes meet?
 #[inline]
 fn boxes_meet(a: &[f64; 4], b: &[f64; 4]) -> bool {
     a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3]
+}
+
+/// The box of the part of the circumdisk of the counter-clockwise triangle `t` that its
+/// constrained edges (`hidden`) leave visible, when one of them has an obtuse angle opposite
+/// (the centre lies beyond it, so the visible part is within the cap on the triangle's side:
+/// the chord box of [`Certifier::flat_clear`]); the intersection of such boxes. `None`: the
+/// whole disk.
+fn cap_box(t: &[[f64; 2]; 3], hidden: [bool; 3], g: &super::grid::TileGrid) -> Option<[f64; 4]> {
+    let mut out: Option<[f64; 4]> = None;
+    for k in (0..3).filter(|&k| hidden[k]) {
+        let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+        let (ca, cb) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
+        let dot = ca[0] * cb[0] + ca[1] * cb[1];
+        let lens = (ca[0].hypot(ca[1])) * (cb[0].hypot(cb[1]));
+        if dot.is_nan() || dot >= -1e-6 * lens {
+            continue;
+        }
+        let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let mag = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
+        let slack = g.margin(mag + l) + l * 1e-9;
+        let h = sagitta_bound(a, b, c, l);
+        let n = [-(b[1] - a[1]) / l, (b[0] - a[0]) / l];
+        let (ah, bh) = (
+            [a[0] + n[0] * h, a[1] + n[1] * h],
+            [b[0] + n[0] * h, b[1] + n[1] * h],
+        );
+        let bx = [
+            a[0].min(b[0]).min(ah[0]).min(bh[0]) - slack,
+            a[1].min(b[1]).min(ah[1]).min(bh[1]) - slack,
+            a[0].max(b[0]).max(ah[0]).max(bh[0]) + slack,
+            a[1].max(b[1]).max(ah[1]).max(bh[1]) + slack,
+        ];
+        if !bx.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        out = Some(match out {
+            None => bx,
+            Some(o) => [
+                o[0].max(bx[0]),
+                o[1].max(bx[1]),
+                o[2].min(bx[2]),
+                o[3].min(bx[3]),
+            ],
+        });
+    }
+    out
 }
 
 /// Where [`Certifier`] puts the blocks that withheld a certificate.
@@ -142,6 +202,9 @@ impl<'a> Certifier<'a> {
             cache: RefCell::new(Cache::default()),
             tested: std::cell::Cell::new((0, 0)),
             witnesses: 4,
+            lines: None,
+            mesh: None,
+            tri: std::cell::Cell::new(0),
         }
     }
 
@@ -197,14 +260,43 @@ impl<'a> Certifier<'a> {
             self.unknown.set(self.unknown.get().max(reach));
             return Ok(false);
         }
+        // With breaklines: what the triangle's constrained edges hide, and the box of the part
+        // of the disk they leave visible (the cap on the triangle's side of a chord whose centre
+        // lies beyond it).
+        let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
+        let cap = cap_box(t, hidden, g);
+        let disk = [cx - r, cy - r, cx + r, cy + r];
+        let b0 = cap.unwrap_or(disk);
+        let (c, r2) = ([cx, cy], r * r * (1.0 + 1e-9));
+        let sight = self.sight(hidden, |x, y| {
+            boxes_meet(&tri_box(&[x, y, y]), &b0) && seg_dist2(c, x, y) <= r2
+        });
+        let b = match sight.region_box() {
+            Some(rb) => [
+                rb[0].max(b0[0]),
+                rb[1].max(b0[1]),
+                rb[2].min(b0[2]),
+                rb[3].min(b0[3]),
+            ],
+            None => b0,
+        };
+        if let Some(l) = self.lines
+            && !self.lines_clear(l, t, &sight, &b, out)
+        {
+            return Ok(false);
+        }
         let occ = self.index.occupied();
-        let b = g.block;
-        let by0 = (((cy - r) / b).floor() as i64).max(occ.y0);
-        let by1 = (((cy + r) / b).floor() as i64).min(occ.y1 - 1);
-        // Each row's span of blocks under the disk.
-        let mut rows = Vec::with_capacity((by1 - by0 + 1).max(0) as usize);
+        let bs = g.block;
+        let by0 = (((cy - r).max(b[1]) / bs).floor() as i64).max(occ.y0);
+        let by1 = (((cy + r).min(b[3]) / bs).floor() as i64).min(occ.y1 - 1);
+        // The blocks not read whose points' box the disk reaches, nearest to the triangle first.
+        let mut near: Vec<(f64, u64)> = Vec::new();
+        let m = [
+            (t[0][0] + t[1][0] + t[2][0]) / 3.0,
+            (t[0][1] + t[1][1] + t[2][1]) / 3.0,
+        ];
         for by in by0..=by1 {
-            let (lo, hi) = (by as f64 * b, (by + 1) as f64 * b);
+            let (lo, hi) = (by as f64 * bs, (by + 1) as f64 * bs);
             let dy = if cy < lo {
                 lo - cy
             } else if cy > hi {
@@ -216,100 +308,96 @@ impl<'a> Certifier<'a> {
                 continue;
             }
             let hw = (r * r - dy * dy).max(0.0).sqrt() * (1.0 + 1e-12) + r * 1e-12;
-            rows.push((by, ((cx - hw) / b).floor() as i64, ((cx + hw) / b).floor() as i64));
+            let bx0 = ((cx - hw).max(b[0]) / bs).floor() as i64;
+            let bx1 = ((cx + hw).min(b[2]) / bs).floor() as i64;
+            self.unread_in_row(by, bx0, bx1, &mut |k| {
+                if let Some(e) = self.index.extent(k)
+                    && box_dist2(&e, [cx, cy]) <= r * r * (1.0 + 1e-9)
+                    && boxes_meet(&e, &b)
+                {
+                    near.push((box_dist2(&e, m), k));
+                }
+                Ok(())
+            })?;
         }
-        Ok(self.nearest_witnesses(t, [cx, cy], r, &rows, out)? == 0)
+        Ok(self.witnesses_among(near, t, &sight, out)? == 0)
     }
 
-    /// Tests the blocks not read under the disk of centre `c` and radius `r` (`rows`: each row
-    /// of blocks with its span) whose points' box the disk reaches, nearest to the triangle's
-    /// centroid first (ties by key), until [`Certifier::witnesses`] of them hold a point inside
-    /// the circumdisk of `t`; returns how many did (the keys go to `out`).
-    ///
-    /// The blocks are gathered box by box around the triangle, each box twice as wide as the
-    /// last, and a block is tested only once no block outside the gathered boxes can be nearer:
-    /// the same blocks in the same order as sorting every block under the disk, but a disk that
-    /// spans the whole input (a triangle to a far hull corner) stops at its first witnesses
-    /// instead of listing millions of blocks.
-    fn nearest_witnesses(
+    /// What blocks the sight from `t` (no breaklines: nothing): the region of the run's
+    /// triangles reachable across unconstrained edges that `meets` ([`Sight::region`]), or
+    /// (a region too large) only its constrained edges.
+    fn sight(&self, hidden: [bool; 3], meets: impl Fn([f64; 2], [f64; 2]) -> bool) -> Sight {
+        let Some(l) = self.lines else {
+            return Sight::default();
+        };
+        let region = self
+            .mesh
+            .and_then(|(tri, twins)| Sight::region(l, tri, twins, self.tri.get(), meets));
+        match region {
+            Some(r) => Sight::within(hidden, r),
+            None => Sight::near(hidden, l.blockers(&self.tri_xy())),
+        }
+    }
+
+    /// The triangle being judged (see [`Certifier::tri`]).
+    fn tri_xy(&self) -> [[f64; 2]; 3] {
+        let Some((t, _)) = self.mesh else {
+            return [[0.0; 2]; 3];
+        };
+        let v = &t.vertices;
+        t.triangles[self.tri.get() as usize].map(|i| [v[i as usize][0], v[i as usize][1]])
+    }
+
+    /// The certificate within a sight's region: no point of a block not read, inside the
+    /// region's box `b`, lies in the circumdisk of `t` and in the region.
+    fn region_clear(
         &self,
         t: &[[f64; 2]; 3],
-        c: [f64; 2],
-        r: f64,
-        rows: &[(i64, i64, i64)],
+        sight: &Sight,
+        b: &[f64; 4],
         out: &mut Missing,
-    ) -> Result<usize> {
-        use std::cmp::Reverse;
+    ) -> Result<bool> {
         let g = &self.index.grid;
-        let b = g.block;
+        let occ = self.index.occupied();
+        let bs = g.block;
+        let by0 = ((b[1] / bs).floor() as i64).max(occ.y0);
+        let by1 = ((b[3] / bs).floor() as i64).min(occ.y1 - 1);
         let m = [
             (t[0][0] + t[1][0] + t[2][0]) / 3.0,
             (t[0][1] + t[1][1] + t[2][1]) / 3.0,
         ];
-        // What the blocks' boxes may stick out of their blocks (rounding), generously.
-        let slack = 4.0 * g.margin(m[0].abs().max(m[1].abs()) + b) + 4.0 * b * 1e-6;
-        let cell = |v: f64| (v / b).floor() as i64;
-        let (tx0, tx1) = (cell(t[0][0].min(t[1][0]).min(t[2][0])), cell(t[0][0].max(t[1][0]).max(t[2][0])));
-        let (ty0, ty1) = (cell(t[0][1].min(t[1][1]).min(t[2][1])), cell(t[0][1].max(t[1][1]).max(t[2][1])));
-        let all = rows.iter().fold((i64::MAX, i64::MAX, i64::MIN, i64::MIN), |a, &(by, x0, x1)| {
-            (a.0.min(x0), a.1.min(by), a.2.max(x1), a.3.max(by))
-        });
-        let mut heap: std::collections::BinaryHeap<Reverse<(Dist, u64)>> = Default::default();
-        let mut prev: Option<(i64, i64, i64, i64)> = None;
-        let mut found = 0;
-        let mut grow = 2i64;
-        loop {
-            let bx = (tx0 - grow, ty0 - grow, tx1 + grow, ty1 + grow);
-            let covers = bx.0 <= all.0 && bx.1 <= all.1 && bx.2 >= all.2 && bx.3 >= all.3;
-            for &(by, x0, x1) in rows {
-                if by < bx.1 || by > bx.3 {
-                    continue;
+        let mut near: Vec<(f64, u64)> = Vec::new();
+        for by in by0..=by1 {
+            let bx0 = (b[0] / bs).floor() as i64;
+            let bx1 = (b[2] / bs).floor() as i64;
+            self.unread_in_row(by, bx0, bx1, &mut |k| {
+                if let Some(e) = self.index.extent(k)
+                    && boxes_meet(&e, b)
+                {
+                    near.push((box_dist2(&e, m), k));
                 }
-                let (a, z) = (x0.max(bx.0), x1.min(bx.2));
-                let spans = match prev {
-                    Some(p) if by >= p.1 && by <= p.3 => [(a, z.min(p.0 - 1)), (a.max(p.2 + 1), z)],
-                    _ => [(a, z), (1, 0)],
-                };
-                for (x0, x1) in spans {
-                    if x1 < x0 {
-                        continue;
-                    }
-                    self.unread_in_row(by, x0, x1, &mut |k| {
-                        if let Some(e) = self.index.extent(k)
-                            && box_dist2(&e, c) <= r * r * (1.0 + 1e-9)
-                        {
-                            heap.push(Reverse((Dist(box_dist2(&e, m)), k)));
-                        }
-                        Ok(())
-                    })?;
-                }
-            }
-            // No block outside the box is nearer to the centroid than its nearest side.
-            let near = (m[0] - bx.0 as f64 * b)
-                .min((bx.2 + 1) as f64 * b - m[0])
-                .min(m[1] - bx.1 as f64 * b)
-                .min((bx.3 + 1) as f64 * b - m[1])
-                - slack;
-            let bound = if near > 0.0 { near * near } else { 0.0 };
-            while let Some(Reverse((d, k))) = heap.peek().copied() {
-                if !covers && d.0 >= bound {
-                    break;
-                }
-                heap.pop();
-                if self.witness(k, t)? {
-                    out.push(k);
-                    found += 1;
-                    if found >= self.witnesses {
-                        return Ok(found);
-                    }
-                }
-            }
-            if covers {
-                return Ok(found);
-            }
-            prev = Some(bx);
-            grow *= 2;
+                Ok(())
+            })?;
         }
+        Ok(self.witnesses_among(near, t, sight, out)? == 0)
+    }
+
+    /// The breakline half of a certificate: no vertex the run did not load lies in the part of
+    /// the circumdisk of `t` visible from it (within the box `b`), and no segment the run did
+    /// not load crosses `t`. A block to read goes to `out` otherwise.
+    fn lines_clear(
+        &self,
+        l: &RunLines,
+        t: &[[f64; 2]; 3],
+        sight: &Sight,
+        b: &[f64; 4],
+        out: &mut Missing,
+    ) -> bool {
+        let g = &self.index.grid;
+        let missing = l.missing(t, sight, b, g, self.witnesses);
+        let clear = missing.is_empty();
+        out.extend(missing);
+        clear
     }
 
     /// Tests the blocks `near` (keys with a distance), nearest first, until
@@ -319,18 +407,27 @@ impl<'a> Certifier<'a> {
         &self,
         mut near: Vec<(f64, u64)>,
         t: &[[f64; 2]; 3],
+        sight: &Sight,
         out: &mut Missing,
     ) -> Result<usize> {
         near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut found = 0;
         for &(_, k) in &near {
-            if self.witness(k, t)? {
+            if self.witness(k, t, sight)? {
                 out.push(k);
                 found += 1;
                 if found >= self.witnesses {
                     break;
                 }
             }
+        }
+        // Behind a constrained edge the visible part of the disk is the cap on the triangle's
+        // side, and the triangle of the whole triangulation on that edge has its cap inside
+        // this one (circles through the edge's ends are nested on one side): a patch that
+        // reads every block reaching it settles the edge at once, instead of one witness at a
+        // time along a long segment.
+        if found > 0 && sight.hidden.iter().any(|&h| h) {
+            out.extend(near.iter().map(|&(_, k)| k));
         }
         Ok(found)
     }
@@ -378,6 +475,33 @@ impl<'a> Certifier<'a> {
             a[0].max(b[0]).max(ah[0]).max(bh[0]) + reach,
             a[1].max(b[1]).max(ah[1]).max(bh[1]) + reach,
         ];
+        // With breaklines: a constrained long edge hides the half-plane beyond it.
+        let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
+        let mut sight = Sight::default();
+        if let Some(l) = self.lines {
+            let all = [
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::INFINITY,
+            ];
+            let b0 = if hidden[i] { near_box } else { all };
+            // The disk lies in the chord box and the open half-plane right of `a → b`.
+            sight = self.sight(hidden, |x, y| {
+                boxes_meet(&tri_box(&[x, y, y]), &near_box)
+                    || (!hidden[i]
+                        && [x, y]
+                            .iter()
+                            .any(|&p| orient(a, b, p) == Orientation::Clockwise))
+            });
+            let b = sight.region_box().unwrap_or(b0);
+            if !self.lines_clear(l, t, &sight, &b, out) {
+                return Ok(Some(false));
+            }
+            if let Some(rb) = sight.region_box() {
+                return self.region_clear(t, &sight, &rb, out).map(Some);
+            }
+        }
         let beyond = |e: &[f64; 4]| {
             [[e[0], e[1]], [e[2], e[1]], [e[2], e[3]], [e[0], e[3]]]
                 .into_iter()
@@ -407,8 +531,11 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        if self.witnesses_among(near, t, out)? > 0 {
+        if self.witnesses_among(near, t, &sight, out)? > 0 {
             return Ok(Some(false));
+        }
+        if hidden[i] {
+            return Ok(Some(true));
         }
         // The rest of the half-plane right of `L`, row by row: in each row the half-plane is
         // an interval of x (bounded conservatively).
@@ -453,11 +580,11 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        Ok(Some(self.witnesses_among(far, t, out)? == 0))
+        Ok(Some(self.witnesses_among(far, t, &sight, out)? == 0))
     }
 
     /// Does block `k` (not read) hold a point inside the circumdisk of `t`? Exact.
-    fn witness(&self, k: u64, t: &[[f64; 2]; 3]) -> Result<bool> {
+    fn witness(&self, k: u64, t: &[[f64; 2]; 3], sight: &Sight) -> Result<bool> {
         let mut cache = self.cache.borrow_mut();
         if !cache.blocks.contains_key(&k) {
             if cache.points > CACHE_POINTS {
@@ -478,6 +605,7 @@ impl<'a> Certifier<'a> {
                 && q != t[1]
                 && q != t[2]
                 && incircle(t[0], t[1], t[2], q) == CircleSide::Inside
+                && sight.visible(t, q)
         }))
     }
 }

@@ -397,6 +397,20 @@ impl BlockIndex {
         &self.hull
     }
 
+    /// Adds breakline vertices to the data: the blocks `blocks` holding them count as occupied
+    /// (a tile with a vertex runs; a run that reads every occupied block loads every segment),
+    /// and `hull`, the corners of the hull of the points and the vertices, replaces the points'.
+    pub fn add_lines(&mut self, blocks: BlockRect, hull: Vec<[f64; 3]>) {
+        if !blocks.is_empty() {
+            self.occupied = if self.occupied.is_empty() {
+                blocks
+            } else {
+                self.occupied.union(&blocks)
+            };
+        }
+        self.hull = hull;
+    }
+
     /// Number of points.
     pub fn len(&self) -> u64 {
         *self.starts.last().unwrap_or(&0)

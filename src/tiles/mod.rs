@@ -23,6 +23,7 @@ pub(crate) mod grid;
 pub(crate) mod hull;
 pub(crate) mod index;
 pub(crate) mod keep;
+pub(crate) mod lines;
 pub(crate) mod region;
 pub(crate) mod worker;
 
@@ -162,6 +163,10 @@ pub(crate) struct TileJob<'a> {
     pub duplicates: crate::DuplicatePolicy,
     /// `--max-edge`.
     pub max_edge: Option<f64>,
+    /// Breaklines (and trimming rings), cleaned, every `z` known.
+    pub lines: Option<&'a crate::breaklines::Pslg>,
+    /// Trimming (boundary, holes, `--max-edge`), instead of `max_edge` alone.
+    pub trim: Option<&'a crate::breaklines::Trim>,
     /// Memory budget in bytes.
     pub mem: u64,
     /// Where spill files go.
@@ -334,6 +339,32 @@ fn outside_of(e: [f64; 4], a: [f64; 4]) -> Vec<[f64; 4]> {
     out
 }
 
+/// The breaklines `p` of a run over `index`: their vertices' `z` settled against the points
+/// (`--duplicates`), their blocks occupied, the hull of points and vertices as the index's hull.
+fn with_lines(
+    index: &mut BlockIndex,
+    p: &crate::breaklines::Pslg,
+    policy: crate::DuplicatePolicy,
+) -> Result<lines::TileLines> {
+    let g = index.grid;
+    let mut l = lines::TileLines::new(&p.vertices, &p.segments);
+    if let Some(b) = l.bounds() {
+        g.check_bounds(b)?;
+    }
+    l.merge(index, policy)?;
+    let mut corners: Vec<[f64; 3]> = index.hull().to_vec();
+    corners.extend_from_slice(&l.vertices);
+    let mut h = hull::hull(&mut corners);
+    // A corner at a vertex's position has the vertex's (settled) z.
+    for c in &mut h {
+        if let Some(z) = l.z_at([c[0], c[1]]) {
+            c[2] = z;
+        }
+    }
+    index.add_lines(l.blocks(&g), h);
+    Ok(l)
+}
+
 /// Points per batch handed from the reader's thread.
 const BATCH: usize = 1 << 16;
 
@@ -436,7 +467,26 @@ pub(crate) fn run(
             total: 0,
         });
     }
+    let mut index = index;
+    let lines = match job.lines {
+        Some(p) if !p.vertices.is_empty() => Some(with_lines(&mut index, p, job.duplicates)?),
+        _ => None,
+    };
+    let lines = lines.as_ref();
+    let index = index;
     let g = index.grid;
+    // Tiles holding a breakline vertex run even without points (they own its triangles).
+    let line_tiles: crate::idmap::FastSet<(i64, i64)> = lines
+        .map(|l| {
+            l.vertices
+                .iter()
+                .map(|v| {
+                    let (bx, by) = g.block_of(v[0], v[1]);
+                    g.tile_of_block(bx, by)
+                })
+                .collect()
+        })
+        .unwrap_or_default();
     // A task runs every tile of its plan tile, with points or not: triangles of other tasks may
     // cover its empty parts, and its cells need them.
     let tiles_rect = match &options.scope {
@@ -463,7 +513,11 @@ pub(crate) fn run(
     });
     let order: Vec<(i64, i64)> = (tiles_rect.y0..tiles_rect.y1)
         .flat_map(|ty| (tiles_rect.x0..tiles_rect.x1).map(move |tx| (tx, ty)))
-        .filter(|&(tx, ty)| options.scope.is_some() || index.count(&g.tile_blocks(tx, ty)) > 0)
+        .filter(|&(tx, ty)| {
+            options.scope.is_some()
+                || index.count(&g.tile_blocks(tx, ty)) > 0
+                || line_tiles.contains(&(tx, ty))
+        })
         .collect();
     let threads = match options.threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -477,9 +531,11 @@ pub(crate) fn run(
     for s in sinks.iter_mut() {
         s.begin(&info)?;
     }
-    let trim = match max_edge {
-        Some(l) => Some(crate::breaklines::Trim::new(None, &[], Some(l))?),
-        None => None,
+    let trim = match (job.trim, max_edge) {
+        (Some(t), _) if !t.keeps_all() => Some(t.clone()),
+        (Some(_), _) => None,
+        (None, Some(l)) => Some(crate::breaklines::Trim::new(None, &[], Some(l))?),
+        (None, None) => None,
     };
     let shares: u64 = sinks.iter().map(|s| s.memory_share()).sum();
     let mut writer = emit::TileWriter::new(mesh, sinks, trim);
@@ -519,7 +575,7 @@ pub(crate) fn run(
                         break;
                     }
                     let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        worker::run_tile(index, order[i], policy, FIRST_BUFFER, task)
+                        worker::run_tile(index, order[i], policy, FIRST_BUFFER, task, lines)
                     }))
                     .unwrap_or_else(|p| Err(Error::panicked("tile worker", &*p)));
                     if tx.send((i, r)).is_err() {

@@ -201,8 +201,9 @@ pub(crate) struct Verdict {
     pub tested: (u64, u64),
 }
 
-/// Judges the run `t` over `loaded` on `region` (the tile's `run`-th). A run over every
-/// non-empty block (`full`) is the whole triangulation: everything in it is certified.
+/// Judges the run `t` over `loaded` on `region` (the tile's `run`-th), with the breaklines it
+/// loaded and the run's adjacency (`lines`). A run over every non-empty block and every segment (`full`) is the whole
+/// triangulation: everything in it is certified.
 ///
 /// # Errors
 /// Reading the points of blocks not loaded.
@@ -213,10 +214,13 @@ pub(crate) fn judge(
     loaded: &Loaded,
     full: bool,
     run: u32,
+    lines: Option<(&super::lines::RunLines, &[u32])>,
 ) -> crate::error::Result<Verdict> {
     let unknown = std::cell::Cell::new(0.0);
     let mut cert = Certifier::new(index, loaded, &unknown);
     cert.witnesses = 4usize << run.saturating_sub(1).min(8);
+    cert.lines = lines.map(|l| l.0);
+    cert.mesh = lines.map(|l| (t, l.1));
     let v = &t.vertices;
     let mut out = Verdict::default();
     for (k, tri) in t.triangles.iter().enumerate() {
@@ -228,6 +232,7 @@ pub(crate) fn judge(
             out.certified.push(k as u32);
             continue;
         }
+        cert.tri.set(k as u32);
         let ok = match circumdisk_bounds(t2[0], t2[1], t2[2]) {
             Some(d) => cert.clear(&t2, &d, &mut out.blocks)?,
             None => match cert.flat_clear(&t2, &mut out.blocks)? {

@@ -18,15 +18,41 @@
 //! meet `R`: every owned triangle is there, and every owned vertex has its whole star (its degree).
 //! Parts of `R` outside them are outside the whole hull. When the blocks read are every non-empty
 //! block, every certificate holds, so this ends.
+//!
+//! **Breaklines (constrained Delaunay).** Let `B` be the blocks a run reads. The run triangulates
+//! its points plus every (cleaned, z-settled) segment that meets `B`, whole, with both ends
+//! wherever they lie (ends are points of the whole input; the tie rule is stated in positions,
+//! so it is the global one), and the corners of the hull of all points *and* line vertices
+//! ([`super::lines`]). A triangle `t` of the run's CDT is a triangle of the whole CDT when
+//! (a) no point or line vertex the run did not load lies in its circumdisk where it is visible
+//! from `t` (the certificate above, with segment ends as data too), and (b) no segment the run
+//! did not load crosses `t` (checked exactly with [`crate::geom::predicates`] on the graph's
+//! segment grid). Proof: by (b) every segment of the input that crosses `t` is loaded, and `t`
+//! is a CDT triangle of the run, so none does. A vertex of the input inside the disk and visible
+//! from `t`'s interior in the whole input is loaded by (a), and visible in the run too (the run's
+//! segments are a subset of the input's), against `t` being constrained Delaunay in the run. So
+//! `t` is constrained Delaunay for the whole input, and the whole CDT (unique under the tie rule)
+//! holds it. "Visible" in (a) is decided conservatively: a point is hidden only when it lies
+//! strictly beyond a constrained edge of `t` (in the cap that edge cuts off the disk), outside
+//! the region of run triangles reachable from `t` across unconstrained edges that meet the disk
+//! (a sight line inside the disk crosses no vertex of the run, else that vertex would be visible
+//! in the disk, so it walks through that region), or behind one loaded segment that meets every
+//! segment from the point to a corner of `t` ([`super::lines::Sight`]). A point exactly on a
+//! loaded segment lies on the chord of the triangles beside it, so it is never hidden: a run
+//! that did not load it cannot certify them. A line vertex at a point's position is one vertex
+//! whose `z` follows `--duplicates` (the line read last) in every run. The rest of the argument
+//! (patches, coverage, ownership) is the unconstrained one. `--no-flat-triangles` stays on the
+//! sweep: its flips look across triangles that other tiles own, which no certificate covers.
 
 use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
 use super::index::BlockIndex;
 use super::keep::{Owner, from_runs};
+use super::lines::TileLines;
 use super::region::{Region, Tri2, Tris, judge, tri_meets_rect};
 use crate::error::{Error, Result};
 use crate::sort::DuplicatePolicy;
-use crate::triangulation::{Options, triangulate};
+use crate::triangulation::{Options, triangulate, triangulate_with_twins};
 
 /// Degree of a vertex this tile does not own (unknown here).
 pub(crate) const NOT_OWNED: u32 = u32::MAX;
@@ -70,6 +96,7 @@ pub(crate) fn run_tile(
     policy: DuplicatePolicy,
     buffer: i64,
     task: Option<&BlockRect>,
+    lines: Option<&TileLines>,
 ) -> Result<TileOutput> {
     let g = index.grid;
     let owned = g.tile_blocks(tile.0, tile.1);
@@ -80,7 +107,7 @@ pub(crate) fn run_tile(
     out.points_read = index.count(&owned);
     // A tile without points owns nothing; in a task it still delivers the triangles of other
     // tasks that cover it.
-    if out.points_read == 0 && task.is_none() {
+    if out.points_read == 0 && task.is_none() && lines.is_none() {
         return Ok(out);
     }
     let occ = index.occupied();
@@ -121,15 +148,29 @@ pub(crate) fn run_tile(
                 pts.push(*p);
             }
         }
-        // Every point there is: all the blocks, and (for a task) nothing unread in the files.
-        let full =
-            loaded.rect.contains_rect(&occ) && index.scope.as_ref().is_none_or(|sc| sc.complete());
+        // The segments meeting the blocks read, whole, with their ends (after the points: a
+        // vertex at a point's position is one vertex, the line read last).
+        let run_lines = lines.map(|l| l.run(&g, &loaded.rect, &loaded.extra));
+        let segments = run_lines
+            .as_ref()
+            .map(|l| l.append(&mut pts))
+            .unwrap_or_default();
+        // Every point there is: all the blocks, every segment, and (for a task) nothing unread
+        // in the files.
+        let full = loaded.rect.contains_rect(&occ)
+            && index.scope.as_ref().is_none_or(|sc| sc.complete())
+            && run_lines.as_ref().is_none_or(|l| l.all());
         let mut cpu = 0.0;
         let t = crate::clock::timed(&mut cpu, || {
-            triangulate(&pts, &Options { duplicates: policy })
+            let options = Options { duplicates: policy };
+            if run_lines.is_none() {
+                triangulate(&pts, &options).map(|t| (t, Vec::new()))
+            } else {
+                triangulate_with_twins(&pts, &segments, &options)
+            }
         });
         out.cpu.triangulate += cpu;
-        let t = match t {
+        let (t, twins) = match t {
             Ok(t) => t,
             Err(Error::TooFewPoints { .. } | Error::AllCollinear { .. }) if !full => {
                 if loaded.rect.contains_rect(&occ) {
@@ -143,9 +184,23 @@ pub(crate) fn run_tile(
             }
             Err(e) => return Err(e),
         };
+        if t.constraint_stats.crossing_skipped > 0 {
+            return Err(Error::Internal(format!(
+                "tile {tile:?}: {} breakline segments of a cleaned graph crossed",
+                t.constraint_stats.crossing_skipped
+            )));
+        }
         let mut cpu = 0.0;
         let verdict = crate::clock::timed(&mut cpu, || {
-            judge(index, &t, &region, &loaded, full, out.runs)
+            judge(
+                index,
+                &t,
+                &region,
+                &loaded,
+                full,
+                out.runs,
+                run_lines.as_ref().map(|l| (l, &twins[..])),
+            )
         })?;
         out.cpu.certify += cpu;
         if std::env::var_os("SWEEPTIN_DEBUG_TILES").is_some() {
