@@ -389,7 +389,7 @@ fn cli(args: &[String]) -> std::process::Output {
 }
 
 /// The CLI on the IGN crop with breaklines and a trimming polygon (2-D, draped): the DEM of
-/// `--engine tiles` is the sweep's byte for byte, and the DEM and the PLY mesh are the same bytes
+/// `--engine tiles` (`auto` keeps the sweep for lines) is the sweep's byte for byte, and the DEM and the PLY mesh are the same bytes
 /// for `--threads 1` and `2` and two `--mem` budgets.
 #[test]
 fn cli_dem_and_mesh_with_breaklines_do_not_depend_on_engine_threads_or_memory() {
@@ -445,6 +445,8 @@ fn cli_dem_and_mesh_with_breaklines_do_not_depend_on_engine_threads_or_memory() 
             &[
                 "--cell",
                 "1",
+                "--engine",
+                "tiles",
                 "--threads",
                 "2",
                 "--mem",
@@ -466,7 +468,16 @@ fn cli_dem_and_mesh_with_breaklines_do_not_depend_on_engine_threads_or_memory() 
         run(
             "tin",
             "m2.ply",
-            &["--threads", "2", "--mem", "64M", "--tile", "100"],
+            &[
+                "--engine",
+                "tiles",
+                "--threads",
+                "2",
+                "--mem",
+                "64M",
+                "--tile",
+                "100",
+            ],
         ),
     ];
     assert!(meshes[0] == meshes[1], "meshes differ");

@@ -139,6 +139,36 @@ fn boxes_meet(a: &[f64; 4], b: &[f64; 4]) -> bool {
     a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3]
 }
 
+/// Is the angle at `c` of the triangle `a, b, c` clearly obtuse (so the circumcentre lies
+/// beyond the chord `ab`)?
+fn obtuse_at(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> bool {
+    let (ca, cb) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
+    let dot = ca[0] * cb[0] + ca[1] * cb[1];
+    let lens = (ca[0].hypot(ca[1])) * (cb[0].hypot(cb[1]));
+    !(dot.is_nan() || dot >= -1e-6 * lens)
+}
+
+/// The box of the cap that the chord `ab` cuts off the circumdisk of `a, b, c` on `c`'s side
+/// (the chord moved up to [`sagitta_bound`] towards `c`), for an obtuse angle at `c`, widened by
+/// the rounding slack and `grow`.
+fn chord_box(a: [f64; 2], b: [f64; 2], c: [f64; 2], g: &super::grid::TileGrid, grow: f64) -> [f64; 4] {
+    let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+    let mag = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
+    let reach = g.margin(mag + l) + l * 1e-9 + grow;
+    let h = sagitta_bound(a, b, c, l);
+    let n = [-(b[1] - a[1]) / l, (b[0] - a[0]) / l];
+    let (ah, bh) = (
+        [a[0] + n[0] * h, a[1] + n[1] * h],
+        [b[0] + n[0] * h, b[1] + n[1] * h],
+    );
+    [
+        a[0].min(b[0]).min(ah[0]).min(bh[0]) - reach,
+        a[1].min(b[1]).min(ah[1]).min(bh[1]) - reach,
+        a[0].max(b[0]).max(ah[0]).max(bh[0]) + reach,
+        a[1].max(b[1]).max(ah[1]).max(bh[1]) + reach,
+    ]
+}
+
 /// The box of the part of the circumdisk of the counter-clockwise triangle `t` that its
 /// constrained edges (`hidden`) leave visible, when one of them has an obtuse angle opposite
 /// (the centre lies beyond it, so the visible part is within the cap on the triangle's side:
@@ -148,27 +178,10 @@ fn cap_box(t: &[[f64; 2]; 3], hidden: [bool; 3], g: &super::grid::TileGrid) -> O
     let mut out: Option<[f64; 4]> = None;
     for k in (0..3).filter(|&k| hidden[k]) {
         let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-        let (ca, cb) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
-        let dot = ca[0] * cb[0] + ca[1] * cb[1];
-        let lens = (ca[0].hypot(ca[1])) * (cb[0].hypot(cb[1]));
-        if dot.is_nan() || dot >= -1e-6 * lens {
+        if !obtuse_at(a, b, c) {
             continue;
         }
-        let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
-        let mag = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
-        let slack = g.margin(mag + l) + l * 1e-9;
-        let h = sagitta_bound(a, b, c, l);
-        let n = [-(b[1] - a[1]) / l, (b[0] - a[0]) / l];
-        let (ah, bh) = (
-            [a[0] + n[0] * h, a[1] + n[1] * h],
-            [b[0] + n[0] * h, b[1] + n[1] * h],
-        );
-        let bx = [
-            a[0].min(b[0]).min(ah[0]).min(bh[0]) - slack,
-            a[1].min(b[1]).min(ah[1]).min(bh[1]) - slack,
-            a[0].max(b[0]).max(ah[0]).max(bh[0]) + slack,
-            a[1].max(b[1]).max(ah[1]).max(bh[1]) + slack,
-        ];
+        let bx = chord_box(a, b, c, g, 0.0);
         if !bx.iter().all(|v| v.is_finite()) {
             continue;
         }
@@ -450,31 +463,16 @@ impl<'a> Certifier<'a> {
             .max_by(|&i, &j| len2(t[i], t[(i + 1) % 3]).total_cmp(&len2(t[j], t[(j + 1) % 3])))
             .unwrap_or(0);
         let (a, b, c) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
-        let (ca, cb) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
-        let dot = ca[0] * cb[0] + ca[1] * cb[1];
-        let lens = (ca[0].hypot(ca[1])) * (cb[0].hypot(cb[1]));
-        if dot.is_nan() || dot >= -1e-6 * lens {
+        if !obtuse_at(a, b, c) {
             return Ok(None);
         }
         let g = &self.index.grid;
         let l = len2(a, b).sqrt();
         let mag = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
         let slack = g.margin(mag + l) + l * 1e-9;
-        let h = sagitta_bound(a, b, c, l);
         // The near box: the chord box (the segment `ab` moved up to `h` to the left), two
         // blocks wider (witnesses on the far side are most often close to the triangle).
-        let n = [-(b[1] - a[1]) / l, (b[0] - a[0]) / l];
-        let (ah, bh) = (
-            [a[0] + n[0] * h, a[1] + n[1] * h],
-            [b[0] + n[0] * h, b[1] + n[1] * h],
-        );
-        let reach = slack + 2.0 * g.block;
-        let near_box = [
-            a[0].min(b[0]).min(ah[0]).min(bh[0]) - reach,
-            a[1].min(b[1]).min(ah[1]).min(bh[1]) - reach,
-            a[0].max(b[0]).max(ah[0]).max(bh[0]) + reach,
-            a[1].max(b[1]).max(ah[1]).max(bh[1]) + reach,
-        ];
+        let near_box = chord_box(a, b, c, g, 2.0 * g.block);
         // With breaklines: a constrained long edge hides the half-plane beyond it.
         let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
         let mut sight = Sight::default();
