@@ -25,6 +25,7 @@
 use super::grid::BlockRect;
 use super::index::BlockIndex;
 use super::lines::{RunLines, Sight};
+use super::region::bbox;
 use crate::error::Result;
 use crate::geom::predicates::{CircleSide, DiskBounds, Orientation, incircle, orient};
 use crate::idmap::FastMap;
@@ -121,16 +122,6 @@ fn seg_dist2(c: [f64; 2], x: [f64; 2], y: [f64; 2]) -> f64 {
     };
     let p = [x[0] + s * d[0], x[1] + s * d[1]];
     (c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)
-}
-
-/// The bounding box of a triangle.
-fn tri_box(t: &[[f64; 2]; 3]) -> [f64; 4] {
-    [
-        t[0][0].min(t[1][0]).min(t[2][0]),
-        t[0][1].min(t[1][1]).min(t[2][1]),
-        t[0][0].max(t[1][0]).max(t[2][0]),
-        t[0][1].max(t[1][1]).max(t[2][1]),
-    ]
 }
 
 /// Do two closed boxes meet?
@@ -282,7 +273,7 @@ impl<'a> Certifier<'a> {
         let b0 = cap.unwrap_or(disk);
         let (c, r2) = ([cx, cy], r * r * (1.0 + 1e-9));
         let sight = self.sight(hidden, |x, y| {
-            boxes_meet(&tri_box(&[x, y, y]), &b0) && seg_dist2(c, x, y) <= r2
+            boxes_meet(&bbox(&[x, y, y]), &b0) && seg_dist2(c, x, y) <= r2
         });
         let b = match sight.region_box() {
             Some(rb) => [
@@ -486,7 +477,7 @@ impl<'a> Certifier<'a> {
             let b0 = if hidden[i] { near_box } else { all };
             // The disk lies in the chord box and the open half-plane right of `a → b`.
             sight = self.sight(hidden, |x, y| {
-                boxes_meet(&tri_box(&[x, y, y]), &near_box)
+                boxes_meet(&bbox(&[x, y, y]), &near_box)
                     || (!hidden[i]
                         && [x, y]
                             .iter()

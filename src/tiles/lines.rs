@@ -16,7 +16,7 @@
 
 use super::grid::{BlockRect, TileGrid};
 use super::index::BlockIndex;
-use super::region::{Tri2, tri_meets_rect};
+use super::region::{Tri2, bbox, tri_meets_rect};
 use crate::error::Result;
 use crate::geom::grid::{Buckets, Grid};
 use crate::geom::predicates::{CircleSide, Orientation, incircle, orient};
@@ -305,18 +305,12 @@ impl Sight {
     }
 
     /// A sight bounded by a [`Sight::region`].
-    pub fn within(hidden: [bool; 3], (tris, bbox): (Vec<Tri2>, [f64; 4])) -> Sight {
-        let grid = Grid::new([bbox[0], bbox[1]], [bbox[2], bbox[3]], tris.len());
+    pub fn within(hidden: [bool; 3], (tris, area): (Vec<Tri2>, [f64; 4])) -> Sight {
+        let grid = Grid::new([area[0], area[1]], [area[2], area[3]], tris.len());
         let mut pairs = Vec::new();
         for (i, t) in tris.iter().enumerate() {
-            let lo = [
-                t[0][0].min(t[1][0]).min(t[2][0]),
-                t[0][1].min(t[1][1]).min(t[2][1]),
-            ];
-            let hi = [
-                t[0][0].max(t[1][0]).max(t[2][0]),
-                t[0][1].max(t[1][1]).max(t[2][1]),
-            ];
+            let b = bbox(t);
+            let (lo, hi) = ([b[0], b[1]], [b[2], b[3]]);
             grid.box_cells(lo, hi, |c| pairs.push((u64::from(c) << 32) | i as u64));
         }
         let buckets = Buckets::from_pairs(grid.len(), pairs);
@@ -325,7 +319,7 @@ impl Sight {
             blockers: Vec::new(),
             region: Some(Region {
                 tris,
-                bbox,
+                bbox: area,
                 grid,
                 buckets,
             }),
@@ -393,14 +387,8 @@ impl RunLines<'_> {
         let Some(gb) = l.bbox else {
             return Vec::new();
         };
-        let lo = [
-            t[0][0].min(t[1][0]).min(t[2][0]),
-            t[0][1].min(t[1][1]).min(t[2][1]),
-        ];
-        let hi = [
-            t[0][0].max(t[1][0]).max(t[2][0]),
-            t[0][1].max(t[1][1]).max(t[2][1]),
-        ];
+        let b = bbox(t);
+        let (lo, hi) = ([b[0], b[1]], [b[2], b[3]]);
         let d = (hi[0] - lo[0]).max(hi[1] - lo[1]);
         let (lo, hi) = ([lo[0] - d, lo[1] - d], [hi[0] + d, hi[1] + d]);
         if hi[0] < gb[0] || lo[0] > gb[2] || hi[1] < gb[1] || lo[1] > gb[3] {
@@ -495,14 +483,8 @@ impl RunLines<'_> {
                 }
             });
         }
-        let lo = [
-            t[0][0].min(t[1][0]).min(t[2][0]),
-            t[0][1].min(t[1][1]).min(t[2][1]),
-        ];
-        let hi = [
-            t[0][0].max(t[1][0]).max(t[2][0]),
-            t[0][1].max(t[1][1]).max(t[2][1]),
-        ];
+        let b = bbox(t);
+        let (lo, hi) = ([b[0], b[1]], [b[2], b[3]]);
         if hi[0] < gb[0] || lo[0] > gb[2] || hi[1] < gb[1] || lo[1] > gb[3] {
             return out;
         }

@@ -13,7 +13,8 @@ use crate::geom::predicates::{Orientation, circumdisk_bounds, orient};
 /// A triangle in the plane.
 pub(crate) type Tri2 = [[f64; 2]; 3];
 
-fn bbox(t: &Tri2) -> [f64; 4] {
+/// The bounding box `[xmin, ymin, xmax, ymax]` of a triangle.
+pub(crate) fn bbox(t: &Tri2) -> [f64; 4] {
     let (x0, x1) = (
         t[0][0].min(t[1][0]).min(t[2][0]),
         t[0][0].max(t[1][0]).max(t[2][0]),
