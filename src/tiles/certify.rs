@@ -446,9 +446,19 @@ impl<'a> Certifier<'a> {
     /// point: those near the triangle first, then the rest of the half-plane, row by row.
     /// `None` when the angle at `c` cannot be shown obtuse.
     ///
+    /// A bound of the disk (`disk`: a flat triangle's, whose centre is far and known only
+    /// roughly) narrows both: only blocks that also meet it are tested. Along a straight data
+    /// edge the bound alone can cover the whole survey, while the half-plane beyond the edge
+    /// holds no block at all.
+    ///
     /// # Errors
     /// Reading a block's points.
-    pub fn flat_clear(&self, t: &[[f64; 2]; 3], out: &mut Missing) -> Result<Option<bool>> {
+    pub fn flat_clear(
+        &self,
+        t: &[[f64; 2]; 3],
+        disk: Option<&DiskBounds>,
+        out: &mut Missing,
+    ) -> Result<Option<bool>> {
         let len2 = |p: [f64; 2], q: [f64; 2]| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
         let i = (0..3)
             .max_by(|&i, &j| len2(t[i], t[(i + 1) % 3]).total_cmp(&len2(t[j], t[(j + 1) % 3])))
@@ -461,6 +471,14 @@ impl<'a> Certifier<'a> {
         let l = len2(a, b).sqrt();
         let mag = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
         let slack = g.margin(mag + l) + l * 1e-9;
+        // The disk's bound, as [`Certifier::clear`] widens it (none: everywhere).
+        let bound = disk.map(|d| {
+            let [cx, cy] = d.center;
+            ([cx, cy], d.radius + g.margin(cx.abs().max(cy.abs()) + d.radius))
+        });
+        let in_bound = |e: &[f64; 4]| {
+            bound.is_none_or(|(c, r)| r.is_finite() && box_dist2(e, c) <= r * r * (1.0 + 1e-9))
+        };
         // The near box: the chord box (the segment `ab` moved up to `h` to the left), two
         // blocks wider (witnesses on the far side are most often close to the triangle).
         let near_box = chord_box(a, b, c, g, 2.0 * g.block);
@@ -514,6 +532,7 @@ impl<'a> Certifier<'a> {
             self.unread_in_row(by, bx0, bx1, &mut |k| {
                 if let Some(e) = self.index.extent(k)
                     && boxes_meet(&e, &near_box)
+                    && in_bound(&e)
                 {
                     near.push((box_dist2(&e, m), k));
                 }
@@ -530,7 +549,11 @@ impl<'a> Certifier<'a> {
         // an interval of x (bounded conservatively).
         let d = [b[0] - a[0], b[1] - a[1]];
         let mut far: Vec<(f64, u64)> = Vec::new();
-        for by in occ.y0..occ.y1 {
+        let (fy0, fy1) = match bound {
+            Some((c, r)) if r.is_finite() => rows(c[1] - r, c[1] + r),
+            _ => (occ.y0, occ.y1 - 1),
+        };
+        for by in fy0..=fy1 {
             let (y0, y1) = (by as f64 * bs - slack, (by + 1) as f64 * bs + slack);
             let (lo, hi) = if d[1] == 0.0 {
                 // Right of a horizontal line: below it going east, above it going west.
@@ -562,6 +585,7 @@ impl<'a> Certifier<'a> {
             self.unread_in_row(by, bx0, bx1, &mut |k| {
                 if let Some(e) = self.index.extent(k)
                     && !boxes_meet(&e, &near_box)
+                    && in_bound(&e)
                     && beyond(&e)
                 {
                     far.push((box_dist2(&e, m), k));
@@ -665,6 +689,57 @@ mod tests {
     }
 
     #[test]
+    fn a_straight_data_edge_is_judged_by_its_half_plane() {
+        // A lattice at UTM-sized coordinates whose top row runs along a line of slope 1/100,
+        // heights at LAS's 0.01 steps (so the row is straight but for binary rounding): the
+        // triangle of three top-row points is flat, its disk's centre lies far away and is
+        // known only roughly, so the disk's bound reaches every block of the lattice.
+        let las = |v: f64| format!("{v:.2}").parse::<f64>().unwrap();
+        let mut pts = Vec::new();
+        for y in 0..32 {
+            for x in 0..32 {
+                pts.push([500_140.5 + x as f64, 5_001_290.5 + y as f64]);
+            }
+        }
+        for x in (0..32).filter(|&x| x != 19) {
+            let px = 500_140.51 + x as f64;
+            pts.push([las(px), las(5_001_323.54 + (px - 500_157.51) * 0.01)]);
+        }
+        let ix = index(&pts);
+        let loaded = Loaded {
+            rect: BlockRect {
+                x0: 500_154,
+                y0: 5_001_318,
+                x1: 500_163,
+                y1: 5_001_325,
+            },
+            extra: vec![],
+        };
+        let unknown = std::cell::Cell::new(0.0);
+        let c = Certifier::new(&ix, &loaded, &unknown);
+        let t = [
+            [500_157.51, 5_001_323.54],
+            [500_158.51, 5_001_323.55],
+            [500_160.51, 5_001_323.57],
+        ];
+        let t = match orient(t[0], t[1], t[2]) {
+            Orientation::CounterClockwise => t,
+            Orientation::Clockwise => [t[0], t[2], t[1]],
+            Orientation::Collinear => panic!("the rounding made them collinear"),
+        };
+        let d = bounds(&t);
+        let (mut m, mut m2) = (Missing::new(), Missing::new());
+        let by_disk = c.clear(&t, &d, &mut m).unwrap();
+        let tested = c.tested.get().0;
+        assert!(tested > 500, "{tested}");
+        let by_half_plane = c.flat_clear(&t, Some(&d), &mut m2).unwrap();
+        assert_eq!(by_half_plane, Some(by_disk));
+        assert_eq!(m.is_empty(), m2.is_empty());
+        let flat = c.tested.get().0 - tested;
+        assert!(flat < 100, "{flat}");
+    }
+
+    #[test]
     fn disks() {
         // Points at the integer lattice 0..20 × 0..20, except a hole at x, y in 8..12.
         let mut pts = Vec::new();
@@ -710,6 +785,7 @@ mod tests {
         let t = [[0.5, 0.5], [1.5, 0.5], [1.0, 0.5 + 1e-7]];
         let before = c.tested.get().0;
         assert!(c.clear(&t, &bounds(&t), &mut m2).unwrap());
+        assert_eq!(c.flat_clear(&t, None, &mut m2).unwrap(), Some(true));
         assert!(c.tested.get().0 > before);
         // Outside the data everything is empty.
         let t = [[40.0, 40.0], [45.0, 40.0], [42.0, 44.0]];

@@ -8,7 +8,7 @@
 
 use super::certify::{Certifier, Loaded, Missing};
 use super::index::BlockIndex;
-use crate::geom::predicates::{Orientation, circumdisk_bounds, orient};
+use crate::geom::predicates::{DiskBounds, Orientation, circumdisk_bounds, orient};
 
 /// A triangle in the plane.
 pub(crate) type Tri2 = [[f64; 2]; 3];
@@ -235,10 +235,11 @@ pub(crate) fn judge(
         }
         cert.tri.set(k as u32);
         let ok = match circumdisk_bounds(t2[0], t2[1], t2[2]) {
-            Some(d) => cert.clear(&t2, &d, &mut out.blocks)?,
-            None => match cert.flat_clear(&t2, &mut out.blocks)? {
-                Some(ok) => ok,
-                None => {
+            Some(d) if !flat(&t2, &d) => cert.clear(&t2, &d, &mut out.blocks)?,
+            d => match (cert.flat_clear(&t2, d.as_ref(), &mut out.blocks)?, d) {
+                (Some(ok), _) => ok,
+                (None, Some(d)) => cert.clear(&t2, &d, &mut out.blocks)?,
+                (None, None) => {
                     out.degenerate = true;
                     false
                 }
@@ -260,6 +261,15 @@ pub(crate) fn judge(
     out.unknown = unknown.get();
     out.tested = cert.tested.get();
     Ok(out)
+}
+
+/// Is `t` flat for its disk: a radius (bound) over 16 times its longest edge? Its disk is then
+/// judged as a flat triangle's ([`Certifier::flat_clear`]: the cap on its long edge and the
+/// half-plane beyond it), within the bound.
+fn flat(t: &Tri2, d: &DiskBounds) -> bool {
+    let len2 = |p: [f64; 2], q: [f64; 2]| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
+    let l2 = len2(t[0], t[1]).max(len2(t[1], t[2])).max(len2(t[2], t[0]));
+    d.radius * d.radius > 256.0 * l2
 }
 
 /// Might an unread point lie beyond an edge of the convex hull of `v` whose outer half-plane
