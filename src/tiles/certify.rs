@@ -289,16 +289,57 @@ impl<'a> Certifier<'a> {
         {
             return Ok(false);
         }
-        let occ = self.index.occupied();
-        let bs = g.block;
-        let by0 = (((cy - r).max(b[1]) / bs).floor() as i64).max(occ.y0);
-        let by1 = (((cy + r).min(b[3]) / bs).floor() as i64).min(occ.y1 - 1);
-        // The blocks not read whose points' box the disk reaches, nearest to the triangle first.
-        let mut near: Vec<(f64, u64)> = Vec::new();
+        // The blocks not read whose points' box the disk reaches, nearest to the triangle's
+        // centroid first, stage by stage: boxes around it growing fourfold, so that a failing
+        // certificate with a huge disk (a sparse patch run's) stops at its first witnesses
+        // instead of gathering every block under the disk. With breaklines, one stage: a
+        // hidden edge's patch reads every block reaching its cap (see `witnesses_among`).
         let m = [
             (t[0][0] + t[1][0] + t[2][0]) / 3.0,
             (t[0][1] + t[1][1] + t[2][1]) / 3.0,
         ];
+        let mut half = if self.lines.is_some() {
+            f64::INFINITY
+        } else {
+            2.0 * g.block
+        };
+        let mut prev: Option<[f64; 4]> = None;
+        let mut found = 0;
+        loop {
+            let stage = [m[0] - half, m[1] - half, m[0] + half, m[1] + half];
+            let sb = [
+                stage[0].max(b[0]),
+                stage[1].max(b[1]),
+                stage[2].min(b[2]),
+                stage[3].min(b[3]),
+            ];
+            let near = self.gather([cx, cy], r, &sb, prev.as_ref(), m)?;
+            found += self.witnesses_among(near, t, &sight, self.witnesses - found, out)?;
+            let last = sb == b || !sb.iter().all(|v| v.is_finite());
+            if found >= self.witnesses || last {
+                return Ok(found == 0);
+            }
+            prev = Some(sb);
+            half *= 4.0;
+        }
+    }
+
+    /// The blocks not read whose points' box meets the disk of centre `c` and radius `r` and
+    /// the box `b` but not the box `inner` (gathered before), with their distance to `m`.
+    fn gather(
+        &self,
+        c: [f64; 2],
+        r: f64,
+        b: &[f64; 4],
+        inner: Option<&[f64; 4]>,
+        m: [f64; 2],
+    ) -> Result<Vec<(f64, u64)>> {
+        let bs = self.index.grid.block;
+        let occ = self.index.occupied();
+        let [cx, cy] = c;
+        let by0 = (((cy - r).max(b[1]) / bs).floor() as i64).max(occ.y0);
+        let by1 = (((cy + r).min(b[3]) / bs).floor() as i64).min(occ.y1 - 1);
+        let mut near: Vec<(f64, u64)> = Vec::new();
         for by in by0..=by1 {
             let (lo, hi) = (by as f64 * bs, (by + 1) as f64 * bs);
             let dy = if cy < lo {
@@ -316,15 +357,16 @@ impl<'a> Certifier<'a> {
             let bx1 = ((cx + hw).min(b[2]) / bs).floor() as i64;
             self.unread_in_row(by, bx0, bx1, &mut |k| {
                 if let Some(e) = self.index.extent(k)
-                    && box_dist2(&e, [cx, cy]) <= r * r * (1.0 + 1e-9)
-                    && boxes_meet(&e, &b)
+                    && box_dist2(&e, c) <= r * r * (1.0 + 1e-9)
+                    && boxes_meet(&e, b)
+                    && inner.is_none_or(|i| !boxes_meet(&e, i))
                 {
                     near.push((box_dist2(&e, m), k));
                 }
                 Ok(())
             })?;
         }
-        Ok(self.witnesses_among(near, t, &sight, out)? == 0)
+        Ok(near)
     }
 
     /// What blocks the sight from `t` (no breaklines: nothing): the region of the run's
@@ -383,7 +425,7 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        Ok(self.witnesses_among(near, t, sight, out)? == 0)
+        Ok(self.witnesses_among(near, t, sight, self.witnesses, out)? == 0)
     }
 
     /// The breakline half of a certificate: no vertex the run did not load lies in the part of
@@ -404,14 +446,14 @@ impl<'a> Certifier<'a> {
         clear
     }
 
-    /// Tests the blocks `near` (keys with a distance), nearest first, until
-    /// [`Certifier::witnesses`] of them hold a point inside the circumdisk of `t`; returns how
-    /// many did (the keys go to `out`).
+    /// Tests the blocks `near` (keys with a distance), nearest first, until `limit` of them
+    /// hold a point inside the circumdisk of `t`; returns how many did (the keys go to `out`).
     fn witnesses_among(
         &self,
         mut near: Vec<(f64, u64)>,
         t: &[[f64; 2]; 3],
         sight: &Sight,
+        limit: usize,
         out: &mut Missing,
     ) -> Result<usize> {
         near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -420,7 +462,7 @@ impl<'a> Certifier<'a> {
             if self.witness(k, t, sight)? {
                 out.push(k);
                 found += 1;
-                if found >= self.witnesses {
+                if found >= limit {
                     break;
                 }
             }
@@ -539,7 +581,7 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        if self.witnesses_among(near, t, &sight, out)? > 0 {
+        if self.witnesses_among(near, t, &sight, self.witnesses, out)? > 0 {
             return Ok(Some(false));
         }
         if hidden[i] {
@@ -593,7 +635,7 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        Ok(Some(self.witnesses_among(far, t, &sight, out)? == 0))
+        Ok(Some(self.witnesses_among(far, t, &sight, self.witnesses, out)? == 0))
     }
 
     /// Does block `k` (not read) hold a point inside the circumdisk of `t`? Exact.

@@ -235,7 +235,7 @@ pub(crate) fn judge(
         }
         cert.tri.set(k as u32);
         let ok = match circumdisk_bounds(t2[0], t2[1], t2[2]) {
-            Some(d) if !flat(&t2, &d) => cert.clear(&t2, &d, &mut out.blocks)?,
+            Some(d) if lines.is_some() || !flat(&t2, &d) => cert.clear(&t2, &d, &mut out.blocks)?,
             d => match (cert.flat_clear(&t2, d.as_ref(), &mut out.blocks)?, d) {
                 (Some(ok), _) => ok,
                 (None, Some(d)) => cert.clear(&t2, &d, &mut out.blocks)?,
@@ -265,7 +265,8 @@ pub(crate) fn judge(
 
 /// Is `t` flat for its disk: a radius (bound) over 16 times its longest edge? Its disk is then
 /// judged as a flat triangle's ([`Certifier::flat_clear`]: the cap on its long edge and the
-/// half-plane beyond it), within the bound.
+/// half-plane beyond it), within the bound; not with breaklines, whose sight over a half-plane
+/// costs more than the disk's.
 fn flat(t: &Tri2, d: &DiskBounds) -> bool {
     let len2 = |p: [f64; 2], q: [f64; 2]| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
     let l2 = len2(t[0], t[1]).max(len2(t[1], t[2])).max(len2(t[2], t[0]));
