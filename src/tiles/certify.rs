@@ -54,8 +54,10 @@ struct Cache {
     points: usize,
 }
 
-/// Cached points beyond which the cache starts afresh.
-const CACHE_POINTS: usize = 1 << 20;
+/// Cached points beyond which the cache starts afresh (6 MiB of points per run in flight: a
+/// run tests the blocks around its own, and the flat route keeps a data edge's long slivers
+/// from testing whole rows).
+const CACHE_POINTS: usize = 1 << 18;
 
 /// Answers certificate questions for one run over the `loaded` blocks.
 #[derive(Debug)]
