@@ -7,6 +7,8 @@
 //! along a tile edge; the CLI's DEM is the sweep's, byte for byte, for any `--threads` and
 //! `--mem`.
 
+#[path = "support/cli.rs"]
+mod cli;
 #[path = "support/data.rs"]
 mod data;
 #[path = "support/mesh.rs"]
@@ -375,18 +377,7 @@ fn real_lidar_with_real_breaklines_equals_the_sweep() {
     }
 }
 
-fn cli(args: &[String]) -> std::process::Output {
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
+use cli::ok as cli;
 
 /// The CLI on the IGN crop with breaklines and a trimming polygon (2-D, draped): the DEM of
 /// `--engine tiles` (`auto` keeps the sweep for lines) is the sweep's byte for byte, and the DEM and the PLY mesh are the same bytes

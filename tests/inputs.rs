@@ -5,6 +5,8 @@
 //! COPC copies are written at run time by `scripts/make_copc.py` (copclib, independent of
 //! sweeptin); a small one, `tests/data/lidR_Topography.copc.laz`, is committed.
 
+#[path = "support/cli.rs"]
+mod cli;
 #[path = "support/data.rs"]
 mod data;
 
@@ -187,18 +189,7 @@ fn ign_tiles() -> Vec<PathBuf> {
     v
 }
 
-fn sweeptin(args: &[&str]) -> std::process::Output {
-    let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "sweeptin {args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
+use cli::ok as sweeptin;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()

@@ -4,6 +4,8 @@
 //! grow their buffers; and the tiled outputs are the same bytes for any thread count and budget,
 //! with the same DEM and contours as the single sweep.
 
+#[path = "support/cli.rs"]
+mod cli;
 #[path = "support/data.rs"]
 mod data;
 #[path = "support/mesh.rs"]
@@ -209,18 +211,7 @@ fn real_files_equal_the_core() {
     }
 }
 
-fn cli(args: &[&str]) -> std::process::Output {
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
+use cli::ok as cli;
 
 /// Same bytes whatever the thread count and memory budget; the DEM is the sweep's, byte for
 /// byte, and the contours are the sweep's polylines.

@@ -18,6 +18,15 @@
 //! makes flat triangles whose huge disks reach far along the edge, but only by a sliver that the
 //! points there stay out of.
 //!
+//! Two refinements keep the second stage small. Blocks are gathered nearest the triangle's
+//! centroid first, in boxes growing fourfold, so a failing certificate stops at its first
+//! witnesses (a sparse patch run has huge triangles between the hull's corners). And a *flat*
+//! triangle (disk bound over 16 times its longest edge; [`Certifier::flat_clear`]) is judged by
+//! the cap on its long edge and the half-plane beyond it, within the bound: along a straight
+//! data edge (a survey's border, a tile's edge at a gap between tiles) the centre of a sliver's
+//! disk lies far outside and is known only roughly, so the bound alone would reach every block
+//! of the survey, while the half-plane beyond the edge holds none.
+//!
 //! The convex hull needs no certificate of its own: every run also holds the corners of the hull
 //! of all the points ([`super::hull`]), so a run's hull *is* the whole hull, and what lies
 //! outside it lies outside the whole triangulation.
