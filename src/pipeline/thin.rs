@@ -41,6 +41,9 @@ pub struct ThinSummary {
     pub read_seconds: f64,
     /// Peak resident memory (VmHWM), when the OS reports it.
     pub peak_rss_bytes: Option<u64>,
+    /// With `--tile`: the tiles.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tiles: Option<super::thin_tiles::ThinTileSummary>,
 }
 
 /// Reads the points and breaklines of `config` and thins them within `options.max_error`.
@@ -146,7 +149,7 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
 }
 
 /// The predicates' range check of one input point.
-fn check_point(index: u64, p: [f64; 3]) -> Result<()> {
+pub(super) fn check_point(index: u64, p: [f64; 3]) -> Result<()> {
     if !p.iter().all(|c| c.is_finite()) {
         return Err(Error::NonFinite {
             index,
