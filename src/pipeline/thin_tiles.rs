@@ -45,6 +45,8 @@ pub struct ThinTileSummary {
     pub border_points: u64,
     /// Points of the largest tile.
     pub largest_tile_points: u64,
+    /// Bytes the routing sort spilled to temporary files (0: it fit in its quarter of --mem).
+    pub spilled_bytes: u64,
     /// Seconds computing the borders (the exact TIN's pass and the 1-D simplification).
     pub border_seconds: f64,
     /// Seconds reading and sorting the points into tiles.
@@ -53,7 +55,9 @@ pub struct ThinTileSummary {
     pub thin_seconds: f64,
 }
 
-/// A point on its way to its tile: packed tile key (row-major), position, input order.
+/// A point on its way to its tile: packed tile key (row-major), position, input order. Padded
+/// to 64 bytes: the sort's sliding maps (`sort::mmap`) need a record size that divides their
+/// window.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 struct TileRecord {
@@ -62,6 +66,7 @@ struct TileRecord {
     y: f64,
     z: f64,
     index: u64,
+    pad: [u64; 3],
 }
 
 impl SortKey for TileRecord {
@@ -154,6 +159,7 @@ pub fn thin_tiled(
                 y: q[1],
                 z: q[2],
                 index,
+                pad: [0; 3],
             })?;
             index += 1;
         }
@@ -163,6 +169,7 @@ pub fn thin_tiled(
     summary.crs = config.input_crs()?;
     drop(reader);
     let mut merge = sorter.finish()?;
+    tiles.spilled_bytes = merge.stats().spilled_bytes;
     tiles.route_seconds = start.elapsed().as_secs_f64();
     summary.read_seconds = tiles.border_seconds + tiles.route_seconds;
 

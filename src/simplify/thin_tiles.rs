@@ -86,7 +86,7 @@ impl TileLines {
     #[inline]
     pub(crate) fn tile_of(&self, v: f64) -> Result<i64> {
         let q = (v / self.size).floor();
-        if !(q.abs() < MAX_TILE) {
+        if q.is_nan() || q.abs() >= MAX_TILE {
             return Err(Error::Options(format!(
                 "coordinate {v} is {q} tiles of --tile {} from 0: give a larger --tile",
                 self.size
@@ -180,9 +180,9 @@ impl Sections {
         if self.samples.saturating_mul(SAMPLE_BYTES) > self.limit {
             return Err(Error::Options(format!(
                 "thin --tile {}: the TIN's sections along the tile borders need more than {} \
-                 MiB ({} samples): give a larger --tile or a larger --mem",
+                 KiB ({} samples, an eighth of --mem): give a larger --tile or a larger --mem",
                 self.grid.size,
-                self.limit >> 20,
+                self.limit >> 10,
                 self.samples
             )));
         }
@@ -309,10 +309,7 @@ fn simplify_section(
     let mut kept = Vec::new();
     let mut failure = None;
     let mut start = 0;
-    for end in 1..s.len() {
-        if !anchors[end] {
-            continue;
-        }
+    for end in (1..s.len()).filter(|&n| anchors[n]) {
         let piece = simplify_by(
             end - start + 1,
             |a, b| {
