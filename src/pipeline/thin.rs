@@ -6,6 +6,7 @@
 //! [`THIN_BYTES_PER_POINT`] bytes per point at the peak (reading and sorting). The job is checked
 //! against `--mem` from the LAS/LAZ headers' point counts before anything is read, and refused
 //! when it does not fit.
+//! `sweeptin thin --tile` runs in bounded memory instead: [`super::thin_tiles`].
 
 use super::{RunConfig, Source, lines};
 use crate::error::{Error, Result};

@@ -40,6 +40,9 @@
 //! point set. Its memory is linear in the points, with a small constant; the caller
 //! (`pipeline::thin`) checks the points against the memory budget before reading, from the
 //! files' headers, and refuses jobs that do not fit; the kept TIN is checked as it grows.
+//! `sweeptin thin --tile` is the bounded alternative, at the price of a few more points:
+//! `simplify::thin_tiles` runs this thinning per tile (`thin_in_domain`) from borders cut from
+//! the exact TIN.
 //!
 //! # Determinism
 //! Ties in the queue go to the highest triangle slot; slots, vertex ids and walks depend only on
