@@ -148,6 +148,21 @@ fn real_ground_tiles_keep_every_point_and_conform() {
             ThinOptions::max_error(0.1)
         })
         .unwrap();
+    // One tile holding everything: the global run's triangles.
+    let (one, _) = tiled(std::slice::from_ref(&las), Filter::default(), 0.1, 1e6);
+    let set = |v: &[[f64; 3]], t: &[[u32; 3]]| {
+        let mut k: Vec<[[u64; 3]; 3]> = t
+            .iter()
+            .map(|t| {
+                let mut c = t.map(|i| v[i as usize].map(f64::to_bits));
+                c.sort();
+                c
+            })
+            .collect();
+        k.sort();
+        k
+    };
+    assert!(set(&one.vertices, &one.triangles) == set(&global.vertices, &global.triangles));
     // 20 m: the tile's west edge x = 770 500 lies on a grid line (points on it, a sliver
     // tile); 7 m: 64 small tiles.
     for tile in [20.0, 7.0] {
@@ -230,6 +245,9 @@ fn same_bytes_whatever_mem_and_threads_and_clear_refusals() {
     let a = run("a.ply", &["--threads", "1", "--mem", "2M"]);
     let b = run("b.ply", &["--threads", "2", "--mem", "1G"]);
     assert!(a == b, "thin --tile output differs with --mem / --threads");
+    // The first pass's engine (its triangles arrive in another order).
+    let c = run("c.ply", &["--engine", "sweep"]);
+    assert!(a == c, "thin --tile output differs with --engine");
     // Refused before any work, exit 2 (usage).
     let lines = dir.path().join("line.txt");
     std::fs::write(&lines, "770510 6277560\n770540 6277580\n").unwrap();

@@ -204,8 +204,15 @@ impl Sections {
         let mut corners: HashMap<(i64, i64), f64> = HashMap::new();
         for (k, lines) in [(0usize, vertical), (1, horizontal)] {
             for (i, mut s) in lines {
-                s.sort_by(|a, b| a.pos.total_cmp(&b.pos).then(b.vertex.cmp(&a.vertex)));
-                // One sample per position: a vertex before a crossing rounded onto it.
+                // A total order (the triangles arrive in an order that depends on the engine
+                // and the threads): one sample per position, a vertex before a crossing
+                // rounded onto it, else the lowest.
+                s.sort_by(|a, b| {
+                    a.pos
+                        .total_cmp(&b.pos)
+                        .then(b.vertex.cmp(&a.vertex))
+                        .then(a.z.total_cmp(&b.z))
+                });
                 s.dedup_by(|b, a| a.pos == b.pos);
                 let (lo, hi) = (s[0].pos, s[s.len() - 1].pos);
                 let mut anchors = vec![false; s.len()];
