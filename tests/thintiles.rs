@@ -246,7 +246,7 @@ fn same_bytes_whatever_mem_and_threads_and_clear_refusals() {
     let b = run("b.ply", &["--threads", "2", "--mem", "1G"]);
     assert!(a == b, "thin --tile output differs with --mem / --threads");
     // The first pass's engine (its triangles arrive in another order).
-    let c = run("c.ply", &["--engine", "sweep"]);
+    let c = run("s.ply", &["--engine", "sweep"]);
     assert!(a == c, "thin --tile output differs with --engine");
     // Refused before any work, exit 2 (usage).
     let lines = dir.path().join("line.txt");
