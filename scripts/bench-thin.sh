@@ -5,8 +5,14 @@
 # against every ground point by an independent checker (dev/tin_errors.rs: a grid of triangles,
 # barycentric interpolation), wall time and peak RSS by /usr/bin/time -v.
 #
+# Then `thin --tile T` (bounded memory, per tile) beside the global run at one tolerance, each
+# tile size with its own --mem: kept points, border (Steiner) points, errors by the same checker,
+# wall time and peak RSS.
+#
 # usage: scripts/bench-thin.sh [LAZ] [TOLERANCES…]
 #   LAZ defaults to ../shared/data/lidar/arso_TM_511_122_from_ept.laz, tolerances to 0.05 0.1 0.5.
+#   THIN_TILE_TOL (default 0.1) and THIN_TILES ("T:MEM …", default "250:256M 500:768M") set the
+#   tiled runs; THIN_TILES="" skips them.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 laz=${1:-$here/../shared/data/lidar/arso_TM_511_122_from_ept.laz}
@@ -53,3 +59,29 @@ for tol in "${tols[@]}"; do
     "$(field "$work/simp.err.json" "d['all']['uncovered']")" "$s2" "$mb2"
   echo "  thin: $(field "$work/thin.err.json" "d['distinct']['beyond_tol']") distinct points beyond the tolerance (checker), over all points incl. duplicates max $(field "$work/thin.err.json" "d['all']['max_error']"); dem+simplify: $(field "$work/simp.err.json" "d['distinct']['beyond_tol']") beyond; thin's own summary: max $(field "$work/thin.json" "d['thin']['max_error']"), rms $(field "$work/thin.json" "d['thin']['rms_error']"), $(field "$work/thin.json" "d['thin']['seconds']") s thinning + $(field "$work/thin.json" "d['read_seconds']") s reading"
 done
+
+tile_tol=${THIN_TILE_TOL:-0.1}
+read -r -a tile_runs <<<"${THIN_TILES-250:256M 500:768M}"
+if [ ${#tile_runs[@]} -gt 0 ]; then
+  echo
+  echo "thin --tile at $tile_tol (load: $(cut -d' ' -f1-3 /proc/loadavg))"
+  printf '%-30s %9s %8s %8s %9s %9s %9s %7s %8s\n' route kept kept_% border max_err rms_err uncovered wall_s peak_MiB
+  for run in global "${tile_runs[@]}"; do
+    if [ "$run" = global ]; then
+      args=(); label="thin (global)"
+    else
+      args=(--tile "${run%%:*}" --mem "${run##*:}"); label="thin --tile ${run%%:*} --mem ${run##*:}"
+    fi
+    read -r s mb < <(timed "$bin" thin "$laz" --class 2 --max-error "$tile_tol" "${args[@]}" -o "$work/tile.ply" --json --quiet)
+    cp "$work/out" "$work/tile.json"
+    "$errors" "$work/tile.ply" "$tile_tol" "$laz" 2 >"$work/tile.err.json"
+    printf '%-30s %9s %8.2f %8s %9.4f %9.4f %9s %7s %8s\n' "$label" \
+      "$(field "$work/tile.json" "d['thin']['kept']")" \
+      "$(field "$work/tile.json" "100 * d['thin']['kept_ratio']")" \
+      "$(field "$work/tile.json" "d['tiles']['border_points'] if 'tiles' in d else 0")" \
+      "$(field "$work/tile.err.json" "d['distinct']['max_error']")" \
+      "$(field "$work/tile.err.json" "d['all']['rms_error']")" \
+      "$(field "$work/tile.err.json" "d['all']['uncovered']")" "$s" "$mb"
+    [ "$run" = global ] || echo "  $(field "$work/tile.json" "d['tiles']")"
+  done
+fi

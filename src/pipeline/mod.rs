@@ -23,6 +23,7 @@ mod lines;
 mod read;
 mod replay;
 mod thin;
+mod thin_tiles;
 mod tiled;
 
 use crate::error::{Error, Result};
@@ -36,6 +37,7 @@ pub use config::RunConfig;
 pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary};
 pub use read::read_points;
 pub use thin::{THIN_BYTES_PER_POINT, ThinSummary, thin};
+pub use thin_tiles::{TILE_BYTES_PER_POINT, ThinTileSummary, thin_tiled};
 
 /// What to triangulate.
 #[derive(Clone, Debug)]

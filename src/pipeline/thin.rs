@@ -6,6 +6,7 @@
 //! [`THIN_BYTES_PER_POINT`] bytes per point at the peak (reading and sorting). The job is checked
 //! against `--mem` from the LAS/LAZ headers' point counts before anything is read, and refused
 //! when it does not fit.
+//! `sweeptin thin --tile` runs in bounded memory instead: [`super::thin_tiles`].
 
 use super::{RunConfig, Source, lines};
 use crate::error::{Error, Result};
@@ -41,6 +42,9 @@ pub struct ThinSummary {
     pub read_seconds: f64,
     /// Peak resident memory (VmHWM), when the OS reports it.
     pub peak_rss_bytes: Option<u64>,
+    /// With `--tile`: the tiles.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tiles: Option<super::thin_tiles::ThinTileSummary>,
 }
 
 /// Reads the points and breaklines of `config` and thins them within `options.max_error`.
@@ -146,7 +150,7 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
 }
 
 /// The predicates' range check of one input point.
-fn check_point(index: u64, p: [f64; 3]) -> Result<()> {
+pub(super) fn check_point(index: u64, p: [f64; 3]) -> Result<()> {
     if !p.iter().all(|c| c.is_finite()) {
         return Err(Error::NonFinite {
             index,

@@ -26,24 +26,46 @@ pub(super) fn simplify_line(h: &[f64], bound: f64, decimate: bool) -> Vec<usize>
         .filter(|v| !v.is_nan())
         .fold(1.0f64, |m, v| m.max(v.abs()));
     let limit = bound - 64e-12 * scale;
-    let mut keep = vec![false; n];
-    keep[0] = true;
-    keep[n - 1] = true;
+    simplify_by(
+        n,
+        |i, j| split(h, i, j, limit),
+        |i, j| covers_missing(h, i, j),
+        decimate,
+    )
+}
+
+/// The one-dimensional simplification behind [`simplify_line`], for any line of `n` samples
+/// (`sweeptin thin --tile` runs it on the TIN's sections along tile borders, at irregular
+/// positions): `split(i, j)` names the sample where segment `i..=j` must be split (`None`: the
+/// segment stays), `keep(i, j)` says that a segment must not replace its parts even so.
+/// Returns the kept samples, increasing, the ends included.
+pub(crate) fn simplify_by(
+    n: usize,
+    mut split: impl FnMut(usize, usize) -> Option<usize>,
+    mut keep: impl FnMut(usize, usize) -> bool,
+    decimate: bool,
+) -> Vec<usize> {
+    if n < 2 {
+        return (0..n).collect();
+    }
+    let mut kept_flag = vec![false; n];
+    kept_flag[0] = true;
+    kept_flag[n - 1] = true;
     let mut stack = vec![(0usize, n - 1)];
     while let Some((i, j)) = stack.pop() {
-        if let Some(k) = split(h, i, j, limit) {
-            keep[k] = true;
+        if let Some(k) = split(i, j) {
+            kept_flag[k] = true;
             stack.push((k, j));
             stack.push((i, k));
         }
     }
-    let mut out: Vec<usize> = (0..n).filter(|&i| keep[i]).collect();
+    let mut out: Vec<usize> = (0..n).filter(|&i| kept_flag[i]).collect();
     if decimate && out.len() > 2 {
         let mut kept = Vec::with_capacity(out.len());
         kept.push(out[0]);
         for w in 1..out.len() - 1 {
             let (prev, next) = (*kept.last().expect("an end"), out[w + 1]);
-            if split(h, prev, next, limit).is_some() || covers_missing(h, prev, next) {
+            if split(prev, next).is_some() || keep(prev, next) {
                 kept.push(out[w]);
             }
         }

@@ -73,7 +73,7 @@ use refiner::Refiner;
 use scan::Cells;
 pub use scan::Height;
 
-mod border;
+pub(crate) mod border;
 mod queue;
 mod refiner;
 pub mod scan;
@@ -84,6 +84,7 @@ pub use windows::{
     simplify_raster,
 };
 pub mod thin;
+pub(crate) mod thin_tiles;
 pub use thin::{ThinLines, ThinOptions, ThinStats, Thinned, thin};
 
 /// When to stop refining.

@@ -40,6 +40,9 @@
 //! point set. Its memory is linear in the points, with a small constant; the caller
 //! (`pipeline::thin`) checks the points against the memory budget before reading, from the
 //! files' headers, and refuses jobs that do not fit; the kept TIN is checked as it grows.
+//! `sweeptin thin --tile` is the bounded alternative, at the price of a few more points:
+//! `simplify::thin_tiles` runs this thinning per tile (`thin_in_domain`) from borders cut from
+//! the exact TIN.
 //!
 //! # Determinism
 //! Ties in the queue go to the highest triangle slot; slots, vertex ids and walks depend only on
@@ -167,7 +170,43 @@ pub fn thin(points: Vec<[f64; 3]>, lines: ThinLines<'_>, options: &ThinOptions) 
             max: u64::from(NONE) - 1,
         });
     }
-    let mut t = Thinner::new(points, lines, tol)?;
+    let h = hull(&points);
+    let mut t = Thinner::new(points, h, lines, tol)?;
+    t.run(options.mem.unwrap_or(u64::MAX))?;
+    if options.decimate {
+        t.decimate()?;
+    }
+    let mut out = t.finish()?;
+    out.stats.seconds = start.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+/// Thins the points of one tile of `sweeptin thin --tile` (`pipeline::thin_tiles`): the start
+/// is the Delaunay triangulation of `fixed` (the tile's border vertices, not input points) and
+/// the points `hull` names (the other vertices of the tile's domain), all never removed; every
+/// point must lie in it and none at a `fixed` position. Otherwise as [`thin()`].
+///
+/// # Errors
+/// As [`thin()`]; [`Error::TooFewPoints`] / [`Error::AllCollinear`] when the start has no
+/// triangle.
+pub(crate) fn thin_in_domain(
+    points: Vec<[f64; 3]>,
+    hull: Vec<u32>,
+    fixed: &[[f64; 3]],
+    options: &ThinOptions,
+) -> Result<Thinned> {
+    let start = std::time::Instant::now();
+    if points.len() as u64 >= u64::from(NONE) {
+        return Err(Error::TooManyPoints {
+            count: points.len() as u64,
+            max: u64::from(NONE) - 1,
+        });
+    }
+    let lines = ThinLines {
+        vertices: fixed,
+        segments: &[],
+    };
+    let mut t = Thinner::new(points, hull, lines, options.max_error)?;
     t.run(options.mem.unwrap_or(u64::MAX))?;
     if options.decimate {
         t.decimate()?;
@@ -179,7 +218,7 @@ pub fn thin(points: Vec<[f64; 3]>, lines: ThinLines<'_>, options: &ThinOptions) 
 
 /// The exact convex hull of `points` (strictly convex vertices only), by Andrew's monotone chain
 /// over the points in `(y, x)` order; indices into `points`.
-fn hull(points: &[[f64; 3]]) -> Vec<u32> {
+pub(crate) fn hull(points: &[[f64; 3]]) -> Vec<u32> {
     let mut order: Vec<u32> = (0..points.len() as u32).collect();
     let cmp = |a: &u32, b: &u32| {
         let (p, q) = (points[*a as usize], points[*b as usize]);
@@ -270,8 +309,9 @@ struct Thinner {
 }
 
 impl Thinner {
-    fn new(pts: Vec<[f64; 3]>, lines: ThinLines<'_>, tol: f64) -> Result<Self> {
-        let h = hull(&pts);
+    /// The start: the Delaunay triangulation of the points `h` names and the line vertices,
+    /// with the line segments as constraints; every point bucketed.
+    fn new(pts: Vec<[f64; 3]>, h: Vec<u32>, lines: ThinLines<'_>, tol: f64) -> Result<Self> {
         if h.len() < 3 && lines.vertices.is_empty() {
             // The core's own error: too few points, or all collinear.
             crate::triangulate(&pts, &crate::Options::default())?;
