@@ -45,8 +45,10 @@ const MAX_BLOCKS: f64 = (1u64 << 21) as f64;
 /// about 13 %).
 const TILE_BLOCKS: f64 = 1024.0;
 /// Bytes a tile's run holds per point read, at its peak (the points, the in-memory sweep, the
-/// triangulation, the certificates and the tile's output), for the memory budget.
-const RUN_BYTES_PER_POINT: f64 = 256.0;
+/// triangulation, the certificates and the tile's output), for the memory budget. Measured at a
+/// billion points (`scripts/bench-billion.sh`, tiles of about 350 k points): three runs in
+/// flight took about 129 MB each, 350 bytes a point, beside the block table and the DEM's rows.
+const RUN_BYTES_PER_POINT: f64 = 384.0;
 /// The first buffer of a tile, in blocks.
 const FIRST_BUFFER: i64 = 1;
 
