@@ -96,6 +96,46 @@ pub trait MeshSink {
     fn finish(&mut self) -> Result<MeshSummary>;
 }
 
+/// A mesh kept in memory: the vertex table and triangles of 32-bit vertex numbers, for a step
+/// that needs the whole mesh (`sweeptin refine` of points) and for tests.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MemoryMesh {
+    /// Vertices in the order written.
+    pub vertices: Vec<[f64; 3]>,
+    /// Triangles, as written.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl MeshSink for MemoryMesh {
+    fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
+        self.vertices.push(p);
+        Ok(())
+    }
+
+    fn triangle(&mut self, t: [u64; 3]) -> Result<()> {
+        let mut out = [0u32; 3];
+        for (o, v) in out.iter_mut().zip(t) {
+            *o = u32::try_from(v)
+                .ok()
+                .filter(|&v| (v as usize) < self.vertices.len())
+                .ok_or_else(|| crate::Error::Output {
+                    path: PathBuf::from("(memory)"),
+                    message: format!("triangle vertex {v} not written (or over 32 bits)"),
+                })?;
+        }
+        self.triangles.push(out);
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<MeshSummary> {
+        Ok(MeshSummary {
+            vertices: self.vertices.len() as u64,
+            triangles: self.triangles.len() as u64,
+            bytes: 0,
+        })
+    }
+}
+
 /// What a finished [`MeshSink`] wrote.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MeshSummary {

@@ -5,26 +5,17 @@
 //! Without the GDAL tool (`apt-get install -y gdal-bin`) each test fails under `CI=true`; locally
 //! it is skipped with a message.
 
+#[path = "support/cli.rs"]
+mod cli;
 #[path = "support/data.rs"]
 mod data;
 use data::data_dir;
 
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn sweeptin(args: &[&str]) -> Output {
-    let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "sweeptin {args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
+use cli::ok as sweeptin;
 
 /// Runs a GDAL tool; `None` (and a message) when it is not installed.
 fn gdal(tool: &str, args: &[&str]) -> Option<String> {

@@ -17,29 +17,8 @@ use std::process::Command;
 use sweeptin::input::las::Filter;
 use sweeptin::pipeline::{Input, LineOptions, RunConfig, RunOptions, ThinSummary, thin_tiled};
 use sweeptin::simplify::ThinOptions;
-use sweeptin::sink::{MeshSink, MeshSummary};
+use sweeptin::sink::MemoryMesh;
 use tin_errors::tin_errors;
-
-/// A mesh in memory.
-#[derive(Default)]
-struct Mesh {
-    vertices: Vec<[f64; 3]>,
-    triangles: Vec<[u32; 3]>,
-}
-
-impl MeshSink for Mesh {
-    fn vertex(&mut self, p: [f64; 3]) -> sweeptin::Result<()> {
-        self.vertices.push(p);
-        Ok(())
-    }
-    fn triangle(&mut self, t: [u64; 3]) -> sweeptin::Result<()> {
-        self.triangles.push(t.map(|v| v as u32));
-        Ok(())
-    }
-    fn finish(&mut self) -> sweeptin::Result<MeshSummary> {
-        Ok(MeshSummary::default())
-    }
-}
 
 fn config(paths: &[PathBuf], filter: Filter) -> RunConfig {
     let input = Input {
@@ -51,8 +30,8 @@ fn config(paths: &[PathBuf], filter: Filter) -> RunConfig {
     RunConfig::new(input, RunOptions::default()).unwrap()
 }
 
-fn tiled(paths: &[PathBuf], filter: Filter, tol: f64, tile: f64) -> (Mesh, ThinSummary) {
-    let mut mesh = Mesh::default();
+fn tiled(paths: &[PathBuf], filter: Filter, tol: f64, tile: f64) -> (MemoryMesh, ThinSummary) {
+    let mut mesh = MemoryMesh::default();
     let s = thin_tiled(
         &config(paths, filter),
         &ThinOptions::max_error(tol),
@@ -89,7 +68,7 @@ fn cross(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
 /// every vertex used, the boundary one loop, V − E + F = 1, and the triangles' areas add up to
 /// the area inside the boundary (no fold, no overlap). A T-junction on a tile border leaves
 /// a second boundary loop (a hole of zero area) and fails the count.
-fn assert_conforming(m: &Mesh) {
+fn assert_conforming(m: &MemoryMesh) {
     let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
     let mut used = vec![false; m.vertices.len()];
     let mut area = 0.0;

@@ -8,7 +8,7 @@ use std::time::Instant;
 use sweeptin::breaklines::{CleanOptions, read_files};
 use sweeptin::output::{MeshFormat, MeshMeta, create_mesh_sink};
 use sweeptin::refine::{RefineOptions, RefineStats, refine};
-use sweeptin::sink::{MeshSink, MeshSummary};
+use sweeptin::sink::MemoryMesh;
 
 /// Arguments of `sweeptin refine`.
 #[derive(clap::Args, Debug)]
@@ -84,27 +84,6 @@ struct Summary<'a> {
     total_seconds: f64,
 }
 
-/// Keeps a streamed mesh in memory.
-#[derive(Default)]
-struct Collect {
-    vertices: Vec<[f64; 3]>,
-    triangles: Vec<[u32; 3]>,
-}
-
-impl MeshSink for Collect {
-    fn vertex(&mut self, p: [f64; 3]) -> sweeptin::Result<()> {
-        self.vertices.push(p);
-        Ok(())
-    }
-    fn triangle(&mut self, t: [u64; 3]) -> sweeptin::Result<()> {
-        self.triangles.push(t.map(|v| v as u32));
-        Ok(())
-    }
-    fn finish(&mut self) -> sweeptin::Result<MeshSummary> {
-        Ok(MeshSummary::default())
-    }
-}
-
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let options = RefineOptions {
@@ -151,7 +130,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         let meta = meta(&args, crs.clone());
         let sink = create_mesh_sink(&args.output, args.format, &meta)?;
-        let mut collect = Collect::default();
+        let mut collect = MemoryMesh::default();
         sweeptin::pipeline::run(&config, Some(&mut collect), &mut [])
             .map_err(|e| super::input::run_error(e, &args.input.inputs))?;
         (collect.vertices, collect.triangles, sink)

@@ -164,14 +164,25 @@ pub fn thin(points: Vec<[f64; 3]>, lines: ThinLines<'_>, options: &ThinOptions) 
             "--max-error {tol} must be a finite distance >= 0"
         )));
     }
+    fits_ids(&points)?;
+    let h = hull(&points);
+    finish(Thinner::new(points, h, lines, tol)?, options, start)
+}
+
+/// Are there few enough points for the thinning's 32-bit ids?
+fn fits_ids(points: &[[f64; 3]]) -> Result<()> {
     if points.len() as u64 >= u64::from(NONE) {
         return Err(Error::TooManyPoints {
             count: points.len() as u64,
             max: u64::from(NONE) - 1,
         });
     }
-    let h = hull(&points);
-    let mut t = Thinner::new(points, h, lines, tol)?;
+    Ok(())
+}
+
+/// Runs the greedy insertion of `t` (and the decimation when asked) and times the thinning from
+/// `start`.
+fn finish(mut t: Thinner, options: &ThinOptions, start: std::time::Instant) -> Result<Thinned> {
     t.run(options.mem.unwrap_or(u64::MAX))?;
     if options.decimate {
         t.decimate()?;
@@ -196,24 +207,16 @@ pub(crate) fn thin_in_domain(
     options: &ThinOptions,
 ) -> Result<Thinned> {
     let start = std::time::Instant::now();
-    if points.len() as u64 >= u64::from(NONE) {
-        return Err(Error::TooManyPoints {
-            count: points.len() as u64,
-            max: u64::from(NONE) - 1,
-        });
-    }
+    fits_ids(&points)?;
     let lines = ThinLines {
         vertices: fixed,
         segments: &[],
     };
-    let mut t = Thinner::new(points, hull, lines, options.max_error)?;
-    t.run(options.mem.unwrap_or(u64::MAX))?;
-    if options.decimate {
-        t.decimate()?;
-    }
-    let mut out = t.finish()?;
-    out.stats.seconds = start.elapsed().as_secs_f64();
-    Ok(out)
+    finish(
+        Thinner::new(points, hull, lines, options.max_error)?,
+        options,
+        start,
+    )
 }
 
 /// The exact convex hull of `points` (strictly convex vertices only), by Andrew's monotone chain
