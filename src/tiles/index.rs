@@ -518,25 +518,27 @@ impl BlockIndex {
     }
 }
 
+/// The block index of `pts` on `grid`, sorted within `mem` bytes under `dir` (for tests).
+#[cfg(test)]
+pub(crate) fn index(mem: u64, pts: &[[f64; 3]], grid: TileGrid, dir: &Path) -> BlockIndex {
+    use crate::sort::external::ExternalSorter;
+    let mut s = ExternalSorter::<BlockRecord>::new(mem, dir);
+    for p in pts {
+        let (bx, by) = grid.block_of(p[0], p[1]);
+        s.push(BlockRecord {
+            key: TileGrid::key(bx, by),
+            x: p[0],
+            y: p[1],
+            z: p[2],
+        })
+        .unwrap();
+    }
+    BlockIndex::build(grid, s.finish().unwrap(), dir, DuplicatePolicy::First).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sort::external::ExternalSorter;
-
-    fn index(mem: u64, pts: &[[f64; 3]], grid: TileGrid, dir: &Path) -> BlockIndex {
-        let mut s = ExternalSorter::<BlockRecord>::new(mem, dir);
-        for p in pts {
-            let (bx, by) = grid.block_of(p[0], p[1]);
-            s.push(BlockRecord {
-                key: TileGrid::key(bx, by),
-                x: p[0],
-                y: p[1],
-                z: p[2],
-            })
-            .unwrap();
-        }
-        BlockIndex::build(grid, s.finish().unwrap(), dir, DuplicatePolicy::First).unwrap()
-    }
 
     #[test]
     fn spilled_and_in_memory_indexes_agree_and_keep_input_order() {

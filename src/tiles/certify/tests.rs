@@ -2,31 +2,22 @@
 //! straight data edge.
 
 use super::*;
-use crate::sort::external::ExternalSorter;
 use crate::tiles::grid::TileGrid;
-use crate::tiles::index::BlockRecord;
 
+/// The block index of `pts` (z = 0) on a grid of 8-unit tiles and unit blocks.
 fn index(pts: &[[f64; 2]]) -> BlockIndex {
     let dir = tempfile::tempdir().unwrap();
+    let pts: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], 0.0]).collect();
     let grid = TileGrid::new(8.0, 3).unwrap();
-    let mut s = ExternalSorter::<BlockRecord>::new(1 << 20, dir.path());
-    for p in pts {
-        let (bx, by) = grid.block_of(p[0], p[1]);
-        s.push(BlockRecord {
-            key: TileGrid::key(bx, by),
-            x: p[0],
-            y: p[1],
-            z: 0.0,
-        })
-        .unwrap();
+    crate::tiles::index::index(1 << 20, &pts, grid, dir.path())
+}
+
+/// Blocks read: the rectangle `x0 .. x1` × `y0 .. y1`, nothing else.
+fn loaded(x0: i64, y0: i64, x1: i64, y1: i64) -> Loaded {
+    Loaded {
+        rect: BlockRect { x0, y0, x1, y1 },
+        extra: vec![],
     }
-    BlockIndex::build(
-        grid,
-        s.finish().unwrap(),
-        dir.path(),
-        crate::sort::DuplicatePolicy::First,
-    )
-    .unwrap()
 }
 
 fn bounds(t: &[[f64; 2]; 3]) -> DiskBounds {
@@ -51,15 +42,7 @@ fn a_straight_data_edge_is_judged_by_its_half_plane() {
         pts.push([las(px), las(5_001_323.54 + (px - 500_157.51) * 0.01)]);
     }
     let ix = index(&pts);
-    let loaded = Loaded {
-        rect: BlockRect {
-            x0: 500_154,
-            y0: 5_001_318,
-            x1: 500_163,
-            y1: 5_001_325,
-        },
-        extra: vec![],
-    };
+    let loaded = loaded(500_154, 5_001_318, 500_163, 5_001_325);
     let unknown = std::cell::Cell::new(0.0);
     let c = Certifier::new(&ix, &loaded, &unknown);
     let t = [
@@ -96,15 +79,7 @@ fn disks() {
         }
     }
     let ix = index(&pts);
-    let loaded = Loaded {
-        rect: BlockRect {
-            x0: 4,
-            y0: 4,
-            x1: 16,
-            y1: 16,
-        },
-        extra: vec![],
-    };
+    let loaded = loaded(4, 4, 16, 16);
     let unknown = std::cell::Cell::new(0.0);
     let c = Certifier::new(&ix, &loaded, &unknown);
     let mut m = Missing::new();
