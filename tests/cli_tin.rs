@@ -1,6 +1,8 @@
 //! `sweeptin tin` on bad input: a clear message naming the file, exit code 3 (bad input data; 2
 //! for a bad option), no output file and no temporary file left behind.
 
+#[path = "support/cli.rs"]
+mod cli;
 use std::path::Path;
 use std::process::Command;
 
@@ -126,15 +128,7 @@ fn every_command_has_consistent_options() {
         "simplify",
         "crossval",
     ] {
-        let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
-            .args([c, "--help"])
-            .output()
-            .unwrap();
-        assert!(
-            o.status.success(),
-            "{c} --help: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        cli::ok(&[c, "--help"]);
     }
 }
 

@@ -3,25 +3,16 @@
 //! `centres`) on real tiles and against IGN's own DTM; plan mosaics (GeoTIFF and COG) equal to
 //! one run with either alignment; `.prj` beside `.asc`; the hillshade's georeferencing.
 
+#[path = "support/cli.rs"]
+mod cli;
 #[path = "support/data.rs"]
 mod data;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 use sweeptin::input::raster::RasterReader;
 
-fn sweeptin(args: &[&str], what: &str) -> Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{what} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
+use cli::ok as sweeptin;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -84,7 +75,7 @@ fn cog_is_valid_and_equals_the_plain_geotiff() {
         let mut a: Vec<&str> = base.to_vec();
         a.extend(extra);
         a.extend(["-o", s(out)]);
-        sweeptin(&a, "dem");
+        sweeptin(&a);
     };
     run(&[], &plain);
     let want = cells(&plain);
@@ -132,7 +123,7 @@ fn a_1_km_tile_gives_1000_by_1000_cells() {
     let laz = data::shared("lidar/ign_test_semis_2023_0299_6802_LA93_IGN69.laz");
     let t = tempfile::tempdir().unwrap();
     let edges = t.path().join("edges.tif");
-    let out = sweeptin(&["dem", s(&laz), "--json", "-q", "-o", s(&edges)], "dem");
+    let out = sweeptin(&["dem", s(&laz), "--json", "-q", "-o", s(&edges)]);
     let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         (j["dem"]["cols"].as_u64(), j["dem"]["rows"].as_u64()),
@@ -141,19 +132,16 @@ fn a_1_km_tile_gives_1000_by_1000_cells() {
     let c = cells(&edges);
     assert_eq!(c.2, [299_000.0, 1.0, 0.0, 6_802_000.0, 0.0, -1.0]);
     let centres = t.path().join("centres.asc");
-    let out = sweeptin(
-        &[
-            "dem",
-            s(&laz),
-            "--align",
-            "centres",
-            "--json",
-            "-q",
-            "-o",
-            s(&centres),
-        ],
-        "dem --align centres",
-    );
+    let out = sweeptin(&[
+        "dem",
+        s(&laz),
+        "--align",
+        "centres",
+        "--json",
+        "-q",
+        "-o",
+        s(&centres),
+    ]);
     let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         (j["dem"]["cols"].as_u64(), j["dem"]["rows"].as_u64()),
@@ -186,22 +174,19 @@ fn ign_tile_matches_igns_dtm_lattice() {
     let t = tempfile::tempdir().unwrap();
     let ours = t.path().join("centres.tif");
     let bbox = "770550,6277550,770600,6277600";
-    sweeptin(
-        &[
-            "dem",
-            s(&las),
-            "--cell",
-            "0.5",
-            "--align",
-            "centres",
-            "--bbox",
-            bbox,
-            "-q",
-            "-o",
-            s(&ours),
-        ],
-        "dem --align centres",
-    );
+    sweeptin(&[
+        "dem",
+        s(&las),
+        "--cell",
+        "0.5",
+        "--align",
+        "centres",
+        "--bbox",
+        bbox,
+        "-q",
+        "-o",
+        s(&ours),
+    ]);
     let theirs = RasterReader::open(&ign).unwrap().spec().clone();
     let mut r = RasterReader::open(&ours).unwrap();
     let spec = r.spec().clone();
@@ -218,20 +203,17 @@ fn ign_tile_matches_igns_dtm_lattice() {
         "{close} of {n} within 1 mm"
     );
     let edges = t.path().join("edges.tif");
-    sweeptin(
-        &[
-            "dem",
-            s(&las),
-            "--cell",
-            "0.5",
-            "--bbox",
-            bbox,
-            "-q",
-            "-o",
-            s(&edges),
-        ],
+    sweeptin(&[
         "dem",
-    );
+        s(&las),
+        "--cell",
+        "0.5",
+        "--bbox",
+        bbox,
+        "-q",
+        "-o",
+        s(&edges),
+    ]);
     let e = cells(&edges);
     assert_eq!((e.0, e.1), (100, 100));
     assert_eq!(e.2, [770_550.0, 0.5, 0.0, 6_277_600.0, 0.0, -0.5]);
@@ -256,11 +238,11 @@ fn plan_mosaic_equals_one_run_with_centre_alignment_and_as_cog() {
         "-o",
         s(&job),
     ]);
-    sweeptin(&args, "plan");
+    sweeptin(&args);
     let plan = job.join("plan.json");
-    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
+    sweeptin(&["run", s(&plan), "--all", "-q"]);
     let mosaic = t.path().join("mosaic.tif");
-    sweeptin(&["merge", s(&plan), "-o", s(&mosaic)], "merge");
+    sweeptin(&["merge", s(&plan), "-o", s(&mosaic)]);
     let m = cells(&mosaic);
     // One run over the same box (the union of the plan's tiles), reading everything.
     let x0 = m.2[0] + 0.25;
@@ -288,17 +270,14 @@ fn plan_mosaic_equals_one_run_with_centre_alignment_and_as_cog() {
         "-o",
         s(&single),
     ]);
-    sweeptin(&one, "one run");
+    sweeptin(&one);
     assert_eq!(
         m,
         cells(&single),
         "the centre-aligned mosaic differs from one run"
     );
     let cog = t.path().join("mosaic_cog.tif");
-    sweeptin(
-        &["merge", s(&plan), "-o", s(&cog), "--format", "cog"],
-        "merge --format cog",
-    );
+    sweeptin(&["merge", s(&plan), "-o", s(&cog), "--format", "cog"]);
     validate_cog(
         &cog,
         "plan_mosaic_equals_one_run_with_centre_alignment_and_as_cog",
@@ -313,27 +292,21 @@ fn hillshade_outputs_are_georeferenced() {
     let t = tempfile::tempdir().unwrap();
     let dem = t.path().join("dem.tif");
     let png = t.path().join("shade.png");
-    sweeptin(
-        &[
-            "dem",
-            s(&las),
-            "--cell",
-            "0.5",
-            "--hillshade",
-            s(&png),
-            "-q",
-            "-o",
-            s(&dem),
-        ],
-        "dem --hillshade",
-    );
+    sweeptin(&[
+        "dem",
+        s(&las),
+        "--cell",
+        "0.5",
+        "--hillshade",
+        s(&png),
+        "-q",
+        "-o",
+        s(&dem),
+    ]);
     let pgw = std::fs::read_to_string(png.with_extension("pgw")).unwrap();
     assert_eq!(pgw, "0.5\n0.0\n0.0\n-0.5\n770550.25\n6277599.75\n");
     let cog = t.path().join("shade.tif");
-    sweeptin(
-        &["hillshade", s(&dem), "-o", s(&cog), "--format", "cog"],
-        "hillshade",
-    );
+    sweeptin(&["hillshade", s(&dem), "-o", s(&cog), "--format", "cog"]);
     let r = RasterReader::open(&cog).unwrap();
     assert_eq!(
         r.spec().transform,
