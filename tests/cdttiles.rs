@@ -14,13 +14,12 @@ mod data;
 #[path = "support/mesh.rs"]
 mod mesh;
 
-use mesh::{Collect, Key, write_las};
+use mesh::{Key, write_las};
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation as _};
 use std::path::{Path, PathBuf};
 use sweeptin::DuplicatePolicy;
 use sweeptin::geom::predicates::{Orientation, orient};
-use sweeptin::pipeline::{Input, LineOptions, RunConfig, RunOptions, RunSummary, run};
-use sweeptin::tiles::TileOptions;
+use sweeptin::pipeline::{Input, LineOptions};
 
 fn rng(seed: u64) -> impl FnMut() -> f64 {
     let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
@@ -150,32 +149,7 @@ fn input(paths: &[PathBuf], lines: LineOptions, duplicates: DuplicatePolicy) -> 
     }
 }
 
-/// A run into a collecting mesh sink: tiled with `tile` and `threads`, or the sweep (`None`).
-fn collect(input: &Input, tiles: Option<(Option<f64>, usize)>, mem: u64) -> (Collect, RunSummary) {
-    let tmp = tempfile::tempdir().unwrap();
-    let options = RunOptions {
-        mem,
-        tmp_dir: Some(tmp.path().to_path_buf()),
-        tiles: tiles.map(|(tile, threads)| TileOptions {
-            threads,
-            tile,
-            base: None,
-            scope: None,
-        }),
-        ..RunOptions::default()
-    };
-    let mut c = Collect::default();
-    let config = RunConfig::new(input.clone(), options).unwrap();
-    let s = run(&config, Some(&mut c), &mut []).unwrap();
-    assert_eq!(s.tiles.is_some(), tiles.is_some(), "engine");
-    assert_eq!(s.triangles as usize, c.triangles.len());
-    assert_eq!(
-        c.released.len(),
-        c.vertices.len(),
-        "every vertex released once"
-    );
-    (c, s)
-}
+use mesh::collect_run as collect;
 
 /// The tiled triangles (with z) equal the sweep's for each tile size and both thread counts.
 fn assert_tiles_equal_sweep(input: &Input, tiles: &[Option<f64>], what: &str) -> Vec<Key> {
@@ -219,18 +193,7 @@ fn spade_cdt(pts: &[[f64; 3]], segs: &[[[f64; 3]; 2]]) -> Vec<Key2> {
         let b = cdt.insert(Point2::new(s[1][0], s[1][1])).unwrap();
         assert!(cdt.add_constraint(a, b));
     }
-    let mut out: Vec<Key2> = cdt
-        .inner_faces()
-        .map(|f| {
-            let mut k = f
-                .vertices()
-                .map(|v| (v.position().x.to_bits(), v.position().y.to_bits()));
-            k.sort();
-            k
-        })
-        .collect();
-    out.sort();
-    out
+    mesh::spade_keys(&cdt)
 }
 
 /// Random segments (long ones across many tiles, ends at lidar points) in tiles of 8 m: the

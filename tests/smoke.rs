@@ -1,3 +1,6 @@
+#[path = "support/mesh.rs"]
+mod mesh;
+
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
 use sweeptin::sort::memory::{DuplicatePolicy, prepare};
 use sweeptin::sweep::Sweep;
@@ -36,18 +39,7 @@ fn spade_set(pts: &[[f64; 3]]) -> Vec<[(u64, u64); 3]> {
     for p in pts {
         d.insert(Point2::new(p[0], p[1])).unwrap();
     }
-    let mut out: Vec<[(u64, u64); 3]> = d
-        .inner_faces()
-        .map(|f| {
-            let mut k = f
-                .vertices()
-                .map(|v| (v.position().x.to_bits(), v.position().y.to_bits()));
-            k.sort();
-            k
-        })
-        .collect();
-    out.sort();
-    out
+    mesh::spade_keys(&d)
 }
 
 #[test]

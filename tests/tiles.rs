@@ -14,8 +14,7 @@ mod mesh;
 use data::shared;
 use mesh::{Collect, contour_set, core_keys, write_las};
 use std::path::{Path, PathBuf};
-use sweeptin::pipeline::{Input, RunConfig, RunOptions, RunSummary, run};
-use sweeptin::tiles::TileOptions;
+use sweeptin::pipeline::{Input, RunSummary};
 use sweeptin::{DuplicatePolicy, Options, triangulate};
 
 fn input(paths: &[PathBuf], classes: Option<Vec<u8>>) -> Input {
@@ -32,34 +31,7 @@ fn input(paths: &[PathBuf], classes: Option<Vec<u8>>) -> Input {
 
 /// A tiled run into a collecting mesh sink.
 fn tiled(input: &Input, tile: Option<f64>, threads: usize, mem: u64) -> (Collect, RunSummary) {
-    let tmp = tempfile::tempdir().unwrap();
-    let options = RunOptions {
-        mem,
-        tmp_dir: Some(tmp.path().to_path_buf()),
-        tiles: Some(TileOptions {
-            threads,
-            tile,
-            base: None,
-            scope: None,
-        }),
-        ..RunOptions::default()
-    };
-    let mut c = Collect::default();
-    let config = RunConfig::new(input.clone(), options).unwrap();
-    let summary = run(&config, Some(&mut c), &mut []).unwrap();
-    assert!(summary.tiles.is_some(), "the run was tiled");
-    assert_eq!(summary.triangles as usize, c.triangles.len());
-    assert_eq!(
-        c.released.len(),
-        c.vertices.len(),
-        "every vertex released once"
-    );
-    assert_eq!(
-        std::fs::read_dir(tmp.path()).unwrap().count(),
-        0,
-        "spill files left behind"
-    );
-    (c, summary)
+    mesh::collect_run(input, Some((tile, threads)), mem)
 }
 
 /// The tiled triangles equal the core's on the same points, for the given tile sizes and both

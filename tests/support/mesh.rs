@@ -141,3 +141,60 @@ pub fn contour_set(bytes: &[u8]) -> Vec<String> {
     out.sort();
     out
 }
+
+/// A run of `input` into a [`Collect`]: tiled with `(tile, threads)`, or the sweep (`None`);
+/// checks the summary against what was collected, that every vertex was released once and that
+/// no spill file is left behind.
+pub fn collect_run(
+    input: &sweeptin::pipeline::Input,
+    tiles: Option<(Option<f64>, usize)>,
+    mem: u64,
+) -> (Collect, sweeptin::pipeline::RunSummary) {
+    use sweeptin::pipeline::{RunConfig, RunOptions, run};
+    let tmp = tempfile::tempdir().unwrap();
+    let options = RunOptions {
+        mem,
+        tmp_dir: Some(tmp.path().to_path_buf()),
+        tiles: tiles.map(|(tile, threads)| sweeptin::tiles::TileOptions {
+            threads,
+            tile,
+            base: None,
+            scope: None,
+        }),
+        ..RunOptions::default()
+    };
+    let mut c = Collect::default();
+    let config = RunConfig::new(input.clone(), options).unwrap();
+    let s = run(&config, Some(&mut c), &mut []).unwrap();
+    assert_eq!(s.tiles.is_some(), tiles.is_some(), "engine");
+    assert_eq!(s.triangles as usize, c.triangles.len());
+    assert_eq!(
+        c.released.len(),
+        c.vertices.len(),
+        "every vertex released once"
+    );
+    assert_eq!(
+        std::fs::read_dir(tmp.path()).unwrap().count(),
+        0,
+        "spill files left behind"
+    );
+    (c, s)
+}
+
+/// The inner faces of a spade triangulation, each as its corners' `(x, y)` bits sorted, sorted.
+pub fn spade_keys<T: spade::Triangulation<Vertex = spade::Point2<f64>>>(
+    t: &T,
+) -> Vec<[(u64, u64); 3]> {
+    let mut out: Vec<[(u64, u64); 3]> = t
+        .inner_faces()
+        .map(|f| {
+            let mut k = f
+                .vertices()
+                .map(|v| (v.position().x.to_bits(), v.position().y.to_bits()));
+            k.sort();
+            k
+        })
+        .collect();
+    out.sort();
+    out
+}
