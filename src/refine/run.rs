@@ -563,6 +563,9 @@ impl<'a> Refiner<'a> {
     }
 
     /// The domain's triangles and their vertices, renumbered in vertex-id order.
+    ///
+    /// The heights of the Steiner points and the triangle pass (renumbering, constrained edges,
+    /// statistics) run side by side (`rayon::join`); neither depends on the thread count.
     pub(super) fn finish(self) -> Refined {
         let tin = &self.tin;
         let tris: Vec<TriId> = tin
@@ -593,14 +596,35 @@ impl<'a> Refiner<'a> {
             .iter()
             .map(|&i| [out.vertices[i][0], out.vertices[i][1]])
             .collect();
-        for (&i, z) in free.iter().zip(super::surface::heights(&self.surface, &xy)) {
+        let (z, (triangles, constrained, stats)) = rayon::join(
+            || super::surface::heights(&self.surface, &xy),
+            || self.output_triangles(&tris, &remap),
+        );
+        for (&i, z) in free.iter().zip(z) {
             out.vertices[i][2] = z;
         }
+        out.triangles = triangles;
+        out.constrained = constrained;
+        out.stats = stats;
+        out.stats.vertices = out.vertices.len() as u64;
+        out
+    }
+
+    /// The triangles `tris` renumbered by `remap`, the constrained edges among their sides (lower
+    /// index first, sorted, once each) and the statistics of the output.
+    fn output_triangles(
+        &self,
+        tris: &[TriId],
+        remap: &[u32],
+    ) -> (Vec<[u32; 3]>, Vec<[u32; 2]>, RefineStats) {
+        let tin = &self.tin;
+        let mut triangles = Vec::with_capacity(tris.len());
+        let mut constrained = Vec::new();
         let mut stats = self.stats.clone();
         let mut worst = (-1.0, TriId(NONE));
-        for &t in &tris {
+        for &t in tris {
             let v = tin.tri_vertices(t);
-            out.triangles.push(v.map(|v| remap[v.0 as usize]));
+            triangles.push(v.map(|v| remap[v.0 as usize]));
             // The exact angle (atan2) only near the bound and for the worst triangle.
             let (cos2, area, _, _) = shape(v.map(|v| tin.xy(v)));
             stats.max_area = stats.max_area.max(area);
@@ -615,21 +639,19 @@ impl<'a> Refiner<'a> {
             for e in [t.edge(), t.edge().next(), t.edge().prev()] {
                 if tin.is_constrained(e) {
                     let (a, b) = (remap[tin.org(e).0 as usize], remap[tin.dst(e).0 as usize]);
-                    out.constrained.push([a.min(b), a.max(b)]);
+                    constrained.push([a.min(b), a.max(b)]);
                 }
             }
         }
-        out.constrained.sort_unstable();
-        out.constrained.dedup();
+        constrained.sort_unstable();
+        constrained.dedup();
         stats.min_angle = if worst.1.0 == NONE {
             0.0
         } else {
             super::min_angle(tin.tri_vertices(worst.1).map(|v| tin.point(v)))
         };
-        stats.vertices = out.vertices.len() as u64;
-        stats.triangles = out.triangles.len() as u64;
-        out.stats = stats;
-        out
+        stats.triangles = triangles.len() as u64;
+        (triangles, constrained, stats)
     }
 }
 

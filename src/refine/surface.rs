@@ -13,7 +13,7 @@ pub(super) struct Surface<'a> {
     triangles: &'a [[u32; 3]],
     /// Twin of each half-edge `3t + k` (from corner `k` to `k + 1`), `u32::MAX` on the boundary.
     twins: Vec<u32>,
-    index: std::cell::OnceCell<Index>,
+    index: std::sync::OnceLock<Index>,
 }
 
 /// The grid of a [`Surface`].
@@ -46,7 +46,7 @@ impl<'a> Surface<'a> {
             vertices,
             triangles,
             twins,
-            index: std::cell::OnceCell::new(),
+            index: std::sync::OnceLock::new(),
         }
     }
 
