@@ -86,6 +86,7 @@ pub use finalise::StreamStats;
 pub use pipeline::{Input, LineOptions, RunConfig, RunOptions, RunSummary, SweepAxis};
 pub use sort::DuplicatePolicy;
 pub use sort::external::SortStats;
+pub use sort::mmap::tune_allocator;
 pub use sweep::{ConstraintStats, SweepStats};
 pub use tiles::{TaskScope, TileCpu, TileOptions, TileStats};
 pub use tin::{CrossValidation, EdgeId, PointLocation, Tin, TriId, VertexId};

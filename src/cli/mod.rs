@@ -96,6 +96,8 @@ static LAST_PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None
 
 /// Runs the command line; returns the process exit code.
 pub fn main() -> ExitCode {
+    // Large buffers freed by a tile or run go back to the system at once (glibc).
+    sweeptin::tune_allocator();
     let cli = Cli::parse();
     // Ctrl-C / SIGTERM: delete temporary files, exit 130. Without it outputs stay atomic anyway.
     if let Err(e) = sweeptin::output::install_interrupt_handler() {
