@@ -4,17 +4,8 @@
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation as _};
 use sweeptin::geom::predicates::{Orientation, orient};
 use sweeptin::sort::memory::{DuplicatePolicy, prepare};
+use sweeptin::synth::SplitMix64;
 use sweeptin::{Options, triangulate_cdt};
-
-fn rng(seed: u64) -> impl FnMut() -> f64 {
-    let mut s = seed.wrapping_mul(0x9E3779B97F4A7C15) | 1;
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
     let o1 = orient(a, b, c);
@@ -30,7 +21,7 @@ fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
 /// Random points and random non-crossing segments between them (no shared endpoints check
 /// needed: segments may share endpoints).
 fn random_input(seed: u64, n: usize, m: usize) -> (Vec<[f64; 3]>, Vec<[u32; 2]>) {
-    let mut r = rng(seed);
+    let mut r = SplitMix64::uniform(seed);
     let pts: Vec<[f64; 3]> = (0..n).map(|_| [r() * 100.0, r() * 100.0, r()]).collect();
     let mut segs: Vec<[u32; 2]> = Vec::new();
     let xy = |i: u32| [pts[i as usize][0], pts[i as usize][1]];

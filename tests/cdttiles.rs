@@ -20,16 +20,7 @@ use std::path::{Path, PathBuf};
 use sweeptin::DuplicatePolicy;
 use sweeptin::geom::predicates::{Orientation, orient};
 use sweeptin::pipeline::{Input, LineOptions};
-
-fn rng(seed: u64) -> impl FnMut() -> f64 {
-    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use sweeptin::synth::SplitMix64;
 
 /// The world double of `n` millimetres east (or north) of `origin` metres, as the LAS reader
 /// makes it (the nearest double of the decimal value).
@@ -65,7 +56,7 @@ fn meet(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
 /// ends; a third of the ends are lidar points; one in five is up to 100 m long (across many
 /// tiles).
 fn random_case(seed: u64, n: usize, m: usize) -> (Vec<[f64; 3]>, Vec<[[f64; 3]; 2]>) {
-    let mut r = rng(seed);
+    let mut r = SplitMix64::uniform(seed);
     let lattice: Vec<[i64; 2]> = (0..n)
         .map(|_| [(r() * 100_000.0) as i64, (r() * 100_000.0) as i64])
         .collect();

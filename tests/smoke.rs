@@ -4,17 +4,8 @@ mod mesh;
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
 use sweeptin::sort::memory::{DuplicatePolicy, prepare};
 use sweeptin::sweep::Sweep;
+use sweeptin::synth::SplitMix64;
 use sweeptin::{Options, triangulate};
-
-fn rng(seed: u64) -> impl FnMut() -> f64 {
-    let mut s = seed.wrapping_mul(0x9E3779B97F4A7C15) | 1;
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 fn tri_set(tris: &[[u32; 3]], verts: &[[f64; 3]]) -> Vec<[(u64, u64); 3]> {
     let mut out: Vec<[(u64, u64); 3]> = tris
@@ -45,7 +36,7 @@ fn spade_set(pts: &[[f64; 3]]) -> Vec<[(u64, u64); 3]> {
 #[test]
 fn stepwise_check_small() {
     for seed in 0..300 {
-        let mut r = rng(seed);
+        let mut r = SplitMix64::uniform(seed);
         let n = 3 + (seed as usize % 40);
         let pts: Vec<[f64; 3]> = (0..n).map(|_| [r(), r(), 0.0]).collect();
         let prep = prepare(&pts, DuplicatePolicy::First).unwrap();
@@ -72,7 +63,7 @@ fn stepwise_check_small() {
 #[test]
 fn matches_spade_random() {
     for seed in 0..20 {
-        let mut r = rng(seed + 1000);
+        let mut r = SplitMix64::uniform(seed + 1000);
         let n = 20000;
         let pts: Vec<[f64; 3]> = (0..n).map(|_| [r() * 1000.0, r() * 1000.0, 0.0]).collect();
         let t = triangulate(&pts, &Options::default()).unwrap();
@@ -157,7 +148,7 @@ fn stream_set(
 #[test]
 fn streaming_equals_batch() {
     for seed in 0..200 {
-        let mut r = rng(seed + 7);
+        let mut r = SplitMix64::uniform(seed + 7);
         let n = 3 + (seed as usize * 7 % 300);
         let pts: Vec<[f64; 3]> = (0..n).map(|_| [r(), r(), 0.0]).collect();
         let (s, _) = stream_set(&pts, n < 100);
@@ -178,7 +169,7 @@ fn streaming_equals_batch() {
 
 #[test]
 fn streaming_memory_is_bounded() {
-    let mut r = rng(99);
+    let mut r = SplitMix64::uniform(99);
     let n = 200_000;
     let pts: Vec<[f64; 3]> = (0..n).map(|_| [r() * 1000.0, r() * 1000.0, 0.0]).collect();
     let (s, st) = stream_set(&pts, false);

@@ -37,6 +37,12 @@ impl SplitMix64 {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
+    /// A closure drawing [`SplitMix64::next_f64`] values from `seed` (the tests' `r()`).
+    pub fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = SplitMix64::new(seed);
+        move || s.next_f64()
+    }
+
     /// Uniform in `[lo, hi)`.
     #[inline]
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {

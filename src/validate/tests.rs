@@ -2,6 +2,7 @@
 //! spade (Delaunay and constrained Delaunay, random and gridded).
 
 use super::*;
+use crate::synth::SplitMix64;
 use spade::{ConstrainedDelaunayTriangulation, DelaunayTriangulation, Point2, Triangulation as _};
 
 fn v2(pts: &[[f64; 2]]) -> Vec<[f64; 3]> {
@@ -15,16 +16,6 @@ fn fails(r: Result<Report>, needle: &str) {
             assert!(msg.contains(needle), "message {msg:?} lacks {needle:?}")
         }
         other => panic!("expected Invalid containing {needle:?}, got {other:?}"),
-    }
-}
-
-fn rng(seed: u64) -> impl FnMut() -> f64 {
-    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 
@@ -342,7 +333,7 @@ fn local_frame_keeps_utm_coordinates_exact() {
 #[test]
 fn spade_random_meshes_are_valid() {
     for seed in 0..30 {
-        let mut r = rng(seed);
+        let mut r = SplitMix64::uniform(seed);
         let n = 3 + (seed as usize * 37) % 2000;
         let pts: Vec<[f64; 2]> = (0..n).map(|_| [r() * 100.0, r() * 100.0]).collect();
         let (v, t) = spade_delaunay(&pts);
@@ -370,7 +361,7 @@ fn spade_grid_meshes_are_valid() {
 #[test]
 fn spade_cdt_meshes_are_valid() {
     for seed in 0..20 {
-        let mut r = rng(seed + 100);
+        let mut r = SplitMix64::uniform(seed + 100);
         let n = 10 + seed as usize * 50;
         let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> = Default::default();
         let handles: Vec<_> = (0..n)
@@ -404,7 +395,7 @@ fn hull_matches_brute_force() {
     // On small gridded sets (collinear runs everywhere), the hull is exactly the set of points with
     // a supporting line through them and another point, in counter-clockwise order.
     for seed in 0..200 {
-        let mut r = rng(seed + 7);
+        let mut r = SplitMix64::uniform(seed + 7);
         let n = 3 + seed as usize % 25;
         let mut pts: Vec<[f64; 2]> = (0..n)
             .map(|_| [(r() * 5.0).floor(), (r() * 5.0).floor()])
