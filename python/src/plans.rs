@@ -109,6 +109,7 @@ pub(crate) fn make_plan(
         crs: job.crs,
         mem: job.mem,
         tmp_dir: job.tmp_dir,
+        lines: None,
     };
     let mut outputs = vec![("dir".to_string(), dir.clone())];
     if let Some(c) = job.contours {
