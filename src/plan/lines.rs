@@ -1,24 +1,4 @@
-//! Breaklines and trimming rings in a plan.
-//!
-//! A plan stores its line files by absolute path with a fingerprint (size and SHA-256 of the
-//! bytes, as `sha256sum` prints it), and every task reads and cleans them itself: cleaning is
-//! deterministic ([`crate::breaklines::clean`]), so every task holds the same planar graph, the
-//! one a single run holds, and hands it to the tiled engine exactly as one tiled run does
-//! (`pipeline::tiled`). Which segments a tile's run loads is the engine's business
-//! ([`crate::tiles::lines`]).
-//!
-//! What a task cannot do is anything that needs all the points: drape vertices without `z`
-//! (they take their height from the TIN of every point) or cut the lines to the points' hull
-//! (`--clip-breaklines`). So a plan takes lines whose every vertex has a `z` after cleaning
-//! (boundary and hole rings too: they are inserted as breaklines, and their vertices are vertices
-//! of the TIN), and checks it when it is made, so that a bad file fails `sweeptin plan` once
-//! rather than every task.
-//!
-//! Line vertices are data like points, but every task knows all of them: the extents of the
-//! files a task does not read stay the only places where it may not know the data, so the files
-//! a task reads do not depend on the lines. The tiles do: the plan has a task for every tile the
-//! convex hull of the files' extents and the line vertices meets, so a line that leaves the
-//! files has the tiles it reaches, and the triangles between it and the points have theirs.
+//! Breaklines and trimming rings in a plan ([`PlanLines`]).
 
 use crate::error::{Error, Result};
 use crate::pipeline::LineOptions;
@@ -92,7 +72,27 @@ fn fingerprint(path: &Path) -> Result<(u64, String)> {
     Ok((bytes, hex))
 }
 
-/// The breaklines and trimming rings of a plan (see the module docs).
+/// The breaklines and trimming rings of a plan.
+///
+/// A plan stores its line files by absolute path with a fingerprint (size and SHA-256 of the
+/// bytes, as `sha256sum` prints it), and every task reads and cleans them itself: cleaning is
+/// deterministic ([`crate::breaklines::clean()`]), so every task holds the same planar graph, the
+/// one a single run holds, and hands it to the tiled engine exactly as one tiled run does
+/// (`pipeline::tiled`). Which segments a tile's run loads is the engine's business
+/// (`tiles::lines`).
+///
+/// What a task cannot do is anything that needs all the points: drape vertices without `z`
+/// (they take their height from the TIN of every point) or cut the lines to the points' hull
+/// (`--clip-breaklines`). So a plan takes lines whose every vertex has a `z` after cleaning
+/// (boundary and hole rings too: they are inserted as breaklines, and their vertices are vertices
+/// of the TIN), and checks it when it is made, so that a bad file fails `sweeptin plan` once
+/// rather than every task.
+///
+/// Line vertices are data like points, but every task knows all of them: the extents of the
+/// files a task does not read stay the only places where it may not know the data, so the files
+/// a task reads do not depend on the lines. The tiles do: the plan has a task for every tile the
+/// convex hull of the files' extents and the line vertices meets, so a line that leaves the
+/// files has the tiles it reaches, and the triangles between it and the points have theirs.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct PlanLines {
     /// Breakline files (`--breaklines`), in the order given.

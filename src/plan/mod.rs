@@ -130,8 +130,9 @@ impl Plan {
     /// is the command line it was made from (for people); `outputs` are where the whole job's
     /// outputs go (`"dir"`, `"contours"`, …).
     ///
-    /// With lines ([`Job::lines`]) they are read and cleaned now, as every task will: a tile
-    /// that a line vertex or segment meets has a task too (see [`lines`]).
+    /// Every tile that the convex hull of the files' extents (and the line vertices) meets has
+    /// a task. Lines ([`Job::lines`]) are read and cleaned now, as every task will (see
+    /// [`PlanLines`]).
     ///
     /// # Errors
     /// [`Error::Options`] for a bad tile size, buffer or job option, and for a line vertex

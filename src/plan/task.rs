@@ -126,7 +126,7 @@ pub struct Job {
     /// Where a task's spill files go.
     pub tmp_dir: Option<PathBuf>,
     /// Breaklines and trimming rings every task inserts (every vertex with its z; see
-    /// [`super::lines`]). Absent from the plans of versions before 3.
+    /// [`super::PlanLines`]). Absent from the plans of versions before 3.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lines: Option<super::PlanLines>,
 }
