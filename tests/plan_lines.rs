@@ -327,6 +327,15 @@ fn plans_refuse_lines_without_z_and_tasks_refuse_changed_lines() {
         &["--breaklines".into(), s(&gj)],
         &["two_d.geojson feature 1 part 0, vertex 0", "has no z"],
     );
+    // A layer of a GeoPackage (`FILE:LAYER`).
+    let gpkg = data::shared("lines/momepy_bubenec.gpkg");
+    refused(
+        &["--breaklines".into(), format!("{}:streets", gpkg.display())],
+        &[
+            "momepy_bubenec.gpkg:streets feature 0 part 0, vertex 0",
+            "more vertices",
+        ],
+    );
     // A ring is inserted as a breakline: its vertices need z too.
     let ring = d("ring.txt");
     std::fs::write(

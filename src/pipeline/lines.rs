@@ -337,13 +337,14 @@ fn no_z_error(lines: &Lines, pslg: &Pslg, count: usize) -> Error {
     });
     let more = match count {
         1 => String::new(),
-        n => format!(" ({n} vertices of the cleaned lines have none)"),
+        2 => " (nor has one more vertex of the cleaned lines)".to_string(),
+        n => format!(" (nor have {} more vertices of the cleaned lines)", n - 1),
     };
-    let what = "a plan's tasks cannot take heights from the points (each reads only the files \
-                near its tile): give every vertex a z (e.g. lines as text, `x y` a line, through \
-                `sweeptin sample FILES… --points lines.txt -o lines_z.txt`, which appends the \
-                TIN's height to each line), or run the job as one run without `plan`, which \
-                drapes them";
+    let what = "a plan's tasks cannot drape lines on the points (each reads only the files near \
+                its tile): give every vertex a z (for lines as text, `x y` a line and a blank \
+                line between lines, `sweeptin sample FILES… --points lines.txt -o lines_z.txt` \
+                appends the TIN's height to every line), or run the job as one command without \
+                `plan`, which drapes them";
     match first {
         Some((i, k, v)) => {
             let s = &lines.sources[i];

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 /// A line file of a plan: where it is and what it held when the plan was made.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct LineFile {
-    /// The file, absolute.
+    /// The file, absolute, as the readers take it (`FILE.gpkg:LAYER` keeps its layer).
     pub path: PathBuf,
     /// Its size in bytes.
     pub bytes: u64,
@@ -23,10 +23,16 @@ impl LineFile {
     /// # Errors
     /// [`Error::Io`] naming the file.
     pub fn new(path: &Path) -> Result<LineFile> {
-        let path = std::fs::canonicalize(path).map_err(|e| Error::io(path, e))?;
-        let (bytes, sha256) = fingerprint(&path)?;
+        let (file, layer) = crate::input::vector::split_layer(path);
+        let mut abs = std::fs::canonicalize(&file).map_err(|e| Error::io(&file, e))?;
+        let (bytes, sha256) = fingerprint(&abs)?;
+        if let Some(l) = layer {
+            let mut s = abs.into_os_string();
+            s.push(format!(":{l}"));
+            abs = s.into();
+        }
         Ok(LineFile {
-            path,
+            path: abs,
             bytes,
             sha256,
         })
@@ -37,7 +43,7 @@ impl LineFile {
     /// # Errors
     /// [`Error::Format`] naming the file when it changed; [`Error::Io`] when it cannot be read.
     pub fn check(&self) -> Result<()> {
-        let (bytes, sha256) = fingerprint(&self.path)?;
+        let (bytes, sha256) = fingerprint(&crate::input::vector::split_layer(&self.path).0)?;
         if bytes != self.bytes || sha256 != self.sha256 {
             return Err(Error::Format {
                 path: self.path.clone(),

@@ -356,8 +356,9 @@ impl Plan {
         Ok(record)
     }
 
-    /// The first buffer of task `i`: the plan's, or, for a tile that only lines reach (no
-    /// input file within the plan's buffer), the one that reads the nearest file.
+    /// The first buffer of task `i`: the plan's, or, for a tile with no input file within the
+    /// plan's buffer (inside the data's hull: a concave corner of the files, beside a line that
+    /// leaves them), the one that reads the nearest file.
     ///
     /// # Errors
     /// As [`Plan::task`].
