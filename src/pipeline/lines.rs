@@ -17,7 +17,9 @@
 //! and each such vertex takes the height of the (first, in stream order) triangle that contains it,
 //! by linear interpolation. A vertex outside the points' triangulation has no height to take:
 //! that is an error naming the line. Vertices where a line with z meets one without take the
-//! known z (breakline cleaning interpolates along the line that has it).
+//! known z (breakline cleaning interpolates along the line that has it). A plan and its tasks
+//! prepare the lines without a draping pass ([`prepare`] without `drape`): every vertex must
+//! have its z after cleaning, and `--clip-breaklines` is refused, both needing all the points.
 //!
 //! **Duplicates**: a breakline vertex at exactly the (x, y) of a lidar point is one vertex; its z
 //! follows `--duplicates` like any other duplicate, where the breakline vertex counts as read
