@@ -172,7 +172,11 @@ fn dem_plan_with_3d_breaklines_and_a_hole_equals_one_sweep() {
     plan.extend(job.iter().cloned());
     plan.extend(["--contours".into(), d("planned.geojson")]);
     plan.extend(["--tile".into(), "50".into(), "-o".into(), d("job")]);
-    cli::ok(&plan);
+    let out = cli::ok(&plan);
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("the lines reach beyond the input files"),
+        "no warning for the line beyond the files"
+    );
     let p = t.path().join("job/plan.json");
     let (bbox, n) = plan_extent(&p);
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();

@@ -413,6 +413,15 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
             plan.tiles.len()
         );
     }
+    let lone = plan.tiles.iter().filter(|t| t.files.is_empty()).count();
+    if lone > 0 && plan.job.lines.is_some() {
+        eprintln!(
+            "sweeptin: warning: the lines reach beyond the input files: as in one run, the TIN \
+             extends to them, and {lone} of the {} tasks have no file within their buffer (they \
+             read the nearest); cut the lines to the data if that is not meant",
+            plan.tiles.len()
+        );
+    }
     let points: u64 = plan.files.iter().map(|f| f.points).sum();
     eprintln!(
         "sweeptin: {} tasks (tiles of {tile}, first buffer {buffer}) over {} files, {points} \
