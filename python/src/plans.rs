@@ -8,7 +8,7 @@ use crate::to_py;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use sweeptin::input::las::Returns;
-use sweeptin::plan::{Job, Levels, Plan, Product, TaskOptions};
+use sweeptin::plan::{Job, Levels, Plan, PlanLines, Product, TaskOptions};
 
 /// The job's options (a dict built by the package).
 #[derive(FromPyObject)]
@@ -32,6 +32,9 @@ pub(crate) struct JobOpts {
     keep_withheld: bool,
     duplicates: String,
     max_edge: Option<f64>,
+    breaklines: Vec<PathBuf>,
+    trim_boundary: Option<PathBuf>,
+    holes: Option<PathBuf>,
     crs: Option<String>,
     mem: u64,
     tmp_dir: Option<PathBuf>,
@@ -109,6 +112,12 @@ pub(crate) fn make_plan(
         crs: job.crs,
         mem: job.mem,
         tmp_dir: job.tmp_dir,
+        lines: PlanLines::new(
+            &job.breaklines,
+            job.trim_boundary.as_deref(),
+            job.holes.as_deref(),
+        )
+        .map_err(to_py)?,
     };
     let mut outputs = vec![("dir".to_string(), dir.clone())];
     if let Some(c) = job.contours {
@@ -118,7 +127,18 @@ pub(crate) fn make_plan(
         let buffer = buffer.unwrap_or(tile / 10.0);
         // `@lists`, globs and `.vpc` files expanded, every file by absolute path.
         let plan = Plan::new(typed, args, outputs, &files, tile, buffer)?;
-        let inputs: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
+        // The line files are inputs too: no output may replace one.
+        let inputs: Vec<PathBuf> = plan
+            .files
+            .iter()
+            .map(|f| f.path.clone())
+            .chain(
+                plan.job
+                    .lines
+                    .iter()
+                    .flat_map(|l| l.files().map(|f| f.path.clone())),
+            )
+            .collect();
         let planned: Vec<(&str, &std::path::Path)> = plan
             .outputs
             .iter()

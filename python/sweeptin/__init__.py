@@ -510,6 +510,9 @@ def plan(
     keep_withheld: bool = False,
     duplicates: str = "first",
     max_edge: float | None = None,
+    breaklines: Sequence[PathLike] = (),
+    trim_boundary: PathLike | None = None,
+    holes: PathLike | None = None,
     crs: str | None = None,
     mem: int | str = "1G",
     tmp_dir: PathLike | None = None,
@@ -525,7 +528,10 @@ def plan(
     absolute path. Run the tasks with :func:`run_task` (any order, any machine: ``sweeptin
     run`` too) and join them with :func:`merge`; the result equals one run over all the
     files (a ``"tin"`` plan's merge writes one mesh, ``.ply``, ``.obj``, ``.xml`` or ``.stin``
-    by its extension, with the triangles of one run)."""
+    by its extension, with the triangles of one run). ``breaklines``, ``trim_boundary`` and
+    ``holes`` go into every task when every vertex has a z (3-D lines and rings; the plan
+    records each file with its size and SHA-256, and a task refuses one that changed); lines
+    without z raise :class:`OptionsError` naming the first such vertex."""
     job = {
         "product": product,
         "cell": float(cell),
@@ -542,6 +548,9 @@ def plan(
         "keep_withheld": bool(keep_withheld),
         "duplicates": duplicates,
         "max_edge": max_edge,
+        "breaklines": [os.fspath(p) for p in breaklines],
+        "trim_boundary": None if trim_boundary is None else os.fspath(trim_boundary),
+        "holes": None if holes is None else os.fspath(holes),
         "crs": crs,
         "mem": _mem(mem),
         "tmp_dir": None if tmp_dir is None else os.fspath(tmp_dir),
@@ -554,6 +563,9 @@ def plan(
             args += ["--format", format]
     if classes is not None:
         args += ["--class", ",".join(str(int(c)) for c in classes)]
+    for flag, paths in (("--breaklines", job["breaklines"]), ("--trim-boundary", [trim_boundary]),
+                        ("--holes", [holes])):
+        args += [a for p in paths if p is not None for a in (flag, os.path.abspath(p))]
     path = _native.make_plan(names, os.fspath(dir), float(tile), buffer, job, args)
     return Plan(path)
 

@@ -115,6 +115,30 @@ def test_tin_plan_merges_to_the_triangles_of_one_run(ign, tmp_path):
     assert (s["triangles"], s["vertices"]) == (mesh["triangles"], mesh["vertices"])
 
 
+def test_a_plan_with_3d_lines_is_the_cli_plan_and_lines_without_z_are_refused(ign, cli, tmp_path):
+    """Breaklines and a hole with z go into the plan's job (version 3, each file by absolute path
+    with its size and SHA-256), as from the command line; a line without z is refused, named."""
+    lines = tmp_path / "lines.txt"
+    lines.write_text("770505.25 6277503.5 21\n770595.75 6277596.25 21.4\n")
+    hole = tmp_path / "hole.txt"
+    hole.write_text("770560 6277530 21\n770575 6277530 21\n770575 6277545 21\n770560 6277530 21\n")
+    plan = sweeptin.plan("dem", ign, tmp_path / "job", tile=50, cell=0.5, classes=[2],
+                         breaklines=[lines], holes=hole)
+    cli("plan", "dem", *ign, "--cell", "0.5", "--class", "2", "--breaklines", lines, "--holes", hole,
+        "--tile", "50", "-o", tmp_path / "cli-job")
+    ours = json.loads(Path(plan.path).read_text())
+    theirs = json.loads((tmp_path / "cli-job" / "plan.json").read_text())
+    assert ours["version"] == 3
+    for k in ("version", "job", "tiles"):
+        assert ours[k] == theirs[k], k
+    assert ours["job"]["lines"]["holes"]["path"] == str(hole.resolve())
+    assert len(ours["job"]["lines"]["breaklines"][0]["sha256"]) == 64
+    flat = tmp_path / "flat.txt"
+    flat.write_text("770505.25 6277503.5\n770595.75 6277596.25\n")
+    with pytest.raises(sweeptin.OptionsError, match=r"flat.txt:1, vertex 0 .* has no z"):
+        sweeptin.plan("dem", ign, tmp_path / "flat", tile=50, breaklines=[flat])
+
+
 def test_plan_inputs_from_a_vpc_a_list_and_a_glob(ign, cli, tmp_path):
     """The library expands the inputs (as the command line does): a plan names every file of a
     .vpc, an @list or a glob, by absolute path."""

@@ -237,7 +237,8 @@ pub struct LineArgs {
     /// text (`x y [z]` per line, a blank line between polylines), in the points' CRS and units. They
     /// become triangle edges; crossings are split, overlaps merged. Lines without z take their
     /// heights from the points' TIN (an extra pass over the points). They run in exact tiles
-    /// too (each tile's run takes every line that meets it whole; not in a plan's tasks).
+    /// too (each tile's run takes every line that meets it whole), and in a plan's tasks when
+    /// every vertex has a z (`sweeptin plan --help`).
     #[arg(long = "breaklines", value_name = "FILE")]
     pub breaklines: Vec<PathBuf>,
     /// Keep only the triangles inside these polygons (survey limit); the rings become breaklines.

@@ -9,13 +9,27 @@ use clap::Parser;
 use std::path::{Path, PathBuf};
 use sweeptin::plan::{Levels, Plan, Product, TaskOptions, TaskRecord, merge, task_from_env};
 
+/// What `sweeptin plan --help` ends with.
+const PLAN_HELP: &str = "\
+Example:
+  sweeptin plan dem tiles/*.laz --cell 1 --class 2 --tile 1000 -o job
+  sweeptin run job/plan.json --all --jobs 2
+  sweeptin merge job/plan.json -o dtm.tif
+
+Breaklines and trimming rings (--breaklines, --trim-boundary, --holes) go into every task when
+every vertex has a z (3-D lines; the rings too: they become edges of the TIN). The plan reads and
+cleans them once to check, and records each file by absolute path with its size and SHA-256; each
+task cleans them again (the same graph in every task) and refuses a file that changed. Lines
+without z take their heights from all the points, which no task reads: give them z, e.g. for a
+text file of `x y` lines (a blank line between lines)
+  sweeptin sample tiles/*.laz --class 2 --points lines.txt -o lines_z.txt
+and plan with --breaklines lines_z.txt (the result is one run's with those 3-D lines), or run the
+job as one command. --clip-breaklines (the hull of all the points) and --no-flat-triangles (flips
+across tiles) are refused.";
+
 /// Arguments of `sweeptin plan`.
 #[derive(clap::Args, Debug)]
-#[command(
-    after_help = "Example:\n  sweeptin plan dem tiles/*.laz --cell 1 --class 2 --tile 1000 \
-                        -o job\n  sweeptin run job/plan.json --all --jobs 2\n  sweeptin merge \
-                        job/plan.json -o dtm.tif"
-)]
+#[command(after_help = PLAN_HELP)]
 pub struct PlanArgs {
     /// The first buffer of every task: points this far around its tile are read (default: a
     /// tenth of the tile). A task whose triangles need points farther out doubles it and runs
@@ -135,6 +149,15 @@ impl Job {
         }
     }
 
+    /// `--trim-boundary` (for `tin`, also as `--boundary`).
+    fn trim_boundary(&self) -> Option<PathBuf> {
+        match self {
+            Job::Tin(t) => t.boundary_polygon.clone(),
+            _ => None,
+        }
+        .or_else(|| self.args().lines.boundary.clone())
+    }
+
     fn name(&self) -> &'static str {
         match self {
             Job::Dem(_) => "dem",
@@ -175,7 +198,14 @@ impl Job {
         };
         let a = self.args();
         let f = a.filter.to_filter();
+        let l = &a.lines;
         Ok(sweeptin::plan::Job {
+            // Absolute and fingerprinted: every task reads the same lines.
+            lines: sweeptin::plan::PlanLines::new(
+                &l.breaklines,
+                self.trim_boundary().as_deref(),
+                l.holes.as_deref(),
+            )?,
             product,
             classes: f.classes,
             returns: f.returns,
@@ -252,11 +282,18 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
         bail!("a plan covers its files whole: leave --bbox out (the tiles cut the area)");
     }
     let l = &a.lines;
-    if !l.breaklines.is_empty() || l.boundary.is_some() || l.holes.is_some() || l.no_flat_triangles
-    {
+    if l.no_flat_triangles {
         bail!(
-            "breaklines, --trim-boundary, --holes and --no-flat-triangles are not yet proved exact \
-             in tiles, so a plan refuses them: run the job as one `sweeptin {}` (one sweep)",
+            "--no-flat-triangles flips triangles across tile edges, which no tile's certificate \
+             covers, so a plan refuses it: run the job as one `sweeptin {}` (one sweep)",
+            job.name()
+        );
+    }
+    if l.clip_breaklines {
+        bail!(
+            "--clip-breaklines cuts the lines to the convex hull of all the points, which no \
+             task sees (each reads the files near its tile), so a plan refuses it: cut the \
+             lines to the data beforehand, or run the job as one `sweeptin {}`",
             job.name()
         );
     }
@@ -283,10 +320,6 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
         Job::Volume(v) if v.plane.is_none() => {
             bail!("a plan computes volumes against a plane (--plane Z); --surface needs one run")
         }
-        Job::Tin(t) if t.boundary_polygon.is_some() => bail!(
-            "--boundary (trimming polygons) is not yet proved exact in tiles, so a plan refuses \
-             it: run the job as one `sweeptin tin` (one sweep)"
-        ),
         Job::Tin(t) if t.format.is_some() => {
             bail!("a TIN plan's mesh format is chosen at `sweeptin merge -o OUT.ply|obj|xml|stin`")
         }
@@ -338,7 +371,16 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let inputs: Vec<PathBuf> = abs_groups.iter().flatten().cloned().collect();
     // The stored command line (for people) names the inputs by absolute path.
     let argv = absolute_inputs(&argv, &given, &abs_groups);
-    let plan = Plan::new(job.typed()?, argv, outputs, &inputs, tile, buffer)?;
+    let typed = job.typed()?;
+    // The line files are inputs too: no output may replace one.
+    let mut read: Vec<PathBuf> = inputs.clone();
+    read.extend(
+        typed
+            .lines
+            .iter()
+            .flat_map(|l| l.files().map(|f| f.path.clone())),
+    );
+    let plan = Plan::new(typed, argv, outputs, &inputs, tile, buffer)?;
     if let (Job::Dem(d), Some(t)) = (&job, plan.tiles.first()) {
         // A task's raster (one tile) against --max-cells, as one run checks its raster.
         let extent = sweeptin::raster::GridExtent::BBox {
@@ -362,12 +404,21 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     for (name, p) in plan.outputs.iter().filter(|(n, _)| n != "dir") {
         planned_outputs.push((name.as_str(), p.as_path()));
     }
-    distinct_outputs(&planned_outputs, &inputs, "the plan")?;
+    distinct_outputs(&planned_outputs, &read, "the plan")?;
     let path = plan.save(&dir)?;
     if plan.tiles.len() > 1000 {
         eprintln!(
             "sweeptin: warning: {} tasks: Slurm's default MaxArraySize is 1001; a larger --tile \
              makes fewer, longer tasks",
+            plan.tiles.len()
+        );
+    }
+    let lone = plan.tiles.iter().filter(|t| t.files.is_empty()).count();
+    if lone > 0 && plan.job.lines.is_some() {
+        eprintln!(
+            "sweeptin: warning: the lines reach beyond the input files: as in one run, the TIN \
+             extends to them, and {lone} of the {} tasks have no file within their buffer (they \
+             read the nearest); cut the lines to the data if that is not meant",
             plan.tiles.len()
         );
     }

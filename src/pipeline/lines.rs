@@ -17,7 +17,9 @@
 //! and each such vertex takes the height of the (first, in stream order) triangle that contains it,
 //! by linear interpolation. A vertex outside the points' triangulation has no height to take:
 //! that is an error naming the line. Vertices where a line with z meets one without take the
-//! known z (breakline cleaning interpolates along the line that has it).
+//! known z (breakline cleaning interpolates along the line that has it). A plan and its tasks
+//! prepare the lines without a draping pass ([`prepare`] without `drape`): every vertex must
+//! have its z after cleaning, and `--clip-breaklines` is refused, both needing all the points.
 //!
 //! **Duplicates**: a breakline vertex at exactly the (x, y) of a lidar point is one vertex; its z
 //! follows `--duplicates` like any other duplicate, where the breakline vertex counts as read
@@ -177,19 +179,35 @@ impl Prepared {
     }
 }
 
+/// The points-only pass that lines without z, and `--clip-breaklines`, need: it runs the
+/// caller's pipeline over the points alone into the given sink.
+pub(crate) type Drape<'a> = &'a mut dyn FnMut(&mut dyn TriangleSink) -> Result<()>;
+
 /// Reads, cleans and (when needed) drapes the breaklines of a run.
 ///
-/// `drape` runs the points-only pass with the given sink (the caller's pipeline).
-pub(crate) fn prepare(
-    o: &LineOptions,
-    drape: &mut dyn FnMut(&mut dyn TriangleSink) -> Result<()>,
-) -> Result<Prepared> {
+/// `drape` runs the points-only pass with the given sink (the caller's pipeline). Without one
+/// (a plan and its tasks, which never see all the points) every vertex must have a `z` after
+/// cleaning and `clip` must be off.
+///
+/// # Errors
+/// The readers' and cleaning's errors; [`Error::Options`] without `drape` for
+/// `--clip-breaklines`, and for a vertex without `z`, naming the first such vertex of the input
+/// (file, feature or line, vertex); the draping pass's errors.
+pub(crate) fn prepare(o: &LineOptions, mut drape: Option<Drape>) -> Result<Prepared> {
     let mut lines = Lines::default();
     for p in &o.breaklines {
         lines.append(read_file(p)?)?;
     }
     let mut clipped = None;
     if o.clip && !lines.is_empty() {
+        let Some(drape) = drape.as_mut() else {
+            return Err(Error::Options(
+                "--clip-breaklines cuts the lines to the convex hull of all the points, which a \
+                 plan's task never sees (it reads the files near its tile): cut the lines to the \
+                 data beforehand, or run the job as one run"
+                    .into(),
+            ));
+        };
         let mut hull = HullSink::default();
         drape(&mut hull)?;
         let h = hull.finish_hull();
@@ -197,20 +215,7 @@ pub(crate) fn prepare(
         lines = cut;
         clipped = Some(summary);
     }
-    let boundary = o.boundary.as_deref().map(read_file).transpose()?;
-    let holes = o.holes.as_deref().map(read_file).transpose()?;
-    let trim = Trim::from_lines(boundary.as_ref(), holes.as_ref(), o.max_edge).map_err(|e| {
-        match (e, &o.boundary) {
-            // `Trim` has no file name for an empty boundary: add it.
-            (Error::Format { path, message }, Some(b)) if path.as_os_str().is_empty() => {
-                Error::Format {
-                    path: b.clone(),
-                    message,
-                }
-            }
-            (e, _) => e,
-        }
-    })?;
+    let (boundary, holes, trim) = read_trim(o)?;
     for l in [boundary, holes].into_iter().flatten() {
         lines.append(l)?;
     }
@@ -254,6 +259,9 @@ pub(crate) fn prepare(
         .filter(|&v| pslg.vertices[v as usize][2].is_nan())
         .collect();
     if !unknown.is_empty() {
+        let Some(drape) = drape else {
+            return Err(no_z_error(&lines, &pslg, unknown.len()));
+        };
         let xy: Vec<[f64; 2]> = unknown
             .iter()
             .map(|&v| {
@@ -278,6 +286,79 @@ pub(crate) fn prepare(
         flat: o.no_flat_triangles,
         summary,
     })
+}
+
+/// The boundary and hole rings of `o` as read, and the trimming rules they make with
+/// `--max-edge`.
+///
+/// # Errors
+/// The readers' errors; [`Error::Format`] for rings that are not closed or an empty boundary,
+/// naming the file.
+fn read_trim(o: &LineOptions) -> Result<(Option<Lines>, Option<Lines>, Trim)> {
+    let boundary = o.boundary.as_deref().map(read_file).transpose()?;
+    let holes = o.holes.as_deref().map(read_file).transpose()?;
+    let trim = Trim::from_lines(boundary.as_ref(), holes.as_ref(), o.max_edge).map_err(|e| {
+        match (e, &o.boundary) {
+            // `Trim` has no file name for an empty boundary: add it.
+            (Error::Format { path, message }, Some(b)) if path.as_os_str().is_empty() => {
+                Error::Format {
+                    path: b.clone(),
+                    message,
+                }
+            }
+            (e, _) => e,
+        }
+    })?;
+    Ok((boundary, holes, trim))
+}
+
+/// The trimming rules of `o` alone (boundary, holes, `--max-edge`): what a TIN plan's merge
+/// applies to the tasks' pieces, which hold every triangle.
+///
+/// # Errors
+/// As [`read_trim`].
+pub(crate) fn trim(o: &LineOptions) -> Result<Trim> {
+    read_trim(o).map(|(_, _, t)| t)
+}
+
+/// The error for `count` vertices of the cleaned graph without z when nothing can drape them:
+/// names the first input vertex without z that cleaning left without one (file, feature or
+/// line, vertex), and what to do.
+fn no_z_error(lines: &Lines, pslg: &Pslg, count: usize) -> Error {
+    let key = |x: f64, y: f64| ((x + 0.0).to_bits(), (y + 0.0).to_bits());
+    let unknown: crate::idmap::FastSet<(u64, u64)> = pslg
+        .vertices
+        .iter()
+        .filter(|v| v[2].is_nan())
+        .map(|v| key(v[0], v[1]))
+        .collect();
+    let first = lines.polylines.iter().enumerate().find_map(|(i, p)| {
+        p.iter()
+            .position(|v| v[2].is_nan() && unknown.contains(&key(v[0], v[1])))
+            .map(|k| (i, k, p[k]))
+    });
+    let more = match count {
+        1 => String::new(),
+        2 => " (nor has one more vertex of the cleaned lines)".to_string(),
+        n => format!(" (nor have {} more vertices of the cleaned lines)", n - 1),
+    };
+    let what = "a plan's tasks cannot drape lines on the points (each reads only the files near \
+                its tile): give every vertex a z (for lines as text, `x y` a line and a blank \
+                line between lines, `sweeptin sample FILES… --points lines.txt -o lines_z.txt` \
+                appends the TIN's height to every line), or run the job as one command without \
+                `plan`, which drapes them";
+    match first {
+        Some((i, k, v)) => {
+            let s = &lines.sources[i];
+            Error::Options(format!(
+                "{s}, vertex {k} ({}, {}) has no z{more}: {what}",
+                v[0], v[1]
+            ))
+        }
+        None => Error::Options(format!(
+            "breaklines: {count} vertices of the cleaned lines have no z: {what}"
+        )),
+    }
 }
 
 /// The error for a vertex without z outside the points' TIN, naming a line through it.

@@ -35,6 +35,7 @@ use std::path::PathBuf;
 
 pub use config::RunConfig;
 pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary};
+pub(crate) use lines::{prepare, trim};
 pub use read::read_points;
 pub use thin::{THIN_BYTES_PER_POINT, ThinSummary, thin};
 pub use thin_tiles::{TILE_BYTES_PER_POINT, ThinTileSummary, thin_tiled};
@@ -301,7 +302,7 @@ pub fn run(
     {
         return Err(Error::Options(
             "a task of a plan runs in exact tiles, which need LAS/LAZ points without \
-             breaklines, trimming polygons or --no-flat-triangles, swept along y"
+             --no-flat-triangles, swept along y"
                 .into(),
         ));
     }
@@ -310,16 +311,19 @@ pub fn run(
         return drive::run(config, None, mesh, sinks);
     }
     let points_only = config.points_only();
-    let prepared = lines::prepare(lines, &mut |sink| {
-        if let Some(s) = config.stream_input() {
-            return Err(Error::Options(format!(
-                "{}: lines without z take their heights from a first pass over the points, but \
+    let prepared = lines::prepare(
+        lines,
+        Some(&mut |sink| {
+            if let Some(s) = config.stream_input() {
+                return Err(Error::Options(format!(
+                    "{}: lines without z take their heights from a first pass over the points, but \
                  this input is a pipe or a device, which can be read only once: give the points \
                  as a file, or the lines with z",
-                s.display()
-            )));
-        }
-        drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
-    })?;
+                    s.display()
+                )));
+            }
+            drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
+        }),
+    )?;
     drive::run(config, Some(&prepared), mesh, sinks)
 }

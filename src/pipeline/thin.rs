@@ -113,17 +113,20 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
     let prepared = if l.is_empty() {
         None
     } else {
-        let p = lines::prepare(l, &mut |sink| {
-            if let Some(s) = config.stream_input() {
-                return Err(Error::Options(format!(
-                    "{}: lines without z take their heights from a first pass over the points, \
+        let p = lines::prepare(
+            l,
+            Some(&mut |sink| {
+                if let Some(s) = config.stream_input() {
+                    return Err(Error::Options(format!(
+                        "{}: lines without z take their heights from a first pass over the points, \
                      but this input is a pipe or a device, which can be read only once: give \
                      the points as a file, or the lines with z",
-                    s.display()
-                )));
-            }
-            super::drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
-        })?;
+                        s.display()
+                    )));
+                }
+                super::drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
+            }),
+        )?;
         Some(p)
     };
     let (line_vertices, segments) = match prepared.as_ref().and_then(|p| p.pslg.as_ref()) {

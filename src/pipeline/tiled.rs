@@ -10,19 +10,13 @@ use std::time::Instant;
 
 /// Can `input` run in tiles? LAS/LAZ points, with breaklines, trimming polygons and
 /// `--max-edge` (see [`crate::tiles::worker`] for why constrained tiles are exact); not the
-/// flat-triangle pass (its flips need neighbours across the whole triangulation), and not a
-/// plan's task with lines (a task does not know the lines of other tasks' areas).
+/// flat-triangle pass (its flips need neighbours across the whole triangulation). A plan's task
+/// takes lines too, every vertex with its z (it prepares the whole graph itself, as every other
+/// task does, but cannot drape or clip: that needs all the points).
 pub(crate) fn applies(config: &RunConfig) -> bool {
     let l = &config.input().lines;
-    let lines = !l.breaklines.is_empty() || l.boundary.is_some() || l.holes.is_some();
-    let task = config
-        .options()
-        .tiles
-        .as_ref()
-        .is_some_and(|t| t.scope.is_some());
     config.source() == Source::Lidar
         && !l.no_flat_triangles
-        && !(lines && task)
         && config.options().sweep_axis != SweepAxis::X
 }
 
@@ -49,14 +43,18 @@ pub(crate) fn run(
     let input = config.input();
     let l = &input.lines;
     // Breaklines and rings: read, cleaned and draped (lines without z: a points-only tiled run
-    // first), as for the sweep.
+    // first), as for the sweep. A plan's task sees only the files near its tile: its lines must
+    // have every z (the plan checked), and it never drapes or clips.
     let prepared = if l.breaklines.is_empty() && l.boundary.is_none() && l.holes.is_none() {
         None
+    } else if tiles.scope.is_some() {
+        Some(super::lines::prepare(l, None)?)
     } else {
         let points_only = config.points_only();
-        Some(super::lines::prepare(l, &mut |sink| {
-            run(&points_only, tiles, None, &mut [sink]).map(|_| ())
-        })?)
+        Some(super::lines::prepare(
+            l,
+            Some(&mut |sink| run(&points_only, tiles, None, &mut [sink]).map(|_| ())),
+        )?)
     };
     let job = crate::tiles::TileJob {
         paths: &input.paths,

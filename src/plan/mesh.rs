@@ -28,7 +28,7 @@ pub struct TinMergeSummary {
     pub triangles: u64,
     /// See `vertices`.
     pub bytes: u64,
-    /// Triangles `--max-edge` dropped.
+    /// Triangles trimming dropped (`--max-edge`, outside the boundary, inside holes).
     pub trimmed: u64,
     /// Most vertices waiting for their last triangle at once (those along task edges).
     pub peak_waiting_vertices: u64,
@@ -56,9 +56,11 @@ pub(super) fn merge_tin(
         )],
     };
     let mut sink = create_mesh_sink(out, None, &meta)?;
-    let trim = match plan.job.max_edge {
-        Some(l) => Some(crate::breaklines::Trim::new(None, &[], Some(l))?),
-        None => None,
+    // The pieces hold every triangle: the merge trims (boundary, holes, --max-edge).
+    let trim = match (&plan.job.lines, plan.job.max_edge) {
+        (Some(l), m) => Some(l.trim(m)?).filter(|t| !t.keeps_all()),
+        (None, Some(l)) => Some(crate::breaklines::Trim::new(None, &[], Some(l))?),
+        (None, None) => None,
     };
     let mut no_sinks: [&mut dyn crate::sink::TriangleSink; 0] = [];
     let mut writer = TileWriter::new(Some(&mut *sink), &mut no_sinks, trim);

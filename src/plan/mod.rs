@@ -17,11 +17,13 @@
 //! plans with the same tile size agree tile for tile, and every raster cell (by its centre) and
 //! every triangle (by its lowest vertex in sweep order) has exactly one owner tile.
 
+mod lines;
 pub mod merge;
 pub mod mesh;
 mod stitch;
 mod task;
 
+pub use lines::{LineFile, PlanLines};
 pub use task::{Job, Levels, Product, TaskOptions};
 
 use crate::error::{Error, Result};
@@ -31,6 +33,10 @@ use std::path::{Path, PathBuf};
 
 /// Format version of `plan.json` (2: the typed [`Job`]).
 pub const PLAN_VERSION: u32 = 2;
+/// Format version of a `plan.json` whose job has breaklines or trimming rings
+/// ([`Job::lines`]): a sweeptin that reads only [`PLAN_VERSION`] refuses it instead of running
+/// its tasks without the lines. This one reads both.
+pub const PLAN_VERSION_LINES: u32 = 3;
 
 /// One input file of a plan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -63,7 +69,7 @@ pub struct PlanTile {
 /// A job cut into tiles (see the module docs).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
-    /// [`PLAN_VERSION`].
+    /// [`PLAN_VERSION`], or [`PLAN_VERSION_LINES`] when the job has lines.
     pub version: u32,
     /// The product command (`dem`, `contours`, `volume`).
     pub command: String,
@@ -124,10 +130,15 @@ impl Plan {
     /// is the command line it was made from (for people); `outputs` are where the whole job's
     /// outputs go (`"dir"`, `"contours"`, …).
     ///
+    /// Every tile that the convex hull of the files' extents (and the line vertices) meets has
+    /// a task. Lines ([`Job::lines`]) are read and cleaned now, as every task will (see
+    /// [`PlanLines`]).
+    ///
     /// # Errors
-    /// [`Error::Options`] for a bad tile size, buffer or job option; [`Error::Format`] for a
-    /// file that is not LAS/LAZ; the header reader's errors, also for files that cannot be read
-    /// together (CRS, formats), as a single run would refuse them.
+    /// [`Error::Options`] for a bad tile size, buffer or job option, and for a line vertex
+    /// without z (naming it) or `--clip-breaklines`; [`Error::Format`] for a file that is not
+    /// LAS/LAZ; the header reader's errors, also for files that cannot be read together (CRS,
+    /// formats), as a single run would refuse them; the line readers' and cleaning's errors.
     pub fn new(
         job: Job,
         args: Vec<String>,
@@ -195,15 +206,28 @@ impl Plan {
                 points: info.point_count,
             });
         }
+        // Where data may be: the files' extents and the lines' vertices (the lines read and
+        // cleaned now, as every task will: a bad file or a vertex without z fails here, once).
+        let mut data: Vec<[f64; 3]> = Vec::new();
+        for f in files.iter().filter(|f| f.points > 0) {
+            let b = f.bounds;
+            data.extend(
+                [[b[0], b[1]], [b[2], b[1]], [b[2], b[3]], [b[0], b[3]]].map(|c| [c[0], c[1], 0.0]),
+            );
+        }
+        if let Some(l) = &job.lines {
+            data.extend(l.graph(job.max_edge)?.vertices);
+        }
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
-        for f in &files {
-            if f.points == 0 {
-                continue;
-            }
-            lo = [lo[0].min(f.bounds[0]), lo[1].min(f.bounds[1])];
-            hi = [hi[0].max(f.bounds[2]), hi[1].max(f.bounds[3])];
+        for p in &data {
+            lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+            hi = [hi[0].max(p[0]), hi[1].max(p[1])];
         }
+        let hull: Vec<[f64; 2]> = crate::tiles::hull::hull(&mut data)
+            .iter()
+            .map(|p| [p[0], p[1]])
+            .collect();
         let mut tiles = Vec::new();
         if lo[0].is_finite() {
             // A tile owns the cells whose centres lie in [x0, x1) × (y0, y1]: columns by floor,
@@ -218,15 +242,17 @@ impl Plan {
                         (tx + 1) as f64 * tile,
                         (ty + 1) as f64 * tile,
                     ];
+                    // A tile outside the convex hull of the data has no triangle and owns
+                    // nothing: no task. (One inside it that no file reaches, in a concave corner
+                    // of the files or beside a line that leaves them, lies under triangles that
+                    // one run fills cells from.)
+                    if !meets_hull(&hull, &b) {
+                        continue;
+                    }
                     let g = grown(b, buffer);
                     let near: Vec<usize> = (0..files.len())
                         .filter(|&i| files[i].points > 0 && overlaps(&files[i].bounds, &g))
                         .collect();
-                    // A tile no file reaches into holds no point: no task.
-                    let inside = near.iter().any(|&i| overlaps(&files[i].bounds, &b));
-                    if !inside {
-                        continue;
-                    }
                     let points = near.iter().map(|&i| files[i].points).sum();
                     tiles.push(PlanTile {
                         index: tiles.len(),
@@ -240,7 +266,11 @@ impl Plan {
             }
         }
         Ok(Plan {
-            version: PLAN_VERSION,
+            version: if job.lines.is_some() {
+                PLAN_VERSION_LINES
+            } else {
+                PLAN_VERSION
+            },
             command: job.command().to_string(),
             args,
             job,
@@ -287,12 +317,12 @@ impl Plan {
         }
         let v: Version = serde_json::from_str(&text)
             .map_err(|e| bad(path, format!("not a sweeptin plan: {e}")))?;
-        if v.version != PLAN_VERSION {
+        if v.version != PLAN_VERSION && v.version != PLAN_VERSION_LINES {
             return Err(bad(
                 path,
                 format!(
-                    "plan version {} (this sweeptin reads version {PLAN_VERSION}): make the plan \
-                     again with this sweeptin",
+                    "plan version {} (this sweeptin reads versions {PLAN_VERSION} and \
+                     {PLAN_VERSION_LINES}): make the plan again with this sweeptin",
                     v.version
                 ),
             ));
@@ -449,6 +479,33 @@ pub fn task_from_env() -> Result<Option<usize>> {
 /// `b` grown by `d` on every side.
 fn grown(b: [f64; 4], d: f64) -> [f64; 4] {
     [b[0] - d, b[1] - d, b[2] + d, b[3] + d]
+}
+
+/// Does the closed convex polygon `hull` (counter-clockwise corners; one or two for a point or a
+/// segment) meet the closed rectangle `r`? Exact: they are apart exactly when an axis of the
+/// rectangle or an edge of the polygon separates them.
+fn meets_hull(hull: &[[f64; 2]], r: &[f64; 4]) -> bool {
+    use crate::geom::predicates::{Orientation, orient};
+    match hull {
+        [] => false,
+        [a] => crate::tiles::region::tri_meets_rect(&[*a, *a, *a], r),
+        [a, b] => crate::tiles::region::tri_meets_rect(&[*a, *b, *b], r),
+        _ => {
+            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for p in hull {
+                lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+                hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+            }
+            let corners = [[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]];
+            overlaps(&[lo[0], lo[1], hi[0], hi[1]], r)
+                && !(0..hull.len()).any(|i| {
+                    let (p, q) = (hull[i], hull[(i + 1) % hull.len()]);
+                    corners
+                        .iter()
+                        .all(|&c| orient(p, q, c) == Orientation::Clockwise)
+                })
+        }
+    }
 }
 
 /// Do the closed rectangles `a` and `b` meet?

@@ -125,6 +125,10 @@ pub struct Job {
     pub mem: u64,
     /// Where a task's spill files go.
     pub tmp_dir: Option<PathBuf>,
+    /// Breaklines and trimming rings every task inserts (every vertex with its z; see
+    /// [`super::PlanLines`]). Absent from the plans of versions before 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lines: Option<super::PlanLines>,
 }
 
 impl Job {
@@ -142,6 +146,7 @@ impl Job {
             crs: None,
             mem: crate::pipeline::DEFAULT_MEM,
             tmp_dir: None,
+            lines: None,
         }
     }
 
@@ -293,11 +298,14 @@ impl Plan {
         let start = std::time::Instant::now();
         self.task(i)?;
         let crs = self.job.crs()?;
-        let mut buffer = self.buffer;
+        let mut buffer = self.first_buffer(i)?;
         let mut runs = 0;
         let mut record = loop {
             runs += 1;
             self.check_files(i, buffer)?;
+            if let Some(l) = &self.job.lines {
+                l.check()?;
+            }
             let config = self.task_config(i, buffer, options)?;
             let mut fanout = Fanout::new(self.task_sinks(dir, i)?).with_crs(crs.clone());
             let mut pieces = self.task_pieces(dir, i)?;
@@ -307,7 +315,17 @@ impl Plan {
             match crate::pipeline::run(&config, mesh, &mut [&mut fanout]) {
                 Ok(mut run) => {
                     let products = fanout_summary(run.products.pop())?;
-                    let status = if run.triangles == 0 { "empty" } else { "done" };
+                    // Empty: no triangle of its own, and no cell with data from the triangles
+                    // of others that cover it (a tile inside a concave corner of the data).
+                    let covered = products
+                        .0
+                        .iter()
+                        .any(|(_, s)| matches!(s, ProductSummary::Dem(d) if d.cells_with_data > 0));
+                    let status = if run.triangles == 0 && !covered {
+                        "empty"
+                    } else {
+                        "done"
+                    };
                     let mut r = record_of(i, status, buffer, runs, &run, &products);
                     self.finish_pieces(dir, i, pieces, &mut r)?;
                     break r;
@@ -338,16 +356,45 @@ impl Plan {
         Ok(record)
     }
 
+    /// The first buffer of task `i`: the plan's, or, for a tile with no input file within the
+    /// plan's buffer (inside the data's hull: a concave corner of the files, beside a line that
+    /// leaves them), the one that reads the nearest file.
+    ///
+    /// # Errors
+    /// As [`Plan::task`].
+    fn first_buffer(&self, i: usize) -> Result<f64> {
+        if !self.task_files(i, self.buffer)?.is_empty() {
+            return Ok(self.buffer);
+        }
+        let sc = self.scope(i, self.buffer)?;
+        let scope = crate::tiles::index::Scope {
+            unknown: sc.unread,
+            beyond: Vec::new(),
+            tile: sc.tile,
+            buffer: sc.buffer,
+        };
+        let near = scope
+            .unknown
+            .iter()
+            .map(|u| scope.reach(u))
+            .fold(f64::INFINITY, f64::min);
+        Ok(if near.is_finite() { near } else { self.buffer })
+    }
+
     /// The run of task `i` with a buffer of `buffer`.
     fn task_config(&self, i: usize, buffer: f64, o: &TaskOptions) -> Result<RunConfig> {
+        let lines = match &self.job.lines {
+            Some(l) => l.options(self.job.max_edge),
+            None => LineOptions {
+                max_edge: self.job.max_edge,
+                ..LineOptions::default()
+            },
+        };
         let input = Input {
             paths: self.task_files(i, buffer)?,
             filter: self.job.filter(),
             duplicates: self.job.duplicates,
-            lines: LineOptions {
-                max_edge: self.job.max_edge,
-                ..LineOptions::default()
-            },
+            lines,
         };
         let options = RunOptions {
             mem: self.job.mem,

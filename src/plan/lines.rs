@@ -1,0 +1,209 @@
+//! Breaklines and trimming rings in a plan ([`PlanLines`]).
+
+use crate::error::{Error, Result};
+use crate::pipeline::LineOptions;
+use serde::{Deserialize, Serialize};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// A line file of a plan: where it is and what it held when the plan was made.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LineFile {
+    /// The file, absolute, as the readers take it (`FILE.gpkg:LAYER` keeps its layer).
+    pub path: PathBuf,
+    /// Its size in bytes.
+    pub bytes: u64,
+    /// The SHA-256 of its bytes, lower-case hex (what `sha256sum` prints).
+    pub sha256: String,
+}
+
+impl LineFile {
+    /// The file at `path` (made absolute) with its fingerprint.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file.
+    pub fn new(path: &Path) -> Result<LineFile> {
+        let (file, layer) = crate::input::vector::split_layer(path);
+        let mut abs = std::fs::canonicalize(&file).map_err(|e| Error::io(&file, e))?;
+        let (bytes, sha256) = fingerprint(&abs)?;
+        if let Some(l) = layer {
+            let mut s = abs.into_os_string();
+            s.push(format!(":{l}"));
+            abs = s.into();
+        }
+        Ok(LineFile {
+            path: abs,
+            bytes,
+            sha256,
+        })
+    }
+
+    /// Checks that the file still holds what it held when the plan was made.
+    ///
+    /// # Errors
+    /// [`Error::Format`] naming the file when it changed; [`Error::Io`] when it cannot be read.
+    pub fn check(&self) -> Result<()> {
+        let (bytes, sha256) = fingerprint(&crate::input::vector::split_layer(&self.path).0)?;
+        if bytes != self.bytes || sha256 != self.sha256 {
+            return Err(Error::Format {
+                path: self.path.clone(),
+                message: format!(
+                    "the line file changed since the plan was made ({} bytes, sha256 {} then; \
+                     {bytes} bytes, sha256 {sha256} now): every task must insert the same lines, \
+                     so make the plan again",
+                    self.bytes, self.sha256
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The size and SHA-256 (hex) of the file at `path`.
+fn fingerprint(path: &Path) -> Result<(u64, String)> {
+    use sha2::Digest;
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut hash = sha2::Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    let mut bytes = 0u64;
+    loop {
+        let n = f.read(&mut buf).map_err(|e| Error::io(path, e))?;
+        if n == 0 {
+            break;
+        }
+        hash.update(&buf[..n]);
+        bytes += n as u64;
+    }
+    let hex = hash.finalize().iter().map(|b| format!("{b:02x}")).collect();
+    Ok((bytes, hex))
+}
+
+/// The breaklines and trimming rings of a plan.
+///
+/// A plan stores its line files by absolute path with a fingerprint (size and SHA-256 of the
+/// bytes, as `sha256sum` prints it), and every task reads and cleans them itself: cleaning is
+/// deterministic ([`crate::breaklines::clean()`]), so every task holds the same planar graph, the
+/// one a single run holds, and hands it to the tiled engine exactly as one tiled run does
+/// (`pipeline::tiled`). Which segments a tile's run loads is the engine's business
+/// (`tiles::lines`).
+///
+/// What a task cannot do is anything that needs all the points: drape vertices without `z`
+/// (they take their height from the TIN of every point) or cut the lines to the points' hull
+/// (`--clip-breaklines`). So a plan takes lines whose every vertex has a `z` after cleaning
+/// (boundary and hole rings too: they are inserted as breaklines, and their vertices are vertices
+/// of the TIN), and checks it when it is made, so that a bad file fails `sweeptin plan` once
+/// rather than every task.
+///
+/// Line vertices are data like points, but every task knows all of them: the extents of the
+/// files a task does not read stay the only places where it may not know the data, so the files
+/// a task reads do not depend on the lines. The tiles do: the plan has a task for every tile the
+/// convex hull of the files' extents and the line vertices meets, so a line that leaves the
+/// files has the tiles it reaches, and the triangles between it and the points have theirs.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PlanLines {
+    /// Breakline files (`--breaklines`), in the order given.
+    pub breaklines: Vec<LineFile>,
+    /// Keep only the triangles inside these rings (`--trim-boundary`).
+    pub boundary: Option<LineFile>,
+    /// Drop the triangles inside these rings (`--holes`).
+    pub holes: Option<LineFile>,
+}
+
+impl PlanLines {
+    /// The plan's lines from these files (absolute, fingerprinted); `None` when there are none.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming a file that cannot be read.
+    pub fn new(
+        breaklines: &[PathBuf],
+        boundary: Option<&Path>,
+        holes: Option<&Path>,
+    ) -> Result<Option<PlanLines>> {
+        if breaklines.is_empty() && boundary.is_none() && holes.is_none() {
+            return Ok(None);
+        }
+        Ok(Some(PlanLines {
+            breaklines: breaklines
+                .iter()
+                .map(|p| LineFile::new(p))
+                .collect::<Result<_>>()?,
+            boundary: boundary.map(LineFile::new).transpose()?,
+            holes: holes.map(LineFile::new).transpose()?,
+        }))
+    }
+
+    /// Every file, breaklines first.
+    pub fn files(&self) -> impl Iterator<Item = &LineFile> {
+        self.breaklines
+            .iter()
+            .chain(self.boundary.iter())
+            .chain(self.holes.iter())
+    }
+
+    /// Checks that no file changed since the plan was made ([`LineFile::check`]).
+    ///
+    /// # Errors
+    /// As [`LineFile::check`].
+    pub fn check(&self) -> Result<()> {
+        self.files().try_for_each(LineFile::check)
+    }
+
+    /// The run's line options: these files, with `max_edge` (never draped, never clipped).
+    pub(crate) fn options(&self, max_edge: Option<f64>) -> LineOptions {
+        LineOptions {
+            breaklines: self.breaklines.iter().map(|f| f.path.clone()).collect(),
+            boundary: self.boundary.as_ref().map(|f| f.path.clone()),
+            holes: self.holes.as_ref().map(|f| f.path.clone()),
+            max_edge,
+            ..LineOptions::default()
+        }
+    }
+
+    /// The cleaned graph's vertices and segments, read and cleaned as every task will (the
+    /// files checked first): what the plan checks when it is made.
+    ///
+    /// # Errors
+    /// As [`PlanLines::check`]; the readers' and cleaning's errors; [`Error::Options`] naming
+    /// the first vertex without `z`.
+    pub(crate) fn graph(&self, max_edge: Option<f64>) -> Result<crate::breaklines::Pslg> {
+        self.check()?;
+        let p = crate::pipeline::prepare(&self.options(max_edge), None)?;
+        Ok(p.pslg.unwrap_or_default())
+    }
+
+    /// The trimming rules (boundary, holes, `max_edge`), the files checked first: what a TIN
+    /// plan's merge applies to the pieces.
+    ///
+    /// # Errors
+    /// As [`PlanLines::check`]; the readers' errors.
+    pub(crate) fn trim(&self, max_edge: Option<f64>) -> Result<crate::breaklines::Trim> {
+        self.check()?;
+        crate::pipeline::trim(&self.options(max_edge))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fingerprints_name_a_changed_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("l.txt");
+        std::fs::write(&p, "0 0 1\n1 1 2\n").unwrap();
+        let f = LineFile::new(&p).unwrap();
+        assert_eq!(f.bytes, 12);
+        // What `sha256sum` prints for the same bytes.
+        assert_eq!(
+            f.sha256,
+            "c70eef8c2074ce1de7eb2cebf2bf75d735e2eda4ec04fe4083270da77c0b232d"
+        );
+        assert!(f.check().is_ok());
+        std::fs::write(&p, "0 0 1\n1 1 3\n").unwrap();
+        let e = f.check().unwrap_err().to_string();
+        assert!(
+            e.contains("l.txt") && e.contains("changed since the plan"),
+            "{e}"
+        );
+    }
+}
