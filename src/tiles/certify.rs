@@ -264,16 +264,18 @@ impl<'a> Certifier<'a> {
         if !r.is_finite() {
             return Ok(false);
         }
-        let w = &self.world;
-        if cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
-            return Ok(true);
-        }
+        // A plan's task first: the loaded rectangle, rounded out to whole blocks, can reach past
+        // what the task read, into a file it did not read.
         if let Some(sc) = &self.index.scope
             && let reach = sc.disk_reach([cx, cy], r)
             && reach > 0.0
         {
             self.unknown.set(self.unknown.get().max(reach));
             return Ok(false);
+        }
+        let w = &self.world;
+        if cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
+            return Ok(true);
         }
         // With breaklines: what the triangle's constrained edges hide, and the box of the part
         // of the disk they leave visible (the cap on the triangle's side of a chord whose centre
@@ -535,6 +537,23 @@ impl<'a> Certifier<'a> {
         // The near box: the chord box (the segment `ab` moved up to `h` to the left), two
         // blocks wider (witnesses on the far side are most often close to the triangle).
         let near_box = chord_box(a, b, c, g, 2.0 * g.block);
+        let beyond = |e: &[f64; 4]| {
+            [[e[0], e[1]], [e[2], e[1]], [e[2], e[3]], [e[0], e[3]]]
+                .into_iter()
+                .any(|p| orient(a, b, p) == Orientation::Clockwise)
+        };
+        // A plan's task: a file it did not read that the chord box or the half-plane (within
+        // the bound) reaches may hold a witness (hidden half-planes ignored: conservative).
+        if let Some(sc) = &self.index.scope {
+            let meets = |u: &&[f64; 4]| in_bound(u) && (boxes_meet(u, &near_box) || beyond(u));
+            let files = sc.unknown.iter().filter(meets).map(|u| sc.reach_of(u, true));
+            let parts = sc.beyond.iter().filter(meets).map(|u| sc.reach_of(u, false));
+            let reach = files.chain(parts).fold(0.0, f64::max);
+            if reach > 0.0 {
+                self.unknown.set(self.unknown.get().max(reach));
+                return Ok(Some(false));
+            }
+        }
         // With breaklines: a constrained long edge hides the half-plane beyond it.
         let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
         let mut sight = Sight::default();
@@ -562,11 +581,6 @@ impl<'a> Certifier<'a> {
                 return self.region_clear(t, &sight, &rb, out).map(Some);
             }
         }
-        let beyond = |e: &[f64; 4]| {
-            [[e[0], e[1]], [e[2], e[1]], [e[2], e[3]], [e[0], e[3]]]
-                .into_iter()
-                .any(|p| orient(a, b, p) == Orientation::Clockwise)
-        };
         let m = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
         let occ = self.index.occupied();
         let bs = g.block;
