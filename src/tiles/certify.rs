@@ -264,8 +264,13 @@ impl<'a> Certifier<'a> {
         if !r.is_finite() {
             return Ok(false);
         }
-        // A plan's task first: the loaded rectangle, rounded out to whole blocks, can reach past
-        // what the task read, into a file it did not read.
+        let inside = |w: &[f64; 4]| cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3];
+        // A plan's task reads every file meeting its tile and buffer, but the loaded rectangle,
+        // rounded out to whole blocks, can reach past that, into a file it did not read.
+        let read = self.index.scope.as_ref().map(|sc| sc.read_rect());
+        if inside(&self.world) && read.is_none_or(|w| inside(&w)) {
+            return Ok(true);
+        }
         if let Some(sc) = &self.index.scope
             && let reach = sc.disk_reach([cx, cy], r)
             && reach > 0.0
@@ -273,8 +278,7 @@ impl<'a> Certifier<'a> {
             self.unknown.set(self.unknown.get().max(reach));
             return Ok(false);
         }
-        let w = &self.world;
-        if cx - r >= w[0] && cx + r <= w[2] && cy - r >= w[1] && cy + r <= w[3] {
+        if inside(&self.world) {
             return Ok(true);
         }
         // With breaklines: what the triangle's constrained edges hide, and the box of the part

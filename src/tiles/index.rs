@@ -89,6 +89,12 @@ fn disk_meets(u: &[f64; 4], c: [f64; 2], r: f64) -> bool {
 }
 
 impl Scope {
+    /// The rectangle the task read whole: its tile and buffer (every file meeting it was read).
+    pub fn read_rect(&self) -> [f64; 4] {
+        let (t, b) = (&self.tile, self.buffer);
+        [t[0] - b, t[1] - b, t[2] + b, t[3] + b]
+    }
+
     /// Does the task know every point there is?
     pub fn complete(&self) -> bool {
         self.unknown.is_empty() && self.beyond.is_empty()
