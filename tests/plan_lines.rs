@@ -254,6 +254,7 @@ fn tin_plan_with_a_boundary_and_a_hole_has_the_triangles_of_one_sweep() {
     let mut job: Vec<String> = vec!["tin".into()];
     job.extend(ground());
     job.extend(breaklines(&bl[1..]));
+    let hole_path = hole.clone();
     job.extend(["--trim-boundary".into(), boundary, "--holes".into(), hole]);
     let mut plan = vec!["plan".to_string()];
     plan.extend(job.iter().cloned());
@@ -275,6 +276,16 @@ fn tin_plan_with_a_boundary_and_a_hole_has_the_triangles_of_one_sweep() {
     let want = keys(&d("one.ply"));
     assert!(want.len() > 10_000, "{} triangles", want.len());
     assert!(keys(&d("merged.ply")) == want, "the triangles of one sweep");
+    // The merge never writes over a line file the plan reads (exit 2, the file untouched).
+    let before = std::fs::read(&hole_path).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(["merge", &p, "-o", &hole_path])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("an input of the plan"), "{err}");
+    assert_eq!(std::fs::read(&hole_path).unwrap(), before);
 }
 
 /// Lines without z are refused by `plan` (file, line, vertex; exit 2), as are

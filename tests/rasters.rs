@@ -7,27 +7,18 @@
 mod cli;
 #[path = "support/data.rs"]
 mod data;
+#[path = "support/plans.rs"]
+mod plans;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use sweeptin::input::raster::RasterReader;
 
 use cli::ok as sweeptin;
+use plans::cells;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
-}
-
-/// Size, geotransform and every cell's bits (nodata as `u64::MAX`).
-fn cells(path: &Path) -> (u32, u32, [f64; 6], Vec<u64>) {
-    let mut r = RasterReader::open(path).unwrap();
-    let spec = r.spec().clone();
-    let v = r.read_window(0, 0, spec.cols, spec.rows).unwrap();
-    let bits = v
-        .iter()
-        .map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() })
-        .collect();
-    (spec.cols, spec.rows, spec.transform, bits)
 }
 
 fn ign_ground(tile: &str) -> PathBuf {

@@ -136,7 +136,7 @@ impl Plan {
     ///
     /// # Errors
     /// [`Error::Options`] for a bad tile size, buffer or job option, and for a line vertex
-    /// without z (naming it) or `--clip-breaklines`; [`Error::Format`] for a file that is not
+    /// without z (naming it); [`Error::Format`] for a file that is not
     /// LAS/LAZ; the header reader's errors, also for files that cannot be read together (CRS,
     /// formats), as a single run would refuse them; the line readers' and cleaning's errors.
     pub fn new(

@@ -181,7 +181,7 @@ fn release(_file: &File, _offset: usize, _len: usize) {}
 /// [`tune_allocator`].
 pub const OWN_MAP_BYTES: usize = 4 << 20;
 
-/// Makes glibc serve every allocation of [`OWN_MAP_BYTES`] or more from a memory map of its own,
+/// Makes glibc serve every allocation of 4 MiB (`OWN_MAP_BYTES`) or more from a memory map of its own,
 /// unmapped when freed, so memory freed by one tile or run goes back to the system at once.
 ///
 /// By default glibc raises that threshold to the size of the largest block freed so far, so after

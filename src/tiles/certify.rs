@@ -541,18 +541,11 @@ impl<'a> Certifier<'a> {
         // The near box: the chord box (the segment `ab` moved up to `h` to the left), two
         // blocks wider (witnesses on the far side are most often close to the triangle).
         let near_box = chord_box(a, b, c, g, 2.0 * g.block);
-        let beyond = |e: &[f64; 4]| {
-            [[e[0], e[1]], [e[2], e[1]], [e[2], e[3]], [e[0], e[3]]]
-                .into_iter()
-                .any(|p| orient(a, b, p) == Orientation::Clockwise)
-        };
+        let beyond = |e: &[f64; 4]| corner_right_of(a, b, e);
         // A plan's task: a file it did not read that the chord box or the half-plane (within
         // the bound) reaches may hold a witness (hidden half-planes ignored: conservative).
         if let Some(sc) = &self.index.scope {
-            let meets = |u: &&[f64; 4]| in_bound(u) && (boxes_meet(u, &near_box) || beyond(u));
-            let files = sc.unknown.iter().filter(meets).map(|u| sc.reach_of(u, true));
-            let parts = sc.beyond.iter().filter(meets).map(|u| sc.reach_of(u, false));
-            let reach = files.chain(parts).fold(0.0, f64::max);
+            let reach = sc.reach_where(|u| in_bound(u) && (boxes_meet(u, &near_box) || beyond(u)));
             if reach > 0.0 {
                 self.unknown.set(self.unknown.get().max(reach));
                 return Ok(Some(false));
@@ -700,29 +693,21 @@ impl Certifier<'_> {
     /// line do not move the hull's boundary beyond it (the triangles along it are judged by
     /// their disks). Without a scope, every point is known: `false`.
     pub fn beyond_unknown(&self, a: [f64; 2], b: [f64; 2]) -> bool {
-        use crate::geom::predicates::{Orientation, orient};
         let Some(sc) = &self.index.scope else {
             return false;
         };
-        let beyond = |u: &&[f64; 4]| {
-            [[u[0], u[1]], [u[2], u[1]], [u[2], u[3]], [u[0], u[3]]]
-                .into_iter()
-                .any(|c| orient(a, b, c) == Orientation::Clockwise)
-        };
-        let files = sc
-            .unknown
-            .iter()
-            .filter(beyond)
-            .map(|u| sc.reach_of(u, true));
-        let parts = sc
-            .beyond
-            .iter()
-            .filter(beyond)
-            .map(|u| sc.reach_of(u, false));
-        let reach = files.chain(parts).fold(0.0, f64::max);
+        let reach = sc.reach_where(|u| corner_right_of(a, b, u));
         self.unknown.set(self.unknown.get().max(reach));
         reach > 0.0
     }
+}
+
+/// Does a corner of the closed rectangle `e` lie strictly right of the directed line `a → b`
+/// (exactly)? That is when the rectangle meets the open half-plane there.
+fn corner_right_of(a: [f64; 2], b: [f64; 2], e: &[f64; 4]) -> bool {
+    [[e[0], e[1]], [e[2], e[1]], [e[2], e[3]], [e[0], e[3]]]
+        .into_iter()
+        .any(|p| orient(a, b, p) == Orientation::Clockwise)
 }
 
 #[cfg(test)]

@@ -142,10 +142,12 @@ impl Scope {
         d.max(0.0) * (1.0 + 1e-9) + 1e-9
     }
 
-    /// The buffer that reads what may lie in the rectangle `u` of [`Scope::unknown`] (`file`) or
-    /// [`Scope::beyond`] (not `file`).
-    pub fn reach_of(&self, u: &[f64; 4], file: bool) -> f64 {
-        if file { self.reach(u) } else { self.cover(u) }
+    /// The buffer that reads whatever may lie in the rectangles of [`Scope::unknown`] and
+    /// [`Scope::beyond`] that `meets` accepts (0: none).
+    pub fn reach_where(&self, meets: impl Fn(&[f64; 4]) -> bool) -> f64 {
+        let files = self.unknown.iter().filter(|u| meets(u)).map(|u| self.reach(u));
+        let parts = self.beyond.iter().filter(|u| meets(u)).map(|u| self.cover(u));
+        files.chain(parts).fold(0.0, f64::max)
     }
 }
 
