@@ -205,7 +205,8 @@ impl Job {
                 &l.breaklines,
                 self.trim_boundary().as_deref(),
                 l.holes.as_deref(),
-            )?,
+            )?
+            .map(|p| p.with_z_tolerance(l.z_tolerance)),
             product,
             classes: f.classes,
             returns: f.returns,

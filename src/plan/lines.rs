@@ -99,7 +99,7 @@ fn fingerprint(path: &Path) -> Result<(u64, String)> {
 /// a task reads do not depend on the lines. The tiles do: the plan has a task for every tile the
 /// convex hull of the files' extents and the line vertices meets, so a line that leaves the
 /// files has the tiles it reaches, and the triangles between it and the points have theirs.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlanLines {
     /// Breakline files (`--breaklines`), in the order given.
     pub breaklines: Vec<LineFile>,
@@ -107,6 +107,10 @@ pub struct PlanLines {
     pub boundary: Option<LineFile>,
     /// Drop the triangles inside these rings (`--holes`).
     pub holes: Option<LineFile>,
+    /// Heights of one vertex given twice that differ by more than this are a conflict
+    /// (`--z-tolerance`); absent: the default of [`crate::breaklines::CleanOptions`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z_tolerance: Option<f64>,
 }
 
 impl PlanLines {
@@ -129,7 +133,16 @@ impl PlanLines {
                 .collect::<Result<_>>()?,
             boundary: boundary.map(LineFile::new).transpose()?,
             holes: holes.map(LineFile::new).transpose()?,
+            z_tolerance: None,
         }))
+    }
+
+    /// The same lines cleaned with `z_tolerance` (recorded only when it is not the default,
+    /// so a plan made with the default is the same whoever made it).
+    pub fn with_z_tolerance(mut self, z_tolerance: f64) -> PlanLines {
+        let default = crate::breaklines::CleanOptions::default().z_tolerance;
+        self.z_tolerance = (z_tolerance != default).then_some(z_tolerance);
+        self
     }
 
     /// Every file, breaklines first.
@@ -155,6 +168,7 @@ impl PlanLines {
             boundary: self.boundary.as_ref().map(|f| f.path.clone()),
             holes: self.holes.as_ref().map(|f| f.path.clone()),
             max_edge,
+            z_tolerance: self.z_tolerance,
             ..LineOptions::default()
         }
     }
@@ -185,6 +199,24 @@ impl PlanLines {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `--z-tolerance` reaches every task through the plan; the default is not written, so a
+    /// plan made with it is the same as one made without the option (or from Python).
+    #[test]
+    fn the_z_tolerance_is_carried_and_the_default_left_out() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("l.txt");
+        std::fs::write(&p, "0 0 1\n1 1 2\n").unwrap();
+        let l = PlanLines::new(&[p], None, None).unwrap().unwrap();
+        let default = crate::breaklines::CleanOptions::default().z_tolerance;
+        let d = l.clone().with_z_tolerance(default);
+        assert_eq!(d.z_tolerance, None);
+        assert!(!serde_json::to_string(&d).unwrap().contains("z_tolerance"));
+        let t = l.with_z_tolerance(0.25);
+        assert_eq!(t.options(None).z_tolerance, Some(0.25));
+        let back: PlanLines = serde_json::from_str(&serde_json::to_string(&t).unwrap()).unwrap();
+        assert_eq!(back, t);
+    }
 
     #[test]
     fn fingerprints_name_a_changed_file() {
