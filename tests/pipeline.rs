@@ -28,29 +28,7 @@ fn streamed_along(
         duplicates: dup,
         lines: Default::default(),
     };
-    let tmp = tempfile::tempdir().unwrap();
-    let options = RunOptions {
-        mem,
-        tmp_dir: Some(tmp.path().to_path_buf()),
-        progress: false,
-        sweep_axis,
-        tiles: None,
-    };
-    let mut c = Collect::default();
-    let config = RunConfig::new(input, options).unwrap();
-    let summary = run(&config, Some(&mut c), &mut []).unwrap();
-    assert_eq!(summary.triangles as usize, c.triangles.len());
-    assert_eq!(
-        c.released.len(),
-        c.vertices.len(),
-        "every vertex released once"
-    );
-    assert_eq!(
-        std::fs::read_dir(tmp.path()).unwrap().count(),
-        0,
-        "spill files left behind"
-    );
-    (c, summary)
+    mesh::collect_run_along(&input, None, mem, sweep_axis)
 }
 
 fn write_xyz(path: &Path, pts: &[[f64; 3]]) {

@@ -150,10 +150,21 @@ pub fn collect_run(
     tiles: Option<(Option<f64>, usize)>,
     mem: u64,
 ) -> (Collect, sweeptin::pipeline::RunSummary) {
+    collect_run_along(input, tiles, mem, sweeptin::pipeline::SweepAxis::Auto)
+}
+
+/// [`collect_run`] sweeping along `sweep_axis`.
+pub fn collect_run_along(
+    input: &sweeptin::pipeline::Input,
+    tiles: Option<(Option<f64>, usize)>,
+    mem: u64,
+    sweep_axis: sweeptin::pipeline::SweepAxis,
+) -> (Collect, sweeptin::pipeline::RunSummary) {
     use sweeptin::pipeline::{RunConfig, RunOptions, run};
     let tmp = tempfile::tempdir().unwrap();
     let options = RunOptions {
         mem,
+        sweep_axis,
         tmp_dir: Some(tmp.path().to_path_buf()),
         tiles: tiles.map(|(tile, threads)| sweeptin::tiles::TileOptions {
             threads,
