@@ -516,6 +516,25 @@ fn cli_real_points() {
     let (v, t) = sweeptin::input::read_ply(&out).unwrap();
     assert_eq!(v.len() as u64, s["vertices"].as_u64().unwrap());
     assert!(t.iter().all(|tri| meets(tri.map(|i| v[i as usize]), 28.0)));
+    // The output pass runs in two halves side by side: one thread gives the same bytes.
+    let one = dir.path().join("one.ply");
+    let r = sweeptin(&[
+        "refine",
+        las.to_str().unwrap(),
+        "--min-angle",
+        "28",
+        "--max-area",
+        "4",
+        "--threads",
+        "1",
+        "-o",
+        one.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(
+        std::fs::read(&one).unwrap() == std::fs::read(&out).unwrap(),
+        "--threads 1 differs"
+    );
 }
 
 /// `refine_pslg` (Triangle's `-pq`: the graph's CDT, outside regions eaten from the hull) makes
