@@ -23,6 +23,17 @@ pub(crate) struct FileDecoder {
     pub(crate) record_len: usize,
     pub(crate) extended: bool,
     pub(crate) quant: Quantization,
+    /// The last call's span buffers, reused by the next (each with [`LAYOUT_HEAD`] bytes before
+    /// the span's bytes): fresh ones fault in fresh pages, batch after batch.
+    spare: Vec<Vec<u8>>,
+}
+
+/// Bytes before a LAZ chunk in the layout a decompressor expects: the chunk table's offset.
+const LAYOUT_HEAD: usize = 8;
+
+thread_local! {
+    /// Each decoding thread's buffer of raw records, reused from span to span.
+    static RAW: std::cell::RefCell<Vec<u8>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// Which fields a job needs (LAZ 1.4 layered chunks skip the others).
@@ -74,6 +85,7 @@ impl FileDecoder {
             record_len: usize::from(info.record_length),
             extended: info.point_format >= 6,
             quant: info.quantization(),
+            spare: Vec::new(),
         })
     }
 
@@ -86,12 +98,14 @@ impl FileDecoder {
         fields: Fields,
         job: impl Fn(&Chunk, &[u8]) -> T + Sync,
     ) -> Result<Vec<T>> {
-        let mut bytes = Vec::with_capacity(spans.len());
-        for s in spans {
-            let mut b = vec![0u8; s.bytes as usize];
+        let mut bytes = std::mem::take(&mut self.spare);
+        bytes.resize_with(bytes.len().max(spans.len()), Vec::new);
+        for (s, b) in spans.iter().zip(&mut bytes) {
+            b.clear();
+            b.resize(LAYOUT_HEAD + s.bytes as usize, 0);
             self.file
                 .seek(SeekFrom::Start(s.offset))
-                .and_then(|_| self.file.read_exact(&mut b))
+                .and_then(|_| self.file.read_exact(&mut b[LAYOUT_HEAD..]))
                 .map_err(|e| {
                     if e.kind() == std::io::ErrorKind::UnexpectedEof {
                         format_error(&self.path, "unexpected end of file: the file is truncated")
@@ -99,19 +113,19 @@ impl FileDecoder {
                         Error::io(&self.path, e)
                     }
                 })?;
-            bytes.push(b);
         }
         let (path, vlr, len) = (self.path.as_path(), self.vlr.as_ref(), self.record_len);
-        let one = |(s, b): (&Chunk, &Vec<u8>)| -> Result<T> {
+        let one = |(s, b): (&Chunk, &mut Vec<u8>)| -> Result<T> {
             match vlr {
-                None => Ok(job(s, b)),
-                Some(vlr) => {
-                    let mut raw = vec![0u8; s.points as usize * len];
+                None => Ok(job(s, &b[LAYOUT_HEAD..])),
+                Some(vlr) => RAW.with_borrow_mut(|raw| {
+                    raw.clear();
+                    raw.resize(s.points as usize * len, 0);
                     let entry = laz::laszip::ChunkTableEntry {
                         point_count: s.points,
                         byte_count: s.bytes,
                     };
-                    decode_chunk(b, &mut raw, vlr, entry, fields.selection()).map_err(|what| {
+                    decode_chunk(b, raw, vlr, entry, fields.selection()).map_err(|what| {
                         format_error(
                             path,
                             format!(
@@ -122,81 +136,94 @@ impl FileDecoder {
                             ),
                         )
                     })?;
-                    Ok(job(s, &raw))
-                }
+                    Ok(job(s, raw))
+                }),
             }
         };
-        guarded(path, || {
+        let parts = &mut bytes[..spans.len()];
+        let result = guarded(path, || {
             // Every span's result, then the first error in span order: the message does not
             // depend on which thread failed first.
             let all: Vec<Result<T>> = if parallel {
-                spans.par_iter().zip(&bytes).map(one).collect()
+                spans.par_iter().zip(parts).map(one).collect()
             } else {
-                spans.iter().zip(&bytes).map(one).collect()
+                spans.iter().zip(parts).map(one).collect()
             };
             all.into_iter().collect()
-        })
+        });
+        self.spare = bytes;
+        result
     }
 }
 
-/// Decodes one LAZ chunk, `bytes`, into `out` (its points' records) with a decompressor that
-/// sees only them, and checks that it used exactly them. A decoder running over damaged bytes
+/// Decodes one LAZ chunk, `layout[LAYOUT_HEAD..]`, into `out` (its points' records) with a
+/// decompressor that sees only them, and checks that it used exactly them. `layout` gets the
+/// chunk table's offset in its head and the table after the chunk (its end is cut back). A decoder running over damaged bytes
 /// takes them for data (a zeroed chunk decodes into 50,000 copies of one point): a chunk whose
 /// points end before its bytes do, or need more bytes than it has, is corrupt — which a file's
 /// length alone cannot tell (that is "truncated").
 fn decode_chunk(
-    bytes: &[u8],
+    layout: &mut Vec<u8>,
     out: &mut [u8],
     vlr: &laz::LazVlr,
     entry: laz::laszip::ChunkTableEntry,
     selection: laz::DecompressionSelection,
 ) -> std::result::Result<(), String> {
     // The layout a decompressor expects: the offset of the chunk table, the chunk, the table.
-    let mut buf = Vec::with_capacity(8 + bytes.len() + 32);
-    buf.extend_from_slice(&((8 + bytes.len()) as i64).to_le_bytes());
-    buf.extend_from_slice(bytes);
+    let end = layout.len();
+    let bytes_len = end - LAYOUT_HEAD;
+    layout[..LAYOUT_HEAD].copy_from_slice(&(end as i64).to_le_bytes());
     let mut table = laz::laszip::ChunkTable::with_capacity(1);
     table.push(entry);
-    table
-        .write_to(&mut buf, vlr)
-        .map_err(|e| format!("cannot set up its decoder: {e}"))?;
+    let written = table
+        .write_to(&mut *layout, vlr)
+        .map_err(|e| format!("cannot set up its decoder: {e}"));
+    let used = written.and_then(|()| decode_layout(layout, out, vlr, entry, selection, bytes_len));
+    layout.truncate(end);
+    let used = used?;
+    if used != bytes_len as u64 {
+        return Err(format!(
+            "its {} points decode from {used} of its {bytes_len} bytes",
+            entry.point_count,
+        ));
+    }
+    Ok(())
+}
+
+/// Runs the decompressor over `buf` (see [`decode_chunk`]); the chunk bytes it used.
+fn decode_layout(
+    buf: &[u8],
+    out: &mut [u8],
+    vlr: &laz::LazVlr,
+    entry: laz::laszip::ChunkTableEntry,
+    selection: laz::DecompressionSelection,
+    bytes_len: usize,
+) -> std::result::Result<u64, String> {
     let run = || -> std::result::Result<u64, String> {
-        let mut d = laz::LasZipDecompressor::selective(
-            std::io::Cursor::new(&buf[..]),
-            vlr.clone(),
-            selection,
-        )
-        .map_err(|e| laz_message(&e))?;
+        let mut d =
+            laz::LasZipDecompressor::selective(std::io::Cursor::new(buf), vlr.clone(), selection)
+                .map_err(|e| laz_message(&e))?;
         d.decompress_many(out).map_err(|e| {
             if e.kind() == std::io::ErrorKind::UnexpectedEof {
                 format!(
-                    "its {} points need more than its {} bytes",
+                    "its {} points need more than its {bytes_len} bytes",
                     entry.point_count,
-                    bytes.len()
                 )
             } else {
                 e.to_string()
             }
         })?;
-        Ok(d.get().position() - 8)
+        Ok(d.get().position() - LAYOUT_HEAD as u64)
     };
     // The decoder asserts on some damaged input: that too is this chunk's corruption.
-    let used = catch_unwind(AssertUnwindSafe(run)).unwrap_or_else(|panic| {
+    catch_unwind(AssertUnwindSafe(run)).unwrap_or_else(|panic| {
         let what = panic
             .downcast_ref::<&str>()
             .map(|s| s.to_string())
             .or_else(|| panic.downcast_ref::<String>().cloned())
             .unwrap_or_default();
         Err(format!("the decoder failed on it ({what})"))
-    })?;
-    if used != bytes.len() as u64 {
-        return Err(format!(
-            "its {} points decode from {used} of its {} bytes",
-            entry.point_count,
-            bytes.len()
-        ));
-    }
-    Ok(())
+    })
 }
 
 /// The spans of `info` to decode: every LAZ chunk, or slices of about `batch` LAS records; with

@@ -54,6 +54,8 @@ pub struct LidarReader {
     current: Option<Current>,
     ready: Vec<LidarPoint>,
     ready_pos: usize,
+    /// Spans' point buffers, reused batch after batch (fresh ones fault in fresh pages).
+    spare: std::sync::Mutex<Vec<Vec<LidarPoint>>>,
 }
 
 impl std::fmt::Debug for LidarReader {
@@ -288,6 +290,7 @@ impl LidarReader {
             current: None,
             ready: Vec::new(),
             ready_pos: 0,
+            spare: std::sync::Mutex::default(),
         })
     }
 
@@ -408,6 +411,7 @@ impl LidarReader {
                     }
                 }
                 let (filter, base, check) = (&self.filter, cur.first_index, &cur.check);
+                let spare = &self.spare;
                 let (quant, len, ext) = (
                     cur.decoder.quant,
                     cur.decoder.record_len,
@@ -418,7 +422,13 @@ impl LidarReader {
                     self.options.parallel,
                     Fields::Filter,
                     |span, raw| {
-                        let mut kept = Vec::with_capacity(span.points as usize);
+                        let mut kept = spare
+                            .lock()
+                            .ok()
+                            .and_then(|mut v| v.pop())
+                            .unwrap_or_default();
+                        kept.clear();
+                        kept.reserve(span.points as usize);
                         let mut stats = FilterStats::default();
                         for (i, rec) in raw.chunks_exact(len).enumerate() {
                             check.test(rec, ext, span, span.first + i as u64)?;
@@ -437,6 +447,9 @@ impl LidarReader {
                     let (kept, stats) = part?;
                     self.ready.extend_from_slice(&kept);
                     self.stats += stats;
+                    if let Ok(mut v) = self.spare.lock() {
+                        v.push(kept);
+                    }
                 }
                 return Ok(true);
             }
