@@ -116,10 +116,7 @@ impl TileGrid {
     /// The block of point `(x, y)`.
     #[inline]
     pub fn block_of(&self, x: f64, y: f64) -> (i64, i64) {
-        (
-            (x / self.block).floor() as i64,
-            (y / self.block).floor() as i64,
-        )
+        (floor_i64(x / self.block), floor_i64(y / self.block))
     }
 
     /// The tile of block `(bx, by)`.
@@ -216,6 +213,15 @@ pub(crate) fn pow2(base: f64, k: i32) -> f64 {
     base * 2f64.powi(k)
 }
 
+/// `q.floor() as i64` (saturating, NaN to 0) without a call into the C library: the float to
+/// integer conversion truncates towards zero, one less below zero when that rounded up. Exact for
+/// every `q` (a float beyond 2^52 in magnitude is already an integer).
+#[inline]
+fn floor_i64(q: f64) -> i64 {
+    let t = q as i64;
+    t.saturating_sub(i64::from((t as f64) > q))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -268,5 +274,25 @@ mod tests {
         assert!(r.expand(1).contains_rect(&r));
         assert_eq!(side_for(1.0, 13.2, 256.0), 2);
         assert_eq!(pow2(0.5, -1), 0.25);
+    }
+
+    #[test]
+    fn floor_i64_is_floor() {
+        let cases = [
+            0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 2.999_999, -2.999_999, 1e15 + 0.5, -1e15 - 0.5,
+            4.5e15, -4.5e15, 9.3e18, -9.3e18, 1e300, -1e300, f64::MIN_POSITIVE, -f64::MIN_POSITIVE,
+            f64::INFINITY, f64::NEG_INFINITY, f64::NAN,
+        ];
+        for q in cases {
+            assert_eq!(floor_i64(q), q.floor() as i64, "{q}");
+        }
+        for k in -2000..2000 {
+            let q = f64::from(k) * 0.37;
+            assert_eq!(floor_i64(q), q.floor() as i64, "{q}");
+            let n = f64::from(k);
+            for q in [n, n.next_up(), n.next_down()] {
+                assert_eq!(floor_i64(q), q.floor() as i64, "{q}");
+            }
+        }
     }
 }

@@ -37,6 +37,11 @@ impl SortKey for BlockRecord {
     }
     // Points of one block keep their input order: the duplicate policy needs it.
     const STABLE: bool = true;
+    const RADIX: bool = true;
+    #[inline(always)]
+    fn radix_key(&self) -> u64 {
+        self.key
+    }
 }
 
 #[derive(Debug)]
@@ -514,6 +519,7 @@ impl BlockIndex {
     /// [`Error::Io`] if the index file cannot be read.
     pub fn read(&self, r: &BlockRect, out: &mut Vec<[f64; 3]>) -> Result<()> {
         let r = r.intersect(&self.occupied);
+        out.reserve(self.count(&r) as usize);
         for by in r.y0..r.y1 {
             let k = self.row_range(by, r.x0, r.x1);
             self.read_span(

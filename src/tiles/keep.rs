@@ -155,8 +155,10 @@ fn collect(
     let low = |t: &[u32; 3]| t[0].min(t[1]).min(t[2]) as usize;
     let mut degree = vec![0u32; n];
     let mut foreign = vec![false; n];
+    let mut owned_tris = 0;
     for tri in tris.clone() {
         let o = is_owned[low(&tri)];
+        owned_tris += usize::from(o);
         for &i in &tri {
             degree[i as usize] += 1;
             if !o {
@@ -164,6 +166,10 @@ fn collect(
             }
         }
     }
+    // Sized once: growing them copies into fresh pages, tile after tile.
+    out.triangles.reserve(owned_tris);
+    out.vertices.reserve(n);
+    out.degree.reserve(n);
     let mut map = vec![u32::MAX; n];
     let mut add = |i: usize, out: &mut TileOutput| -> u32 {
         if map[i] == u32::MAX {
