@@ -103,7 +103,8 @@ pub struct TileStats {
     pub uncertified_owned: u64,
     /// Worker threads.
     pub threads: u64,
-    /// Tiles allowed in flight (running or waiting to be written) within `--mem`.
+    /// Tiles' runs allowed at once within `--mem` (at most the workers); finished tiles waiting
+    /// to be written in order hold only their outputs' share.
     pub window: u64,
     /// CPU time by stage.
     pub cpu: TileCpu,
@@ -423,17 +424,79 @@ fn block_points(total: u64) -> f64 {
     BLOCK_POINTS.max(total as f64 / MAX_BLOCKS)
 }
 
-/// How many tiles may be in flight (running, or waiting to be written) within the memory
-/// budget `mem` (what the sinks keep, a DEM's rows, already taken off; then what the index
-/// holds), with `threads` workers: at most `threads + 2`, at least one.
-fn window(index: &BlockIndex, mem: u64, threads: usize) -> usize {
-    let per_block = index.len() as f64 / index.blocks().max(1) as f64;
-    // A tile's first run: its blocks and a buffer of one block around.
-    let side = f64::from(1u32 << index.grid.shift.min(15)) + 2.0;
-    let points = per_block * side * side;
-    let run = (points * RUN_BYTES_PER_POINT).max(1.0);
-    let free = mem.saturating_sub(index.memory_bytes()) as f64;
-    ((free / run) as usize).clamp(1, threads + 2)
+/// Bytes a tile's output holds per point it owns while it waits to be written (its vertices,
+/// degrees and triangles: about 24 + 4 + 2 × 12 bytes, and the vertices along its edges).
+const OUTPUT_BYTES_PER_POINT: f64 = 64.0;
+
+/// The memory of tiles in flight: a run takes [`Budget::run`] bytes when it starts, gives back
+/// all but [`Budget::output`] when it ends, and the rest when the writer has written it. Tiles
+/// are written in order, so a slow tile holds the outputs after it, not the runs: the workers go
+/// on while there is room for a run.
+struct Budget {
+    free: std::sync::Mutex<(u64, bool)>,
+    freed: std::sync::Condvar,
+    /// Bytes a tile's run holds at its peak (an estimate from the density).
+    run: u64,
+    /// Bytes a tile's output holds until it is written.
+    output: u64,
+    /// Runs the budget holds at once (at most the workers): the summary's `window`.
+    runs: usize,
+}
+
+impl Budget {
+    /// The budget `mem` (what the sinks keep, a DEM's rows, already taken off; then what the
+    /// index holds) for tiles of `index` on `threads` workers: at least one run, whatever `mem`.
+    fn for_tiles(index: &BlockIndex, mem: u64, threads: usize) -> Budget {
+        let per_block = index.len() as f64 / index.blocks().max(1) as f64;
+        let blocks = f64::from(1u32 << index.grid.shift.min(15));
+        // A tile's first run: its blocks and a buffer of one block around.
+        let run = (per_block * (blocks + 2.0).powi(2) * RUN_BYTES_PER_POINT).max(1.0) as u64;
+        let output = ((per_block * blocks * blocks * OUTPUT_BYTES_PER_POINT) as u64).clamp(1, run);
+        let free = mem.saturating_sub(index.memory_bytes()).max(run);
+        Budget {
+            free: std::sync::Mutex::new((free, false)),
+            freed: std::sync::Condvar::new(),
+            run,
+            output,
+            runs: ((free / run) as usize).clamp(1, threads),
+        }
+    }
+
+    /// Waits until `bytes` are free and takes them; `false` once the budget is closed.
+    fn take(&self, bytes: u64) -> bool {
+        let Ok(mut g) = self.free.lock() else {
+            return false;
+        };
+        loop {
+            if g.1 {
+                return false;
+            }
+            if g.0 >= bytes {
+                g.0 -= bytes;
+                return true;
+            }
+            g = match self.freed.wait(g) {
+                Ok(g) => g,
+                Err(_) => return false,
+            };
+        }
+    }
+
+    /// Gives back `bytes`.
+    fn give(&self, bytes: u64) {
+        if let Ok(mut g) = self.free.lock() {
+            g.0 += bytes;
+        }
+        self.freed.notify_all();
+    }
+
+    /// Wakes every waiting worker with `false`.
+    fn close(&self) {
+        if let Ok(mut g) = self.free.lock() {
+            g.1 = true;
+        }
+        self.freed.notify_all();
+    }
 }
 
 /// Runs a tiled triangulation of `job` into `mesh` and `sinks`.
@@ -551,24 +614,20 @@ pub(crate) fn run(
     let (mut read, mut kept) = (0u64, 0u64);
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
-    // At most this many tiles in flight or waiting to be written.
-    let window = window(&index, job.mem.saturating_sub(shares), threads);
-    stats.window = window as u64;
-    let (tx, rx) = crossbeam_channel::bounded::<(usize, Result<TileOutput>)>(window);
+    // Memory for tiles' runs in flight and their outputs waiting to be written.
+    let budget = Budget::for_tiles(&index, job.mem.saturating_sub(shares), threads);
+    stats.window = budget.runs as u64;
+    let (tx, rx) = crossbeam_channel::unbounded::<(usize, Result<TileOutput>)>();
     let task = task.as_ref();
-    let (tok_tx, tok_rx) = crossbeam_channel::bounded::<()>(window);
-    for _ in 0..window {
-        tok_tx.send(()).expect("room for every token");
-    }
     let policy = job.duplicates;
     let total = order.len();
     let result = std::thread::scope(|scope| -> Result<()> {
         let rx = rx;
         for _ in 0..threads {
-            let (tx, tok_rx, next, stop, order, index) =
-                (tx.clone(), tok_rx.clone(), &next, &stop, &order, &index);
+            let (tx, budget, next, stop, order, index) =
+                (tx.clone(), &budget, &next, &stop, &order, &index);
             scope.spawn(move || {
-                while tok_rx.recv().is_ok() {
+                while budget.take(budget.run) {
                     if stop.load(Ordering::Relaxed) {
                         break;
                     }
@@ -580,6 +639,8 @@ pub(crate) fn run(
                         worker::run_tile(index, order[i], policy, FIRST_BUFFER, task, lines)
                     }))
                     .unwrap_or_else(|p| Err(Error::panicked("tile worker", &*p)));
+                    // The run's memory is free; its output waits to be written.
+                    budget.give(budget.run - budget.output);
                     if tx.send((i, r)).is_err() {
                         break;
                     }
@@ -613,7 +674,7 @@ pub(crate) fn run(
                     stats.cpu.add(&t.cpu);
                     done += 1;
                     progress("triangulating", done as u64, total as u64);
-                    let _ = tok_tx.send(());
+                    budget.give(budget.output);
                 }
             }
             Ok(())
@@ -622,8 +683,8 @@ pub(crate) fn run(
         if outcome.is_err() {
             stop.store(true, Ordering::Relaxed);
         }
-        // Workers waiting for a token or to send a result see the channels closed and stop.
-        drop(tok_tx);
+        // Workers waiting for memory, or to send a result, see the budget or channel closed.
+        budget.close();
         drop(rx);
         outcome
     });
