@@ -53,6 +53,13 @@ pub trait SortKey: bytemuck::Pod + Send + Sync + std::fmt::Debug {
     /// Must records that compare equal keep their input order? (Then chunks are sorted with a
     /// stable sort and the merge breaks ties by run, so equal records come out in input order.)
     const STABLE: bool;
+    /// Is the order (stable) that of [`SortKey::radix_key`] alone? Then spilled chunks take a
+    /// radix sort, with scratch space as large as the half it sorts.
+    const RADIX: bool = false;
+    /// The key of a [`SortKey::RADIX`] order.
+    fn radix_key(&self) -> u64 {
+        0
+    }
 }
 
 impl SortKey for SortRecord {
@@ -100,8 +107,9 @@ impl<R: SortKey> Spiller<R> {
         let dir = tmp_dir.to_path_buf();
         let thread = std::thread::spawn(move || -> Result<Vec<File>> {
             let mut runs = Vec::new();
+            let mut scratch = Vec::new();
             for mut chunk in rx {
-                runs.push(write_run(&mut chunk, &dir)?);
+                runs.push(write_run(&mut chunk, &mut scratch, &dir)?);
                 chunk.clear();
                 // Never waits: the sorter takes each half back before handing over the next
                 // (a half it does not want any more is freed here).
@@ -131,9 +139,14 @@ impl<R: SortKey> Spiller<R> {
     }
 }
 
-/// Sorts `chunk` and writes it to a new anonymous file under `dir`.
-fn write_run<R: SortKey>(chunk: &mut [R], dir: &Path) -> Result<File> {
-    sort_records(chunk);
+/// Sorts `chunk` (a radix sort's scratch space in `scratch`) and writes it to a new anonymous
+/// file under `dir`.
+fn write_run<R: SortKey>(chunk: &mut [R], scratch: &mut Vec<R>, dir: &Path) -> Result<File> {
+    if R::RADIX {
+        crate::sort::radix::sort_by_key(chunk, scratch, R::radix_key);
+    } else {
+        sort_records(chunk);
+    }
     let io = |e| Error::write(dir, e);
     let file = tempfile::tempfile_in(dir).map_err(io)?;
     let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
@@ -166,10 +179,13 @@ pub struct SortStats {
 
 impl<R: SortKey> ExternalSorter<R> {
     /// A sorter whose two halves use at most `chunk_bytes` of memory, spilling under `tmp_dir`.
-    /// A stable sort needs scratch space of half what it sorts (one half at a time): the halves
-    /// then take four fifths.
+    /// A stable sort needs scratch space of half what it sorts (one half at a time, or both
+    /// halves sorted as one when nothing is spilled): the halves then take four fifths. A radix
+    /// sort needs scratch as large as the half it spills: the halves take two thirds.
     pub fn new(chunk_bytes: u64, tmp_dir: &Path) -> Self {
-        let bytes = if R::STABLE {
+        let bytes = if R::RADIX {
+            chunk_bytes / 3 * 2
+        } else if R::STABLE {
             chunk_bytes / 5 * 4
         } else {
             chunk_bytes
