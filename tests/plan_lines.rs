@@ -10,6 +10,8 @@
 mod cli;
 #[path = "support/data.rs"]
 mod data;
+#[path = "support/geojson.rs"]
+mod geojson;
 #[path = "support/mesh.rs"]
 mod mesh;
 #[path = "support/plans.rs"]
@@ -107,23 +109,14 @@ fn lines(dir: &Path) -> (Vec<String>, String, String) {
         ],
     );
     let cross = dir.join("cross.geojson");
-    let coords: Vec<String> = line(
-        [770_510.5, 6_277_590.5, 21.2],
-        [770_590.5, 6_277_510.5, 20.9],
-        16,
-    )
-    .iter()
-    .map(|p| format!("[{},{},{}]", p[0], p[1], p[2]))
-    .collect();
-    std::fs::write(
+    geojson::write_lines(
         &cross,
-        format!(
-            r#"{{"type":"FeatureCollection","features":[{{"type":"Feature","properties":{{}},
-            "geometry":{{"type":"LineString","coordinates":[{}]}}}}]}}"#,
-            coords.join(",")
-        ),
-    )
-    .unwrap();
+        &[line(
+            [770_510.5, 6_277_590.5, 21.2],
+            [770_590.5, 6_277_510.5, 20.9],
+            16,
+        )],
+    );
     let boundary = dir.join("boundary.txt");
     write_text(
         &boundary,
