@@ -291,12 +291,7 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
         );
     }
     if l.clip_breaklines {
-        bail!(
-            "--clip-breaklines cuts the lines to the convex hull of all the points, which no \
-             task sees (each reads the files near its tile), so a plan refuses it: cut the \
-             lines to the data beforehand, or run the job as one `sweeptin {}`",
-            job.name()
-        );
+        bail!(sweeptin::pipeline::PLAN_REFUSES_CLIP);
     }
     if a.engine == super::input::Engine::Sweep {
         bail!("a plan runs the tiled engine: leave --engine sweep out");

@@ -44,6 +44,13 @@ use std::path::PathBuf;
 /// Sort-record index bit marking a breakline vertex (the rest is its vertex id in the graph).
 pub(crate) const LINE_FLAG: u64 = 1 << 63;
 
+/// Why a plan refuses `--clip-breaklines`: the one wording of the refusal, by `sweeptin plan`
+/// before anything is written and by a task's run (which never sees all the points).
+pub const PLAN_REFUSES_CLIP: &str = "--clip-breaklines cuts the lines to the convex hull of all \
+     the points, which no task of a plan sees (each reads the files near its tile), so a plan \
+     refuses it: cut the lines to the data beforehand, or run the job as one command without \
+     `plan`";
+
 /// Breaklines and trimming for a run.
 #[derive(Clone, Debug, Default)]
 pub struct LineOptions {
@@ -201,12 +208,7 @@ pub(crate) fn prepare(o: &LineOptions, mut drape: Option<Drape>) -> Result<Prepa
     let mut clipped = None;
     if o.clip && !lines.is_empty() {
         let Some(drape) = drape.as_mut() else {
-            return Err(Error::Options(
-                "--clip-breaklines cuts the lines to the convex hull of all the points, which a \
-                 plan's task never sees (it reads the files near its tile): cut the lines to the \
-                 data beforehand, or run the job as one run"
-                    .into(),
-            ));
+            return Err(Error::Options(PLAN_REFUSES_CLIP.into()));
         };
         let mut hull = HullSink::default();
         drape(&mut hull)?;

@@ -34,7 +34,7 @@ use config::Source;
 use std::path::PathBuf;
 
 pub use config::RunConfig;
-pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary};
+pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary, PLAN_REFUSES_CLIP};
 pub(crate) use lines::{prepare, trim};
 pub use read::read_points;
 pub use thin::{THIN_BYTES_PER_POINT, ThinSummary, thin};
