@@ -4,12 +4,15 @@
 //! contour lines and its triangle set. What a plan cannot prove is refused before anything is
 //! written (lines without z, naming the file, line and vertex; `--clip-breaklines`;
 //! `--no-flat-triangles`), the recipe the refusal gives works, and a task refuses a line file
-//! that changed after planning.
+//! that changed after planning. Lines whose heights disagree are warned of by `plan` as by one
+//! run.
 
 #[path = "support/cli.rs"]
 mod cli;
 #[path = "support/data.rs"]
 mod data;
+#[path = "support/geojson.rs"]
+mod geojson;
 #[path = "support/mesh.rs"]
 mod mesh;
 #[path = "support/plans.rs"]
@@ -107,23 +110,14 @@ fn lines(dir: &Path) -> (Vec<String>, String, String) {
         ],
     );
     let cross = dir.join("cross.geojson");
-    let coords: Vec<String> = line(
-        [770_510.5, 6_277_590.5, 21.2],
-        [770_590.5, 6_277_510.5, 20.9],
-        16,
-    )
-    .iter()
-    .map(|p| format!("[{},{},{}]", p[0], p[1], p[2]))
-    .collect();
-    std::fs::write(
+    geojson::write_lines(
         &cross,
-        format!(
-            r#"{{"type":"FeatureCollection","features":[{{"type":"Feature","properties":{{}},
-            "geometry":{{"type":"LineString","coordinates":[{}]}}}}]}}"#,
-            coords.join(",")
-        ),
-    )
-    .unwrap();
+        &[line(
+            [770_510.5, 6_277_590.5, 21.2],
+            [770_590.5, 6_277_510.5, 20.9],
+            16,
+        )],
+    );
     let boundary = dir.join("boundary.txt");
     write_text(
         &boundary,
@@ -419,4 +413,89 @@ fn plans_refuse_lines_without_z_and_tasks_refuse_changed_lines() {
         "{err}"
     );
     assert!(!job.join("tiles/task_4.json").exists());
+}
+
+/// Breaklines whose heights disagree (two lines crossing, a vertex given twice) are warned of
+/// by `plan`, which cleans the lines as its tasks will, in the words of one run's warning.
+#[test]
+fn plans_warn_of_z_conflicts_as_one_run_does() {
+    let t = tempfile::tempdir().unwrap();
+    let d = |n: &str| s(&t.path().join(n));
+    let x = t.path().join("x.geojson");
+    geojson::write_lines(
+        &x,
+        &[
+            line(
+                [770_505.25, 6_277_505.5, 21.0],
+                [770_545.75, 6_277_546.5, 21.0],
+                1,
+            ),
+            line(
+                [770_505.25, 6_277_546.5, 21.5],
+                [770_545.75, 6_277_505.5, 21.5],
+                1,
+            ),
+            line(
+                [770_505.25, 6_277_505.5, 21.3],
+                [770_520.0, 6_277_510.5, 21.3],
+                1,
+            ),
+        ],
+    );
+    let file = ground()[0].clone();
+    let warning = |stderr: &[u8]| -> Vec<String> {
+        let text = String::from_utf8_lossy(stderr);
+        let mut lines = text
+            .lines()
+            .skip_while(|l| !l.contains("--z-tolerance apart"));
+        let first = lines.next().map(str::to_string);
+        first
+            .into_iter()
+            .chain(
+                lines
+                    .take_while(|l| l.starts_with("  "))
+                    .map(str::to_string),
+            )
+            .collect()
+    };
+    let plan = cli::ok(&[
+        "plan",
+        "dem",
+        &file,
+        "--breaklines",
+        &s(&x),
+        "--cell",
+        "1",
+        "--tile",
+        "50",
+        "-o",
+        &d("job"),
+    ]);
+    let planned = warning(&plan.stderr);
+    assert_eq!(planned.len(), 3, "{planned:?}");
+    assert!(planned[0].contains("at 2 places"), "{planned:?}");
+    assert!(
+        planned[1..]
+            .iter()
+            .any(|l| l.ends_with("two lines crossing: 21 and 21.5, the mean kept")),
+        "{planned:?}"
+    );
+    assert!(
+        planned[1..]
+            .iter()
+            .any(|l| l == "  (770505.25, 6277505.5), a vertex given twice: 21 kept, 21.3 dropped"),
+        "{planned:?}"
+    );
+    let one = cli::ok(&[
+        "dem",
+        &file,
+        "--breaklines",
+        &s(&x),
+        "--cell",
+        "1",
+        "-q",
+        "-o",
+        &d("one.tif"),
+    ]);
+    assert_eq!(warning(&one.stderr), planned, "one run's warning");
 }

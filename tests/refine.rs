@@ -17,6 +17,8 @@
 
 #[path = "support/data.rs"]
 mod data;
+#[path = "support/geojson.rs"]
+mod geojson;
 
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation as _};
 use std::collections::HashSet;
@@ -424,19 +426,9 @@ fn cli_mesh_to_2dm() {
         .for_each(|&tri| w.triangle(tri.map(u64::from)).unwrap());
     w.finish().unwrap();
     // The zig-zag as a 2-D GeoJSON line: its heights come from the mesh.
-    let zig: Vec<String> = (8..14)
-        .map(|i| format!("[{}, {}]", pts[i][0], pts[i][1]))
-        .collect();
+    let zig: Vec<[f64; 2]> = (8..14).map(|i| [pts[i][0], pts[i][1]]).collect();
     let lines = dir.path().join("zig.geojson");
-    std::fs::write(
-        &lines,
-        format!(
-            r#"{{"type": "FeatureCollection", "features": [{{"type": "Feature", "properties": {{}},
-              "geometry": {{"type": "LineString", "coordinates": [{}]}}}}]}}"#,
-            zig.join(", ")
-        ),
-    )
-    .unwrap();
+    geojson::write_lines(&lines, &[zig]);
     let out = dir.path().join("out.2dm");
     let (p, l, o) = (
         ply.to_str().unwrap(),

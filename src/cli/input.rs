@@ -5,6 +5,7 @@
 use super::info::FilterArgs;
 use std::path::{Path, PathBuf};
 use sweeptin::breaklines::CleanOptions;
+use sweeptin::breaklines::clean::{ZConflict, ZConflictKind};
 use sweeptin::crs::Crs;
 use sweeptin::input::las::BBox;
 use sweeptin::output::target::Destination;
@@ -407,8 +408,43 @@ pub fn run_error(e: sweeptin::Error, inputs: &[PathBuf]) -> anyhow::Error {
     }
 }
 
-/// Prints the run's warnings on standard error: breakline heights far from the points'.
+/// Prints where the breaklines give one place two heights more than `--z-tolerance` apart
+/// (cleaning keeps the first, or the mean where lines cross): the first few of `shown`, of
+/// `total` in all. The one wording for a run ([`warn`]) and for `sweeptin plan`, which cleans
+/// the lines as its tasks will.
+pub fn warn_z_conflicts(shown: &[ZConflict], total: u64) {
+    const FIRST: usize = 5;
+    if total == 0 {
+        return;
+    }
+    let places = if total == 1 { "place" } else { "places" };
+    eprintln!(
+        "sweeptin: warning: the breaklines give heights more than --z-tolerance apart at \
+         {total} {places} (check the lines' heights):"
+    );
+    for c in shown.iter().take(FIRST) {
+        let [a, b] = c.z;
+        let what = match c.kind {
+            ZConflictKind::Duplicate => format!("a vertex given twice: {a} kept, {b} dropped"),
+            ZConflictKind::OnLine => {
+                format!("a vertex on another line: {a} kept, {b} along the line")
+            }
+            ZConflictKind::Crossing => format!("two lines crossing: {a} and {b}, the mean kept"),
+        };
+        eprintln!("  ({}, {}), {what}", c.at[0], c.at[1]);
+    }
+    let listed = shown.len().min(FIRST) as u64;
+    if total > listed {
+        eprintln!("  and {} more", total - listed);
+    }
+}
+
+/// Prints the run's warnings on standard error: breakline heights that disagree where lines
+/// meet ([`warn_z_conflicts`]) or lie far from the points'.
 pub fn warn(run: &RunSummary) {
+    if let Some(b) = &run.breaklines {
+        warn_z_conflicts(&b.z_conflicts, b.clean.z_conflicts);
+    }
     if let Some(f) = run.breaklines.as_ref().and_then(|b| b.far_heights) {
         eprintln!(
             "sweeptin: warning: {} breakline vertices have heights from {} to {}, far outside \

@@ -291,12 +291,7 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
         );
     }
     if l.clip_breaklines {
-        bail!(
-            "--clip-breaklines cuts the lines to the convex hull of all the points, which no \
-             task sees (each reads the files near its tile), so a plan refuses it: cut the \
-             lines to the data beforehand, or run the job as one `sweeptin {}`",
-            job.name()
-        );
+        bail!(sweeptin::pipeline::PLAN_REFUSES_CLIP);
     }
     if a.engine == super::input::Engine::Sweep {
         bail!("a plan runs the tiled engine: leave --engine sweep out");
@@ -382,6 +377,9 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
             .flat_map(|l| l.files().map(|f| f.path.clone())),
     );
     let plan = Plan::new(typed, argv, outputs, &inputs, tile, buffer)?;
+    // The lines cleaned as every task will (checked on the bytes read): their z conflicts,
+    // warned of as one run warns of them.
+    let lines = plan.job.lines.as_ref().map(|l| l.graph()).transpose()?;
     if let (Job::Dem(d), Some(t)) = (&job, plan.tiles.first()) {
         // A task's raster (one tile) against --max-cells, as one run checks its raster.
         let extent = sweeptin::raster::GridExtent::BBox {
@@ -407,6 +405,9 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     }
     distinct_outputs(&planned_outputs, &read, "the plan")?;
     let path = plan.save(&dir)?;
+    if let Some(g) = &lines {
+        super::input::warn_z_conflicts(&g.warnings, g.stats.z_conflicts);
+    }
     if plan.tiles.len() > 1000 {
         eprintln!(
             "sweeptin: warning: {} tasks: Slurm's default MaxArraySize is 1001; a larger --tile \

@@ -170,16 +170,31 @@ impl Lines {
 pub fn read_file(path: &Path) -> Result<Lines> {
     let (file, _) = vector::split_layer(path);
     if vector::format_of(&file) != vector::VectorFormat::GeoJson {
-        let doc = vector::read(path)?;
-        return from_parts(doc, Arc::from(path));
+        // The SQLite and Shapefile readers open the file themselves (and what lies beside it:
+        // a database's `-wal`, a Shapefile's `.shx`).
+        return from_parts(vector::read(path)?, Arc::from(path));
     }
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    read_bytes(path, &bytes)
+}
+
+/// As [`read_file`], from `bytes`, the content of the file `path` names (`FILE:LAYER` picks a
+/// layer as there): what a caller that read the file itself parses, so that it can fingerprint
+/// exactly the bytes parsed (a plan's line files, `plan::lines`). Errors name `path`.
+///
+/// # Errors
+/// As [`read_file`] (no [`Error::Io`] for the file itself).
+pub(crate) fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Lines> {
+    let (file, _) = vector::split_layer(path);
+    if vector::format_of_bytes(&file, bytes) != vector::VectorFormat::GeoJson {
+        return from_parts(vector::read_bytes(path, bytes)?, Arc::from(path));
+    }
     let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
     let path: Arc<Path> = Arc::from(path);
     if first == Some(&b'{') {
-        read_geojson(&bytes, path)
+        read_geojson(bytes, path)
     } else {
-        read_text(&bytes, path)
+        read_text(bytes, path)
     }
 }
 

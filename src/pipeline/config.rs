@@ -10,10 +10,12 @@
 //! DEM's cell size and extent by [`crate::raster::GridPlan::new`]); the one rule that depends on
 //! the sinks of a run (`--sweep-axis x` only for a plain mesh) is checked when the run starts.
 
+use super::lines::ReadLines;
 use super::{Input, RunOptions};
 use crate::error::{Error, Result};
 use crate::input::las::{Filter, Returns};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// What kind of files the points come from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -145,6 +147,22 @@ pub struct RunConfig {
     tmp_dir: PathBuf,
     /// Inputs that are pipes or devices: they can be read once only.
     streams: Vec<PathBuf>,
+    /// How the line files are read ([`RunConfig::read_lines`]).
+    line_reader: LineReader,
+}
+
+/// How a run reads its line files: as they are ([`crate::breaklines::read_file`]), or, in a
+/// plan's task, checked against the plan's fingerprints ([`RunConfig::with_line_reader`]).
+#[derive(Clone)]
+struct LineReader(Option<Arc<ReadLines<'static>>>);
+
+impl std::fmt::Debug for LineReader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self.0 {
+            Some(_) => "LineReader(checked)",
+            None => "LineReader(read_file)",
+        })
+    }
 }
 
 impl RunConfig {
@@ -190,7 +208,24 @@ impl RunConfig {
             source,
             tmp_dir,
             streams,
+            line_reader: LineReader(None),
         })
+    }
+
+    /// The same run reading its line files with `read` (a plan's task: each file checked
+    /// against the plan's fingerprint on the bytes it parses).
+    pub(crate) fn with_line_reader(mut self, read: Arc<ReadLines<'static>>) -> RunConfig {
+        self.line_reader = LineReader(Some(read));
+        self
+    }
+
+    /// How the run reads its line files: [`crate::breaklines::read_file`] unless
+    /// [`RunConfig::with_line_reader`] said otherwise.
+    pub(crate) fn read_lines(&self) -> &ReadLines<'static> {
+        match &self.line_reader.0 {
+            Some(r) => r.as_ref(),
+            None => &crate::breaklines::read_file,
+        }
     }
 
     /// What to triangulate.

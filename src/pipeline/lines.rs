@@ -33,16 +33,23 @@
 
 use super::TriangleSink;
 use crate::breaklines::flat::FlatStats;
-use crate::breaklines::{CleanOptions, CleanStats, Lines, Pslg, Trim, read_file};
+use crate::breaklines::{CleanOptions, CleanStats, Lines, Pslg, Trim};
 use crate::error::{Error, Result};
 use crate::geom::grid::{Buckets, Grid};
 use crate::geom::predicates::{Orientation, check_coord, orient};
 use crate::sink::ProductSummary;
 use crate::sweep::{ConstraintGraph, ConstraintStats};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Sort-record index bit marking a breakline vertex (the rest is its vertex id in the graph).
 pub(crate) const LINE_FLAG: u64 = 1 << 63;
+
+/// Why a plan refuses `--clip-breaklines`: the one wording of the refusal, by `sweeptin plan`
+/// before anything is written and by a task's run (which never sees all the points).
+pub const PLAN_REFUSES_CLIP: &str = "--clip-breaklines cuts the lines to the convex hull of all \
+     the points, which no task of a plan sees (each reads the files near its tile), so a plan \
+     refuses it: cut the lines to the data beforehand, or run the job as one command without \
+     `plan`";
 
 /// Breaklines and trimming for a run.
 #[derive(Clone, Debug, Default)]
@@ -183,7 +190,12 @@ impl Prepared {
 /// caller's pipeline over the points alone into the given sink.
 pub(crate) type Drape<'a> = &'a mut dyn FnMut(&mut dyn TriangleSink) -> Result<()>;
 
-/// Reads, cleans and (when needed) drapes the breaklines of a run.
+/// How a run reads each line file (breaklines, boundary, holes):
+/// [`crate::breaklines::read_file`] for a run; a plan and its tasks check each file's
+/// fingerprint on the very bytes they parse ([`crate::plan::PlanLines`]).
+pub(crate) type ReadLines<'a> = dyn Fn(&Path) -> Result<Lines> + Send + Sync + 'a;
+
+/// Reads (with `read`), cleans and (when needed) drapes the breaklines of a run.
 ///
 /// `drape` runs the points-only pass with the given sink (the caller's pipeline). Without one
 /// (a plan and its tasks, which never see all the points) every vertex must have a `z` after
@@ -193,20 +205,19 @@ pub(crate) type Drape<'a> = &'a mut dyn FnMut(&mut dyn TriangleSink) -> Result<(
 /// The readers' and cleaning's errors; [`Error::Options`] without `drape` for
 /// `--clip-breaklines`, and for a vertex without `z`, naming the first such vertex of the input
 /// (file, feature or line, vertex); the draping pass's errors.
-pub(crate) fn prepare(o: &LineOptions, mut drape: Option<Drape>) -> Result<Prepared> {
+pub(crate) fn prepare(
+    o: &LineOptions,
+    read: &ReadLines<'_>,
+    mut drape: Option<Drape>,
+) -> Result<Prepared> {
     let mut lines = Lines::default();
     for p in &o.breaklines {
-        lines.append(read_file(p)?)?;
+        lines.append(read(p)?)?;
     }
     let mut clipped = None;
     if o.clip && !lines.is_empty() {
         let Some(drape) = drape.as_mut() else {
-            return Err(Error::Options(
-                "--clip-breaklines cuts the lines to the convex hull of all the points, which a \
-                 plan's task never sees (it reads the files near its tile): cut the lines to the \
-                 data beforehand, or run the job as one run"
-                    .into(),
-            ));
+            return Err(Error::Options(PLAN_REFUSES_CLIP.into()));
         };
         let mut hull = HullSink::default();
         drape(&mut hull)?;
@@ -215,7 +226,7 @@ pub(crate) fn prepare(o: &LineOptions, mut drape: Option<Drape>) -> Result<Prepa
         lines = cut;
         clipped = Some(summary);
     }
-    let (boundary, holes, trim) = read_trim(o)?;
+    let (boundary, holes, trim) = read_trim(o, read)?;
     for l in [boundary, holes].into_iter().flatten() {
         lines.append(l)?;
     }
@@ -288,15 +299,18 @@ pub(crate) fn prepare(o: &LineOptions, mut drape: Option<Drape>) -> Result<Prepa
     })
 }
 
-/// The boundary and hole rings of `o` as read, and the trimming rules they make with
-/// `--max-edge`.
+/// The boundary and hole rings of `o` as read with `read`, and the trimming rules they make
+/// with `--max-edge`.
 ///
 /// # Errors
 /// The readers' errors; [`Error::Format`] for rings that are not closed or an empty boundary,
 /// naming the file.
-fn read_trim(o: &LineOptions) -> Result<(Option<Lines>, Option<Lines>, Trim)> {
-    let boundary = o.boundary.as_deref().map(read_file).transpose()?;
-    let holes = o.holes.as_deref().map(read_file).transpose()?;
+fn read_trim(
+    o: &LineOptions,
+    read: &ReadLines<'_>,
+) -> Result<(Option<Lines>, Option<Lines>, Trim)> {
+    let boundary = o.boundary.as_deref().map(read).transpose()?;
+    let holes = o.holes.as_deref().map(read).transpose()?;
     let trim = Trim::from_lines(boundary.as_ref(), holes.as_ref(), o.max_edge).map_err(|e| {
         match (e, &o.boundary) {
             // `Trim` has no file name for an empty boundary: add it.
@@ -312,13 +326,13 @@ fn read_trim(o: &LineOptions) -> Result<(Option<Lines>, Option<Lines>, Trim)> {
     Ok((boundary, holes, trim))
 }
 
-/// The trimming rules of `o` alone (boundary, holes, `--max-edge`): what a TIN plan's merge
-/// applies to the tasks' pieces, which hold every triangle.
+/// The trimming rules of `o` alone (boundary, holes, `--max-edge`), the rings read with
+/// `read`: what a TIN plan's merge applies to the tasks' pieces, which hold every triangle.
 ///
 /// # Errors
 /// As [`read_trim`].
-pub(crate) fn trim(o: &LineOptions) -> Result<Trim> {
-    read_trim(o).map(|(_, _, t)| t)
+pub(crate) fn trim(o: &LineOptions, read: &ReadLines<'_>) -> Result<Trim> {
+    read_trim(o, read).map(|(_, _, t)| t)
 }
 
 /// The error for `count` vertices of the cleaned graph without z when nothing can drape them:

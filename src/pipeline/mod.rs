@@ -34,8 +34,8 @@ use config::Source;
 use std::path::PathBuf;
 
 pub use config::RunConfig;
-pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary};
-pub(crate) use lines::{prepare, trim};
+pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary, PLAN_REFUSES_CLIP};
+pub(crate) use lines::{ReadLines, prepare, trim};
 pub use read::read_points;
 pub use thin::{THIN_BYTES_PER_POINT, ThinSummary, thin};
 pub use thin_tiles::{TILE_BYTES_PER_POINT, ThinTileSummary, thin_tiled};
@@ -313,6 +313,7 @@ pub fn run(
     let points_only = config.points_only();
     let prepared = lines::prepare(
         lines,
+        config.read_lines(),
         Some(&mut |sink| {
             if let Some(s) = config.stream_input() {
                 return Err(Error::Options(format!(

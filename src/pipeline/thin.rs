@@ -115,6 +115,7 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
     } else {
         let p = lines::prepare(
             l,
+            config.read_lines(),
             Some(&mut |sink| {
                 if let Some(s) = config.stream_input() {
                     return Err(Error::Options(format!(

@@ -48,11 +48,12 @@ pub(crate) fn run(
     let prepared = if l.breaklines.is_empty() && l.boundary.is_none() && l.holes.is_none() {
         None
     } else if tiles.scope.is_some() {
-        Some(super::lines::prepare(l, None)?)
+        Some(super::lines::prepare(l, config.read_lines(), None)?)
     } else {
         let points_only = config.points_only();
         Some(super::lines::prepare(
             l,
+            config.read_lines(),
             Some(&mut |sink| run(&points_only, tiles, None, &mut [sink]).map(|_| ())),
         )?)
     };

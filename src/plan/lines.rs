@@ -1,10 +1,11 @@
 //! Breaklines and trimming rings in a plan ([`PlanLines`]).
 
+use crate::breaklines::{Lines, Pslg};
 use crate::error::{Error, Result};
-use crate::pipeline::LineOptions;
+use crate::pipeline::{LineOptions, ReadLines};
 use serde::{Deserialize, Serialize};
-use std::io::Read;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A line file of a plan: where it is and what it held when the plan was made.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -25,7 +26,7 @@ impl LineFile {
     pub fn new(path: &Path) -> Result<LineFile> {
         let (file, layer) = crate::input::vector::split_layer(path);
         let mut abs = std::fs::canonicalize(&file).map_err(|e| Error::io(&file, e))?;
-        let (bytes, sha256) = fingerprint(&abs)?;
+        let (bytes, sha256) = fingerprint(&read_all(&abs)?);
         if let Some(l) = layer {
             let mut s = abs.into_os_string();
             s.push(format!(":{l}"));
@@ -43,7 +44,28 @@ impl LineFile {
     /// # Errors
     /// [`Error::Format`] naming the file when it changed; [`Error::Io`] when it cannot be read.
     pub fn check(&self) -> Result<()> {
-        let (bytes, sha256) = fingerprint(&crate::input::vector::split_layer(&self.path).0)?;
+        self.holds(&read_all(&self.file())?)
+    }
+
+    /// The file's lines, parsed from the bytes that were checked against its fingerprint: the
+    /// file is read once, so the lines are those of the bytes the plan recorded.
+    ///
+    /// # Errors
+    /// As [`LineFile::check`]; the readers' errors.
+    pub(crate) fn read(&self) -> Result<Lines> {
+        let content = read_all(&self.file())?;
+        self.holds(&content)?;
+        crate::input::lines::read_bytes(&self.path, &content)
+    }
+
+    /// The file without its layer (`FILE` of `FILE.gpkg:LAYER`).
+    fn file(&self) -> PathBuf {
+        crate::input::vector::split_layer(&self.path).0
+    }
+
+    /// Checks that `content`, the file's bytes now, are what the plan recorded.
+    fn holds(&self, content: &[u8]) -> Result<()> {
+        let (bytes, sha256) = fingerprint(content);
         if bytes != self.bytes || sha256 != self.sha256 {
             return Err(Error::Format {
                 path: self.path.clone(),
@@ -59,29 +81,27 @@ impl LineFile {
     }
 }
 
-/// The size and SHA-256 (hex) of the file at `path`.
-fn fingerprint(path: &Path) -> Result<(u64, String)> {
+/// The bytes of the file at `path`.
+fn read_all(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| Error::io(path, e))
+}
+
+/// The size and SHA-256 (hex) of `content`.
+fn fingerprint(content: &[u8]) -> (u64, String) {
     use sha2::Digest;
-    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut hash = sha2::Sha256::new();
-    let mut buf = vec![0u8; 1 << 16];
-    let mut bytes = 0u64;
-    loop {
-        let n = f.read(&mut buf).map_err(|e| Error::io(path, e))?;
-        if n == 0 {
-            break;
-        }
-        hash.update(&buf[..n]);
-        bytes += n as u64;
-    }
-    let hex = hash.finalize().iter().map(|b| format!("{b:02x}")).collect();
-    Ok((bytes, hex))
+    let hex = sha2::Sha256::digest(content)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    (content.len() as u64, hex)
 }
 
 /// The breaklines and trimming rings of a plan.
 ///
 /// A plan stores its line files by absolute path with a fingerprint (size and SHA-256 of the
-/// bytes, as `sha256sum` prints it), and every task reads and cleans them itself: cleaning is
+/// bytes, as `sha256sum` prints it), and every task reads and cleans them itself, each file
+/// read once and parsed from the very bytes checked against its fingerprint (so the plan, which
+/// reads them the same way, and every task clean the recorded bytes): cleaning is
 /// deterministic ([`crate::breaklines::clean()`]), so every task holds the same planar graph, the
 /// one a single run holds, and hands it to the tiled engine exactly as one tiled run does
 /// (`pipeline::tiled`). Which segments a tile's run loads is the engine's business
@@ -173,26 +193,43 @@ impl PlanLines {
         }
     }
 
-    /// The cleaned graph's vertices and segments, read and cleaned as every task will (the
-    /// files checked first): what the plan checks when it is made.
+    /// The lines of the plan's file `path` (one of [`PlanLines::files`]), read once and
+    /// checked against its fingerprint ([`LineFile::read`]).
+    fn read(&self, path: &Path) -> Result<Lines> {
+        match self.files().find(|f| f.path == path) {
+            Some(f) => f.read(),
+            None => Err(Error::Internal(format!(
+                "{}: not a line file of the plan",
+                path.display()
+            ))),
+        }
+    }
+
+    /// How a task's run reads the line files ([`PlanLines::read`]).
+    pub(crate) fn reader(&self) -> Arc<ReadLines<'static>> {
+        let lines = self.clone();
+        Arc::new(move |p: &Path| lines.read(p))
+    }
+
+    /// The cleaned graph (vertices, segments, and the `z` conflicts cleaning found), read and
+    /// cleaned as every task will, each file checked on the bytes parsed: what the plan checks
+    /// when it is made.
     ///
     /// # Errors
     /// As [`PlanLines::check`]; the readers' and cleaning's errors; [`Error::Options`] naming
     /// the first vertex without `z`.
-    pub(crate) fn graph(&self, max_edge: Option<f64>) -> Result<crate::breaklines::Pslg> {
-        self.check()?;
-        let p = crate::pipeline::prepare(&self.options(max_edge), None)?;
+    pub fn graph(&self) -> Result<Pslg> {
+        let p = crate::pipeline::prepare(&self.options(None), &|p: &Path| self.read(p), None)?;
         Ok(p.pslg.unwrap_or_default())
     }
 
-    /// The trimming rules (boundary, holes, `max_edge`), the files checked first: what a TIN
-    /// plan's merge applies to the pieces.
+    /// The trimming rules (boundary, holes, `max_edge`), the rings read as [`PlanLines::graph`]
+    /// reads them: what a TIN plan's merge applies to the pieces.
     ///
     /// # Errors
     /// As [`PlanLines::check`]; the readers' errors.
     pub(crate) fn trim(&self, max_edge: Option<f64>) -> Result<crate::breaklines::Trim> {
-        self.check()?;
-        crate::pipeline::trim(&self.options(max_edge))
+        crate::pipeline::trim(&self.options(max_edge), &|p: &Path| self.read(p))
     }
 }
 
@@ -216,6 +253,32 @@ mod tests {
         assert_eq!(t.options(None).z_tolerance, Some(0.25));
         let back: PlanLines = serde_json::from_str(&serde_json::to_string(&t).unwrap()).unwrap();
         assert_eq!(back, t);
+    }
+
+    /// A plan's lines are read once per file and parsed from the bytes checked against the
+    /// fingerprint: what the plan cleans, and what a task's run reads, are the recorded bytes;
+    /// a changed file is refused, never parsed.
+    #[test]
+    fn lines_are_parsed_from_the_checked_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("l.txt");
+        std::fs::write(&p, "0 0 1\n1 1 2\n").unwrap();
+        let l = PlanLines::new(std::slice::from_ref(&p), None, None)
+            .unwrap()
+            .unwrap();
+        assert_eq!(
+            l.graph().unwrap().vertices,
+            [[0.0, 0.0, 1.0], [1.0, 1.0, 2.0]]
+        );
+        let read = l.reader();
+        let path = l.breaklines[0].path.clone();
+        assert_eq!(read(&path).unwrap().polylines[0][1], [1.0, 1.0, 2.0]);
+        std::fs::write(&p, "0 0 1\n1 1 3\n").unwrap();
+        for e in [l.graph().unwrap_err(), read(&path).unwrap_err()] {
+            assert!(e.to_string().contains("changed since the plan"), "{e}");
+        }
+        let e = read(&dir.path().join("other.txt")).unwrap_err();
+        assert!(matches!(e, Error::Internal(_)), "{e}");
     }
 
     #[test]

@@ -216,7 +216,7 @@ impl Plan {
             );
         }
         if let Some(l) = &job.lines {
-            data.extend(l.graph(job.max_edge)?.vertices);
+            data.extend(l.graph()?.vertices);
         }
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];

@@ -303,9 +303,6 @@ impl Plan {
         let mut record = loop {
             runs += 1;
             self.check_files(i, buffer)?;
-            if let Some(l) = &self.job.lines {
-                l.check()?;
-            }
             let config = self.task_config(i, buffer, options)?;
             let mut fanout = Fanout::new(self.task_sinks(dir, i)?).with_crs(crs.clone());
             let mut pieces = self.task_pieces(dir, i)?;
@@ -408,7 +405,13 @@ impl Plan {
                 scope: Some(self.scope(i, buffer)?),
             }),
         };
-        RunConfig::new(input, options)
+        let config = RunConfig::new(input, options)?;
+        // Each line file is read once and parsed from the bytes checked against the plan's
+        // fingerprint (a file changed since the plan was made is refused).
+        Ok(match &self.job.lines {
+            Some(l) => config.with_line_reader(l.reader()),
+            None => config,
+        })
     }
 
     /// The sinks of task `i`, writing under `dir/tiles/`.

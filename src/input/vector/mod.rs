@@ -61,10 +61,14 @@ pub fn split_layer(path: &Path) -> (PathBuf, Option<String>) {
 /// extension, GeoJSON otherwise.
 pub fn format_of(file: &Path) -> VectorFormat {
     let mut head = [0u8; 16];
-    let sqlite = std::fs::File::open(file)
-        .and_then(|mut f| f.read_exact(&mut head))
-        .is_ok()
-        && &head == b"SQLite format 3\0";
+    // A file too short to read 16 bytes from is no SQLite database: `head` stays zeros.
+    let _ = std::fs::File::open(file).and_then(|mut f| f.read_exact(&mut head));
+    format_of_bytes(file, &head)
+}
+
+/// As [`format_of`], for the file `file` whose content is (or starts with) `bytes`.
+pub(crate) fn format_of_bytes(file: &Path, bytes: &[u8]) -> VectorFormat {
+    let sqlite = bytes.starts_with(b"SQLite format 3\0");
     let ext = file
         .extension()
         .and_then(|e| e.to_str())
@@ -85,16 +89,39 @@ pub fn format_of(file: &Path) -> VectorFormat {
 /// [`Error::Io`] when the file cannot be read; [`Error::Format`] naming the file (and the
 /// feature and part) for a bad geometry, an unknown layer, or several layers and none named.
 pub fn read(path: &Path) -> Result<GeoJson> {
+    read_from(path, None)
+}
+
+/// As [`read`], from `bytes`, the content of the file `path` names (read by the caller, which
+/// can then fingerprint exactly what is parsed: a plan's line files, `plan::lines`). Errors
+/// name `path` as [`read`]'s do. A SQLite file's `-wal` beside it is not read: the bytes are the
+/// whole database.
+///
+/// # Errors
+/// As [`read`] (no [`Error::Io`] for the file itself).
+pub(crate) fn read_bytes(path: &Path, bytes: &[u8]) -> Result<GeoJson> {
+    read_from(path, Some(bytes))
+}
+
+/// [`read`] (`bytes` is `None`: the readers open the file) or [`read_bytes`].
+fn read_from(path: &Path, bytes: Option<&[u8]>) -> Result<GeoJson> {
     let (file, layer) = split_layer(path);
-    match format_of(&file) {
-        VectorFormat::Sqlite => sqlite::read(&file, layer.as_deref()),
+    let format = match bytes {
+        Some(b) => format_of_bytes(&file, b),
+        None => format_of(&file),
+    };
+    match format {
+        VectorFormat::Sqlite => sqlite::read(&file, bytes, layer.as_deref()),
         VectorFormat::Shapefile => {
             no_layer(&file, layer.as_deref())?;
-            shp::read(&file)
+            shp::read(&file, bytes)
         }
         VectorFormat::GeoJson => {
             no_layer(&file, layer.as_deref())?;
-            geojson::read(&file)
+            match bytes {
+                Some(b) => geojson::parse(b, &file),
+                None => geojson::read(&file),
+            }
         }
     }
 }

@@ -4,6 +4,7 @@ use super::{epsg_of_wkt, format};
 use crate::error::Result;
 use crate::input::geojson::{GeoJson, push_part};
 use shapefile::{Shape, ShapeReader};
+use std::io::{Cursor, Read, Seek};
 use std::path::Path;
 
 /// The rings of a polygon shape, grouped: an outer ring starts a polygon, inner rings follow.
@@ -25,12 +26,31 @@ fn polygons<P: Copy>(
     out
 }
 
-pub(super) fn read(path: &Path) -> Result<GeoJson> {
-    let bad = |e: shapefile::Error| match e {
+fn bad(path: &Path, e: shapefile::Error) -> crate::error::Error {
+    match e {
         shapefile::Error::IoError(io) => crate::error::Error::io(path, io),
         other => format(path, format!("cannot read the Shapefile: {other}")),
-    };
-    let mut reader = ShapeReader::from_path(path).map_err(bad)?;
+    }
+}
+
+/// The shapes of the Shapefile `path`: read from the file (and its `.shx` index), or parsed
+/// from `bytes`, its content (shapes in file order, without the index). The CRS comes from the
+/// `.prj` beside it either way.
+pub(super) fn read(path: &Path, bytes: Option<&[u8]>) -> Result<GeoJson> {
+    match bytes {
+        Some(b) => shapes(
+            path,
+            ShapeReader::new(Cursor::new(b)).map_err(|e| bad(path, e))?,
+        ),
+        None => shapes(
+            path,
+            ShapeReader::from_path(path).map_err(|e| bad(path, e))?,
+        ),
+    }
+}
+
+fn shapes<T: Read + Seek>(path: &Path, mut reader: ShapeReader<T>) -> Result<GeoJson> {
+    let bad = |e| bad(path, e);
     let crs = std::fs::read(path.with_extension("prj"))
         .ok()
         .and_then(|w| epsg_of_wkt(&w));

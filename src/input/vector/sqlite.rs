@@ -5,6 +5,7 @@ use super::{epsg_of_wkt, format};
 use crate::error::{Error, Result};
 use crate::input::geojson::GeoJson;
 use rusqlite::{Connection, OpenFlags, OptionalExtension};
+use std::io::Read;
 use std::path::Path;
 
 /// A geometry layer: its table, geometry column, blob kind and CRS.
@@ -165,13 +166,33 @@ fn layers(db: &Connection, path: &Path) -> Result<Vec<Layer>> {
     Ok(out)
 }
 
-/// Reads layer `layer` (or the only one) of the GeoPackage or OGR-SQLite database `path`.
-pub(super) fn read(path: &Path, layer: Option<&str>) -> Result<GeoJson> {
-    let db = Connection::open_with_flags(
-        path,
-        OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
+/// The database `path`, opened read-only: the file itself, or a copy in memory of `bytes`, its
+/// content.
+fn open(path: &Path, bytes: Option<&[u8]>) -> Result<Connection> {
+    let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+    let Some(bytes) = bytes else {
+        return Connection::open_with_flags(path, flags).map_err(|e| sql_error(path, e));
+    };
+    let mut db = Connection::open_in_memory().map_err(|e| sql_error(path, e))?;
+    // Bytes 18 and 19 of the header are 2 for a database in WAL mode, which SQLite does not
+    // open in memory; 1 (rollback journal) reads the same pages.
+    let (head, rest) = bytes.split_at(bytes.len().min(18));
+    let (version, tail) = rest.split_at(rest.len().min(2));
+    let version: &[u8] = if version == [2, 2] { &[1, 1] } else { version };
+    db.deserialize_read_exact(
+        rusqlite::MAIN_DB,
+        head.chain(version).chain(tail),
+        bytes.len(),
+        true,
     )
     .map_err(|e| sql_error(path, e))?;
+    Ok(db)
+}
+
+/// Reads layer `layer` (or the only one) of the GeoPackage or OGR-SQLite database `path`: the
+/// file, or `bytes`, its content.
+pub(super) fn read(path: &Path, bytes: Option<&[u8]>, layer: Option<&str>) -> Result<GeoJson> {
+    let db = open(path, bytes)?;
     let all = layers(&db, path)?;
     let names = || {
         all.iter()
