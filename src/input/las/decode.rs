@@ -159,9 +159,9 @@ impl FileDecoder {
 /// Decodes one LAZ chunk, `layout[LAYOUT_HEAD..]`, into `out` (its points' records) with a
 /// decompressor that sees only them, and checks that it used exactly them. `layout` gets the
 /// chunk table's offset in its head and the table after the chunk (its end is cut back). A
-/// decoder running over damaged bytes takes them for data (a zeroed chunk decodes into 50,000 copies of one point): a chunk whose
-/// points end before its bytes do, or need more bytes than it has, is corrupt — which a file's
-/// length alone cannot tell (that is "truncated").
+/// decoder running over damaged bytes takes them for data (a zeroed chunk decodes into 50,000
+/// copies of one point): a chunk whose points end before its bytes do, or need more bytes than it
+/// has, is corrupt — which a file's length alone cannot tell (that is "truncated").
 fn decode_chunk(
     layout: &mut Vec<u8>,
     out: &mut [u8],
