@@ -31,5 +31,5 @@ cargo clippy --all-targets --locked -- -D warnings
 cargo clippy --lib --locked -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked --quiet
 cargo test --locked --quiet
-# The Python package (python/): its own venv under target/, the extension built once in release.
+# The Python package (python/): its own venv under target/, the extension built once (dev profile).
 scripts/test-python.sh
