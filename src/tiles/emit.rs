@@ -5,7 +5,9 @@
 //! writer gets numbered vertices: a vertex is numbered when a triangle first uses it, and its
 //! entry is dropped (`vertex_done`) when all its triangles have been written; its degree comes
 //! from the tile that owns it, whose run holds its whole star. Only vertices with some but not
-//! all triangles written are held: a band along the tile edges.
+//! all triangles written are held: a band along the tile edges. A vertex whose whole star is in
+//! one tile (its owner's degree equals its uses there: most of them) never enters the map; it is
+//! numbered and finished through the tile's own arrays, in the same order.
 
 use super::worker::{NOT_OWNED, TileOutput};
 use crate::breaklines::Trim;
@@ -40,7 +42,16 @@ pub(crate) struct TileWriter<'m, 'a, 'b> {
     pub vertices: u64,
     /// Largest number of live vertex entries.
     pub peak_live: usize,
+    /// Per vertex of the current tile: triangles left to write when the whole star is in the
+    /// tile, else [`NOT_LOCAL`]; and its number once written.
+    local_left: Vec<u32>,
+    local_id: Vec<u64>,
 }
+
+/// A vertex of the tile with triangles in other tiles too (it goes through the map).
+const NOT_LOCAL: u32 = u32::MAX;
+/// A local vertex not numbered yet.
+const NO_ID: u64 = u64::MAX;
 
 fn key(p: &[f64; 3]) -> (u64, u64) {
     (p[0].to_bits(), p[1].to_bits())
@@ -63,6 +74,8 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             trimmed: 0,
             vertices: 0,
             peak_live: 0,
+            local_left: Vec::new(),
+            local_id: Vec::new(),
         }
     }
 
@@ -107,9 +120,10 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             // A plan's task: the merge numbers the vertices of all the tasks' pieces.
             return mesh.piece(t.tile, &t.vertices, &t.degree, &t.triangles);
         }
+        self.find_local(t);
         // Degrees of the owned vertices first: some were used by earlier tiles already.
         for (i, &d) in t.degree.iter().enumerate() {
-            if d != NOT_OWNED {
+            if d != NOT_OWNED && self.local_left[i] == NOT_LOCAL {
                 let k = key(&t.vertices[i]);
                 let e = self.live.entry(k).or_insert(Live {
                     id: None,
@@ -126,28 +140,47 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             if keep {
                 let mut ids = [0u64; 3];
                 for (j, &i) in tri.iter().enumerate() {
-                    ids[j] = self.use_vertex(&t.vertices[i as usize])?;
+                    ids[j] = self.use_vertex(t, i as usize)?;
                 }
                 self.mesh.as_mut().expect("a mesh").triangle(ids)?;
             }
             for &i in tri {
-                let k = key(&t.vertices[i as usize]);
-                let e = self.live.entry(k).or_insert(Live {
-                    id: None,
-                    seen: 0,
-                    degree: NOT_OWNED,
-                });
-                e.seen += 1;
-                if e.seen == e.degree {
-                    self.done(k)?;
-                }
+                self.seen(t, i as usize)?;
             }
         }
         self.peak_live = self.peak_live.max(self.live.len());
         Ok(())
     }
 
-    fn use_vertex(&mut self, p: &[f64; 3]) -> Result<u64> {
+    /// Marks the tile's vertices whose whole star is in the tile: owned, with as many triangles
+    /// here as their degree (so no other tile has used them or will).
+    fn find_local(&mut self, t: &TileOutput) {
+        let n = t.vertices.len();
+        self.local_left.clear();
+        self.local_left.resize(n, 0);
+        self.local_id.clear();
+        self.local_id.resize(n, NO_ID);
+        for tri in &t.triangles {
+            for &i in tri {
+                self.local_left[i as usize] += 1;
+            }
+        }
+        for (left, &d) in self.local_left.iter_mut().zip(&t.degree) {
+            if d == NOT_OWNED || *left != d {
+                *left = NOT_LOCAL;
+            }
+        }
+    }
+
+    /// The number of vertex `i` of tile `t`, written when a triangle first uses it.
+    fn use_vertex(&mut self, t: &TileOutput, i: usize) -> Result<u64> {
+        let p = &t.vertices[i];
+        if self.local_left[i] != NOT_LOCAL {
+            if self.local_id[i] == NO_ID {
+                self.local_id[i] = self.new_vertex(p)?;
+            }
+            return Ok(self.local_id[i]);
+        }
         let e = self.live.entry(key(p)).or_insert(Live {
             id: None,
             seen: 0,
@@ -158,10 +191,40 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
         }
         let id = self.next_id;
         e.id = Some(id);
+        self.new_vertex(p)
+    }
+
+    fn new_vertex(&mut self, p: &[f64; 3]) -> Result<u64> {
+        let id = self.next_id;
         self.next_id += 1;
         self.vertices += 1;
         self.mesh.as_mut().expect("a mesh").vertex(*p)?;
         Ok(id)
+    }
+
+    /// One more triangle of vertex `i` of tile `t` written (or trimmed): finishes the vertex
+    /// after its last.
+    fn seen(&mut self, t: &TileOutput, i: usize) -> Result<()> {
+        let left = &mut self.local_left[i];
+        if *left != NOT_LOCAL {
+            *left -= 1;
+            if *left == 0 && self.local_id[i] != NO_ID {
+                let id = self.local_id[i];
+                self.mesh.as_mut().expect("a mesh").vertex_done(id)?;
+            }
+            return Ok(());
+        }
+        let k = key(&t.vertices[i]);
+        let e = self.live.entry(k).or_insert(Live {
+            id: None,
+            seen: 0,
+            degree: NOT_OWNED,
+        });
+        e.seen += 1;
+        if e.seen == e.degree {
+            self.done(k)?;
+        }
+        Ok(())
     }
 
     fn done(&mut self, k: (u64, u64)) -> Result<()> {
