@@ -263,6 +263,71 @@ impl Builder {
     }
 }
 
+/// Records per batch handed from the merging thread to the writing one.
+const BATCH: usize = 1 << 14;
+
+/// Writes the merged stream to `file` as bare `[x, y, z]` records and notes its blocks: the
+/// k-way merge on this thread, the block table and the writes on another (batches of
+/// [`BATCH`] records through a channel, their vectors handed back), so the two halves of the
+/// work overlap.
+///
+/// # Errors
+/// [`Error::Io`] naming `tmp_dir`, or the merge's own error.
+fn write_merged(
+    grid: TileGrid,
+    merge: &mut Merge<BlockRecord>,
+    file: &File,
+    tmp_dir: &Path,
+) -> Result<Builder> {
+    let io = |e| Error::io(tmp_dir, e);
+    let (full_tx, full_rx) = crossbeam_channel::bounded::<Vec<BlockRecord>>(2);
+    let (empty_tx, empty_rx) = crossbeam_channel::bounded::<Vec<BlockRecord>>(4);
+    std::thread::scope(|scope| {
+        let writer = scope.spawn(move || -> Result<Builder> {
+            let mut b = Builder::new(grid);
+            let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
+            let mut buf: Vec<[f64; 3]> = Vec::with_capacity(BATCH);
+            for batch in full_rx {
+                for r in &batch {
+                    b.note(r);
+                    buf.push([r.x, r.y, r.z]);
+                }
+                w.write_all(bytemuck::cast_slice(&buf)).map_err(io)?;
+                buf.clear();
+                // The merging thread may have stopped taking vectors back.
+                let _ = empty_tx.try_send(batch);
+            }
+            w.flush().map_err(io)?;
+            Ok(b)
+        });
+        let mut batch = Vec::with_capacity(BATCH);
+        for r in merge.by_ref() {
+            batch.push(r);
+            if batch.len() == BATCH {
+                let mut next = empty_rx
+                    .try_recv()
+                    .unwrap_or_else(|_| Vec::with_capacity(BATCH));
+                next.clear();
+                // A writer that stopped says why when joined.
+                if full_tx.send(std::mem::replace(&mut batch, next)).is_err() {
+                    break;
+                }
+            }
+        }
+        if !batch.is_empty() {
+            let _ = full_tx.send(batch);
+        }
+        drop(full_tx);
+        let b = writer
+            .join()
+            .map_err(|_| Error::Internal("the block index's writing thread panicked".into()))??;
+        match merge.take_error() {
+            Some(e) => Err(e),
+            None => Ok(b),
+        }
+    })
+}
+
 impl BlockIndex {
     /// Builds the index from the merged sort, writing the points to an anonymous file under
     /// `tmp_dir` unless the sort kept them in memory.
@@ -286,22 +351,7 @@ impl BlockIndex {
             Store::Memory(pts)
         } else {
             let file = tempfile::tempfile_in(tmp_dir).map_err(io)?;
-            let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
-            let mut buf: Vec<[f64; 3]> = Vec::with_capacity(1 << 14);
-            for r in merge.by_ref() {
-                b.note(&r);
-                buf.push([r.x, r.y, r.z]);
-                if buf.len() == buf.capacity() {
-                    w.write_all(bytemuck::cast_slice(&buf)).map_err(io)?;
-                    buf.clear();
-                }
-            }
-            if let Some(e) = merge.take_error() {
-                return Err(e);
-            }
-            w.write_all(bytemuck::cast_slice(&buf)).map_err(io)?;
-            w.flush().map_err(io)?;
-            drop(w);
+            b = write_merged(grid, &mut merge, &file, tmp_dir)?;
             Store::File {
                 file,
                 dir: tmp_dir.to_path_buf(),
@@ -600,6 +650,16 @@ mod tests {
             e
         };
         assert_eq!(va, expect);
+        // Everything, across the writer's batches: the same records, blocks and extents.
+        let (mut wa, mut wb) = (Vec::new(), Vec::new());
+        a.read(&a.occupied(), &mut wa).unwrap();
+        b.read(&b.occupied(), &mut wb).unwrap();
+        assert_eq!(wa.len(), 50_000);
+        assert_eq!(wa, wb);
+        assert_eq!((&a.keys, &a.starts), (&b.keys, &b.starts));
+        for &k in &a.keys {
+            assert_eq!(a.extent(k), b.extent(k));
+        }
         assert!(a.any_in_row(0, -2, 5));
         assert!(!a.any_in_row(100, -2, 5));
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
