@@ -52,6 +52,7 @@ macro_rules! internal {
 }
 
 pub mod breaklines;
+pub mod cpu;
 pub mod crs;
 pub mod error;
 pub mod input;

@@ -18,6 +18,13 @@ pub(crate) use errors::to_py;
 
 #[pymodule]
 fn _sweeptin(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // Built for x86-64-v2 (.cargo/config.toml): an ImportError on an older processor, before
+    // anything could run an instruction it lacks.
+    if let Some(missing) = sweeptin::cpu::missing_features() {
+        return Err(pyo3::exceptions::PyImportError::new_err(
+            sweeptin::cpu::message(&missing),
+        ));
+    }
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<memory::Tin>()?;
     m.add_function(wrap_pyfunction!(memory::triangulate, m)?)?;

@@ -156,6 +156,7 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
     /// here as their degree (so no other tile has used them or will).
     fn find_local(&mut self, t: &TileOutput) {
         let n = t.vertices.len();
+        debug_assert_eq!(t.degree.len(), n, "a degree for every vertex");
         self.local_left.clear();
         self.local_left.resize(n, 0);
         self.local_id.clear();

@@ -272,7 +272,8 @@ const BATCH: usize = 1 << 14;
 /// work overlap.
 ///
 /// # Errors
-/// [`Error::Io`] naming `tmp_dir`, or the merge's own error.
+/// [`Error::Io`] naming `tmp_dir`, the merge's own error, [`Error::Internal`] if the writing
+/// thread panicked.
 fn write_merged(
     grid: TileGrid,
     merge: &mut Merge<BlockRecord>,
@@ -318,9 +319,9 @@ fn write_merged(
             let _ = full_tx.send(batch);
         }
         drop(full_tx);
-        let b = writer
-            .join()
-            .map_err(|_| Error::Internal("the block index's writing thread panicked".into()))??;
+        let b = writer.join().unwrap_or_else(|p| {
+            Err(Error::panicked("the block index's writing thread", &*p))
+        })?;
         match merge.take_error() {
             Some(e) => Err(e),
             None => Ok(b),
