@@ -125,11 +125,7 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
         for (i, &d) in t.degree.iter().enumerate() {
             if d != NOT_OWNED && self.local_left[i] == NOT_LOCAL {
                 let k = key(&t.vertices[i]);
-                let e = self.live.entry(k).or_insert(Live {
-                    id: None,
-                    seen: 0,
-                    degree: NOT_OWNED,
-                });
+                let e = self.live_entry(k);
                 e.degree = d;
                 if e.seen == d {
                     self.done(k)?;
@@ -182,16 +178,13 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             }
             return Ok(self.local_id[i]);
         }
-        let e = self.live.entry(key(p)).or_insert(Live {
-            id: None,
-            seen: 0,
-            degree: NOT_OWNED,
-        });
+        let next = self.next_id;
+        let e = self.live_entry(key(p));
         if let Some(id) = e.id {
             return Ok(id);
         }
-        let id = self.next_id;
-        e.id = Some(id);
+        // Numbered before it is written, as `new_vertex` numbers it.
+        e.id = Some(next);
         self.new_vertex(p)
     }
 
@@ -216,16 +209,22 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             return Ok(());
         }
         let k = key(&t.vertices[i]);
-        let e = self.live.entry(k).or_insert(Live {
-            id: None,
-            seen: 0,
-            degree: NOT_OWNED,
-        });
+        let e = self.live_entry(k);
         e.seen += 1;
         if e.seen == e.degree {
             self.done(k)?;
         }
         Ok(())
+    }
+
+    /// The map's entry of the vertex at `k`, new (unnumbered, nothing seen, degree unknown) if
+    /// absent.
+    fn live_entry(&mut self, k: (u64, u64)) -> &mut Live {
+        self.live.entry(k).or_insert(Live {
+            id: None,
+            seen: 0,
+            degree: NOT_OWNED,
+        })
     }
 
     fn done(&mut self, k: (u64, u64)) -> Result<()> {
