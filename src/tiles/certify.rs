@@ -33,7 +33,7 @@
 
 use super::grid::BlockRect;
 use super::index::BlockIndex;
-use super::lines::{RunLines, Sight};
+use super::lines::{RegionScratch, RunLines, Sight};
 use super::region::bbox;
 use crate::error::Result;
 use crate::geom::predicates::{CircleSide, DiskBounds, Orientation, incircle, orient};
@@ -91,6 +91,8 @@ pub(crate) struct Certifier<'a> {
     /// (for [`Sight::region`]).
     pub mesh: Option<(&'a crate::Triangulation, &'a [u32])>,
     pub tri: std::cell::Cell<u32>,
+    /// What sight regions reuse over the run.
+    scratch: RefCell<RegionScratch>,
 }
 
 /// Squared distance from `p` to the box `e` (`[xmin, ymin, xmax, ymax]`).
@@ -220,6 +222,7 @@ impl<'a> Certifier<'a> {
             lines: None,
             mesh: None,
             tri: std::cell::Cell::new(0),
+            scratch: RefCell::new(RegionScratch::default()),
         }
     }
 
@@ -395,7 +398,10 @@ impl<'a> Certifier<'a> {
         };
         let region = self
             .mesh
-            .and_then(|(tri, twins)| Sight::region(l, tri, twins, self.tri.get(), meets));
+            .and_then(|(tri, twins)| {
+                let scratch = &mut self.scratch.borrow_mut();
+                Sight::region(l, tri, twins, self.tri.get(), meets, scratch)
+            });
         match region {
             Some(r) => Sight::within(hidden, r),
             None => Sight::near(hidden, l.blockers(&self.tri_xy())),

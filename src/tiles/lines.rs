@@ -229,6 +229,39 @@ pub(crate) struct Sight {
     region: Option<Region>,
 }
 
+/// What [`Sight::region`] reuses from one triangle's region to the next over a run: a mark per
+/// triangle (the region's number when it reached it) and whether each edge is constrained
+/// (0: not known yet, 1: no, 2: yes; an edge and its twin alike).
+#[derive(Debug, Default)]
+pub(crate) struct RegionScratch {
+    stamp: Vec<u32>,
+    region: u32,
+    constrained: Vec<u8>,
+}
+
+impl RegionScratch {
+    /// The number of a new region over a run of `triangles` triangles.
+    fn next(&mut self, triangles: usize) -> u32 {
+        if self.stamp.len() != triangles || self.region == u32::MAX {
+            self.stamp = vec![0; triangles];
+            self.constrained = vec![0; 3 * triangles];
+            self.region = 0;
+        }
+        self.region += 1;
+        self.region
+    }
+
+    /// Is the edge `x-y` (half-edge `h`, twin `tw`) on a loaded segment?
+    fn constrained(&mut self, lines: &RunLines, h: usize, tw: u32, x: [f64; 2], y: [f64; 2]) -> bool {
+        if self.constrained[h] == 0 {
+            let c = 1 + u8::from(lines.constrained(x, y));
+            self.constrained[h] = c;
+            self.constrained[tw as usize] = c;
+        }
+        self.constrained[h] == 2
+    }
+}
+
 /// The triangles of a [`Sight::region`], bucketed by bounding box.
 #[derive(Debug)]
 struct Region {
@@ -267,11 +300,12 @@ impl Sight {
         twins: &[u32],
         k: u32,
         meets: impl Fn([f64; 2], [f64; 2]) -> bool,
+        scratch: &mut RegionScratch,
     ) -> Option<(Vec<Tri2>, [f64; 4])> {
         let v = &tri.vertices;
         let at = |u: u32| tri.triangles[u as usize].map(|i| [v[i as usize][0], v[i as usize][1]]);
-        let mut seen: crate::idmap::FastSet<u32> = crate::idmap::FastSet::default();
-        seen.insert(k);
+        let seen = scratch.next(tri.triangles.len());
+        scratch.stamp[k as usize] = seen;
         let mut stack = vec![k];
         let mut out = Vec::new();
         let mut b = [
@@ -290,13 +324,14 @@ impl Sight {
                 return None;
             }
             for e in 0..3 {
-                let tw = twins[3 * u as usize + e];
+                let (h, tw) = (3 * u as usize + e, twins[3 * u as usize + e]);
                 let (x, y) = (tu[e], tu[(e + 1) % 3]);
-                if tw == u32::MAX || !meets(x, y) || lines.constrained(x, y) {
+                if tw == u32::MAX || !meets(x, y) || scratch.constrained(lines, h, tw, x, y) {
                     continue;
                 }
                 let n = tw / 3;
-                if seen.insert(n) {
+                if scratch.stamp[n as usize] != seen {
+                    scratch.stamp[n as usize] = seen;
                     stack.push(n);
                 }
             }
@@ -311,9 +346,9 @@ impl Sight {
         for (i, t) in tris.iter().enumerate() {
             let b = bbox(t);
             let (lo, hi) = ([b[0], b[1]], [b[2], b[3]]);
-            grid.box_cells(lo, hi, |c| pairs.push((u64::from(c) << 32) | i as u64));
+            grid.box_cells(lo, hi, |c| pairs.push((c, i as u32)));
         }
-        let buckets = Buckets::from_pairs(grid.len(), pairs);
+        let buckets = Buckets::from_item_order(grid.len(), &pairs);
         Sight {
             hidden,
             blockers: Vec::new(),
