@@ -80,11 +80,37 @@ impl Prepared {
 /// [`crate::mesh::MAX_VERTICES`]).
 pub const MAX_POINTS: u64 = crate::mesh::MAX_VERTICES;
 
-#[derive(Clone, Copy)]
+/// A point in sort order: `(ky, kx, idx)` compares as `(y, x, input index)` by `f64::total_cmp`
+/// (see [`order_key`]), so the bucket sorts compare integers.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 struct Rec {
-    x: f64,
-    y: f64,
+    ky: u64,
+    kx: u64,
     idx: u32,
+}
+
+impl Rec {
+    fn x(&self) -> f64 {
+        from_order_key(self.kx)
+    }
+
+    fn y(&self) -> f64 {
+        from_order_key(self.ky)
+    }
+}
+
+/// The bits of `v` as an integer in the order of `f64::total_cmp` (negative values with every bit
+/// flipped, the others with the sign bit set).
+#[inline(always)]
+fn order_key(v: f64) -> u64 {
+    let b = v.to_bits();
+    if b >> 63 == 1 { !b } else { b | 1 << 63 }
+}
+
+/// The inverse of [`order_key`].
+#[inline(always)]
+fn from_order_key(k: u64) -> f64 {
+    f64::from_bits(if k >> 63 == 1 { k & !(1 << 63) } else { !k })
 }
 
 /// Validates, sorts and de-duplicates `points` (`[x, y, z]`).
@@ -175,8 +201,8 @@ fn sort_local(points: &[[f64; 3]], origin: [f64; 2], y_range: (f64, f64)) -> Res
     }
     let mut recs = vec![
         Rec {
-            x: 0.0,
-            y: 0.0,
+            ky: 0,
+            kx: 0,
             idx: 0
         };
         n
@@ -186,8 +212,8 @@ fn sort_local(points: &[[f64; 3]], origin: [f64; 2], y_range: (f64, f64)) -> Res
         let (x, y) = local(p, origin);
         let b = bucket(y);
         recs[fill[b] as usize] = Rec {
-            x,
-            y,
+            ky: order_key(y),
+            kx: order_key(x),
             idx: i as u32,
         };
         fill[b] += 1;
@@ -222,11 +248,7 @@ fn sort_buckets(recs: &mut [Rec], start: &[u32]) {
     pieces.into_par_iter().for_each(|(piece, bounds, offset)| {
         for w in bounds.windows(2) {
             let (lo, hi) = (w[0] as usize - offset, w[1] as usize - offset);
-            piece[lo..hi].sort_unstable_by(|a, b| {
-                a.y.total_cmp(&b.y)
-                    .then(a.x.total_cmp(&b.x))
-                    .then(a.idx.cmp(&b.idx))
-            });
+            piece[lo..hi].sort_unstable();
         }
     });
 }
@@ -238,7 +260,8 @@ fn dedupe(recs: &[Rec], points: &[[f64; 3]], policy: DuplicatePolicy) -> (Vec<[f
     let mut index: Vec<u32> = Vec::with_capacity(recs.len());
     let mut prev: Option<(f64, f64)> = None;
     for r in recs {
-        if prev == Some((r.x, r.y)) {
+        let (x, y) = (r.x(), r.y());
+        if prev == Some((x, y)) {
             let keep = *index.last().expect("a previous point exists");
             let cand = (points[r.idx as usize][2], r.idx as u64);
             let kept = (points[keep as usize][2], keep as u64);
@@ -247,8 +270,8 @@ fn dedupe(recs: &[Rec], points: &[[f64; 3]], policy: DuplicatePolicy) -> (Vec<[f
             }
             continue;
         }
-        prev = Some((r.x, r.y));
-        xy.push([r.x, r.y]);
+        prev = Some((x, y));
+        xy.push([x, y]);
         index.push(r.idx);
     }
     (xy, index)
@@ -274,6 +297,29 @@ mod tests {
         assert_eq!(prepare(&pts, DuplicatePolicy::Last).unwrap().index[2], 4);
         assert_eq!(prepare(&pts, DuplicatePolicy::Lowest).unwrap().index[2], 2);
         assert_eq!(prepare(&pts, DuplicatePolicy::Highest).unwrap().index[2], 4);
+    }
+
+    #[test]
+    fn order_keys_sort_as_total_cmp() {
+        let v = [
+            f64::NEG_INFINITY,
+            -1e300,
+            -2.5,
+            -f64::MIN_POSITIVE,
+            -0.0,
+            0.0,
+            f64::MIN_POSITIVE,
+            1.0,
+            1.0 + f64::EPSILON,
+            7e305,
+            f64::INFINITY,
+        ];
+        for a in v {
+            assert_eq!(from_order_key(order_key(a)).to_bits(), a.to_bits());
+            for b in v {
+                assert_eq!(order_key(a).cmp(&order_key(b)), a.total_cmp(&b), "{a} {b}");
+            }
+        }
     }
 
     #[test]
