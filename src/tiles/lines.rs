@@ -397,6 +397,16 @@ impl Sight {
 /// `t`, every sight line from the interior crosses it inside. Exact.
 fn blocks(u: [f64; 2], v: [f64; 2], t: &Tri2, q: [f64; 2]) -> bool {
     use Orientation::{Clockwise, Collinear, CounterClockwise};
+    // The tests below hold only when the closed segment `u-v` meets each segment from `q` to a
+    // corner, and so its box: comparing boxes (exact) settles most segments far from the sight.
+    let meets_box = |c: [f64; 2]| {
+        (0..2).all(|k| {
+            u[k].min(v[k]).max(q[k].min(c[k])) <= u[k].max(v[k]).min(q[k].max(c[k]))
+        })
+    };
+    if !t.iter().all(|&c| meets_box(c)) {
+        return false;
+    }
     let side = orient(u, v, q);
     if side == Collinear {
         return false;
