@@ -292,7 +292,7 @@ impl<'a> Certifier<'a> {
         let disk = [cx - r, cy - r, cx + r, cy + r];
         let b0 = cap.unwrap_or(disk);
         let (c, r2) = ([cx, cy], r * r * (1.0 + 1e-9));
-        let sight = self.sight(hidden, |x, y| {
+        let sight = self.sight(t, hidden, |x, y| {
             boxes_meet(&bbox(&[x, y, y]), &b0) && seg_dist2(c, x, y) <= r2
         });
         let b = match sight.region_box() {
@@ -392,7 +392,12 @@ impl<'a> Certifier<'a> {
     /// What blocks the sight from `t` (no breaklines: nothing): the region of the run's
     /// triangles reachable across unconstrained edges that `meets` ([`Sight::region`]), or
     /// (a region too large) only its constrained edges.
-    fn sight(&self, hidden: [bool; 3], meets: impl Fn([f64; 2], [f64; 2]) -> bool) -> Sight {
+    fn sight(
+        &self,
+        t: &[[f64; 2]; 3],
+        hidden: [bool; 3],
+        meets: impl Fn([f64; 2], [f64; 2]) -> bool,
+    ) -> Sight {
         let Some(l) = self.lines else {
             return Sight::default();
         };
@@ -404,17 +409,8 @@ impl<'a> Certifier<'a> {
             });
         match region {
             Some(r) => Sight::within(hidden, r),
-            None => Sight::near(hidden, l.blockers(&self.tri_xy())),
+            None => Sight::near(hidden, t, l.blockers(t)),
         }
-    }
-
-    /// The triangle being judged (see [`Certifier::tri`]).
-    fn tri_xy(&self) -> [[f64; 2]; 3] {
-        let Some((t, _)) = self.mesh else {
-            return [[0.0; 2]; 3];
-        };
-        let v = &t.vertices;
-        t.triangles[self.tri.get() as usize].map(|i| [v[i as usize][0], v[i as usize][1]])
     }
 
     /// The certificate within a sight's region: no point of a block not read, inside the
@@ -569,7 +565,7 @@ impl<'a> Certifier<'a> {
             ];
             let b0 = if hidden[i] { near_box } else { all };
             // The disk lies in the chord box and the open half-plane right of `a → b`.
-            sight = self.sight(hidden, |x, y| {
+            sight = self.sight(t, hidden, |x, y| {
                 boxes_meet(&bbox(&[x, y, y]), &near_box)
                     || (!hidden[i]
                         && [x, y]

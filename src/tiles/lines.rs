@@ -223,7 +223,7 @@ pub(crate) struct RunLines<'a> {
 pub(crate) struct Sight {
     pub hidden: [bool; 3],
     /// Loaded segments near the triangle, tested when there is no region.
-    blockers: Vec<[[f64; 2]; 2]>,
+    blockers: Vec<([[f64; 2]; 2], Orientation)>,
     /// The triangles of the run reachable from `t` across unconstrained edges within the
     /// circumdisk (see [`Sight::within`]); their bounding box.
     region: Option<Region>,
@@ -279,7 +279,11 @@ pub(crate) const REGION_MAX: usize = 4096;
 impl Sight {
     /// A sight hidden by the triangle's own constrained edges and the loaded segments near
     /// it (see [`RunLines::blockers`]).
-    pub fn near(hidden: [bool; 3], blockers: Vec<[[f64; 2]; 2]>) -> Sight {
+    pub fn near(hidden: [bool; 3], t: &Tri2, blockers: Vec<[[f64; 2]; 2]>) -> Sight {
+        let blockers = blockers
+            .into_iter()
+            .filter_map(|[u, v]| far_side(u, v, t).map(|s| ([u, v], s)))
+            .collect();
         Sight {
             hidden,
             blockers,
@@ -388,36 +392,37 @@ impl Sight {
                     (0..3).all(|k| orient(u[k], u[(k + 1) % 3], q) != Clockwise)
                 });
         }
-        !self.blockers.iter().any(|&[u, v]| blocks(u, v, t, q))
+        !self.blockers.iter().any(|&([u, v], far)| blocks(u, v, far, t, q))
+    }
+}
+
+/// The side of the line `u → v` where a point can be hidden from the interior of `t` by the
+/// segment `u-v`: the side opposite `t`'s, when `t` lies on one closed side of the line and
+/// strictly on it somewhere; `None` when `t` straddles the line or lies on it.
+fn far_side(u: [f64; 2], v: [f64; 2], t: &Tri2) -> Option<Orientation> {
+    use Orientation::{Clockwise, CounterClockwise};
+    let o = t.map(|c| orient(u, v, c));
+    match (o.contains(&Clockwise), o.contains(&CounterClockwise)) {
+        (true, false) => Some(CounterClockwise),
+        (false, true) => Some(Clockwise),
+        _ => None,
     }
 }
 
 /// Does the segment `u-v` hide `q` from the interior of `t`? When `t` lies on one closed side
-/// of its line, `q` strictly on the other, and it meets the segment from `q` to every corner of
-/// `t`, every sight line from the interior crosses it inside. Exact.
-fn blocks(u: [f64; 2], v: [f64; 2], t: &Tri2, q: [f64; 2]) -> bool {
-    use Orientation::{Clockwise, Collinear, CounterClockwise};
-    // The tests below hold only when the closed segment `u-v` meets each segment from `q` to a
+/// of its line, `q` strictly on the other (`far`, from [`far_side`]), and it meets the segment
+/// from `q` to every corner of `t`, every sight line from the interior crosses it inside. Exact.
+fn blocks(u: [f64; 2], v: [f64; 2], far: Orientation, t: &Tri2, q: [f64; 2]) -> bool {
+    use Orientation::Collinear;
+    // The test below holds only when the closed segment `u-v` meets each segment from `q` to a
     // corner, and so its box: comparing boxes (exact) settles most segments far from the sight.
     let meets_box = |c: [f64; 2]| {
         (0..2).all(|k| {
             u[k].min(v[k]).max(q[k].min(c[k])) <= u[k].max(v[k]).min(q[k].max(c[k]))
         })
     };
-    if !t.iter().all(|&c| meets_box(c)) {
-        return false;
-    }
-    let side = orient(u, v, q);
-    if side == Collinear {
-        return false;
-    }
-    let other = if side == Clockwise {
-        CounterClockwise
-    } else {
-        Clockwise
-    };
-    t.iter().all(|&c| orient(u, v, c) != side)
-        && t.iter().any(|&c| orient(u, v, c) == other)
+    t.iter().all(|&c| meets_box(c))
+        && orient(u, v, q) == far
         && t.iter().all(|&c| {
             let (a, b) = (orient(q, c, u), orient(q, c, v));
             a == Collinear || b == Collinear || a != b
