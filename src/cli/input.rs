@@ -65,7 +65,10 @@ pub struct InputArgs {
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub threads: usize,
     /// Tile side for the tiled engine, in the data's units (a multiple of the DEM cell); default:
-    /// about 250,000 points per tile at the data's density.
+    /// a power-of-two multiple of the cell (of one unit without a cell) holding about 65,000
+    /// points at the data's density (more above 134 million points, so that the block table
+    /// stays under 2 million blocks): 64 m on a 13-points-per-m² tile. Larger tiles do not save
+    /// CPU: their buffers are relatively thinner, but the runs leave the processor's caches.
     #[arg(long, value_name = "SIZE")]
     pub tile: Option<f64>,
     /// No progress bar.

@@ -224,6 +224,9 @@ pub(crate) struct Sight {
     pub hidden: [bool; 3],
     /// Loaded segments near the triangle, tested when there is no region.
     blockers: Vec<([[f64; 2]; 2], Orientation)>,
+    /// The blocker that hid the last point hidden by one (tried first: the points of a block
+    /// lie together, behind the same segment).
+    last: std::cell::Cell<usize>,
     /// The triangles of the run reachable from `t` across unconstrained edges within the
     /// circumdisk (see [`Sight::within`]); their bounding box.
     region: Option<Region>,
@@ -287,6 +290,7 @@ impl Sight {
         Sight {
             hidden,
             blockers,
+            last: Default::default(),
             region: None,
         }
     }
@@ -356,6 +360,7 @@ impl Sight {
         Sight {
             hidden,
             blockers: Vec::new(),
+            last: Default::default(),
             region: Some(Region {
                 tris,
                 bbox: area,
@@ -392,7 +397,18 @@ impl Sight {
                     (0..3).all(|k| orient(u[k], u[(k + 1) % 3], q) != Clockwise)
                 });
         }
-        !self.blockers.iter().any(|&([u, v], far)| blocks(u, v, far, t, q))
+        let hides = |&([u, v], far): &([[f64; 2]; 2], Orientation)| blocks(u, v, far, t, q);
+        let last = self.last.get();
+        if self.blockers.get(last).is_some_and(hides) {
+            return false;
+        }
+        match self.blockers.iter().position(hides) {
+            Some(i) => {
+                self.last.set(i);
+                false
+            }
+            None => true,
+        }
     }
 }
 
