@@ -270,8 +270,25 @@ impl RegionScratch {
 struct Region {
     tris: Vec<Tri2>,
     bbox: [f64; 4],
-    grid: Grid,
-    buckets: Buckets,
+    /// The grid over the box and its buckets, built when a point is first tested (most disks
+    /// hold no point of an unread block, and then no point is).
+    buckets: std::cell::OnceCell<(Grid, Buckets)>,
+}
+
+impl Region {
+    fn buckets(&self) -> &(Grid, Buckets) {
+        self.buckets.get_or_init(|| {
+            let a = self.bbox;
+            let grid = Grid::new([a[0], a[1]], [a[2], a[3]], self.tris.len());
+            let mut pairs = Vec::new();
+            for (i, t) in self.tris.iter().enumerate() {
+                let b = bbox(t);
+                grid.box_cells([b[0], b[1]], [b[2], b[3]], |c| pairs.push((c, i as u32)));
+            }
+            let buckets = Buckets::from_item_order(grid.len(), &pairs);
+            (grid, buckets)
+        })
+    }
 }
 
 /// Triangles a [`Sight::within`] region holds at most (beyond, only the constrained edges of
@@ -349,14 +366,6 @@ impl Sight {
 
     /// A sight bounded by a [`Sight::region`].
     pub fn within(hidden: [bool; 3], (tris, area): (Vec<Tri2>, [f64; 4])) -> Sight {
-        let grid = Grid::new([area[0], area[1]], [area[2], area[3]], tris.len());
-        let mut pairs = Vec::new();
-        for (i, t) in tris.iter().enumerate() {
-            let b = bbox(t);
-            let (lo, hi) = ([b[0], b[1]], [b[2], b[3]]);
-            grid.box_cells(lo, hi, |c| pairs.push((c, i as u32)));
-        }
-        let buckets = Buckets::from_item_order(grid.len(), &pairs);
         Sight {
             hidden,
             blockers: Vec::new(),
@@ -364,8 +373,7 @@ impl Sight {
             region: Some(Region {
                 tris,
                 bbox: area,
-                grid,
-                buckets,
+                buckets: Default::default(),
             }),
         }
     }
@@ -392,10 +400,13 @@ impl Sight {
                 && q[0] <= b[2]
                 && q[1] >= b[1]
                 && q[1] <= b[3]
-                && r.buckets.cell(r.grid.cell_of(q)).iter().any(|&i| {
-                    let u = &r.tris[i as usize];
-                    (0..3).all(|k| orient(u[k], u[(k + 1) % 3], q) != Clockwise)
-                });
+                && {
+                    let (grid, buckets) = r.buckets();
+                    buckets.cell(grid.cell_of(q)).iter().any(|&i| {
+                        let u = &r.tris[i as usize];
+                        (0..3).all(|k| orient(u[k], u[(k + 1) % 3], q) != Clockwise)
+                    })
+                };
         }
         let hides = |&([u, v], far): &([[f64; 2]; 2], Orientation)| blocks(u, v, far, t, q);
         let last = self.last.get();
