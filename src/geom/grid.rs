@@ -157,6 +157,18 @@ impl Grid {
 /// Fewest pairs [`Buckets::from_pairs`] sorts on every core.
 const PAR_SORT_MIN: usize = 1 << 16;
 
+/// Where each of `cells` cells starts in a list of items grouped by cell, from the items' cells.
+fn starts(cells: usize, of: impl Iterator<Item = usize>) -> Vec<u32> {
+    let mut start = vec![0u32; cells + 1];
+    for c in of {
+        start[c + 1] += 1;
+    }
+    for c in 0..cells {
+        start[c + 1] += start[c];
+    }
+    start
+}
+
 /// Items per cell, in compressed rows: the items of cell `c` are `items[start[c]..start[c + 1]]`,
 /// increasing.
 #[derive(Clone, Debug, Default)]
@@ -168,21 +180,15 @@ pub(crate) struct Buckets {
 impl Buckets {
     /// Builds the buckets from `(cell << 32) | item` words (any order, duplicates allowed).
     pub fn from_pairs(cells: usize, mut pairs: Vec<u64>) -> Buckets {
-        // Small sets (a certificate's sight region, built per triangle on a tile worker) sort
-        // on the calling thread: handing them to rayon's pool from outside it costs more.
+        // Small sets sort on the calling thread: rayon's split and join cost more than they
+        // save there, and far more when the caller (a tile worker) is outside rayon's pool.
         if pairs.len() < PAR_SORT_MIN {
             pairs.sort_unstable();
         } else {
             pairs.par_sort_unstable();
         }
         pairs.dedup();
-        let mut start = vec![0u32; cells + 1];
-        for &w in &pairs {
-            start[(w >> 32) as usize + 1] += 1;
-        }
-        for c in 0..cells {
-            start[c + 1] += start[c];
-        }
+        let start = starts(cells, pairs.iter().map(|&w| (w >> 32) as usize));
         let items = pairs.into_iter().map(|w| w as u32).collect();
         Buckets { start, items }
     }
@@ -191,13 +197,7 @@ impl Buckets {
     /// same buckets as [`Buckets::from_pairs`], by counting, without a sort.
     pub fn from_item_order(cells: usize, pairs: &[(u32, u32)]) -> Buckets {
         debug_assert!(pairs.windows(2).all(|w| w[0].1 < w[1].1 || (w[0].1 == w[1].1 && w[0].0 != w[1].0)));
-        let mut start = vec![0u32; cells + 1];
-        for &(c, _) in pairs {
-            start[c as usize + 1] += 1;
-        }
-        for c in 0..cells {
-            start[c + 1] += start[c];
-        }
+        let start = starts(cells, pairs.iter().map(|&(c, _)| c as usize));
         let mut fill = start.clone();
         let mut items = vec![0u32; pairs.len()];
         for &(c, i) in pairs {

@@ -270,8 +270,9 @@ impl RegionScratch {
 struct Region {
     tris: Vec<Tri2>,
     bbox: [f64; 4],
-    /// The grid over the box and its buckets, built when a point is first tested (most disks
-    /// hold no point of an unread block, and then no point is).
+    /// The grid over the box and its buckets, built when a point is first tested: most disks
+    /// hold no point of an unread block, so no point is (Delft + BGT in tiles: 6,000 of 33,800
+    /// regions were ever queried).
     buckets: std::cell::OnceCell<(Grid, Buckets)>,
 }
 
