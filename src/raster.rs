@@ -184,6 +184,30 @@ impl GridSpec {
         (top - hi) as u32..(top - lo + 1) as u32
     }
 
+    /// Might a cell centre lie in the closed bounding box of triangle `t`? `false` only when none
+    /// does (exact comparisons with the centres' coordinates): most triangles of dense lidar hold
+    /// no centre, and a DEM skips them before any exact test.
+    pub fn may_hold_centre(&self, t: &[[f64; 3]; 3]) -> bool {
+        let (xmin, xmax) = (
+            t[0][0].min(t[1][0]).min(t[2][0]),
+            t[0][0].max(t[1][0]).max(t[2][0]),
+        );
+        let (ymin, ymax) = (
+            t[0][1].min(t[1][1]).min(t[2][1]),
+            t[0][1].max(t[1][1]).max(t[2][1]),
+        );
+        if !self.rows_over(ymin, ymax).any(|row| {
+            let y = self.centre_y(row);
+            y >= ymin && y <= ymax
+        }) {
+            return false;
+        }
+        self.cols_over(xmin, xmax).any(|col| {
+            let x = self.centre_x(col);
+            x >= xmin && x <= xmax
+        })
+    }
+
     /// How many rows, counted from the southern one, have their centre strictly below `y`.
     pub fn rows_below(&self, y: f64) -> u32 {
         // The lowest lattice index whose coordinate is at least y.

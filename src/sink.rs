@@ -14,6 +14,7 @@
 
 use crate::crs::Crs;
 use crate::error::Result;
+use crate::raster::GridSpec;
 use serde::{Serialize, Serializer};
 use std::path::PathBuf;
 
@@ -156,6 +157,44 @@ pub struct StreamInfo {
     pub bounds: [f64; 4],
 }
 
+/// Which triangles a [`TriangleSink`] needs ([`TriangleSink::needs`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Needs {
+    /// Every triangle.
+    All,
+    /// Only triangles whose closed bounding box may hold a cell centre of one of these grids
+    /// ([`GridSpec::may_hold_centre`]); a producer may leave the others out and count them
+    /// ([`TriangleSink::skipped`]).
+    Centres(Vec<GridSpec>),
+}
+
+impl Needs {
+    /// Does a sink with these needs want triangle `t`?
+    #[inline]
+    pub fn wants(&self, t: &[[f64; 3]; 3]) -> bool {
+        match self {
+            Needs::All => true,
+            Needs::Centres(grids) => grids.iter().any(|g| g.may_hold_centre(t)),
+        }
+    }
+
+    /// What sinks fed the same triangles need together (every triangle when there are none).
+    pub fn together(needs: impl IntoIterator<Item = Needs>) -> Needs {
+        let mut grids = Vec::new();
+        for n in needs {
+            match n {
+                Needs::All => return Needs::All,
+                Needs::Centres(g) => grids.extend(g),
+            }
+        }
+        if grids.is_empty() {
+            Needs::All
+        } else {
+            Needs::Centres(grids)
+        }
+    }
+}
+
 /// A consumer of final triangles (DEM, contours, volumes, …).
 ///
 /// Triangles arrive roughly in increasing `y`, in real-world coordinates `[x, y, z]`,
@@ -188,6 +227,14 @@ pub trait TriangleSink: Send {
     fn boundary_triangle(&mut self, _t: &[[f64; 3]; 3]) -> Result<()> {
         Ok(())
     }
+    /// Which triangles this sink needs, asked after [`TriangleSink::begin`]: a producer may
+    /// leave out the others (a tiled run filters them in its workers). Default: every one.
+    fn needs(&self) -> Needs {
+        Needs::All
+    }
+    /// `n` triangles were left out because [`TriangleSink::needs`] did not want them (they
+    /// still count as triangles of the stream).
+    fn skipped(&mut self, _n: u64) {}
     /// Called once after the last triangle; returns what the sink did.
     fn finish(&mut self) -> Result<ProductSummary>;
 }
@@ -463,6 +510,16 @@ impl TriangleSink for Fanout {
         self.sinks.iter().map(|(_, s)| s.memory_share()).sum()
     }
 
+    fn needs(&self) -> Needs {
+        Needs::together(self.sinks.iter().map(|(_, s)| s.needs()))
+    }
+
+    fn skipped(&mut self, n: u64) {
+        for (_, s) in &mut self.sinks {
+            s.skipped(n);
+        }
+    }
+
     fn finish(&mut self) -> Result<ProductSummary> {
         if let Some(s) = &self.summary {
             return Ok(ProductSummary::Fanout(s.clone()));
@@ -481,6 +538,25 @@ impl TriangleSink for Fanout {
 mod tests {
     use super::*;
     use std::sync::{Arc, Mutex};
+
+    #[test]
+    fn needs_together_want_what_any_sink_wants() {
+        // Centres on multiples of 1 (and of 10 for the second grid).
+        let a = GridSpec::aligned(1.0, 0, 0, 10, 10, -9999.0);
+        let b = GridSpec::aligned(10.0, 0, 0, 2, 2, -9999.0);
+        let small = [[0.2, 0.2, 0.0], [0.8, 0.2, 0.0], [0.2, 0.8, 0.0]];
+        let on_centre = [[1.0, 1.0, 0.0], [1.5, 1.2, 0.0], [1.2, 1.5, 0.0]];
+        let both = Needs::together([Needs::Centres(vec![a.clone()]), Needs::Centres(vec![b])]);
+        assert!(!both.wants(&small));
+        assert!(both.wants(&on_centre), "a centre on a vertex (closed box)");
+        assert!(Needs::Centres(vec![a.clone()]).wants(&on_centre));
+        assert_eq!(
+            Needs::together([Needs::Centres(vec![a]), Needs::All]),
+            Needs::All
+        );
+        assert_eq!(Needs::together([]), Needs::All);
+        assert!(Needs::All.wants(&small));
+    }
 
     /// What a probe was given: CRS, triangles, watermarks.
     type Seen = Arc<Mutex<(Option<String>, u64, u64)>>;

@@ -263,3 +263,30 @@ fn cli_outputs_do_not_depend_on_threads_or_memory() {
         "the contours are not the sweep's"
     );
 }
+
+/// A DEM-only tiled run leaves out, in its workers, the triangles that hold no cell centre; it
+/// still counts them: its summary's triangles are the sweep's, and so is the raster.
+#[test]
+fn a_dem_only_run_counts_the_triangles_it_leaves_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
+    let topo = shared("lidar/lidR_Topography.laz");
+    let topo = topo.to_str().unwrap();
+    let mut runs = Vec::new();
+    for engine in ["tiles", "sweep"] {
+        let tif = d(&format!("{engine}.tif"));
+        let out = cli(&[
+            "dem", topo, "--cell", "2", "--engine", engine, "-o", &tif, "--json", "-q",
+        ]);
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        runs.push((
+            v["run"]["triangles"].as_u64().unwrap(),
+            v["dem"]["triangles"].as_u64().unwrap(),
+            std::fs::read(&tif).unwrap(),
+        ));
+    }
+    assert!(runs[0].0 > 0);
+    assert_eq!(runs[0].0, runs[1].0, "run triangles");
+    assert_eq!(runs[0].1, runs[1].1, "DEM triangles");
+    assert!(runs[0].2 == runs[1].2, "the DEM is not the sweep's");
+}

@@ -37,7 +37,7 @@ use crate::output::raster::{
     GridWriter, MemoryGrid, RasterFormat, RasterOptions, create_grid_writer,
 };
 use crate::raster::{GridPlan, GridSpec};
-use crate::sink::{DemSummary, ProductSummary, StreamInfo, TriangleSink};
+use crate::sink::{DemSummary, Needs, ProductSummary, StreamInfo, TriangleSink};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 
@@ -180,29 +180,6 @@ impl Raster {
             self.written += 1;
         }
         Ok(())
-    }
-
-    /// Might a cell centre lie in the closed box of `t`? (`false` only when none does.)
-    fn any_centre_in(&self, t: &[[f64; 3]; 3]) -> bool {
-        let (xmin, xmax) = (
-            t[0][0].min(t[1][0]).min(t[2][0]),
-            t[0][0].max(t[1][0]).max(t[2][0]),
-        );
-        let (ymin, ymax) = (
-            t[0][1].min(t[1][1]).min(t[2][1]),
-            t[0][1].max(t[1][1]).max(t[2][1]),
-        );
-        let rows = self.spec.rows_over(ymin, ymax);
-        if !rows.clone().any(|row| {
-            let y = self.spec.centre_y(row);
-            y >= ymin && y <= ymax
-        }) {
-            return false;
-        }
-        self.spec.cols_over(xmin, xmax).any(|col| {
-            let x = self.spec.centre_x(col);
-            x >= xmin && x <= xmax
-        })
     }
 
     fn rasterise(&mut self, t: &Tri) -> Result<()> {
@@ -354,7 +331,7 @@ impl TriangleSink for DemSink {
         self.triangles += 1;
         let r = self.raster()?;
         // Most triangles of dense lidar hold no cell centre: skip them before any exact test.
-        if !r.any_centre_in(t) {
+        if !r.spec.may_hold_centre(t) {
             return Ok(());
         }
         let Some(t) = Tri::new(t) else {
@@ -379,6 +356,17 @@ impl TriangleSink for DemSink {
 
     fn boundary_triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
         self.triangle(t)
+    }
+
+    fn needs(&self) -> Needs {
+        match &self.raster {
+            Some(r) => Needs::Centres(vec![r.spec.clone()]),
+            None => Needs::All,
+        }
+    }
+
+    fn skipped(&mut self, n: u64) {
+        self.triangles += n;
     }
 
     fn finish(&mut self) -> Result<ProductSummary> {

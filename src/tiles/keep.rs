@@ -4,7 +4,17 @@
 use super::grid::{BlockRect, TileGrid};
 use super::worker::{NOT_OWNED, TileOutput};
 use crate::idmap::FastMap;
+use crate::sink::Needs;
 use std::cmp::Ordering;
+
+/// What the writer will do with a tile's owned triangles.
+#[derive(Clone, Debug)]
+pub(crate) struct Want {
+    /// A mesh numbers the vertices: it needs every owned vertex's degree and every triangle.
+    pub mesh: bool,
+    /// The products' needs: triangles they do not want are counted, not kept ([`Needs`]).
+    pub needs: Needs,
+}
 
 /// Decides which points the tile owns: clearly inside or outside its rectangle by a margin, or
 /// else by the block function itself (the one rule of ownership).
@@ -48,6 +58,7 @@ fn sweep_cmp(a: &[f64; 3], b: &[f64; 3]) -> Ordering {
 pub(crate) fn from_runs(
     owner: &Owner,
     task: Option<&Owner>,
+    want: &Want,
     t: &crate::Triangulation,
     certified: &[u32],
     patched: &[[[f64; 3]; 3]],
@@ -57,6 +68,7 @@ pub(crate) fn from_runs(
         collect(
             owner,
             task,
+            want,
             &t.vertices,
             certified.iter().map(|&k| t.triangles[k as usize]),
             out,
@@ -138,14 +150,16 @@ pub(crate) fn from_runs(
     for t in &mut tris {
         *t = t.map(|i| remap[i as usize]);
     }
-    collect(owner, task, &sorted, tris.iter().copied(), out);
+    collect(owner, task, want, &sorted, tris.iter().copied(), out);
 }
 
 /// Fills `out` from triangles (indices into `vertices`, which are in sweep order; each triangle
-/// once) certified for the tile.
+/// once) certified for the tile: the owned ones the writer wants (the others counted in
+/// `out.skipped`), and for a mesh every owned vertex's degree.
 fn collect(
     owner: &Owner,
     task: Option<&Owner>,
+    want: &Want,
     vertices: &[[f64; 3]],
     tris: impl Iterator<Item = [u32; 3]> + Clone,
     out: &mut TileOutput,
@@ -153,12 +167,63 @@ fn collect(
     let n = vertices.len();
     let is_owned: Vec<bool> = vertices.iter().map(|p| owner.owns(p)).collect();
     let low = |t: &[u32; 3]| t[0].min(t[1]).min(t[2]) as usize;
+    let (degree, foreign) = if want.mesh {
+        degrees(&is_owned, tris.clone())
+    } else {
+        (Vec::new(), Vec::new())
+    };
+    // Sized once: growing them copies into fresh pages, tile after tile.
+    if want.needs == Needs::All {
+        out.triangles
+            .reserve(tris.clone().filter(|t| is_owned[low(t)]).count());
+        out.vertices.reserve(n);
+    }
+    if want.mesh {
+        out.degree.reserve(n);
+    }
+    let mut map = vec![u32::MAX; n];
+    let mut add = |i: usize, out: &mut TileOutput| -> u32 {
+        if map[i] == u32::MAX {
+            map[i] = out.vertices.len() as u32;
+            out.vertices.push(vertices[i]);
+            if want.mesh {
+                out.degree
+                    .push(if is_owned[i] { degree[i] } else { NOT_OWNED });
+            }
+        }
+        map[i]
+    };
+    for tri in tris {
+        let l = low(&tri);
+        if is_owned[l] {
+            if want.needs.wants(&tri.map(|i| vertices[i as usize])) {
+                let o = tri.map(|i| add(i as usize, out));
+                out.triangles.push(o);
+            } else {
+                out.skipped += 1;
+            }
+        } else if task.is_some_and(|tk| !tk.owns(&vertices[l])) {
+            let o = tri.map(|i| add(i as usize, out));
+            out.boundary.push(o);
+        }
+    }
+    if want.mesh {
+        for i in 0..n {
+            if is_owned[i] && foreign[i] {
+                add(i, out);
+            }
+        }
+    }
+    out.points_kept = is_owned.iter().filter(|&&o| o).count() as u64;
+}
+
+/// Each vertex's number of triangles, and whether a triangle owned by another tile uses it.
+fn degrees(is_owned: &[bool], tris: impl Iterator<Item = [u32; 3]>) -> (Vec<u32>, Vec<bool>) {
+    let n = is_owned.len();
     let mut degree = vec![0u32; n];
     let mut foreign = vec![false; n];
-    let mut owned_tris = 0;
-    for tri in tris.clone() {
-        let o = is_owned[low(&tri)];
-        owned_tris += usize::from(o);
+    for tri in tris {
+        let o = is_owned[tri[0].min(tri[1]).min(tri[2]) as usize];
         for &i in &tri {
             degree[i as usize] += 1;
             if !o {
@@ -166,34 +231,5 @@ fn collect(
             }
         }
     }
-    // Sized once: growing them copies into fresh pages, tile after tile.
-    out.triangles.reserve(owned_tris);
-    out.vertices.reserve(n);
-    out.degree.reserve(n);
-    let mut map = vec![u32::MAX; n];
-    let mut add = |i: usize, out: &mut TileOutput| -> u32 {
-        if map[i] == u32::MAX {
-            map[i] = out.vertices.len() as u32;
-            out.vertices.push(vertices[i]);
-            out.degree
-                .push(if is_owned[i] { degree[i] } else { NOT_OWNED });
-        }
-        map[i]
-    };
-    for tri in tris {
-        let l = low(&tri);
-        if is_owned[l] {
-            let o = tri.map(|i| add(i as usize, out));
-            out.triangles.push(o);
-        } else if task.is_some_and(|tk| !tk.owns(&vertices[l])) {
-            let o = tri.map(|i| add(i as usize, out));
-            out.boundary.push(o);
-        }
-    }
-    for i in 0..n {
-        if is_owned[i] && foreign[i] {
-            add(i, out);
-        }
-    }
-    out.points_kept = is_owned.iter().filter(|&&o| o).count() as u64;
+    (degree, foreign)
 }

@@ -29,7 +29,7 @@ pub(crate) mod worker;
 
 use crate::error::{Error, Result};
 use crate::input::las::{LidarPoint, LidarReader};
-use crate::sink::{MeshSink, StreamInfo, TriangleSink};
+use crate::sink::{MeshSink, Needs, StreamInfo, TriangleSink};
 use crate::sort::external::ExternalSorter;
 use grid::{TileGrid, pow2, side_for};
 use index::{BlockIndex, BlockRecord};
@@ -603,6 +603,16 @@ pub(crate) fn run(
         (None, None) => None,
     };
     let shares: u64 = sinks.iter().map(|s| s.memory_share()).sum();
+    // The workers keep only the triangles some output wants: a mesh, or `--max-edge` (which
+    // counts what it trims), takes every one.
+    let want = keep::Want {
+        mesh: mesh.is_some(),
+        needs: if mesh.is_some() || trim.is_some() {
+            Needs::All
+        } else {
+            Needs::together(sinks.iter().map(|s| s.needs()))
+        },
+    };
     let mut writer = emit::TileWriter::new(mesh, sinks, trim);
     let mut stats = TileStats {
         tile_size: g.tile,
@@ -624,8 +634,8 @@ pub(crate) fn run(
     let result = std::thread::scope(|scope| -> Result<()> {
         let rx = rx;
         for _ in 0..threads {
-            let (tx, budget, next, stop, order, index) =
-                (tx.clone(), &budget, &next, &stop, &order, &index);
+            let (tx, budget, next, stop, order, index, want) =
+                (tx.clone(), &budget, &next, &stop, &order, &index, &want);
             scope.spawn(move || {
                 while budget.take(budget.run) {
                     if stop.load(Ordering::Relaxed) {
@@ -636,7 +646,7 @@ pub(crate) fn run(
                         break;
                     }
                     let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        worker::run_tile(index, order[i], policy, FIRST_BUFFER, task, lines)
+                        worker::run_tile(index, order[i], policy, FIRST_BUFFER, task, lines, want)
                     }))
                     .unwrap_or_else(|p| Err(Error::panicked("tile worker", &*p)));
                     // The run's memory is free; its output waits to be written.

@@ -47,7 +47,7 @@
 use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
 use super::index::BlockIndex;
-use super::keep::{Owner, from_runs};
+use super::keep::{Owner, Want, from_runs};
 use super::lines::TileLines;
 use super::region::{Region, Tri2, Tris, judge, tri_meets_rect};
 use crate::error::{Error, Result};
@@ -69,8 +69,8 @@ pub(crate) struct TileOutput {
     /// For a task of a plan: the certified triangles that meet this tile but belong to a tile
     /// outside the task (for the grids of the task's own cells).
     pub boundary: Vec<[u32; 3]>,
-    /// For each vertex: its number of triangles in the whole triangulation when this tile owns
-    /// it, else [`NOT_OWNED`].
+    /// For a mesh ([`Want::mesh`]), for each vertex: its number of triangles in the whole
+    /// triangulation when this tile owns it, else [`NOT_OWNED`]. Empty otherwise.
     pub degree: Vec<u32>,
     /// Points read in the owned blocks (after filters).
     pub points_read: u64,
@@ -82,6 +82,8 @@ pub(crate) struct TileOutput {
     pub buffer_blocks: i64,
     /// Points triangulated, all runs together.
     pub loaded_points: u64,
+    /// Owned triangles left out because no product wanted them ([`crate::sink::Needs`]).
+    pub skipped: u64,
     /// CPU time of the tile's stages.
     pub cpu: super::TileCpu,
 }
@@ -97,6 +99,7 @@ pub(crate) fn run_tile(
     buffer: i64,
     task: Option<&BlockRect>,
     lines: Option<&TileLines>,
+    want: &Want,
 ) -> Result<TileOutput> {
     let g = index.grid;
     let owned = g.tile_blocks(tile.0, tile.1);
@@ -292,6 +295,7 @@ pub(crate) fn run_tile(
         from_runs(
             &owner,
             task_owner.as_ref(),
+            want,
             &t,
             &certified,
             &patched,
