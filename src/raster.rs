@@ -468,6 +468,65 @@ fn lattice(cell: f64, kx0: i64, kx1: i64, ky0: i64, ky1: i64) -> Result<(i64, i6
 mod tests {
     use super::*;
 
+    /// `may_hold_centre` against every centre, for both alignments, UTM-sized coordinates,
+    /// cells that are not powers of two, and boxes ending exactly on centres.
+    #[test]
+    fn may_hold_centre_is_exact() {
+        let mut rng = crate::geom::rng::SplitMix64::new(7);
+        for (cell, kx0, ky0) in [
+            (1.0, 511_000, 122_000),
+            (0.3, 1_700_000, 400_000),
+            (2.5, -40, 3),
+        ] {
+            for align in [Align::Centres, Align::Edges] {
+                let g = GridSpec::aligned(cell, kx0, ky0, 20, 20, -9999.0).with_align(align);
+                let (x0, y0) = (g.centre_x(0), g.centre_y(19));
+                for _ in 0..4000 {
+                    let mut p = || {
+                        let snap = rng.below(4) == 0;
+                        let (x, y) = (
+                            x0 + rng.range(-2.0, 22.0) * cell,
+                            y0 + rng.range(-2.0, 22.0) * cell,
+                        );
+                        if snap {
+                            [(x / cell).round() * cell, (y / cell).round() * cell, 0.0]
+                        } else {
+                            [x, y, 0.0]
+                        }
+                    };
+                    let c = [p(), p(), p()];
+                    let t = if rng.below(2) == 0 {
+                        c
+                    } else {
+                        [
+                            c[0],
+                            [c[0][0] + cell * 0.3, c[0][1], 0.0],
+                            [c[0][0], c[0][1] + cell * 0.2, 0.0],
+                        ]
+                    };
+                    let (xs, ys) = (t.map(|v| v[0]), t.map(|v| v[1]));
+                    let fold = |v: [f64; 3], f: fn(f64, f64) -> f64| {
+                        v[1..].iter().fold(v[0], |a, &b| f(a, b))
+                    };
+                    let (xmin, xmax, ymin, ymax) = (
+                        fold(xs, f64::min),
+                        fold(xs, f64::max),
+                        fold(ys, f64::min),
+                        fold(ys, f64::max),
+                    );
+                    let brute = (0..g.rows).any(|r| {
+                        let y = g.centre_y(r);
+                        y >= ymin && y <= ymax
+                    }) && (0..g.cols).any(|c| {
+                        let x = g.centre_x(c);
+                        x >= xmin && x <= xmax
+                    });
+                    assert_eq!(g.may_hold_centre(&t), brute, "{t:?} cell {cell} {align:?}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn aligned_centres_fall_on_multiples() {
         let g = GridSpec::aligned(0.5, 1_541_100, 12_555_101, 100, 100, -9999.0);
