@@ -173,7 +173,7 @@ fn collect(
         (Vec::new(), Vec::new())
     };
     // Sized once: growing them copies into fresh pages, tile after tile.
-    if want.needs == Needs::All {
+    if matches!(want.needs, Needs::All) {
         out.triangles
             .reserve(tris.clone().filter(|t| is_owned[low(t)]).count());
         out.vertices.reserve(n);
