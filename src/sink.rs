@@ -228,7 +228,9 @@ pub trait TriangleSink: Send {
         Ok(())
     }
     /// Which triangles this sink needs, asked after [`TriangleSink::begin`]: a producer may
-    /// leave out the others (a tiled run filters them in its workers). Default: every one.
+    /// leave out the others (a tiled run filters them in its workers), and tells the sink how
+    /// many in [`TriangleSink::skipped`], which a sink that counts triangles must then implement.
+    /// Default: every one.
     fn needs(&self) -> Needs {
         Needs::All
     }
