@@ -14,6 +14,7 @@
 
 use crate::crs::Crs;
 use crate::error::Result;
+use crate::products::contours::ContourLevels;
 use crate::raster::GridSpec;
 use serde::{Serialize, Serializer};
 use std::path::PathBuf;
@@ -162,10 +163,20 @@ pub struct StreamInfo {
 pub enum Needs {
     /// Every triangle.
     All,
-    /// Only triangles whose closed bounding box may hold a cell centre of one of these grids
-    /// ([`GridSpec::may_hold_centre`]); a producer may leave the others out and count them
-    /// ([`TriangleSink::skipped`]).
-    Centres(Vec<GridSpec>),
+    /// Only triangles one of these tests wants; a producer may leave the others out and count
+    /// them ([`TriangleSink::skipped`]).
+    Only(Vec<Need>),
+}
+
+/// One test of [`Needs::Only`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Need {
+    /// Triangles whose closed bounding box may hold a cell centre of this grid (a DEM's:
+    /// [`GridSpec::may_hold_centre`]).
+    Centre(GridSpec),
+    /// Triangles that cross a contour level, or span more levels than the sink accepts (it
+    /// must see those to refuse them): [`ContourLevels::wanted`].
+    Level(ContourLevels),
 }
 
 impl Needs {
@@ -174,23 +185,26 @@ impl Needs {
     pub fn wants(&self, t: &[[f64; 3]; 3]) -> bool {
         match self {
             Needs::All => true,
-            Needs::Centres(grids) => grids.iter().any(|g| g.may_hold_centre(t)),
+            Needs::Only(tests) => tests.iter().any(|n| match n {
+                Need::Centre(g) => g.may_hold_centre(t),
+                Need::Level(l) => l.wanted(t),
+            }),
         }
     }
 
     /// What sinks fed the same triangles need together (every triangle when there are none).
     pub fn together(needs: impl IntoIterator<Item = Needs>) -> Needs {
-        let mut grids = Vec::new();
+        let mut tests = Vec::new();
         for n in needs {
             match n {
                 Needs::All => return Needs::All,
-                Needs::Centres(g) => grids.extend(g),
+                Needs::Only(t) => tests.extend(t),
             }
         }
-        if grids.is_empty() {
+        if tests.is_empty() {
             Needs::All
         } else {
-            Needs::Centres(grids)
+            Needs::Only(tests)
         }
     }
 }
@@ -548,12 +562,15 @@ mod tests {
         let b = GridSpec::aligned(10.0, 0, 0, 2, 2, -9999.0);
         let small = [[0.2, 0.2, 0.0], [0.8, 0.2, 0.0], [0.2, 0.8, 0.0]];
         let on_centre = [[1.0, 1.0, 0.0], [1.5, 1.2, 0.0], [1.2, 1.5, 0.0]];
-        let both = Needs::together([Needs::Centres(vec![a.clone()]), Needs::Centres(vec![b])]);
+        let both = Needs::together([
+            Needs::Only(vec![Need::Centre(a.clone())]),
+            Needs::Only(vec![Need::Centre(b)]),
+        ]);
         assert!(!both.wants(&small));
         assert!(both.wants(&on_centre), "a centre on a vertex (closed box)");
-        assert!(Needs::Centres(vec![a.clone()]).wants(&on_centre));
+        assert!(Needs::Only(vec![Need::Centre(a.clone())]).wants(&on_centre));
         assert_eq!(
-            Needs::together([Needs::Centres(vec![a]), Needs::All]),
+            Needs::together([Needs::Only(vec![Need::Centre(a)]), Needs::All]),
             Needs::All
         );
         assert_eq!(Needs::together([]), Needs::All);

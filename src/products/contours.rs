@@ -33,7 +33,7 @@
 use super::geom::{Tri, cmp_xy};
 use crate::error::{Error, Result};
 use crate::output::geojson::FeatureWriter;
-use crate::sink::{ContourSummary, ProductSummary, StreamInfo, TriangleSink};
+use crate::sink::{ContourSummary, Need, Needs, ProductSummary, StreamInfo, TriangleSink};
 use serde_json::json;
 use std::collections::{HashMap, VecDeque};
 use std::fs::File;
@@ -69,6 +69,49 @@ impl Default for ContourOptions {
 
 /// Most levels one triangle may cross (a guard against a tiny interval).
 const MAX_LEVELS_PER_TRIANGLE: i64 = 1_000_000;
+
+/// The levels of a contour sink: `base + k × interval` ([`level_value`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContourLevels {
+    /// A level through which the others are counted.
+    pub base: f64,
+    /// Distance between levels (> 0).
+    pub interval: f64,
+}
+
+impl ContourLevels {
+    /// The heights of `t`, and the levels `k_lo..=k_hi` it may cross (one more on each side).
+    fn span(&self, t: &[[f64; 3]; 3]) -> (f64, f64, i64, i64) {
+        let zmin = t[0][2].min(t[1][2]).min(t[2][2]);
+        let zmax = t[0][2].max(t[1][2]).max(t[2][2]);
+        let k_lo = ((zmin - self.base) / self.interval).floor() as i64 - 1;
+        let k_hi = ((zmax - self.base) / self.interval).ceil() as i64 + 1;
+        (zmin, zmax, k_lo, k_hi)
+    }
+
+    /// The levels `t` crosses (`zmin < level ≤ zmax`), or `Err` with its heights and its span
+    /// of levels when that is more than [`MAX_LEVELS_PER_TRIANGLE`].
+    fn crossed(
+        &self,
+        t: &[[f64; 3]; 3],
+    ) -> std::result::Result<impl Iterator<Item = i64>, (f64, f64, i64)> {
+        let (zmin, zmax, k_lo, k_hi) = self.span(t);
+        if k_hi - k_lo > MAX_LEVELS_PER_TRIANGLE {
+            return Err((zmin, zmax, k_hi - k_lo));
+        }
+        let levels = *self;
+        Ok((k_lo..=k_hi).filter(move |&k| {
+            let l = level_value(levels.base, levels.interval, k);
+            zmin < l && l <= zmax
+        }))
+    }
+
+    /// Does a contour sink want `t`: does it cross a level, or span too many (an error the sink
+    /// must raise)? The sink's own test, [`ContourLevels::crossed`].
+    pub fn wanted(&self, t: &[[f64; 3]; 3]) -> bool {
+        self.crossed(t).map_or(true, |mut ks| ks.next().is_some())
+    }
+}
 
 /// Level `k` as a number: `base + k × interval`, cleaned of binary noise (`0.30000000000000004`
 /// becomes `0.3`) when that changes it by less than a billionth.
@@ -337,6 +380,13 @@ impl ContourSink {
         level_value(self.options.base, self.options.interval, k)
     }
 
+    fn levels(&self) -> ContourLevels {
+        ContourLevels {
+            base: self.options.base,
+            interval: self.options.interval,
+        }
+    }
+
     /// Writes a finished polyline (ring or open line), dropping repeated points.
     fn emit(&mut self, p: Poly, closed: bool) -> Result<()> {
         let level = self.level(p.k);
@@ -513,26 +563,25 @@ impl TriangleSink for ContourSink {
         let Some(t) = Tri::new(t) else {
             return Ok(());
         };
-        let zmin = t.v[0][2].min(t.v[1][2]).min(t.v[2][2]);
-        let zmax = t.v[0][2].max(t.v[1][2]).max(t.v[2][2]);
-        let (base, interval) = (self.options.base, self.options.interval);
-        let k_lo = ((zmin - base) / interval).floor() as i64 - 1;
-        let k_hi = ((zmax - base) / interval).ceil() as i64 + 1;
-        if k_hi - k_lo > MAX_LEVELS_PER_TRIANGLE {
-            return Err(Error::Options(format!(
-                "{}: a triangle spans {} contour levels (z {zmin} .. {zmax}, --interval \
-                 {interval}): the interval is too small",
+        let levels = self.levels();
+        match levels.crossed(&t.v) {
+            Err((zmin, zmax, span)) => Err(Error::Options(format!(
+                "{}: a triangle spans {span} contour levels (z {zmin} .. {zmax}, --interval \
+                 {}): the interval is too small",
                 self.path.display(),
-                k_hi - k_lo
-            )));
-        }
-        for k in k_lo..=k_hi {
-            let l = self.level(k);
-            if zmin < l && l <= zmax {
-                self.segment(k, &t)?;
+                levels.interval
+            ))),
+            Ok(ks) => {
+                for k in ks {
+                    self.segment(k, &t)?;
+                }
+                Ok(())
             }
         }
-        Ok(())
+    }
+
+    fn needs(&self) -> Needs {
+        Needs::Only(vec![Need::Level(self.levels())])
     }
 
     fn finish(&mut self) -> Result<ProductSummary> {
@@ -637,6 +686,37 @@ mod tests {
             })
             .sum::<f64>()
             / 2.0
+    }
+
+    /// What a tiled run's workers keep for contours: the triangles the sink makes segments of
+    /// (a level in `(zmin, zmax]`), and those it must refuse; no others.
+    #[test]
+    fn wanted_triangles_are_those_that_cross_a_level() {
+        let l = ContourLevels {
+            base: 0.0,
+            interval: 0.5,
+        };
+        let t = |z: [f64; 3]| [[0.0, 0.0, z[0]], [1.0, 0.0, z[1]], [0.0, 1.0, z[2]]];
+        assert!(l.wanted(&t([0.1, 0.4, 0.6])));
+        assert!(!l.wanted(&t([0.1, 0.4, 0.3])));
+        assert!(
+            l.wanted(&t([0.1, 0.5, 0.3])),
+            "a level at the highest vertex"
+        );
+        assert!(
+            !l.wanted(&t([0.5, 0.7, 0.9])),
+            "a level at the lowest vertex only"
+        );
+        assert!(!l.wanted(&t([0.5, 0.5, 0.5])), "flat on a level");
+        let tiny = ContourLevels {
+            base: 0.0,
+            interval: 1e-9,
+        };
+        assert!(
+            tiny.wanted(&t([0.0, 0.0, 0.1])),
+            "too many levels: the sink refuses it"
+        );
+        assert!(tiny.crossed(&t([0.0, 0.0, 0.1])).is_err());
     }
 
     #[test]

@@ -37,7 +37,7 @@ use crate::output::raster::{
     GridWriter, MemoryGrid, RasterFormat, RasterOptions, create_grid_writer,
 };
 use crate::raster::{GridPlan, GridSpec};
-use crate::sink::{DemSummary, Needs, ProductSummary, StreamInfo, TriangleSink};
+use crate::sink::{DemSummary, Need, Needs, ProductSummary, StreamInfo, TriangleSink};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 
@@ -360,7 +360,7 @@ impl TriangleSink for DemSink {
 
     fn needs(&self) -> Needs {
         match &self.raster {
-            Some(r) => Needs::Centres(vec![r.spec.clone()]),
+            Some(r) => Needs::Only(vec![Need::Centre(r.spec.clone())]),
             None => Needs::All,
         }
     }

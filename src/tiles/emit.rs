@@ -2,9 +2,9 @@
 //!
 //! Terrain products get each owned triangle with its coordinates, and a watermark when a row of
 //! tiles is complete (later triangles are owned by higher rows, so they lie above it). Triangles
-//! no product wants (a DEM's that hold no cell centre, [`crate::sink::Needs`]: about 24 in 25 at
-//! 1 m cells on dense lidar) were left out by the workers and are only counted
-//! ([`crate::sink::TriangleSink::skipped`]). A mesh
+//! no product wants ([`crate::sink::Needs`]: a DEM's that hold no cell centre, about 24 in 25 at
+//! 1 m cells on dense lidar; contours' that cross no level) were left out by the workers and are
+//! only counted ([`crate::sink::TriangleSink::skipped`]). A mesh
 //! writer gets numbered vertices: a vertex is numbered when a triangle first uses it, and its
 //! entry is dropped (`vertex_done`) when all its triangles have been written; its degree comes
 //! from the tile that owns it, whose run holds its whole star. Only vertices with some but not
