@@ -14,10 +14,9 @@
 
 use crate::crs::Crs;
 use crate::error::Result;
-use crate::products::contours::ContourLevels;
-use crate::raster::GridSpec;
 use serde::{Serialize, Serializer};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// A streaming mesh writer.
 ///
@@ -159,24 +158,20 @@ pub struct StreamInfo {
 }
 
 /// Which triangles a [`TriangleSink`] needs ([`TriangleSink::needs`]).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub enum Needs {
     /// Every triangle.
     All,
     /// Only triangles one of these tests wants; a producer may leave the others out and count
     /// them ([`TriangleSink::skipped`]).
-    Only(Vec<Need>),
+    Only(Vec<Arc<dyn Wants>>),
 }
 
-/// One test of [`Needs::Only`].
-#[derive(Clone, Debug, PartialEq)]
-pub enum Need {
-    /// Triangles whose closed bounding box may hold a cell centre of this grid (a DEM's:
-    /// [`GridSpec::may_hold_centre`]).
-    Centre(GridSpec),
-    /// Triangles that cross a contour level, or span more levels than the sink accepts (it
-    /// must see those to refuse them): [`ContourLevels::wanted`].
-    Level(ContourLevels),
+/// A test of [`Needs::Only`], implemented by the products (a DEM: triangles whose closed box
+/// may hold one of its cell centres; contours: triangles that cross a level).
+pub trait Wants: Send + Sync + std::fmt::Debug {
+    /// Does the sink want triangle `t`? `false` only for triangles it would ignore.
+    fn wants(&self, t: &[[f64; 3]; 3]) -> bool;
 }
 
 impl Needs {
@@ -185,10 +180,7 @@ impl Needs {
     pub fn wants(&self, t: &[[f64; 3]; 3]) -> bool {
         match self {
             Needs::All => true,
-            Needs::Only(tests) => tests.iter().any(|n| match n {
-                Need::Centre(g) => g.may_hold_centre(t),
-                Need::Level(l) => l.wanted(t),
-            }),
+            Needs::Only(tests) => tests.iter().any(|w| w.wants(t)),
         }
     }
 
@@ -555,26 +547,30 @@ mod tests {
     use super::*;
     use std::sync::{Arc, Mutex};
 
+    /// Wants triangles with a vertex above a height.
+    #[derive(Debug)]
+    struct Above(f64);
+
+    impl Wants for Above {
+        fn wants(&self, t: &[[f64; 3]; 3]) -> bool {
+            t.iter().any(|v| v[2] > self.0)
+        }
+    }
+
     #[test]
     fn needs_together_want_what_any_sink_wants() {
-        // Centres on multiples of 1 (and of 10 for the second grid).
-        let a = GridSpec::aligned(1.0, 0, 0, 10, 10, -9999.0);
-        let b = GridSpec::aligned(10.0, 0, 0, 2, 2, -9999.0);
-        let small = [[0.2, 0.2, 0.0], [0.8, 0.2, 0.0], [0.2, 0.8, 0.0]];
-        let on_centre = [[1.0, 1.0, 0.0], [1.5, 1.2, 0.0], [1.2, 1.5, 0.0]];
-        let both = Needs::together([
-            Needs::Only(vec![Need::Centre(a.clone())]),
-            Needs::Only(vec![Need::Centre(b)]),
-        ]);
-        assert!(!both.wants(&small));
-        assert!(both.wants(&on_centre), "a centre on a vertex (closed box)");
-        assert!(Needs::Only(vec![Need::Centre(a.clone())]).wants(&on_centre));
-        assert_eq!(
-            Needs::together([Needs::Only(vec![Need::Centre(a)]), Needs::All]),
+        let t = |z: f64| [[0.0, 0.0, z], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let only = |h: f64| Needs::Only(vec![Arc::new(Above(h))]);
+        let both = Needs::together([only(5.0), only(10.0)]);
+        assert!(!both.wants(&t(1.0)));
+        assert!(both.wants(&t(6.0)), "the first sink wants it");
+        assert!(!only(10.0).wants(&t(6.0)));
+        assert!(matches!(
+            Needs::together([only(5.0), Needs::All]),
             Needs::All
-        );
-        assert_eq!(Needs::together([]), Needs::All);
-        assert!(Needs::All.wants(&small));
+        ));
+        assert!(matches!(Needs::together([]), Needs::All));
+        assert!(Needs::All.wants(&t(1.0)));
     }
 
     /// What a probe was given: CRS, triangles, watermarks.

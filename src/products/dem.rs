@@ -37,9 +37,10 @@ use crate::output::raster::{
     GridWriter, MemoryGrid, RasterFormat, RasterOptions, create_grid_writer,
 };
 use crate::raster::{GridPlan, GridSpec};
-use crate::sink::{DemSummary, Need, Needs, ProductSummary, StreamInfo, TriangleSink};
+use crate::sink::{DemSummary, Needs, ProductSummary, StreamInfo, TriangleSink, Wants};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Late cells queued before they are applied to the file (16 bytes each).
 pub const LATE_BATCH: usize = 1 << 16;
@@ -66,6 +67,17 @@ impl Default for DemOptions {
             output: RasterOptions::default(),
             memory: 256 << 20,
         }
+    }
+}
+
+/// What a DEM needs: the triangles whose closed box may hold one of its cell centres (the
+/// others hold none, [`GridSpec::may_hold_centre`]).
+#[derive(Debug)]
+struct Centres(GridSpec);
+
+impl Wants for Centres {
+    fn wants(&self, t: &[[f64; 3]; 3]) -> bool {
+        self.0.may_hold_centre(t)
     }
 }
 
@@ -360,7 +372,7 @@ impl TriangleSink for DemSink {
 
     fn needs(&self) -> Needs {
         match &self.raster {
-            Some(r) => Needs::Only(vec![Need::Centre(r.spec.clone())]),
+            Some(r) => Needs::Only(vec![Arc::new(Centres(r.spec.clone()))]),
             None => Needs::All,
         }
     }
