@@ -109,7 +109,7 @@ impl ContourLevels {
 }
 
 /// What a contour sink needs: the triangles that cross a level, or span too many (an error the
-/// sink must raise). The sink's own test, [`ContourLevels::crossed`].
+/// sink must raise). The sink's own test (`ContourLevels::crossed`).
 impl Wants for ContourLevels {
     fn wants(&self, t: &[[f64; 3]; 3]) -> bool {
         self.crossed(t).map_or(true, |mut ks| ks.next().is_some())
