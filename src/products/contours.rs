@@ -110,8 +110,24 @@ impl ContourLevels {
 
 /// What a contour sink needs: the triangles that cross a level, or span too many (an error the
 /// sink must raise). The sink's own test (`ContourLevels::crossed`).
+///
+/// Most triangles of dense lidar lie between two levels: a quick test rejects them without the
+/// levels' rounding. A level `L` of index `k` is within `E = 4e-9 · max(|z|, |base|, 1)` of
+/// `base + k × interval` (`level_value` cleans it by at most `1e-9 · max(|L|, 1)`; the floating
+/// sums err by far less), so a level in `(zmin, zmax]` has `k` in `[a, b]`, with
+/// `a = (zmin − base − E) / interval` and `b = (zmax − base + E) / interval` (their own rounding
+/// is below `1e-15` of the magnitudes, far inside `E`): with no integer in `[a, b]` there is no
+/// such level.
 impl Wants for ContourLevels {
     fn wants(&self, t: &[[f64; 3]; 3]) -> bool {
+        let zmin = t[0][2].min(t[1][2]).min(t[2][2]);
+        let zmax = t[0][2].max(t[1][2]).max(t[2][2]);
+        let e = 4e-9 * zmin.abs().max(zmax.abs()).max(self.base.abs()).max(1.0);
+        let a = (zmin - self.base - e) / self.interval;
+        let b = (zmax - self.base + e) / self.interval;
+        if a.is_finite() && b.is_finite() && b.floor() < a.ceil() {
+            return false;
+        }
         self.crossed(t).map_or(true, |mut ks| ks.next().is_some())
     }
 }

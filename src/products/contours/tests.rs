@@ -213,3 +213,45 @@ fn order_and_spilling_do_not_change_the_result() {
     assert_eq!(a, b);
     assert_eq!(a, c);
 }
+
+/// The quick rejection never drops a triangle the sink would use: against the sink's own test,
+/// on levels exactly at vertices, binary-unfriendly intervals, high and negative heights.
+#[test]
+fn quick_rejection_keeps_every_crossing_triangle() {
+    let mut rng = crate::geom::rng::SplitMix64::new(11);
+    for (base, interval) in [
+        (0.0, 1.0),
+        (0.0, 0.1),
+        (0.05, 0.25),
+        (100.0, 1.0 / 3.0),
+        (-7.0, 1e-3),
+    ] {
+        let l = ContourLevels { base, interval };
+        for centre in [0.0, 812.3, 4807.9, -31.7] {
+            let (mut kept, mut crossing) = (0, 0);
+            for _ in 0..20_000 {
+                let mut z = || {
+                    let v = centre + rng.range(-2.0, 2.0) * interval;
+                    if rng.below(3) == 0 {
+                        // Exactly on a level.
+                        level_value(base, interval, ((v - base) / interval).round() as i64)
+                    } else {
+                        v
+                    }
+                };
+                let t = [[0.0, 0.0, z()], [1.0, 0.0, z()], [0.0, 1.0, z()]];
+                let exact = l.crossed(&t).map_or(true, |mut ks| ks.next().is_some());
+                assert!(
+                    !exact || l.wants(&t),
+                    "{t:?} base {base} interval {interval}"
+                );
+                kept += usize::from(l.wants(&t));
+                crossing += usize::from(exact);
+            }
+            assert!(
+                kept <= crossing + crossing / 20 + 50,
+                "the quick test rejects too little"
+            );
+        }
+    }
+}
