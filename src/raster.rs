@@ -188,14 +188,7 @@ impl GridSpec {
     /// does (exact comparisons with the centres' coordinates): most triangles of dense lidar hold
     /// no centre, and a DEM skips them before any exact test.
     pub fn may_hold_centre(&self, t: &[[f64; 3]; 3]) -> bool {
-        let (xmin, xmax) = (
-            t[0][0].min(t[1][0]).min(t[2][0]),
-            t[0][0].max(t[1][0]).max(t[2][0]),
-        );
-        let (ymin, ymax) = (
-            t[0][1].min(t[1][1]).min(t[2][1]),
-            t[0][1].max(t[1][1]).max(t[2][1]),
-        );
+        let [xmin, ymin, xmax, ymax] = crate::geom::tri_bbox(t);
         if !self.rows_over(ymin, ymax).any(|row| {
             let y = self.centre_y(row);
             y >= ymin && y <= ymax

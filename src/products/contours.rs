@@ -80,11 +80,18 @@ pub struct ContourLevels {
     pub interval: f64,
 }
 
+/// The least and greatest height of a triangle's vertices.
+fn heights(t: &[[f64; 3]; 3]) -> (f64, f64) {
+    (
+        t[0][2].min(t[1][2]).min(t[2][2]),
+        t[0][2].max(t[1][2]).max(t[2][2]),
+    )
+}
+
 impl ContourLevels {
     /// The heights of `t`, and the levels `k_lo..=k_hi` it may cross (one more on each side).
     fn span(&self, t: &[[f64; 3]; 3]) -> (f64, f64, i64, i64) {
-        let zmin = t[0][2].min(t[1][2]).min(t[2][2]);
-        let zmax = t[0][2].max(t[1][2]).max(t[2][2]);
+        let (zmin, zmax) = heights(t);
         let k_lo = ((zmin - self.base) / self.interval).floor() as i64 - 1;
         let k_hi = ((zmax - self.base) / self.interval).ceil() as i64 + 1;
         (zmin, zmax, k_lo, k_hi)
@@ -120,8 +127,7 @@ impl ContourLevels {
 /// such level.
 impl Wants for ContourLevels {
     fn wants(&self, t: &[[f64; 3]; 3]) -> bool {
-        let zmin = t[0][2].min(t[1][2]).min(t[2][2]);
-        let zmax = t[0][2].max(t[1][2]).max(t[2][2]);
+        let (zmin, zmax) = heights(t);
         let e = 4e-9 * zmin.abs().max(zmax.abs()).max(self.base.abs()).max(1.0);
         let a = (zmin - self.base - e) / self.interval;
         let b = (zmax - self.base + e) / self.interval;

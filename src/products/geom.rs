@@ -83,13 +83,7 @@ impl Tri {
 
     /// `[xmin, ymin, xmax, ymax]`.
     pub fn bbox(&self) -> [f64; 4] {
-        let [a, b, c] = &self.v;
-        [
-            a[0].min(b[0]).min(c[0]),
-            a[1].min(b[1]).min(c[1]),
-            a[0].max(b[0]).max(c[0]),
-            a[1].max(b[1]).max(c[1]),
-        ]
+        crate::geom::tri_bbox(&self.v)
     }
 
     /// Exact location of `p`.

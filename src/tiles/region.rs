@@ -15,15 +15,7 @@ pub(crate) type Tri2 = [[f64; 2]; 3];
 
 /// The bounding box `[xmin, ymin, xmax, ymax]` of a triangle.
 pub(crate) fn bbox(t: &Tri2) -> [f64; 4] {
-    let (x0, x1) = (
-        t[0][0].min(t[1][0]).min(t[2][0]),
-        t[0][0].max(t[1][0]).max(t[2][0]),
-    );
-    let (y0, y1) = (
-        t[0][1].min(t[1][1]).min(t[2][1]),
-        t[0][1].max(t[1][1]).max(t[2][1]),
-    );
-    [x0, y0, x1, y1]
+    crate::geom::tri_bbox(t)
 }
 
 fn overlap(a: &[f64; 4], b: &[f64; 4]) -> bool {
