@@ -196,7 +196,10 @@ fn collect(
     for tri in tris {
         let l = low(&tri);
         if is_owned[l] {
-            if want.needs.wants(&tri.map(|i| vertices[i as usize])) {
+            // (Without a filter, no coordinates are gathered.)
+            if matches!(want.needs, Needs::All)
+                || want.needs.wants(&tri.map(|i| vertices[i as usize]))
+            {
                 let o = tri.map(|i| add(i as usize, out));
                 out.triangles.push(o);
             } else {
