@@ -3,20 +3,24 @@
 # and the single sweep (--engine sweep) side by side in one run, under /usr/bin/time -v, with
 # --mem 128M, on the real 13.2M-point ARSO tile; optionally on a generated 100M-point LAZ.
 # Prints a Markdown table: wall, user CPU, peak RSS, points/s, and the tiles' re-runs and buffer.
+# With --whitebox BIN, WhiteboxTools' LidarTINGridding (a TIN-gridded 1 m DEM, the nearest peer
+# that builds here; lasR and PDAL do not install) runs on the same file in the same table, all
+# points and ground only. Build it outside this repository (docs/BENCHMARKS.md says how).
 #
 # The 100M row runs with --big-mem (default 256M, the issue's bound for it): at 128M its block
 # table leaves room for one tile's run at a time, so its tiles run one after the other.
 #
-#   scripts/bench-tiles.sh [--big] [--mem 128M] [--big-mem 256M] [--out DIR]
+#   scripts/bench-tiles.sh [--big] [--mem 128M] [--big-mem 256M] [--out DIR] [--whitebox BIN]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-MEM=128M; BIG_MEM=256M; OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench}; BIG=0
+MEM=128M; BIG_MEM=256M; OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench}; BIG=0; WBT=""
 while [ $# -gt 0 ]; do
     case "$1" in
         --big) BIG=1; shift;;
         --mem) MEM=$2; shift 2;;
         --big-mem) BIG_MEM=$2; shift 2;;
         --out) OUT=$2; shift 2;;
+        --whitebox) WBT=$2; shift 2;;
         *) echo "unknown option $1" >&2; exit 2;;
     esac
 done
@@ -71,6 +75,15 @@ if [ -f "$ARSO" ]; then
     row "ARSO tin → PLY, --threads 2" $N "$BIN" tin "$ARSO" -o "$OUT/a.ply" --mem "$MEM" --engine tiles --json
     row "ARSO tin → PLY, --engine sweep" $N "$BIN" tin "$ARSO" -o "$OUT/s.ply" --mem "$MEM" --engine sweep --json
     rm -f "$OUT"/a.ply "$OUT"/s.ply
+    if [ -n "$WBT" ]; then
+        # Its grid starts at the file's minimum x and maximum y (not snapped), 1001 × 1001 cells.
+        # Withheld points are skipped; classes 7 and 18 are not (the tool's code, not its help).
+        row "WhiteboxTools LidarTINGridding 1 m (all)" $N "$WBT" -r=LidarTINGridding -i="$(realpath "$ARSO")" \
+            -o="$(realpath "$OUT")/wbt.tif" --parameter=elevation --returns=all --resolution=1.0 -v=false
+        row "WhiteboxTools LidarTINGridding 1 m (ground)" $N "$WBT" -r=LidarTINGridding -i="$(realpath "$ARSO")" \
+            -o="$(realpath "$OUT")/wbt_ground.tif" --parameter=elevation --returns=all --resolution=1.0 \
+            --exclude_cls='0,1,3-18' -v=false
+    fi
 fi
 if [ "$BIG" = 1 ]; then
     f="$OUT/lidar-100M.laz"
