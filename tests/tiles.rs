@@ -290,3 +290,72 @@ fn a_dem_only_run_counts_the_triangles_it_leaves_out() {
     assert_eq!(runs[0].1, runs[1].1, "DEM triangles");
     assert!(runs[0].2 == runs[1].2, "the DEM is not the sweep's");
 }
+
+/// Heights at query points (sorted by `y`, answered lazily), profiles along lines and volumes
+/// are the sweep's, byte for byte, whatever the thread count: the products that need every
+/// triangle get them in the tiles' order, which is not the sweep's.
+#[test]
+fn sample_profile_and_volume_are_the_sweeps() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
+    let topo = shared("lidar/lidR_Topography.laz");
+    let topo = topo.to_str().unwrap();
+    // The file's extent: x 273357.1 .. 273642.9, y 5274357.1 .. 5274642.8.
+    let (x0, y0, x1, y1) = (273357.0, 5274357.0, 273643.0, 5274643.0);
+    let mut queries = String::from("x,y\n");
+    for j in 0..=143 {
+        for i in 0..=143 {
+            queries.push_str(&format!(
+                "{},{}\n",
+                x0 + 2.0 * i as f64,
+                y0 + 2.0 * j as f64
+            ));
+        }
+    }
+    std::fs::write(d("q.csv"), queries).unwrap();
+    let mut lines = String::from(r#"{"type":"FeatureCollection","features":["#);
+    for k in 0..20 {
+        let kx = x0 + 13.0 * k as f64;
+        lines.push_str(&format!(
+            r#"{}{{"type":"Feature","properties":{{}},"geometry":{{"type":"LineString","coordinates":[[{kx},{y0}],[{},{y1}],[{x1},{}]]}}}}"#,
+            if k > 0 { "," } else { "" },
+            kx + 150.0,
+            y0 + 11.0 * k as f64
+        ));
+    }
+    lines.push_str("]}");
+    std::fs::write(d("l.geojson"), lines).unwrap();
+    let mut outs = Vec::new();
+    for (k, engine) in [["tiles", "1"], ["tiles", "2"], ["sweep", "1"]]
+        .iter()
+        .enumerate()
+    {
+        let (s, p) = (d(&format!("s{k}.csv")), d(&format!("p{k}.csv")));
+        let common = ["--engine", engine[0], "--threads", engine[1], "-q"];
+        let q = d("q.csv");
+        cli(&[&["sample", topo, "--points", &q, "-o", &s][..], &common].concat());
+        let l = d("l.geojson");
+        cli(&[&["profile", topo, "--line", &l, "-o", &p][..], &common].concat());
+        let v = cli(&[&["volume", topo, "--plane", "800", "--json"][..], &common].concat());
+        let v: serde_json::Value = serde_json::from_slice(&v.stdout).unwrap();
+        outs.push((
+            std::fs::read(&s).unwrap(),
+            std::fs::read(&p).unwrap(),
+            [
+                "cut_volume",
+                "fill_volume",
+                "cut_area",
+                "fill_area",
+                "triangles",
+            ]
+            .map(|f| v[f].to_string()),
+        ));
+    }
+    assert!(outs[0].0.len() > 100_000 && outs[0].1.len() > 100_000);
+    assert!(outs[0].2.iter().all(|f| f != "null"), "{:?}", outs[0].2);
+    for o in &outs[1..] {
+        assert!(o.0 == outs[0].0, "sample differs");
+        assert!(o.1 == outs[0].1, "profile differs");
+        assert_eq!(o.2, outs[0].2, "volumes differ");
+    }
+}
