@@ -12,6 +12,12 @@
 //!    box meets it is paired with it, and bands below the surface's watermark are dropped. A late
 //!    triangle simply loads its bands again.
 //!
+//! A surface triangle that meets more than [`TALL_BANDS`] bands (a long thin triangle along the
+//! hull, which a tiled run delivers with its first tiles, or a triangle across a lake) would load
+//! most of the reference at once: it waits instead, and the waiting triangles meet the reference
+//! at the end, one band in memory at a time (or sooner, when [`MAX_TALL`] wait). A pair met in
+//! several bands or columns is counted in the first band and column both meet.
+//!
 //! For a pair, the surface triangle is clipped to the reference triangle (both convex), then to
 //! the boundary, and the difference `d = z_surface − z_reference`, linear on each piece, is split
 //! at `d = 0` and integrated exactly as for a plane ([`CutFill`]). Each pair is met exactly once
@@ -35,6 +41,10 @@ use std::path::{Path, PathBuf};
 const RECORD: usize = 80;
 /// Triangles buffered per band before a chunk is written.
 const CHUNK: usize = 4096;
+/// A surface triangle meeting more bands than this waits for one pass over the bands.
+pub(crate) const TALL_BANDS: usize = 16;
+/// Most surface triangles waiting (about 5 MB).
+const MAX_TALL: usize = 1 << 16;
 
 /// The layout of the bands: `count` bands of height `h` from `y0`.
 #[derive(Clone, Copy, Debug)]
@@ -277,6 +287,9 @@ pub struct OverlaySink {
     max_loaded: usize,
     candidates: Vec<(u64, usize, u32)>,
     scratch: (Vec<PV>, Vec<PV>),
+    /// Surface triangles meeting more than `tall_bands` bands, waiting for a pass over the bands.
+    tall: Vec<Tri>,
+    tall_bands: usize,
 }
 
 impl OverlaySink {
@@ -293,7 +306,68 @@ impl OverlaySink {
             max_loaded: 0,
             candidates: Vec::new(),
             scratch: (Vec::new(), Vec::new()),
+            tall: Vec::new(),
+            tall_bands: TALL_BANDS,
         }
+    }
+
+    /// Pairs the waiting tall triangles with the reference, band by band: a band already in
+    /// memory is used, any other is loaded for the pass and dropped. A pair is counted in the
+    /// first band and column where both triangles are filed.
+    fn pass_over_bands(&mut self) -> Result<()> {
+        let tall = std::mem::take(&mut self.tall);
+        let bands = self.reference.bands;
+        let span: Vec<(usize, usize)> = tall
+            .iter()
+            .map(|a| {
+                let bb = a.bbox();
+                (bands.of(bb[1]), bands.of(bb[3]))
+            })
+            .collect();
+        let (Some(lo), Some(hi)) = (
+            span.iter().map(|s| s.0).min(),
+            span.iter().map(|s| s.1).max(),
+        ) else {
+            return Ok(());
+        };
+        let mut others: Vec<(usize, Tri)> = Vec::new();
+        for b in lo..=hi {
+            let users = (0..tall.len()).filter(|&k| span[k].0 <= b && b <= span[k].1);
+            let mut users = users.peekable();
+            if users.peek().is_none() {
+                continue;
+            }
+            let temp;
+            let l = match self.loaded.get(&b) {
+                Some(l) => l,
+                None => {
+                    temp = self.reference.load(b)?;
+                    self.band_loads += 1;
+                    &temp
+                }
+            };
+            others.clear();
+            for k in users {
+                let bb = tall[k].bbox();
+                let c0 = l.column(bb[0]);
+                for c in c0..=l.column(bb[2]) {
+                    for &i in &l.cells[c] {
+                        let t = &l.tris[i as usize].1;
+                        let tb = t.bbox();
+                        if overlaps(&bb, &tb)
+                            && b == span[k].0.max(bands.of(tb[1]))
+                            && c == c0.max(l.column(tb[0]))
+                        {
+                            others.push((k, *t));
+                        }
+                    }
+                }
+            }
+            for &(k, t) in &others {
+                self.pair(&tall[k], &t);
+            }
+        }
+        Ok(())
     }
 
     /// The totals so far.
@@ -349,6 +423,13 @@ impl TriangleSink for OverlaySink {
         let bb = a.bbox();
         let bands = self.reference.bands;
         let (b0, b1) = (bands.of(bb[1]), bands.of(bb[3]));
+        if b1 - b0 >= self.tall_bands {
+            if self.tall.len() == MAX_TALL {
+                self.pass_over_bands()?;
+            }
+            self.tall.push(a);
+            return Ok(());
+        }
         self.candidates.clear();
         for b in b0..=b1 {
             if !self.loaded.contains_key(&b) {
@@ -385,6 +466,7 @@ impl TriangleSink for OverlaySink {
     }
 
     fn finish(&mut self) -> Result<ProductSummary> {
+        self.pass_over_bands()?;
         Ok(ProductSummary::Volume(VolumeSummary {
             partials: None,
             totals: self.acc.totals(),
@@ -422,6 +504,35 @@ mod tests {
         let mut sink = OverlaySink::new(store.into_reader().unwrap(), None);
         feed(&mut sink, &info(), surface);
         sink
+    }
+
+    /// Triangles that wait for a pass over the bands (all but the smallest, with a threshold of
+    /// one band) give exactly the totals of pairing each one as it comes (the sums are exact):
+    /// each pair counted once, in sweep order and shuffled.
+    #[test]
+    fn waiting_tall_triangles_give_the_same_totals() {
+        let a = random_tin(900, 100.0, 3, |x, y| 15.0 * (x / 7.0).sin() - y / 9.0);
+        let b = random_tin(800, 100.0, 4, |x, y| 10.0 * (x / 11.0).cos() + 0.1 * y);
+        let run = |tall_bands: usize, shuffled: bool| {
+            let dir = tempfile::tempdir().unwrap();
+            let mut store = BandStore::new(dir.path(), 64);
+            feed(&mut store, &info(), &in_sweep_order(&b));
+            let mut sink = OverlaySink::new(store.into_reader().unwrap(), None);
+            sink.tall_bands = tall_bands;
+            let steps = if shuffled {
+                shuffled_with_watermarks(&a, 9)
+            } else {
+                in_sweep_order(&a)
+            };
+            feed(&mut sink, &info(), &steps);
+            (format!("{:?}", sink.totals()), sink.pairs, sink.max_loaded)
+        };
+        let want = run(usize::MAX, false);
+        for shuffled in [false, true] {
+            let got = run(1, shuffled);
+            assert_eq!((&got.0, got.1), (&want.0, want.1));
+            assert!(got.2 <= want.2);
+        }
     }
 
     /// Two different TINs of planes: the difference is the exact difference of the planes, and
