@@ -16,17 +16,18 @@
 //! lazily: a query is loaded once the *level* (the highest top of the triangles seen, rounded up
 //! to a row of buckets) reaches its `y`, and forgotten as soon as a triangle answers it. A *tall*
 //! triangle (more than [`TALL_BUCKETS`] buckets from its bottom to its top) does not raise the
-//! level: it is kept aside and meets the queries as later triangles load them. A tiled run delivers its triangles by rows of tiles, and the long thin triangles
-//! along the data's hull that its first tiles own reach the top of the data: raising the level to
-//! their tops loaded almost every query at once (ARSO, a million queries on a 1 m lattice: 0.70 M
-//! held, 259 MB at `--mem 128M`; kept aside: see `docs/BENCHMARKS.md`). At most
-//! [`MAX_DEFERRED`] triangles wait; beyond that a tall triangle raises the level as any other.
-//! Queries outside the bounds of the input
-//! points are answered "outside" at once. Loaded queries that no triangle has answered yet stay
-//! until the end (a late triangle may still answer them), so memory is bounded by the queries near
-//! the level plus those outside the TIN but inside its bounding box. Unsorted queries are all
-//! loaded at the start (memory proportional to their number). Answers go to an anonymous scratch
-//! file (8 bytes per query) and the output is written at the end in the queries' order.
+//! level: it is kept aside and meets the queries as later triangles load them. A tiled run
+//! delivers its triangles by rows of tiles, and the long thin triangles along the data's hull that
+//! its first tiles own reach the top of the data: raising the level to their tops loaded almost
+//! every query at once (ARSO, a million queries on a 1 m lattice: 0.70 M held, 259 MB at
+//! `--mem 128M`; kept aside: see `docs/BENCHMARKS.md`). At most [`MAX_DEFERRED`] triangles wait;
+//! beyond that a tall triangle raises the level as any other. Queries outside the bounds of the
+//! input points are answered "outside" at once. Loaded queries that no triangle has answered yet
+//! stay until the end (a late triangle may still answer them), so memory is bounded by the
+//! queries near the level plus those outside the TIN but inside its bounding box. Unsorted
+//! queries are all loaded at the start (memory proportional to their number). Answers go to an
+//! anonymous scratch file (8 bytes per query, written in batches) and the output is written at
+//! the end in the queries' order.
 //!
 //! The queries are read three times (checked, loaded, copied to the output): queries from a pipe
 //! or a device (`/dev/stdin`, `<(…)`) are first copied, once, to a temporary file.
