@@ -12,10 +12,10 @@
 //!    box meets it is paired with it, and bands below the surface's watermark are dropped. A late
 //!    triangle simply loads its bands again.
 //!
-//! A surface triangle that meets more than [`TALL_BANDS`] bands (a long thin triangle along the
+//! A surface triangle that meets more than 16 bands (`TALL_BANDS`: a long thin triangle along the
 //! hull, which a tiled run delivers with its first tiles, or a triangle across a lake) would load
 //! most of the reference at once: it waits instead, and the waiting triangles meet the reference
-//! at the end, one band in memory at a time (or sooner, when [`MAX_TALL`] wait). A pair met in
+//! at the end, one band in memory at a time (or sooner, when 65,536 wait). A pair met in
 //! several bands or columns is counted in the first band and column both meet.
 //!
 //! For a pair, the surface triangle is clipped to the reference triangle (both convex), then to

@@ -15,12 +15,12 @@
 //! When the queries are sorted by `y` (checked in a first pass over the file), they are read
 //! lazily: a query is loaded once the *level* (the highest top of the triangles seen, rounded up
 //! to a row of buckets) reaches its `y`, and forgotten as soon as a triangle answers it. A *tall*
-//! triangle (more than [`TALL_BUCKETS`] buckets from its bottom to its top) does not raise the
+//! triangle (more than 16 buckets (`TALL_BUCKETS`) from its bottom to its top) does not raise the
 //! level: it is kept aside and meets the queries as later triangles load them. A tiled run
 //! delivers its triangles by rows of tiles, and the long thin triangles along the data's hull that
 //! its first tiles own reach the top of the data: raising the level to their tops loaded almost
 //! every query at once (ARSO, a million queries on a 1 m lattice: 0.70 M held, 259 MB at
-//! `--mem 128M`; kept aside: see `docs/BENCHMARKS.md`). At most [`MAX_DEFERRED`] triangles wait;
+//! `--mem 128M`; kept aside: see `docs/BENCHMARKS.md`). At most 65,536 triangles wait;
 //! beyond that a tall triangle raises the level as any other. Queries outside the bounds of the
 //! input points are answered "outside" at once. Loaded queries that no triangle has answered yet
 //! stay until the end (a late triangle may still answer them), so memory is bounded by the
