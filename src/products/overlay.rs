@@ -9,13 +9,14 @@
 //!    (or the buffer fills). Memory: the buffers of the bands between the watermark and the front.
 //! 2. The **surface** is then streamed into an [`OverlaySink`]. For each of its triangles the
 //!    bands it meets are loaded (and indexed by a grid of columns), every reference triangle whose
-//!    box meets it is paired with it, and bands below the surface's watermark are dropped. A late
-//!    triangle simply loads its bands again.
+//!    box meets it is paired with it, and bands below the surface's watermark are dropped.
 //!
-//! A surface triangle that meets more than 16 bands (`TALL_BANDS`: a long thin triangle along the
+//! A surface triangle that meets more than 16 bands (`TALL_BANDS`; a long thin triangle along the
 //! hull, which a tiled run delivers with its first tiles, or a triangle across a lake) would load
-//! most of the reference at once: it waits instead, and the waiting triangles meet the reference
-//! at the end, one band in memory at a time (or sooner, when 65,536 wait). A pair met in
+//! most of the reference at once, and so would the late triangles a sweep gives at its end, all
+//! along the hull: a tall or late triangle (one meeting a band dropped at a watermark) waits
+//! instead, and the waiting triangles meet the reference at the end, one band in memory at a
+//! time (or sooner, when 65,536 wait). A pair met in
 //! several bands or columns is counted in the first band and column both meet.
 //!
 //! For a pair, the surface triangle is clipped to the reference triangle (both convex), then to
@@ -290,6 +291,8 @@ pub struct OverlaySink {
     /// Surface triangles meeting more than `tall_bands` bands, waiting for a pass over the bands.
     tall: Vec<Tri>,
     tall_bands: usize,
+    /// The highest watermark seen: bands below it were dropped.
+    watermark: f64,
 }
 
 impl OverlaySink {
@@ -308,6 +311,7 @@ impl OverlaySink {
             scratch: (Vec::new(), Vec::new()),
             tall: Vec::new(),
             tall_bands: TALL_BANDS,
+            watermark: f64::NEG_INFINITY,
         }
     }
 
@@ -423,7 +427,9 @@ impl TriangleSink for OverlaySink {
         let bb = a.bbox();
         let bands = self.reference.bands;
         let (b0, b1) = (bands.of(bb[1]), bands.of(bb[3]));
-        if b1 - b0 >= self.tall_bands {
+        // A late triangle (some of its bands were dropped at a watermark) waits too: the sweep
+        // gives the hull's triangles late, all along the data, and they reloaded every band.
+        if b1 - b0 >= self.tall_bands || bands.top(b0) < self.watermark {
             if self.tall.len() == MAX_TALL {
                 self.pass_over_bands()?;
             }
@@ -461,6 +467,7 @@ impl TriangleSink for OverlaySink {
 
     fn watermark(&mut self, y: f64) -> Result<()> {
         let bands = self.reference.bands;
+        self.watermark = self.watermark.max(y);
         self.loaded.retain(|&b, _| bands.top(b) >= y);
         Ok(())
     }
