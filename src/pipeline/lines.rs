@@ -37,6 +37,7 @@ use crate::breaklines::{CleanOptions, CleanStats, Lines, Pslg, Trim};
 use crate::error::{Error, Result};
 use crate::geom::grid::{Buckets, Grid};
 use crate::geom::predicates::{Orientation, check_coord, orient};
+use crate::products::geom::{Location, Tri};
 use crate::sink::ProductSummary;
 use crate::sweep::{ConstraintGraph, ConstraintStats};
 use std::path::{Path, PathBuf};
@@ -426,35 +427,6 @@ impl DrapeSink {
     }
 }
 
-/// Linear interpolation of `q` in the closed triangle `t` (either orientation), or `None` when
-/// `q` is outside (decided exactly).
-fn interpolate(t: &[[f64; 3]; 3], q: [f64; 2]) -> Option<f64> {
-    let p = t.map(|v| [v[0], v[1]]);
-    let o = [
-        orient(p[1], p[2], q),
-        orient(p[2], p[0], q),
-        orient(p[0], p[1], q),
-    ];
-    let pos = o.iter().any(|s| s.is_ccw());
-    let neg = o.contains(&Orientation::Clockwise);
-    if pos && neg {
-        return None;
-    }
-    let area = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
-        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-    };
-    let total = area(p[0], p[1], p[2]);
-    if total == 0.0 {
-        return None;
-    }
-    let w = [
-        area(q, p[1], p[2]) / total,
-        area(p[0], q, p[2]) / total,
-        area(p[0], p[1], q) / total,
-    ];
-    Some(w[0] * t[0][2] + w[1] * t[1][2] + w[2] * t[2][2])
-}
-
 impl TriangleSink for DrapeSink {
     fn begin(&mut self, _info: &super::StreamInfo) -> Result<()> {
         Ok(())
@@ -469,14 +441,22 @@ impl TriangleSink for DrapeSink {
             t[0][0].max(t[1][0]).max(t[2][0]),
             t[0][1].max(t[1][1]).max(t[2][1]),
         ];
+        // The products' canonical triangle and valuation (on an edge or a vertex, from that edge
+        // or vertex alone), so a draped height does not depend on which of the triangles around
+        // it comes first or how its corners are rotated: tiles and the sweep give them in other
+        // orders, and gave heights 1 ulp apart.
+        let Some(tri) = Tri::new(t) else {
+            return Ok(());
+        };
         let (xy, z, buckets) = (&self.xy, &mut self.z, &self.buckets);
         self.grid.box_cells(lo, hi, |c| {
             for &q in buckets.cell(c) {
                 let q = q as usize;
-                if z[q].is_nan()
-                    && let Some(h) = interpolate(t, xy[q])
-                {
-                    z[q] = h;
+                if z[q].is_nan() {
+                    let loc = tri.locate(xy[q]);
+                    if loc != Location::Outside {
+                        z[q] = tri.value_at(xy[q], loc);
+                    }
                 }
             }
         });
@@ -732,13 +712,31 @@ mod tests {
     }
 
     #[test]
-    fn interpolation_is_linear_and_closed() {
+    fn draping_is_linear_closed_and_independent_of_order() {
+        let drape = |tris: &[[[f64; 3]; 3]], q: &[[f64; 2]]| {
+            let mut s = DrapeSink::new(q.to_vec());
+            for t in tris {
+                s.triangle(t).unwrap();
+            }
+            s.z
+        };
         let t = [[0.0, 0.0, 0.0], [4.0, 0.0, 4.0], [0.0, 4.0, 8.0]];
-        assert_eq!(interpolate(&t, [1.0, 1.0]), Some(3.0));
-        assert_eq!(interpolate(&t, [2.0, 2.0]), Some(6.0)); // on the edge
-        assert_eq!(interpolate(&t, [0.0, 0.0]), Some(0.0)); // a corner
-        assert_eq!(interpolate(&t, [2.0, 2.1]), None);
-        let cw = [t[0], t[2], t[1]];
-        assert_eq!(interpolate(&cw, [1.0, 1.0]), Some(3.0));
+        let q = [[1.0, 1.0], [2.0, 2.0], [0.0, 0.0], [2.0, 2.1]];
+        let z = drape(&[t], &q);
+        assert_eq!(&z[..3], &[3.0, 6.0, 0.0]); // inside, on the edge, a corner
+        assert!(z[3].is_nan());
+        assert_eq!(drape(&[[t[0], t[2], t[1]]], &q[..1]), vec![3.0]); // clockwise
+        // Two triangles on one edge, in either order and with their corners rotated: a point on
+        // the shared edge, and inside, gets the same bits (tiles and the sweep differ in both).
+        let (a, b) = ([0.0, 0.0, 2.9], [4.0, 4.0, 0.7]);
+        let (c, d) = ([4.0, 0.0, 1.3], [0.0, 4.0, 0.3]);
+        let q = [[2.0, 2.0], [3.1, 0.7], [0.3, 2.9]];
+        let want = drape(&[[a, c, b], [a, b, d]], &q);
+        assert!(want.iter().all(|z| !z.is_nan()));
+        for tris in [[[b, a, d], [c, b, a]], [[d, a, b], [b, a, c]]] {
+            let got = drape(&tris, &q);
+            let bits = |z: &[f64]| z.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&want), bits(&got));
+        }
     }
 }
