@@ -177,3 +177,34 @@ fn streaming_memory_is_bounded() {
     eprintln!("{st:?}");
     assert!(st.peak_live_triangles < 40_000, "{st:?}");
 }
+
+/// Degenerate strips keep the streaming sweep's bookkeeping linear. Two aligned rows far apart:
+/// each point of the upper row takes over the whole fan of the one before (n flips a point), and
+/// each flip used to queue another entry for the same triangle slot. A diagonal band: the
+/// triangles along its upper side wait for a part of the front that never rises, and used to be
+/// checked again every few buckets until the end.
+#[test]
+fn streaming_bookkeeping_is_linear_on_degenerate_strips() {
+    let n = 1500;
+    let rows: Vec<[f64; 3]> = (0..2 * n)
+        .map(|i| [(i % n) as f64, (i / n * n) as f64, 0.0])
+        .collect();
+    let m = 8000;
+    let band: Vec<[f64; 3]> = (0..2 * m)
+        .map(|i| {
+            let k = (i % m) as f64;
+            [k, k + (i / m) as f64 * 200.0, 0.0]
+        })
+        .collect();
+    for (name, pts) in [("rows", rows), ("band", band)] {
+        let (s, st) = stream_set(&pts, false);
+        let t = triangulate(&pts, &Options::default()).unwrap();
+        assert_eq!(s, tri_set(&t.triangles, &t.vertices), "{name}");
+        eprintln!("{name}: {st:?}");
+        assert!(
+            st.peak_queued <= 2 * st.peak_live_triangles,
+            "{name}: {st:?}"
+        );
+        assert!(st.rechecks <= 12 * st.triangles, "{name}: {st:?}");
+    }
+}

@@ -32,7 +32,11 @@
 //! passes a bucket, its triangles are re-checked with their *current* vertices (a flip changes two
 //! slots' triangles in place and re-schedules both a few buckets ahead; queue entries for any other
 //! bucket are stale and skipped) and either finalised or re-scheduled, at their circle's top or
-//! after the basin that blocks them has had time to fill.
+//! after the basin that blocks them has had time to fill. A slot re-scheduled for the bucket it
+//! already waits for queues nothing new (one insertion can flip the same slot thousands of times).
+//! A triangle the front has blocked more than a few times in a row waits twice as long each time
+//! after: the front under it may never rise (the upper side of a diagonal strip), and checking it
+//! every few buckets until the end made such data quadratic.
 //!
 //! # Output
 //!
@@ -104,6 +108,8 @@ const RING: usize = 1024;
 const RING_KEEP: usize = 256;
 /// Buckets between a triangle's creation and its first check.
 const FIRST_CHECK: u64 = 3;
+/// Checks a triangle may fail on the front before the waits between its checks double.
+const PATIENT_CHECKS: u8 = 4;
 /// Buckets between checks of a triangle that uses an artificial point or is too flat to bound.
 const PARKED: u64 = 64;
 
@@ -159,6 +165,9 @@ pub struct StreamStats {
     pub peak_pending_segments: u64,
     /// Finalisation checks that had to be repeated.
     pub rechecks: u64,
+    /// Most entries in the finalisation queue at once, stale ones (for a bucket the triangle no
+    /// longer waits for) included.
+    pub peak_queued: u64,
     /// Triangles emitted.
     pub triangles: u64,
     /// Vertices emitted.
@@ -197,6 +206,9 @@ pub(crate) struct Finalizer {
     /// other bucket are stale (the slot was rescheduled, flipped or refilled since) and skipped,
     /// so each slot has one live entry.
     due: Vec<u64>,
+    /// How many times in a row each slot's triangle was found blocked by the front since it was
+    /// made or changed (saturating): past `PATIENT_CHECKS` its waits double.
+    blocked: Vec<u8>,
 }
 
 /// Is the circumcircle of `a b c` narrower than `limit` in radius and inside the x range of the
@@ -254,6 +266,7 @@ impl Finalizer {
             pending: PendingSegments::new((x0, x1)),
             x_range: (x0, x1),
             due: Vec::new(),
+            blocked: Vec::new(),
         }
     }
 
@@ -270,6 +283,14 @@ impl Finalizer {
         let i = t as usize;
         if i >= self.due.len() {
             self.due.resize(i + 1, u64::MAX);
+            self.blocked.resize(i + 1, 0);
+        }
+        if self.due[i] == k {
+            // Its entry for bucket `k` is still queued (an entry is consumed only once `cur`
+            // has passed its bucket, and `k >= cur`): a second one would only be skipped later.
+            // A slot flipped again and again while one point is inserted would otherwise queue
+            // one entry a flip (two long rows far apart: O(n^2) entries).
+            return;
         }
         self.due[i] = k;
         self.push_entry(t, k);
@@ -302,6 +323,7 @@ impl Finalizer {
     #[inline(always)]
     fn changed(&mut self, t: u32) {
         self.schedule(t, self.sweep_bucket.saturating_add(FIRST_CHECK));
+        self.blocked[t as usize] = 0;
     }
 
     /// A triangle slot was (re)filled.
@@ -312,6 +334,7 @@ impl Finalizer {
             self.stats.peak_live_triangles = self.live_triangles;
         }
         self.schedule(t, self.sweep_bucket.saturating_add(FIRST_CHECK));
+        self.blocked[t as usize] = 0;
     }
 
     /// Moves the far-queue entries that now fall within the ring into it.
@@ -482,6 +505,8 @@ impl StreamingSweep {
             });
         }
         fin.last = p.xy;
+        let queued = (fin.in_ring + fin.far.len()) as u64;
+        fin.stats.peak_queued = fin.stats.peak_queued.max(queued);
         self.finalize_due(p.xy[1]);
         let fin = self.fin();
         let v = fin.vertices.add(&p);
@@ -673,9 +698,18 @@ impl StreamingSweep {
             self.finalize(t);
         } else {
             fin.stats.rechecks += 1;
-            // The front under the disk must rise by (top - low): wait about that long.
+            // The front under the disk must rise by (top - low): wait about that long, or longer
+            // once it has not risen several times (a part of the front that never rises: the
+            // upper side of a diagonal strip, whose hull triangles would otherwise be checked
+            // every few buckets until the end).
+            let b = &mut fin.blocked[t as usize];
+            *b = b.saturating_add(1);
+            let patience = match *b {
+                n if n > PATIENT_CHECKS => 1u64 << (n - PATIENT_CHECKS).min(48),
+                _ => 1,
+            };
             let k = fin.bucket(y + (d.top - low));
-            fin.schedule(t, k.max(ks + 1));
+            fin.schedule(t, k.max(ks.saturating_add(patience)));
         }
     }
 

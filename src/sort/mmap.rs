@@ -171,7 +171,9 @@ impl<T: Pod> MappedRecords<T> {
 fn release(file: &File, offset: usize, len: usize) {
     use rustix::fs::{FallocateFlags, fallocate};
     let flags = FallocateFlags::PUNCH_HOLE | FallocateFlags::KEEP_SIZE;
-    let _ = fallocate(file, flags, offset as u64, len as u64);
+    // Best effort (a file system without holes keeps the bytes), but an interrupted call is
+    // tried again.
+    while fallocate(file, flags, offset as u64, len as u64) == Err(rustix::io::Errno::INTR) {}
 }
 
 #[cfg(not(target_os = "linux"))]
@@ -243,8 +245,15 @@ mod tests {
         }
         if cfg!(target_os = "linux") {
             assert_eq!(m.released(), 3 * PUNCH);
-            // tmpfs and ext4 both punch holes; the allocated size shrinks by what was released.
-            assert!(blocks(&probe) <= before - 3 * PUNCH as u64, "no hole punched");
+            // tmpfs and ext4 both punch holes; the allocated size shrinks by what was released,
+            // give or take the file system's own blocks (ext4 may add an extent-tree block when
+            // a file written beside others is fragmented: seen as 4 KiB more).
+            let after = blocks(&probe);
+            let slack = 64 * 1024;
+            assert!(
+                after <= before - 3 * PUNCH as u64 + slack,
+                "no hole punched: {before} -> {after} bytes allocated"
+            );
             let e = m.get(0).unwrap_err();
             assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
         }
