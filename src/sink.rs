@@ -382,10 +382,11 @@ pub enum VolumeReference {
 pub struct OverlayStats {
     /// Pairs of overlapping triangles (surface, reference) intersected.
     pub pairs: u64,
-    /// Bands of the reference read from the scratch file.
-    pub band_loads: u64,
-    /// Largest number of bands held in memory at once.
-    pub max_bands_in_memory: u64,
+    /// Pieces of the reference (one band's triangles in one block of columns) read from the
+    /// scratch file.
+    pub loads: u64,
+    /// Most bytes of the reference held in memory at once.
+    pub max_loaded_bytes: u64,
 }
 
 /// What a sample sink wrote.

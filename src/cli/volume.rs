@@ -66,7 +66,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )?;
             pipeline::run(&reference, None, &mut [&mut store])
                 .map_err(|e| super::input::run_error(e, &args.surface))?;
-            Box::new(OverlaySink::new(store.into_reader()?, boundary))
+            // A quarter of the budget for the reference's pieces in memory.
+            let budget = usize::try_from(config.options().mem / 4).unwrap_or(usize::MAX);
+            Box::new(OverlaySink::new(store.into_reader()?, boundary, budget))
         }
     };
     let (run, products) = run_products(&args.input, &config, None, vec![("volume".into(), sink)])?;

@@ -4,26 +4,28 @@
 //! progress, so the two streams are not merged live. Instead:
 //!
 //! 1. The **reference** surface is streamed first into a [`BandStore`]: its triangles are filed
-//!    by horizontal band (a triangle goes to every band its `y` range meets) into an anonymous
-//!    scratch file, in chunks; a band's buffer is written out when the watermark passes the band
-//!    (or the buffer fills). Memory: the buffers of the bands between the watermark and the front.
+//!    by *piece* — a horizontal band cut into blocks of 64 columns (a triangle goes to every
+//!    piece its box meets) — into an anonymous scratch file, in chunks; a piece's buffer is
+//!    written out when the watermark passes its band, when it fills, or when all buffers
+//!    together pass 262,144 triangles (a tiled run fills a row of tiles' pieces at once).
 //! 2. The **surface** is then streamed into an [`OverlaySink`]. For each of its triangles the
-//!    bands it meets are loaded (and indexed by a grid of columns), every reference triangle whose
-//!    box meets it is paired with it, and bands below the surface's watermark are dropped.
+//!    pieces it meets are loaded, every reference triangle whose box meets it is paired with it,
+//!    pieces below the surface's watermark are dropped, and past the byte budget the least
+//!    recently used pieces are dropped too (a tiled run gives a row of tiles one tile at a time).
 //!
-//! A surface triangle that meets more than 16 bands (`TALL_BANDS`; a long thin triangle along the
-//! hull, which a tiled run delivers with its first tiles, or a triangle across a lake) would load
-//! most of the reference at once, and so would the late triangles a sweep gives at its end, all
-//! along the hull: a tall or late triangle (one meeting a band dropped at a watermark) waits
-//! instead, and the waiting triangles meet the reference at the end, one band in memory at a
-//! time (or sooner, when 65,536 wait). A pair met in
-//! several bands or columns is counted in the first band and column both meet.
+//! A surface triangle that meets more than 16 bands (a long thin triangle along the hull, which
+//! a tiled run delivers with its first tiles, or a triangle across a lake) would load most of
+//! the reference at once, and so would the late triangles a sweep gives at its end, all along
+//! the hull: a tall or late triangle (one meeting a band dropped at a watermark) waits instead,
+//! and the waiting triangles meet the reference at the end, one band in memory at a time (or
+//! sooner, when 65,536 wait). On every path a pair is counted only in the first band and column
+//! both triangles meet, so which pieces are in memory never changes the result.
 //!
 //! For a pair, the surface triangle is clipped to the reference triangle (both convex), then to
 //! the boundary, and the difference `d = z_surface − z_reference`, linear on each piece, is split
-//! at `d = 0` and integrated exactly as for a plane ([`CutFill`]). Each pair is met exactly once
-//! (reference triangles are de-duplicated across bands by id), so the overlap of the two TINs is
-//! covered once; where only one surface exists nothing is counted.
+//! at `d = 0` and integrated exactly as for a plane ([`CutFill`]). Each pair is met exactly once,
+//! so the overlap of the two TINs is covered once; where only one surface exists nothing is
+//! counted.
 
 use super::boundary::Boundary;
 use super::geom::{PV, Tri, clip_left};
@@ -40,14 +42,21 @@ use std::path::{Path, PathBuf};
 
 /// Bytes of one stored triangle: id + 9 coordinates.
 const RECORD: usize = 80;
-/// Triangles buffered per band before a chunk is written.
+/// Triangles buffered per piece before a chunk is written.
 const CHUNK: usize = 4096;
+/// Triangles buffered in all pieces together before every buffer is written (about 23 MB).
+const MAX_BUFFERED: usize = 1 << 18;
+/// Columns of a block: a piece is one band's columns of one block.
+const BLOCK_COLUMNS: usize = 64;
 /// A surface triangle meeting more bands than this waits for one pass over the bands.
-pub(crate) const TALL_BANDS: usize = 16;
+const TALL_BANDS: usize = 16;
 /// Most surface triangles waiting (about 5 MB).
 const MAX_TALL: usize = 1 << 16;
+/// Bytes of a loaded reference triangle: its id, the triangle and its column-cell entry.
+const LOADED_BYTES: usize = 8 + 72 + 4;
 
-/// The layout of the bands: `count` bands of height `h` from `y0`.
+/// The layout of the pieces: `count` bands of height `h` from `y0`, each cut into columns of
+/// width `w` from `x[0]`, `BLOCK_COLUMNS` columns to a block.
 #[derive(Clone, Copy, Debug)]
 struct Bands {
     y0: f64,
@@ -55,9 +64,31 @@ struct Bands {
     count: usize,
     /// `[xmin, xmax]` of the reference surface.
     x: [f64; 2],
+    w: f64,
+    columns: usize,
 }
 
 impl Bands {
+    fn new(bounds: [f64; 4], wanted: usize) -> Bands {
+        let [xmin, ymin, xmax, ymax] = bounds;
+        let height = ymax - ymin;
+        let (count, h) = if height > 0.0 && height.is_finite() {
+            (wanted, height / wanted as f64)
+        } else {
+            (1, 1.0)
+        };
+        let width = (xmax - xmin).max(h);
+        let columns = ((width / h).ceil() as usize).clamp(1, 1 << 16);
+        Bands {
+            y0: ymin,
+            h,
+            count,
+            x: [xmin, xmax],
+            w: width / columns as f64,
+            columns,
+        }
+    }
+
     fn of(&self, y: f64) -> usize {
         let b = ((y - self.y0) / self.h).floor();
         if b < 0.0 {
@@ -70,7 +101,43 @@ impl Bands {
     fn top(&self, b: usize) -> f64 {
         self.y0 + (b + 1) as f64 * self.h
     }
+
+    fn column(&self, x: f64) -> usize {
+        let c = ((x - self.x[0]) / self.w).floor();
+        if c < 0.0 {
+            0
+        } else {
+            (c as usize).min(self.columns - 1)
+        }
+    }
+
+    fn blocks(&self) -> usize {
+        self.columns.div_ceil(BLOCK_COLUMNS)
+    }
+
+    /// The pieces (band, block) a box `[xmin, ymin, xmax, ymax]` meets, band by band.
+    fn pieces(&self, bb: &[f64; 4]) -> impl Iterator<Item = Piece> + use<> {
+        let (k0, k1) = (
+            self.column(bb[0]) / BLOCK_COLUMNS,
+            self.column(bb[2]) / BLOCK_COLUMNS,
+        );
+        (self.of(bb[1])..=self.of(bb[3])).flat_map(move |b| (k0..=k1).map(move |k| (b, k)))
+    }
+
+    /// Index of piece `p` in the store's index.
+    fn slot(&self, p: Piece) -> usize {
+        p.0 * self.blocks() + p.1
+    }
+
+    /// Is `(b, c)` the first band and column that boxes `a` and `t` (which overlap) both meet?
+    /// Each pair is counted there only.
+    fn first_common(&self, a: &[f64; 4], t: &[f64; 4], b: usize, c: usize) -> bool {
+        b == self.of(a[1].max(t[1])) && c == self.column(a[0].max(t[0]))
+    }
 }
+
+/// A piece of the reference: (band, block).
+type Piece = (usize, usize);
 
 /// Phase 1: a [`TriangleSink`] that files the reference surface's triangles by band.
 #[derive(Debug)]
@@ -80,9 +147,12 @@ pub struct BandStore {
     bands: Option<Bands>,
     file: Option<BufWriter<File>>,
     written: u64,
-    buffers: HashMap<usize, Vec<(u64, Tri)>>,
+    buffers: HashMap<Piece, Vec<(u64, Tri)>>,
+    /// Triangles in `buffers`.
+    buffered: usize,
     /// Flushed below this band.
     flushed_below: usize,
+    /// The chunks (offset, count) of each piece, by [`Bands::slot`].
     index: Vec<Vec<(u64, u32)>>,
     next_id: u64,
 }
@@ -97,19 +167,22 @@ impl BandStore {
             file: None,
             written: 0,
             buffers: HashMap::new(),
+            buffered: 0,
             flushed_below: 0,
             index: Vec::new(),
             next_id: 0,
         }
     }
 
-    fn flush_band(&mut self, b: usize) -> Result<()> {
-        let Some(buf) = self.buffers.remove(&b) else {
+    fn flush_piece(&mut self, p: Piece) -> Result<()> {
+        let Some(buf) = self.buffers.remove(&p) else {
             return Ok(());
         };
+        self.buffered -= buf.len();
         if buf.is_empty() {
             return Ok(());
         }
+        let slot = self.bands.expect("set in begin").slot(p);
         let dir = &self.dir;
         let f = self.file.as_mut().expect("opened in begin");
         let mut bytes = Vec::with_capacity(buf.len() * RECORD);
@@ -120,7 +193,7 @@ impl BandStore {
             }
         }
         f.write_all(&bytes).map_err(|e| Error::write(dir, e))?;
-        self.index[b].push((self.written, buf.len() as u32));
+        self.index[slot].push((self.written, buf.len() as u32));
         self.written += bytes.len() as u64;
         Ok(())
     }
@@ -133,10 +206,7 @@ impl BandStore {
         let bands = self
             .bands
             .ok_or_else(|| Error::Internal("band store read before it was filled".into()))?;
-        let keys: Vec<usize> = self.buffers.keys().copied().collect();
-        for b in keys {
-            self.flush_band(b)?;
-        }
+        self.flush_all()?;
         let dir = self.dir.clone();
         let file = self
             .file
@@ -154,22 +224,23 @@ impl BandStore {
     }
 }
 
+impl BandStore {
+    /// Writes every buffer, in piece order (so the scratch file depends only on the input).
+    fn flush_all(&mut self) -> Result<()> {
+        let mut keys: Vec<Piece> = self.buffers.keys().copied().collect();
+        keys.sort_unstable();
+        for p in keys {
+            self.flush_piece(p)?;
+        }
+        Ok(())
+    }
+}
+
 impl TriangleSink for BandStore {
     fn begin(&mut self, info: &StreamInfo) -> Result<()> {
-        let [xmin, ymin, xmax, ymax] = info.bounds;
-        let height = ymax - ymin;
-        let (count, h) = if height > 0.0 && height.is_finite() {
-            (self.bands_wanted, height / self.bands_wanted as f64)
-        } else {
-            (1, 1.0)
-        };
-        self.bands = Some(Bands {
-            y0: ymin,
-            h,
-            count,
-            x: [xmin, xmax],
-        });
-        self.index = vec![Vec::new(); count];
+        let bands = Bands::new(info.bounds, self.bands_wanted);
+        self.bands = Some(bands);
+        self.index = vec![Vec::new(); bands.count * bands.blocks()];
         let f = tempfile::tempfile_in(&self.dir).map_err(|e| Error::write(&self.dir, e))?;
         self.file = Some(BufWriter::with_capacity(1 << 20, f));
         Ok(())
@@ -183,21 +254,36 @@ impl TriangleSink for BandStore {
         let bb = t.bbox();
         let id = self.next_id;
         self.next_id += 1;
-        for b in bands.of(bb[1])..=bands.of(bb[3]) {
-            let buf = self.buffers.entry(b).or_default();
+        for p in bands.pieces(&bb) {
+            let buf = self.buffers.entry(p).or_default();
             buf.push((id, t));
+            self.buffered += 1;
             if buf.len() >= CHUNK {
-                self.flush_band(b)?;
+                self.flush_piece(p)?;
             }
+        }
+        if self.buffered > MAX_BUFFERED {
+            // A tiled run delivers a row of tiles before its watermark: many pieces fill at once.
+            self.flush_all()?;
         }
         Ok(())
     }
 
     fn watermark(&mut self, y: f64) -> Result<()> {
         let bands = self.bands.expect("set in begin");
+        let below = self.flushed_below;
         while self.flushed_below < bands.count && bands.top(self.flushed_below) < y {
-            self.flush_band(self.flushed_below)?;
             self.flushed_below += 1;
+        }
+        if self.flushed_below > below {
+            let mut done: Vec<Piece> = (self.buffers.keys())
+                .filter(|p| p.0 < self.flushed_below)
+                .copied()
+                .collect();
+            done.sort_unstable();
+            for p in done {
+                self.flush_piece(p)?;
+            }
         }
         Ok(())
     }
@@ -205,7 +291,7 @@ impl TriangleSink for BandStore {
     fn finish(&mut self) -> Result<ProductSummary> {
         Ok(ProductSummary::SurfaceStore(SurfaceStoreSummary {
             reference_triangles: self.next_id,
-            bands: self.index.len() as u64,
+            bands: self.bands.map_or(0, |b| b.count as u64),
         }))
     }
 }
@@ -220,30 +306,39 @@ pub struct BandReader {
     triangles: u64,
 }
 
-/// A band in memory, with a grid of columns over it.
+/// A piece in memory, its triangles listed by column.
 struct Loaded {
     tris: Vec<(u64, Tri)>,
+    /// The triangles meeting each column of the block, from column `first`.
     cells: Vec<Vec<u32>>,
-    x0: f64,
-    w: f64,
+    first: usize,
+    /// When it was last used (a count of surface triangles).
+    used: u64,
 }
 
 impl Loaded {
-    fn column(&self, x: f64) -> usize {
-        let c = ((x - self.x0) / self.w).floor();
-        if c < 0.0 {
-            0
-        } else {
-            (c as usize).min(self.cells.len() - 1)
-        }
+    /// The reference triangles filed in this piece's part of columns `c0..=c1`, as (column,
+    /// triangle).
+    fn in_columns(&self, c0: usize, c1: usize) -> impl Iterator<Item = (usize, &(u64, Tri))> {
+        let last = self.first + self.cells.len() - 1;
+        (c0.max(self.first)..=c1.min(last)).flat_map(move |c| {
+            self.cells[c - self.first]
+                .iter()
+                .map(move |&i| (c, &self.tris[i as usize]))
+        })
+    }
+
+    fn bytes(&self) -> usize {
+        self.tris.len() * LOADED_BYTES + self.cells.len() * std::mem::size_of::<Vec<u32>>()
     }
 }
 
 impl BandReader {
-    fn load(&mut self, b: usize) -> Result<Loaded> {
+    fn load(&mut self, p: Piece) -> Result<Loaded> {
         let mut tris = Vec::new();
         let mut bytes = Vec::new();
-        for &(offset, count) in &self.index[b] {
+        let slot = self.bands.slot(p);
+        for &(offset, count) in &self.index[slot] {
             bytes.resize(count as usize * RECORD, 0);
             self.file
                 .seek(SeekFrom::Start(offset))
@@ -257,22 +352,22 @@ impl BandReader {
                 tris.push((id, Tri { v }));
             }
         }
-        let [x0, x1] = self.bands.x;
-        let width = (x1 - x0).max(self.bands.h);
-        let ncols = ((width / self.bands.h).ceil() as usize).clamp(1, 1 << 16);
-        let mut loaded = Loaded {
-            tris,
-            cells: vec![Vec::new(); ncols],
-            x0,
-            w: width / ncols as f64,
-        };
-        for (i, (_, t)) in loaded.tris.iter().enumerate() {
+        let bands = &self.bands;
+        let first = p.1 * BLOCK_COLUMNS;
+        let last = (first + BLOCK_COLUMNS).min(bands.columns) - 1;
+        let mut cells = vec![Vec::new(); last + 1 - first];
+        for (i, (_, t)) in tris.iter().enumerate() {
             let bb = t.bbox();
-            for c in loaded.column(bb[0])..=loaded.column(bb[2]) {
-                loaded.cells[c].push(i as u32);
+            for c in bands.column(bb[0]).max(first)..=bands.column(bb[2]).min(last) {
+                cells[c - first].push(i as u32);
             }
         }
-        Ok(loaded)
+        Ok(Loaded {
+            tris,
+            cells,
+            first,
+            used: 0,
+        })
     }
 }
 
@@ -280,13 +375,17 @@ impl BandReader {
 pub struct OverlaySink {
     reference: BandReader,
     boundary: Option<Boundary>,
-    loaded: HashMap<usize, Loaded>,
+    loaded: HashMap<Piece, Loaded>,
+    /// Bytes of the loaded pieces, and the most they may take before the least recently used
+    /// are dropped.
+    loaded_bytes: usize,
+    budget: usize,
+    max_loaded_bytes: usize,
     acc: CutFill,
     triangles: u64,
     pairs: u64,
-    band_loads: u64,
-    max_loaded: usize,
-    candidates: Vec<(u64, usize, u32)>,
+    loads: u64,
+    others: Vec<Tri>,
     scratch: (Vec<PV>, Vec<PV>),
     /// Surface triangles meeting more than `tall_bands` bands, waiting for a pass over the bands.
     tall: Vec<Tri>,
@@ -296,18 +395,22 @@ pub struct OverlaySink {
 }
 
 impl OverlaySink {
-    /// Cut and fill of the streamed surface against `reference`, inside `boundary` when given.
-    pub fn new(reference: BandReader, boundary: Option<Boundary>) -> OverlaySink {
+    /// Cut and fill of the streamed surface against `reference`, inside `boundary` when given,
+    /// holding about `budget` bytes of the reference in memory (the pieces the current triangle
+    /// meets are always held).
+    pub fn new(reference: BandReader, boundary: Option<Boundary>, budget: usize) -> OverlaySink {
         OverlaySink {
             reference,
             boundary,
             loaded: HashMap::new(),
+            loaded_bytes: 0,
+            budget,
+            max_loaded_bytes: 0,
             acc: CutFill::default(),
             triangles: 0,
             pairs: 0,
-            band_loads: 0,
-            max_loaded: 0,
-            candidates: Vec::new(),
+            loads: 0,
+            others: Vec::new(),
             scratch: (Vec::new(), Vec::new()),
             tall: Vec::new(),
             tall_bands: TALL_BANDS,
@@ -315,59 +418,88 @@ impl OverlaySink {
         }
     }
 
-    /// Pairs the waiting tall triangles with the reference, band by band: a band already in
-    /// memory is used, any other is loaded for the pass and dropped. A pair is counted in the
-    /// first band and column where both triangles are filed.
-    fn pass_over_bands(&mut self) -> Result<()> {
-        let tall = std::mem::take(&mut self.tall);
-        let bands = self.reference.bands;
-        let span: Vec<(usize, usize)> = tall
-            .iter()
-            .map(|a| {
-                let bb = a.bbox();
-                (bands.of(bb[1]), bands.of(bb[3]))
-            })
+    /// Loads piece `p` unless it is in memory, and marks it used now.
+    fn touch(&mut self, p: Piece) -> Result<()> {
+        let now = self.triangles;
+        if let Some(l) = self.loaded.get_mut(&p) {
+            l.used = now;
+            return Ok(());
+        }
+        let mut l = self.reference.load(p)?;
+        l.used = now;
+        self.loads += 1;
+        self.loaded_bytes += l.bytes();
+        self.max_loaded_bytes = self.max_loaded_bytes.max(self.loaded_bytes);
+        self.loaded.insert(p, l);
+        Ok(())
+    }
+
+    /// Drops the least recently used pieces (never those of the current triangle) until the
+    /// loaded pieces fit in three quarters of the budget.
+    fn shed(&mut self) {
+        if self.loaded_bytes <= self.budget {
+            return;
+        }
+        let now = self.triangles;
+        let mut old: Vec<(u64, Piece)> = (self.loaded.iter())
+            .filter(|(_, l)| l.used < now)
+            .map(|(&p, l)| (l.used, p))
             .collect();
-        let (Some(lo), Some(hi)) = (
-            span.iter().map(|s| s.0).min(),
-            span.iter().map(|s| s.1).max(),
-        ) else {
+        old.sort_unstable();
+        for (_, p) in old {
+            if self.loaded_bytes <= self.budget / 4 * 3 {
+                break;
+            }
+            if let Some(l) = self.loaded.remove(&p) {
+                self.loaded_bytes -= l.bytes();
+            }
+        }
+    }
+
+    /// Pairs the waiting tall triangles with the reference, band by band: a piece already in
+    /// memory is used, any other is loaded for the pass and dropped.
+    fn pass_over_bands(&mut self) -> Result<()> {
+        let mut tall = std::mem::take(&mut self.tall);
+        let bands = self.reference.bands;
+        // By first band: the triangles meeting band b are a window of this order.
+        tall.sort_by_key(|a| bands.of(a.bbox()[1]));
+        let boxes: Vec<[f64; 4]> = tall.iter().map(Tri::bbox).collect();
+        let mut from = 0;
+        let mut pairs: Vec<(usize, Tri)> = Vec::new();
+        let mut temp: HashMap<Piece, Loaded> = HashMap::new();
+        let Some(hi) = boxes.iter().map(|bb| bands.of(bb[3])).max() else {
             return Ok(());
         };
-        let mut others: Vec<(usize, Tri)> = Vec::new();
-        for b in lo..=hi {
-            let users = (0..tall.len()).filter(|&k| span[k].0 <= b && b <= span[k].1);
-            let mut users = users.peekable();
-            if users.peek().is_none() {
-                continue;
+        for b in bands.of(boxes[0][1])..=hi {
+            while from < tall.len() && bands.of(boxes[from][3]) < b {
+                from += 1;
             }
-            let temp;
-            let l = match self.loaded.get(&b) {
-                Some(l) => l,
-                None => {
-                    temp = self.reference.load(b)?;
-                    self.band_loads += 1;
-                    &temp
+            pairs.clear();
+            temp.clear();
+            for (k, bb) in boxes.iter().enumerate().skip(from) {
+                if bands.of(bb[1]) > b {
+                    break;
                 }
-            };
-            others.clear();
-            for k in users {
-                let bb = tall[k].bbox();
-                let c0 = l.column(bb[0]);
-                for c in c0..=l.column(bb[2]) {
-                    for &i in &l.cells[c] {
-                        let t = &l.tris[i as usize].1;
+                if bands.of(bb[3]) < b {
+                    continue;
+                }
+                let (c0, c1) = (bands.column(bb[0]), bands.column(bb[2]));
+                for blk in c0 / BLOCK_COLUMNS..=c1 / BLOCK_COLUMNS {
+                    let p = (b, blk);
+                    if !self.loaded.contains_key(&p) && !temp.contains_key(&p) {
+                        temp.insert(p, self.reference.load(p)?);
+                        self.loads += 1;
+                    }
+                    let l = self.loaded.get(&p).or(temp.get(&p)).expect("loaded");
+                    for (c, (_, t)) in l.in_columns(c0, c1) {
                         let tb = t.bbox();
-                        if overlaps(&bb, &tb)
-                            && b == span[k].0.max(bands.of(tb[1]))
-                            && c == c0.max(l.column(tb[0]))
-                        {
-                            others.push((k, *t));
+                        if overlaps(bb, &tb) && bands.first_common(bb, &tb, b, c) {
+                            pairs.push((k, *t));
                         }
                     }
                 }
             }
-            for &(k, t) in &others {
+            for &(k, t) in &pairs {
                 self.pair(&tall[k], &t);
             }
         }
@@ -436,39 +568,38 @@ impl TriangleSink for OverlaySink {
             self.tall.push(a);
             return Ok(());
         }
-        self.candidates.clear();
-        for b in b0..=b1 {
-            if !self.loaded.contains_key(&b) {
-                let l = self.reference.load(b)?;
-                self.band_loads += 1;
-                self.loaded.insert(b, l);
-                self.max_loaded = self.max_loaded.max(self.loaded.len());
-            }
-            let l = &self.loaded[&b];
-            for c in l.column(bb[0])..=l.column(bb[2]) {
-                for &i in &l.cells[c] {
-                    let (id, t) = &l.tris[i as usize];
-                    if overlaps(&bb, &t.bbox()) {
-                        self.candidates.push((*id, b, i));
-                    }
+        let (c0, c1) = (bands.column(bb[0]), bands.column(bb[2]));
+        let mut others = std::mem::take(&mut self.others);
+        others.clear();
+        for p in bands.pieces(&bb) {
+            self.touch(p)?;
+            for (c, (_, t)) in self.loaded[&p].in_columns(c0, c1) {
+                let tb = t.bbox();
+                if overlaps(&bb, &tb) && bands.first_common(&bb, &tb, p.0, c) {
+                    others.push(*t);
                 }
             }
         }
-        self.candidates.sort_unstable_by_key(|c| c.0);
-        self.candidates.dedup_by_key(|c| c.0);
-        let candidates = std::mem::take(&mut self.candidates);
-        for &(_, b, i) in &candidates {
-            let other = self.loaded[&b].tris[i as usize].1;
-            self.pair(&a, &other);
+        for t in &others {
+            self.pair(&a, t);
         }
-        self.candidates = candidates;
+        self.others = others;
+        self.shed();
         Ok(())
     }
 
     fn watermark(&mut self, y: f64) -> Result<()> {
         let bands = self.reference.bands;
         self.watermark = self.watermark.max(y);
-        self.loaded.retain(|&b, _| bands.top(b) >= y);
+        let mut freed = 0;
+        self.loaded.retain(|&(b, _), l| {
+            let keep = bands.top(b) >= y;
+            if !keep {
+                freed += l.bytes();
+            }
+            keep
+        });
+        self.loaded_bytes -= freed;
         Ok(())
     }
 
@@ -482,8 +613,8 @@ impl TriangleSink for OverlaySink {
             triangles: self.triangles,
             overlay: Some(OverlayStats {
                 pairs: self.pairs,
-                band_loads: self.band_loads,
-                max_bands_in_memory: self.max_loaded as u64,
+                loads: self.loads,
+                max_loaded_bytes: self.max_loaded_bytes as u64,
             }),
         }))
     }
@@ -508,23 +639,24 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let mut store = BandStore::new(dir.path(), bands);
         feed(&mut store, &info(), reference);
-        let mut sink = OverlaySink::new(store.into_reader().unwrap(), None);
+        let mut sink = OverlaySink::new(store.into_reader().unwrap(), None, usize::MAX);
         feed(&mut sink, &info(), surface);
         sink
     }
 
     /// Triangles that wait for a pass over the bands (all but the smallest, with a threshold of
-    /// one band) give exactly the totals of pairing each one as it comes (the sums are exact):
-    /// each pair counted once, in sweep order and shuffled.
+    /// one band) give exactly the totals of pairing each one as it comes (the sums are exact),
+    /// and so does a budget that drops every piece as soon as it can: each pair counted once, in
+    /// sweep order and shuffled.
     #[test]
     fn waiting_tall_triangles_give_the_same_totals() {
         let a = random_tin(900, 100.0, 3, |x, y| 15.0 * (x / 7.0).sin() - y / 9.0);
         let b = random_tin(800, 100.0, 4, |x, y| 10.0 * (x / 11.0).cos() + 0.1 * y);
-        let run = |tall_bands: usize, shuffled: bool| {
+        let run = |tall_bands: usize, shuffled: bool, budget: usize| {
             let dir = tempfile::tempdir().unwrap();
             let mut store = BandStore::new(dir.path(), 64);
             feed(&mut store, &info(), &in_sweep_order(&b));
-            let mut sink = OverlaySink::new(store.into_reader().unwrap(), None);
+            let mut sink = OverlaySink::new(store.into_reader().unwrap(), None, budget);
             sink.tall_bands = tall_bands;
             let steps = if shuffled {
                 shuffled_with_watermarks(&a, 9)
@@ -532,11 +664,19 @@ mod tests {
                 in_sweep_order(&a)
             };
             feed(&mut sink, &info(), &steps);
-            (format!("{:?}", sink.totals()), sink.pairs, sink.max_loaded)
+            (
+                format!("{:?}", sink.totals()),
+                sink.pairs,
+                sink.max_loaded_bytes,
+            )
         };
-        let want = run(usize::MAX, false);
+        let want = run(usize::MAX, false, usize::MAX);
         for shuffled in [false, true] {
-            let got = run(1, shuffled);
+            let got = run(1, shuffled, usize::MAX);
+            assert_eq!((&got.0, got.1), (&want.0, want.1));
+            assert!(got.2 <= want.2);
+            // A budget of nothing: every piece but the current triangle's is dropped at once.
+            let got = run(usize::MAX, shuffled, 0);
             assert_eq!((&got.0, got.1), (&want.0, want.1));
             assert!(got.2 <= want.2);
         }
@@ -588,6 +728,6 @@ mod tests {
         assert!((t1.cut_volume - t2.cut_volume).abs() < 1e-6 * t1.cut_volume);
         assert!(t1.cut_volume > 0.0 && t1.fill_volume > 0.0);
         assert!((t1.area - 10_000.0).abs() < 1e-6);
-        assert!(s2.band_loads > 64, "late triangles reload bands");
+        assert!(s2.loads > 64, "late triangles reload bands");
     }
 }

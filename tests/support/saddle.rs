@@ -76,7 +76,7 @@ pub fn volume_difference(surface: &[[[f64; 3]; 3]], reference: &[[[f64; 3]; 3]])
     let dir = tempfile::tempdir().unwrap();
     let mut store = BandStore::new(dir.path(), 128);
     feed(&mut store, reference);
-    let mut o = OverlaySink::new(store.into_reader().unwrap(), None);
+    let mut o = OverlaySink::new(store.into_reader().unwrap(), None, usize::MAX);
     feed(&mut o, surface);
     o.totals().net_volume
 }
