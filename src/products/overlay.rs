@@ -40,8 +40,8 @@ use std::fs::File;
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-/// Bytes of one stored triangle: id + 9 coordinates.
-const RECORD: usize = 80;
+/// Bytes of one stored triangle: 9 coordinates.
+const RECORD: usize = 72;
 /// Triangles buffered per piece before a chunk is written.
 const CHUNK: usize = 4096;
 /// Triangles buffered in all pieces together before every buffer is written (about 23 MB).
@@ -52,8 +52,8 @@ const BLOCK_COLUMNS: usize = 64;
 const TALL_BANDS: usize = 16;
 /// Most surface triangles waiting (about 5 MB).
 const MAX_TALL: usize = 1 << 16;
-/// Bytes of a loaded reference triangle: its id, the triangle and its column-cell entry.
-const LOADED_BYTES: usize = 8 + 72 + 4;
+/// Bytes of a loaded reference triangle: the triangle and its column-cell entry.
+const LOADED_BYTES: usize = 72 + 4;
 
 /// The layout of the pieces: `count` bands of height `h` from `y0`, each cut into columns of
 /// width `w` from `x[0]`, `BLOCK_COLUMNS` columns to a block.
@@ -147,14 +147,15 @@ pub struct BandStore {
     bands: Option<Bands>,
     file: Option<BufWriter<File>>,
     written: u64,
-    buffers: HashMap<Piece, Vec<(u64, Tri)>>,
+    buffers: HashMap<Piece, Vec<Tri>>,
     /// Triangles in `buffers`.
     buffered: usize,
     /// Flushed below this band.
     flushed_below: usize,
     /// The chunks (offset, count) of each piece, by [`Bands::slot`].
     index: Vec<Vec<(u64, u32)>>,
-    next_id: u64,
+    /// Triangles filed.
+    triangles: u64,
 }
 
 impl BandStore {
@@ -170,7 +171,7 @@ impl BandStore {
             buffered: 0,
             flushed_below: 0,
             index: Vec::new(),
-            next_id: 0,
+            triangles: 0,
         }
     }
 
@@ -186,8 +187,7 @@ impl BandStore {
         let dir = &self.dir;
         let f = self.file.as_mut().expect("opened in begin");
         let mut bytes = Vec::with_capacity(buf.len() * RECORD);
-        for (id, t) in &buf {
-            bytes.extend_from_slice(&id.to_le_bytes());
+        for t in &buf {
             for c in t.v.iter().flatten() {
                 bytes.extend_from_slice(&c.to_le_bytes());
             }
@@ -219,7 +219,7 @@ impl BandStore {
             dir,
             bands,
             index: self.index,
-            triangles: self.next_id,
+            triangles: self.triangles,
         })
     }
 }
@@ -252,11 +252,10 @@ impl TriangleSink for BandStore {
         };
         let bands = self.bands.expect("set in begin");
         let bb = t.bbox();
-        let id = self.next_id;
-        self.next_id += 1;
+        self.triangles += 1;
         for p in bands.pieces(&bb) {
             let buf = self.buffers.entry(p).or_default();
-            buf.push((id, t));
+            buf.push(t);
             self.buffered += 1;
             if buf.len() >= CHUNK {
                 self.flush_piece(p)?;
@@ -290,7 +289,7 @@ impl TriangleSink for BandStore {
 
     fn finish(&mut self) -> Result<ProductSummary> {
         Ok(ProductSummary::SurfaceStore(SurfaceStoreSummary {
-            reference_triangles: self.next_id,
+            reference_triangles: self.triangles,
             bands: self.bands.map_or(0, |b| b.count as u64),
         }))
     }
@@ -308,7 +307,7 @@ pub struct BandReader {
 
 /// A piece in memory, its triangles listed by column.
 struct Loaded {
-    tris: Vec<(u64, Tri)>,
+    tris: Vec<Tri>,
     /// The triangles meeting each column of the block, from column `first`.
     cells: Vec<Vec<u32>>,
     first: usize,
@@ -319,7 +318,7 @@ struct Loaded {
 impl Loaded {
     /// The reference triangles filed in this piece's part of columns `c0..=c1`, as (column,
     /// triangle).
-    fn in_columns(&self, c0: usize, c1: usize) -> impl Iterator<Item = (usize, &(u64, Tri))> {
+    fn in_columns(&self, c0: usize, c1: usize) -> impl Iterator<Item = (usize, &Tri)> {
         let last = self.first + self.cells.len() - 1;
         (c0.max(self.first)..=c1.min(last)).flat_map(move |c| {
             self.cells[c - self.first]
@@ -345,18 +344,16 @@ impl BandReader {
                 .and_then(|_| self.file.read_exact(&mut bytes))
                 .map_err(|e| Error::write(&self.dir, e))?;
             for r in bytes.chunks_exact(RECORD) {
-                let f =
-                    |i: usize| f64::from_le_bytes(r[8 + 8 * i..16 + 8 * i].try_into().expect("8"));
-                let id = u64::from_le_bytes(r[..8].try_into().expect("8 bytes"));
+                let f = |i: usize| f64::from_le_bytes(r[8 * i..8 * i + 8].try_into().expect("8"));
                 let v = [[f(0), f(1), f(2)], [f(3), f(4), f(5)], [f(6), f(7), f(8)]];
-                tris.push((id, Tri { v }));
+                tris.push(Tri { v });
             }
         }
         let bands = &self.bands;
         let first = p.1 * BLOCK_COLUMNS;
         let last = (first + BLOCK_COLUMNS).min(bands.columns) - 1;
         let mut cells = vec![Vec::new(); last + 1 - first];
-        for (i, (_, t)) in tris.iter().enumerate() {
+        for (i, t) in tris.iter().enumerate() {
             let bb = t.bbox();
             for c in bands.column(bb[0]).max(first)..=bands.column(bb[2]).min(last) {
                 cells[c - first].push(i as u32);
@@ -491,7 +488,7 @@ impl OverlaySink {
                         self.loads += 1;
                     }
                     let l = self.loaded.get(&p).or(temp.get(&p)).expect("loaded");
-                    for (c, (_, t)) in l.in_columns(c0, c1) {
+                    for (c, t) in l.in_columns(c0, c1) {
                         let tb = t.bbox();
                         if overlaps(bb, &tb) && bands.first_common(bb, &tb, b, c) {
                             pairs.push((k, *t));
@@ -573,7 +570,7 @@ impl TriangleSink for OverlaySink {
         others.clear();
         for p in bands.pieces(&bb) {
             self.touch(p)?;
-            for (c, (_, t)) in self.loaded[&p].in_columns(c0, c1) {
+            for (c, t) in self.loaded[&p].in_columns(c0, c1) {
                 let tb = t.bbox();
                 if overlaps(&bb, &tb) && bands.first_common(&bb, &tb, p.0, c) {
                     others.push(*t);
