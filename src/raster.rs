@@ -189,28 +189,32 @@ impl GridSpec {
     /// no centre, and a DEM skips them before any exact test.
     pub fn may_hold_centre(&self, t: &[[f64; 3]; 3]) -> bool {
         let [xmin, ymin, xmax, ymax] = crate::geom::tri_bbox(t);
-        if !self.rows_over(ymin, ymax).any(|row| {
-            let y = self.centre_y(row);
-            y >= ymin && y <= ymax
-        }) {
+        // The lowest centre at or above the box's lower side must not pass its upper side.
+        let ky = self.first_at_least(ymin).max(self.ky0);
+        if ky > self.ky_top() || self.at(ky) > ymax {
             return false;
         }
-        self.cols_over(xmin, xmax).any(|col| {
-            let x = self.centre_x(col);
-            x >= xmin && x <= xmax
-        })
+        let kx = self.first_at_least(xmin).max(self.kx0);
+        kx < self.kx0 + i64::from(self.cols) && self.at(kx) <= xmax
+    }
+
+    /// The lowest lattice index whose coordinate is at least `v` (exact: the quotient's
+    /// rounding is corrected against [`GridSpec::at`]).
+    #[inline]
+    fn first_at_least(&self, v: f64) -> i64 {
+        let mut k = (v / self.cell - self.align.offset()).ceil() as i64;
+        while k < i64::MAX && self.at(k) < v {
+            k += 1;
+        }
+        while k > i64::MIN && self.at(k - 1) >= v {
+            k -= 1;
+        }
+        k
     }
 
     /// How many rows, counted from the southern one, have their centre strictly below `y`.
     pub fn rows_below(&self, y: f64) -> u32 {
-        // The lowest lattice index whose coordinate is at least y.
-        let mut k = (y / self.cell - self.align.offset()).ceil() as i64;
-        if self.at(k) < y {
-            k = k.saturating_add(1);
-        }
-        while k > i64::MIN && self.at(k - 1) >= y {
-            k -= 1;
-        }
+        let k = self.first_at_least(y);
         k.saturating_sub(self.ky0).clamp(0, i64::from(self.rows)) as u32
     }
 
