@@ -10,5 +10,19 @@ fn main() -> std::process::ExitCode {
         eprintln!("sweeptin: error: {}", sweeptin::cpu::message(&missing));
         return std::process::ExitCode::from(4);
     }
+    raise_open_file_limit();
     cli::main()
+}
+
+/// Lifts the soft limit on open files to the hard one, as `ulimit -n $(ulimit -Hn)` would: the
+/// external sort keeps a file per run and sizes its merges by this limit (often 1,024 soft on a
+/// cluster node, with a higher hard limit).
+fn raise_open_file_limit() {
+    use rustix::process::{Resource, getrlimit, setrlimit};
+    let mut limit = getrlimit(Resource::Nofile);
+    if limit.current < limit.maximum {
+        limit.current = limit.maximum;
+        // Refused (a sandbox): the sort adapts to the soft limit instead.
+        let _ = setrlimit(Resource::Nofile, limit);
+    }
 }

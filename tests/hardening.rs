@@ -545,3 +545,48 @@ fn exit_statuses_sort_the_failures() {
         assert!(help.contains(line), "--help lacks {line:?}:\n{help}");
     }
 }
+
+// ---- A low limit on open files -----------------------------------------------------------------
+
+/// The external sort keeps a file per spilled run: at `--mem 64K` this sample spills 39 runs,
+/// more than a process limited to 24 open files may hold. The sort merges runs as they come
+/// (by the soft limit), so the job runs and gives the same bytes as without the limit.
+#[cfg(unix)]
+#[test]
+fn a_low_open_file_limit_merges_runs_early_with_the_same_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let args = |out: &str| -> Vec<String> {
+        [
+            "dem",
+            sample.to_str().unwrap(),
+            "--cell",
+            "1",
+            "--mem",
+            "64K",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .chain(["--engine", "sweep", "-q", "-o", out].map(String::from))
+        .collect()
+    };
+    let free = sweeptin()
+        .current_dir(dir.path())
+        .args(args("free.tif"))
+        .output()
+        .unwrap();
+    assert_eq!(code(&free), 0, "{}", err(&free));
+    // `ulimit -n` sets the soft and the hard limit: the binary cannot lift it.
+    let limited = Command::new("sh")
+        .current_dir(dir.path())
+        .arg("-c")
+        .arg("ulimit -n 24 && exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(args("limited.tif"))
+        .output()
+        .unwrap();
+    assert_eq!(code(&limited), 0, "{}", err(&limited));
+    let a = std::fs::read(dir.path().join("free.tif")).unwrap();
+    let b = std::fs::read(dir.path().join("limited.tif")).unwrap();
+    assert!(a == b, "the DEMs differ");
+}

@@ -87,6 +87,8 @@ pub struct ExternalSorter<R: SortKey = SortRecord> {
     spiller: Option<Spiller<R>>,
     tmp_dir: PathBuf,
     stats: SortStats,
+    /// Most runs open at once (`max_open_runs`).
+    max_runs: usize,
 }
 
 /// The thread that sorts full halves and writes them as runs, in the order it gets them, and
@@ -99,23 +101,24 @@ struct Spiller<R: SortKey> {
 }
 
 impl<R: SortKey> Spiller<R> {
-    fn start(tmp_dir: &Path) -> Self {
+    fn start(tmp_dir: &Path, max_runs: usize) -> Self {
         // A rendezvous: the caller's next half waits until the thread is free, so at most two
         // halves exist (the one being spilled, the one being filled).
         let (full, rx) = crossbeam_channel::bounded::<Vec<R>>(0);
         let (tx, empty) = crossbeam_channel::bounded::<Vec<R>>(1);
         let dir = tmp_dir.to_path_buf();
         let thread = std::thread::spawn(move || -> Result<Vec<File>> {
-            let mut runs = Vec::new();
+            let mut runs = Runs::new(max_runs);
             let mut scratch = Vec::new();
             for mut chunk in rx {
-                runs.push(write_run(&mut chunk, &mut scratch, &dir)?);
+                let run = write_run(&mut chunk, &mut scratch, &dir)?;
                 chunk.clear();
                 // Never waits: the sorter takes each half back before handing over the next
                 // (a half it does not want any more is freed here).
                 let _ = tx.try_send(chunk);
+                runs.push::<R>(run, &dir)?;
             }
-            Ok(runs)
+            Ok(runs.into_files())
         });
         Spiller {
             full: Some(full),
@@ -137,6 +140,82 @@ impl<R: SortKey> Spiller<R> {
             .join()
             .unwrap_or_else(|p| Err(Error::panicked("the sort's spilling thread", &*p)))
     }
+}
+
+/// The spilled runs, in input order, with at most about `max_runs` files open: each run is an
+/// open file (its descriptor), and a batch job's limit is often 1,024 descriptors. When the
+/// newest `max_runs / 2` runs are all of one *level* (0: a spilled half; `l + 1`: a merge of
+/// runs of level `l`), they are merged into one run of the next level. The runs merged are
+/// consecutive in input order and the merge breaks ties by run, so the result is the same
+/// stable order; each record is rewritten once per level, and a second level needs
+/// `(max_runs / 2)²` halves.
+struct Runs {
+    files: Vec<(File, u32)>,
+    group: usize,
+}
+
+impl Runs {
+    fn new(max_runs: usize) -> Runs {
+        Runs {
+            files: Vec::new(),
+            group: (max_runs / 2).max(2),
+        }
+    }
+
+    fn push<R: SortKey>(&mut self, run: File, dir: &Path) -> Result<()> {
+        self.files.push((run, 0));
+        loop {
+            let Some(&(_, level)) = self.files.last() else {
+                return Ok(());
+            };
+            let n = self.files.iter().rev().take_while(|f| f.1 == level).count();
+            if n < self.group {
+                return Ok(());
+            }
+            let from = self.files.len() - self.group;
+            let group = self.files.drain(from..).map(|f| f.0).collect();
+            let merged = merge_files::<R>(group, dir)?;
+            self.files.push((merged, level + 1));
+        }
+    }
+
+    fn into_files(self) -> Vec<File> {
+        self.files.into_iter().map(|f| f.0).collect()
+    }
+}
+
+/// Merges the runs `files` (in input order) into one new run under `dir`.
+fn merge_files<R: SortKey>(files: Vec<File>, dir: &Path) -> Result<File> {
+    let mut merge = Merge::<R>::of_runs(files, SortStats::default(), dir)?;
+    let io = |e| Error::write(dir, e);
+    let file = tempfile::tempfile_in(dir).map_err(io)?;
+    let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
+    let mut batch: Vec<R> = Vec::with_capacity(1 << 14);
+    loop {
+        batch.clear();
+        batch.extend(merge.by_ref().take(1 << 14));
+        if batch.is_empty() {
+            break;
+        }
+        w.write_all(bytemuck::cast_slice(&batch)).map_err(io)?;
+    }
+    if let Some(e) = merge.take_error() {
+        return Err(e);
+    }
+    w.flush().map_err(io)?;
+    drop(w);
+    Ok(file)
+}
+
+/// How many runs a sort of `budget` bytes keeps open at most: a quarter of the process's limit on
+/// open files (other sorts, inputs and outputs need theirs), and as many as the merge's windows
+/// of the runs ([`crate::sort::mmap::WINDOW`] each) fit in half the budget; between 4 and 1,024.
+fn max_open_runs(budget: u64) -> usize {
+    let soft = rustix::process::getrlimit(rustix::process::Resource::Nofile)
+        .current
+        .unwrap_or(u64::MAX);
+    let windows = budget / 2 / crate::sort::mmap::WINDOW as u64;
+    (soft / 4).min(windows).clamp(4, 1024) as usize
 }
 
 /// Sorts `chunk` (a radix sort's scratch space in `scratch`) and writes it to a new anonymous
@@ -201,7 +280,15 @@ impl<R: SortKey> ExternalSorter<R> {
                 chunk_records: capacity as u64,
                 ..SortStats::default()
             },
+            max_runs: max_open_runs(chunk_bytes),
         }
+    }
+
+    /// Keeps at most about `n` runs open (at least 4).
+    #[cfg(test)]
+    fn with_max_runs(mut self, n: usize) -> Self {
+        self.max_runs = n.max(4);
+        self
     }
 
     /// Room left in the current half before it is full.
@@ -237,7 +324,7 @@ impl<R: SortKey> ExternalSorter<R> {
             return Ok(());
         }
         if self.spiller.is_none() {
-            self.spiller = Some(Spiller::start(&self.tmp_dir));
+            self.spiller = Some(Spiller::start(&self.tmp_dir, self.max_runs));
             let held = std::mem::take(&mut self.held);
             self.hand_over(held)?;
         }
@@ -340,27 +427,7 @@ impl<R: SortKey> ExternalSorter<R> {
             let _ = spiller.send(chunk);
         }
         let files = spiller.finish()?;
-        let io = |e| Error::write(&self.tmp_dir, e);
-        let mut runs = Vec::with_capacity(files.len());
-        for f in files {
-            let m = MappedRecords::<R>::map(f).map_err(io)?;
-            runs.push(Run { map: m, pos: 0 });
-        }
-        let mut heap = BinaryHeap::with_capacity(runs.len());
-        for (i, r) in runs.iter_mut().enumerate() {
-            if let Some(rec) = r.map.get(0).map_err(io)? {
-                heap.push(Head { rec, run: i });
-            }
-        }
-        Ok(Merge {
-            source: Source::Runs {
-                runs,
-                heap,
-                dir: self.tmp_dir.clone(),
-            },
-            stats: self.stats,
-            error: None,
-        })
+        Merge::of_runs(files, self.stats, &self.tmp_dir)
     }
 }
 
@@ -422,6 +489,31 @@ pub struct Merge<R: SortKey = SortRecord> {
 }
 
 impl<R: SortKey> Merge<R> {
+    /// The k-way merge of the sorted runs `files` (in input order), spilled under `dir`.
+    fn of_runs(files: Vec<File>, stats: SortStats, dir: &Path) -> Result<Merge<R>> {
+        let io = |e| Error::write(dir, e);
+        let mut runs = Vec::with_capacity(files.len());
+        for f in files {
+            let m = MappedRecords::<R>::map(f).map_err(io)?;
+            runs.push(Run { map: m, pos: 0 });
+        }
+        let mut heap = BinaryHeap::with_capacity(runs.len());
+        for (i, r) in runs.iter_mut().enumerate() {
+            if let Some(rec) = r.map.get(0).map_err(io)? {
+                heap.push(Head { rec, run: i });
+            }
+        }
+        Ok(Merge {
+            source: Source::Runs {
+                runs,
+                heap,
+                dir: dir.to_path_buf(),
+            },
+            stats,
+            error: None,
+        })
+    }
+
     /// What the sort did.
     pub fn stats(&self) -> SortStats {
         self.stats
@@ -572,6 +664,58 @@ mod tests {
         pts.sort_by(sweep_order);
         assert_eq!(a, pts);
         // The spill files were anonymous: nothing is left in the directory.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    /// A record with a key and its input position, ordered by the key alone (stably).
+    #[repr(C)]
+    #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Keyed {
+        key: u64,
+        seq: u64,
+    }
+
+    impl SortKey for Keyed {
+        fn order(a: &Self, b: &Self) -> Ordering {
+            a.key.cmp(&b.key)
+        }
+        const STABLE: bool = true;
+        const RADIX: bool = true;
+        fn radix_key(&self) -> u64 {
+            self.key
+        }
+    }
+
+    #[test]
+    fn many_runs_are_merged_as_they_come_in_the_same_stable_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s: u64 = 99;
+        let recs: Vec<Keyed> = (0..300_000u64)
+            .map(|seq| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                Keyed {
+                    key: (s >> 40) % 50,
+                    seq,
+                }
+            })
+            .collect();
+        // Halves of 1,024 records: about 290 runs, never more than about 3 per level open.
+        let mut sorter = ExternalSorter::<Keyed>::new(1, dir.path()).with_max_runs(8);
+        for r in &recs {
+            sorter.push(*r).unwrap();
+        }
+        let merge = sorter.finish().unwrap();
+        assert!(merge.stats().runs > 250, "{:?}", merge.stats());
+        let Source::Runs { runs, .. } = &merge.source else {
+            panic!("spilled")
+        };
+        assert!(runs.len() <= 3 * 5, "{} runs open", runs.len());
+        let got: Vec<Keyed> = merge.collect();
+        let mut want = recs;
+        want.sort_by_key(|r| r.key);
+        assert_eq!(got, want);
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 
