@@ -205,7 +205,7 @@ fn read_index(
     let crs = reader.crs().cloned();
     let t0 = Instant::now();
     let c0 = crate::clock::process_cpu();
-    let mut sorter = ExternalSorter::<BlockRecord>::new(mem / 2, tmp);
+    let mut sorter = ExternalSorter::<BlockRecord>::new(index_sort_budget(mem, total), tmp);
     let mut bounds = [
         f64::INFINITY,
         f64::INFINITY,
@@ -415,6 +415,24 @@ fn prefetched(
         }
         Ok(())
     })
+}
+
+/// Runs the block index's sort aims at: halves of about a sixteenth of the input (a radix sort's
+/// budget is three halves).
+const INDEX_RUNS: u64 = 16;
+
+/// The smallest budget of the block index's sort (halves of about 2.7 MB).
+const MIN_INDEX_SORT: u64 = 8 << 20;
+
+/// The block index's sort budget: half of `mem`, or less when the input (`points`, from the
+/// headers) would fill fewer than [`INDEX_RUNS`] halves. Small halves are sorted and spilled
+/// while decoding goes on; a few large ones (or one vector sorted after the last point) leave
+/// that work to the end, with nothing beside it: ARSO (13.2 M points) at `--mem 1G` took 6.9 s
+/// and 555 MB against 6.0 s and 107 MB at `--mem 128M`. The order of the records is the same
+/// whatever the budget.
+fn index_sort_budget(mem: u64, points: u64) -> u64 {
+    let bytes = points.saturating_mul(std::mem::size_of::<BlockRecord>() as u64);
+    (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))
 }
 
 /// Points per block: [`BLOCK_POINTS`], or more for inputs so large that the block table would
