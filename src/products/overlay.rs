@@ -268,6 +268,11 @@ impl TriangleSink for BandStore {
         Ok(())
     }
 
+    /// The buffers of all pieces together stay under about [`MAX_BUFFERED`] triangles.
+    fn memory_share(&self) -> u64 {
+        ((MAX_BUFFERED + CHUNK) * std::mem::size_of::<Tri>()) as u64
+    }
+
     fn watermark(&mut self, y: f64) -> Result<()> {
         let bands = self.bands.expect("set in begin");
         let below = self.flushed_below;
@@ -583,6 +588,11 @@ impl TriangleSink for OverlaySink {
         self.others = others;
         self.shed();
         Ok(())
+    }
+
+    /// The pieces held (their budget, about) and the waiting tall triangles.
+    fn memory_share(&self) -> u64 {
+        (self.budget + MAX_TALL * std::mem::size_of::<Tri>()) as u64
     }
 
     fn watermark(&mut self, y: f64) -> Result<()> {
