@@ -116,7 +116,7 @@ impl<R: SortKey> Spiller<R> {
                 // Never waits: the sorter takes each half back before handing over the next
                 // (a half it does not want any more is freed here).
                 let _ = tx.try_send(chunk);
-                runs.push::<R>(run, &dir)?;
+                runs.push(run, &mut scratch, &dir)?;
             }
             Ok(runs.into_files())
         });
@@ -145,7 +145,8 @@ impl<R: SortKey> Spiller<R> {
 /// The spilled runs, in input order, with at most about `max_runs` files open: each run is an
 /// open file (its descriptor), and a batch job's limit is often 1,024 descriptors. When the
 /// newest `max_runs / 2` runs are all of one *level* (0: a spilled half; `l + 1`: a merge of
-/// runs of level `l`), they are merged into one run of the next level. The runs merged are
+/// runs of level `l`), they are merged into one run of the next level, and so are the newest
+/// `max_runs / 2` whatever their levels when `max_runs` are open. The runs merged are
 /// consecutive in input order and the merge breaks ties by run, so the result is the same
 /// stable order; each record is rewritten once per level, and a second level needs
 /// `(max_runs / 2)²` halves.
@@ -162,20 +163,25 @@ impl Runs {
         }
     }
 
-    fn push<R: SortKey>(&mut self, run: File, dir: &Path) -> Result<()> {
+    /// Adds the newest run; `scratch` (the radix sort's) is given back before a merge.
+    fn push<R: SortKey>(&mut self, run: File, scratch: &mut Vec<R>, dir: &Path) -> Result<()> {
         self.files.push((run, 0));
         loop {
             let Some(&(_, level)) = self.files.last() else {
                 return Ok(());
             };
             let n = self.files.iter().rev().take_while(|f| f.1 == level).count();
-            if n < self.group {
+            // The levels keep the rewriting to one per level; the cap holds whatever the levels.
+            let full = self.files.len() >= 2 * self.group;
+            if n < self.group && !full {
                 return Ok(());
             }
+            *scratch = Vec::new();
             let from = self.files.len() - self.group;
+            let top = self.files[from..].iter().map(|f| f.1).max().unwrap_or(0);
             let group = self.files.drain(from..).map(|f| f.0).collect();
             let merged = merge_files::<R>(group, dir)?;
-            self.files.push((merged, level + 1));
+            self.files.push((merged, top + 1));
         }
     }
 
@@ -211,11 +217,22 @@ fn merge_files<R: SortKey>(files: Vec<File>, dir: &Path) -> Result<File> {
 /// open files (other sorts, inputs and outputs need theirs), and as many as the merge's windows
 /// of the runs ([`crate::sort::mmap::WINDOW`] each) fit in half the budget; between 4 and 1,024.
 fn max_open_runs(budget: u64) -> usize {
-    let soft = rustix::process::getrlimit(rustix::process::Resource::Nofile)
-        .current
-        .unwrap_or(u64::MAX);
     let windows = budget / 2 / crate::sort::mmap::WINDOW as u64;
-    (soft / 4).min(windows).clamp(4, 1024) as usize
+    (open_file_limit() / 4).min(windows).clamp(4, 1024) as usize
+}
+
+/// The process's soft limit on open files.
+#[cfg(target_os = "linux")]
+fn open_file_limit() -> u64 {
+    rustix::process::getrlimit(rustix::process::Resource::Nofile)
+        .current
+        .unwrap_or(u64::MAX)
+}
+
+/// The process's soft limit on open files (the usual 1,024 where it is not asked).
+#[cfg(not(target_os = "linux"))]
+fn open_file_limit() -> u64 {
+    1024
 }
 
 /// Sorts `chunk` (a radix sort's scratch space in `scratch`) and writes it to a new anonymous
@@ -711,7 +728,7 @@ mod tests {
         let Source::Runs { runs, .. } = &merge.source else {
             panic!("spilled")
         };
-        assert!(runs.len() <= 3 * 5, "{} runs open", runs.len());
+        assert!(runs.len() < 8, "{} runs open", runs.len());
         let got: Vec<Keyed> = merge.collect();
         let mut want = recs;
         want.sort_by_key(|r| r.key);
