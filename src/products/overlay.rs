@@ -268,7 +268,7 @@ impl TriangleSink for BandStore {
         Ok(())
     }
 
-    /// The buffers of all pieces together stay under about [`MAX_BUFFERED`] triangles.
+    /// The buffers of all pieces together stay under about 262,144 triangles.
     fn memory_share(&self) -> u64 {
         ((MAX_BUFFERED + CHUNK) * std::mem::size_of::<Tri>()) as u64
     }
