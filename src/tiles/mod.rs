@@ -205,6 +205,7 @@ fn read_index(
     let crs = reader.crs().cloned();
     let t0 = Instant::now();
     let c0 = crate::clock::process_cpu();
+    probe_memory(mem, total)?;
     let mut sorter = ExternalSorter::<BlockRecord>::new(index_sort_budget(mem, total), tmp);
     let mut bounds = [
         f64::INFINITY,
@@ -433,6 +434,23 @@ const MIN_INDEX_SORT: u64 = 8 << 20;
 fn index_sort_budget(mem: u64, points: u64) -> u64 {
     let bytes = points.saturating_mul(std::mem::size_of::<BlockRecord>() as u64);
     (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))
+}
+
+/// Fails before any work when the process may not have what the run may hold: half of `mem`, or
+/// the input's `points` as sort records if fewer (a memory limit below `--mem`: `ulimit -v`, a
+/// cgroup or a batch job's limit), rather than aborting later. The probe is only reserved.
+fn probe_memory(mem: u64, points: u64) -> Result<()> {
+    let bytes = (mem / 2).min(points.saturating_mul(std::mem::size_of::<BlockRecord>() as u64));
+    let mut probe: Vec<u8> = Vec::new();
+    probe
+        .try_reserve_exact(usize::try_from(bytes).unwrap_or(usize::MAX))
+        .map_err(|_| Error::OutOfMemory {
+            what: format!("the tiles of {points} points"),
+            bytes,
+            hint: "the process has less memory than --mem asks (ulimit -v, a cgroup or a \
+                   batch job's limit): give a smaller --mem"
+                .into(),
+        })
 }
 
 /// Points per block: [`BLOCK_POINTS`], or more for inputs so large that the block table would
