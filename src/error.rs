@@ -81,7 +81,7 @@ pub enum Error {
     },
 
     /// Reading an input file failed.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}{}", path.display(), files_hint(source))]
     Io {
         /// The file.
         path: PathBuf,
@@ -167,7 +167,7 @@ pub enum Error {
     /// Writing an output, a temporary or a spill file failed (disk full, read-only, permissions),
     /// or it cannot be written where asked (a directory, a block device, a stream for a format
     /// that needs seeking).
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}{}", path.display(), files_hint(source))]
     Write {
         /// The output (or temporary) file.
         path: PathBuf,
@@ -267,6 +267,16 @@ fn names(files: &[PathBuf]) -> String {
     names.join(", ")
 }
 
+/// What to do when the process may open no more files (`EMFILE`), or nothing.
+fn files_hint(e: &std::io::Error) -> &'static str {
+    // EMFILE is 24 on Linux, macOS and the BSDs.
+    if e.raw_os_error() == Some(24) {
+        " (this process may open too few files at once: raise `ulimit -n`)"
+    } else {
+        ""
+    }
+}
+
 impl Error {
     /// Wraps an I/O error reading an input with the path it concerns.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
@@ -288,6 +298,8 @@ impl Error {
     pub fn kind(&self) -> ErrorKind {
         match self {
             Error::NoInput | Error::Options(_) => ErrorKind::Usage,
+            // Too many open files: the environment's limit, not the input.
+            Error::Io { source, .. } if !files_hint(source).is_empty() => ErrorKind::Output,
             Error::NonFinite { .. }
             | Error::CoordinateOutOfRange { .. }
             | Error::TooFewPoints { .. }

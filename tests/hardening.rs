@@ -588,3 +588,37 @@ fn a_low_open_file_limit_merges_runs_early_with_the_same_output() {
     let b = std::fs::read(dir.path().join("limited.tif")).unwrap();
     assert!(a == b, "the DEMs differ");
 }
+
+/// A summary printed to standard output (`info`, `--json`, `volume`) whose reader went away is
+/// exit 0, as for streamed outputs; a full device is exit 4 with a message. Both were a panic
+/// (exit 5, "failed printing to stdout").
+#[cfg(unix)]
+#[test]
+fn summaries_to_a_closed_pipe_or_a_full_disk_are_not_internal_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let sample = sample.to_str().unwrap();
+    let mut child = sweeptin()
+        .current_dir(dir.path())
+        .args(["tin", sample, "-o", "a.ply", "--json", "-q"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    if Path::new("/dev/full").exists() {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let o = sweeptin()
+            .args(["info", sample])
+            .stdout(full)
+            .output()
+            .unwrap();
+        assert_eq!(code(&o), 4, "{}", err(&o));
+        assert!(err(&o).contains("standard output"), "{}", err(&o));
+    }
+}

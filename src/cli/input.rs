@@ -56,8 +56,9 @@ pub struct InputArgs {
     /// breakline that meets a tile's run goes into it whole); its memory is bounded by --mem.
     /// Dense breakline networks (a planar partition of polygons) make tiles read far beyond
     /// their buffers, and the sweep can be faster there. `sweep` runs one streaming sweep on one core, whose memory
-    /// follows the advancing front. All give the same triangles (and the same DEM, contours and
-    /// volumes, byte for byte); a mesh lists them in another order.
+    /// follows the advancing front. All give the same triangles (and the same DEM and volumes,
+    /// byte for byte, and the same contour lines, a closed ring perhaps from another vertex or
+    /// in another order); a mesh lists them in another order.
     #[arg(long, value_enum, value_name = "ENGINE", default_value_t = Engine::Auto)]
     pub engine: Engine,
     /// Threads (default: every core): the tiled engine's tile workers, and the decoding and

@@ -107,7 +107,9 @@ pub fn main() -> ExitCode {
     // library turns its threads' panics and its decoders' into errors. The hook only keeps the
     // message and place (and prints a backtrace when RUST_BACKTRACE asks for one).
     std::panic::set_hook(Box::new(|info| {
-        if std::env::var_os("RUST_BACKTRACE").is_some_and(|v| v != "0") {
+        if std::env::var_os("RUST_BACKTRACE").is_some_and(|v| v != "0")
+            && stdout_failure(&info.to_string()).is_none()
+        {
             eprintln!("{info}\n{}", std::backtrace::Backtrace::force_capture());
         }
         *LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()) = Some(info.to_string());
@@ -120,6 +122,14 @@ pub fn main() -> ExitCode {
                 .unwrap_or_else(|e| e.into_inner())
                 .take()
                 .unwrap_or_else(|| "(no message)".into());
+            // `println!` on a closed pipe or a full disk: not a bug.
+            if let Some(cause) = stdout_failure(&what) {
+                if cause.contains("os error 32") {
+                    return ExitCode::SUCCESS;
+                }
+                eprintln!("sweeptin: error: cannot write to standard output: {cause}");
+                return ExitCode::from(sweeptin::ErrorKind::Output.exit_code());
+            }
             Err(sweeptin::Error::Internal(what.replace('\n', " ")).into())
         }
     };
@@ -142,6 +152,13 @@ pub fn main() -> ExitCode {
             ExitCode::from(kind(&e).exit_code())
         }
     }
+}
+
+/// The I/O error of a panic of `print!`/`println!` (standard output closed or full), if that is
+/// what the panic message `what` says.
+fn stdout_failure(what: &str) -> Option<&str> {
+    const PREFIX: &str = "failed printing to stdout: ";
+    what.find(PREFIX).map(|i| what[i + PREFIX.len()..].trim())
 }
 
 /// What kind of failure `e` is: the kind of the library error in its chain; an I/O error of the

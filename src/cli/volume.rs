@@ -75,6 +75,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let Some(ProductSummary::Volume(v)) = products.get("volume") else {
         return Err(sweeptin::Error::Internal(format!("no volume summary in {products:?}")).into());
     };
+    if args.plane.is_none() && v.totals.area == 0.0 {
+        eprintln!(
+            "sweeptin: warning: the surface and the reference do not overlap (or only along \
+             edges): every volume and area is 0"
+        );
+    }
     if args.input.args.json {
         let mut out = serde_json::to_value(v)?;
         out["run"] = serde_json::to_value(&run)?;

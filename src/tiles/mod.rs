@@ -436,11 +436,11 @@ fn index_sort_budget(mem: u64, points: u64) -> u64 {
     (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))
 }
 
-/// Fails before any work when the process may not have what the run may hold: half of `mem`, or
-/// the input's `points` as sort records if fewer (a memory limit below `--mem`: `ulimit -v`, a
-/// cgroup or a batch job's limit), rather than aborting later. The probe is only reserved.
+/// Fails before any work when the process may not have half of `mem` (a limit on its address
+/// space below `--mem`: `ulimit -v`, a batch job's limit), rather than aborting later in a tile
+/// worker. The probe is only reserved, never touched.
 fn probe_memory(mem: u64, points: u64) -> Result<()> {
-    let bytes = (mem / 2).min(points.saturating_mul(std::mem::size_of::<BlockRecord>() as u64));
+    let bytes = mem / 2;
     let mut probe: Vec<u8> = Vec::new();
     probe
         .try_reserve_exact(usize::try_from(bytes).unwrap_or(usize::MAX))
