@@ -194,13 +194,18 @@ impl RunConfig {
         }
         let tmp_dir = options.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
         if !tmp_dir.is_dir() {
-            return Err(Error::write(
-                &tmp_dir,
-                std::io::Error::new(
+            let (kind, what) = if tmp_dir.exists() {
+                (
+                    std::io::ErrorKind::NotADirectory,
+                    "the temporary directory is not a directory",
+                )
+            } else {
+                (
                     std::io::ErrorKind::NotFound,
                     "temporary directory does not exist",
-                ),
-            ));
+                )
+            };
+            return Err(Error::write(&tmp_dir, std::io::Error::new(kind, what)));
         }
         Ok(RunConfig {
             input,
