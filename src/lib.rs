@@ -82,7 +82,7 @@ internal! {
     mod tin;
 }
 
-pub use error::{Error, ErrorKind, Result};
+pub use error::{Error, ErrorKind, Result, human_bytes};
 pub use finalise::StreamStats;
 pub use pipeline::{Input, LineOptions, RunConfig, RunOptions, RunSummary, SweepAxis};
 pub use sort::DuplicatePolicy;

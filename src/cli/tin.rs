@@ -88,37 +88,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.output.display(),
             written.vertices,
             written.triangles,
-            human_bytes(written.bytes),
+            sweeptin::human_bytes(written.bytes),
             format,
             start.elapsed().as_secs_f64(),
-            summary.peak_rss_bytes.map_or("?".into(), human_bytes),
+            summary
+                .peak_rss_bytes
+                .map_or("?".into(), sweeptin::human_bytes),
         );
     }
     Ok(())
-}
-
-/// `1536` → `1.5 KiB`.
-fn human_bytes(bytes: u64) -> String {
-    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
-    let mut v = bytes as f64;
-    let mut unit = 0;
-    while v >= 1024.0 && unit + 1 < UNITS.len() {
-        v /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{bytes} B")
-    } else {
-        format!("{v:.1} {}", UNITS[unit])
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn human_bytes() {
-        assert_eq!(super::human_bytes(12), "12 B");
-        assert_eq!(super::human_bytes(1536), "1.5 KiB");
-        assert_eq!(super::human_bytes(5 << 30), "5.0 GiB");
-    }
 }

@@ -179,10 +179,10 @@ pub(super) fn check_point(index: u64, p: [f64; 3]) -> Result<()> {
 fn too_big(count: u64, need: u64, mem: u64) -> Error {
     Error::Options(format!(
         "thin holds every point in memory: {count} points (before filters) need about {} MiB \
-         ({THIN_BYTES_PER_POINT} bytes each), more than --mem {} MiB: raise --mem, or thin \
+         ({THIN_BYTES_PER_POINT} bytes each), more than --mem {}: raise --mem, or thin \
          smaller areas with --bbox",
         need >> 20,
-        mem >> 20
+        crate::human_bytes(mem)
     ))
 }
 

@@ -233,15 +233,15 @@ fn band_rows(spec: &GridSpec, memory: u64) -> Result<usize> {
     let rows = memory.saturating_sub(tables) / row.max(1);
     if rows < 2 {
         return Err(Error::Options(format!(
-            "a DEM of {} × {} cells needs at least {} MiB ({} bytes a row, two rows, and {} \
-             bytes of row tables), more than its share of --mem ({} MiB): raise --mem, or use a \
+            "a DEM of {} × {} cells needs at least {} ({} bytes a row, two rows, and {} \
+             bytes of row tables), more than its share of --mem ({}): raise --mem, or use a \
              larger --cell or a smaller --bbox",
             spec.cols,
             spec.rows,
-            (2 * row + tables).div_ceil(1 << 20),
+            crate::human_bytes(2 * row + tables),
             row,
             tables,
-            memory >> 20
+            crate::human_bytes(memory)
         )));
     }
     Ok(usize::try_from(rows).unwrap_or(usize::MAX))
