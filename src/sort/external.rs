@@ -214,11 +214,15 @@ fn merge_files<R: SortKey>(files: Vec<File>, dir: &Path) -> Result<File> {
 }
 
 /// How many runs a sort of `budget` bytes keeps open at most: a quarter of the process's limit on
-/// open files (other sorts, inputs and outputs need theirs), and as many as the merge's windows
+/// open files beyond its own 16 (other sorts, inputs and outputs need theirs), and as many as the merge's windows
 /// of the runs ([`crate::sort::mmap::WINDOW`] each) fit in half the budget; between 4 and 1,024.
 fn max_open_runs(budget: u64) -> usize {
     let windows = budget / 2 / crate::sort::mmap::WINDOW as u64;
-    (open_file_limit() / 4).min(windows).clamp(4, 1024) as usize
+    // About 16 descriptors are the process's own (standard streams, the interrupt handler's
+    // pipe, inputs, outputs and their spools).
+    (open_file_limit().saturating_sub(16) / 4)
+        .min(windows)
+        .clamp(4, 1024) as usize
 }
 
 /// The process's soft limit on open files.
