@@ -233,6 +233,18 @@ fn open_file_limit() -> u64 {
         .unwrap_or(u64::MAX)
 }
 
+/// The process's soft limit on its address space (`ulimit -v`), if it has one.
+#[cfg(target_os = "linux")]
+pub(crate) fn address_space_limit() -> Option<u64> {
+    rustix::process::getrlimit(rustix::process::Resource::As).current
+}
+
+/// The process's soft limit on its address space (not asked here).
+#[cfg(not(target_os = "linux"))]
+pub(crate) fn address_space_limit() -> Option<u64> {
+    None
+}
+
 /// The process's soft limit on open files (the usual 1,024 where it is not asked).
 #[cfg(not(target_os = "linux"))]
 fn open_file_limit() -> u64 {

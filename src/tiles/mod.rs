@@ -205,7 +205,7 @@ fn read_index(
     let crs = reader.crs().cloned();
     let t0 = Instant::now();
     let c0 = crate::clock::process_cpu();
-    probe_memory(mem, total)?;
+    check_address_space(mem, total)?;
     let mut sorter = ExternalSorter::<BlockRecord>::new(index_sort_budget(mem, total), tmp);
     let mut bounds = [
         f64::INFINITY,
@@ -436,21 +436,21 @@ fn index_sort_budget(mem: u64, points: u64) -> u64 {
     (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))
 }
 
-/// Fails before any work when the process may not have half of `mem` (a limit on its address
-/// space below `--mem`: `ulimit -v`, a batch job's limit), rather than aborting later in a tile
-/// worker. The probe is only reserved, never touched.
-fn probe_memory(mem: u64, points: u64) -> Result<()> {
-    let bytes = mem / 2;
-    let mut probe: Vec<u8> = Vec::new();
-    probe
-        .try_reserve_exact(usize::try_from(bytes).unwrap_or(usize::MAX))
-        .map_err(|_| Error::OutOfMemory {
+/// Fails before any work when the process's address space is limited below half of `mem`
+/// (`ulimit -v`, a batch job's limit), rather than aborting later in a tile worker.
+fn check_address_space(mem: u64, points: u64) -> Result<()> {
+    match crate::sort::external::address_space_limit() {
+        Some(limit) if limit < mem / 2 => Err(Error::OutOfMemory {
             what: format!("the tiles of {points} points"),
-            bytes,
-            hint: "the process has less memory than --mem asks (ulimit -v, a cgroup or a \
-                   batch job's limit): give a smaller --mem"
-                .into(),
-        })
+            bytes: mem / 2,
+            hint: format!(
+                "the process may use {} of address space (ulimit -v or a batch job's limit), \
+                 less than half of --mem: give a smaller --mem",
+                crate::human_bytes(limit)
+            ),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// Points per block: [`BLOCK_POINTS`], or more for inputs so large that the block table would
