@@ -124,7 +124,7 @@ pub fn main() -> ExitCode {
                 .unwrap_or_else(|| "(no message)".into());
             // `println!` on a closed pipe or a full disk: not a bug.
             if let Some(cause) = stdout_failure(&what) {
-                if cause.contains("os error 32") {
+                if cause.contains("os error 32") || cause.starts_with("Broken pipe") {
                     return ExitCode::SUCCESS;
                 }
                 eprintln!("sweeptin: error: cannot write to standard output: {cause}");

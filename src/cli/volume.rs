@@ -76,9 +76,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Err(sweeptin::Error::Internal(format!("no volume summary in {products:?}")).into());
     };
     if args.plane.is_none() && v.totals.area == 0.0 {
+        let within = if args.boundary.is_some() {
+            " within the boundary"
+        } else {
+            ""
+        };
         eprintln!(
-            "sweeptin: warning: the surface and the reference do not overlap (or only along \
-             edges): every volume and area is 0"
+            "sweeptin: warning: the surface and the reference do not overlap{within} (or only \
+             along edges): every volume and area is 0"
         );
     }
     if args.input.args.json {

@@ -178,10 +178,10 @@ pub(super) fn check_point(index: u64, p: [f64; 3]) -> Result<()> {
 
 fn too_big(count: u64, need: u64, mem: u64) -> Error {
     Error::Options(format!(
-        "thin holds every point in memory: {count} points (before filters) need about {} MiB \
+        "thin holds every point in memory: {count} points (before filters) need about {} \
          ({THIN_BYTES_PER_POINT} bytes each), more than --mem {}: raise --mem, or thin \
          smaller areas with --bbox",
-        need >> 20,
+        crate::human_bytes(need),
         crate::human_bytes(mem)
     ))
 }

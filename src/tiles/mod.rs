@@ -436,16 +436,17 @@ fn index_sort_budget(mem: u64, points: u64) -> u64 {
     (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))
 }
 
-/// Fails before any work when the process's address space is limited below half of `mem`
-/// (`ulimit -v`, a batch job's limit), rather than aborting later in a tile worker.
+/// Fails before any work when the process's address space is limited below `mem` (`ulimit -v`,
+/// a batch job's limit; the tiles in flight may take all of `mem`, and threads' stacks and
+/// allocator arenas count too), rather than aborting later in a tile worker.
 fn check_address_space(mem: u64, points: u64) -> Result<()> {
     match crate::sort::external::address_space_limit() {
-        Some(limit) if limit < mem / 2 => Err(Error::OutOfMemory {
+        Some(limit) if limit < mem => Err(Error::OutOfMemory {
             what: format!("the tiles of {points} points"),
-            bytes: mem / 2,
+            bytes: mem,
             hint: format!(
                 "the process may use {} of address space (ulimit -v or a batch job's limit), \
-                 less than half of --mem: give a smaller --mem",
+                 less than --mem: give a smaller --mem",
                 crate::human_bytes(limit)
             ),
         }),
