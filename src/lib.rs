@@ -72,6 +72,7 @@ pub mod validate;
 
 pub(crate) mod clock;
 pub(crate) mod idmap;
+pub(crate) mod limits;
 internal! {
     mod finalise;
     mod geom;

@@ -193,21 +193,32 @@ impl Runs {
 /// Merges the runs `files` (in input order) into one new run under `dir`.
 fn merge_files<R: SortKey>(files: Vec<File>, dir: &Path) -> Result<File> {
     let mut merge = Merge::<R>::of_runs(files, SortStats::default(), dir)?;
+    let mut batch: Vec<R> = Vec::with_capacity(1 << 14);
+    let file = new_run(dir, |w| {
+        loop {
+            batch.clear();
+            batch.extend(merge.by_ref().take(1 << 14));
+            if batch.is_empty() {
+                return Ok(());
+            }
+            w.write_all(bytemuck::cast_slice(&batch))?;
+        }
+    })?;
+    match merge.take_error() {
+        Some(e) => Err(e),
+        None => Ok(file),
+    }
+}
+
+/// A new anonymous run file under `dir`, its records written by `write` through a buffer.
+fn new_run(
+    dir: &Path,
+    write: impl FnOnce(&mut std::io::BufWriter<&File>) -> std::io::Result<()>,
+) -> Result<File> {
     let io = |e| Error::write(dir, e);
     let file = tempfile::tempfile_in(dir).map_err(io)?;
     let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
-    let mut batch: Vec<R> = Vec::with_capacity(1 << 14);
-    loop {
-        batch.clear();
-        batch.extend(merge.by_ref().take(1 << 14));
-        if batch.is_empty() {
-            break;
-        }
-        w.write_all(bytemuck::cast_slice(&batch)).map_err(io)?;
-    }
-    if let Some(e) = merge.take_error() {
-        return Err(e);
-    }
+    write(&mut w).map_err(io)?;
     w.flush().map_err(io)?;
     drop(w);
     Ok(file)
@@ -220,35 +231,9 @@ fn max_open_runs(budget: u64) -> usize {
     let windows = budget / 2 / crate::sort::mmap::WINDOW as u64;
     // About 16 descriptors are the process's own (standard streams, the interrupt handler's
     // pipe, inputs, outputs and their spools).
-    (open_file_limit().saturating_sub(16) / 4)
+    (crate::limits::open_files().saturating_sub(16) / 4)
         .min(windows)
         .clamp(4, 1024) as usize
-}
-
-/// The process's soft limit on open files.
-#[cfg(target_os = "linux")]
-fn open_file_limit() -> u64 {
-    rustix::process::getrlimit(rustix::process::Resource::Nofile)
-        .current
-        .unwrap_or(u64::MAX)
-}
-
-/// The process's soft limit on its address space (`ulimit -v`), if it has one.
-#[cfg(target_os = "linux")]
-pub(crate) fn address_space_limit() -> Option<u64> {
-    rustix::process::getrlimit(rustix::process::Resource::As).current
-}
-
-/// The process's soft limit on its address space (not asked here).
-#[cfg(not(target_os = "linux"))]
-pub(crate) fn address_space_limit() -> Option<u64> {
-    None
-}
-
-/// The process's soft limit on open files (the usual 1,024 where it is not asked).
-#[cfg(not(target_os = "linux"))]
-fn open_file_limit() -> u64 {
-    1024
 }
 
 /// Sorts `chunk` (a radix sort's scratch space in `scratch`) and writes it to a new anonymous
@@ -259,13 +244,7 @@ fn write_run<R: SortKey>(chunk: &mut [R], scratch: &mut Vec<R>, dir: &Path) -> R
     } else {
         sort_records(chunk);
     }
-    let io = |e| Error::write(dir, e);
-    let file = tempfile::tempfile_in(dir).map_err(io)?;
-    let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
-    w.write_all(bytemuck::cast_slice(chunk)).map_err(io)?;
-    w.flush().map_err(io)?;
-    drop(w);
-    Ok(file)
+    new_run(dir, |w| w.write_all(bytemuck::cast_slice(chunk)))
 }
 
 fn sort_records<R: SortKey>(chunk: &mut [R]) {

@@ -440,7 +440,7 @@ fn index_sort_budget(mem: u64, points: u64) -> u64 {
 /// a batch job's limit; the tiles in flight may take all of `mem`, and threads' stacks and
 /// allocator arenas count too), rather than aborting later in a tile worker.
 fn check_address_space(mem: u64, points: u64) -> Result<()> {
-    match crate::sort::external::address_space_limit() {
+    match crate::limits::address_space() {
         Some(limit) if limit < mem => Err(Error::OutOfMemory {
             what: format!("the tiles of {points} points"),
             bytes: mem,
