@@ -1,17 +1,26 @@
 //! The block index: every point once, grouped by block, so a tile can read the blocks of its
 //! buffered extent without decoding the input again.
 //!
-//! Reading pushes each point with its block key into the external sort ([`BlockRecord`], a stable
-//! sort by key, so the points of a block stay in input order). The merged stream is written once
-//! to an anonymous temporary file as bare `[x, y, z]` records (or kept in memory when it fit in
-//! one chunk), with a table of the non-empty blocks and where each starts. A row of blocks is one
-//! contiguous run of records, so reading a rectangle of blocks is one read per block row.
+//! Reading pushes each point with its block key into the external sort (a stable sort by key, so
+//! the points of a block stay in input order). The merged stream is written once to an anonymous
+//! temporary file as bare points (or kept in memory when it fit in one chunk), with a table of
+//! the non-empty blocks and where each starts. A row of blocks is one contiguous run of records,
+//! so reading a rectangle of blocks is one read per block row.
+//!
+//! **Packing.** When the input files share one decimal lattice ([`Lattice`]: short decimal
+//! scales and offsets, headers that bound their points) and the blocks of their boxes fit a
+//! 32-bit key, a point is sorted as a [`PackedRecord`] (16 bytes: the key and three lattice
+//! integers) and stored as its three integers (12 bytes), which decode to the very doubles the
+//! reader gave. Otherwise it is sorted as a [`BlockRecord`] (32 bytes) and stored as `[x, y, z]`
+//! (24 bytes). The spilled and stored bytes, the temporary disk and the kernel's copying are
+//! halved; the points, their order and every output are the same either way.
 //!
 //! The table also answers *occupancy* (is any point in these blocks?), which the certificates use.
 
 use super::grid::{BlockRect, TileGrid};
 use super::hull::hull;
 use crate::error::{Error, Result};
+use crate::input::las::world::Lattice;
 use crate::sort::DuplicatePolicy;
 use crate::sort::external::{Merge, SortKey};
 use std::cmp::Ordering;
@@ -44,10 +53,124 @@ impl SortKey for BlockRecord {
     }
 }
 
+/// A point with its block key in 16 bytes ([`Packing`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct PackedRecord {
+    key: u32,
+    q: [u32; 3],
+}
+
+impl SortKey for PackedRecord {
+    #[inline(always)]
+    fn order(a: &Self, b: &Self) -> Ordering {
+        a.key.cmp(&b.key)
+    }
+    const STABLE: bool = true;
+    const RADIX: bool = true;
+    #[inline(always)]
+    fn radix_key(&self) -> u64 {
+        u64::from(self.key)
+    }
+}
+
+/// How points are packed: their lattice, and block keys counted from the lowest block of the
+/// input's box, the column in the low `shift` bits (row-major, as [`TileGrid::key`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Packing {
+    lattice: Lattice,
+    bx0: i64,
+    by0: i64,
+    shift: u32,
+}
+
+impl Packing {
+    /// The packing of points in `bounds` (`[xmin, ymin, xmax, ymax]`, the headers' box) on
+    /// `lattice`, with blocks of `grid`, or `None` when the box has more blocks than 32-bit
+    /// keys count.
+    pub fn new(lattice: Lattice, grid: &TileGrid, bounds: [f64; 4]) -> Option<Packing> {
+        // A block of margin: the reader lets points a unit outside a header's box through.
+        let (bx0, by0) = grid.block_of(bounds[0], bounds[1]);
+        let (bx1, by1) = grid.block_of(bounds[2], bounds[3]);
+        let (bx0, by0, bx1, by1) = (bx0 - 1, by0 - 1, bx1 + 1, by1 + 1);
+        let shift = 64 - ((bx1 - bx0) as u64).leading_zeros();
+        let rows = (by1 - by0 + 1) as u64;
+        (shift <= 32 && rows <= 1u64 << (32 - shift)).then_some(Packing {
+            lattice,
+            bx0,
+            by0,
+            shift,
+        })
+    }
+
+    /// The record of point `p` in block `(bx, by)`.
+    ///
+    /// # Errors
+    /// [`Error::Internal`] for a point outside the box (the reader lets none through).
+    #[inline]
+    pub fn pack(&self, (bx, by): (i64, i64), p: [f64; 3]) -> Result<PackedRecord> {
+        let (c, r) = (bx - self.bx0, by - self.by0);
+        let fits = (0..1i64 << self.shift).contains(&c) && (0..1i64 << (32 - self.shift)).contains(&r);
+        match self.lattice.encode(p) {
+            Some(q) if fits => Ok(PackedRecord {
+                key: (((r as u64) << self.shift) | c as u64) as u32,
+                q,
+            }),
+            _ => Err(Error::Internal(format!(
+                "point ({}, {}, {}) lies outside the files' headers' box",
+                p[0], p[1], p[2]
+            ))),
+        }
+    }
+}
+
+/// A sort record of the index: its block key and point, and what the index's file stores.
+pub(crate) trait IndexRecord: SortKey + bytemuck::Pod + Send {
+    /// A point as the index's file stores it.
+    type Stored: bytemuck::Pod + Send;
+    /// The block key ([`TileGrid::key`]) and the point.
+    fn unpack(&self, packing: Option<&Packing>) -> (u64, [f64; 3]);
+    /// The point as stored.
+    fn stored(&self) -> Self::Stored;
+}
+
+impl IndexRecord for BlockRecord {
+    type Stored = [f64; 3];
+    #[inline]
+    fn unpack(&self, _: Option<&Packing>) -> (u64, [f64; 3]) {
+        (self.key, [self.x, self.y, self.z])
+    }
+    #[inline]
+    fn stored(&self) -> [f64; 3] {
+        [self.x, self.y, self.z]
+    }
+}
+
+impl IndexRecord for PackedRecord {
+    type Stored = [u32; 3];
+    #[inline]
+    fn unpack(&self, packing: Option<&Packing>) -> (u64, [f64; 3]) {
+        let p = packing.expect("packed records come with their packing");
+        let k = u64::from(self.key);
+        let (c, r) = (k & ((1u64 << p.shift) - 1), k >> p.shift);
+        let key = TileGrid::key(p.bx0 + c as i64, p.by0 + r as i64);
+        (key, p.lattice.decode(self.q))
+    }
+    #[inline]
+    fn stored(&self) -> [u32; 3] {
+        self.q
+    }
+}
+
 #[derive(Debug)]
 enum Store {
     Memory(Vec<[f64; 3]>),
-    File { file: File, dir: PathBuf },
+    /// Points as `[x, y, z]`, or as lattice integers with a packing.
+    File {
+        file: File,
+        dir: PathBuf,
+        packing: Option<Packing>,
+    },
 }
 
 /// Every point, grouped by block.
@@ -245,11 +368,11 @@ impl Builder {
     }
 
     #[inline]
-    fn note(&mut self, r: &BlockRecord) {
-        if self.keys.last() != Some(&r.key) {
+    fn note(&mut self, key: u64, p: &[f64; 3]) {
+        if self.keys.last() != Some(&key) {
             self.close();
-            let (bx, by) = TileGrid::unkey(r.key);
-            self.keys.push(r.key);
+            let (bx, by) = TileGrid::unkey(key);
+            self.keys.push(key);
             self.starts.push(self.n);
             let o = &mut self.occupied;
             o.x0 = o.x0.min(bx);
@@ -258,7 +381,7 @@ impl Builder {
             o.y1 = o.y1.max(by + 1);
         }
         let c = &mut self.current;
-        *c = [c[0].min(r.x), c[1].min(r.y), c[2].max(r.x), c[3].max(r.y)];
+        *c = [c[0].min(p[0]), c[1].min(p[1]), c[2].max(p[0]), c[3].max(p[1])];
         self.n += 1;
     }
 }
@@ -266,7 +389,7 @@ impl Builder {
 /// Records per batch handed from the merging thread to the writing one.
 const BATCH: usize = 1 << 14;
 
-/// Writes the merged stream to `file` as bare `[x, y, z]` records and notes its blocks: the
+/// Writes the merged stream to `file` as stored points and notes its blocks: the
 /// k-way merge on this thread, the block table and the writes on another (batches of
 /// [`BATCH`] records through a channel, their vectors handed back), so the two halves of the
 /// work overlap.
@@ -274,24 +397,26 @@ const BATCH: usize = 1 << 14;
 /// # Errors
 /// [`Error::Io`] naming `tmp_dir`, the merge's own error, [`Error::Internal`] if the writing
 /// thread panicked.
-fn write_merged(
+fn write_merged<R: IndexRecord>(
     grid: TileGrid,
-    merge: &mut Merge<BlockRecord>,
+    packing: Option<&Packing>,
+    merge: &mut Merge<R>,
     file: &File,
     tmp_dir: &Path,
 ) -> Result<Builder> {
     let io = |e| Error::io(tmp_dir, e);
-    let (full_tx, full_rx) = crossbeam_channel::bounded::<Vec<BlockRecord>>(2);
-    let (empty_tx, empty_rx) = crossbeam_channel::bounded::<Vec<BlockRecord>>(4);
+    let (full_tx, full_rx) = crossbeam_channel::bounded::<Vec<R>>(2);
+    let (empty_tx, empty_rx) = crossbeam_channel::bounded::<Vec<R>>(4);
     std::thread::scope(|scope| {
         let writer = scope.spawn(move || -> Result<Builder> {
             let mut b = Builder::new(grid);
             let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
-            let mut buf: Vec<[f64; 3]> = Vec::with_capacity(BATCH);
+            let mut buf: Vec<R::Stored> = Vec::with_capacity(BATCH);
             for batch in full_rx {
                 for r in &batch {
-                    b.note(r);
-                    buf.push([r.x, r.y, r.z]);
+                    let (key, p) = r.unpack(packing);
+                    b.note(key, &p);
+                    buf.push(r.stored());
                 }
                 w.write_all(bytemuck::cast_slice(&buf)).map_err(io)?;
                 buf.clear();
@@ -335,9 +460,10 @@ impl BlockIndex {
     ///
     /// # Errors
     /// [`Error::Io`] naming `tmp_dir`, or the merge's own error.
-    pub fn build(
+    pub fn build<R: IndexRecord>(
         grid: TileGrid,
-        mut merge: Merge<BlockRecord>,
+        mut merge: Merge<R>,
+        packing: Option<Packing>,
         tmp_dir: &Path,
         policy: DuplicatePolicy,
     ) -> Result<Self> {
@@ -346,16 +472,18 @@ impl BlockIndex {
         let store = if let Some(v) = merge.take_memory() {
             let mut pts = Vec::with_capacity(v.len());
             for r in &v {
-                b.note(r);
-                pts.push([r.x, r.y, r.z]);
+                let (key, p) = r.unpack(packing.as_ref());
+                b.note(key, &p);
+                pts.push(p);
             }
             Store::Memory(pts)
         } else {
             let file = tempfile::tempfile_in(tmp_dir).map_err(io)?;
-            b = write_merged(grid, &mut merge, &file, tmp_dir)?;
+            b = write_merged(grid, packing.as_ref(), &mut merge, &file, tmp_dir)?;
             Store::File {
                 file,
                 dir: tmp_dir.to_path_buf(),
+                packing,
             }
         };
         b.close();
@@ -542,12 +670,36 @@ impl BlockIndex {
         }
         match &self.store {
             Store::Memory(v) => out.extend_from_slice(&v[a..b]),
-            Store::File { file, dir } => {
+            Store::File {
+                file,
+                dir,
+                packing: None,
+            } => {
                 let old = out.len();
                 out.resize(old + (b - a), [0.0; 3]);
                 let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out[old..]);
                 file.read_exact_at(bytes, (a * 24) as u64)
                     .map_err(|e| Error::io(dir, e))?;
+            }
+            Store::File {
+                file,
+                dir,
+                packing: Some(p),
+            } => {
+                let (old, n) = (out.len(), b - a);
+                out.resize(old + n, [0.0; 3]);
+                // The packed points go to the upper half of the new points' bytes and are
+                // unpacked in place, front to back: point `i` is read (at byte `12 n + 12 i`)
+                // before point `i` is written (bytes `24 i .. 24 i + 24`, below `12 n + 12 (i + 1)`).
+                let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out[old..]);
+                file.read_exact_at(&mut bytes[12 * n..], (a * 12) as u64)
+                    .map_err(|e| Error::io(dir, e))?;
+                for i in 0..n {
+                    let at = 12 * n + 12 * i;
+                    let q: [u32; 3] = bytemuck::pod_read_unaligned(&bytes[at..at + 12]);
+                    let v = p.lattice.decode(q);
+                    bytes[24 * i..24 * i + 24].copy_from_slice(bytemuck::bytes_of(&v));
+                }
             }
         }
         Ok(())
@@ -598,71 +750,8 @@ pub(crate) fn index(mem: u64, pts: &[[f64; 3]], grid: TileGrid, dir: &Path) -> B
         })
         .unwrap();
     }
-    BlockIndex::build(grid, s.finish().unwrap(), dir, DuplicatePolicy::First).unwrap()
+    BlockIndex::build(grid, s.finish().unwrap(), None, dir, DuplicatePolicy::First).unwrap()
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn spilled_and_in_memory_indexes_agree_and_keep_input_order() {
-        let dir = tempfile::tempdir().unwrap();
-        let grid = TileGrid::new(16.0, 2).unwrap();
-        let mut pts = Vec::new();
-        let mut s = 99u64;
-        for i in 0..50_000 {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let x = ((s >> 33) % 6400) as f64 / 100.0 - 10.0;
-            let y = ((s >> 13) % 6400) as f64 / 100.0 - 20.0;
-            pts.push([x, y, i as f64]);
-        }
-        let a = index(1, &pts, grid, dir.path());
-        let b = index(1 << 30, &pts, grid, dir.path());
-        assert_eq!(a.len(), 50_000);
-        assert_eq!(a.occupied(), b.occupied());
-        let r = BlockRect {
-            x0: -2,
-            y0: -3,
-            x1: 5,
-            y1: 4,
-        };
-        let (mut va, mut vb) = (Vec::new(), Vec::new());
-        a.read(&r, &mut va).unwrap();
-        b.read(&r, &mut vb).unwrap();
-        assert_eq!(va, vb);
-        assert_eq!(va.len() as u64, a.count(&r));
-        let expect: Vec<[f64; 3]> = {
-            let mut e: Vec<_> = pts
-                .iter()
-                .filter(|p| {
-                    let (bx, by) = grid.block_of(p[0], p[1]);
-                    r.contains(bx, by)
-                })
-                .copied()
-                .collect();
-            // Row-major by block, input order (z) within a block.
-            e.sort_by_key(|p| {
-                let (bx, by) = grid.block_of(p[0], p[1]);
-                (TileGrid::key(bx, by), p[2] as u64)
-            });
-            e
-        };
-        assert_eq!(va, expect);
-        // Everything, across the writer's batches: the same records, blocks and extents.
-        let (mut wa, mut wb) = (Vec::new(), Vec::new());
-        a.read(&a.occupied(), &mut wa).unwrap();
-        b.read(&b.occupied(), &mut wb).unwrap();
-        assert_eq!(wa.len(), 50_000);
-        assert_eq!(wa, wb);
-        assert_eq!((&a.keys, &a.starts), (&b.keys, &b.starts));
-        for &k in &a.keys {
-            assert_eq!(a.extent(k), b.extent(k));
-        }
-        assert!(a.any_in_row(0, -2, 5));
-        assert!(!a.any_in_row(100, -2, 5));
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-    }
-}
+mod tests;

@@ -32,7 +32,7 @@ use crate::input::las::{LidarPoint, LidarReader};
 use crate::sink::{MeshSink, Needs, StreamInfo, TriangleSink};
 use crate::sort::external::ExternalSorter;
 use grid::{TileGrid, pow2, side_for};
-use index::{BlockIndex, BlockRecord};
+use index::{BlockIndex, BlockRecord, IndexRecord, Packing};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 use worker::TileOutput;
@@ -183,7 +183,7 @@ fn read_index(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4], TileCpu)> {
     let scope = options.scope.as_ref();
-    let (mem, tmp) = (job.mem, job.tmp);
+    let mem = job.mem;
     let (mut reader, outside) = open_for(job, scope)?;
     let b = reader.bounds();
     let total = reader.point_count();
@@ -203,55 +203,21 @@ fn read_index(
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
     let crs = reader.crs().cloned();
-    let t0 = Instant::now();
-    let c0 = crate::clock::process_cpu();
     check_address_space(mem, total)?;
-    let mut sorter = ExternalSorter::<BlockRecord>::new(index_sort_budget(mem, total), tmp);
-    let mut bounds = [
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    prefetched(&mut reader, |buf, done| {
-        for p in buf {
-            let (x, y) = (p.x, p.y);
-            bounds = [
-                bounds[0].min(x),
-                bounds[1].min(y),
-                bounds[2].max(x),
-                bounds[3].max(y),
-            ];
-            let (bx, by) = probe.block_of(x, y);
-            sorter.push(BlockRecord {
+    let packing = reader
+        .lattice()
+        .and_then(|l| Packing::new(l, &probe, [b.min[0], b.min[1], b.max[0], b.max[1]]));
+    let (mut index, bounds, cpu) = match packing {
+        Some(p) => index_points(&mut reader, probe, Some(p), job, progress, |k, q| p.pack(k, q))?,
+        None => index_points(&mut reader, probe, None, job, progress, |(bx, by), [x, y, z]| {
+            Ok(BlockRecord {
                 key: TileGrid::key(bx, by),
                 x,
                 y,
-                z: p.z,
-            })?;
-        }
-        progress(done, total);
-        Ok(())
-    })?;
-    let t_read = Instant::now();
-    let merge = sorter.finish()?;
-    let c1 = crate::clock::process_cpu();
-    let t_fin = Instant::now();
-    let sort = merge.stats();
-    let mut index = BlockIndex::build(probe, merge, tmp, job.duplicates)?;
-    let cpu = TileCpu {
-        read_sort: c1 - c0,
-        index: crate::clock::process_cpu() - c1,
-        ..TileCpu::default()
+                z,
+            })
+        })?,
     };
-    if std::env::var_os("SWEEPTIN_DEBUG_PHASES").is_some() {
-        eprintln!(
-            "phase1: read {:?} finish {:?} build {:?}",
-            t_read - t0,
-            t_fin - t_read,
-            t_fin.elapsed()
-        );
-    }
     if let Some(sc) = scope {
         index.scope = Some(index::Scope {
             unknown: sc.unread.clone(),
@@ -288,8 +254,65 @@ fn read_index(
     let shift = (tile / block).log2().round() as u32;
     index.grid = TileGrid::new(tile, shift)?;
     debug_assert_eq!(index.grid.block, block);
-    let _ = sort;
     Ok((index, crs, bounds, cpu))
+}
+
+/// Reads every point of `reader` into the block index's sort as the records `record` makes
+/// of its block and position (packed with `packing`, or not), and builds the index: with the
+/// points' bounding box and the CPU time of both steps.
+fn index_points<R: IndexRecord>(
+    reader: &mut LidarReader,
+    grid: TileGrid,
+    packing: Option<Packing>,
+    job: &TileJob,
+    progress: &mut dyn FnMut(u64, u64),
+    record: impl Fn((i64, i64), [f64; 3]) -> Result<R>,
+) -> Result<(BlockIndex, [f64; 4], TileCpu)> {
+    let total = reader.point_count();
+    let t0 = Instant::now();
+    let c0 = crate::clock::process_cpu();
+    let budget = index_sort_budget(job.mem, total, std::mem::size_of::<R>());
+    let mut sorter = ExternalSorter::<R>::new(budget, job.tmp);
+    let mut bounds = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    prefetched(reader, |buf, done| {
+        for p in buf {
+            let (x, y) = (p.x, p.y);
+            bounds = [
+                bounds[0].min(x),
+                bounds[1].min(y),
+                bounds[2].max(x),
+                bounds[3].max(y),
+            ];
+            sorter.push(record(grid.block_of(x, y), [x, y, p.z])?)?;
+        }
+        progress(done, total);
+        Ok(())
+    })?;
+    let t_read = Instant::now();
+    let merge = sorter.finish()?;
+    let c1 = crate::clock::process_cpu();
+    let t_fin = Instant::now();
+    let index = BlockIndex::build(grid, merge, packing, job.tmp, job.duplicates)?;
+    let cpu = TileCpu {
+        read_sort: c1 - c0,
+        index: crate::clock::process_cpu() - c1,
+        ..TileCpu::default()
+    };
+    if std::env::var_os("SWEEPTIN_DEBUG_PHASES").is_some() {
+        eprintln!(
+            "phase1: read {:?} finish {:?} build {:?} (packed: {})",
+            t_read - t0,
+            t_fin - t_read,
+            t_fin.elapsed(),
+            packing.is_some()
+        );
+    }
+    Ok((index, bounds, cpu))
 }
 
 /// Opens the files of `job`. A task of a plan whose files are all COPC reads only the points of
@@ -431,8 +454,8 @@ const MIN_INDEX_SORT: u64 = 8 << 20;
 /// that work to the end, with nothing beside it: ARSO (13.2 M points) at `--mem 1G` took 6.9 s
 /// and 555 MB against 6.0 s and 107 MB at `--mem 128M`. The order of the records is the same
 /// whatever the budget.
-fn index_sort_budget(mem: u64, points: u64) -> u64 {
-    let bytes = points.saturating_mul(std::mem::size_of::<BlockRecord>() as u64);
+fn index_sort_budget(mem: u64, points: u64, record: usize) -> u64 {
+    let bytes = points.saturating_mul(record as u64);
     (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))
 }
 

@@ -303,6 +303,20 @@ impl LidarReader {
             .map(FileInfo::quantization)
     }
 
+    /// One decimal lattice for the points of every file with points (see
+    /// [`Lattice`](super::world::Lattice)), or
+    /// `None` when a source has no header or a file's scale, offset or box rules it out.
+    pub(crate) fn lattice(&self) -> Option<super::world::Lattice> {
+        let mut files = Vec::new();
+        for s in &self.sources {
+            let info = s.info.as_ref()?;
+            if info.point_count > 0 {
+                files.push((info.quantization(), [info.bounds.min, info.bounds.max]));
+            }
+        }
+        super::world::Lattice::of(&files)
+    }
+
     /// The CRS declared by the files (the first declaration; all must agree), if any.
     pub fn crs(&self) -> Option<&Crs> {
         self.crs.as_ref()

@@ -117,6 +117,89 @@ impl Quantization {
     }
 }
 
+/// One decimal lattice for the points of several files, so that a point is three unsigned 32-bit
+/// integers instead of three doubles (the tiles' block index stores points this way: half the
+/// bytes written to and read from temporary files).
+///
+/// Every file's scale and offset must be short decimals ([`Quantization`]'s decimal form, with
+/// `10^k_f`) and its header must bound its points (the reader refuses a point outside its
+/// header's box, give or take one unit: `PointCheck`). With `k` the largest `k_f`, a point's
+/// value on an axis is `K / 10^k` for an integer `K` (`(S × N + O) × 10^(k − k_f)`), and its
+/// double `x` is that quotient correctly rounded. Then `x × 10^k`, rounded, is `K` again when
+/// `|K| < 2^51` (two roundings of relative error `2^-53` each move it by less than a half), and
+/// `K / 10^k`, rounded once, is `x` again (the same quotient, `K` and `10^k` exact doubles): so
+/// [`Lattice::encode`] and [`Lattice::decode`] round-trip every point bit for bit. Stored is
+/// `K − base` (the box's lower corner, with a margin), which must fit in 32 bits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Lattice {
+    /// `10^k`.
+    pow: f64,
+    /// `K` of stored zero, per axis.
+    base: [i64; 3],
+}
+
+/// `|K|` below which [`Lattice::encode`] is exact.
+const MAX_LATTICE: f64 = (1u64 << 51) as f64;
+
+impl Lattice {
+    /// The lattice of files with quantizations and header boxes `files` (`[min, max]` per
+    /// axis), or `None` when a scale or offset is no short decimal, a box is not usable (empty,
+    /// all zero, not finite) or the points would not fit in 32 bits per axis.
+    pub(crate) fn of(files: &[(Quantization, [[f64; 3]; 2])]) -> Option<Lattice> {
+        let mut pow = 1.0f64;
+        let mut scale = 0.0f64;
+        for (q, b) in files {
+            let zero = b.iter().flatten().all(|v| *v == 0.0);
+            if zero || !(0..3).all(|k| b[0][k] <= b[1][k] && b[1][k].is_finite()) {
+                return None;
+            }
+            for d in &q.decimal {
+                pow = pow.max(d.as_ref()?.pow);
+            }
+            scale = q.scale.iter().fold(scale, |m, &v| m.max(v));
+        }
+        let mut base = [0i64; 3];
+        for (k, b) in base.iter_mut().enumerate() {
+            // The reader lets points one unit outside the header's box through.
+            let margin = 4.0 * scale;
+            let lo = files
+                .iter()
+                .map(|f| f.1[0][k])
+                .fold(f64::INFINITY, f64::min)
+                - margin;
+            let hi = files
+                .iter()
+                .map(|f| f.1[1][k])
+                .fold(f64::NEG_INFINITY, f64::max)
+                + margin;
+            let (lo, hi) = ((lo * pow).floor() - 1.0, (hi * pow).ceil() + 1.0);
+            if !(lo.abs() < MAX_LATTICE && hi.abs() < MAX_LATTICE && hi - lo < u32::MAX as f64) {
+                return None;
+            }
+            *b = lo as i64;
+        }
+        Some(Lattice { pow, base })
+    }
+
+    /// The stored integers of point `p` (a point of one of the files), or `None` when it lies
+    /// below the lattice's box or 2^32 units beyond it (the reader lets no such point through).
+    #[inline]
+    pub(crate) fn encode(&self, p: [f64; 3]) -> Option<[u32; 3]> {
+        let mut q = [0u32; 3];
+        for k in 0..3 {
+            let n = (p[k] * self.pow).round() as i64 - self.base[k];
+            q[k] = u32::try_from(n).ok()?;
+        }
+        Some(q)
+    }
+
+    /// The point of stored integers `q`.
+    #[inline]
+    pub(crate) fn decode(&self, q: [u32; 3]) -> [f64; 3] {
+        std::array::from_fn(|k| (self.base[k] + i64::from(q[k])) as f64 / self.pow + 0.0)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -160,5 +243,57 @@ mod tests {
         assert_eq!(q.round(2, -0.5680000000000001), -0.568);
         assert_eq!(q.round(2, -0.0), 0.0);
         assert!(q.round(2, -0.0).is_sign_positive());
+    }
+
+    #[test]
+    fn lattice_round_trips_every_encoding_bit_for_bit() {
+        let files = [
+            (
+                Quantization::new([0.01; 3], [0.0; 3]),
+                [[510_000.0, 121_000.0, -20.0], [513_000.0, 124_000.0, 900.0]],
+            ),
+            (
+                Quantization::new([0.01; 3], [511_500.025, 122_499.965, 747.255]),
+                [[511_000.0, 122_000.0, 200.0], [512_000.0, 123_000.0, 300.0]],
+            ),
+            (
+                Quantization::new([0.001, 0.00025, 0.001], [0.005, 0.0, -0.5]),
+                [[511_200.0, 122_100.0, 0.0], [511_300.0, 122_200.0, 10.0]],
+            ),
+        ];
+        let l = Lattice::of(&files).unwrap();
+        assert_eq!(l.pow, 1e5);
+        let mut rng = crate::geom::rng::SplitMix64::new(11);
+        for (q, b) in &files {
+            for _ in 0..20_000 {
+                let n: [i32; 3] = std::array::from_fn(|k| {
+                    let lo = ((b[0][k] - q.offset[k]) / q.scale[k]).ceil();
+                    let hi = ((b[1][k] - q.offset[k]) / q.scale[k]).floor();
+                    (lo + (rng.range(0.0, 1.0) * (hi - lo)).floor()) as i32
+                });
+                let p = q.to_world(n);
+                let back = l.decode(l.encode(p).unwrap());
+                assert_eq!(back.map(f64::to_bits), p.map(f64::to_bits), "{n:?} {q:?}");
+            }
+        }
+        // Zero stays a positive zero.
+        let z = Lattice::of(&[(
+            Quantization::new([0.01; 3], [0.0; 3]),
+            [[-1.0; 3], [1.0; 3]],
+        )])
+        .unwrap();
+        assert!(z.decode(z.encode([0.0; 3]).unwrap())[0].is_sign_positive());
+        assert_eq!(
+            z.decode(z.encode([-0.03, 0.99, 0.0]).unwrap()),
+            [-0.03, 0.99, 0.0]
+        );
+        // Out of the box, binary scales, unusable headers, too wide a box: no lattice.
+        assert_eq!(z.encode([-5.0, 0.0, 0.0]), None);
+        let binary = Quantization::new([1.0 / 1024.0; 3], [0.0; 3]);
+        assert_eq!(Lattice::of(&[(binary, [[0.0; 3], [1.0; 3]])]), None);
+        let cm = Quantization::new([0.01; 3], [0.0; 3]);
+        assert_eq!(Lattice::of(&[(cm, [[0.0; 3], [0.0; 3]])]), None);
+        assert_eq!(Lattice::of(&[(cm, [[0.0; 3], [5e7; 3]])]), None);
+        assert!(Lattice::of(&[(cm, [[0.0; 3], [4e7; 3]])]).is_some());
     }
 }
