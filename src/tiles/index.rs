@@ -85,13 +85,13 @@ pub(crate) struct Packing {
 }
 
 impl Packing {
-    /// The packing of points in `bounds` (`[xmin, ymin, xmax, ymax]`, the headers' box) on
-    /// `lattice`, with blocks of `grid`, or `None` when the box has more blocks than 32-bit
-    /// keys count.
+    /// The packing of points in `bounds` (`[xmin, ymin, xmax, ymax]`, the headers' box, give or
+    /// take the lattice's margin) on `lattice`, with blocks of `grid`, or `None` when the box
+    /// has more blocks than 32-bit keys count.
     pub fn new(lattice: Lattice, grid: &TileGrid, bounds: [f64; 4]) -> Option<Packing> {
-        // A block of margin: the reader lets points a unit outside a header's box through.
-        let (bx0, by0) = grid.block_of(bounds[0], bounds[1]);
-        let (bx1, by1) = grid.block_of(bounds[2], bounds[3]);
+        let m = lattice.margin;
+        let (bx0, by0) = grid.block_of(bounds[0] - m, bounds[1] - m);
+        let (bx1, by1) = grid.block_of(bounds[2] + m, bounds[3] + m);
         let (bx0, by0, bx1, by1) = (bx0 - 1, by0 - 1, bx1 + 1, by1 + 1);
         let shift = 64 - ((bx1 - bx0) as u64).leading_zeros();
         let rows = (by1 - by0 + 1) as u64;

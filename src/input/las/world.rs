@@ -136,6 +136,9 @@ pub(crate) struct Lattice {
     pow: f64,
     /// `K` of stored zero, per axis.
     base: [i64; 3],
+    /// How far outside the headers' boxes a point may lie (the reader lets points one unit
+    /// outside through): four of the largest scale.
+    pub margin: f64,
 }
 
 /// `|K|` below which [`Lattice::encode`] is exact.
@@ -158,10 +161,9 @@ impl Lattice {
             }
             scale = q.scale.iter().fold(scale, |m, &v| m.max(v));
         }
+        let margin = 4.0 * scale;
         let mut base = [0i64; 3];
         for (k, b) in base.iter_mut().enumerate() {
-            // The reader lets points one unit outside the header's box through.
-            let margin = 4.0 * scale;
             let lo = files
                 .iter()
                 .map(|f| f.1[0][k])
@@ -178,7 +180,7 @@ impl Lattice {
             }
             *b = lo as i64;
         }
-        Some(Lattice { pow, base })
+        Some(Lattice { pow, base, margin })
     }
 
     /// The stored integers of point `p` (a point of one of the files), or `None` when it lies
