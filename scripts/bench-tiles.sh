@@ -45,13 +45,13 @@ user = float(re.search(r"User time \(seconds\): ([\d.]+)", t).group(1))
 rss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", t).group(1)) / 1024
 try:
     d = json.load(open(js)); run = d.get("run", d); tiles = run.get("tiles") or {}
-    extra = f"{tiles.get('tiles', '–')} tiles, {tiles.get('reruns', '–')} re-runs, buffer ≤ {tiles.get('max_buffer', '–')}"
+    extra = f"{tiles['tiles']} tiles, {tiles['reruns']} re-runs, buffer ≤ {tiles['max_buffer']}" if tiles else "–"
     cpu = tiles.get("cpu")
     if cpu:
         per = lambda k: f"{cpu[k] / (float(points) / 1e6) * 1e3:.0f}"
         extra += " · CPU ms/M pts: " + ", ".join(f"{k} {per(k)}" for k in ("read_sort", "index", "blocks", "triangulate", "certify", "keep", "write"))
 except Exception:
-    extra = ""
+    extra = "–"
 n = float(points)
 print(f"| {label} | {secs:.2f} s | {user:.2f} s | {rss:.0f} MB | {n / secs / 1e6:.2f} M/s | {user / (n / 1e6) * 1e3:.0f} ms | {extra} |")
 PY
