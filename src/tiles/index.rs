@@ -39,19 +39,27 @@ pub(crate) struct BlockRecord {
     pub z: f64,
 }
 
-impl SortKey for BlockRecord {
-    #[inline(always)]
-    fn order(a: &Self, b: &Self) -> Ordering {
-        a.key.cmp(&b.key)
-    }
-    // Points of one block keep their input order: the duplicate policy needs it.
-    const STABLE: bool = true;
-    const RADIX: bool = true;
-    #[inline(always)]
-    fn radix_key(&self) -> u64 {
-        self.key
-    }
+/// Both records of the index sort by their block key alone, stably: points of one block keep
+/// their input order (the duplicate policy needs it).
+macro_rules! sort_by_block_key {
+    ($record:ty) => {
+        impl SortKey for $record {
+            #[inline(always)]
+            fn order(a: &Self, b: &Self) -> Ordering {
+                a.key.cmp(&b.key)
+            }
+            const STABLE: bool = true;
+            const RADIX: bool = true;
+            #[inline(always)]
+            fn radix_key(&self) -> u64 {
+                u64::from(self.key)
+            }
+        }
+    };
 }
+
+sort_by_block_key!(BlockRecord);
+sort_by_block_key!(PackedRecord);
 
 /// A point with its block key in 16 bytes ([`Packing`]).
 #[repr(C)]
@@ -59,19 +67,6 @@ impl SortKey for BlockRecord {
 pub(crate) struct PackedRecord {
     key: u32,
     q: [u32; 3],
-}
-
-impl SortKey for PackedRecord {
-    #[inline(always)]
-    fn order(a: &Self, b: &Self) -> Ordering {
-        a.key.cmp(&b.key)
-    }
-    const STABLE: bool = true;
-    const RADIX: bool = true;
-    #[inline(always)]
-    fn radix_key(&self) -> u64 {
-        u64::from(self.key)
-    }
 }
 
 /// How points are packed: their lattice, and block keys counted from the lowest block of the
@@ -85,13 +80,13 @@ pub(crate) struct Packing {
 }
 
 impl Packing {
-    /// The packing of points in `bounds` (`[xmin, ymin, xmax, ymax]`, the headers' box, give or
-    /// take the lattice's margin) on `lattice`, with blocks of `grid`, or `None` when the box
-    /// has more blocks than 32-bit keys count.
-    pub fn new(lattice: Lattice, grid: &TileGrid, bounds: [f64; 4]) -> Option<Packing> {
-        let m = lattice.margin;
-        let (bx0, by0) = grid.block_of(bounds[0] - m, bounds[1] - m);
-        let (bx1, by1) = grid.block_of(bounds[2] + m, bounds[3] + m);
+    /// The packing of points on `lattice` (in its box: the headers' boxes, the margin the reader
+    /// allows included) with blocks of `grid`, or `None` when the box has more blocks than
+    /// 32-bit keys count.
+    pub fn new(lattice: Lattice, grid: &TileGrid) -> Option<Packing> {
+        let b = lattice.xy_box();
+        let (bx0, by0) = grid.block_of(b[0], b[1]);
+        let (bx1, by1) = grid.block_of(b[2], b[3]);
         let (bx0, by0, bx1, by1) = (bx0 - 1, by0 - 1, bx1 + 1, by1 + 1);
         let shift = 64 - ((bx1 - bx0) as u64).leading_zeros();
         let rows = (by1 - by0 + 1) as u64;
@@ -106,7 +101,8 @@ impl Packing {
     /// The record of point `p` in block `(bx, by)`.
     ///
     /// # Errors
-    /// [`Error::Internal`] for a point outside the box (the reader lets none through).
+    /// [`Error::Internal`] for a point outside the lattice's box (the reader lets none
+    /// through).
     #[inline]
     pub fn pack(&self, (bx, by): (i64, i64), p: [f64; 3]) -> Result<PackedRecord> {
         let (c, r) = (bx - self.bx0, by - self.by0);

@@ -204,9 +204,7 @@ fn read_index(
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
     let crs = reader.crs().cloned();
     check_address_space(mem, total)?;
-    let packing = reader
-        .lattice()
-        .and_then(|l| Packing::new(l, &probe, [b.min[0], b.min[1], b.max[0], b.max[1]]));
+    let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
     let (mut index, bounds, cpu) = match packing {
         Some(p) => index_points(&mut reader, probe, Some(p), job, progress, |k, q| p.pack(k, q))?,
         None => index_points(&mut reader, probe, None, job, progress, |(bx, by), [x, y, z]| {
@@ -448,12 +446,12 @@ const INDEX_RUNS: u64 = 16;
 /// The smallest budget of the block index's sort (halves of about 2.7 MB).
 const MIN_INDEX_SORT: u64 = 8 << 20;
 
-/// The block index's sort budget: half of `mem`, or less when the input (`points`, from the
-/// headers) would fill fewer than [`INDEX_RUNS`] halves. Small halves are sorted and spilled
-/// while decoding goes on; a few large ones (or one vector sorted after the last point) leave
-/// that work to the end, with nothing beside it: ARSO (13.2 M points) at `--mem 1G` took 6.9 s
-/// and 555 MB against 6.0 s and 107 MB at `--mem 128M`. The order of the records is the same
-/// whatever the budget.
+/// The block index's sort budget: half of `mem`, or less when the input (`points` of `record`
+/// bytes, the count from the headers) would fill fewer than [`INDEX_RUNS`] halves. Small halves
+/// are sorted and spilled while decoding goes on; a few large ones (or one vector sorted after
+/// the last point) leave that work to the end, with nothing beside it: ARSO (13.2 M points, 32-byte
+/// records) at `--mem 1G` took 6.9 s and 555 MB against 6.0 s and 107 MB at `--mem 128M`. The
+/// order of the records is the same whatever the budget.
 fn index_sort_budget(mem: u64, points: u64, record: usize) -> u64 {
     let bytes = points.saturating_mul(record as u64);
     (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))

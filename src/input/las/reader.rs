@@ -5,7 +5,7 @@ use super::decode::{Fields, FileDecoder, spans};
 use super::filter::{BBox, CompiledFilter, Filter, FilterStats, Verdict};
 use super::header::{Bounds3, Chunk, FileInfo, format_error, inspect};
 use super::vpc;
-use super::world::Quantization;
+use super::world::{HEADER_SLACK, Quantization};
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -111,8 +111,8 @@ impl PointCheck {
                 let (s, o) = (info.scale[k], info.offset[k]);
                 // Saturating: damaged headers hold any doubles.
                 [
-                    (((b.min[k] - o) / s).floor() as i64).saturating_sub(1),
-                    (((b.max[k] - o) / s).ceil() as i64).saturating_add(1),
+                    (((b.min[k] - o) / s).floor() as i64).saturating_sub(HEADER_SLACK),
+                    (((b.max[k] - o) / s).ceil() as i64).saturating_add(HEADER_SLACK),
                 ]
             })
         });
@@ -304,12 +304,13 @@ impl LidarReader {
     }
 
     /// One decimal lattice for the points of every file with points (see
-    /// [`Lattice`](super::world::Lattice)), or
-    /// `None` when a source has no header or a file's scale, offset or box rules it out.
+    /// [`Lattice`](super::world::Lattice)), or `None` when a file's scale, offset or box rules
+    /// it out.
     pub(crate) fn lattice(&self) -> Option<super::world::Lattice> {
         let mut files = Vec::new();
         for s in &self.sources {
-            let info = s.info.as_ref()?;
+            // (An entry of a `.vpc` left unopened gives no points.)
+            let Some(info) = &s.info else { continue };
             if info.point_count > 0 {
                 files.push((info.quantization(), [info.bounds.min, info.bounds.max]));
             }

@@ -123,7 +123,8 @@ impl Quantization {
 ///
 /// Every file's scale and offset must be short decimals ([`Quantization`]'s decimal form, with
 /// `10^k_f`) and its header must bound its points (the reader refuses a point outside its
-/// header's box, give or take one unit: `PointCheck`). With `k` the largest `k_f`, a point's
+/// header's box rounded out to the file's integers and [`HEADER_SLACK`] more: `PointCheck`).
+/// With `k` the largest `k_f`, a point's
 /// value on an axis is `K / 10^k` for an integer `K` (`(S × N + O) × 10^(k − k_f)`), and its
 /// double `x` is that quotient correctly rounded. Then `x × 10^k`, rounded, is `K` again when
 /// `|K| < 2^51` (two roundings of relative error `2^-53` each move it by less than a half), and
@@ -136,10 +137,13 @@ pub(crate) struct Lattice {
     pow: f64,
     /// `K` of stored zero, per axis.
     base: [i64; 3],
-    /// How far outside the headers' boxes a point may lie (the reader lets points one unit
-    /// outside through): four of the largest scale.
-    pub margin: f64,
+    /// Stored integers of the box's upper corner, per axis.
+    extent: [u32; 3],
 }
+
+/// Integers of its file a point may lie beyond its header's box rounded out to them, and still
+/// be read (the reader's check, `PointCheck`, and the lattice's margin share it).
+pub(crate) const HEADER_SLACK: i64 = 1;
 
 /// `|K|` below which [`Lattice::encode`] is exact.
 const MAX_LATTICE: f64 = (1u64 << 51) as f64;
@@ -161,9 +165,10 @@ impl Lattice {
             }
             scale = q.scale.iter().fold(scale, |m, &v| m.max(v));
         }
-        let margin = 4.0 * scale;
-        let mut base = [0i64; 3];
-        for (k, b) in base.iter_mut().enumerate() {
+        // Rounding the box out to a file's integers, the slack, and one more for the doubles.
+        let margin = (HEADER_SLACK + 2) as f64 * scale;
+        let (mut base, mut extent) = ([0i64; 3], [0u32; 3]);
+        for k in 0..3 {
             let lo = files
                 .iter()
                 .map(|f| f.1[0][k])
@@ -178,19 +183,32 @@ impl Lattice {
             if !(lo.abs() < MAX_LATTICE && hi.abs() < MAX_LATTICE && hi - lo < u32::MAX as f64) {
                 return None;
             }
-            *b = lo as i64;
+            base[k] = lo as i64;
+            extent[k] = (hi - lo) as u32;
         }
-        Some(Lattice { pow, base, margin })
+        Some(Lattice { pow, base, extent })
+    }
+
+    /// The box of the lattice in `x` and `y` (`[xmin, ymin, xmax, ymax]`): the headers' boxes
+    /// with a margin, holding every point the reader lets through.
+    pub(crate) fn xy_box(&self) -> [f64; 4] {
+        let at = |k: usize, q: u32| (self.base[k] + i64::from(q)) as f64 / self.pow;
+        [
+            at(0, 0),
+            at(1, 0),
+            at(0, self.extent[0]),
+            at(1, self.extent[1]),
+        ]
     }
 
     /// The stored integers of point `p` (a point of one of the files), or `None` when it lies
-    /// below the lattice's box or 2^32 units beyond it (the reader lets no such point through).
+    /// outside the lattice's box (the reader lets no such point through).
     #[inline]
     pub(crate) fn encode(&self, p: [f64; 3]) -> Option<[u32; 3]> {
         let mut q = [0u32; 3];
         for k in 0..3 {
             let n = (p[k] * self.pow).round() as i64 - self.base[k];
-            q[k] = u32::try_from(n).ok()?;
+            q[k] = u32::try_from(n).ok().filter(|&n| n <= self.extent[k])?;
         }
         Some(q)
     }
@@ -278,6 +296,26 @@ mod tests {
                 assert_eq!(back.map(f64::to_bits), p.map(f64::to_bits), "{n:?} {q:?}");
             }
         }
+        // Near the bound of exactness: |K| just under 2^51 at 1 mm.
+        let far = Quantization::new([0.001; 3], [2.2e12, 2.2e12, 0.0]);
+        let fb = [
+            [2.2e12, 2.2e12, 0.0],
+            [2.2e12 + 1000.0, 2.2e12 + 1000.0, 10.0],
+        ];
+        let l = Lattice::of(&[(far, fb)]).unwrap();
+        for _ in 0..20_000 {
+            let n = [
+                rng.below(1_000_000) as i32,
+                rng.below(1_000_000) as i32,
+                rng.below(10_000) as i32,
+            ];
+            let p = far.to_world(n);
+            assert_eq!(
+                l.decode(l.encode(p).unwrap()).map(f64::to_bits),
+                p.map(f64::to_bits),
+                "{n:?}"
+            );
+        }
         // Zero stays a positive zero.
         let z = Lattice::of(&[(
             Quantization::new([0.01; 3], [0.0; 3]),
@@ -291,6 +329,11 @@ mod tests {
         );
         // Out of the box, binary scales, unusable headers, too wide a box: no lattice.
         assert_eq!(z.encode([-5.0, 0.0, 0.0]), None);
+        assert_eq!(z.encode([5.0, 0.0, 0.0]), None);
+        assert_eq!(
+            z.encode([1.04, -1.04, 0.0]).map(|q| z.decode(q)),
+            Some([1.04, -1.04, 0.0])
+        );
         let binary = Quantization::new([1.0 / 1024.0; 3], [0.0; 3]);
         assert_eq!(Lattice::of(&[(binary, [[0.0; 3], [1.0; 3]])]), None);
         let cm = Quantization::new([0.01; 3], [0.0; 3]);

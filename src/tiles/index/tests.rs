@@ -5,14 +5,29 @@ use crate::input::las::world::Quantization;
 use crate::sort::external::ExternalSorter;
 
 /// The packed index of `pts` (points of a file of quantization `q` and header box `b`).
-fn packed(mem: u64, pts: &[[f64; 3]], grid: TileGrid, q: Quantization, b: [[f64; 3]; 2], dir: &Path) -> BlockIndex {
+fn packed(
+    mem: u64,
+    pts: &[[f64; 3]],
+    grid: TileGrid,
+    q: Quantization,
+    b: [[f64; 3]; 2],
+    dir: &Path,
+) -> BlockIndex {
     let lattice = Lattice::of(&[(q, b)]).unwrap();
-    let p = Packing::new(lattice, &grid, [b[0][0], b[0][1], b[1][0], b[1][1]]).unwrap();
+    let p = Packing::new(lattice, &grid).unwrap();
     let mut s = ExternalSorter::<PackedRecord>::new(mem, dir);
     for &pt in pts {
-        s.push(p.pack(grid.block_of(pt[0], pt[1]), pt).unwrap()).unwrap();
+        s.push(p.pack(grid.block_of(pt[0], pt[1]), pt).unwrap())
+            .unwrap();
     }
-    BlockIndex::build(grid, s.finish().unwrap(), Some(p), dir, DuplicatePolicy::First).unwrap()
+    BlockIndex::build(
+        grid,
+        s.finish().unwrap(),
+        Some(p),
+        dir,
+        DuplicatePolicy::First,
+    )
+    .unwrap()
 }
 
 #[test]
@@ -20,24 +35,40 @@ fn packed_and_wide_indexes_hold_the_same_points_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
     let grid = TileGrid::new(8.0, 3).unwrap();
     let q = Quantization::new([0.01, 0.01, 0.001], [511_500.025, -122_499.965, 747.255]);
-    let b = [[510_990.0, -123_010.0, -5.0], [511_050.0, -122_950.0, 2000.0]];
+    let b = [
+        [510_990.0, -123_010.0, -5.0],
+        [511_050.0, -122_950.0, 2000.0],
+    ];
     let mut rng = crate::geom::rng::SplitMix64::new(5);
     let pts: Vec<[f64; 3]> = (0..60_000)
         .map(|_| {
             let n = [
                 rng.range(-50_900.0, -45_100.0) as i32,
-                rng.range(-50_900.0, 4_900.0) as i32,
+                rng.range(-50_900.0, -45_100.0) as i32,
                 rng.range(-752_000.0, 1_252_000.0) as i32,
             ];
             q.to_world(n)
         })
         .collect();
-    // Points exactly on block edges, the box's corner and a duplicate.
+    // Points exactly on block edges, the box's corner and a duplicate, and the farthest outside
+    // the header's box the reader lets through.
     let mut pts = pts;
-    pts.extend([[511_000.0, -123_000.0, 1.5], [511_000.0, -123_000.0, 2.5], [510_990.0, -123_010.0, 0.0]]);
+    pts.push(q.to_world([-51_004, -51_004, -752_256]));
+    pts.push(q.to_world([-45_001, -45_001, 1_252_746]));
+    pts.extend([
+        [511_000.0, -123_000.0, 1.5],
+        [511_000.0, -123_000.0, 2.5],
+        [510_990.0, -123_010.0, 0.0],
+    ]);
     for mem in [1, 1 << 30] {
-        let (w, p) = (index(mem, &pts, grid, dir.path()), packed(mem, &pts, grid, q, b, dir.path()));
-        assert_eq!((&w.keys, &w.starts, w.occupied()), (&p.keys, &p.starts, p.occupied()));
+        let (w, p) = (
+            index(mem, &pts, grid, dir.path()),
+            packed(mem, &pts, grid, q, b, dir.path()),
+        );
+        assert_eq!(
+            (&w.keys, &w.starts, w.occupied()),
+            (&p.keys, &p.starts, p.occupied())
+        );
         assert_eq!(w.hull(), p.hull());
         let (mut a, mut c) = (Vec::new(), Vec::new());
         w.read(&w.occupied(), &mut a).unwrap();
@@ -54,12 +85,15 @@ fn packed_and_wide_indexes_hold_the_same_points_bit_for_bit() {
     }
     // A point outside the box is an error, not a wrong key.
     let lattice = Lattice::of(&[(q, b)]).unwrap();
-    let pk = Packing::new(lattice, &grid, [b[0][0], b[0][1], b[1][0], b[1][1]]).unwrap();
+    let pk = Packing::new(lattice, &grid).unwrap();
     let far = [520_000.0, -123_000.0, 0.0];
     assert!(pk.pack(grid.block_of(far[0], far[1]), far).is_err());
     // Boxes with more blocks than 32-bit keys count are not packed.
     let tiny = TileGrid::new(0.01, 0).unwrap();
-    assert!(Packing::new(lattice, &tiny, [0.0, 0.0, 1e4, 1e4]).is_none());
+    let cm = Quantization::new([0.01; 3], [0.0; 3]);
+    let wide = Lattice::of(&[(cm, [[0.0; 3], [1e4, 1e4, 1.0]])]).unwrap();
+    assert!(Packing::new(wide, &tiny).is_none());
+    assert!(Packing::new(wide, &TileGrid::new(4.0, 0).unwrap()).is_some());
 }
 
 #[test]
