@@ -301,6 +301,42 @@ fn a_vpc_of_the_ign_tiles() {
     assert!(e.to_string().contains("77050_627755"), "{e}");
 }
 
+/// A `.vpc` whose boxes are not the files' (stale, or shrunk here by 20 m on the south-west):
+/// the tiles' block index packs points on the headers' boxes, not the list's, so the tiled DEM
+/// runs and equals the sweep's.
+#[test]
+fn a_vpc_with_boxes_other_than_the_headers() {
+    let dir = tempfile::tempdir().unwrap();
+    let tiles = ign_tiles();
+    let vpc = dir.path().join("ign.vpc");
+    let mut args = vec!["index"];
+    args.extend(tiles.iter().map(|t| s(t)));
+    args.extend_from_slice(&["-o", s(&vpc)]);
+    sweeptin(&args);
+    let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(&vpc).unwrap()).unwrap();
+    for item in v["features"].as_array_mut().unwrap() {
+        let b = item["properties"]["proj:bbox"].as_array_mut().unwrap();
+        for k in [0, 1] {
+            b[k] = serde_json::json!(b[k].as_f64().unwrap() + 20.0);
+        }
+    }
+    std::fs::write(&vpc, serde_json::to_vec(&v).unwrap()).unwrap();
+    let tiled = dem(
+        &[s(&vpc)],
+        &["--engine", "tiles"],
+        &dir.path().join("t.tif"),
+    );
+    let swept = dem(
+        &[s(&vpc)],
+        &["--engine", "sweep"],
+        &dir.path().join("s.tif"),
+    );
+    assert!(
+        tiled == swept,
+        "the tiled and swept DEMs of the .vpc differ"
+    );
+}
+
 /// The same DEM bytes from LAZ tiles, a `.vpc` of them, an `@list` and a quoted glob (a box in
 /// one of the six IGN tiles: the others are never decoded); and from COPC copies (written by
 /// copclib) of two tiles. The COPC copies order the points by octree node, so there the
