@@ -301,40 +301,46 @@ fn a_vpc_of_the_ign_tiles() {
     assert!(e.to_string().contains("77050_627755"), "{e}");
 }
 
-/// A `.vpc` whose boxes are not the files' (stale, or shrunk here by 20 m on the south-west):
-/// the tiles' block index packs points on the headers' boxes, not the list's, so the tiled DEM
-/// runs and equals the sweep's.
+/// A `.vpc` whose boxes are not the files' headers' (stale: shrunk by 20 m on the south-west; or
+/// only a WGS84 `bbox`, as a STAC catalogue may give): the files it opens count with their
+/// headers' boxes, so the DEM (tiled, its block index packed on the headers' lattice, or swept)
+/// is the one of the files themselves.
 #[test]
 fn a_vpc_with_boxes_other_than_the_headers() {
     let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n);
     let tiles = ign_tiles();
-    let vpc = dir.path().join("ign.vpc");
+    let names: Vec<&str> = tiles.iter().map(|t| s(t)).collect();
+    let vpc = d("ign.vpc");
     let mut args = vec!["index"];
-    args.extend(tiles.iter().map(|t| s(t)));
+    args.extend_from_slice(&names);
     args.extend_from_slice(&["-o", s(&vpc)]);
     sweeptin(&args);
-    let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(&vpc).unwrap()).unwrap();
-    for item in v["features"].as_array_mut().unwrap() {
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&vpc).unwrap()).unwrap();
+    let (mut stale, mut wgs84) = (v.clone(), v);
+    for item in stale["features"].as_array_mut().unwrap() {
         let b = item["properties"]["proj:bbox"].as_array_mut().unwrap();
         for k in [0, 1] {
             b[k] = serde_json::json!(b[k].as_f64().unwrap() + 20.0);
         }
     }
-    std::fs::write(&vpc, serde_json::to_vec(&v).unwrap()).unwrap();
-    let tiled = dem(
-        &[s(&vpc)],
-        &["--engine", "tiles"],
-        &dir.path().join("t.tif"),
-    );
-    let swept = dem(
-        &[s(&vpc)],
-        &["--engine", "sweep"],
-        &dir.path().join("s.tif"),
-    );
-    assert!(
-        tiled == swept,
-        "the tiled and swept DEMs of the .vpc differ"
-    );
+    for item in wgs84["features"].as_array_mut().unwrap() {
+        let p = item["properties"].as_object_mut().unwrap();
+        p.remove("proj:bbox");
+        p.remove("proj:geometry");
+        item["bbox"] = serde_json::json!([2.43, 48.83, 0.0, 2.44, 48.84, 100.0]);
+    }
+    let files = dem(&names, &[], &d("files.tif"));
+    for (name, list) in [("stale.vpc", stale), ("wgs84.vpc", wgs84)] {
+        std::fs::write(d(name), serde_json::to_vec(&list).unwrap()).unwrap();
+        for engine in ["tiles", "sweep"] {
+            let got = dem(&[s(&d(name))], &["--engine", engine], &d("x.tif"));
+            assert!(
+                got == files,
+                "{name} through {engine} differs from the files' DEM"
+            );
+        }
+    }
 }
 
 /// The same DEM bytes from LAZ tiles, a `.vpc` of them, an `@list` and a quoted glob (a box in
@@ -462,6 +468,16 @@ fn mixed_scales_and_offsets_give_the_same_dem() {
     assert_eq!(
         dem(&[s(&odd), names[1]], &[], &dir.path().join("b.tif")),
         base
+    );
+    // A binary scale has no decimal lattice: the tiles' block index keeps its points wide, and
+    // the tiled DEM is still the sweep's.
+    let bin = dir.path().join("bin.las");
+    requantise(&tiles[2], &bin, 1.0 / 1024.0, [770000.0, 6277000.0, 0.0]);
+    let with_bin = [s(&bin), names[1]];
+    assert!(
+        dem(&with_bin, &["--engine", "tiles"], &dir.path().join("c.tif"))
+            == dem(&with_bin, &["--engine", "sweep"], &dir.path().join("d.tif")),
+        "the tiled and swept DEMs with a binary scale differ"
     );
 }
 

@@ -268,9 +268,11 @@ impl LidarReader {
                 } else {
                     None
                 };
+                // An opened file's header is the truth; the list's box only decides what to
+                // open (it may be stale, or in another CRS).
                 push(Source {
                     points: e.points,
-                    bounds: e.bounds,
+                    bounds: info.as_ref().map_or(e.bounds, |i| i.bounds),
                     first_index: 0,
                     info,
                 });
