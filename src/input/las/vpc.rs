@@ -5,7 +5,9 @@
 //! pointcloud (`pc:count`) and projection (`proj:bbox`, `proj:wkt2`, `proj:epsg`) extensions; each
 //! item's `data` asset names one file, relative to the `.vpc`'s folder (`./tile.laz`) or absolute.
 //! A reader learns the files and their extents without opening them, so a run with a box never
-//! opens the files outside it. The native extent is `proj:bbox` (3-D or 2-D), else `bbox`.
+//! opens the files outside it. The native extent is `proj:bbox` (3-D or 2-D), else `bbox`; it only
+//! decides which files to open: a file opened counts with its own header's box (a list may be
+//! stale, and a STAC `bbox` is in WGS84).
 //!
 //! sweeptin has no projection library, so the items it writes carry `geometry` and `bbox` in the
 //! files' own CRS, as wrench does when it cannot reproject; `proj:bbox` and `proj:geometry`,
