@@ -172,6 +172,15 @@ pub enum Needs {
 pub trait Wants: Send + Sync + std::fmt::Debug {
     /// Does the sink want triangle `t`? `false` only for triangles it would ignore.
     fn wants(&self, t: &[[f64; 3]; 3]) -> bool;
+
+    /// Is the test one of *covering*: is there a fixed set of points such that the sink uses a
+    /// triangle only for the points of the set it holds (closed), and the test wants every
+    /// triangle that holds one, whatever else the triangle is? (A DEM's is: its cell centres.)
+    /// Then any triangle of any triangulation that holds such a point is wanted, and the exact
+    /// tiles need not certify the unwanted triangles deep inside a tile. `false` unless said.
+    fn covering(&self) -> bool {
+        false
+    }
 }
 
 impl Needs {
@@ -181,6 +190,14 @@ impl Needs {
         match self {
             Needs::All => true,
             Needs::Only(tests) => tests.iter().any(|w| w.wants(t)),
+        }
+    }
+
+    /// Are these needs a filter whose every test is covering ([`Wants::covering`])?
+    pub fn covering(&self) -> bool {
+        match self {
+            Needs::All => false,
+            Needs::Only(tests) => tests.iter().all(|w| w.covering()),
         }
     }
 

@@ -79,6 +79,11 @@ impl Wants for Centres {
     fn wants(&self, t: &[[f64; 3]; 3]) -> bool {
         self.0.may_hold_centre(t)
     }
+
+    /// A cell takes its value from the triangles that hold its centre, and their boxes hold it.
+    fn covering(&self) -> bool {
+        true
+    }
 }
 
 /// The band of rows in memory and the writer behind it.

@@ -277,6 +277,17 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
     }
 
     /// Vertices still waiting for triangles (none after the last tile).
+    /// Counts `n` triangles that no tile looked at (no product wanted them: see
+    /// [`super::keep::Want::skip_inside`]) as written, as the workers' skipped ones are.
+    pub fn unseen(&mut self, n: u64) {
+        if n > 0 {
+            for s in self.sinks.iter_mut() {
+                s.skipped(n);
+            }
+            self.triangles += n;
+        }
+    }
+
     pub fn pending(&self) -> usize {
         self.live.len()
     }

@@ -2,7 +2,10 @@
 //! is the whole hull). They are real input points, so adding them to a run never changes a
 //! certified triangle.
 
+use super::index::BlockIndex;
+use crate::error::Result;
 use crate::geom::predicates::{Orientation, orient};
+use crate::idmap::FastSet;
 
 fn xy(p: &[f64; 3]) -> [f64; 2] {
     [p[0], p[1]]
@@ -48,6 +51,67 @@ pub(crate) fn hull(v: &mut [[f64; 3]]) -> Vec<[f64; 3]> {
     chain(&d, Orientation::CounterClockwise)
 }
 
+/// The number of distinct positions of the points on the boundary of their convex hull: its
+/// corners, and the points exactly on its edges (exact orientation), found in the blocks along
+/// each edge (rows of blocks, the edge's span in each a block wider on either side). A
+/// triangulation of `V` distinct points of which `B` lie there has `2V − B − 2` triangles.
+///
+/// # Errors
+/// Reading the index.
+pub(crate) fn boundary_points(index: &BlockIndex) -> Result<u64> {
+    let h = index.hull();
+    let n = h.len();
+    if n < 3 {
+        // All on a line: no triangle, and no polygon to walk.
+        return Ok(n as u64);
+    }
+    let g = index.grid;
+    let mut on: FastSet<(u64, u64)> = FastSet::default();
+    let mut pts = Vec::new();
+    for i in 0..n {
+        let (a, b) = (xy(&h[i]), xy(&h[(i + 1) % n]));
+        let (ylo, yhi) = (a[1].min(b[1]), a[1].max(b[1]));
+        for by in g.block_of(a[0], ylo).1 - 1..=g.block_of(a[0], yhi).1 + 1 {
+            let [x0, x1] = span(a, b, by as f64 * g.block, (by + 1) as f64 * g.block);
+            let (bx0, bx1) = (g.block_of(x0, ylo).0 - 1, g.block_of(x1, ylo).0 + 1);
+            for &k in index.keys_in_row(by, bx0, bx1 + 1) {
+                pts.clear();
+                index.read_block(k, &mut pts)?;
+                for p in &pts {
+                    let q = xy(p);
+                    if q != a && q != b && on_segment(a, b, q) {
+                        on.insert((q[0].to_bits(), q[1].to_bits()));
+                    }
+                }
+            }
+        }
+    }
+    Ok((n + on.len()) as u64)
+}
+
+/// The `x` range of the segment `a b` over `y0 ..= y1` (clamped to the segment; a little wide).
+fn span(a: [f64; 2], b: [f64; 2], y0: f64, y1: f64) -> [f64; 2] {
+    let (xlo, xhi) = (a[0].min(b[0]), a[0].max(b[0]));
+    if a[1] == b[1] {
+        return [xlo, xhi];
+    }
+    let at = |y: f64| {
+        let t = ((y - a[1]) / (b[1] - a[1])).clamp(0.0, 1.0);
+        a[0] + t * (b[0] - a[0])
+    };
+    let (p, q) = (at(y0), at(y1));
+    [p.min(q).max(xlo), p.max(q).min(xhi)]
+}
+
+/// Is `q` on the closed segment `a b`? Exact.
+fn on_segment(a: [f64; 2], b: [f64; 2], q: [f64; 2]) -> bool {
+    orient(a, b, q) == Orientation::Collinear
+        && q[0] >= a[0].min(b[0])
+        && q[0] <= a[0].max(b[0])
+        && q[1] >= a[1].min(b[1])
+        && q[1] <= a[1].max(b[1])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -70,5 +134,44 @@ mod tests {
         };
         let h = hull(&mut v.clone());
         assert_eq!(from_origin(h.iter().map(xy).collect()), square);
+    }
+
+    /// `2V − B − 2` with [`boundary_points`] is spade's number of triangles: points on a lattice
+    /// in a triangle, a rotated square and a strip (many on slanted hull edges), with duplicates,
+    /// at UTM-sized offsets, the index spilled to disk.
+    #[test]
+    fn euler_with_the_boundary_points_counts_spades_triangles() {
+        use spade::{DelaunayTriangulation, Point2, Triangulation as _};
+        let dir = tempfile::tempdir().unwrap();
+        let mut rng = crate::geom::rng::SplitMix64::new(3);
+        type Shape = fn(i64, i64) -> bool;
+        let shapes: [Shape; 3] = [
+            |x, y| x + y <= 40,
+            |x, y| (x - 20).abs() + (y - 20).abs() <= 17,
+            |x, y| (y - x / 3).abs() <= 2,
+        ];
+        for (s, inside) in shapes.iter().enumerate() {
+            let mut pts = Vec::new();
+            for y in 0..=40i64 {
+                for x in 0..=40i64 {
+                    if inside(x, y) && rng.below(3) > 0 {
+                        let p = [511_000.0 + x as f64 * 0.5, 122_000.0 + y as f64 * 0.5, 0.0];
+                        pts.push(p);
+                        if rng.below(10) == 0 {
+                            pts.push([p[0], p[1], 1.0]);
+                        }
+                    }
+                }
+            }
+            let grid = crate::tiles::grid::TileGrid::new(2.0, 1).unwrap();
+            let index = crate::tiles::index::index(1, &pts, grid, dir.path());
+            let mut t = DelaunayTriangulation::<Point2<f64>>::new();
+            for p in &pts {
+                t.insert(Point2::new(p[0], p[1])).unwrap();
+            }
+            let v = t.num_vertices() as u64;
+            let b = boundary_points(&index).unwrap();
+            assert_eq!(2 * v - b - 2, t.num_inner_faces() as u64, "shape {s}: {v} points, {b} on the hull");
+        }
     }
 }

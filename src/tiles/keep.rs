@@ -14,6 +14,9 @@ pub(crate) struct Want {
     pub mesh: bool,
     /// The products' needs: triangles they do not want are counted, not kept ([`Needs`]).
     pub needs: Needs,
+    /// The needs are covering and nothing else looks at every triangle: tiles leave the unwanted
+    /// triangles deep inside them uncertified and uncounted ([`super::worker`]).
+    pub skip_inside: bool,
 }
 
 /// Decides which points the tile owns: clearly inside or outside its rectangle by a margin, or

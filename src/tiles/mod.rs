@@ -313,6 +313,26 @@ fn index_points<R: IndexRecord>(
     Ok((index, bounds, cpu))
 }
 
+/// Counts the triangles no tile looked at (unwanted, deep inside their tiles): all there are,
+/// `2V − B − 2` for `kept` distinct points, less those the tiles counted.
+///
+/// # Errors
+/// Reading the index; [`Error::Internal`] if the tiles counted more.
+fn count_unseen(index: &BlockIndex, kept: u64, writer: &mut emit::TileWriter) -> Result<()> {
+    if index.hull().len() < 3 {
+        return Ok(());
+    }
+    let all = (2 * kept).saturating_sub(hull::boundary_points(index)? + 2);
+    if writer.triangles > all {
+        return Err(Error::Internal(format!(
+            "the tiles counted {} triangles, but {kept} points make {all}",
+            writer.triangles
+        )));
+    }
+    writer.unseen(all - writer.triangles);
+    Ok(())
+}
+
 /// Opens the files of `job`. A task of a plan whose files are all COPC reads only the points of
 /// its tile and buffer (their octrees skip the rest) and returns the rest of each file's extent
 /// as rectangles where points it did not read may lie, like the files it does not read at all.
@@ -663,13 +683,15 @@ pub(crate) fn run(
     let shares: u64 = sinks.iter().map(|s| s.memory_share()).sum();
     // The workers keep only the triangles some output wants: a mesh, or `--max-edge` (which
     // counts what it trims), takes every one.
+    let needs = if mesh.is_some() || trim.is_some() {
+        Needs::All
+    } else {
+        Needs::together(sinks.iter().map(|s| s.needs()))
+    };
     let want = keep::Want {
         mesh: mesh.is_some(),
-        needs: if mesh.is_some() || trim.is_some() {
-            Needs::All
-        } else {
-            Needs::together(sinks.iter().map(|s| s.needs()))
-        },
+        skip_inside: needs.covering() && job.lines.is_none() && options.scope.is_none(),
+        needs,
     };
     let mut writer = emit::TileWriter::new(mesh, sinks, trim);
     let mut stats = TileStats {
@@ -757,6 +779,9 @@ pub(crate) fn run(
         outcome
     });
     result?;
+    if want.skip_inside {
+        count_unseen(&index, kept, &mut writer)?;
+    }
     if writer.pending() != 0 {
         return Err(Error::Internal(format!(
             "{} vertices were left waiting for triangles after the last tile",

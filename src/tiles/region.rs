@@ -195,8 +195,10 @@ pub(crate) struct Verdict {
 }
 
 /// Judges the run `t` over `loaded` on `region` (the tile's `run`-th), with the breaklines it
-/// loaded and the run's adjacency (`lines`). A run over every non-empty block and every segment (`full`) is the whole
-/// triangulation: everything in it is certified.
+/// loaded and the run's adjacency (`lines`). A run over every non-empty block and every segment
+/// (`full`) is the whole triangulation: everything in it is certified. With `skip` (covering
+/// needs and a rectangle inside the tile), the triangles strictly inside the rectangle that the
+/// needs do not want are left unjudged (see [`super::worker`], "Covering needs").
 ///
 /// # Errors
 /// Reading the points of blocks not loaded.
@@ -208,6 +210,7 @@ pub(crate) fn judge(
     full: bool,
     run: u32,
     lines: Option<(&super::lines::RunLines, &[u32])>,
+    skip: Option<(&crate::sink::Needs, [f64; 4])>,
 ) -> crate::error::Result<Verdict> {
     let unknown = std::cell::Cell::new(0.0);
     let mut cert = Certifier::new(index, loaded, &unknown);
@@ -219,6 +222,12 @@ pub(crate) fn judge(
     for (k, tri) in t.triangles.iter().enumerate() {
         let t2: Tri2 = tri.map(|i| [v[i as usize][0], v[i as usize][1]]);
         if !region.meets(&t2) {
+            continue;
+        }
+        if let Some((needs, r)) = skip
+            && strictly_inside(&t2, &r)
+            && !needs.wants(&tri.map(|i| v[i as usize]))
+        {
             continue;
         }
         if full {
@@ -253,6 +262,12 @@ pub(crate) fn judge(
     out.unknown = unknown.get();
     out.tested = cert.tested.get();
     Ok(out)
+}
+
+/// Does the triangle `t` lie in the open rectangle `r`?
+fn strictly_inside(t: &Tri2, r: &[f64; 4]) -> bool {
+    let b = bbox(t);
+    b[0] > r[0] && b[1] > r[1] && b[2] < r[2] && b[3] < r[3]
 }
 
 /// Is `t` flat for its disk: a radius (bound) over 16 times its longest edge? Its disk is then

@@ -43,6 +43,21 @@
 //! whose `z` follows `--duplicates` (the line read last) in every run. The rest of the argument
 //! (patches, coverage, ownership) is the unconstrained one. `--no-flat-triangles` stays on the
 //! sweep: its flips look across triangles that other tiles own, which no certificate covers.
+//!
+//! **Covering needs (a DEM alone).** When the only products are covering
+//! ([`crate::sink::Wants::covering`]: a DEM uses a triangle only for the cell centres it holds,
+//! and wants every triangle whose box holds one) and no mesh, line, trim or task looks at every
+//! triangle, a run leaves unjudged the triangles lying strictly inside the tile (their box in
+//! the open tile rectangle, shrunk by the margin) that the products do not want. Every owned
+//! triangle `T` the DEM needs is still found. If `T` reaches the tile's border or beyond, take
+//! a point `q` of `T` not inside the open rectangle but in the tile (`T`'s lowest vertex is in
+//! the tile): every run triangle holding `q` is judged, so the runs go on until the ones
+//! holding `q` are certified, and then they are the whole triangulation's triangles holding
+//! `q`, `T` among them (certified triangles are true ones, and those holding `q` cover its
+//! neighbourhood). If `T` is strictly inside, it holds a centre `c` in the tile, every run
+//! triangle holding `c` is wanted, hence judged, and the same argument finds `T`. The triangles
+//! left out are counted at the end instead: a triangulation of `V` points, `B` of them on the
+//! hull's boundary, has `2V − B − 2` triangles ([`super::hull::boundary_points`]).
 
 use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
@@ -119,6 +134,7 @@ pub(crate) fn run_tile(
     let w = g.world(&owned);
     let m = g.margin(w.iter().fold(0.0f64, |m, v| m.max(v.abs())));
     let rect = [w[0] - m, w[1] - m, w[2] + m, w[3] + m];
+    let inner = [w[0] + m, w[1] + m, w[2] - m, w[3] - m];
     let mut region = Region { rect, failed: None };
     let mut loaded = Loaded {
         rect: owned.expand(buffer.max(0)).intersect(&occ),
@@ -203,6 +219,7 @@ pub(crate) fn run_tile(
                 full,
                 out.runs,
                 run_lines.as_ref().map(|l| (l, &twins[..])),
+                want.skip_inside.then_some((&want.needs, inner)),
             )
         })?;
         out.cpu.certify += cpu;
