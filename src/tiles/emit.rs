@@ -14,7 +14,7 @@
 
 use super::worker::{NOT_OWNED, TileOutput};
 use crate::breaklines::Trim;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::idmap::{FastMap, FastSet};
 use crate::sink::{MeshSink, TriangleSink};
 
@@ -277,15 +277,30 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
     }
 
     /// Vertices still waiting for triangles (none after the last tile).
-    /// Counts `n` triangles that no tile looked at (no product wanted them: see
-    /// [`super::keep::Want::skip_inside`]) as written, as the workers' skipped ones are.
-    pub fn unseen(&mut self, n: u64) {
-        if n > 0 {
-            for s in self.sinks.iter_mut() {
-                s.skipped(n);
-            }
-            self.triangles += n;
+    /// Counts the triangles no tile looked at (no product wanted them, deep inside their tiles:
+    /// [`super::keep::Want::skip_inside`]) as written, as the workers' skipped ones are: all
+    /// there are, `2V − B − 2` for `kept` distinct points ([`super::hull::boundary_points`]),
+    /// less those counted.
+    ///
+    /// # Errors
+    /// Reading the index; [`Error::Internal`] if the tiles counted more.
+    pub fn count_unseen(&mut self, index: &super::index::BlockIndex, kept: u64) -> Result<()> {
+        if index.hull().len() < 3 {
+            return Ok(());
         }
+        let all = (2 * kept).saturating_sub(super::hull::boundary_points(index)? + 2);
+        if self.triangles > all {
+            return Err(Error::Internal(format!(
+                "the tiles counted {} triangles, but {kept} points make {all}",
+                self.triangles
+            )));
+        }
+        let n = all - self.triangles;
+        for s in self.sinks.iter_mut() {
+            s.skipped(n);
+        }
+        self.triangles = all;
+        Ok(())
     }
 
     pub fn pending(&self) -> usize {

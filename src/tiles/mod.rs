@@ -313,26 +313,6 @@ fn index_points<R: IndexRecord>(
     Ok((index, bounds, cpu))
 }
 
-/// Counts the triangles no tile looked at (unwanted, deep inside their tiles): all there are,
-/// `2V − B − 2` for `kept` distinct points, less those the tiles counted.
-///
-/// # Errors
-/// Reading the index; [`Error::Internal`] if the tiles counted more.
-fn count_unseen(index: &BlockIndex, kept: u64, writer: &mut emit::TileWriter) -> Result<()> {
-    if index.hull().len() < 3 {
-        return Ok(());
-    }
-    let all = (2 * kept).saturating_sub(hull::boundary_points(index)? + 2);
-    if writer.triangles > all {
-        return Err(Error::Internal(format!(
-            "the tiles counted {} triangles, but {kept} points make {all}",
-            writer.triangles
-        )));
-    }
-    writer.unseen(all - writer.triangles);
-    Ok(())
-}
-
 /// Opens the files of `job`. A task of a plan whose files are all COPC reads only the points of
 /// its tile and buffer (their octrees skip the rest) and returns the rest of each file's extent
 /// as rectangles where points it did not read may lie, like the files it does not read at all.
@@ -780,7 +760,7 @@ pub(crate) fn run(
     });
     result?;
     if want.skip_inside {
-        count_unseen(&index, kept, &mut writer)?;
+        writer.count_unseen(&index, kept)?;
     }
     if writer.pending() != 0 {
         return Err(Error::Internal(format!(

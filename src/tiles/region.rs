@@ -66,11 +66,14 @@ pub(crate) struct Tris {
 /// The part of the plane whose triangles a run must certify: the tile's closed rectangle
 /// (widened by the rounding margin), and for a patch run also the union of the closed triangles
 /// the earlier runs failed. A triangle must be certified when it meets both; the certified
-/// triangles of all runs then cover the rectangle (see [`super::worker`]).
+/// triangles of all runs then cover the rectangle (see [`super::worker`]). With covering needs,
+/// the triangles in an open rectangle inside the tile that the needs do not want are left out
+/// (`skip`; see [`super::worker`], "Covering needs").
 #[derive(Debug, Clone)]
-pub(crate) struct Region {
+pub(crate) struct Region<'a> {
     pub rect: [f64; 4],
     pub failed: Option<Tris>,
+    pub skip: Option<(&'a crate::sink::Needs, [f64; 4])>,
 }
 
 impl Tris {
@@ -142,7 +145,7 @@ fn cell_range_of(all: &[f64; 4], b: &[f64; 4]) -> (usize, usize, usize, usize) {
     )
 }
 
-impl Region {
+impl Region<'_> {
     /// Does triangle `t` meet the region? (Exact, the rectangle being widened by its margin.)
     pub fn meets(&self, t: &Tri2) -> bool {
         let tb = bbox(t);
@@ -196,9 +199,8 @@ pub(crate) struct Verdict {
 
 /// Judges the run `t` over `loaded` on `region` (the tile's `run`-th), with the breaklines it
 /// loaded and the run's adjacency (`lines`). A run over every non-empty block and every segment
-/// (`full`) is the whole triangulation: everything in it is certified. With `skip` (covering
-/// needs and a rectangle inside the tile), the triangles strictly inside the rectangle that the
-/// needs do not want are left unjudged (see [`super::worker`], "Covering needs").
+/// (`full`) is the whole triangulation: everything in it is certified. The region's `skip`
+/// leaves some triangles unjudged ([`Region`]).
 ///
 /// # Errors
 /// Reading the points of blocks not loaded.
@@ -210,7 +212,6 @@ pub(crate) fn judge(
     full: bool,
     run: u32,
     lines: Option<(&super::lines::RunLines, &[u32])>,
-    skip: Option<(&crate::sink::Needs, [f64; 4])>,
 ) -> crate::error::Result<Verdict> {
     let unknown = std::cell::Cell::new(0.0);
     let mut cert = Certifier::new(index, loaded, &unknown);
@@ -224,7 +225,7 @@ pub(crate) fn judge(
         if !region.meets(&t2) {
             continue;
         }
-        if let Some((needs, r)) = skip
+        if let Some((needs, r)) = region.skip
             && strictly_inside(&t2, &r)
             && !needs.wants(&tri.map(|i| v[i as usize]))
         {
@@ -309,6 +310,7 @@ mod tests {
         let r = Region {
             rect: [0.0, 0.0, 10.0, 10.0],
             failed: None,
+            skip: None,
         };
         assert!(r.meets(&[[1.0, 1.0], [2.0, 1.0], [1.0, 2.0]]));
         // Bounding boxes overlap, the triangle does not reach the square.
@@ -316,6 +318,7 @@ mod tests {
         assert!(r.meets(&[[10.0, 5.0], [20.0, 5.0], [20.0, 6.0]]));
         let f = Region {
             rect: [-1e3, -1e3, 1e3, 1e3],
+            skip: None,
             failed: Some(Tris::new(vec![
                 [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
                 [[100.0, 100.0], [101.0, 100.0], [100.0, 101.0]],

@@ -135,7 +135,12 @@ pub(crate) fn run_tile(
     let m = g.margin(w.iter().fold(0.0f64, |m, v| m.max(v.abs())));
     let rect = [w[0] - m, w[1] - m, w[2] + m, w[3] + m];
     let inner = [w[0] + m, w[1] + m, w[2] - m, w[3] - m];
-    let mut region = Region { rect, failed: None };
+    let skip = want.skip_inside.then_some((&want.needs, inner));
+    let mut region = Region {
+        rect,
+        failed: None,
+        skip,
+    };
     let mut loaded = Loaded {
         rect: owned.expand(buffer.max(0)).intersect(&occ),
         extra: Vec::new(),
@@ -219,7 +224,6 @@ pub(crate) fn run_tile(
                 full,
                 out.runs,
                 run_lines.as_ref().map(|l| (l, &twins[..])),
-                want.skip_inside.then_some((&want.needs, inner)),
             )
         })?;
         out.cpu.certify += cpu;
@@ -303,6 +307,7 @@ pub(crate) fn run_tile(
             region = Region {
                 rect,
                 failed: Some(Tris::new(failed)),
+                skip,
             };
         }
     }
