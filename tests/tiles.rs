@@ -291,6 +291,57 @@ fn a_dem_only_run_counts_the_triangles_it_leaves_out() {
     assert!(runs[0].2 == runs[1].2, "the DEM is not the sweep's");
 }
 
+/// A DEM alone leaves the triangles deep inside a tile that hold no cell centre unjudged
+/// (covering needs): with a lake wider than the tiles and sparse clusters, whose triangles reach
+/// across tiles with their centres in other tiles, and cells from finer than the points to far
+/// coarser than a tile, the raster and the counts are the sweep's, on one thread or two.
+#[test]
+fn a_dem_alone_skips_what_it_does_not_want_and_is_still_the_sweeps() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
+    let mut pts: Vec<[f64; 3]> = sweeptin::synth::uniform(9_000, 21)
+        .into_iter()
+        .map(|p| [p[0] * 0.3, p[1] * 0.3, p[2]])
+        .filter(|p| (p[0] - 150.0).hypot(p[1] - 150.0) > 80.0)
+        .collect();
+    // Sparse clusters in the lake and beyond the data.
+    for (k, c) in [[150.0, 150.0], [120.0, 170.0], [340.0, 40.0]]
+        .iter()
+        .enumerate()
+    {
+        for i in 0..12 {
+            let a = i as f64 * 0.5 + k as f64;
+            pts.push([
+                c[0] + 3.0 * a.cos(),
+                c[1] + 3.0 * a.sin(),
+                (i * 7 % 5) as f64,
+            ]);
+        }
+    }
+    let las = las_of(dir.path(), "lake.las", &pts);
+    let las = las.to_str().unwrap();
+    for cell in ["0.25", "2", "7", "40"] {
+        let mut runs = Vec::new();
+        for (engine, threads) in [("tiles", "1"), ("tiles", "2"), ("sweep", "1")] {
+            let tif = d(&format!("{engine}{threads}.tif"));
+            let mut args = vec!["dem", las, "--cell", cell, "--engine", engine];
+            args.extend_from_slice(&["--threads", threads, "-o", &tif, "--json", "-q"]);
+            if engine == "tiles" && cell != "40" {
+                args.extend_from_slice(&["--tile", "16"]);
+            }
+            let v: serde_json::Value = serde_json::from_slice(&cli(&args).stdout).unwrap();
+            runs.push((v["run"]["triangles"].as_u64(), std::fs::read(&tif).unwrap()));
+        }
+        for r in &runs[..2] {
+            assert_eq!(
+                r.0, runs[2].0,
+                "cell {cell}: the triangle count is not the sweep's"
+            );
+            assert!(r.1 == runs[2].1, "cell {cell}: the DEM is not the sweep's");
+        }
+    }
+}
+
 /// Heights at query points (sorted by `y`, answered lazily), profiles along lines and volumes
 /// are the sweep's, byte for byte, whatever the thread count: the products that need every
 /// triangle get them in the tiles' order, which is not the sweep's.
