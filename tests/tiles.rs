@@ -318,26 +318,38 @@ fn a_dem_alone_skips_what_it_does_not_want_and_is_still_the_sweeps() {
             ]);
         }
     }
-    let las = las_of(dir.path(), "lake.las", &pts);
-    let las = las.to_str().unwrap();
-    for cell in ["0.25", "2", "7", "40"] {
-        let mut runs = Vec::new();
-        for (engine, threads) in [("tiles", "1"), ("tiles", "2"), ("sweep", "1")] {
-            let tif = d(&format!("{engine}{threads}.tif"));
-            let mut args = vec!["dem", las, "--cell", cell, "--engine", engine];
-            args.extend_from_slice(&["--threads", threads, "-o", &tif, "--json", "-q"]);
-            if engine == "tiles" && cell != "40" {
-                args.extend_from_slice(&["--tile", "16"]);
+    let lake = las_of(dir.path(), "lake.las", &pts);
+    // Lattices: many points exactly on the hull's edges (the count's `B`), ties everywhere.
+    let grid = las_of(dir.path(), "grid.las", &sweeptin::synth::grid(80, 60, 1.0));
+    let tilted = sweeptin::synth::tilted_grid(70, 70, 1.0, 0.3);
+    let tilted = las_of(dir.path(), "tilted.las", &tilted);
+    let cases = [
+        (lake, ["0.25", "2", "7", "40"].as_slice()),
+        (grid, ["0.3", "1"].as_slice()),
+        (tilted, ["0.3", "2.5"].as_slice()),
+    ];
+    for (las, cells) in &cases {
+        let las = las.to_str().unwrap();
+        for &cell in *cells {
+            let mut runs = Vec::new();
+            for (engine, threads) in [("tiles", "1"), ("tiles", "2"), ("sweep", "1")] {
+                let tif = d(&format!("{engine}{threads}.tif"));
+                let mut args = vec!["dem", las, "--cell", cell, "--engine", engine];
+                args.extend_from_slice(&["--threads", threads, "-o", &tif, "--json", "-q"]);
+                if engine == "tiles" && cell != "40" {
+                    args.extend_from_slice(&["--tile", "16"]);
+                }
+                let v: serde_json::Value = serde_json::from_slice(&cli(&args).stdout).unwrap();
+                runs.push((v["run"]["triangles"].as_u64(), std::fs::read(&tif).unwrap()));
             }
-            let v: serde_json::Value = serde_json::from_slice(&cli(&args).stdout).unwrap();
-            runs.push((v["run"]["triangles"].as_u64(), std::fs::read(&tif).unwrap()));
-        }
-        for r in &runs[..2] {
-            assert_eq!(
-                r.0, runs[2].0,
-                "cell {cell}: the triangle count is not the sweep's"
-            );
-            assert!(r.1 == runs[2].1, "cell {cell}: the DEM is not the sweep's");
+            for r in &runs[..2] {
+                let what = format!("{las}, cell {cell}");
+                assert_eq!(
+                    r.0, runs[2].0,
+                    "{what}: the triangle count is not the sweep's"
+                );
+                assert!(r.1 == runs[2].1, "{what}: the DEM is not the sweep's");
+            }
         }
     }
 }

@@ -276,7 +276,6 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
         Ok(keys.len() as u64)
     }
 
-    /// Vertices still waiting for triangles (none after the last tile).
     /// Counts the triangles no tile looked at (no product wanted them, deep inside their tiles:
     /// [`super::keep::Want::skip_inside`]) as written, as the workers' skipped ones are: all
     /// there are, `2V − B − 2` for `kept` distinct points ([`super::hull::boundary_points`]),
@@ -303,6 +302,7 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
         Ok(())
     }
 
+    /// Vertices still waiting for triangles (none after the last tile).
     pub fn pending(&self) -> usize {
         self.live.len()
     }

@@ -50,8 +50,9 @@
 //! triangle, a run leaves unjudged the triangles lying strictly inside the tile (their box in
 //! the open tile rectangle, shrunk by the margin) that the products do not want. Every owned
 //! triangle `T` the DEM needs is still found. If `T` reaches the tile's border or beyond, take
-//! a point `q` of `T` not inside the open rectangle but in the tile (`T`'s lowest vertex is in
-//! the tile): every run triangle holding `q` is judged, so the runs go on until the ones
+//! a point `q` of `T` outside the open inner rectangle but in the widened one the region judges
+//! (on the way from `T`'s lowest vertex, owned, hence within the margin of the tile, to a
+//! corner outside the inner rectangle): every run triangle holding `q` is judged, so the runs go on until the ones
 //! holding `q` are certified, and then they are the whole triangulation's triangles holding
 //! `q`, `T` among them (certified triangles are true ones, and those holding `q` cover its
 //! neighbourhood). If `T` is strictly inside, it holds a centre `c` in the tile, every run
