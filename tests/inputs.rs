@@ -301,6 +301,14 @@ fn a_vpc_of_the_ign_tiles() {
     assert!(e.to_string().contains("77050_627755"), "{e}");
 }
 
+/// `sweeptin index FILES -o VPC`.
+fn write_vpc(files: &[&str], vpc: &Path) {
+    let mut args = vec!["index"];
+    args.extend_from_slice(files);
+    args.extend_from_slice(&["-o", s(vpc)]);
+    sweeptin(&args);
+}
+
 /// A `.vpc` whose boxes are not the files' headers' (stale: shrunk by 20 m on the south-west; or
 /// only a WGS84 `bbox`, as a STAC catalogue may give): the files it opens count with their
 /// headers' boxes, so the DEM (tiled, its block index packed on the headers' lattice, or swept)
@@ -312,10 +320,7 @@ fn a_vpc_with_boxes_other_than_the_headers() {
     let tiles = ign_tiles();
     let names: Vec<&str> = tiles.iter().map(|t| s(t)).collect();
     let vpc = d("ign.vpc");
-    let mut args = vec!["index"];
-    args.extend_from_slice(&names);
-    args.extend_from_slice(&["-o", s(&vpc)]);
-    sweeptin(&args);
+    write_vpc(&names, &vpc);
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&vpc).unwrap()).unwrap();
     let (mut stale, mut wgs84) = (v.clone(), v);
     for item in stale["features"].as_array_mut().unwrap() {
@@ -354,10 +359,7 @@ fn the_same_dem_from_laz_vpc_lists_globs_and_copc() {
     let tiles = ign_tiles();
     let names: Vec<&str> = tiles.iter().map(|t| s(t)).collect();
     let vpc = d("ign.vpc");
-    let mut args = vec!["index"];
-    args.extend_from_slice(&names);
-    args.extend_from_slice(&["-o", s(&vpc)]);
-    sweeptin(&args);
+    write_vpc(&names, &vpc);
     let bbox = ["--bbox", "770560,6277560,770590,6277590"];
     let laz_box = dem(&names, &bbox, &d("laz_box.tif"));
     assert_eq!(dem(&[s(&vpc)], &bbox, &d("vpc_box.tif")), laz_box);
