@@ -302,6 +302,15 @@ impl Error {
         }
     }
 
+    /// The trimming (`--max-edge`, a boundary, holes) removed every one of the `n` triangles:
+    /// an option to change, not a point set without triangles.
+    pub fn trimmed_all(n: u64) -> Self {
+        Error::Options(format!(
+            "the trimming (--max-edge, --trim-boundary, --holes) removed all {n} triangles: \
+             nothing is left to write (a longer --max-edge or a wider boundary keeps some)"
+        ))
+    }
+
     /// Wraps an I/O error writing an output, temporary or spill file with the path it concerns.
     pub fn write(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Write {

@@ -631,3 +631,34 @@ fn summaries_to_a_closed_pipe_or_a_full_disk_are_not_internal_errors() {
         assert!(err(&o).contains("standard output"), "{}", err(&o));
     }
 }
+
+/// A `--max-edge` shorter than every edge removes every triangle: an option to change (exit 2,
+/// saying so), not "all points are collinear" (exit 3) as it was; no output is left, through
+/// the tiles and the sweep alike.
+#[test]
+fn a_trim_that_removes_every_triangle_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let laz = data::shared("lidar/startinpy_small.laz");
+    for engine in ["tiles", "sweep"] {
+        let out = dir.path().join(format!("{engine}.tif"));
+        let o = run(
+            dir.path(),
+            &[
+                "dem",
+                laz.to_str().unwrap(),
+                "--cell",
+                "1",
+                "--max-edge",
+                "0.001",
+                "--engine",
+                engine,
+                "-o",
+                out.to_str().unwrap(),
+                "-q",
+            ],
+        );
+        assert_eq!(code(&o), 2, "{engine}: {}", err(&o));
+        assert!(err(&o).contains("removed all"), "{engine}: {}", err(&o));
+        assert!(!out.exists(), "{engine}: an output was left");
+    }
+}

@@ -153,7 +153,9 @@ pub(crate) fn run(
     pb.finish_and_clear();
     if triangles == 0 {
         let filtered = rd.stats.read > rd.stats.kept || rd.stats.skipped > 0;
-        return Err(if kept < 3 && filtered {
+        return Err(if trimmed > 0 {
+            Error::trimmed_all(trimmed)
+        } else if kept < 3 && filtered {
             Error::NothingLeft {
                 files: input.paths.clone(),
                 what: rd.stats.describe(kept),

@@ -770,7 +770,9 @@ pub(crate) fn run(
     }
     // A task may own no triangle (its points all belong to triangles of other tasks).
     if writer.triangles == 0 && options.scope.is_none() {
-        return Err(if kept < 3 {
+        return Err(if writer.trimmed > 0 {
+            Error::trimmed_all(writer.trimmed)
+        } else if kept < 3 {
             Error::TooFewPoints {
                 distinct: kept,
                 total: read,
