@@ -151,6 +151,17 @@ pub fn orient(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> Orientation {
     Orientation::from_f64(robust::orient2d(c(a), c(b), c(p)))
 }
 
+/// Is `p` on the closed segment `a b`? Exact: collinear by [`orient`], and within the
+/// segment's box.
+#[inline]
+pub fn on_segment(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> bool {
+    orient(a, b, p) == Orientation::Collinear
+        && a[0].min(b[0]) <= p[0]
+        && p[0] <= a[0].max(b[0])
+        && a[1].min(b[1]) <= p[1]
+        && p[1] <= a[1].max(b[1])
+}
+
 /// The orientation determinant of `a, b, p` (twice the signed area), from [`robust`]'s adaptive
 /// evaluation: its sign is exact and its value never less accurate than the plain floating-point
 /// formula. For constructions (such as where two segments cross), never for decisions: decide with

@@ -4,7 +4,7 @@
 
 use super::index::BlockIndex;
 use crate::error::Result;
-use crate::geom::predicates::{Orientation, orient};
+use crate::geom::predicates::{Orientation, on_segment, orient};
 use crate::idmap::FastSet;
 
 fn xy(p: &[f64; 3]) -> [f64; 2] {
@@ -103,14 +103,6 @@ fn span(a: [f64; 2], b: [f64; 2], y0: f64, y1: f64) -> [f64; 2] {
     [p.min(q).max(xlo), p.max(q).min(xhi)]
 }
 
-/// Is `q` on the closed segment `a b`? Exact.
-fn on_segment(a: [f64; 2], b: [f64; 2], q: [f64; 2]) -> bool {
-    orient(a, b, q) == Orientation::Collinear
-        && q[0] >= a[0].min(b[0])
-        && q[0] <= a[0].max(b[0])
-        && q[1] >= a[1].min(b[1])
-        && q[1] <= a[1].max(b[1])
-}
 
 #[cfg(test)]
 mod tests {

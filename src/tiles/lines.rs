@@ -19,7 +19,7 @@ use super::index::BlockIndex;
 use super::region::{Tri2, bbox, tri_meets_rect};
 use crate::error::Result;
 use crate::geom::grid::{Buckets, Grid};
-use crate::geom::predicates::{CircleSide, Orientation, incircle, orient};
+use crate::geom::predicates::{CircleSide, Orientation, incircle, on_segment, orient};
 use crate::idmap::FastMap;
 use crate::sort::DuplicatePolicy;
 
@@ -598,11 +598,3 @@ pub(crate) fn crosses_interior(t: &Tri2, a: [f64; 2], b: [f64; 2]) -> bool {
     !(left || right)
 }
 
-/// `p` on the closed segment `a`-`b` (exact).
-fn on_segment(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> bool {
-    orient(a, b, p) == Orientation::Collinear
-        && a[0].min(b[0]) <= p[0]
-        && p[0] <= a[0].max(b[0])
-        && a[1].min(b[1]) <= p[1]
-        && p[1] <= a[1].max(b[1])
-}

@@ -10,7 +10,7 @@
 use super::{Report, Validator, apex_of, dst_of, invalid};
 use crate::error::Result;
 use crate::geom::grid::{Buckets, Grid};
-use crate::geom::predicates::{Orientation, check_coord, orient};
+use crate::geom::predicates::{Orientation, check_coord, on_segment, orient};
 use rayon::prelude::*;
 
 /// Which checks [`validate_cdt_with`] runs besides the structural ones (indices, distinct
@@ -126,11 +126,6 @@ impl SegmentIndex {
             on_segment(a, b, p) && on_segment(a, b, q)
         })
     }
-}
-
-/// `p` on the closed segment `a-b` (exact).
-fn on_segment(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> bool {
-    orient(a, b, p) == Orientation::Collinear && within(a, b, p)
 }
 
 /// For `p` on the line `ab`: between `a` and `b`, ends included.
