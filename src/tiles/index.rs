@@ -124,6 +124,11 @@ impl Packing {
 pub(crate) trait IndexRecord: SortKey + bytemuck::Pod + Send {
     /// A point as the index's file stores it.
     type Stored: bytemuck::Pod + Send;
+    /// The record of point `p` in block `(bx, by)` (a packed record needs its packing).
+    ///
+    /// # Errors
+    /// As [`Packing::pack`].
+    fn pack(packing: Option<&Packing>, block: (i64, i64), p: [f64; 3]) -> Result<Self>;
     /// The block key ([`TileGrid::key`]) and the point.
     fn unpack(&self, packing: Option<&Packing>) -> (u64, [f64; 3]);
     /// The point as stored.
@@ -132,6 +137,15 @@ pub(crate) trait IndexRecord: SortKey + bytemuck::Pod + Send {
 
 impl IndexRecord for BlockRecord {
     type Stored = [f64; 3];
+    #[inline]
+    fn pack(_: Option<&Packing>, (bx, by): (i64, i64), [x, y, z]: [f64; 3]) -> Result<Self> {
+        Ok(BlockRecord {
+            key: TileGrid::key(bx, by),
+            x,
+            y,
+            z,
+        })
+    }
     #[inline]
     fn unpack(&self, _: Option<&Packing>) -> (u64, [f64; 3]) {
         (self.key, [self.x, self.y, self.z])
@@ -144,6 +158,12 @@ impl IndexRecord for BlockRecord {
 
 impl IndexRecord for PackedRecord {
     type Stored = [u32; 3];
+    #[inline]
+    fn pack(packing: Option<&Packing>, block: (i64, i64), p: [f64; 3]) -> Result<Self> {
+        packing
+            .expect("packed records come with their packing")
+            .pack(block, p)
+    }
     #[inline]
     fn unpack(&self, packing: Option<&Packing>) -> (u64, [f64; 3]) {
         let p = packing.expect("packed records come with their packing");

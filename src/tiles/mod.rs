@@ -32,7 +32,7 @@ use crate::input::las::{LidarPoint, LidarReader};
 use crate::sink::{MeshSink, Needs, StreamInfo, TriangleSink};
 use crate::sort::external::ExternalSorter;
 use grid::{TileGrid, pow2, side_for};
-use index::{BlockIndex, BlockRecord, IndexRecord, Packing};
+use index::{BlockIndex, BlockRecord, IndexRecord, PackedRecord, Packing};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 use worker::TileOutput;
@@ -206,15 +206,8 @@ fn read_index(
     check_address_space(mem, total)?;
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
     let (mut index, bounds, cpu) = match packing {
-        Some(p) => index_points(&mut reader, probe, Some(p), job, progress, |k, q| p.pack(k, q))?,
-        None => index_points(&mut reader, probe, None, job, progress, |(bx, by), [x, y, z]| {
-            Ok(BlockRecord {
-                key: TileGrid::key(bx, by),
-                x,
-                y,
-                z,
-            })
-        })?,
+        Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
+        None => index_points::<BlockRecord>(&mut reader, probe, None, job, progress)?,
     };
     if let Some(sc) = scope {
         index.scope = Some(index::Scope {
@@ -255,16 +248,15 @@ fn read_index(
     Ok((index, crs, bounds, cpu))
 }
 
-/// Reads every point of `reader` into the block index's sort as the records `record` makes
-/// of its block and position (packed with `packing`, or not), and builds the index: with the
-/// points' bounding box and the CPU time of both steps.
+/// Reads every point of `reader` into the block index's sort as records `R` (packed with
+/// `packing`, or wide), and builds the index: with the points' bounding box and the CPU time of
+/// both steps.
 fn index_points<R: IndexRecord>(
     reader: &mut LidarReader,
     grid: TileGrid,
     packing: Option<Packing>,
     job: &TileJob,
     progress: &mut dyn FnMut(u64, u64),
-    record: impl Fn((i64, i64), [f64; 3]) -> Result<R>,
 ) -> Result<(BlockIndex, [f64; 4], TileCpu)> {
     let total = reader.point_count();
     let t0 = Instant::now();
@@ -286,7 +278,7 @@ fn index_points<R: IndexRecord>(
                 bounds[2].max(x),
                 bounds[3].max(y),
             ];
-            sorter.push(record(grid.block_of(x, y), [x, y, p.z])?)?;
+            sorter.push(R::pack(packing.as_ref(), grid.block_of(x, y), [x, y, p.z])?)?;
         }
         progress(done, total);
         Ok(())
