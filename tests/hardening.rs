@@ -515,6 +515,26 @@ fn exit_statuses_sort_the_failures() {
             &["contours", "grid.xyz", "-o", "c.geojson", "--interval", "0"],
             2,
         ),
+        // A size the engine in use ignores is still refused (it was, only by the tiles).
+        (&["tin", "grid.xyz", "-o", "t.ply", "--tile", "0"], 2),
+        (
+            &[
+                "tin",
+                "grid.xyz",
+                "-o",
+                "t.ply",
+                "--engine",
+                "sweep",
+                "--tile=-5",
+            ],
+            2,
+        ),
+        (
+            &[
+                "tin", "grid.xyz", "-o", "t.ply", "--engine", "sweep", "--tile", "NaN",
+            ],
+            2,
+        ),
         (&["tin", "missing.xyz", "-o", "t.ply"], 3),
         (&["tin", "bad.xyz", "-o", "t.ply"], 3),
         (&["tin", "bad.laz", "-o", "t.ply"], 3),

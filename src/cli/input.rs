@@ -65,7 +65,9 @@ pub struct InputArgs {
     /// sorting of every engine. The output is the same for any number.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub threads: usize,
-    /// Tile side for the tiled engine, in the data's units (a multiple of the DEM cell); default:
+    /// Tile side for the tiled engine, in the data's units (any positive size: a DEM cell belongs
+    /// to the tile holding its centre, so here it need not be a multiple of the cell; a plan's
+    /// tiles must be, since each task writes its own raster); default:
     /// a power-of-two multiple of the cell (of one unit without a cell) holding about 65,000
     /// points at the data's density (more above 134 million points, so that the block table
     /// stays under 2 million blocks): 64 m on a 13-points-per-m² tile. Larger tiles do not save
@@ -148,6 +150,10 @@ impl InputArgs {
 
     /// The run's configuration, checked.
     pub fn config(&self, input: Input) -> anyhow::Result<RunConfig> {
+        // Checked whatever the engine: a value the sweep would ignore is still a mistake.
+        if let Some(t) = self.tile.filter(|t| !(t.is_finite() && *t > 0.0)) {
+            anyhow::bail!("--tile {t}: must be a positive size");
+        }
         let mut options = self.options();
         let l = &input.lines;
         let lines = !l.breaklines.is_empty() || l.boundary.is_some() || l.holes.is_some();
