@@ -682,3 +682,35 @@ fn a_trim_that_removes_every_triangle_says_so() {
         assert!(!out.exists(), "{engine}: an output was left");
     }
 }
+
+/// A tile that lost an owned triangle (a certification bug, injected) fails the run as an
+/// internal error (exit 5) with no output left, rather than writing a mesh or raster with a
+/// hole: the tiles' triangles are counted against Euler's `2V − B − 2`.
+#[test]
+fn a_lost_triangle_is_an_internal_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let laz = data::shared("lidar/startinpy_small.laz");
+    for (cmd, out, extra) in [
+        ("tin", "t.ply", None),
+        ("dem", "d.tif", Some("--contours=c.geojson")),
+    ] {
+        let mut args = vec![cmd, laz.to_str().unwrap(), "-o", out, "-q"];
+        if cmd == "dem" {
+            args.extend(["--cell", "1"]);
+        }
+        args.extend(extra);
+        let o = sweeptin()
+            .current_dir(dir.path())
+            .env("SWEEPTIN_TEST_LOSE", "triangle")
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(code(&o), 5, "{cmd}: {}", err(&o));
+        assert!(err(&o).contains("owned by no tile"), "{cmd}: {}", err(&o));
+        assert!(
+            names(dir.path()).is_empty(),
+            "{cmd}: {:?}",
+            names(dir.path())
+        );
+    }
+}

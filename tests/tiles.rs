@@ -51,7 +51,7 @@ fn assert_tiles_equal_core(input: &Input, tiles: &[Option<f64>], what: &str) {
             );
             assert!(got == want, "{what}, tile {tile:?}, {threads} threads");
             let t = s.tiles.unwrap();
-            assert_eq!(t.uncertified_owned, 0);
+            assert_eq!(t.uncertified_owned, Some(0));
             if threads == 1 {
                 c.validate();
             }

@@ -276,30 +276,47 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
         Ok(keys.len() as u64)
     }
 
-    /// Counts the triangles no tile looked at (no product wanted them, deep inside their tiles:
-    /// [`super::keep::Want::skip_inside`]) as written, as the workers' skipped ones are: all
-    /// there are, `2V − B − 2` for `kept` distinct points ([`super::hull::boundary_points`]),
-    /// less those counted.
+    /// Accounts for every triangle of a points-only run over all the data: there are `2V − B − 2`
+    /// for `kept` distinct points ([`super::hull::boundary_points`]). With `unseen` (a DEM alone:
+    /// [`super::keep::Want::skip_inside`]) the triangles no tile looked at count as written, as
+    /// the workers' skipped ones do, and nothing is measured (`None`). Otherwise every triangle
+    /// was owned by one tile, certified and written or trimmed: the owned triangles missing
+    /// (`Some(0)`, or the error below).
     ///
     /// # Errors
-    /// Reading the index; [`Error::Internal`] if the tiles counted more.
-    pub fn count_unseen(&mut self, index: &super::index::BlockIndex, kept: u64) -> Result<()> {
+    /// Reading the index; [`Error::Internal`] if the tiles counted more triangles than there
+    /// are, or (all seen) fewer: an owned triangle never certified.
+    pub fn account(
+        &mut self,
+        index: &super::index::BlockIndex,
+        kept: u64,
+        unseen: bool,
+    ) -> Result<Option<u64>> {
         if index.hull().len() < 3 {
-            return Ok(());
+            return Ok((!unseen).then_some(0));
         }
         let all = (2 * kept).saturating_sub(super::hull::boundary_points(index)? + 2);
-        if self.triangles > all {
+        let counted = self.triangles + self.trimmed;
+        if counted > all {
             return Err(Error::Internal(format!(
-                "the tiles counted {} triangles, but {kept} points make {all}",
-                self.triangles
+                "the tiles counted {counted} triangles, but {kept} points make {all}"
             )));
         }
-        let n = all - self.triangles;
+        let n = all - counted;
+        if !unseen {
+            if n > 0 {
+                return Err(Error::Internal(format!(
+                    "{n} of the {all} triangles of {kept} points were owned by no tile that \
+                     certified them"
+                )));
+            }
+            return Ok(Some(0));
+        }
         for s in self.sinks.iter_mut() {
             s.skipped(n);
         }
-        self.triangles = all;
-        Ok(())
+        self.triangles += n;
+        Ok(None)
     }
 
     /// Vertices still waiting for triangles (none after the last tile).

@@ -80,7 +80,7 @@ pub(crate) fn boundary_points(index: &BlockIndex) -> Result<u64> {
                 for p in &pts {
                     let q = xy(p);
                     if q != a && q != b && on_segment(a, b, q) {
-                        on.insert((q[0].to_bits(), q[1].to_bits()));
+                        on.insert(((q[0] + 0.0).to_bits(), (q[1] + 0.0).to_bits())); // -0 is 0
                     }
                 }
             }

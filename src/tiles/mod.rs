@@ -99,8 +99,11 @@ pub struct TileStats {
     pub max_buffer: f64,
     /// Points triangulated over all runs' last attempts (owned plus buffers).
     pub loaded_points: u64,
-    /// Owned triangles that were not certified: always 0 (a tile only finishes when all are).
-    pub uncertified_owned: u64,
+    /// Owned triangles that were not certified, counted over the whole run: the triangles
+    /// there are (Euler's `2V − B − 2`) less those the tiles wrote or trimmed; a run with any
+    /// is an internal error, so a summary says 0. `None` where it cannot be counted: a DEM
+    /// alone (it leaves unwanted triangles unseen), breaklines, a plan's task.
+    pub uncertified_owned: Option<u64>,
     /// Worker threads.
     pub threads: u64,
     /// Tiles' runs allowed at once within `--mem` (at most the workers); finished tiles waiting
@@ -751,8 +754,8 @@ pub(crate) fn run(
         outcome
     });
     result?;
-    if want.skip_inside {
-        writer.count_unseen(&index, kept)?;
+    if lines.is_none() && options.scope.is_none() {
+        stats.uncertified_owned = writer.account(&index, kept, want.skip_inside)?;
     }
     if writer.pending() != 0 {
         return Err(Error::Internal(format!(
