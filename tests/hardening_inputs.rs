@@ -354,3 +354,66 @@ fn streaming_meshes_are_checked_in_bounded_memory() {
     let help = String::from_utf8_lossy(&help.stdout);
     assert!(help.contains("Memory:") && help.contains(".stin"), "{help}");
 }
+
+/// Header boxes that say nothing (all zero, as some writers leave them; inverted) do not decide
+/// a DEM's grid, which the points decide: the same raster as with true boxes, beside a file
+/// with a true box too (the union stretched to (0, 0) and the grid was refused). A box far
+/// larger than its points is refused before reading, naming the headers' box and the way out
+/// (`--bbox`, or repairing the header).
+#[test]
+fn header_boxes_that_say_nothing_do_not_decide_the_grid() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let tiles = data::shared("lidar/ign_50m_tiles");
+    let a = std::fs::read(tiles.join("test_data_77055_627760_LA93_IGN69_ground.las")).unwrap();
+    let b = tiles.join("test_data_77060_627760_LA93_IGN69_ground.las");
+    std::fs::write(dir.join("a.las"), &a).unwrap();
+    let f64_at = |at: usize| f64::from_le_bytes(a[at..at + 8].try_into().unwrap());
+    // max x, min x, max y, min y, max z, min z from byte 179.
+    let with_box = |name: &str, v: [f64; 6]| {
+        let mut c = a.clone();
+        for (k, x) in v.iter().enumerate() {
+            c[179 + 8 * k..187 + 8 * k].copy_from_slice(&x.to_le_bytes());
+        }
+        std::fs::write(dir.join(name), c).unwrap();
+    };
+    with_box("zero.las", [0.0; 6]);
+    let (x0, y0) = (f64_at(187), f64_at(203));
+    with_box(
+        "inverted.las",
+        [x0, f64_at(179), y0, f64_at(195), 0.0, 100.0],
+    );
+    with_box("huge.las", [x0 + 1e6, x0, y0 + 1e6, y0, 1e4, 0.0]);
+    let b = b.to_str().unwrap();
+    for engine in ["tiles", "sweep"] {
+        let dem = |file: &str, out: &str| {
+            let o = run(
+                dir,
+                &[
+                    "dem", file, b, "--cell", "0.5", "--engine", engine, "-q", "-o", out,
+                ],
+            );
+            assert_eq!(code(&o), 0, "{file} {engine}: {}", err(&o));
+            std::fs::read(dir.join(out)).unwrap()
+        };
+        let want = dem("a.las", "a.tif");
+        assert!(dem("zero.las", "z.tif") == want, "zero box, {engine}");
+        assert!(
+            dem("inverted.las", "i.tif") == want,
+            "inverted box, {engine}"
+        );
+        let o = run(
+            dir,
+            &[
+                "dem", "huge.las", b, "--cell", "0.5", "--engine", engine, "-o", "h.tif",
+            ],
+        );
+        assert_eq!(code(&o), 2, "{engine}: {}", err(&o));
+        let e = err(&o);
+        assert!(
+            e.contains("header") && e.contains("--bbox") && e.contains("--max-cells"),
+            "{engine}: {e}"
+        );
+        assert!(!dir.join("h.tif").exists());
+    }
+}

@@ -31,6 +31,15 @@ pub struct Bounds3 {
 }
 
 impl Bounds3 {
+    /// Does this header box say where the points are: finite, min ≤ max on every axis, and not
+    /// all zero (what writers leave when they did not compute it)?
+    pub fn usable(&self) -> bool {
+        let zero = self.min.iter().chain(&self.max).all(|v| *v == 0.0);
+        let ordered = (0..3).all(|k| self.min[k] <= self.max[k]);
+        let finite = self.min.iter().chain(&self.max).all(|v| v.is_finite());
+        !zero && ordered && finite
+    }
+
     /// The smallest box containing both.
     pub fn union(&self, other: &Bounds3) -> Bounds3 {
         Bounds3 {

@@ -104,9 +104,8 @@ struct PointCheck {
 impl PointCheck {
     fn of(info: &FileInfo) -> PointCheck {
         let b = &info.bounds;
-        let zero = b.min.iter().chain(&b.max).all(|v| *v == 0.0);
-        let usable = (0..3).all(|k| b.min[k] <= b.max[k] && info.scale[k] > 0.0);
-        let bounds = (!zero && usable).then(|| {
+        let usable = b.usable() && info.scale.iter().all(|s| *s > 0.0);
+        let bounds = usable.then(|| {
             std::array::from_fn(|k| {
                 let (s, o) = (info.scale[k], info.offset[k]);
                 // Saturating: damaged headers hold any doubles.
@@ -337,19 +336,24 @@ impl LidarReader {
         self.sources.iter().map(|s| s.points).sum()
     }
 
-    /// Union of the header bounds of the files that have points (real-world units; all zero
-    /// when no file has points).
+    /// Union of the header bounds of the files that have points (real-world units), leaving
+    /// out boxes that say nothing ([`Bounds3::usable`]: all zero, inverted, not finite); all
+    /// zero when no file has points and a usable box.
     pub fn bounds(&self) -> Bounds3 {
-        let mut it = self
-            .sources
-            .iter()
-            .filter(|s| s.points > 0)
-            .map(|s| s.bounds);
-        let first = it.next().unwrap_or(Bounds3 {
+        self.header_box().unwrap_or(Bounds3 {
             min: [0.0; 3],
             max: [0.0; 3],
-        });
-        it.fold(first, |a, b| a.union(&b))
+        })
+    }
+
+    /// [`LidarReader::bounds`], or `None` when no file with points has a usable box: what a
+    /// check made before reading (a DEM's size) may go by.
+    pub fn header_box(&self) -> Option<Bounds3> {
+        self.sources
+            .iter()
+            .filter(|s| s.points > 0 && s.bounds.usable())
+            .map(|s| s.bounds)
+            .reduce(|a, b| a.union(&b))
     }
 
     /// What the filters kept and dropped so far; `read + skipped` against

@@ -156,8 +156,12 @@ impl Lattice {
         let mut pow = 1.0f64;
         let mut scale = 0.0f64;
         for (q, b) in files {
-            let zero = b.iter().flatten().all(|v| *v == 0.0);
-            if zero || !(0..3).all(|k| b[0][k] <= b[1][k] && b[1][k].is_finite()) {
+            if !(super::header::Bounds3 {
+                min: b[0],
+                max: b[1],
+            })
+            .usable()
+            {
                 return None;
             }
             for d in &q.decimal {
