@@ -59,3 +59,18 @@ pub use raster::{GridWriter, MemoryGrid, RasterFormat, RasterOptions, create_gri
 pub use sms2dm::Sms2dmWriter;
 pub use stin::StinWriter;
 pub use target::{check_output, distinct_outputs};
+
+/// The most bytes handed to one `write` call by [`write_pieces`].
+const WRITE_PIECE: usize = 1 << 20;
+
+/// Writes `bytes` in pieces of a megabyte. One `write` of many megabytes (a sort's half, a tile's
+/// vertices) makes Linux fill the page cache with 2 MiB folios, and on a virtual machine that
+/// hands free memory back to its host each such folio is faulted in page by page: spilling
+/// ARSO's ground runs in 13 MB writes took 0.9 s of system CPU, in 1 MB pieces 0.03 s
+/// (docs/BENCHMARKS.md, evening of 2026-12-04). Elsewhere it costs nothing.
+///
+/// # Errors
+/// The writer's.
+pub(crate) fn write_pieces(w: &mut impl std::io::Write, bytes: &[u8]) -> std::io::Result<()> {
+    bytes.chunks(WRITE_PIECE).try_for_each(|p| w.write_all(p))
+}

@@ -244,7 +244,8 @@ fn write_run<R: SortKey>(chunk: &mut [R], scratch: &mut Vec<R>, dir: &Path) -> R
     } else {
         sort_records(chunk);
     }
-    new_run(dir, |w| w.write_all(bytemuck::cast_slice(chunk)))
+    let bytes: &[u8] = bytemuck::cast_slice(chunk);
+    new_run(dir, |w| crate::output::write_pieces(w, bytes))
 }
 
 fn sort_records<R: SortKey>(chunk: &mut [R]) {
