@@ -27,7 +27,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 /// Size of the write buffer of an [`AtomicFile`].
-const WRITE_BUFFER: usize = 1 << 20;
+const WRITE_BUFFER: usize = super::WRITE_PIECE;
 
 /// Exit code after an interruption by Ctrl-C (128 + SIGINT, the shell convention); SIGTERM
 /// gives 143 and SIGHUP 129.

@@ -281,7 +281,7 @@ pub(crate) fn write_tiff(
     // Chunks, smallest overview first.
     let dir = super::target::scratch_dir(path);
     let chunk_file = tempfile::tempfile_in(&dir).map_err(|e| Error::write(&dir, e))?;
-    let mut out = BufWriter::with_capacity(1 << 20, chunk_file);
+    let mut out = BufWriter::with_capacity(super::WRITE_PIECE, chunk_file);
     let io = |e: std::io::Error| Error::write(path, e);
     let mut pos = 0u64;
     for (stage, level) in stages.iter().zip(levels.iter_mut()).rev() {

@@ -60,14 +60,16 @@ pub use sms2dm::Sms2dmWriter;
 pub use stin::StinWriter;
 pub use target::{check_output, distinct_outputs};
 
-/// The most bytes handed to one `write` call by [`write_pieces`].
-const WRITE_PIECE: usize = 1 << 20;
+/// The most bytes handed to one `write` call of a file: [`write_pieces`], and the capacity of
+/// every buffered file writer. Linux sizes the page-cache folios of a buffered write by the
+/// write's length, and on a virtual machine that hands free memory back to its host
+/// (virtio-balloon free page reporting, 2 MiB blocks) large folios come from blocks the host
+/// must fault in again page by page: writing 1.6 GB in 1 MiB calls took 3.8–11 s of system CPU
+/// here, in 256 KiB calls 0.5 s (13 MB calls: 0.1–1 s for 156 MB). Elsewhere it costs nothing
+/// (docs/BENCHMARKS.md, evening of 2026-12-04).
+pub(crate) const WRITE_PIECE: usize = 256 << 10;
 
-/// Writes `bytes` in pieces of a megabyte. One `write` of many megabytes (a sort's half, a tile's
-/// vertices) makes Linux fill the page cache with 2 MiB folios, and on a virtual machine that
-/// hands free memory back to its host each such folio is faulted in page by page: spilling
-/// ARSO's ground runs in 13 MB writes took 0.9 s of system CPU, in 1 MB pieces 0.03 s
-/// (docs/BENCHMARKS.md, evening of 2026-12-04). Elsewhere it costs nothing.
+/// Writes `bytes` in pieces of at most [`WRITE_PIECE`] bytes.
 ///
 /// # Errors
 /// The writer's.

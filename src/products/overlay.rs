@@ -242,7 +242,7 @@ impl TriangleSink for BandStore {
         self.bands = Some(bands);
         self.index = vec![Vec::new(); bands.count * bands.blocks()];
         let f = tempfile::tempfile_in(&self.dir).map_err(|e| Error::write(&self.dir, e))?;
-        self.file = Some(BufWriter::with_capacity(1 << 20, f));
+        self.file = Some(BufWriter::with_capacity(crate::output::WRITE_PIECE, f));
         Ok(())
     }
 

@@ -217,7 +217,7 @@ fn new_run(
 ) -> Result<File> {
     let io = |e| Error::write(dir, e);
     let file = tempfile::tempfile_in(dir).map_err(io)?;
-    let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
+    let mut w = std::io::BufWriter::with_capacity(crate::output::WRITE_PIECE, &file);
     write(&mut w).map_err(io)?;
     w.flush().map_err(io)?;
     drop(w);

@@ -426,7 +426,7 @@ fn write_merged<R: IndexRecord>(
     std::thread::scope(|scope| {
         let writer = scope.spawn(move || -> Result<Builder> {
             let mut b = Builder::new(grid);
-            let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
+            let mut w = std::io::BufWriter::with_capacity(crate::output::WRITE_PIECE, file);
             let mut buf: Vec<R::Stored> = Vec::with_capacity(BATCH);
             for batch in full_rx {
                 for r in &batch {
