@@ -690,6 +690,16 @@ fn a_trim_that_removes_every_triangle_says_so() {
 fn a_lost_triangle_is_an_internal_error() {
     let dir = tempfile::tempdir().unwrap();
     let laz = data::shared("lidar/startinpy_small.laz");
+    // Without the injection the count holds, with trimming too (trimmed triangles count).
+    for trim in [None, Some("--max-edge=2")] {
+        let mut args = vec!["tin", laz.to_str().unwrap(), "-o", "ok.ply", "-q", "--json"];
+        args.extend(trim);
+        let o = run(dir.path(), &args);
+        assert_eq!(code(&o), 0, "{trim:?}: {}", err(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(j["tiles"]["uncertified_owned"], 0, "{trim:?}");
+        std::fs::remove_file(dir.path().join("ok.ply")).unwrap();
+    }
     for (cmd, out, extra) in [
         ("tin", "t.ply", None),
         ("dem", "d.tif", Some("--contours=c.geojson")),

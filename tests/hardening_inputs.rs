@@ -416,4 +416,25 @@ fn header_boxes_that_say_nothing_do_not_decide_the_grid() {
         );
         assert!(!dir.join("h.tif").exists());
     }
+    // A mesh too: the tiles' grid from the one true box, the same triangles as the sweep's.
+    let tin = |file: &str, engine: &str| {
+        let out = format!("{engine}.ply");
+        let o = run(dir, &["tin", file, b, "--engine", engine, "-q", "-o", &out]);
+        assert_eq!(code(&o), 0, "{file} {engine}: {}", err(&o));
+        let o = run(dir, &["check", &out]);
+        assert_eq!(code(&o), 0, "{}", err(&o));
+        let s = String::from_utf8_lossy(&o.stdout).into_owned();
+        // "x.ply: valid (V vertices, T triangles)": the counts, whatever the name.
+        s[s.find(':').unwrap()..].to_string()
+    };
+    assert_eq!(tin("zero.las", "tiles"), tin("a.las", "sweep"));
+    // A plan places files by their boxes without reading them: one that says nothing is refused.
+    let o = run(
+        dir,
+        &[
+            "plan", "dem", "zero.las", b, "--cell", "1", "--tile", "100", "-o", "job",
+        ],
+    );
+    assert_eq!(code(&o), 3, "{}", err(&o));
+    assert!(err(&o).contains("zero.las") && err(&o).contains("says nothing"));
 }

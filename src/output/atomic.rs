@@ -241,7 +241,7 @@ enum Inner {
         mode: Option<u32>,
         // Field order matters: the temporary file is deleted before it is unregistered.
         writer: BufWriter<tempfile::NamedTempFile>,
-        /// Bytes written, and how far write-behind was started ([`WRITE_BEHIND`]).
+        /// Bytes written, and how many when write-behind last started ([`WRITE_BEHIND`]).
         behind: (u64, u64),
         _registration: TempRegistration,
     },
@@ -454,33 +454,17 @@ impl AtomicFile {
 /// Bytes written to a file between two starts of its write-behind.
 const WRITE_BEHIND: u64 = 64 << 20;
 
-/// Starts writing bytes `from .. to` of `file` to the disk without waiting (Linux: the
-/// `POSIX_FADV_DONTNEED` advice writes dirty pages back asynchronously): the `fsync` of
-/// [`AtomicFile::commit`] then finds most of a large output on disk already (a 629 MB PLY's took
-/// 0.30 s, all at the end). A hint: errors are ignored, and the commit's `fsync` still decides.
-fn start_writeback(file: &File, from: u64, to: u64) {
-    #[cfg(target_os = "linux")]
-    {
-        use rustix::fs::{Advice, fadvise};
-        let _ = fadvise(
-            file,
-            from,
-            std::num::NonZeroU64::new(to - from),
-            Advice::DontNeed,
-        );
-    }
-    #[cfg(not(target_os = "linux"))]
-    let _ = (file, from, to);
-}
-
 impl Write for AtomicFile {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         match &mut self.inner {
             Inner::Replace { writer, behind, .. } => {
-                let n = writer.write(buf)?;
+                // At most a piece at a time (see `super::WRITE_PIECE`).
+                let n = writer.write(&buf[..buf.len().min(super::WRITE_PIECE)])?;
                 behind.0 += n as u64;
                 if behind.0 - behind.1 >= WRITE_BEHIND {
-                    start_writeback(writer.get_ref().as_file(), behind.1, behind.0);
+                    // Write-behind: the commit's `fsync` then finds most of a large output on
+                    // disk already (a 629 MB PLY's took 0.30 s, all at the end).
+                    crate::sort::mmap::start_writeback(writer.get_ref().as_file());
                     behind.1 = behind.0;
                 }
                 Ok(n)

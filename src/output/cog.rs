@@ -305,7 +305,7 @@ pub(crate) fn write_tiff(
                         .map_err(io)?;
                     pos += 4;
                 }
-                out.write_all(&data).map_err(io)?;
+                super::write_pieces(&mut out, &data).map_err(io)?;
                 level.chunks.push((pos, data.len() as u64));
                 pos += data.len() as u64;
                 if cog {

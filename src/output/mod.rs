@@ -60,8 +60,9 @@ pub use sms2dm::Sms2dmWriter;
 pub use stin::StinWriter;
 pub use target::{check_output, distinct_outputs};
 
-/// The most bytes handed to one `write` call of a file: [`write_pieces`], and the capacity of
-/// every buffered file writer. Linux sizes the page-cache folios of a buffered write by the
+/// The most bytes handed to one `write` call of a file: [`AtomicFile`] writes at most this much
+/// at a time, the buffered writers of large files (spills, spools, the block index) hold this
+/// much, and [`write_pieces`] cuts larger slices (a writer of small files may buffer less). Linux sizes the page-cache folios of a buffered write by the
 /// write's length, and on a virtual machine that hands free memory back to its host
 /// (virtio-balloon free page reporting, 2 MiB blocks) large folios come from blocks the host
 /// must fault in again page by page: writing 1.6 GB in 1 MiB calls took 3.8–11 s of system CPU

@@ -200,6 +200,15 @@ impl Plan {
         for p in paths {
             let info = FileInfo::read(p)?;
             let b = info.bounds;
+            if info.point_count > 0 && !b.usable() {
+                // Tasks find their files by these boxes: one that says nothing cannot be placed.
+                return Err(bad(
+                    p,
+                    "its header's box says nothing (all zero, inverted or not finite): a plan \
+                     places files by their headers' boxes, without reading points; repair the \
+                     header (e.g. lasinfo -repair_bb) or run the job without a plan",
+                ));
+            }
             files.push(PlanFile {
                 path: p.clone(),
                 bounds: [b.min[0], b.min[1], b.max[0], b.max[1]],

@@ -37,7 +37,7 @@ use crate::sink::{
 };
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{BufWriter, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 /// Bytes of one stored triangle: 9 coordinates.
@@ -192,7 +192,7 @@ impl BandStore {
                 bytes.extend_from_slice(&c.to_le_bytes());
             }
         }
-        f.write_all(&bytes).map_err(|e| Error::write(dir, e))?;
+        crate::output::write_pieces(f, &bytes).map_err(|e| Error::write(dir, e))?;
         self.index[slot].push((self.written, buf.len() as u32));
         self.written += bytes.len() as u64;
         Ok(())

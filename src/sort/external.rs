@@ -201,7 +201,7 @@ fn merge_files<R: SortKey>(files: Vec<File>, dir: &Path) -> Result<File> {
             if batch.is_empty() {
                 return Ok(());
             }
-            w.write_all(bytemuck::cast_slice(&batch))?;
+            crate::output::write_pieces(w, bytemuck::cast_slice(&batch))?;
         }
     })?;
     match merge.take_error() {

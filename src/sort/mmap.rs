@@ -1,6 +1,6 @@
 //! The only `unsafe` code in sweeptin: read-only memory maps of the external sort's own spill
-//! files, and one allocator setting that gives large allocations maps of their own
-//! ([`tune_allocator`]).
+//! files, one allocator setting that gives large allocations maps of their own
+//! ([`tune_allocator`]), and one system call that has no safe wrapper ([`start_writeback`]).
 //!
 //! A spill file is an anonymous temporary file (already unlinked, so no other process can open
 //! it) that this process wrote completely and never writes again while it is mapped; that is what
@@ -178,6 +178,23 @@ fn release(file: &File, offset: usize, len: usize) {
 
 #[cfg(not(target_os = "linux"))]
 fn release(_file: &File, _offset: usize, _len: usize) {}
+
+/// Starts writing every dirty page of `file` to its disk without waiting for it and without
+/// dropping any page from the cache (`sync_file_range(SYNC_FILE_RANGE_WRITE)` over the whole
+/// file): a later `fsync` then has little left to do. A hint: errors are ignored.
+pub fn start_writeback(file: &File) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        // SAFETY: sync_file_range only reads the descriptor, which `file` keeps open for the
+        // call; offset 0 and length 0 mean the whole file; it touches no memory of ours.
+        unsafe {
+            libc::sync_file_range(file.as_raw_fd(), 0, 0, libc::SYNC_FILE_RANGE_WRITE);
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = file;
+}
 
 /// Bytes from which an allocation gets an anonymous memory map of its own (glibc), see
 /// [`tune_allocator`].

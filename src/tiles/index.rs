@@ -139,6 +139,15 @@ impl IndexRecord for BlockRecord {
     type Stored = [f64; 3];
     #[inline]
     fn pack(_: Option<&Packing>, (bx, by): (i64, i64), [x, y, z]: [f64; 3]) -> Result<Self> {
+        // The headers' boxes were checked against the grid; a point of a file whose box says
+        // nothing was not, and its key must not wrap.
+        const LIMIT: u64 = (1 << 31) - 2;
+        if bx.unsigned_abs() > LIMIT || by.unsigned_abs() > LIMIT {
+            return Err(Error::Options(format!(
+                "the point ({x}, {y}) lies too far from the origin for the tiles' blocks \
+                 (its file's header box says nothing): give a larger --tile, or --engine sweep"
+            )));
+        }
         Ok(BlockRecord {
             key: TileGrid::key(bx, by),
             x,
@@ -434,7 +443,7 @@ fn write_merged<R: IndexRecord>(
                     b.note(key, &p);
                     buf.push(r.stored());
                 }
-                w.write_all(bytemuck::cast_slice(&buf)).map_err(io)?;
+                crate::output::write_pieces(&mut w, bytemuck::cast_slice(&buf)).map_err(io)?;
                 buf.clear();
                 // The merging thread may have stopped taking vectors back.
                 let _ = empty_tx.try_send(batch);

@@ -101,8 +101,9 @@ pub struct TileStats {
     pub loaded_points: u64,
     /// Owned triangles that were not certified, counted over the whole run: the triangles
     /// there are (Euler's `2V − B − 2`) less those the tiles wrote or trimmed; a run with any
-    /// is an internal error, so a summary says 0. `None` where it cannot be counted: a DEM
-    /// alone (it leaves unwanted triangles unseen), breaklines, a plan's task.
+    /// is an internal error, so a summary says 0. `None` where it cannot be counted: products
+    /// that all cover (a DEM alone: unwanted triangles are left unseen), breaklines or trimming
+    /// polygons, a plan's task.
     pub uncertified_owned: Option<u64>,
     /// Worker threads.
     pub threads: u64,
@@ -192,7 +193,9 @@ fn read_index(
     let total = reader.point_count();
     let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
     let base = options.base.unwrap_or(1.0);
-    let density = total as f64 / area;
+    // Over the boxes that say where their points are, those points (files whose box says
+    // nothing would make the density look higher).
+    let density = reader.points_in_header_boxes() as f64 / area;
     let block_points = block_points(total);
     let tile_points = block_points * TILE_BLOCKS;
     let block = match options.tile {

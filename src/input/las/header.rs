@@ -714,3 +714,24 @@ fn read_crs(header: &las::Header, warnings: &mut Vec<String>) -> Option<Crs> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Bounds3;
+
+    #[test]
+    fn a_box_is_usable_when_it_says_where_points_are() {
+        let b = |min: [f64; 3], max: [f64; 3]| Bounds3 { min, max }.usable();
+        assert!(b([1.0, 2.0, 3.0], [4.0, 5.0, 6.0]));
+        assert!(
+            b([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+            "partly zero: a point at the origin"
+        );
+        assert!(b([5.0; 3], [5.0; 3]), "one point");
+        assert!(!b([0.0; 3], [0.0; 3]), "all zero: never computed");
+        assert!(!b([1.0, 2.0, 3.0], [0.0, 5.0, 6.0]), "inverted");
+        assert!(!b([f64::NAN, 2.0, 3.0], [4.0, 5.0, 6.0]));
+        assert!(!b([f64::NEG_INFINITY, 2.0, 3.0], [4.0, 5.0, 6.0]));
+        assert!(!b([1.0, 2.0, 3.0], [4.0, f64::INFINITY, 6.0]));
+    }
+}

@@ -346,6 +346,16 @@ impl LidarReader {
         })
     }
 
+    /// The points of the files whose header box is usable: those [`LidarReader::header_box`]
+    /// bounds (the density over it counts these).
+    pub fn points_in_header_boxes(&self) -> u64 {
+        self.sources
+            .iter()
+            .filter(|s| s.bounds.usable())
+            .map(|s| s.points)
+            .sum()
+    }
+
     /// [`LidarReader::bounds`], or `None` when no file with points has a usable box: what a
     /// check made before reading (a DEM's size) may go by.
     pub fn header_box(&self) -> Option<Bounds3> {
