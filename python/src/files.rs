@@ -105,6 +105,9 @@ impl InputOpts {
         // As `--engine`: `auto` (the default) and `tiles` run exact tiles where the input
         // allows it (LAS/LAZ points without breaklines or trimming polygons), one sweep
         // otherwise; `sweep` always runs one streaming sweep.
+        if let Some(t) = self.tile {
+            sweeptin::pipeline::check_tile_side(t).map_err(to_py)?;
+        }
         let tiles = match self.engine.as_str() {
             "sweep" => None,
             "auto" | "tiles" => Some(sweeptin::TileOptions {

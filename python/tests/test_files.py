@@ -113,6 +113,10 @@ def test_file_errors(small, tmp_path):
     with pytest.raises(sweeptin.OptionsError, match="max-cells") as e:
         sweeptin.dem(path, tmp_path / "x.tif", cell=0.01, max_cells=1000)
     assert e.value.exit_code == 2
+    # A tile side that is no size is refused whatever the engine (the sweep ignored it).
+    for engine in ("sweep", "tiles"):
+        with pytest.raises(sweeptin.OptionsError, match="--tile"):
+            sweeptin.dem(path, tmp_path / "x.tif", cell=1, engine=engine, tile=0)
     bad = tmp_path / "bad.xyz"
     bad.write_text("0 0 0\n1 0 1\n0 1 oops\n")
     with pytest.raises(sweeptin.InputError) as e:

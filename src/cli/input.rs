@@ -150,9 +150,8 @@ impl InputArgs {
 
     /// The run's configuration, checked.
     pub fn config(&self, input: Input) -> anyhow::Result<RunConfig> {
-        // Checked whatever the engine: a value the sweep would ignore is still a mistake.
-        if let Some(t) = self.tile.filter(|t| !(t.is_finite() && *t > 0.0)) {
-            anyhow::bail!("--tile {t}: must be a positive size");
+        if let Some(t) = self.tile {
+            pipeline::check_tile_side(t)?;
         }
         let mut options = self.options();
         let l = &input.lines;

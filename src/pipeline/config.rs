@@ -119,13 +119,24 @@ fn check_numbers(input: &Input, options: &RunOptions) -> Result<()> {
             "--z-tolerance {t}: must be a height difference >= 0"
         )));
     }
-    let tile = options.tiles.as_ref().and_then(|t| t.tile);
-    if let Some(t) = tile.filter(|t| !(t.is_finite() && *t > 0.0)) {
-        return Err(Error::Options(format!(
-            "--tile {t}: must be a positive size"
-        )));
+    if let Some(t) = options.tiles.as_ref().and_then(|t| t.tile) {
+        check_tile_side(t)?;
     }
     Ok(())
+}
+
+/// Refuses a tile side that is not a positive size (`--tile`), whatever the engine: a value the
+/// sweep would ignore is still a mistake.
+///
+/// # Errors
+/// [`Error::Options`] naming the value.
+pub fn check_tile_side(t: f64) -> Result<()> {
+    if t.is_finite() && t > 0.0 {
+        return Ok(());
+    }
+    Err(Error::Options(format!(
+        "--tile {t}: must be a positive size"
+    )))
 }
 
 /// The inputs among `paths` that are pipes or devices (readable once, no seeking).

@@ -33,7 +33,7 @@ use crate::sort::memory::DuplicatePolicy;
 use config::Source;
 use std::path::PathBuf;
 
-pub use config::RunConfig;
+pub use config::{RunConfig, check_tile_side};
 pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary, PLAN_REFUSES_CLIP};
 pub(crate) use lines::{ReadLines, prepare, trim};
 pub use read::read_points;

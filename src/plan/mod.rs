@@ -149,11 +149,7 @@ impl Plan {
     ) -> Result<Plan> {
         job.check()?;
         let cell = job.cell();
-        if !(tile.is_finite() && tile > 0.0) {
-            return Err(Error::Options(format!(
-                "--tile must be a positive length, not {tile}"
-            )));
-        }
+        crate::pipeline::check_tile_side(tile)?;
         if let Some(c) = cell {
             let k = tile / c;
             if (k - k.round()).abs() > 1e-9 * k.max(1.0) {
