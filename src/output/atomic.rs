@@ -27,7 +27,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 /// Size of the write buffer of an [`AtomicFile`].
-const WRITE_BUFFER: usize = super::WRITE_PIECE;
+const WRITE_BUFFER: usize = crate::sort::WRITE_PIECE;
 
 /// Exit code after an interruption by Ctrl-C (128 + SIGINT, the shell convention); SIGTERM
 /// gives 143 and SIGHUP 129.
@@ -458,8 +458,8 @@ impl Write for AtomicFile {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         match &mut self.inner {
             Inner::Replace { writer, behind, .. } => {
-                // At most a piece at a time (see `super::WRITE_PIECE`).
-                let n = writer.write(&buf[..buf.len().min(super::WRITE_PIECE)])?;
+                // At most a piece at a time (see `crate::sort::WRITE_PIECE`).
+                let n = writer.write(&buf[..buf.len().min(crate::sort::WRITE_PIECE)])?;
                 behind.0 += n as u64;
                 if behind.0 - behind.1 >= WRITE_BEHIND {
                     // Write-behind: the commit's `fsync` then finds most of a large output on

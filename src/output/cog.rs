@@ -281,7 +281,7 @@ pub(crate) fn write_tiff(
     // Chunks, smallest overview first.
     let dir = super::target::scratch_dir(path);
     let chunk_file = tempfile::tempfile_in(&dir).map_err(|e| Error::write(&dir, e))?;
-    let mut out = BufWriter::with_capacity(super::WRITE_PIECE, chunk_file);
+    let mut out = BufWriter::with_capacity(crate::sort::WRITE_PIECE, chunk_file);
     let io = |e: std::io::Error| Error::write(path, e);
     let mut pos = 0u64;
     for (stage, level) in stages.iter().zip(levels.iter_mut()).rev() {
@@ -305,7 +305,7 @@ pub(crate) fn write_tiff(
                         .map_err(io)?;
                     pos += 4;
                 }
-                super::write_pieces(&mut out, &data).map_err(io)?;
+                crate::sort::write_pieces(&mut out, &data).map_err(io)?;
                 level.chunks.push((pos, data.len() as u64));
                 pos += data.len() as u64;
                 if cog {

@@ -132,8 +132,8 @@ pub fn create_mesh_sink(
 }
 
 /// Size of the I/O buffers of a face spool: reading it back, its bytes are copied to the
-/// output in pieces of this size ([`super::WRITE_PIECE`]).
-const SPOOL_BUFFER: usize = super::WRITE_PIECE;
+/// output in pieces of this size ([`crate::sort::WRITE_PIECE`]).
+const SPOOL_BUFFER: usize = crate::sort::WRITE_PIECE;
 
 /// What a writer opens when its format lists every face after every vertex (PLY, LandXML): the
 /// output, which takes the vertices as they come, and an anonymous spool file where the encoded

@@ -97,9 +97,9 @@ impl MeshSink for PieceWriter {
         ]);
         let r = out
             .write_all(&head)
-            .and_then(|()| super::write_pieces(out, bytemuck::cast_slice(vertices)))
-            .and_then(|()| super::write_pieces(out, bytemuck::cast_slice(degree)))
-            .and_then(|()| super::write_pieces(out, bytemuck::cast_slice(triangles)));
+            .and_then(|()| crate::sort::write_pieces(out, bytemuck::cast_slice(vertices)))
+            .and_then(|()| crate::sort::write_pieces(out, bytemuck::cast_slice(degree)))
+            .and_then(|()| crate::sort::write_pieces(out, bytemuck::cast_slice(triangles)));
         r.map_err(|e| out.err(e))?;
         self.pieces += 1;
         self.summary.vertices += vertices.len() as u64;

@@ -66,7 +66,7 @@ impl PlyWriter {
         let header = header(&comments, 0, 0);
         let vertices = if out.is_stream() {
             let spool = tempfile::tempfile_in(spool_dir).map_err(|e| state.io(e))?;
-            Some(BufWriter::with_capacity(super::WRITE_PIECE, spool))
+            Some(BufWriter::with_capacity(crate::sort::WRITE_PIECE, spool))
         } else {
             out.write_all(header.as_bytes()).map_err(|e| state.io(e))?;
             None

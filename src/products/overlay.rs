@@ -192,7 +192,7 @@ impl BandStore {
                 bytes.extend_from_slice(&c.to_le_bytes());
             }
         }
-        crate::output::write_pieces(f, &bytes).map_err(|e| Error::write(dir, e))?;
+        crate::sort::write_pieces(f, &bytes).map_err(|e| Error::write(dir, e))?;
         self.index[slot].push((self.written, buf.len() as u32));
         self.written += bytes.len() as u64;
         Ok(())
@@ -242,7 +242,7 @@ impl TriangleSink for BandStore {
         self.bands = Some(bands);
         self.index = vec![Vec::new(); bands.count * bands.blocks()];
         let f = tempfile::tempfile_in(&self.dir).map_err(|e| Error::write(&self.dir, e))?;
-        self.file = Some(BufWriter::with_capacity(crate::output::WRITE_PIECE, f));
+        self.file = Some(BufWriter::with_capacity(crate::sort::WRITE_PIECE, f));
         Ok(())
     }
 

@@ -299,7 +299,7 @@ impl SampleSink {
                 i += 1;
             }
             f.seek(SeekFrom::Start(first * 8))
-                .and_then(|_| crate::output::write_pieces(f, &bytes))
+                .and_then(|_| crate::sort::write_pieces(f, &bytes))
                 .map_err(|e| Error::write(&self.output, e))?;
         }
         self.batch.clear();

@@ -201,7 +201,7 @@ fn merge_files<R: SortKey>(files: Vec<File>, dir: &Path) -> Result<File> {
             if batch.is_empty() {
                 return Ok(());
             }
-            crate::output::write_pieces(w, bytemuck::cast_slice(&batch))?;
+            super::write_pieces(w, bytemuck::cast_slice(&batch))?;
         }
     })?;
     match merge.take_error() {
@@ -217,7 +217,7 @@ fn new_run(
 ) -> Result<File> {
     let io = |e| Error::write(dir, e);
     let file = tempfile::tempfile_in(dir).map_err(io)?;
-    let mut w = std::io::BufWriter::with_capacity(crate::output::WRITE_PIECE, &file);
+    let mut w = std::io::BufWriter::with_capacity(super::WRITE_PIECE, &file);
     write(&mut w).map_err(io)?;
     w.flush().map_err(io)?;
     drop(w);
@@ -245,7 +245,7 @@ fn write_run<R: SortKey>(chunk: &mut [R], scratch: &mut Vec<R>, dir: &Path) -> R
         sort_records(chunk);
     }
     let bytes: &[u8] = bytemuck::cast_slice(chunk);
-    new_run(dir, |w| crate::output::write_pieces(w, bytes))
+    new_run(dir, |w| super::write_pieces(w, bytes))
 }
 
 fn sort_records<R: SortKey>(chunk: &mut [R]) {

@@ -435,7 +435,7 @@ fn write_merged<R: IndexRecord>(
     std::thread::scope(|scope| {
         let writer = scope.spawn(move || -> Result<Builder> {
             let mut b = Builder::new(grid);
-            let mut w = std::io::BufWriter::with_capacity(crate::output::WRITE_PIECE, file);
+            let mut w = std::io::BufWriter::with_capacity(crate::sort::WRITE_PIECE, file);
             let mut buf: Vec<R::Stored> = Vec::with_capacity(BATCH);
             for batch in full_rx {
                 for r in &batch {
@@ -443,7 +443,7 @@ fn write_merged<R: IndexRecord>(
                     b.note(key, &p);
                     buf.push(r.stored());
                 }
-                crate::output::write_pieces(&mut w, bytemuck::cast_slice(&buf)).map_err(io)?;
+                crate::sort::write_pieces(&mut w, bytemuck::cast_slice(&buf)).map_err(io)?;
                 buf.clear();
                 // The merging thread may have stopped taking vectors back.
                 let _ = empty_tx.try_send(batch);
