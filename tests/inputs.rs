@@ -302,11 +302,15 @@ fn a_vpc_of_the_ign_tiles() {
 }
 
 /// `sweeptin index FILES -o VPC`.
-fn write_vpc(files: &[&str], vpc: &Path) {
+/// The six IGN tiles and `ign.vpc` listing them (written by `sweeptin index`) in `dir`.
+fn ign_vpc(dir: &Path) -> (Vec<PathBuf>, PathBuf) {
+    let tiles = ign_tiles();
+    let vpc = dir.join("ign.vpc");
     let mut args = vec!["index"];
-    args.extend_from_slice(files);
-    args.extend_from_slice(&["-o", s(vpc)]);
+    args.extend(tiles.iter().map(|t| s(t)));
+    args.extend_from_slice(&["-o", s(&vpc)]);
     sweeptin(&args);
+    (tiles, vpc)
 }
 
 /// A `.vpc` whose boxes are not the files' headers' (stale: shrunk by 20 m on the south-west; or
@@ -317,10 +321,8 @@ fn write_vpc(files: &[&str], vpc: &Path) {
 fn a_vpc_with_boxes_other_than_the_headers() {
     let dir = tempfile::tempdir().unwrap();
     let d = |n: &str| dir.path().join(n);
-    let tiles = ign_tiles();
+    let (tiles, vpc) = ign_vpc(dir.path());
     let names: Vec<&str> = tiles.iter().map(|t| s(t)).collect();
-    let vpc = d("ign.vpc");
-    write_vpc(&names, &vpc);
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&vpc).unwrap()).unwrap();
     let (mut stale, mut wgs84) = (v.clone(), v);
     for item in stale["features"].as_array_mut().unwrap() {
@@ -356,10 +358,8 @@ fn a_vpc_with_boxes_other_than_the_headers() {
 fn the_same_dem_from_laz_vpc_lists_globs_and_copc() {
     let dir = tempfile::tempdir().unwrap();
     let d = |n: &str| dir.path().join(n);
-    let tiles = ign_tiles();
+    let (tiles, vpc) = ign_vpc(dir.path());
     let names: Vec<&str> = tiles.iter().map(|t| s(t)).collect();
-    let vpc = d("ign.vpc");
-    write_vpc(&names, &vpc);
     let bbox = ["--bbox", "770560,6277560,770590,6277590"];
     let laz_box = dem(&names, &bbox, &d("laz_box.tif"));
     assert_eq!(dem(&[s(&vpc)], &bbox, &d("vpc_box.tif")), laz_box);

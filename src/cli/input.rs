@@ -330,15 +330,13 @@ impl ProductInput {
         self.crs.as_deref().map(parse_crs).transpose()
     }
 
-    /// The extent of the points from the LAS/LAZ headers (`None` for other inputs, when a
-    /// header cannot be read, the run then reporting it, or when no header has a usable box).
+    /// The extent of the points from the LAS/LAZ headers (`LidarReader::header_extent`; `None`
+    /// for other inputs).
     pub fn header_bounds(&self) -> Option<[f64; 4]> {
         if !self.all_lidar() {
             return None;
         }
-        let r = sweeptin::input::las::LidarReader::open(&self.args.inputs, &Default::default());
-        let b = r.ok()?.header_box()?;
-        Some([b.min[0], b.min[1], b.max[0], b.max[1]])
+        sweeptin::input::las::LidarReader::header_extent(&self.args.inputs)
     }
 
     /// Are all the inputs LAS/LAZ (so that the box filter applies)?

@@ -305,16 +305,13 @@ impl RunConfig {
         }
     }
 
-    /// The extent of the points `[xmin, ymin, xmax, ymax]` from the LAS/LAZ headers, without
-    /// reading a point (`None` for other inputs, when a header cannot be read, the run then
-    /// reporting it, or when no header has a usable box). What a DEM's size is checked against before any work.
+    /// The extent of the points from the LAS/LAZ headers
+    /// ([`crate::input::las::LidarReader::header_extent`]; `None` for other inputs).
     pub fn header_bounds(&self) -> Option<[f64; 4]> {
         if self.source != Source::Lidar {
             return None;
         }
-        let r = crate::input::las::LidarReader::open(&self.input.paths, &Default::default());
-        let b = r.ok()?.header_box()?;
-        Some([b.min[0], b.min[1], b.max[0], b.max[1]])
+        crate::input::las::LidarReader::header_extent(&self.input.paths)
     }
 }
 

@@ -346,6 +346,17 @@ impl LidarReader {
         })
     }
 
+    /// The extent `[xmin, ymin, xmax, ymax]` of the usable header boxes of `paths`
+    /// ([`LidarReader::header_box`]), without reading a point: `None` when a header cannot be
+    /// read (the run then reports it) or none has a usable box. What checks made before any
+    /// work (a DEM's size) go by.
+    pub fn header_extent<P: AsRef<Path>>(paths: &[P]) -> Option<[f64; 4]> {
+        let b = LidarReader::open(paths, &Filter::default())
+            .ok()?
+            .header_box()?;
+        Some([b.min[0], b.min[1], b.max[0], b.max[1]])
+    }
+
     /// The points of the files whose header box is usable: those [`LidarReader::header_box`]
     /// bounds (the density over it counts these).
     pub fn points_in_header_boxes(&self) -> u64 {
