@@ -67,6 +67,10 @@ impl Align {
     }
 }
 
+/// The relative margin by which [`GridSpec::may_hold_centre`]'s quotients must clear a lattice
+/// index to decide without the exact test (2⁻⁴⁰: a thousand times their rounding error).
+const QUOTIENT_MARGIN: f64 = 1.0 / (1u64 << 40) as f64;
+
 /// A north-up grid of square cells on the lattice of the cell size ([`Align`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridSpec {
@@ -189,13 +193,38 @@ impl GridSpec {
     /// no centre, and a DEM skips them before any exact test.
     pub fn may_hold_centre(&self, t: &[[f64; 3]; 3]) -> bool {
         let [xmin, ymin, xmax, ymax] = crate::geom::tri_bbox(t);
-        // The lowest centre at or above the box's lower side must not pass its upper side.
-        let ky = self.first_at_least(ymin).max(self.ky0);
-        if ky > self.ky_top() || self.at(ky) > ymax {
-            return false;
+        let inv = 1.0 / self.cell;
+        self.axis_holds(ymin, ymax, self.ky0, self.ky_top(), inv)
+            && self.axis_holds(xmin, xmax, self.kx0, self.kx0 + i64::from(self.cols) - 1, inv)
+    }
+
+    /// Does a lattice index in `lo..=hi` have its coordinate ([`GridSpec::at`]) in `[a, b]`?
+    /// Decided from the quotients `a / cell`, `b / cell` (`inv` is `1 / cell`) when no lattice
+    /// index lies within a margin of them far above their rounding error (almost always: a
+    /// triangle's box is rarely within 2⁻⁴⁰ of a cell of a centre), exactly otherwise.
+    #[inline]
+    fn axis_holds(&self, a: f64, b: f64, lo: i64, hi: i64, inv: f64) -> bool {
+        let off = self.align.offset();
+        let (u, w) = (a * inv - off, b * inv - off);
+        // The quotients' error and `at`'s rounding are below 2⁻⁵⁰ × (|u| + |w| + 1) here, so
+        // an index clear of [u, w] by the margin is clear of [a, b] too, and one inside it by
+        // the margin is inside. (Beyond 2⁵² or not finite: the exact test.)
+        let margin = (u.abs() + w.abs() + 1.0) * QUOTIENT_MARGIN;
+        if margin < 4096.0 {
+            let first = ((u - margin).ceil() as i64).max(lo);
+            let last = ((w + margin).floor() as i64).min(hi);
+            if first > last {
+                return false;
+            }
+            let first_in = ((u + margin).ceil() as i64).max(lo);
+            let last_in = ((w - margin).floor() as i64).min(hi);
+            if first_in <= last_in {
+                return true;
+            }
         }
-        let kx = self.first_at_least(xmin).max(self.kx0);
-        kx < self.kx0 + i64::from(self.cols) && self.at(kx) <= xmax
+        // The lowest index at or above `a` must not pass `b`.
+        let k = self.first_at_least(a).max(lo);
+        k <= hi && self.at(k) <= b
     }
 
     /// The lowest lattice index whose coordinate is at least `v` (exact: the quotient's
@@ -480,15 +509,27 @@ mod tests {
                 let (x0, y0) = (g.centre_x(0), g.centre_y(19));
                 for _ in 0..4000 {
                     let mut p = || {
-                        let snap = rng.below(4) == 0;
+                        let snap = rng.below(4);
                         let (x, y) = (
                             x0 + rng.range(-2.0, 22.0) * cell,
                             y0 + rng.range(-2.0, 22.0) * cell,
                         );
-                        if snap {
-                            [(x / cell).round() * cell, (y / cell).round() * cell, 0.0]
-                        } else {
-                            [x, y, 0.0]
+                        let on = |v: f64| g.at((v / cell - g.align.offset()).round() as i64);
+                        // On a centre, or a few units in the last place beside one (the
+                        // quotients' margin leaves these to the exact test).
+                        let nudge = |v: f64, n: u64| match n % 3 {
+                            0 => v,
+                            1 => (0..n).fold(v, |v, _| v.next_up()),
+                            _ => (0..n).fold(v, |v, _| v.next_down()),
+                        };
+                        match snap {
+                            0 => [on(x), on(y), 0.0],
+                            1 => {
+                                let n = rng.below(6);
+                                [nudge(on(x), n), nudge(on(y), n + 1), 0.0]
+                            }
+                            2 => [(x / cell).round() * cell, (y / cell).round() * cell, 0.0],
+                            _ => [x, y, 0.0],
                         }
                     };
                     let c = [p(), p(), p()];

@@ -168,11 +168,12 @@ fn choose_origin(points: &[[f64; 3]]) -> Result<([f64; 2], (f64, f64))> {
 }
 
 /// Moves the points into the local frame (checking the range) and sorts them into sweep order:
-/// a counting sort into about n/32 buckets by `y`, then an exact sort of each bucket in parallel.
+/// a counting sort into about n/8 buckets by `y` (at most 2²²), then an exact sort of each bucket
+/// (in parallel for large inputs).
 /// Bucketing is monotone in `y`, so the result is exactly the order by `(y, x, input index)`.
 fn sort_local(points: &[[f64; 3]], origin: [f64; 2], y_range: (f64, f64)) -> Result<Vec<Rec>> {
     let n = points.len();
-    let nb = (n / 32).clamp(1, 1 << 22);
+    let nb = (n / 8).clamp(1, 1 << 22);
     let base = y_range.0 - origin[1];
     let span = y_range.1 - y_range.0;
     let scale = if span > 0.0 && span.is_finite() {
@@ -229,9 +230,21 @@ fn local(p: &[f64; 3], origin: [f64; 2]) -> (f64, f64) {
     ((p[0] - origin[0]) + 0.0, (p[1] - origin[1]) + 0.0)
 }
 
-/// Sorts each bucket `recs[start[b]..start[b + 1]]`, in parallel over groups of buckets.
+/// Points from which [`sort_buckets`] goes parallel: below, handing the work to rayon costs more
+/// than it saves (a tile's run, tens of thousands of points, runs on a worker of its own and the
+/// other workers keep the other cores busy).
+const PARALLEL_SORT_MIN: usize = 1 << 20;
+
+/// Sorts each bucket `recs[start[b]..start[b + 1]]`, in parallel over groups of buckets for
+/// large inputs.
 fn sort_buckets(recs: &mut [Rec], start: &[u32]) {
     use rayon::prelude::*;
+    if recs.len() < PARALLEL_SORT_MIN {
+        for w in start.windows(2) {
+            recs[w[0] as usize..w[1] as usize].sort_unstable();
+        }
+        return;
+    }
     let nb = start.len() - 1;
     let groups = 64.min(nb);
     let mut pieces = Vec::with_capacity(groups);

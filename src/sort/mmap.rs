@@ -200,24 +200,42 @@ pub fn start_writeback(file: &File) {
 /// [`tune_allocator`].
 pub const OWN_MAP_BYTES: usize = 4 << 20;
 
+/// Bytes of freed memory a glibc heap keeps at its top before giving them back, see
+/// [`tune_allocator`].
+pub const KEEP_FREE_BYTES: usize = 8 << 20;
+
 /// Makes glibc serve every allocation of 4 MiB (`OWN_MAP_BYTES`) or more from a memory map of its own,
-/// unmapped when freed, so memory freed by one tile or run goes back to the system at once.
+/// unmapped when freed, so memory freed by one tile or run goes back to the system at once; and
+/// lets each heap keep up to 8 MiB (`KEEP_FREE_BYTES`) of freed memory at its top.
 ///
 /// By default glibc raises that threshold to the size of the largest block freed so far, so after
 /// the first large buffer is freed, later ones come from its heaps (one per thread), which keep
 /// freed memory for reuse: the tiled `thin` of the ARSO ground peaked at 416 MB at `--mem 256M`
 /// (216 MB with this setting) and the billion-point tiled DEM at 543 MB (379 MB with a 1 MiB
 /// threshold). A smaller threshold holds less but faults in more fresh pages (1 MiB: 2.5× the
-/// system time); 4 MiB is the compromise measured in `docs/BENCHMARKS.md`. Call it once, first
-/// thing (the `sweeptin` command does; the Python module leaves its host's allocator alone); the
-/// environment's `MALLOC_MMAP_THRESHOLD_`, when set, wins. Does nothing on other C libraries.
+/// system time); 4 MiB is the compromise measured in `docs/BENCHMARKS.md`.
+///
+/// Fixing the threshold leaves glibc's trim threshold at 128 KiB: each tile's run freed its
+/// vectors, the heap gave the pages back (`madvise`) and the next run faulted fresh ones in. An
+/// 8 MiB trim threshold keeps them: the ARSO ground DEM's system time 0.5–0.6 s → 0.2–0.3 s
+/// at the same peak RSS (a heap keeps at most that much it does not use).
+///
+/// Call it once, first thing (the `sweeptin` command does; the Python module leaves its host's
+/// allocator alone); the environment's `MALLOC_MMAP_THRESHOLD_` and `MALLOC_TRIM_THRESHOLD_`,
+/// when set, win. Does nothing on other C libraries.
 pub fn tune_allocator() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    if std::env::var_os("MALLOC_MMAP_THRESHOLD_").is_none() {
-        // SAFETY: mallopt only changes the allocator's parameters; it is safe to call at any
-        // time (glibc takes its own lock), and a rejected value leaves them as they were.
-        unsafe {
-            libc::mallopt(libc::M_MMAP_THRESHOLD, OWN_MAP_BYTES as libc::c_int);
+    for (name, param, bytes) in [
+        ("MALLOC_MMAP_THRESHOLD_", libc::M_MMAP_THRESHOLD, OWN_MAP_BYTES),
+        ("MALLOC_TRIM_THRESHOLD_", libc::M_TRIM_THRESHOLD, KEEP_FREE_BYTES),
+    ] {
+        if std::env::var_os(name).is_none() {
+            // SAFETY: mallopt only changes the allocator's parameters; it is safe to call at
+            // any time (glibc takes its own lock), and a rejected value leaves them as they
+            // were.
+            unsafe {
+                libc::mallopt(param, bytes as libc::c_int);
+            }
         }
     }
 }
