@@ -195,7 +195,13 @@ impl GridSpec {
         let [xmin, ymin, xmax, ymax] = crate::geom::tri_bbox(t);
         let inv = 1.0 / self.cell;
         self.axis_holds(ymin, ymax, self.ky0, self.ky_top(), inv)
-            && self.axis_holds(xmin, xmax, self.kx0, self.kx0 + i64::from(self.cols) - 1, inv)
+            && self.axis_holds(
+                xmin,
+                xmax,
+                self.kx0,
+                self.kx0 + i64::from(self.cols) - 1,
+                inv,
+            )
     }
 
     /// Does a lattice index in `lo..=hi` have its coordinate ([`GridSpec::at`]) in `[a, b]`?

@@ -306,6 +306,55 @@ fn a_memory_limit_below_the_budget_is_a_message_not_an_abort() {
     assert!(names(d.path()).is_empty(), "{:?}", names(d.path()));
 }
 
+/// A limit just above --mem leaves no room for the program itself (its code, threads' stacks,
+/// allocator arenas): refused before any work, naming a --mem that fits (it was an abort, exit
+/// 134, "memory allocation failed", whatever --mem). Without --mem, the budget follows the
+/// limit and the job runs, tiled or swept.
+#[cfg(unix)]
+#[test]
+fn an_address_space_limit_sets_the_default_budget_and_refuses_a_larger_one() {
+    let d = tempfile::tempdir().unwrap();
+    let arso = data::shared("lidar/arso_TM_511_122_from_ept.laz");
+    let small = data::shared("lidar/startinpy_small.laz");
+    let limited = |limit: u32, args: &str| {
+        Command::new("sh")
+            .current_dir(d.path())
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v {limit} && exec '{}' {args}",
+                env!("CARGO_BIN_EXE_sweeptin"),
+            ))
+            .output()
+            .unwrap()
+    };
+    let a = arso.display();
+    let o = limited(
+        270_000,
+        &format!("dem '{a}' --cell 1 --mem 256M -o a.tif -q"),
+    );
+    assert_eq!(code(&o), 4, "{}", err(&o));
+    assert!(err(&o).contains("give --mem 135M or less"), "{}", err(&o));
+    let o = limited(
+        200_000,
+        &format!("tin '{a}' --mem 128M -o a.ply -q --engine sweep"),
+    );
+    assert_eq!(code(&o), 4, "{}", err(&o));
+    assert!(names(d.path()).is_empty(), "{:?}", names(d.path()));
+    let s = small.display();
+    for (engine, out) in [("tiles", "t.tif"), ("sweep", "s.tif")] {
+        let o = limited(
+            200_000,
+            &format!("dem '{s}' --cell 1 --engine {engine} -o {out} -q --json"),
+        );
+        assert_eq!(code(&o), 0, "{engine}: {}", err(&o));
+    }
+    let (t, w) = (
+        std::fs::read(d.path().join("t.tif")).unwrap(),
+        std::fs::read(d.path().join("s.tif")).unwrap(),
+    );
+    assert!(t == w, "the tiled and swept DEMs differ");
+}
+
 // ---- Item 10: the bounded checker of streaming meshes ----------------------------------------
 
 #[test]

@@ -9,7 +9,7 @@ use sweeptin::breaklines::clean::{ZConflict, ZConflictKind};
 use sweeptin::crs::Crs;
 use sweeptin::input::las::BBox;
 use sweeptin::output::target::Destination;
-use sweeptin::pipeline::{self, DEFAULT_MEM, Input, RunConfig, RunOptions, RunSummary, SweepAxis};
+use sweeptin::pipeline::{self, Input, RunConfig, RunOptions, RunSummary, SweepAxis};
 use sweeptin::sink::{Fanout, FanoutSummary, MeshSink, ProductSummary, TriangleSink};
 
 /// Input files and how to read and run them (flattened into each command's arguments).
@@ -31,8 +31,10 @@ pub struct InputArgs {
     #[command(flatten)]
     pub lines: LineArgs,
     /// Memory budget for sorting (e.g. 512M, 4G). Larger inputs are sorted in chunks spilled to
-    /// --tmp-dir; the result is the same whatever the budget.
-    #[arg(long, value_name = "SIZE", default_value_t = Size(DEFAULT_MEM))]
+    /// --tmp-dir; the result is the same whatever the budget. Under an address-space limit
+    /// (ulimit -v, h_vmem) the default is what the limit leaves beside about 128 MiB for the
+    /// program itself, and a larger --mem is refused before any work.
+    #[arg(long, value_name = "SIZE", default_value_t = Size(pipeline::default_mem()))]
     pub mem: Size,
     /// Directory for spill files (anonymous temporary files, never left behind).
     #[arg(long, value_name = "DIR")]

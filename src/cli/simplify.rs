@@ -7,7 +7,6 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use sweeptin::input::raster::RasterReader;
 use sweeptin::output::{MeshFormat, MeshMeta, create_mesh_sink};
-use sweeptin::pipeline::DEFAULT_MEM;
 use sweeptin::simplify::{
     DEFAULT_WINDOW, GridOptions, GridProgress, Options, Stop, simplify_raster,
 };
@@ -63,7 +62,7 @@ pub struct Args {
     pub window: u32,
     /// Memory budget (e.g. 512M, 4G): a job whose band of windows cannot fit is refused before
     /// reading; with room, more windows run at once and the next band is read ahead.
-    #[arg(long, value_name = "SIZE", default_value_t = Size(DEFAULT_MEM))]
+    #[arg(long, value_name = "SIZE", default_value_t = Size(sweeptin::pipeline::default_mem()))]
     pub mem: Size,
     /// Threads refining windows (default: every core). The output is the same for any number.
     #[arg(long, value_name = "N", default_value_t = 0)]

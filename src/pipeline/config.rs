@@ -187,6 +187,7 @@ impl RunConfig {
         let source = Source::of(&input.paths)?;
         check_filter(source, &input.filter, &input.paths)?;
         check_numbers(&input, &options)?;
+        crate::limits::check_address_space(options.mem, "the job's memory budget (--mem)")?;
         let streams = streams(&input.paths);
         if let (Some(s), Source::Lidar | Source::Stream) = (streams.first(), source) {
             return Err(Error::Options(format!(

@@ -73,7 +73,7 @@ pub struct RunOptions {
 impl Default for RunOptions {
     fn default() -> Self {
         RunOptions {
-            mem: DEFAULT_MEM,
+            mem: default_mem(),
             tmp_dir: None,
             progress: false,
             sweep_axis: SweepAxis::Auto,
@@ -102,8 +102,21 @@ pub enum SweepAxis {
 /// [`SweepAxis::Auto`] to sweep along `x`.
 pub const STRIP_RATIO: f64 = 4.0;
 
-/// Default memory budget: 1 GiB.
+/// Default memory budget: 1 GiB (less under an address-space limit: [`default_mem`]).
 pub const DEFAULT_MEM: u64 = 1 << 30;
+
+/// The default memory budget: [`DEFAULT_MEM`], or, under an address-space limit (`ulimit -v`,
+/// a batch job's `h_vmem`), what the limit leaves beside the process's own mappings, in whole
+/// MiB (at least 16 MiB; a limit below that is refused when the job starts).
+pub fn default_mem() -> u64 {
+    match crate::limits::address_space() {
+        Some(limit) => {
+            let left = limit.saturating_sub(crate::limits::ADDRESS_OVERHEAD) >> 20 << 20;
+            DEFAULT_MEM.min(left.max(16 << 20))
+        }
+        None => DEFAULT_MEM,
+    }
+}
 
 /// Parses a human memory size: `1048576`, `512K`, `128M`, `4G`, `1T`, optionally with `B`,
 /// `iB` or a space (binary multiples: 1K = 1024), as `--mem` and the Python package take it.

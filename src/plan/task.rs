@@ -144,7 +144,7 @@ impl Job {
             duplicates: DuplicatePolicy::default(),
             max_edge: None,
             crs: None,
-            mem: crate::pipeline::DEFAULT_MEM,
+            mem: crate::pipeline::default_mem(),
             tmp_dir: None,
             lines: None,
         }

@@ -209,7 +209,7 @@ fn read_index(
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
     let crs = reader.crs().cloned();
-    check_address_space(mem, total)?;
+    crate::limits::check_address_space(mem, &format!("the tiles of {total} points"))?;
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
     let (mut index, bounds, cpu) = match packing {
         Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
@@ -453,24 +453,6 @@ const MIN_INDEX_SORT: u64 = 8 << 20;
 fn index_sort_budget(mem: u64, points: u64, record: usize) -> u64 {
     let bytes = points.saturating_mul(record as u64);
     (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))
-}
-
-/// Fails before any work when the process's address space is limited below `mem` (`ulimit -v`,
-/// a batch job's limit; the tiles in flight may take all of `mem`, and threads' stacks and
-/// allocator arenas count too), rather than aborting later in a tile worker.
-fn check_address_space(mem: u64, points: u64) -> Result<()> {
-    match crate::limits::address_space() {
-        Some(limit) if limit < mem => Err(Error::OutOfMemory {
-            what: format!("the tiles of {points} points"),
-            bytes: mem,
-            hint: format!(
-                "the process may use {} of address space (ulimit -v or a batch job's limit), \
-                 less than --mem: give a smaller --mem",
-                crate::human_bytes(limit)
-            ),
-        }),
-        _ => Ok(()),
-    }
 }
 
 /// Points per block: [`BLOCK_POINTS`], or more for inputs so large that the block table would
