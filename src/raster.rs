@@ -204,6 +204,32 @@ impl GridSpec {
             )
     }
 
+    /// Where `p` lies among the centres, for [`GridSpec::keys_hold_centre`]: the first column
+    /// whose centre's `x` is at least `p`'s and the last at most it, then the same for rows
+    /// (from the southern one), counted from the grid's first and clamped to one beyond it.
+    /// Computed once per vertex, they decide [`GridSpec::may_hold_centre`] for every triangle
+    /// on it with integer comparisons: the lowest first and the highest last of a triangle's
+    /// vertices are those of its box's sides, the centre coordinates being monotone.
+    pub fn lattice_keys(&self, p: &[f64; 3]) -> [i32; 4] {
+        let rel = |k: i64, k0: i64, n: u32| k.saturating_sub(k0).clamp(-1, i64::from(n)) as i32;
+        let (cols, rows) = (self.cols, self.rows);
+        [
+            rel(self.first_at_least(p[0]), self.kx0, cols),
+            rel(self.first_at_least(p[0].next_up()) - 1, self.kx0, cols),
+            rel(self.first_at_least(p[1]), self.ky0, rows),
+            rel(self.first_at_least(p[1].next_up()) - 1, self.ky0, rows),
+        ]
+    }
+
+    /// [`GridSpec::may_hold_centre`] of the triangle whose vertices have the
+    /// [`GridSpec::lattice_keys`] `k` (the same answer, exactly).
+    #[inline]
+    pub fn keys_hold_centre(&self, k: [[i32; 4]; 3]) -> bool {
+        let first = |i: usize| k[0][i].min(k[1][i]).min(k[2][i]).max(0);
+        let last = |i: usize, n: u32| k[0][i].max(k[1][i]).max(k[2][i]).min(n as i32 - 1);
+        first(2) <= last(3, self.rows) && first(0) <= last(1, self.cols)
+    }
+
     /// Does a lattice index in `lo..=hi` have its coordinate ([`GridSpec::at`]) in `[a, b]`?
     /// Decided from the quotients `a / cell`, `b / cell` (`inv` is `1 / cell`) when no lattice
     /// index lies within a margin of them far above their rounding error (almost always: a
@@ -500,7 +526,7 @@ fn lattice(cell: f64, kx0: i64, kx1: i64, ky0: i64, ky1: i64) -> Result<(i64, i6
 mod tests {
     use super::*;
 
-    /// `may_hold_centre` against every centre, for both alignments, UTM-sized coordinates,
+    /// `may_hold_centre` and `keys_hold_centre` against every centre, for both alignments, UTM-sized coordinates,
     /// cells that are not powers of two, and boxes ending exactly on centres.
     #[test]
     fn may_hold_centre_is_exact() {
@@ -566,6 +592,8 @@ mod tests {
                         x >= xmin && x <= xmax
                     });
                     assert_eq!(g.may_hold_centre(&t), brute, "{t:?} cell {cell} {align:?}");
+                    let keys = t.map(|v| g.lattice_keys(&v));
+                    assert_eq!(g.keys_hold_centre(keys), brute, "{t:?} keys {keys:?}");
                 }
             }
         }

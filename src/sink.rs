@@ -181,6 +181,13 @@ pub trait Wants: Send + Sync + std::fmt::Debug {
     fn covering(&self) -> bool {
         false
     }
+
+    /// The grid whose cell centres the test is exactly [`crate::raster::GridSpec::may_hold_centre`]
+    /// of (a DEM's), so that a producer may decide it from per-vertex
+    /// [`crate::raster::GridSpec::lattice_keys`]. `None` unless said.
+    fn centres(&self) -> Option<&crate::raster::GridSpec> {
+        None
+    }
 }
 
 impl Needs {
@@ -190,6 +197,14 @@ impl Needs {
         match self {
             Needs::All => true,
             Needs::Only(tests) => tests.iter().any(|w| w.wants(t)),
+        }
+    }
+
+    /// The one grid of cell centres these needs are, if they are one ([`Wants::centres`]).
+    pub fn centres(&self) -> Option<&crate::raster::GridSpec> {
+        match self {
+            Needs::Only(tests) if tests.len() == 1 => tests[0].centres(),
+            _ => None,
         }
     }
 

@@ -84,6 +84,10 @@ impl Wants for Centres {
     fn covering(&self) -> bool {
         true
     }
+
+    fn centres(&self) -> Option<&GridSpec> {
+        Some(&self.0)
+    }
 }
 
 /// The band of rows in memory and the writer behind it.

@@ -220,6 +220,11 @@ pub(crate) fn judge(
     cert.mesh = lines.map(|l| (t, l.1));
     let v = &t.vertices;
     let mut out = Verdict::default();
+    // A DEM's test from each vertex's place among the centres, computed once per vertex.
+    let centres = region.skip.and_then(|(needs, _)| needs.centres());
+    let keys: Vec<[i32; 4]> = centres.map_or_else(Vec::new, |g| {
+        v.iter().map(|p| g.lattice_keys(p)).collect()
+    });
     for (k, tri) in t.triangles.iter().enumerate() {
         let t2: Tri2 = tri.map(|i| [v[i as usize][0], v[i as usize][1]]);
         if !region.meets(&t2) {
@@ -227,7 +232,10 @@ pub(crate) fn judge(
         }
         if let Some((needs, r)) = region.skip
             && strictly_inside(&t2, &r)
-            && !needs.wants(&tri.map(|i| v[i as usize]))
+            && !match centres {
+                Some(g) => g.keys_hold_centre(tri.map(|i| keys[i as usize])),
+                None => needs.wants(&tri.map(|i| v[i as usize])),
+            }
         {
             continue;
         }
