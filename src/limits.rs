@@ -1,6 +1,7 @@
 //! The process's limits, as the operating system states them (Linux `getrlimit`; elsewhere the
-//! usual values): the external sort sizes its open runs by the open-file limit, and the tiled
-//! engine refuses an address space smaller than `--mem` before any work.
+//! usual values): the external sort sizes its open runs by the open-file limit, and a run
+//! refuses an address space smaller than `--mem` and what the program maps itself before any
+//! work ([`check_address_space`]).
 
 /// The soft limit on open files.
 #[cfg(target_os = "linux")]
@@ -28,37 +29,55 @@ pub(crate) fn address_space() -> Option<u64> {
     None
 }
 
-/// Address space the process maps beyond the data `--mem` budgets: the binary and its libraries,
-/// thread stacks, the allocator's second arena (glibc reserves 64 MiB for it) and the mapped
-/// windows of spilled runs. The ARSO tile peaked at 142–181 MB of address space at `--mem` 64M
-/// to 1G (VmPeak, two arenas: [`crate::tune_allocator`] keeps to two under a limit).
-pub(crate) const ADDRESS_OVERHEAD: u64 = 128 << 20;
+/// Address space the process maps beyond the data `--mem` budgets, with `threads` workers (0:
+/// one per core): 96 MiB for the binary and its libraries, the allocator's second arena (glibc
+/// reserves 64 MiB for it) and the mapped windows of spilled runs, and 4 MiB for each thread's
+/// stack (about two per worker, the tile workers and rayon's, and four more). The ARSO tile
+/// mapped 142–181 MB (VmPeak) at `--mem` 64M to 1G on two cores, with two arenas
+/// ([`crate::tune_allocator`] keeps to two under a limit); this says 128 MiB there.
+pub(crate) fn address_overhead(threads: usize) -> u64 {
+    let n = match threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    } as u64;
+    (96 << 20) + (4 << 20) * (2 * n + 4)
+}
+
+/// The budget an address-space limit leaves beside [`address_overhead`], in whole MiB and at
+/// least 16 MiB, or `mem` when it is smaller or there is no limit.
+pub(crate) fn fit_address_space(mem: u64, threads: usize) -> u64 {
+    match address_space() {
+        Some(limit) => {
+            let left = limit.saturating_sub(address_overhead(threads)) >> 20 << 20;
+            mem.min(left.max(16 << 20))
+        }
+        None => mem,
+    }
+}
 
 /// Fails before any work when the process's address space (`ulimit -v`, a batch job's
-/// `h_vmem`) is limited below `mem` plus [`ADDRESS_OVERHEAD`]: rather than aborting later when an
-/// allocation fails. `what` names the work.
-pub(crate) fn check_address_space(mem: u64, what: &str) -> crate::Result<()> {
+/// `h_vmem`) is limited below `mem` plus [`address_overhead`] of `threads`: rather than
+/// aborting later when an allocation fails. `what` names the work.
+pub(crate) fn check_address_space(mem: u64, threads: usize, what: &str) -> crate::Result<()> {
+    let overhead = address_overhead(threads);
     match address_space() {
-        Some(limit) if limit < mem.saturating_add(ADDRESS_OVERHEAD) => {
-            Err(crate::Error::OutOfMemory {
-                what: what.to_string(),
-                bytes: mem,
-                hint: format!(
-                    "the process may use {} of address space (ulimit -v or a batch job's \
-                     limit), and needs --mem plus about {} (its code, threads' stacks, \
-                     allocator): {}",
-                    crate::human_bytes(limit),
-                    crate::human_bytes(ADDRESS_OVERHEAD),
-                    match limit.checked_sub(ADDRESS_OVERHEAD + (16 << 20)) {
-                        Some(_) => format!(
-                            "give --mem {}M or less, or raise the limit",
-                            (limit - ADDRESS_OVERHEAD) >> 20
-                        ),
-                        None => "raise the limit".to_string(),
-                    },
-                ),
-            })
-        }
+        Some(limit) if limit < mem.saturating_add(overhead) => Err(crate::Error::OutOfMemory {
+            what: what.to_string(),
+            bytes: mem,
+            hint: format!(
+                "the process may use {} of address space (ulimit -v or a batch job's limit), \
+                 and needs --mem plus about {} (its code, threads' stacks, allocator): {}",
+                crate::human_bytes(limit),
+                crate::human_bytes(overhead),
+                match limit.checked_sub(overhead + (16 << 20)) {
+                    Some(_) => format!(
+                        "give --mem {}M or less, or raise the limit",
+                        (limit - overhead) >> 20
+                    ),
+                    None => "raise the limit".to_string(),
+                },
+            ),
+        }),
         _ => Ok(()),
     }
 }

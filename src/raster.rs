@@ -209,16 +209,44 @@ impl GridSpec {
     /// (from the southern one), counted from the grid's first and clamped to one beyond it.
     /// Computed once per vertex, they decide [`GridSpec::may_hold_centre`] for every triangle
     /// on it with integer comparisons: the lowest first and the highest last of a triangle's
-    /// vertices are those of its box's sides, the centre coordinates being monotone.
+    /// vertices are those of its box's sides, the centre coordinates being monotone. Only for
+    /// grids with fewer than 2³¹ − 1 columns and rows ([`GridSpec::has_lattice_keys`]).
     pub fn lattice_keys(&self, p: &[f64; 3]) -> [i32; 4] {
         let rel = |k: i64, k0: i64, n: u32| k.saturating_sub(k0).clamp(-1, i64::from(n)) as i32;
-        let (cols, rows) = (self.cols, self.rows);
+        let inv = 1.0 / self.cell;
+        let (x0, x1) = self.around(p[0], inv);
+        let (y0, y1) = self.around(p[1], inv);
         [
-            rel(self.first_at_least(p[0]), self.kx0, cols),
-            rel(self.first_at_least(p[0].next_up()) - 1, self.kx0, cols),
-            rel(self.first_at_least(p[1]), self.ky0, rows),
-            rel(self.first_at_least(p[1].next_up()) - 1, self.ky0, rows),
+            rel(x0, self.kx0, self.cols),
+            rel(x1, self.kx0, self.cols),
+            rel(y0, self.ky0, self.rows),
+            rel(y1, self.ky0, self.rows),
         ]
+    }
+
+    /// The first lattice index whose coordinate is at least `v` and the last at most `v`;
+    /// from the quotient `v / cell` (`inv` is `1 / cell`) when no index lies within the margin
+    /// of it (see [`GridSpec::axis_holds`]), exactly otherwise.
+    #[inline]
+    fn around(&self, v: f64, inv: f64) -> (i64, i64) {
+        let u = v * inv - self.align.offset();
+        let margin = (u.abs() + 1.0) * QUOTIENT_MARGIN;
+        if margin < 4096.0 {
+            let (lo, hi) = ((u - margin).ceil(), (u + margin).floor());
+            if lo > hi {
+                let k = lo as i64;
+                return (k, k - 1);
+            }
+        }
+        (
+            self.first_at_least(v),
+            self.first_at_least(v.next_up()).saturating_sub(1),
+        )
+    }
+
+    /// Do the grid's columns and rows fit [`GridSpec::lattice_keys`] (below `i32::MAX`)?
+    pub fn has_lattice_keys(&self) -> bool {
+        self.cols < i32::MAX as u32 && self.rows < i32::MAX as u32
     }
 
     /// [`GridSpec::may_hold_centre`] of the triangle whose vertices have the
@@ -232,8 +260,8 @@ impl GridSpec {
 
     /// Does a lattice index in `lo..=hi` have its coordinate ([`GridSpec::at`]) in `[a, b]`?
     /// Decided from the quotients `a / cell`, `b / cell` (`inv` is `1 / cell`) when no lattice
-    /// index lies within a margin of them far above their rounding error (almost always: a
-    /// triangle's box is rarely within 2⁻⁴⁰ of a cell of a centre), exactly otherwise.
+    /// index lies within a margin of them far above their rounding error (2⁻⁴⁰ × (|u| + |w| + 1)
+    /// cells, about 10⁻⁶ of a 1 m cell at UTM coordinates: almost always), exactly otherwise.
     #[inline]
     fn axis_holds(&self, a: f64, b: f64, lo: i64, hi: i64, inv: f64) -> bool {
         let off = self.align.offset();

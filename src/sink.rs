@@ -182,8 +182,8 @@ pub trait Wants: Send + Sync + std::fmt::Debug {
         false
     }
 
-    /// The grid whose cell centres the test is exactly [`crate::raster::GridSpec::may_hold_centre`]
-    /// of (a DEM's), so that a producer may decide it from per-vertex
+    /// `Some(g)` only when [`Wants::wants`] is exactly `g.may_hold_centre` (a DEM's test) and
+    /// `g` has lattice keys: a producer may then decide it from per-vertex
     /// [`crate::raster::GridSpec::lattice_keys`]. `None` unless said.
     fn centres(&self) -> Option<&crate::raster::GridSpec> {
         None

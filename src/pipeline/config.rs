@@ -182,12 +182,18 @@ impl RunConfig {
     /// # Errors
     /// [`Error::NoInput`]; [`Error::Format`] for a streaming mesh that is not the only input or
     /// comes with breaklines or trimming, or LAS/LAZ files mixed with XYZ; [`Error::Io`] for a
-    /// temporary directory that does not exist.
+    /// temporary directory that does not exist; [`Error::OutOfMemory`] when an address-space
+    /// limit leaves less than `mem` beside what the program maps itself.
     pub fn new(input: Input, options: RunOptions) -> Result<RunConfig> {
         let source = Source::of(&input.paths)?;
         check_filter(source, &input.filter, &input.paths)?;
         check_numbers(&input, &options)?;
-        crate::limits::check_address_space(options.mem, "the job's memory budget (--mem)")?;
+        let threads = options.tiles.as_ref().map_or(0, |t| t.threads);
+        crate::limits::check_address_space(
+            options.mem,
+            threads,
+            "the job's memory budget (--mem)",
+        )?;
         let streams = streams(&input.paths);
         if let (Some(s), Source::Lidar | Source::Stream) = (streams.first(), source) {
             return Err(Error::Options(format!(

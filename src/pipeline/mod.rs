@@ -106,16 +106,11 @@ pub const STRIP_RATIO: f64 = 4.0;
 pub const DEFAULT_MEM: u64 = 1 << 30;
 
 /// The default memory budget: [`DEFAULT_MEM`], or, under an address-space limit (`ulimit -v`,
-/// a batch job's `h_vmem`), what the limit leaves beside the process's own mappings, in whole
-/// MiB (at least 16 MiB; a limit below that is refused when the job starts).
+/// a batch job's `h_vmem`), what the limit leaves beside the process's own mappings with a
+/// worker per core, in whole MiB (at least 16 MiB; a limit below that is refused when the job
+/// starts).
 pub fn default_mem() -> u64 {
-    match crate::limits::address_space() {
-        Some(limit) => {
-            let left = limit.saturating_sub(crate::limits::ADDRESS_OVERHEAD) >> 20 << 20;
-            DEFAULT_MEM.min(left.max(16 << 20))
-        }
-        None => DEFAULT_MEM,
-    }
+    crate::limits::fit_address_space(DEFAULT_MEM, 0)
 }
 
 /// Parses a human memory size: `1048576`, `512K`, `128M`, `4G`, `1T`, optionally with `B`,

@@ -378,6 +378,13 @@ impl Plan {
         Ok(if near.is_finite() { near } else { self.buffer })
     }
 
+    /// A task's budget: the plan's `--mem`, or what an address-space limit on this node leaves
+    /// beside the program (the output is the same whatever the budget, and `run` has no --mem
+    /// of its own).
+    fn task_mem(&self) -> u64 {
+        crate::limits::fit_address_space(self.job.mem, 0)
+    }
+
     /// The run of task `i` with a buffer of `buffer`.
     fn task_config(&self, i: usize, buffer: f64, o: &TaskOptions) -> Result<RunConfig> {
         let lines = match &self.job.lines {
@@ -394,7 +401,7 @@ impl Plan {
             lines,
         };
         let options = RunOptions {
-            mem: self.job.mem,
+            mem: self.task_mem(),
             tmp_dir: self.job.tmp_dir.clone(),
             progress: o.progress,
             sweep_axis: SweepAxis::Auto,
@@ -447,7 +454,7 @@ impl Plan {
                         ..RasterOptions::default()
                     },
                     // As one run: the raster's rows hold at most a quarter of the budget.
-                    memory: self.job.mem / 4,
+                    memory: self.task_mem() / 4,
                 };
                 let path = self.task_output(dir, i, "dem", "tif");
                 sinks.push(("dem".into(), Box::new(DemSink::new(&path, options)?)));

@@ -86,7 +86,7 @@ impl Wants for Centres {
     }
 
     fn centres(&self) -> Option<&GridSpec> {
-        Some(&self.0)
+        self.0.has_lattice_keys().then_some(&self.0)
     }
 }
 

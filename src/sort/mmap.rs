@@ -220,9 +220,12 @@ pub const KEEP_FREE_BYTES: usize = 8 << 20;
 /// 8 MiB trim threshold keeps them: the ARSO ground DEM's system time 0.5–0.6 s → 0.2–0.3 s
 /// at the same peak RSS (a heap keeps at most that much it does not use).
 ///
+/// Under an address-space limit (`ulimit -v`, SGE's `h_vmem`) glibc keeps to two arenas: each
+/// reserves 64 MiB of address space, which the limit counts.
+///
 /// Call it once, first thing (the `sweeptin` command does; the Python module leaves its host's
-/// allocator alone); the environment's `MALLOC_MMAP_THRESHOLD_` and `MALLOC_TRIM_THRESHOLD_`,
-/// when set, win. Does nothing on other C libraries.
+/// allocator alone); the environment's `MALLOC_MMAP_THRESHOLD_`, `MALLOC_TRIM_THRESHOLD_` and
+/// `MALLOC_ARENA_MAX`, when set, win. Does nothing on other C libraries.
 pub fn tune_allocator() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     for (name, param, bytes) in [

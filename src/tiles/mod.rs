@@ -209,7 +209,11 @@ fn read_index(
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
     let crs = reader.crs().cloned();
-    crate::limits::check_address_space(mem, &format!("the tiles of {total} points"))?;
+    crate::limits::check_address_space(
+        mem,
+        options.threads,
+        &format!("the tiles of {total} points"),
+    )?;
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
     let (mut index, bounds, cpu) = match packing {
         Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
