@@ -476,6 +476,12 @@ impl TriangleStream {
     }
 }
 
+/// The default memory budget, as `--mem`'s: 1 GiB, or what an address-space limit leaves.
+#[pyfunction]
+pub(crate) fn default_mem() -> u64 {
+    pipeline::default_mem()
+}
+
 /// Parses a memory size (`"512M"`, `"4G"`) as `--mem` does.
 #[pyfunction]
 pub(crate) fn parse_size(s: &str) -> PyResult<u64> {

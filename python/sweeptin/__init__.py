@@ -17,7 +17,8 @@ The file functions take these input options (keyword only), as the command line 
 ``classes`` (kept classification codes), ``returns`` (``"all"``, ``"first"``, ``"last"``),
 ``keep_withheld``, ``bbox`` (``(xmin, ymin, xmax, ymax)``), ``duplicates`` (``"first"``,
 ``"last"``, ``"lowest"``, ``"highest"``), ``breaklines`` (files), ``trim_boundary``, ``holes``,
-``max_edge``, ``mem`` (sort budget: bytes or ``"512M"``, default ``"1G"``), ``tmp_dir``,
+``max_edge``, ``mem`` (sort budget: bytes or ``"512M"``; default 1 GiB, or under an
+address-space limit what it leaves beside the program), ``tmp_dir``,
 ``engine`` (``"auto"``, the default: exact tiles on every core for LAS/LAZ points without
 breaklines or trimming polygons, one streaming sweep otherwise; ``"tiles"``; ``"sweep"``),
 ``threads``, ``tile``, ``crs`` (``"EPSG:2154"`` or WKT) and ``progress`` (a progress bar on
@@ -286,7 +287,7 @@ _INPUT_DEFAULTS: dict[str, Any] = {
     "trim_boundary": None,
     "holes": None,
     "max_edge": None,
-    "mem": "1G",
+    "mem": None,
     "tmp_dir": None,
     "engine": "auto",
     "threads": 0,
@@ -305,7 +306,9 @@ def _files(files: Files) -> list[str]:
     return out
 
 
-def _mem(mem: int | str) -> int:
+def _mem(mem: int | str | None) -> int:
+    if mem is None:
+        return _native.default_mem()
     return int(mem) if isinstance(mem, int) else _native.parse_size(str(mem))
 
 
@@ -514,7 +517,7 @@ def plan(
     trim_boundary: PathLike | None = None,
     holes: PathLike | None = None,
     crs: str | None = None,
-    mem: int | str = "1G",
+    mem: int | str | None = None,
     tmp_dir: PathLike | None = None,
 ) -> Plan:
     """``sweeptin plan``: cuts a ``"dem"``, ``"contours"``, ``"volume"`` or ``"tin"`` job over
