@@ -563,6 +563,7 @@ mod tests {
             (1.0, 511_000, 122_000),
             (0.3, 1_700_000, 400_000),
             (2.5, -40, 3),
+            (0.001, -(1 << 40), 1 << 40),
         ] {
             for align in [Align::Centres, Align::Edges] {
                 let g = GridSpec::aligned(cell, kx0, ky0, 20, 20, -9999.0).with_align(align);
@@ -624,6 +625,17 @@ mod tests {
                     assert_eq!(g.keys_hold_centre(keys), brute, "{t:?} keys {keys:?}");
                 }
             }
+        }
+    }
+
+    /// A grid without columns or rows holds no centre, whatever the triangle.
+    #[test]
+    fn empty_grids_hold_no_centre() {
+        for (cols, rows) in [(0, 5), (5, 0)] {
+            let g = GridSpec::aligned(1.0, 0, 0, cols, rows, -9999.0);
+            let t = [[-1.0, -1.0, 0.0], [9.0, -1.0, 0.0], [-1.0, 9.0, 0.0]];
+            assert!(!g.may_hold_centre(&t));
+            assert!(!g.keys_hold_centre(t.map(|v| g.lattice_keys(&v))));
         }
     }
 
