@@ -80,22 +80,47 @@ impl Prepared {
 /// [`crate::mesh::MAX_VERTICES`]).
 pub const MAX_POINTS: u64 = crate::mesh::MAX_VERTICES;
 
-/// A point in sort order: `(ky, kx, idx)` compares as `(y, x, input index)` by `f64::total_cmp`
-/// (see [`order_key`]), so the bucket sorts compare integers.
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+/// A point in sort order: `key` (the order keys of `y` and `x`) and `idx` compare as `(y, x,
+/// input index)` by `f64::total_cmp` (see [`order_key`]), so the bucket sorts compare integers:
+/// one 128-bit comparison for the position (24 bytes: a `u128` field would align to 32).
+#[derive(Clone, Copy, PartialEq, Eq)]
 struct Rec {
-    ky: u64,
-    kx: u64,
+    key: [u64; 2],
     idx: u32,
 }
 
 impl Rec {
+    fn new(x: f64, y: f64, idx: u32) -> Rec {
+        Rec {
+            key: [order_key(y), order_key(x)],
+            idx,
+        }
+    }
+
+    #[inline(always)]
+    fn position(&self) -> u128 {
+        u128::from(self.key[0]) << 64 | u128::from(self.key[1])
+    }
+
     fn x(&self) -> f64 {
-        from_order_key(self.kx)
+        from_order_key(self.key[1])
     }
 
     fn y(&self) -> f64 {
-        from_order_key(self.ky)
+        from_order_key(self.key[0])
+    }
+}
+
+impl Ord for Rec {
+    #[inline(always)]
+    fn cmp(&self, other: &Rec) -> std::cmp::Ordering {
+        (self.position(), self.idx).cmp(&(other.position(), other.idx))
+    }
+}
+
+impl PartialOrd for Rec {
+    fn partial_cmp(&self, other: &Rec) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
     }
 }
 
@@ -200,23 +225,12 @@ fn sort_local(points: &[[f64; 3]], origin: [f64; 2], y_range: (f64, f64)) -> Res
     for b in 0..nb {
         start[b + 1] += start[b];
     }
-    let mut recs = vec![
-        Rec {
-            ky: 0,
-            kx: 0,
-            idx: 0
-        };
-        n
-    ];
+    let mut recs = vec![Rec { key: [0; 2], idx: 0 }; n];
     let mut fill = start.clone();
     for (i, p) in points.iter().enumerate() {
         let (x, y) = local(p, origin);
         let b = bucket(y);
-        recs[fill[b] as usize] = Rec {
-            ky: order_key(y),
-            kx: order_key(x),
-            idx: i as u32,
-        };
+        recs[fill[b] as usize] = Rec::new(x, y, i as u32);
         fill[b] += 1;
     }
     drop(fill);
@@ -293,6 +307,11 @@ fn dedupe(recs: &[Rec], points: &[[f64; 3]], policy: DuplicatePolicy) -> (Vec<[f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn records_stay_small() {
+        assert_eq!(std::mem::size_of::<Rec>(), 24);
+    }
 
     #[test]
     fn sorts_and_merges_duplicates_by_policy() {
