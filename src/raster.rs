@@ -67,8 +67,8 @@ impl Align {
     }
 }
 
-/// The relative margin by which [`GridSpec::may_hold_centre`]'s quotients must clear a lattice
-/// index to decide without the exact test (2⁻⁴⁰: a thousand times their rounding error).
+/// The relative margin by which [`GridSpec::around`]'s quotient must clear a lattice
+/// index to decide without the exact test (2⁻⁴⁰: a thousand times its rounding error).
 const QUOTIENT_MARGIN: f64 = 1.0 / (1u64 << 40) as f64;
 
 /// A north-up grid of square cells on the lattice of the cell size ([`Align`]).
@@ -225,11 +225,15 @@ impl GridSpec {
     }
 
     /// The first lattice index whose coordinate is at least `v` and the last at most `v`;
-    /// from the quotient `v / cell` (`inv` is `1 / cell`) when no index lies within the margin
-    /// of it (see [`GridSpec::axis_holds`]), exactly otherwise.
+    /// from the quotient `u = v / cell` (`inv` is `1 / cell`) when no index lies within a
+    /// margin of it far above its rounding error (2⁻⁴⁰ × (|u| + 1) cells, about 10⁻⁶ of a 1 m
+    /// cell at UTM coordinates: almost always), exactly otherwise.
     #[inline]
     fn around(&self, v: f64, inv: f64) -> (i64, i64) {
         let u = v * inv - self.align.offset();
+        // The quotient's error and `at`'s rounding are below 2⁻⁵⁰ × (|u| + 1) here, so an
+        // index clear of `u` by the margin is on the same side of `v`. (Beyond 2⁵² or not
+        // finite: the exact test.)
         let margin = (u.abs() + 1.0) * QUOTIENT_MARGIN;
         if margin < 4096.0 {
             let (lo, hi) = ((u - margin).ceil(), (u + margin).floor());
@@ -259,32 +263,11 @@ impl GridSpec {
     }
 
     /// Does a lattice index in `lo..=hi` have its coordinate ([`GridSpec::at`]) in `[a, b]`?
-    /// Decided from the quotients `a / cell`, `b / cell` (`inv` is `1 / cell`) when no lattice
-    /// index lies within a margin of them far above their rounding error (2⁻⁴⁰ × (|u| + |w| + 1)
-    /// cells, about 10⁻⁶ of a 1 m cell at UTM coordinates: almost always), exactly otherwise.
+    /// The first index at or above `a` must not pass the last at or below `b` (`inv` is
+    /// `1 / cell`, see [`GridSpec::around`]).
     #[inline]
     fn axis_holds(&self, a: f64, b: f64, lo: i64, hi: i64, inv: f64) -> bool {
-        let off = self.align.offset();
-        let (u, w) = (a * inv - off, b * inv - off);
-        // The quotients' error and `at`'s rounding are below 2⁻⁵⁰ × (|u| + |w| + 1) here, so
-        // an index clear of [u, w] by the margin is clear of [a, b] too, and one inside it by
-        // the margin is inside. (Beyond 2⁵² or not finite: the exact test.)
-        let margin = (u.abs() + w.abs() + 1.0) * QUOTIENT_MARGIN;
-        if margin < 4096.0 {
-            let first = ((u - margin).ceil() as i64).max(lo);
-            let last = ((w + margin).floor() as i64).min(hi);
-            if first > last {
-                return false;
-            }
-            let first_in = ((u + margin).ceil() as i64).max(lo);
-            let last_in = ((w - margin).floor() as i64).min(hi);
-            if first_in <= last_in {
-                return true;
-            }
-        }
-        // The lowest index at or above `a` must not pass `b`.
-        let k = self.first_at_least(a).max(lo);
-        k <= hi && self.at(k) <= b
+        self.around(a, inv).0.max(lo) <= self.around(b, inv).1.min(hi)
     }
 
     /// The lowest lattice index whose coordinate is at least `v` (exact: the quotient's

@@ -187,7 +187,6 @@ fn read_index(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4], TileCpu)> {
     let scope = options.scope.as_ref();
-    let mem = job.mem;
     let (mut reader, outside) = open_for(job, scope)?;
     let b = reader.bounds();
     let total = reader.point_count();
@@ -209,11 +208,6 @@ fn read_index(
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
     let crs = reader.crs().cloned();
-    crate::limits::check_address_space(
-        mem,
-        options.threads,
-        &format!("the tiles of {total} points"),
-    )?;
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
     let (mut index, bounds, cpu) = match packing {
         Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
