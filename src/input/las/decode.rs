@@ -23,7 +23,7 @@ pub(crate) struct FileDecoder {
     pub(crate) record_len: usize,
     pub(crate) extended: bool,
     pub(crate) quant: Quantization,
-    /// The last call's span buffers, reused by the next (each with [`LAYOUT_HEAD`] bytes before
+    /// Span buffers given back, reused by the next reads (each with [`LAYOUT_HEAD`] bytes before
     /// the span's bytes): fresh ones fault in fresh pages, batch after batch.
     spare: Vec<Vec<u8>>,
 }
@@ -98,8 +98,28 @@ impl FileDecoder {
         fields: Fields,
         job: impl Fn(&Chunk, &[u8]) -> T + Sync,
     ) -> Result<Vec<T>> {
-        let mut bytes = std::mem::take(&mut self.spare);
-        bytes.resize_with(bytes.len().max(spans.len()), Vec::new);
+        let mut bytes = self.read(spans)?;
+        let result = self
+            .spans()
+            .decode(spans, &mut bytes, parallel, fields, job);
+        self.give_back(bytes);
+        result
+    }
+
+    /// What decodes this file's spans once their bytes are read, on any thread.
+    pub(crate) fn spans(&self) -> SpanDecoder {
+        SpanDecoder {
+            path: self.path.clone(),
+            vlr: self.vlr.clone(),
+            record_len: self.record_len,
+        }
+    }
+
+    /// Reads the bytes of `spans`, each in a buffer of its own (see [`SpanDecoder::decode`]).
+    pub(crate) fn read(&mut self, spans: &[Chunk]) -> Result<Vec<Vec<u8>>> {
+        let mut bytes: Vec<Vec<u8>> = (0..spans.len())
+            .map(|_| self.spare.pop().unwrap_or_default())
+            .collect();
         for (s, b) in spans.iter().zip(&mut bytes) {
             b.clear();
             b.resize(LAYOUT_HEAD + s.bytes as usize, 0);
@@ -114,6 +134,36 @@ impl FileDecoder {
                     }
                 })?;
         }
+        Ok(bytes)
+    }
+
+    /// Takes back buffers [`FileDecoder::read`] handed out, for the next call.
+    pub(crate) fn give_back(&mut self, bytes: Vec<Vec<u8>>) {
+        self.spare.extend(bytes);
+    }
+}
+
+/// Decodes a file's spans from their bytes: what a [`FileDecoder`] knows of the file, owned, so
+/// that a batch can be decoded on another thread while the next one is read.
+#[derive(Clone)]
+pub(crate) struct SpanDecoder {
+    path: PathBuf,
+    vlr: Option<laz::LazVlr>,
+    record_len: usize,
+}
+
+impl SpanDecoder {
+    /// Decompresses `spans` from `bytes` (as [`FileDecoder::read`] filled them), runs `job` on
+    /// each span's raw records (`span.points` records of `record_len` bytes) and returns the
+    /// results in span order. The first error in span order wins, whichever thread met it.
+    pub(crate) fn decode<T: Send>(
+        &self,
+        spans: &[Chunk],
+        bytes: &mut [Vec<u8>],
+        parallel: bool,
+        fields: Fields,
+        job: impl Fn(&Chunk, &[u8]) -> T + Sync,
+    ) -> Result<Vec<T>> {
         let (path, vlr, len) = (self.path.as_path(), self.vlr.as_ref(), self.record_len);
         let one = |(s, b): (&Chunk, &mut Vec<u8>)| -> Result<T> {
             match vlr {
@@ -141,18 +191,14 @@ impl FileDecoder {
             }
         };
         let parts = &mut bytes[..spans.len()];
-        let result = guarded(path, || {
-            // Every span's result, then the first error in span order: the message does not
-            // depend on which thread failed first.
+        guarded(path, || {
             let all: Vec<Result<T>> = if parallel {
                 spans.par_iter().zip(parts).map(one).collect()
             } else {
                 spans.iter().zip(parts).map(one).collect()
             };
             all.into_iter().collect()
-        });
-        self.spare = bytes;
-        result
+        })
     }
 }
 

@@ -8,7 +8,10 @@ use super::vpc;
 use super::world::{HEADER_SLACK, Quantization};
 use crate::crs::Crs;
 use crate::error::{Error, Result};
+use std::collections::VecDeque;
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// Tuning of a [`LidarReader`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,7 +50,7 @@ impl Default for ReadOptions {
 pub struct LidarReader {
     sources: Vec<Source>,
     crs: Option<Crs>,
-    filter: CompiledFilter,
+    filter: Arc<CompiledFilter>,
     stats: FilterStats,
     options: ReadOptions,
     next_source: usize,
@@ -55,7 +58,7 @@ pub struct LidarReader {
     ready: Vec<LidarPoint>,
     ready_pos: usize,
     /// Spans' point buffers, reused batch after batch (fresh ones fault in fresh pages).
-    spare: std::sync::Mutex<Vec<Vec<LidarPoint>>>,
+    spare: Arc<Mutex<Vec<Vec<LidarPoint>>>>,
 }
 
 impl std::fmt::Debug for LidarReader {
@@ -83,9 +86,123 @@ struct Source {
 struct Current {
     decoder: FileDecoder,
     spans: Vec<Chunk>,
+    /// The first span not yet decoded (or, parallel, not yet sent to decode).
     next: usize,
     first_index: u64,
-    check: PointCheck,
+    check: Arc<PointCheck>,
+    /// Batches decoding on rayon's pool, oldest first.
+    in_flight: VecDeque<InFlight>,
+}
+
+/// Batches of spans decoding at once while the reader hands out the one before.
+const IN_FLIGHT: usize = 2;
+
+/// What a span decodes to: the points the filter keeps, and the tally of its verdicts.
+type SpanPoints = Result<(Vec<LidarPoint>, FilterStats)>;
+
+/// A batch's spans' results (or the error that stopped the batch) and its byte buffers.
+type Decoded = (Result<Vec<SpanPoints>>, Vec<Vec<u8>>);
+
+/// A batch sent to decode on rayon's pool.
+struct InFlight {
+    rx: crossbeam_channel::Receiver<Decoded>,
+}
+
+/// What turns one span's raw records into points: checked, decoded, filtered.
+#[derive(Clone)]
+struct SpanJob {
+    filter: Arc<CompiledFilter>,
+    check: Arc<PointCheck>,
+    spare: Arc<Mutex<Vec<Vec<LidarPoint>>>>,
+    quant: Quantization,
+    len: usize,
+    ext: bool,
+    base: u64,
+}
+
+impl SpanJob {
+    fn run(&self, span: &Chunk, raw: &[u8]) -> SpanPoints {
+        let mut kept = self
+            .spare
+            .lock()
+            .ok()
+            .and_then(|mut v| v.pop())
+            .unwrap_or_default();
+        kept.clear();
+        kept.reserve(span.points as usize);
+        let mut stats = FilterStats::default();
+        for (i, rec) in raw.chunks_exact(self.len).enumerate() {
+            self.check
+                .test(rec, self.ext, span, span.first + i as u64)?;
+            let p = decode(
+                rec,
+                self.ext,
+                self.base + span.first + i as u64,
+                &self.quant,
+            );
+            let v = self.filter.test(&p);
+            stats.count(v);
+            if v == Verdict::Keep {
+                kept.push(p);
+            }
+        }
+        Ok((kept, stats))
+    }
+}
+
+impl Current {
+    /// The end of the batch that starts at `next`: at least `batch` points and one span per
+    /// thread when parallel, at most about four batches (or 2^20 points) whatever the number
+    /// of cores.
+    fn batch_end(&self, batch: u64, parallel: bool) -> usize {
+        let threads = if parallel {
+            rayon::current_num_threads()
+        } else {
+            1
+        };
+        let cap = (4 * batch).max(1 << 20);
+        let (mut end, mut points) = (self.next, 0u64);
+        while end < self.spans.len() {
+            points += self.spans[end].points;
+            end += 1;
+            if (points >= batch && end - self.next >= threads) || points >= cap {
+                break;
+            }
+        }
+        end
+    }
+
+    /// Reads the bytes of batches of `batch` points and sends them to decode on rayon's pool
+    /// until [`IN_FLIGHT`] are under way. A batch whose bytes cannot be read is queued as its
+    /// error, to be met in span order.
+    fn submit(&mut self, batch: u64, job: &SpanJob) {
+        while self.in_flight.len() < IN_FLIGHT && self.next < self.spans.len() {
+            let end = self.batch_end(batch, true);
+            let spans = self.spans[self.next..end].to_vec();
+            self.next = end;
+            let (tx, rx) = crossbeam_channel::bounded::<Decoded>(1);
+            self.in_flight.push_back(InFlight { rx });
+            let mut bytes = match self.decoder.read(&spans) {
+                Ok(b) => b,
+                Err(e) => {
+                    let _ = tx.send((Err(e), Vec::new()));
+                    continue;
+                }
+            };
+            let (decoder, job) = (self.decoder.spans(), job.clone());
+            rayon::spawn(move || {
+                let run = || {
+                    decoder.decode(&spans, &mut bytes, true, Fields::Filter, |s, raw| {
+                        job.run(s, raw)
+                    })
+                };
+                let parts = catch_unwind(AssertUnwindSafe(run))
+                    .unwrap_or_else(|p| Err(Error::panicked("decoding", &*p)));
+                // The reader may have stopped waiting (an earlier error): nothing to do then.
+                let _ = tx.send((parts, bytes));
+            });
+        }
+    }
 }
 
 /// What a decoded record can be checked for: inside the header's bounds (one scale step of
@@ -280,7 +397,7 @@ impl LidarReader {
         let crs = common_crs(&declared)?;
         Ok(LidarReader {
             sources,
-            filter: compiled,
+            filter: Arc::new(compiled),
             crs,
             stats: FilterStats::default(),
             options: ReadOptions {
@@ -291,7 +408,7 @@ impl LidarReader {
             current: None,
             ready: Vec::new(),
             ready_pos: 0,
-            spare: std::sync::Mutex::default(),
+            spare: Arc::default(),
         })
     }
 
@@ -430,70 +547,65 @@ impl LidarReader {
     }
 
     /// Decodes the next batch of spans into `ready`; `false` when every file is done.
+    ///
+    /// Parallel reading keeps [`IN_FLIGHT`] batches decoding on rayon's pool while this thread
+    /// hands out the one before (and reads the next one's bytes), so the pool does not wait for
+    /// the reader between batches; batches still come out in span order. On a thread of the pool
+    /// itself (a caller inside a rayon job), waiting for queued work could hold up the pool: each
+    /// batch is decoded in the call that needs it.
     fn decode_batch(&mut self) -> Result<bool> {
+        let pipelined = self.options.parallel && rayon::current_thread_index().is_none();
         loop {
-            if let Some(cur) = &mut self.current
-                && cur.next < cur.spans.len()
-            {
-                let threads = if self.options.parallel {
-                    rayon::current_num_threads()
-                } else {
-                    1
+            if let Some(cur) = &mut self.current {
+                let job = SpanJob {
+                    filter: self.filter.clone(),
+                    check: cur.check.clone(),
+                    spare: self.spare.clone(),
+                    quant: cur.decoder.quant,
+                    len: cur.decoder.record_len,
+                    ext: cur.decoder.extended,
+                    base: cur.first_index,
                 };
-                // At least `batch_points` and one span per thread, at most about four batches
-                // (or 2^20 points) in memory at once, whatever the number of cores.
                 let batch = self.options.batch_points as u64;
-                let cap = (4 * batch).max(1 << 20);
-                let (mut end, mut points) = (cur.next, 0u64);
-                while end < cur.spans.len() {
-                    points += cur.spans[end].points;
-                    end += 1;
-                    if (points >= batch && end - cur.next >= threads) || points >= cap {
-                        break;
-                    }
-                }
-                let (filter, base, check) = (&self.filter, cur.first_index, &cur.check);
-                let spare = &self.spare;
-                let (quant, len, ext) = (
-                    cur.decoder.quant,
-                    cur.decoder.record_len,
-                    cur.decoder.extended,
-                );
-                let parts = cur.decoder.decode(
-                    &cur.spans[cur.next..end],
-                    self.options.parallel,
-                    Fields::Filter,
-                    |span, raw| {
-                        let mut kept = spare
-                            .lock()
-                            .ok()
-                            .and_then(|mut v| v.pop())
-                            .unwrap_or_default();
-                        kept.clear();
-                        kept.reserve(span.points as usize);
-                        let mut stats = FilterStats::default();
-                        for (i, rec) in raw.chunks_exact(len).enumerate() {
-                            check.test(rec, ext, span, span.first + i as u64)?;
-                            let p = decode(rec, ext, base + span.first + i as u64, &quant);
-                            let v = filter.test(&p);
-                            stats.count(v);
-                            if v == Verdict::Keep {
-                                kept.push(p);
-                            }
+                let parts = if pipelined {
+                    cur.submit(batch.div_ceil(IN_FLIGHT as u64), &job);
+                    match cur.in_flight.pop_front() {
+                        Some(f) => {
+                            let (parts, bytes) = f.rx.recv().unwrap_or_else(|_| {
+                                (
+                                    Err(Error::Internal("a decoding job was lost".into())),
+                                    vec![],
+                                )
+                            });
+                            cur.decoder.give_back(bytes);
+                            cur.submit(batch.div_ceil(IN_FLIGHT as u64), &job);
+                            Some(parts?)
                         }
-                        Ok((kept, stats))
-                    },
-                )?;
-                cur.next = end;
-                for part in parts {
-                    let (kept, stats) = part?;
-                    self.ready.extend_from_slice(&kept);
-                    self.stats += stats;
-                    if let Ok(mut v) = self.spare.lock() {
-                        v.push(kept);
+                        None => None,
                     }
+                } else if cur.next < cur.spans.len() {
+                    let end = cur.batch_end(batch, self.options.parallel);
+                    let spans = &cur.spans[cur.next..end];
+                    cur.next = end;
+                    let parallel = self.options.parallel;
+                    Some(
+                        cur.decoder
+                            .decode(spans, parallel, Fields::Filter, |s, raw| job.run(s, raw))?,
+                    )
+                } else {
+                    None
+                };
+                if let Some(parts) = parts {
+                    for part in parts {
+                        let (kept, stats) = part?;
+                        self.ready.extend_from_slice(&kept);
+                        self.stats += stats;
+                        if let Ok(mut v) = self.spare.lock() {
+                            v.push(kept);
+                        }
+                    }
+                    return Ok(true);
                 }
-                return Ok(true);
             }
             self.current = None;
             if !self.open_next()? {
@@ -536,7 +648,8 @@ impl LidarReader {
                 spans,
                 next: 0,
                 first_index: s.first_index,
-                check: PointCheck::of(info),
+                check: Arc::new(PointCheck::of(info)),
+                in_flight: VecDeque::new(),
             });
             return Ok(true);
         }
@@ -630,6 +743,88 @@ mod tests {
             (66, 5, 7)
         );
         assert_eq!(p.flags, LidarPoint::WITHHELD | LidarPoint::OVERLAP);
+    }
+
+    fn fixture() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/lidR_Topography.copc.laz")
+    }
+
+    /// Every point `path` gives (index, position, class), read in batches of one span per
+    /// thread, and the error that stopped the read.
+    fn read_all(path: &Path, parallel: bool) -> (Vec<(u64, [u64; 3], u8)>, Option<String>) {
+        let options = ReadOptions {
+            parallel,
+            batch_points: 1,
+            area: None,
+            copc_index: false,
+        };
+        let mut r = LidarReader::open_with(&[path], &Filter::default(), options).unwrap();
+        let mut pts = Vec::new();
+        let error = loop {
+            match r.read_chunk(&mut pts, 1000) {
+                Ok(0) => break None,
+                Ok(_) => {}
+                Err(e) => break Some(e.to_string()),
+            }
+        };
+        let key = |p: &LidarPoint| {
+            let xyz = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+            (p.index, xyz, p.classification)
+        };
+        (pts.iter().map(key).collect(), error)
+    }
+
+    /// Reads `path` three ways: batches decoding ahead on rayon's pool (this thread is not one
+    /// of its workers), each batch in the call that needs it (a worker of a pool), one thread.
+    fn three_ways(path: &Path) -> [(Vec<(u64, [u64; 3], u8)>, Option<String>); 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        [
+            pool.install(|| std::thread::scope(|s| s.spawn(|| read_all(path, true)).join()))
+                .unwrap(),
+            pool.install(|| read_all(path, true)),
+            read_all(path, false),
+        ]
+    }
+
+    #[test]
+    fn decoding_ahead_gives_the_same_points() {
+        let [ahead, in_call, serial] = three_ways(&fixture());
+        assert!(ahead.1.is_none(), "{:?}", ahead.1);
+        assert!(ahead.0.len() > 50_000);
+        assert_eq!(ahead, in_call);
+        assert_eq!(ahead, serial);
+    }
+
+    #[test]
+    fn decoding_ahead_meets_errors_in_span_order() {
+        let src = fixture();
+        let info = inspect(&src).unwrap();
+        let chunks = &info.layout.chunks;
+        assert!(chunks.len() >= 8, "{} chunks", chunks.len());
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("damaged.laz");
+        let mut bytes = std::fs::read(&src).unwrap();
+        // Chunks 3 and 6 damaged (in batches decoding side by side): the error is chunk 3's,
+        // whichever batch fails first.
+        let c = chunks[3];
+        bytes[c.offset as usize..(c.offset + c.bytes) as usize].fill(0);
+        let d = chunks[6];
+        bytes[d.offset as usize..(d.offset + d.bytes) as usize].fill(0);
+        std::fs::write(&path, &bytes).unwrap();
+        let [ahead, in_call, serial] = three_ways(&path);
+        let message = ahead.1.clone().unwrap();
+        let at = format!("chunk at byte {}", c.offset);
+        assert!(message.contains(&at), "{message}");
+        // Read one span at a time, every point before chunk 3 comes out; in batches of two
+        // spans, those of the batches before its batch.
+        let before: u64 = chunks[..3].iter().map(|c| c.points).sum();
+        assert_eq!(serial.0.len() as u64, before);
+        assert_eq!(serial.1, ahead.1);
+        assert!(serial.0.starts_with(&ahead.0) && !ahead.0.is_empty());
+        assert_eq!(ahead, in_call);
     }
 
     #[test]
