@@ -749,9 +749,12 @@ mod tests {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/lidR_Topography.copc.laz")
     }
 
-    /// Every point `path` gives (index, position, class), read in batches of one span per
-    /// thread, and the error that stopped the read.
-    fn read_all(path: &Path, parallel: bool) -> (Vec<(u64, [u64; 3], u8)>, Option<String>) {
+    /// The points a read gave (index, position bits, class) and the error that stopped it.
+    type Read = (Vec<(u64, [u64; 3], u8)>, Option<String>);
+
+    /// Every point `path` gives, read in batches of one span per thread, and the error that
+    /// stopped the read.
+    fn read_all(path: &Path, parallel: bool) -> Read {
         let options = ReadOptions {
             parallel,
             batch_points: 1,
@@ -776,7 +779,7 @@ mod tests {
 
     /// Reads `path` three ways: batches decoding ahead on rayon's pool (this thread is not one
     /// of its workers), each batch in the call that needs it (a worker of a pool), one thread.
-    fn three_ways(path: &Path) -> [(Vec<(u64, [u64; 3], u8)>, Option<String>); 3] {
+    fn three_ways(path: &Path) -> [Read; 3] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .build()
