@@ -16,10 +16,10 @@
 
 use crate::error::{Error, Result};
 use crate::sort::memory::DuplicatePolicy;
+use crate::sort::loser::LoserTree;
 use crate::sort::mmap::MappedRecords;
 use rayon::slice::ParallelSliceMut;
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -451,42 +451,13 @@ struct Run<R: SortKey> {
 }
 
 #[derive(Debug)]
-struct Head<R: SortKey> {
-    rec: R,
-    run: usize,
-}
-
-impl<R: SortKey> PartialEq for Head<R> {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl<R: SortKey> Eq for Head<R> {}
-impl<R: SortKey> PartialOrd for Head<R> {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl<R: SortKey> Ord for Head<R> {
-    // Reversed: BinaryHeap is a max-heap and we want the smallest record first; equal records
-    // come from the earlier run first (runs are in input order).
-    #[inline(always)]
-    fn cmp(&self, o: &Self) -> Ordering {
-        let c = R::order(&o.rec, &self.rec);
-        if R::STABLE {
-            c.then(o.run.cmp(&self.run))
-        } else {
-            c
-        }
-    }
-}
-
-#[derive(Debug)]
 enum Source<R: SortKey> {
     Memory(Vec<R>, usize),
     Runs {
         runs: Vec<Run<R>>,
-        heap: BinaryHeap<Head<R>>,
+        /// Each run's current record (`None`: the run is done).
+        heads: Vec<Option<R>>,
+        tree: LoserTree,
         /// The spill directory, to name it in an error.
         dir: PathBuf,
     },
@@ -510,16 +481,17 @@ impl<R: SortKey> Merge<R> {
             let m = MappedRecords::<R>::map(f).map_err(io)?;
             runs.push(Run { map: m, pos: 0 });
         }
-        let mut heap = BinaryHeap::with_capacity(runs.len());
-        for (i, r) in runs.iter_mut().enumerate() {
-            if let Some(rec) = r.map.get(0).map_err(io)? {
-                heap.push(Head { rec, run: i });
-            }
-        }
+        let heads = runs
+            .iter_mut()
+            .map(|r| r.map.get(0))
+            .collect::<std::io::Result<Vec<_>>>()
+            .map_err(io)?;
+        let tree = LoserTree::new(runs.len(), |a, b| beats(&heads, a, b));
         Ok(Merge {
             source: Source::Runs {
                 runs,
-                heap,
+                heads,
+                tree,
                 dir: dir.to_path_buf(),
             },
             stats,
@@ -559,26 +531,40 @@ impl<R: SortKey> Iterator for Merge<R> {
                 *i += 1;
                 r
             }
-            Source::Runs { runs, heap, dir } => {
-                let mut top = heap.peek_mut()?;
-                let out = top.rec;
-                let run = &mut runs[top.run];
+            Source::Runs {
+                runs,
+                heads,
+                tree,
+                dir,
+            } => {
+                let w = tree.winner();
+                let out = heads[w]?;
+                let run = &mut runs[w];
                 run.pos += 1;
                 match run.map.get(run.pos) {
-                    Ok(Some(next)) => top.rec = next,
-                    Ok(None) => {
-                        std::collections::binary_heap::PeekMut::pop(top);
-                    }
+                    Ok(next) => heads[w] = next,
                     Err(e) => {
-                        drop(top);
-                        heap.clear();
+                        heads.iter_mut().for_each(|h| *h = None);
                         self.error = Some(Error::write(dir.as_path(), e));
                         return None;
                     }
                 }
+                tree.replay(|a, b| beats(heads, a, b));
                 Some(out)
             }
         }
+    }
+}
+
+/// Does run `a`'s head come before run `b`'s? The smaller record first, equal records from the
+/// earlier run first (runs are in input order), a finished run last.
+#[inline(always)]
+fn beats<R: SortKey>(heads: &[Option<R>], a: usize, b: usize) -> bool {
+    match (&heads[a], &heads[b]) {
+        (Some(x), Some(y)) => R::order(x, y).then(a.cmp(&b)) == Ordering::Less,
+        (Some(_), None) => true,
+        (None, Some(_)) => false,
+        (None, None) => a < b,
     }
 }
 
