@@ -577,11 +577,22 @@ impl BlockIndex {
     /// beaten in every direction by a point of the neighbour in that quadrant (block assignment
     /// is monotone in each coordinate), so it is inside the hull.
     fn convex_hull(&self) -> Result<Vec<[f64; 3]>> {
-        let has = |bx: i64, by: i64| self.keys.binary_search(&TileGrid::key(bx, by)).is_ok();
+        let keys = &self.keys;
+        // Diagonal neighbours are looked up by cursors that only move forward through the rows
+        // below and above (the keys are sorted row by row, then by column): one each for the
+        // column before and the column after.
+        let (mut below, mut above) = ([0usize; 2], [0usize; 2]);
+        let has = |cursor: &mut usize, bx: i64, by: i64| {
+            let k = TileGrid::key(bx, by);
+            while *cursor < keys.len() && keys[*cursor] < k {
+                *cursor += 1;
+            }
+            keys.get(*cursor) == Some(&k)
+        };
         let mut h: Vec<[f64; 3]> = Vec::new();
         let mut row: Vec<[f64; 3]> = Vec::new();
         let mut row_y = None;
-        for (i, &k) in self.keys.iter().enumerate() {
+        for (i, &k) in keys.iter().enumerate() {
             let (bx, by) = TileGrid::unkey(k);
             if row_y != Some(by) && !row.is_empty() {
                 row.extend_from_slice(&h);
@@ -589,10 +600,10 @@ impl BlockIndex {
                 row.clear();
             }
             row_y = Some(by);
-            let inner = has(bx - 1, by - 1)
-                && has(bx + 1, by - 1)
-                && has(bx - 1, by + 1)
-                && has(bx + 1, by + 1);
+            let inner = has(&mut below[0], bx - 1, by - 1)
+                && has(&mut below[1], bx + 1, by - 1)
+                && has(&mut above[0], bx - 1, by + 1)
+                && has(&mut above[1], bx + 1, by + 1);
             if !inner {
                 let before = row.len();
                 self.read_span(
