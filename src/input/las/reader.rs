@@ -90,22 +90,24 @@ struct Current {
     next: usize,
     first_index: u64,
     check: Arc<PointCheck>,
-    /// Batches decoding on rayon's pool, oldest first.
+    /// Spans decoding on rayon's pool, oldest first, and their points.
     in_flight: VecDeque<InFlight>,
+    flying: u64,
 }
 
-/// Batches of spans decoding at once while the reader hands out the one before.
-const IN_FLIGHT: usize = 2;
+/// The most spans decoding at once while the reader hands out the one before.
+const MAX_IN_FLIGHT: usize = 64;
 
 /// What a span decodes to: the points the filter keeps, and the tally of its verdicts.
 type SpanPoints = Result<(Vec<LidarPoint>, FilterStats)>;
 
-/// A batch's spans' results (or the error that stopped the batch) and its byte buffers.
+/// A span's result (or the error that stopped it) and its byte buffer.
 type Decoded = (Result<Vec<SpanPoints>>, Vec<Vec<u8>>);
 
-/// A batch sent to decode on rayon's pool.
+/// A span sent to decode on rayon's pool.
 struct InFlight {
     rx: crossbeam_channel::Receiver<Decoded>,
+    points: u64,
 }
 
 /// What turns one span's raw records into points: checked, decoded, filtered.
@@ -172,17 +174,26 @@ impl Current {
         end
     }
 
-    /// Reads the bytes of batches of `batch` points and sends them to decode on rayon's pool
-    /// until [`IN_FLIGHT`] are under way. A batch whose bytes cannot be read is queued as its
-    /// error, to be met in span order.
+    /// Reads the bytes of spans and sends each to decode on rayon's pool, a job of its own,
+    /// until at least `batch` points and two spans per thread are under way. A span whose bytes
+    /// cannot be read is queued as its error, to be met in span order. (A job decoding several
+    /// spans with a parallel iterator would wait for a stolen span while its thread runs another
+    /// job, and hold up the reader, which waits for the oldest.)
     fn submit(&mut self, batch: u64, job: &SpanJob) {
-        while self.in_flight.len() < IN_FLIGHT && self.next < self.spans.len() {
-            let end = self.batch_end(batch, true);
-            let spans = self.spans[self.next..end].to_vec();
-            self.next = end;
+        let spans_wanted = 2 * rayon::current_num_threads();
+        while self.next < self.spans.len()
+            && (self.in_flight.len() < spans_wanted || self.flying < batch)
+            && self.in_flight.len() < MAX_IN_FLIGHT
+        {
+            let span = self.spans[self.next];
+            self.next += 1;
+            self.flying += span.points;
             let (tx, rx) = crossbeam_channel::bounded::<Decoded>(1);
-            self.in_flight.push_back(InFlight { rx });
-            let mut bytes = match self.decoder.read(&spans) {
+            self.in_flight.push_back(InFlight {
+                rx,
+                points: span.points,
+            });
+            let mut bytes = match self.decoder.read(&[span]) {
                 Ok(b) => b,
                 Err(e) => {
                     let _ = tx.send((Err(e), Vec::new()));
@@ -192,7 +203,7 @@ impl Current {
             let (decoder, job) = (self.decoder.spans(), job.clone());
             rayon::spawn(move || {
                 let run = || {
-                    decoder.decode(&spans, &mut bytes, true, Fields::Filter, |s, raw| {
+                    decoder.decode(&[span], &mut bytes, false, Fields::Filter, |s, raw| {
                         job.run(s, raw)
                     })
                 };
@@ -546,13 +557,13 @@ impl LidarReader {
         Ok(out)
     }
 
-    /// Decodes the next batch of spans into `ready`; `false` when every file is done.
+    /// Decodes the next span (or batch of spans) into `ready`; `false` when every file is done.
     ///
-    /// Parallel reading keeps [`IN_FLIGHT`] batches decoding on rayon's pool while this thread
-    /// hands out the one before (and reads the next one's bytes), so the pool does not wait for
-    /// the reader between batches; batches still come out in span order. On a thread of the pool
-    /// itself (a caller inside a rayon job), waiting for queued work could hold up the pool: each
-    /// batch is decoded in the call that needs it.
+    /// Parallel reading keeps spans decoding on rayon's pool (a batch's worth, at least two per
+    /// thread; see [`Current::submit`]) while this thread hands out the oldest one (and reads
+    /// the next one's bytes), so the pool does not wait for the reader; spans still come out in
+    /// order. On a thread of the pool itself (a caller inside a rayon job), waiting for queued
+    /// work could hold up the pool: each batch is decoded in the call that needs it.
     fn decode_batch(&mut self) -> Result<bool> {
         let pipelined = self.options.parallel && rayon::current_thread_index().is_none();
         loop {
@@ -568,7 +579,7 @@ impl LidarReader {
                 };
                 let batch = self.options.batch_points as u64;
                 let parts = if pipelined {
-                    cur.submit(batch.div_ceil(IN_FLIGHT as u64), &job);
+                    cur.submit(batch, &job);
                     match cur.in_flight.pop_front() {
                         Some(f) => {
                             let (parts, bytes) = f.rx.recv().unwrap_or_else(|_| {
@@ -577,8 +588,9 @@ impl LidarReader {
                                     vec![],
                                 )
                             });
+                            cur.flying -= f.points;
                             cur.decoder.give_back(bytes);
-                            cur.submit(batch.div_ceil(IN_FLIGHT as u64), &job);
+                            cur.submit(batch, &job);
                             Some(parts?)
                         }
                         None => None,
@@ -650,6 +662,7 @@ impl LidarReader {
                 first_index: s.first_index,
                 check: Arc::new(PointCheck::of(info)),
                 in_flight: VecDeque::new(),
+                flying: 0,
             });
             return Ok(true);
         }
