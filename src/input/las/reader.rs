@@ -810,8 +810,8 @@ mod tests {
         let [ahead, in_call, serial] = three_ways(&fixture());
         assert!(ahead.1.is_none(), "{:?}", ahead.1);
         assert!(ahead.0.len() > 50_000);
-        assert_eq!(ahead, in_call);
-        assert_eq!(ahead, serial);
+        assert!(ahead == in_call, "decoding ahead and in the call differ");
+        assert!(ahead == serial, "decoding ahead and one thread differ");
     }
 
     #[test]
@@ -823,8 +823,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("damaged.laz");
         let mut bytes = std::fs::read(&src).unwrap();
-        // Chunks 3 and 6 damaged (in batches decoding side by side): the error is chunk 3's,
-        // whichever batch fails first.
+        // Chunks 3 and 6 damaged (decoding side by side): the error is chunk 3's, whichever
+        // fails first.
         let c = chunks[3];
         bytes[c.offset as usize..(c.offset + c.bytes) as usize].fill(0);
         let d = chunks[6];
@@ -834,13 +834,13 @@ mod tests {
         let message = ahead.1.clone().unwrap();
         let at = format!("chunk at byte {}", c.offset);
         assert!(message.contains(&at), "{message}");
-        // Read one span at a time, every point before chunk 3 comes out; in batches of two
-        // spans, those of the batches before its batch.
+        // Span by span (decoding ahead, or one thread), every point before chunk 3 comes out;
+        // in batches of two spans, those of the batches before its batch.
         let before: u64 = chunks[..3].iter().map(|c| c.points).sum();
-        assert_eq!(serial.0.len() as u64, before);
-        assert_eq!(serial.1, ahead.1);
-        assert!(serial.0.starts_with(&ahead.0) && !ahead.0.is_empty());
-        assert_eq!(ahead, in_call);
+        assert_eq!(ahead.0.len() as u64, before);
+        assert!(ahead == serial, "decoding ahead and one thread differ");
+        assert_eq!(in_call.1, ahead.1);
+        assert!(ahead.0.starts_with(&in_call.0) && !in_call.0.is_empty());
     }
 
     #[test]
