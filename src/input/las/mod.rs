@@ -39,6 +39,7 @@
 //! files give an [`crate::Error::Format`] naming the file, never a panic. Files that declare a
 //! CRS must declare the same one.
 
+mod ahead;
 pub mod copc;
 mod decode;
 pub mod filter;

@@ -1,15 +1,15 @@
 //! The chunked reader over one or more LAS/LAZ/COPC files (and the files of `.vpc` lists).
 
 use super::LidarPoint;
+use super::ahead::{Current, PointCheck, SpanJob};
 use super::decode::{Fields, FileDecoder, spans};
-use super::filter::{BBox, CompiledFilter, Filter, FilterStats, Verdict};
-use super::header::{Bounds3, Chunk, FileInfo, format_error, inspect};
+use super::filter::{BBox, CompiledFilter, Filter, FilterStats};
+use super::header::{Bounds3, FileInfo, format_error, inspect};
 use super::vpc;
-use super::world::{HEADER_SLACK, Quantization};
+use super::world::Quantization;
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use std::collections::VecDeque;
-use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -80,226 +80,6 @@ struct Source {
     /// Header facts, unless the file was skipped without being opened (a `.vpc` entry outside
     /// the box).
     info: Option<FileInfo>,
-}
-
-/// The file being read: its decoder and the spans left to decode.
-struct Current {
-    decoder: FileDecoder,
-    spans: Vec<Chunk>,
-    /// The first span not yet decoded (or, parallel, not yet sent to decode).
-    next: usize,
-    first_index: u64,
-    check: Arc<PointCheck>,
-    /// Spans decoding on rayon's pool, oldest first, and their points.
-    in_flight: VecDeque<InFlight>,
-    flying: u64,
-}
-
-/// The most spans decoding at once while the reader hands out the one before.
-const MAX_IN_FLIGHT: usize = 64;
-
-/// What a span decodes to: the points the filter keeps, and the tally of its verdicts.
-type SpanPoints = Result<(Vec<LidarPoint>, FilterStats)>;
-
-/// A span's result (or the error that stopped it) and its byte buffer.
-type Decoded = (Result<Vec<SpanPoints>>, Vec<Vec<u8>>);
-
-/// A span sent to decode on rayon's pool.
-struct InFlight {
-    rx: crossbeam_channel::Receiver<Decoded>,
-    points: u64,
-}
-
-/// What turns one span's raw records into points: checked, decoded, filtered.
-#[derive(Clone)]
-struct SpanJob {
-    filter: Arc<CompiledFilter>,
-    check: Arc<PointCheck>,
-    spare: Arc<Mutex<Vec<Vec<LidarPoint>>>>,
-    quant: Quantization,
-    len: usize,
-    ext: bool,
-    base: u64,
-}
-
-impl SpanJob {
-    fn run(&self, span: &Chunk, raw: &[u8]) -> SpanPoints {
-        let mut kept = self
-            .spare
-            .lock()
-            .ok()
-            .and_then(|mut v| v.pop())
-            .unwrap_or_default();
-        kept.clear();
-        kept.reserve(span.points as usize);
-        let mut stats = FilterStats::default();
-        for (i, rec) in raw.chunks_exact(self.len).enumerate() {
-            self.check
-                .test(rec, self.ext, span, span.first + i as u64)?;
-            let p = decode(
-                rec,
-                self.ext,
-                self.base + span.first + i as u64,
-                &self.quant,
-            );
-            let v = self.filter.test(&p);
-            stats.count(v);
-            if v == Verdict::Keep {
-                kept.push(p);
-            }
-        }
-        Ok((kept, stats))
-    }
-}
-
-impl Current {
-    /// The end of the batch that starts at `next`: at least `batch` points and one span per
-    /// thread when parallel, at most about four batches (or 2^20 points) whatever the number
-    /// of cores.
-    fn batch_end(&self, batch: u64, parallel: bool) -> usize {
-        let threads = if parallel {
-            rayon::current_num_threads()
-        } else {
-            1
-        };
-        let cap = (4 * batch).max(1 << 20);
-        let (mut end, mut points) = (self.next, 0u64);
-        while end < self.spans.len() {
-            points += self.spans[end].points;
-            end += 1;
-            if (points >= batch && end - self.next >= threads) || points >= cap {
-                break;
-            }
-        }
-        end
-    }
-
-    /// Reads the bytes of spans and sends each to decode on rayon's pool, a job of its own,
-    /// until at least `batch` points and two spans per thread are under way. A span whose bytes
-    /// cannot be read is queued as its error, to be met in span order. (A job decoding several
-    /// spans with a parallel iterator would wait for a stolen span while its thread runs another
-    /// job, and hold up the reader, which waits for the oldest.)
-    fn submit(&mut self, batch: u64, job: &SpanJob) {
-        let spans_wanted = 2 * rayon::current_num_threads();
-        while self.next < self.spans.len()
-            && (self.in_flight.len() < spans_wanted || self.flying < batch)
-            && self.in_flight.len() < MAX_IN_FLIGHT
-        {
-            let span = self.spans[self.next];
-            self.next += 1;
-            self.flying += span.points;
-            let (tx, rx) = crossbeam_channel::bounded::<Decoded>(1);
-            self.in_flight.push_back(InFlight {
-                rx,
-                points: span.points,
-            });
-            let mut bytes = match self.decoder.read(&[span]) {
-                Ok(b) => b,
-                Err(e) => {
-                    let _ = tx.send((Err(e), Vec::new()));
-                    continue;
-                }
-            };
-            let (decoder, job) = (self.decoder.spans(), job.clone());
-            rayon::spawn(move || {
-                let run = || {
-                    decoder.decode(&[span], &mut bytes, false, Fields::Filter, |s, raw| {
-                        job.run(s, raw)
-                    })
-                };
-                let parts = catch_unwind(AssertUnwindSafe(run))
-                    .unwrap_or_else(|p| Err(Error::panicked("decoding", &*p)));
-                // The reader may have stopped waiting (an earlier error): nothing to do then.
-                let _ = tx.send((parts, bytes));
-            });
-        }
-    }
-}
-
-/// What a decoded record can be checked for: inside the header's bounds (one scale step of
-/// slack, in the file's own integers) and a return number no larger than the number of returns
-/// (when that is known, > 0). A record that fails is corrupt data that happened to decode.
-struct PointCheck {
-    path: PathBuf,
-    compressed: bool,
-    /// `None` when the header has no usable bounds (all zero, or min above max).
-    bounds: Option<[[i64; 2]; 3]>,
-    header: Bounds3,
-    scale: [f64; 3],
-    offset: [f64; 3],
-}
-
-impl PointCheck {
-    fn of(info: &FileInfo) -> PointCheck {
-        let b = &info.bounds;
-        let usable = b.usable() && info.scale.iter().all(|s| *s > 0.0);
-        let bounds = usable.then(|| {
-            std::array::from_fn(|k| {
-                let (s, o) = (info.scale[k], info.offset[k]);
-                // Saturating: damaged headers hold any doubles.
-                [
-                    (((b.min[k] - o) / s).floor() as i64).saturating_sub(HEADER_SLACK),
-                    (((b.max[k] - o) / s).ceil() as i64).saturating_add(HEADER_SLACK),
-                ]
-            })
-        });
-        PointCheck {
-            path: info.path.clone(),
-            compressed: info.compressed,
-            bounds,
-            header: info.bounds,
-            scale: info.scale,
-            offset: info.offset,
-        }
-    }
-
-    /// Checks record `rec` (point `n` of the file, in `span`).
-    #[inline]
-    fn test(&self, rec: &[u8], extended: bool, span: &Chunk, n: u64) -> Result<()> {
-        let le = |o: usize| i32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
-        let xyz = [le(0), le(4), le(8)];
-        let in_box = self.bounds.is_none_or(|b| {
-            (0..3).all(|k| i64::from(xyz[k]) >= b[k][0] && i64::from(xyz[k]) <= b[k][1])
-        });
-        let (r, nr) = if extended {
-            (rec[14] & 0x0f, rec[14] >> 4)
-        } else {
-            (rec[14] & 0x07, (rec[14] >> 3) & 0x07)
-        };
-        if in_box && (nr == 0 || r <= nr) {
-            return Ok(());
-        }
-        Err(self.corrupt(xyz, r, nr, span, n, !in_box))
-    }
-
-    #[cold]
-    fn corrupt(&self, xyz: [i32; 3], r: u8, nr: u8, span: &Chunk, n: u64, out: bool) -> Error {
-        let at = if self.compressed {
-            format!("the LAZ chunk at byte {}, point {n}", span.offset)
-        } else {
-            format!("point {n}")
-        };
-        let what = if out {
-            let w = |k: usize| self.offset[k] + self.scale[k] * f64::from(xyz[k]);
-            let h = &self.header;
-            format!(
-                "its position ({}, {}, {}) is outside the header's bounds x {} .. {}, y {} .. {}, \
-                 z {} .. {} (the data is damaged, or the header's bounds are wrong)",
-                w(0),
-                w(1),
-                w(2),
-                h.min[0],
-                h.max[0],
-                h.min[1],
-                h.max[1],
-                h.min[2],
-                h.max[2]
-            )
-        } else {
-            format!("return number {r} of {nr} returns")
-        };
-        format_error(&self.path, format!("corrupt point data ({at}): {what}"))
-    }
 }
 
 impl LidarReader {
@@ -697,30 +477,6 @@ fn common_crs(declared: &[(PathBuf, Crs)]) -> Result<Option<Crs>> {
     Ok(Some(first.clone()))
 }
 
-/// Decodes the fields a [`LidarPoint`] carries from one point record (formats 0–10; the record
-/// is at least 20 bytes, 30 for formats 6–10).
-#[inline]
-pub(crate) fn decode(rec: &[u8], extended: bool, index: u64, q: &Quantization) -> LidarPoint {
-    let le = |o: usize| i32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
-    let (b14, b15) = (rec[14], rec[15]);
-    let (classification, return_number, number_of_returns, flags) = if extended {
-        (rec[16], b14 & 0x0f, b14 >> 4, b15 & 0x0f)
-    } else {
-        (b15 & 0x1f, b14 & 0x07, (b14 >> 3) & 0x07, (b15 >> 5) & 0x07)
-    };
-    let [x, y, z] = q.to_world([le(0), le(4), le(8)]);
-    LidarPoint {
-        index,
-        x,
-        y,
-        z,
-        classification,
-        return_number,
-        number_of_returns,
-        flags,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -729,33 +485,6 @@ mod tests {
     fn reader_is_send() {
         fn assert_send<T: Send>() {}
         assert_send::<LidarReader>();
-    }
-
-    #[test]
-    fn decode_legacy_and_extended() {
-        let q = Quantization::new([0.01; 3], [0.0; 3]);
-        let mut rec = [0u8; 30];
-        rec[0..4].copy_from_slice(&(-5i32).to_le_bytes());
-        rec[4..8].copy_from_slice(&7i32.to_le_bytes());
-        rec[8..12].copy_from_slice(&123456i32.to_le_bytes());
-        rec[14] = 2 | (3 << 3); // legacy: return 2 of 3
-        rec[15] = 9 | 0x80; // class 9, withheld
-        let p = decode(&rec, false, 42, &q);
-        assert_eq!((p.index, p.x, p.y, p.z), (42, -0.05, 0.07, 1234.56));
-        assert_eq!(
-            (p.classification, p.return_number, p.number_of_returns),
-            (9, 2, 3)
-        );
-        assert_eq!(p.flags, LidarPoint::WITHHELD);
-        rec[14] = 5 | (7 << 4); // extended: return 5 of 7
-        rec[15] = 0x04 | 0x08 | 0x30; // withheld + overlap, scanner channel bits
-        rec[16] = 66;
-        let p = decode(&rec, true, 0, &q);
-        assert_eq!(
-            (p.classification, p.return_number, p.number_of_returns),
-            (66, 5, 7)
-        );
-        assert_eq!(p.flags, LidarPoint::WITHHELD | LidarPoint::OVERLAP);
     }
 
     fn fixture() -> PathBuf {

@@ -2,10 +2,10 @@
 //! number and number of returns, flags, coordinate, intensity and GPS-time ranges, and the area
 //! the points cover, computed on every core at the decoder's speed.
 
+use super::ahead::decode;
 use super::decode::{Fields, FileDecoder, spans};
 use super::filter::{CompiledFilter, Filter, FilterStats, Verdict};
 use super::header::FileInfo;
-use super::reader::decode;
 use crate::error::Result;
 use serde::Serialize;
 use std::path::Path;
