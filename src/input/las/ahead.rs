@@ -92,7 +92,7 @@ impl Current {
         } else {
             1
         };
-        let cap = (4 * batch).max(1 << 20);
+        let cap = batch_cap(batch);
         let (mut end, mut points) = (self.next, 0u64);
         while end < self.spans.len() {
             points += self.spans[end].points;
@@ -105,17 +105,21 @@ impl Current {
     }
 
     /// Reads the bytes of spans and sends each to decode on rayon's pool, a job of its own,
-    /// until at least `batch` points and two spans per thread are under way. A span whose bytes
-    /// cannot be read is queued as its error, to be met in span order. (A job decoding several
-    /// spans with a parallel iterator would wait for a stolen span while its thread runs another
-    /// job, and hold up the reader, which waits for the oldest.)
+    /// until at least `batch` points and two spans per thread are under way, but no more than
+    /// a batch may hold ([`Current::batch_end`]'s cap: memory does not grow with the cores). A
+    /// span whose bytes cannot be read is queued as its error, to be met in span order. (A job
+    /// decoding several spans with a parallel iterator would wait for a stolen span while its
+    /// thread runs another job, and hold up the reader, which waits for the oldest.)
     pub(super) fn submit(&mut self, batch: u64, job: &SpanJob) {
         let spans_wanted = 2 * rayon::current_num_threads();
-        while self.next < self.spans.len()
-            && (self.in_flight.len() < spans_wanted || self.flying < batch)
-            && self.in_flight.len() < MAX_IN_FLIGHT
-        {
+        let cap = batch_cap(batch);
+        while self.next < self.spans.len() && self.in_flight.len() < MAX_IN_FLIGHT {
             let span = self.spans[self.next];
+            let wanted = self.in_flight.len() < spans_wanted || self.flying < batch;
+            let room = self.in_flight.is_empty() || self.flying + span.points <= cap;
+            if !(wanted && room) {
+                break;
+            }
             self.next += 1;
             self.flying += span.points;
             let (tx, rx) = crossbeam_channel::bounded::<Decoded>(1);
@@ -144,6 +148,11 @@ impl Current {
             });
         }
     }
+}
+
+/// The most points of a batch, or decoding at once: four batches, or 2^20 points.
+fn batch_cap(batch: u64) -> u64 {
+    (4 * batch).max(1 << 20)
 }
 
 /// What a decoded record can be checked for: inside the header's bounds (one scale step of
