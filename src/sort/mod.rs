@@ -1,9 +1,8 @@
 //! Putting points in sweep order: in memory ([`memory`]: validation, exact local origin, bucket
 //! sort, duplicate policy) or out of core ([`external`]: chunks sorted with rayon, spilled, merged
-//! through sliding memory maps ([`mmap`]) by a tournament tree ([`loser`]), duplicates merged; chunks ordered by a key alone take a
-//! radix sort, [`radix`]). Every file this crate writes goes out in pieces of at most
-//! `WRITE_PIECE` bytes (`write_pieces`), the spills first.
-
+//! by a tournament tree ([`loser`]) through sliding memory maps ([`mmap`]), duplicates merged;
+//! chunks ordered by a key alone take a radix sort, [`radix`]). Every file this crate writes goes
+//! out in pieces of at most `WRITE_PIECE` bytes (`write_pieces`), the spills first.
 pub mod external;
 pub(crate) mod loser;
 pub mod memory;
