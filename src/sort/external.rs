@@ -538,7 +538,7 @@ impl<R: SortKey> Iterator for Merge<R> {
                 dir,
             } => {
                 let w = tree.winner();
-                let out = heads[w]?;
+                let out = (*heads.get(w)?)?;
                 let run = &mut runs[w];
                 run.pos += 1;
                 match run.map.get(run.pos) {
@@ -716,6 +716,14 @@ mod tests {
         want.sort_by_key(|r| r.key);
         assert_eq!(got, want);
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn a_merge_of_no_runs_is_empty() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut m = Merge::<SortRecord>::of_runs(Vec::new(), SortStats::default(), dir.path())
+            .unwrap();
+        assert!(m.next().is_none());
     }
 
     #[test]

@@ -40,6 +40,33 @@ pub(super) struct InFlight {
     pub(super) points: u64,
 }
 
+impl InFlight {
+    /// Waits for the span's result. On a thread of rayon's pool the wait runs other jobs of the
+    /// pool (the span's among them) rather than block the thread.
+    pub(super) fn wait(&self) -> Decoded {
+        let lost = || -> Decoded {
+            (
+                Err(Error::Internal("a decoding job was lost".into())),
+                vec![],
+            )
+        };
+        if rayon::current_thread_index().is_none() {
+            return self.rx.recv().unwrap_or_else(|_| lost());
+        }
+        loop {
+            match self.rx.try_recv() {
+                Ok(d) => return d,
+                Err(crossbeam_channel::TryRecvError::Disconnected) => return lost(),
+                Err(crossbeam_channel::TryRecvError::Empty) => {
+                    if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                        std::thread::yield_now();
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// What turns one span's raw records into points: checked, decoded, filtered.
 #[derive(Clone)]
 pub(super) struct SpanJob {

@@ -358,20 +358,22 @@ impl LidarReader {
                     base: cur.first_index,
                 };
                 let batch = self.options.batch_points as u64;
-                let parts = if pipelined {
-                    cur.submit(batch, &job);
+                // Spans already in flight come out first, whatever thread this call is on (a
+                // reader may move into a rayon job after reading on another thread).
+                let parts = if pipelined || !cur.in_flight.is_empty() {
+                    if pipelined {
+                        cur.submit(batch, &job);
+                    }
                     match cur.in_flight.pop_front() {
                         Some(f) => {
-                            let (parts, bytes) = f.rx.recv().unwrap_or_else(|_| {
-                                (
-                                    Err(Error::Internal("a decoding job was lost".into())),
-                                    vec![],
-                                )
-                            });
+                            let (parts, bytes) = f.wait();
                             cur.flying -= f.points;
                             cur.decoder.give_back(bytes);
-                            cur.submit(batch, &job);
-                            Some(parts?)
+                            let parts = parts?;
+                            if pipelined {
+                                cur.submit(batch, &job);
+                            }
+                            Some(parts)
                         }
                         None => None,
                     }
@@ -541,6 +543,31 @@ mod tests {
         assert!(ahead.0.len() > 50_000);
         assert!(ahead == in_call, "decoding ahead and in the call differ");
         assert!(ahead == serial, "decoding ahead and one thread differ");
+    }
+
+    /// A reader that decoded ahead on one thread and then moves into a rayon job hands out the
+    /// spans in flight first: no point is lost.
+    #[test]
+    fn a_reader_moved_into_a_rayon_job_loses_nothing() {
+        let path = fixture();
+        let whole = read_all(&path, false).0;
+        let options = ReadOptions {
+            parallel: true,
+            batch_points: 1,
+            area: None,
+            copc_index: false,
+        };
+        let mut r = LidarReader::open_with(&[&path], &Filter::default(), options).unwrap();
+        let mut pts = Vec::new();
+        std::thread::scope(|s| s.spawn(|| r.read_chunk(&mut pts, 10).unwrap()).join()).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        pool.install(|| while r.read_chunk(&mut pts, 1000).unwrap() > 0 {});
+        let got: Vec<u64> = pts.iter().map(|p| p.index).collect();
+        let want: Vec<u64> = whole.iter().map(|p| p.0).collect();
+        assert!(got == want, "{} points of {}", got.len(), want.len());
     }
 
     #[test]
