@@ -20,8 +20,9 @@ pub struct ReadOptions {
     /// The points and their order are the same either way.
     pub parallel: bool,
     /// Point records decoded per batch (at least one LAZ chunk, and one chunk per thread when
-    /// parallel, up to `4 × batch_points` or 2^20 points). Memory held by the reader is about
-    /// 80 bytes per point of a batch.
+    /// parallel, up to `4 × batch_points` or 2^20 points). Parallel reading keeps decoding ahead
+    /// at least this many points and two chunks per thread, within the same cap. Memory held by
+    /// the reader is about 80 bytes per point of a batch (or decoding ahead).
     pub batch_points: usize,
     /// Keep only the points inside this area too (edges included), on top of the filter's box:
     /// "the points of these files inside this rectangle". Files whose header extent misses it
