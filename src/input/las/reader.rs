@@ -367,9 +367,9 @@ impl LidarReader {
                     }
                     match cur.in_flight.pop_front() {
                         Some(f) => {
-                            let (parts, bytes) = f.wait();
+                            let (parts, bufs) = f.wait();
                             cur.flying -= f.points;
-                            cur.decoder.give_back(bytes);
+                            cur.decoder.give_back(bufs);
                             let parts = parts?;
                             if pipelined {
                                 cur.submit(batch, &job);
