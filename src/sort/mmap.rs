@@ -227,7 +227,7 @@ const MAX_ARENAS: libc::c_int = 4;
 /// glibc keeps to four arenas (two under an address-space limit, `ulimit -v` or SGE's `h_vmem`,
 /// which counts each arena's 64 MiB reservation). By default it makes up to eight per core as
 /// threads contend, and each keeps what its threads freed: ARSO's ground DEM at `--mem 128M`
-/// and `--threads 32` peaked at 292–306 MB of RSS (four arenas: 204–211 MB, the same time; at
+/// and `--threads 32` peaked at 292–306 MB of RSS (four arenas: 204–218 MB, the same time; at
 /// `--threads 2` no change, 68–71 MB).
 ///
 /// Call it once, first thing (the `sweeptin` command does; the Python module leaves its host's

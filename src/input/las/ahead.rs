@@ -2,7 +2,7 @@
 //! and hands it out), and what turns a span's raw records into points (checked, decoded, filtered).
 
 use super::LidarPoint;
-use super::decode::{Fields, FileDecoder, SpanBuf};
+use super::decode::{Fields, FileDecoder};
 use super::filter::{CompiledFilter, FilterStats, Verdict};
 use super::header::{Bounds3, Chunk, FileInfo, format_error};
 use super::world::{HEADER_SLACK, Quantization};
@@ -31,8 +31,8 @@ const MAX_IN_FLIGHT: usize = 64;
 /// What a span decodes to: the points the filter keeps, and the tally of its verdicts.
 pub(super) type SpanPoints = Result<(Vec<LidarPoint>, FilterStats)>;
 
-/// A span's result (or the error that stopped it) and its buffers.
-pub(super) type Decoded = (Result<Vec<SpanPoints>>, Vec<SpanBuf>);
+/// A span's result (or the error that stopped it) and its byte buffer.
+pub(super) type Decoded = (Result<Vec<SpanPoints>>, Vec<Vec<u8>>);
 
 /// A span sent to decode on rayon's pool.
 pub(super) struct InFlight {
@@ -154,7 +154,7 @@ impl Current {
                 rx,
                 points: span.points,
             });
-            let mut bufs = match self.decoder.read(&[span]) {
+            let mut bytes = match self.decoder.read(&[span]) {
                 Ok(b) => b,
                 Err(e) => {
                     let _ = tx.send((Err(e), Vec::new()));
@@ -164,14 +164,14 @@ impl Current {
             let (decoder, job) = (self.decoder.spans(), job.clone());
             rayon::spawn(move || {
                 let run = || {
-                    decoder.decode(&[span], &mut bufs, false, Fields::Filter, |s, raw| {
+                    decoder.decode(&[span], &mut bytes, false, Fields::Filter, |s, raw| {
                         job.run(s, raw)
                     })
                 };
                 let parts = catch_unwind(AssertUnwindSafe(run))
                     .unwrap_or_else(|p| Err(Error::panicked("decoding", &*p)));
                 // The reader may have stopped waiting (an earlier error): nothing to do then.
-                let _ = tx.send((parts, bufs));
+                let _ = tx.send((parts, bytes));
             });
         }
     }

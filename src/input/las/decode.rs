@@ -23,21 +23,17 @@ pub(crate) struct FileDecoder {
     pub(crate) record_len: usize,
     pub(crate) extended: bool,
     pub(crate) quant: Quantization,
-    /// Span buffers given back, reused by the next reads: fresh ones fault in fresh pages,
-    /// batch after batch.
-    spare: Vec<SpanBuf>,
+    /// Span buffers given back, reused by the next reads (each with [`LAYOUT_HEAD`] bytes before
+    /// the span's bytes): fresh ones fault in fresh pages, batch after batch.
+    spare: Vec<Vec<u8>>,
 }
 
 /// Bytes before a LAZ chunk in the layout a decompressor expects: the chunk table's offset.
 const LAYOUT_HEAD: usize = 8;
 
-/// A span's buffers: its bytes as read (after [`LAYOUT_HEAD`] bytes) and, for a LAZ chunk, its
-/// decompressed records. They go with the span, not with a decoding thread, so the memory they
-/// hold follows the spans being decoded, not the number of threads.
-#[derive(Debug, Default)]
-pub(crate) struct SpanBuf {
-    bytes: Vec<u8>,
-    raw: Vec<u8>,
+thread_local! {
+    /// Each decoding thread's buffer of raw records, reused from span to span.
+    static RAW: std::cell::RefCell<Vec<u8>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// Which fields a job needs (LAZ 1.4 layered chunks skip the others).
@@ -102,9 +98,11 @@ impl FileDecoder {
         fields: Fields,
         job: impl Fn(&Chunk, &[u8]) -> T + Sync,
     ) -> Result<Vec<T>> {
-        let mut bufs = self.read(spans)?;
-        let result = self.spans().decode(spans, &mut bufs, parallel, fields, job);
-        self.give_back(bufs);
+        let mut bytes = self.read(spans)?;
+        let result = self
+            .spans()
+            .decode(spans, &mut bytes, parallel, fields, job);
+        self.give_back(bytes);
         result
     }
 
@@ -118,11 +116,11 @@ impl FileDecoder {
     }
 
     /// Reads the bytes of `spans`, each in a buffer of its own (see [`SpanDecoder::decode`]).
-    pub(crate) fn read(&mut self, spans: &[Chunk]) -> Result<Vec<SpanBuf>> {
-        let mut bufs: Vec<SpanBuf> = (0..spans.len())
+    pub(crate) fn read(&mut self, spans: &[Chunk]) -> Result<Vec<Vec<u8>>> {
+        let mut bytes: Vec<Vec<u8>> = (0..spans.len())
             .map(|_| self.spare.pop().unwrap_or_default())
             .collect();
-        for (s, SpanBuf { bytes: b, .. }) in spans.iter().zip(&mut bufs) {
+        for (s, b) in spans.iter().zip(&mut bytes) {
             b.clear();
             b.resize(LAYOUT_HEAD + s.bytes as usize, 0);
             self.file
@@ -136,12 +134,12 @@ impl FileDecoder {
                     }
                 })?;
         }
-        Ok(bufs)
+        Ok(bytes)
     }
 
     /// Takes back buffers [`FileDecoder::read`] handed out, for the next call.
-    pub(crate) fn give_back(&mut self, bufs: Vec<SpanBuf>) {
-        self.spare.extend(bufs);
+    pub(crate) fn give_back(&mut self, bytes: Vec<Vec<u8>>) {
+        self.spare.extend(bytes);
     }
 }
 
@@ -155,23 +153,22 @@ pub(crate) struct SpanDecoder {
 }
 
 impl SpanDecoder {
-    /// Decompresses `spans` from `bufs` (as [`FileDecoder::read`] filled them), runs `job` on
+    /// Decompresses `spans` from `bytes` (as [`FileDecoder::read`] filled them), runs `job` on
     /// each span's raw records (`span.points` records of `record_len` bytes) and returns the
     /// results in span order. The first error in span order wins, whichever thread met it.
     pub(crate) fn decode<T: Send>(
         &self,
         spans: &[Chunk],
-        bufs: &mut [SpanBuf],
+        bytes: &mut [Vec<u8>],
         parallel: bool,
         fields: Fields,
         job: impl Fn(&Chunk, &[u8]) -> T + Sync,
     ) -> Result<Vec<T>> {
         let (path, vlr, len) = (self.path.as_path(), self.vlr.as_ref(), self.record_len);
-        let one = |(s, buf): (&Chunk, &mut SpanBuf)| -> Result<T> {
-            let SpanBuf { bytes: b, raw } = buf;
+        let one = |(s, b): (&Chunk, &mut Vec<u8>)| -> Result<T> {
             match vlr {
                 None => Ok(job(s, &b[LAYOUT_HEAD..])),
-                Some(vlr) => {
+                Some(vlr) => RAW.with_borrow_mut(|raw| {
                     raw.clear();
                     raw.resize(s.points as usize * len, 0);
                     let entry = laz::laszip::ChunkTableEntry {
@@ -190,10 +187,10 @@ impl SpanDecoder {
                         )
                     })?;
                     Ok(job(s, raw))
-                }
+                }),
             }
         };
-        let parts = &mut bufs[..spans.len()];
+        let parts = &mut bytes[..spans.len()];
         guarded(path, || {
             let all: Vec<Result<T>> = if parallel {
                 spans.par_iter().zip(parts).map(one).collect()

@@ -367,9 +367,9 @@ impl LidarReader {
                     }
                     match cur.in_flight.pop_front() {
                         Some(f) => {
-                            let (parts, bufs) = f.wait();
+                            let (parts, bytes) = f.wait();
                             cur.flying -= f.points;
-                            cur.decoder.give_back(bufs);
+                            cur.decoder.give_back(bytes);
                             let parts = parts?;
                             if pipelined {
                                 cur.submit(batch, &job);
