@@ -110,30 +110,20 @@ impl SpanJob {
 }
 
 impl Current {
-    /// The end of the batch that starts at `next`: at least `batch` points and one span per
-    /// thread when parallel, at most about four batches (or 2^20 points) whatever the number
-    /// of cores.
-    pub(super) fn batch_end(&self, batch: u64, parallel: bool) -> usize {
-        let threads = if parallel {
-            rayon::current_num_threads()
-        } else {
-            1
-        };
-        let cap = batch_cap(batch);
+    /// The end of the batch that starts at `next`, read in the call: the fewest spans that hold
+    /// `batch` points (or the rest).
+    pub(super) fn batch_end(&self, batch: u64) -> usize {
         let (mut end, mut points) = (self.next, 0u64);
-        while end < self.spans.len() {
+        while end < self.spans.len() && points < batch {
             points += self.spans[end].points;
             end += 1;
-            if (points >= batch && end - self.next >= threads) || points >= cap {
-                break;
-            }
         }
         end
     }
 
     /// Reads the bytes of spans and sends each to decode on rayon's pool, a job of its own,
     /// until at least `batch` points and two spans per thread are under way, but no more than
-    /// a batch may hold ([`Current::batch_end`]'s cap: memory does not grow with the cores). A
+    /// a batch may hold ([`batch_cap`]: memory does not grow with the cores). A
     /// span whose bytes cannot be read is queued as its error, to be met in span order. (A job
     /// decoding several spans with a parallel iterator would wait for a stolen span while its
     /// thread runs another job, and hold up the reader, which waits for the oldest.)
@@ -177,7 +167,7 @@ impl Current {
     }
 }
 
-/// The most points of a batch, or decoding at once: four batches, or 2^20 points.
+/// The most points decoding ahead at once: four batches, or 2^20 points.
 fn batch_cap(batch: u64) -> u64 {
     (4 * batch).max(1 << 20)
 }

@@ -343,10 +343,9 @@ impl LidarReader {
     /// Parallel reading keeps spans decoding on rayon's pool (a batch's worth, at least two per
     /// thread; see [`Current::submit`]) while this thread hands out the oldest one (and reads
     /// the next one's bytes), so the pool does not wait for the reader; spans still come out in
-    /// order. On a thread of the pool itself (a caller inside a rayon job), waiting for queued
-    /// work could hold up the pool: each batch is decoded in the call that needs it.
+    /// order. On a thread of the pool itself the wait runs the pool's jobs
+    /// ([`super::ahead::InFlight::wait`]). Serial reading decodes a batch in the call.
     fn decode_batch(&mut self) -> Result<bool> {
-        let pipelined = self.options.parallel && rayon::current_thread_index().is_none();
         loop {
             if let Some(cur) = &mut self.current {
                 let job = SpanJob {
@@ -359,33 +358,26 @@ impl LidarReader {
                     base: cur.first_index,
                 };
                 let batch = self.options.batch_points as u64;
-                // Spans already in flight come out first, whatever thread this call is on (a
-                // reader may move into a rayon job after reading on another thread).
-                let parts = if pipelined || !cur.in_flight.is_empty() {
-                    if pipelined {
-                        cur.submit(batch, &job);
-                    }
+                let parts = if self.options.parallel {
+                    cur.submit(batch, &job);
                     match cur.in_flight.pop_front() {
                         Some(f) => {
                             let (parts, bytes) = f.wait();
                             cur.flying -= f.points;
                             cur.decoder.give_back(bytes);
                             let parts = parts?;
-                            if pipelined {
-                                cur.submit(batch, &job);
-                            }
+                            cur.submit(batch, &job);
                             Some(parts)
                         }
                         None => None,
                     }
                 } else if cur.next < cur.spans.len() {
-                    let end = cur.batch_end(batch, self.options.parallel);
+                    let end = cur.batch_end(batch);
                     let spans = &cur.spans[cur.next..end];
                     cur.next = end;
-                    let parallel = self.options.parallel;
                     Some(
                         cur.decoder
-                            .decode(spans, parallel, Fields::Filter, |s, raw| job.run(s, raw))?,
+                            .decode(spans, false, Fields::Filter, |s, raw| job.run(s, raw))?,
                     )
                 } else {
                     None
@@ -522,8 +514,9 @@ mod tests {
         (pts.iter().map(key).collect(), error)
     }
 
-    /// Reads `path` three ways: batches decoding ahead on rayon's pool (this thread is not one
-    /// of its workers), each batch in the call that needs it (a worker of a pool), one thread.
+    /// Reads `path` three ways: decoding ahead on rayon's pool from a thread that is not one of
+    /// its workers, decoding ahead from a worker of a pool (its waits run the pool's jobs), and
+    /// on one thread.
     fn three_ways(path: &Path) -> [Read; 3] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
@@ -539,10 +532,10 @@ mod tests {
 
     #[test]
     fn decoding_ahead_gives_the_same_points() {
-        let [ahead, in_call, serial] = three_ways(&fixture());
+        let [ahead, on_worker, serial] = three_ways(&fixture());
         assert!(ahead.1.is_none(), "{:?}", ahead.1);
         assert!(ahead.0.len() > 50_000);
-        assert!(ahead == in_call, "decoding ahead and in the call differ");
+        assert!(ahead == on_worker, "decoding ahead from a worker differs");
         assert!(ahead == serial, "decoding ahead and one thread differ");
     }
 
@@ -587,17 +580,17 @@ mod tests {
         let d = chunks[6];
         bytes[d.offset as usize..(d.offset + d.bytes) as usize].fill(0);
         std::fs::write(&path, &bytes).unwrap();
-        let [ahead, in_call, serial] = three_ways(&path);
+        let [ahead, on_worker, serial] = three_ways(&path);
         let message = ahead.1.clone().unwrap();
         let at = format!("chunk at byte {}", c.offset);
         assert!(message.contains(&at), "{message}");
-        // Span by span (decoding ahead, or one thread), every point before chunk 3 comes out;
-        // in batches of two spans, those of the batches before its batch.
+        // Span by span (decoding ahead, from any thread, or one thread), every point before
+        // chunk 3 comes out.
         let before: u64 = chunks[..3].iter().map(|c| c.points).sum();
         assert_eq!(ahead.0.len() as u64, before);
         assert!(ahead == serial, "decoding ahead and one thread differ");
-        assert_eq!(in_call.1, ahead.1);
-        assert!(ahead.0.starts_with(&in_call.0) && !in_call.0.is_empty());
+        assert_eq!(on_worker.1, ahead.1);
+        assert!(ahead.0.starts_with(&on_worker.0) && !on_worker.0.is_empty());
     }
 
     #[test]
