@@ -537,8 +537,9 @@ fn lattice(cell: f64, kx0: i64, kx1: i64, ky0: i64, ky1: i64) -> Result<(i64, i6
 mod tests {
     use super::*;
 
-    /// `may_hold_centre` and `keys_hold_centre` against every centre, for both alignments, UTM-sized coordinates,
-    /// cells that are not powers of two, and boxes ending exactly on centres.
+    /// `may_hold_centre` and `keys_hold_centre` against every centre, for both alignments,
+    /// UTM-sized coordinates, cells that are not powers of two, and boxes ending exactly on
+    /// centres.
     #[test]
     fn may_hold_centre_is_exact() {
         let mut rng = crate::geom::rng::SplitMix64::new(7);
