@@ -106,7 +106,9 @@ pub(crate) fn read_into(
         s.push(r)
     };
     if config.source() == Source::Lidar {
-        let mut reader = LidarReader::open(&input.paths, &input.filter)?;
+        // A quarter of the budget decoding ahead (the sort's chunk has half).
+        let options = crate::input::las::ReadOptions::within(config.options().mem / 4);
+        let mut reader = LidarReader::open_with(&input.paths, &input.filter, options)?;
         if axis == SweepAxis::Auto && free_axis {
             let b = reader.bounds();
             let (w, h) = (b.max[0] - b.min[0], b.max[1] - b.min[1]);

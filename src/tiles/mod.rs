@@ -28,7 +28,7 @@ pub(crate) mod region;
 pub(crate) mod worker;
 
 use crate::error::{Error, Result};
-use crate::input::las::{LidarPoint, LidarReader};
+use crate::input::las::{LidarPoint, LidarReader, ReadOptions};
 use crate::sink::{MeshSink, Needs, StreamInfo, TriangleSink};
 use crate::sort::external::ExternalSorter;
 use grid::{TileGrid, pow2, side_for};
@@ -327,7 +327,11 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
             && infos.iter().all(|i| i.copc.is_some())
             && let Some(bbox) = crate::input::las::BBox::new(area[0], area[1], area[2], area[3])
         {
-            let reader = LidarReader::open_area(job.paths, job.filter, bbox)?;
+            let options = ReadOptions {
+                area: Some(bbox),
+                ..read_options(job.mem)
+            };
+            let reader = LidarReader::open_with(job.paths, job.filter, options)?;
             let outside = infos
                 .iter()
                 .flat_map(|i| outside_of(i.rect(), area))
@@ -335,7 +339,14 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
             return Ok((reader, outside));
         }
     }
-    Ok((LidarReader::open(job.paths, job.filter)?, Vec::new()))
+    let reader = LidarReader::open_with(job.paths, job.filter, read_options(job.mem))?;
+    Ok((reader, Vec::new()))
+}
+
+/// The reader's options within the budget `mem`: a quarter of it decoding ahead (the index's
+/// sort has half), so that many threads do not decode more chunks at once than `--mem` holds.
+fn read_options(mem: u64) -> ReadOptions {
+    ReadOptions::within(mem / 4)
 }
 
 /// The parts of the closed rectangle `e` outside the closed rectangle `a`, as at most four closed

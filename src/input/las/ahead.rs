@@ -123,13 +123,12 @@ impl Current {
 
     /// Reads the bytes of spans and sends each to decode on rayon's pool, a job of its own,
     /// until at least `batch` points and two spans per thread are under way, but no more than
-    /// a batch may hold ([`batch_cap`]: memory does not grow with the cores). A
+    /// `cap` points (the reader's memory: it does not grow with the cores), or one span. A
     /// span whose bytes cannot be read is queued as its error, to be met in span order. (A job
     /// decoding several spans with a parallel iterator would wait for a stolen span while its
     /// thread runs another job, and hold up the reader, which waits for the oldest.)
-    pub(super) fn submit(&mut self, batch: u64, job: &SpanJob) {
+    pub(super) fn submit(&mut self, batch: u64, cap: u64, job: &SpanJob) {
         let spans_wanted = 2 * rayon::current_num_threads();
-        let cap = batch_cap(batch);
         while self.next < self.spans.len() && self.in_flight.len() < MAX_IN_FLIGHT {
             let span = self.spans[self.next];
             let wanted = self.in_flight.len() < spans_wanted || self.flying < batch;
@@ -165,11 +164,6 @@ impl Current {
             });
         }
     }
-}
-
-/// The most points decoding ahead at once: four batches, or 2^20 points.
-fn batch_cap(batch: u64) -> u64 {
-    (4 * batch).max(1 << 20)
 }
 
 /// What a decoded record can be checked for: inside the header's bounds (one scale step of

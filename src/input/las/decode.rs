@@ -14,6 +14,7 @@ use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// One file open for decoding.
 pub(crate) struct FileDecoder {
@@ -26,15 +27,16 @@ pub(crate) struct FileDecoder {
     /// Span buffers given back, reused by the next reads (each with [`LAYOUT_HEAD`] bytes before
     /// the span's bytes): fresh ones fault in fresh pages, batch after batch.
     spare: Vec<Vec<u8>>,
+    raw: RawPool,
 }
 
 /// Bytes before a LAZ chunk in the layout a decompressor expects: the chunk table's offset.
 const LAYOUT_HEAD: usize = 8;
 
-thread_local! {
-    /// Each decoding thread's buffer of raw records, reused from span to span.
-    static RAW: std::cell::RefCell<Vec<u8>> = const { std::cell::RefCell::new(Vec::new()) };
-}
+/// Buffers of decompressed records, shared by a file's decoding jobs and reused from span to
+/// span: there are as many as spans ever decompressed at once (not one per thread of the pool,
+/// which would hold 1.4 MB on each of 32 threads for the life of the process).
+type RawPool = Arc<Mutex<Vec<Vec<u8>>>>;
 
 /// Which fields a job needs (LAZ 1.4 layered chunks skip the others).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,6 +88,7 @@ impl FileDecoder {
             extended: info.point_format >= 6,
             quant: info.quantization(),
             spare: Vec::new(),
+            raw: RawPool::default(),
         })
     }
 
@@ -112,6 +115,7 @@ impl FileDecoder {
             path: self.path.clone(),
             vlr: self.vlr.clone(),
             record_len: self.record_len,
+            raw: self.raw.clone(),
         }
     }
 
@@ -150,6 +154,7 @@ pub(crate) struct SpanDecoder {
     path: PathBuf,
     vlr: Option<laz::LazVlr>,
     record_len: usize,
+    raw: RawPool,
 }
 
 impl SpanDecoder {
@@ -168,26 +173,42 @@ impl SpanDecoder {
         let one = |(s, b): (&Chunk, &mut Vec<u8>)| -> Result<T> {
             match vlr {
                 None => Ok(job(s, &b[LAYOUT_HEAD..])),
-                Some(vlr) => RAW.with_borrow_mut(|raw| {
-                    raw.clear();
-                    raw.resize(s.points as usize * len, 0);
+                Some(vlr) => {
+                    let mut raw = self
+                        .raw
+                        .lock()
+                        .ok()
+                        .and_then(|mut p| p.pop())
+                        .unwrap_or_default();
+                    // The decompressor writes every byte it is given (or fails): only growth is
+                    // zeroed.
+                    let need = s.points as usize * len;
+                    if raw.len() < need {
+                        raw.resize(need, 0);
+                    }
                     let entry = laz::laszip::ChunkTableEntry {
                         point_count: s.points,
                         byte_count: s.bytes,
                     };
-                    decode_chunk(b, raw, vlr, entry, fields.selection()).map_err(|what| {
-                        format_error(
-                            path,
-                            format!(
-                                "corrupt LAZ data in the chunk at byte {} (points {} to {}): {what}",
-                                s.offset,
-                                s.first,
-                                s.first + s.points.max(1) - 1
-                            ),
-                        )
-                    })?;
-                    Ok(job(s, raw))
-                }),
+                    let out = decode_chunk(b, &mut raw[..need], vlr, entry, fields.selection())
+                        .map_err(|what| {
+                            format_error(
+                                path,
+                                format!(
+                                    "corrupt LAZ data in the chunk at byte {} (points {} to {}): \
+                                     {what}",
+                                    s.offset,
+                                    s.first,
+                                    s.first + s.points.max(1) - 1
+                                ),
+                            )
+                        })
+                        .map(|()| job(s, &raw[..need]));
+                    if let Ok(mut p) = self.raw.lock() {
+                        p.push(raw);
+                    }
+                    out
+                }
             }
         };
         let parts = &mut bytes[..spans.len()];

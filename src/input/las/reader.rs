@@ -19,11 +19,13 @@ pub struct ReadOptions {
     /// Decode LAZ chunks (and filter their points) on several threads (rayon's global pool).
     /// The points and their order are the same either way.
     pub parallel: bool,
-    /// Point records decoded per batch (at least one LAZ chunk, and one chunk per thread when
-    /// parallel, up to `4 × batch_points` or 2^20 points). Parallel reading keeps decoding ahead
-    /// at least this many points and two chunks per thread, within the same cap. Memory held by
-    /// the reader is about 80 bytes per point of a batch (or decoding ahead).
+    /// Point records decoded per batch (at least one LAZ chunk). Parallel reading keeps decoding
+    /// ahead at least this many points and two chunks per thread, within `ahead_bytes`.
     pub batch_points: usize,
+    /// Memory the points decoding ahead may hold (about [`READ_BYTES_PER_POINT`] a point; at
+    /// least one chunk is always decoding): the reader's share of a memory budget. More threads
+    /// decode side by side only while their chunks fit.
+    pub ahead_bytes: u64,
     /// Keep only the points inside this area too (edges included), on top of the filter's box:
     /// "the points of these files inside this rectangle". Files whose header extent misses it
     /// are not decoded, nor COPC nodes that miss it.
@@ -33,11 +35,26 @@ pub struct ReadOptions {
     pub copc_index: bool,
 }
 
+/// What the reader holds per point decoding ahead, at most: the compressed bytes, the
+/// decompressed record and the decoded [`LidarPoint`].
+pub const READ_BYTES_PER_POINT: u64 = 80;
+
+impl ReadOptions {
+    /// The default options, decoding ahead within `bytes` (see [`ReadOptions::ahead_bytes`]).
+    pub fn within(bytes: u64) -> ReadOptions {
+        ReadOptions {
+            ahead_bytes: bytes,
+            ..ReadOptions::default()
+        }
+    }
+}
+
 impl Default for ReadOptions {
     fn default() -> Self {
         ReadOptions {
             parallel: true,
             batch_points: 200_000,
+            ahead_bytes: (1 << 20) * READ_BYTES_PER_POINT,
             area: None,
             copc_index: true,
         }
@@ -358,15 +375,16 @@ impl LidarReader {
                     base: cur.first_index,
                 };
                 let batch = self.options.batch_points as u64;
+                let cap = self.options.ahead_bytes / READ_BYTES_PER_POINT;
                 let parts = if self.options.parallel {
-                    cur.submit(batch, &job);
+                    cur.submit(batch, cap, &job);
                     match cur.in_flight.pop_front() {
                         Some(f) => {
                             let (parts, bytes) = f.wait();
                             cur.flying -= f.points;
                             cur.decoder.give_back(bytes);
                             let parts = parts?;
-                            cur.submit(batch, &job);
+                            cur.submit(batch, cap, &job);
                             Some(parts)
                         }
                         None => None,
@@ -384,8 +402,13 @@ impl LidarReader {
                 };
                 if let Some(parts) = parts {
                     for part in parts {
-                        let (kept, stats) = part?;
-                        self.ready.extend_from_slice(&kept);
+                        let (mut kept, stats) = part?;
+                        // `ready` is empty here: the first span's points take its place.
+                        if self.ready.is_empty() {
+                            std::mem::swap(&mut self.ready, &mut kept);
+                        } else {
+                            self.ready.extend_from_slice(&kept);
+                        }
                         self.stats += stats;
                         if let Ok(mut v) = self.spare.lock() {
                             v.push(kept);
@@ -495,8 +518,8 @@ mod tests {
         let options = ReadOptions {
             parallel,
             batch_points: 1,
-            area: None,
             copc_index: false,
+            ..ReadOptions::default()
         };
         let mut r = LidarReader::open_with(&[path], &Filter::default(), options).unwrap();
         let mut pts = Vec::new();
@@ -546,10 +569,9 @@ mod tests {
         let path = fixture();
         let whole = read_all(&path, false).0;
         let options = ReadOptions {
-            parallel: true,
             batch_points: 1,
-            area: None,
             copc_index: false,
+            ..ReadOptions::default()
         };
         let mut r = LidarReader::open_with(&[&path], &Filter::default(), options).unwrap();
         let mut pts = Vec::new();
@@ -562,6 +584,50 @@ mod tests {
         let got: Vec<u64> = pts.iter().map(|p| p.index).collect();
         let want: Vec<u64> = whole.iter().map(|p| p.0).collect();
         assert!(got == want, "{} points of {}", got.len(), want.len());
+    }
+
+    /// Eight threads decode no more points at once than the memory given to the reader holds
+    /// (at least one chunk), and the points are the same.
+    #[test]
+    fn decoding_ahead_stays_within_its_memory() {
+        let path = fixture();
+        let whole = read_all(&path, false).0;
+        let info = inspect(&path).unwrap();
+        let chunk = info.layout.chunks.iter().map(|c| c.points).max().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(8)
+            .build()
+            .unwrap();
+        for (bytes, most) in [(2 * chunk * READ_BYTES_PER_POINT, 2 * chunk), (0, chunk)] {
+            let options = ReadOptions {
+                copc_index: false,
+                ..ReadOptions::within(bytes)
+            };
+            let mut r = LidarReader::open_with(&[&path], &Filter::default(), options).unwrap();
+            let mut pts = Vec::new();
+            let mut peak = 0;
+            pool.install(|| {
+                while r.read_chunk(&mut pts, 1000).unwrap() > 0 {
+                    let (flying, spans) = r
+                        .current
+                        .as_ref()
+                        .map_or((0, 0), |c| (c.flying, c.in_flight.len()));
+                    assert!(
+                        spans <= 1 || flying <= most,
+                        "{flying} points decoding ahead"
+                    );
+                    peak = peak.max(spans);
+                }
+            });
+            // More than one chunk at a time within two chunks' points; one within nothing.
+            assert!(
+                (peak > 1) == (bytes > 0),
+                "{peak} chunks at once within {bytes} bytes"
+            );
+            let got: Vec<u64> = pts.iter().map(|p| p.index).collect();
+            let want: Vec<u64> = whole.iter().map(|p| p.0).collect();
+            assert!(got == want, "{} points of {}", got.len(), want.len());
+        }
     }
 
     #[test]
