@@ -52,8 +52,6 @@ const BLOCK_COLUMNS: usize = 64;
 const TALL_BANDS: usize = 16;
 /// Most surface triangles waiting (about 5 MB).
 const MAX_TALL: usize = 1 << 16;
-/// Bytes of a loaded reference triangle: the triangle and its column-cell entry.
-const LOADED_BYTES: usize = 72 + 4;
 
 /// The layout of the pieces: `count` bands of height `h` from `y0`, each cut into columns of
 /// width `w` from `x[0]`, `BLOCK_COLUMNS` columns to a block.
@@ -332,16 +330,21 @@ impl Loaded {
         })
     }
 
+    /// What the piece holds on the heap: its vectors' capacities, not their lengths.
     fn bytes(&self) -> usize {
-        self.tris.len() * LOADED_BYTES + self.cells.len() * std::mem::size_of::<Vec<u32>>()
+        let lists: usize = self.cells.iter().map(Vec::capacity).sum();
+        self.tris.capacity() * std::mem::size_of::<Tri>()
+            + lists * std::mem::size_of::<u32>()
+            + self.cells.capacity() * std::mem::size_of::<Vec<u32>>()
     }
 }
 
 impl BandReader {
     fn load(&mut self, p: Piece) -> Result<Loaded> {
-        let mut tris = Vec::new();
-        let mut bytes = Vec::new();
         let slot = self.bands.slot(p);
+        let count: u64 = self.index[slot].iter().map(|&(_, n)| u64::from(n)).sum();
+        let mut tris = Vec::with_capacity(count as usize);
+        let mut bytes = Vec::new();
         for &(offset, count) in &self.index[slot] {
             bytes.resize(count as usize * RECORD, 0);
             self.file
@@ -357,10 +360,20 @@ impl BandReader {
         let bands = &self.bands;
         let first = p.1 * BLOCK_COLUMNS;
         let last = (first + BLOCK_COLUMNS).min(bands.columns) - 1;
-        let mut cells = vec![Vec::new(); last + 1 - first];
-        for (i, t) in tris.iter().enumerate() {
+        // Each column's list counted first, then filled: no slack in what the budget counts.
+        let columns = |t: &Tri| {
             let bb = t.bbox();
-            for c in bands.column(bb[0]).max(first)..=bands.column(bb[2]).min(last) {
+            bands.column(bb[0]).max(first)..=bands.column(bb[2]).min(last)
+        };
+        let mut counts = vec![0usize; last + 1 - first];
+        for t in &tris {
+            for c in columns(t) {
+                counts[c - first] += 1;
+            }
+        }
+        let mut cells: Vec<Vec<u32>> = counts.into_iter().map(Vec::with_capacity).collect();
+        for (i, t) in tris.iter().enumerate() {
+            for c in columns(t) {
                 cells[c - first].push(i as u32);
             }
         }

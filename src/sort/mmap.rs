@@ -208,6 +208,25 @@ pub const KEEP_FREE_BYTES: usize = 8 << 20;
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 const MAX_ARENAS: libc::c_int = 4;
 
+/// Set by [`tune_allocator`]: the program owns the allocator's settings.
+static TUNED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Gives the pages of freed memory inside glibc's heaps back to the system (`malloc_trim`), once
+/// [`tune_allocator`] has run (a host such as Python keeps its allocator to itself). The heaps
+/// keep what freed vectors leave between live ones: holes that the top-of-heap trim never
+/// reaches. Called between rows of tiles, where a row's runs have ended; the pages fault in again
+/// when used, at most once a row.
+pub(crate) fn release_free_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    if TUNED.load(std::sync::atomic::Ordering::Relaxed) {
+        // SAFETY: malloc_trim only returns free pages of the heaps to the system; glibc takes
+        // each heap's lock while it does.
+        unsafe {
+            libc::malloc_trim(0);
+        }
+    }
+}
+
 /// Makes glibc serve every allocation of 4 MiB (`OWN_MAP_BYTES`) or more from a memory map of its own,
 /// unmapped when freed, so memory freed by one tile or run goes back to the system at once; and
 /// lets each heap keep up to 8 MiB (`KEEP_FREE_BYTES`) of freed memory at its top.
@@ -234,6 +253,7 @@ const MAX_ARENAS: libc::c_int = 4;
 /// allocator alone); the environment's `MALLOC_MMAP_THRESHOLD_`, `MALLOC_TRIM_THRESHOLD_` and
 /// `MALLOC_ARENA_MAX`, when set, win. Does nothing on other C libraries.
 pub fn tune_allocator() {
+    TUNED.store(true, std::sync::atomic::Ordering::Relaxed);
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     for (name, param, bytes) in [
         ("MALLOC_MMAP_THRESHOLD_", libc::M_MMAP_THRESHOLD, OWN_MAP_BYTES),

@@ -471,21 +471,16 @@ fn block_points(total: u64) -> f64 {
     BLOCK_POINTS.max(total as f64 / MAX_BLOCKS)
 }
 
-/// Bytes a tile's output holds per point it owns while it waits to be written (its vertices,
-/// degrees and triangles: about 24 + 4 + 2 × 12 bytes, and the vertices along its edges).
-const OUTPUT_BYTES_PER_POINT: f64 = 64.0;
-
 /// The memory of tiles in flight: a run takes [`Budget::run`] bytes when it starts, gives back
-/// all but [`Budget::output`] when it ends, and the rest when the writer has written it. Tiles
-/// are written in order, so a slow tile holds the outputs after it, not the runs: the workers go
-/// on while there is room for a run.
+/// all but what its output holds ([`TileOutput::heap_bytes`]) when it ends, and the rest when the
+/// writer has written it. Tiles are written in order, so a slow tile (or a slow writer: an
+/// overlay's) holds the outputs after it, not the runs: the workers go on while there is room
+/// for a run.
 struct Budget {
     free: std::sync::Mutex<(u64, bool)>,
     freed: std::sync::Condvar,
     /// Bytes a tile's run holds at its peak (an estimate from the density).
     run: u64,
-    /// Bytes a tile's output holds until it is written.
-    output: u64,
     /// Runs the budget holds at once (at most the workers): the summary's `window`.
     runs: usize,
 }
@@ -498,13 +493,11 @@ impl Budget {
         let blocks = f64::from(1u32 << index.grid.shift.min(15));
         // A tile's first run: its blocks and a buffer of one block around.
         let run = (per_block * (blocks + 2.0).powi(2) * RUN_BYTES_PER_POINT).max(1.0) as u64;
-        let output = ((per_block * blocks * blocks * OUTPUT_BYTES_PER_POINT) as u64).clamp(1, run);
         let free = mem.saturating_sub(index.memory_bytes()).max(run);
         Budget {
             free: std::sync::Mutex::new((free, false)),
             freed: std::sync::Condvar::new(),
             run,
-            output,
             runs: ((free / run) as usize).clamp(1, threads),
         }
     }
@@ -676,7 +669,7 @@ pub(crate) fn run(
     // Memory for tiles' runs in flight and their outputs waiting to be written.
     let budget = Budget::for_tiles(&index, job.mem.saturating_sub(shares), threads);
     stats.window = budget.runs as u64;
-    let (tx, rx) = crossbeam_channel::unbounded::<(usize, Result<TileOutput>)>();
+    let (tx, rx) = crossbeam_channel::unbounded::<(usize, (Result<TileOutput>, u64))>();
     let task = task.as_ref();
     let policy = job.duplicates;
     let total = order.len();
@@ -699,8 +692,9 @@ pub(crate) fn run(
                     }))
                     .unwrap_or_else(|p| Err(Error::panicked("tile worker", &*p)));
                     // The run's memory is free; its output waits to be written.
-                    budget.give(budget.run - budget.output);
-                    if tx.send((i, r)).is_err() {
+                    let held = r.as_ref().map_or(0, TileOutput::heap_bytes).min(budget.run);
+                    budget.give(budget.run - held);
+                    if tx.send((i, (r, held))).is_err() {
                         break;
                     }
                 }
@@ -717,11 +711,12 @@ pub(crate) fn run(
                     Error::Internal("a tile worker stopped without a result".into())
                 })?;
                 pending.insert(i, r);
-                while let Some(r) = pending.remove(&done) {
+                while let Some((r, held)) = pending.remove(&done) {
                     let t = r?;
                     if row != Some(t.tile.1) {
                         writer.watermark(g.world(&g.tile_blocks(t.tile.0, t.tile.1))[1])?;
                         row = Some(t.tile.1);
+                        crate::sort::mmap::release_free_memory();
                     }
                     writer.tile(&t)?;
                     read += t.points_read;
@@ -733,7 +728,7 @@ pub(crate) fn run(
                     stats.cpu.add(&t.cpu);
                     done += 1;
                     progress("triangulating", done as u64, total as u64);
-                    budget.give(budget.output);
+                    budget.give(held);
                 }
             }
             Ok(())

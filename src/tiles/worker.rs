@@ -104,6 +104,17 @@ pub(crate) struct TileOutput {
     pub cpu: super::TileCpu,
 }
 
+impl TileOutput {
+    /// What the output holds on the heap until it is written (its vectors' capacities).
+    pub(crate) fn heap_bytes(&self) -> u64 {
+        use std::mem::size_of;
+        let tris = self.triangles.capacity() + self.boundary.capacity();
+        (self.vertices.capacity() * size_of::<[f64; 3]>()
+            + tris * size_of::<[u32; 3]>()
+            + self.degree.capacity() * size_of::<u32>()) as u64
+    }
+}
+
 /// Runs tile `(tx, ty)`, starting with a buffer of `buffer` blocks.
 ///
 /// # Errors
