@@ -1,7 +1,24 @@
 //! The process's limits, as the operating system states them (Linux `getrlimit`; elsewhere the
 //! usual values): the external sort sizes its open runs by the open-file limit, and a run
 //! refuses an address space smaller than `--mem` and what the program maps itself before any
-//! work ([`check_address_space`]).
+//! work ([`check_address_space`]). Also what the process holds (`/proc/self/status`).
+
+fn proc_status_kb(field: &str) -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with(field))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Peak resident set size of this process, from `/proc/self/status` (Linux).
+pub fn peak_rss() -> Option<u64> {
+    proc_status_kb("VmHWM:")
+}
+
+/// Current anonymous resident memory of this process (Linux).
+pub fn anon_rss() -> Option<u64> {
+    proc_status_kb("RssAnon:")
+}
 
 /// The soft limit on open files.
 #[cfg(target_os = "linux")]

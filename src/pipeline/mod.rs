@@ -216,22 +216,7 @@ pub struct RunSummary {
     pub tiles: Option<crate::tiles::TileStats>,
 }
 
-fn proc_status_kb(field: &str) -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with(field))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
-/// Peak resident set size of this process, from `/proc/self/status` (Linux).
-pub fn peak_rss() -> Option<u64> {
-    proc_status_kb("VmHWM:")
-}
-
-/// Current anonymous resident memory of this process (Linux).
-pub fn anon_rss() -> Option<u64> {
-    proc_status_kb("RssAnon:")
-}
+pub use crate::limits::{anon_rss, peak_rss};
 
 /// Running maximum of [`anon_rss`] samples.
 #[derive(Debug, Default)]

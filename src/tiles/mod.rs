@@ -716,7 +716,7 @@ pub(crate) fn run(
                     if row != Some(t.tile.1) {
                         writer.watermark(g.world(&g.tile_blocks(t.tile.0, t.tile.1))[1])?;
                         row = Some(t.tile.1);
-                        crate::sort::mmap::release_free_memory();
+                        crate::sort::mmap::release_free_memory_above(job.mem);
                     }
                     writer.tile(&t)?;
                     read += t.points_read;
