@@ -312,7 +312,10 @@ pub struct BandReader {
 struct Loaded {
     tris: Vec<Tri>,
     /// The triangles meeting each column of the block, from column `first`.
-    cells: Vec<Vec<u32>>,
+    /// Column `first + c` lists `cells[starts[c]..starts[c + 1]]` (one allocation, not one per
+    /// column: pieces come and go by the thousand, and many small vectors fragment the heap).
+    starts: Vec<u32>,
+    cells: Vec<u32>,
     first: usize,
     /// When it was last used (a count of surface triangles).
     used: u64,
@@ -322,9 +325,10 @@ impl Loaded {
     /// The reference triangles filed in this piece's part of columns `c0..=c1`, as (column,
     /// triangle).
     fn in_columns(&self, c0: usize, c1: usize) -> impl Iterator<Item = (usize, &Tri)> {
-        let last = self.first + self.cells.len() - 1;
+        let last = self.first + self.starts.len() - 2;
         (c0.max(self.first)..=c1.min(last)).flat_map(move |c| {
-            self.cells[c - self.first]
+            let k = c - self.first;
+            self.cells[self.starts[k] as usize..self.starts[k + 1] as usize]
                 .iter()
                 .map(move |&i| (c, &self.tris[i as usize]))
         })
@@ -332,10 +336,8 @@ impl Loaded {
 
     /// What the piece holds on the heap: its vectors' capacities, not their lengths.
     fn bytes(&self) -> usize {
-        let lists: usize = self.cells.iter().map(Vec::capacity).sum();
         self.tris.capacity() * std::mem::size_of::<Tri>()
-            + lists * std::mem::size_of::<u32>()
-            + self.cells.capacity() * std::mem::size_of::<Vec<u32>>()
+            + (self.starts.capacity() + self.cells.capacity()) * std::mem::size_of::<u32>()
     }
 }
 
@@ -360,25 +362,32 @@ impl BandReader {
         let bands = &self.bands;
         let first = p.1 * BLOCK_COLUMNS;
         let last = (first + BLOCK_COLUMNS).min(bands.columns) - 1;
-        // Each column's list counted first, then filled: no slack in what the budget counts.
+        // Each column's list counted first, then filled in place.
         let columns = |t: &Tri| {
             let bb = t.bbox();
             bands.column(bb[0]).max(first)..=bands.column(bb[2]).min(last)
         };
-        let mut counts = vec![0usize; last + 1 - first];
+        let mut starts = vec![0u32; last + 2 - first];
         for t in &tris {
             for c in columns(t) {
-                counts[c - first] += 1;
+                starts[c - first + 1] += 1;
             }
         }
-        let mut cells: Vec<Vec<u32>> = counts.into_iter().map(Vec::with_capacity).collect();
+        for k in 1..starts.len() {
+            starts[k] += starts[k - 1];
+        }
+        let mut next = starts.clone();
+        let mut cells = vec![0u32; starts[starts.len() - 1] as usize];
         for (i, t) in tris.iter().enumerate() {
             for c in columns(t) {
-                cells[c - first].push(i as u32);
+                let at = &mut next[c - first];
+                cells[*at as usize] = i as u32;
+                *at += 1;
             }
         }
         Ok(Loaded {
             tris,
+            starts,
             cells,
             first,
             used: 0,
