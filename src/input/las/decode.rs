@@ -93,7 +93,9 @@ impl FileDecoder {
     }
 
     /// Reads and decompresses `spans`, runs `job` on each span's raw records (`span.points`
-    /// records of `record_len` bytes) and returns the results in span order.
+    /// records of `record_len` bytes) and returns the results in span order. The first error in
+    /// span order wins: a span whose bytes cannot be read stops the reading, and the spans before
+    /// it are decoded first (one of them may be corrupt).
     pub(crate) fn decode<T: Send>(
         &mut self,
         spans: &[Chunk],
@@ -101,12 +103,24 @@ impl FileDecoder {
         fields: Fields,
         job: impl Fn(&Chunk, &[u8]) -> T + Sync,
     ) -> Result<Vec<T>> {
-        let mut bytes = self.read(spans)?;
-        let result = self
-            .spans()
-            .decode(spans, &mut bytes, parallel, fields, job);
+        let mut bytes = Vec::with_capacity(spans.len());
+        let mut unread = None;
+        for s in spans {
+            match self.read(std::slice::from_ref(s)) {
+                Ok(b) => bytes.extend(b),
+                Err(e) => {
+                    unread = Some(e);
+                    break;
+                }
+            }
+        }
+        let read = &spans[..bytes.len()];
+        let result = self.spans().decode(read, &mut bytes, parallel, fields, job);
         self.give_back(bytes);
-        result
+        match (result, unread) {
+            (Ok(_), Some(e)) => Err(e),
+            (result, _) => result,
+        }
     }
 
     /// What decodes this file's spans once their bytes are read, on any thread.
@@ -340,4 +354,43 @@ pub(crate) fn guarded<T>(path: &Path, f: impl FnOnce() -> Result<T>) -> Result<T
             format!("the point data is damaged: the decoder failed ({what})"),
         ))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::input::las::header::inspect;
+
+    /// Decoding a batch of spans at once, a corrupt span wins over a later span whose bytes
+    /// cannot be read (here, one beyond the end of the file).
+    #[test]
+    fn a_corrupt_span_wins_over_a_later_unreadable_one() {
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/lidR_Topography.copc.laz");
+        let info = inspect(&src).unwrap();
+        let chunks = &info.layout.chunks;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("damaged.laz");
+        let mut bytes = std::fs::read(&src).unwrap();
+        let c = chunks[1];
+        bytes[c.offset as usize..(c.offset + c.bytes) as usize].fill(0);
+        std::fs::write(&path, &bytes).unwrap();
+        let info = inspect(&path).unwrap();
+        let beyond = Chunk {
+            offset: bytes.len() as u64 + 10,
+            ..chunks[2]
+        };
+        for parallel in [false, true] {
+            let mut d = FileDecoder::open(&info).unwrap();
+            let spans = [chunks[0], c, beyond];
+            let e = d.decode(&spans, parallel, Fields::Filter, |_, _| ());
+            let message = e.unwrap_err().to_string();
+            assert!(
+                message.contains(&format!("chunk at byte {}", c.offset)),
+                "{message}"
+            );
+            // Without the corrupt span, the unreadable one is the error.
+            let e = d.decode(&[chunks[0], beyond], parallel, Fields::Filter, |_, _| ());
+            assert!(e.unwrap_err().to_string().contains("truncated"));
+        }
+    }
 }
