@@ -106,8 +106,7 @@ pub(crate) fn read_into(
         s.push(r)
     };
     if config.source() == Source::Lidar {
-        // A quarter of the budget decoding ahead (the sort's chunk has half).
-        let options = crate::input::las::ReadOptions::within(config.options().mem / 4);
+        let options = crate::input::las::ReadOptions::for_budget(config.options().mem);
         let mut reader = LidarReader::open_with(&input.paths, &input.filter, options)?;
         if axis == SweepAxis::Auto && free_axis {
             let b = reader.bounds();

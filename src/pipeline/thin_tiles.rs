@@ -141,7 +141,8 @@ pub fn thin_tiled(
 
     // 2. Every point to its tile.
     let start = Instant::now();
-    let mut reader = LidarReader::open(&input.paths, &input.filter)?;
+    let read = crate::input::las::ReadOptions::for_budget(mem);
+    let mut reader = LidarReader::open_with(&input.paths, &input.filter, read)?;
     let mut sorter = ExternalSorter::<TileRecord>::new(mem / 4, config.tmp_dir());
     let mut chunk = Vec::new();
     let mut index = 0u64;

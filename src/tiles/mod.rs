@@ -329,7 +329,7 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
         {
             let options = ReadOptions {
                 area: Some(bbox),
-                ..read_options(job.mem)
+                ..ReadOptions::for_budget(job.mem)
             };
             let reader = LidarReader::open_with(job.paths, job.filter, options)?;
             let outside = infos
@@ -339,14 +339,8 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
             return Ok((reader, outside));
         }
     }
-    let reader = LidarReader::open_with(job.paths, job.filter, read_options(job.mem))?;
+    let reader = LidarReader::open_with(job.paths, job.filter, ReadOptions::for_budget(job.mem))?;
     Ok((reader, Vec::new()))
-}
-
-/// The reader's options within the budget `mem`: a quarter of it decoding ahead (the index's
-/// sort has half), so that many threads do not decode more chunks at once than `--mem` holds.
-fn read_options(mem: u64) -> ReadOptions {
-    ReadOptions::within(mem / 4)
 }
 
 /// The parts of the closed rectangle `e` outside the closed rectangle `a`, as at most four closed
@@ -472,8 +466,8 @@ fn block_points(total: u64) -> f64 {
 }
 
 /// The memory of tiles in flight: a run takes [`Budget::run`] bytes when it starts, gives back
-/// all but what its output holds ([`TileOutput::heap_bytes`]) when it ends, and the rest when the
-/// writer has written it. Tiles are written in order, so a slow tile (or a slow writer: an
+/// all but what its output holds ([`TileOutput::heap_bytes`], counted as a run's at most) when it
+/// ends, and the rest when the writer has written it. Tiles are written in order, so a slow tile (or a slow writer: an
 /// overlay's) holds the outputs after it, not the runs: the workers go on while there is room
 /// for a run.
 struct Budget {

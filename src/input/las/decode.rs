@@ -93,9 +93,10 @@ impl FileDecoder {
     }
 
     /// Reads and decompresses `spans`, runs `job` on each span's raw records (`span.points`
-    /// records of `record_len` bytes) and returns the results in span order. The first error in
-    /// span order wins: a span whose bytes cannot be read stops the reading, and the spans before
-    /// it are decoded first (one of them may be corrupt).
+    /// records of `record_len` bytes) and returns the results in span order. Of the errors of
+    /// reading and decompressing, the first in span order wins: a span whose bytes cannot be
+    /// read stops the reading, and the spans before it are decoded first (one of them may be
+    /// corrupt). Errors `job` returns inside its results are the caller's to order.
     pub(crate) fn decode<T: Send>(
         &mut self,
         spans: &[Chunk],
@@ -360,6 +361,34 @@ pub(crate) fn guarded<T>(path: &Path, f: impl FnOnce() -> Result<T>) -> Result<T
 mod tests {
     use super::*;
     use crate::input::las::header::inspect;
+
+    /// Buffers of decompressed records are reused without zeroing: every byte of a record is
+    /// written, even in the layers a layered (COPC, format 6) chunk was not asked to decode.
+    #[test]
+    fn reused_record_buffers_hold_nothing_stale() {
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/lidR_Topography.copc.laz");
+        let info = inspect(&src).unwrap();
+        assert!(info.point_format >= 6);
+        let chunks = &info.layout.chunks;
+        for fields in [Fields::Filter, Fields::Stats] {
+            let records = |d: &mut FileDecoder| {
+                d.decode(chunks, false, fields, |_, raw| raw.to_vec())
+                    .unwrap()
+            };
+            let clean = records(&mut FileDecoder::open(&info).unwrap());
+            let mut dirty = FileDecoder::open(&info).unwrap();
+            let most = chunks.iter().map(|c| c.points).max().unwrap() as usize;
+            dirty
+                .raw
+                .lock()
+                .unwrap()
+                .push(vec![0xAA; most * info.record_length as usize]);
+            assert!(
+                records(&mut dirty) == clean,
+                "stale bytes in decoded records"
+            );
+        }
+    }
 
     /// Decoding a batch of spans at once, a corrupt span wins over a later span whose bytes
     /// cannot be read (here, one beyond the end of the file).

@@ -54,7 +54,7 @@ pub use crate::crs::{Crs, HorizontalKind};
 pub use copc::CopcInfo;
 pub use filter::{BBox, Filter, FilterStats, Returns, parse_classes};
 pub use header::{Bounds3, FileInfo};
-pub use reader::{LidarReader, READ_BYTES_PER_POINT, ReadOptions};
+pub use reader::{LidarReader, ReadOptions};
 pub use stats::{PointStats, scan};
 pub use vlrs::VlrInfo;
 pub use world::Quantization;

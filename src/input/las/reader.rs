@@ -22,9 +22,10 @@ pub struct ReadOptions {
     /// Point records decoded per batch (at least one LAZ chunk). Parallel reading keeps decoding
     /// ahead at least this many points and two chunks per thread, within `ahead_bytes`.
     pub batch_points: usize,
-    /// Memory the points decoding ahead may hold (about [`READ_BYTES_PER_POINT`] a point; at
-    /// least one chunk is always decoding): the reader's share of a memory budget. More threads
-    /// decode side by side only while their chunks fit.
+    /// Memory the points decoding ahead may hold (at least one span is always decoding): the
+    /// reader's share of a memory budget. A point is counted as twice its record (compressed
+    /// and decompressed) and the decoded [`LidarPoint`]: 96 bytes for point format 1. More
+    /// threads decode side by side only while their spans fit.
     pub ahead_bytes: u64,
     /// Keep only the points inside this area too (edges included), on top of the filter's box:
     /// "the points of these files inside this rectangle". Files whose header extent misses it
@@ -35,18 +36,21 @@ pub struct ReadOptions {
     pub copc_index: bool,
 }
 
-/// What the reader holds per point decoding ahead, at most: the compressed bytes, the
-/// decompressed record and the decoded [`LidarPoint`].
-pub const READ_BYTES_PER_POINT: u64 = 80;
-
 impl ReadOptions {
-    /// The default options, decoding ahead within `bytes` (see [`ReadOptions::ahead_bytes`]).
-    pub fn within(bytes: u64) -> ReadOptions {
+    /// The default options within a run's memory budget `mem`: a quarter of it decoding ahead
+    /// (the engines' sorts have half).
+    pub fn for_budget(mem: u64) -> ReadOptions {
         ReadOptions {
-            ahead_bytes: bytes,
+            ahead_bytes: mem / 4,
             ..ReadOptions::default()
         }
     }
+}
+
+/// What the reader counts per point decoding ahead for records of `record_len` bytes (see
+/// [`ReadOptions::ahead_bytes`]).
+fn ahead_bytes_per_point(record_len: usize) -> u64 {
+    (2 * record_len + std::mem::size_of::<LidarPoint>()) as u64
 }
 
 impl Default for ReadOptions {
@@ -54,7 +58,7 @@ impl Default for ReadOptions {
         ReadOptions {
             parallel: true,
             batch_points: 200_000,
-            ahead_bytes: (1 << 20) * READ_BYTES_PER_POINT,
+            ahead_bytes: 96 << 20,
             area: None,
             copc_index: true,
         }
@@ -375,7 +379,7 @@ impl LidarReader {
                     base: cur.first_index,
                 };
                 let batch = self.options.batch_points as u64;
-                let cap = self.options.ahead_bytes / READ_BYTES_PER_POINT;
+                let cap = self.options.ahead_bytes / ahead_bytes_per_point(cur.decoder.record_len);
                 let parts = if self.options.parallel {
                     cur.submit(batch, cap, &job);
                     match cur.in_flight.pop_front() {
@@ -598,10 +602,12 @@ mod tests {
             .num_threads(8)
             .build()
             .unwrap();
-        for (bytes, most) in [(2 * chunk * READ_BYTES_PER_POINT, 2 * chunk), (0, chunk)] {
+        let per_point = ahead_bytes_per_point(usize::from(info.record_length));
+        for (bytes, most) in [(2 * chunk * per_point, 2 * chunk), (0, chunk)] {
             let options = ReadOptions {
                 copc_index: false,
-                ..ReadOptions::within(bytes)
+                ahead_bytes: bytes,
+                ..ReadOptions::default()
             };
             let mut r = LidarReader::open_with(&[&path], &Filter::default(), options).unwrap();
             let mut pts = Vec::new();
