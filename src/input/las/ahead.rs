@@ -2,7 +2,7 @@
 //! and hands it out), and what turns a span's raw records into points (checked, decoded, filtered).
 
 use super::LidarPoint;
-use super::decode::{Fields, FileDecoder};
+use super::decode::{Fields, FileDecoder, Spare};
 use super::filter::{CompiledFilter, FilterStats, Verdict};
 use super::header::{Bounds3, Chunk, FileInfo, format_error};
 use super::world::{HEADER_SLACK, Quantization};
@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use std::collections::VecDeque;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// The file being read: its decoder and the spans left to decode.
 pub(super) struct Current {
@@ -72,7 +72,7 @@ impl InFlight {
 pub(super) struct SpanJob {
     pub(super) filter: Arc<CompiledFilter>,
     pub(super) check: Arc<PointCheck>,
-    pub(super) spare: Arc<Mutex<Vec<Vec<LidarPoint>>>>,
+    pub(super) spare: Arc<Spare<LidarPoint>>,
     pub(super) quant: Quantization,
     pub(super) len: usize,
     pub(super) ext: bool,
@@ -81,12 +81,7 @@ pub(super) struct SpanJob {
 
 impl SpanJob {
     pub(super) fn run(&self, span: &Chunk, raw: &[u8]) -> SpanPoints {
-        let mut kept = self
-            .spare
-            .lock()
-            .ok()
-            .and_then(|mut v| v.pop())
-            .unwrap_or_default();
+        let mut kept = self.spare.take();
         kept.clear();
         kept.reserve(span.points as usize);
         let mut stats = FilterStats::default();

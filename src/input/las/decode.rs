@@ -36,7 +36,35 @@ const LAYOUT_HEAD: usize = 8;
 /// Buffers of decompressed records, shared by a file's decoding jobs and reused from span to
 /// span: there are as many as spans ever decompressed at once (not one per thread of the pool,
 /// which would hold 1.4 MB on each of 32 threads for the life of the process).
-type RawPool = Arc<Mutex<Vec<Vec<u8>>>>;
+type RawPool = Arc<Spare<u8>>;
+
+/// Vectors given back for reuse, shared between threads (fresh ones fault in fresh pages).
+#[derive(Debug)]
+pub(crate) struct Spare<T>(Mutex<Vec<Vec<T>>>);
+
+impl<T> Default for Spare<T> {
+    fn default() -> Self {
+        Spare(Mutex::new(Vec::new()))
+    }
+}
+
+impl<T> Spare<T> {
+    /// A vector given back earlier (its contents as they were left), or a new one.
+    pub(crate) fn take(&self) -> Vec<T> {
+        self.0
+            .lock()
+            .ok()
+            .and_then(|mut v| v.pop())
+            .unwrap_or_default()
+    }
+
+    /// Gives `v` back for reuse.
+    pub(crate) fn give(&self, v: Vec<T>) {
+        if let Ok(mut spare) = self.0.lock() {
+            spare.push(v);
+        }
+    }
+}
 
 /// Which fields a job needs (LAZ 1.4 layered chunks skip the others).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -189,12 +217,7 @@ impl SpanDecoder {
             match vlr {
                 None => Ok(job(s, &b[LAYOUT_HEAD..])),
                 Some(vlr) => {
-                    let mut raw = self
-                        .raw
-                        .lock()
-                        .ok()
-                        .and_then(|mut p| p.pop())
-                        .unwrap_or_default();
+                    let mut raw = self.raw.take();
                     // The decompressor writes every byte it is given (or fails): only growth is
                     // zeroed.
                     let need = s.points as usize * len;
@@ -219,9 +242,7 @@ impl SpanDecoder {
                             )
                         })
                         .map(|()| job(s, &raw[..need]));
-                    if let Ok(mut p) = self.raw.lock() {
-                        p.push(raw);
-                    }
+                    self.raw.give(raw);
                     out
                 }
             }
@@ -380,9 +401,7 @@ mod tests {
             let most = chunks.iter().map(|c| c.points).max().unwrap() as usize;
             dirty
                 .raw
-                .lock()
-                .unwrap()
-                .push(vec![0xAA; most * info.record_length as usize]);
+                .give(vec![0xAA; most * info.record_length as usize]);
             assert!(
                 records(&mut dirty) == clean,
                 "stale bytes in decoded records"

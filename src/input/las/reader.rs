@@ -2,7 +2,7 @@
 
 use super::LidarPoint;
 use super::ahead::{Current, PointCheck, SpanJob};
-use super::decode::{Fields, FileDecoder, spans};
+use super::decode::{Fields, FileDecoder, Spare, spans};
 use super::filter::{BBox, CompiledFilter, Filter, FilterStats};
 use super::header::{Bounds3, FileInfo, format_error, inspect};
 use super::vpc;
@@ -11,7 +11,7 @@ use crate::crs::Crs;
 use crate::error::{Error, Result};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// Tuning of a [`LidarReader`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,7 +80,7 @@ pub struct LidarReader {
     ready: Vec<LidarPoint>,
     ready_pos: usize,
     /// Spans' point buffers, reused batch after batch (fresh ones fault in fresh pages).
-    spare: Arc<Mutex<Vec<Vec<LidarPoint>>>>,
+    spare: Arc<Spare<LidarPoint>>,
 }
 
 impl std::fmt::Debug for LidarReader {
@@ -414,9 +414,7 @@ impl LidarReader {
                             self.ready.extend_from_slice(&kept);
                         }
                         self.stats += stats;
-                        if let Ok(mut v) = self.spare.lock() {
-                            v.push(kept);
-                        }
+                        self.spare.give(kept);
                     }
                     return Ok(true);
                 }
