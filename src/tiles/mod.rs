@@ -467,9 +467,9 @@ fn block_points(total: u64) -> f64 {
 
 /// The memory of tiles in flight: a run takes [`Budget::run`] bytes when it starts, gives back
 /// all but what its output holds ([`TileOutput::heap_bytes`], counted as a run's at most) when it
-/// ends, and the rest when the writer has written it. Tiles are written in order, so a slow tile (or a slow writer: an
-/// overlay's) holds the outputs after it, not the runs: the workers go on while there is room
-/// for a run.
+/// ends, and the rest when the writer has written it. Tiles are written in order, so a slow tile
+/// (or a slow writer: an overlay's) holds the outputs after it, not the runs: the workers go on
+/// while there is room for a run.
 struct Budget {
     free: std::sync::Mutex<(u64, bool)>,
     freed: std::sync::Condvar,
