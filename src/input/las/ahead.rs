@@ -29,7 +29,7 @@ pub(super) struct Current {
 const MAX_IN_FLIGHT: usize = 64;
 
 /// What a span decodes to: the points the filter keeps, and the tally of its verdicts.
-pub(super) type SpanPoints = Result<(Vec<LidarPoint>, FilterStats)>;
+pub(super) type SpanPoints = (Vec<LidarPoint>, FilterStats);
 
 /// A span's result (or the error that stopped it) and its byte buffer.
 pub(super) type Decoded = (Result<Vec<SpanPoints>>, Vec<Vec<u8>>);
@@ -80,7 +80,7 @@ pub(super) struct SpanJob {
 }
 
 impl SpanJob {
-    pub(super) fn run(&self, span: &Chunk, raw: &[u8]) -> SpanPoints {
+    pub(super) fn run(&self, span: &Chunk, raw: &[u8]) -> Result<SpanPoints> {
         let mut kept = self.spare.take();
         kept.clear();
         kept.reserve(span.points as usize);

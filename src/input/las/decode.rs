@@ -121,16 +121,15 @@ impl FileDecoder {
     }
 
     /// Reads and decompresses `spans`, runs `job` on each span's raw records (`span.points`
-    /// records of `record_len` bytes) and returns the results in span order. Of the errors of
-    /// reading and decompressing, the first in span order wins: a span whose bytes cannot be
-    /// read stops the reading, and the spans before it are decoded first (one of them may be
-    /// corrupt). Errors `job` returns inside its results are the caller's to order.
+    /// records of `record_len` bytes) and returns the results in span order. The first error in
+    /// span order wins, whether reading, decompressing or the job's: a span whose bytes cannot
+    /// be read stops the reading, and the spans before it are decoded first.
     pub(crate) fn decode<T: Send>(
         &mut self,
         spans: &[Chunk],
         parallel: bool,
         fields: Fields,
-        job: impl Fn(&Chunk, &[u8]) -> T + Sync,
+        job: impl Fn(&Chunk, &[u8]) -> Result<T> + Sync,
     ) -> Result<Vec<T>> {
         let mut bytes = Vec::with_capacity(spans.len());
         let mut unread = None;
@@ -203,19 +202,20 @@ pub(crate) struct SpanDecoder {
 impl SpanDecoder {
     /// Decompresses `spans` from `bytes` (as [`FileDecoder::read`] filled them), runs `job` on
     /// each span's raw records (`span.points` records of `record_len` bytes) and returns the
-    /// results in span order. The first error in span order wins, whichever thread met it.
+    /// results in span order. The first error in span order wins (decompressing or the job's),
+    /// whichever thread met it.
     pub(crate) fn decode<T: Send>(
         &self,
         spans: &[Chunk],
         bytes: &mut [Vec<u8>],
         parallel: bool,
         fields: Fields,
-        job: impl Fn(&Chunk, &[u8]) -> T + Sync,
+        job: impl Fn(&Chunk, &[u8]) -> Result<T> + Sync,
     ) -> Result<Vec<T>> {
         let (path, vlr, len) = (self.path.as_path(), self.vlr.as_ref(), self.record_len);
         let one = |(s, b): (&Chunk, &mut Vec<u8>)| -> Result<T> {
             match vlr {
-                None => Ok(job(s, &b[LAYOUT_HEAD..])),
+                None => job(s, &b[LAYOUT_HEAD..]),
                 Some(vlr) => {
                     let mut raw = self.raw.take();
                     // The decompressor writes every byte it is given (or fails): only growth is
@@ -241,7 +241,7 @@ impl SpanDecoder {
                                 ),
                             )
                         })
-                        .map(|()| job(s, &raw[..need]));
+                        .and_then(|()| job(s, &raw[..need]));
                     self.raw.give(raw);
                     out
                 }
@@ -393,7 +393,7 @@ mod tests {
         let chunks = &info.layout.chunks;
         for fields in [Fields::Filter, Fields::Stats] {
             let records = |d: &mut FileDecoder| {
-                d.decode(chunks, false, fields, |_, raw| raw.to_vec())
+                d.decode(chunks, false, fields, |_, raw| Ok(raw.to_vec()))
                     .unwrap()
             };
             let clean = records(&mut FileDecoder::open(&info).unwrap());
@@ -409,8 +409,8 @@ mod tests {
         }
     }
 
-    /// Decoding a batch of spans at once, a corrupt span wins over a later span whose bytes
-    /// cannot be read (here, one beyond the end of the file).
+    /// Decoding a batch of spans at once, a corrupt span (or one whose records the job refuses)
+    /// wins over a later span whose bytes cannot be read (here, one beyond the end of the file).
     #[test]
     fn a_corrupt_span_wins_over_a_later_unreadable_one() {
         let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/lidR_Topography.copc.laz");
@@ -430,15 +430,28 @@ mod tests {
         for parallel in [false, true] {
             let mut d = FileDecoder::open(&info).unwrap();
             let spans = [chunks[0], c, beyond];
-            let e = d.decode(&spans, parallel, Fields::Filter, |_, _| ());
+            let e = d.decode(&spans, parallel, Fields::Filter, |_, _| Ok(()));
             let message = e.unwrap_err().to_string();
             assert!(
                 message.contains(&format!("chunk at byte {}", c.offset)),
                 "{message}"
             );
             // Without the corrupt span, the unreadable one is the error.
-            let e = d.decode(&[chunks[0], beyond], parallel, Fields::Filter, |_, _| ());
+            let e = d.decode(
+                &[chunks[0], beyond],
+                parallel,
+                Fields::Filter,
+                |_, _| Ok(()),
+            );
             assert!(e.unwrap_err().to_string().contains("truncated"));
+            // A job's error in an earlier span (a point it refuses) wins too.
+            let first = chunks[0].offset;
+            let refuse = |s: &Chunk, _: &[u8]| match s.offset == first {
+                true => Err(format_error(&path, "point refused")),
+                false => Ok(()),
+            };
+            let e = d.decode(&[chunks[0], beyond], parallel, Fields::Filter, refuse);
+            assert!(e.unwrap_err().to_string().contains("point refused"));
         }
     }
 }

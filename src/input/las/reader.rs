@@ -405,8 +405,7 @@ impl LidarReader {
                     None
                 };
                 if let Some(parts) = parts {
-                    for part in parts {
-                        let (mut kept, stats) = part?;
+                    for (mut kept, stats) in parts {
                         // `ready` is empty here: the first span's points take its place.
                         if self.ready.is_empty() {
                             std::mem::swap(&mut self.ready, &mut kept);

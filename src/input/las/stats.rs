@@ -189,7 +189,7 @@ pub fn scan(path: &Path, filter: &Filter, parallel: bool) -> Result<PointStats> 
                     let k = cy * nx + cx;
                     bits[k / 64].fetch_or(1 << (k % 64), Ordering::Relaxed);
                 }
-                s
+                Ok(s)
             })?;
             for p in &parts {
                 total.merge(p);
