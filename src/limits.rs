@@ -98,3 +98,27 @@ pub(crate) fn check_address_space(mem: u64, threads: usize, what: &str) -> crate
         _ => Ok(()),
     }
 }
+
+/// Fails when an address-space limit (`ulimit -v`, a batch job's `h_vmem`) leaves less than
+/// `bytes` beside what the process maps now (`VmSize`): for in-memory steps whose size shows only
+/// as they go (`refine`), before the allocation that would abort the process. `what` names the
+/// memory, `hint` what to do. Without a limit (or `/proc`), `Ok`.
+pub(crate) fn check_room(bytes: u64, what: &str, hint: &str) -> crate::Result<()> {
+    let Some(limit) = address_space() else {
+        return Ok(());
+    };
+    let mapped = proc_status_kb("VmSize:").unwrap_or(0);
+    if mapped.saturating_add(bytes) <= limit {
+        return Ok(());
+    }
+    Err(crate::Error::OutOfMemory {
+        what: what.to_string(),
+        bytes,
+        hint: format!(
+            "the process maps {} of the {} of address space it may use (ulimit -v or a batch \
+             job's limit): {hint}",
+            crate::human_bytes(mapped),
+            crate::human_bytes(limit),
+        ),
+    })
+}

@@ -109,8 +109,7 @@ pub struct MemoryMesh {
 
 impl MeshSink for MemoryMesh {
     fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
-        self.vertices.push(p);
-        Ok(())
+        push(&mut self.vertices, p, "a mesh's vertices in memory")
     }
 
     fn triangle(&mut self, t: [u64; 3]) -> Result<()> {
@@ -124,8 +123,7 @@ impl MeshSink for MemoryMesh {
                     message: format!("triangle vertex {v} not written (or over 32 bits)"),
                 })?;
         }
-        self.triangles.push(out);
-        Ok(())
+        push(&mut self.triangles, out, "a mesh's triangles in memory")
     }
 
     fn finish(&mut self) -> Result<MeshSummary> {
@@ -135,6 +133,24 @@ impl MeshSink for MemoryMesh {
             bytes: 0,
         })
     }
+}
+
+/// Pushes `x`, growing `v` fallibly: a mesh held in memory fails with
+/// [`crate::Error::OutOfMemory`] instead of aborting the process when it outgrows an
+/// address-space limit.
+fn push<T>(v: &mut Vec<T>, x: T, what: &str) -> Result<()> {
+    if v.len() == v.capacity() {
+        let more = v.len().max(1024);
+        v.try_reserve(more).map_err(|_| crate::Error::OutOfMemory {
+            what: what.to_string(),
+            bytes: (more * std::mem::size_of::<T>()) as u64,
+            hint: "the mesh is held in memory: raise the memory limit, or give a smaller \
+                       area (--bbox)"
+                .to_string(),
+        })?;
+    }
+    v.push(x);
+    Ok(())
 }
 
 /// What a finished [`MeshSink`] wrote.

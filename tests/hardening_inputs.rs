@@ -355,6 +355,38 @@ fn an_address_space_limit_sets_the_default_budget_and_refuses_a_larger_one() {
     assert!(t == w, "the tiled and swept DEMs differ");
 }
 
+/// `refine` holds its mesh in memory: under an address-space limit too small for it, each step
+/// checks for room (collecting the input mesh, the TIN, the surface's grid, the growing mesh,
+/// the output) and fails with exit 4, leaving nothing; it was an abort (exit 134, "memory
+/// allocation of N bytes failed"). With room enough, the same job runs.
+#[cfg(unix)]
+#[test]
+fn refine_under_a_memory_limit_is_a_message_not_an_abort() {
+    let d = tempfile::tempdir().unwrap();
+    let arso = data::shared("lidar/arso_TM_511_122_from_ept.laz");
+    let refine = |limit: u32, out: &str| {
+        Command::new("sh")
+            .current_dir(d.path())
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v {limit} && exec '{}' refine '{}' --class 2 --min-angle 25 \
+                 --bbox 511000,122000,511250,122250 -o {out} -q",
+                env!("CARGO_BIN_EXE_sweeptin"),
+                arso.display(),
+            ))
+            .output()
+            .unwrap()
+    };
+    for limit in [330_000, 400_000] {
+        let o = refine(limit, "small.ply");
+        assert_eq!(code(&o), 4, "under {limit} KiB: {}", err(&o));
+        assert!(err(&o).contains("cannot allocate"), "{}", err(&o));
+        assert!(names(d.path()).is_empty(), "{:?}", names(d.path()));
+    }
+    let o = refine(800_000, "fits.ply");
+    assert_eq!(code(&o), 0, "{}", err(&o));
+}
+
 // ---- Item 10: the bounded checker of streaming meshes ----------------------------------------
 
 #[test]

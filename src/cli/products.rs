@@ -164,8 +164,8 @@ impl DemArgs {
         if let Some(b) = bounds.filter(|_| extent == GridExtent::Auto) {
             sink.check_size(b).with_context(|| {
                 format!(
-                    "the DEM's extent x {} .. {}, y {} .. {} is the union of the inputs' usable \
-                     header boxes (no point is read before this check): if the points cover less, \
+                    "no DEM over x {} .. {}, y {} .. {} (the union of the inputs' usable header \
+                     boxes; no point is read before this check): if the points cover less, \
                      repair the headers (e.g. lasinfo -repair_bb) or give --bbox",
                     b[0], b[2], b[1], b[3]
                 )

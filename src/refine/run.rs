@@ -363,7 +363,7 @@ impl<'a> Refiner<'a> {
             self.stats.unsplittable += 1;
             return Ok(false);
         };
-        self.new_vertex(VertexKind::Segment, s);
+        self.new_vertex(VertexKind::Segment, s)?;
         self.stats.segment_points += 1;
         // The star of v: counter-clockwise from v → b to v → a is the left side of a → b.
         self.grow();
@@ -384,9 +384,21 @@ impl<'a> Refiner<'a> {
         Ok(true)
     }
 
-    fn new_vertex(&mut self, kind: VertexKind, seg: u32) {
+    /// Records a new vertex. When the mesh's arrays are about to double (the vertex count at a
+    /// power of two), checks that an address-space limit leaves room for it.
+    fn new_vertex(&mut self, kind: VertexKind, seg: u32) -> Result<()> {
+        let n = self.kind.len();
+        if n >= 1 << 12 && n.is_power_of_two() {
+            super::room(n as u64 * super::GROWTH_BYTES, "the growing mesh")?;
+        }
         self.kind.push(kind);
         self.seg_of.push(seg);
+        Ok(())
+    }
+
+    /// Vertices of the mesh so far (input and Steiner points).
+    pub(super) fn vertex_count(&self) -> usize {
+        self.kind.len()
     }
 
     fn grow(&mut self) {
@@ -438,7 +450,7 @@ impl<'a> Refiner<'a> {
             self.stats.unsplittable += 1;
             return Ok(());
         };
-        self.new_vertex(VertexKind::Free, NONE);
+        self.new_vertex(VertexKind::Free, NONE)?;
         self.grow();
         let mut touched = Vec::new();
         self.tin.take_touched(&mut touched);

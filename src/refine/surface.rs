@@ -73,13 +73,10 @@ impl<'a> Surface<'a> {
             }
             // Four cells a triangle: few candidates per query, even among long thin triangles.
             let grid = Grid::new(lo, hi, 4 * triangles.len().max(1));
-            let mut pairs = Vec::with_capacity(4 * triangles.len());
-            for (i, b) in boxes.iter().enumerate() {
-                grid.box_cells([b[0], b[1]], [b[2], b[3]], |c| {
-                    pairs.push((u64::from(c) << 32) | i as u64)
-                });
-            }
-            let buckets = Buckets::from_pairs(grid.len(), pairs);
+            let buckets = Buckets::counted(grid.len(), boxes.len(), |i, f| {
+                let b = boxes[i];
+                grid.box_cells([b[0], b[1]], [b[2], b[3]], f)
+            });
             Index {
                 boxes,
                 grid,

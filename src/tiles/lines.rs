@@ -281,12 +281,10 @@ impl Region {
         self.buckets.get_or_init(|| {
             let a = self.bbox;
             let grid = Grid::new([a[0], a[1]], [a[2], a[3]], self.tris.len());
-            let mut pairs = Vec::new();
-            for (i, t) in self.tris.iter().enumerate() {
-                let b = bbox(t);
-                grid.box_cells([b[0], b[1]], [b[2], b[3]], |c| pairs.push((c, i as u32)));
-            }
-            let buckets = Buckets::from_item_order(grid.len(), &pairs);
+            let buckets = Buckets::counted(grid.len(), self.tris.len(), |i, f| {
+                let b = bbox(&self.tris[i]);
+                grid.box_cells([b[0], b[1]], [b[2], b[3]], f)
+            });
             (grid, buckets)
         })
     }
