@@ -51,7 +51,7 @@ try:
     cpu = tiles.get("cpu")
     if cpu:
         per = lambda k: f"{cpu[k] / (float(points) / 1e6) * 1e3:.0f}"
-        extra += " · CPU ms/M pts: " + ", ".join(f"{k} {per(k)}" for k in ("read_sort", "index", "blocks", "triangulate", "certify", "keep", "write"))
+        extra += " · CPU ms/M pts: " + ", ".join(f"{k} {per(k)}" for k in ("read_sort", "decode", "index", "blocks", "triangulate", "certify", "keep", "write"))
 except Exception:
     extra = "–"
 n = float(points)

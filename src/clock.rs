@@ -44,6 +44,27 @@ pub(crate) fn timed<T>(total: &mut f64, f: impl FnOnce() -> T) -> T {
     r
 }
 
+/// CPU time several threads spend on one stage, added up (the reader's decoding jobs on
+/// rayon's threads): shared by clones.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Tally(std::sync::Arc<std::sync::atomic::AtomicU64>);
+
+impl Tally {
+    /// Runs `f`, adding the CPU time this thread spent in it.
+    pub(crate) fn timed<T>(&self, f: impl FnOnce() -> T) -> T {
+        let mut spent = 0.0;
+        let r = timed(&mut spent, f);
+        let ns = (spent * 1e9) as u64;
+        self.0.fetch_add(ns, std::sync::atomic::Ordering::Relaxed);
+        r
+    }
+
+    /// The CPU seconds added so far.
+    pub(crate) fn seconds(&self) -> f64 {
+        self.0.load(std::sync::atomic::Ordering::Relaxed) as f64 * 1e-9
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

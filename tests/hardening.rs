@@ -698,6 +698,11 @@ fn a_lost_triangle_is_an_internal_error() {
         assert_eq!(code(&o), 0, "{trim:?}: {}", err(&o));
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         assert_eq!(j["tiles"]["uncertified_owned"], 0, "{trim:?}");
+        // The stages' CPU: decoding (on every core) is part of the read phase.
+        let cpu = |k: &str| j["tiles"]["cpu"][k].as_f64().unwrap();
+        if cfg!(target_os = "linux") {
+            assert!(cpu("decode") > 0.0 && cpu("decode") <= cpu("read_sort"), "{j}");
+        }
         std::fs::remove_file(dir.path().join("ok.ply")).unwrap();
     }
     for (cmd, out, extra) in [

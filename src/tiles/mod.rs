@@ -121,6 +121,9 @@ pub struct TileStats {
 pub struct TileCpu {
     /// Decoding, filtering and sorting into blocks (the sort's chunks and spills).
     pub read_sort: f64,
+    /// Of `read_sort`, decoding: decompressing, converting and filtering the records (on every
+    /// core).
+    pub decode: f64,
     /// Merging the sorted runs into the block index, and the hull.
     pub index: f64,
     /// Reading tiles' blocks back from the index (workers).
@@ -294,6 +297,7 @@ fn index_points<R: IndexRecord>(
     let index = BlockIndex::build(grid, merge, packing, job.tmp, job.duplicates)?;
     let cpu = TileCpu {
         read_sort: c1 - c0,
+        decode: reader.decode_cpu(),
         index: crate::clock::process_cpu() - c1,
         ..TileCpu::default()
     };

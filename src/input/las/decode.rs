@@ -28,6 +28,8 @@ pub(crate) struct FileDecoder {
     /// the span's bytes): fresh ones fault in fresh pages, batch after batch.
     spare: Vec<Vec<u8>>,
     raw: RawPool,
+    /// CPU time spent decoding spans, on whichever thread.
+    cpu: crate::clock::Tally,
 }
 
 /// Bytes before a LAZ chunk in the layout a decompressor expects: the chunk table's offset.
@@ -117,7 +119,13 @@ impl FileDecoder {
             quant: info.quantization(),
             spare: Vec::new(),
             raw: RawPool::default(),
+            cpu: crate::clock::Tally::default(),
         })
+    }
+
+    /// Adds this decoder's CPU time to `cpu` (shared with the reader that reports it).
+    pub(crate) fn tallied(self, cpu: crate::clock::Tally) -> FileDecoder {
+        FileDecoder { cpu, ..self }
     }
 
     /// Reads and decompresses `spans`, runs `job` on each span's raw records (`span.points`
@@ -158,6 +166,7 @@ impl FileDecoder {
             vlr: self.vlr.clone(),
             record_len: self.record_len,
             raw: self.raw.clone(),
+            cpu: self.cpu.clone(),
         }
     }
 
@@ -197,6 +206,8 @@ pub(crate) struct SpanDecoder {
     vlr: Option<laz::LazVlr>,
     record_len: usize,
     raw: RawPool,
+    /// CPU time spent decoding spans, on whichever thread.
+    cpu: crate::clock::Tally,
 }
 
 impl SpanDecoder {
@@ -214,7 +225,7 @@ impl SpanDecoder {
     ) -> Result<Vec<T>> {
         let (path, vlr, len) = (self.path.as_path(), self.vlr.as_ref(), self.record_len);
         let one = |(s, b): (&Chunk, &mut Vec<u8>)| -> Result<T> {
-            match vlr {
+            self.cpu.timed(|| match vlr {
                 None => job(s, &b[LAYOUT_HEAD..]),
                 Some(vlr) => {
                     let mut raw = self.raw.take();
@@ -245,7 +256,7 @@ impl SpanDecoder {
                     self.raw.give(raw);
                     out
                 }
-            }
+            })
         };
         let parts = &mut bytes[..spans.len()];
         guarded(path, || {

@@ -81,6 +81,8 @@ pub struct LidarReader {
     ready_pos: usize,
     /// Spans' point buffers, reused batch after batch (fresh ones fault in fresh pages).
     spare: Arc<Spare<LidarPoint>>,
+    /// CPU time spent decoding (decompressing, converting and filtering records), every thread.
+    decode_cpu: crate::clock::Tally,
 }
 
 impl std::fmt::Debug for LidarReader {
@@ -222,6 +224,7 @@ impl LidarReader {
             ready: Vec::new(),
             ready_pos: 0,
             spare: Arc::default(),
+            decode_cpu: crate::clock::Tally::default(),
         })
     }
 
@@ -305,6 +308,12 @@ impl LidarReader {
             .filter(|s| s.points > 0 && s.bounds.usable())
             .map(|s| s.bounds)
             .reduce(|a, b| a.union(&b))
+    }
+
+    /// CPU seconds spent so far decoding points (decompressing, converting and filtering
+    /// records), added up over every thread that decoded (0 off Linux).
+    pub fn decode_cpu(&self) -> f64 {
+        self.decode_cpu.seconds()
     }
 
     /// What the filters kept and dropped so far; `read + skipped` against
@@ -455,7 +464,7 @@ impl LidarReader {
                 continue;
             }
             self.current = Some(Current {
-                decoder: FileDecoder::open(info)?,
+                decoder: FileDecoder::open(info)?.tallied(self.decode_cpu.clone()),
                 spans,
                 next: 0,
                 first_index: s.first_index,
