@@ -535,6 +535,12 @@ fn exit_statuses_sort_the_failures() {
             ],
             2,
         ),
+        // A typo'd thread count is refused before any thread starts (100,000 were spawned).
+        (
+            &["tin", "grid.xyz", "-o", "t.ply", "--threads", "100000"],
+            2,
+        ),
+        (&["run", "p/plan.json", "--all", "--jobs", "5000"], 2),
         (&["tin", "missing.xyz", "-o", "t.ply"], 3),
         (&["tin", "bad.xyz", "-o", "t.ply"], 3),
         (&["tin", "bad.laz", "-o", "t.ply"], 3),
@@ -701,7 +707,10 @@ fn a_lost_triangle_is_an_internal_error() {
         // The stages' CPU: decoding (on every core) is part of the read phase.
         let cpu = |k: &str| j["tiles"]["cpu"][k].as_f64().unwrap();
         if cfg!(target_os = "linux") {
-            assert!(cpu("decode") > 0.0 && cpu("decode") <= cpu("read_sort"), "{j}");
+            assert!(
+                cpu("decode") > 0.0 && cpu("decode") <= cpu("read_sort"),
+                "{j}"
+            );
         }
         std::fs::remove_file(dir.path().join("ok.ply")).unwrap();
     }

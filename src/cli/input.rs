@@ -65,7 +65,7 @@ pub struct InputArgs {
     pub engine: Engine,
     /// Threads (default: every core): the tiled engine's tile workers, and the decoding and
     /// sorting of every engine. The output is the same for any number.
-    #[arg(long, value_name = "N", default_value_t = 0)]
+    #[arg(long, value_name = "N", default_value_t = 0, value_parser = parse_threads)]
     pub threads: usize,
     /// Tile side for the tiled engine, in the data's units (any positive size: a DEM cell belongs
     /// to the tile holding its centre, so here it need not be a multiple of the cell; a plan's
@@ -184,6 +184,23 @@ pub fn stdin_path(p: &Path) -> PathBuf {
     } else {
         p.to_path_buf()
     }
+}
+
+/// Parses `--threads N` (0: every core) and `--jobs N`, at most
+/// [`sweeptin::pipeline::MAX_THREADS`], so that a typo fails before any work.
+pub fn parse_threads(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a whole number of threads"))?;
+    if n > pipeline::MAX_THREADS {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        return Err(format!(
+            "{n} is more than {} (this machine has {cores} cores)",
+            pipeline::MAX_THREADS
+        ));
+    }
+    Ok(n)
 }
 
 /// A memory size given as `512M`, `4G`, … (see [`parse_size`]); shown in the same form.

@@ -61,13 +61,14 @@ pub struct RunArgs {
     #[arg(long)]
     pub all: bool,
     /// With --all: tasks run at once (each on cores / jobs threads).
-    #[arg(long, value_name = "N", default_value_t = 1, requires = "all")]
+    #[arg(long, value_name = "N", default_value_t = 1, requires = "all",
+          value_parser = super::input::parse_threads)]
     pub jobs: usize,
     /// Skip tasks that already finished (their record `tiles/task_<i>.json` exists).
     #[arg(long)]
     pub resume: bool,
     /// Threads per task (default: every core, divided among --jobs).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = super::input::parse_threads)]
     pub threads: Option<usize>,
     /// No progress bar.
     #[arg(short, long)]

@@ -65,7 +65,7 @@ pub struct Args {
     #[arg(long, value_name = "SIZE", default_value_t = Size(sweeptin::pipeline::default_mem()))]
     pub mem: Size,
     /// Threads refining windows (default: every core). The output is the same for any number.
-    #[arg(long, value_name = "N", default_value_t = 0)]
+    #[arg(long, value_name = "N", default_value_t = 0, value_parser = super::input::parse_threads)]
     pub threads: usize,
     /// No progress spinner.
     #[arg(short, long)]

@@ -189,6 +189,7 @@ impl RunConfig {
         check_filter(source, &input.filter, &input.paths)?;
         check_numbers(&input, &options)?;
         let threads = options.tiles.as_ref().map_or(0, |t| t.threads);
+        super::check_threads(threads)?;
         crate::limits::check_address_space(
             options.mem,
             threads,
