@@ -305,6 +305,61 @@ fn tiles_with_edges_that_round_each_run_their_own_tile() {
     }
 }
 
+/// The mosaic never goes over a task's output, however its path reaches the tiles: through
+/// `..` or a symbolic link (both replaced a tile with the mosaic, and later merges took it).
+#[test]
+fn the_mosaic_never_replaces_a_task_output() {
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("job");
+    let args = [
+        "plan",
+        "dem",
+        s(&sample),
+        "--cell",
+        "0.5",
+        "--tile",
+        "16",
+        "-o",
+        s(&job),
+    ];
+    sweeptin(&args, "plan");
+    let plan = job.join("plan.json");
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
+    let tile = std::fs::read_dir(job.join("tiles"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|e| e == "tif"))
+        .unwrap();
+    let before = std::fs::read(&tile).unwrap();
+    let name = tile.file_name().unwrap().to_str().unwrap();
+    let dotted = job.join("..").join("job/tiles").join(name);
+    #[cfg(unix)]
+    let links = {
+        let link = t.path().join("link.tif");
+        std::os::unix::fs::symlink(&tile, &link).unwrap();
+        let dangling = t.path().join("dangling.vrt");
+        std::os::unix::fs::symlink(job.join("tiles/new.vrt"), &dangling).unwrap();
+        vec![link, dangling]
+    };
+    #[cfg(not(unix))]
+    let links: Vec<PathBuf> = Vec::new();
+    for out in std::iter::once(dotted).chain(links) {
+        let o = bin()
+            .args(["merge", s(&plan), "-o", s(&out)])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{}", out.display());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("where the tasks' outputs are"), "{err}");
+    }
+    assert!(
+        std::fs::read(&tile).unwrap() == before,
+        "a tile was replaced"
+    );
+    assert!(!job.join("tiles/new.vrt").exists());
+}
+
 /// A TIN plan's merged mesh has the triangles of one run (each vertex once), with and without
 /// `--max-edge`, in every mesh format the merge picks by extension.
 #[test]

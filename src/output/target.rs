@@ -183,6 +183,21 @@ pub fn check_output(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The file an output at `path` writes, as a canonical path: through symbolic links, its
+/// directory's `..` and links resolved (what `starts_with` can compare with a canonical
+/// directory). A stream, or a path that cannot be resolved, is returned absolute.
+pub fn written_path(path: &Path) -> PathBuf {
+    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let Ok(Destination::File { target, .. }) = Destination::of(path) else {
+        return abs(path);
+    };
+    let dir = super::atomic::parent_dir(&target);
+    match (std::fs::canonicalize(dir), target.file_name()) {
+        (Ok(d), Some(name)) => d.join(name),
+        _ => abs(&target),
+    }
+}
+
 /// Is `a` the same file as `b`: the same absolute path, the same file (device and inode) when
 /// both exist, or the same file an output there would write (through symbolic links)?
 fn same_file(a: &Path, b: &Path) -> bool {

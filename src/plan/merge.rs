@@ -418,10 +418,11 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     protected.extend(lines.map(|f| crate::input::vector::split_layer(&f.path).0));
     protected.push(dir.join("plan.json"));
     crate::output::distinct_outputs(&outs, &protected, "the plan")?;
+    let tiles = dir.join("tiles");
+    let tiles = std::fs::canonicalize(&tiles).unwrap_or(tiles);
     for (what, o) in &outs {
         crate::output::check_output(o)?;
-        let abs = std::path::absolute(o).unwrap_or_else(|_| o.to_path_buf());
-        if abs.starts_with(dir.join("tiles")) {
+        if crate::output::target::written_path(o).starts_with(&tiles) {
             return Err(Error::Options(format!(
                 "{what} {}: that is where the tasks' outputs are",
                 o.display()
