@@ -2,6 +2,9 @@
 //! directly, so nothing else in this process registers paths meanwhile), and the real handler in
 //! the binary, interrupted by SIGINT / SIGTERM while it waits on its input.
 
+#[path = "support/data.rs"]
+mod data;
+
 use std::io::Write;
 use std::path::Path;
 use std::process::Command;
@@ -115,4 +118,87 @@ fn sigint_deletes_temporary_output() {
 #[test]
 fn sigterm_deletes_temporary_output() {
     interrupted_run("TERM", 143);
+}
+
+/// Every command line running now whose arguments include `needle`.
+#[cfg(target_os = "linux")]
+fn processes_with(needle: &str) -> Vec<String> {
+    let mut found = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        if let Ok(cmd) = std::fs::read(e.path().join("cmdline")) {
+            let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
+            if cmd.contains(needle) {
+                found.push(cmd);
+            }
+        }
+    }
+    found
+}
+
+/// `run --all` passes SIGTERM on to the tasks it runs (each its own process) and waits for them:
+/// none is left running, nothing is written after it exits (143), and no task starts after the
+/// signal. The tasks kept running, orphaned, and wrote their tiles after the job was reported
+/// interrupted.
+#[cfg(target_os = "linux")]
+#[test]
+fn sigterm_stops_the_tasks_of_run_all() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = dir.path().join("job");
+    let arso = data::shared("lidar/arso_TM_511_122_from_ept.laz");
+    let bin = env!("CARGO_BIN_EXE_sweeptin");
+    let plan = Command::new(bin)
+        .arg("plan")
+        .arg("dem")
+        .arg(&arso)
+        .args(["--cell", "1", "--tile", "250", "-q", "-o"])
+        .arg(&job)
+        .status()
+        .unwrap();
+    assert!(plan.success());
+    let plan = job.join("plan.json");
+    let mut all = Command::new(bin)
+        .arg("run")
+        .arg(&plan)
+        .args(["--all", "--jobs", "2", "-q"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The first records are written: tasks are running now.
+    let started = Instant::now();
+    while names(&job.join("tiles")).len() < 2 {
+        assert!(started.elapsed() < Duration::from_secs(60), "no task ended");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let needle = plan.to_string_lossy().into_owned();
+    assert!(processes_with(&needle).len() >= 2, "no task is running");
+    let killed = Command::new("kill")
+        .arg("-TERM")
+        .arg(all.id().to_string())
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let waited = Instant::now();
+    let status = loop {
+        if let Some(status) = all.try_wait().unwrap() {
+            break status;
+        }
+        if waited.elapsed() > Duration::from_secs(60) {
+            let _ = all.kill();
+            panic!("run --all did not exit after SIGTERM");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut all.stderr.take().unwrap(), &mut stderr).unwrap();
+    assert_eq!(status.code(), Some(143), "{stderr}");
+    assert_eq!(
+        processes_with(&needle),
+        Vec::<String>::new(),
+        "tasks left running"
+    );
+    let after = names(&job.join("tiles"));
+    std::thread::sleep(Duration::from_millis(1500));
+    assert_eq!(names(&job.join("tiles")), after, "written after the exit");
+    assert!(after.iter().all(|n| !n.contains("sweeptin-")), "{after:?}");
+    assert!(after.len() < 2 * 36, "every task ran: {after:?}");
 }

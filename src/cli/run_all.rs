@@ -6,6 +6,7 @@ use super::plan::RunArgs;
 use anyhow::Context;
 use std::path::Path;
 use std::time::Instant;
+use sweeptin::output::interrupt;
 use sweeptin::plan::Plan;
 
 /// `--all`: every task (not yet finished, with --resume), --jobs at a time, each in its own
@@ -32,12 +33,19 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
                 loop {
                     let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(&i) = todo.get(k) else { break };
-                    let status = std::process::Command::new(&exe)
+                    let mut command = std::process::Command::new(&exe);
+                    command
                         .arg("run")
                         .arg(&args.plan)
                         .args(["--task", &i.to_string(), "--quiet"])
-                        .args(["--threads", &threads.to_string()])
-                        .status();
+                        .args(["--threads", &threads.to_string()]);
+                    // An interruption (Ctrl-C, SIGTERM) passes on to the tasks running, and
+                    // waits for them; none starts after it.
+                    let status = match interrupt::spawn_child(&mut command) {
+                        Ok(Some(child)) => interrupt::wait_child(child),
+                        Ok(None) => break,
+                        Err(e) => Err(e),
+                    };
                     let ok = matches!(&status, Ok(s) if s.success());
                     if !ok {
                         let code = status.ok().and_then(|s| s.code()).unwrap_or(5);
@@ -47,13 +55,14 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
                             .push((i, code));
                     }
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    if !args.quiet {
+                    if !args.quiet && !interrupt::interrupted() {
                         eprintln!("sweeptin: {n}/{} tasks finished", todo.len());
                     }
                 }
             });
         }
     });
+    interrupt::await_interruption();
     let mut failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
     failed.sort_unstable();
     if let Some(&(_, code)) = failed.first() {

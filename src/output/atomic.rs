@@ -23,7 +23,6 @@ use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 /// Size of the write buffer of an [`AtomicFile`].
@@ -137,51 +136,6 @@ pub fn registered_temps() -> Vec<(PathBuf, TempKind)> {
 /// errors are ignored because there is nothing better to do with them while exiting.
 pub fn cleanup_registered_temps() -> usize {
     REGISTRY.cleanup()
-}
-
-static HANDLER_INSTALLED: AtomicBool = AtomicBool::new(false);
-
-/// Installs the process-wide Ctrl-C / SIGTERM / SIGHUP handler: a thread that waits for one of
-/// them, deletes every registered temporary path, prints one line on stderr and exits with
-/// 128 + the signal's number (130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP). Calling it again
-/// is harmless.
-///
-/// # Errors
-/// [`Error::Internal`] if the operating system refuses the handler.
-pub fn install_interrupt_handler() -> Result<()> {
-    if HANDLER_INSTALLED.swap(true, Ordering::SeqCst) {
-        return Ok(());
-    }
-    let failed = |e: io::Error| {
-        HANDLER_INSTALLED.store(false, Ordering::SeqCst);
-        Error::Internal(format!("cannot install the interrupt handler: {e}"))
-    };
-    #[cfg(unix)]
-    {
-        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
-        let mut signals =
-            signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]).map_err(failed)?;
-        std::thread::Builder::new()
-            .name("signals".into())
-            .spawn(move || {
-                if let Some(signal) = signals.forever().next() {
-                    let removed = cleanup_registered_temps();
-                    let name = match signal {
-                        SIGINT => "SIGINT",
-                        SIGTERM => "SIGTERM",
-                        _ => "SIGHUP",
-                    };
-                    eprintln!(
-                        "sweeptin: interrupted by {name}; removed {removed} temporary file(s)"
-                    );
-                    std::process::exit(128 + signal);
-                }
-            })
-            .map_err(failed)?;
-    }
-    #[cfg(not(unix))]
-    let _ = failed;
-    Ok(())
 }
 
 /// A temporary directory that is deleted (with its contents) when dropped, and also when the

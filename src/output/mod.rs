@@ -10,9 +10,10 @@
 //! - [`geojson`]: a streaming GeoJSON feature writer.
 //! - [`pieces`]: the tiles of a plan's `tin` task, for the merge.
 //! - [`vpc`]: virtual point clouds (`.vpc`) from LAS/LAZ headers.
-//! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C
-//!   ([`install_interrupt_handler`]); [`target`]: what an output path is (a file, a link, a
-//!   stream) and the temporary files of dead runs.
+//! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C;
+//!   [`interrupt`]: the handler that deletes them ([`install_interrupt_handler`]) and passes
+//!   the signal on to child processes (`run --all`'s tasks); [`target`]: what an output path
+//!   is (a file, a link, a stream) and the temporary files of dead runs.
 //!
 //! ```
 //! use sweeptin::output::{create_mesh_sink, MeshMeta};
@@ -38,6 +39,7 @@ pub mod atomic;
 pub mod cog;
 pub mod geojson;
 pub mod geotiff;
+pub mod interrupt;
 pub mod landxml;
 pub mod mesh;
 pub mod obj;
@@ -50,7 +52,8 @@ pub mod target;
 pub mod vpc;
 pub mod world;
 
-pub use atomic::{AtomicFile, RegisteredTempDir, install_interrupt_handler};
+pub use atomic::{AtomicFile, RegisteredTempDir};
+pub use interrupt::install_interrupt_handler;
 pub use landxml::LandXmlWriter;
 pub use mesh::{MeshFormat, MeshMeta, create_mesh_sink};
 pub use obj::ObjWriter;
