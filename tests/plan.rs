@@ -506,6 +506,34 @@ fn empty_tasks_pass_and_what_a_plan_cannot_do_is_refused() {
     // compression, is refused before the plan is written.
     refuse(&["--format", "asc"], "a DEM mosaic is a GeoTIFF");
     refuse(&["--predictor", "float"], "needs compression");
+    // A budget in which no task's raster fits fails here, not in every task.
+    refuse(&["--cell", "0.5", "--mem", "1K"], "the plan's --mem");
+    // A missing input is bad input (3), as in one run.
+    let out = bin()
+        .args([
+            "plan",
+            "dem",
+            "no-such.laz",
+            "--cell",
+            "1",
+            "--tile",
+            "16",
+            "-o",
+        ])
+        .arg(t.path().join("missing"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no-such.laz"));
+    // Every task empty: the merge says so with the status of one run that keeps nothing (3).
+    sweeptin(&["run", s(&plan), "--all", "-q"], "empty tasks");
+    let out = bin()
+        .args(["merge", s(&plan), "-o"])
+        .arg(t.path().join("nothing.tif"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no task found a point"));
     // Merging onto an input, the plan or a task's output is refused.
     let done = t.path().join("done");
     sweeptin(

@@ -103,6 +103,9 @@ pub struct MergeArgs {
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
+    /// No summary line on stderr (a volume plan's totals still go to stdout).
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 /// The plan's command, parsed back from its stored command line.
@@ -189,10 +192,7 @@ impl Job {
                 boundary: v
                     .boundary
                     .as_deref()
-                    .map(|b| {
-                        std::fs::canonicalize(b)
-                            .with_context(|| format!("cannot read {}", b.display()))
-                    })
+                    .map(|b| std::fs::canonicalize(b).map_err(|e| sweeptin::Error::io(b, e)))
                     .transpose()?,
             },
             Job::Tin(_) => Product::Tin,
@@ -359,7 +359,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     outputs.insert(0, ("dir".to_string(), dir.clone()));
     let buffer = args.buffer.unwrap_or(tile / 10.0);
     let canonical = |p: &PathBuf| {
-        std::fs::canonicalize(p).with_context(|| format!("cannot read {}", p.display()))
+        std::fs::canonicalize(p).map_err(|e| anyhow::Error::from(sweeptin::Error::io(p, e)))
     };
     let abs_groups: Vec<Vec<PathBuf>> = groups
         .iter()
@@ -396,6 +396,8 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
                 )
             })?;
     }
+    plan.check_task_memory()
+        .context("a task's DEM (one tile) does not fit the plan's --mem")?;
     if dir.exists() && !dir.is_dir() {
         bail!("{}: not a directory", dir.display());
     }
@@ -426,6 +428,9 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         );
     }
     let points: u64 = plan.files.iter().map(|f| f.points).sum();
+    // A tenth of 24.9 is 2.4899999999999998 in full: shown to a micrometre at most.
+    let buffer = format!("{buffer:.6}");
+    let buffer = buffer.trim_end_matches('0').trim_end_matches('.');
     eprintln!(
         "sweeptin: {} tasks (tiles of {tile}, first buffer {buffer}) over {} files, {points} \
          points -> {}",
@@ -547,7 +552,7 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     }
     if args.json {
         println!("{}", serde_json::to_string(&s)?);
-    } else {
+    } else if !args.quiet {
         eprintln!(
             "sweeptin: merged {} tasks ({} empty){}",
             s.tasks,

@@ -162,7 +162,9 @@ impl DemArgs {
             },
         )?;
         if let Some(b) = bounds.filter(|_| extent == GridExtent::Auto) {
-            sink.check_size(b).with_context(|| {
+            // A grid too large may come from headers that claim too much; its memory, from
+            // --mem.
+            sink.check_grid(b).with_context(|| {
                 format!(
                     "no DEM over x {} .. {}, y {} .. {} (the union of the inputs' usable header \
                      boxes; no point is read before this check): if the points cover less, \
@@ -170,6 +172,7 @@ impl DemArgs {
                     b[0], b[2], b[1], b[3]
                 )
             })?;
+            sink.check_size(b)?;
         } else if extent != GridExtent::Auto {
             sink.check_size([0.0; 4])?;
         }

@@ -394,8 +394,8 @@ fn mosaic_options(plan: &Plan, out: &Path, given: &RasterOptions) -> Result<Mosa
 ///
 /// # Errors
 /// [`Error::Options`] for unfinished tasks, a missing or wrong output, an output that is an
-/// input, the plan, a task's output or another output, or when no task found a point; the
-/// readers' and writers' errors.
+/// input, the plan, a task's output or another output; [`Error::NothingLeft`] when no task
+/// found a point; the readers' and writers' errors.
 pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSummary> {
     use super::Product;
     let out = o.out.as_deref();
@@ -457,11 +457,13 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     };
     let recs = records(plan, dir)?;
     if !recs.is_empty() && recs.iter().all(|r| r.points == 0) {
-        return Err(Error::Options(
-            "no task found a point after the filters: nothing to merge (check --class and the \
-             other filters of the plan)"
+        // As one run whose filters keep nothing: the input's verdict (exit 3), not an option's.
+        return Err(Error::NothingLeft {
+            files: vec![dir.join("plan.json")],
+            what: "no task found a point after the filters: nothing to merge (check --class \
+                   and the other filters of the plan)"
                 .into(),
-        ));
+        });
     }
     let crs = plan.job.crs()?;
     let mut summary = MergeSummary {

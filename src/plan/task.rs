@@ -421,6 +421,54 @@ impl Plan {
         })
     }
 
+    /// The DEM of a task whose tile is `tile`.
+    fn dem_options(
+        &self,
+        tile: [f64; 4],
+        cell: f64,
+        align: crate::raster::Align,
+        nodata: f32,
+    ) -> Result<DemOptions> {
+        // The raster covers the tile (on the plan's lattice), whatever is read.
+        let extent = GridExtent::BBox {
+            bbox: tile,
+            snap: false,
+        };
+        Ok(DemOptions {
+            grid: GridPlan::new(cell, extent, align)?,
+            nodata,
+            // The tasks' tiles are plain GeoTIFFs; the mosaic gets the plan's format.
+            output: RasterOptions {
+                format: Some(RasterFormat::GeoTiff),
+                ..RasterOptions::default()
+            },
+            // As one run: the raster's rows hold at most a quarter of the budget.
+            memory: self.task_mem() / 4,
+        })
+    }
+
+    /// Refuses, when the plan is made, a budget in which no task's DEM fits (every task would
+    /// fail, as one run with it fails before any work).
+    ///
+    /// # Errors
+    /// [`Error::Options`] from [`DemSink::check_size`], as one run gives it.
+    pub fn check_task_memory(&self) -> Result<()> {
+        let (
+            Product::Dem {
+                cell,
+                align,
+                nodata,
+                ..
+            },
+            Some(t),
+        ) = (&self.job.product, self.tiles.first())
+        else {
+            return Ok(());
+        };
+        let options = self.dem_options(t.bounds, *cell, *align, *nodata)?;
+        DemSink::new(Path::new("task.tif"), options)?.check_size(t.bounds)
+    }
+
     /// The sinks of task `i`, writing under `dir/tiles/`.
     fn task_sinks(&self, dir: &Path, i: usize) -> Result<Vec<(String, Box<dyn TriangleSink>)>> {
         let tile = self.task(i)?.bounds;
@@ -440,23 +488,8 @@ impl Plan {
                 contours: levels,
                 ..
             } => {
-                // The raster covers the tile (on the plan's lattice), whatever is read.
-                let extent = GridExtent::BBox {
-                    bbox: tile,
-                    snap: false,
-                };
-                // The tasks' tiles are plain GeoTIFFs; the mosaic gets the plan's format.
-                let options = DemOptions {
-                    grid: GridPlan::new(*cell, extent, *align)?,
-                    nodata: *nodata,
-                    output: RasterOptions {
-                        format: Some(RasterFormat::GeoTiff),
-                        ..RasterOptions::default()
-                    },
-                    // As one run: the raster's rows hold at most a quarter of the budget.
-                    memory: self.task_mem() / 4,
-                };
                 let path = self.task_output(dir, i, "dem", "tif");
+                let options = self.dem_options(tile, *cell, *align, *nodata)?;
                 sinks.push(("dem".into(), Box::new(DemSink::new(&path, options)?)));
                 if let Some(l) = levels {
                     sinks.push(contours(l)?);

@@ -266,6 +266,18 @@ impl DemSink {
         let spec = self.options.grid.grid(bounds, self.options.nodata)?;
         band_rows(&spec, self.options.memory).map(|_| ())
     }
+
+    /// The first half of [`DemSink::check_size`]: the grid over `bounds` alone (its cells
+    /// against `--max-cells`), not yet its memory.
+    ///
+    /// # Errors
+    /// As [`DemSink::check_size`], for the grid.
+    pub fn check_grid(&self, bounds: [f64; 4]) -> Result<()> {
+        self.options
+            .grid
+            .grid(bounds, self.options.nodata)
+            .map(|_| ())
+    }
 }
 
 /// A [`TriangleSink`] that writes a DEM raster (see the module docs).
