@@ -10,30 +10,9 @@ mod mesh;
 #[path = "support/plans.rs"]
 mod plans;
 
-use plans::{cells, plan_extent, records};
+use plans::{bin, cells, ok, plan_extent, records, s, sweeptin};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_sweeptin"))
-}
-
-fn ok(out: Output, what: &str) -> Output {
-    assert!(
-        out.status.success(),
-        "{what} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn sweeptin(args: &[&str], what: &str) -> Output {
-    ok(bin().args(args).output().unwrap(), what)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use std::process::Command;
 
 #[test]
 fn dem_and_contours_of_a_plan_equal_one_run() {
@@ -269,95 +248,6 @@ fn volume_of_a_plan_equals_one_run() {
     for k in ["cut_volume", "fill_volume", "cut_area", "fill_area", "area"] {
         assert_eq!(merged["volume"][k], one[k], "{k}: summed exactly");
     }
-}
-
-/// Tiles whose edges are not whole numbers (27.9 × 225,002 rounds below the edge): each task
-/// runs its own tile, found by its centre (half the tasks ran a neighbour's or nothing, reported
-/// "empty", and the mosaic lost whole rows: a volume 11 % low). The volume sums exactly to one
-/// run's, which needs every tile's triangles once.
-#[test]
-fn tiles_with_edges_that_round_each_run_their_own_tile() {
-    let dir_data = data::data_dir().join("lidar/ign_50m_tiles");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir_data)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "laz"))
-        .collect();
-    files.sort();
-    let t = tempfile::tempdir().unwrap();
-    let mut one: Vec<&str> = vec!["volume"];
-    one.extend(files.iter().map(|p| s(p)));
-    one.extend(["--plane", "30", "--json", "-q"]);
-    let one: serde_json::Value = serde_json::from_slice(&sweeptin(&one, "volume").stdout).unwrap();
-    for tile in ["27.9", "24.9"] {
-        let job = t.path().join(tile);
-        let mut args: Vec<&str> = vec!["plan", "volume"];
-        args.extend(files.iter().map(|p| s(p)));
-        args.extend(["--plane", "30", "--tile", tile, "-o", s(&job)]);
-        sweeptin(&args, "plan");
-        let plan = job.join("plan.json");
-        sweeptin(&["run", s(&plan), "--all", "--jobs", "2", "-q"], "run");
-        let out = sweeptin(&["merge", s(&plan), "--json"], "merge");
-        let merged: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        for k in ["cut_volume", "fill_volume", "area"] {
-            assert_eq!(merged["volume"][k], one[k], "--tile {tile}: {k}");
-        }
-    }
-}
-
-/// The mosaic never goes over a task's output, however its path reaches the tiles: through
-/// `..` or a symbolic link (both replaced a tile with the mosaic, and later merges took it).
-#[test]
-fn the_mosaic_never_replaces_a_task_output() {
-    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
-    let t = tempfile::tempdir().unwrap();
-    let job = t.path().join("job");
-    let args = [
-        "plan",
-        "dem",
-        s(&sample),
-        "--cell",
-        "0.5",
-        "--tile",
-        "16",
-        "-o",
-        s(&job),
-    ];
-    sweeptin(&args, "plan");
-    let plan = job.join("plan.json");
-    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
-    let tile = std::fs::read_dir(job.join("tiles"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .find(|p| p.extension().is_some_and(|e| e == "tif"))
-        .unwrap();
-    let before = std::fs::read(&tile).unwrap();
-    let name = tile.file_name().unwrap().to_str().unwrap();
-    let dotted = job.join("..").join("job/tiles").join(name);
-    #[cfg(unix)]
-    let links = {
-        let link = t.path().join("link.tif");
-        std::os::unix::fs::symlink(&tile, &link).unwrap();
-        let dangling = t.path().join("dangling.vrt");
-        std::os::unix::fs::symlink(job.join("tiles/new.vrt"), &dangling).unwrap();
-        vec![link, dangling]
-    };
-    #[cfg(not(unix))]
-    let links: Vec<PathBuf> = Vec::new();
-    for out in std::iter::once(dotted).chain(links) {
-        let o = bin()
-            .args(["merge", s(&plan), "-o", s(&out)])
-            .output()
-            .unwrap();
-        assert_eq!(o.status.code(), Some(2), "{}", out.display());
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(err.contains("where the tasks' outputs are"), "{err}");
-    }
-    assert!(
-        std::fs::read(&tile).unwrap() == before,
-        "a tile was replaced"
-    );
-    assert!(!job.join("tiles/new.vrt").exists());
 }
 
 /// A TIN plan's merged mesh has the triangles of one run (each vertex once), with and without

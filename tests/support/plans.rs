@@ -1,10 +1,36 @@
-//! Reading what a plan wrote, for the plan tests: its tiles' extent, its tasks' records, and a
-//! raster's cells bit for bit.
+//! Running the binary and reading what a plan wrote, for the plan tests: its tiles' extent, its
+//! tasks' records, and a raster's cells bit for bit.
 
 #![allow(dead_code)]
 
 use std::path::Path;
+use std::process::{Command, Output};
 use sweeptin::input::raster::RasterReader;
+
+/// The binary under test.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+}
+
+/// `out`, which must be a success (else the test fails with its stderr).
+pub fn ok(out: Output, what: &str) -> Output {
+    assert!(
+        out.status.success(),
+        "{what} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Runs the binary with `args`, which must succeed.
+pub fn sweeptin(args: &[&str], what: &str) -> Output {
+    ok(bin().args(args).output().unwrap(), what)
+}
+
+/// A path as a `&str` (the test directories are UTF-8).
+pub fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
 
 /// Every cell's value bits, and the raster's size and origin.
 pub fn cells(path: &Path) -> (u32, u32, [f64; 6], Vec<u64>) {
