@@ -20,6 +20,26 @@ pub fn anon_rss() -> Option<u64> {
     proc_status_kb("RssAnon:")
 }
 
+/// Most worker threads a job starts (`--threads`, and `--jobs` for a plan's tasks): more is a
+/// typo, not a machine (`--threads 100000` spawned that many threads and kept a 2-core machine
+/// busy for minutes).
+pub const MAX_THREADS: usize = 1024;
+
+/// Refuses a thread count above [`MAX_THREADS`] (0 means every core).
+///
+/// # Errors
+/// [`crate::Error::Options`] naming the count and the machine's cores.
+pub fn check_threads(threads: usize) -> crate::Result<()> {
+    if threads > MAX_THREADS {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        return Err(crate::Error::Options(format!(
+            "--threads {threads}: at most {MAX_THREADS} (this machine has {cores} cores; 0 \
+             means every core)"
+        )));
+    }
+    Ok(())
+}
+
 /// The soft limit on open files.
 #[cfg(target_os = "linux")]
 pub(crate) fn open_files() -> u64 {

@@ -102,26 +102,6 @@ pub enum SweepAxis {
 /// [`SweepAxis::Auto`] to sweep along `x`.
 pub const STRIP_RATIO: f64 = 4.0;
 
-/// Most worker threads a job starts (`--threads`, and `--jobs` for a plan's tasks): more is a
-/// typo, not a machine (`--threads 100000` spawned that many threads and kept a 2-core machine
-/// busy for minutes).
-pub const MAX_THREADS: usize = 1024;
-
-/// Refuses a thread count above [`MAX_THREADS`] (0 means every core).
-///
-/// # Errors
-/// [`Error::Options`] naming the count and the machine's cores.
-pub fn check_threads(threads: usize) -> Result<()> {
-    if threads > MAX_THREADS {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        return Err(Error::Options(format!(
-            "--threads {threads}: at most {MAX_THREADS} (this machine has {cores} cores; 0 \
-             means every core)"
-        )));
-    }
-    Ok(())
-}
-
 /// Default memory budget: 1 GiB (less under an address-space limit: [`default_mem`]).
 pub const DEFAULT_MEM: u64 = 1 << 30;
 
@@ -236,7 +216,7 @@ pub struct RunSummary {
     pub tiles: Option<crate::tiles::TileStats>,
 }
 
-pub use crate::limits::{anon_rss, peak_rss};
+pub use crate::limits::{MAX_THREADS, anon_rss, check_threads, peak_rss};
 
 /// Running maximum of [`anon_rss`] samples.
 #[derive(Debug, Default)]

@@ -166,7 +166,7 @@ fn plan(reader: &RasterReader, grid: &GridOptions) -> Result<Layout> {
     let spec = reader.spec();
     let cols = cuts(spec.cols, grid.window);
     let rows = cuts(spec.rows, grid.window);
-    crate::pipeline::check_threads(grid.threads)?;
+    crate::limits::check_threads(grid.threads)?;
     let threads = match grid.threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
