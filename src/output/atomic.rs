@@ -8,7 +8,7 @@
 //! devices and standard output are written directly ([`AtomicFile::is_stream`]).
 //!
 //! Temporary paths that must not outlive the process are kept in a process-wide registry
-//! ([`register_temp`]). [`install_interrupt_handler`] makes Ctrl-C (SIGINT), SIGTERM and SIGHUP
+//! ([`register_temp`]). [`super::interrupt::install_interrupt_handler`] makes Ctrl-C (SIGINT), SIGTERM and SIGHUP
 //! delete every registered path ([`cleanup_registered_temps`]) and exit with 128 + the signal's
 //! number (130, 143, 129), the shell's convention. Modules that
 //! spill to disk (the external sort under `--tmp-dir`) use [`RegisteredTempDir`] or register their
