@@ -10,7 +10,7 @@ mod cli;
 #[path = "support/data.rs"]
 mod data;
 
-use data::shared;
+use data::{ign_tiles, shared};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use sweeptin::input::las::{BBox, FileInfo, Filter, LidarPoint, LidarReader, ReadOptions};
@@ -176,17 +176,6 @@ fn arso_copc_box() {
     assert!(s.read * 10 < s.skipped, "{s:?}");
     let (orig, _) = read(&[src], &f, ReadOptions::default());
     assert_eq!(keys(&got), keys(&orig));
-}
-
-fn ign_tiles() -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(shared("lidar/ign_50m_tiles"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "laz"))
-        .collect();
-    v.sort();
-    assert_eq!(v.len(), 6);
-    v
 }
 
 use cli::ok as sweeptin;

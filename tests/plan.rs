@@ -18,14 +18,7 @@ use std::process::Command;
 fn dem_and_contours_of_a_plan_equal_one_run() {
     // Ground of the six IGN 50 m tiles: gaps under buildings, and the data's outer edge, where
     // tasks must read farther than their first buffer.
-    let dir_data = data::data_dir().join("lidar/ign_50m_tiles");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir_data)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "laz"))
-        .collect();
-    files.sort();
-    assert_eq!(files.len(), 6);
+    let files = data::ign_tiles();
     let t = tempfile::tempdir().unwrap();
     let job = t.path().join("job");
     let mut args: Vec<&str> = vec!["plan", "--buffer", "2", "dem"];

@@ -15,13 +15,7 @@ use std::path::PathBuf;
 /// run's, which needs every tile's triangles once.
 #[test]
 fn tiles_with_edges_that_round_each_run_their_own_tile() {
-    let dir_data = data::data_dir().join("lidar/ign_50m_tiles");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir_data)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "laz"))
-        .collect();
-    files.sort();
+    let files = data::ign_tiles();
     let t = tempfile::tempdir().unwrap();
     let mut one: Vec<&str> = vec!["volume"];
     one.extend(files.iter().map(|p| s(p)));

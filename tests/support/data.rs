@@ -97,3 +97,15 @@ pub fn python(modules: &[&str], test: &str) -> bool {
     }
     found
 }
+
+/// The six IGN 50 m LAZ tiles (`lidar/ign_50m_tiles`), sorted by name.
+pub fn ign_tiles() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(shared("lidar/ign_50m_tiles"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "laz"))
+        .collect();
+    v.sort();
+    assert_eq!(v.len(), 6);
+    v
+}
