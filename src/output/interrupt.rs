@@ -8,42 +8,42 @@ use crate::error::{Error, Result};
 use std::io;
 use std::process::{Child, Command, ExitStatus};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Mutex, MutexGuard};
-use std::time::{Duration, Instant};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+use std::time::Duration;
 
 /// How long an interrupted process waits for its children to stop (each removes its own
-/// temporary files) before it exits anyway.
+/// temporary files) before it kills what is left and exits.
 const CHILDREN_GRACE: Duration = Duration::from_secs(30);
 
-/// The children an interruption passes its signal on to, and whether it has come (then no
-/// child starts).
-struct Children {
-    interrupted: bool,
-    pids: Vec<u32>,
-}
+/// Set inside the signal handler itself, the moment a signal comes (before the handler's
+/// thread runs): no child starts after it.
+static SIGNALLED: OnceLock<Arc<AtomicBool>> = OnceLock::new();
 
-static CHILDREN: Mutex<Children> = Mutex::new(Children {
-    interrupted: false,
-    pids: Vec::new(),
-});
+/// The children an interruption passes its signal on to.
+static CHILDREN: Mutex<Vec<u32>> = Mutex::new(Vec::new());
 
-fn children() -> MutexGuard<'static, Children> {
+fn children() -> MutexGuard<'static, Vec<u32>> {
     CHILDREN.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// Has this process been interrupted (a signal of [`install_interrupt_handler`] came)?
+pub fn interrupted() -> bool {
+    SIGNALLED.get().is_some_and(|f| f.load(Ordering::SeqCst))
+}
+
 /// Starts `command` as a child process that an interruption of this one passes its signal on
-/// to and waits for (up to 30 s); wait for it with [`wait_child`]. `None` once this process is
-/// interrupted: no child starts then.
+/// to and waits for (up to 30 s, then kills it); wait for it with [`wait_child`]. `None` once
+/// this process is interrupted: no child starts then. (Signals are passed on under Linux.)
 ///
 /// # Errors
 /// The operating system's, when the child cannot start.
 pub fn spawn_child(command: &mut Command) -> io::Result<Option<Child>> {
     let mut c = children();
-    if c.interrupted {
+    if interrupted() {
         return Ok(None);
     }
     let child = command.spawn()?;
-    c.pids.push(child.id());
+    c.push(child.id());
     Ok(Some(child))
 }
 
@@ -53,44 +53,45 @@ pub fn spawn_child(command: &mut Command) -> io::Result<Option<Child>> {
 /// The operating system's, when it cannot be waited for.
 pub fn wait_child(mut child: Child) -> io::Result<ExitStatus> {
     let status = child.wait();
-    children().pids.retain(|&p| p != child.id());
+    children().retain(|&p| p != child.id());
     status
-}
-
-/// Has this process been interrupted (a signal of [`install_interrupt_handler`] came)?
-pub fn interrupted() -> bool {
-    children().interrupted
 }
 
 /// When this process has been interrupted, waits for the handler to end it (with the
 /// signal's exit status, after its children): the caller's work, cut short, must not end it
-/// first with an error of its own. Returns at once otherwise.
+/// first with an error of its own. Past the handler's grace period (it may have failed), the
+/// process ends here with the interruption's status. Returns at once otherwise.
 pub fn await_interruption() {
     if interrupted() {
-        loop {
-            std::thread::park();
-        }
+        std::thread::sleep(CHILDREN_GRACE + Duration::from_secs(5));
+        std::process::exit(super::atomic::INTERRUPTED_EXIT_CODE);
     }
 }
 
-/// Passes `signal` on to the children, and waits until they have ended (or the grace period).
-#[cfg(unix)]
+/// Passes `signal` on to the children and waits until they have ended; after the grace period,
+/// kills those left (their temporary files are removed as stale by a later run).
+#[cfg(target_os = "linux")]
 fn stop_children(signal: i32) {
-    {
-        let mut c = children();
-        c.interrupted = true;
-        let sig = rustix::process::Signal::from_named_raw(signal);
-        for &p in &c.pids {
-            if let (Some(pid), Some(sig)) = (rustix::process::Pid::from_raw(p as i32), sig) {
-                let _ = rustix::process::kill_process(pid, sig);
+    use rustix::process::{Pid, Signal, kill_process};
+    let send = |sig: Option<Signal>| {
+        for &p in children().iter() {
+            if let (Some(pid), Some(sig)) = (Pid::from_raw(p as i32), sig) {
+                let _ = kill_process(pid, sig);
             }
         }
-    }
-    let deadline = Instant::now() + CHILDREN_GRACE;
-    while !children().pids.is_empty() && Instant::now() < deadline {
+    };
+    send(Signal::from_named_raw(signal));
+    let deadline = std::time::Instant::now() + CHILDREN_GRACE;
+    while !children().is_empty() && std::time::Instant::now() < deadline {
         std::thread::sleep(Duration::from_millis(10));
     }
+    send(Some(Signal::KILL));
 }
+
+/// Children are not signalled here (no `kill` binding off Linux); they see a terminal's Ctrl-C
+/// themselves.
+#[cfg(not(target_os = "linux"))]
+fn stop_children(_signal: i32) {}
 
 static HANDLER_INSTALLED: AtomicBool = AtomicBool::new(false);
 
@@ -113,6 +114,11 @@ pub fn install_interrupt_handler() -> Result<()> {
     #[cfg(unix)]
     {
         use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+        use std::io::Write;
+        let flag = SIGNALLED.get_or_init(|| Arc::new(AtomicBool::new(false)));
+        for sig in [SIGINT, SIGTERM, SIGHUP] {
+            signal_hook::flag::register(sig, flag.clone()).map_err(failed)?;
+        }
         let mut signals =
             signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]).map_err(failed)?;
         std::thread::Builder::new()
@@ -126,7 +132,9 @@ pub fn install_interrupt_handler() -> Result<()> {
                         SIGTERM => "SIGTERM",
                         _ => "SIGHUP",
                     };
-                    eprintln!(
+                    // Never a panic here (a closed terminal after SIGHUP): the exit must come.
+                    let _ = writeln!(
+                        io::stderr(),
                         "sweeptin: interrupted by {name}; removed {removed} temporary file(s)"
                     );
                     std::process::exit(128 + signal);
@@ -135,6 +143,6 @@ pub fn install_interrupt_handler() -> Result<()> {
             .map_err(failed)?;
     }
     #[cfg(not(unix))]
-    let _ = failed;
+    let _ = (failed, cleanup_registered_temps, stop_children);
     Ok(())
 }

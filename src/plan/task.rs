@@ -448,7 +448,8 @@ impl Plan {
     }
 
     /// Refuses, when the plan is made, a budget in which no task's DEM fits (every task would
-    /// fail, as one run with it fails before any work).
+    /// fail, as one run with it fails before any work). The budget is the task's here (under
+    /// this machine's address-space limit, if any; at least 16 MiB), as a task would take it.
     ///
     /// # Errors
     /// [`Error::Options`] from [`DemSink::check_size`], as one run gives it.

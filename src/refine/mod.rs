@@ -280,6 +280,7 @@ pub fn refine_pslg(
     options: &RefineOptions,
 ) -> Result<Refined> {
     options.validate()?;
+    room(points.len() as u64 * SETUP_BYTES, "refine's triangulation")?;
     let cdt = crate::triangulate_cdt(points, segments, &crate::Options::default())?;
     if cdt.duplicates > 0 {
         return Err(Error::Refine(format!(

@@ -598,16 +598,30 @@ pub(crate) fn run(
             // The plan's tile is `per × per` tiles of this grid (its side halved `log2 per`
             // times, edges on the multiples of both): those of the plan tile holding its centre.
             // Its edges, products of a side such as 27.9, may round into the tiles beside it.
-            let per = options.tile.map_or(1, |t| (t / g.tile).round() as i64).max(1);
             let t = sc.tile;
-            let (bx, by) = g.block_of((t[0] + t[2]) / 2.0, (t[1] + t[3]) / 2.0);
-            let (tx, ty) = g.tile_of_block(bx, by);
-            let (x0, y0) = (tx.div_euclid(per) * per, ty.div_euclid(per) * per);
-            grid::BlockRect {
-                x0,
-                y0,
-                x1: x0 + per,
-                y1: y0 + per,
+            let tile_at = |x: f64, y: f64| {
+                let (bx, by) = g.block_of(x, y);
+                g.tile_of_block(bx, by)
+            };
+            match options.tile {
+                Some(side) => {
+                    let per = ((side / g.tile).round() as i64).max(1);
+                    let (tx, ty) = tile_at((t[0] + t[2]) / 2.0, (t[1] + t[3]) / 2.0);
+                    let (x0, y0) = (tx.div_euclid(per) * per, ty.div_euclid(per) * per);
+                    grid::BlockRect {
+                        x0,
+                        y0,
+                        x1: x0 + per,
+                        y1: y0 + per,
+                    }
+                }
+                // A scope without the plan's side (a library caller): the tiles its corners
+                // fall in.
+                None => {
+                    let (x0, y0) = tile_at(t[0], t[1]);
+                    let (x1, y1) = tile_at(t[2], t[3]);
+                    grid::BlockRect { x0, y0, x1, y1 }
+                }
             }
         }
     };
