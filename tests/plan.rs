@@ -594,6 +594,18 @@ fn failed_tasks_set_the_exit_status_and_resume_runs_them_again() {
     for r in records(&job, n) {
         assert!(r["status"] == "done" || r["status"] == "empty", "{r}");
     }
+    // A tile cut short after its task finished (a full disk, a copy interrupted) runs again.
+    let tile = job.join(records(&job, n)[0]["outputs"][0][1].as_str().unwrap());
+    let whole = std::fs::read(&tile).unwrap();
+    std::fs::write(&tile, &whole[..100]).unwrap();
+    sweeptin(
+        &["run", s(&plan), "--all", "--resume", "-q"],
+        "run --resume",
+    );
+    assert!(
+        std::fs::read(&tile).unwrap() == whole,
+        "the cut tile was not run again"
+    );
 }
 
 /// A plan over a COPC file: each task decodes only the octree nodes of its tile and buffer

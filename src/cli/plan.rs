@@ -64,7 +64,8 @@ pub struct RunArgs {
     #[arg(long, value_name = "N", default_value_t = 1, requires = "all",
           value_parser = super::input::parse_threads)]
     pub jobs: usize,
-    /// Skip tasks that already finished (their record `tiles/task_<i>.json` exists).
+    /// Skip tasks that already finished: their record `tiles/task_<i>.json` exists and their
+    /// outputs have the sizes it records.
     #[arg(long)]
     pub resume: bool,
     /// Threads per task (default: every core, divided among --jobs).

@@ -111,6 +111,10 @@ pub struct TaskRecord {
     pub seconds: f64,
     /// The task's outputs, by product name.
     pub outputs: Vec<(String, PathBuf)>,
+    /// The sizes of `outputs` in bytes when the task finished: `--resume` runs a task again
+    /// when one no longer has its size (a truncated tile). Empty in records of older builds.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bytes: Vec<u64>,
     /// Exact volume partial sums (cut, fill, cut area, fill area, area), for `volume`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub volume: Option<[Vec<f64>; 5]>,

@@ -279,11 +279,18 @@ impl Plan {
         })
     }
 
-    /// Has task `i` finished, with its record readable and every output it names present? (What
-    /// a resumed run skips; anything less runs again.)
+    /// Has task `i` finished, with its record readable and every output it names present, of the
+    /// size it had then? (What a resumed run skips; anything less, a truncated tile too, runs
+    /// again.)
     pub fn finished(&self, dir: &Path, i: usize) -> bool {
         match self.record(dir, i) {
-            Ok(Some(r)) => r.outputs.iter().all(|(_, p)| dir.join(p).is_file()),
+            Ok(Some(r)) => r.outputs.iter().enumerate().all(|(k, (_, p))| {
+                let len = std::fs::metadata(dir.join(p))
+                    .ok()
+                    .filter(|m| m.is_file())
+                    .map(|m| m.len());
+                len.is_some() && r.bytes.get(k).is_none_or(|&b| len == Some(b))
+            }),
             _ => false,
         }
     }
@@ -349,6 +356,11 @@ impl Plan {
             }
         };
         record.seconds = start.elapsed().as_secs_f64();
+        record.bytes = record
+            .outputs
+            .iter()
+            .map(|(_, p)| std::fs::metadata(dir.join(p)).map_or(0, |m| m.len()))
+            .collect();
         self.finish_task(dir, &record)?;
         Ok(record)
     }
@@ -603,6 +615,7 @@ fn record_of(
         triangles: run.triangles,
         seconds: 0.0,
         outputs,
+        bytes: Vec::new(),
         volume,
     }
 }
