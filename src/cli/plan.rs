@@ -397,8 +397,6 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
                 )
             })?;
     }
-    plan.check_task_memory()
-        .context("a task's DEM (one tile) does not fit the plan's --mem")?;
     if dir.exists() && !dir.is_dir() {
         bail!("{}: not a directory", dir.display());
     }

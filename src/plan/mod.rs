@@ -142,7 +142,8 @@ impl Plan {
     /// [`Error::Options`] for a bad tile size, buffer or job option, and for a line vertex
     /// without z (naming it); [`Error::Format`] for a file that is not
     /// LAS/LAZ; the header reader's errors, also for files that cannot be read together (CRS,
-    /// formats), as a single run would refuse them; the line readers' and cleaning's errors.
+    /// formats), as a single run would refuse them; the line readers' and cleaning's errors;
+    /// [`Error::Options`] for a `--mem` in which no task's DEM fits.
     pub fn new(
         job: Job,
         args: Vec<String>,
@@ -274,7 +275,7 @@ impl Plan {
                 }
             }
         }
-        Ok(Plan {
+        let plan = Plan {
             version: if job.lines.is_some() {
                 PLAN_VERSION_LINES
             } else {
@@ -289,7 +290,9 @@ impl Plan {
             buffer,
             cell,
             tiles,
-        })
+        };
+        plan.check_task_memory()?;
+        Ok(plan)
     }
 
     /// Writes `DIR/plan.json` (atomically) and creates `DIR/tiles/`.

@@ -465,7 +465,7 @@ impl Plan {
     ///
     /// # Errors
     /// [`Error::Options`] from [`DemSink::check_size`], as one run gives it.
-    pub fn check_task_memory(&self) -> Result<()> {
+    pub(crate) fn check_task_memory(&self) -> Result<()> {
         let (
             Product::Dem {
                 cell,
@@ -479,7 +479,12 @@ impl Plan {
             return Ok(());
         };
         let options = self.dem_options(t.bounds, *cell, *align, *nodata)?;
-        DemSink::new(Path::new("task.tif"), options)?.check_size(t.bounds)
+        let sink = DemSink::new(Path::new("task.tif"), options)?;
+        sink.check_size(t.bounds).map_err(|e| {
+            Error::Options(format!(
+                "a task's DEM (one tile) does not fit the plan's --mem: {e}"
+            ))
+        })
     }
 
     /// The sinks of task `i`, writing under `dir/tiles/`.
