@@ -50,6 +50,35 @@ fn cleanup_removes_every_registered_path() {
 /// opening the FIFO; the signal must delete the temporary file and exit with 128 + the signal
 /// (130 for SIGINT, 143 for SIGTERM).
 #[cfg(unix)]
+/// Sends `child` the signal `SIG<signal>` and waits for it to exit (at most `seconds`): its
+/// status and what it wrote on stderr (piped).
+fn signalled(
+    child: &mut std::process::Child,
+    signal: &str,
+    seconds: u64,
+) -> (std::process::ExitStatus, String) {
+    let killed = Command::new("kill")
+        .arg(format!("-{signal}"))
+        .arg(child.id().to_string())
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let waited = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if waited.elapsed() > Duration::from_secs(seconds) {
+            let _ = child.kill();
+            panic!("sweeptin did not exit after SIG{signal}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+    (status, stderr)
+}
+
 fn interrupted_run(signal: &str, code: i32) {
     let dir = tempfile::tempdir().unwrap();
     let fifo = dir.path().join("points.xyz");
@@ -80,25 +109,7 @@ fn interrupted_run(signal: &str, code: i32) {
         temp.iter().any(|n| n.starts_with(".out.ply.sweeptin-")),
         "{temp:?}"
     );
-    let killed = Command::new("kill")
-        .arg(format!("-{signal}"))
-        .arg(child.id().to_string())
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    let waited = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status;
-        }
-        if waited.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            panic!("sweeptin did not exit after SIG{signal}");
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    };
-    let mut stderr = String::new();
-    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+    let (status, stderr) = signalled(&mut child, signal, 30);
     assert_eq!(status.code(), Some(code), "{stderr}");
     assert!(stderr.contains("interrupted"), "{stderr}");
     assert_eq!(
@@ -171,25 +182,7 @@ fn sigterm_stops_the_tasks_of_run_all() {
     }
     let needle = plan.to_string_lossy().into_owned();
     assert!(processes_with(&needle).len() >= 2, "no task is running");
-    let killed = Command::new("kill")
-        .arg("-TERM")
-        .arg(all.id().to_string())
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    let waited = Instant::now();
-    let status = loop {
-        if let Some(status) = all.try_wait().unwrap() {
-            break status;
-        }
-        if waited.elapsed() > Duration::from_secs(60) {
-            let _ = all.kill();
-            panic!("run --all did not exit after SIGTERM");
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    };
-    let mut stderr = String::new();
-    std::io::Read::read_to_string(&mut all.stderr.take().unwrap(), &mut stderr).unwrap();
+    let (status, stderr) = signalled(&mut all, "TERM", 60);
     assert_eq!(status.code(), Some(143), "{stderr}");
     assert_eq!(
         processes_with(&needle),
