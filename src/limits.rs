@@ -33,7 +33,7 @@ pub fn check_threads(threads: usize) -> crate::Result<()> {
     if threads > MAX_THREADS {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         return Err(crate::Error::Options(format!(
-            "--threads {threads}: at most {MAX_THREADS} (this machine has {cores} cores; 0 \
+            "{threads} threads: at most {MAX_THREADS} (this machine has {cores} cores; 0 \
              means every core)"
         )));
     }

@@ -193,13 +193,7 @@ pub fn parse_threads(s: &str) -> Result<usize, String> {
         .trim()
         .parse()
         .map_err(|_| format!("'{s}' is not a whole number of threads"))?;
-    if n > pipeline::MAX_THREADS {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        return Err(format!(
-            "{n} is more than {} (this machine has {cores} cores)",
-            pipeline::MAX_THREADS
-        ));
-    }
+    pipeline::check_threads(n).map_err(|e| e.to_string())?;
     Ok(n)
 }
 
