@@ -47,13 +47,30 @@ pub fn spawn_child(command: &mut Command) -> io::Result<Option<Child>> {
     Ok(Some(child))
 }
 
-/// Waits for a child of [`spawn_child`] to end, and forgets it.
+/// Waits for a child of [`spawn_child`] to end, and forgets it. Under Linux the child is
+/// waited for without being reaped, then forgotten and reaped under the lock the handler holds
+/// while it signals: its pid cannot be reused by another process while it is still listed.
 ///
 /// # Errors
 /// The operating system's, when it cannot be waited for.
 pub fn wait_child(mut child: Child) -> io::Result<ExitStatus> {
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::io::Errno;
+        use rustix::process::{Pid, WaitId, WaitIdOptions, waitid};
+        let pid = Pid::from_child(&child);
+        let ended = WaitIdOptions::EXITED | WaitIdOptions::NOWAIT;
+        loop {
+            match waitid(WaitId::Pid(pid), ended) {
+                Err(Errno::INTR) => continue,
+                Err(e) => return Err(e.into()),
+                Ok(_) => break,
+            }
+        }
+    }
+    let mut c = children();
     let status = child.wait();
-    children().retain(|&p| p != child.id());
+    c.retain(|&p| p != child.id());
     status
 }
 
