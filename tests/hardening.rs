@@ -565,6 +565,13 @@ fn exit_statuses_sort_the_failures() {
     assert!(err(&o).contains("internal error"), "{}", err(&o));
     assert!(err(&o).contains("injected panic"), "{}", err(&o));
     assert_eq!(names(dir), ["bad.laz", "bad.xyz", "grid.xyz"]);
+    // The most threads allowed run (the decoding pool is capped beside the cores: 1,024 idle
+    // workers of it took 1.9 s on this tiny grid).
+    let o = run(
+        dir,
+        &["tin", "grid.xyz", "-o", "t.ply", "--threads", "1024"],
+    );
+    assert_eq!(code(&o), 0, "{}", err(&o));
     let help = sweeptin().arg("--help").output().unwrap();
     let help = String::from_utf8_lossy(&help.stdout);
     for line in ["Exit status:", "  2 ", "  3 ", "  4 ", "  5 ", "  130 "] {

@@ -126,12 +126,7 @@ impl InputArgs {
     /// The library's run options. `--threads N` also sizes the thread pool that decodes and
     /// sorts (once per process), so that `--threads 1` runs on one core.
     pub fn options(&self) -> RunOptions {
-        if self.threads > 0 {
-            // Only the first call can size the global pool; later ones keep it.
-            let _ = rayon::ThreadPoolBuilder::new()
-                .num_threads(self.threads)
-                .build_global();
-        }
+        pipeline::size_thread_pool(self.threads);
         RunOptions {
             mem: self.mem.0,
             tmp_dir: self.tmp_dir.clone(),

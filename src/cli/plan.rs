@@ -511,13 +511,9 @@ fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result
         threads: args.threads.unwrap_or(0),
         progress: !quiet,
     };
-    if let Some(n) = args.threads.filter(|&n| n > 0) {
-        // As for one run (`InputArgs::options`): --threads also sizes the pool that decodes
-        // and sorts, so that `--threads 1` runs on one core (once per process).
-        let _ = rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global();
-    }
+    // As for one run (`InputArgs::options`): --threads also sizes the pool that decodes and
+    // sorts, so that `--threads 1` runs on one core (once per process).
+    sweeptin::pipeline::size_thread_pool(args.threads.unwrap_or(0));
     let r = plan
         .run_task(dir, i, &options)
         .with_context(|| format!("task {i} of {}", plan.tiles.len()))?;

@@ -216,7 +216,7 @@ pub struct RunSummary {
     pub tiles: Option<crate::tiles::TileStats>,
 }
 
-pub use crate::limits::{MAX_THREADS, anon_rss, check_threads, peak_rss};
+pub use crate::limits::{MAX_THREADS, anon_rss, check_threads, peak_rss, size_thread_pool};
 
 /// Running maximum of [`anon_rss`] samples.
 #[derive(Debug, Default)]
