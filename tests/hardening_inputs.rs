@@ -518,4 +518,23 @@ fn header_boxes_that_say_nothing_do_not_decide_the_grid() {
     );
     assert_eq!(code(&o), 3, "{}", err(&o));
     assert!(err(&o).contains("zero.las") && err(&o).contains("says nothing"));
+    // Nor may such a box prove that a file misses --bbox: its points were skipped without a
+    // word beside another file (exit 0, half the DEM nodata). The box straddles both tiles.
+    let bbox = format!("{},{},{},{}", x0 + 30.0, y0 + 10.0, x0 + 70.0, y0 + 40.0);
+    let clip = |file: &str, out: &str| {
+        let o = run(
+            dir,
+            &[
+                "dem", file, b, "--cell", "0.5", "--bbox", &bbox, "-q", "-o", out,
+            ],
+        );
+        assert_eq!(code(&o), 0, "{file}: {}", err(&o));
+        std::fs::read(dir.join(out)).unwrap()
+    };
+    assert!(clip("zero.las", "zb.tif") == clip("a.las", "ab.tif"));
+    // A virtual point cloud places files by these boxes: refused, never written with them.
+    let o = run(dir, &["index", "zero.las", b, "-o", "z.vpc"]);
+    assert_eq!(code(&o), 3, "{}", err(&o));
+    assert!(err(&o).contains("zero.las") && err(&o).contains("says nothing"));
+    assert!(!dir.join("z.vpc").exists());
 }

@@ -11,8 +11,22 @@ use std::path::Path;
 /// folder; returns the size written.
 ///
 /// # Errors
-/// [`crate::Error::Io`] naming `path`; nothing is left under `path` on error.
+/// [`crate::Error::Format`] for a file with points whose header box says nothing (all zero,
+/// inverted or not finite: readers place files by these boxes, and a `.vpc` cannot hold a
+/// NaN); [`crate::Error::Io`] naming `path`; nothing is left under `path` on error.
 pub fn write_vpc(path: &Path, files: &[FileInfo]) -> Result<u64> {
+    if let Some(f) = files
+        .iter()
+        .find(|f| f.point_count > 0 && !f.bounds.usable())
+    {
+        return Err(crate::Error::Format {
+            path: f.path.clone(),
+            message: "its header's box says nothing (all zero, inverted or not finite): a \
+                      virtual point cloud places files by their headers' boxes; repair the \
+                      header (e.g. lasinfo -repair_bb)"
+                .into(),
+        });
+    }
     let dir = path.parent().unwrap_or(Path::new(""));
     let collection = ItemCollection {
         kind: "FeatureCollection".into(),

@@ -327,8 +327,10 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
             .collect::<Result<Vec<_>>>()?;
         let (t, b) = (sc.tile, sc.buffer);
         let area = [t[0] - b, t[1] - b, t[2] + b, t[3] + b];
+        // A COPC file whose header box says nothing is read whole (its box cannot say what
+        // lies outside the area).
         if !infos.is_empty()
-            && infos.iter().all(|i| i.copc.is_some())
+            && infos.iter().all(|i| i.copc.is_some() && i.known_rect().is_some())
             && let Some(bbox) = crate::input::las::BBox::new(area[0], area[1], area[2], area[3])
         {
             let options = ReadOptions {

@@ -141,6 +141,13 @@ impl FileInfo {
         let b = &self.bounds;
         [b.min[0], b.min[1], b.max[0], b.max[1]]
     }
+
+    /// The header extent when it says where the points are ([`Bounds3::usable`]): only such
+    /// a box may prove that a file misses an area (an all-zero box left by a writer that did
+    /// not compute it made `--bbox` skip the file's points without a word).
+    pub fn known_rect(&self) -> Option<[f64; 4]> {
+        self.bounds.usable().then(|| self.rect())
+    }
 }
 
 pub(crate) fn format_error(path: &Path, message: impl Into<String>) -> Error {

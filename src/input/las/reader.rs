@@ -178,7 +178,9 @@ impl LidarReader {
                     e.bounds.max[0],
                     e.bounds.max[1],
                 ];
-                let info = if e.points > 0 && !compiled.misses(rect, margin(rect, 0.01)) {
+                // A box that says nothing (another writer's) cannot prove the file misses.
+                let misses = e.bounds.usable() && compiled.misses(rect, margin(rect, 0.01));
+                let info = if e.points > 0 && !misses {
                     let info = inspect(&e.path)?;
                     if info.point_count != e.points {
                         return Err(format_error(
@@ -444,9 +446,9 @@ impl LidarReader {
                 self.stats.skipped += s.points;
                 continue;
             };
-            let rect = info.rect();
-            let m = margin(rect, info.scale[0].max(info.scale[1]));
-            if self.filter.misses(rect, m) {
+            let step = info.scale[0].max(info.scale[1]);
+            let m = info.known_rect().map_or(step, |r| margin(r, step));
+            if info.known_rect().is_some_and(|r| self.filter.misses(r, m)) {
                 self.stats.skipped += s.points;
                 continue;
             }

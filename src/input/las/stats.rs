@@ -137,7 +137,7 @@ pub fn scan(path: &Path, filter: &Filter, parallel: bool) -> Result<PointStats> 
         let mut d = FileDecoder::open(&info)?;
         let step = info.scale[0].max(info.scale[1]);
         let keep = |n: [f64; 4]| !compiled.misses(n, step);
-        let all = if compiled.misses(r, step) {
+        let all = if info.known_rect().is_some_and(|r| compiled.misses(r, step)) {
             Vec::new()
         } else {
             spans(&info, 1 << 16, Some(&keep))

@@ -233,7 +233,16 @@ fn entry(path: &Path, dir: &Path, i: usize, item: Item) -> Result<VpcEntry> {
 /// The STAC item of a file, with its path relative to `dir` (the `.vpc`'s folder) when that is
 /// possible.
 pub fn item(info: &FileInfo, dir: &Path) -> Item {
-    let b = &info.bounds;
+    // A file without points may have any box; a `.vpc` holds numbers (never a NaN's null).
+    let none = super::Bounds3 {
+        min: [0.0; 3],
+        max: [0.0; 3],
+    };
+    let b = if info.bounds.usable() {
+        &info.bounds
+    } else {
+        &none
+    };
     let rect = [b.min[0], b.min[1], b.max[0], b.max[1]];
     let ring = vec![
         [rect[0], rect[1]],
