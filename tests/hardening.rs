@@ -361,6 +361,10 @@ fn outputs_never_overwrite_an_input_or_each_other() {
     grid(dir);
     let before = std::fs::read(dir.join("grid.xyz")).unwrap();
     std::os::unix::fs::symlink("grid.xyz", dir.join("alias.ply")).unwrap();
+    // A side file (an ASCII grid's .prj, a PNG's world file) through a link to an input: the
+    // .prj replaced the input.
+    std::os::unix::fs::symlink("grid.xyz", dir.join("alias.prj")).unwrap();
+    std::os::unix::fs::symlink("grid.xyz", dir.join("shade.pgw")).unwrap();
     std::fs::write(dir.join("q.csv"), "1 1\n").unwrap();
     std::fs::write(
         dir.join("l.geojson"),
@@ -384,6 +388,9 @@ fn outputs_never_overwrite_an_input_or_each_other() {
             "l.geojson",
         ],
         &["products", "grid.xyz", "--dem", "a.tif", "--mesh", "a.tif"],
+        &["dem", "grid.xyz", "-o", "alias.asc"],
+        &["dem", "grid.xyz", "-o", "a.tif", "--hillshade", "shade.png"],
+        &["dem", "grid.xyz", "-o", "a.asc", "--contours", "a.prj"],
         &[
             "tin",
             "grid.xyz",
@@ -404,10 +411,22 @@ fn outputs_never_overwrite_an_input_or_each_other() {
             err(&o)
         );
     }
+    // A side file in the way (a directory) is refused before the grid is written.
+    std::fs::create_dir(dir.join("b.prj")).unwrap();
+    let o = run(dir, &["dem", "grid.xyz", "-o", "b.asc"]);
+    assert_eq!(code(&o), 4, "{}", err(&o));
     assert_eq!(std::fs::read(dir.join("grid.xyz")).unwrap(), before);
     assert_eq!(
         names(dir),
-        ["alias.ply", "grid.xyz", "l.geojson", "q.csv"],
+        [
+            "alias.ply",
+            "alias.prj",
+            "b.prj",
+            "grid.xyz",
+            "l.geojson",
+            "q.csv",
+            "shade.pgw"
+        ],
         "something was written"
     );
 }

@@ -231,15 +231,53 @@ fn is_char_device(p: &Path) -> bool {
     }
 }
 
+/// The side files an output at `path` writes beside it: an ESRI ASCII grid's `.prj`, a PNG's
+/// world file and `.prj` (none beside a stream).
+pub fn side_files(path: &Path) -> Vec<PathBuf> {
+    if !matches!(Destination::of(path), Ok(Destination::File { .. })) {
+        return Vec::new();
+    }
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    match ext.to_ascii_lowercase().as_str() {
+        "asc" => vec![path.with_extension("prj")],
+        "png" => vec![
+            super::world::world_file_path(path),
+            path.with_extension("prj"),
+        ],
+        _ => Vec::new(),
+    }
+}
+
 /// Refuses, before any work, outputs (`(flag, path)`) that are the same file as each other or
 /// as one of the `inputs` of `of` (the run, the plan): compared by absolute path, by device and
 /// inode where they exist, and through symbolic links. Several outputs may go to one character
-/// device (`/dev/null`). An output never overwrites an input or another output.
+/// device (`/dev/null`). An output never overwrites an input or another output. The outputs'
+/// side files ([`side_files`]) count as outputs, and one in the way (a directory, a FIFO) is
+/// refused too: a `.prj` through a symbolic link replaced an input.
 ///
 /// # Errors
-/// [`Error::Options`] naming the clash.
+/// [`Error::Options`] naming the clash; [`Error::Output`] for a side file in the way.
 pub fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[PathBuf], of: &str) -> Result<()> {
-    for (k, (flag, o)) in outputs.iter().enumerate() {
+    let mut all: Vec<(String, PathBuf)> = outputs
+        .iter()
+        .map(|(f, o)| (f.to_string(), o.to_path_buf()))
+        .collect();
+    for (flag, o) in outputs {
+        for side in side_files(o) {
+            if !matches!(Destination::of(&side)?, Destination::File { .. }) {
+                return Err(Error::Output {
+                    path: side,
+                    message: format!(
+                        "the side file of {flag} {} is not a regular file: a side file never \
+                         replaces one",
+                        o.display()
+                    ),
+                });
+            }
+            all.push((format!("the side file of {flag}"), side));
+        }
+    }
+    for (k, (flag, o)) in all.iter().enumerate() {
         if let Some(i) = inputs.iter().find(|i| same_file(o, i)) {
             return Err(Error::Options(format!(
                 "{flag} {}: that is an input of {of} ({}); an output never overwrites one",
@@ -250,7 +288,7 @@ pub fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[PathBuf], of: &str)
         if is_char_device(o) {
             continue;
         }
-        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same_file(o, p)) {
+        if let Some((other, _)) = all[..k].iter().find(|(_, p)| same_file(o, p)) {
             return Err(Error::Options(format!(
                 "{flag} and {other} name the same file {}",
                 o.display()
