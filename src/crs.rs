@@ -26,6 +26,17 @@ pub struct Crs {
     pub name: Option<String>,
     /// The WKT text, when the CRS was declared as WKT.
     pub wkt: Option<String>,
+    /// GeoTIFF keys given beside the codes, carried to GeoTIFF outputs as they are: the model
+    /// type (`GTModelTypeGeoKey`: 1 projected, 2 geographic).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_type: Option<u16>,
+    /// `ProjLinearUnitsGeoKey` (9001 metre, 9002 foot, 9003 US survey foot), which overrides the
+    /// projected CRS's own unit (many US files in feet say so this way).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub linear_units: Option<u16>,
+    /// `VerticalUnitsGeoKey`, which overrides the vertical CRS's own unit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vertical_units: Option<u16>,
 }
 
 impl Crs {
@@ -43,13 +54,43 @@ impl Crs {
         }
     }
 
-    /// Do two declarations describe the same CRS? Equal EPSG codes when both have one, otherwise
-    /// equal WKT text, otherwise equal names.
+    /// Do two declarations describe the same CRS? Equal EPSG codes when both have one (and
+    /// equal vertical codes, but for a compound WKT without one: PROJ's WKT2 names the vertical
+    /// part only inside the whole's code, the WKT1 spelling gives it apart; equal unit
+    /// overrides),
+    /// otherwise equal WKT text, otherwise equal names.
     pub fn same_as(&self, other: &Crs) -> bool {
+        let units =
+            self.linear_units == other.linear_units && self.vertical_units == other.vertical_units;
+        // A compound's code alone names its vertical part too.
+        let vertical = match (self.vertical_epsg, other.vertical_epsg) {
+            (Some(a), Some(b)) => a == b,
+            (None, Some(_)) => self.is_compound(),
+            (Some(_), None) => other.is_compound(),
+            (None, None) => true,
+        };
         match (self.epsg, other.epsg) {
-            (Some(a), Some(b)) => a == b && self.vertical_epsg == other.vertical_epsg,
+            (Some(a), Some(b)) => a == b && vertical && units,
             _ if self.wkt.is_some() || other.wkt.is_some() => self.wkt == other.wkt,
-            _ => self.name == other.name && self.vertical_epsg == other.vertical_epsg,
+            _ => self.name == other.name && self.vertical_epsg == other.vertical_epsg && units,
+        }
+    }
+
+    /// Is this a compound CRS given as WKT (`COMPD_CS`, `COMPOUNDCRS`)?
+    fn is_compound(&self) -> bool {
+        self.wkt
+            .as_deref()
+            .and_then(wkt::parse)
+            .is_some_and(|r| matches!(r.keyword.as_str(), "COMPD_CS" | "COMPOUNDCRS"))
+    }
+
+    /// Of two declarations of the same CRS ([`Crs::same_as`]), the one that says more (a
+    /// vertical code).
+    pub fn fuller(self, other: Crs) -> Crs {
+        if self.vertical_epsg.is_none() && other.vertical_epsg.is_some() {
+            other
+        } else {
+            self
         }
     }
 
@@ -128,11 +169,25 @@ impl Crs {
         if epsg.is_none() && vertical_epsg.is_none() && name.is_none() {
             return None;
         }
+        let short = |id: u16| {
+            keys.entries
+                .iter()
+                .find(|e| e.id == id)
+                .and_then(|e| match &e.data {
+                    las::crs::GeoTiffData::U16(v) => Some(*v),
+                    _ => None,
+                })
+        };
+        // A unit key is kept only when it names a unit (not 32767, user-defined).
+        let unit = |id: u16| short(id).filter(|u| (9000..9200).contains(u));
         Some(Crs {
             epsg,
             vertical_epsg,
             name,
             wkt: None,
+            model_type: short(1024).filter(|m| matches!(m, 1 | 2)),
+            linear_units: unit(3076),
+            vertical_units: unit(4099),
         })
     }
 }
@@ -149,12 +204,84 @@ impl fmt::Display for Crs {
         if let Some(n) = &self.name {
             parts.push(format!("\"{n}\""));
         }
+        for (what, u) in [
+            ("units", self.linear_units),
+            ("vertical units", self.vertical_units),
+        ] {
+            if let Some(u) = u {
+                parts.push(format!("{what} {}", unit_name(u)));
+            }
+        }
         if self.wkt.is_some() {
             parts.push("(WKT)".to_string());
         } else {
             parts.push("(GeoTIFF keys)".to_string());
         }
         f.write_str(&parts.join(" "))
+    }
+}
+
+/// The unit of length of a projected CRS, where it can be told without a CRS database.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LengthUnit {
+    /// The metre.
+    Metre,
+    /// The international foot (0.3048 m).
+    Foot,
+    /// The US survey foot (1200/3937 m).
+    UsSurveyFoot,
+}
+
+impl Crs {
+    /// The unit of the horizontal coordinates: a GeoTIFF unit key (3076) when given, else the
+    /// WKT's unit of its projected part (`UNIT` / `LENGTHUNIT` by its factor). `None` when
+    /// only an EPSG code says it (a code's unit needs the EPSG database) or the unit is another.
+    pub fn length_unit(&self) -> Option<LengthUnit> {
+        match self.linear_units {
+            Some(9001) => return Some(LengthUnit::Metre),
+            Some(9002) => return Some(LengthUnit::Foot),
+            Some(9003) => return Some(LengthUnit::UsSurveyFoot),
+            _ => {}
+        }
+        let root = wkt::parse(self.wkt.as_deref()?)?;
+        let projected =
+            |n: &wkt::Node| matches!(n.keyword.as_str(), "PROJCS" | "PROJCRS" | "PROJECTEDCRS");
+        let node = if projected(&root) {
+            &root
+        } else {
+            root.children().find(|c| projected(c))?
+        };
+        let is_unit = |n: &&wkt::Node| matches!(n.keyword.as_str(), "UNIT" | "LENGTHUNIT");
+        // WKT1 and WKT2 give the unit as a child; WKT2 may give it in each AXIS instead.
+        let unit = node.children().find(is_unit).or_else(|| {
+            node.children()
+                .filter(|c| c.keyword == "AXIS")
+                .find_map(|a| a.children().find(is_unit))
+        })?;
+        let factor: f64 = unit.args.iter().find_map(|a| match a {
+            wkt::Arg::Bare(v) => v.trim().parse().ok(),
+            _ => None,
+        })?;
+        let near = |f: f64| (factor - f).abs() < 1e-9;
+        if near(1.0) {
+            Some(LengthUnit::Metre)
+        } else if near(0.3048) {
+            Some(LengthUnit::Foot)
+        } else if near(1200.0 / 3937.0) {
+            Some(LengthUnit::UsSurveyFoot)
+        } else {
+            None
+        }
+    }
+}
+
+/// The name of an EPSG unit of length code as GeoTIFF keys give it.
+pub fn unit_name(code: u16) -> String {
+    match code {
+        9001 => "metre".into(),
+        9002 => "foot".into(),
+        9003 => "US survey foot".into(),
+        c => format!("EPSG:{c}"),
     }
 }
 
@@ -172,7 +299,8 @@ impl Crs {
     /// The EPSG code of the horizontal CRS and its kind, for writers that need them apart (such as
     /// GeoTIFF keys). From WKT: the root object, or for a compound CRS its first projected or
     /// geographic child. Without WKT (GeoTIFF keys in the LAS header), [`Crs::epsg`] with a guess
-    /// of the kind from the code: 4000–4999 are geographic, everything else projected.
+    /// of the kind, the header's model type, or else from the code: 4000–4999 geographic,
+    /// everything else projected.
     pub fn horizontal_epsg(&self) -> Option<(u32, HorizontalKind)> {
         let kind_of = |keyword: &str| match keyword {
             "PROJCS" | "PROJCRS" | "PROJECTEDCRS" => Some(HorizontalKind::Projected),
@@ -191,10 +319,11 @@ impl Crs {
                 .and_then(|(c, k)| c.epsg().map(|code| (code, k)));
         }
         let code = self.epsg?;
-        let kind = if (4000..5000).contains(&code) {
-            HorizontalKind::Geographic
-        } else {
-            HorizontalKind::Projected
+        let kind = match self.model_type {
+            Some(2) => HorizontalKind::Geographic,
+            Some(_) => HorizontalKind::Projected,
+            None if (4000..5000).contains(&code) => HorizontalKind::Geographic,
+            None => HorizontalKind::Projected,
         };
         Some((code, kind))
     }
@@ -336,6 +465,32 @@ mod tests {
     use super::*;
 
     const RD_NAP: &str = r#"COMPD_CS["Amersfoort / RD New + NAP height",PROJCS["Amersfoort / RD New",GEOGCS["Amersfoort",AUTHORITY["EPSG","4289"]],AUTHORITY["EPSG","28992"]],VERT_CS["NAP height",VERT_DATUM["Normaal Amsterdams Peil",2005,AUTHORITY["EPSG","5109"]],AUTHORITY["EPSG","5709"]],AUTHORITY["EPSG","7415"]]"#;
+
+    #[test]
+    fn wkt2_compound_with_one_code_is_its_wkt1_spelling() {
+        // PROJ's WKT2 for EPSG:7415 gives the code on the whole only; its WKT1 gives the parts'
+        // codes too: one CRS (files with both were refused as in two CRSs).
+        let wkt2 = Crs::from_wkt_bytes(
+            b"COMPOUNDCRS[\"Amersfoort / RD New + NAP height\",PROJCRS[\"Amersfoort / RD New\"],\
+              VERTCRS[\"NAP height\"],ID[\"EPSG\",7415]]",
+        )
+        .unwrap();
+        let wkt1 = Crs::from_wkt_bytes(
+            b"COMPD_CS[\"Amersfoort / RD New + NAP height\",PROJCS[\"Amersfoort / RD New\",\
+              AUTHORITY[\"EPSG\",\"28992\"]],VERT_CS[\"NAP height\",AUTHORITY[\"EPSG\",\"5709\"]],\
+              AUTHORITY[\"EPSG\",\"7415\"]]",
+        )
+        .unwrap();
+        assert_eq!((wkt2.epsg, wkt2.vertical_epsg), (Some(7415), None));
+        assert!(wkt2.same_as(&wkt1) && wkt1.same_as(&wkt2));
+        assert_eq!(wkt2.clone().fuller(wkt1.clone()), wkt1);
+        // Different vertical codes stay different.
+        let other = Crs {
+            vertical_epsg: Some(5710),
+            ..wkt1.clone()
+        };
+        assert!(!other.same_as(&wkt1));
+    }
 
     #[test]
     fn wkt1_compound() {

@@ -491,7 +491,25 @@ pub fn run_products(
     run.peak_rss_bytes = pipeline::peak_rss();
     warn(&run);
     warn_clipped(&run);
+    let crs = match p.crs()? {
+        Some(c) => Some(c),
+        None => run.crs.as_deref().and_then(|t| Crs::parse(t).ok()),
+    };
+    warn_crs(crs.as_ref());
     Ok((run, products))
+}
+
+/// Warns when the CRS has no EPSG code for its horizontal part, which GeoTIFF keys and a
+/// GeoJSON's `crs` need (a WKT2 compound that gives a code only for the whole, a custom WKT):
+/// those outputs go without a CRS, and `--crs` can name one.
+fn warn_crs(crs: Option<&Crs>) {
+    if let Some(c) = crs.filter(|c| c.horizontal_epsg().is_none()) {
+        eprintln!(
+            "sweeptin: warning: the CRS {c} gives no EPSG code for its horizontal part: GeoTIFF \
+             and GeoJSON outputs carry no CRS (an ASCII grid's .prj keeps the WKT); name it with \
+             --crs EPSG:code or EPSG:code+vertical"
+        );
+    }
 }
 
 #[cfg(test)]

@@ -216,9 +216,16 @@ fn geokeys(crs: Option<&Crs>) -> Vec<u16> {
         };
         keys.push([1024, 0, 1, model]);
         keys.push([key, 0, 1, code]);
+        // A unit override of the input's keys (feet) goes with its code.
+        if let (HorizontalKind::Projected, Some(u)) = (kind, crs.and_then(|c| c.linear_units)) {
+            keys.push([3076, 0, 1, u]);
+        }
     }
     if let Some(v) = crs.and_then(|c| c.vertical_epsg).and_then(code16) {
         keys.push([4096, 0, 1, v]);
+        if let Some(u) = crs.and_then(|c| c.vertical_units) {
+            keys.push([4099, 0, 1, u]);
+        }
     }
     keys.sort_unstable();
     let mut dir = vec![1, 1, 0, keys.len() as u16];
@@ -557,6 +564,32 @@ mod tests {
         assert_eq!(
             geokeys(&spec)[4..],
             [1024, 0, 1, 2, 1025, 0, 1, 1, 2048, 0, 1, 4326]
+        );
+        // The input keys' model type (EPSG:6318 is geographic, outside 4000–4999) and unit
+        // overrides (feet: they were dropped, and feet read as metres).
+        spec.crs = Some(Crs {
+            epsg: Some(6318),
+            model_type: Some(2),
+            ..Crs::default()
+        });
+        assert_eq!(
+            geokeys(&spec)[4..],
+            [1024, 0, 1, 2, 1025, 0, 1, 1, 2048, 0, 1, 6318]
+        );
+        spec.crs = Some(Crs {
+            epsg: Some(26915),
+            vertical_epsg: Some(5703),
+            model_type: Some(1),
+            linear_units: Some(9002),
+            vertical_units: Some(9002),
+            ..Crs::default()
+        });
+        assert_eq!(
+            geokeys(&spec)[4..],
+            [
+                1024, 0, 1, 1, 1025, 0, 1, 1, 3072, 0, 1, 26915, 3076, 0, 1, 9002, 4096, 0, 1,
+                5703, 4099, 0, 1, 9002
+            ]
         );
     }
 

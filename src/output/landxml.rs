@@ -135,6 +135,34 @@ impl MeshSink for LandXmlWriter {
     }
 }
 
+/// The `<Units>` element: imperial when the CRS's WKT (or a GeoTIFF unit key) says feet,
+/// metric otherwise (a CRS known only by its EPSG code is taken as metric: its unit needs the
+/// EPSG database).
+fn units(meta: &MeshMeta) -> String {
+    use crate::crs::{Crs, LengthUnit};
+    let unit = meta
+        .crs
+        .as_deref()
+        .and_then(|c| Crs::parse(c).ok())
+        .and_then(|c| c.length_unit());
+    let feet = match unit {
+        Some(LengthUnit::Foot) => "foot",
+        Some(LengthUnit::UsSurveyFoot) => "USSurveyFoot",
+        _ => {
+            return "<Units><Metric areaUnit=\"squareMeter\" linearUnit=\"meter\" \
+                    volumeUnit=\"cubicMeter\" temperatureUnit=\"celsius\" \
+                    pressureUnit=\"milliBars\" diameterUnit=\"millimeter\" \
+                    angularUnit=\"decimal degrees\" directionUnit=\"decimal degrees\"/></Units>\n"
+                .into();
+        }
+    };
+    format!(
+        "<Units><Imperial areaUnit=\"squareFoot\" linearUnit=\"{feet}\" volumeUnit=\"cubicFeet\" \
+         temperatureUnit=\"fahrenheit\" pressureUnit=\"inHG\" diameterUnit=\"inch\" \
+         angularUnit=\"decimal degrees\" directionUnit=\"decimal degrees\"/></Units>\n"
+    )
+}
+
 /// Everything up to and including `<Pnts>`.
 fn prologue(surface: &str, meta: &MeshMeta, (date, time): (String, String)) -> String {
     let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
@@ -148,11 +176,7 @@ fn prologue(surface: &str, meta: &MeshMeta, (date, time): (String, String)) -> S
     for c in meta.comment_lines() {
         s.push_str(&format!("<!-- {} -->\n", xml_comment(&c)));
     }
-    s.push_str(
-        "<Units><Metric areaUnit=\"squareMeter\" linearUnit=\"meter\" volumeUnit=\"cubicMeter\" \
-         temperatureUnit=\"celsius\" pressureUnit=\"milliBars\" diameterUnit=\"millimeter\" \
-         angularUnit=\"decimal degrees\" directionUnit=\"decimal degrees\"/></Units>\n",
-    );
+    s.push_str(&units(meta));
     if let Some(code) = meta.epsg_code() {
         s.push_str(&format!(
             "<CoordinateSystem name=\"EPSG:{code}\" epsgCode=\"{code}\"/>\n"
@@ -277,9 +301,32 @@ mod tests {
             crs: Some("PROJCS[\"D96 / TM\",\n GEOGCS[\"x\"]]".into()),
             comments: vec![],
         };
-        let p = prologue("t", &wkt, date);
+        let p = prologue("t", &wkt, date.clone());
         assert!(
             p.contains("<CoordinateSystem ogcWktCode=\"PROJCS[&quot;D96 / TM&quot;, GEOGCS[&quot;x&quot;]]\"/>"),
+            "{p}"
+        );
+        assert!(
+            p.contains("<Metric ") && p.contains("linearUnit=\"meter\""),
+            "{p}"
+        );
+        // Feet from the WKT's unit: WKT1's UNIT, WKT2's LENGTHUNIT in the axes.
+        let feet = |crs: &str| MeshMeta {
+            crs: Some(crs.into()),
+            comments: vec![],
+        };
+        let wkt1 = "PROJCS[\"NAD83 / NY Long Island (ftUS)\",GEOGCS[\"NAD83\"],\
+                    UNIT[\"US survey foot\",0.304800609601219]]";
+        let p = prologue("t", &feet(wkt1), date.clone());
+        assert!(
+            p.contains("<Imperial areaUnit=\"squareFoot\" linearUnit=\"USSurveyFoot\""),
+            "{p}"
+        );
+        let wkt2 = "COMPOUNDCRS[\"x\",PROJCRS[\"y\",BASEGEOGCRS[\"z\"],CS[Cartesian,2],\
+                    AXIS[\"easting\",east,LENGTHUNIT[\"foot\",0.3048]]],VERTCRS[\"v\"]]";
+        let p = prologue("t", &feet(wkt2), date);
+        assert!(
+            p.contains("<Imperial ") && p.contains("linearUnit=\"foot\""),
             "{p}"
         );
     }

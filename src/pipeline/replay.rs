@@ -10,16 +10,9 @@ use std::time::Instant;
 
 /// A CRS from the text a streaming mesh records (`EPSG:n` or WKT).
 fn crs_from_text(t: &str) -> Option<Crs> {
-    if let Some(code) = t
-        .trim()
-        .strip_prefix("EPSG:")
-        .and_then(|c| c.split('+').next())
-        .and_then(|c| c.parse().ok())
-    {
-        return Some(Crs {
-            epsg: Some(code),
-            ..Crs::default()
-        });
+    // "EPSG:h+v" keeps its vertical part (it came back as "EPSG:h").
+    if t.trim().to_ascii_uppercase().starts_with("EPSG:") {
+        return Crs::parse(t).ok();
     }
     Crs::from_wkt_bytes(t.as_bytes())
 }

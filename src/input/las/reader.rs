@@ -492,6 +492,7 @@ fn common_crs(declared: &[(PathBuf, Crs)]) -> Result<Option<Crs>> {
     let Some((first_path, first)) = declared.first() else {
         return Ok(None);
     };
+    let mut common = first.clone();
     for (path, crs) in &declared[1..] {
         if !first.same_as(crs) {
             return Err(format_error(
@@ -503,8 +504,9 @@ fn common_crs(declared: &[(PathBuf, Crs)]) -> Result<Option<Crs>> {
                 ),
             ));
         }
+        common = common.fuller(crs.clone());
     }
-    Ok(Some(first.clone()))
+    Ok(Some(common))
 }
 
 #[cfg(test)]
