@@ -382,7 +382,7 @@ impl GridPlan {
             GridExtent::Auto => None,
             GridExtent::BBox { bbox, snap } => {
                 let side = |v: f64, up: bool| -> Result<i64> {
-                    let q = v / cell;
+                    let q = exact_index(v, cell)?;
                     let k = q.round();
                     if (q - k).abs() <= MULTIPLE_TOLERANCE {
                         Ok(k as i64)
@@ -474,6 +474,9 @@ impl GridPlan {
                         total: 0,
                     });
                 }
+                for v in bounds {
+                    exact_index(v, self.cell)?;
+                }
                 let (c, off) = (self.cell, self.align.offset());
                 // The lattice indices whose centres `(k + off) × c` lie in the bounds, decided on
                 // the centres themselves (as `GridSpec` computes them).
@@ -510,6 +513,19 @@ impl GridPlan {
         self.check_size(cols, rows)?;
         Ok(GridSpec::aligned(self.cell, kx0, ky0, cols, rows, nodata).with_align(self.align))
     }
+}
+
+/// `v / cell`, the lattice index of `v`, refused beyond 2^52 cells from 0, where indices are no
+/// longer exact (`--cell 1e-14` at UTM coordinates spun forever looking for its first cell).
+fn exact_index(v: f64, cell: f64) -> Result<f64> {
+    let q = v / cell;
+    if q.abs() > (1u64 << 52) as f64 {
+        return Err(Error::Options(format!(
+            "the coordinate {v} is {q:.3e} cells of {cell:e} from 0, more than 2^52: cell \
+             positions are no longer exact there; use a larger --cell"
+        )));
+    }
+    Ok(q)
 }
 
 /// The lattice of centres with indices `kx0 ..= kx1`, `ky0 ..= ky1`: `(kx0, ky0, cols, rows)`.

@@ -490,6 +490,60 @@ fn rasters_too_large_are_refused_before_any_work() {
     assert_eq!(names(dir), ["grid.xyz"]);
 }
 
+/// Cells and contour levels whose indices pass 2^52 (where a float no longer counts them
+/// exactly) are refused: `--cell 1e-14` at these coordinates spun forever, `--interval 1e-19`
+/// hung, `--interval 1e-30` and `--base 1e19` wrote no line with exit 0.
+#[test]
+fn cells_and_levels_beyond_exact_indices_are_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let laz = small_laz();
+    let laz = laz.to_str().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["dem", laz, "--cell", "1e-14", "-o", "x.tif"], "2^52"),
+        (
+            &[
+                "dem",
+                laz,
+                "--cell",
+                "1e-14",
+                "--bbox",
+                "85700,447200,85720,447220",
+                "-o",
+                "x.tif",
+            ],
+            "2^52",
+        ),
+        (
+            &["contours", laz, "--interval", "1e-19", "-o", "c.geojson"],
+            "too small",
+        ),
+        (
+            &["contours", laz, "--interval", "1e-30", "-o", "c.geojson"],
+            "too small",
+        ),
+        (
+            &[
+                "contours",
+                laz,
+                "--interval",
+                "1",
+                "--base",
+                "1e19",
+                "-o",
+                "c.geojson",
+            ],
+            "2^52",
+        ),
+    ];
+    for (args, says) in cases {
+        let o = run(dir, args);
+        assert_eq!(code(&o), 2, "{args:?}: {}", err(&o));
+        assert!(err(&o).contains(says), "{args:?}: {}", err(&o));
+    }
+    assert!(names(dir).is_empty(), "{:?}", names(dir));
+}
+
 /// The DEM's rows count against --mem: with a budget of a few rows, rows go to the file early and
 /// later cells are written there, and the raster is the same bytes.
 #[test]

@@ -89,24 +89,30 @@ fn heights(t: &[[f64; 3]; 3]) -> (f64, f64) {
 }
 
 impl ContourLevels {
-    /// The heights of `t`, and the levels `k_lo..=k_hi` it may cross (one more on each side).
-    fn span(&self, t: &[[f64; 3]; 3]) -> (f64, f64, i64, i64) {
+    /// The heights of `t`, and the levels `k_lo..=k_hi` it may cross (one more on each side),
+    /// as floating-point numbers (a tiny interval or a far base gives indices beyond `i64`).
+    fn span(&self, t: &[[f64; 3]; 3]) -> (f64, f64, f64, f64) {
         let (zmin, zmax) = heights(t);
-        let k_lo = ((zmin - self.base) / self.interval).floor() as i64 - 1;
-        let k_hi = ((zmax - self.base) / self.interval).ceil() as i64 + 1;
+        let k_lo = ((zmin - self.base) / self.interval).floor() - 1.0;
+        let k_hi = ((zmax - self.base) / self.interval).ceil() + 1.0;
         (zmin, zmax, k_lo, k_hi)
     }
 
     /// The levels `t` crosses (`zmin < level ≤ zmax`), or `Err` with its heights and its span
-    /// of levels when that is more than [`MAX_LEVELS_PER_TRIANGLE`].
+    /// of levels when that is more than [`MAX_LEVELS_PER_TRIANGLE`], or its levels lie more
+    /// than 2^52 intervals from the base (where level indices are no longer exact: an
+    /// interval of 1e-19 hung, a base of 1e19 wrote no line).
     fn crossed(
         &self,
         t: &[[f64; 3]; 3],
-    ) -> std::result::Result<impl Iterator<Item = i64>, (f64, f64, i64)> {
-        let (zmin, zmax, k_lo, k_hi) = self.span(t);
-        if k_hi - k_lo > MAX_LEVELS_PER_TRIANGLE {
-            return Err((zmin, zmax, k_hi - k_lo));
+    ) -> std::result::Result<impl Iterator<Item = i64>, (f64, f64, f64)> {
+        let (zmin, zmax, lo, hi) = self.span(t);
+        const EXACT: f64 = (1u64 << 52) as f64;
+        let span = hi - lo;
+        if !(span <= MAX_LEVELS_PER_TRIANGLE as f64 && lo.abs() <= EXACT && hi.abs() <= EXACT) {
+            return Err((zmin, zmax, span));
         }
+        let (k_lo, k_hi) = (lo as i64, hi as i64);
         let levels = *self;
         Ok((k_lo..=k_hi).filter(move |&k| {
             let l = level_value(levels.base, levels.interval, k);
@@ -590,9 +596,19 @@ impl TriangleSink for ContourSink {
         };
         let levels = self.levels();
         match levels.crossed(&t.v) {
+            Err((zmin, zmax, span)) if span <= MAX_LEVELS_PER_TRIANGLE as f64 => {
+                Err(Error::Options(format!(
+                    "{}: the levels near z {zmin} .. {zmax} lie more than 2^52 intervals \
+                     (--interval {:e}) from --base {:e}: no level can be told exactly there; \
+                     use a base nearer the heights or a larger interval",
+                    self.path.display(),
+                    levels.interval,
+                    levels.base
+                )))
+            }
             Err((zmin, zmax, span)) => Err(Error::Options(format!(
-                "{}: a triangle spans {span} contour levels (z {zmin} .. {zmax}, --interval \
-                 {}): the interval is too small",
+                "{}: a triangle spans {span:.3e} contour levels (z {zmin} .. {zmax}, --interval \
+                 {:e}): the interval is too small",
                 self.path.display(),
                 levels.interval
             ))),
