@@ -59,7 +59,7 @@ pub enum Align {
 
 impl Align {
     /// The centre of lattice index `k` is `(k + offset) × cell`.
-    fn offset(self) -> f64 {
+    pub(crate) fn offset(self) -> f64 {
         match self {
             Align::Edges => 0.5,
             Align::Centres => 0.0,

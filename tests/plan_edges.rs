@@ -37,6 +37,32 @@ fn tiles_with_edges_that_round_each_run_their_own_tile() {
     }
 }
 
+/// Files whose edges lie on tile edges (the IGN tiles end on multiples of 50 m): a DEM plan
+/// has a task per tile holding cell centres, and the mosaic is one run's raster, byte for byte
+/// (a row and a column of empty tasks made the mosaic 200 × 150 against 150 × 100).
+#[test]
+fn a_dem_plan_tiles_only_where_cell_centres_are() {
+    let files = data::ign_tiles();
+    let t = tempfile::tempdir().unwrap();
+    let one = t.path().join("one.tif");
+    let mut args: Vec<&str> = vec!["dem"];
+    args.extend(files.iter().map(|p| s(p)));
+    args.extend(["--cell", "1", "-q", "-o", s(&one)]);
+    sweeptin(&args, "dem");
+    let job = t.path().join("job");
+    let mut args: Vec<&str> = vec!["plan", "dem"];
+    args.extend(files.iter().map(|p| s(p)));
+    args.extend(["--cell", "1", "--tile", "50", "-q", "-o", s(&job)]);
+    sweeptin(&args, "plan");
+    let plan = job.join("plan.json");
+    let p: serde_json::Value = serde_json::from_slice(&std::fs::read(&plan).unwrap()).unwrap();
+    assert_eq!(p["tiles"].as_array().unwrap().len(), files.len());
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
+    let mosaic = t.path().join("m.tif");
+    sweeptin(&["merge", s(&plan), "-o", s(&mosaic), "-q"], "merge");
+    assert!(std::fs::read(&mosaic).unwrap() == std::fs::read(&one).unwrap());
+}
+
 /// The mosaic never goes over a task's output, however its path reaches the tiles: through
 /// `..` or a symbolic link (both replaced a tile with the mosaic, and later merges took it).
 #[test]

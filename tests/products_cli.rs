@@ -248,6 +248,87 @@ fn volume_against_plane_and_surface() {
     assert!(out.contains("net volume   12000.000"), "{out}");
 }
 
+/// Two surfaces that agree except in a raised patch: where they agree there is no cut and no
+/// fill (the planes' rounding made ±1e-16 differences that counted 10 % of the area as cut and
+/// as fill, and any level piece counted as fill); a surface against itself gives zeros.
+#[test]
+fn volume_areas_count_only_where_the_surfaces_differ() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.xyz");
+    let b = dir.path().join("b.xyz");
+    write_points(&a, bumps, 1);
+    let patch = |x: f64, y: f64| (20.0..30.0).contains(&x) && (10.0..20.0).contains(&y);
+    write_points(
+        &b,
+        |x, y| bumps(x, y) + if patch(x, y) { 1.0 } else { 0.0 },
+        1,
+    );
+    let volume = |top: &Path, base: &Path| -> Value {
+        let o = ok(&["volume", s(top), "--surface", s(base), "--json"]);
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    // Zero but for the slivers where triangles of the two surfaces meet at a vertex, whose
+    // corners are computed crossings (1e-31 here; it was 10 % of the area).
+    let nothing = |v: &Value, k: &str| assert!(v[k].as_f64().unwrap() < 1e-12, "{k}: {v}");
+    let v = volume(&a, &a);
+    for k in ["cut_volume", "fill_volume", "cut_area", "fill_area"] {
+        nothing(&v, k);
+    }
+    assert!((v["area"].as_f64().unwrap() - 2400.0).abs() < 1e-9, "{v}");
+    let v = volume(&b, &a);
+    nothing(&v, "fill_area");
+    nothing(&v, "fill_volume");
+    // The patch (100) and the ring of triangles around it, far from the 2400 covered.
+    let cut = v["cut_area"].as_f64().unwrap();
+    assert!((100.0..200.0).contains(&cut), "{v}");
+}
+
+/// A line whose first vertex is repeated (digitised lines often are) has a height there: the
+/// first row was empty ("outside the TIN") where `sample` gives one. A line of no length is
+/// refused, naming it.
+#[test]
+fn profile_heights_at_repeated_vertices() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    write_points(&d("p.xyz"), bumps, 1);
+    let line = |name: &str, coords: &str| {
+        std::fs::write(
+            d(name),
+            format!(r#"{{"type":"LineString","coordinates":{coords}}}"#),
+        )
+        .unwrap();
+    };
+    line("rep.geojson", "[[10,10],[10,10],[20,20],[30,10]]");
+    line("one.geojson", "[[10,10],[20,20],[30,10]]");
+    let profile = |l: &str, out: &str| {
+        ok(&[
+            "profile",
+            s(&d("p.xyz")),
+            "--line",
+            s(&d(l)),
+            "-o",
+            s(&d(out)),
+            "-q",
+        ]);
+        std::fs::read_to_string(d(out)).unwrap()
+    };
+    let rep = profile("rep.geojson", "rep.csv");
+    assert_eq!(rep, profile("one.geojson", "one.csv"));
+    assert!(!rep.lines().nth(1).unwrap().ends_with(','), "{rep}");
+    line("dot.geojson", "[[10,10],[10,10]]");
+    let o = run(&[
+        "profile",
+        s(&d("p.xyz")),
+        "--line",
+        s(&d("dot.geojson")),
+        "-o",
+        s(&d("x.csv")),
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no length"));
+    assert!(!d("x.csv").exists());
+}
+
 #[test]
 fn clear_errors() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,8 +1,10 @@
 //! XYZ text points: `x y z` per line.
 //!
 //! The format accepted:
-//! - fields are separated by commas, semicolons, tabs or spaces; a run of separators counts as
-//!   one (so `1, 2, 3` and `1  2  3` work, and an empty field is not noticed);
+//! - fields are separated by commas, semicolons, tabs or spaces; a run of white space counts as
+//!   one (so `1, 2, 3` and `1  2  3` work); two commas or semicolons in a run before the third
+//!   number (an empty field: `1,2,,5`) and a line with both (`0,15;0,29;10,00`, decimal commas)
+//!   are errors, never a column read in the wrong place;
 //! - blank lines, and lines whose first non-blank character is `#`, are skipped;
 //! - **header**: if the first line that is neither blank nor a comment has a first field that is
 //!   not a number (`x,y,z`, `X Y Z`, `Easting;Northing;Height`), that line is skipped as a header.
@@ -220,6 +222,8 @@ fn is_binary(line: &[u8]) -> bool {
 #[derive(Debug, PartialEq)]
 enum LineError {
     TooFew { found: usize },
+    EmptyField { field: usize },
+    MixedSeparators,
     NotANumber { field: usize, token: String },
     NonFinite { field: usize, token: String },
 }
@@ -232,6 +236,17 @@ impl std::fmt::Display for LineError {
                 f,
                 "expected 3 numbers (x y z), found {found} field{}",
                 if *found == 1 { "" } else { "s" }
+            ),
+            LineError::EmptyField { field } => write!(
+                f,
+                "{} is an empty field (two separators in a row): a missing value is never \
+                 read as the next column's",
+                NAMES[*field]
+            ),
+            LineError::MixedSeparators => write!(
+                f,
+                "the line mixes ',' and ';' as separators (decimal commas? write numbers with \
+                 a decimal point)"
             ),
             LineError::NotANumber { field, token } => {
                 write!(f, "{} is not a number: \"{token}\"", NAMES[*field])
@@ -253,9 +268,24 @@ fn is_separator(b: u8) -> bool {
 fn parse_line(bytes: &[u8]) -> std::result::Result<Option<[f64; 3]>, LineError> {
     let mut pos = 0;
     let mut p = [0.0; 3];
+    // The line's comma or semicolon: a run of white space counts as one separator, but two of
+    // these in a run leave an empty field, and both in one line are decimal commas.
+    let mut hard = 0u8;
     for (field, value) in p.iter_mut().enumerate() {
+        let mut hards = 0;
         while pos < bytes.len() && is_separator(bytes[pos]) {
+            let b = bytes[pos];
+            if b == b',' || b == b';' {
+                if hard != 0 && b != hard {
+                    return Err(LineError::MixedSeparators);
+                }
+                hard = b;
+                hards += 1;
+            }
             pos += 1;
+        }
+        if hards > usize::from(field > 0) && pos < bytes.len() {
+            return Err(LineError::EmptyField { field });
         }
         if pos == bytes.len() {
             return if field == 0 {
@@ -420,6 +450,21 @@ mod tests {
                 [10.0, 20.0, 30.0]
             ]
         );
+    }
+
+    #[test]
+    fn empty_fields_and_decimal_commas_are_errors() {
+        // A missing z took the class column's value; decimal commas made nonsense points.
+        let (line, e) = err_of("1,2,3\n0.15,0.28,,2\n");
+        assert_eq!(line, 2);
+        assert!(e.starts_with("z is an empty field"), "{e}");
+        let (line, e) = err_of("0,15;0,29;10,00\n");
+        assert_eq!(line, 1);
+        assert!(e.contains("mixes ',' and ';'"), "{e}");
+        assert!(err_of(",1,2,3\n").1.starts_with("x is an empty field"));
+        // White space around one separator, and extra empty columns after z, are fine.
+        assert!(err_of("1 , 2 ;\t3\n").1.contains("mixes"));
+        assert_eq!(read_str("1 ,  2 ,\t3,,,\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
     }
 
     #[test]

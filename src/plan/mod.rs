@@ -244,6 +244,14 @@ impl Plan {
             // rows by ceil − 1 (a centre on the data's lower edge belongs to the row below).
             let col_of = |v: f64| (v / tile).floor() as i64;
             let ty_of = |v: f64| (v / tile).ceil() as i64 - 1;
+            // A raster alone is owned by cell centres: tiles from the first centre to the last
+            // inside the data (files ending on a tile edge added a row and a column of empty
+            // tasks, and the mosaic was larger than one run's raster). Triangles, contours and
+            // volumes are owned by points, which may lie on the far edges.
+            let (lo, hi) = match centres_within(&job.product, lo, hi) {
+                Some(c) => c,
+                None => (lo, hi),
+            };
             for ty in ty_of(lo[1])..=ty_of(hi[1]) {
                 for tx in col_of(lo[0])..=col_of(hi[0]) {
                     let b = [
@@ -491,6 +499,35 @@ pub fn task_from_env() -> Result<Option<usize>> {
 /// `b` grown by `d` on every side.
 fn grown(b: [f64; 4], d: f64) -> [f64; 4] {
     [b[0] - d, b[1] - d, b[2] + d, b[3] + d]
+}
+
+/// For a job whose only output is a raster, the first and last cell centres inside `lo..hi`
+/// (`None` otherwise, or when no centre lies inside).
+fn centres_within(
+    product: &task::Product,
+    lo: [f64; 2],
+    hi: [f64; 2],
+) -> Option<([f64; 2], [f64; 2])> {
+    let task::Product::Dem {
+        cell,
+        align,
+        contours: None,
+        ..
+    } = product
+    else {
+        return None;
+    };
+    let off = align.offset();
+    let first = |v: f64| ((v / cell - off).ceil() + off) * cell;
+    let last = |v: f64| ((v / cell - off).floor() + off) * cell;
+    let (a, b) = ([first(lo[0]), first(lo[1])], [last(hi[0]), last(hi[1])]);
+    (a[0] <= b[0]
+        && a[1] <= b[1]
+        && a[0] >= lo[0]
+        && a[1] >= lo[1]
+        && b[0] <= hi[0]
+        && b[1] <= hi[1])
+        .then_some((a, b))
 }
 
 /// Does the closed convex polygon `hull` (counter-clockwise corners; one or two for a point or a

@@ -19,7 +19,7 @@
 //!   (a half-plane or a level) and integrated exactly up to rounding.
 //! - [`ExactSum`]: the correctly rounded sum of many `f64`s, independent of their order.
 
-use crate::geom::predicates::{Orientation, orient};
+use crate::geom::predicates::{Orientation, orient, orient_det};
 use std::cmp::Ordering;
 
 /// Where a point lies relative to a triangle.
@@ -215,14 +215,12 @@ pub fn clip(poly: &[PV], f: impl Fn(&PV) -> f64, strict: bool, out: &mut Vec<PV>
 }
 
 /// Keeps the part of a convex polygon on the left of (or on) the directed line `a → b`.
+///
+/// The side is the exact orientation's sign ([`orient_det`]): a triangle beside another, on
+/// their shared edge, leaves exactly nothing (the plain formula's rounding left slivers whose
+/// ±1e-11 areas counted as cut and fill).
 pub fn clip_left(poly: &[PV], a: [f64; 2], b: [f64; 2], out: &mut Vec<PV>) {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    clip(
-        poly,
-        |p| dx * (p[1] - a[1]) - dy * (p[0] - a[0]),
-        false,
-        out,
-    );
+    clip(poly, |p| orient_det(a, b, [p[0], p[1]]), false, out);
 }
 
 /// `(area, ∫ value dA)` of a convex polygon (counter-clockwise gives a positive area).

@@ -551,10 +551,20 @@ impl OverlaySink {
         }
         self.pairs += 1;
         let acc = &mut self.acc;
+        // The same triangle in both surfaces (canonical vertices): no difference at all, where
+        // the planes' arithmetic left ±1e-16 that counted as cut and fill areas.
+        let same = a.v == b.v;
         let mut add = |piece: &[PV]| {
             let d: Vec<PV> = piece
                 .iter()
-                .map(|v| [v[0], v[1], v[2] - b.plane_value([v[0], v[1]])])
+                .map(|v| {
+                    let d = if same {
+                        0.0
+                    } else {
+                        v[2] - b.plane_value([v[0], v[1]])
+                    };
+                    [v[0], v[1], d]
+                })
                 .collect();
             acc.add(&d);
         };

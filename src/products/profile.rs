@@ -71,11 +71,22 @@ impl ProfileSink {
     ///
     /// # Errors
     /// [`Error::Output`] if a line has fewer than two points or a non-finite coordinate.
-    pub fn new(lines: Vec<Vec<[f64; 2]>>, output: &Path) -> Result<ProfileSink> {
+    pub fn new(mut lines: Vec<Vec<[f64; 2]>>, output: &Path) -> Result<ProfileSink> {
         let bad = |message: String| Error::Output {
             path: output.to_path_buf(),
             message,
         };
+        // A repeated vertex (common in digitised lines) is one vertex: the first of a line
+        // got no height when its segment had no length.
+        for l in lines.iter_mut() {
+            l.dedup();
+        }
+        if let Some(li) = lines.iter().position(|l| l.len() == 1) {
+            return Err(bad(format!(
+                "line {li} has no length (all its points are one point): `sweeptin sample` gives \
+                 the height at a point"
+            )));
+        }
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         let mut segs = Vec::new();
         for (li, l) in lines.iter().enumerate() {

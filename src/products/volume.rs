@@ -51,7 +51,10 @@ impl CutFill {
         self.cut.add(v);
         clip(poly, |p| -p[2], true, below);
         let (a, v) = integrate(below);
-        self.fill_area.add(a);
+        // A piece level with the reference is neither cut nor fill.
+        if below.iter().any(|p| p[2] != 0.0) {
+            self.fill_area.add(a);
+        }
         self.fill.add(-v);
     }
 
@@ -90,10 +93,16 @@ impl CutFill {
         acc.totals()
     }
 
-    /// The totals so far.
+    /// The totals so far. Volumes and areas are sums of parts that are never negative: a sum
+    /// below zero is the clipping's rounding (±1e-11 where two surfaces meet), reported as 0
+    /// (never `-0`).
     pub fn totals(&self) -> CutFillTotals {
-        let cut = self.cut.value();
-        let fill = self.fill.value();
+        let whole = |s: &ExactSum| {
+            let v = s.value();
+            if v > 0.0 { v } else { 0.0 }
+        };
+        let cut = whole(&self.cut);
+        let fill = whole(&self.fill);
         let mut net = ExactSum::new();
         net.add(cut);
         net.add(-fill);
@@ -101,9 +110,9 @@ impl CutFill {
             cut_volume: cut,
             fill_volume: fill,
             net_volume: net.value(),
-            cut_area: self.cut_area.value(),
-            fill_area: self.fill_area.value(),
-            area: self.area.value(),
+            cut_area: whole(&self.cut_area),
+            fill_area: whole(&self.fill_area),
+            area: whole(&self.area),
         }
     }
 }
