@@ -614,6 +614,14 @@ fn exit_statuses_sort_the_failures() {
             2,
         ),
         (&["run", "p/plan.json", "--all", "--jobs", "5000"], 2),
+        // Outputs that cannot say what was asked: contours in another format (GeoJSON was
+        // written under a .shp name), a NODATA an ASCII grid cannot hold, a float32 overflow.
+        (
+            &["contours", "grid.xyz", "-o", "c.shp", "--interval", "1"],
+            2,
+        ),
+        (&["dem", "grid.xyz", "-o", "n.asc", "--nodata", "nan"], 2),
+        (&["dem", "grid.xyz", "-o", "n.tif", "--nodata", "1e40"], 2),
         (&["tin", "missing.xyz", "-o", "t.ply"], 3),
         (&["tin", "bad.xyz", "-o", "t.ply"], 3),
         (&["tin", "bad.laz", "-o", "t.ply"], 3),

@@ -133,6 +133,18 @@ fn cli_simplify_writes_a_mesh_and_a_json_summary() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
+    // A bound that is no distance is a usage error (it was exit 3, "mesh is not a valid
+    // Delaunay triangulation").
+    for bad in ["-1", "nan", "inf"] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+            .args(["simplify", p.to_str().unwrap(), "-o", out.to_str().unwrap()])
+            .arg(format!("--max-error={bad}"))
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {e}");
+        assert!(e.contains("must be a finite number"), "{e}");
+    }
 }
 
 #[test]

@@ -387,6 +387,16 @@ impl ContourSink {
                 options.interval, options.base
             )));
         }
+        // Contours are written as GeoJSON only: `-o x.shp` wrote GeoJSON under that name.
+        if let Some(ext) = path.extension().and_then(|e| e.to_str())
+            && !matches!(ext.to_ascii_lowercase().as_str(), "geojson" | "json")
+        {
+            return Err(Error::Options(format!(
+                "{}: contours are written as GeoJSON (.geojson or .json); convert with \
+                 ogr2ogr for .{ext}",
+                path.display()
+            )));
+        }
         Ok(ContourSink {
             path: path.to_path_buf(),
             options,

@@ -298,7 +298,17 @@ impl DemSink {
     /// [`Error::Output`] for an unknown format or options that do not go together
     /// ([`RasterOptions::resolve`]).
     pub fn new(path: &Path, options: DemOptions) -> Result<DemSink> {
-        options.output.resolve(path, false)?;
+        let format = options.output.resolve(path, false)?.format;
+        // `--nodata 1e40` became inf as a float32; an ASCII grid with a NaN or inf NODATA_value
+        // is one GDAL cannot read.
+        let nodata = options.nodata;
+        if nodata.is_infinite() || (nodata.is_nan() && format == RasterFormat::Ascii) {
+            return Err(Error::Options(format!(
+                "{}: --nodata {nodata} cannot be written: give a finite float32 value (GeoTIFFs \
+                 also take nan)",
+                path.display()
+            )));
+        }
         Ok(DemSink {
             path: path.to_path_buf(),
             options,

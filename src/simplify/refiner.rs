@@ -209,7 +209,9 @@ impl<'a, T: Height> Refiner<'a, T> {
     pub(super) fn run(&mut self, stop: Stop, mut progress: Option<Progress<'_>>) -> Result<()> {
         match stop {
             Stop::MaxError(e) if !(e >= 0.0 && e.is_finite()) => {
-                return Err(Error::Invalid(format!("--max-error {e} must be >= 0")));
+                return Err(Error::Options(format!(
+                    "--max-error {e} must be a finite number >= 0"
+                )));
             }
             _ => {}
         }

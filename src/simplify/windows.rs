@@ -151,7 +151,9 @@ pub fn simplify_raster(
         )));
     };
     if !(bound >= 0.0 && bound.is_finite()) {
-        return Err(Error::Invalid(format!("--max-error {bound} must be >= 0")));
+        return Err(Error::Options(format!(
+            "--max-error {bound} must be a finite number >= 0"
+        )));
     }
     let mut stitch = Stitch::new(&layout.cols, &layout.rows);
     run(reader, &spec, grid, &layout, &mut stitch, sink, progress)?;
