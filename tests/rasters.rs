@@ -305,4 +305,34 @@ fn hillshade_outputs_are_georeferenced() {
     );
     assert_eq!(r.sample_type(), sweeptin::input::raster::SampleType::U8);
     validate_cog(&cog, "hillshade_outputs_are_georeferenced");
+    // The same DEM stored south-up (rows from the south, a positive pixel height): refused,
+    // naming the way out (it was shaded with north and south swapped, a raster's height off).
+    if !data::python(&["rasterio"], "hillshade_outputs_are_georeferenced") {
+        return;
+    }
+    let south = t.path().join("south.tif");
+    let flip = "import sys, rasterio\n\
+                from affine import Affine\n\
+                with rasterio.open(sys.argv[1]) as r:\n\
+                \x20   a, t, p = r.read(1)[::-1], r.transform, r.profile\n\
+                p.update(transform=Affine(t.a, 0, t.c, 0, -t.e, t.f + t.e * r.height))\n\
+                with rasterio.open(sys.argv[2], 'w', **p) as w:\n\
+                \x20   w.write(a, 1)\n";
+    let o = Command::new("python3")
+        .args(["-c", flip, s(&dem), s(&south)])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(["hillshade", s(&south), "-o", s(&t.path().join("s.png"))])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("north-up"));
+    assert!(!t.path().join("s.png").exists());
 }

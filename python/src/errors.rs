@@ -99,3 +99,22 @@ pub(crate) fn to_py(e: Error) -> PyErr {
 pub(crate) fn value_error(message: impl Into<String>) -> PyErr {
     to_py(Error::Options(message.into()))
 }
+
+/// Runs `work` with the GIL released, as `py.detach`, and turns a panic in it into
+/// [`sweeptin::Error::Internal`] (raised as `InternalError`, exit code 5, as the command line
+/// reports one), never pyo3's `PanicException`, which `except Exception` misses.
+pub(crate) fn detach_guarded<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> sweeptin::Result<T> + Send,
+) -> sweeptin::Result<T> {
+    py.detach(|| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|p| {
+            let message = p
+                .downcast_ref::<&str>()
+                .copied()
+                .or_else(|| p.downcast_ref::<String>().map(String::as_str))
+                .unwrap_or("(no message)");
+            Err(sweeptin::Error::Internal(format!("a panic: {message}")))
+        })
+    })
+}

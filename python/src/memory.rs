@@ -249,7 +249,7 @@ impl Tin {
     fn contours_geojson(&self, py: Python<'_>, interval: f64, base: f64) -> PyResult<String> {
         let (v, t) = self.arrays(py);
         let (v, t): (&[[f64; 3]], &[[u32; 3]]) = (rows(&v, "vertices")?, rows(&t, "triangles")?);
-        py.detach(|| -> sweeptin::Result<String> {
+        crate::errors::detach_guarded(py, || -> sweeptin::Result<String> {
             let dir =
                 tempfile::tempdir().map_err(|e| sweeptin::Error::write(std::env::temp_dir(), e))?;
             let path = dir.path().join("contours.geojson");
@@ -277,7 +277,7 @@ impl Tin {
     ) -> PyResult<(u64, u64, u64)> {
         let (v, t) = self.arrays(py);
         let (v, t): (&[[f64; 3]], &[[u32; 3]]) = (rows(&v, "vertices")?, rows(&t, "triangles")?);
-        py.detach(|| -> sweeptin::Result<_> {
+        crate::errors::detach_guarded(py, || -> sweeptin::Result<_> {
             let meta = sweeptin::output::MeshMeta {
                 crs,
                 comments: vec![format!(

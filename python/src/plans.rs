@@ -123,7 +123,7 @@ pub(crate) fn make_plan(
     if let Some(c) = job.contours {
         outputs.push(("contours".to_string(), c));
     }
-    py.detach(|| -> sweeptin::Result<PathBuf> {
+    crate::errors::detach_guarded(py, || -> sweeptin::Result<PathBuf> {
         let buffer = buffer.unwrap_or(tile / 10.0);
         // `@lists`, globs and `.vpc` files expanded, every file by absolute path.
         let plan = Plan::new(typed, args, outputs, &files, tile, buffer)?;
@@ -175,7 +175,7 @@ pub(crate) fn run_task(
     resume: bool,
     progress: bool,
 ) -> PyResult<String> {
-    py.detach(|| -> sweeptin::Result<String> {
+    crate::errors::detach_guarded(py, || -> sweeptin::Result<String> {
         let plan = Plan::load(&path)?;
         let dir = Plan::dir_of(&path)?;
         plan.task(i)?;
@@ -215,7 +215,7 @@ pub(crate) fn merge(py: Python<'_>, path: PathBuf, opts: MergeOpts) -> PyResult<
             opts.bigtiff,
         )?,
     };
-    py.detach(|| -> sweeptin::Result<String> {
+    crate::errors::detach_guarded(py, || -> sweeptin::Result<String> {
         let plan = Plan::load(&path)?;
         let dir = Plan::dir_of(&path)?;
         let s = sweeptin::plan::merge::merge_plan(&plan, &dir, &outputs)?;

@@ -101,8 +101,10 @@ def test_file_errors(small, tmp_path):
     with pytest.raises(sweeptin.MissingFileError) as e:
         sweeptin.dem(tmp_path / "nope.laz", tmp_path / "x.tif")
     assert isinstance(e.value, FileNotFoundError) and str(e.value.path).endswith("nope.laz")
+    link = tmp_path / "c.geojson"
+    link.symlink_to(path)
     with pytest.raises(sweeptin.OptionsError, match="input"):
-        sweeptin.contours(path, path)  # would overwrite its input
+        sweeptin.contours(path, link)  # would overwrite its input, through the link
     with pytest.raises(sweeptin.NoTriangleError, match="class") as e:
         sweeptin.volume(path, plane=0, classes=[200])  # the filters leave nothing
     assert (e.value.kind, e.value.exit_code) == ("input", 3)

@@ -27,6 +27,9 @@ pub struct Args {
     /// 0.00001 so that metres of height match degrees of extent).
     #[arg(long, default_value_t = 1.0)]
     pub z_factor: f64,
+    /// No summary line on standard error (errors are still printed).
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -44,6 +47,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     check_output(&args.output)?;
     let s = hillshade(&args.dem, &args.output, &o)?;
+    if args.quiet {
+        return Ok(());
+    }
     eprintln!(
         "sweeptin: {} -> {}: {} × {} pixels, {} shaded",
         args.dem.display(),

@@ -219,8 +219,8 @@ fn crs_of(text: Option<&str>) -> Option<Crs> {
 /// georeferenced GeoTIFF or COG (0 = nodata, as `gdaldem hillshade` writes).
 ///
 /// # Errors
-/// [`Error::Io`] / [`Error::Format`] naming the file; [`Error::Output`] for a rotated grid or an
-/// unknown output format; [`Error::Options`] for options out of range
+/// [`Error::Io`] / [`Error::Format`] naming the file, for a rotated grid or one not stored
+/// north-up; [`Error::Output`] for an unknown output format; [`Error::Options`] for options out of range
 /// ([`HillshadeOptions::check`]).
 pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<HillshadeSummary> {
     o.check()?;
@@ -230,6 +230,16 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
         return Err(Error::Format {
             path: input.to_path_buf(),
             message: "a rotated or sheared grid cannot be shaded".into(),
+        });
+    }
+    // Rows run north to south and columns west to east here: a south-up grid was shaded with
+    // north and south swapped and placed a raster's height south.
+    if !(spec.transform[1] > 0.0 && spec.transform[5] < 0.0) {
+        return Err(Error::Format {
+            path: input.to_path_buf(),
+            message: "the grid is stored south-up or east to west (a pixel height that is not \
+                      negative): make it north-up first (gdalwarp in.tif out.tif)"
+                .into(),
         });
     }
     let (w, h) = (spec.cols, spec.rows);
