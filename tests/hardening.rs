@@ -622,6 +622,7 @@ fn exit_statuses_sort_the_failures() {
         ),
         (&["dem", "grid.xyz", "-o", "n.asc", "--nodata", "nan"], 2),
         (&["dem", "grid.xyz", "-o", "n.tif", "--nodata", "1e40"], 2),
+        (&["tin", "grid.xyz", "-o", "t.ply", "--crs", "nonsense"], 2),
         (&["tin", "missing.xyz", "-o", "t.ply"], 3),
         (&["tin", "bad.xyz", "-o", "t.ply"], 3),
         (&["tin", "bad.laz", "-o", "t.ply"], 3),

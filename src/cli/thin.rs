@@ -74,7 +74,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         mem: Some(args.input.mem.0),
     };
     let crs = match &args.crs {
-        Some(c) => Some(c.clone()),
+        Some(c) => Some(super::input::parse_crs(c).map(|_| c.clone())?),
         None => config.input_crs()?,
     };
     let meta = MeshMeta {

@@ -46,7 +46,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let config = args.input.config(input)?;
     let crs = match &args.crs {
-        Some(c) => Some(c.clone()),
+        // Checked as the products check it (`tin --crs nonsense` was written as it was).
+        Some(c) => Some(super::input::parse_crs(c).map(|_| c.clone())?),
         None => config.input_crs()?,
     };
     let meta = MeshMeta {

@@ -87,7 +87,7 @@ impl Default for RunOptions {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SweepAxis {
-    /// `x` when the LAS/LAZ headers' extent is more than [`STRIP_RATIO`] times wider than tall
+    /// `x` when the LAS/LAZ headers' extent is more than 4 times wider than tall
     /// and nothing needs `y` order (no breaklines, no terrain products); `y` otherwise (and
     /// always for XYZ text, whose extent is not known before reading).
     #[default]
