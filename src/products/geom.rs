@@ -216,9 +216,9 @@ pub fn clip(poly: &[PV], f: impl Fn(&PV) -> f64, strict: bool, out: &mut Vec<PV>
 
 /// Keeps the part of a convex polygon on the left of (or on) the directed line `a → b`.
 ///
-/// The side is the exact orientation's sign ([`orient_det`]): a triangle beside another, on
-/// their shared edge, leaves exactly nothing (the plain formula's rounding left slivers whose
-/// ±1e-11 areas counted as cut and fill).
+/// The side is the sign of `robust`'s orientation (`geom::predicates::orient_det`), which is
+/// exact: a triangle beside another, on their shared edge, leaves exactly nothing (the plain
+/// formula's rounding left slivers whose ±1e-11 areas counted as cut and fill).
 pub fn clip_left(poly: &[PV], a: [f64; 2], b: [f64; 2], out: &mut Vec<PV>) {
     clip(poly, |p| orient_det(a, b, [p[0], p[1]]), false, out);
 }
