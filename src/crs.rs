@@ -26,8 +26,8 @@ pub struct Crs {
     pub name: Option<String>,
     /// The WKT text, when the CRS was declared as WKT.
     pub wkt: Option<String>,
-    /// GeoTIFF keys given beside the codes, carried to GeoTIFF outputs as they are: the model
-    /// type (`GTModelTypeGeoKey`: 1 projected, 2 geographic).
+    /// Whether [`Crs::epsg`] came from GeoTIFF keys as a projected (1) or a geographic (2) code,
+    /// as `GTModelTypeGeoKey` says it in GeoTIFF outputs.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub model_type: Option<u16>,
     /// `ProjLinearUnitsGeoKey` (9001 metre, 9002 foot, 9003 US survey foot), which overrides the
@@ -56,12 +56,15 @@ impl Crs {
 
     /// Do two declarations describe the same CRS? Equal EPSG codes when both have one (and
     /// equal vertical codes, but for a compound WKT without one: PROJ's WKT2 names the vertical
-    /// part only inside the whole's code, the WKT1 spelling gives it apart; equal unit
-    /// overrides),
+    /// part only inside the whole's code, the WKT1 spelling gives it apart; unit keys that do
+    /// not differ),
     /// otherwise equal WKT text, otherwise equal names.
     pub fn same_as(&self, other: &Crs) -> bool {
-        let units =
-            self.linear_units == other.linear_units && self.vertical_units == other.vertical_units;
+        // A unit key where the other gives none may only restate the code's unit (LAStools
+        // writes 3076 = metre routinely; a `.vpc` lists codes alone): two different keys differ.
+        let agree = |a: Option<u16>, b: Option<u16>| a.zip(b).is_none_or(|(a, b)| a == b);
+        let units = agree(self.linear_units, other.linear_units)
+            && agree(self.vertical_units, other.vertical_units);
         // A compound's code alone names its vertical part too.
         let vertical = match (self.vertical_epsg, other.vertical_epsg) {
             (Some(a), Some(b)) => a == b,
@@ -85,13 +88,17 @@ impl Crs {
     }
 
     /// Of two declarations of the same CRS ([`Crs::same_as`]), the one that says more (a
-    /// vertical code).
+    /// vertical code), with the keys only the other gives (units, model type).
     pub fn fuller(self, other: Crs) -> Crs {
-        if self.vertical_epsg.is_none() && other.vertical_epsg.is_some() {
-            other
+        let (mut a, b) = if self.vertical_epsg.is_none() && other.vertical_epsg.is_some() {
+            (other, self)
         } else {
-            self
-        }
+            (self, other)
+        };
+        a.linear_units = a.linear_units.or(b.linear_units);
+        a.vertical_units = a.vertical_units.or(b.vertical_units);
+        a.model_type = a.model_type.or(b.model_type);
+        a
     }
 
     /// Parses a CRS given by a user (`--crs`, the Python package's `crs=`): `EPSG:code`,
@@ -150,8 +157,14 @@ impl Crs {
     /// Reads the CRS from parsed GeoTIFF keys (`None` if they name no CRS at all).
     pub fn from_geotiff(keys: &las::crs::GeoTiffCrs) -> Option<Crs> {
         let code = |v: Option<u16>| v.filter(|k| (1024..=32766).contains(k)).map(u32::from);
-        let epsg = code(keys.get_projected_crs_geo_key_value())
-            .or_else(|| code(keys.get_geodetic_crs_geo_key_value()));
+        // The kind of the code is the key's that gave it (`GTModelTypeGeoKey` may disagree).
+        let (epsg, model_type) = match code(keys.get_projected_crs_geo_key_value()) {
+            Some(c) => (Some(c), Some(1)),
+            None => match code(keys.get_geodetic_crs_geo_key_value()) {
+                Some(c) => (Some(c), Some(2)),
+                None => (None, None),
+            },
+        };
         let vertical_epsg = code(keys.get_vertical_crs_geo_key_value());
         // GTCitationGeoKey, PCSCitationGeoKey, GeogCitationGeoKey, in that order of preference.
         let name = [1026u16, 3073, 2049].iter().find_map(|id| {
@@ -185,7 +198,7 @@ impl Crs {
             vertical_epsg,
             name,
             wkt: None,
-            model_type: short(1024).filter(|m| matches!(m, 1 | 2)),
+            model_type,
             linear_units: unit(3076),
             vertical_units: unit(4099),
         })
@@ -490,6 +503,24 @@ mod tests {
             ..wkt1.clone()
         };
         assert!(!other.same_as(&wkt1));
+        // A unit key beside none (a `.vpc` lists codes alone; LAStools writes 3076 = metre)
+        // agrees; two different keys do not; the fuller declaration keeps the key.
+        let code = Crs {
+            epsg: Some(26915),
+            ..Crs::default()
+        };
+        let metre = Crs {
+            linear_units: Some(9001),
+            model_type: Some(1),
+            ..code.clone()
+        };
+        let foot = Crs {
+            linear_units: Some(9002),
+            ..code.clone()
+        };
+        assert!(code.same_as(&metre) && metre.same_as(&code));
+        assert!(!metre.same_as(&foot));
+        assert_eq!(code.fuller(metre.clone()), metre);
     }
 
     #[test]

@@ -478,29 +478,8 @@ impl GridPlan {
                     exact_index(v, self.cell)?;
                 }
                 let (c, off) = (self.cell, self.align.offset());
-                // The lattice indices whose centres `(k + off) × c` lie in the bounds, decided on
-                // the centres themselves (as `GridSpec` computes them).
-                let at = |k: i64| (k as f64 + off) * c;
-                let first = |v: f64| {
-                    let mut k = (v / c - off).ceil() as i64;
-                    while at(k) < v {
-                        k += 1;
-                    }
-                    while at(k - 1) >= v {
-                        k -= 1;
-                    }
-                    k
-                };
-                let last = |v: f64| {
-                    let mut k = (v / c - off).floor() as i64;
-                    while at(k) > v {
-                        k -= 1;
-                    }
-                    while at(k + 1) <= v {
-                        k += 1;
-                    }
-                    k
-                };
+                let first = |v: f64| first_centre(v, c, off);
+                let last = |v: f64| last_centre(v, c, off);
                 lattice(
                     c,
                     first(bounds[0]),
@@ -515,9 +494,40 @@ impl GridPlan {
     }
 }
 
+/// The centre of lattice index `k`: `(k + off) × c`, as [`GridSpec`] computes it.
+pub(crate) fn centre(k: i64, c: f64, off: f64) -> f64 {
+    (k as f64 + off) * c
+}
+
+/// The first lattice index whose centre ([`centre`]) is at or above `v`, decided on the
+/// centres themselves (the quotient's rounding put 700 / 0.7 at 1000.0000000000001).
+/// `v / c` must be within 2^52 ([`exact_index`]).
+pub(crate) fn first_centre(v: f64, c: f64, off: f64) -> i64 {
+    let mut k = (v / c - off).ceil() as i64;
+    while centre(k, c, off) < v {
+        k += 1;
+    }
+    while centre(k - 1, c, off) >= v {
+        k -= 1;
+    }
+    k
+}
+
+/// The last lattice index whose centre is at or below `v` (see [`first_centre`]).
+pub(crate) fn last_centre(v: f64, c: f64, off: f64) -> i64 {
+    let mut k = (v / c - off).floor() as i64;
+    while centre(k, c, off) > v {
+        k -= 1;
+    }
+    while centre(k + 1, c, off) <= v {
+        k += 1;
+    }
+    k
+}
+
 /// `v / cell`, the lattice index of `v`, refused beyond 2^52 cells from 0, where indices are no
 /// longer exact (`--cell 1e-14` at UTM coordinates spun forever looking for its first cell).
-fn exact_index(v: f64, cell: f64) -> Result<f64> {
+pub(crate) fn exact_index(v: f64, cell: f64) -> Result<f64> {
     let q = v / cell;
     if q.abs() > (1u64 << 52) as f64 {
         return Err(Error::Options(format!(

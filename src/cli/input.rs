@@ -477,6 +477,8 @@ pub fn run_products(
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: Vec<(String, Box<dyn TriangleSink>)>,
 ) -> anyhow::Result<(RunSummary, FanoutSummary)> {
+    // GeoTIFF keys and a GeoJSON `crs` need EPSG codes; other outputs carry the WKT.
+    let coded = sinks.iter().any(|(n, _)| n == "dem" || n == "contours");
     let mut fanout = Fanout::new(sinks).with_crs(p.crs()?);
     let mut run = pipeline::run(config, mesh, &mut [&mut fanout])
         .map_err(|e| run_error(e, &p.args.inputs))?;
@@ -495,7 +497,9 @@ pub fn run_products(
         Some(c) => Some(c),
         None => run.crs.as_deref().and_then(|t| Crs::parse(t).ok()),
     };
-    warn_crs(crs.as_ref());
+    if coded {
+        warn_crs(crs.as_ref());
+    }
     Ok((run, products))
 }
 

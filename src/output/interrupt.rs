@@ -60,18 +60,20 @@ pub fn wait_child(mut child: Child) -> io::Result<ExitStatus> {
         use rustix::process::{Pid, WaitId, WaitIdOptions, waitid};
         let pid = Pid::from_child(&child);
         let ended = WaitIdOptions::EXITED | WaitIdOptions::NOWAIT;
-        loop {
-            match waitid(WaitId::Pid(pid), ended) {
-                Err(Errno::INTR) => continue,
-                Err(e) => return Err(e.into()),
-                Ok(_) => break,
-            }
-        }
+        // Until it has ended (or cannot be waited for this way: then `wait` below says why),
+        // without reaping it; then forgotten and reaped under the lock.
+        while let Err(Errno::INTR) = waitid(WaitId::Pid(pid), ended) {}
+        let mut c = children();
+        c.retain(|&p| p != child.id());
+        child.wait()
     }
-    let mut c = children();
-    let status = child.wait();
-    c.retain(|&p| p != child.id());
-    status
+    // Elsewhere no signal is passed on: wait without the lock (other tasks start meanwhile).
+    #[cfg(not(target_os = "linux"))]
+    {
+        let status = child.wait();
+        children().retain(|&p| p != child.id());
+        status
+    }
 }
 
 /// When this process has been interrupted, waits for the handler to end it (with the

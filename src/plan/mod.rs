@@ -517,17 +517,16 @@ fn centres_within(
     else {
         return None;
     };
-    let off = align.offset();
-    let first = |v: f64| ((v / cell - off).ceil() + off) * cell;
-    let last = |v: f64| ((v / cell - off).floor() + off) * cell;
+    use crate::raster::{centre, exact_index, first_centre, last_centre};
+    let (c, off) = (*cell, align.offset());
+    if lo.iter().chain(&hi).any(|&v| exact_index(v, c).is_err()) {
+        return None;
+    }
+    // The centres as one run's grid finds them (`GridPlan::grid`).
+    let first = |v: f64| centre(first_centre(v, c, off), c, off);
+    let last = |v: f64| centre(last_centre(v, c, off), c, off);
     let (a, b) = ([first(lo[0]), first(lo[1])], [last(hi[0]), last(hi[1])]);
-    (a[0] <= b[0]
-        && a[1] <= b[1]
-        && a[0] >= lo[0]
-        && a[1] >= lo[1]
-        && b[0] <= hi[0]
-        && b[1] <= hi[1])
-        .then_some((a, b))
+    (a[0] <= b[0] && a[1] <= b[1]).then_some((a, b))
 }
 
 /// Does the closed convex polygon `hull` (counter-clockwise corners; one or two for a point or a

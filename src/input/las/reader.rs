@@ -494,7 +494,8 @@ fn common_crs(declared: &[(PathBuf, Crs)]) -> Result<Option<Crs>> {
     };
     let mut common = first.clone();
     for (path, crs) in &declared[1..] {
-        if !first.same_as(crs) {
+        // Against what all the files before say together (never a chain of pairs).
+        if !common.same_as(crs) {
             return Err(format_error(
                 path,
                 format!(
