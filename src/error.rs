@@ -349,8 +349,9 @@ impl Error {
     }
 
     /// [`Error::Internal`] for a panic caught in the `thread` thread: its message (the payload
-    /// as `&str` or `String`), instead of a re-panic.
-    pub(crate) fn panicked(thread: &str, payload: &(dyn std::any::Any + Send)) -> Self {
+    /// as `&str` or `String`), instead of a re-panic. The Python package reports its panics
+    /// with it too.
+    pub fn panicked(thread: &str, payload: &(dyn std::any::Any + Send)) -> Self {
         let message = payload
             .downcast_ref::<&str>()
             .copied()

@@ -108,13 +108,7 @@ pub(crate) fn detach_guarded<T: Send>(
     work: impl FnOnce() -> sweeptin::Result<T> + Send,
 ) -> sweeptin::Result<T> {
     py.detach(|| {
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|p| {
-            let message = p
-                .downcast_ref::<&str>()
-                .copied()
-                .or_else(|| p.downcast_ref::<String>().map(String::as_str))
-                .unwrap_or("(no message)");
-            Err(sweeptin::Error::Internal(format!("a panic: {message}")))
-        })
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(work))
+            .unwrap_or_else(|p| Err(sweeptin::Error::panicked("binding's", &*p)))
     })
 }

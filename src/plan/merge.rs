@@ -497,7 +497,8 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
         }
         Product::Contours(_) => {
             let out = need(out, "contours (OUT.geojson)")?;
-            if !matches!(extension(out).as_deref(), Some("geojson" | "json")) {
+            if !extension(out).is_some_and(|e| crate::products::contours::is_geojson_extension(&e))
+            {
                 return Err(Error::Options(format!(
                     "{}: contours are written as GeoJSON (.geojson)",
                     out.display()

@@ -144,6 +144,11 @@ impl Wants for ContourLevels {
     }
 }
 
+/// Is `ext` (without its dot, any case) a GeoJSON file's: `geojson` or `json`?
+pub(crate) fn is_geojson_extension(ext: &str) -> bool {
+    matches!(ext.to_ascii_lowercase().as_str(), "geojson" | "json")
+}
+
 /// Level `k` as a number: `base + k × interval`, cleaned of binary noise (`0.30000000000000004`
 /// becomes `0.3`) when that changes it by less than a billionth.
 pub fn level_value(base: f64, interval: f64, k: i64) -> f64 {
@@ -389,7 +394,7 @@ impl ContourSink {
         }
         // Contours are written as GeoJSON only: `-o x.shp` wrote GeoJSON under that name.
         if let Some(ext) = path.extension().and_then(|e| e.to_str())
-            && !matches!(ext.to_ascii_lowercase().as_str(), "geojson" | "json")
+            && !is_geojson_extension(ext)
         {
             return Err(Error::Options(format!(
                 "{}: contours are written as GeoJSON (.geojson or .json); convert with \
