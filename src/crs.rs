@@ -113,6 +113,21 @@ impl Crs {
             let mut parts = code.split('+');
             let h = parts.next().unwrap_or("").trim().parse::<u32>();
             let v = parts.next().map(|v| v.trim().parse::<u32>());
+            // GeoTIFF's "undefined" and "user-defined" name no CRS (`EPSG:0` was taken and
+            // written as if it were one).
+            if let Some(c) = [h.as_ref().ok(), v.as_ref().and_then(|v| v.as_ref().ok())]
+                .into_iter()
+                .flatten()
+                .find(|&&c| c == 0 || c == 32767)
+            {
+                return Err(crate::Error::Options(format!(
+                    "--crs {s}: {c} is not an EPSG code ({} in GeoTIFF's keys)",
+                    if *c == 0 { "undefined" } else { "user-defined" }
+                )));
+            }
+            if parts.next().is_some() {
+                return Err(bad("EPSG:code or EPSG:code+code"));
+            }
             return match (h, v) {
                 (Ok(h), None) => Ok(Crs {
                     epsg: Some(h),
@@ -592,6 +607,9 @@ mod tests {
             ..Crs::default()
         };
         assert_eq!(c.definition().as_deref(), Some("EPSG:2949+5713"));
+        for s in ["EPSG:0", "EPSG:32767", "EPSG:2949+0", "EPSG:1+2+3"] {
+            assert!(Crs::parse(s).is_err(), "{s}");
+        }
         assert!(!c.same_as(&Crs {
             epsg: Some(2949),
             ..Crs::default()

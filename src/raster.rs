@@ -390,7 +390,7 @@ impl GridPlan {
                         Ok(if up { q.ceil() } else { q.floor() } as i64)
                     } else {
                         Err(Error::Options(format!(
-                            "the box side {v} is not a multiple of the cell size {cell} \
+                            "the box edge at {v} is not on a multiple of the cell size {cell} \
                              (use --snap to round the box outwards)"
                         )))
                     }

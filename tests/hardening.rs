@@ -391,6 +391,16 @@ fn outputs_never_overwrite_an_input_or_each_other() {
         &["dem", "grid.xyz", "-o", "alias.asc"],
         &["dem", "grid.xyz", "-o", "a.tif", "--hillshade", "shade.png"],
         &["dem", "grid.xyz", "-o", "a.asc", "--contours", "a.prj"],
+        // An ASCII grid by --format writes its .prj whatever its extension.
+        &["dem", "grid.xyz", "--format", "asc", "-o", "alias.txt"],
+        &[
+            "products",
+            "grid.xyz",
+            "--raster-format",
+            "asc",
+            "--dem",
+            "alias",
+        ],
         &[
             "tin",
             "grid.xyz",
@@ -659,6 +669,54 @@ fn exit_statuses_sort_the_failures() {
     for line in ["Exit status:", "  2 ", "  3 ", "  4 ", "  5 ", "  130 "] {
         assert!(help.contains(line), "--help lacks {line:?}:\n{help}");
     }
+}
+
+/// A batch job that parses `--json` found nothing on standard output when a command failed. A
+/// failure is one object there too, with the status, the kind and the message of stderr.
+#[test]
+fn json_failures_are_one_object_on_stdout() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    grid(dir);
+    std::fs::write(dir.join("bad.xyz"), "1 2 3\n4 five 6\n").unwrap();
+    let cases: &[(&[&str], i32, &str)] = &[
+        (&["tin", "bad.xyz", "-o", "t.ply", "--json"], 3, "input"),
+        (
+            &["dem", "grid.xyz", "--cell", "0", "-o", "d.tif", "--json"],
+            2,
+            "usage",
+        ),
+        (
+            &["info", "missing.laz", "--json", "@missing_list.txt"],
+            3,
+            "input",
+        ),
+        (&["run", "missing/plan.json", "--all", "--json"], 3, "input"),
+    ];
+    for (args, status, kind) in cases {
+        let o = run(dir, args);
+        assert_eq!(code(&o), *status, "{args:?}: {}", err(&o));
+        let out = String::from_utf8_lossy(&o.stdout);
+        let v: serde_json::Value = serde_json::from_str(out.trim())
+            .unwrap_or_else(|e| panic!("{args:?}: stdout is not one JSON object ({e}): {out:?}"));
+        let e = &v["error"];
+        assert_eq!(e["status"], *status, "{args:?}: {v}");
+        assert_eq!(e["kind"], *kind, "{args:?}: {v}");
+        let message = e["message"].as_str().unwrap();
+        assert!(
+            err(&o).contains(message),
+            "{args:?}: {message:?} not on stderr"
+        );
+    }
+    // `info` reports files it cannot read in its own summary: one object, not two.
+    let o = run(dir, &["info", "missing.laz", "--json"]);
+    assert_eq!(code(&o), 3);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["files"][0]["error"].is_string(), "{v}");
+    // Without --json, standard output stays empty.
+    let o = run(dir, &["tin", "bad.xyz", "-o", "t.ply"]);
+    assert_eq!(code(&o), 3);
+    assert!(o.stdout.is_empty());
 }
 
 // ---- A low limit on open files -----------------------------------------------------------------

@@ -602,3 +602,57 @@ fn a_plan_of_a_vpc_list_or_glob_names_every_file() {
         }
     }
 }
+
+/// Writes `n` points as LAS `version` in point format `format`, then sets the header's legacy
+/// 32-bit point count (offset 107) to `legacy`.
+fn las_with_legacy_count(path: &Path, version: (u8, u8), format: u8, n: u32, legacy: u32) {
+    let mut b = las::Builder::from(version);
+    b.point_format = las::point::Format::new(format).unwrap();
+    let mut w = las::Writer::from_path(path, b.into_header().unwrap()).unwrap();
+    for i in 0..n {
+        w.write_point(las::Point {
+            x: f64::from(i % 20),
+            y: f64::from(i / 20),
+            z: f64::from(i % 7),
+            gps_time: Some(f64::from(i)),
+            ..Default::default()
+        })
+        .unwrap();
+    }
+    w.close().unwrap();
+    let mut bytes = std::fs::read(path).unwrap();
+    bytes[107..111].copy_from_slice(&legacy.to_le_bytes());
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// A LAS 1.4 format-6 file whose legacy count (which must be 0) said 100 of its 400 points was
+/// read as 100 points; a LAS 1.2 header announcing 100 of 400 records was read short without a
+/// word.
+#[test]
+fn point_counts_that_disagree_with_the_file() {
+    let d = tempfile::tempdir().unwrap();
+    let wrong = d.path().join("wrong_legacy.las");
+    las_with_legacy_count(&wrong, (1, 4), 6, 400, 100);
+    let info = FileInfo::read(&wrong).unwrap();
+    assert_eq!(info.point_count, 400);
+    assert!(
+        info.warnings
+            .iter()
+            .any(|w| w.contains("legacy point count 100") && w.contains("using 400")),
+        "{:?}",
+        info.warnings
+    );
+    let (pts, _) = read(&[wrong], &Filter::default(), ReadOptions::default());
+    assert_eq!(pts.len(), 400);
+    let short = d.path().join("short.las");
+    las_with_legacy_count(&short, (1, 2), 1, 400, 100);
+    let info = FileInfo::read(&short).unwrap();
+    assert_eq!(info.point_count, 100);
+    assert!(
+        info.warnings
+            .iter()
+            .any(|w| w.contains("room for 300 more points")),
+        "{:?}",
+        info.warnings
+    );
+}

@@ -531,3 +531,80 @@ fn max_edge_is_applied_once() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!bad.exists());
 }
+
+/// A `--boundary` in another CRS than the points gave zeros without a word, one half outside
+/// the data gave half the volume without one, and a hole lying outside its outline added its
+/// own area to the boundary's.
+#[test]
+fn volume_boundaries_that_miss_the_data_say_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    let mut xyz = String::new();
+    for i in 0..=10 {
+        for j in 0..=10 {
+            xyz += &format!("{i} {j} {}\n", i + j);
+        }
+    }
+    std::fs::write(d("g.xyz"), xyz).unwrap();
+    let square = |x: f64, y: f64, s: f64| {
+        format!(
+            "[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]",
+            x + s,
+            x + s,
+            y + s,
+            y + s
+        )
+    };
+    let polygon = |rings: &[String]| {
+        format!(
+            r#"{{"type":"Polygon","coordinates":[{}]}}"#,
+            rings.join(",")
+        )
+    };
+    let cases = [
+        (
+            "far.geojson",
+            polygon(&[square(1000.0, 1000.0, 10.0)]),
+            "does not meet the boundary",
+        ),
+        (
+            "half.geojson",
+            polygon(&[square(5.0, 0.0, 10.0)]),
+            "covers 50.000 of the boundary's 100.000 (50.0 %)",
+        ),
+        ("inside.geojson", polygon(&[square(1.0, 1.0, 8.0)]), ""),
+    ];
+    for (name, text, warning) in cases {
+        std::fs::write(d(name), text).unwrap();
+        let o = ok(&[
+            "volume",
+            s(&d("g.xyz")),
+            "--plane",
+            "0",
+            "--boundary",
+            s(&d(name)),
+            "-q",
+        ]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        if warning.is_empty() {
+            assert!(!e.contains("warning"), "{name}: {e}");
+        } else {
+            assert!(e.contains(warning), "{name}: {e}");
+        }
+    }
+    // A hole outside its outline takes nothing and adds nothing.
+    let astray = polygon(&[square(0.0, 0.0, 10.0), square(20.0, 20.0, 5.0)]);
+    std::fs::write(d("astray.geojson"), astray).unwrap();
+    let o = ok(&[
+        "volume",
+        s(&d("g.xyz")),
+        "--plane",
+        "0",
+        "--boundary",
+        s(&d("astray.geojson")),
+        "--json",
+    ]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["boundary_area"], 100.0, "{v}");
+    assert_eq!(v["totals"]["area"], 100.0, "{v}");
+}

@@ -102,9 +102,10 @@ pub(crate) fn triangulate(
         Some(s) => rows(s, "segments")?,
         None => &[],
     };
-    let (t, twins) = py
-        .detach(|| sweeptin::triangulation::triangulate_with_twins(points, segs, &options))
-        .map_err(to_py)?;
+    let (t, twins) = crate::errors::detach_guarded(py, || {
+        sweeptin::triangulation::triangulate_with_twins(points, segs, &options)
+    })
+    .map_err(to_py)?;
     let index = numpy::PyArray1::from_vec(py, t.input_index);
     index.getattr("flags")?.setattr("writeable", false)?;
     Ok(Tin {
@@ -194,16 +195,15 @@ impl Tin {
         let (v, t) = self.arrays(py);
         let (v, t): (&[[f64; 3]], &[[u32; 3]]) = (rows(&v, "vertices")?, rows(&t, "triangles")?);
         let (walk, twins) = (&self.walk, &self.twins);
-        let z = py
-            .detach(|| {
-                let mut guard = walk.lock().unwrap_or_else(|e| e.into_inner());
-                if guard.is_none() {
-                    *guard = Some(sweeptin::Tin::from_twins(v, t, twins)?);
-                }
-                let tin = guard.as_mut().expect("built above");
-                Ok(sweeptin::products::sample::heights(tin, q))
-            })
-            .map_err(to_py)?;
+        let z = crate::errors::detach_guarded(py, || {
+            let mut guard = walk.lock().unwrap_or_else(|e| e.into_inner());
+            if guard.is_none() {
+                *guard = Some(sweeptin::Tin::from_twins(v, t, twins)?);
+            }
+            let tin = guard.as_mut().expect("built above");
+            Ok(sweeptin::products::sample::heights(tin, q))
+        })
+        .map_err(to_py)?;
         Ok(PyArray1::from_vec(py, z))
     }
 
@@ -222,8 +222,8 @@ impl Tin {
         let (v, t) = self.arrays(py);
         let (v, t): (&[[f64; 3]], &[[u32; 3]]) = (rows(&v, "vertices")?, rows(&t, "triangles")?);
         let align = self::align(align)?;
-        let (cols, rows_, values, transform) = py
-            .detach(|| -> sweeptin::Result<_> {
+        let (cols, rows_, values, transform) =
+            crate::errors::detach_guarded(py, || -> sweeptin::Result<_> {
                 let extent = bbox.map_or(GridExtent::Auto, |b| GridExtent::BBox { bbox: b, snap });
                 let mut sink = DemSink::in_memory(DemOptions {
                     grid: GridPlan::new(cell, extent, align)?,

@@ -41,6 +41,10 @@ pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>
     if let Some(h) = &args.hillshade {
         outputs.push(("--hillshade", h));
     }
+    let prj = sweeptin::output::ascii_grid_prj(&args.output, args.dem.raster.format);
+    if let Some(p) = &prj {
+        outputs.push(("-o (its .prj)", p));
+    }
     args.input.args.check_outputs(&outputs, &[])?;
     let bbox = args.input.args.filter.bbox;
     let mut sinks: Vec<(String, Box<dyn TriangleSink>)> = vec![(

@@ -159,6 +159,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             summary,
         };
         println!("{}", serde_json::to_string_pretty(&out)?);
+        super::SUMMARY_PRINTED.store(true, std::sync::atomic::Ordering::Relaxed);
     } else if args.files.len() > 1 {
         println!();
         print_summary(&summary);

@@ -83,7 +83,7 @@ pub struct InputArgs {
     #[arg(skip)]
     pub task: Option<sweeptin::TaskScope>,
     /// Print a one-object JSON summary on stdout (points, triangles, seconds per phase, peak
-    /// memory) for batch jobs.
+    /// memory) for batch jobs; on failure `{"error": {"status", "kind", "message", "causes"}}`.
     #[arg(long)]
     pub json: bool,
 }
@@ -454,9 +454,21 @@ pub fn warn_z_conflicts(shown: &[ZConflict], total: u64) {
     }
 }
 
-/// Prints the run's warnings on standard error: breakline heights that disagree where lines
+/// Prints the run's warnings on standard error: what the input headers say (a point count
+/// that disagrees with the file…), breakline heights that disagree where lines
 /// meet ([`warn_z_conflicts`]) or lie far from the points'.
 pub fn warn(run: &RunSummary) {
+    // The headers' warnings, as `sweeptin info` prints them; the first few of many files.
+    const SHOWN: usize = 10;
+    for w in run.warnings.iter().take(SHOWN) {
+        eprintln!("sweeptin: warning: {w}");
+    }
+    if run.warnings.len() > SHOWN {
+        eprintln!(
+            "sweeptin: warning: … and {} more header warnings (in the --json summary)",
+            run.warnings.len() - SHOWN
+        );
+    }
     if let Some(b) = &run.breaklines {
         warn_z_conflicts(&b.z_conflicts, b.clean.z_conflicts);
     }

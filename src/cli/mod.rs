@@ -36,7 +36,9 @@ Exit status:
   4    output or temporary I/O: disk full, read-only, permissions, a directory or device in the
        way, memory that cannot be had
   5    internal error (a bug in sweeptin: please report it with the input)
-  130  interrupted by Ctrl-C (SIGINT); 143 by SIGTERM, 129 by SIGHUP (temporary files removed)";
+  130  interrupted by Ctrl-C (SIGINT); 143 by SIGTERM, 129 by SIGHUP (temporary files removed)
+With --json a failure is also one object on standard output:
+  {\"error\": {\"status\": 3, \"kind\": \"input\", \"message\": \"…\", \"causes\": […]}}";
 
 /// Exact, bounded-memory Delaunay terrain models from lidar point clouds.
 #[derive(Parser, Debug)]
@@ -91,6 +93,55 @@ enum Command {
     Refine(refine::Args),
 }
 
+impl Command {
+    /// Whether a one-object JSON summary was asked for on standard output: a failure is then
+    /// reported there too ([`ErrorSummary`]), beside the message on standard error.
+    fn json(&self) -> bool {
+        match self {
+            Command::Tin(a) => a.input.json,
+            Command::Thin(a) => a.input.json,
+            Command::Refine(a) => a.input.json,
+            Command::Dem(a) => a.input.args.json,
+            Command::Contours(a) => a.input.args.json,
+            Command::Volume(a) => a.input.args.json,
+            Command::Sample(a) => a.input.args.json,
+            Command::Profile(a) => a.input.args.json,
+            Command::Products(a) => a.input.args.json,
+            Command::Info(a) => a.json,
+            Command::Index(a) => a.json,
+            Command::Crossval(a) => a.json,
+            Command::Simplify(a) => a.json,
+            Command::Run(a) => a.json,
+            Command::Merge(a) => a.json,
+            Command::Check(_) | Command::Hillshade(_) | Command::Plan(_) => false,
+        }
+    }
+}
+
+/// The `--json` summary of a failed command: `{"error": {...}}` on standard output, so that a
+/// batch job that parses it learns why instead of finding nothing.
+#[derive(serde::Serialize)]
+struct ErrorSummary<'a> {
+    error: ErrorReport<'a>,
+}
+
+#[derive(serde::Serialize)]
+struct ErrorReport<'a> {
+    /// The exit status.
+    status: u8,
+    /// `usage`, `input`, `output`, `internal` or `interrupted`.
+    kind: sweeptin::ErrorKind,
+    /// The message, as on standard error (without the prefix).
+    message: &'a str,
+    /// Causes the message does not already spell out.
+    causes: Vec<String>,
+}
+
+/// Set by a command that printed its `--json` summary and then fails (`info` lists the files
+/// it could not read there): no second object follows it.
+pub static SUMMARY_PRINTED: std::sync::atomic::AtomicBool =
+    std::sync::atomic::AtomicBool::new(false);
+
 /// The last panic's message and place (see `main`).
 static LAST_PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
 
@@ -99,6 +150,7 @@ pub fn main() -> ExitCode {
     // Large buffers freed by a tile or run go back to the system at once (glibc).
     sweeptin::tune_allocator();
     let cli = Cli::parse();
+    let json = cli.command.json();
     // Ctrl-C / SIGTERM: delete temporary files, exit 130. Without it outputs stay atomic anyway.
     if let Err(e) = sweeptin::output::install_interrupt_handler() {
         eprintln!("sweeptin: warning: {e}");
@@ -139,17 +191,36 @@ pub fn main() -> ExitCode {
             if is_broken_pipe(&e) {
                 return ExitCode::SUCCESS;
             }
-            let mut shown = e.to_string();
-            eprintln!("sweeptin: error: {shown}");
+            let message = e.to_string();
+            eprintln!("sweeptin: error: {message}");
+            let mut causes = Vec::new();
+            let mut shown = message.clone();
             for cause in e.chain().skip(1) {
                 // Library errors already spell out their source in their own message.
                 let text = cause.to_string();
                 if !shown.contains(&text) {
                     eprintln!("  caused by: {text}");
+                    causes.push(text.clone());
                 }
                 shown = text;
             }
-            ExitCode::from(kind(&e).exit_code())
+            let kind = kind(&e);
+            if json && !SUMMARY_PRINTED.load(std::sync::atomic::Ordering::Relaxed) {
+                let summary = ErrorSummary {
+                    error: ErrorReport {
+                        status: kind.exit_code(),
+                        kind,
+                        message: &message,
+                        causes,
+                    },
+                };
+                // Standard output may be what failed: the message on stderr stands then.
+                if let Ok(text) = serde_json::to_string(&summary) {
+                    use std::io::Write;
+                    let _ = writeln!(std::io::stdout(), "{text}");
+                }
+            }
+            ExitCode::from(kind.exit_code())
         }
     }
 }

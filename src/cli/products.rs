@@ -414,6 +414,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             outputs.push((flag, p));
         }
     }
+    let prj = args
+        .dem
+        .as_deref()
+        .and_then(|d| sweeptin::output::ascii_grid_prj(d, args.dem_options.raster.format));
+    if let Some(p) = &prj {
+        outputs.push(("--dem (its .prj)", p));
+    }
     let read: Vec<&Path> = [&args.sample_points, &args.profile_line, &args.boundary]
         .into_iter()
         .flatten()

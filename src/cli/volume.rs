@@ -75,16 +75,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let Some(ProductSummary::Volume(v)) = products.get("volume") else {
         return Err(sweeptin::Error::Internal(format!("no volume summary in {products:?}")).into());
     };
-    if args.plane.is_none() && v.totals.area == 0.0 {
-        let within = if args.boundary.is_some() {
-            " within the boundary"
-        } else {
-            ""
-        };
-        eprintln!(
-            "sweeptin: warning: the surface and the reference do not overlap{within} (or only \
-             along edges): every volume and area is 0"
-        );
+    if let Some(w) = coverage_warning(v, args.plane.is_none()) {
+        eprintln!("sweeptin: warning: {w}");
     }
     if args.input.args.json {
         let mut out = serde_json::to_value(v)?;
@@ -109,6 +101,37 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// What to warn about when the volumes cover less than asked: nothing at all (a boundary in
+/// another CRS than the points gave zeros without a word), or only part of the boundary.
+fn coverage_warning(v: &sweeptin::sink::VolumeSummary, surface: bool) -> Option<String> {
+    let covered = v.totals.area;
+    let (none, some) = if surface {
+        (
+            "the surface and the reference do not overlap",
+            "the surface and the reference overlap on",
+        )
+    } else {
+        ("the TIN does not meet", "the TIN covers")
+    };
+    match v.boundary_area {
+        Some(_) if covered == 0.0 => Some(format!(
+            "{none}{} the boundary (or only along edges): every volume and area is 0 (is the \
+             boundary in the points' CRS?)",
+            if surface { " within" } else { "" }
+        )),
+        // Less than 99 % of the boundary: worth a word, volumes outside are not guessed.
+        Some(b) if covered < 0.99 * b => Some(format!(
+            "{some} {covered:.3} of the boundary's {b:.3} ({:.1} %): the volumes count only that \
+             part",
+            100.0 * covered / b
+        )),
+        None if surface && covered == 0.0 => Some(format!(
+            "{none} (or only along edges): every volume and area is 0"
+        )),
+        _ => None,
+    }
 }
 
 /// Cut, fill, net volume and the areas, one per line (as `sweeptin volume` prints them).

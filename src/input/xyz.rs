@@ -3,8 +3,9 @@
 //! The format accepted:
 //! - fields are separated by commas, semicolons, tabs or spaces; a run of white space counts as
 //!   one (so `1, 2, 3` and `1  2  3` work); two commas or semicolons in a run before the third
-//!   number (an empty field: `1,2,,5`) and a line with both (`0,15;0,29;10,00`, decimal commas)
-//!   are errors, never a column read in the wrong place;
+//!   number (an empty field: `1,2,,5`), a line with both (`0,15;0,29;10,00`, decimal commas)
+//!   and one whose y and z follow different kinds of separator (`0,15\t0,29\t10,00`: a comma
+//!   before y, a tab before z) are errors, never a column read in the wrong place;
 //! - blank lines, and lines whose first non-blank character is `#`, are skipped;
 //! - **header**: if the first line that is neither blank nor a comment has a first field that is
 //!   not a number (`x,y,z`, `X Y Z`, `Easting;Northing;Height`), that line is skipped as a header.
@@ -224,6 +225,7 @@ enum LineError {
     TooFew { found: usize },
     EmptyField { field: usize },
     MixedSeparators,
+    CommaAndBlank,
     NotANumber { field: usize, token: String },
     NonFinite { field: usize, token: String },
 }
@@ -248,6 +250,11 @@ impl std::fmt::Display for LineError {
                 "the line mixes ',' and ';' as separators (decimal commas? write numbers with \
                  a decimal point)"
             ),
+            LineError::CommaAndBlank => write!(
+                f,
+                "the line separates x, y and z by ',' or ';' in one place and by blanks in \
+                 another (decimal commas? write numbers with a decimal point)"
+            ),
             LineError::NotANumber { field, token } => {
                 write!(f, "{} is not a number: \"{token}\"", NAMES[*field])
             }
@@ -271,6 +278,9 @@ fn parse_line(bytes: &[u8]) -> std::result::Result<Option<[f64; 3]>, LineError> 
     // The line's comma or semicolon: a run of white space counts as one separator, but two of
     // these in a run leave an empty field, and both in one line are decimal commas.
     let mut hard = 0u8;
+    // Whether the separator before y was a comma or semicolon: the one before z must agree
+    // (`0,15\t0,29\t10,00` read as 0, 15, 0).
+    let mut first_hard = None;
     for (field, value) in p.iter_mut().enumerate() {
         let mut hards = 0;
         while pos < bytes.len() && is_separator(bytes[pos]) {
@@ -286,6 +296,13 @@ fn parse_line(bytes: &[u8]) -> std::result::Result<Option<[f64; 3]>, LineError> 
         }
         if hards > usize::from(field > 0) && pos < bytes.len() {
             return Err(LineError::EmptyField { field });
+        }
+        if field > 0 && pos < bytes.len() && bytes[pos] != b'#' {
+            match first_hard {
+                None => first_hard = Some(hards > 0),
+                Some(h) if h != (hards > 0) => return Err(LineError::CommaAndBlank),
+                Some(_) => {}
+            }
         }
         if pos == bytes.len() {
             return if field == 0 {
@@ -465,6 +482,12 @@ mod tests {
         // White space around one separator, and extra empty columns after z, are fine.
         assert!(err_of("1 , 2 ;\t3\n").1.contains("mixes"));
         assert_eq!(read_str("1 ,  2 ,\t3,,,\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        // Decimal commas between tabs or spaces were read as x = 0, y = 15, z = 0.
+        for line in ["0,15\t0,29\t10,00\n", "0,15 0,29 10,00\n", "1 2,3\n"] {
+            assert!(err_of(line).1.contains("decimal commas"), "{line:?}");
+        }
+        // Blanks, or commas, throughout; extra columns after z may be separated otherwise.
+        assert_eq!(read_str("1\t2\t3,7\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
     }
 
     #[test]
@@ -638,11 +661,11 @@ mod tests {
             let want = std.filter(|v| v.is_finite());
             assert_eq!(full.map(f64::to_bits), want.map(f64::to_bits), "{t:?}");
             if !t.is_empty() {
-                let line = parse_line(format!("{t},0 {t}\t{t}\r").as_bytes())
-                    .ok()
-                    .flatten();
                 let want = want.map(|v| [v.to_bits(), 0, v.to_bits()]);
-                assert_eq!(line.map(|p| p.map(f64::to_bits)), want, "{t:?}");
+                for line in [format!("{t},0 ,{t}\t{t}\r"), format!("{t} 0\t{t},{t}\r")] {
+                    let got = parse_line(line.as_bytes()).ok().flatten();
+                    assert_eq!(got.map(|p| p.map(f64::to_bits)), want, "{line:?}");
+                }
             }
         }
     }

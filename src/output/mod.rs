@@ -61,4 +61,4 @@ pub use ply::PlyWriter;
 pub use raster::{GridWriter, MemoryGrid, RasterFormat, RasterOptions, create_grid_writer};
 pub use sms2dm::Sms2dmWriter;
 pub use stin::StinWriter;
-pub use target::{check_output, distinct_outputs};
+pub use target::{ascii_grid_prj, check_output, distinct_outputs};

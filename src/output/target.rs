@@ -248,6 +248,19 @@ pub fn side_files(path: &Path) -> Vec<PathBuf> {
     }
 }
 
+/// The `.prj` an ESRI ASCII grid asked for by `--format asc` writes beside `path` when its
+/// extension is not `.asc` (which [`side_files`] finds by itself): `dem --format asc -o x.txt`
+/// writes `x.prj`, which the callers list among the outputs.
+pub fn ascii_grid_prj(path: &Path, format: Option<super::raster::RasterFormat>) -> Option<PathBuf> {
+    let by_extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("asc"));
+    let file = matches!(Destination::of(path), Ok(Destination::File { .. }));
+    (format == Some(super::raster::RasterFormat::Ascii) && !by_extension && file)
+        .then(|| path.with_extension("prj"))
+}
+
 /// Refuses, before any work, outputs (`(flag, path)`) that are the same file as each other or
 /// as one of the `inputs` of `of` (the run, the plan): compared by absolute path, by device and
 /// inode where they exist, and through symbolic links. Several outputs may go to one character

@@ -206,6 +206,7 @@ pub(crate) fn run(
             ..l.summary.clone()
         }),
         tiles: None,
+        warnings: rd.warnings.clone(),
     })
 }
 

@@ -214,6 +214,10 @@ pub struct RunSummary {
     /// The tiles, for a tiled run.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tiles: Option<crate::tiles::TileStats>,
+    /// What the input files' headers say that did not stop the run, each `FILE: warning` (a
+    /// point count that disagrees with the file…).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 pub use crate::limits::{MAX_THREADS, anon_rss, check_threads, peak_rss, size_thread_pool};

@@ -13,6 +13,8 @@ use crate::sort::external::{ExternalSorter, SortRecord};
 pub(crate) struct ReadResult {
     pub frame: Frame,
     pub crs: Option<Crs>,
+    /// The headers' warnings ([`LidarReader::warnings`]).
+    pub warnings: Vec<String>,
     /// Local-frame extent of the points read: `[xmin, ymin, xmax, ymax]`.
     pub bounds: [f64; 4],
     /// Lowest and highest z of the points read.
@@ -146,6 +148,7 @@ pub(crate) fn read_into(
         return Ok(ReadResult {
             frame: Frame { swap },
             crs,
+            warnings: reader.warnings(),
             bounds,
             z_range,
             points: n,
@@ -206,6 +209,7 @@ pub(crate) fn read_into(
     Ok(ReadResult {
         frame: Frame { swap },
         crs: None,
+        warnings: Vec::new(),
         bounds,
         z_range,
         points: n,

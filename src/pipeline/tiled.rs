@@ -96,6 +96,7 @@ pub(crate) fn run(
         crs: r.crs.as_ref().and_then(|c| c.definition()),
         sweep_axis: SweepAxis::Y,
         tiles: Some(r.tiles),
+        warnings: r.warnings,
         breaklines: match prepared {
             Some(p) => Some(super::LineSummary {
                 trimmed_triangles: r.trimmed,

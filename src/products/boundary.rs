@@ -4,9 +4,11 @@
 //! The decomposition: sort the distinct `y` of all vertices (and of points where edges cross);
 //! between two consecutive ones (a *slab*) no edge starts, ends or crosses another, so the edges
 //! crossing the slab keep their left-to-right order, and the stretches between them where the
-//! winding number is not zero are trapezoids inside the area. Each polygon's first ring is its
-//! outline and the others are holes, whatever their orientation in the file (rings are
-//! re-oriented); several polygons that overlap cover their union (non-zero winding rule).
+//! area is inside are trapezoids. Each polygon's first ring is its outline and the others are
+//! holes, whatever their orientation in the file (rings are re-oriented). A point is inside a
+//! polygon where its outline winds around it (non-zero rule) and none of its holes does; a hole
+//! takes area from its own polygon only (a hole outside its outline took nothing and added its
+//! own area); several polygons cover their union.
 
 use super::geom::{PV, clip_left, integrate};
 use crate::error::{Error, Result};
@@ -25,11 +27,12 @@ pub struct Boundary {
     slabs: Vec<Vec<Trap>>,
 }
 
-/// An edge as `(lower end, upper end, +1 if the ring runs upwards along it, else -1)`.
-type Edge = ([f64; 2], [f64; 2], i32);
+/// An edge as `(lower end, upper end, +1 if the ring runs upwards along it, else -1, its
+/// polygon, whether its ring is a hole)`.
+type Edge = ([f64; 2], [f64; 2], i32, usize, bool);
 
 fn x_at(e: &Edge, y: f64) -> f64 {
-    let (a, b, _) = e;
+    let (a, b, ..) = e;
     if y <= a[1] {
         return a[0];
     }
@@ -77,7 +80,7 @@ impl Boundary {
 
     fn decompose(polygons: &[Polygon]) -> std::result::Result<Boundary, &'static str> {
         let mut edges: Vec<Edge> = Vec::new();
-        for poly in polygons {
+        for (k, poly) in polygons.iter().enumerate() {
             for (i, ring) in poly.iter().enumerate() {
                 let ccw = ring_area2(ring) > 0.0;
                 // Outline counter-clockwise, holes clockwise.
@@ -88,9 +91,9 @@ impl Boundary {
                         continue;
                     }
                     edges.push(if a[1] < b[1] {
-                        (a, b, flip)
+                        (a, b, flip, k, i > 0)
                     } else {
-                        (b, a, -flip)
+                        (b, a, -flip, k, i > 0)
                     });
                 }
             }
@@ -103,7 +106,7 @@ impl Boundary {
             if ys.len() < 2 {
                 return Err("the boundary has no area");
             }
-            let (slabs, crossings) = Self::slabs(&edges, &ys);
+            let (slabs, crossings) = Self::slabs(&edges, &ys, polygons.len());
             if crossings.is_empty() {
                 let b = Boundary { ys, slabs };
                 if b.area() <= 0.0 {
@@ -117,8 +120,13 @@ impl Boundary {
     }
 
     /// The trapezoids of every slab, or the `y` of points where edges cross inside a slab.
-    fn slabs(edges: &[Edge], ys: &[f64]) -> (Vec<Vec<Trap>>, Vec<f64>) {
+    fn slabs(edges: &[Edge], ys: &[f64], polygons: usize) -> (Vec<Vec<Trap>>, Vec<f64>) {
         let mut slabs = Vec::with_capacity(ys.len() - 1);
+        // Per polygon: the winding numbers of its outline and of its holes left of the edge
+        // (each back at 0 right of a slab's last edge), and how many polygons hold it.
+        let mut outline = vec![0i32; polygons];
+        let mut holes = vec![0i32; polygons];
+        let mut inside = 0usize;
         let mut crossings = Vec::new();
         let mut active: Vec<Edge> = Vec::new();
         let mut next = 0;
@@ -147,14 +155,21 @@ impl Boundary {
                 }
             }
             let mut traps = Vec::new();
-            let mut winding = 0;
             let mut left: Option<&Edge> = None;
             for e in &active {
-                let before = winding;
-                winding += e.2;
-                if before == 0 && winding != 0 {
+                let before = inside;
+                let k = e.3;
+                let was = outline[k] != 0 && holes[k] == 0;
+                if e.4 {
+                    holes[k] += e.2;
+                } else {
+                    outline[k] += e.2;
+                }
+                let is = outline[k] != 0 && holes[k] == 0;
+                inside = inside + usize::from(is) - usize::from(was);
+                if before == 0 && inside != 0 {
                     left = Some(e);
-                } else if before != 0 && winding == 0 {
+                } else if before != 0 && inside == 0 {
                     let l = left.take().expect("opened when the winding left zero");
                     traps.push([
                         [x_at(l, y0), y0],
@@ -284,6 +299,17 @@ mod tests {
         // A hole given counter-clockwise is still a hole.
         let holed = [vec![square(0.0, 0.0, 4.0), square(1.0, 1.0, 1.0)]];
         assert_eq!(Boundary::new(&holed).unwrap().area(), 15.0);
+        // A hole outside its outline takes nothing (it added its own area), a hole straddling
+        // the outline only the part inside; another polygon covering a hole covers it.
+        let astray = [vec![square(0.0, 0.0, 4.0), square(10.0, 10.0, 2.0)]];
+        assert_eq!(Boundary::new(&astray).unwrap().area(), 16.0);
+        let straddling = [vec![square(0.0, 0.0, 4.0), square(3.0, 1.0, 2.0)]];
+        assert_eq!(Boundary::new(&straddling).unwrap().area(), 14.0);
+        let covered = [
+            vec![square(0.0, 0.0, 4.0), square(1.0, 1.0, 1.0)],
+            vec![square(1.0, 1.0, 1.0)],
+        ];
+        assert_eq!(Boundary::new(&covered).unwrap().area(), 16.0);
         assert!(Boundary::new(&[vec![vec![[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]]]).is_err());
     }
 }

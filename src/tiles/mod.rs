@@ -7,8 +7,8 @@
 //!   ─► writer: tiles in order ─► MeshSink / TriangleSinks (the same sinks as the sweep's)
 //! ```
 //!
-//! `grid` defines the tiles and blocks, `index` stores the points by block (and the convex hull,
-//! `hull`), `certify` says which triangles of a tile's run are triangles of the whole
+//! `grid` defines the tiles and blocks, `read` decodes the files once into `index`, which stores
+//! the points by block (and the convex hull, `hull`), `certify` says which triangles of a tile's run are triangles of the whole
 //! triangulation, `region` judges a run, `worker` runs one tile (the ownership rule and why a tile
 //! is exact are stated there), `keep` collects what a tile owns, `emit` delivers the tiles in order.
 //!
@@ -24,17 +24,17 @@ pub(crate) mod hull;
 pub(crate) mod index;
 pub(crate) mod keep;
 pub(crate) mod lines;
+pub(crate) mod read;
 pub(crate) mod region;
 pub(crate) mod worker;
 
 use crate::error::{Error, Result};
-use crate::input::las::{LidarPoint, LidarReader, ReadOptions};
 use crate::sink::{MeshSink, Needs, StreamInfo, TriangleSink};
-use crate::sort::external::ExternalSorter;
-use grid::{TileGrid, pow2, side_for};
-use index::{BlockIndex, BlockRecord, IndexRecord, PackedRecord, Packing};
+
+use index::BlockIndex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
+use read::{read_index, with_lines};
 use worker::TileOutput;
 
 /// Average points per block the block size aims at (at least; see [`block_points`]).
@@ -160,6 +160,8 @@ pub(crate) struct TiledRun {
     pub sort: crate::sort::external::SortStats,
     pub tiles: TileStats,
     pub crs: Option<crate::crs::Crs>,
+    /// The headers' warnings ([`LidarReader::warnings`]).
+    pub warnings: Vec<String>,
     pub read_sort: f64,
 }
 
@@ -181,294 +183,6 @@ pub(crate) struct TileJob<'a> {
     pub mem: u64,
     /// Where spill files go.
     pub tmp: &'a std::path::Path,
-}
-
-/// Reads the LAS/LAZ files of `job` into a block index.
-fn read_index(
-    job: &TileJob,
-    options: &TileOptions,
-    progress: &mut dyn FnMut(u64, u64),
-) -> Result<(BlockIndex, Option<crate::crs::Crs>, [f64; 4], TileCpu)> {
-    let scope = options.scope.as_ref();
-    let (mut reader, outside) = open_for(job, scope)?;
-    let b = reader.bounds();
-    let total = reader.point_count();
-    let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
-    let base = options.base.unwrap_or(1.0);
-    // Over the boxes that say where their points are, those points (files whose box says
-    // nothing would make the density look higher).
-    let density = reader.points_in_header_boxes() as f64 / area;
-    let block_points = block_points(total);
-    let tile_points = block_points * TILE_BLOCKS;
-    let block = match options.tile {
-        Some(t) => {
-            let k = side_for(base, density, block_points);
-            let s = ((t / pow2(base, k)).log2().round().max(0.0) as u32).min(12);
-            t / f64::from(1u32 << s)
-        }
-        None => pow2(base, side_for(base, density, block_points).max(-30)),
-    };
-    let probe = TileGrid::new(block, 0)?;
-    probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
-    let crs = reader.crs().cloned();
-    let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
-    let (mut index, bounds, cpu) = match packing {
-        Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
-        None => index_points::<BlockRecord>(&mut reader, probe, None, job, progress)?,
-    };
-    if let Some(sc) = scope {
-        index.scope = Some(index::Scope {
-            unknown: sc.unread.clone(),
-            beyond: outside,
-            tile: sc.tile,
-            buffer: sc.buffer,
-        });
-    }
-    // The tile: as given, or about `tile_points` at the density over the non-empty blocks; for
-    // a task, its plan tile halved until it holds about `tile_points`.
-    let tile = match options.tile {
-        Some(t) if scope.is_some() => {
-            let covered = index.blocks().max(1) as f64 * block * block;
-            let d = index.len() as f64 / covered;
-            let mut sub = t;
-            while sub / 2.0 >= block && sub / 2.0 >= base && sub * sub * d > 2.0 * tile_points {
-                sub /= 2.0;
-            }
-            sub
-        }
-        Some(t) => t,
-        None => {
-            let covered = index.blocks().max(1) as f64 * block * block;
-            let d = index.len() as f64 / covered;
-            let k = side_for(block, d, tile_points).clamp(0, 12);
-            // A whole multiple of the base (blocks may be finer than the base).
-            let mut t = pow2(block, k);
-            while t < base {
-                t *= 2.0;
-            }
-            t
-        }
-    };
-    let shift = (tile / block).log2().round() as u32;
-    index.grid = TileGrid::new(tile, shift)?;
-    debug_assert_eq!(index.grid.block, block);
-    Ok((index, crs, bounds, cpu))
-}
-
-/// Reads every point of `reader` into the block index's sort as records `R` (packed with
-/// `packing`, or wide), and builds the index: with the points' bounding box and the CPU time of
-/// both steps.
-fn index_points<R: IndexRecord>(
-    reader: &mut LidarReader,
-    grid: TileGrid,
-    packing: Option<Packing>,
-    job: &TileJob,
-    progress: &mut dyn FnMut(u64, u64),
-) -> Result<(BlockIndex, [f64; 4], TileCpu)> {
-    let total = reader.point_count();
-    let t0 = Instant::now();
-    let c0 = crate::clock::process_cpu();
-    let budget = index_sort_budget(job.mem, total, std::mem::size_of::<R>());
-    let mut sorter = ExternalSorter::<R>::new(budget, job.tmp);
-    let mut bounds = [
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    prefetched(reader, |buf, done| {
-        for p in buf {
-            let (x, y) = (p.x, p.y);
-            bounds = [
-                bounds[0].min(x),
-                bounds[1].min(y),
-                bounds[2].max(x),
-                bounds[3].max(y),
-            ];
-            sorter.push(R::pack(packing.as_ref(), grid.block_of(x, y), [x, y, p.z])?)?;
-        }
-        progress(done, total);
-        Ok(())
-    })?;
-    let t_read = Instant::now();
-    let merge = sorter.finish()?;
-    let c1 = crate::clock::process_cpu();
-    let t_fin = Instant::now();
-    let index = BlockIndex::build(grid, merge, packing, job.tmp, job.duplicates)?;
-    let cpu = TileCpu {
-        read_sort: c1 - c0,
-        decode: reader.decode_cpu(),
-        index: crate::clock::process_cpu() - c1,
-        ..TileCpu::default()
-    };
-    if std::env::var_os("SWEEPTIN_DEBUG_PHASES").is_some() {
-        eprintln!(
-            "phase1: read {:?} finish {:?} build {:?} (packed: {})",
-            t_read - t0,
-            t_fin - t_read,
-            t_fin.elapsed(),
-            packing.is_some()
-        );
-    }
-    Ok((index, bounds, cpu))
-}
-
-/// Opens the files of `job`. A task of a plan whose files are all COPC reads only the points of
-/// its tile and buffer (their octrees skip the rest) and returns the rest of each file's extent
-/// as rectangles where points it did not read may lie, like the files it does not read at all.
-/// Other tasks keep every point of their files (decoding LAZ costs the same whatever is kept,
-/// and the points farther out settle the triangles along the data's edge without another run).
-fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Vec<[f64; 4]>)> {
-    if let Some(sc) = scope {
-        let infos = job
-            .paths
-            .iter()
-            .map(crate::input::las::FileInfo::read)
-            .collect::<Result<Vec<_>>>()?;
-        let (t, b) = (sc.tile, sc.buffer);
-        let area = [t[0] - b, t[1] - b, t[2] + b, t[3] + b];
-        // A COPC file whose header box says nothing is read whole (its box cannot say what
-        // lies outside the area).
-        if !infos.is_empty()
-            && infos.iter().all(|i| i.copc.is_some() && i.known_rect().is_some())
-            && let Some(bbox) = crate::input::las::BBox::new(area[0], area[1], area[2], area[3])
-        {
-            let options = ReadOptions {
-                area: Some(bbox),
-                ..ReadOptions::for_budget(job.mem)
-            };
-            let reader = LidarReader::open_with(job.paths, job.filter, options)?;
-            let outside = infos
-                .iter()
-                .flat_map(|i| outside_of(i.rect(), area))
-                .collect();
-            return Ok((reader, outside));
-        }
-    }
-    let reader = LidarReader::open_with(job.paths, job.filter, ReadOptions::for_budget(job.mem))?;
-    Ok((reader, Vec::new()))
-}
-
-/// The parts of the closed rectangle `e` outside the closed rectangle `a`, as at most four closed
-/// rectangles (sharing `a`'s edges: points on them are read, and counted as unknown too).
-fn outside_of(e: [f64; 4], a: [f64; 4]) -> Vec<[f64; 4]> {
-    let mut out = Vec::new();
-    if e[1] < a[1] {
-        out.push([e[0], e[1], e[2], a[1].min(e[3])]);
-    }
-    if e[3] > a[3] {
-        out.push([e[0], a[3].max(e[1]), e[2], e[3]]);
-    }
-    let (y0, y1) = (e[1].max(a[1]), e[3].min(a[3]));
-    if y0 <= y1 {
-        if e[0] < a[0] {
-            out.push([e[0], y0, a[0].min(e[2]), y1]);
-        }
-        if e[2] > a[2] {
-            out.push([a[2].max(e[0]), y0, e[2], y1]);
-        }
-    }
-    out
-}
-
-/// The breaklines `p` of a run over `index`: their vertices' `z` settled against the points
-/// (`--duplicates`), their blocks occupied, the hull of points and vertices as the index's hull.
-fn with_lines(
-    index: &mut BlockIndex,
-    p: &crate::breaklines::Pslg,
-    policy: crate::DuplicatePolicy,
-) -> Result<lines::TileLines> {
-    let g = index.grid;
-    let mut l = lines::TileLines::new(&p.vertices, &p.segments);
-    if let Some(b) = l.bounds() {
-        g.check_bounds(b)?;
-    }
-    l.merge(index, policy)?;
-    let mut corners: Vec<[f64; 3]> = index.hull().to_vec();
-    corners.extend_from_slice(&l.vertices);
-    let mut h = hull::hull(&mut corners);
-    // A corner at a vertex's position has the vertex's (settled) z.
-    for c in &mut h {
-        if let Some(z) = l.z_at([c[0], c[1]]) {
-            c[2] = z;
-        }
-    }
-    index.add_lines(l.blocks(&g), h);
-    Ok(l)
-}
-
-/// Points per batch handed from the reader's thread.
-const BATCH: usize = 1 << 16;
-
-/// Reads every point of `reader` on a thread of its own, a few batches ahead, and hands each
-/// batch to `f` with the points read (or skipped) so far: decoding (on every core) goes on while
-/// `f` works (the sort's chunks are sorted and spilled meanwhile).
-fn prefetched(
-    reader: &mut LidarReader,
-    mut f: impl FnMut(&[LidarPoint], u64) -> Result<()>,
-) -> Result<()> {
-    let (full_tx, full_rx) = crossbeam_channel::bounded::<Result<(Vec<LidarPoint>, u64)>>(2);
-    let (free_tx, free_rx) = crossbeam_channel::bounded::<Vec<LidarPoint>>(4);
-    std::thread::scope(|scope| {
-        scope.spawn(move || {
-            loop {
-                let mut buf = free_rx
-                    .try_recv()
-                    .unwrap_or_else(|_| Vec::with_capacity(BATCH));
-                buf.clear();
-                let r = reader.read_chunk(&mut buf, BATCH).map(|n| {
-                    let s = reader.stats();
-                    (n, s.read + s.skipped)
-                });
-                let (stop, msg) = match r {
-                    Ok((0, _)) => (true, None),
-                    Ok((_, done)) => (false, Some(Ok((buf, done)))),
-                    Err(e) => (true, Some(Err(e))),
-                };
-                if let Some(m) = msg
-                    && full_tx.send(m).is_err()
-                {
-                    break;
-                }
-                if stop {
-                    break;
-                }
-            }
-        });
-        // Dropped on an error before the scope waits for the reader, which then stops.
-        let (rx, free) = (full_rx, free_tx);
-        for m in rx.iter() {
-            let (buf, done) = m?;
-            f(&buf, done)?;
-            let _ = free.try_send(buf);
-        }
-        Ok(())
-    })
-}
-
-/// Runs the block index's sort aims at: halves of about a sixteenth of the input (a radix sort's
-/// budget is three halves).
-const INDEX_RUNS: u64 = 16;
-
-/// The smallest budget of the block index's sort (halves of about 2.7 MB).
-const MIN_INDEX_SORT: u64 = 8 << 20;
-
-/// The block index's sort budget: half of `mem`, or less when the input (`points` of `record`
-/// bytes, the count from the headers) would fill fewer than [`INDEX_RUNS`] halves. Small halves
-/// are sorted and spilled while decoding goes on; a few large ones (or one vector sorted after
-/// the last point) leave that work to the end, with nothing beside it: ARSO (13.2 M points, 32-byte
-/// records) at `--mem 1G` took 6.9 s and 555 MB against 6.0 s and 107 MB at `--mem 128M`. The
-/// order of the records is the same whatever the budget.
-fn index_sort_budget(mem: u64, points: u64, record: usize) -> u64 {
-    let bytes = points.saturating_mul(record as u64);
-    (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))
-}
-
-/// Points per block: [`BLOCK_POINTS`], or more for inputs so large that the block table would
-/// pass [`MAX_BLOCKS`]. A function of the input's point count only (the output must not depend
-/// on anything else).
-fn block_points(total: u64) -> f64 {
-    BLOCK_POINTS.max(total as f64 / MAX_BLOCKS)
 }
 
 /// The memory of tiles in flight: a run takes [`Budget::run`] bytes when it starts, gives back
@@ -558,7 +272,7 @@ pub(crate) fn run(
         options.base = sinks.iter().find_map(|s| s.grid_cell());
     }
     let options = &options;
-    let (index, crs, bounds, cpu) =
+    let (index, declared, bounds, cpu) =
         read_index(job, options, &mut |n, t| progress("reading", n, t))?;
     let read_sort = start.elapsed().as_secs_f64();
     if index.len() == 0 {
@@ -651,7 +365,7 @@ pub(crate) fn run(
     }
     .max(1);
     let info = StreamInfo {
-        crs: crs.clone(),
+        crs: declared.crs.clone(),
         bounds,
     };
     for s in sinks.iter_mut() {
@@ -794,7 +508,8 @@ pub(crate) fn run(
         vertices: writer.vertices,
         sort: crate::sort::external::SortStats::default(),
         tiles: stats,
-        crs,
+        crs: declared.crs,
+        warnings: declared.warnings,
         read_sort,
     })
 }

@@ -98,7 +98,12 @@ impl FileDecoder {
         let vlr = if info.compressed {
             let header = las::Header::new(&mut file)
                 .map_err(|e| format_error(path, format!("invalid header: {}", las_message(&e))))?;
-            if header.number_of_points() != info.point_count {
+            // The count the `las` crate takes (the legacy one when non-zero) as when checked.
+            let crate_count = match info.legacy_point_count {
+                0 => info.extended_point_count.unwrap_or(0),
+                n => u64::from(n),
+            };
+            if header.number_of_points() != crate_count {
                 return Err(format_error(
                     path,
                     "the file changed while it was being read",

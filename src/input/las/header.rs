@@ -83,8 +83,8 @@ pub struct FileInfo {
     pub record_length: u16,
     /// Extra bytes per record beyond the point format's standard fields.
     pub extra_bytes: u16,
-    /// The number of points the reader will read: the legacy count when it is non-zero,
-    /// else the LAS 1.4 extended count (the rule of the LAS 1.4 specification, R15).
+    /// The number of points the reader will read: the LAS 1.4 64-bit count when the file has a
+    /// non-zero one, else the legacy 32-bit count ([`announced_points`]).
     pub point_count: u64,
     /// The legacy 32-bit "number of point records" field.
     pub legacy_point_count: u32,
@@ -194,14 +194,21 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
         .map_err(|e| Error::io(path, e))?;
     let header = las::Header::new(&mut read)
         .map_err(|e| format_error(path, format!("invalid header: {}", las_message(&e))))?;
-    let point_count = header.number_of_points();
+    let point_count = announced_points(&raw);
     let data_start = u64::from(raw.offset_to_point_data);
     let mut layout = Layout {
         data_start,
         ..Layout::default()
     };
     if header.point_format().is_compressed {
-        layout.chunks = check_laz(path, read.get_mut(), &header, file_len, data_start)?;
+        layout.chunks = check_laz(
+            path,
+            read.get_mut(),
+            &header,
+            point_count,
+            file_len,
+            data_start,
+        )?;
     } else {
         check_las_length(path, &raw, point_count, file_len)?;
     }
@@ -223,6 +230,12 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
         info
     });
     let mut info = describe(path, &raw, &header);
+    if let Some(more) = unannounced_records(&raw, point_count, file_len) {
+        info.warnings.push(format!(
+            "the file holds room for {more} more points than its header announces after the \
+             {point_count} it reads (a header not updated after points were added?)"
+        ));
+    }
     info.vlrs = vlrs::list(&header, &evlrs);
     // A WKT in an EVLR past the first (copclib writes it last), which `las` does not read.
     if info.crs.is_none() {
@@ -406,12 +419,28 @@ fn check_las_length(
     }
 }
 
+/// Whole records of an uncompressed file past the announced points, when nothing else (no
+/// EVLR) claims those bytes.
+fn unannounced_records(raw: &las::raw::Header, points: u64, file_len: u64) -> Option<u64> {
+    let compressed =
+        raw.point_data_record_format & 0x80 != 0 || raw.point_data_record_format & 0x40 != 0;
+    let evlrs = raw.evlr.is_some_and(|e| e.start_of_first_evlr > 0);
+    let record = u64::from(raw.point_data_record_length);
+    if compressed || evlrs || record == 0 {
+        return None;
+    }
+    let end = u64::from(raw.offset_to_point_data).checked_add(points.checked_mul(record)?)?;
+    let more = file_len.checked_sub(end)? / record;
+    (more > 0).then_some(more)
+}
+
 /// Checks the LASzip VLR and the chunk table against the file length and the point count;
 /// returns the chunks.
 fn check_laz(
     path: &Path,
     file: &mut File,
     header: &las::Header,
+    points: u64,
     file_len: u64,
     data_start: u64,
 ) -> Result<Vec<Chunk>> {
@@ -443,7 +472,6 @@ fn check_laz(
     }
     let table_at = chunk_table_offset(path, file, file_len, data_start)?;
     let n_chunks = read_chunk_count(path, file, table_at)?;
-    let points = header.number_of_points();
     // Every chunk holds at least one byte and one point (writers may add one empty chunk).
     let max_chunks = file_len.min(points.saturating_add(1));
     if n_chunks > max_chunks {
@@ -651,6 +679,17 @@ fn check_chunk_entries(
     Ok(())
 }
 
+/// The points a header announces: LAS 1.4's 64-bit count when it is non-zero (the legacy
+/// 32-bit field must be 0 for point formats 6-10 and over 4 billion points, and LAS 1.4 readers
+/// take the 64-bit one: a format-6 file with a wrong legacy count of 100 of 400 was read as 100),
+/// else the legacy count. The `las` crate prefers the legacy one; every count here is this one.
+pub(crate) fn announced_points(raw: &las::raw::Header) -> u64 {
+    match raw.large_file {
+        Some(l) if l.number_of_point_records > 0 => l.number_of_point_records,
+        _ => u64::from(raw.number_of_point_records),
+    }
+}
+
 fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileInfo {
     let mut warnings = Vec::new();
     let extended = raw.large_file.map(|l| l.number_of_point_records);
@@ -660,8 +699,9 @@ fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileIn
         && u64::from(legacy) != ext
     {
         warnings.push(format!(
-            "legacy point count {legacy} differs from the LAS 1.4 count {ext}; using {legacy} \
-             (LAS 1.4 R15 rule)"
+            "legacy point count {legacy} differs from the LAS 1.4 count {ext}; using {} (the \
+             64-bit count of LAS 1.4; formats 6-10 must leave the legacy one 0)",
+            announced_points(raw)
         ));
     }
     let crs = read_crs(header, &mut warnings);
@@ -679,7 +719,7 @@ fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileIn
         compressed: format.is_compressed,
         record_length: raw.point_data_record_length,
         extra_bytes: format.extra_bytes,
-        point_count: header.number_of_points(),
+        point_count: announced_points(raw),
         legacy_point_count: legacy,
         extended_point_count: extended,
         bounds: Bounds3 {

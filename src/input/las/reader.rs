@@ -265,6 +265,19 @@ impl LidarReader {
         self.sources.iter().filter_map(|s| s.info.as_ref())
     }
 
+    /// What the headers of the files opened say that does not stop reading (a point count
+    /// that disagrees with the file, an unreadable CRS record…), each `FILE: warning`: a run
+    /// reports them as `sweeptin info` does.
+    pub fn warnings(&self) -> Vec<String> {
+        self.files()
+            .flat_map(|i| {
+                i.warnings
+                    .iter()
+                    .map(|w| format!("{}: {w}", i.path.display()))
+            })
+            .collect()
+    }
+
     /// Total number of points in the files, before filtering (an upper bound on what
     /// [`LidarReader::read_chunk`] will return in all).
     pub fn point_count(&self) -> u64 {
