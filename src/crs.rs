@@ -113,16 +113,20 @@ impl Crs {
             let mut parts = code.split('+');
             let h = parts.next().unwrap_or("").trim().parse::<u32>();
             let v = parts.next().map(|v| v.trim().parse::<u32>());
-            // GeoTIFF's "undefined" and "user-defined" name no CRS (`EPSG:0` was taken and
-            // written as if it were one).
+            // GeoTIFF's "undefined" (0) and "user-defined" (32767) name no CRS, nor does any
+            // code below 1024 (`EPSG:0` was taken and written as if it were one).
             if let Some(c) = [h.as_ref().ok(), v.as_ref().and_then(|v| v.as_ref().ok())]
                 .into_iter()
                 .flatten()
-                .find(|&&c| c == 0 || c == 32767)
+                .find(|&&c| c < 1024 || c == 32767)
             {
                 return Err(crate::Error::Options(format!(
-                    "--crs {s}: {c} is not an EPSG code ({} in GeoTIFF's keys)",
-                    if *c == 0 { "undefined" } else { "user-defined" }
+                    "--crs {s}: {c} is not the EPSG code of a CRS ({})",
+                    match *c {
+                        0 => "0 is \"undefined\" in GeoTIFF's keys",
+                        32767 => "32767 is \"user-defined\" in GeoTIFF's keys",
+                        _ => "they start at 1024",
+                    }
                 )));
             }
             if parts.next().is_some() {
@@ -607,7 +611,13 @@ mod tests {
             ..Crs::default()
         };
         assert_eq!(c.definition().as_deref(), Some("EPSG:2949+5713"));
-        for s in ["EPSG:0", "EPSG:32767", "EPSG:2949+0", "EPSG:1+2+3"] {
+        for s in [
+            "EPSG:0",
+            "EPSG:32767",
+            "EPSG:2949+0",
+            "EPSG:1+2+3",
+            "EPSG:1023",
+        ] {
             assert!(Crs::parse(s).is_err(), "{s}");
         }
         assert!(!c.same_as(&Crs {

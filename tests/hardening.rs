@@ -401,6 +401,15 @@ fn outputs_never_overwrite_an_input_or_each_other() {
             "--dem",
             "alias",
         ],
+        // An input's own side file: a shapefile's .prj.
+        &[
+            "dem",
+            "grid.xyz",
+            "--breaklines",
+            "road.shp",
+            "-o",
+            "road.asc",
+        ],
         &[
             "tin",
             "grid.xyz",
@@ -692,6 +701,17 @@ fn json_failures_are_one_object_on_stdout() {
             "input",
         ),
         (&["run", "missing/plan.json", "--all", "--json"], 3, "input"),
+        // Found while parsing the command line.
+        (
+            &["tin", "grid.xyz", "-o", "t.ply", "--json", "--threads", "x"],
+            2,
+            "usage",
+        ),
+        (
+            &["dem", "grid.xyz", "-o", "d.tif", "--json", "--no-such-flag"],
+            2,
+            "usage",
+        ),
     ];
     for (args, status, kind) in cases {
         let o = run(dir, args);

@@ -196,7 +196,12 @@ impl Tin {
         let (v, t): (&[[f64; 3]], &[[u32; 3]]) = (rows(&v, "vertices")?, rows(&t, "triangles")?);
         let (walk, twins) = (&self.walk, &self.twins);
         let z = crate::errors::detach_guarded(py, || {
-            let mut guard = walk.lock().unwrap_or_else(|e| e.into_inner());
+            // A walk that panicked may have left its state half-updated: build it again.
+            let mut guard = walk.lock().unwrap_or_else(|e| {
+                let mut g = e.into_inner();
+                *g = None;
+                g
+            });
             if guard.is_none() {
                 *guard = Some(sweeptin::Tin::from_twins(v, t, twins)?);
             }

@@ -149,7 +149,21 @@ static LAST_PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None
 pub fn main() -> ExitCode {
     // Large buffers freed by a tile or run go back to the system at once (glibc).
     sweeptin::tune_allocator();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // A usage error found while parsing (a bad number, an unknown flag) is reported as
+            // one object too when `--json` is on the command line; help and version are not
+            // errors.
+            if e.use_stderr() && std::env::args_os().skip(1).any(|a| a == "--json") {
+                let text = e.render().to_string();
+                let first = text.lines().next().unwrap_or_default();
+                let message = first.strip_prefix("error: ").unwrap_or(first);
+                print_error_json(sweeptin::ErrorKind::Usage, message, Vec::new());
+            }
+            e.exit()
+        }
+    };
     let json = cli.command.json();
     // Ctrl-C / SIGTERM: delete temporary files, exit 130. Without it outputs stay atomic anyway.
     if let Err(e) = sweeptin::output::install_interrupt_handler() {
@@ -206,22 +220,27 @@ pub fn main() -> ExitCode {
             }
             let kind = kind(&e);
             if json && !SUMMARY_PRINTED.load(std::sync::atomic::Ordering::Relaxed) {
-                let summary = ErrorSummary {
-                    error: ErrorReport {
-                        status: kind.exit_code(),
-                        kind,
-                        message: &message,
-                        causes,
-                    },
-                };
-                // Standard output may be what failed: the message on stderr stands then.
-                if let Ok(text) = serde_json::to_string(&summary) {
-                    use std::io::Write;
-                    let _ = writeln!(std::io::stdout(), "{text}");
-                }
+                print_error_json(kind, &message, causes);
             }
             ExitCode::from(kind.exit_code())
         }
+    }
+}
+
+/// Prints the `--json` object of a failure on standard output ([`ErrorSummary`]).
+fn print_error_json(kind: sweeptin::ErrorKind, message: &str, causes: Vec<String>) {
+    let summary = ErrorSummary {
+        error: ErrorReport {
+            status: kind.exit_code(),
+            kind,
+            message,
+            causes,
+        },
+    };
+    // Standard output may be what failed: the message on stderr stands then.
+    if let Ok(text) = serde_json::to_string(&summary) {
+        use std::io::Write;
+        let _ = writeln!(std::io::stdout(), "{text}");
     }
 }
 

@@ -490,6 +490,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => None,
     };
     let (run, products) = run_products(&args.input, &config, mesh_ref, sinks)?;
+    if let Some(sweeptin::sink::ProductSummary::Volume(v)) = products.get("volume")
+        && let Some(w) = super::volume::coverage_warning(v, false)
+    {
+        eprintln!("sweeptin: warning: {w}");
+    }
     let mut report = Report::new(products);
     if let (Some(mut m), Some(path)) = (mesh, &args.mesh) {
         report.mesh = Some((path.clone(), m.finish()?));

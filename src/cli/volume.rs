@@ -105,7 +105,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// What to warn about when the volumes cover less than asked: nothing at all (a boundary in
 /// another CRS than the points gave zeros without a word), or only part of the boundary.
-fn coverage_warning(v: &sweeptin::sink::VolumeSummary, surface: bool) -> Option<String> {
+pub fn coverage_warning(v: &sweeptin::sink::VolumeSummary, surface: bool) -> Option<String> {
     let covered = v.totals.area;
     let (none, some) = if surface {
         (

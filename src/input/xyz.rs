@@ -4,8 +4,9 @@
 //! - fields are separated by commas, semicolons, tabs or spaces; a run of white space counts as
 //!   one (so `1, 2, 3` and `1  2  3` work); two commas or semicolons in a run before the third
 //!   number (an empty field: `1,2,,5`), a line with both (`0,15;0,29;10,00`, decimal commas)
-//!   and one whose y and z follow different kinds of separator (`0,15\t0,29\t10,00`: a comma
-//!   before y, a tab before z) are errors, never a column read in the wrong place;
+//!   and one whose y, z and a further column follow different kinds of separator
+//!   (`0,15\t0,29\t10,00`: a comma before y, a tab before z; `1\t2\t12,75`) are errors, never
+//!   a column read in the wrong place;
 //! - blank lines, and lines whose first non-blank character is `#`, are skipped;
 //! - **header**: if the first line that is neither blank nor a comment has a first field that is
 //!   not a number (`x,y,z`, `X Y Z`, `Easting;Northing;Height`), that line is skipped as a header.
@@ -322,6 +323,22 @@ fn parse_line(bytes: &[u8]) -> std::result::Result<Option<[f64; 3]>, LineError> 
             None => parse_number(&bytes[from..end], field)?,
         };
     }
+    // The separator after z, when a column follows, is of the same kind too: a decimal comma in
+    // z alone (`480000\t6200000\t12,75`, `480000;6200000;12,75`) was read as z = 12.
+    let mut hards = 0;
+    while pos < bytes.len() && is_separator(bytes[pos]) {
+        let b = bytes[pos];
+        if b == b',' || b == b';' {
+            if hard != 0 && b != hard {
+                return Err(LineError::MixedSeparators);
+            }
+            hards += 1;
+        }
+        pos += 1;
+    }
+    if pos < bytes.len() && bytes[pos] != b'#' && first_hard != Some(hards > 0) {
+        return Err(LineError::CommaAndBlank);
+    }
     Ok(Some(p))
 }
 
@@ -486,8 +503,18 @@ mod tests {
         for line in ["0,15\t0,29\t10,00\n", "0,15 0,29 10,00\n", "1 2,3\n"] {
             assert!(err_of(line).1.contains("decimal commas"), "{line:?}");
         }
-        // Blanks, or commas, throughout; extra columns after z may be separated otherwise.
-        assert_eq!(read_str("1\t2\t3,7\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        // A decimal comma in z alone: z was read as 12.
+        assert!(
+            err_of("480000\t6200000\t12,75\n")
+                .1
+                .contains("decimal commas")
+        );
+        assert!(err_of("480000;6200000;12,75\n").1.contains("mixes"));
+        // Blanks, or commas, throughout, extra columns and a comment after z are fine.
+        assert_eq!(
+            read_str("1\t2\t3\t7 # c\n1,2,3,,7\n1;2;3\r\n").unwrap(),
+            vec![[1.0, 2.0, 3.0]; 3]
+        );
     }
 
     #[test]
@@ -662,7 +689,7 @@ mod tests {
             assert_eq!(full.map(f64::to_bits), want.map(f64::to_bits), "{t:?}");
             if !t.is_empty() {
                 let want = want.map(|v| [v.to_bits(), 0, v.to_bits()]);
-                for line in [format!("{t},0 ,{t}\t{t}\r"), format!("{t} 0\t{t},{t}\r")] {
+                for line in [format!("{t},0 ,{t}, {t}\r"), format!("{t} 0\t{t} {t}\r")] {
                     let got = parse_line(line.as_bytes()).ok().flatten();
                     assert_eq!(got.map(|p| p.map(f64::to_bits)), want, "{line:?}");
                 }

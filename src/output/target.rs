@@ -248,6 +248,18 @@ pub fn side_files(path: &Path) -> Vec<PathBuf> {
     }
 }
 
+/// The files read beside an input at `path`: a shapefile's `.prj`, `.shx`, `.dbf` and `.cpg`,
+/// an ESRI ASCII grid's `.prj`.
+fn input_side_files(path: &Path) -> Vec<PathBuf> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    let others: &[&str] = match ext.to_ascii_lowercase().as_str() {
+        "shp" => &["prj", "shx", "dbf", "cpg"],
+        "asc" => &["prj"],
+        _ => &[],
+    };
+    others.iter().map(|e| path.with_extension(e)).collect()
+}
+
 /// The `.prj` an ESRI ASCII grid asked for by `--format asc` writes beside `path` when its
 /// extension is not `.asc` (which [`side_files`] finds by itself): `dem --format asc -o x.txt`
 /// writes `x.prj`, which the callers list among the outputs.
@@ -290,8 +302,14 @@ pub fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[PathBuf], of: &str)
             all.push((format!("the side file of {flag}"), side));
         }
     }
+    // An input's own side files are read with it: a shapefile's `.prj`, `.shx` and `.dbf`, an
+    // ASCII grid's `.prj` (`dem -o lines.asc --breaklines lines.shp` replaced the lines' CRS).
+    let read: Vec<PathBuf> = inputs
+        .iter()
+        .flat_map(|i| std::iter::once(i.clone()).chain(input_side_files(i)))
+        .collect();
     for (k, (flag, o)) in all.iter().enumerate() {
-        if let Some(i) = inputs.iter().find(|i| same_file(o, i)) {
+        if let Some(i) = read.iter().find(|i| same_file(o, i)) {
             return Err(Error::Options(format!(
                 "{flag} {}: that is an input of {of} ({}); an output never overwrites one",
                 o.display(),

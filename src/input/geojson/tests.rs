@@ -174,7 +174,8 @@ fn bad_values_in_positions() {
 /// One polygon file, two options: `--trim-boundary` (breakline rings through
 /// [`crate::input::lines`], trimmed by [`crate::breaklines::Trim`]) and the volume's
 /// `--boundary` ([`read_polygons`], clipped by [`crate::products::boundary::Boundary`]) accept
-/// the same files, refuse the same ones, and see the same area.
+/// the same files, refuse the same ones, and see the same area (of valid polygons: a hole
+/// outside its outline takes nothing from `Boundary`, while `Trim`'s even-odd rule counts it).
 #[test]
 fn trim_boundary_and_volume_boundary_accept_the_same_files() {
     use crate::breaklines::{Trim, read_file};

@@ -83,8 +83,8 @@ pub struct FileInfo {
     pub record_length: u16,
     /// Extra bytes per record beyond the point format's standard fields.
     pub extra_bytes: u16,
-    /// The number of points the reader will read: the LAS 1.4 64-bit count when the file has a
-    /// non-zero one, else the legacy 32-bit count ([`announced_points`]).
+    /// The number of points the reader will read: the LAS 1.4 64-bit count for point formats
+    /// 6-10, the legacy 32-bit count when non-zero for the others (`announced_points`).
     pub point_count: u64,
     /// The legacy 32-bit "number of point records" field.
     pub legacy_point_count: u32,
@@ -420,11 +420,14 @@ fn check_las_length(
 }
 
 /// Whole records of an uncompressed file past the announced points, when nothing else (no
-/// EVLR) claims those bytes.
+/// EVLR, no waveform packets) claims those bytes.
 fn unannounced_records(raw: &las::raw::Header, points: u64, file_len: u64) -> Option<u64> {
     let compressed =
         raw.point_data_record_format & 0x80 != 0 || raw.point_data_record_format & 0x40 != 0;
-    let evlrs = raw.evlr.is_some_and(|e| e.start_of_first_evlr > 0);
+    let evlrs = raw.evlr.is_some_and(|e| e.start_of_first_evlr > 0)
+        || raw
+            .start_of_waveform_data_packet_record
+            .is_some_and(|w| w > 0);
     let record = u64::from(raw.point_data_record_length);
     if compressed || evlrs || record == 0 {
         return None;
@@ -679,14 +682,20 @@ fn check_chunk_entries(
     Ok(())
 }
 
-/// The points a header announces: LAS 1.4's 64-bit count when it is non-zero (the legacy
-/// 32-bit field must be 0 for point formats 6-10 and over 4 billion points, and LAS 1.4 readers
-/// take the 64-bit one: a format-6 file with a wrong legacy count of 100 of 400 was read as 100),
-/// else the legacy count. The `las` crate prefers the legacy one; every count here is this one.
+/// The points a header announces. For point formats 6-10 the 64-bit count of LAS 1.4 when it is
+/// non-zero: their legacy 32-bit field must be 0 (a format-6 file whose legacy field said 100 of
+/// its 400 points was read as 100). Otherwise the legacy count when non-zero (LAS 1.4 R15, as
+/// the `las` crate does), else the 64-bit one.
 pub(crate) fn announced_points(raw: &las::raw::Header) -> u64 {
+    let legacy = u64::from(raw.number_of_point_records);
     match raw.large_file {
-        Some(l) if l.number_of_point_records > 0 => l.number_of_point_records,
-        _ => u64::from(raw.number_of_point_records),
+        Some(l)
+            if l.number_of_point_records > 0
+                && (legacy == 0 || raw.point_data_record_format & 0x3f >= 6) =>
+        {
+            l.number_of_point_records
+        }
+        _ => legacy,
     }
 }
 
@@ -700,7 +709,8 @@ fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileIn
     {
         warnings.push(format!(
             "legacy point count {legacy} differs from the LAS 1.4 count {ext}; using {} (the \
-             64-bit count of LAS 1.4; formats 6-10 must leave the legacy one 0)",
+             legacy one for point formats 0-5, LAS 1.4 R15; the 64-bit one for formats 6-10, \
+             whose legacy field must be 0)",
             announced_points(raw)
         ));
     }
