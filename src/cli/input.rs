@@ -454,21 +454,25 @@ pub fn warn_z_conflicts(shown: &[ZConflict], total: u64) {
     }
 }
 
+/// Prints the input headers' warnings, as `sweeptin info` does: the first few of many files.
+pub fn warn_headers(warnings: &[String]) {
+    const SHOWN: usize = 10;
+    for w in warnings.iter().take(SHOWN) {
+        eprintln!("sweeptin: warning: {w}");
+    }
+    if warnings.len() > SHOWN {
+        eprintln!(
+            "sweeptin: warning: … and {} more header warnings (in the --json summary)",
+            warnings.len() - SHOWN
+        );
+    }
+}
+
 /// Prints the run's warnings on standard error: what the input headers say (a point count
 /// that disagrees with the file…), breakline heights that disagree where lines
 /// meet ([`warn_z_conflicts`]) or lie far from the points'.
 pub fn warn(run: &RunSummary) {
-    // The headers' warnings, as `sweeptin info` prints them; the first few of many files.
-    const SHOWN: usize = 10;
-    for w in run.warnings.iter().take(SHOWN) {
-        eprintln!("sweeptin: warning: {w}");
-    }
-    if run.warnings.len() > SHOWN {
-        eprintln!(
-            "sweeptin: warning: … and {} more header warnings (in the --json summary)",
-            run.warnings.len() - SHOWN
-        );
-    }
+    warn_headers(&run.warnings);
     if let Some(b) = &run.breaklines {
         warn_z_conflicts(&b.z_conflicts, b.clean.z_conflicts);
     }

@@ -133,8 +133,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let meta = meta(&args, crs.clone());
         let sink = create_mesh_sink(&args.output, args.format, &meta)?;
         let mut collect = MemoryMesh::default();
-        sweeptin::pipeline::run(&config, Some(&mut collect), &mut [])
+        let run = sweeptin::pipeline::run(&config, Some(&mut collect), &mut [])
             .map_err(|e| super::input::run_error(e, &args.input.inputs))?;
+        super::input::warn(&run);
         (collect.vertices, collect.triangles, sink)
     };
     let lines: Vec<[[f64; 3]; 2]> = if line_files.is_empty() {

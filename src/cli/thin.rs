@@ -110,6 +110,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let written = sink.finish()?;
     summary.peak_rss_bytes = sweeptin::pipeline::peak_rss();
+    super::input::warn_headers(&summary.warnings);
     let s = &summary.thin;
     if args.input.json {
         println!("{}", serde_json::to_string(&summary)?);

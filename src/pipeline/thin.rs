@@ -45,6 +45,10 @@ pub struct ThinSummary {
     /// With `--tile`: the tiles.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tiles: Option<super::thin_tiles::ThinTileSummary>,
+    /// What the input files' headers say that did not stop the run
+    /// ([`crate::input::las::LidarReader::warnings`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// Reads the points and breaklines of `config` and thins them within `options.max_error`.
@@ -91,6 +95,7 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
             pts.extend(chunk.iter().map(|p| [p.x, p.y, p.z]));
         }
         summary.filters = Some(*r.stats());
+        summary.warnings = r.warnings();
         pts
     } else {
         let (pts, _) = super::read_points(input)?;

@@ -167,6 +167,7 @@ pub fn thin_tiled(
     }
     summary.points_read = index;
     summary.filters = Some(*reader.stats());
+    summary.warnings = reader.warnings();
     summary.crs = config.input_crs()?;
     drop(reader);
     let mut merge = sorter.finish()?;
