@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let start = Instant::now();
-    let mut reader = LidarReader::open_with(&files, &filter, options)?;
+    let mut reader = LidarReader::open_with(&files, &filter, options.clone())?;
     let mut chunk = Vec::with_capacity(1 << 20);
     let mut checksum = 0f64;
     while reader.read_chunk(&mut chunk, 1 << 20)? > 0 {

@@ -365,6 +365,8 @@ fn outputs_never_overwrite_an_input_or_each_other() {
     // .prj replaced the input.
     std::os::unix::fs::symlink("grid.xyz", dir.join("alias.prj")).unwrap();
     std::os::unix::fs::symlink("grid.xyz", dir.join("shade.pgw")).unwrap();
+    std::fs::write(dir.join("grid.shp"), b"not read").unwrap();
+    std::os::unix::fs::symlink("grid.shp", dir.join("alias.shp")).unwrap();
     std::fs::write(dir.join("q.csv"), "1 1\n").unwrap();
     std::fs::write(
         dir.join("l.geojson"),
@@ -401,7 +403,7 @@ fn outputs_never_overwrite_an_input_or_each_other() {
             "--dem",
             "alias",
         ],
-        // An input's own side file: a shapefile's .prj.
+        // An input's own side file: a shapefile's .prj, also through a link to the shapefile.
         &[
             "dem",
             "grid.xyz",
@@ -409,6 +411,14 @@ fn outputs_never_overwrite_an_input_or_each_other() {
             "road.shp",
             "-o",
             "road.asc",
+        ],
+        &[
+            "dem",
+            "grid.xyz",
+            "--breaklines",
+            "alias.shp",
+            "-o",
+            "grid.asc",
         ],
         &[
             "tin",
@@ -440,7 +450,9 @@ fn outputs_never_overwrite_an_input_or_each_other() {
         [
             "alias.ply",
             "alias.prj",
+            "alias.shp",
             "b.prj",
+            "grid.shp",
             "grid.xyz",
             "l.geojson",
             "q.csv",

@@ -644,6 +644,15 @@ fn point_counts_that_disagree_with_the_file() {
     );
     let (pts, _) = read(&[wrong], &Filter::default(), ReadOptions::default());
     assert_eq!(pts.len(), 400);
+    // Formats 0-5 keep the legacy count (R15), unless the file's length fits only the 64-bit
+    // one (legacy 600 was "the file is truncated", legacy 100 read 100 points).
+    for legacy in [100, 600] {
+        let f = d.path().join(format!("pf1_{legacy}.las"));
+        las_with_legacy_count(&f, (1, 4), 1, 400, legacy);
+        assert_eq!(FileInfo::read(&f).unwrap().point_count, 400, "{legacy}");
+        let (pts, _) = read(&[f], &Filter::default(), ReadOptions::default());
+        assert_eq!(pts.len(), 400);
+    }
     let short = d.path().join("short.las");
     las_with_legacy_count(&short, (1, 2), 1, 400, 100);
     let info = FileInfo::read(&short).unwrap();
@@ -655,4 +664,64 @@ fn point_counts_that_disagree_with_the_file() {
         "{:?}",
         info.warnings
     );
+}
+
+/// Writes a small LAS 1.4 file at `path` whose WKT says EPSG `code`.
+fn las_with_crs(path: &Path, code: u32, dx: f64) {
+    let mut b = las::Builder::from((1, 4));
+    b.point_format = las::point::Format::new(6).unwrap();
+    let mut header = b.into_header().unwrap();
+    let wkt = format!(r#"PROJCS["test {code}",AUTHORITY["EPSG","{code}"]]"#);
+    header.set_wkt_crs(wkt.into_bytes()).unwrap();
+    let mut w = las::Writer::from_path(path, header).unwrap();
+    for i in 0..100u32 {
+        w.write_point(las::Point {
+            x: dx + f64::from(i % 10),
+            y: f64::from(i / 10),
+            z: f64::from(i % 3),
+            gps_time: Some(0.0),
+            ..Default::default()
+        })
+        .unwrap();
+    }
+    w.close().unwrap();
+}
+
+/// Files that declare different CRSs are refused together, unless `--crs` says what they are
+/// (PDAL's `override_srs`): the refusal could not be overridden.
+#[test]
+fn crs_given_overrides_files_that_disagree() {
+    let d = tempfile::tempdir().unwrap();
+    let (a, b) = (d.path().join("a.las"), d.path().join("b.las"));
+    las_with_crs(&a, 2154, 0.0);
+    las_with_crs(&b, 2949, 10.0);
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+            .current_dir(d.path())
+            .args([
+                "dem", "a.las", "b.las", "--cell", "1", "-o", "d.tif", "--json",
+            ])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[]);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("same CRS"));
+    for engine in ["tiles", "sweep"] {
+        let o = run(&["--crs", "EPSG:2154", "--engine", engine]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{engine}: {e}");
+        assert!(
+            e.contains("b.las: declares CRS") && e.contains("(--crs)"),
+            "{e}"
+        );
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["run"]["points_read"], 200, "{v}");
+    }
 }

@@ -305,6 +305,31 @@ fn hillshade_outputs_are_georeferenced() {
     );
     assert_eq!(r.sample_type(), sweeptin::input::raster::SampleType::U8);
     validate_cog(&cog, "hillshade_outputs_are_georeferenced");
+    // A hillshade name no format fits, or a DEM that is not a GeoTIFF: refused before the DEM
+    // is made (the first failed after writing it, the second named a .prj clash).
+    for (out, shade, says) in [
+        ("h2.tif", "h2.pgw", "PNG (.png) or GeoTIFF"),
+        ("d.asc", "d.png", "needs a GeoTIFF DEM"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+            .current_dir(t.path())
+            .args([
+                "dem",
+                s(&las),
+                "--cell",
+                "0.5",
+                "-o",
+                out,
+                "--hillshade",
+                shade,
+            ])
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{e}");
+        assert!(e.contains(says), "{e}");
+        assert!(!t.path().join(out).exists(), "{out} was written");
+    }
     // The same DEM stored south-up (rows from the south, a positive pixel height): refused,
     // naming the way out (it was shaded with north and south swapped, a raster's height off).
     if !data::python(&["rasterio"], "hillshade_outputs_are_georeferenced") {

@@ -34,6 +34,11 @@ pub struct Args {
 
 /// The sinks of the DEM and its contours (checked before any work).
 pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>> {
+    if let Some(png) = &args.hillshade {
+        // Before the outputs' names are compared (`-o d.asc --hillshade d.png` said the two
+        // .prj clash rather than what is wrong).
+        check_hillshade(&args.output, args.dem.raster.format, png)?;
+    }
     let mut outputs: Vec<(&str, &std::path::Path)> = vec![("-o", &args.output)];
     if let Some(c) = &args.contours {
         outputs.push(("--contours", c));
@@ -58,7 +63,6 @@ pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>
     )];
     if let Some(png) = &args.hillshade {
         check_output(png)?;
-        check_hillshade(&args.output, args.dem.raster.format)?;
     }
     if let Some(p) = &args.contours {
         sinks.push(("contours".into(), args.contour.sink(p)?));

@@ -330,7 +330,7 @@ impl ProductInput {
         if read_box.is_some() {
             input.filter.bbox = read_box;
         }
-        self.args.config(input)
+        Ok(self.args.config(input)?.with_crs(self.crs()?))
     }
 
     /// The CRS given with `--crs`, parsed.
@@ -523,11 +523,24 @@ pub fn run_products(
 /// GeoJSON's `crs` need (a WKT2 compound that gives a code only for the whole, a custom WKT):
 /// those outputs go without a CRS, and `--crs` can name one.
 fn warn_crs(crs: Option<&Crs>) {
-    if let Some(c) = crs.filter(|c| c.horizontal_epsg().is_none()) {
-        eprintln!(
+    let Some(c) = crs else { return };
+    match c.horizontal_epsg() {
+        None => eprintln!(
             "sweeptin: warning: the CRS {c} gives no EPSG code for its horizontal part: GeoTIFF \
              and GeoJSON outputs carry no CRS (an ASCII grid's .prj keeps the WKT); name it with \
              --crs EPSG:code or EPSG:code+vertical"
+        ),
+        // GeoTIFF keys hold 16 bits (ESRI:102100 given as EPSG:102100 was dropped silently).
+        Some((h, _)) if h > u32::from(u16::MAX) => eprintln!(
+            "sweeptin: warning: the CRS code {h} does not fit a GeoTIFF key (16 bits): a \
+             GeoTIFF output carries no CRS"
+        ),
+        Some(_) => {}
+    }
+    if let Some(v) = c.vertical_epsg.filter(|&v| v > u32::from(u16::MAX)) {
+        eprintln!(
+            "sweeptin: warning: the vertical CRS code {v} does not fit a GeoTIFF key (16 bits): \
+             a GeoTIFF output carries no vertical CRS"
         );
     }
 }

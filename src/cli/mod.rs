@@ -155,10 +155,21 @@ pub fn main() -> ExitCode {
             // A usage error found while parsing (a bad number, an unknown flag) is reported as
             // one object too when `--json` is on the command line; help and version are not
             // errors.
-            if e.use_stderr() && std::env::args_os().skip(1).any(|a| a == "--json") {
+            let json = |a: &std::ffi::OsString| {
+                a.to_str()
+                    .is_some_and(|a| a == "--json" || a.starts_with("--json="))
+            };
+            if e.use_stderr() && std::env::args_os().skip(1).any(|a| json(&a)) {
+                // The message up to the usage (a missing argument's names are on the lines
+                // after the first).
                 let text = e.render().to_string();
-                let first = text.lines().next().unwrap_or_default();
-                let message = first.strip_prefix("error: ").unwrap_or(first);
+                let lines: Vec<&str> = text
+                    .lines()
+                    .take_while(|l| !l.trim().is_empty())
+                    .map(str::trim)
+                    .collect();
+                let message = lines.join(" ");
+                let message = message.strip_prefix("error: ").unwrap_or(&message);
                 print_error_json(sweeptin::ErrorKind::Usage, message, Vec::new());
             }
             e.exit()

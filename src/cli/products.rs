@@ -381,12 +381,27 @@ fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
 }
 
 /// Refuses a hillshade of a DEM that is not a GeoTIFF, before any work.
-pub fn check_hillshade(dem: &Path, format: Option<RasterFormat>) -> anyhow::Result<()> {
+pub fn check_hillshade(
+    dem: &Path,
+    format: Option<RasterFormat>,
+    shade: &Path,
+) -> anyhow::Result<()> {
     let f = format.or_else(|| RasterFormat::from_extension(dem));
     if !matches!(f, Some(RasterFormat::GeoTiff | RasterFormat::Cog)) {
         bail!(
             "--hillshade needs a GeoTIFF DEM (.tif), not {}",
             dem.display()
+        );
+    }
+    // Found before the DEM is made (`--hillshade h.pgw` failed after writing it).
+    let ext = shade
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("png" | "tif" | "tiff")) {
+        bail!(
+            "--hillshade {}: a hillshade is written as PNG (.png) or GeoTIFF (.tif)",
+            shade.display()
         );
     }
     Ok(())
@@ -401,6 +416,9 @@ pub fn shade(dem: &Path, png: &Path) -> anyhow::Result<(PathBuf, HillshadeSummar
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    if let (Some(d), Some(png)) = (&args.dem, &args.hillshade) {
+        check_hillshade(d, args.dem_options.raster.format, png)?;
+    }
     let mut outputs: Vec<(&str, &Path)> = Vec::new();
     for (flag, p) in [
         ("--dem", &args.dem),
@@ -434,7 +452,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         sinks.push(("dem".into(), args.dem_options.sink(p, bbox, mem, bounds)?));
         if let Some(png) = &args.hillshade {
             check_output(png)?;
-            check_hillshade(p, args.dem_options.raster.format)?;
         }
     }
     if let Some(p) = &args.contours {

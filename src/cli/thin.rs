@@ -67,14 +67,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .into());
     }
     args.input.check_outputs(&[("-o", &args.output)], &[])?;
-    let config = args.input.config(args.input.input())?;
+    let given = args
+        .crs
+        .as_deref()
+        .map(super::input::parse_crs)
+        .transpose()?;
+    let config = args.input.config(args.input.input())?.with_crs(given);
     let options = ThinOptions {
         max_error: args.max_error,
         decimate: !args.no_decimate,
         mem: Some(args.input.mem.0),
     };
     let crs = match &args.crs {
-        Some(c) => Some(super::input::parse_crs(c).map(|_| c.clone())?),
+        Some(c) => Some(c.clone()),
         None => config.input_crs()?,
     };
     let meta = MeshMeta {

@@ -44,10 +44,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(b) = &args.boundary_polygon {
         input.lines.boundary = Some(b.clone());
     }
-    let config = args.input.config(input)?;
+    // Checked as the products check it (`tin --crs nonsense` was written as it was).
+    let given = args
+        .crs
+        .as_deref()
+        .map(super::input::parse_crs)
+        .transpose()?;
+    let config = args.input.config(input)?.with_crs(given);
     let crs = match &args.crs {
-        // Checked as the products check it (`tin --crs nonsense` was written as it was).
-        Some(c) => Some(super::input::parse_crs(c).map(|_| c.clone())?),
+        Some(c) => Some(c.clone()),
         None => config.input_crs()?,
     };
     let meta = MeshMeta {

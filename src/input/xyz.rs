@@ -10,7 +10,9 @@
 //! - blank lines, and lines whose first non-blank character is `#`, are skipped;
 //! - **header**: if the first line that is neither blank nor a comment has a first field that is
 //!   not a number (`x,y,z`, `X Y Z`, `Easting;Northing;Height`), that line is skipped as a header.
-//!   Only that one line can be a header; later non-numeric lines are errors;
+//!   Only that one line can be a header; later non-numeric lines are errors. A header that names
+//!   x, y or z (or easting, northing, height…) in another column than the one it is read from
+//!   (`id,x,y,z`) is an error;
 //! - the first three fields are `x`, `y`, `z`; further fields (intensity, class, colour…) are
 //!   ignored without being read;
 //! - numbers are anything Rust's `f64` parser reads (`12`, `-1.5`, `.5`, `3e2`, `+4`); the value
@@ -142,6 +144,7 @@ impl<R: Read> XyzReader<R> {
                 }
                 Err(LineError::NotANumber { field: 0, .. }) if !self.seen_data => {
                     self.seen_data = true; // a header line
+                    check_header(bytes).map_err(|m| self.parse_error(m))?;
                 }
                 Err(_) if is_binary(bytes) => {
                     return Err(self.parse_error(
@@ -222,22 +225,35 @@ fn is_binary(line: &[u8]) -> bool {
 
 /// What is wrong with a line.
 #[derive(Debug, PartialEq)]
-enum LineError {
-    TooFew { found: usize },
-    EmptyField { field: usize },
+pub(crate) enum LineError {
+    /// Fewer fields than wanted (`wanted`: 3 for points, 2 for query positions).
+    TooFew {
+        found: usize,
+        wanted: usize,
+    },
+    EmptyField {
+        field: usize,
+    },
     MixedSeparators,
     CommaAndBlank,
-    NotANumber { field: usize, token: String },
-    NonFinite { field: usize, token: String },
+    NotANumber {
+        field: usize,
+        token: String,
+    },
+    NonFinite {
+        field: usize,
+        token: String,
+    },
 }
 
 impl std::fmt::Display for LineError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         const NAMES: [&str; 3] = ["x", "y", "z"];
         match self {
-            LineError::TooFew { found } => write!(
+            LineError::TooFew { found, wanted } => write!(
                 f,
-                "expected 3 numbers (x y z), found {found} field{}",
+                "expected {wanted} numbers ({}), found {found} field{}",
+                NAMES[..*wanted].join(" "),
                 if *found == 1 { "" } else { "s" }
             ),
             LineError::EmptyField { field } => write!(
@@ -266,6 +282,37 @@ impl std::fmt::Display for LineError {
     }
 }
 
+/// Refuses a header that names x, y or z in another column than the one they are read from
+/// (`id,x,y,z` was read as x = id, y = x, z = y; `z y x` swapped x and z). Names it does not
+/// know are left alone.
+fn check_header(bytes: &[u8]) -> std::result::Result<(), String> {
+    let text = String::from_utf8_lossy(bytes);
+    let names: Vec<String> = text
+        .split([',', ';', '\t', ' ', '\r'])
+        .filter(|s| !s.is_empty())
+        .map(|s| s.trim_matches(['"', '\'']).to_ascii_lowercase())
+        .collect();
+    let axis = |n: &str| match n {
+        "x" | "easting" | "east" | "lon" | "long" | "longitude" => Some(0),
+        "y" | "northing" | "north" | "lat" | "latitude" => Some(1),
+        "z" | "elevation" | "elev" | "height" | "alt" | "altitude" => Some(2),
+        _ => None,
+    };
+    for (i, n) in names.iter().enumerate() {
+        if let Some(a) = axis(n)
+            && a != i
+        {
+            return Err(format!(
+                "the header names column {} \"{n}\", but the columns are read as x, y, z in \
+                 this order (the header is {}): put x, y and z first",
+                i + 1,
+                names.join(", ")
+            ));
+        }
+    }
+    Ok(())
+}
+
 #[inline]
 fn is_separator(b: u8) -> bool {
     matches!(b, b' ' | b'\t' | b',' | b';' | b'\r')
@@ -274,8 +321,18 @@ fn is_separator(b: u8) -> bool {
 /// Parses one line (without its `\n`): `None` for blank and comment lines.
 #[inline]
 fn parse_line(bytes: &[u8]) -> std::result::Result<Option<[f64; 3]>, LineError> {
+    parse_fields::<3>(bytes)
+}
+
+/// Parses the first `N` numbers of a line (without its `\n`) under the separator rules of the
+/// module docs: `None` for blank and comment lines. `N` is 3 for points, 2 for the query
+/// positions of `sample` (one home for both: those read `1,5;3,5` as (1, 5)).
+#[inline]
+pub(crate) fn parse_fields<const N: usize>(
+    bytes: &[u8],
+) -> std::result::Result<Option<[f64; N]>, LineError> {
     let mut pos = 0;
-    let mut p = [0.0; 3];
+    let mut p = [0.0; N];
     // The line's comma or semicolon: a run of white space counts as one separator, but two of
     // these in a run leave an empty field, and both in one line are decimal commas.
     let mut hard = 0u8;
@@ -309,7 +366,10 @@ fn parse_line(bytes: &[u8]) -> std::result::Result<Option<[f64; 3]>, LineError> 
             return if field == 0 {
                 Ok(None)
             } else {
-                Err(LineError::TooFew { found: field })
+                Err(LineError::TooFew {
+                    found: field,
+                    wanted: N,
+                })
             };
         }
         if field == 0 && bytes[pos] == b'#' {
@@ -515,6 +575,30 @@ mod tests {
             read_str("1\t2\t3\t7 # c\n1,2,3,,7\n1;2;3\r\n").unwrap(),
             vec![[1.0, 2.0, 3.0]; 3]
         );
+    }
+
+    /// A header naming the axes in other columns: `id,x,y,z` was read with x = id.
+    #[test]
+    fn headers_that_name_other_columns_are_refused() {
+        for h in [
+            "id,x,y,z",
+            "z y x",
+            "Northing;Easting;Height",
+            "x,y,class,z",
+        ] {
+            let (line, e) = err_of(format!("{h}\n1,2,3,4\n"));
+            assert_eq!(line, 1, "{h}");
+            assert!(e.contains("put x, y and z first"), "{h}: {e}");
+        }
+        for h in [
+            "x,y,z,class",
+            "X Y Z",
+            "Easting;Northing;Height",
+            "a,b,c",
+            "\"x\",\"y\",\"z\"",
+        ] {
+            assert_eq!(read_str(format!("{h}\n1,2,3,4\n")).unwrap().len(), 1, "{h}");
+        }
     }
 
     #[test]

@@ -249,15 +249,27 @@ pub fn side_files(path: &Path) -> Vec<PathBuf> {
 }
 
 /// The files read beside an input at `path`: a shapefile's `.prj`, `.shx`, `.dbf` and `.cpg`,
-/// an ESRI ASCII grid's `.prj`.
+/// an ESRI ASCII grid's `.prj`; beside the path as given and beside the file a symbolic link
+/// leads to (for `--breaklines link.shp` with `link.shp -> lines.shp`, `-o lines.asc` replaced
+/// `lines.prj`).
 fn input_side_files(path: &Path) -> Vec<PathBuf> {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
-    let others: &[&str] = match ext.to_ascii_lowercase().as_str() {
-        "shp" => &["prj", "shx", "dbf", "cpg"],
-        "asc" => &["prj"],
-        _ => &[],
-    };
-    others.iter().map(|e| path.with_extension(e)).collect()
+    let mut names = vec![path.to_path_buf()];
+    if let Ok(real) = std::fs::canonicalize(path)
+        && real != path
+    {
+        names.push(real);
+    }
+    let mut out = Vec::new();
+    for p in names {
+        let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
+        let others: &[&str] = match ext.to_ascii_lowercase().as_str() {
+            "shp" => &["prj", "shx", "dbf", "cpg"],
+            "asc" => &["prj"],
+            _ => &[],
+        };
+        out.extend(others.iter().map(|e| p.with_extension(e)));
+    }
+    out
 }
 
 /// The `.prj` an ESRI ASCII grid asked for by `--format asc` writes beside `path` when its

@@ -160,6 +160,8 @@ pub struct RunConfig {
     streams: Vec<PathBuf>,
     /// How the line files are read ([`RunConfig::read_lines`]).
     line_reader: LineReader,
+    /// The CRS the user declares for the files ([`RunConfig::with_crs`]).
+    crs: Option<crate::crs::Crs>,
 }
 
 /// How a run reads its line files: as they are ([`crate::breaklines::read_file`]), or, in a
@@ -233,7 +235,36 @@ impl RunConfig {
             tmp_dir,
             streams,
             line_reader: LineReader(None),
+            crs: None,
         })
+    }
+
+    /// The same run with the files declared to be in `crs` (`--crs`): LAS/LAZ files that
+    /// declare another are read as in it, with a warning, instead of refused
+    /// ([`crate::input::las::ReadOptions::crs`]).
+    pub fn with_crs(mut self, crs: Option<crate::crs::Crs>) -> RunConfig {
+        self.crs = crs;
+        self
+    }
+
+    /// Opens the LAS/LAZ files of the run with `options` and the declared CRS.
+    ///
+    /// # Errors
+    /// As [`crate::input::las::LidarReader::open_with`].
+    pub(crate) fn open_lidar(
+        &self,
+        options: crate::input::las::ReadOptions,
+    ) -> Result<crate::input::las::LidarReader> {
+        let options = crate::input::las::ReadOptions {
+            crs: self.crs.clone(),
+            ..options
+        };
+        crate::input::las::LidarReader::open_with(&self.input.paths, &self.input.filter, options)
+    }
+
+    /// The CRS declared for the files ([`RunConfig::with_crs`]).
+    pub(crate) fn declared_crs(&self) -> Option<&crate::crs::Crs> {
+        self.crs.as_ref()
     }
 
     /// The same run reading its line files with `read` (a plan's task: each file checked
@@ -305,8 +336,7 @@ impl RunConfig {
                 Ok(r.crs().map(str::to_string))
             }
             Source::Lidar => {
-                let r =
-                    crate::input::las::LidarReader::open(&self.input.paths, &self.input.filter)?;
+                let r = self.open_lidar(crate::input::las::ReadOptions::default())?;
                 Ok(r.crs().and_then(|c| c.definition()))
             }
             Source::Xyz => Ok(None),

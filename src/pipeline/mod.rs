@@ -246,7 +246,7 @@ impl AnonPeak {
 fn nothing_left(config: &RunConfig, distinct: u64, e: Error) -> Error {
     let input = config.input();
     let count = || -> Result<crate::input::las::FilterStats> {
-        let mut r = crate::input::las::LidarReader::open(&input.paths, &input.filter)?;
+        let mut r = config.open_lidar(crate::input::las::ReadOptions::default())?;
         let mut chunk = Vec::new();
         while r.read_chunk(&mut chunk, 1 << 16)? > 0 {
             chunk.clear();

@@ -109,7 +109,7 @@ pub(crate) fn read_into(
     };
     if config.source() == Source::Lidar {
         let options = crate::input::las::ReadOptions::for_budget(config.options().mem);
-        let mut reader = LidarReader::open_with(&input.paths, &input.filter, options)?;
+        let mut reader = config.open_lidar(options)?;
         if axis == SweepAxis::Auto && free_axis {
             let b = reader.bounds();
             let (w, h) = (b.max[0] - b.min[0], b.max[1] - b.min[1]);

@@ -11,7 +11,7 @@
 use super::{RunConfig, Source, lines};
 use crate::error::{Error, Result};
 use crate::geom::predicates;
-use crate::input::las::{FilterStats, LidarReader};
+use crate::input::las::FilterStats;
 use crate::simplify::{ThinLines, ThinOptions, Thinned};
 use crate::sort::memory::DuplicatePolicy;
 use rayon::prelude::*;
@@ -79,7 +79,7 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
     let start = std::time::Instant::now();
     let mut summary = ThinSummary::default();
     let points = if source == Source::Lidar {
-        let mut r = LidarReader::open(&input.paths, &input.filter)?;
+        let mut r = config.open_lidar(crate::input::las::ReadOptions::default())?;
         let count = r.point_count();
         let need = count.saturating_mul(THIN_BYTES_PER_POINT);
         if need > mem {

@@ -20,7 +20,6 @@ use super::RunConfig;
 use super::config::Source;
 use super::thin::{THIN_BYTES_PER_POINT, ThinSummary, check_point};
 use crate::error::{Error, Result};
-use crate::input::las::LidarReader;
 use crate::simplify::thin::KEPT_BYTES;
 use crate::simplify::thin_tiles::{Borders, Sections, TileLines, TileThinned};
 use crate::simplify::{ThinOptions, ThinStats};
@@ -142,7 +141,7 @@ pub fn thin_tiled(
     // 2. Every point to its tile.
     let start = Instant::now();
     let read = crate::input::las::ReadOptions::for_budget(mem);
-    let mut reader = LidarReader::open_with(&input.paths, &input.filter, read)?;
+    let mut reader = config.open_lidar(read)?;
     let mut sorter = ExternalSorter::<TileRecord>::new(mem / 4, config.tmp_dir());
     let mut chunk = Vec::new();
     let mut index = 0u64;

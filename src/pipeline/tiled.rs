@@ -66,6 +66,7 @@ pub(crate) fn run(
         trim: prepared.as_ref().map(|p| &p.trim),
         mem: options.mem,
         tmp: config.tmp_dir(),
+        crs: config.declared_crs(),
     };
     let line_vertices = job.lines.map_or(0, |g| g.vertices.len() as u64);
     let r = crate::tiles::run(&job, tiles, &mut progress, mesh, sinks)?;

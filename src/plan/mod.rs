@@ -196,7 +196,11 @@ impl Plan {
         }
         // The files must make one point set (one CRS, compatible formats), as for a single run:
         // refused now, from the headers, not by every task later.
-        crate::input::las::LidarReader::open(paths, &job.filter())?;
+        let read = crate::input::las::ReadOptions {
+            crs: job.crs()?,
+            ..Default::default()
+        };
+        crate::input::las::LidarReader::open_with(paths, &job.filter(), read)?;
         let mut files = Vec::with_capacity(paths.len());
         for p in paths {
             let info = FileInfo::read(p)?;

@@ -424,7 +424,7 @@ impl Plan {
                 scope: Some(self.scope(i, buffer)?),
             }),
         };
-        let config = RunConfig::new(input, options)?;
+        let config = RunConfig::new(input, options)?.with_crs(self.job.crs()?);
         // Each line file is read once and parsed from the bytes checked against the plan's
         // fingerprint (a file changed since the plan was made is refused).
         Ok(match &self.job.lines {
@@ -565,11 +565,10 @@ impl Plan {
         let paths = &config.input().paths;
         let crs = match crs {
             Some(c) => Some(c),
-            None if !paths.is_empty() => {
-                crate::input::las::LidarReader::open(paths, &config.input().filter)?
-                    .crs()
-                    .cloned()
-            }
+            None if !paths.is_empty() => config
+                .open_lidar(crate::input::las::ReadOptions::default())?
+                .crs()
+                .cloned(),
             None => None,
         };
         let mut fanout = Fanout::new(self.task_sinks(dir, i)?);

@@ -3,8 +3,9 @@
 //! # Input and output
 //!
 //! The queries are a text file with `x` and `y` as the first two fields of each line (separated
-//! by commas, semicolons, tabs or spaces; `#` comments and blank lines skipped; a first line that
-//! does not start with two numbers is a header). The output repeats every query line unchanged,
+//! by commas, semicolons, tabs or spaces under the XYZ reader's rules, so that an empty field or
+//! a decimal comma is an error, never a column read in the wrong place; `#` comments and blank
+//! lines skipped; a first line that does not start with a number is a header). The output repeats every query line unchanged,
 //! in the same order, with one more field: the height `z`, or an **empty field** when the point is
 //! outside the TIN (a header line gets the field name `z`). A point exactly on an edge or vertex
 //! gets the value computed from that edge or vertex alone ([`super::geom`]), the same whichever
@@ -83,11 +84,6 @@ struct Query {
     y: f64,
 }
 
-/// Splits a line into fields the way the module docs say.
-fn fields(line: &str) -> impl Iterator<Item = &str> {
-    line.split([',', ';', '\t', ' ']).filter(|s| !s.is_empty())
-}
-
 /// What a line is.
 enum Line {
     Skip,
@@ -95,24 +91,15 @@ enum Line {
     Point(f64, f64),
 }
 
+/// A line under the XYZ reader's separator rules ([`crate::input::xyz::parse_fields`]): the
+/// first line that is not a number is a header.
 fn classify(line: &str, first_data: bool) -> std::result::Result<Line, String> {
-    let t = line.trim();
-    if t.is_empty() || t.starts_with('#') {
-        return Ok(Line::Skip);
-    }
-    let mut f = fields(t);
-    let (a, b) = (f.next(), f.next());
-    let xy = a
-        .zip(b)
-        .and_then(|(a, b)| Some((a.parse::<f64>().ok()?, b.parse::<f64>().ok()?)));
-    match xy {
-        Some((x, y)) if x.is_finite() && y.is_finite() => Ok(Line::Point(x, y)),
-        Some(_) => Err("x or y is not a finite number".into()),
-        None if first_data => Ok(Line::Header),
-        None => Err(format!(
-            "expected x and y as the first two fields, found \"{}\"",
-            t.chars().take(60).collect::<String>()
-        )),
+    use crate::input::xyz::{LineError, parse_fields};
+    match parse_fields::<2>(line.trim().as_bytes()) {
+        Ok(None) => Ok(Line::Skip),
+        Ok(Some([x, y])) => Ok(Line::Point(x, y)),
+        Err(LineError::NotANumber { .. }) if first_data => Ok(Line::Header),
+        Err(e) => Err(e.to_string()),
     }
 }
 
@@ -534,6 +521,21 @@ impl TriangleSink for SampleSink {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Query positions follow the XYZ reader's separator rules: `1,5;3,5` (decimal commas) was
+    /// read as (1, 5), `1,,2` as (1, 2).
+    #[test]
+    fn queries_follow_the_xyz_separator_rules() {
+        for bad in ["1,5;3,5", "1\t5,3", "1,,2", "1"] {
+            assert!(classify(bad, false).is_err(), "{bad}");
+        }
+        assert!(matches!(classify("x,y", true), Ok(Line::Header)));
+        assert!(matches!(classify("  # note", false), Ok(Line::Skip)));
+        assert!(matches!(
+            classify("1.5 3.5 extra", false),
+            Ok(Line::Point(1.5, 3.5))
+        ));
+    }
     use crate::products::testutil::{
         feed, grid_tin, in_sweep_order, random_tin, shuffled_with_watermarks,
     };

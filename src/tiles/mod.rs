@@ -183,6 +183,9 @@ pub(crate) struct TileJob<'a> {
     pub mem: u64,
     /// Where spill files go.
     pub tmp: &'a std::path::Path,
+    /// The CRS the user declares for the files (`--crs`; see
+    /// [`crate::input::las::ReadOptions::crs`]).
+    pub crs: Option<&'a crate::crs::Crs>,
 }
 
 /// The memory of tiles in flight: a run takes [`Budget::run`] bytes when it starts, gives back

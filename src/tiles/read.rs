@@ -171,6 +171,7 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
         {
             let options = ReadOptions {
                 area: Some(bbox),
+                crs: job.crs.cloned(),
                 ..ReadOptions::for_budget(job.mem)
             };
             let reader = LidarReader::open_with(job.paths, job.filter, options)?;
@@ -181,7 +182,11 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
             return Ok((reader, outside));
         }
     }
-    let reader = LidarReader::open_with(job.paths, job.filter, ReadOptions::for_budget(job.mem))?;
+    let options = ReadOptions {
+        crs: job.crs.cloned(),
+        ..ReadOptions::for_budget(job.mem)
+    };
+    let reader = LidarReader::open_with(job.paths, job.filter, options)?;
     Ok((reader, Vec::new()))
 }
 

@@ -194,7 +194,7 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
         .map_err(|e| Error::io(path, e))?;
     let header = las::Header::new(&mut read)
         .map_err(|e| format_error(path, format!("invalid header: {}", las_message(&e))))?;
-    let point_count = announced_points(&raw);
+    let point_count = announced_points(&raw, file_len);
     let data_start = u64::from(raw.offset_to_point_data);
     let mut layout = Layout {
         data_start,
@@ -229,7 +229,7 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
         layout.nodes = Some(nodes);
         info
     });
-    let mut info = describe(path, &raw, &header);
+    let mut info = describe(path, &raw, &header, point_count);
     if let Some(more) = unannounced_records(&raw, point_count, file_len) {
         info.warnings.push(format!(
             "the file holds room for {more} more points than its header announces after the \
@@ -419,19 +419,25 @@ fn check_las_length(
     }
 }
 
-/// Whole records of an uncompressed file past the announced points, when nothing else (no
-/// EVLR, no waveform packets) claims those bytes.
-fn unannounced_records(raw: &las::raw::Header, points: u64, file_len: u64) -> Option<u64> {
+/// Whether the file is uncompressed records and nothing after them (no EVLR, no waveform
+/// packets): its length then says how many records it holds.
+fn records_end_the_file(raw: &las::raw::Header) -> bool {
     let compressed =
         raw.point_data_record_format & 0x80 != 0 || raw.point_data_record_format & 0x40 != 0;
-    let evlrs = raw.evlr.is_some_and(|e| e.start_of_first_evlr > 0)
+    let after = raw.evlr.is_some_and(|e| e.start_of_first_evlr > 0)
         || raw
             .start_of_waveform_data_packet_record
             .is_some_and(|w| w > 0);
-    let record = u64::from(raw.point_data_record_length);
-    if compressed || evlrs || record == 0 {
+    !compressed && !after && raw.point_data_record_length > 0
+}
+
+/// Whole records of an uncompressed file past the announced points, when nothing else (no
+/// EVLR, no waveform packets) claims those bytes.
+fn unannounced_records(raw: &las::raw::Header, points: u64, file_len: u64) -> Option<u64> {
+    if !records_end_the_file(raw) {
         return None;
     }
+    let record = u64::from(raw.point_data_record_length);
     let end = u64::from(raw.offset_to_point_data).checked_add(points.checked_mul(record)?)?;
     let more = file_len.checked_sub(end)? / record;
     (more > 0).then_some(more)
@@ -685,21 +691,40 @@ fn check_chunk_entries(
 /// The points a header announces. For point formats 6-10 the 64-bit count of LAS 1.4 when it is
 /// non-zero: their legacy 32-bit field must be 0 (a format-6 file whose legacy field said 100 of
 /// its 400 points was read as 100). Otherwise the legacy count when non-zero (LAS 1.4 R15, as
-/// the `las` crate does), else the 64-bit one.
-pub(crate) fn announced_points(raw: &las::raw::Header) -> u64 {
+/// the `las` crate does), else the 64-bit one; but when both are set and differ in an
+/// uncompressed file of `file_len` bytes with nothing after its points, the one its length fits.
+pub(crate) fn announced_points(raw: &las::raw::Header, file_len: u64) -> u64 {
     let legacy = u64::from(raw.number_of_point_records);
-    match raw.large_file {
-        Some(l)
-            if l.number_of_point_records > 0
-                && (legacy == 0 || raw.point_data_record_format & 0x3f >= 6) =>
-        {
-            l.number_of_point_records
-        }
-        _ => legacy,
+    let Some(ext) = raw
+        .large_file
+        .map(|l| l.number_of_point_records)
+        .filter(|&e| e > 0)
+    else {
+        return legacy;
+    };
+    if legacy == 0 || raw.point_data_record_format & 0x3f >= 6 {
+        return ext;
     }
+    if legacy != ext && records_end_the_file(raw) {
+        let record = u64::from(raw.point_data_record_length);
+        let fits = |n: u64| {
+            n.checked_mul(record)
+                .and_then(|b| b.checked_add(u64::from(raw.offset_to_point_data)))
+                == Some(file_len)
+        };
+        if fits(ext) && !fits(legacy) {
+            return ext;
+        }
+    }
+    legacy
 }
 
-fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileInfo {
+fn describe(
+    path: &Path,
+    raw: &las::raw::Header,
+    header: &las::Header,
+    point_count: u64,
+) -> FileInfo {
     let mut warnings = Vec::new();
     let extended = raw.large_file.map(|l| l.number_of_point_records);
     let legacy = raw.number_of_point_records;
@@ -711,7 +736,7 @@ fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileIn
             "legacy point count {legacy} differs from the LAS 1.4 count {ext}; using {} (the \
              legacy one for point formats 0-5, LAS 1.4 R15; the 64-bit one for formats 6-10, \
              whose legacy field must be 0)",
-            announced_points(raw)
+            point_count
         ));
     }
     let crs = read_crs(header, &mut warnings);
@@ -729,7 +754,7 @@ fn describe(path: &Path, raw: &las::raw::Header, header: &las::Header) -> FileIn
         compressed: format.is_compressed,
         record_length: raw.point_data_record_length,
         extra_bytes: format.extra_bytes,
-        point_count: announced_points(raw),
+        point_count,
         legacy_point_count: legacy,
         extended_point_count: extended,
         bounds: Bounds3 {

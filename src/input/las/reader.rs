@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Tuning of a [`LidarReader`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ReadOptions {
     /// Decode LAZ chunks (and filter their points) on several threads (rayon's global pool).
     /// The points and their order are the same either way.
@@ -34,6 +34,10 @@ pub struct ReadOptions {
     /// Use the octree of COPC files to decode only the nodes that meet the box (`false`: read
     /// them as plain LAZ; the points kept are the same).
     pub copc_index: bool,
+    /// The CRS the user declares for the files (`--crs`, PDAL's `override_srs`): the reader's
+    /// [`LidarReader::crs`], and files that declare others are read as in it, each named in
+    /// [`LidarReader::warnings`], instead of refused.
+    pub crs: Option<Crs>,
 }
 
 impl ReadOptions {
@@ -61,6 +65,7 @@ impl Default for ReadOptions {
             ahead_bytes: 96 << 20,
             area: None,
             copc_index: true,
+            crs: None,
         }
     }
 }
@@ -72,6 +77,8 @@ impl Default for ReadOptions {
 pub struct LidarReader {
     sources: Vec<Source>,
     crs: Option<Crs>,
+    /// Files whose CRS is not the one declared ([`ReadOptions::crs`]).
+    crs_notes: Vec<String>,
     filter: Arc<CompiledFilter>,
     stats: FilterStats,
     options: ReadOptions,
@@ -211,11 +218,15 @@ impl LidarReader {
                 });
             }
         }
-        let crs = common_crs(&declared)?;
+        let (crs, crs_notes) = match &options.crs {
+            Some(c) => (Some(c.clone()), overridden(c, &declared)),
+            None => (common_crs(&declared)?, Vec::new()),
+        };
         Ok(LidarReader {
             sources,
             filter: Arc::new(compiled),
             crs,
+            crs_notes,
             stats: FilterStats::default(),
             options: ReadOptions {
                 batch_points: options.batch_points.max(1),
@@ -266,8 +277,9 @@ impl LidarReader {
     }
 
     /// What the headers of the files opened say that does not stop reading (a point count
-    /// that disagrees with the file, an unreadable CRS record…), each `FILE: warning`: a run
-    /// reports them as `sweeptin info` does.
+    /// that disagrees with the file, an unreadable CRS record, a CRS other than the one
+    /// declared in [`ReadOptions::crs`]…), each `FILE: warning`: a run reports them as
+    /// `sweeptin info` does.
     pub fn warnings(&self) -> Vec<String> {
         self.files()
             .flat_map(|i| {
@@ -275,6 +287,7 @@ impl LidarReader {
                     .iter()
                     .map(|w| format!("{}: {w}", i.path.display()))
             })
+            .chain(self.crs_notes.iter().cloned())
             .collect()
     }
 
@@ -501,6 +514,15 @@ fn margin(r: [f64; 4], step: f64) -> f64 {
 }
 
 /// The files' common CRS: files that declare one must declare the same.
+/// The files of `declared` whose CRS is not `given` (the user's), each as a warning.
+fn overridden(given: &Crs, declared: &[(PathBuf, Crs)]) -> Vec<String> {
+    declared
+        .iter()
+        .filter(|(_, c)| !given.same_as(c))
+        .map(|(p, c)| format!("{}: declares CRS {c}; read as {given} (--crs)", p.display()))
+        .collect()
+}
+
 fn common_crs(declared: &[(PathBuf, Crs)]) -> Result<Option<Crs>> {
     let Some((first_path, first)) = declared.first() else {
         return Ok(None);
