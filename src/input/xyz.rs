@@ -340,18 +340,7 @@ pub(crate) fn parse_fields<const N: usize>(
     // (`0,15\t0,29\t10,00` read as 0, 15, 0).
     let mut first_hard = None;
     for (field, value) in p.iter_mut().enumerate() {
-        let mut hards = 0;
-        while pos < bytes.len() && is_separator(bytes[pos]) {
-            let b = bytes[pos];
-            if b == b',' || b == b';' {
-                if hard != 0 && b != hard {
-                    return Err(LineError::MixedSeparators);
-                }
-                hard = b;
-                hards += 1;
-            }
-            pos += 1;
-        }
+        let hards = skip_separators(bytes, &mut pos, &mut hard)?;
         if hards > usize::from(field > 0) && pos < bytes.len() {
             return Err(LineError::EmptyField { field });
         }
@@ -385,21 +374,35 @@ pub(crate) fn parse_fields<const N: usize>(
     }
     // The separator after z, when a column follows, is of the same kind too: a decimal comma in
     // z alone (`480000\t6200000\t12,75`, `480000;6200000;12,75`) was read as z = 12.
-    let mut hards = 0;
-    while pos < bytes.len() && is_separator(bytes[pos]) {
-        let b = bytes[pos];
-        if b == b',' || b == b';' {
-            if hard != 0 && b != hard {
-                return Err(LineError::MixedSeparators);
-            }
-            hards += 1;
-        }
-        pos += 1;
-    }
+    let hards = skip_separators(bytes, &mut pos, &mut hard)?;
     if pos < bytes.len() && bytes[pos] != b'#' && first_hard != Some(hards > 0) {
         return Err(LineError::CommaAndBlank);
     }
     Ok(Some(p))
+}
+
+/// Moves `pos` past a run of separators and returns how many commas or semicolons it held;
+/// `hard` is the line's comma or semicolon (the first seen), and the other one is
+/// [`LineError::MixedSeparators`].
+#[inline]
+fn skip_separators(
+    bytes: &[u8],
+    pos: &mut usize,
+    hard: &mut u8,
+) -> std::result::Result<usize, LineError> {
+    let mut hards = 0;
+    while *pos < bytes.len() && is_separator(bytes[*pos]) {
+        let b = bytes[*pos];
+        if b == b',' || b == b';' {
+            if *hard != 0 && b != *hard {
+                return Err(LineError::MixedSeparators);
+            }
+            *hard = b;
+            hards += 1;
+        }
+        *pos += 1;
+    }
+    Ok(hards)
 }
 
 /// Finds the end of the field starting at `pos` and, in the same pass, computes its value when

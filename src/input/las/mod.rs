@@ -44,6 +44,7 @@ pub mod copc;
 mod decode;
 pub mod filter;
 pub mod header;
+mod laz_check;
 mod reader;
 pub mod stats;
 pub mod vlrs;
