@@ -235,7 +235,11 @@ fn volume_of_a_plan_equals_one_run() {
         "plan",
     );
     let plan = job.join("plan.json");
-    sweeptin(&["run", s(&plan), "--all", "--jobs", "2", "-q"], "run");
+    // `run --all --json` says what it ran (it printed nothing).
+    let out = sweeptin(&["run", s(&plan), "--all", "--jobs", "2", "--json"], "run");
+    let ran: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(ran["tasks"].as_u64().unwrap() > 1, "{ran}");
+    assert_eq!(ran["skipped"], 0, "{ran}");
     let out = sweeptin(&["merge", s(&plan), "--json"], "merge");
     let merged: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     for k in ["cut_volume", "fill_volume", "cut_area", "fill_area", "area"] {

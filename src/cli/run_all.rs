@@ -9,6 +9,18 @@ use std::time::Instant;
 use sweeptin::output::interrupt;
 use sweeptin::plan::Plan;
 
+/// The `--json` summary of `run --all` that finished every task (a failure is the error object
+/// that names the failed tasks).
+#[derive(serde::Serialize)]
+struct RunAllSummary {
+    /// Tasks run.
+    tasks: usize,
+    /// Tasks skipped as already finished (`--resume`).
+    skipped: usize,
+    /// Wall-clock seconds.
+    seconds: f64,
+}
+
 /// `--all`: every task (not yet finished, with --resume), --jobs at a time, each in its own
 /// process so that one failing task does not stop the others.
 pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
@@ -74,7 +86,14 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
         }
         .into());
     }
-    if !args.quiet {
+    if args.json {
+        let s = RunAllSummary {
+            tasks: todo.len(),
+            skipped: plan.tiles.len() - todo.len(),
+            seconds: start.elapsed().as_secs_f64(),
+        };
+        println!("{}", serde_json::to_string(&s)?);
+    } else if !args.quiet {
         eprintln!(
             "sweeptin: {} tasks in {:.2} s; next: sweeptin merge {} -o OUT",
             todo.len(),
