@@ -143,15 +143,20 @@ def test_ctrl_c_stops_a_run_and_leaves_no_output(tmp_path):
 
     arso = data("lidar/arso_TM_511_122_from_ept.laz")
     out = tmp_path / "arso.ply"
+    # Python's own SIGINT handler, as an interactive session has it: a runner started in the
+    # background (`cmd &` in a script) passes SIGINT on as ignored, and Python keeps it so.
     code = (
-        "import sweeptin, sys\n"
+        "import signal, sweeptin, sys\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "print('started', flush=True)\n"
         "try:\n"
         f"    sweeptin.tin({str(arso)!r}, {str(out)!r})\n"
         "except KeyboardInterrupt:\n"
         "    print('interrupted'); sys.exit(3)\n"
     )
     p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
-    time.sleep(3)
+    assert p.stdout.readline().strip() == "started"
+    time.sleep(2)
     p.send_signal(signal.SIGINT)
     stdout, _ = p.communicate(timeout=300)
     assert p.returncode == 3 and "interrupted" in stdout, (p.returncode, stdout)
