@@ -725,3 +725,60 @@ fn crs_given_overrides_files_that_disagree() {
         assert_eq!(v["run"]["points_read"], 200, "{v}");
     }
 }
+
+/// What a header says (here: records past the announced count) reaches a plan's user: `plan`
+/// prints it and keeps it in `plan.json`, and each task that reads the file prints it and
+/// records it; before, plan tasks said nothing of it.
+#[test]
+fn plans_and_their_tasks_warn_of_what_headers_say() {
+    let d = tempfile::tempdir().unwrap();
+    las_with_legacy_count(&d.path().join("short.las"), (1, 2), 1, 400, 100);
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+            .current_dir(d.path())
+            .args(args)
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{args:?}: {e}");
+        (String::from_utf8_lossy(&o.stdout).into_owned(), e)
+    };
+    let (_, e) = run(&[
+        "plan",
+        "dem",
+        "short.las",
+        "--cell",
+        "1",
+        "--tile",
+        "10",
+        "-o",
+        "job",
+    ]);
+    assert!(
+        e.contains("short.las: the file holds room for 300 more points"),
+        "{e}"
+    );
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("job/plan.json")).unwrap())
+            .unwrap();
+    assert!(
+        plan["warnings"][0]
+            .as_str()
+            .unwrap()
+            .contains("room for 300"),
+        "{plan}"
+    );
+    let (out, e) = run(&["run", "job/plan.json", "--task", "0", "--json"]);
+    assert!(
+        e.contains("warning: task 0: ") && e.contains("room for 300"),
+        "{e}"
+    );
+    let record: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(
+        record["warnings"][0]
+            .as_str()
+            .unwrap()
+            .contains("room for 300"),
+        "{record}"
+    );
+}

@@ -407,6 +407,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     }
     distinct_outputs(&planned_outputs, &read, "the plan")?;
     let path = plan.save(&dir)?;
+    super::input::warn_headers(&plan.warnings);
     if let Some(g) = &lines {
         super::input::warn_z_conflicts(&g.warnings, g.stats.z_conflicts);
     }
@@ -517,6 +518,12 @@ fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result
     let r = plan
         .run_task(dir, i, &options)
         .with_context(|| format!("task {i} of {}", plan.tiles.len()))?;
+    let warnings: Vec<String> = r
+        .warnings
+        .iter()
+        .map(|w| format!("task {i}: {w}"))
+        .collect();
+    super::input::warn_headers(&warnings);
     if r.status == "empty" && r.points == 0 {
         eprintln!(
             "sweeptin: warning: task {i} has no point after the filters: its outputs are empty \

@@ -89,6 +89,10 @@ pub struct Plan {
     pub cell: Option<f64>,
     /// The tasks, in tile order (rows from south to north, west to east in a row).
     pub tiles: Vec<PlanTile>,
+    /// What the files' headers said when the plan was made (a point count that disagrees with
+    /// the file, a CRS read as `--crs` says…), as one run warns of them; `plan` prints them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// What a finished task records in `tiles/task_<i>.json`.
@@ -115,6 +119,10 @@ pub struct TaskRecord {
     /// when one no longer has its size (a truncated tile). Empty in records of older builds.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bytes: Vec<u64>,
+    /// What the headers of the files the task read said (as [`Plan::warnings`], for these
+    /// files); `run` prints them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Exact volume partial sums (cut, fill, cut area, fill area, area), for `volume`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub volume: Option<[Vec<f64>; 5]>,
@@ -200,7 +208,8 @@ impl Plan {
             crs: job.crs()?,
             ..Default::default()
         };
-        crate::input::las::LidarReader::open_with(paths, &job.filter(), read)?;
+        let warnings =
+            crate::input::las::LidarReader::open_with(paths, &job.filter(), read)?.warnings();
         let mut files = Vec::with_capacity(paths.len());
         for p in paths {
             let info = FileInfo::read(p)?;
@@ -302,6 +311,7 @@ impl Plan {
             buffer,
             cell,
             tiles,
+            warnings,
         };
         plan.check_task_memory()?;
         Ok(plan)

@@ -620,6 +620,7 @@ fn record_of(
         seconds: 0.0,
         outputs,
         bytes: Vec::new(),
+        warnings: run.warnings.clone(),
         volume,
     }
 }
