@@ -273,7 +273,8 @@ pub(crate) fn run_products(
             interval,
             base,
             ..ContourOptions::default()
-        };
+        }
+        .within(opts.mem);
         let sink = ContourSink::new(&path, options).map_err(to_py)?;
         sinks.push(("contours".into(), Box::new(sink)));
     }

@@ -195,8 +195,9 @@ pub struct ContourArgs {
 }
 
 impl ContourArgs {
-    /// A contour sink writing to `path`.
-    pub fn sink(&self, path: &Path) -> anyhow::Result<Box<dyn TriangleSink>> {
+    /// A contour sink writing to `path`, holding its open lines' points within an eighth of
+    /// `mem` ([`ContourOptions::within`]).
+    pub fn sink(&self, path: &Path, mem: u64) -> anyhow::Result<Box<dyn TriangleSink>> {
         check_output(path)?;
         Ok(Box::new(ContourSink::new(
             path,
@@ -205,7 +206,8 @@ impl ContourArgs {
                 base: self.base,
                 edges: self.edges,
                 ..ContourOptions::default()
-            },
+            }
+            .within(mem),
         )?))
     }
 }
@@ -455,7 +457,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if let Some(p) = &args.contours {
-        sinks.push(("contours".into(), args.contour_options.sink(p)?));
+        let mem = args.input.args.mem.0;
+        sinks.push(("contours".into(), args.contour_options.sink(p, mem)?));
     }
     if let Some(z) = args.volume_plane.filter(|z| !z.is_finite()) {
         return Err(sweeptin::Error::Options(format!(

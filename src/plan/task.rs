@@ -32,13 +32,14 @@ pub struct Levels {
 
 impl Levels {
     /// The contour sink's options, with end edges for the merge (`edges`).
-    fn options(&self, edges: bool) -> ContourOptions {
+    fn options(&self, edges: bool, mem: u64) -> ContourOptions {
         ContourOptions {
             interval: self.interval,
             base: self.base,
             edges,
             ..ContourOptions::default()
         }
+        .within(mem)
     }
 }
 
@@ -494,7 +495,7 @@ impl Plan {
             let path = self.task_output(dir, i, "contours", "geojson");
             Ok((
                 "contours".into(),
-                Box::new(ContourSink::new(&path, l.options(true))?),
+                Box::new(ContourSink::new(&path, l.options(true, self.task_mem()))?),
             ))
         };
         let mut sinks: Vec<(String, Box<dyn TriangleSink>)> = Vec::new();

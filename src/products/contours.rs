@@ -68,6 +68,18 @@ impl Default for ContourOptions {
     }
 }
 
+impl ContourOptions {
+    /// These options holding the open polylines' points within an eighth of `mem` bytes (the
+    /// run's `--mem`), at 32 bytes a point (the point and its deque's slack): between 4096
+    /// points and the default.
+    #[must_use]
+    pub fn within(mut self, mem: u64) -> Self {
+        let points = usize::try_from(mem / 8 / 32).unwrap_or(usize::MAX);
+        self.memory_points = points.clamp(1 << 12, ContourOptions::default().memory_points);
+        self
+    }
+}
+
 /// Most levels one triangle may cross (a guard against a tiny interval).
 const MAX_LEVELS_PER_TRIANGLE: i64 = 1_000_000;
 
@@ -376,6 +388,10 @@ pub struct ContourSink {
     scratch: Option<File>,
     scratch_len: u64,
     mem_points: usize,
+    /// Points in memory that make the next spill: [`ContourOptions::memory_points`] more than a
+    /// spill left (short pieces stay), so that a spill that frees little is not repeated at
+    /// every segment.
+    spill_at: usize,
     stats: Stats,
 }
 
@@ -404,6 +420,7 @@ impl ContourSink {
         }
         Ok(ContourSink {
             path: path.to_path_buf(),
+            spill_at: options.memory_points,
             options,
             out: None,
             stitcher: Stitcher::default(),
@@ -588,8 +605,9 @@ impl ContourSink {
                 self.emit(p, true)?;
             }
         }
-        if self.mem_points > self.options.memory_points {
+        if self.mem_points > self.spill_at {
             self.spill()?;
+            self.spill_at = self.options.memory_points + self.mem_points;
         }
         Ok(())
     }
