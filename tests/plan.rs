@@ -245,6 +245,29 @@ fn volume_of_a_plan_equals_one_run() {
     for k in ["cut_volume", "fill_volume", "cut_area", "fill_area", "area"] {
         assert_eq!(merged["volume"][k], one[k], "{k}: summed exactly");
     }
+    // The boundary is pinned by size and SHA-256: edited between tasks, it mixed two polygons.
+    let poly = t.path().join("poly.geojson");
+    let ring = |x: f64| {
+        format!(r#"{{"type":"Polygon","coordinates":[[[0,0],[{x},0],[{x},1e8],[0,1e8],[0,0]]]}}"#)
+    };
+    std::fs::write(&poly, ring(1e8)).unwrap();
+    let job = t.path().join("job2");
+    let args = ["plan", "volume", s(&sample), "--plane", "5", "--tile", "8"];
+    sweeptin(
+        &[&args[..], &["--boundary", s(&poly), "-o", s(&job)]].concat(),
+        "plan",
+    );
+    std::fs::write(&poly, ring(2e8)).unwrap();
+    let o = bin()
+        .args(["run", s(&job.join("plan.json")), "--task", "0", "-q"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{e}");
+    assert!(
+        e.contains("poly.geojson: the file changed since the plan"),
+        "{e}"
+    );
 }
 
 /// A TIN plan's merged mesh has the triangles of one run (each vertex once), with and without
@@ -749,4 +772,99 @@ fn a_plan_without_buffer_never_certifies_against_files_it_did_not_read() {
     let d2 = t.path().join("gap");
     std::fs::create_dir(&d2).unwrap();
     plan_with_no_buffer_equals_one_run(&d2, &[left, right]);
+}
+
+/// The job directory's bookkeeping (a hostile tester's findings, each a mosaic wrong with exit
+/// 0 before): a task that runs again forgets its old record first, so a failed re-run is not
+/// taken as finished; records carry the plan's fingerprint, so records of a plan edited or made
+/// before in the same directory never count; a plan whose tiles do not follow from its tile
+/// side and cell is refused; a link among the plan's own files is refused, never written
+/// through (it replaced an input).
+#[test]
+fn records_count_only_for_their_plan_and_links_are_refused() {
+    let t = tempfile::tempdir().unwrap();
+    let input = t.path().join("in.laz");
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    std::fs::copy(&sample, &input).unwrap();
+    let job = t.path().join("job");
+    let plan = job.join("plan.json");
+    let plan_args = ["plan", "dem", s(&input), "--cell", "0.5", "--tile", "32"];
+    sweeptin(&[&plan_args[..], &["-o", s(&job)]].concat(), "plan");
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
+    let failing = |args: &[&str], code: i32, says: &str| {
+        let o = bin().args(args).output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {e}");
+        assert!(e.contains(says), "{args:?}: {e}");
+    };
+    // A nightly re-run that fails leaves no record of the night before.
+    let away = t.path().join("away.laz");
+    std::fs::rename(&input, &away).unwrap();
+    failing(&["run", s(&plan), "--task", "0", "-q"], 3, "in.laz");
+    assert!(!job.join("tiles/task_0.json").exists());
+    let m = t.path().join("m.tif");
+    failing(&["merge", s(&plan), "-o", s(&m)], 2, "have not finished");
+    std::fs::rename(&away, &input).unwrap();
+    sweeptin(&["run", s(&plan), "--all", "--resume", "-q"], "resume");
+    // Records of the plan before an edit are not this plan's.
+    let text = std::fs::read_to_string(&plan).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["args"].as_array_mut().unwrap().push("(edited)".into());
+    std::fs::write(&plan, v.to_string()).unwrap();
+    failing(&["merge", s(&plan), "-o", s(&m)], 2, "have not finished");
+    sweeptin(&["run", s(&plan), "--all", "--resume", "-q"], "resume");
+    sweeptin(&["merge", s(&plan), "-o", s(&m)], "merge");
+    // A plan whose cell or tiles were edited apart is refused.
+    v["cell"] = serde_json::json!(1.0);
+    std::fs::write(&plan, v.to_string()).unwrap();
+    failing(&["run", s(&plan), "--task", "0"], 3, "the plan was edited");
+    // Planned again into the directory of another plan's tasks.
+    std::fs::remove_file(&plan).unwrap();
+    let again = [
+        &plan_args[..3],
+        &["--cell", "1", "--tile", "32", "-o", s(&job)],
+    ]
+    .concat();
+    failing(&again, 2, "but no plan");
+    // A link where the plan keeps its own files is refused, and its target left alone.
+    std::fs::write(&plan, &text).unwrap();
+    let before = std::fs::read(&input).unwrap();
+    let record = job.join("tiles/task_0.json");
+    std::fs::remove_file(&record).unwrap();
+    std::os::unix::fs::symlink(&input, &record).unwrap();
+    failing(
+        &["run", s(&plan), "--task", "0", "-q"],
+        2,
+        "a symbolic link",
+    );
+    let tile = std::fs::read_dir(job.join("tiles"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|e| e == "tif"))
+        .unwrap();
+    std::fs::remove_file(&record).unwrap();
+    std::fs::remove_file(&tile).unwrap();
+    std::os::unix::fs::symlink(&input, &tile).unwrap();
+    let o = bin()
+        .args(["run", s(&plan), "--all", "-q"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    std::fs::remove_file(&plan).unwrap();
+    std::os::unix::fs::symlink(&input, &plan).unwrap();
+    failing(
+        &[&plan_args[..], &["-o", s(&job)]].concat(),
+        2,
+        "a symbolic link",
+    );
+    assert!(
+        std::fs::read(&input).unwrap() == before,
+        "an input was replaced"
+    );
 }

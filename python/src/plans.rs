@@ -40,10 +40,6 @@ pub(crate) struct JobOpts {
     tmp_dir: Option<PathBuf>,
 }
 
-fn absolute(p: &std::path::Path) -> sweeptin::Result<PathBuf> {
-    std::fs::canonicalize(p).map_err(|e| sweeptin::Error::io(p, e))
-}
-
 /// Writes `DIR/plan.json` for the job over `files`; returns its path.
 #[pyfunction]
 #[pyo3(signature = (files, dir, tile, buffer, job, args))]
@@ -81,7 +77,7 @@ pub(crate) fn make_plan(
             boundary: job
                 .boundary
                 .as_deref()
-                .map(absolute)
+                .map(sweeptin::plan::LineFile::new)
                 .transpose()
                 .map_err(to_py)?,
         },

@@ -22,7 +22,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     args.input
         .args
         .check_outputs(&[("-o", &args.output)], &[])?;
-    let sinks = vec![("contours".to_string(), args.contour.sink(&args.output, args.input.args.mem.0)?)];
+    let sinks = vec![(
+        "contours".to_string(),
+        args.contour.sink(&args.output, args.input.args.mem.0)?,
+    )];
     let config = args.input.config(None)?;
     let (run, products) = run_products(&args.input, &config, None, sinks)?;
     finish_report(&args.input, &run, &Report::new(products), start)

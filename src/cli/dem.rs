@@ -65,7 +65,10 @@ pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>
         check_output(png)?;
     }
     if let Some(p) = &args.contours {
-        sinks.push(("contours".into(), args.contour.sink(p, args.input.args.mem.0)?));
+        sinks.push((
+            "contours".into(),
+            args.contour.sink(p, args.input.args.mem.0)?,
+        ));
     }
     Ok(sinks)
 }

@@ -193,7 +193,7 @@ impl Job {
                 boundary: v
                     .boundary
                     .as_deref()
-                    .map(|b| std::fs::canonicalize(b).map_err(|e| sweeptin::Error::io(b, e)))
+                    .map(sweeptin::plan::LineFile::new)
                     .transpose()?,
             },
             Job::Tin(_) => Product::Tin,

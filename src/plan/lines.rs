@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// A line file of a plan: where it is and what it held when the plan was made.
+/// A line or polygon file of a plan (breaklines, trimming rings, a volume's boundary): where it
+/// is and what it held when the plan was made.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct LineFile {
     /// The file, absolute, as the readers take it (`FILE.gpkg:LAYER` keeps its layer).
@@ -70,9 +71,9 @@ impl LineFile {
             return Err(Error::Format {
                 path: self.path.clone(),
                 message: format!(
-                    "the line file changed since the plan was made ({} bytes, sha256 {} then; \
-                     {bytes} bytes, sha256 {sha256} now): every task must insert the same lines, \
-                     so make the plan again",
+                    "the file changed since the plan was made ({} bytes, sha256 {} then; \
+                     {bytes} bytes, sha256 {sha256} now): every task must read the same lines \
+                     or polygon, so make the plan again",
                     self.bytes, self.sha256
                 ),
             });
@@ -87,7 +88,7 @@ fn read_all(path: &Path) -> Result<Vec<u8>> {
 }
 
 /// The size and SHA-256 (hex) of `content`.
-fn fingerprint(content: &[u8]) -> (u64, String) {
+pub(super) fn fingerprint(content: &[u8]) -> (u64, String) {
     use sha2::Digest;
     let hex = sha2::Sha256::digest(content)
         .iter()

@@ -29,7 +29,8 @@ pub fn records(plan: &Plan, dir: &Path) -> Result<Vec<TaskRecord>> {
     if !missing.is_empty() {
         let list: Vec<String> = missing.iter().take(20).map(|i| i.to_string()).collect();
         return Err(Error::Options(format!(
-            "{} of {} tasks have not finished (run them first: `sweeptin run {} --task I`): {}{}",
+            "{} of {} tasks have not finished under this plan (run them first: `sweeptin run {} \
+             --task I`, or `--all --resume`): {}{}",
             missing.len(),
             plan.tiles.len(),
             dir.join("plan.json").display(),

@@ -93,6 +93,19 @@ pub struct Plan {
     /// the file, a CRS read as `--crs` says…), as one run warns of them; `plan` prints them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// [`Plan::id`], computed once.
+    #[serde(skip)]
+    id: PlanId,
+}
+
+/// The fingerprint of a plan ([`Plan::id`]), computed once; plans are equal whatever it holds.
+#[derive(Clone, Debug, Default)]
+struct PlanId(std::sync::OnceLock<String>);
+
+impl PartialEq for PlanId {
+    fn eq(&self, _: &PlanId) -> bool {
+        true
+    }
 }
 
 /// What a finished task records in `tiles/task_<i>.json`.
@@ -115,6 +128,11 @@ pub struct TaskRecord {
     pub seconds: f64,
     /// The task's outputs, by product name.
     pub outputs: Vec<(String, PathBuf)>,
+    /// The [`Plan::id`] of the plan the task ran under: a record of another plan (made into
+    /// the same directory before, or before the plan was edited) is no record of this one.
+    /// Empty in records of older builds.
+    #[serde(default)]
+    pub plan: String,
     /// The sizes of `outputs` in bytes when the task finished: `--resume` runs a task again
     /// when one no longer has its size (a truncated tile). Empty in records of older builds.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -312,6 +330,7 @@ impl Plan {
             cell,
             tiles,
             warnings,
+            id: PlanId::default(),
         };
         plan.check_task_memory()?;
         Ok(plan)
@@ -334,9 +353,34 @@ impl Plan {
                 dir.display()
             )));
         }
-        std::fs::create_dir_all(dir.join("tiles")).map_err(|e| Error::write(dir, e))?;
+        let tiles = dir.join("tiles");
+        if !path.exists()
+            && let Some(old) = std::fs::read_dir(&tiles)
+                .into_iter()
+                .flatten()
+                .flatten()
+                .find(|e| e.file_name().to_string_lossy().starts_with("task_"))
+        {
+            return Err(Error::Options(format!(
+                "{} holds a task record ({}) but no plan: the tasks of another plan; plan into a \
+                 new directory, or delete {} first",
+                dir.display(),
+                old.file_name().to_string_lossy(),
+                tiles.display()
+            )));
+        }
+        std::fs::create_dir_all(&tiles).map_err(|e| Error::write(&tiles, e))?;
         write_atomic(&path, text.as_bytes())?;
         Ok(path)
+    }
+
+    /// The plan's fingerprint: the SHA-256 of its JSON. Task records carry it, so that a record
+    /// of another plan in the same directory, or of this one before it was edited, never counts.
+    pub fn id(&self) -> &str {
+        self.id.0.get_or_init(|| {
+            let text = serde_json::to_string(self).unwrap_or_default();
+            lines::fingerprint(text.as_bytes()).1
+        })
     }
 
     /// Reads a `plan.json`.
@@ -361,7 +405,43 @@ impl Plan {
                 ),
             ));
         }
-        serde_json::from_str(&text).map_err(|e| bad(path, format!("not a sweeptin plan: {e}")))
+        let plan: Plan = serde_json::from_str(&text)
+            .map_err(|e| bad(path, format!("not a sweeptin plan: {e}")))?;
+        plan.check_consistent()
+            .map_err(|m| bad(path, format!("{m}: the plan was edited; make it again")))?;
+        Ok(plan)
+    }
+
+    /// Checks what a plan says twice, or what its tiles follow from: the cell against the
+    /// job's, each tile's number, bounds (from its grid position and the tile side) and files
+    /// (a hand-edited cell or tile side made tiles that the mosaic misplaced).
+    fn check_consistent(&self) -> std::result::Result<(), String> {
+        if self.cell != self.job.cell() {
+            return Err(format!(
+                "its cell {:?} is not its job's {:?}",
+                self.cell,
+                self.job.cell()
+            ));
+        }
+        crate::pipeline::check_tile_side(self.tile).map_err(|e| e.to_string())?;
+        for (k, t) in self.tiles.iter().enumerate() {
+            let b = [
+                t.tx as f64 * self.tile,
+                t.ty as f64 * self.tile,
+                (t.tx + 1) as f64 * self.tile,
+                (t.ty + 1) as f64 * self.tile,
+            ];
+            if t.index != k || t.bounds != b || t.files.iter().any(|&f| f >= self.files.len()) {
+                return Err(format!(
+                    "task {k} is not tile ({}, {}) of side {} over its {} files",
+                    t.tx,
+                    t.ty,
+                    self.tile,
+                    self.files.len()
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The task `i`.
@@ -441,10 +521,16 @@ impl Plan {
     }
 
     /// Where task `i` writes its output `name` (extension `ext`) under `dir`.
-    pub fn task_output(&self, dir: &Path, i: usize, name: &str, ext: &str) -> PathBuf {
+    ///
+    /// # Errors
+    /// As [`own_file`]: the path is a link or not a regular file.
+    pub fn task_output(&self, dir: &Path, i: usize, name: &str, ext: &str) -> Result<PathBuf> {
         let t = &self.tiles[i];
-        dir.join("tiles")
-            .join(format!("{name}_{}_{}.{ext}", t.tx, t.ty))
+        let p = dir
+            .join("tiles")
+            .join(format!("{name}_{}_{}.{ext}", t.tx, t.ty));
+        own_file(&p)?;
+        Ok(p)
     }
 
     /// Where task `i` records that it finished.
@@ -452,18 +538,32 @@ impl Plan {
         dir.join("tiles").join(format!("task_{i}.json"))
     }
 
-    /// The record of task `i`, if it finished.
+    /// The record of task `i`, if it finished under this plan (a record of another plan is
+    /// none: [`TaskRecord::plan`]).
     ///
     /// # Errors
     /// [`Error::Format`] for a damaged record.
     pub fn record(&self, dir: &Path, i: usize) -> Result<Option<TaskRecord>> {
         let p = self.marker(dir, i);
         match std::fs::read_to_string(&p) {
-            Ok(t) => serde_json::from_str(&t)
-                .map(Some)
+            Ok(t) => serde_json::from_str::<TaskRecord>(&t)
+                .map(|r| Some(r).filter(|r| r.plan == self.id() && r.index == i))
                 .map_err(|e| bad(&p, format!("damaged task record: {e}"))),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(Error::io(&p, e)),
+        }
+    }
+
+    /// Removes the record of task `i`, if any (the task is running again).
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the record.
+    pub fn forget_task(&self, dir: &Path, i: usize) -> Result<()> {
+        let p = self.marker(dir, i);
+        own_file(&p)?;
+        match std::fs::remove_file(&p) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::write(&p, e)),
+            _ => Ok(()),
         }
     }
 
@@ -576,8 +676,31 @@ fn overlaps(a: &[f64; 4], b: &[f64; 4]) -> bool {
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+/// Refuses a file of the plan's directory (the plan, a task's output or record) that is a
+/// symbolic link or not a regular file: the directory holds only what sweeptin writes there, and
+/// writing through a link replaced what it pointed at (an input, once).
+///
+/// # Errors
+/// [`Error::Options`] naming the path.
+fn own_file(path: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.file_type().is_file() => Err(Error::Options(format!(
+            "{}: {} where the plan keeps its own file: sweeptin writes only regular files in a \
+             plan's directory (remove it)",
+            path.display(),
+            if m.file_type().is_symlink() {
+                "a symbolic link"
+            } else {
+                "not a regular file"
+            }
+        ))),
+        _ => Ok(()),
+    }
+}
+
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     use std::io::Write;
+    own_file(path)?;
     let mut f = crate::output::AtomicFile::create(path)?;
     f.write_all(bytes).map_err(|e| Error::write(path, e))?;
     f.commit()?;

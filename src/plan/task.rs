@@ -73,8 +73,9 @@ pub enum Product {
     Volume {
         /// The plane's height.
         plane: f64,
-        /// The boundary polygon file (absolute).
-        boundary: Option<PathBuf>,
+        /// The boundary polygon file (absolute), with its size and SHA-256: every task checks
+        /// that it still holds what the plan saw (an edit between tasks mixed two polygons).
+        boundary: Option<super::LineFile>,
     },
 }
 
@@ -305,6 +306,9 @@ impl Plan {
     pub fn run_task(&self, dir: &Path, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
         let start = std::time::Instant::now();
         self.task(i)?;
+        // Not finished until it finishes now: a run that fails leaves no record of an earlier
+        // one for `--resume` or `merge` to take (they mixed old tiles with new ones).
+        self.forget_task(dir, i)?;
         let crs = self.job.crs()?;
         let mut buffer = self.first_buffer(i)?;
         let mut runs = 0;
@@ -357,6 +361,7 @@ impl Plan {
             }
         };
         record.seconds = start.elapsed().as_secs_f64();
+        record.plan = self.id().to_string();
         record.bytes = record
             .outputs
             .iter()
@@ -492,7 +497,7 @@ impl Plan {
     fn task_sinks(&self, dir: &Path, i: usize) -> Result<Vec<(String, Box<dyn TriangleSink>)>> {
         let tile = self.task(i)?.bounds;
         let contours = |l: &Levels| -> Result<(String, Box<dyn TriangleSink>)> {
-            let path = self.task_output(dir, i, "contours", "geojson");
+            let path = self.task_output(dir, i, "contours", "geojson")?;
             Ok((
                 "contours".into(),
                 Box::new(ContourSink::new(&path, l.options(true, self.task_mem()))?),
@@ -507,7 +512,7 @@ impl Plan {
                 contours: levels,
                 ..
             } => {
-                let path = self.task_output(dir, i, "dem", "tif");
+                let path = self.task_output(dir, i, "dem", "tif")?;
                 let options = self.dem_options(tile, *cell, *align, *nodata)?;
                 sinks.push(("dem".into(), Box::new(DemSink::new(&path, options)?)));
                 if let Some(l) = levels {
@@ -517,8 +522,11 @@ impl Plan {
             Product::Contours(l) => sinks.push(contours(l)?),
             Product::Volume { plane, boundary } => {
                 let boundary = boundary
-                    .as_deref()
-                    .map(crate::products::boundary::Boundary::read)
+                    .as_ref()
+                    .map(|f| {
+                        f.check()?;
+                        crate::products::boundary::Boundary::read(&f.path)
+                    })
                     .transpose()?;
                 sinks.push(("volume".into(), Box::new(VolumeSink::new(*plane, boundary))));
             }
@@ -532,7 +540,7 @@ impl Plan {
     fn task_pieces(&self, dir: &Path, i: usize) -> Result<Option<PieceWriter>> {
         match self.job.product {
             Product::Tin => Ok(Some(PieceWriter::create(
-                &self.task_output(dir, i, "tin", "pieces"),
+                &self.task_output(dir, i, "tin", "pieces")?,
             )?)),
             _ => Ok(None),
         }
@@ -549,7 +557,7 @@ impl Plan {
         if let Some(mut p) = pieces {
             p.finish()?;
             r.outputs
-                .push(("tin".into(), self.task_output(dir, i, "tin", "pieces")));
+                .push(("tin".into(), self.task_output(dir, i, "tin", "pieces")?));
         }
         Ok(())
     }
@@ -621,6 +629,7 @@ fn record_of(
         seconds: 0.0,
         outputs,
         bytes: Vec::new(),
+        plan: String::new(),
         warnings: run.warnings.clone(),
         volume,
     }
