@@ -868,3 +868,68 @@ fn records_count_only_for_their_plan_and_links_are_refused() {
         "an input was replaced"
     );
 }
+
+/// A merged output carries the CRS one run gives: a contours plan's merge dropped it, and a DEM
+/// mosaic took it from the first file alone (none when that one declares none).
+#[test]
+fn merged_outputs_carry_the_crs_of_one_run() {
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let ahn = data::shared("lidar/ahn3_delft_cropped_1.laz");
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("jc");
+    let plan = job.join("plan.json");
+    let args = [
+        "plan",
+        "contours",
+        s(&sample),
+        "--interval",
+        "1",
+        "--tile",
+        "32",
+    ];
+    sweeptin(&[&args[..], &["-o", s(&job)]].concat(), "plan");
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
+    let merged = t.path().join("m.geojson");
+    sweeptin(&["merge", s(&plan), "-o", s(&merged), "-q"], "merge");
+    let text = std::fs::read_to_string(&merged).unwrap();
+    assert!(text[..200].contains("\"crs\""), "{}", &text[..200]);
+    let crs = |p: &Path| {
+        sweeptin::input::raster::RasterReader::open(p)
+            .unwrap()
+            .spec()
+            .crs
+            .clone()
+    };
+    let one = t.path().join("one.tif");
+    sweeptin(
+        &[
+            "dem",
+            s(&ahn),
+            s(&sample),
+            "--cell",
+            "1",
+            "-o",
+            s(&one),
+            "-q",
+        ],
+        "dem",
+    );
+    assert!(crs(&one).is_some());
+    let job = t.path().join("jd");
+    let plan = job.join("plan.json");
+    let args = [
+        "plan",
+        "dem",
+        s(&ahn),
+        s(&sample),
+        "--cell",
+        "1",
+        "--tile",
+        "500",
+    ];
+    sweeptin(&[&args[..], &["-o", s(&job)]].concat(), "plan");
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
+    let mosaic = t.path().join("m.tif");
+    sweeptin(&["merge", s(&plan), "-o", s(&mosaic), "-q"], "merge");
+    assert_eq!(crs(&mosaic), crs(&one));
+}

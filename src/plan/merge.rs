@@ -324,15 +324,18 @@ fn extension(p: &Path) -> Option<String> {
         .map(str::to_ascii_lowercase)
 }
 
-/// The CRS of the plan's first file (as a single run takes it from the headers).
+/// The CRS of the plan's output: its `--crs`, or the one its files declare, from their headers
+/// as a single run over them all takes it (from the first file alone, a first file without one
+/// left the mosaic without a CRS).
 fn plan_crs(plan: &Plan) -> Result<Option<Crs>> {
-    let Some(f) = plan.files.first() else {
+    if let Some(c) = plan.job.crs()? {
+        return Ok(Some(c));
+    }
+    let paths: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
+    if paths.is_empty() {
         return Ok(None);
-    };
-    let r = crate::input::las::LidarReader::open(
-        std::slice::from_ref(&f.path),
-        &crate::input::las::Filter::default(),
-    )?;
+    }
+    let r = crate::input::las::LidarReader::open(&paths, &crate::input::las::Filter::default())?;
     Ok(r.crs().cloned())
 }
 
@@ -466,7 +469,6 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
                 .into(),
         });
     }
-    let crs = plan.job.crs()?;
     let mut summary = MergeSummary {
         tasks: recs.len(),
         empty_tasks: recs.iter().filter(|r| r.status == "empty").count(),
@@ -480,10 +482,7 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
             let Some((out, m)) = mosaic else {
                 return Err(Error::Internal("a DEM plan without its mosaic".into()));
             };
-            let crs = match crs {
-                Some(c) => Some(c),
-                None => plan_crs(plan)?,
-            };
+            let crs = plan_crs(plan)?;
             summary.dem = Some(merge_dem(plan, dir, out, &m, crs.as_ref())?);
             if let (Some(c), Some(_)) = (&contours, levels) {
                 summary.contours = Some(merge_contours(plan, dir, c, crs.as_ref())?);
@@ -505,7 +504,7 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
                     out.display()
                 )));
             }
-            summary.contours = Some(merge_contours(plan, dir, out, crs.as_ref())?);
+            summary.contours = Some(merge_contours(plan, dir, out, plan_crs(plan)?.as_ref())?);
         }
         Product::Volume { .. } => {
             if let Some(o) = out {
@@ -519,10 +518,7 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
         }
         Product::Tin => {
             let out = need(out, "mesh (OUT.ply, OUT.obj, OUT.xml or OUT.stin)")?;
-            let crs = match crs {
-                Some(c) => Some(c),
-                None => plan_crs(plan)?,
-            };
+            let crs = plan_crs(plan)?;
             let def = crs.as_ref().and_then(Crs::definition);
             summary.tin = Some(super::mesh::merge_tin(plan, &recs, out, def)?);
         }
