@@ -789,14 +789,22 @@ fn records_count_only_for_their_plan_and_links_are_refused() {
     let job = t.path().join("job");
     let plan = job.join("plan.json");
     let plan_args = ["plan", "dem", s(&input), "--cell", "0.5", "--tile", "32"];
-    sweeptin(&[&plan_args[..], &["-o", s(&job)]].concat(), "plan");
-    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
     let failing = |args: &[&str], code: i32, says: &str| {
         let o = bin().args(args).output().unwrap();
         let e = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(code), "{args:?}: {e}");
         assert!(e.contains(says), "{args:?}: {e}");
     };
+    // An output that merge would refuse after every task ran is refused now.
+    let inside = job.join("tiles/c.geojson");
+    let contours = ["--contours", s(&inside), "--interval", "1", "-o", s(&job)];
+    failing(
+        &[&plan_args[..], &contours].concat(),
+        2,
+        "keeps its own files",
+    );
+    sweeptin(&[&plan_args[..], &["-o", s(&job)]].concat(), "plan");
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
     // A nightly re-run that fails leaves no record of the night before.
     let away = t.path().join("away.laz");
     std::fs::rename(&input, &away).unwrap();

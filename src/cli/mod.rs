@@ -74,7 +74,7 @@ enum Command {
     Crossval(crossval::Args),
     /// Simplify a grid DEM (GeoTIFF, ESRI ASCII) into a TIN within an error bound.
     Simplify(simplify::Args),
-    /// Cut a `dem`, `contours` or `volume` job into exact tiles for a batch engine: writes
+    /// Cut a `dem`, `contours`, `volume` or `tin` job into exact tiles for a batch engine: writes
     /// DIR/plan.json (from the files' headers only).
     Plan(plan::PlanArgs),
     /// Run one task of a plan (--task I, or the index a job array gives), or all of them.

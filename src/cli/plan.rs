@@ -351,10 +351,10 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let mut outputs = Vec::new();
     if let Job::Dem(d) = &job {
         if let Some(c) = &d.contours {
-            outputs.push(("contours".to_string(), c.clone()));
+            outputs.push(("contours".to_string(), side_output(c, &dir)?));
         }
         if let Some(h) = &d.hillshade {
-            outputs.push(("hillshade".to_string(), h.clone()));
+            outputs.push(("hillshade".to_string(), side_output(h, &dir)?));
         }
     }
     outputs.insert(0, ("dir".to_string(), dir.clone()));
@@ -446,6 +446,25 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         plan.tiles.len().saturating_sub(1)
     );
     Ok(())
+}
+
+/// A whole-job output the plan names (`--contours`, `--hillshade`), made absolute: `merge`,
+/// run from another directory, wrote it there. One in the plan's directory (`plan.json`,
+/// `tiles/`), which `merge` would refuse after every task ran, is refused now.
+fn side_output(p: &Path, dir: &Path) -> anyhow::Result<PathBuf> {
+    if p.as_os_str() == "-" {
+        return Ok(p.to_path_buf());
+    }
+    let abs = std::path::absolute(p).with_context(|| format!("{}", p.display()))?;
+    let own = std::path::absolute(dir).with_context(|| format!("{}", dir.display()))?;
+    if abs == own.join("plan.json") || abs.starts_with(own.join("tiles")) {
+        bail!(
+            "{}: that is where the plan keeps its own files (plan.json, tiles/): write the \
+             job's outputs elsewhere",
+            p.display()
+        );
+    }
+    Ok(abs)
 }
 
 /// `argv` with each input replaced by the absolute paths of its files.

@@ -197,7 +197,7 @@ impl Plan {
         }
         if !(buffer.is_finite() && buffer >= 0.0) {
             return Err(Error::Options(format!(
-                "--plan-buffer must be a distance >= 0, not {buffer}"
+                "--buffer must be a distance >= 0, not {buffer}"
             )));
         }
         if paths.is_empty() {
