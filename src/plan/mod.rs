@@ -523,7 +523,7 @@ impl Plan {
     /// Where task `i` writes its output `name` (extension `ext`) under `dir`.
     ///
     /// # Errors
-    /// As [`own_file`]: the path is a link or not a regular file.
+    /// [`Error::Options`] when the path is a symbolic link or not a regular file.
     pub fn task_output(&self, dir: &Path, i: usize, name: &str, ext: &str) -> Result<PathBuf> {
         let t = &self.tiles[i];
         let p = dir
