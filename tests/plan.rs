@@ -834,11 +834,23 @@ fn records_count_only_for_their_plan_and_links_are_refused() {
     ]
     .concat();
     failing(&again, 2, "but no plan");
-    // A link where the plan keeps its own files is refused, and its target left alone.
+    // An input rewritten in place with the same header (reclassified, heights corrected) is
+    // told by its size and modification time.
     std::fs::write(&plan, &text).unwrap();
+    let f = std::fs::File::options().write(true).open(&input).unwrap();
+    let then = f.metadata().unwrap().modified().unwrap();
+    f.set_modified(then - std::time::Duration::from_secs(60))
+        .unwrap();
+    failing(
+        &["run", s(&plan), "--task", "0", "-q"],
+        3,
+        "changed since the plan was made",
+    );
+    f.set_modified(then).unwrap();
+    // A link where the plan keeps its own files is refused, and its target left alone.
     let before = std::fs::read(&input).unwrap();
     let record = job.join("tiles/task_0.json");
-    std::fs::remove_file(&record).unwrap();
+    assert!(!record.exists(), "the refused task forgot its record");
     std::os::unix::fs::symlink(&input, &record).unwrap();
     failing(
         &["run", s(&plan), "--task", "0", "-q"],

@@ -462,7 +462,8 @@ pub fn warn_headers(warnings: &[String]) {
     }
     if warnings.len() > SHOWN {
         eprintln!(
-            "sweeptin: warning: … and {} more header warnings (in the --json summary)",
+            "sweeptin: warning: … and {} more header warnings (all in the JSON summary, plan or \
+             task record)",
             warnings.len() - SHOWN
         );
     }

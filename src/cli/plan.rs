@@ -456,8 +456,26 @@ fn side_output(p: &Path, dir: &Path) -> anyhow::Result<PathBuf> {
         return Ok(p.to_path_buf());
     }
     let abs = std::path::absolute(p).with_context(|| format!("{}", p.display()))?;
+    // Where it would be written (`..` and links resolved), against the directory's own files.
+    // A directory not made yet cannot be resolved: `..` is then taken lexically.
+    let lexical = |p: PathBuf| {
+        let mut out = PathBuf::new();
+        for c in p.components() {
+            match c {
+                std::path::Component::ParentDir => {
+                    out.pop();
+                }
+                std::path::Component::CurDir => {}
+                c => out.push(c),
+            }
+        }
+        out
+    };
+    let written = lexical(sweeptin::output::target::written_path(p));
     let own = std::path::absolute(dir).with_context(|| format!("{}", dir.display()))?;
-    if abs == own.join("plan.json") || abs.starts_with(own.join("tiles")) {
+    let own = std::fs::canonicalize(&own).unwrap_or_else(|_| lexical(own));
+    let tiles = std::fs::canonicalize(own.join("tiles")).unwrap_or(own.join("tiles"));
+    if written == own.join("plan.json") || written.starts_with(&tiles) {
         bail!(
             "{}: that is where the plan keeps its own files (plan.json, tiles/): write the \
              job's outputs elsewhere",

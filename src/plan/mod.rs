@@ -17,17 +17,20 @@
 //! plans with the same tile size agree tile for tile, and every raster cell (by its centre) and
 //! every triangle (by its lowest vertex in sweep order) has exactly one owner tile.
 
+mod files;
 mod lines;
 pub mod merge;
 pub mod mesh;
 mod stitch;
 mod task;
 
+pub use files::FileStamp;
 pub use lines::{LineFile, PlanLines};
 pub use task::{Job, Levels, Product, TaskOptions};
 
 use crate::error::{Error, Result};
 use crate::input::las::FileInfo;
+use files::{own_file, write_atomic};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -47,6 +50,12 @@ pub struct PlanFile {
     pub bounds: [f64; 4],
     /// Its number of points, from the header.
     pub points: u64,
+    /// Its size and modification time (seconds and nanoseconds since 1970) when the plan was
+    /// made: a file rewritten in place (reclassified, heights corrected) keeps its header's
+    /// count and extent, and tasks before and after the rewrite mixed old and new points.
+    /// `None` in plans of older builds (not checked).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stamp: Option<FileStamp>,
 }
 
 /// One task: a tile of the grid.
@@ -245,6 +254,7 @@ impl Plan {
                 path: p.clone(),
                 bounds: [b.min[0], b.min[1], b.max[0], b.max[1]],
                 points: info.point_count,
+                stamp: Some(FileStamp::of(p)?),
             });
         }
         // Where data may be: the files' extents and the lines' vertices (the lines read and
@@ -374,8 +384,9 @@ impl Plan {
         Ok(path)
     }
 
-    /// The plan's fingerprint: the SHA-256 of its JSON. Task records carry it, so that a record
-    /// of another plan in the same directory, or of this one before it was edited, never counts.
+    /// The plan's fingerprint: the SHA-256 of its content (serialised compactly, so not what
+    /// `sha256sum plan.json` prints). Task records carry it, so that a record of another plan in
+    /// the same directory, or of this one before it was edited, never counts.
     pub fn id(&self) -> &str {
         self.id.0.get_or_init(|| {
             let text = serde_json::to_string(self).unwrap_or_default();
@@ -424,6 +435,15 @@ impl Plan {
             ));
         }
         crate::pipeline::check_tile_side(self.tile).map_err(|e| e.to_string())?;
+        if let Some(c) = self.cell {
+            let k = self.tile / c;
+            if (k - k.round()).abs() > 1e-9 * k.max(1.0) {
+                return Err(format!(
+                    "its tile side {} is not a whole multiple of its cell {c}",
+                    self.tile
+                ));
+            }
+        }
         for (k, t) in self.tiles.iter().enumerate() {
             let b = [
                 t.tx as f64 * self.tile,
@@ -504,6 +524,25 @@ impl Plan {
             .filter(|f| f.points > 0 && overlaps(&f.bounds, &g))
         {
             let info = FileInfo::read(&f.path)?;
+            if let Some(then) = f.stamp {
+                let now = FileStamp::of(&f.path)?;
+                if now != then {
+                    return Err(bad(
+                        &f.path,
+                        format!(
+                            "the file changed since the plan was made ({} bytes, modified at \
+                             {}.{:09} s then; {} bytes, {}.{:09} s now): every task must read \
+                             the same points, so make the plan again",
+                            then.bytes,
+                            then.modified,
+                            then.nanos,
+                            now.bytes,
+                            now.modified,
+                            now.nanos
+                        ),
+                    ));
+                }
+            }
             let b = info.bounds;
             if info.point_count != f.points || [b.min[0], b.min[1], b.max[0], b.max[1]] != f.bounds
             {
@@ -676,37 +715,6 @@ fn overlaps(a: &[f64; 4], b: &[f64; 4]) -> bool {
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
-/// Refuses a file of the plan's directory (the plan, a task's output or record) that is a
-/// symbolic link or not a regular file: the directory holds only what sweeptin writes there, and
-/// writing through a link replaced what it pointed at (an input, once).
-///
-/// # Errors
-/// [`Error::Options`] naming the path.
-fn own_file(path: &Path) -> Result<()> {
-    match std::fs::symlink_metadata(path) {
-        Ok(m) if !m.file_type().is_file() => Err(Error::Options(format!(
-            "{}: {} where the plan keeps its own file: sweeptin writes only regular files in a \
-             plan's directory (remove it)",
-            path.display(),
-            if m.file_type().is_symlink() {
-                "a symbolic link"
-            } else {
-                "not a regular file"
-            }
-        ))),
-        _ => Ok(()),
-    }
-}
-
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    use std::io::Write;
-    own_file(path)?;
-    let mut f = crate::output::AtomicFile::create(path)?;
-    f.write_all(bytes).map_err(|e| Error::write(path, e))?;
-    f.commit()?;
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -75,8 +75,29 @@ pub enum Product {
         plane: f64,
         /// The boundary polygon file (absolute), with its size and SHA-256: every task checks
         /// that it still holds what the plan saw (an edit between tasks mixed two polygons).
+        #[serde(deserialize_with = "pinned")]
         boundary: Option<super::LineFile>,
     },
+}
+
+/// A volume's boundary: pinned ([`super::LineFile`]); a bare path (a plan of an older build,
+/// which tasks could not check) is refused with what to do.
+fn pinned<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<super::LineFile>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Form {
+        Pinned(super::LineFile),
+        Path(PathBuf),
+    }
+    match Option::<Form>::deserialize(d)? {
+        None => Ok(None),
+        Some(Form::Pinned(f)) => Ok(Some(f)),
+        Some(Form::Path(p)) => Err(serde::de::Error::custom(format!(
+            "the volume boundary {} is not pinned by size and SHA-256 (a plan of an older \
+             sweeptin): make the plan again",
+            p.display()
+        ))),
+    }
 }
 
 /// A non-finite `f32` (a NaN nodata) as a string in JSON.

@@ -605,6 +605,10 @@ impl ContourSink {
                 self.emit(p, true)?;
             }
         }
+        // Lines that closed since the last spill took their short pieces with them.
+        self.spill_at = self
+            .spill_at
+            .min(self.mem_points + self.options.memory_points);
         if self.mem_points > self.spill_at {
             self.spill()?;
             self.spill_at = self.options.memory_points + self.mem_points;

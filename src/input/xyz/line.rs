@@ -65,7 +65,7 @@ impl std::fmt::Display for LineError {
 }
 
 /// Why a line with a carriage return inside is refused.
-const CR_ONLY: &str = "a carriage return (\\r) inside the line: the file seems to end its lines \
+pub(super) const CR_ONLY: &str = "a carriage return (\\r) inside the line: the file seems to end its lines \
                        with \\r alone (classic Mac OS), which reads as one line; convert it \
                        first, e.g. tr '\\r' '\\n' < IN > OUT";
 
@@ -169,8 +169,15 @@ pub(crate) fn parse_fields<const N: usize>(
     // The separator after z, when a column follows, is of the same kind too: a decimal comma in
     // z alone (`480000\t6200000\t12,75`, `480000;6200000;12,75`) was read as z = 12.
     let hards = skip_separators(bytes, &mut pos, &mut hard)?;
-    if pos < bytes.len() && bytes[pos] != b'#' && first_hard != Some(hards > 0) {
-        return Err(LineError::CommaAndBlank);
+    if pos < bytes.len() {
+        if bytes[pos] != b'#' && first_hard != Some(hards > 0) {
+            return Err(LineError::CommaAndBlank);
+        }
+        // Extra columns or a comment run to the line's end: with lines ended by `\r` alone, to
+        // the file's end (`0 0 1 5\r1 0 2 6\r…` was one point).
+        if memchr::memchr(b'\r', bytes[pos..].trim_ascii_end()).is_some() {
+            return Err(LineError::CarriageReturn);
+        }
     }
     Ok(Some(p))
 }

@@ -187,10 +187,12 @@ impl<R: Read> XyzReader<R> {
         let pending = self.end - self.start;
         if pending >= MAX_LINE {
             self.line += 1;
-            return Err(self.parse_error(format!(
-                "line is longer than {} bytes: is this really an XYZ text file?",
-                MAX_LINE
-            )));
+            let line = &self.buf[self.start..self.end];
+            return Err(self.parse_error(if memchr::memchr(b'\r', line).is_some() {
+                line::CR_ONLY.to_string()
+            } else {
+                format!("line is longer than {MAX_LINE} bytes: is this really an XYZ text file?")
+            }));
         }
         self.buf.copy_within(self.start..self.end, 0);
         self.start = 0;
@@ -310,9 +312,15 @@ mod tests {
             "x y z\r0 0 1\r1 0 2\r",
             "# c\r0 0 1\r1 0 2\r",
             "0,0,1\r\n1,0\r,2\n",
+            "0 0 1 5\r1 0 2 6\r",
+            "0,0,1,5\r1,0,2,6\r",
+            "0 0 1 # c\r1 0 2\r",
         ] {
             assert!(err_of(text).1.contains("tr '\\r' '\\n'"), "{text:?}");
         }
+        // A file longer than a line may be says why too.
+        let long = "480000.00 6200000.00 12.75 7\r".repeat(50_000);
+        assert!(err_of(long).1.contains("tr '\\r' '\\n'"));
         assert_eq!(
             read_str("x y z \r\n# c\r\n0 0 1\r\n1 0 2 \r\n")
                 .unwrap()

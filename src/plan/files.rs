@@ -1,0 +1,75 @@
+//! What a plan pins on disk: its input files' size and modification time ([`FileStamp`]), and
+//! its own files (`plan.json`, the tasks' outputs and records), written atomically and never
+//! through a link ([`own_file`]).
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// A file's size and modification time ([`super::PlanFile::stamp`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FileStamp {
+    /// Bytes.
+    pub bytes: u64,
+    /// Seconds since 1970-01-01 UTC.
+    pub modified: i64,
+    /// And nanoseconds.
+    pub nanos: u32,
+}
+
+impl FileStamp {
+    /// The stamp of the file at `path` now.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file.
+    pub fn of(path: &Path) -> Result<FileStamp> {
+        let m = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+        let t = m.modified().map_err(|e| Error::io(path, e))?;
+        let (modified, nanos) = match t.duration_since(std::time::UNIX_EPOCH) {
+            Ok(d) => (
+                i64::try_from(d.as_secs()).unwrap_or(i64::MAX),
+                d.subsec_nanos(),
+            ),
+            Err(e) => (
+                -i64::try_from(e.duration().as_secs()).unwrap_or(i64::MAX),
+                e.duration().subsec_nanos(),
+            ),
+        };
+        Ok(FileStamp {
+            bytes: m.len(),
+            modified,
+            nanos,
+        })
+    }
+}
+
+/// Refuses a file of the plan's directory (the plan, a task's output or record) that is a
+/// symbolic link or not a regular file: the directory holds only what sweeptin writes there, and
+/// writing through a link replaced what it pointed at (an input, once).
+///
+/// # Errors
+/// [`Error::Options`] naming the path.
+pub(super) fn own_file(path: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.file_type().is_file() => Err(Error::Options(format!(
+            "{}: {} where the plan keeps its own file: sweeptin writes only regular files in a \
+             plan's directory (remove it)",
+            path.display(),
+            if m.file_type().is_symlink() {
+                "a symbolic link"
+            } else {
+                "not a regular file"
+            }
+        ))),
+        _ => Ok(()),
+    }
+}
+
+pub(super) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    use std::io::Write;
+    own_file(path)?;
+    let mut f = crate::output::AtomicFile::create(path)?;
+    f.write_all(bytes).map_err(|e| Error::write(path, e))?;
+    f.commit()?;
+    Ok(())
+}
