@@ -351,10 +351,10 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let mut outputs = Vec::new();
     if let Job::Dem(d) = &job {
         if let Some(c) = &d.contours {
-            outputs.push(("contours".to_string(), side_output(c, &dir)?));
+            outputs.push(("contours".to_string(), c.clone()));
         }
         if let Some(h) = &d.hillshade {
-            outputs.push(("hillshade".to_string(), side_output(h, &dir)?));
+            outputs.push(("hillshade".to_string(), h.clone()));
         }
     }
     outputs.insert(0, ("dir".to_string(), dir.clone()));
@@ -446,43 +446,6 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         plan.tiles.len().saturating_sub(1)
     );
     Ok(())
-}
-
-/// A whole-job output the plan names (`--contours`, `--hillshade`), made absolute: `merge`,
-/// run from another directory, wrote it there. One in the plan's directory (`plan.json`,
-/// `tiles/`), which `merge` would refuse after every task ran, is refused now.
-fn side_output(p: &Path, dir: &Path) -> anyhow::Result<PathBuf> {
-    if p.as_os_str() == "-" {
-        return Ok(p.to_path_buf());
-    }
-    let abs = std::path::absolute(p).with_context(|| format!("{}", p.display()))?;
-    // Where it would be written (`..` and links resolved), against the directory's own files.
-    // A directory not made yet cannot be resolved: `..` is then taken lexically.
-    let lexical = |p: PathBuf| {
-        let mut out = PathBuf::new();
-        for c in p.components() {
-            match c {
-                std::path::Component::ParentDir => {
-                    out.pop();
-                }
-                std::path::Component::CurDir => {}
-                c => out.push(c),
-            }
-        }
-        out
-    };
-    let written = lexical(sweeptin::output::target::written_path(p));
-    let own = std::path::absolute(dir).with_context(|| format!("{}", dir.display()))?;
-    let own = std::fs::canonicalize(&own).unwrap_or_else(|_| lexical(own));
-    let tiles = std::fs::canonicalize(own.join("tiles")).unwrap_or(own.join("tiles"));
-    if written == own.join("plan.json") || written.starts_with(&tiles) {
-        bail!(
-            "{}: that is where the plan keeps its own files (plan.json, tiles/): write the \
-             job's outputs elsewhere",
-            p.display()
-        );
-    }
-    Ok(abs)
 }
 
 /// `argv` with each input replaced by the absolute paths of its files.

@@ -73,3 +73,39 @@ pub(super) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     f.commit()?;
     Ok(())
 }
+
+/// Refuses an output of the whole job (`what` at `p`: the mosaic, `--contours`, `--hillshade`)
+/// that would be written among the plan's own files in `dir`: `plan.json`, or under `tiles/`
+/// (with `..` and links resolved, `..` lexically where a directory is not made yet).
+///
+/// # Errors
+/// [`Error::Options`] naming the output.
+pub(crate) fn outside_plan_dir(dir: &Path, what: &str, p: &Path) -> Result<()> {
+    let written = lexical(&crate::output::target::written_path(p));
+    let own = std::path::absolute(dir).map_err(|e| Error::io(dir, e))?;
+    let own = std::fs::canonicalize(&own).unwrap_or_else(|_| lexical(&own));
+    let tiles = std::fs::canonicalize(own.join("tiles")).unwrap_or(own.join("tiles"));
+    if written == own.join("plan.json") || written.starts_with(&tiles) {
+        return Err(Error::Options(format!(
+            "{what} {}: that is where the tasks' outputs are, or the plan: a plan's directory \
+             keeps its own files (plan.json, tiles/); write the job's outputs elsewhere",
+            p.display()
+        )));
+    }
+    Ok(())
+}
+
+/// `p` with `.` and `..` taken lexically.
+fn lexical(p: &Path) -> std::path::PathBuf {
+    let mut out = std::path::PathBuf::new();
+    for c in p.components() {
+        match c {
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            std::path::Component::CurDir => {}
+            c => out.push(c),
+        }
+    }
+    out
+}

@@ -422,16 +422,9 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     protected.extend(lines.map(|f| crate::input::vector::split_layer(&f.path).0));
     protected.push(dir.join("plan.json"));
     crate::output::distinct_outputs(&outs, &protected, "the plan")?;
-    let tiles = dir.join("tiles");
-    let tiles = std::fs::canonicalize(&tiles).unwrap_or(tiles);
     for (what, o) in &outs {
         crate::output::check_output(o)?;
-        if crate::output::target::written_path(o).starts_with(&tiles) {
-            return Err(Error::Options(format!(
-                "{what} {}: that is where the tasks' outputs are",
-                o.display()
-            )));
-        }
+        super::files::outside_plan_dir(dir, what, o)?;
     }
     fn need<'a>(o: Option<&'a Path>, what: &str) -> Result<&'a Path> {
         o.ok_or_else(|| Error::Options(format!("give the {what}")))

@@ -188,11 +188,12 @@ impl Plan {
         buffer: f64,
     ) -> Result<Plan> {
         job.check()?;
+        let outputs = job_outputs(outputs)?;
         let cell = job.cell();
         crate::pipeline::check_tile_side(tile)?;
         if let Some(c) = cell {
             let k = tile / c;
-            if (k - k.round()).abs() > 1e-9 * k.max(1.0) {
+            if !whole_multiple(tile, c) {
                 return Err(Error::Options(format!(
                     "--tile {tile} must be a whole multiple of the cell size {c}"
                 )));
@@ -295,12 +296,7 @@ impl Plan {
             };
             for ty in ty_of(lo[1])..=ty_of(hi[1]) {
                 for tx in col_of(lo[0])..=col_of(hi[0]) {
-                    let b = [
-                        tx as f64 * tile,
-                        ty as f64 * tile,
-                        (tx + 1) as f64 * tile,
-                        (ty + 1) as f64 * tile,
-                    ];
+                    let b = tile_bounds(tx, ty, tile);
                     // A tile outside the convex hull of the data has no triangle and owns
                     // nothing: no task. (One inside it that no file reaches, in a concave corner
                     // of the files or beside a line that leaves them, lies under triangles that
@@ -435,23 +431,17 @@ impl Plan {
             ));
         }
         crate::pipeline::check_tile_side(self.tile).map_err(|e| e.to_string())?;
-        if let Some(c) = self.cell {
-            let k = self.tile / c;
-            if (k - k.round()).abs() > 1e-9 * k.max(1.0) {
-                return Err(format!(
-                    "its tile side {} is not a whole multiple of its cell {c}",
-                    self.tile
-                ));
-            }
+        if let Some(c) = self.cell.filter(|&c| !whole_multiple(self.tile, c)) {
+            return Err(format!(
+                "its tile side {} is not a whole multiple of its cell {c}",
+                self.tile
+            ));
         }
         for (k, t) in self.tiles.iter().enumerate() {
-            let b = [
-                t.tx as f64 * self.tile,
-                t.ty as f64 * self.tile,
-                (t.tx + 1) as f64 * self.tile,
-                (t.ty + 1) as f64 * self.tile,
-            ];
-            if t.index != k || t.bounds != b || t.files.iter().any(|&f| f >= self.files.len()) {
+            if t.index != k
+                || t.bounds != tile_bounds(t.tx, t.ty, self.tile)
+                || t.files.iter().any(|&f| f >= self.files.len())
+            {
                 return Err(format!(
                     "task {k} is not tile ({}, {}) of side {} over its {} files",
                     t.tx,
@@ -650,6 +640,45 @@ pub fn task_from_env() -> Result<Option<usize>> {
 }
 
 /// `b` grown by `d` on every side.
+/// The whole job's outputs: each but the directory (and standard output) made absolute (`merge`,
+/// run from elsewhere, wrote a relative one there) and refused among the plan's own files
+/// ([`files::outside_plan_dir`]), where `merge` refused it after every task ran.
+fn job_outputs(outputs: Vec<(String, PathBuf)>) -> Result<Vec<(String, PathBuf)>> {
+    let dir = outputs
+        .iter()
+        .find(|(n, _)| n == "dir")
+        .map(|(_, d)| d.clone());
+    outputs
+        .into_iter()
+        .map(|(name, p)| {
+            if name == "dir" || p.as_os_str() == "-" {
+                return Ok((name, p));
+            }
+            if let Some(d) = &dir {
+                files::outside_plan_dir(d, &format!("--{name}"), &p)?;
+            }
+            let abs = std::path::absolute(&p).map_err(|e| Error::io(&p, e))?;
+            Ok((name, abs))
+        })
+        .collect()
+}
+
+/// Is `tile` a whole multiple of `cell` (to a relative 1e-9)?
+fn whole_multiple(tile: f64, cell: f64) -> bool {
+    let k = tile / cell;
+    (k - k.round()).abs() <= 1e-9 * k.max(1.0)
+}
+
+/// The bounds of tile `(tx, ty)` of side `tile`, as every plan computes them.
+fn tile_bounds(tx: i64, ty: i64, tile: f64) -> [f64; 4] {
+    [
+        tx as f64 * tile,
+        ty as f64 * tile,
+        (tx + 1) as f64 * tile,
+        (ty + 1) as f64 * tile,
+    ]
+}
+
 fn grown(b: [f64; 4], d: f64) -> [f64; 4] {
     [b[0] - d, b[1] - d, b[2] + d, b[3] + d]
 }

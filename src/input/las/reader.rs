@@ -513,7 +513,6 @@ fn margin(r: [f64; 4], step: f64) -> f64 {
     step + 1e-9 * r.iter().fold(1.0f64, |m, v| m.max(v.abs()))
 }
 
-/// The files' common CRS: files that declare one must declare the same.
 /// The files of `declared` whose CRS is not `given` (the user's), each as a warning.
 fn overridden(given: &Crs, declared: &[(PathBuf, Crs)]) -> Vec<String> {
     declared
@@ -523,6 +522,7 @@ fn overridden(given: &Crs, declared: &[(PathBuf, Crs)]) -> Vec<String> {
         .collect()
 }
 
+/// The files' common CRS: files that declare one must declare the same.
 fn common_crs(declared: &[(PathBuf, Crs)]) -> Result<Option<Crs>> {
     let Some((first_path, first)) = declared.first() else {
         return Ok(None);
