@@ -112,6 +112,13 @@ const FIRST_CHECK: u64 = 3;
 const PATIENT_CHECKS: u8 = 4;
 /// Buckets between checks of a triangle that uses an artificial point or is too flat to bound.
 const PARKED: u64 = 64;
+/// Fewest points between two estimates of the bucket height (see [`Finalizer::adapt`]).
+const WINDOW: u64 = 1024;
+/// Rows of points the front holds, about (measured on uniform data: its nodes zigzag over two
+/// rows below the sweep line).
+const FRONT_ROWS: f64 = 2.0;
+/// Most buckets the whole `y` range of the data may span (bucket numbers stay far from overflow).
+const MAX_BUCKETS: f64 = (1u64 << 40) as f64;
 
 /// Per-vertex data needed only when streaming (the same rows as the core's vertex table).
 #[derive(Debug, Clone, Default)]
@@ -188,8 +195,18 @@ pub(crate) struct Finalizer {
     cur: u64,
     /// Bucket of the sweep line.
     sweep_bucket: u64,
+    /// Buckets are `k_ref + (y − base) · inv_h` at and above `base`: the bucket height `1 /
+    /// inv_h` follows the rows of points the sweep line meets ([`Finalizer::adapt`]).
     base: f64,
+    k_ref: u64,
     inv_h: f64,
+    /// Largest `inv_h` allowed ([`MAX_BUCKETS`] over the data's `y` range).
+    max_inv_h: f64,
+    /// Points pushed so far, and the count and sweep-line `y` when the current estimate window
+    /// of the bucket height began.
+    points: u64,
+    window_points: u64,
+    window_y: f64,
     next_out: u64,
     events: Vec<Event>,
     last: [f64; 2],
@@ -241,8 +258,13 @@ impl Finalizer {
         } else {
             w.max(h) / n
         };
+        let max_inv_h = if h > 0.0 && h.is_finite() {
+            MAX_BUCKETS / h
+        } else {
+            MAX_BUCKETS
+        };
         let inv_h = if spacing > 0.0 && spacing.is_finite() {
-            1.0 / spacing
+            (1.0 / spacing).min(max_inv_h)
         } else {
             1.0
         };
@@ -255,7 +277,12 @@ impl Finalizer {
             cur: 0,
             sweep_bucket: 0,
             base: if y0.is_finite() { y0 } else { 0.0 },
+            k_ref: 0,
             inv_h,
+            max_inv_h,
+            points: 0,
+            window_points: 0,
+            window_y: f64::NAN,
             next_out: 0,
             events: Vec::new(),
             last: [f64::NEG_INFINITY; 2],
@@ -274,7 +301,42 @@ impl Finalizer {
     fn bucket(&self, y: f64) -> u64 {
         let k = (y - self.base) * self.inv_h;
         // Saturating cast: negative and NaN go to 0, huge values to u64::MAX.
-        k as u64
+        self.k_ref.saturating_add(k as u64)
+    }
+
+    /// Counts a point pushed at sweep-line height `y` with `front` nodes on the front, and
+    /// re-estimates the bucket height once a window of points has passed.
+    ///
+    /// A bucket should be about one row of points (the height the sweep line climbs while half
+    /// as many points as the front has nodes arrive, [`FRONT_ROWS`]): a triangle is first checked a few rows after
+    /// it appears and re-checked when the sweep line reaches its circle's top. The height cannot
+    /// be known up front: the bounding box of data with a far outlier (or Kuzmin's heavy tail)
+    /// is a million times taller than its dense part, and buckets from the box then hold the
+    /// whole data set, so nothing is checked, let alone finalised, before the end (every
+    /// triangle held). So the height is measured: over each window of at least [`WINDOW`] and
+    /// two fronts' worth of points, the climb per row. The bucket numbers stay
+    /// continuous and increasing (a new scale starts at the current sweep line), so a change
+    /// only moves when triangles are checked, never what is decided; and the windows depend
+    /// only on the input, so the output does too.
+    #[inline]
+    fn adapt(&mut self, y: f64, front: usize) {
+        self.points += 1;
+        let n = self.points - self.window_points;
+        if n < WINDOW.max(2 * front as u64) {
+            return;
+        }
+        let climb = y - self.window_y;
+        if climb > 0.0 && climb.is_finite() {
+            let row = climb * front.max(1) as f64 / (FRONT_ROWS * n as f64);
+            let inv = (1.0 / row).min(self.max_inv_h);
+            if inv.is_finite() && inv > 0.0 {
+                self.k_ref = self.bucket(y);
+                self.base = y;
+                self.inv_h = inv;
+            }
+        }
+        self.window_points = self.points;
+        self.window_y = y;
     }
 
     #[inline]
@@ -461,6 +523,7 @@ impl StreamingSweep {
         }
         fin.vertices.push(first.z, first.index);
         fin.last = first.xy;
+        fin.window_y = first.xy[1];
         fin.live_vertices = 1;
         fin.stats.peak_live_vertices = 1;
         let pts = vec![[f64::NAN; 2], [f64::NAN; 2], first.xy];
@@ -505,6 +568,9 @@ impl StreamingSweep {
             });
         }
         fin.last = p.xy;
+        let front = self.sweep.front().len();
+        let fin = self.fin();
+        fin.adapt(p.xy[1], front);
         let queued = (fin.in_ring + fin.far.len()) as u64;
         fin.stats.peak_queued = fin.stats.peak_queued.max(queued);
         self.finalize_due(p.xy[1]);

@@ -5,6 +5,7 @@ use super::{Frame, Input, RunConfig, STRIP_RATIO, SweepAxis};
 use crate::error::{Error, Result};
 use crate::geom::predicates;
 use crate::input::las::{Crs, FilterStats, LidarPoint, LidarReader};
+use crate::input::spread::Spread;
 use crate::input::xyz::XyzReader;
 use crate::sort::external::{ExternalSorter, SortRecord};
 
@@ -89,8 +90,10 @@ pub(crate) fn read_into(
     };
     let mut swap = axis == SweepAxis::X;
     let mut z_range = [f64::INFINITY, f64::NEG_INFINITY];
+    let mut spread = Spread::default();
     let mut add = |s: &mut ExternalSorter, swap: bool, r: SortRecord| -> Result<()> {
         z_range = [z_range[0].min(r.z), z_range[1].max(r.z)];
+        spread.add(r.x, r.y);
         let r = if swap {
             SortRecord {
                 x: r.y,
@@ -145,10 +148,12 @@ pub(crate) fn read_into(
             let s = reader.stats();
             progress(s.read + s.skipped, Some(total));
         }
+        let mut warnings = reader.warnings();
+        warnings.extend(spread.far_points().map(|f| f.warning()));
         return Ok(ReadResult {
             frame: Frame { swap },
             crs,
-            warnings: reader.warnings(),
+            warnings,
             bounds,
             z_range,
             points: n,
@@ -209,7 +214,11 @@ pub(crate) fn read_into(
     Ok(ReadResult {
         frame: Frame { swap },
         crs: None,
-        warnings: Vec::new(),
+        warnings: spread
+            .far_points()
+            .map(|f| f.warning())
+            .into_iter()
+            .collect(),
         bounds,
         z_range,
         points: n,

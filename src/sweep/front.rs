@@ -216,7 +216,6 @@ impl Front {
 
     /// Number of nodes, `P-1` and `P-2` included.
     #[inline]
-    #[cfg(any(test, feature = "dev"))]
     pub fn len(&self) -> usize {
         self.len
     }

@@ -11,6 +11,7 @@
 //! | [`lidar_like`] | one airborne-scanner tile at UTM-sized offsets | many: ties in `x` and `y`, cocircular rectangles, exact duplicates, holes |
 //! | [`clustered`] | Gaussian clusters of very different densities over a sparse background | density contrast of 10⁶ |
 //! | [`grid`], [`tilted_grid`], [`ring`] | small test shapes | everything is cocircular / collinear |
+//! | [`heavy`]: `disc`, `disc_far`, `kuzmin`, `almost_line` | the memory benchmark's distributions, and input orders | bounding boxes far larger than where the points are |
 //!
 //! All return `Vec<[f64; 3]>` (`[x, y, z]`), the input format of [`crate::triangulate`].
 //!
@@ -18,6 +19,7 @@
 
 use std::f64::consts::{PI, TAU};
 
+pub mod heavy;
 pub mod lines;
 pub use crate::geom::rng::SplitMix64;
 pub use lines::{coastline, coastline_points, contour_points, contours};

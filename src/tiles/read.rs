@@ -7,6 +7,7 @@ use super::index::{self, BlockIndex, BlockRecord, IndexRecord, PackedRecord, Pac
 use super::{BLOCK_POINTS, MAX_BLOCKS, TILE_BLOCKS, TaskScope, TileCpu, TileJob, TileOptions};
 use crate::error::Result;
 use crate::input::las::{LidarPoint, LidarReader, ReadOptions};
+use crate::input::spread::Spread;
 use crate::sort::external::ExternalSorter;
 use std::time::Instant;
 
@@ -37,15 +38,19 @@ pub(super) fn read_index(
     };
     let probe = TileGrid::new(block, 0)?;
     probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
-    let declared = Declared {
+    let mut declared = Declared {
         crs: reader.crs().cloned(),
         warnings: reader.warnings(),
     };
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
-    let (mut index, bounds, cpu) = match packing {
+    let (mut index, spread, cpu) = match packing {
         Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
         None => index_points::<BlockRecord>(&mut reader, probe, None, job, progress)?,
     };
+    let bounds = spread.extent();
+    if let Some(far) = spread.far_points() {
+        declared.warnings.push(far.warning());
+    }
     if let Some(sc) = scope {
         index.scope = Some(index::Scope {
             unknown: sc.unread.clone(),
@@ -92,35 +97,25 @@ pub(super) struct Declared {
 }
 
 /// Reads every point of `reader` into the block index's sort as records `R` (packed with
-/// `packing`, or wide), and builds the index: with the points' bounding box and the CPU time of
-/// both steps.
+/// `packing`, or wide), and builds the index: with what [`Spread`] saw of the points (their
+/// bounding box, far points) and the CPU time of both steps.
 fn index_points<R: IndexRecord>(
     reader: &mut LidarReader,
     grid: TileGrid,
     packing: Option<Packing>,
     job: &TileJob,
     progress: &mut dyn FnMut(u64, u64),
-) -> Result<(BlockIndex, [f64; 4], TileCpu)> {
+) -> Result<(BlockIndex, Spread, TileCpu)> {
     let total = reader.point_count();
     let t0 = Instant::now();
     let c0 = crate::clock::process_cpu();
     let budget = index_sort_budget(job.mem, total, std::mem::size_of::<R>());
     let mut sorter = ExternalSorter::<R>::new(budget, job.tmp);
-    let mut bounds = [
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    ];
+    let mut spread = Spread::default();
     prefetched(reader, |buf, done| {
         for p in buf {
             let (x, y) = (p.x, p.y);
-            bounds = [
-                bounds[0].min(x),
-                bounds[1].min(y),
-                bounds[2].max(x),
-                bounds[3].max(y),
-            ];
+            spread.add(x, y);
             sorter.push(R::pack(packing.as_ref(), grid.block_of(x, y), [x, y, p.z])?)?;
         }
         progress(done, total);
@@ -146,7 +141,7 @@ fn index_points<R: IndexRecord>(
             packing.is_some()
         );
     }
-    Ok((index, bounds, cpu))
+    Ok((index, spread, cpu))
 }
 
 /// Opens the files of `job`. A task of a plan whose files are all COPC reads only the points of
