@@ -297,8 +297,7 @@ impl Plan {
                 Some(c) => c,
                 None => (lo, hi),
             };
-            // Counted before any is made: `--tile 0.001` over a kilometre made a trillion
-            // (an abort when their list could not grow, in the Python package too).
+            // Counted first: `--tile 0.001` over a kilometre listed 10^12 tiles (an abort).
             let cols = (hi[0] / tile).floor() - (lo[0] / tile).floor() + 1.0;
             let rows = (hi[1] / tile).ceil() - (lo[1] / tile).ceil() + 1.0;
             let count = cols * rows;
