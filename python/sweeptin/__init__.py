@@ -222,6 +222,7 @@ class Tin:
         *,
         nodata: float = float("nan"),
         snap: bool = False,
+        max_cells: int = 1 << 30,
     ) -> tuple[_np.ndarray, _typing.Any]:
         """The DEM of the TIN: ``(values, transform)``.
 
@@ -239,10 +240,12 @@ class Tin:
         the library's ``GridPlan``. ``bbox=(xmin, ymin, xmax, ymax)``
         with sides on multiples of ``cell`` (or ``snap=True`` to round them outwards); without
         it, the cells whose centres lie within the data's bounds. The values are computed by
-        the library's DEM sink, as ``sweeptin dem`` computes them.
+        the library's DEM sink, as ``sweeptin dem`` computes them. ``max_cells`` as in
+        :func:`dem`: a larger raster is refused (:class:`OptionsError`) before it is allocated.
         """
         b = None if bbox is None else [float(v) for v in bbox]
-        values, t = self._tin.rasterize(float(cell), b, align, float(nodata), bool(snap))
+        n = _whole(max_cells, "max_cells")
+        values, t = self._tin.rasterize(float(cell), b, align, float(nodata), bool(snap), n)
         return values, _transform(t)
 
     def contours(self, interval: float = 1.0, base: float = 0.0) -> dict[str, _typing.Any]:

@@ -245,6 +245,8 @@ def test_nonsense_numbers_are_refused_by_the_clis_own_checks(small, tmp_path):
     for call in (
         lambda: tin.rasterize(nan),
         lambda: tin.rasterize(0),
+        lambda: tin.rasterize(1e-4),  # 10^10 cells: over max_cells, before any allocation
+        lambda: tin.rasterize(1, max_cells=0),
         lambda: tin.contours(interval=0),
         lambda: tin.contours(interval=1, base=nan),
         lambda: sweeptin.stream_triangles(path, chunk=0),
