@@ -74,6 +74,91 @@ fn attributes<'py>(py: Python<'py>, e: &Error) -> PyResult<Bound<'py, PyDict>> {
     Ok(d)
 }
 
+/// The package's parameter for each command-line flag the library's messages name (`--class`
+/// is `classes=`); a flag of a yes/no option reads as the value that turns it on.
+const PARAMETERS: &[(&str, &str)] = &[
+    ("--align", "align="),
+    ("--base", "base="),
+    ("--bbox", "bbox="),
+    ("--bigtiff", "bigtiff=True"),
+    ("--boundary", "boundary="),
+    ("--breaklines", "breaklines="),
+    ("--buffer", "buffer="),
+    ("--cell", "cell="),
+    ("--class", "classes="),
+    ("--compress", "compress="),
+    ("--contours", "contours="),
+    ("--crs", "crs="),
+    ("--duplicates", "duplicates="),
+    ("--engine", "engine="),
+    ("--format", "format="),
+    ("--hillshade", "hillshade="),
+    ("--holes", "holes="),
+    ("--interval", "interval="),
+    ("--keep-withheld", "keep_withheld=True"),
+    ("--max-cells", "max_cells="),
+    ("--max-edge", "max_edge="),
+    ("--mem", "mem="),
+    ("--nodata", "nodata="),
+    ("--plane", "plane="),
+    ("--predictor", "predictor="),
+    ("--resume", "resume=True"),
+    ("--returns", "returns="),
+    ("--snap", "snap=True"),
+    ("--threads", "threads="),
+    ("--tile", "tile="),
+    ("--tmp-dir", "tmp_dir="),
+    ("--trim-boundary", "trim_boundary="),
+    ("--volume-plane", "plane="),
+];
+
+/// `message` with the command-line flags it names (`--tile 0: must be …`, `dropped by
+/// --class`) spelt as the package's parameters (`tile=0: must be …`, `dropped by classes=`),
+/// so that a Python user is told what to change in the call. A flag's value (a number, or a
+/// word ending a clause) joins it after `=`; flags the package has no parameter for, and
+/// anything between backquotes (a command to run), stay as they are.
+pub(crate) fn python_names(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut quoted = false;
+    let mut rest = message;
+    while let Some(c) = rest.chars().next() {
+        let at_flag = !quoted
+            && rest.starts_with("--")
+            && out.chars().last().is_none_or(|p| " (,\"'".contains(p));
+        if at_flag {
+            let len = 2 + rest[2..]
+                .find(|c: char| !(c.is_ascii_lowercase() || c == '-'))
+                .unwrap_or(rest.len() - 2);
+            if let Some((_, param)) = PARAMETERS.iter().find(|(f, _)| *f == &rest[..len]) {
+                out.push_str(param);
+                rest = &rest[len..];
+                // `--tile 0:` → `tile=0:`, `--interval 0,` → `interval=0,`.
+                if param.ends_with('=')
+                    && let Some(value) = rest.strip_prefix(' ')
+                {
+                    let word = value.split(' ').next().unwrap_or("");
+                    let numeric = word
+                        .chars()
+                        .next()
+                        .is_some_and(|c| c.is_ascii_digit() || "-+.".contains(c))
+                        || ["nan", "inf", "NaN"].iter().any(|w| word.starts_with(w));
+                    let ends_clause = word.len() > 1 && word.ends_with([':', ',', ')', ';']);
+                    if numeric || ends_clause {
+                        rest = value;
+                    }
+                }
+                continue;
+            }
+        }
+        if c == '`' {
+            quoted = !quoted;
+        }
+        out.push(c);
+        rest = &rest[c.len_utf8()..];
+    }
+    out
+}
+
 fn build(py: Python<'_>, e: &Error) -> PyResult<PyErr> {
     let module = py.import("sweeptin._errors")?;
     let name = class_of(e);
@@ -83,7 +168,7 @@ fn build(py: Python<'_>, e: &Error) -> PyResult<PyErr> {
         ));
     }
     let class = module.getattr(name)?;
-    let exc = class.call1((e.to_string(),))?;
+    let exc = class.call1((python_names(&e.to_string()),))?;
     for (k, v) in attributes(py, e)?.iter() {
         exc.setattr(k.extract::<&str>()?, v)?;
     }

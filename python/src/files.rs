@@ -39,7 +39,7 @@ pub(crate) struct InputOpts {
     mem: u64,
     tmp_dir: Option<PathBuf>,
     engine: String,
-    threads: usize,
+    threads: i64,
     tile: Option<f64>,
     crs: Option<String>,
     progress: bool,
@@ -108,10 +108,11 @@ impl InputOpts {
         if let Some(t) = self.tile {
             sweeptin::pipeline::check_tile_side(t).map_err(to_py)?;
         }
+        let threads = count(self.threads, "threads", 0)?;
         let tiles = match self.engine.as_str() {
             "sweep" => None,
             "auto" | "tiles" => Some(sweeptin::TileOptions {
-                threads: self.threads,
+                threads,
                 tile: self.tile,
                 base: None,
                 scope: None,
@@ -203,7 +204,7 @@ pub(crate) struct DemOpts {
     compress: Option<String>,
     predictor: Option<String>,
     bigtiff: bool,
-    max_cells: u64,
+    max_cells: i64,
 }
 
 /// `{"run": …, "products": …}` as JSON text.
@@ -242,8 +243,9 @@ pub(crate) fn run_products(
             },
             None => GridExtent::Auto,
         };
+        let max_cells = count(d.max_cells, "max_cells", 1)? as u64;
         let grid = GridPlan::new(d.cell, extent, align(&d.align)?)
-            .and_then(|g| g.limit(d.max_cells))
+            .and_then(|g| g.limit(max_cells))
             .map_err(to_py)?;
         let options = DemOptions {
             grid,
@@ -284,7 +286,8 @@ pub(crate) fn run_products(
             .map(sweeptin::products::boundary::Boundary::read)
             .transpose()
             .map_err(to_py)?;
-        sinks.push(("volume".into(), Box::new(VolumeSink::new(plane, boundary))));
+        let sink = VolumeSink::new(plane, boundary).map_err(to_py)?;
+        sinks.push(("volume".into(), Box::new(sink)));
     }
     let cancel = Cancel::default();
     let (mut run, products) = interruptible(py, &cancel, || {
@@ -344,6 +347,12 @@ pub(crate) fn run_tin(py: Python<'_>, opts: InputOpts, out: PathBuf) -> PyResult
     summary_json(&run, serde_json::json!({ "mesh": mesh }))
 }
 
+/// Bytes of a triangle in a chunk: three corners of three doubles.
+const TRIANGLE_BYTES: u64 = 72;
+
+/// Triangles a chunk holds by default, when a quarter of the memory budget holds them.
+const DEFAULT_CHUNK: u64 = 1_000_000;
+
 /// A [`TriangleSink`] handing chunks of triangles to the Python iterator through a bounded
 /// channel (two chunks in flight at most: memory stays bounded whatever the input).
 struct ChunkSink {
@@ -353,8 +362,15 @@ struct ChunkSink {
 }
 
 impl ChunkSink {
+    /// An empty buffer for the next chunk: room for a small one at first (a chunk of a large
+    /// size holds a small run's few triangles), growing with the triangles.
+    fn fresh(&self) -> Vec<[[f64; 3]; 3]> {
+        Vec::with_capacity(self.chunk.min(1 << 16))
+    }
+
     fn send(&mut self) -> sweeptin::Result<()> {
-        let full = std::mem::replace(&mut self.buf, Vec::with_capacity(self.chunk));
+        let fresh = self.fresh();
+        let full = std::mem::replace(&mut self.buf, fresh);
         // The iterator was dropped: stop the run.
         self.tx.send(full).map_err(|_| sweeptin::Error::Interrupted)
     }
@@ -366,6 +382,18 @@ impl TriangleSink for ChunkSink {
     }
 
     fn triangle(&mut self, t: &[[f64; 3]; 3]) -> sweeptin::Result<()> {
+        if self.buf.len() == self.buf.capacity() {
+            // Grown by doubling up to the chunk, never beyond it; a failure is an error, not an
+            // abort of the interpreter.
+            let more = self.buf.len().clamp(1, self.chunk - self.buf.len());
+            self.buf
+                .try_reserve_exact(more)
+                .map_err(|_| sweeptin::Error::OutOfMemory {
+                    what: "a chunk of triangles for stream_triangles".into(),
+                    bytes: (self.buf.len() + more) as u64 * TRIANGLE_BYTES,
+                    hint: "give a smaller chunk=".into(),
+                })?;
+        }
         self.buf.push(*t);
         if self.buf.len() >= self.chunk {
             self.send()?;
@@ -378,6 +406,37 @@ impl TriangleSink for ChunkSink {
             self.send()?;
         }
         Ok(ProductSummary::None)
+    }
+}
+
+/// The triangles a chunk holds: `chunk` (`None`: [`DEFAULT_CHUNK`]), at least 1 and within a
+/// quarter of the memory budget `mem` (as a DEM's rows: three chunks live at once, one filling,
+/// one in the pipe and one handed to Python). `chunk=10**9` allocated 72 GB up front and
+/// aborted the interpreter.
+fn chunk_size(chunk: Option<i64>, mem: u64) -> PyResult<usize> {
+    let most = (mem / 4 / TRIANGLE_BYTES).max(1);
+    let n = match chunk {
+        None => return Ok(DEFAULT_CHUNK.min(most) as usize),
+        Some(n) => count(n, "chunk", 1)? as u64,
+    };
+    if n > most {
+        return Err(value_error(format!(
+            "chunk={n}: {n} triangles of {TRIANGLE_BYTES} bytes are more than a quarter of \
+             mem= ({mem} bytes) holds: give chunk={most} or less, or a larger mem="
+        )));
+    }
+    Ok(n as usize)
+}
+
+/// `value` as a count of at least `least`, named `name` in the error.
+pub(crate) fn count(value: i64, name: &str, least: u64) -> PyResult<usize> {
+    match u64::try_from(value) {
+        Ok(v) if v >= least => {
+            usize::try_from(v).map_err(|_| value_error(format!("{name}={value}: too large")))
+        }
+        _ => Err(value_error(format!(
+            "{name}={value}: must be a whole number, {least} or more"
+        ))),
     }
 }
 
@@ -397,11 +456,9 @@ pub struct TriangleStream {
 }
 
 #[pyfunction]
-#[pyo3(signature = (opts, chunk))]
-pub(crate) fn stream_triangles(opts: InputOpts, chunk: usize) -> PyResult<TriangleStream> {
-    if chunk == 0 {
-        return Err(value_error("chunk must be at least 1"));
-    }
+#[pyo3(signature = (opts, chunk = None))]
+pub(crate) fn stream_triangles(opts: InputOpts, chunk: Option<i64>) -> PyResult<TriangleStream> {
+    let chunk = chunk_size(chunk, opts.mem)?;
     let (config, _) = opts.config()?;
     let (tx, rx) = crossbeam_channel::bounded(1);
     let run = std::thread::Builder::new()
@@ -410,8 +467,9 @@ pub(crate) fn stream_triangles(opts: InputOpts, chunk: usize) -> PyResult<Triang
             let mut sink = ChunkSink {
                 tx,
                 chunk,
-                buf: Vec::with_capacity(chunk.min(1 << 20)),
+                buf: Vec::new(),
             };
+            sink.buf = sink.fresh();
             pipeline::run(&config, None, &mut [&mut sink])
         })
         .map_err(|e| value_error(format!("cannot start the run: {e}")))?;
@@ -487,4 +545,10 @@ pub(crate) fn default_mem() -> u64 {
 #[pyfunction]
 pub(crate) fn parse_size(s: &str) -> PyResult<u64> {
     pipeline::parse_size(s).map_err(crate::to_py)
+}
+
+/// Parses a classification list (`"2,9"`, `"29"`) as `--class` does.
+#[pyfunction]
+pub(crate) fn parse_classes(s: &str) -> PyResult<Vec<u8>> {
+    sweeptin::input::las::parse_classes(s).map_err(crate::to_py)
 }

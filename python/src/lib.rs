@@ -33,6 +33,7 @@ fn _sweeptin(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(files::run_tin, m)?)?;
     m.add_function(wrap_pyfunction!(files::stream_triangles, m)?)?;
     m.add_function(wrap_pyfunction!(files::parse_size, m)?)?;
+    m.add_function(wrap_pyfunction!(files::parse_classes, m)?)?;
     m.add_function(wrap_pyfunction!(files::default_mem, m)?)?;
     m.add_function(wrap_pyfunction!(plans::make_plan, m)?)?;
     m.add_function(wrap_pyfunction!(plans::run_task, m)?)?;

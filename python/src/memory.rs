@@ -214,7 +214,9 @@ impl Tin {
 
     /// `(values, (a, b, c, d, e, f))`: the DEM raster of the TIN (float32, row 0 north) and
     /// its affine transform.
-    #[pyo3(signature = (cell, bbox = None, align = "edges", nodata = f32::NAN, snap = false))]
+    #[pyo3(signature = (cell, bbox = None, align = "edges", nodata = f32::NAN, snap = false,
+                        max_cells = sweeptin::raster::DEFAULT_MAX_CELLS as i64))]
+    #[allow(clippy::too_many_arguments)] // Python's keyword arguments
     fn rasterize<'py>(
         &self,
         py: Python<'py>,
@@ -223,7 +225,9 @@ impl Tin {
         align: &str,
         nodata: f32,
         snap: bool,
+        max_cells: i64,
     ) -> PyResult<(Bound<'py, PyArray2<f32>>, [f64; 6])> {
+        let max_cells = crate::files::count(max_cells, "max_cells", 1)? as u64;
         let (v, t) = self.arrays(py);
         let (v, t): (&[[f64; 3]], &[[u32; 3]]) = (rows(&v, "vertices")?, rows(&t, "triangles")?);
         let align = self::align(align)?;
@@ -231,7 +235,7 @@ impl Tin {
             crate::errors::detach_guarded(py, || -> sweeptin::Result<_> {
                 let extent = bbox.map_or(GridExtent::Auto, |b| GridExtent::BBox { bbox: b, snap });
                 let mut sink = DemSink::in_memory(DemOptions {
-                    grid: GridPlan::new(cell, extent, align)?,
+                    grid: GridPlan::new(cell, extent, align)?.limit(max_cells)?,
                     nodata,
                     ..DemOptions::default()
                 });

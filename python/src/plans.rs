@@ -166,11 +166,13 @@ pub(crate) fn task_count(path: PathBuf) -> PyResult<usize> {
 pub(crate) fn run_task(
     py: Python<'_>,
     path: PathBuf,
-    i: usize,
-    threads: usize,
+    i: i64,
+    threads: i64,
     resume: bool,
     progress: bool,
 ) -> PyResult<String> {
+    let i = crate::files::count(i, "i", 0)?;
+    let threads = crate::files::count(threads, "threads", 0)?;
     crate::errors::detach_guarded(py, || -> sweeptin::Result<String> {
         let plan = Plan::load(&path)?;
         let dir = Plan::dir_of(&path)?;

@@ -14,7 +14,8 @@ And tile plans for Dask or any batch engine: :func:`plan`, :func:`run_task`, :fu
 the same ``plan.json`` as ``sweeptin plan/run/merge``.
 
 The file functions take these input options (keyword only), as the command line does:
-``classes`` (kept classification codes), ``returns`` (``"all"``, ``"first"``, ``"last"``),
+``classes`` (kept classification codes: ``[2, 9]``, ``2``, or ``"2,9"`` as ``--class``
+takes them, so ``"29"`` is class 29), ``returns`` (``"all"``, ``"first"``, ``"last"``),
 ``keep_withheld``, ``bbox`` (``(xmin, ymin, xmax, ymax)``), ``duplicates`` (``"first"``,
 ``"last"``, ``"lowest"``, ``"highest"``), ``breaklines`` (files), ``trim_boundary``, ``holes``,
 ``max_edge``, ``mem`` (sort budget: bytes or ``"512M"``; default 1 GiB, or under an
@@ -22,7 +23,10 @@ address-space limit what it leaves beside the program), ``tmp_dir``,
 ``engine`` (``"auto"``, the default: exact tiles on every core for LAS/LAZ points without
 breaklines or trimming polygons, one streaming sweep otherwise; ``"tiles"``; ``"sweep"``),
 ``threads``, ``tile``, ``crs`` (``"EPSG:2154"`` or WKT) and ``progress`` (a progress bar on
-stderr).
+stderr). Every value is checked by the library's own configuration, as the command line's
+flags are, with the same errors (``mem=0``, ``plane=nan``, ``tile=-5``: :class:`OptionsError`,
+``exit_code`` 2, the message naming the parameter); a count (``threads``, ``max_cells``,
+``chunk``, a task's index) must be an ``int`` (``TypeError`` otherwise).
 
 Errors raise the exceptions of :mod:`sweeptin._errors` (all :class:`SweeptinError`). The GIL is
 released while the library works, so threads (and Dask's threaded scheduler) run in parallel.
@@ -30,11 +34,12 @@ released while the library works, so threads (and Dask's threaded scheduler) run
 
 from __future__ import annotations
 
-import json
-import os
-from typing import Any, Iterator, Sequence, Union
+import json as _json
+import operator as _operator
+import os as _os
+import typing as _typing
 
-import numpy as np
+import numpy as _np
 
 from . import _sweeptin as _native
 from ._errors import (
@@ -51,11 +56,12 @@ from ._errors import (
 
 __version__: str = _native.__version__
 
-PathLike = Union[str, "os.PathLike[str]"]
-Files = Union[PathLike, Sequence[PathLike]]
+PathLike = _typing.Union[str, "_os.PathLike[str]"]
+Files = _typing.Union[PathLike, _typing.Sequence[PathLike]]
 
 __all__ = [
     "Tin",
+    "Transform",
     "triangulate",
     "dem",
     "contours",
@@ -75,26 +81,79 @@ __all__ = [
     "OutputError",
     "OutOfMemoryError",
     "InternalError",
+    "PathLike",
+    "Files",
 ]
 
 
-def _transform(t: Sequence[float]) -> Any:
-    """``affine.Affine`` when the package is installed (what rasterio uses), else the 6-tuple
-    ``(a, b, c, d, e, f)`` with ``x = a*col + b*row + c`` and ``y = d*col + e*row + f``."""
+class Transform(_typing.NamedTuple):
+    """A raster's affine transform in the order of the ``affine`` package and rasterio,
+    ``(a, b, c, d, e, f)``: ``x = a*col + b*row + c``, ``y = d*col + e*row + f`` (of a cell's
+    corner; ``c, f`` the raster's north-west corner, ``a`` the cell size, ``e`` minus it).
+    NOT GDAL's geotransform order: :meth:`to_gdal` gives that, ``(c, a, b, f, d, e)``, as
+    ``affine.Affine.to_gdal`` does."""
+
+    a: float
+    b: float
+    c: float
+    d: float
+    e: float
+    f: float
+
+    def to_gdal(self) -> tuple[float, float, float, float, float, float]:
+        """GDAL's geotransform ``(c, a, b, f, d, e)`` (``SetGeoTransform``'s order)."""
+        return (self.c, self.a, self.b, self.f, self.d, self.e)
+
+
+def _transform(t: _typing.Sequence[float]) -> _typing.Any:
+    """``affine.Affine`` when the package is installed (what rasterio uses), else a
+    :class:`Transform`: the same order ``(a, b, c, d, e, f)``, and ``to_gdal()`` on both."""
     try:
         from affine import Affine
     except ImportError:
-        return tuple(float(v) for v in t)
+        return Transform(*(float(v) for v in t))
     return Affine(*t)
 
 
-def _points(a: Any, cols: int, what: str) -> np.ndarray:
+def _whole(v: _typing.Any, name: str) -> int:
+    """``v`` as an int: ``TypeError`` for anything but a whole number (``1.5``, ``"3"``,
+    ``True``), as Python's own ``range`` or list indices do. Its range is the library's to
+    check (beyond 64 bits it is clamped, still out of any range)."""
+    if isinstance(v, bool) or not hasattr(type(v), "__index__"):
+        raise TypeError(f"{name} must be a whole number (an int), not {v!r}")
+    return max(-(2**63), min(_operator.index(v), 2**63 - 1))
+
+
+def _classes(classes: _typing.Any) -> list[int] | None:
+    """The classification codes to keep, parsed as ``--class`` parses them: ``"2,9"`` (or
+    ``"29"``, class 29), one code ``2``, or codes ``[2, 9]``."""
+    if classes is None:
+        return None
+    if isinstance(classes, str):
+        text = classes
+    elif hasattr(type(classes), "__index__") and not isinstance(classes, bool):
+        text = str(_whole(classes, "classes"))
+    else:
+        text = ",".join(str(_whole(c, "classes")) for c in classes)
+    return list(_named("classes", classes, _native.parse_classes, text))
+
+
+def _named(name: str, given: _typing.Any, parse: _typing.Any, text: str) -> _typing.Any:
+    """``parse(text)``, the library's parser of a flag's value; its error names the parameter
+    as the command line's names the flag (``invalid value '0' for '--mem'``)."""
+    try:
+        return parse(text)
+    except OptionsError as e:
+        raise OptionsError(f"{name}={given!r}: {e}") from None
+
+
+def _points(a: _typing.Any, cols: int, what: str) -> _np.ndarray:
     """``a`` as a C-contiguous float64 ``(n, cols)`` array (no copy when it already is one)."""
-    arr = np.ascontiguousarray(a, dtype=np.float64)
+    arr = _np.ascontiguousarray(a, dtype=_np.float64)
     if arr.ndim != 2 or arr.shape[1] < cols:
         raise OptionsError(f"{what} must be an (n, {cols}) array, not shape {arr.shape}")
     if arr.shape[1] != cols:
-        arr = np.ascontiguousarray(arr[:, :cols])
+        arr = _np.ascontiguousarray(arr[:, :cols])
     return arr
 
 
@@ -113,21 +172,21 @@ class Tin:
 
     __slots__ = ("_tin",)
 
-    def __init__(self, native: Any) -> None:
+    def __init__(self, native: _typing.Any) -> None:
         self._tin = native
 
     @property
-    def vertices(self) -> np.ndarray:
+    def vertices(self) -> _np.ndarray:
         return self._tin.vertices
 
     points = vertices
 
     @property
-    def triangles(self) -> np.ndarray:
+    def triangles(self) -> _np.ndarray:
         return self._tin.triangles
 
     @property
-    def input_index(self) -> np.ndarray:
+    def input_index(self) -> _np.ndarray:
         return self._tin.input_index
 
     @property
@@ -149,7 +208,7 @@ class Tin:
     def __repr__(self) -> str:
         return f"<sweeptin.Tin: {self.number_of_vertices()} vertices, {self.number_of_triangles()} triangles>"
 
-    def interpolate(self, xy: Any) -> np.ndarray:
+    def interpolate(self, xy: _typing.Any) -> _np.ndarray:
         """Heights at the points ``xy`` (``(k, 2)``; more columns are ignored) by linear
         interpolation in the TIN; NaN outside it. A point exactly on an edge or a vertex gets
         the value of that edge or vertex alone, as the DEM and ``sweeptin sample`` do."""
@@ -158,17 +217,22 @@ class Tin:
     def rasterize(
         self,
         cell: float,
-        bbox: Sequence[float] | None = None,
+        bbox: _typing.Sequence[float] | None = None,
         align: str = "edges",
         *,
         nodata: float = float("nan"),
         snap: bool = False,
-    ) -> tuple[np.ndarray, Any]:
+        max_cells: int = 1 << 30,
+    ) -> tuple[_np.ndarray, _typing.Any]:
         """The DEM of the TIN: ``(values, transform)``.
 
         ``values`` is a float32 ``(rows, cols)`` array, row 0 the northern one, each cell the
         TIN's height at the cell's centre (``nodata`` outside the TIN); ``transform`` is the
-        affine transform rasterio expects (``affine.Affine`` when installed, else the 6-tuple).
+        affine transform rasterio expects, in the ``affine`` package's order
+        ``(a, b, c, d, e, f)`` (``x = a*col + b*row + c``, ``y = d*col + e*row + f``):
+        an ``affine.Affine`` when that package is installed, else a :class:`Transform` (a named
+        tuple in the same order). Not GDAL's geotransform order: ``transform.to_gdal()`` gives
+        ``(c, a, b, f, d, e)`` for ``SetGeoTransform``, on both.
 
         ``align="edges"`` (default): cell edges on multiples of ``cell`` (GDAL's ``-tap``): a
         1 km tile at 1 m is 1000 × 1000 cells. ``align="centres"``: cell centres on multiples
@@ -176,21 +240,23 @@ class Tin:
         the library's ``GridPlan``. ``bbox=(xmin, ymin, xmax, ymax)``
         with sides on multiples of ``cell`` (or ``snap=True`` to round them outwards); without
         it, the cells whose centres lie within the data's bounds. The values are computed by
-        the library's DEM sink, as ``sweeptin dem`` computes them.
+        the library's DEM sink, as ``sweeptin dem`` computes them. ``max_cells`` as in
+        :func:`dem`: a larger raster is refused (:class:`OptionsError`) before it is allocated.
         """
         b = None if bbox is None else [float(v) for v in bbox]
-        values, t = self._tin.rasterize(float(cell), b, align, float(nodata), bool(snap))
+        n = _whole(max_cells, "max_cells")
+        values, t = self._tin.rasterize(float(cell), b, align, float(nodata), bool(snap), n)
         return values, _transform(t)
 
-    def contours(self, interval: float = 1.0, base: float = 0.0) -> dict[str, Any]:
+    def contours(self, interval: float = 1.0, base: float = 0.0) -> dict[str, _typing.Any]:
         """Contour lines at ``base + k × interval`` as a GeoJSON-like FeatureCollection dict:
         LineString features with properties ``elevation`` and ``closed`` (higher ground on the
         left), the same lines ``sweeptin contours`` writes."""
-        return json.loads(self._tin.contours_geojson(float(interval), float(base)))
+        return _json.loads(self._tin.contours_geojson(float(interval), float(base)))
 
     def write(self, path: PathLike, *, crs: str | None = None) -> dict[str, int]:
         """Writes the mesh: ``.ply`` (binary PLY), ``.obj``, ``.xml`` (LandXML) or ``.stin``."""
-        v, t, b = self._tin.write(os.fspath(path), crs)
+        v, t, b = self._tin.write(_os.fspath(path), crs)
         return {"vertices": v, "triangles": t, "bytes": b}
 
     def write_ply(self, path: PathLike) -> dict[str, int]:
@@ -203,17 +269,17 @@ class Tin:
 
 
 def _with_extension(path: PathLike, ext: str) -> str:
-    p = os.fspath(path)
+    p = _os.fspath(path)
     if not p.lower().endswith(ext):
         raise OptionsError(f"{p}: expected a {ext} file name")
     return p
 
 
 def triangulate(
-    xyz: Any,
+    xyz: _typing.Any,
     *,
     duplicates: str = "first",
-    breaklines: Sequence[Any] | np.ndarray | None = None,
+    breaklines: _typing.Sequence[_typing.Any] | _np.ndarray | None = None,
 ) -> Tin:
     """Exact Delaunay triangulation of the points ``xyz`` (an ``(n, 3)`` array; ``z`` is
     carried along). The result depends only on the set of distinct (x, y) positions, never on
@@ -239,27 +305,27 @@ def triangulate(
     return Tin(_native.triangulate(pts, duplicates, segments))
 
 
-def _segments(pts: np.ndarray, breaklines: Any) -> tuple[np.ndarray, np.ndarray | None]:
+def _segments(pts: _np.ndarray, breaklines: _typing.Any) -> tuple[_np.ndarray, _np.ndarray | None]:
     n = pts.shape[0]
-    if isinstance(breaklines, np.ndarray) and breaklines.ndim == 2 and breaklines.shape[1] == 2:
+    if isinstance(breaklines, _np.ndarray) and breaklines.ndim == 2 and breaklines.shape[1] == 2:
         seg = breaklines
-        if not np.issubdtype(seg.dtype, np.integer):
+        if not _np.issubdtype(seg.dtype, _np.integer):
             raise OptionsError("breaklines as an (m, 2) array must hold integer point indices")
         if len(seg) and (seg.min() < 0 or seg.max() >= n):
             raise OptionsError(f"a breakline segment refers to a point beyond the {n} given")
-        return pts, np.ascontiguousarray(seg, dtype=np.uint32)
-    extra: list[np.ndarray] = []
-    segs: list[np.ndarray] = []
+        return pts, _np.ascontiguousarray(seg, dtype=_np.uint32)
+    extra: list[_np.ndarray] = []
+    segs: list[_np.ndarray] = []
     total = n
     for k, line in enumerate(breaklines):
-        a = np.asarray(line)
-        if a.ndim == 1 and np.issubdtype(a.dtype, np.integer):
-            idx = a.astype(np.int64)
+        a = _np.asarray(line)
+        if a.ndim == 1 and _np.issubdtype(a.dtype, _np.integer):
+            idx = a.astype(_np.int64)
             if len(idx) and (idx.min() < 0 or idx.max() >= n):
                 raise OptionsError(f"breakline {k} refers to a point beyond the {n} given")
         elif a.ndim == 2 and a.shape[1] == 3:
-            extra.append(np.asarray(a, dtype=np.float64))
-            idx = np.arange(total, total + len(a), dtype=np.int64)
+            extra.append(_np.asarray(a, dtype=_np.float64))
+            idx = _np.arange(total, total + len(a), dtype=_np.int64)
             total += len(a)
         else:
             raise OptionsError(
@@ -267,17 +333,17 @@ def _segments(pts: np.ndarray, breaklines: Any) -> tuple[np.ndarray, np.ndarray 
                 f"not shape {a.shape}"
             )
         if len(idx) >= 2:
-            segs.append(np.stack([idx[:-1], idx[1:]], axis=1))
+            segs.append(_np.stack([idx[:-1], idx[1:]], axis=1))
     if extra:
-        pts = np.ascontiguousarray(np.concatenate([pts, *extra]))
+        pts = _np.ascontiguousarray(_np.concatenate([pts, *extra]))
     if not segs:
         return pts, None
-    return pts, np.ascontiguousarray(np.concatenate(segs), dtype=np.uint32)
+    return pts, _np.ascontiguousarray(_np.concatenate(segs), dtype=_np.uint32)
 
 
 # ---- files -------------------------------------------------------------------------------
 
-_INPUT_DEFAULTS: dict[str, Any] = {
+_INPUT_DEFAULTS: dict[str, _typing.Any] = {
     "classes": None,
     "returns": "all",
     "keep_withheld": False,
@@ -298,33 +364,35 @@ _INPUT_DEFAULTS: dict[str, Any] = {
 
 
 def _files(files: Files) -> list[str]:
-    if isinstance(files, (str, os.PathLike)):
-        return [os.fspath(files)]
-    out = [os.fspath(f) for f in files]
+    if isinstance(files, (str, _os.PathLike)):
+        return [_os.fspath(files)]
+    out = [_os.fspath(f) for f in files]
     if not out:
         raise OptionsError("no input files given")
     return out
 
 
 def _mem(mem: int | str | None) -> int:
+    """The memory budget in bytes, parsed and checked as ``--mem`` is (``0`` is refused)."""
     if mem is None:
         return _native.default_mem()
-    return int(mem) if isinstance(mem, int) else _native.parse_size(str(mem))
+    text = mem if isinstance(mem, str) else str(_whole(mem, "mem"))
+    return _named("mem", mem, _native.parse_size, text)
 
 
-def _opts(files: Files, options: dict[str, Any]) -> dict[str, Any]:
+def _opts(files: Files, options: dict[str, _typing.Any]) -> dict[str, _typing.Any]:
     unknown = set(options) - set(_INPUT_DEFAULTS)
     if unknown:
         raise TypeError(f"unknown option(s): {', '.join(sorted(unknown))}")
     o = {**_INPUT_DEFAULTS, **options}
     o["files"] = _files(files)
     o["mem"] = _mem(o["mem"])
-    o["breaklines"] = [os.fspath(p) for p in o["breaklines"]]
+    o["breaklines"] = [_os.fspath(p) for p in o["breaklines"]]
     for k in ("trim_boundary", "holes", "tmp_dir"):
         if o[k] is not None:
-            o[k] = os.fspath(o[k])
-    if o["classes"] is not None:
-        o["classes"] = [int(c) for c in o["classes"]]
+            o[k] = _os.fspath(o[k])
+    o["classes"] = _classes(o["classes"])
+    o["threads"] = _whole(o["threads"], "threads")
     if o["bbox"] is not None:
         o["bbox"] = [float(v) for v in o["bbox"]]
     return o
@@ -332,7 +400,7 @@ def _opts(files: Files, options: dict[str, Any]) -> dict[str, Any]:
 
 def _raster(
     format: str | None, compress: str | None, predictor: str | None, bigtiff: bool
-) -> dict[str, Any]:
+) -> dict[str, _typing.Any]:
     return {"format": format, "compress": compress, "predictor": predictor, "bigtiff": bool(bigtiff)}
 
 
@@ -352,8 +420,8 @@ def dem(
     interval: float = 1.0,
     base: float = 0.0,
     max_cells: int = 1 << 30,
-    **options: Any,
-) -> dict[str, Any]:
+    **options: _typing.Any,
+) -> dict[str, _typing.Any]:
     """``sweeptin dem``: a DEM raster (``.tif`` float32 GeoTIFF or ``.asc``) of the TIN of the
     files, by linear interpolation at cell centres, streaming in bounded memory; optionally
     contour lines (``contours=`` a ``.geojson`` path) from the same pass. With ``bbox=`` the
@@ -373,16 +441,16 @@ def dem(
     fields as the command line's ``--json``."""
     o = _opts(files, options)
     d = {
-        "out": os.fspath(out),
+        "out": _os.fspath(out),
         "cell": float(cell),
         "nodata": float(nodata),
         "snap": bool(snap),
         "align": align,
         **_raster(format, compress, predictor, bigtiff),
-        "max_cells": int(max_cells),
+        "max_cells": _whole(max_cells, "max_cells"),
     }
-    c = None if contours is None else (os.fspath(contours), float(interval), float(base))
-    return json.loads(_native.run_products(o, dem=d, contours=c))
+    c = None if contours is None else (_os.fspath(contours), float(interval), float(base))
+    return _json.loads(_native.run_products(o, dem=d, contours=c))
 
 
 def contours(
@@ -391,13 +459,13 @@ def contours(
     *,
     interval: float = 1.0,
     base: float = 0.0,
-    **options: Any,
-) -> dict[str, Any]:
+    **options: _typing.Any,
+) -> dict[str, _typing.Any]:
     """``sweeptin contours``: contour lines at ``base + k × interval`` as GeoJSON, stitched
     into polylines, streaming in bounded memory. Returns the run's summary."""
     o = _opts(files, options)
-    c = (os.fspath(out), float(interval), float(base))
-    return json.loads(_native.run_products(o, contours=c))
+    c = (_os.fspath(out), float(interval), float(base))
+    return _json.loads(_native.run_products(o, contours=c))
 
 
 def volume(
@@ -405,22 +473,22 @@ def volume(
     *,
     plane: float,
     boundary: PathLike | None = None,
-    **options: Any,
-) -> dict[str, Any]:
+    **options: _typing.Any,
+) -> dict[str, _typing.Any]:
     """``sweeptin volume --plane``: cut and fill volumes and areas of the TIN against the plane
     ``z = plane``, within an optional GeoJSON polygon. Returns the run's summary; the volumes
     are ``result["products"]["volume"]`` (``cut_volume``, ``fill_volume``, ``net_volume``,
     ``cut_area``, ``fill_area``, ``area``)."""
     o = _opts(files, options)
-    b = None if boundary is None else os.fspath(boundary)
-    return json.loads(_native.run_products(o, volume=(float(plane), b)))
+    b = None if boundary is None else _os.fspath(boundary)
+    return _json.loads(_native.run_products(o, volume=(float(plane), b)))
 
 
-def tin(files: Files, out: PathLike, **options: Any) -> dict[str, Any]:
+def tin(files: Files, out: PathLike, **options: _typing.Any) -> dict[str, _typing.Any]:
     """``sweeptin tin``: the Delaunay TIN of the files written as ``.ply``, ``.obj``, ``.xml``
     (LandXML) or ``.stin``, streaming in bounded memory. Returns the run's summary."""
     o = _opts(files, options)
-    return json.loads(_native.run_tin(o, os.fspath(out)))
+    return _json.loads(_native.run_tin(o, _os.fspath(out)))
 
 
 class _Stream:
@@ -428,30 +496,37 @@ class _Stream:
 
     __slots__ = ("_it",)
 
-    def __init__(self, it: Any) -> None:
+    def __init__(self, it: _typing.Any) -> None:
         self._it = it
 
     def __iter__(self) -> "_Stream":
         return self
 
-    def __next__(self) -> np.ndarray:
+    def __next__(self) -> _np.ndarray:
         return next(self._it)
 
     @property
-    def summary(self) -> dict[str, Any] | None:
+    def summary(self) -> dict[str, _typing.Any] | None:
         """The run's summary once the iterator is exhausted (else ``None``)."""
         s = self._it.summary_json()
-        return None if s is None else json.loads(s)
+        return None if s is None else _json.loads(s)
 
 
-def stream_triangles(files: Files, chunk: int = 1_000_000, **options: Any) -> Iterator[np.ndarray]:
+def stream_triangles(
+    files: Files, chunk: int | None = None, **options: _typing.Any
+) -> _typing.Iterator[_np.ndarray]:
     """Iterates over the final triangles of a streaming run over the files, in chunks: float64
     arrays of shape ``(k, 3, 3)`` (``k <= chunk`` triangles, three ``[x, y, z]`` corners each,
     counter-clockwise), as the sweep releases them (roughly south to north). Memory stays
     bounded (at most two chunks wait in the pipe). Stopping early stops the run. The returned
-    iterator has ``.summary`` once exhausted."""
+    iterator has ``.summary`` once exhausted.
+
+    ``chunk``: most triangles a chunk holds (72 bytes each), at most what a quarter of ``mem``
+    holds (:class:`OptionsError` beyond, before any work); default 1,000,000, or that many
+    when fewer."""
     o = _opts(files, options)
-    return _Stream(_native.stream_triangles(o, int(chunk)))
+    n = None if chunk is None else _whole(chunk, "chunk")
+    return _Stream(_native.stream_triangles(o, n))
 
 
 # ---- plans -------------------------------------------------------------------------------
@@ -464,7 +539,7 @@ class Plan:
     __slots__ = ("path",)
 
     def __init__(self, path: PathLike) -> None:
-        self.path = os.path.abspath(os.fspath(path))
+        self.path = _os.path.abspath(_os.fspath(path))
 
     def __fspath__(self) -> str:
         return self.path
@@ -475,7 +550,7 @@ class Plan:
     def __repr__(self) -> str:
         return f"sweeptin.Plan({self.path!r})"
 
-    def __reduce__(self) -> tuple[Any, ...]:
+    def __reduce__(self) -> tuple[_typing.Any, ...]:
         return (Plan, (self.path,))
 
     @property
@@ -485,8 +560,8 @@ class Plan:
 
 
 def _plan_path(p: Plan | PathLike) -> str:
-    path = os.fspath(p)
-    return os.path.join(path, "plan.json") if os.path.isdir(path) else path
+    path = _os.fspath(p)
+    return _os.path.join(path, "plan.json") if _os.path.isdir(path) else path
 
 
 def plan(
@@ -508,12 +583,12 @@ def plan(
     base: float = 0.0,
     plane: float | None = None,
     boundary: PathLike | None = None,
-    classes: Sequence[int] | None = None,
+    classes: _typing.Sequence[int] | int | str | None = None,
     returns: str = "all",
     keep_withheld: bool = False,
     duplicates: str = "first",
     max_edge: float | None = None,
-    breaklines: Sequence[PathLike] = (),
+    breaklines: _typing.Sequence[PathLike] = (),
     trim_boundary: PathLike | None = None,
     holes: PathLike | None = None,
     crs: str | None = None,
@@ -541,35 +616,35 @@ def plan(
         "align": align,
         "nodata": float(nodata),
         **_raster(format, compress, predictor, bigtiff),
-        "contours": None if contours is None else os.path.abspath(os.fspath(contours)),
+        "contours": None if contours is None else _os.path.abspath(_os.fspath(contours)),
         "interval": float(interval),
         "base": float(base),
         "plane": None if plane is None else float(plane),
-        "boundary": None if boundary is None else os.fspath(boundary),
-        "classes": None if classes is None else [int(c) for c in classes],
+        "boundary": None if boundary is None else _os.fspath(boundary),
+        "classes": _classes(classes),
         "returns": returns,
         "keep_withheld": bool(keep_withheld),
         "duplicates": duplicates,
         "max_edge": max_edge,
-        "breaklines": [os.fspath(p) for p in breaklines],
-        "trim_boundary": None if trim_boundary is None else os.fspath(trim_boundary),
-        "holes": None if holes is None else os.fspath(holes),
+        "breaklines": [_os.fspath(p) for p in breaklines],
+        "trim_boundary": None if trim_boundary is None else _os.fspath(trim_boundary),
+        "holes": None if holes is None else _os.fspath(holes),
         "crs": crs,
         "mem": _mem(mem),
-        "tmp_dir": None if tmp_dir is None else os.fspath(tmp_dir),
+        "tmp_dir": None if tmp_dir is None else _os.fspath(tmp_dir),
     }
     names = _files(files)
-    args = [product, *[os.path.abspath(f) for f in names], "--tile", repr(float(tile))]
+    args = [product, *[_os.path.abspath(f) for f in names], "--tile", repr(float(tile))]
     if product == "dem":
         args += ["--cell", repr(float(cell)), "--align", align]
         if format is not None:
             args += ["--format", format]
-    if classes is not None:
-        args += ["--class", ",".join(str(int(c)) for c in classes)]
+    if job["classes"] is not None:
+        args += ["--class", ",".join(str(c) for c in job["classes"])]
     for flag, paths in (("--breaklines", job["breaklines"]), ("--trim-boundary", [trim_boundary]),
                         ("--holes", [holes])):
-        args += [a for p in paths if p is not None for a in (flag, os.path.abspath(p))]
-    path = _native.make_plan(names, os.fspath(dir), float(tile), buffer, job, args)
+        args += [a for p in paths if p is not None for a in (flag, _os.path.abspath(p))]
+    path = _native.make_plan(names, _os.fspath(dir), float(tile), buffer, job, args)
     return Plan(path)
 
 
@@ -580,12 +655,15 @@ def run_task(
     threads: int = 0,
     resume: bool = False,
     progress: bool = False,
-) -> dict[str, Any]:
+) -> dict[str, _typing.Any]:
     """``sweeptin run --task i``: runs task ``i`` of the plan (its outputs under
     ``DIR/tiles/``, then its record); with ``resume`` a finished task is skipped. ``threads``:
     the task's worker threads (0: every core). Returns the task's record (status ``"done"``,
     or ``"empty"`` when its tile holds no point after the filters)."""
-    return json.loads(_native.run_task(_plan_path(plan), int(i), int(threads), bool(resume), bool(progress)))
+    task = _whole(i, "i")
+    return _json.loads(
+        _native.run_task(_plan_path(plan), task, _whole(threads, "threads"), bool(resume), bool(progress))
+    )
 
 
 def merge(
@@ -598,7 +676,7 @@ def merge(
     compress: str | None = None,
     predictor: str | None = None,
     bigtiff: bool = False,
-) -> dict[str, Any]:
+) -> dict[str, _typing.Any]:
     """``sweeptin merge``: joins the finished tasks: the DEM mosaic ``out`` (``.vrt`` over the
     tiles or one ``.tif``, a GeoTIFF or COG as the plan's ``format`` says unless ``format``,
     ``compress``, ``predictor`` or ``bigtiff`` are given here) with the DEM's contours
@@ -609,9 +687,9 @@ def merge(
     (``dem``/``contours``/``hillshade``/``volume``/``tin``, ``tasks``, ``empty_tasks``,
     ``max_buffer``)."""
     opts = {
-        "out": None if out is None else os.fspath(out),
-        "contours": None if contours is None else os.fspath(contours),
-        "hillshade": None if hillshade is None else os.fspath(hillshade),
+        "out": None if out is None else _os.fspath(out),
+        "contours": None if contours is None else _os.fspath(contours),
+        "hillshade": None if hillshade is None else _os.fspath(hillshade),
         **_raster(format, compress, predictor, bigtiff),
     }
-    return json.loads(_native.merge(_plan_path(plan), opts))
+    return _json.loads(_native.merge(_plan_path(plan), opts))

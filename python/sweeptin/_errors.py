@@ -6,7 +6,7 @@ Where the library knows it, the exception carries ``path`` (the file), ``line`` 
 ``index`` (0-based point index) as attributes. Every one raised by the library also carries
 ``kind`` (``"usage"``, ``"input"``, ``"output"``, ``"internal"``) and ``exit_code`` (2, 3, 4,
 5): the command line's exit status for the same failure, for batch scripts that report as it
-does.
+does; so does one the package raises itself (an :class:`OptionsError` is ``"usage"``, 2).
 """
 
 from __future__ import annotations
@@ -26,6 +26,9 @@ class InputError(SweeptinError, ValueError):
     """The data cannot be used: a non-finite or out-of-range coordinate, a damaged or
     unreadable file, a bad line of a text file, a breakline that cannot be used."""
 
+    kind = "input"
+    exit_code = 3
+
 
 class NoTriangleError(InputError):
     """No triangle exists: fewer than 3 distinct (x, y) positions, or all of them on one line,
@@ -35,6 +38,9 @@ class NoTriangleError(InputError):
 class OptionsError(SweeptinError, ValueError):
     """Options that cannot be used (a bad value, options that do not go together, no input,
     an output that would overwrite an input or another output)."""
+
+    kind = "usage"
+    exit_code = 2
 
 
 class FileError(SweeptinError, OSError):
@@ -51,14 +57,23 @@ class OutputError(SweeptinError, OSError):
     """An output cannot be written as asked (unknown format, a limit of the format, a
     directory or device in the way)."""
 
+    kind = "output"
+    exit_code = 4
+
 
 class OutOfMemoryError(SweeptinError, MemoryError):
     """A buffer the job needs cannot be allocated within memory (or within ``mem``): the
     message says what for and what to do."""
 
+    kind = "output"
+    exit_code = 4
+
 
 class InternalError(SweeptinError, RuntimeError):
     """A bug in sweeptin: please report it with the input."""
+
+    kind = "internal"
+    exit_code = 5
 
 
 __all__ = [

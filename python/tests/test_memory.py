@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -208,3 +209,33 @@ def test_errors_are_the_documented_exceptions():
         sweeptin.triangulate(np.zeros((5, 2)))
     with pytest.raises(sweeptin.OptionsError, match="duplicates"):
         sweeptin.triangulate(np.eye(3), duplicates="median")
+
+
+def test_rasterize_without_affine_names_its_order_and_gives_gdals(monkeypatch):
+    """Issue 41, item 16: without the `affine` package `rasterize` returned a bare 6-tuple in
+    affine's order, easily taken for GDAL's geotransform. It is a named `Transform`, in
+    affine's order (as `affine.Affine`), with `to_gdal()` on both."""
+    tin = sweeptin.triangulate(np.array([[0.0, 0, 0], [10, 0, 1], [0, 10, 2], [10, 10, 3]]))
+    _, with_affine = tin.rasterize(0.5)
+    monkeypatch.setitem(sys.modules, "affine", None)  # `import affine` fails
+    values, t = tin.rasterize(0.5)
+    assert isinstance(t, sweeptin.Transform) and isinstance(t, tuple)
+    assert (t.a, t.b, t.c, t.d, t.e, t.f) == (0.5, 0.0, 0.0, 0.0, -0.5, 10.0)
+    assert tuple(t) == tuple(with_affine)[:6]
+    # GDAL's order: origin x, cell width, row rotation, origin y, column rotation, cell height.
+    assert t.to_gdal() == with_affine.to_gdal() == (0.0, 0.5, 0.0, 10.0, 0.0, -0.5)
+    assert "Transform(a=0.5" in repr(t)
+    assert values.shape == (20, 20)
+
+
+def test_the_module_exports_its_api_only():
+    """Issue 41, item 16: `sweeptin.np`, `sweeptin.os` and `sweeptin.json` were there (the
+    module's own imports); every public name is now in `__all__`, and no module is one."""
+    import types
+
+    public = {n for n in dir(sweeptin) if not n.startswith("_")}
+    assert not {"np", "os", "json", "Any", "Sequence"} & public
+    assert not [n for n in public if isinstance(getattr(sweeptin, n), types.ModuleType)]
+    # `annotations` is `from __future__ import annotations`, a compiler directive.
+    assert public - {"annotations"} == set(sweeptin.__all__)
+    assert all(hasattr(sweeptin, n) for n in sweeptin.__all__)

@@ -172,6 +172,34 @@ def test_plan_errors(ign, small, tmp_path):
         sweeptin.plan("contours", [path], tmp_path / "c", tile=16, interval=2)
 
 
+def test_run_task_takes_a_whole_task_index_only(small, tmp_path):
+    """Issue 41, item 16: `run_task(p, 1.5)` ran task 1 (`int()` truncated it); a task index
+    or thread count that is not an int is a TypeError, a negative one an OptionsError with
+    the command line's exit code, and nothing runs."""
+    path, _ = small
+    plan = sweeptin.plan("contours", [path], tmp_path / "c", tile=16, interval=1)
+    for i in (1.5, 1.0, "1", True, None):
+        with pytest.raises(TypeError, match="whole number"):
+            sweeptin.run_task(plan, i)
+    with pytest.raises(TypeError, match="threads"):
+        sweeptin.run_task(plan, 1, threads=2.0)
+    for bad in (-1, -(2**70)):
+        with pytest.raises(sweeptin.OptionsError, match=r"^i=-\d+: must be a whole number, 0 or more") as e:
+            sweeptin.run_task(plan, bad)
+        assert (e.value.kind, e.value.exit_code) == ("usage", 2)
+    with pytest.raises(sweeptin.OptionsError, match="threads=-1"):
+        sweeptin.run_task(plan, 1, threads=-1)
+    assert not (tmp_path / "c" / "tiles").exists() or not any((tmp_path / "c" / "tiles").iterdir())
+    # A numpy integer is a whole number.
+    assert sweeptin.run_task(plan, np_int(1))["status"] in ("done", "empty")
+
+
+def np_int(i: int):
+    import numpy as np
+
+    return np.int64(i)
+
+
 def test_the_dask_example_runs_on_two_worker_processes(ign, tmp_path):
     pytest.importorskip("dask.distributed") if os.environ.get("CI") not in ("true", "1") else None
     r = subprocess.run(

@@ -460,15 +460,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let mem = args.input.args.mem.0;
         sinks.push(("contours".into(), args.contour_options.sink(p, mem)?));
     }
-    if let Some(z) = args.volume_plane.filter(|z| !z.is_finite()) {
-        return Err(sweeptin::Error::Options(format!(
-            "--volume-plane {z}: must be a finite height"
-        ))
-        .into());
-    }
     if let Some(z) = args.volume_plane {
         let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;
-        sinks.push(("volume".into(), Box::new(VolumeSink::new(z, boundary))));
+        sinks.push(("volume".into(), Box::new(VolumeSink::new(z, boundary)?)));
     }
     if let (Some(q), Some(o)) = (&args.sample_points, &args.sample_out) {
         check_output(o)?;

@@ -32,15 +32,11 @@ pub struct Args {
 
 /// The volume sink against the plane (`None` when the reference is a surface).
 pub fn plane_sink(args: &Args) -> anyhow::Result<Option<Box<dyn TriangleSink>>> {
-    if let Some(z) = args.plane.filter(|z| !z.is_finite()) {
-        return Err(
-            sweeptin::Error::Options(format!("--plane {z}: must be a finite height")).into(),
-        );
-    }
+    let Some(z) = args.plane else {
+        return Ok(None);
+    };
     let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;
-    Ok(args
-        .plane
-        .map(|z| Box::new(VolumeSink::new(z, boundary)) as Box<dyn TriangleSink>))
+    Ok(Some(Box::new(VolumeSink::new(z, boundary)?)))
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {

@@ -155,6 +155,9 @@ pub struct TaskRecord {
     pub volume: Option<[Vec<f64>; 5]>,
 }
 
+/// Most tiles a plan may cut its data into (each a task, listed in `plan.json`).
+pub const MAX_TASKS: u64 = 1 << 20;
+
 fn bad(path: &Path, message: impl Into<String>) -> Error {
     Error::Format {
         path: path.to_path_buf(),
@@ -294,6 +297,18 @@ impl Plan {
                 Some(c) => c,
                 None => (lo, hi),
             };
+            // Counted first: `--tile 0.001` over a kilometre listed 10^12 tiles (an abort).
+            let cols = (hi[0] / tile).floor() - (lo[0] / tile).floor() + 1.0;
+            let rows = (hi[1] / tile).ceil() - (lo[1] / tile).ceil() + 1.0;
+            let count = cols * rows;
+            if count.is_nan() || count > MAX_TASKS as f64 {
+                return Err(Error::Options(format!(
+                    "--tile {tile} cuts the data (x {} .. {}, y {} .. {}) into {cols:.0} × \
+                     {rows:.0} tiles, more than the {MAX_TASKS} tasks a plan may have: use a \
+                     larger --tile",
+                    lo[0], hi[0], lo[1], hi[1]
+                )));
+            }
             for ty in ty_of(lo[1])..=ty_of(hi[1]) {
                 for tx in col_of(lo[0])..=col_of(hi[0]) {
                     let b = tile_bounds(tx, ty, tile);

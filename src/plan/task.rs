@@ -246,12 +246,8 @@ impl Job {
                 check_mosaic(raster)?;
             }
             Product::Contours(l) => levels(l)?,
-            Product::Volume { plane, .. } if !plane.is_finite() => {
-                return Err(Error::Options(format!(
-                    "the volume's plane must be finite, not {plane}"
-                )));
-            }
-            Product::Volume { .. } | Product::Tin => {}
+            Product::Volume { plane, .. } => crate::products::volume::check_plane(*plane)?,
+            Product::Tin => {}
         }
         if let Some(m) = self.max_edge {
             positive(m, "--max-edge")?;
@@ -549,7 +545,10 @@ impl Plan {
                         crate::products::boundary::Boundary::read(&f.path)
                     })
                     .transpose()?;
-                sinks.push(("volume".into(), Box::new(VolumeSink::new(*plane, boundary))));
+                sinks.push((
+                    "volume".into(),
+                    Box::new(VolumeSink::new(*plane, boundary)?),
+                ));
             }
             // Its mesh sink: see `task_pieces`.
             Product::Tin => {}

@@ -744,7 +744,7 @@ mod tests {
         let a = random_tin(900, 100.0, 3, f);
         let b = random_tin(800, 100.0, 4, g);
         let plane = |tris: &[[[f64; 3]; 3]]| {
-            let mut s = VolumeSink::new(0.0, None);
+            let mut s = VolumeSink::new(0.0, None).unwrap();
             feed(&mut s, &info(), &in_sweep_order(tris));
             s.totals().net_volume
         };

@@ -21,7 +21,7 @@
 
 use super::boundary::Boundary;
 use super::geom::{ExactSum, PV, Tri, clip, integrate};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::sink::{
     CutFillTotals, ProductSummary, StreamInfo, TriangleSink, VolumeReference, VolumeSummary,
 };
@@ -117,6 +117,20 @@ impl CutFill {
     }
 }
 
+/// Refuses a reference plane that is not a finite height (`--plane nan` gave volumes of 0,
+/// `inf` nonsense): the one check of the command line, plans and the Python package.
+///
+/// # Errors
+/// [`Error::Options`] naming the value.
+pub fn check_plane(plane: f64) -> Result<()> {
+    if plane.is_finite() {
+        return Ok(());
+    }
+    Err(Error::Options(format!(
+        "the volume's plane must be a finite height, not {plane}"
+    )))
+}
+
 /// A [`TriangleSink`] computing cut and fill against the plane `z = plane`.
 #[derive(Debug)]
 pub struct VolumeSink {
@@ -128,13 +142,17 @@ pub struct VolumeSink {
 
 impl VolumeSink {
     /// Against `z = plane`, inside `boundary` when given.
-    pub fn new(plane: f64, boundary: Option<Boundary>) -> VolumeSink {
-        VolumeSink {
+    ///
+    /// # Errors
+    /// [`Error::Options`] for a plane that is not a finite height ([`check_plane`]).
+    pub fn new(plane: f64, boundary: Option<Boundary>) -> Result<VolumeSink> {
+        check_plane(plane)?;
+        Ok(VolumeSink {
             plane,
             boundary,
             acc: CutFill::default(),
             triangles: 0,
-        }
+        })
     }
 
     /// The totals so far.
@@ -196,7 +214,7 @@ mod tests {
     fn plane_against_plane_is_exact() {
         // z = x / 10 on [0, 100]²: above z = 5 for x > 50.
         let tris = random_tin(500, 100.0, 3, |x, _| x / 10.0);
-        let mut sink = VolumeSink::new(5.0, None);
+        let mut sink = VolumeSink::new(5.0, None).unwrap();
         let ProductSummary::Volume(s) = feed(&mut sink, &info(), &in_sweep_order(&tris)) else {
             panic!("not a volume summary")
         };
@@ -223,7 +241,7 @@ mod tests {
         .unwrap();
         assert_eq!(boundary.area(), 3200.0 - 100.0);
         let run = |steps: &[crate::products::testutil::Step]| {
-            let mut sink = VolumeSink::new(0.0, Some(boundary.clone()));
+            let mut sink = VolumeSink::new(0.0, Some(boundary.clone())).unwrap();
             feed(&mut sink, &info(), steps);
             sink.totals()
         };
@@ -241,7 +259,7 @@ mod tests {
     /// A flat triangle exactly at the plane counts in the area but neither in cut nor fill.
     #[test]
     fn flat_at_the_plane() {
-        let mut sink = VolumeSink::new(2.0, None);
+        let mut sink = VolumeSink::new(2.0, None).unwrap();
         let t = [[0.0, 0.0, 2.0], [1.0, 0.0, 2.0], [0.0, 1.0, 2.0]];
         feed(&mut sink, &info(), &[(t, None)]);
         let r = sink.totals();

@@ -66,7 +66,7 @@ fn feed(sink: &mut dyn TriangleSink, tris: &[[[f64; 3]; 3]]) -> sweeptin::sink::
 
 /// Net volume of the TIN against z = 0 (table 7.2: exactly 0 for the surface).
 pub fn volume(tris: &[[[f64; 3]; 3]]) -> f64 {
-    let mut s = VolumeSink::new(0.0, None);
+    let mut s = VolumeSink::new(0.0, None).unwrap();
     feed(&mut s, tris);
     s.totals().net_volume
 }
