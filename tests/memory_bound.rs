@@ -4,12 +4,11 @@
 //! 10⁶ units away). The bound is asserted through the run summary's own peak figures, and the
 //! triangles are checked against spade, an independent exact triangulator.
 
-#[path = "support/data.rs"]
-#[allow(dead_code)]
-mod data;
-
 #[path = "support/mesh.rs"]
 mod mesh;
+
+#[path = "support/cli.rs"]
+mod cli;
 
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
 use std::io::Write;
@@ -80,5 +79,49 @@ fn far_outliers_and_heavy_tails_stream_in_bounded_memory() {
         )
         .unwrap();
         assert_eq!(xy_keys(&c), mesh::spade_keys(&d), "{name}: spade disagrees");
+    }
+}
+
+/// Issue 40, item 4: a tile plus one point 15 km away made a DEM 16,000 cells wide without a word.
+/// Both engines (the tiles for LAS, the sweep for XYZ) name the point and the `--bbox` that
+/// drops it, on stderr and in the `--json` summary.
+#[test]
+fn far_points_are_named_with_the_bbox_that_drops_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut pts = sweeptin::synth::grid(60, 60, 1.0);
+    pts.insert(1800, [15_000.0, 20.0, 5.0]);
+    let las = dir.path().join("glitch.las");
+    mesh::write_las(&las, &pts);
+    let xyz = dir.path().join("glitch.xyz");
+    write_xyz(&xyz, &pts);
+    for (input, point, bbox) in [
+        (
+            &las,
+            "(515000, 4000020)",
+            "--bbox 500000,4000000,500059,4000059",
+        ),
+        (&xyz, "(15000, 20)", "--bbox 0,0,59,59"),
+    ] {
+        let out = dir.path().join("dem.tif");
+        let o = cli::ok(&[
+            "dem".as_ref(),
+            input.as_os_str(),
+            "--cell".as_ref(),
+            "10".as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--json".as_ref(),
+        ]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let warnings = summary["run"]["warnings"].to_string();
+        for text in [stderr.as_ref(), warnings.as_str()] {
+            assert!(
+                text.contains("1 point lies far from the others"),
+                "{input:?}: {text}"
+            );
+            assert!(text.contains(point), "{input:?}: {text}");
+        }
+        assert!(warnings.contains(bbox), "{input:?}: {warnings}");
     }
 }
