@@ -754,7 +754,7 @@ impl StreamingSweep {
             fin.schedule(t, k.max(ks));
             return;
         }
-        let low = self.sweep.front().min_y_over(d.x_min, d.x_max);
+        let low = self.sweep.front().min_y_over(d.x_min, d.x_max, d.top);
         let fin = self.fin();
         if d.top < low && fin.pending.near(d.center, d.radius) {
             // A breakline still to come may cross it.
@@ -764,7 +764,8 @@ impl StreamingSweep {
             self.finalize(t);
         } else {
             fin.stats.rechecks += 1;
-            // The front under the disk must rise by (top - low): wait about that long, or longer
+            // The front under the disk must rise by (top - low) at least (`low` is the first
+            // front height found at or below the top, not always the lowest): wait about that long, or longer
             // once it has not risen several times (a part of the front that never rises: the
             // upper side of a diagonal strip, whose hull triangles would otherwise be checked
             // every few buckets until the end).

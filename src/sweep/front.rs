@@ -347,14 +347,19 @@ impl Front {
     /// only delay a finalisation; never below the lower end of that segment). Parts of the span
     /// left of the first real node or right of the last are ignored: no point exists there (the end
     /// nodes are the extreme points so far) and every later point lies above the sweep line.
-    pub fn min_y_over(&self, x0: f64, x1: f64) -> f64 {
+    ///
+    /// The scan stops as soon as the minimum so far is at or below `enough` (the caller only
+    /// needs to know whether the front stays above it): a triangle whose disk spans a long front
+    /// (the fan of a line of points and one point beside it) is then checked in O(1), not in
+    /// O(front) each time (quadratic: 200,000 points took 430 s).
+    pub fn min_y_over(&self, x0: f64, x1: f64, enough: f64) -> f64 {
         let nodes = &self.nodes;
         let mut n = self.locate(x0);
         if n == self.head {
             n = self.next(n);
         }
         let mut lo = f64::INFINITY;
-        while n != self.tail {
+        while n != self.tail && lo > enough {
             let a = &nodes[n as usize];
             if a.x >= x0 {
                 lo = lo.min(a.y);
