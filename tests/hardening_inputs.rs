@@ -1,6 +1,7 @@
 //! Issue 13, items 6–10: nonsense numbers, damaged files that decode, messages that say what is
-//! wrong, temporary files of killed runs, and the bounded checker of streaming meshes; through the
-//! command line. docs/RELIABILITY.md lists the cases and these tests.
+//! wrong, temporary files of killed runs, and the bounded checker of streaming meshes; issue 41:
+//! damaged COPC hierarchies; through the command line.
+//! docs/RELIABILITY.md lists the cases and these tests.
 
 #[path = "support/data.rs"]
 mod data;
@@ -537,4 +538,148 @@ fn header_boxes_that_say_nothing_do_not_decide_the_grid() {
     assert_eq!(code(&o), 3, "{}", err(&o));
     assert!(err(&o).contains("zero.las") && err(&o).contains("says nothing"));
     assert!(!dir.join("z.vpc").exists());
+}
+
+// ---- Issue 41: damaged COPC hierarchies ---------------------------------------------------------
+
+/// COPC file `from` with one hierarchy entry rewritten by `edit` (given the entry's key, offset,
+/// byte size and point count; it returns the new ones), for the entry whose key is `key` in the
+/// page at `page` (the root page when `None`).
+fn edited_copc(
+    from: &Path,
+    to: &Path,
+    key: [i32; 4],
+    page: Option<[i32; 4]>,
+    edit: impl Fn([i32; 4], u64, i32, i32) -> ([i32; 4], u64, i32, i32),
+) -> PathBuf {
+    let mut d = std::fs::read(from).unwrap();
+    let u16_at = |d: &[u8], o: usize| u16::from_le_bytes(d[o..o + 2].try_into().unwrap());
+    let u64_at = |d: &[u8], o: usize| u64::from_le_bytes(d[o..o + 8].try_into().unwrap());
+    let i32_at = |d: &[u8], o: usize| i32::from_le_bytes(d[o..o + 4].try_into().unwrap());
+    // The info VLR is the first VLR (54-byte header); the root page's offset and size are its
+    // sixth and seventh 8-byte fields.
+    let info = usize::from(u16_at(&d, 94)) + 54;
+    let (mut at, mut len) = (
+        u64_at(&d, info + 40) as usize,
+        u64_at(&d, info + 48) as usize,
+    );
+    let entry = |d: &[u8], e: usize| {
+        let k = [
+            i32_at(d, e),
+            i32_at(d, e + 4),
+            i32_at(d, e + 8),
+            i32_at(d, e + 12),
+        ];
+        (k, u64_at(d, e + 16), i32_at(d, e + 24), i32_at(d, e + 28))
+    };
+    if let Some(p) = page {
+        let e = (at..at + len)
+            .step_by(32)
+            .find(|e| entry(&d, *e).0 == p && entry(&d, *e).3 == -1)
+            .expect("the page's entry");
+        (at, len) = (entry(&d, e).1 as usize, entry(&d, e).2 as usize);
+    }
+    let e = (at..at + len)
+        .step_by(32)
+        .find(|e| entry(&d, *e).0 == key)
+        .expect("the entry");
+    let (k, offset, bytes, count) = entry(&d, e);
+    let (k, offset, bytes, count) = edit(k, offset, bytes, count);
+    for (i, v) in k.iter().enumerate() {
+        d[e + 4 * i..e + 4 * i + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    d[e + 16..e + 24].copy_from_slice(&offset.to_le_bytes());
+    d[e + 24..e + 28].copy_from_slice(&bytes.to_le_bytes());
+    d[e + 28..e + 32].copy_from_slice(&count.to_le_bytes());
+    std::fs::write(to, d).unwrap();
+    to.to_path_buf()
+}
+
+/// A COPC hierarchy whose keys do not make one octree — a node listed twice (key 1-0-0-0
+/// rewritten as 1-1-1-1: a box read dropped the 4,279 points of 1-0-0-0, exit 0), a node whose
+/// parent is not listed, a node in another node's page, a key outside the octree, point counts
+/// that do not add up to the header's — is refused, exit 3, naming the file and the key, by
+/// `info` as by a box read (which would skip the moved node's points). A leaf moved to a free
+/// key under a listed parent still makes an octree: its points, once decoded, lie outside its
+/// node's square, and are refused there.
+#[test]
+fn copc_hierarchies_with_moved_or_duplicated_keys_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name);
+    let copc =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/lidR_Topography.copc.laz");
+    let to = |k: [i32; 4]| move |_, o, b, c| (k, o, b, c);
+    let moved = edited_copc(&copc, &d("moved.laz"), [2, 2, 2, 1], None, to([2, 0, 0, 0]));
+    let cases = [
+        (
+            edited_copc(&copc, &d("twice.laz"), [1, 0, 0, 0], None, to([1, 1, 1, 1])),
+            "node 1-1-1-1 has two entries",
+        ),
+        (
+            edited_copc(
+                &copc,
+                &d("orphans.laz"),
+                [1, 1, 1, 0],
+                None,
+                to([2, 0, 0, 0]),
+            ),
+            "node 2-2-2-1 has no parent: node 1-1-1-0 is not in the hierarchy",
+        ),
+        (
+            moved.clone(),
+            "node 2-2-2-1 is listed in the hierarchy page of node 2-0-0-0",
+        ),
+        (
+            edited_copc(
+                &copc,
+                &d("outside.laz"),
+                [1, 0, 0, 0],
+                None,
+                to([1, 2, 0, 0]),
+            ),
+            "node 1-2-0-0 lies outside the octree",
+        ),
+        (
+            edited_copc(&copc, &d("count.laz"), [0, 0, 0, 0], None, |k, o, b, c| {
+                (k, o, b, c + 1)
+            }),
+            "the hierarchy's nodes hold 73404 points, but the header announces 73403",
+        ),
+        (
+            edited_copc(
+                &moved,
+                &d("leaf.laz"),
+                [2, 2, 2, 1],
+                Some([2, 0, 0, 0]),
+                to([2, 0, 0, 0]),
+            ),
+            "lies outside the square of its octree node 2-0-0-0",
+        ),
+    ];
+    let bbox = "273400,5274400,273480,5274480";
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let out = s(&d("out.ply"));
+    let out = out.as_str();
+    for (file, want) in &cases {
+        let f = s(file);
+        let f = f.as_str();
+        let leaf = file.ends_with("leaf.laz");
+        let mut runs = vec![
+            vec!["tin", f, "-o", out],
+            vec!["tin", f, "--bbox", bbox, "-o", out],
+        ];
+        if !leaf {
+            // `info` does not decode points: the leaf's damage shows only when they are.
+            runs.push(vec!["info", f]);
+        }
+        for args in runs {
+            let o = run(dir.path(), &args);
+            let e = err(&o);
+            assert_eq!(code(&o), 3, "{args:?}: {e}");
+            assert!(e.contains(f) && e.contains(want), "{args:?}: {e}");
+        }
+    }
+    // The file unedited reads through its index.
+    let o = run(dir.path(), &["tin", &s(&copc), "--bbox", bbox, "-o", out]);
+    assert_eq!(code(&o), 0, "{}", err(&o));
 }
