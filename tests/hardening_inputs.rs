@@ -1,6 +1,6 @@
 //! Issue 13, items 6–10: nonsense numbers, damaged files that decode, messages that say what is
 //! wrong, temporary files of killed runs, and the bounded checker of streaming meshes; issue 41:
-//! damaged COPC hierarchies; through the command line.
+//! damaged COPC hierarchies, point sets with no triangle or far from 0; through the command line.
 //! docs/RELIABILITY.md lists the cases and these tests.
 
 #[path = "support/data.rs"]
@@ -540,7 +540,7 @@ fn header_boxes_that_say_nothing_do_not_decide_the_grid() {
     assert!(!dir.join("z.vpc").exists());
 }
 
-// ---- Issue 41: damaged COPC hierarchies ---------------------------------------------------------
+// ---- Issue 41: damaged COPC hierarchies, degenerate and far point sets -----------------------
 
 /// COPC file `from` with one hierarchy entry rewritten by `edit` (given the entry's key, offset,
 /// byte size and point count; it returns the new ones), for the entry whose key is `key` in the
@@ -682,4 +682,119 @@ fn copc_hierarchies_with_moved_or_duplicated_keys_are_refused() {
     // The file unedited reads through its index.
     let o = run(dir.path(), &["tin", &s(&copc), "--bbox", bbox, "-o", out]);
     assert_eq!(code(&o), 0, "{}", err(&o));
+}
+
+/// A LAS 1.2 file (format 0) of points `pts`, stored with `offset` and `scale` on every axis.
+fn write_las(path: &Path, offset: [f64; 3], scale: f64, pts: &[[f64; 3]]) {
+    use las::{Builder, Point, Transform, Vector, Writer};
+    let mut b = Builder::from((1, 2));
+    let t = |offset| Transform { scale, offset };
+    b.transforms = Vector {
+        x: t(offset[0]),
+        y: t(offset[1]),
+        z: t(offset[2]),
+    };
+    let mut w = Writer::from_path(path, b.into_header().unwrap()).unwrap();
+    for p in pts {
+        w.write_point(Point {
+            x: p[0],
+            y: p[1],
+            z: p[2],
+            ..Default::default()
+        })
+        .unwrap();
+    }
+    w.close().unwrap();
+}
+
+/// One point, two, three on one line (across, along an axis), three at one position: facts
+/// about the points, exit 3 saying what is wrong with them, with either engine, for a mesh and
+/// a DEM (the tiles engine derived blocks of 9.3e-10 from a box of no area and refused its own
+/// tile size, exit 2: "the tile size must be a positive number, not 1", "tiles of 9.3e-10 are
+/// too small"; a DEM said its grid had no cell, exit 2). Points near 10^15 (inside the range
+/// of 2^52) run in tiles as in the sweep: the blocks are no finer than their keys allow there
+/// (it was "tiles of 256 are too small", exit 2).
+#[test]
+fn points_with_no_triangle_or_far_from_zero_are_facts_not_options() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let (x, y) = (500_000.0, 5_000_000.0);
+    let utm = [x, y, 0.0];
+    let cases: [(&str, Vec<[f64; 3]>, &str); 5] = [
+        ("one.las", vec![[x, y, 3.0]], "fewer than 3 distinct points"),
+        (
+            "two.las",
+            vec![[x, y, 3.0], [x + 10.0, y, 4.0]],
+            "fewer than 3 distinct points",
+        ),
+        (
+            "along.las",
+            vec![[x, y, 3.0], [x, y + 1.0, 4.0], [x, y + 2.0, 5.0]],
+            "collinear",
+        ),
+        (
+            "across.las",
+            vec![
+                [x, y, 3.0],
+                [x + 1.0, y + 1.0, 4.0],
+                [x + 2.0, y + 2.0, 5.0],
+            ],
+            "collinear",
+        ),
+        (
+            "same.las",
+            vec![[x, y, 3.0], [x, y, 3.0], [x, y, 3.0]],
+            "fewer than 3 distinct points",
+        ),
+    ];
+    for (name, pts, want) in &cases {
+        write_las(&dir.join(name), utm, 0.01, pts);
+        for engine in ["tiles", "sweep"] {
+            for (args, out) in [
+                (vec!["tin", name, "-o", "t.ply"], "t.ply"),
+                (vec!["dem", name, "--cell", "1", "-o", "d.tif"], "d.tif"),
+            ] {
+                let o = run(dir, &[&args[..], &["--engine", engine]].concat());
+                let e = err(&o);
+                assert_eq!(code(&o), 3, "{name} {args:?} {engine}: {e}");
+                // A DEM's grid over points of no area has no cell: it says so.
+                let dem = args[0] == "dem" && !name.starts_with("across");
+                let want = if dem { "span no area" } else { want };
+                assert!(
+                    e.contains(name) && e.contains(want),
+                    "{name} {args:?} {engine}: {e}"
+                );
+                assert!(!dir.join(out).exists());
+            }
+        }
+    }
+    // Near 10^15: a grid of 40 × 40 points 25 apart, in eighths (exact there).
+    let far = 1e15;
+    let pts: Vec<[f64; 3]> = (0..1600)
+        .map(|i| {
+            let (i, j) = (f64::from(i % 40), f64::from(i / 40));
+            [far + 25.0 * i + 0.125 * j, far + 25.0 * j, (i * j) % 7.0]
+        })
+        .collect();
+    write_las(&dir.join("far.las"), [far, far, 0.0], 0.125, &pts);
+    let mut meshes = Vec::new();
+    let mut dems = Vec::new();
+    for engine in ["tiles", "sweep"] {
+        let (mesh, dem) = (format!("{engine}.ply"), format!("{engine}.tif"));
+        for args in [
+            vec!["tin", "far.las", "-o", &mesh],
+            vec!["dem", "far.las", "--cell", "5", "-o", &dem],
+        ] {
+            let o = run(dir, &[&args[..], &["--engine", engine, "-q"]].concat());
+            assert_eq!(code(&o), 0, "{args:?} {engine}: {}", err(&o));
+        }
+        let o = run(dir, &["check", &mesh]);
+        assert_eq!(code(&o), 0, "{}", err(&o));
+        let s = String::from_utf8_lossy(&o.stdout).into_owned();
+        meshes.push(s[s.find(':').unwrap()..].to_string());
+        dems.push(std::fs::read(dir.join(&dem)).unwrap());
+    }
+    assert_eq!(meshes[0], meshes[1]);
+    assert!(meshes[0].contains("1600 vertices"), "{}", meshes[0]);
+    assert!(dems[0] == dems[1], "the DEMs of the two engines differ");
 }
