@@ -62,6 +62,21 @@ pub enum Error {
         distinct: u64,
     },
 
+    /// The points span no area: all on one line parallel to an axis, or at one position (a
+    /// grid over them, a DEM's, has no cell to give). No triangle exists.
+    #[error(
+        "the points span no area (x {} .. {}, y {} .. {}): they lie on one line or at one \
+         position, so no triangle exists",
+        bounds[0],
+        bounds[2],
+        bounds[1],
+        bounds[3]
+    )]
+    NoArea {
+        /// The points' extent `[xmin, ymin, xmax, ymax]`.
+        bounds: [f64; 4],
+    },
+
     /// More points than the in-memory core can index with 32-bit ids.
     #[error("too many points for one in-memory triangulation: {count} (at most {max})")]
     TooManyPoints {
@@ -329,6 +344,7 @@ impl Error {
             | Error::CoordinateOutOfRange { .. }
             | Error::TooFewPoints { .. }
             | Error::AllCollinear { .. }
+            | Error::NoArea { .. }
             | Error::TooManyPoints { .. }
             | Error::Io { .. }
             | Error::Parse { .. }

@@ -461,7 +461,8 @@ impl GridPlan {
     /// [`GridExtent::Auto`]).
     ///
     /// # Errors
-    /// [`Error::TooFewPoints`] when `bounds` are empty (no data) and the extent is `Auto`;
+    /// [`Error::TooFewPoints`] when `bounds` are empty (no data) and the extent is `Auto`,
+    /// [`Error::NoArea`] when they have no area (the data on one line: no triangle);
     /// [`Error::Options`] when no centre of this cell size lies inside them, or too many (more
     /// than [`GridPlan::limit`]).
     pub fn grid(&self, bounds: [f64; 4], nodata: f32) -> Result<GridSpec> {
@@ -473,6 +474,9 @@ impl GridPlan {
                         distinct: 0,
                         total: 0,
                     });
+                }
+                if !(bounds[2] > bounds[0] && bounds[3] > bounds[1]) {
+                    return Err(Error::NoArea { bounds });
                 }
                 for v in bounds {
                     exact_index(v, self.cell)?;
@@ -733,6 +737,9 @@ mod tests {
         assert!(GridPlan::new(0.0, GridExtent::Auto, Align::Edges).is_err());
         assert!(GridPlan::new(f64::NAN, GridExtent::Auto, Align::Edges).is_err());
         assert!(auto.grid([0.2, 0.2, 0.8, 0.8], 0.0).is_err());
+        // Data of no area (on one line): no triangle, a fact about the data.
+        let e = auto.grid([1.0, 0.0, 1.0, 5.0], 0.0).unwrap_err();
+        assert_eq!(e.kind(), crate::ErrorKind::Input, "{e}");
         let none = [
             f64::INFINITY,
             f64::INFINITY,

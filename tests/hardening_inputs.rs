@@ -1,6 +1,7 @@
 //! Issue 13, items 6–10: nonsense numbers, damaged files that decode, messages that say what is
-//! wrong, temporary files of killed runs, and the bounded checker of streaming meshes; through the
-//! command line. docs/RELIABILITY.md lists the cases and these tests.
+//! wrong, temporary files of killed runs, and the bounded checker of streaming meshes; issue 41:
+//! damaged COPC hierarchies, point sets with no triangle or far from 0; through the command line.
+//! docs/RELIABILITY.md lists the cases and these tests.
 
 #[path = "support/data.rs"]
 mod data;
@@ -537,4 +538,263 @@ fn header_boxes_that_say_nothing_do_not_decide_the_grid() {
     assert_eq!(code(&o), 3, "{}", err(&o));
     assert!(err(&o).contains("zero.las") && err(&o).contains("says nothing"));
     assert!(!dir.join("z.vpc").exists());
+}
+
+// ---- Issue 41: damaged COPC hierarchies, degenerate and far point sets -----------------------
+
+/// COPC file `from` with one hierarchy entry rewritten by `edit` (given the entry's key, offset,
+/// byte size and point count; it returns the new ones), for the entry whose key is `key` in the
+/// page at `page` (the root page when `None`).
+fn edited_copc(
+    from: &Path,
+    to: &Path,
+    key: [i32; 4],
+    page: Option<[i32; 4]>,
+    edit: impl Fn([i32; 4], u64, i32, i32) -> ([i32; 4], u64, i32, i32),
+) -> PathBuf {
+    let mut d = std::fs::read(from).unwrap();
+    let u16_at = |d: &[u8], o: usize| u16::from_le_bytes(d[o..o + 2].try_into().unwrap());
+    let u64_at = |d: &[u8], o: usize| u64::from_le_bytes(d[o..o + 8].try_into().unwrap());
+    let i32_at = |d: &[u8], o: usize| i32::from_le_bytes(d[o..o + 4].try_into().unwrap());
+    // The info VLR is the first VLR (54-byte header); the root page's offset and size are its
+    // sixth and seventh 8-byte fields.
+    let info = usize::from(u16_at(&d, 94)) + 54;
+    let (mut at, mut len) = (
+        u64_at(&d, info + 40) as usize,
+        u64_at(&d, info + 48) as usize,
+    );
+    let entry = |d: &[u8], e: usize| {
+        let k = [
+            i32_at(d, e),
+            i32_at(d, e + 4),
+            i32_at(d, e + 8),
+            i32_at(d, e + 12),
+        ];
+        (k, u64_at(d, e + 16), i32_at(d, e + 24), i32_at(d, e + 28))
+    };
+    if let Some(p) = page {
+        let e = (at..at + len)
+            .step_by(32)
+            .find(|e| entry(&d, *e).0 == p && entry(&d, *e).3 == -1)
+            .expect("the page's entry");
+        (at, len) = (entry(&d, e).1 as usize, entry(&d, e).2 as usize);
+    }
+    let e = (at..at + len)
+        .step_by(32)
+        .find(|e| entry(&d, *e).0 == key)
+        .expect("the entry");
+    let (k, offset, bytes, count) = entry(&d, e);
+    let (k, offset, bytes, count) = edit(k, offset, bytes, count);
+    for (i, v) in k.iter().enumerate() {
+        d[e + 4 * i..e + 4 * i + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    d[e + 16..e + 24].copy_from_slice(&offset.to_le_bytes());
+    d[e + 24..e + 28].copy_from_slice(&bytes.to_le_bytes());
+    d[e + 28..e + 32].copy_from_slice(&count.to_le_bytes());
+    std::fs::write(to, d).unwrap();
+    to.to_path_buf()
+}
+
+/// A COPC hierarchy whose keys do not make one octree — a node listed twice (key 1-0-0-0
+/// rewritten as 1-1-1-1: a box read dropped the 4,279 points of 1-0-0-0, exit 0), a node whose
+/// parent is not listed, a node in another node's page, a key outside the octree, point counts
+/// that do not add up to the header's — is refused, exit 3, naming the file and the key, by
+/// `info` as by a box read (which would skip the moved node's points). A leaf moved to a free
+/// key under a listed parent still makes an octree: its points, once decoded, lie outside its
+/// node's square, and are refused there.
+#[test]
+fn copc_hierarchies_with_moved_or_duplicated_keys_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name);
+    let copc =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/lidR_Topography.copc.laz");
+    let to = |k: [i32; 4]| move |_, o, b, c| (k, o, b, c);
+    let moved = edited_copc(&copc, &d("moved.laz"), [2, 2, 2, 1], None, to([2, 0, 0, 0]));
+    let cases = [
+        (
+            edited_copc(&copc, &d("twice.laz"), [1, 0, 0, 0], None, to([1, 1, 1, 1])),
+            "node 1-1-1-1 has two entries",
+        ),
+        (
+            edited_copc(
+                &copc,
+                &d("orphans.laz"),
+                [1, 1, 1, 0],
+                None,
+                to([2, 0, 0, 0]),
+            ),
+            "node 2-2-2-1 has no parent: node 1-1-1-0 is not in the hierarchy",
+        ),
+        (
+            moved.clone(),
+            "node 2-2-2-1 is listed in the hierarchy page of node 2-0-0-0",
+        ),
+        (
+            edited_copc(
+                &copc,
+                &d("outside.laz"),
+                [1, 0, 0, 0],
+                None,
+                to([1, 2, 0, 0]),
+            ),
+            "node 1-2-0-0 lies outside the octree",
+        ),
+        (
+            edited_copc(&copc, &d("count.laz"), [0, 0, 0, 0], None, |k, o, b, c| {
+                (k, o, b, c + 1)
+            }),
+            "the hierarchy's nodes hold 73404 points, but the header announces 73403",
+        ),
+        (
+            edited_copc(
+                &moved,
+                &d("leaf.laz"),
+                [2, 2, 2, 1],
+                Some([2, 0, 0, 0]),
+                to([2, 0, 0, 0]),
+            ),
+            "lies outside the square of its octree node 2-0-0-0",
+        ),
+    ];
+    let bbox = "273400,5274400,273480,5274480";
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let out = s(&d("out.ply"));
+    let out = out.as_str();
+    for (file, want) in &cases {
+        let f = s(file);
+        let f = f.as_str();
+        let leaf = file.ends_with("leaf.laz");
+        let mut runs = vec![
+            vec!["tin", f, "-o", out],
+            vec!["tin", f, "--bbox", bbox, "-o", out],
+        ];
+        if !leaf {
+            // `info` does not decode points: the leaf's damage shows only when they are.
+            runs.push(vec!["info", f]);
+        }
+        for args in runs {
+            let o = run(dir.path(), &args);
+            let e = err(&o);
+            assert_eq!(code(&o), 3, "{args:?}: {e}");
+            assert!(e.contains(f) && e.contains(want), "{args:?}: {e}");
+        }
+    }
+    // The file unedited reads through its index.
+    let o = run(dir.path(), &["tin", &s(&copc), "--bbox", bbox, "-o", out]);
+    assert_eq!(code(&o), 0, "{}", err(&o));
+}
+
+/// A LAS 1.2 file (format 0) of points `pts`, stored with `offset` and `scale` on every axis.
+fn write_las(path: &Path, offset: [f64; 3], scale: f64, pts: &[[f64; 3]]) {
+    use las::{Builder, Point, Transform, Vector, Writer};
+    let mut b = Builder::from((1, 2));
+    let t = |offset| Transform { scale, offset };
+    b.transforms = Vector {
+        x: t(offset[0]),
+        y: t(offset[1]),
+        z: t(offset[2]),
+    };
+    let mut w = Writer::from_path(path, b.into_header().unwrap()).unwrap();
+    for p in pts {
+        w.write_point(Point {
+            x: p[0],
+            y: p[1],
+            z: p[2],
+            ..Default::default()
+        })
+        .unwrap();
+    }
+    w.close().unwrap();
+}
+
+/// One point, two, three on one line (across, along an axis), three at one position: facts
+/// about the points, exit 3 saying what is wrong with them, with either engine, for a mesh and
+/// a DEM (the tiles engine derived blocks of 9.3e-10 from a box of no area and refused its own
+/// tile size, exit 2: "the tile size must be a positive number, not 1", "tiles of 9.3e-10 are
+/// too small"; a DEM said its grid had no cell, exit 2). Points near 10^15 (inside the range
+/// of 2^52) run in tiles as in the sweep: the blocks are no finer than their keys allow there
+/// (it was "tiles of 256 are too small", exit 2).
+#[test]
+fn points_with_no_triangle_or_far_from_zero_are_facts_not_options() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let (x, y) = (500_000.0, 5_000_000.0);
+    let utm = [x, y, 0.0];
+    let cases: [(&str, Vec<[f64; 3]>, &str); 5] = [
+        ("one.las", vec![[x, y, 3.0]], "fewer than 3 distinct points"),
+        (
+            "two.las",
+            vec![[x, y, 3.0], [x + 10.0, y, 4.0]],
+            "fewer than 3 distinct points",
+        ),
+        (
+            "along.las",
+            vec![[x, y, 3.0], [x, y + 1.0, 4.0], [x, y + 2.0, 5.0]],
+            "collinear",
+        ),
+        (
+            "across.las",
+            vec![
+                [x, y, 3.0],
+                [x + 1.0, y + 1.0, 4.0],
+                [x + 2.0, y + 2.0, 5.0],
+            ],
+            "collinear",
+        ),
+        (
+            "same.las",
+            vec![[x, y, 3.0], [x, y, 3.0], [x, y, 3.0]],
+            "fewer than 3 distinct points",
+        ),
+    ];
+    for (name, pts, want) in &cases {
+        write_las(&dir.join(name), utm, 0.01, pts);
+        for engine in ["tiles", "sweep"] {
+            for (args, out) in [
+                (vec!["tin", name, "-o", "t.ply"], "t.ply"),
+                (vec!["dem", name, "--cell", "1", "-o", "d.tif"], "d.tif"),
+            ] {
+                let o = run(dir, &[&args[..], &["--engine", engine]].concat());
+                let e = err(&o);
+                assert_eq!(code(&o), 3, "{name} {args:?} {engine}: {e}");
+                // A DEM's grid over points of no area has no cell: it says so.
+                let dem = args[0] == "dem" && !name.starts_with("across");
+                let want = if dem { "span no area" } else { want };
+                assert!(
+                    e.contains(name) && e.contains(want),
+                    "{name} {args:?} {engine}: {e}"
+                );
+                assert!(!dir.join(out).exists());
+            }
+        }
+    }
+    // Near 10^15: a grid of 40 × 40 points 25 apart, in eighths (exact there).
+    let far = 1e15;
+    let pts: Vec<[f64; 3]> = (0..1600)
+        .map(|i| {
+            let (i, j) = (f64::from(i % 40), f64::from(i / 40));
+            [far + 25.0 * i + 0.125 * j, far + 25.0 * j, (i * j) % 7.0]
+        })
+        .collect();
+    write_las(&dir.join("far.las"), [far, far, 0.0], 0.125, &pts);
+    let mut meshes = Vec::new();
+    let mut dems = Vec::new();
+    for engine in ["tiles", "sweep"] {
+        let (mesh, dem) = (format!("{engine}.ply"), format!("{engine}.tif"));
+        for args in [
+            vec!["tin", "far.las", "-o", &mesh],
+            vec!["dem", "far.las", "--cell", "5", "-o", &dem],
+        ] {
+            let o = run(dir, &[&args[..], &["--engine", engine, "-q"]].concat());
+            assert_eq!(code(&o), 0, "{args:?} {engine}: {}", err(&o));
+        }
+        let o = run(dir, &["check", &mesh]);
+        assert_eq!(code(&o), 0, "{}", err(&o));
+        let s = String::from_utf8_lossy(&o.stdout).into_owned();
+        meshes.push(s[s.find(':').unwrap()..].to_string());
+        dems.push(std::fs::read(dir.join(&dem)).unwrap());
+    }
+    assert_eq!(meshes[0], meshes[1]);
+    assert!(meshes[0].contains("1600 vertices"), "{}", meshes[0]);
+    assert!(dems[0] == dems[1], "the DEMs of the two engines differ");
 }

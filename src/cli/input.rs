@@ -414,6 +414,7 @@ pub fn run_error(e: sweeptin::Error, inputs: &[PathBuf]) -> anyhow::Error {
     match e {
         E::TooFewPoints { .. }
         | E::AllCollinear { .. }
+        | E::NoArea { .. }
         | E::NonFinite { .. }
         | E::CoordinateOutOfRange { .. } => {
             let names: Vec<String> = inputs.iter().map(|f| f.display().to_string()).collect();

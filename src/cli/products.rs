@@ -161,7 +161,10 @@ impl DemArgs {
                 memory: mem / 4,
             },
         )?;
-        if let Some(b) = bounds.filter(|_| extent == GridExtent::Auto) {
+        // A box of no area holds points on one line (or one point): the run reads them and
+        // says so (exit 3), where a grid of no cell would blame the options.
+        let area = |b: &[f64; 4]| b[2] > b[0] && b[3] > b[1];
+        if let Some(b) = bounds.filter(|b| extent == GridExtent::Auto && area(b)) {
             // A grid too large may come from headers that claim too much; its memory, from
             // --mem.
             sink.check_grid(b).with_context(|| {

@@ -11,11 +11,13 @@ use sweeptin::products::sample::SampleSink;
 pub struct Args {
     #[command(flatten)]
     pub input: ProductInput,
-    /// Query points: x and y as the first two fields of each line (sorted by y for bounded
-    /// memory; other columns are kept).
+    /// Query points: x and y as the first two fields of each line, or the columns a header
+    /// names (`id,x,y`; also easting, northing, any case); sorted by y for bounded memory;
+    /// other columns are kept.
     #[arg(long, value_name = "CSV")]
     pub points: PathBuf,
-    /// Output: every query line with one more field, z (empty outside the TIN).
+    /// Output: every query line with one more field, z (empty outside the TIN; `z_tin` when
+    /// the header has a z column).
     #[arg(short, long)]
     pub output: PathBuf,
 }

@@ -5,9 +5,13 @@
 //! The queries are a text file with `x` and `y` as the first two fields of each line (separated
 //! by commas, semicolons, tabs or spaces under the XYZ reader's rules, so that an empty field or
 //! a decimal comma is an error, never a column read in the wrong place; `#` comments and blank
-//! lines skipped; a first line that does not start with a number is a header). The output repeats every query line unchanged,
-//! in the same order, with one more field: the height `z`, or an **empty field** when the point is
-//! outside the TIN (a header line gets the field name `z`). A point exactly on an edge or vertex
+//! lines skipped). A first line that does not start with a number is a header, which names the
+//! columns of x and y, whatever the case (`x`, `easting`, `lon`…, as PDAL and GDAL read them):
+//! `id,x,y` reads x and y from the second and third columns (split by the line's comma or
+//! semicolon as CSV is, an empty field a column of its own); a header that names no x and y is
+//! refused with its line. The output repeats every query line unchanged, in the same order, with
+//! one more field: the height `z`, or an **empty field** when the point is outside the TIN (a
+//! header line gets the field name `z`, or `z_tin` when it has a `z` column already). A point exactly on an edge or vertex
 //! gets the value computed from that edge or vertex alone ([`super::geom`]), the same whichever
 //! triangle answers.
 //!
@@ -84,23 +88,53 @@ struct Query {
     y: f64,
 }
 
+/// Which columns of a line hold x and y: the first two (no header, or a header naming them
+/// there), or those a header names (`id,x,y`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Columns {
+    x: usize,
+    y: usize,
+}
+
+/// x and y first.
+const FIRST_TWO: Columns = Columns { x: 0, y: 1 };
+
 /// What a line is.
 enum Line {
     Skip,
-    Header,
+    /// A header: the columns it names, and the name of the output's height field (`z`, or
+    /// `z_tin` beside a `z` of the header's).
+    Header(Columns, &'static str),
     Point(f64, f64),
 }
 
-/// A line under the XYZ reader's separator rules ([`crate::input::xyz::parse_fields`]): the
-/// first line that is not a number is a header.
-fn classify(line: &str, first_data: bool) -> std::result::Result<Line, String> {
-    use crate::input::xyz::{LineError, parse_fields};
-    match parse_fields::<2>(line.trim().as_bytes()) {
+/// A line under the XYZ reader's separator rules ([`crate::input::xyz::parse_fields`]), x and y
+/// read from `cols` ([`crate::input::xyz::parse_columns`] when a header put them elsewhere): the
+/// first line that is not a number (`first_data`) is a header, which must name x and y.
+fn classify(line: &str, first_data: bool, cols: Columns) -> std::result::Result<Line, String> {
+    use crate::input::xyz::{LineError, parse_columns, parse_fields};
+    let bytes = line.trim().as_bytes();
+    let parsed = if cols == FIRST_TWO {
+        parse_fields::<2>(bytes)
+    } else {
+        parse_columns(bytes, [cols.x, cols.y])
+    };
+    match parsed {
         Ok(None) => Ok(Line::Skip),
         Ok(Some([x, y])) => Ok(Line::Point(x, y)),
-        Err(LineError::NotANumber { .. }) if first_data => Ok(Line::Header),
+        Err(LineError::NotANumber { .. }) if first_data => header(bytes),
         Err(e) => Err(e.to_string()),
     }
+}
+
+/// The header line `bytes`: the columns it names for x and y
+/// ([`crate::input::xyz::header_axes`]).
+fn header(bytes: &[u8]) -> std::result::Result<Line, String> {
+    let ([x, y], has_z) = crate::input::xyz::header_axes(bytes)?;
+    Ok(Line::Header(
+        Columns { x, y },
+        if has_z { "z_tin" } else { "z" },
+    ))
 }
 
 /// Lazily reads the query points of a file.
@@ -110,6 +144,7 @@ struct QueryReader {
     line_no: u64,
     n: u64,
     seen_data: bool,
+    cols: Columns,
 }
 
 impl QueryReader {
@@ -121,6 +156,7 @@ impl QueryReader {
             line_no: 0,
             n: 0,
             seen_data: false,
+            cols: FIRST_TWO,
         })
     }
 
@@ -129,9 +165,12 @@ impl QueryReader {
             self.line_no += 1;
             let line = line.map_err(|e| Error::io(&self.path, e))?;
             let first = !self.seen_data;
-            match classify(&line, first) {
+            match classify(&line, first, self.cols) {
                 Ok(Line::Skip) => {}
-                Ok(Line::Header) => self.seen_data = true,
+                Ok(Line::Header(cols, _)) => {
+                    self.seen_data = true;
+                    self.cols = cols;
+                }
                 Ok(Line::Point(x, y)) => {
                     self.seen_data = true;
                     let q = Query { n: self.n, x, y };
@@ -409,6 +448,7 @@ impl SampleSink {
         let mut w = BufWriter::with_capacity(1 << 16, &mut out);
         let io = |e| Error::write(&self.output, e);
         let mut seen_data = false;
+        let mut cols = FIRST_TWO;
         for line in BufReader::with_capacity(1 << 16, f).lines() {
             let line = line.map_err(|e| Error::io(&self.name, e))?;
             let sep = if line.contains(',') {
@@ -420,11 +460,12 @@ impl SampleSink {
             } else {
                 " "
             };
-            match classify(&line, !seen_data) {
+            match classify(&line, !seen_data, cols) {
                 Ok(Line::Skip) => writeln!(w, "{line}").map_err(io)?,
-                Ok(Line::Header) => {
+                Ok(Line::Header(c, z)) => {
                     seen_data = true;
-                    writeln!(w, "{line}{sep}z").map_err(io)?;
+                    cols = c;
+                    writeln!(w, "{line}{sep}{z}").map_err(io)?;
                 }
                 Ok(Line::Point(..)) => {
                     seen_data = true;
@@ -527,12 +568,18 @@ mod tests {
     #[test]
     fn queries_follow_the_xyz_separator_rules() {
         for bad in ["1,5;3,5", "1\t5,3", "1,,2", "1"] {
-            assert!(classify(bad, false).is_err(), "{bad}");
+            assert!(classify(bad, false, FIRST_TWO).is_err(), "{bad}");
         }
-        assert!(matches!(classify("x,y", true), Ok(Line::Header)));
-        assert!(matches!(classify("  # note", false), Ok(Line::Skip)));
         assert!(matches!(
-            classify("1.5 3.5 extra", false),
+            classify("x,y", true, FIRST_TWO),
+            Ok(Line::Header(FIRST_TWO, "z"))
+        ));
+        assert!(matches!(
+            classify("  # note", false, FIRST_TWO),
+            Ok(Line::Skip)
+        ));
+        assert!(matches!(
+            classify("1.5 3.5 extra", false, FIRST_TWO),
             Ok(Line::Point(1.5, 3.5))
         ));
     }
@@ -665,6 +712,60 @@ mod tests {
         assert!(s.sorted_by_y);
         assert_eq!(s.answered, 101 * 101);
         assert!(s.max_pending_queries < 2_000, "{}", s.max_pending_queries);
+    }
+
+    /// Query columns are read by the header's names (`id,x,y` was read as x = id, y = x: every
+    /// query outside the TIN, exit 0), other columns kept, a `z` column kept beside the TIN's
+    /// (`z_tin`); a header that names no x and y, or a line without the named column, is refused
+    /// with its line number.
+    #[test]
+    fn headers_name_the_query_columns() {
+        let f = |x: f64, y: f64| 0.5 * x + 0.25 * y - 3.0;
+        let steps = in_sweep_order(&grid_tin(10, 10, 10.0, f));
+        let (out, s) = run("id,x,y\n1,10,20\n2,30.5,40\n3,500,500\n", &steps);
+        assert_eq!((s.queries, s.answered), (3, 2));
+        let want = format!(
+            "id,x,y,z\n1,10,20,{}\n2,30.5,40,{}\n3,500,500,\n",
+            f(10.0, 20.0),
+            f(30.5, 40.0)
+        );
+        assert_eq!(out, want);
+        let (out, s) = run("\"Name\";Northing;Easting;Z\n\"a;b\";20;10;7\n", &steps);
+        assert_eq!(s.answered, 1);
+        assert_eq!(
+            out,
+            format!(
+                "\"Name\";Northing;Easting;Z;z_tin\n\"a;b\";20;10;7;{}\n",
+                f(10.0, 20.0)
+            )
+        );
+        let (out, _) = run("X Y\n10 20\n", &steps);
+        assert_eq!(out, format!("X Y z\n10 20 {}\n", f(10.0, 20.0)));
+        let dir = tempfile::tempdir().unwrap();
+        let q = dir.path().join("q.csv");
+        for (text, line, want) in [
+            ("a,b\n1,2\n", 1, "does not name the x and y columns"),
+            ("x,y,x\n1,2,3\n", 1, "names x twice"),
+            ("id,x,y\n1,2,3\n4,5\n", 3, "y is read from column 3"),
+            ("id,x,y\n1,,3\n", 2, "x is an empty field"),
+            ("id,x,y\n1,2,3,5\n", 0, ""),
+            ("id;x;y\n1;2,5;3\n", 2, "mixes"),
+        ] {
+            std::fs::write(&q, text).unwrap();
+            match SampleSink::new(&q, &dir.path().join("o.csv")) {
+                Ok(_) => assert_eq!(line, 0, "{text}"),
+                Err(e) => {
+                    assert!(
+                        matches!(e, Error::Parse { line: l, .. } if l == line),
+                        "{text}: {e}"
+                    );
+                    assert!(
+                        !want.is_empty() && e.to_string().contains(want),
+                        "{text}: {e}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -15,6 +15,14 @@ use crate::error::{Error, Result};
 /// Largest block coordinate magnitude (keys pack two `i32`).
 const MAX_BLOCK: f64 = (1u64 << 31) as f64 - 2.0;
 
+/// Most halvings of a tile into blocks: `2^MAX_SHIFT` blocks a side.
+pub(crate) const MAX_SHIFT: u32 = 20;
+
+/// The largest coordinate magnitude in `bounds`.
+fn magnitude(bounds: [f64; 4]) -> f64 {
+    bounds.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
 /// A rectangle of blocks: columns `x0 .. x1`, rows `y0 .. y1` (half-open).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct BlockRect {
@@ -86,11 +94,17 @@ impl TileGrid {
     /// A grid of tiles of side `tile`, cut into `2^shift` blocks per side.
     ///
     /// # Errors
-    /// [`Error::Options`] for a tile side that is not a positive finite number.
+    /// [`Error::Options`] for a tile side that is not a positive finite number;
+    /// [`Error::Internal`] for more than `2^MAX_SHIFT` blocks a side (the callers derive fewer).
     pub fn new(tile: f64, shift: u32) -> Result<TileGrid> {
-        if !(tile.is_finite() && tile > 0.0) || shift > 20 {
+        if !(tile.is_finite() && tile > 0.0) {
             return Err(Error::Options(format!(
                 "the tile size must be a positive number, not {tile}"
+            )));
+        }
+        if shift > MAX_SHIFT {
+            return Err(Error::Internal(format!(
+                "tiles of {tile} cut into 2^{shift} blocks a side (at most 2^{MAX_SHIFT})"
             )));
         }
         let block = tile / f64::from(1u32 << shift);
@@ -103,14 +117,21 @@ impl TileGrid {
     /// # Errors
     /// [`Error::Options`] when the blocks are too small for coordinates this large.
     pub fn check_bounds(&self, bounds: [f64; 4]) -> Result<()> {
-        let m = bounds.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        if m / self.block > MAX_BLOCK {
+        if self.block < TileGrid::min_block(bounds) {
+            let m = magnitude(bounds);
             return Err(Error::Options(format!(
                 "tiles of {} are too small for coordinates as large as {m}",
                 self.tile
             )));
         }
         Ok(())
+    }
+
+    /// The smallest block side whose keys hold the blocks of every point in `bounds`
+    /// (`[xmin, ymin, xmax, ymax]`): blocks finer than this would number more than 2^31 between
+    /// 0 and the coordinates (at 10^15, half a million units).
+    pub fn min_block(bounds: [f64; 4]) -> f64 {
+        magnitude(bounds) / MAX_BLOCK
     }
 
     /// The block of point `(x, y)`.

@@ -1,7 +1,7 @@
 //! Reading for the tiles: every point of the files (filters applied) decoded once, sorted by
 //! block into the block index, with the CRS and the headers' warnings; breaklines added to it.
 
-use super::grid::{TileGrid, pow2, side_for};
+use super::grid::{MAX_SHIFT, TileGrid, pow2, side_for};
 use super::{hull, lines};
 use super::index::{self, BlockIndex, BlockRecord, IndexRecord, PackedRecord, Packing};
 use super::{BLOCK_POINTS, MAX_BLOCKS, TILE_BLOCKS, TaskScope, TileCpu, TileJob, TileOptions};
@@ -28,16 +28,30 @@ pub(super) fn read_index(
     let density = reader.points_in_header_boxes() as f64 / area;
     let block_points = block_points(total);
     let tile_points = block_points * TILE_BLOCKS;
+    let rect = [b.min[0], b.min[1], b.max[0], b.max[1]];
+    // Blocks no finer than their keys allow (coordinates far from 0: at 10^15, blocks of half
+    // a million units), whatever the density; a density from a box of no area (one point, or
+    // points on one line) is no reason to fail here: the triangulation says what is wrong.
+    let finest = TileGrid::min_block(rect);
     let block = match options.tile {
         Some(t) => {
             let k = side_for(base, density, block_points);
             let s = ((t / pow2(base, k)).log2().round().max(0.0) as u32).min(12);
-            t / f64::from(1u32 << s)
+            let most = (t / finest).log2().floor().clamp(0.0, 12.0) as u32;
+            t / f64::from(1u32 << s.min(most))
         }
-        None => pow2(base, side_for(base, density, block_points).max(-30)),
+        None => {
+            // At least the base over 2^MAX_SHIFT: a tile is at least the base, and at most
+            // 2^MAX_SHIFT blocks a side.
+            let mut k = side_for(base, density, block_points).max(-(MAX_SHIFT as i32));
+            while pow2(base, k) < finest && k < 1000 {
+                k += 1;
+            }
+            pow2(base, k)
+        }
     };
     let probe = TileGrid::new(block, 0)?;
-    probe.check_bounds([b.min[0], b.min[1], b.max[0], b.max[1]])?;
+    probe.check_bounds(rect)?;
     let mut declared = Declared {
         crs: reader.crs().cloned(),
         warnings: reader.warnings(),

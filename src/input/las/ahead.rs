@@ -5,9 +5,10 @@ use super::LidarPoint;
 use super::decode::{Fields, FileDecoder, Spare};
 use super::filter::{CompiledFilter, FilterStats, Verdict};
 use super::header::{Bounds3, Chunk, FileInfo, format_error};
+use super::reader::margin;
 use super::world::{HEADER_SLACK, Quantization};
 use crate::error::{Error, Result};
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -85,9 +86,10 @@ impl SpanJob {
         kept.clear();
         kept.reserve(span.points as usize);
         let mut stats = FilterStats::default();
+        let node = self.check.node(span);
         for (i, rec) in raw.chunks_exact(self.len).enumerate() {
             self.check
-                .test(rec, self.ext, span, span.first + i as u64)?;
+                .test(rec, self.ext, span, node, span.first + i as u64)?;
             let p = decode(
                 rec,
                 self.ext,
@@ -162,8 +164,10 @@ impl Current {
 }
 
 /// What a decoded record can be checked for: inside the header's bounds (one scale step of
-/// slack, in the file's own integers) and a return number no larger than the number of returns
-/// (when that is known, > 0). A record that fails is corrupt data that happened to decode.
+/// slack, in the file's own integers), inside its COPC node's square (with the margin the index
+/// is read with: a point outside it is one a box read may skip, as when a key was moved), and a
+/// return number no larger than the number of returns (when that is known, > 0). A record that
+/// fails is corrupt data that happened to decode.
 pub(super) struct PointCheck {
     path: PathBuf,
     compressed: bool,
@@ -172,6 +176,16 @@ pub(super) struct PointCheck {
     header: Bounds3,
     scale: [f64; 3],
     offset: [f64; 3],
+    /// The COPC node of each LAZ chunk (by its byte offset): its key and its square in the
+    /// file's integers (x and y ranges), rounded out by the index's margin.
+    nodes: HashMap<u64, NodeSquare>,
+}
+
+/// A COPC node's key and its square in its file's integers (`[[x0, x1], [y0, y1]]`).
+#[derive(Clone, Copy)]
+pub(super) struct NodeSquare {
+    key: [i32; 4],
+    square: [[i64; 2]; 2],
 }
 
 impl PointCheck {
@@ -188,6 +202,26 @@ impl PointCheck {
                 ]
             })
         });
+        let step = info.scale[0].max(info.scale[1]);
+        let nodes = match &info.layout.nodes {
+            Some(nodes) if info.scale.iter().all(|s| *s > 0.0) => nodes
+                .iter()
+                .map(|n| {
+                    let m = margin(n.rect, step);
+                    let (s, o) = (info.scale, info.offset);
+                    // Saturating: a damaged info VLR holds any doubles.
+                    let square = std::array::from_fn(|k| {
+                        [
+                            ((n.rect[k] - m - o[k]) / s[k]).floor() as i64,
+                            ((n.rect[k + 2] + m - o[k]) / s[k]).ceil() as i64,
+                        ]
+                    });
+                    let at = info.layout.chunks[n.chunk].offset;
+                    (at, NodeSquare { key: n.key, square })
+                })
+                .collect(),
+            _ => HashMap::new(),
+        };
         PointCheck {
             path: info.path.clone(),
             compressed: info.compressed,
@@ -195,17 +229,36 @@ impl PointCheck {
             header: info.bounds,
             scale: info.scale,
             offset: info.offset,
+            nodes,
         }
     }
 
-    /// Checks record `rec` (point `n` of the file, in `span`).
+    /// The COPC node whose points `span` holds (`None` for files without an index).
+    pub(super) fn node(&self, span: &Chunk) -> Option<NodeSquare> {
+        self.nodes.get(&span.offset).copied()
+    }
+
+    /// Checks record `rec` (point `n` of the file, in `span`, of COPC node `node`).
     #[inline]
-    fn test(&self, rec: &[u8], extended: bool, span: &Chunk, n: u64) -> Result<()> {
+    fn test(
+        &self,
+        rec: &[u8],
+        extended: bool,
+        span: &Chunk,
+        node: Option<NodeSquare>,
+        n: u64,
+    ) -> Result<()> {
         let le = |o: usize| i32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
         let xyz = [le(0), le(4), le(8)];
         let in_box = self.bounds.is_none_or(|b| {
             (0..3).all(|k| i64::from(xyz[k]) >= b[k][0] && i64::from(xyz[k]) <= b[k][1])
         });
+        if let Some(node) = node.filter(|_| in_box) {
+            let q = node.square;
+            if !(0..2).all(|k| i64::from(xyz[k]) >= q[k][0] && i64::from(xyz[k]) <= q[k][1]) {
+                return Err(self.outside_node(xyz, node, span, n));
+            }
+        }
         let (r, nr) = if extended {
             (rec[14] & 0x0f, rec[14] >> 4)
         } else {
@@ -215,6 +268,32 @@ impl PointCheck {
             return Ok(());
         }
         Err(self.corrupt(xyz, r, nr, span, n, !in_box))
+    }
+
+    #[cold]
+    fn outside_node(&self, xyz: [i32; 3], node: NodeSquare, span: &Chunk, n: u64) -> Error {
+        let w = |k: usize, v: i64| self.offset[k] + self.scale[k] * v as f64;
+        let (k, q) = (node.key, node.square);
+        format_error(
+            &self.path,
+            format!(
+                "invalid COPC file: point {n} (the LAZ chunk at byte {}) at ({}, {}) lies outside \
+                 the square of its octree node {}-{}-{}-{} (x {} .. {}, y {} .. {}): the \
+                 file is damaged (a moved key in the hierarchy, or corrupt point data), and a \
+                 box read through its index would skip points; write it again from its source",
+                span.offset,
+                w(0, xyz[0].into()),
+                w(1, xyz[1].into()),
+                k[0],
+                k[1],
+                k[2],
+                k[3],
+                w(0, q[0][0]),
+                w(0, q[0][1]),
+                w(1, q[1][0]),
+                w(1, q[1][1]),
+            ),
+        )
     }
 
     #[cold]

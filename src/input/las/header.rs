@@ -222,10 +222,11 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
         )?,
         None => Vec::new(),
     };
-    let copc = copc::index(path, &header, &evlrs, &layout.chunks)?.map(|(info, nodes)| {
-        layout.nodes = Some(nodes);
-        info
-    });
+    let copc =
+        copc::index(path, &header, &evlrs, &layout.chunks, point_count)?.map(|(info, nodes)| {
+            layout.nodes = Some(nodes);
+            info
+        });
     let mut info = describe(path, &raw, &header, point_count);
     if let Some(more) = unannounced_records(&raw, point_count, file_len) {
         info.warnings.push(format!(

@@ -508,8 +508,9 @@ impl LidarReader {
 
 /// How far a point may lie outside its file's header extent or its COPC node's bounds through
 /// rounding (writers compute both in floating point): one coordinate step, plus a relative
-/// 1e-9. Used only to decide what need not be decoded.
-fn margin(r: [f64; 4], step: f64) -> f64 {
+/// 1e-9. Used to decide what need not be decoded, and to check that a COPC node's points lie in
+/// its square (`PointCheck`).
+pub(super) fn margin(r: [f64; 4], step: f64) -> f64 {
     step + 1e-9 * r.iter().fold(1.0f64, |m, v| m.max(v.abs()))
 }
 

@@ -1,6 +1,7 @@
 //! One line of XYZ text: its fields, their separators and numbers, under the rules of the
 //! [module docs](super); shared with the query positions of `sample`
-//! ([`crate::products::sample`]).
+//! ([`crate::products::sample`]), which also reads x and y from the columns a header names
+//! ([`parse_columns`]).
 
 /// What is wrong with a line.
 #[derive(Debug, PartialEq)]
@@ -24,6 +25,12 @@ pub(crate) enum LineError {
     NonFinite {
         field: usize,
         token: String,
+    },
+    /// A line without the column its header names for x (`field` 0) or y (1).
+    NoColumn {
+        field: usize,
+        column: usize,
+        found: usize,
     },
 }
 
@@ -60,6 +67,18 @@ impl std::fmt::Display for LineError {
             LineError::NonFinite { field, token } => {
                 write!(f, "{} is not a finite number: \"{token}\"", NAMES[*field])
             }
+            LineError::NoColumn {
+                field,
+                column,
+                found,
+            } => write!(
+                f,
+                "{} is read from column {} (as the header names it), but the line has {found} \
+                 field{}",
+                NAMES[*field],
+                column + 1,
+                if *found == 1 { "" } else { "s" }
+            ),
         }
     }
 }
@@ -82,14 +101,8 @@ pub(super) fn check_header(bytes: &[u8]) -> std::result::Result<(), String> {
         .filter(|s| !s.is_empty())
         .map(|s| s.trim_matches(['"', '\'']).to_ascii_lowercase())
         .collect();
-    let axis = |n: &str| match n {
-        "x" | "easting" | "east" | "lon" | "long" | "longitude" => Some(0),
-        "y" | "northing" | "north" | "lat" | "latitude" => Some(1),
-        "z" | "elevation" | "elev" | "height" | "alt" | "altitude" => Some(2),
-        _ => None,
-    };
     for (i, n) in names.iter().enumerate() {
-        if let Some(a) = axis(n)
+        if let Some(a) = axis_of(n)
             && a != i
         {
             return Err(format!(
@@ -101,6 +114,142 @@ pub(super) fn check_header(bytes: &[u8]) -> std::result::Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// The axis a header's column name stands for (0 x, 1 y, 2 z; lower case, unquoted), as
+/// PDAL's and GDAL's readers take them: `x`, `easting`, `lon`…; `None` for other names.
+fn axis_of(name: &str) -> Option<usize> {
+    match name {
+        "x" | "easting" | "east" | "lon" | "long" | "longitude" => Some(0),
+        "y" | "northing" | "north" | "lat" | "latitude" => Some(1),
+        "z" | "elevation" | "elev" | "height" | "alt" | "altitude" => Some(2),
+        _ => None,
+    }
+}
+
+/// The columns a header line names for x and y (by name whatever the case: `x`, `easting`,
+/// `lon`…, as PDAL's and GDAL's readers take them; split as [`parse_columns`] splits the data
+/// lines), and whether it has a column named `z`. A header that names neither, or one of them
+/// twice, is refused: read by position, `id,x,y` gave `sample` x = id and y = x, every query
+/// outside the TIN.
+pub(crate) fn header_axes(bytes: &[u8]) -> std::result::Result<([usize; 2], bool), String> {
+    let names = header_columns(bytes).map_err(|e| e.to_string())?;
+    let shown = names.join(", ");
+    let find = |axis: usize| -> std::result::Result<Option<usize>, String> {
+        let mut at = (0..names.len()).filter(|&i| axis_of(&names[i]) == Some(axis));
+        match (at.next(), at.next()) {
+            (Some(i), Some(j)) => Err(format!(
+                "the header names {} twice, in columns {} and {} (the header is {shown}): \
+                 name one column only",
+                ["x", "y"][axis],
+                i + 1,
+                j + 1
+            )),
+            (i, _) => Ok(i),
+        }
+    };
+    match (find(0)?, find(1)?) {
+        (Some(x), Some(y)) => Ok(([x, y], names.iter().any(|n| n == "z"))),
+        _ => Err(format!(
+            "the header does not name the x and y columns (it is {shown}): name them x and y \
+             (or easting and northing), or remove the header to read x and y from the first \
+             two columns"
+        )),
+    }
+}
+
+/// The column names of a header line split as [`parse_columns`] splits its data lines, in lower
+/// case, without their quotes.
+fn header_columns(bytes: &[u8]) -> std::result::Result<Vec<String>, LineError> {
+    let line = bytes.trim_ascii();
+    if line.contains(&b'\r') {
+        return Err(LineError::CarriageReturn);
+    }
+    Ok(split_columns(line)?
+        .into_iter()
+        .map(|f| {
+            String::from_utf8_lossy(f.trim_ascii())
+                .trim_matches(['"', '\''])
+                .to_ascii_lowercase()
+        })
+        .collect())
+}
+
+/// The numbers in columns `cols` (0-based; the first is read as x, the second as y) of a line
+/// whose header names its columns (`sample`'s queries under `id,x,y`): the fields split by the
+/// line's comma or semicolon, where an empty field is a column of its own as in CSV and a
+/// double-quoted field may hold the separator, or by runs of blanks when it has neither.
+/// `None` for blank and comment lines. Decimal commas are refused as [`parse_fields`] refuses
+/// them (both `,` and `;`, or blanks inside a field read as a number), and so is an empty field
+/// read as a number.
+pub(crate) fn parse_columns(
+    bytes: &[u8],
+    cols: [usize; 2],
+) -> std::result::Result<Option<[f64; 2]>, LineError> {
+    let line = bytes.trim_ascii();
+    if line.contains(&b'\r') {
+        return Err(LineError::CarriageReturn);
+    }
+    if line.is_empty() || line[0] == b'#' {
+        return Ok(None);
+    }
+    let fields = split_columns(line)?;
+    let mut p = [0.0; 2];
+    for (field, (&c, value)) in cols.iter().zip(p.iter_mut()).enumerate() {
+        let token = fields
+            .get(c)
+            .ok_or(LineError::NoColumn {
+                field,
+                column: c,
+                found: fields.len(),
+            })?
+            .trim_ascii();
+        if token.is_empty() {
+            return Err(LineError::EmptyField { field });
+        }
+        if token.iter().any(|b| is_separator(*b)) {
+            return Err(LineError::CommaAndBlank);
+        }
+        *value = parse_number(token, field)?;
+    }
+    Ok(Some(p))
+}
+
+/// The fields of `line` (trimmed, not empty): split by its comma or semicolon outside double
+/// quotes, or by runs of blanks when it has neither.
+fn split_columns(line: &[u8]) -> std::result::Result<Vec<&[u8]>, LineError> {
+    let mut hard = 0u8;
+    let mut quoted = false;
+    for &b in line {
+        match b {
+            b'"' => quoted = !quoted,
+            b',' | b';' if !quoted => {
+                if hard != 0 && b != hard {
+                    return Err(LineError::MixedSeparators);
+                }
+                hard = b;
+            }
+            _ => {}
+        }
+    }
+    if hard == 0 {
+        return Ok(line
+            .split(|b| is_separator(*b))
+            .filter(|f| !f.is_empty())
+            .collect());
+    }
+    let mut fields = Vec::new();
+    let (mut start, mut quoted) = (0, false);
+    for (i, &b) in line.iter().enumerate() {
+        if b == b'"' {
+            quoted = !quoted;
+        } else if b == hard && !quoted {
+            fields.push(&line[start..i]);
+            start = i + 1;
+        }
+    }
+    fields.push(&line[start..]);
+    Ok(fields)
 }
 
 #[inline]

@@ -30,7 +30,7 @@
 mod line;
 
 use crate::error::{Error, Result};
-pub(crate) use line::{LineError, parse_fields};
+pub(crate) use line::{LineError, header_axes, parse_columns, parse_fields};
 use line::{check_header, parse_line};
 use std::fs::File;
 use std::io::Read;
