@@ -1,29 +1,34 @@
 #!/usr/bin/env bash
 # The whole test suite, from a fresh checkout: installs what the interop tests need (Python's
-# plyfile, GDAL's command-line tools), then checks formatting, lints and runs every test.
-# This is the README's test command; CI runs it through .ci/run.
+# plyfile, laspy, copclib, rio-cogeo in the repository's own venv; GDAL's command-line tools and
+# GNU parallel from Debian packages when run as root), then checks formatting, lints and runs
+# every test. The real test data are committed in tests/data (docs/DATA.md): nothing is needed
+# beside the checkout. This is the README's test command; CI runs it through .ci/run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# Interop peers used by the tests (each test skips with a message when its tool is absent).
-if ! python3 -c 'import plyfile' 2>/dev/null; then
-    python3 -m pip install --quiet --disable-pip-version-check plyfile==1.1.5 || true
-fi
-if ! command -v rio >/dev/null 2>&1 || ! rio cogeo --version >/dev/null 2>&1; then
-    python3 -m pip install --quiet --disable-pip-version-check rio-cogeo==7.0.4 || true
-fi
-if ! python3 -c 'import copclib, laspy, lazrs' 2>/dev/null; then
-    # COPC copies for tests/inputs.rs (scripts/make_copc.py) and laspy as the reference reader.
-    python3 -m pip install --quiet --disable-pip-version-check copclib==2.6.3 laspy==2.7.0 \
-        lazrs==0.8.2 || true
-fi
-if ! command -v gdalinfo >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gdal-bin >/dev/null) || true
+# Debian packages (as root only): GDAL's tools and parallel for the interop tests, and the venv
+# module, which Debian's python3 leaves out.
+missing=()
+command -v gdalinfo >/dev/null 2>&1 || missing+=(gdal-bin)
+command -v parallel >/dev/null 2>&1 || missing+=(parallel)
+python3 -c 'import ensurepip, venv' 2>/dev/null || missing+=(python3-venv)
+if [ ${#missing[@]} -gt 0 ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" \
+        >/dev/null) || echo "test.sh: could not install ${missing[*]}" >&2
 fi
 
-if ! command -v parallel >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq parallel >/dev/null) || true
-fi
+# Python peers in the repository's own venv, never the system Python: target/venv-py, the one
+# scripts/test-python.sh uses. The tests run the `python3` and `rio` on the PATH, so its bin/
+# goes first. plyfile reads our PLY, rio-cogeo (with rasterio) validates COGs, copclib writes the
+# COPC copies for tests/inputs.rs (scripts/make_copc.py), laspy + lazrs are the reference reader.
+# Each test whose tool is missing fails under CI=true and is skipped with a message otherwise.
+VENV=target/venv-py
+[ -x "$VENV/bin/python" ] || python3 -m venv "$VENV"
+"$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-cache-dir \
+    plyfile==1.1.5 rio-cogeo==7.0.4 copclib==2.6.3 laspy==2.7.0 lazrs==0.8.2 ||
+    echo "test.sh: could not install the Python peers in $VENV" >&2
+export PATH="$PWD/$VENV/bin:$PATH"
 
 cargo fmt --all -- --check
 cargo clippy --all-targets --locked -- -D warnings

@@ -1,5 +1,4 @@
-//! `sweeptin info` end to end, on the real data in `shared/data/lidar` (see tests/lidar_data.rs
-//! for how the folder is found).
+//! `sweeptin info` end to end, on the real data in `tests/data/lidar` (docs/DATA.md).
 
 #[path = "support/data.rs"]
 mod data;

@@ -291,7 +291,7 @@ fn a_killed_runs_temporary_file_is_removed_by_the_next_run() {
 #[test]
 fn a_memory_limit_below_the_budget_is_a_message_not_an_abort() {
     let d = tempfile::tempdir().unwrap();
-    let arso = data::shared("lidar/arso_TM_511_122_from_ept.laz");
+    let arso = data::shared("lidar/arso_TM_511_122_sw_250m.laz");
     let o = Command::new("sh")
         .arg("-c")
         .arg(format!(
@@ -315,7 +315,7 @@ fn a_memory_limit_below_the_budget_is_a_message_not_an_abort() {
 #[test]
 fn an_address_space_limit_sets_the_default_budget_and_refuses_a_larger_one() {
     let d = tempfile::tempdir().unwrap();
-    let arso = data::shared("lidar/arso_TM_511_122_from_ept.laz");
+    let arso = data::shared("lidar/arso_TM_511_122_sw_250m.laz");
     let small = data::shared("lidar/startinpy_small.laz");
     let limited = |limit: u32, args: &str| {
         Command::new("sh")
@@ -364,7 +364,7 @@ fn an_address_space_limit_sets_the_default_budget_and_refuses_a_larger_one() {
 #[test]
 fn refine_under_a_memory_limit_is_a_message_not_an_abort() {
     let d = tempfile::tempdir().unwrap();
-    let arso = data::shared("lidar/arso_TM_511_122_from_ept.laz");
+    let arso = data::shared("lidar/arso_TM_511_122_sw_250m.laz");
     let refine = |limit: u32, out: &str| {
         Command::new("sh")
             .current_dir(d.path())

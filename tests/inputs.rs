@@ -55,8 +55,9 @@ fn inside(p: &LidarPoint, b: &BBox) -> bool {
     p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1
 }
 
-/// Writes a COPC copy of `src` with copclib; `None` (skipped) locally without the Python tools.
-fn make_copc(src: &Path, dst: &Path, page_depth: u32, test: &str) -> bool {
+/// Writes a COPC copy of `src` with copclib (`voxels` per side of a node's grid);
+/// `None` (skipped) locally without the Python tools.
+fn make_copc(src: &Path, dst: &Path, page_depth: u32, voxels: u32, test: &str) -> bool {
     if !data::python(&["copclib", "laspy", "lazrs"], test) {
         return false;
     }
@@ -66,6 +67,7 @@ fn make_copc(src: &Path, dst: &Path, page_depth: u32, test: &str) -> bool {
         .arg(src)
         .arg(dst)
         .args(["--page-depth", &page_depth.to_string()])
+        .args(["--voxels", &voxels.to_string()])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -146,21 +148,20 @@ fn copc_box_agrees_with_laspy() {
     assert_eq!(out.trim(), format!("73403 {} {classes}", got.len()));
 }
 
-/// The big ARSO tile as COPC (written at run time): a 100 m box decodes a few percent of it and
-/// keeps exactly the points a full read keeps. (Slow in debug builds: ignored; run with
-/// `cargo test --release --test inputs -- --ignored`.)
+/// The ARSO crop as COPC (written at run time; 32 voxels a side give its root the 7.8 m spacing
+/// 128 give the whole 1 km tile): a 25 m box decodes a few percent of it and keeps exactly the
+/// points a full read keeps.
 #[test]
-#[ignore]
 fn arso_copc_box() {
-    let Some(src) = data::optional("lidar/arso_TM_511_122_from_ept.laz", "arso_copc_box") else {
+    let Some(src) = data::optional("lidar/arso_TM_511_122_sw_250m.laz", "arso_copc_box") else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
     let copc = dir.path().join("arso.copc.laz");
-    if !make_copc(&src, &copc, 3, "arso_copc_box") {
+    if !make_copc(&src, &copc, 3, 32, "arso_copc_box") {
         return;
     }
-    let b = BBox::new(511400.0, 122400.0, 511500.0, 122500.0).unwrap();
+    let b = BBox::new(511005.0, 122005.0, 511030.0, 122030.0).unwrap();
     let f = Filter {
         bbox: Some(b),
         ..Filter::keep_all()
@@ -376,7 +377,7 @@ fn the_same_dem_from_laz_vpc_lists_globs_and_copc() {
     let test = "the_same_dem_from_laz_vpc_lists_globs_and_copc";
     let copcs = [d("a.copc.laz"), d("b.copc.laz")];
     for (t, c) in two.iter().zip(&copcs) {
-        if !make_copc(Path::new(t), c, 1, test) {
+        if !make_copc(Path::new(t), c, 1, 128, test) {
             return;
         }
     }

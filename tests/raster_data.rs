@@ -1,4 +1,4 @@
-//! The grid reader on the real DEMs of `shared/data/dem` (required under CI, skipped locally when absent).
+//! The grid reader on the real DEMs of `tests/data/dem` (required under CI, skipped locally when absent).
 
 #[path = "support/data.rs"]
 mod data;

@@ -26,12 +26,12 @@ def missing(what: str) -> None:
 
 
 def data(rel: str) -> Path:
-    """A file of the real data (../shared/data beside the repository, or $SWEEPTIN_DATA)."""
-    for base in (os.environ.get("SWEEPTIN_DATA"), REPO.parent / "shared" / "data", "/work/shared/data"):
-        if base and (Path(base) / rel).exists():
-            return Path(base) / rel
-    missing(f"test data {rel}")
-    raise AssertionError("unreachable")
+    """A file of the real data committed in tests/data (docs/DATA.md), as tests/support/data.rs
+    finds it for the Rust tests."""
+    p = REPO / "tests" / "data" / rel
+    if not p.exists():
+        missing(f"test data {p}")
+    return p
 
 
 def built(rel: str, env: str) -> Path:

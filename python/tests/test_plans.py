@@ -200,12 +200,30 @@ def np_int(i: int):
     return np.int64(i)
 
 
-def test_the_dask_example_runs_on_two_worker_processes(ign, tmp_path):
+def test_the_dask_example_runs_on_two_worker_processes(tmp_path):
+    """Without files, on the repository's six IGN tiles (tests/data): the mosaic is the bytes of
+    one run over the tiles' extent."""
     pytest.importorskip("dask.distributed") if os.environ.get("CI") not in ("true", "1") else None
     r = subprocess.run(
-        [sys.executable, str(REPO / "examples" / "dask_plan.py"), *ign, "--workers", "2", "--out", str(tmp_path)],
+        [sys.executable, str(REPO / "examples" / "dask_plan.py"), "--workers", "2", "--out", str(tmp_path)],
         capture_output=True, text=True, timeout=600,
     )
     assert r.returncode == 0, r.stdout + r.stderr
-    assert "on 2 worker processes" in r.stdout, r.stdout
+    assert "6 tasks" in r.stdout and "on 2 worker processes" in r.stdout, r.stdout
     assert "mosaic == single run (the same GeoTIFF bytes): True" in r.stdout
+
+
+def test_the_dask_example_checks_against_every_point_past_the_tiles(tmp_path):
+    """The ARSO corner at 1 m cells: 200 points lie a few cm outside the plan's tiles and shape
+    the first row's and column's triangles. The mosaic holds them (the tasks read a buffer); the
+    reference run must read them too (it read the tiles' box alone and said False, exit 1)."""
+    pytest.importorskip("dask.distributed") if os.environ.get("CI") not in ("true", "1") else None
+    arso = data("lidar/arso_TM_511_122_sw_250m.laz")
+    r = subprocess.run(
+        [sys.executable, str(REPO / "examples" / "dask_plan.py"), str(arso), "--cell", "1", "--tile", "125",
+         "--workers", "2", "--out", str(tmp_path)],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "mosaic 250 x 250 cells from 4 tiles" in r.stdout, r.stdout
+    assert "mosaic == single run over every point (the same cells): True" in r.stdout, r.stdout

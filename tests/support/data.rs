@@ -1,7 +1,9 @@
 //! Where the real test data and the interop tools are, for every integration test.
 //!
-//! A test that needs something that is missing must not pass silently: under `CI=true` a missing
-//! data folder or tool fails the test; locally the test prints why it is skipped and returns.
+//! The real data is committed in `tests/data` (docs/DATA.md: sources, licences, checksums), so a
+//! fresh clone needs nothing beside it. A test that needs something that is missing must not pass
+//! silently: under `CI=true` a missing file or tool fails the test; locally the test prints why
+//! it is skipped and returns.
 
 #![allow(dead_code)]
 
@@ -12,35 +14,30 @@ pub fn in_ci() -> bool {
     std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
 }
 
-/// The folder with the real data (`lidar/`, `dem/`, `lines/`): `$SWEEPTIN_DATA`, or
-/// `../shared/data` beside the repository.
-///
-/// # Panics
-/// When it cannot be found (the data is part of every test run).
+/// The folder with the real test data (`lidar/`, `dem/`, `lines/`): `tests/data` in the
+/// repository. Each file, where it comes from, its licence and checksum: docs/DATA.md.
 pub fn data_dir() -> PathBuf {
-    [
-        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
-        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
-        Some(PathBuf::from("/work/shared/data")),
-    ]
-    .into_iter()
-    .flatten()
-    .find(|d| d.join("lidar").is_dir())
-    .expect("real test data not found: set SWEEPTIN_DATA to the folder holding lidar/")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data")
 }
 
-/// A file of the real data, by its path under the data folder.
+/// A file of the real data, by its path under `tests/data`.
 ///
 /// # Panics
-/// When it does not exist.
+/// When it does not exist (the data is part of the repository: a missing file is a broken
+/// checkout, under CI or not).
 pub fn shared(rel: &str) -> PathBuf {
     let p = data_dir().join(rel);
-    assert!(p.exists(), "test data file missing: {}", p.display());
+    assert!(
+        p.exists(),
+        "test data file missing: {} (committed with the repository, see docs/DATA.md)",
+        p.display()
+    );
     p
 }
 
 /// Is the command-line tool `name` on the PATH? When it is not: panics under CI, prints a skip
-/// message and returns `false` locally.
+/// message and returns `false` locally. scripts/test.sh installs the tools the tests use (GDAL's
+/// from Debian packages, `rio` in its venv, whose `bin/` it puts first on the PATH).
 pub fn tool(name: &str, test: &str) -> bool {
     let found = std::process::Command::new("sh")
         .args(["-c", &format!("command -v {name}")])
@@ -51,37 +48,34 @@ pub fn tool(name: &str, test: &str) -> bool {
             !in_ci(),
             "{test}: `{name}` is required under CI=true but not installed"
         );
-        eprintln!("{test}: skipped, `{name}` is not installed");
+        eprintln!("{test}: skipped, `{name}` is not installed (scripts/test.sh installs it)");
     }
     found
 }
 
-/// A file of the real data that a test may do without locally: `Some(path)` when it exists;
-/// when it does not, panics under CI and prints why the test is skipped otherwise.
+/// A file of the real data that a test may do without locally: `Some(path)` when it exists
+/// under `tests/data`; when it does not, panics under CI and prints why the test is skipped
+/// otherwise.
 pub fn optional(rel: &str, test: &str) -> Option<PathBuf> {
-    let base = [
-        std::env::var_os("SWEEPTIN_DATA").map(PathBuf::from),
-        Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")),
-        Some(PathBuf::from("/work/shared/data")),
-    ]
-    .into_iter()
-    .flatten()
-    .find(|d| d.join(rel).exists());
-    match base {
-        Some(d) => Some(d.join(rel)),
-        None => {
-            assert!(
-                !in_ci(),
-                "{test}: test data {rel} is required under CI=true but missing"
-            );
-            eprintln!("{test}: skipped, test data {rel} not found (set SWEEPTIN_DATA)");
-            None
-        }
+    let p = data_dir().join(rel);
+    if p.exists() {
+        return Some(p);
     }
+    assert!(
+        !in_ci(),
+        "{test}: test data {} is required under CI=true but missing",
+        p.display()
+    );
+    eprintln!(
+        "{test}: skipped, test data {} not found (see docs/DATA.md)",
+        p.display()
+    );
+    None
 }
 
 /// Can `python3` import every module in `modules`? When it cannot: panics under CI, prints a skip
-/// message and returns `false` locally (scripts/test.sh installs what the tests import).
+/// message and returns `false` locally. The tests run the `python3` on the PATH: scripts/test.sh
+/// installs what they import in its venv (`target/venv-py`) and puts its `bin/` first.
 pub fn python(modules: &[&str], test: &str) -> bool {
     let code = format!("import {}", modules.join(", "));
     let found = std::process::Command::new("python3")
@@ -93,7 +87,10 @@ pub fn python(modules: &[&str], test: &str) -> bool {
             !in_ci(),
             "{test}: python3 with {modules:?} is required under CI=true but missing"
         );
-        eprintln!("{test}: skipped, python3 cannot import {modules:?}");
+        eprintln!(
+            "{test}: skipped, python3 cannot import {modules:?} (scripts/test.sh installs them \
+             in target/venv-py: put target/venv-py/bin first on the PATH)"
+        );
     }
     found
 }
