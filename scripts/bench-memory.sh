@@ -8,19 +8,20 @@
 # collinear but one), circle. Each at every size, written as XYZ text in random order (the
 # streaming engine sorts externally; XYZ always runs the one sweep), then:
 #   * `sweeptin tin F.xyz -o out.stin` and `sweeptin dem F.xyz --cell C -o out.tif` (C: the
-#     extent / 1000) at every --mem, under /usr/bin/time (wall time, peak RSS);
+#     longer side / 1000, at most the shorter / 4) at every --mem, under /usr/bin/time (wall time, peak RSS);
 #   * spade_xyz (spade 2.x bulk load, in memory) on the same file;
 #   * the input orders (sorted, reversed, random, tiles, gpstime, octree) on lidar at the
 #     largest size and the middle --mem, `tin` only.
 # Prints a Markdown table per part; every row's peak RSS is checked against --mem + 64 MB.
 #
 #   scripts/bench-memory.sh [--sizes "1M 10M"] [--mems "64M 128M 512M"] [--dists "..."]
-#                           [--out DIR] [--no-orders] [--no-spade]
+#                           [--out DIR] [--no-orders] [--no-spade] [--report]
+# --report prints the tables of the results already in DIR (a run cut short).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SIZES="1M 10M"; MEMS="64M 128M 512M"
 DISTS="square disc kuzmin disc-far lidar clustered line circle"
-OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench-memory}; ORDERS=1; SPADE=1
+OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench-memory}; ORDERS=1; SPADE=1; REPORT=0
 while [ $# -gt 0 ]; do
     case "$1" in
         --sizes) SIZES=$2; shift 2;;
@@ -29,14 +30,57 @@ while [ $# -gt 0 ]; do
         --out) OUT=$2; shift 2;;
         --no-orders) ORDERS=0; shift;;
         --no-spade) SPADE=0; shift;;
+        --report) REPORT=1; shift;;
         *) echo "unknown option $1" >&2; exit 2;;
     esac
 done
 mkdir -p "$OUT"
+RESULTS="$OUT/memory-results.jsonl"
+report() {
+python3 - "$RESULTS" <<'PY'
+import json, subprocess, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+mib = lambda s: int(s[:-1]) * (1 << 20)
+cpu = [l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")][0]
+print(f"\nmachine: {subprocess.getoutput('nproc')} cores, {cpu}, load {open('/proc/loadavg').read().split()[0]}")
+spade = {(r["dist"], r["size"]): r for r in rows if r["part"] == "spade"}
+bad = 0
+for part, title in (("dists", "distributions (random order)"), ("orders", "input orders (lidar)")):
+    sel = [r for r in rows if r["part"] == part]
+    if not sel:
+        continue
+    print(f"\n### {title}\n")
+    print("| distribution | points | order | --mem | command | wall s | M points/s | peak RSS MB | bound MB | within | live triangles | spade s | spade RSS MB |")
+    print("|---|---:|---|---:|---|---:|---:|---:|---:|:-:|---:|---:|---:|")
+    for r in sel:
+        bound = mib(r["mem"]) + (64 << 20)
+        ok = r["status"] == 0 and r["max_rss"] <= bound
+        bad += not ok
+        pts = r.get("points", 0)
+        s = spade.get((r["dist"], r["size"]))
+        sp = f"{s['wall_s']:.1f} | {s['max_rss']/2**20:.0f}" if s and s["status"] == 0 else "– | –"
+        flag = "yes" if ok else ("**no**" if r["status"] == 0 else f"**exit {r['status']}**")
+        print(f"| {r['dist']} | {pts:,} | {r['order']} | {r['mem']} | {r['cmd']} | {r['wall_s']:.1f} | "
+              f"{pts / max(r['wall_s'], 1e-9) / 1e6:.2f} | {r['max_rss']/2**20:.0f} | {bound/2**20:.0f} | {flag} | "
+              f"{r.get('live', 0):,} | {sp} |")
+def total(dist):
+    out = {}
+    for r in rows:
+        if r["part"] == "dists" and r["dist"] == dist and r["cmd"] == "tin":
+            out[r["size"]] = out.get(r["size"], 0.0) + r["wall_s"]
+    return out
+disc, kuz = total("disc"), total("kuzmin")
+for size in disc:
+    if size in kuz:
+        print(f"\nkuzmin / disc time, tin, {size} (summed over --mem): {kuz[size] / disc[size]:.2f}")
+print(f"\nrows over the bound: {bad}")
+PY
+}
+if [ "$REPORT" = 1 ]; then report; exit 0; fi
 command -v /usr/bin/time >/dev/null || { apt-get install -y -qq time >/dev/null; }
 cargo build --release --quiet --bin sweeptin --example gen_points --example spade_xyz
 BIN=target/release/sweeptin
-RESULTS="$OUT/memory-results.jsonl"; : > "$RESULTS"
+: > "$RESULTS"
 echo "commit $(git rev-parse --short HEAD)$(git diff --quiet || echo +changes), $(date -u +%FT%TZ)" >&2
 
 record() { # part dist size order mem cmd log json
@@ -51,6 +95,7 @@ row = {"part": part, "dist": dist, "size": size, "order": order, "mem": mem, "cm
 if js != "-":
     try:
         d = json.load(open(js))
+        d = d.get("run", d)  # dem nests the run's summary
         row.update(points=d["points_read"], live=d["stream"]["peak_live_triangles"],
                    front=d["sweep"]["peak_front"], warnings=len(d.get("warnings", [])))
     except Exception as e:  # a failed run: its status says so
@@ -72,7 +117,7 @@ gen() { # dist size order -> file; sets CELL
     if [ ! -f "$f" ] || [ ! -f "$f.extent" ]; then
         target/release/examples/gen_points "$1" "$2" "$f" --order "$3" > "$f.extent"
     fi
-    CELL=$(python3 -c "import sys; x0,y0,x1,y1=map(float,open(sys.argv[1]).read().split()); print(f'{max(x1-x0,y1-y0,1e-6)/1000:.6g}')" "$f.extent")
+    CELL=$(python3 -c "import sys; x0,y0,x1,y1=map(float,open(sys.argv[1]).read().split()); w,h=x1-x0,y1-y0; c=max(w,h,1e-6)/1000; c=min(c,min(w,h)/4) if min(w,h)>0 else c; print(f'{c:.6g}')" "$f.extent")
     FILE=$f
 }
 
@@ -116,41 +161,4 @@ if [ "$ORDERS" = 1 ]; then
     done
 fi
 
-python3 - "$RESULTS" <<'PY'
-import json, subprocess, sys
-rows = [json.loads(l) for l in open(sys.argv[1])]
-mib = lambda s: int(s[:-1]) * (1 << 20)
-cpu = [l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")][0]
-print(f"\nmachine: {subprocess.getoutput('nproc')} cores, {cpu}, load {open('/proc/loadavg').read().split()[0]}")
-spade = {(r["dist"], r["size"]): r for r in rows if r["part"] == "spade"}
-bad = 0
-for part, title in (("dists", "distributions (random order)"), ("orders", "input orders (lidar)")):
-    sel = [r for r in rows if r["part"] == part]
-    if not sel:
-        continue
-    print(f"\n### {title}\n")
-    print("| distribution | points | order | --mem | command | wall s | M points/s | peak RSS MB | bound MB | within | live triangles | spade s | spade RSS MB |")
-    print("|---|---:|---|---:|---|---:|---:|---:|---:|:-:|---:|---:|---:|")
-    for r in sel:
-        bound = mib(r["mem"]) + (64 << 20)
-        ok = r["status"] == 0 and r["max_rss"] <= bound
-        bad += not ok
-        pts = r.get("points", 0)
-        s = spade.get((r["dist"], r["size"]))
-        sp = f"{s['wall_s']:.1f} | {s['max_rss']/2**20:.0f}" if s and s["status"] == 0 else "– | –"
-        flag = "yes" if ok else ("**no**" if r["status"] == 0 else f"**exit {r['status']}**")
-        print(f"| {r['dist']} | {pts:,} | {r['order']} | {r['mem']} | {r['cmd']} | {r['wall_s']:.1f} | "
-              f"{pts / max(r['wall_s'], 1e-9) / 1e6:.2f} | {r['max_rss']/2**20:.0f} | {bound/2**20:.0f} | {flag} | "
-              f"{r.get('live', 0):,} | {sp} |")
-def total(dist):
-    out = {}
-    for r in rows:
-        if r["part"] == "dists" and r["dist"] == dist and r["cmd"] == "tin":
-            out[r["size"]] = out.get(r["size"], 0.0) + r["wall_s"]
-    return out
-disc, kuz = total("disc"), total("kuzmin")
-for size in disc:
-    if size in kuz:
-        print(f"\nkuzmin / disc time, tin, {size} (summed over --mem): {kuz[size] / disc[size]:.2f}")
-print(f"\nrows over the bound: {bad}")
-PY
+report
