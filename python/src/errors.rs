@@ -10,9 +10,10 @@ use sweeptin::{Error, ErrorKind};
 /// status).
 fn class_of(e: &Error) -> &'static str {
     match e {
-        Error::TooFewPoints { .. } | Error::AllCollinear { .. } | Error::NothingLeft { .. } => {
-            "NoTriangleError"
-        }
+        Error::TooFewPoints { .. }
+        | Error::AllCollinear { .. }
+        | Error::NothingLeft { .. }
+        | Error::NoArea { .. } => "NoTriangleError",
         Error::NoInput | Error::Options(_) => "OptionsError",
         Error::Io { source, .. } | Error::Write { source, .. }
             if source.kind() == std::io::ErrorKind::NotFound =>
