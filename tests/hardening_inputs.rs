@@ -538,3 +538,141 @@ fn header_boxes_that_say_nothing_do_not_decide_the_grid() {
     assert!(err(&o).contains("zero.las") && err(&o).contains("says nothing"));
     assert!(!dir.join("z.vpc").exists());
 }
+
+// ---- Issue 41, item 1: the lists and `.vpc` files that name the inputs are inputs ------------
+
+#[test]
+fn outputs_never_overwrite_a_file_list_a_vpc_or_a_file_they_name() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    grid(dir);
+    std::fs::copy(data::shared("lidar/startinpy_small.laz"), dir.join("a.laz")).unwrap();
+    std::fs::write(dir.join("list.txt"), "grid.xyz\n").unwrap();
+    std::fs::write(dir.join("outer.txt"), "@list.txt\n").unwrap();
+    std::fs::write(dir.join("laz.txt"), "a.laz\n").unwrap();
+    let o = run(dir, &["index", "a.laz", "-o", "tiles.vpc"]);
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    let o = run(
+        dir,
+        &[
+            "plan", "dem", "@laz.txt", "--cell", "1", "--tile", "100", "-o", "job",
+        ],
+    );
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    let kept = [
+        "list.txt",
+        "outer.txt",
+        "laz.txt",
+        "tiles.vpc",
+        "a.laz",
+        "grid.xyz",
+    ];
+    let before: Vec<Vec<u8>> = kept
+        .iter()
+        .map(|f| std::fs::read(dir.join(f)).unwrap())
+        .collect();
+    let cases: &[&[&str]] = &[
+        // The list itself (it was replaced by the mesh, exit 0), also named by another list.
+        &[
+            "tin",
+            "@list.txt",
+            "-o",
+            "list.txt",
+            "--format",
+            "obj",
+            "-q",
+        ],
+        &[
+            "tin",
+            "@outer.txt",
+            "-o",
+            "list.txt",
+            "--format",
+            "obj",
+            "-q",
+        ],
+        &[
+            "tin",
+            "@outer.txt",
+            "-o",
+            "outer.txt",
+            "--format",
+            "obj",
+            "-q",
+        ],
+        &[
+            "dem",
+            "@list.txt",
+            "--cell",
+            "1",
+            "-o",
+            "d.tif",
+            "--contours",
+            "list.txt",
+        ],
+        &[
+            "products",
+            "@list.txt",
+            "--cell",
+            "1",
+            "--dem",
+            "d.tif",
+            "--mesh",
+            "list.txt",
+        ],
+        &[
+            "thin",
+            "@list.txt",
+            "--max-error",
+            "0.1",
+            "-o",
+            "list.txt",
+            "--format",
+            "ply",
+        ],
+        &["refine", "@list.txt", "-o", "list.txt", "--format", "ply"],
+        // A `.vpc` rewrote itself; a run over it replaced one of its files.
+        &["index", "tiles.vpc", "-o", "tiles.vpc"],
+        &["tin", "tiles.vpc", "-o", "a.laz", "--format", "ply", "-q"],
+        &[
+            "dem", "@laz.txt", "--cell", "1", "-o", "laz.txt", "--format", "asc",
+        ],
+        // A plan's outputs, when it is made and when it is merged.
+        &[
+            "plan",
+            "dem",
+            "@laz.txt",
+            "--cell",
+            "1",
+            "--tile",
+            "100",
+            "--contours",
+            "laz.txt",
+            "-o",
+            "p",
+        ],
+        &[
+            "plan",
+            "dem",
+            "tiles.vpc",
+            "--cell",
+            "1",
+            "--tile",
+            "100",
+            "--contours",
+            "tiles.vpc",
+            "-o",
+            "p",
+        ],
+        &["merge", "job/plan.json", "-o", "laz.txt"],
+    ];
+    for args in cases {
+        let o = run(dir, args);
+        assert_eq!(code(&o), 2, "{args:?}: {}", err(&o));
+        assert!(err(&o).contains("an input"), "{args:?}: {}", err(&o));
+    }
+    for (f, b) in kept.iter().zip(&before) {
+        assert_eq!(&std::fs::read(dir.join(f)).unwrap(), b, "{f} was replaced");
+    }
+    assert!(!dir.join("d.tif").exists() && !dir.join("p").exists());
+}

@@ -280,20 +280,25 @@ pub fn kind(e: &anyhow::Error) -> sweeptin::ErrorKind {
 }
 
 fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
-    // `@list.txt`, quoted globs: the files a command's FILES stand for.
+    // `@list.txt`, quoted globs: the files a command's FILES stand for; the lists read are
+    // inputs too, which no output may replace.
     match &mut cli.command {
-        Command::Tin(a) => input::expand(&mut a.input.inputs)?,
-        Command::Info(a) => input::expand_files(&mut a.files)?,
-        Command::Dem(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Contours(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Volume(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Sample(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Profile(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Products(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Index(a) => input::expand_files(&mut a.files)?,
-        Command::Crossval(a) => input::expand(&mut a.input)?,
-        Command::Thin(a) => input::expand(&mut a.input.inputs)?,
-        Command::Refine(a) => input::expand(&mut a.input.inputs)?,
+        Command::Tin(a) => a.input.expand()?,
+        Command::Info(a) => {
+            input::expand_files(&mut a.files)?;
+        }
+        Command::Dem(a) => a.input.args.expand()?,
+        Command::Contours(a) => a.input.args.expand()?,
+        Command::Volume(a) => a.input.args.expand()?,
+        Command::Sample(a) => a.input.args.expand()?,
+        Command::Profile(a) => a.input.args.expand()?,
+        Command::Products(a) => a.input.args.expand()?,
+        Command::Index(a) => a.lists = input::expand_files(&mut a.files)?,
+        Command::Crossval(a) => {
+            input::expand(&mut a.input)?;
+        }
+        Command::Thin(a) => a.input.expand()?,
+        Command::Refine(a) => a.input.expand()?,
         _ => {}
     }
     match cli.command {

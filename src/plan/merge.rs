@@ -416,10 +416,7 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     if let Some(h) = &hillshade {
         outs.push(("the hillshade", h));
     }
-    let mut protected: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
-    // The line files too (without a GeoPackage's layer): tasks and the TIN's trim read them.
-    let lines = plan.job.lines.iter().flat_map(|l| l.files());
-    protected.extend(lines.map(|f| crate::input::vector::split_layer(&f.path).0));
+    let mut protected = plan.read_files();
     protected.push(dir.join("plan.json"));
     crate::output::distinct_outputs(&outs, &protected, "the plan")?;
     for (what, o) in &outs {
