@@ -546,7 +546,8 @@ fn outputs_never_overwrite_a_file_list_a_vpc_or_a_file_they_name() {
     let d = tempfile::tempdir().unwrap();
     let dir = d.path();
     grid(dir);
-    std::fs::copy(data::shared("lidar/startinpy_small.laz"), dir.join("a.laz")).unwrap();
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    std::fs::copy(sample, dir.join("a.laz")).unwrap();
     std::fs::write(dir.join("list.txt"), "grid.xyz\n").unwrap();
     std::fs::write(dir.join("outer.txt"), "@list.txt\n").unwrap();
     std::fs::write(dir.join("laz.txt"), "a.laz\n").unwrap();

@@ -117,3 +117,57 @@ fn the_mosaic_never_replaces_a_task_output() {
     );
     assert!(!job.join("tiles/new.vrt").exists());
 }
+
+/// A plan of the sample file in `t/NAME` made by `plan COMMAND… --tile 100`, its tasks run.
+fn planned_and_run(t: &std::path::Path, name: &str, command: &[&str]) -> PathBuf {
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let job = t.join(name);
+    let mut args = vec!["plan", command[0], s(&sample)];
+    args.extend(&command[1..]);
+    args.extend(["--tile", "100", "-q", "-o", s(&job)]);
+    sweeptin(&args, "plan");
+    let plan = job.join("plan.json");
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
+    plan
+}
+
+/// `merge --contours` on a plan whose tasks drew no contour lines (a DEM planned without
+/// --contours, a contours, volume or TIN plan) is refused, saying what the plan makes (it
+/// exited 0 and wrote no lines).
+#[test]
+fn merge_refuses_outputs_its_plan_cannot_give() {
+    let t = tempfile::tempdir().unwrap();
+    let lines = t.path().join("c.geojson");
+    let cases: &[(&[&str], &str, &str)] = &[
+        (
+            &["dem", "--cell", "1"],
+            "m.tif",
+            "a DEM without contour lines",
+        ),
+        (
+            &["contours", "--interval", "1"],
+            "m.geojson",
+            "makes contour lines",
+        ),
+        (&["volume", "--plane", "0"], "", "makes volumes"),
+        (&["tin"], "m.ply", "makes a TIN"),
+    ];
+    for (command, out, says) in cases {
+        let plan = planned_and_run(t.path(), command[0], command);
+        let mut args = vec!["merge", s(&plan), "--contours", s(&lines)];
+        let out = t.path().join(out);
+        if out != t.path() {
+            args.extend(["-o", s(&out)]);
+        }
+        let o = bin().args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{command:?}: {err}");
+        assert!(err.contains(says), "{command:?}: {err}");
+        assert!(!lines.exists(), "{command:?}");
+        assert!(
+            out == t.path() || !out.exists(),
+            "{command:?}: {}",
+            out.display()
+        );
+    }
+}

@@ -90,7 +90,7 @@ pub struct MergeArgs {
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// For a DEM plan made with --contours: the stitched contour lines (default: the path the
-    /// plan was given).
+    /// plan was given). Refused for other plans, whose tasks drew no lines to stitch.
     #[arg(long, value_name = "GEOJSON")]
     pub contours: Option<PathBuf>,
     /// For a DEM plan merged into one GeoTIFF: a hillshade of the whole mosaic (no seams), a

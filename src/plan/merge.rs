@@ -339,6 +339,22 @@ fn plan_crs(plan: &Plan) -> Result<Option<Crs>> {
     Ok(r.crs().cloned())
 }
 
+/// Why a plan of `product` has no contour lines for a merge's `--contours`: what it holds, and
+/// what to do.
+fn no_contours(product: &super::Product) -> String {
+    use super::Product;
+    match product {
+        Product::Dem { .. } => "the plan makes a DEM without contour lines (it was made without              --contours, so no task drew any): make the plan again with --contours FILE              --interval N, or draw them from the mosaic (`sweeptin contours`)"
+            .into(),
+        Product::Contours(_) => "the plan makes contour lines, written to -o OUT.geojson: leave              --contours out"
+            .into(),
+        Product::Volume { .. } => "the plan makes volumes, printed (--json for a summary), and              no contour lines: leave --contours out"
+            .into(),
+        Product::Tin => "the plan makes a TIN (-o OUT.ply, .obj, .xml or .stin) and no contour              lines: leave --contours out"
+            .into(),
+    }
+}
+
 /// An output the plan was given (`"contours"`, `"hillshade"`).
 fn planned(plan: &Plan, name: &str) -> Option<PathBuf> {
     plan.outputs
@@ -404,6 +420,22 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     use super::Product;
     let out = o.out.as_deref();
     let dem = matches!(plan.job.product, Product::Dem { .. });
+    if let Some(c) = &o.contours
+        && !matches!(
+            plan.job.product,
+            Product::Dem {
+                contours: Some(_),
+                ..
+            }
+        )
+    {
+        // The tasks drew no lines to stitch: refused, never an exit 0 that writes nothing.
+        return Err(Error::Options(format!(
+            "--contours {}: {}",
+            c.display(),
+            no_contours(&plan.job.product)
+        )));
+    }
     let contours = o.contours.clone().or_else(|| planned(plan, "contours"));
     let hillshade = o.hillshade.clone().or_else(|| planned(plan, "hillshade"));
     let mut outs: Vec<(&str, &Path)> = Vec::new();
