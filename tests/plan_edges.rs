@@ -257,3 +257,48 @@ fn a_damaged_pieces_file_is_an_input_error() {
     }
     std::fs::write(&pieces, &bytes).unwrap();
 }
+
+/// `run --all` whose task process died of SIGKILL (as the out-of-memory killer does it; the
+/// test makes task 1 kill itself) exits 4, naming the task and the signal, also in `--json`
+/// (it exited 5, "a bug", without naming either); `--resume` then runs it.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_task_killed_by_a_signal_is_named_with_it() {
+    let t = tempfile::tempdir().unwrap();
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let job = t.path().join("job");
+    let args = [
+        "plan",
+        "dem",
+        s(&sample),
+        "--cell",
+        "1",
+        "--tile",
+        "16",
+        "-q",
+    ];
+    sweeptin(&[&args[..], &["-o", s(&job)]].concat(), "plan");
+    let plan = job.join("plan.json");
+    let o = bin()
+        .args(["run", s(&plan), "--all", "-q", "--json"])
+        .env("SWEEPTIN_TEST_KILL_TASK", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{err}");
+    assert!(
+        err.contains("task 1 was killed by SIGKILL (signal 9"),
+        "{err}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["error"]["status"], 4);
+    assert!(
+        json["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("SIGKILL")
+    );
+    sweeptin(&["run", s(&plan), "--all", "--resume", "-q"], "resume");
+    let m = t.path().join("m.tif");
+    sweeptin(&["merge", s(&plan), "-o", s(&m), "-q"], "merge");
+}

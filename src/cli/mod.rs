@@ -34,8 +34,10 @@ Exit status:
        output, a job over its limits (--max-cells, --mem)
   3    bad input data: unreadable, damaged or not in its format, or nothing left to triangulate
   4    output or temporary I/O: disk full, read-only, permissions, a directory or device in the
-       way, memory that cannot be had
-  5    internal error (a bug in sweeptin: please report it with the input)
+       way, memory that cannot be had; `run --all` whose task was killed by a signal from
+       outside (SIGKILL: the out-of-memory killer or a job's limit), named with its task
+  5    internal error (a bug in sweeptin: please report it with the input), also a task of
+       `run --all` that crashed (SIGSEGV, SIGABRT)
   130  interrupted by Ctrl-C (SIGINT); 143 by SIGTERM, 129 by SIGHUP (temporary files removed)
 With --json a failure is also one object on standard output:
   {\"error\": {\"status\": 3, \"kind\": \"input\", \"message\": \"…\", \"causes\": […]}}";

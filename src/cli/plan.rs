@@ -471,6 +471,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         ),
     };
     plan.task(i)?;
+    // Tests: this task's process dies of SIGKILL, as under the out-of-memory killer.
+    #[cfg(target_os = "linux")]
+    if std::env::var("SWEEPTIN_TEST_KILL_TASK").is_ok_and(|v| v == i.to_string()) {
+        use rustix::process::{Signal, getpid, kill_process};
+        let _ = kill_process(getpid(), Signal::KILL);
+    }
     if args.resume
         && plan.finished(&dir, i)
         && let Some(r) = plan.record(&dir, i)?
