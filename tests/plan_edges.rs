@@ -195,7 +195,8 @@ fn a_vrt_merge_checks_every_tile_as_the_tif_merge_does() {
     };
     // Task 0's tile short of its last rows (its header whole); then task 1's header pointing
     // past the end (its size kept).
-    let damage: [(&str, fn(&mut Vec<u8>)); 2] = [
+    type Damage = fn(&mut Vec<u8>);
+    let damage: [(&str, Damage); 2] = [
         ("was truncated", |b| b.truncate(b.len() - b.len() / 4)),
         ("cannot be read", |b| {
             b[4..8].copy_from_slice(&u32::MAX.to_le_bytes())

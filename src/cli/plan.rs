@@ -57,7 +57,9 @@ pub struct RunArgs {
     /// (Kubernetes Indexed Job), AWS_BATCH_JOB_ARRAY_INDEX, PBS_ARRAY_INDEX or SGE_TASK_ID.
     #[arg(long, value_name = "I", conflicts_with = "all")]
     pub task: Option<usize>,
-    /// Run every task here, --jobs at a time.
+    /// Run every task here, --jobs at a time. The exit status is the lowest failed task's; a
+    /// task killed by a signal is named with it (SIGKILL, the out-of-memory killer's: 4; a
+    /// crash: 5).
     #[arg(long)]
     pub all: bool,
     /// With --all: tasks run at once (each on cores / jobs threads).

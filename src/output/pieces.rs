@@ -8,7 +8,7 @@
 //!
 //! The file is `STPIECE2`, then for each piece four 64-bit words (tile x, tile y, vertices,
 //! triangles), the vertices (`3 × f64` each), their degrees (`u32`), the triangles (`3 × u32`)
-//! and a 64-bit checksum of all these ([`Checksum`]), and at the end `STPIECE$` with the number
+//! and a 64-bit checksum of all these (`Checksum`), and at the end `STPIECE$` with the number
 //! of pieces, so that a cut file is refused. A piece is checked before it is handed on: a
 //! damaged file is an input's error naming it (bit flips merged into a different mesh with
 //! exit 0, or failed as an internal error), and counts larger than the bytes left are refused

@@ -146,10 +146,13 @@ fn open_tile(
             && k.round() >= 0.0
             && k.round() + f64::from(n) <= f64::from(of)
     };
-    if !(same(t[1]) && same(-t[5]) && t[2] == 0.0 && t[4] == 0.0)
-        || !whole(col, spec.cols, g.cols)
-        || !whole(row, spec.rows, g.rows)
-    {
+    let fits = same(t[1])
+        && same(-t[5])
+        && t[2] == 0.0
+        && t[4] == 0.0
+        && whole(col, spec.cols, g.cols)
+        && whole(row, spec.rows, g.rows);
+    if !fits {
         return Err(bad(format!(
             "is not a tile of this plan's mosaic: its header says {} × {} cells of {} from \
              ({}, {}), the mosaic {} × {} cells of {} from ({}, {})",

@@ -222,11 +222,7 @@ impl Plan {
         let given = crate::input::files::expand(paths, crate::input::files::Expand::VpcFiles)?;
         let canonical = |p: &PathBuf| std::fs::canonicalize(p).map_err(|e| Error::io(p, e));
         let lists = given.lists.iter().map(canonical).collect::<Result<_>>()?;
-        let paths = given
-            .files
-            .iter()
-            .map(canonical)
-            .collect::<Result<Vec<_>>>()?;
+        let paths: Vec<PathBuf> = given.files.iter().map(canonical).collect::<Result<_>>()?;
         let paths = paths.as_slice();
         if let Some(p) = paths.iter().find(|p| {
             !p.extension()
