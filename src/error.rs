@@ -213,15 +213,20 @@ pub enum Error {
 
     /// Tasks of a plan failed (`sweeptin run --all`); `kind` is the first failure's.
     #[error(
-        "{} of {total} tasks failed: {failed:?} (run them again with --resume)",
-        failed.len()
+        "{} of {total} tasks failed: {failed:?}{}; run them again with --resume",
+        failed.len(),
+        killed_by(killed)
     )]
     TasksFailed {
         /// The tasks that failed.
         failed: Vec<usize>,
+        /// Those of them whose process a signal ended (task, signal number): the out-of-memory
+        /// killer's SIGKILL, a crash's SIGSEGV.
+        killed: Vec<(usize, i32)>,
         /// Tasks run.
         total: usize,
-        /// What kind of failure the lowest-numbered failed task had.
+        /// What kind of failure the lowest-numbered failed task had ([`ErrorKind::from_signal`]
+        /// for one a signal ended).
         kind: ErrorKind,
     },
 
@@ -274,6 +279,56 @@ impl ErrorKind {
             _ => Some(ErrorKind::Internal),
         }
     }
+
+    /// The kind of failure of a child `sweeptin` process that the signal `signal` ended (it
+    /// could not exit with a status of its own): a crash (SIGSEGV, SIGBUS, SIGILL, SIGFPE,
+    /// SIGABRT, SIGTRAP, SIGSYS) is a bug; any other signal came from outside, the environment
+    /// (SIGKILL from the out-of-memory killer or a job's limit, SIGXCPU, SIGTERM to the task
+    /// alone): [`ErrorKind::Output`], exit 4.
+    pub const fn from_signal(signal: i32) -> ErrorKind {
+        match signal {
+            4..=8 | 11 | 31 => ErrorKind::Internal,
+            _ => ErrorKind::Output,
+        }
+    }
+}
+
+/// `"; task 3 was killed by SIGKILL (…)"` for each task in `killed` (task, signal).
+fn killed_by(killed: &[(usize, i32)]) -> String {
+    let mut out = String::new();
+    for &(task, signal) in killed {
+        let name = match signal {
+            1 => "SIGHUP",
+            2 => "SIGINT",
+            3 => "SIGQUIT",
+            4 => "SIGILL",
+            5 => "SIGTRAP",
+            6 => "SIGABRT",
+            7 => "SIGBUS",
+            8 => "SIGFPE",
+            9 => "SIGKILL",
+            11 => "SIGSEGV",
+            13 => "SIGPIPE",
+            15 => "SIGTERM",
+            24 => "SIGXCPU",
+            25 => "SIGXFSZ",
+            31 => "SIGSYS",
+            _ => "a signal",
+        };
+        let why = match (signal, ErrorKind::from_signal(signal)) {
+            (9, _) => {
+                "the out-of-memory killer or a job's memory or time limit sends it: run fewer \
+                 --jobs at once, or plan smaller tiles"
+            }
+            (_, ErrorKind::Internal) => "a crash: a bug in sweeptin, please report it",
+            _ => "sent from outside",
+        };
+        let _ = std::fmt::Write::write_fmt(
+            &mut out,
+            format_args!("; task {task} was killed by {name} (signal {signal}; {why})"),
+        );
+    }
+    out
 }
 
 /// The files' names, comma-separated.
@@ -379,6 +434,23 @@ impl Error {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn tasks_killed_by_signals_are_named_and_classified() {
+        use super::{Error, ErrorKind};
+        let e = Error::TasksFailed {
+            failed: vec![1, 4],
+            killed: vec![(1, 9), (4, 11)],
+            total: 6,
+            kind: ErrorKind::from_signal(9),
+        };
+        let text = e.to_string();
+        assert!(text.contains("task 1 was killed by SIGKILL (signal 9; the out-of-memory"));
+        assert!(text.contains("task 4 was killed by SIGSEGV (signal 11; a crash"));
+        assert_eq!(e.kind().exit_code(), 4);
+        assert_eq!(ErrorKind::from_signal(6), ErrorKind::Internal);
+        assert_eq!(ErrorKind::from_signal(15), ErrorKind::Output);
+    }
+
     #[test]
     fn human_bytes() {
         assert_eq!(super::human_bytes(12), "12 B");

@@ -797,4 +797,142 @@ fn points_with_no_triangle_or_far_from_zero_are_facts_not_options() {
     assert_eq!(meshes[0], meshes[1]);
     assert!(meshes[0].contains("1600 vertices"), "{}", meshes[0]);
     assert!(dems[0] == dems[1], "the DEMs of the two engines differ");
+
+// ---- Issue 41, item 1: the lists and `.vpc` files that name the inputs are inputs ------------
+
+#[test]
+fn outputs_never_overwrite_a_file_list_a_vpc_or_a_file_they_name() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    grid(dir);
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    std::fs::copy(sample, dir.join("a.laz")).unwrap();
+    std::fs::write(dir.join("list.txt"), "grid.xyz\n").unwrap();
+    std::fs::write(dir.join("outer.txt"), "@list.txt\n").unwrap();
+    std::fs::write(dir.join("laz.txt"), "a.laz\n").unwrap();
+    let o = run(dir, &["index", "a.laz", "-o", "tiles.vpc"]);
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    let o = run(
+        dir,
+        &[
+            "plan", "dem", "@laz.txt", "--cell", "1", "--tile", "100", "-o", "job",
+        ],
+    );
+    assert_eq!(code(&o), 0, "{}", err(&o));
+    let kept = [
+        "list.txt",
+        "outer.txt",
+        "laz.txt",
+        "tiles.vpc",
+        "a.laz",
+        "grid.xyz",
+    ];
+    let before: Vec<Vec<u8>> = kept
+        .iter()
+        .map(|f| std::fs::read(dir.join(f)).unwrap())
+        .collect();
+    let cases: &[&[&str]] = &[
+        // The list itself (it was replaced by the mesh, exit 0), also named by another list.
+        &[
+            "tin",
+            "@list.txt",
+            "-o",
+            "list.txt",
+            "--format",
+            "obj",
+            "-q",
+        ],
+        &[
+            "tin",
+            "@outer.txt",
+            "-o",
+            "list.txt",
+            "--format",
+            "obj",
+            "-q",
+        ],
+        &[
+            "tin",
+            "@outer.txt",
+            "-o",
+            "outer.txt",
+            "--format",
+            "obj",
+            "-q",
+        ],
+        &[
+            "dem",
+            "@list.txt",
+            "--cell",
+            "1",
+            "-o",
+            "d.tif",
+            "--contours",
+            "list.txt",
+        ],
+        &[
+            "products",
+            "@list.txt",
+            "--cell",
+            "1",
+            "--dem",
+            "d.tif",
+            "--mesh",
+            "list.txt",
+        ],
+        &[
+            "thin",
+            "@list.txt",
+            "--max-error",
+            "0.1",
+            "-o",
+            "list.txt",
+            "--format",
+            "ply",
+        ],
+        &["refine", "@list.txt", "-o", "list.txt", "--format", "ply"],
+        // A `.vpc` rewrote itself; a run over it replaced one of its files.
+        &["index", "tiles.vpc", "-o", "tiles.vpc"],
+        &["tin", "tiles.vpc", "-o", "a.laz", "--format", "ply", "-q"],
+        &[
+            "dem", "@laz.txt", "--cell", "1", "-o", "laz.txt", "--format", "asc",
+        ],
+        // A plan's outputs, when it is made and when it is merged.
+        &[
+            "plan",
+            "dem",
+            "@laz.txt",
+            "--cell",
+            "1",
+            "--tile",
+            "100",
+            "--contours",
+            "laz.txt",
+            "-o",
+            "p",
+        ],
+        &[
+            "plan",
+            "dem",
+            "tiles.vpc",
+            "--cell",
+            "1",
+            "--tile",
+            "100",
+            "--contours",
+            "tiles.vpc",
+            "-o",
+            "p",
+        ],
+        &["merge", "job/plan.json", "-o", "laz.txt"],
+    ];
+    for args in cases {
+        let o = run(dir, args);
+        assert_eq!(code(&o), 2, "{args:?}: {}", err(&o));
+        assert!(err(&o).contains("an input"), "{args:?}: {}", err(&o));
+    }
+    for (f, b) in kept.iter().zip(&before) {
+        assert_eq!(&std::fs::read(dir.join(f)).unwrap(), b, "{f} was replaced");
+    }
+    assert!(!dir.join("d.tif").exists() && !dir.join("p").exists());
 }

@@ -117,3 +117,189 @@ fn the_mosaic_never_replaces_a_task_output() {
     );
     assert!(!job.join("tiles/new.vrt").exists());
 }
+
+/// A plan of the sample file in `t/NAME` made by `plan COMMAND… --tile TILE`, its tasks run.
+fn planned_and_run(t: &std::path::Path, name: &str, command: &[&str], tile: &str) -> PathBuf {
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let job = t.join(name);
+    let mut args = vec!["plan", command[0], s(&sample)];
+    args.extend(&command[1..]);
+    args.extend(["--tile", tile, "-q", "-o", s(&job)]);
+    sweeptin(&args, "plan");
+    let plan = job.join("plan.json");
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
+    plan
+}
+
+/// `merge --contours` on a plan whose tasks drew no contour lines (a DEM planned without
+/// --contours, a contours, volume or TIN plan) is refused, saying what the plan makes (it
+/// exited 0 and wrote no lines).
+#[test]
+fn merge_refuses_outputs_its_plan_cannot_give() {
+    let t = tempfile::tempdir().unwrap();
+    let lines = t.path().join("c.geojson");
+    let cases: &[(&[&str], &str, &str)] = &[
+        (
+            &["dem", "--cell", "1"],
+            "m.tif",
+            "a DEM without contour lines",
+        ),
+        (
+            &["contours", "--interval", "1"],
+            "m.geojson",
+            "makes contour lines",
+        ),
+        (&["volume", "--plane", "0"], "", "makes volumes"),
+        (&["tin"], "m.ply", "makes a TIN"),
+    ];
+    for (command, out, says) in cases {
+        let plan = planned_and_run(t.path(), command[0], command, "100");
+        let mut args = vec!["merge", s(&plan), "--contours", s(&lines)];
+        let out = t.path().join(out);
+        if out != t.path() {
+            args.extend(["-o", s(&out)]);
+        }
+        let o = bin().args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{command:?}: {err}");
+        assert!(err.contains(says), "{command:?}: {err}");
+        assert!(!lines.exists(), "{command:?}");
+        assert!(
+            out == t.path() || !out.exists(),
+            "{command:?}: {}",
+            out.display()
+        );
+    }
+}
+
+/// `merge -o m.vrt` over a truncated tile, or one whose header no longer reads (its size kept),
+/// exits 3 naming the tile and the task to run again, as the `.tif` merge does, and writes no
+/// VRT (it wrote one, exit 0, and GDAL failed on it later); the task run again mends it.
+#[test]
+fn a_vrt_merge_checks_every_tile_as_the_tif_merge_does() {
+    let t = tempfile::tempdir().unwrap();
+    let plan = planned_and_run(t.path(), "job", &["dem", "--cell", "0.5"], "16");
+    let records: Vec<serde_json::Value> = (0..2)
+        .map(|i| {
+            let p = t.path().join(format!("job/tiles/task_{i}.json"));
+            serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+        })
+        .collect();
+    let tile = |i: usize| PathBuf::from(records[i]["outputs"][0][1].as_str().unwrap());
+    let vrt = t.path().join("m.vrt");
+    let merge = || {
+        bin()
+            .args(["merge", s(&plan), "-o", s(&vrt)])
+            .output()
+            .unwrap()
+    };
+    // Task 0's tile short of its last rows (its header whole); then task 1's header pointing
+    // past the end (its size kept).
+    type Damage = fn(&mut Vec<u8>);
+    let damage: [(&str, Damage); 2] = [
+        ("was truncated", |b| b.truncate(b.len() - b.len() / 4)),
+        ("cannot be read", |b| {
+            b[4..8].copy_from_slice(&u32::MAX.to_le_bytes())
+        }),
+    ];
+    for (i, (says, damage)) in damage.into_iter().enumerate() {
+        let mut bytes = std::fs::read(tile(i)).unwrap();
+        damage(&mut bytes);
+        std::fs::write(tile(i), &bytes).unwrap();
+        let o = merge();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(3), "{err}");
+        assert!(err.contains(s(&tile(i))) && err.contains(says), "{err}");
+        assert!(err.contains(&format!("--task {i}")), "{err}");
+        assert_eq!(err.contains("--resume"), i == 0, "{err}");
+        assert!(!vrt.exists());
+        sweeptin(&["run", s(&plan), "--task", &i.to_string(), "-q"], "run");
+    }
+    sweeptin(&["merge", s(&plan), "-o", s(&vrt), "-q"], "merge");
+}
+
+/// A bit flipped anywhere in a TIN task's `.pieces` file (at 48 offsets spread over it, each
+/// its own bit): the merge exits 3 naming the file and the task to run again, or 0 with the
+/// same mesh, never 5 (1 in 3 flips was "an internal error", and 9 in 20 merged into a
+/// different mesh with exit 0).
+#[test]
+fn a_damaged_pieces_file_is_an_input_error() {
+    let t = tempfile::tempdir().unwrap();
+    let plan = planned_and_run(t.path(), "job", &["tin"], "16");
+    let good = t.path().join("good.ply");
+    sweeptin(&["merge", s(&plan), "-o", s(&good), "-q"], "merge");
+    let good = std::fs::read(good).unwrap();
+    let pieces = std::fs::read_dir(t.path().join("job/tiles"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "pieces"))
+        .max_by_key(|p| std::fs::metadata(p).unwrap().len())
+        .unwrap();
+    let bytes = std::fs::read(&pieces).unwrap();
+    let out = t.path().join("m.ply");
+    for k in 0..48 {
+        let at = (k * bytes.len() / 48 + k * 7919 % 97).min(bytes.len() - 1);
+        let mut b = bytes.clone();
+        b[at] ^= 1 << (k % 8);
+        std::fs::write(&pieces, &b).unwrap();
+        let o = bin()
+            .args(["merge", s(&plan), "-o", s(&out), "-q"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        match o.status.code() {
+            Some(3) => assert!(err.contains(s(&pieces)) && err.contains("--task"), "{err}"),
+            Some(0) => assert!(
+                std::fs::read(&out).unwrap() == good,
+                "byte {at}: another mesh"
+            ),
+            c => panic!("byte {at}, bit {}: exit {c:?}: {err}", k % 8),
+        }
+    }
+    std::fs::write(&pieces, &bytes).unwrap();
+}
+
+/// `run --all` whose task process died of SIGKILL (as the out-of-memory killer does it; the
+/// test makes task 1 kill itself) exits 4, naming the task and the signal, also in `--json`
+/// (it exited 5, "a bug", without naming either); `--resume` then runs it.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_task_killed_by_a_signal_is_named_with_it() {
+    let t = tempfile::tempdir().unwrap();
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let job = t.path().join("job");
+    let args = [
+        "plan",
+        "dem",
+        s(&sample),
+        "--cell",
+        "1",
+        "--tile",
+        "16",
+        "-q",
+    ];
+    sweeptin(&[&args[..], &["-o", s(&job)]].concat(), "plan");
+    let plan = job.join("plan.json");
+    let o = bin()
+        .args(["run", s(&plan), "--all", "-q", "--json"])
+        .env("SWEEPTIN_TEST_KILL_TASK", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{err}");
+    assert!(
+        err.contains("task 1 was killed by SIGKILL (signal 9"),
+        "{err}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["error"]["status"], 4);
+    assert!(
+        json["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("SIGKILL")
+    );
+    sweeptin(&["run", s(&plan), "--all", "--resume", "-q"], "resume");
+    let m = t.path().join("m.tif");
+    sweeptin(&["merge", s(&plan), "-o", s(&m), "-q"], "merge");
+}

@@ -24,6 +24,9 @@ pub struct Args {
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
+    /// The file lists and `.vpc` files read to find `files`: inputs too.
+    #[arg(skip)]
+    pub lists: Vec<PathBuf>,
 }
 
 /// What `index` wrote.
@@ -44,7 +47,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     check_output(&args.output)?;
-    distinct_outputs(&[("-o", &args.output)], &args.files, "the index")?;
+    let read = [args.files.as_slice(), &args.lists].concat();
+    distinct_outputs(&[("-o", &args.output)], &read, "the index")?;
     let infos: Vec<FileInfo> = args
         .files
         .iter()

@@ -82,6 +82,9 @@ pub struct InputArgs {
     /// Set by `sweeptin run`: this run is one task of a plan.
     #[arg(skip)]
     pub task: Option<sweeptin::TaskScope>,
+    /// The file lists (`@list.txt`) read to find `inputs` ([`InputArgs::expand`]): inputs too.
+    #[arg(skip)]
+    pub lists: Vec<PathBuf>,
     /// Print a one-object JSON summary on stdout (points, triangles, seconds per phase, peak
     /// memory) for batch jobs; on failure `{"error": {"status", "kind", "message", "causes"}}`.
     #[arg(long)]
@@ -89,11 +92,19 @@ pub struct InputArgs {
 }
 
 impl InputArgs {
-    /// Every file the run reads: the points, breaklines, boundary and holes (outputs must be
-    /// none of them).
+    /// Replaces the inputs by the files they stand for (`@list.txt`, quoted globs; a `.vpc`
+    /// stays, the reader knows its files and their extents), keeping the lists read.
+    pub fn expand(&mut self) -> anyhow::Result<()> {
+        self.lists = expand(&mut self.inputs)?;
+        Ok(())
+    }
+
+    /// Every file the run reads: the points (and the lists that named them), breaklines,
+    /// boundary and holes (outputs must be none of them).
     pub fn all_inputs(&self) -> Vec<PathBuf> {
         let l = &self.lines;
         let mut v = self.inputs.clone();
+        v.extend(self.lists.iter().cloned());
         v.extend(l.breaklines.iter().cloned());
         v.extend(l.boundary.iter().chain(&l.holes).cloned());
         v
@@ -362,16 +373,20 @@ impl ProductInput {
 }
 
 /// Replaces `paths` by the files they stand for (`@list.txt`, quoted globs; a `.vpc` stays, the
-/// reader knows its files and their extents).
-pub fn expand(paths: &mut Vec<PathBuf>) -> anyhow::Result<()> {
-    *paths = sweeptin::input::files::expand(paths, sweeptin::input::files::Expand::KeepVpc)?;
-    Ok(())
+/// reader knows its files and their extents); returns the lists read, which are inputs too
+/// ([`sweeptin::input::files::Expansion`]).
+pub fn expand(paths: &mut Vec<PathBuf>) -> anyhow::Result<Vec<PathBuf>> {
+    let e = sweeptin::input::files::expand(paths, sweeptin::input::files::Expand::KeepVpc)?;
+    *paths = e.files;
+    Ok(e.lists)
 }
 
-/// As [`expand`], and a `.vpc` replaced by its files (for commands that need every header).
-pub fn expand_files(paths: &mut Vec<PathBuf>) -> anyhow::Result<()> {
-    *paths = sweeptin::input::files::expand(paths, sweeptin::input::files::Expand::VpcFiles)?;
-    Ok(())
+/// As [`expand`], and a `.vpc` replaced by its files (for commands that need every header); the
+/// `.vpc` files are among the lists returned.
+pub fn expand_files(paths: &mut Vec<PathBuf>) -> anyhow::Result<Vec<PathBuf>> {
+    let e = sweeptin::input::files::expand(paths, sweeptin::input::files::Expand::VpcFiles)?;
+    *paths = e.files;
+    Ok(e.lists)
 }
 
 /// Fails early (before any heavy work) if an output cannot be created where asked

@@ -34,8 +34,10 @@ Exit status:
        output, a job over its limits (--max-cells, --mem)
   3    bad input data: unreadable, damaged or not in its format, or nothing left to triangulate
   4    output or temporary I/O: disk full, read-only, permissions, a directory or device in the
-       way, memory that cannot be had
-  5    internal error (a bug in sweeptin: please report it with the input)
+       way, memory that cannot be had; `run --all` whose task was killed by a signal from
+       outside (SIGKILL: the out-of-memory killer or a job's limit), named with its task
+  5    internal error (a bug in sweeptin: please report it with the input), also a task of
+       `run --all` that crashed (SIGSEGV, SIGABRT)
   130  interrupted by Ctrl-C (SIGINT); 143 by SIGTERM, 129 by SIGHUP (temporary files removed)
 With --json a failure is also one object on standard output:
   {\"error\": {\"status\": 3, \"kind\": \"input\", \"message\": \"…\", \"causes\": […]}}";
@@ -280,20 +282,25 @@ pub fn kind(e: &anyhow::Error) -> sweeptin::ErrorKind {
 }
 
 fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
-    // `@list.txt`, quoted globs: the files a command's FILES stand for.
+    // `@list.txt`, quoted globs: the files a command's FILES stand for; the lists read are
+    // inputs too, which no output may replace.
     match &mut cli.command {
-        Command::Tin(a) => input::expand(&mut a.input.inputs)?,
-        Command::Info(a) => input::expand_files(&mut a.files)?,
-        Command::Dem(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Contours(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Volume(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Sample(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Profile(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Products(a) => input::expand(&mut a.input.args.inputs)?,
-        Command::Index(a) => input::expand_files(&mut a.files)?,
-        Command::Crossval(a) => input::expand(&mut a.input)?,
-        Command::Thin(a) => input::expand(&mut a.input.inputs)?,
-        Command::Refine(a) => input::expand(&mut a.input.inputs)?,
+        Command::Tin(a) => a.input.expand()?,
+        Command::Info(a) => {
+            input::expand_files(&mut a.files)?;
+        }
+        Command::Dem(a) => a.input.args.expand()?,
+        Command::Contours(a) => a.input.args.expand()?,
+        Command::Volume(a) => a.input.args.expand()?,
+        Command::Sample(a) => a.input.args.expand()?,
+        Command::Profile(a) => a.input.args.expand()?,
+        Command::Products(a) => a.input.args.expand()?,
+        Command::Index(a) => a.lists = input::expand_files(&mut a.files)?,
+        Command::Crossval(a) => {
+            input::expand(&mut a.input)?;
+        }
+        Command::Thin(a) => a.input.expand()?,
+        Command::Refine(a) => a.input.expand()?,
         _ => {}
     }
     match cli.command {

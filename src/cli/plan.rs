@@ -2,7 +2,7 @@
 //! run as tasks of a batch engine (or locally), and joined into one seamless result. See
 //! [`sweeptin::plan`] and `docs/SCALING.md`.
 
-use super::input::{InputArgs, ProductInput, distinct_outputs};
+use super::input::{InputArgs, ProductInput};
 use super::{Cli, Command};
 use anyhow::{Context, bail};
 use clap::Parser;
@@ -57,7 +57,9 @@ pub struct RunArgs {
     /// (Kubernetes Indexed Job), AWS_BATCH_JOB_ARRAY_INDEX, PBS_ARRAY_INDEX or SGE_TASK_ID.
     #[arg(long, value_name = "I", conflicts_with = "all")]
     pub task: Option<usize>,
-    /// Run every task here, --jobs at a time.
+    /// Run every task here, --jobs at a time. The exit status is the lowest failed task's; a
+    /// task killed by a signal is named with it (SIGKILL, the out-of-memory killer's: 4; a
+    /// crash: 5).
     #[arg(long)]
     pub all: bool,
     /// With --all: tasks run at once (each on cores / jobs threads).
@@ -90,7 +92,7 @@ pub struct MergeArgs {
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// For a DEM plan made with --contours: the stitched contour lines (default: the path the
-    /// plan was given).
+    /// plan was given). Refused for other plans, whose tasks drew no lines to stitch.
     #[arg(long, value_name = "GEOJSON")]
     pub contours: Option<PathBuf>,
     /// For a DEM plan merged into one GeoTIFF: a hillshade of the whole mosaic (no seams), a
@@ -340,6 +342,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
                 std::slice::from_ref(g),
                 sweeptin::input::files::Expand::VpcFiles,
             )
+            .map(|e| e.files)
         })
         .collect::<Result<_, _>>()?;
     job.args_mut().inputs = groups.iter().flatten().cloned().collect();
@@ -366,19 +369,12 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         .iter()
         .map(|g| g.iter().map(canonical).collect::<anyhow::Result<_>>())
         .collect::<anyhow::Result<_>>()?;
-    let inputs: Vec<PathBuf> = abs_groups.iter().flatten().cloned().collect();
     // The stored command line (for people) names the inputs by absolute path.
     let argv = absolute_inputs(&argv, &given, &abs_groups);
     let typed = job.typed()?;
-    // The line files are inputs too: no output may replace one.
-    let mut read: Vec<PathBuf> = inputs.clone();
-    read.extend(
-        typed
-            .lines
-            .iter()
-            .flat_map(|l| l.files().map(|f| f.path.clone())),
-    );
-    let plan = Plan::new(typed, argv, outputs, &inputs, tile, buffer)?;
+    // The inputs as given: the plan keeps the lists and `.vpc` files among what it reads, which
+    // no output may replace (checked there, with the line files).
+    let plan = Plan::new(typed, argv, outputs, &given, tile, buffer)?;
     // The lines cleaned as every task will (checked on the bytes read): their z conflicts,
     // warned of as one run warns of them.
     let lines = plan.job.lines.as_ref().map(|l| l.graph()).transpose()?;
@@ -400,12 +396,6 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     if dir.exists() && !dir.is_dir() {
         bail!("{}: not a directory", dir.display());
     }
-    // Outputs the plan will write later must not be its inputs.
-    let mut planned_outputs: Vec<(&str, &Path)> = vec![];
-    for (name, p) in plan.outputs.iter().filter(|(n, _)| n != "dir") {
-        planned_outputs.push((name.as_str(), p.as_path()));
-    }
-    distinct_outputs(&planned_outputs, &read, "the plan")?;
     let path = plan.save(&dir)?;
     super::input::warn_headers(&plan.warnings);
     if let Some(g) = &lines {
@@ -483,6 +473,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         ),
     };
     plan.task(i)?;
+    // Tests: this task's process dies of SIGKILL, as under the out-of-memory killer.
+    #[cfg(target_os = "linux")]
+    if std::env::var("SWEEPTIN_TEST_KILL_TASK").is_ok_and(|v| v == i.to_string()) {
+        use rustix::process::{Signal, getpid, kill_process};
+        let _ = kill_process(getpid(), Signal::KILL);
+    }
     if args.resume
         && plan.finished(&dir, i)
         && let Some(r) = plan.record(&dir, i)?

@@ -21,6 +21,25 @@ struct RunAllSummary {
     seconds: f64,
 }
 
+/// How a task's process that failed ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Ended {
+    /// With this exit status (5 when it could not be waited for).
+    Code(i32),
+    /// Killed by this signal (the out-of-memory killer's SIGKILL: it exited 5 "a bug", the
+    /// signal unnamed).
+    Signal(i32),
+}
+
+/// How the process of `status` ended (`None`: it could not be waited for).
+fn ended(status: Option<std::process::ExitStatus>) -> Ended {
+    #[cfg(unix)]
+    if let Some(s) = status.and_then(|s| std::os::unix::process::ExitStatusExt::signal(&s)) {
+        return Ended::Signal(s);
+    }
+    Ended::Code(status.and_then(|s| s.code()).unwrap_or(5))
+}
+
 /// `--all`: every task (not yet finished, with --resume), --jobs at a time, each in its own
 /// process so that one failing task does not stop the others.
 pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
@@ -60,11 +79,10 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
                     };
                     let ok = matches!(&status, Ok(s) if s.success());
                     if !ok {
-                        let code = status.ok().and_then(|s| s.code()).unwrap_or(5);
                         failed
                             .lock()
                             .unwrap_or_else(|e| e.into_inner())
-                            .push((i, code));
+                            .push((i, ended(status.ok())));
                     }
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     if !args.quiet && !interrupt::interrupted() {
@@ -77,12 +95,22 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
     interrupt::await_interruption();
     let mut failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
     failed.sort_unstable();
-    if let Some(&(_, code)) = failed.first() {
+    if let Some(&(_, first)) = failed.first() {
+        use sweeptin::ErrorKind;
         return Err(sweeptin::Error::TasksFailed {
             failed: failed.iter().map(|&(i, _)| i).collect(),
+            killed: failed
+                .iter()
+                .filter_map(|&(i, e)| match e {
+                    Ended::Signal(s) => Some((i, s)),
+                    Ended::Code(_) => None,
+                })
+                .collect(),
             total: todo.len(),
-            kind: sweeptin::ErrorKind::from_exit_code(code)
-                .unwrap_or(sweeptin::ErrorKind::Internal),
+            kind: match first {
+                Ended::Code(c) => ErrorKind::from_exit_code(c).unwrap_or(ErrorKind::Internal),
+                Ended::Signal(s) => ErrorKind::from_signal(s),
+            },
         }
         .into());
     }

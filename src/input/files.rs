@@ -9,6 +9,9 @@
 //! - A `.vpc` stays one input for the LAS/LAZ reader (which learns the files and their extents
 //!   from it without opening them), or is replaced by its files ([`Expand::VpcFiles`]) for
 //!   callers that need each file's header (plans).
+//!
+//! The lists and `.vpc` files read on the way are inputs too ([`Expansion::lists`]): an output
+//! never replaces one (`tin @list.txt -o list.txt` overwrote the list).
 
 use crate::error::{Error, Result};
 use crate::input::las::vpc;
@@ -23,20 +26,31 @@ pub enum Expand {
     VpcFiles,
 }
 
-/// The files `args` stand for, in order.
+/// The files some arguments stand for ([`expand`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Expansion {
+    /// The files, in order.
+    pub files: Vec<PathBuf>,
+    /// The file lists (`@list.txt`, nested ones too) and the `.vpc` files replaced by their
+    /// files, read to find [`Expansion::files`]: inputs of the run as much as those, which no
+    /// output may replace (a `.vpc` kept as it is is among the files).
+    pub lists: Vec<PathBuf>,
+}
+
+/// The files `args` stand for, in order, and the lists read to find them.
 ///
 /// # Errors
 /// [`Error::Io`] when a list cannot be read; [`Error::Options`] for a glob that matches nothing
 /// or is not a valid pattern, or an empty list; the `.vpc` reader's errors.
-pub fn expand(args: &[PathBuf], vpc_mode: Expand) -> Result<Vec<PathBuf>> {
-    let mut out = Vec::new();
+pub fn expand(args: &[PathBuf], vpc_mode: Expand) -> Result<Expansion> {
+    let mut out = Expansion::default();
     for a in args {
         expand_one(a, vpc_mode, &mut out, 0)?;
     }
     Ok(out)
 }
 
-fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Vec<PathBuf>, depth: usize) -> Result<()> {
+fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Expansion, depth: usize) -> Result<()> {
     let text = a.to_string_lossy();
     if let Some(list) = text.strip_prefix('@') {
         if depth > 8 {
@@ -46,8 +60,9 @@ fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Vec<PathBuf>, depth: usize) 
         }
         let list = Path::new(list);
         let body = std::fs::read_to_string(list).map_err(|e| Error::io(list, e))?;
+        out.lists.push(list.to_path_buf());
         let dir = list.parent().unwrap_or(Path::new(""));
-        let before = out.len();
+        let before = out.files.len();
         for line in body.lines() {
             let line = line.trim();
             if line.is_empty() || line.starts_with('#') {
@@ -61,7 +76,7 @@ fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Vec<PathBuf>, depth: usize) 
             };
             expand_one(&p, vpc_mode, out, depth + 1)?;
         }
-        if out.len() == before {
+        if out.files.len() == before {
             return Err(Error::Options(format!(
                 "{}: the file list names no file",
                 list.display()
@@ -87,11 +102,12 @@ fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Vec<PathBuf>, depth: usize) 
     push(a.to_path_buf(), vpc_mode, out)
 }
 
-fn push(p: PathBuf, vpc_mode: Expand, out: &mut Vec<PathBuf>) -> Result<()> {
+fn push(p: PathBuf, vpc_mode: Expand, out: &mut Expansion) -> Result<()> {
     if vpc_mode == Expand::VpcFiles && vpc::is_vpc(&p) {
-        out.extend(vpc::read(&p)?.into_iter().map(|e| e.path));
+        out.files.extend(vpc::read(&p)?.into_iter().map(|e| e.path));
+        out.lists.push(p);
     } else {
-        out.push(p);
+        out.files.push(p);
     }
     Ok(())
 }
@@ -111,11 +127,13 @@ mod tests {
         std::fs::write(d.join("sub/list.txt"), "# tiles\n../c.las\n\n../a.laz\n").unwrap();
         let pattern = d.join("*.laz");
         let got = expand(std::slice::from_ref(&pattern), Expand::KeepVpc).unwrap();
-        assert_eq!(got, [d.join("a.laz"), d.join("b.laz")]);
+        assert_eq!(got.files, [d.join("a.laz"), d.join("b.laz")]);
+        assert!(got.lists.is_empty());
         let list = PathBuf::from(format!("@{}", d.join("sub/list.txt").display()));
         let got = expand(&[list, d.join("b.laz")], Expand::KeepVpc).unwrap();
+        assert_eq!(got.lists, [d.join("sub/list.txt")]);
         assert_eq!(
-            got,
+            got.files,
             [
                 d.join("sub/../c.las"),
                 d.join("sub/../a.laz"),
@@ -129,6 +147,6 @@ mod tests {
         // A file that exists is taken as it is, brackets and all.
         std::fs::write(d.join("x[1].laz"), "").unwrap();
         let got = expand(&[d.join("x[1].laz")], Expand::KeepVpc).unwrap();
-        assert_eq!(got, [d.join("x[1].laz")]);
+        assert_eq!(got.files, [d.join("x[1].laz")]);
     }
 }

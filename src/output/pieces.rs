@@ -6,10 +6,15 @@
 //! tile owns it (`u32::MAX` otherwise): what the merge needs to number each vertex once and to
 //! know when no later piece uses it (see [`crate::sink::MeshSink::piece`]).
 //!
-//! The file is `STPIECE1`, then for each piece four 64-bit words (tile x, tile y, vertices,
-//! triangles), the vertices (`3 × f64` each), their degrees (`u32`), the triangles (`3 × u32`),
-//! and at the end `STPIECE$` with the number of pieces, so that a cut file is refused. Numbers
-//! are little-endian (the machines that run plans are). Written through an [`AtomicFile`].
+//! The file is `STPIECE2`, then for each piece four 64-bit words (tile x, tile y, vertices,
+//! triangles), the vertices (`3 × f64` each), their degrees (`u32`), the triangles (`3 × u32`)
+//! and a 64-bit checksum of all these (`Checksum`), and at the end `STPIECE$` with the number
+//! of pieces, so that a cut file is refused. A piece is checked before it is handed on: a
+//! damaged file is an input's error naming it (bit flips merged into a different mesh with
+//! exit 0, or failed as an internal error), and counts larger than the bytes left are refused
+//! before anything is allocated. Numbers are little-endian (the machines that run plans are).
+//! Written through an [`AtomicFile`]. (`STPIECE1`, without checksums, is refused: its task runs
+//! again.)
 
 use super::atomic::AtomicFile;
 use crate::error::{Error, Result};
@@ -18,8 +23,39 @@ use std::fs::File;
 use std::io::{BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8; 8] = b"STPIECE1";
+const MAGIC: &[u8; 8] = b"STPIECE2";
+const OLD_MAGIC: &[u8; 8] = b"STPIECE1";
 const END: &[u8; 8] = b"STPIECE$";
+/// Bytes of one vertex (position and degree), of one triangle, of a checksum.
+const VERTEX: u64 = 24 + 4;
+const TRIANGLE: u64 = 12;
+const SUM: u64 = 8;
+
+/// A piece's checksum: each 8-byte word (the last one of a slice padded with zeros) mixed into
+/// the state by an exclusive or, a multiplication by an odd constant and a rotation, each a
+/// bijection of the state, so a change within one word always changes the sum, and any other
+/// change does but with a chance of 2⁻⁶⁴. It finds damage on disk, not forgeries.
+#[derive(Clone, Copy, Debug)]
+struct Checksum(u64);
+
+impl Checksum {
+    fn new() -> Self {
+        Checksum(0x243F_6A88_85A3_08D3)
+    }
+
+    fn add(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(8) {
+            let mut w = [0u8; 8];
+            w[..c.len()].copy_from_slice(c);
+            self.0 = ((self.0 ^ u64::from_le_bytes(w)).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+                .rotate_left(29);
+        }
+    }
+
+    fn value(self) -> u64 {
+        self.0
+    }
+}
 
 /// Writes the pieces of a tiled run (a [`MeshSink`] that takes pieces only).
 #[derive(Debug)]
@@ -95,12 +131,19 @@ impl MeshSink for PieceWriter {
             vertices.len() as u64,
             triangles.len() as u64,
         ]);
-        let r = out
-            .write_all(&head)
-            .and_then(|()| crate::sort::write_pieces(out, bytemuck::cast_slice(vertices)))
-            .and_then(|()| crate::sort::write_pieces(out, bytemuck::cast_slice(degree)))
-            .and_then(|()| crate::sort::write_pieces(out, bytemuck::cast_slice(triangles)));
-        r.map_err(|e| out.err(e))?;
+        let parts: [&[u8]; 4] = [
+            &head,
+            bytemuck::cast_slice(vertices),
+            bytemuck::cast_slice(degree),
+            bytemuck::cast_slice(triangles),
+        ];
+        let mut sum = Checksum::new();
+        for part in parts {
+            sum.add(part);
+            crate::sort::write_pieces(out, part).map_err(|e| out.err(e))?;
+        }
+        out.write_all(&sum.value().to_le_bytes())
+            .map_err(|e| out.err(e))?;
         self.pieces += 1;
         self.summary.vertices += vertices.len() as u64;
         self.summary.triangles += triangles.len() as u64;
@@ -141,6 +184,8 @@ pub struct PieceReader {
     r: BufReader<File>,
     path: PathBuf,
     read: u64,
+    /// Bytes not read yet.
+    left: u64,
 }
 
 impl PieceReader {
@@ -150,17 +195,31 @@ impl PieceReader {
     /// [`Error::Io`] if it cannot be read; [`Error::Format`] if it is not a pieces file.
     pub fn open(path: &Path) -> Result<Self> {
         let f = File::open(path).map_err(|e| Error::io(path, e))?;
+        let left = f.metadata().map_err(|e| Error::io(path, e))?.len();
         let mut r = PieceReader {
             r: BufReader::with_capacity(1 << 20, f),
             path: path.to_path_buf(),
             read: 0,
+            left,
         };
         let mut m = [0u8; 8];
         r.exact(&mut m)?;
+        if &m == OLD_MAGIC {
+            return Err(r.bad("a pieces file of an older sweeptin, without checksums"));
+        }
         if &m != MAGIC {
-            return Err(r.bad("not a sweeptin pieces file"));
+            return Err(r.bad("not a sweeptin pieces file (or its first bytes are damaged)"));
         }
         Ok(r)
+    }
+
+    /// Piece [`PieceReader::read`] does not hold what its task wrote.
+    fn damaged(&self) -> Error {
+        self.bad(&format!(
+            "piece {} is damaged (its checksum or counts do not hold): the file changed after \
+             its task wrote it",
+            self.read + 1
+        ))
     }
 
     fn bad(&self, message: &str) -> Error {
@@ -177,7 +236,9 @@ impl PieceReader {
             } else {
                 Error::io(&self.path, e)
             }
-        })
+        })?;
+        self.left = self.left.saturating_sub(b.len() as u64);
+        Ok(())
     }
 
     fn records<T: bytemuck::Pod + Default>(&mut self, n: usize) -> Result<Vec<T>> {
@@ -206,16 +267,37 @@ impl PieceReader {
         let word = |b: &[u8]| u64::from_le_bytes(b.try_into().expect("8 bytes"));
         let (tx, ty) = (word(&tag) as i64, word(&rest[..8]) as i64);
         let (nv, nt) = (word(&rest[8..16]), word(&rest[16..]));
+        // Counts are checked against the bytes left before anything is allocated.
+        let need = nv
+            .checked_mul(VERTEX)
+            .and_then(|v| v.checked_add(nt.checked_mul(TRIANGLE)?))
+            .and_then(|b| b.checked_add(SUM));
         if nv > u64::from(u32::MAX) || nt > 2 * nv + 2 {
-            return Err(self.bad("a piece's header is damaged"));
+            return Err(self.damaged());
+        }
+        if need.is_none_or(|b| b > self.left) {
+            return Err(self.bad(&format!(
+                "cut short (the task did not finish writing it), or the counts of piece {} are \
+                 damaged",
+                self.read + 1
+            )));
         }
         let vertices: Vec<[f64; 3]> = self.records(nv as usize)?;
         let degree: Vec<u32> = self.records(nv as usize)?;
         let triangles: Vec<[u32; 3]> = self.records(nt as usize)?;
-        if triangles.iter().flatten().any(|&i| u64::from(i) >= nv)
+        let mut sum = Checksum::new();
+        sum.add(&tag);
+        sum.add(&rest);
+        sum.add(bytemuck::cast_slice(&vertices));
+        sum.add(bytemuck::cast_slice(&degree));
+        sum.add(bytemuck::cast_slice(&triangles));
+        let mut stored = [0u8; 8];
+        self.exact(&mut stored)?;
+        if u64::from_le_bytes(stored) != sum.value()
+            || triangles.iter().flatten().any(|&i| u64::from(i) >= nv)
             || vertices.iter().flatten().any(|c| !c.is_finite())
         {
-            return Err(self.bad("a piece is damaged"));
+            return Err(self.damaged());
         }
         self.read += 1;
         Ok(Some(Piece {
@@ -256,5 +338,55 @@ mod tests {
         let mut r = PieceReader::open(&path).unwrap();
         let e = r.next_piece().and_then(|_| r.next_piece()).unwrap_err();
         assert!(e.to_string().contains("cut short"), "{e}");
+    }
+
+    fn read_all(path: &Path) -> Result<Vec<Piece>> {
+        let mut r = PieceReader::open(path)?;
+        let mut all = Vec::new();
+        while let Some(p) = r.next_piece()? {
+            all.push(p);
+        }
+        Ok(all)
+    }
+
+    #[test]
+    fn every_flipped_bit_of_a_pieces_file_is_found() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.pieces");
+        let mut w = PieceWriter::create(&path).unwrap();
+        let v = [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 2.0],
+            [0.0, 1.0, 3.0],
+            [1.0, 1.0, 4.0],
+        ];
+        w.piece((3, -2), &v, &[2, u32::MAX, 2, 1], &[[0, 1, 2], [1, 3, 2]])
+            .unwrap();
+        w.piece((4, -2), &v[..3], &[1, 1, 1], &[[0, 1, 2]]).unwrap();
+        w.finish().unwrap();
+        let good = std::fs::read(&path).unwrap();
+        assert_eq!(read_all(&path).unwrap().len(), 2);
+        for bit in 0..8 * good.len() {
+            let mut b = good.clone();
+            b[bit / 8] ^= 1 << (bit % 8);
+            std::fs::write(&path, &b).unwrap();
+            match read_all(&path) {
+                Err(Error::Format { .. }) => {}
+                other => panic!("bit {bit}: {other:?}"),
+            }
+        }
+        // Counts beyond the bytes left are refused before anything is allocated.
+        let mut b = good.clone();
+        b[24..32].copy_from_slice(&u64::from(u32::MAX).to_le_bytes());
+        b[32..40].copy_from_slice(&0u64.to_le_bytes());
+        std::fs::write(&path, &b).unwrap();
+        let e = read_all(&path).unwrap_err();
+        assert!(e.to_string().contains("counts of piece 1"), "{e}");
+        // A file of the format without checksums says so.
+        let mut b = good;
+        b[..8].copy_from_slice(OLD_MAGIC);
+        std::fs::write(&path, &b).unwrap();
+        let e = read_all(&path).unwrap_err();
+        assert!(e.to_string().contains("older sweeptin"), "{e}");
     }
 }

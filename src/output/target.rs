@@ -251,8 +251,15 @@ pub fn side_files(path: &Path) -> Vec<PathBuf> {
 /// The files read beside an input at `path`: a shapefile's `.prj`, `.shx`, `.dbf` and `.cpg`,
 /// an ESRI ASCII grid's `.prj`; beside the path as given and beside the file a symbolic link
 /// leads to (for `--breaklines link.shp` with `link.shp -> lines.shp`, `-o lines.asc` replaced
-/// `lines.prj`).
+/// `lines.prj`). And the files a virtual point cloud names, which the reader opens through it
+/// (`tin tiles.vpc -o a.laz` replaced a tile); one that cannot be read names none here (the run
+/// reports it).
 fn input_side_files(path: &Path) -> Vec<PathBuf> {
+    if crate::input::las::vpc::is_vpc(path) {
+        return crate::input::las::vpc::read(path)
+            .map(|v| v.into_iter().map(|e| e.path).collect())
+            .unwrap_or_default();
+    }
     let mut names = vec![path.to_path_buf()];
     if let Ok(real) = std::fs::canonicalize(path)
         && real != path

@@ -4,7 +4,44 @@
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+impl super::Plan {
+    /// Every file the job reads, or was made from: the points' files and the lists and `.vpc`
+    /// files that named them, the line files (a GeoPackage without its layer) and a volume's
+    /// boundary. No output of the plan or of its merge may replace one.
+    pub fn read_files(&self) -> Vec<PathBuf> {
+        let mut read: Vec<PathBuf> = self.files.iter().map(|f| f.path.clone()).collect();
+        read.extend(self.lists.iter().cloned());
+        let boundary = match &self.job.product {
+            super::Product::Volume { boundary, .. } => boundary.as_ref(),
+            _ => None,
+        };
+        let lines = self
+            .job
+            .lines
+            .iter()
+            .flat_map(|l| l.files())
+            .chain(boundary);
+        read.extend(lines.map(|f| crate::input::vector::split_layer(&f.path).0));
+        read
+    }
+
+    /// Refuses, when the plan is made, outputs of the job (`--contours`, `--hillshade`) that
+    /// are files it reads ([`Plan::read_files`]) or each other.
+    ///
+    /// # Errors
+    /// [`crate::output::distinct_outputs`]'.
+    pub(super) fn check_outputs(&self) -> Result<()> {
+        let planned: Vec<(&str, &Path)> = self
+            .outputs
+            .iter()
+            .filter(|(n, _)| n != "dir")
+            .map(|(n, p)| (n.as_str(), p.as_path()))
+            .collect();
+        crate::output::distinct_outputs(&planned, &self.read_files(), "the plan")
+    }
+}
 
 /// A file's size and modification time ([`super::PlanFile::stamp`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

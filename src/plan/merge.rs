@@ -13,10 +13,12 @@ use std::path::{Path, PathBuf};
 
 pub use super::stitch::{StitchSummary, stitch};
 
-/// The records of every task of `plan` under `dir`.
+/// The records of every task of `plan` under `dir`, each output of the size its task wrote
+/// ([`Plan::check_task_outputs`]).
 ///
 /// # Errors
-/// [`Error::Options`] naming the tasks that have not finished.
+/// [`Error::Options`] naming the tasks that have not finished; [`Error::Format`] for an output
+/// missing or of another size.
 pub fn records(plan: &Plan, dir: &Path) -> Result<Vec<TaskRecord>> {
     let mut out = Vec::with_capacity(plan.tiles.len());
     let mut missing = Vec::new();
@@ -24,6 +26,11 @@ pub fn records(plan: &Plan, dir: &Path) -> Result<Vec<TaskRecord>> {
         match plan.record(dir, t.index)? {
             Some(r) => out.push(r),
             None => missing.push(t.index),
+        }
+    }
+    if missing.is_empty() {
+        for r in &out {
+            plan.check_task_outputs(dir, r)?;
         }
     }
     if !missing.is_empty() {
@@ -105,12 +112,54 @@ fn mosaic_grid(
     Ok(g)
 }
 
-/// Where tile raster `r` sits in the mosaic `g`: its first column and row.
-fn offset(g: &crate::raster::GridSpec, r: &crate::input::raster::RasterSpec) -> (u32, u32) {
-    let o = g.origin();
-    let col = ((r.transform[0] - o[0]) / g.cell).round() as u32;
-    let row = ((o[1] - r.transform[3]) / g.cell).round() as u32;
-    (col, row)
+/// Opens the DEM tile of task `i` (`path`, of the plan in `dir`) and finds where it sits in the
+/// mosaic `g` (its first column and row): its header must read, and place it on the mosaic's
+/// cells, inside it. Checked for the VRT as for the `.tif` (a VRT over a damaged tile was
+/// written with exit 0, and GDAL failed on it later).
+///
+/// # Errors
+/// [`Error::Format`] naming the tile and the task to run again.
+fn open_tile(
+    g: &crate::raster::GridSpec,
+    dir: &Path,
+    i: usize,
+    path: &Path,
+) -> Result<(RasterReader, u32, u32)> {
+    let bad = |what: String| Error::Format {
+        path: path.to_path_buf(),
+        message: format!(
+            "the dem output of task {i} {what}; {}",
+            super::task::run_again(dir, i, false)
+        ),
+    };
+    let r = RasterReader::open(path).map_err(|e| match e {
+        Error::Format { message, .. } => bad(format!("cannot be read: {message}")),
+        e => e,
+    })?;
+    let (o, spec) = (g.origin(), r.spec());
+    let t = spec.transform;
+    let col = (t[0] - o[0]) / g.cell;
+    let row = (o[1] - t[3]) / g.cell;
+    let same = |c: f64| (c - g.cell).abs() <= 1e-9 * g.cell;
+    let whole = |k: f64, n: u32, of: u32| {
+        (k - k.round()).abs() <= 1e-6
+            && k.round() >= 0.0
+            && k.round() + f64::from(n) <= f64::from(of)
+    };
+    let fits = same(t[1])
+        && same(-t[5])
+        && t[2] == 0.0
+        && t[4] == 0.0
+        && whole(col, spec.cols, g.cols)
+        && whole(row, spec.rows, g.rows);
+    if !fits {
+        return Err(bad(format!(
+            "is not a tile of this plan's mosaic: its header says {} × {} cells of {} from \
+             ({}, {}), the mosaic {} × {} cells of {} from ({}, {})",
+            spec.cols, spec.rows, t[1], t[0], t[3], g.cols, g.rows, g.cell, o[0], o[1]
+        )));
+    }
+    Ok((r, col.round() as u32, row.round() as u32))
 }
 
 /// How a DEM mosaic is written.
@@ -137,7 +186,11 @@ pub fn merge_dem(
     crs: Option<&Crs>,
 ) -> Result<DemMergeSummary> {
     let recs = records(plan, dir)?;
-    let tiles = outputs(&recs, "dem")?;
+    let tiles: Vec<(usize, &Path)> = recs
+        .iter()
+        .map(|r| r.index)
+        .zip(outputs(&recs, "dem")?)
+        .collect();
     let nodata = options.nodata;
     let g = mosaic_grid(plan, nodata, options.align, crs)?;
     let ext = out
@@ -145,17 +198,16 @@ pub fn merge_dem(
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     if ext.as_deref() == Some("vrt") && options.output.format.is_none() {
-        write_vrt(&g, &tiles, out)?;
+        write_vrt(&g, dir, &tiles, out)?;
     } else {
         let mut o = options.output;
         if o.format.is_none() {
             o.format = Some(RasterFormat::GeoTiff);
         }
         let mut w = create_grid_writer(out, &o, &g)?;
-        for path in &tiles {
-            let mut r = RasterReader::open(path)?;
+        for &(i, path) in &tiles {
+            let (mut r, c0, r0) = open_tile(&g, dir, i, path)?;
             let spec = r.spec().clone();
-            let (c0, r0) = offset(&g, &spec);
             let rows_at_once = (1 << 20) / spec.cols.max(1);
             let mut row = 0;
             while row < spec.rows {
@@ -182,7 +234,12 @@ pub fn merge_dem(
     })
 }
 
-fn write_vrt(g: &crate::raster::GridSpec, tiles: &[&Path], out: &Path) -> Result<()> {
+fn write_vrt(
+    g: &crate::raster::GridSpec,
+    dir: &Path,
+    tiles: &[(usize, &Path)],
+    out: &Path,
+) -> Result<()> {
     use std::fmt::Write as _;
     let o = g.origin();
     let mut x = String::new();
@@ -201,11 +258,10 @@ fn write_vrt(g: &crate::raster::GridSpec, tiles: &[&Path], out: &Path) -> Result
     );
     let _ = writeln!(x, "  <VRTRasterBand dataType=\"Float32\" band=\"1\">");
     let _ = writeln!(x, "    <NoDataValue>{:?}</NoDataValue>", g.nodata);
-    for path in tiles {
-        let r = RasterReader::open(path)?;
+    for &(i, path) in tiles {
+        let (r, c0, r0) = open_tile(g, dir, i, path)?;
         let spec = r.spec();
-        let (c0, r0) = offset(g, spec);
-        let abs = std::fs::canonicalize(path).map_err(|e| Error::io(*path, e))?;
+        let abs = std::fs::canonicalize(path).map_err(|e| Error::io(path, e))?;
         let _ = writeln!(x, "    <SimpleSource>");
         let _ = writeln!(
             x,
@@ -339,6 +395,22 @@ fn plan_crs(plan: &Plan) -> Result<Option<Crs>> {
     Ok(r.crs().cloned())
 }
 
+/// Why a plan of `product` has no contour lines for a merge's `--contours`: what it holds, and
+/// what to do.
+fn no_contours(product: &super::Product) -> String {
+    use super::Product;
+    match product {
+        Product::Dem { .. } => "the plan makes a DEM without contour lines (it was made without              --contours, so no task drew any): make the plan again with --contours FILE              --interval N, or draw them from the mosaic (`sweeptin contours`)"
+            .into(),
+        Product::Contours(_) => "the plan makes contour lines, written to -o OUT.geojson: leave              --contours out"
+            .into(),
+        Product::Volume { .. } => "the plan makes volumes, printed (--json for a summary), and              no contour lines: leave --contours out"
+            .into(),
+        Product::Tin => "the plan makes a TIN (-o OUT.ply, .obj, .xml or .stin) and no contour              lines: leave --contours out"
+            .into(),
+    }
+}
+
 /// An output the plan was given (`"contours"`, `"hillshade"`).
 fn planned(plan: &Plan, name: &str) -> Option<PathBuf> {
     plan.outputs
@@ -404,6 +476,22 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     use super::Product;
     let out = o.out.as_deref();
     let dem = matches!(plan.job.product, Product::Dem { .. });
+    if let Some(c) = &o.contours
+        && !matches!(
+            plan.job.product,
+            Product::Dem {
+                contours: Some(_),
+                ..
+            }
+        )
+    {
+        // The tasks drew no lines to stitch: refused, never an exit 0 that writes nothing.
+        return Err(Error::Options(format!(
+            "--contours {}: {}",
+            c.display(),
+            no_contours(&plan.job.product)
+        )));
+    }
     let contours = o.contours.clone().or_else(|| planned(plan, "contours"));
     let hillshade = o.hillshade.clone().or_else(|| planned(plan, "hillshade"));
     let mut outs: Vec<(&str, &Path)> = Vec::new();
@@ -416,10 +504,7 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     if let Some(h) = &hillshade {
         outs.push(("the hillshade", h));
     }
-    let mut protected: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
-    // The line files too (without a GeoPackage's layer): tasks and the TIN's trim read them.
-    let lines = plan.job.lines.iter().flat_map(|l| l.files());
-    protected.extend(lines.map(|f| crate::input::vector::split_layer(&f.path).0));
+    let mut protected = plan.read_files();
     protected.push(dir.join("plan.json"));
     crate::output::distinct_outputs(&outs, &protected, "the plan")?;
     for (what, o) in &outs {
@@ -513,7 +598,7 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
             let out = need(out, "mesh (OUT.ply, OUT.obj, OUT.xml or OUT.stin)")?;
             let crs = plan_crs(plan)?;
             let def = crs.as_ref().and_then(Crs::definition);
-            summary.tin = Some(super::mesh::merge_tin(plan, &recs, out, def)?);
+            summary.tin = Some(super::mesh::merge_tin(plan, dir, &recs, out, def)?);
         }
     }
     Ok(summary)

@@ -34,7 +34,7 @@ pub struct TinMergeSummary {
     pub peak_waiting_vertices: u64,
 }
 
-/// Joins the pieces of `records` (every task of `plan`, in order) into the mesh `out`, whose
+/// Joins the pieces of `records` (every task of `plan` in `dir`, in order) into the mesh `out`, whose
 /// format its extension names (`.ply`, `.obj`, `.xml`, `.stin`).
 ///
 /// # Errors
@@ -43,6 +43,7 @@ pub struct TinMergeSummary {
 /// writer's errors.
 pub(super) fn merge_tin(
     plan: &Plan,
+    dir: &Path,
     records: &[TaskRecord],
     out: &Path,
     crs: Option<String>,
@@ -77,8 +78,16 @@ pub(super) fn merge_tin(
             writer.watermark(t.bounds[1])?;
             row = Some(t.ty);
         }
-        let mut pieces = PieceReader::open(&path)?;
-        while let Some(p) = pieces.next_piece()? {
+        // A damaged file says which task to run again.
+        let again = |e: Error| match e {
+            Error::Format { path, message } => Error::Format {
+                path,
+                message: format!("{message}; {}", super::task::run_again(dir, r.index, false)),
+            },
+            e => e,
+        };
+        let mut pieces = PieceReader::open(&path).map_err(again)?;
+        while let Some(p) = pieces.next_piece().map_err(again)? {
             writer.tile(&TileOutput {
                 tile: p.tile,
                 vertices: p.vertices,

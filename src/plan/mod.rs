@@ -90,6 +90,10 @@ pub struct Plan {
     pub outputs: Vec<(String, PathBuf)>,
     /// Every input file.
     pub files: Vec<PlanFile>,
+    /// The file lists (`@list.txt`) and `.vpc` files the inputs were given as (absolute): read
+    /// when the plan was made, so no output of the job may replace one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lists: Vec<PathBuf>,
     /// Tile side.
     pub tile: f64,
     /// The first buffer of every task: points this far around the tile are read.
@@ -218,10 +222,10 @@ impl Plan {
         }
         // `@list.txt`, quoted globs and `.vpc` files stand for their files (each header is
         // read); every file is named by its absolute path, so that tasks run from anywhere.
-        let paths = crate::input::files::expand(paths, crate::input::files::Expand::VpcFiles)?
-            .iter()
-            .map(|p| std::fs::canonicalize(p).map_err(|e| Error::io(p, e)))
-            .collect::<Result<Vec<_>>>()?;
+        let given = crate::input::files::expand(paths, crate::input::files::Expand::VpcFiles)?;
+        let canonical = |p: &PathBuf| std::fs::canonicalize(p).map_err(|e| Error::io(p, e));
+        let lists = given.lists.iter().map(canonical).collect::<Result<_>>()?;
+        let paths: Vec<PathBuf> = given.files.iter().map(canonical).collect::<Result<_>>()?;
         let paths = paths.as_slice();
         if let Some(p) = paths.iter().find(|p| {
             !p.extension()
@@ -346,6 +350,7 @@ impl Plan {
             job,
             outputs,
             files,
+            lists,
             tile,
             buffer,
             cell,
@@ -353,6 +358,7 @@ impl Plan {
             warnings,
             id: PlanId::default(),
         };
+        plan.check_outputs()?;
         plan.check_task_memory()?;
         Ok(plan)
     }

@@ -303,15 +303,42 @@ impl Plan {
     /// again.)
     pub fn finished(&self, dir: &Path, i: usize) -> bool {
         match self.record(dir, i) {
-            Ok(Some(r)) => r.outputs.iter().enumerate().all(|(k, (_, p))| {
-                let len = std::fs::metadata(dir.join(p))
-                    .ok()
-                    .filter(|m| m.is_file())
-                    .map(|m| m.len());
-                len.is_some() && r.bytes.get(k).is_none_or(|&b| len == Some(b))
-            }),
+            Ok(Some(r)) => self.check_task_outputs(dir, &r).is_ok(),
             _ => false,
         }
+    }
+
+    /// Checks that every output the finished task's record `r` names is a file of the size it
+    /// recorded (a record of an older build, without sizes: present). `merge` checks every tile
+    /// so, whatever it writes (a VRT over a truncated tile was written, exit 0, and GDAL failed
+    /// on it later).
+    ///
+    /// # Errors
+    /// [`Error::Format`] naming the output, its size and the task to run again.
+    pub fn check_task_outputs(&self, dir: &Path, r: &TaskRecord) -> Result<()> {
+        for (k, (name, p)) in r.outputs.iter().enumerate() {
+            let path = dir.join(p);
+            let len = std::fs::metadata(&path)
+                .ok()
+                .filter(|m| m.is_file())
+                .map(|m| m.len());
+            let wrong = match (len, r.bytes.get(k)) {
+                (None, _) => "is missing".to_string(),
+                (Some(n), Some(&b)) if n != b => format!(
+                    "has {n} bytes, not the {b} its task wrote: it was truncated or changed since"
+                ),
+                _ => continue,
+            };
+            return Err(Error::Format {
+                path,
+                message: format!(
+                    "the {name} output of task {} {wrong}; {}",
+                    r.index,
+                    run_again(dir, r.index, true)
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// Runs task `i` of the plan in `dir` until its buffer is wide enough; writes its outputs
@@ -653,6 +680,20 @@ fn record_of(
         warnings: run.warnings.clone(),
         volume,
     }
+}
+
+/// What to do about a damaged output of task `i` of the plan in `dir` (`resume`: one that
+/// `run --all --resume` runs again, being missing or of another size).
+pub(super) fn run_again(dir: &Path, i: usize, resume: bool) -> String {
+    format!(
+        "run task {i} again (`sweeptin run {} --task {i}`{}), then merge",
+        dir.join("plan.json").display(),
+        if resume {
+            ", or `--all --resume`, which runs every such task"
+        } else {
+            ""
+        }
+    )
 }
 
 #[cfg(test)]
