@@ -24,6 +24,7 @@ def runs(codes):
 def table(name, doc, codes):
     r = runs(codes)
     print(f"/// {doc}")
+    print("#[rustfmt::skip]")
     print(f"pub(super) const {name}: [(u32, u32); {len(r)}] = [")
     line = "   "
     for a, b in r:
