@@ -558,6 +558,9 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
         raster: args.raster.options(),
     };
     let s = merge::merge_plan(&plan, &dir, &outputs)?;
+    if let (Some(h), Some(out)) = (&s.hillshade, &args.output) {
+        super::hillshade::warn(out, &h.summary, true);
+    }
     if let Some(t) = &s.volume
         && !args.json
     {
