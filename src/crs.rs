@@ -15,6 +15,16 @@
 use serde::Serialize;
 use std::fmt;
 
+mod codes;
+mod esri;
+mod wkt;
+
+/// Is `code` in one of the sorted inclusive `ranges`?
+fn in_ranges(ranges: &[(u32, u32)], code: u32) -> bool {
+    let i = ranges.partition_point(|&(_, hi)| hi < code);
+    ranges.get(i).is_some_and(|&(lo, _)| lo <= code)
+}
+
 /// A coordinate reference system as declared in a file's header.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Crs {
@@ -266,8 +276,10 @@ pub enum LengthUnit {
 
 impl Crs {
     /// The unit of the horizontal coordinates: a GeoTIFF unit key (3076) when given, else the
-    /// WKT's unit of its projected part (`UNIT` / `LENGTHUNIT` by its factor). `None` when
-    /// only an EPSG code says it (a code's unit needs the EPSG database) or the unit is another.
+    /// WKT's unit of its projected part (`UNIT` / `LENGTHUNIT` by its factor), else the unit of
+    /// the projected CRS's EPSG code (feet and US survey feet from the EPSG dataset's list,
+    /// `src/crs/codes.rs`; metres for the other projected codes). `None` for a geographic CRS,
+    /// no CRS, or another unit.
     pub fn length_unit(&self) -> Option<LengthUnit> {
         match self.linear_units {
             Some(9001) => return Some(LengthUnit::Metre),
@@ -275,6 +287,28 @@ impl Crs {
             Some(9003) => return Some(LengthUnit::UsSurveyFoot),
             _ => {}
         }
+        self.wkt_length_unit().or_else(|| {
+            let code = self.code_for_tables()?;
+            if in_ranges(&codes::FOOT, code) {
+                Some(LengthUnit::Foot)
+            } else if in_ranges(&codes::US_SURVEY_FOOT, code) {
+                Some(LengthUnit::UsSurveyFoot)
+            } else if self.wkt.is_none() && !self.is_geographic() {
+                Some(LengthUnit::Metre)
+            } else {
+                None
+            }
+        })
+    }
+
+    /// The horizontal EPSG code when the WKT gives it for the projected part, else the code of
+    /// the whole (what the code tables are looked up by).
+    fn code_for_tables(&self) -> Option<u32> {
+        self.horizontal_epsg().map(|(c, _)| c).or(self.epsg)
+    }
+
+    /// The WKT's own unit of its projected part.
+    fn wkt_length_unit(&self) -> Option<LengthUnit> {
         let root = wkt::parse(self.wkt.as_deref()?)?;
         let projected =
             |n: &wkt::Node| matches!(n.keyword.as_str(), "PROJCS" | "PROJCRS" | "PROJECTEDCRS");
@@ -303,6 +337,45 @@ impl Crs {
             Some(LengthUnit::UsSurveyFoot)
         } else {
             None
+        }
+    }
+}
+
+/// Why outputs that would record a CRS go without one, for a one-line warning.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LostCrs {
+    /// No CRS is known: the input declares none and none was given.
+    Unknown,
+    /// The CRS (as [`Crs`] displays it) is known by an EPSG code only, which sweeptin cannot
+    /// write as WKT ([`Crs::prj`]): no `.prj` is written.
+    NoWkt(String),
+}
+
+impl LostCrs {
+    /// What the outputs lose of `crs`; `prj`: a `.prj` (or a PNG's `.aux.xml`) is among them.
+    /// `None` when they carry it.
+    pub fn of(crs: Option<&Crs>, prj: bool) -> Option<LostCrs> {
+        match crs {
+            None => Some(LostCrs::Unknown),
+            Some(c) if prj && c.prj().is_none() => Some(LostCrs::NoWkt(c.to_string())),
+            Some(_) => None,
+        }
+    }
+}
+
+impl fmt::Display for LostCrs {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LostCrs::Unknown => {
+                f.write_str("no coordinate reference system is declared, so the outputs carry none")
+            }
+            LostCrs::NoWkt(c) => write!(
+                f,
+                "the CRS {c} cannot be written as WKT without a CRS database (sweeptin spells \
+                 the common EPSG codes only), so no .prj is written: `gdalsrsinfo -o wkt_esri \
+                 EPSG:code` prints one"
+            ),
         }
     }
 }
@@ -354,141 +427,66 @@ impl Crs {
         let kind = match self.model_type {
             Some(2) => HorizontalKind::Geographic,
             Some(_) => HorizontalKind::Projected,
-            None if (4000..5000).contains(&code) => HorizontalKind::Geographic,
+            None if in_ranges(&codes::GEOGRAPHIC, code) => HorizontalKind::Geographic,
             None => HorizontalKind::Projected,
         };
         Some((code, kind))
     }
-}
 
-/// A minimal WKT (1 and 2) reader: just enough structure to find names and authorities.
-mod wkt {
-    /// One `KEYWORD[arg, …]` object.
-    #[derive(Debug)]
-    pub(super) struct Node {
-        pub(super) keyword: String,
-        pub(super) args: Vec<Arg>,
+    /// Are the horizontal coordinates latitude and longitude in degrees? From the WKT's
+    /// outermost geographic object (or a compound's first child), a GeoTIFF model type, or the
+    /// EPSG code's kind in the EPSG dataset (`src/crs/codes.rs`).
+    pub fn is_geographic(&self) -> bool {
+        let geographic = |k: &str| {
+            matches!(
+                k,
+                "GEOGCS" | "GEOGCRS" | "GEODCRS" | "GEOGRAPHICCRS" | "GEODETICCRS"
+            )
+        };
+        if let Some(root) = self.wkt.as_deref().and_then(wkt::parse) {
+            return geographic(&root.keyword)
+                || (matches!(root.keyword.as_str(), "COMPD_CS" | "COMPOUNDCRS")
+                    && root
+                        .children()
+                        .next()
+                        .is_some_and(|c| geographic(&c.keyword)));
+        }
+        matches!(
+            self.horizontal_epsg(),
+            Some((_, HorizontalKind::Geographic))
+        )
     }
 
-    /// An argument: a quoted string, a bare token (number or enum), or a nested object.
-    #[derive(Debug)]
-    pub(super) enum Arg {
-        Text(String),
-        Bare(String),
-        Node(Node),
-    }
-
-    impl Node {
-        pub(super) fn first_string(&self) -> Option<&str> {
-            self.args.iter().find_map(|a| match a {
-                Arg::Text(s) => Some(s.as_str()),
-                _ => None,
-            })
-        }
-
-        pub(super) fn children(&self) -> impl Iterator<Item = &Node> {
-            self.args.iter().filter_map(|a| match a {
-                Arg::Node(n) => Some(n),
-                _ => None,
-            })
-        }
-
-        /// The EPSG code of this object's own `AUTHORITY`/`ID` child.
-        pub(super) fn epsg(&self) -> Option<u32> {
-            self.children()
-                .filter(|c| c.keyword == "AUTHORITY" || c.keyword == "ID")
-                .find_map(|c| {
-                    let mut it = c.args.iter();
-                    let auth = match it.next()? {
-                        Arg::Text(s) => s,
-                        _ => return None,
-                    };
-                    if !auth.eq_ignore_ascii_case("EPSG") {
-                        return None;
-                    }
-                    match it.next()? {
-                        Arg::Text(s) | Arg::Bare(s) => s.trim().parse().ok(),
-                        Arg::Node(_) => None,
-                    }
-                })
-        }
-    }
-
-    /// Parses the first object of `text`; `None` if it is not well-formed.
-    pub(super) fn parse(text: &str) -> Option<Node> {
-        let chars: Vec<char> = text.chars().collect();
-        let mut pos = 0;
-        parse_node(&chars, &mut pos, 0)
-    }
-
-    const MAX_DEPTH: usize = 64;
-
-    fn skip_ws(c: &[char], pos: &mut usize) {
-        while *pos < c.len() && c[*pos].is_whitespace() {
-            *pos += 1;
-        }
-    }
-
-    fn parse_node(c: &[char], pos: &mut usize, depth: usize) -> Option<Node> {
-        if depth > MAX_DEPTH {
-            return None;
-        }
-        skip_ws(c, pos);
-        let start = *pos;
-        while *pos < c.len() && (c[*pos].is_alphanumeric() || c[*pos] == '_') {
-            *pos += 1;
-        }
-        let keyword: String = c[start..*pos].iter().collect::<String>().to_uppercase();
-        skip_ws(c, pos);
-        if keyword.is_empty() || *pos >= c.len() || !matches!(c[*pos], '[' | '(') {
-            return None;
-        }
-        *pos += 1;
-        let mut args = Vec::new();
-        loop {
-            skip_ws(c, pos);
-            match c.get(*pos)? {
-                ']' | ')' => {
-                    *pos += 1;
-                    return Some(Node { keyword, args });
-                }
-                ',' => *pos += 1,
-                '"' => args.push(Arg::Text(parse_quoted(c, pos)?)),
-                _ => args.push(parse_bare_or_node(c, pos, depth)?),
+    /// The text of a `.prj` beside a raster: the file's own WKT when it is WKT1 (which GDAL
+    /// and ESRI software read), else ESRI's WKT1 of the EPSG code as GDAL writes it, for the
+    /// codes sweeptin can spell without a CRS database (`src/crs/esri.rs`: the common datums'
+    /// geographic CRSs and UTM zones, MGA and MTM zones, a few national grids; a vertical code
+    /// it does not know is left out). `None` when neither is possible: no CRS, another code,
+    /// or a unit key that overrides the code's unit.
+    pub fn prj(&self) -> Option<String> {
+        if let Some(text) = &self.wkt {
+            let wkt1 = wkt::parse(text).is_some_and(|r| {
+                matches!(
+                    r.keyword.as_str(),
+                    "PROJCS" | "GEOGCS" | "COMPD_CS" | "GEOCCS" | "LOCAL_CS"
+                )
+            });
+            if wkt1 {
+                return Some(text.trim_end_matches('\0').to_string());
             }
         }
-    }
-
-    fn parse_quoted(c: &[char], pos: &mut usize) -> Option<String> {
-        *pos += 1;
-        let mut s = String::new();
-        loop {
-            let ch = *c.get(*pos)?;
-            *pos += 1;
-            if ch == '"' {
-                if c.get(*pos) == Some(&'"') {
-                    s.push('"');
-                    *pos += 1;
-                } else {
-                    return Some(s);
-                }
-            } else {
-                s.push(ch);
-            }
+        let code = self.code_for_tables()?;
+        let text = esri::wkt(code, self.vertical_epsg)?;
+        // A GeoTIFF unit key that differs from the code's own unit (a LAS in feet under a
+        // metric code) would make the text wrong.
+        let coded = Crs {
+            epsg: Some(code),
+            ..Crs::default()
+        };
+        if self.linear_units.is_some() && self.length_unit() != coded.length_unit() {
+            return None;
         }
-    }
-
-    fn parse_bare_or_node(c: &[char], pos: &mut usize, depth: usize) -> Option<Arg> {
-        let start = *pos;
-        while *pos < c.len() && !matches!(c[*pos], ',' | ']' | ')' | '[' | '(') {
-            *pos += 1;
-        }
-        if matches!(c.get(*pos), Some('[' | '(')) {
-            *pos = start;
-            return parse_node(c, pos, depth + 1).map(Arg::Node);
-        }
-        let token: String = c[start..*pos].iter().collect();
-        Some(Arg::Bare(token.trim().to_string()))
+        Some(text)
     }
 }
 
@@ -624,5 +622,56 @@ mod tests {
             epsg: Some(2949),
             ..Crs::default()
         }));
+    }
+
+    #[test]
+    fn units_and_kinds_of_codes() {
+        let code = |c: u32| Crs {
+            epsg: Some(c),
+            ..Crs::default()
+        };
+        assert_eq!(code(2992).length_unit(), Some(LengthUnit::Foot));
+        assert_eq!(code(2229).length_unit(), Some(LengthUnit::UsSurveyFoot));
+        assert_eq!(code(3794).length_unit(), Some(LengthUnit::Metre));
+        assert_eq!(code(4326).length_unit(), None);
+        // A unit key overrides the code's unit.
+        let keyed = Crs {
+            linear_units: Some(9001),
+            ..code(2992)
+        };
+        assert_eq!(keyed.length_unit(), Some(LengthUnit::Metre));
+        assert_eq!(keyed.prj(), None);
+        assert!(code(2992).prj().is_some());
+        for g in [4326, 4269, 6318, 7844, 4979] {
+            assert!(code(g).is_geographic(), "{g}");
+        }
+        // Projected codes among 4000–4999 (once guessed geographic by the range alone).
+        for p in [4026, 3794, 32611, 2154] {
+            assert!(!code(p).is_geographic(), "{p}");
+        }
+        let wkt = Crs::from_wkt_bytes(br#"GEOGCS["WGS 84",AUTHORITY["EPSG","4326"]]"#).unwrap();
+        assert!(wkt.is_geographic());
+        assert!(
+            !Crs::from_wkt_bytes(RD_NAP.as_bytes())
+                .unwrap()
+                .is_geographic()
+        );
+        // WKT1 is written as it is; WKT2 (which GDAL does not read from a .prj) as ESRI's text.
+        assert_eq!(
+            Crs::from_wkt_bytes(RD_NAP.as_bytes())
+                .unwrap()
+                .prj()
+                .as_deref(),
+            Some(RD_NAP)
+        );
+        let wkt2 = Crs::from_wkt_bytes(
+            br#"PROJCRS["RGF93 v1 / Lambert-93", BASEGEOGCRS["RGF93 v1"], ID["EPSG", 2154]]"#,
+        )
+        .unwrap();
+        assert!(
+            wkt2.prj()
+                .unwrap()
+                .starts_with("PROJCS[\"RGF_1993_Lambert_93\"")
+        );
     }
 }

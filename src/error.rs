@@ -376,8 +376,9 @@ impl Error {
     /// an option to change, not a point set without triangles.
     pub fn trimmed_all(n: u64) -> Self {
         Error::Options(format!(
-            "the trimming (--max-edge, --trim-boundary, --holes) removed all {n} triangles: \
-             nothing is left to write (a longer --max-edge or a wider boundary keeps some)"
+            "the trimming (--max-edge, --trim-boundary, --holes) removed all {} triangles: \
+             nothing is left to write (a longer --max-edge or a wider boundary keeps some)",
+            crate::fmt::count(n)
         ))
     }
 

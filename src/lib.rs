@@ -55,6 +55,7 @@ pub mod breaklines;
 pub mod cpu;
 pub mod crs;
 pub mod error;
+pub mod fmt;
 pub mod input;
 pub mod output;
 pub mod pipeline;

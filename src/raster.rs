@@ -546,7 +546,8 @@ pub(crate) fn exact_index(v: f64, cell: f64) -> Result<f64> {
 fn lattice(cell: f64, kx0: i64, kx1: i64, ky0: i64, ky1: i64) -> Result<(i64, i64, u32, u32)> {
     if kx1 < kx0 || ky1 < ky0 {
         return Err(Error::Options(format!(
-            "the grid would have no cell (no cell centre of size {cell} inside the extent)"
+            "the grid would have no cell (no cell centre of size {} inside the extent)",
+            crate::fmt::Figure(cell)
         )));
     }
     let count = |lo: i64, hi: i64, what: &str| {

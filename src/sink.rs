@@ -337,6 +337,9 @@ pub struct DemSummary {
     pub nodata: f32,
     /// The CRS recorded in the file, when known.
     pub crs: Option<String>,
+    /// What the raster lost of the CRS: none known, or (an ESRI ASCII grid) no `.prj`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lost_crs: Option<crate::crs::LostCrs>,
     /// Cells with a value.
     pub cells_with_data: u64,
     /// Cells written after their row had gone to the file (late triangles).

@@ -917,3 +917,60 @@ fn a_lost_triangle_is_an_internal_error() {
         );
     }
 }
+
+/// The longest run of digits in `s` (a number printed in full: 1e300 as 301 digits).
+fn longest_digits(s: &str) -> usize {
+    s.split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0)
+}
+
+/// Issue 41, item 15: figures in messages are written one way (`sweeptin::fmt`): 1e300 and
+/// 1e-300 as such, not in three hundred digits; counts with thousands separators in every
+/// summary and message.
+#[test]
+fn figures_in_messages_are_short_and_grouped() {
+    let dir = tempfile::tempdir().unwrap();
+    let laz = small_laz();
+    let l = laz.to_str().unwrap();
+    // The plane and the volumes against it.
+    let o = run(dir.path(), &["volume", l, "--plane", "1e300"]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned() + &err(&o);
+    assert!(longest_digits(&out) < 20, "{out}");
+    assert!(out.contains("z = 1e300"), "{out}");
+    // A cell larger than the data.
+    let o = run(dir.path(), &["dem", l, "-o", "x.tif", "--cell", "1e300"]);
+    assert_eq!(code(&o), 2, "{}", err(&o));
+    assert!(longest_digits(&err(&o)) < 20, "{}", err(&o));
+    assert!(err(&o).contains("of size 1e300"), "{}", err(&o));
+    // Counts: the TIN's summary and the trimming's refusal.
+    let o = run(dir.path(), &["tin", l, "-o", "t.ply"]);
+    assert!(err(&o).contains("39,233 points"), "{}", err(&o));
+    let o = run(
+        dir.path(),
+        &["tin", l, "-o", "t2.ply", "--max-edge", "1e-300", "-q"],
+    );
+    let e = err(&o);
+    assert!(e.contains("removed all 78,430 triangles"), "{e}");
+    assert!(longest_digits(&e) <= 3, "{e}");
+    // A product summary: every count grouped.
+    let o = run(
+        dir.path(),
+        &[
+            "dem",
+            l,
+            "-o",
+            "d.tif",
+            "--cell",
+            "0.1",
+            "--contours",
+            "c.geojson",
+        ],
+    );
+    let e = err(&o);
+    assert!(o.status.success(), "{e}");
+    for line in e.lines().filter(|l| !l.contains(" in ")) {
+        assert!(longest_digits(line) <= 3, "{line}");
+    }
+}

@@ -953,3 +953,112 @@ fn merged_outputs_carry_the_crs_of_one_run() {
     sweeptin(&["merge", s(&plan), "-o", s(&mosaic), "-q"], "merge");
     assert_eq!(crs(&mosaic), crs(&one));
 }
+
+/// Issue 41, item 15: `run --all` said "8/8 tasks finished" when 3 had failed: each line says
+/// which task ended how and how many of those that ran failed.
+#[test]
+fn progress_of_run_all_counts_the_failed_tasks() {
+    let t = tempfile::tempdir().unwrap();
+    let input = t.path().join("in.laz");
+    std::fs::copy(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz"),
+        &input,
+    )
+    .unwrap();
+    let job = t.path().join("job");
+    sweeptin(
+        &[
+            "plan",
+            "dem",
+            s(&input),
+            "--cell",
+            "0.5",
+            "--tile",
+            "32",
+            "-o",
+            s(&job),
+        ],
+        "plan",
+    );
+    let plan = job.join("plan.json");
+    let (_, n) = plan_extent(&plan);
+    std::fs::remove_file(&input).unwrap();
+    let out = bin().args(["run", s(&plan), "--all"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(!err.contains("tasks finished"), "{err}");
+    assert!(
+        err.contains(&format!("{n} of {n} tasks ran, {n} failed")),
+        "{err}"
+    );
+    let lines = err
+        .lines()
+        .filter(|l| l.starts_with("sweeptin: task ") && l.contains(" failed: "));
+    assert_eq!(lines.count(), n, "{err}");
+}
+
+/// Issue 41, item 15: `plan` printed the number of tasks alone on standard output among its
+/// messages on a terminal; it prints it for a script (`N=$(sweeptin plan …)`) only. An empty
+/// task of a contour or TIN plan said its outputs were "a nodata raster".
+#[test]
+fn plan_messages_say_what_each_product_writes() {
+    let t = tempfile::tempdir().unwrap();
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let args = |job: &Path, product: &str| -> Vec<String> {
+        let mut a = vec!["plan".to_string(), product.to_string(), s(&sample).into()];
+        if product == "contours" {
+            a.extend(["--interval".into(), "1".into()]);
+        }
+        a.extend(
+            ["--class", "18", "--tile", "16", "-o", s(job)]
+                .iter()
+                .map(|x| x.to_string()),
+        );
+        a
+    };
+    // Captured: the count alone on stdout.
+    let job = t.path().join("piped");
+    let out = ok(bin().args(args(&job, "tin")).output().unwrap(), "plan");
+    let n: usize = String::from_utf8_lossy(&out.stdout).trim().parse().unwrap();
+    assert_eq!(n, plan_extent(&job.join("plan.json")).1);
+    // On a terminal (`script` gives the command one): the messages alone.
+    let job = t.path().join("tty");
+    let line = std::iter::once(bin().get_program().to_string_lossy().into_owned())
+        .chain(args(&job, "tin"))
+        .map(|a| format!("'{a}'"))
+        .collect::<Vec<_>>()
+        .join(" ");
+    match Command::new("script")
+        .args(["-qec", &line, "/dev/null"])
+        .output()
+    {
+        Ok(o) => {
+            let text = String::from_utf8_lossy(&o.stdout);
+            assert!(text.contains(&format!("{n} tasks")), "{text}");
+            assert!(
+                !text.lines().any(|l| l.trim() == n.to_string()),
+                "a bare count on the terminal: {text}"
+            );
+        }
+        Err(e) => assert!(!data::in_ci(), "script (util-linux) is needed: {e}"),
+    }
+    // An empty task says what its product writes.
+    for (product, says) in [
+        ("tin", "(no triangle)"),
+        ("contours", "(no contour line)"),
+        ("dem", "(a nodata raster)"),
+    ] {
+        let job = t.path().join(product);
+        let mut a = args(&job, product);
+        if product == "dem" {
+            a.extend(["--cell".into(), "0.5".into()]);
+        }
+        ok(bin().args(&a).output().unwrap(), "plan");
+        let out = sweeptin(
+            &["run", s(&job.join("plan.json")), "--task", "0"],
+            "empty task",
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{product}: {err}");
+    }
+}

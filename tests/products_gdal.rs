@@ -230,3 +230,196 @@ fn hillshade_agrees_with_gdaldem() {
     assert!(compared > 50_000, "{compared}");
     assert!(off * 100 < compared, "{off} of {compared} differ by one");
 }
+
+/// Issue 41, item 18: the `.prj` of a CRS known by its EPSG code alone (`--crs EPSG:…`, GeoTIFF
+/// keys in a LAS header) was not written, and a hillshade PNG never had one: each is ESRI's
+/// WKT1 as GDAL writes it, and GDAL reads the CRS back (from the PNG's `.aux.xml`).
+#[test]
+fn prj_of_an_epsg_code_is_written_and_read_by_gdal() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |x: &Path| x.to_str().unwrap().to_string();
+    // ESRI's text for one or two codes of every family sweeptin spells, against GDAL's.
+    for code in [
+        4326, 4269, 4617, 6318, 4258, 4171, 4289, 4283, 7844, 4765, 32601, 32631, 32660, 32701,
+        32755, 26901, 26915, 26923, 6328, 6329, 6330, 6348, 25828, 25832, 28348, 28355, 7846, 7859,
+        2945, 2949, 2952, 3154, 2958, 3761, 3794, 2154, 2992, 28992, 3857, 7415,
+    ] {
+        let ours = ::sweeptin::crs::Crs {
+            epsg: Some(code),
+            ..Default::default()
+        }
+        .prj()
+        .unwrap_or_else(|| panic!("EPSG:{code} not spelled"));
+        let Some(theirs) = gdal(
+            "gdalsrsinfo",
+            &["-o", "wkt_esri", "--single-line", &format!("EPSG:{code}")],
+        ) else {
+            return;
+        };
+        assert_eq!(ours, theirs.trim(), "EPSG:{code}");
+    }
+    // --crs EPSG:3794 on an ASCII grid.
+    let pts = dir.path().join("plane.xyz");
+    write_plane_points(&pts);
+    let asc = dir.path().join("dem.asc");
+    sweeptin(&[
+        "dem",
+        &p(&pts),
+        "-o",
+        &p(&asc),
+        "--cell",
+        "0.5",
+        "--crs",
+        "EPSG:3794",
+        "-q",
+    ]);
+    let info: Value =
+        serde_json::from_str(&gdal("gdalinfo", &["-json", &p(&asc)]).unwrap()).unwrap();
+    let wkt = info["coordinateSystem"]["wkt"].as_str().unwrap_or("");
+    assert!(wkt.contains("Slovene National Grid"), "{info}");
+    // GeoTIFF keys in the LAS header (EPSG:2949), an ASCII grid and a hillshade PNG.
+    let laz = data_dir().join("lidar/lidR_Topography.laz");
+    let (tif, asc, png) = (
+        dir.path().join("t.tif"),
+        dir.path().join("t.asc"),
+        dir.path().join("h.png"),
+    );
+    sweeptin(&["dem", &p(&laz), "-o", &p(&asc), "-q"]);
+    sweeptin(&[
+        "dem",
+        &p(&laz),
+        "-o",
+        &p(&tif),
+        "--hillshade",
+        &p(&png),
+        "-q",
+    ]);
+    for f in [&asc, &png] {
+        let text = gdal("gdalinfo", &["-json", &p(f)]).unwrap();
+        let info: Value = serde_json::from_str(&text).unwrap();
+        let wkt = info["coordinateSystem"]["wkt"].as_str().unwrap_or("");
+        assert!(wkt.contains("MTM zone 7"), "{}: {info}", f.display());
+    }
+    let prj = std::fs::read_to_string(dir.path().join("h.prj")).unwrap();
+    assert!(prj.starts_with("PROJCS[\"NAD_1983_CSRS_MTM_7\""), "{prj}");
+    // A code sweeptin cannot spell: no .prj, and a warning that says so.
+    let asc = dir.path().join("swiss.asc");
+    let o = sweeptin(&[
+        "dem",
+        &p(&pts),
+        "-o",
+        &p(&asc),
+        "--cell",
+        "0.5",
+        "--crs",
+        "EPSG:2056",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!dir.path().join("swiss.prj").exists());
+    assert_eq!(err.matches("no .prj is written").count(), 1, "{err}");
+}
+
+/// Issue 41, item 18: a run over points that declare no CRS says once that its outputs carry
+/// none.
+#[test]
+fn outputs_without_a_crs_are_warned_of_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |x: &Path| x.to_str().unwrap().to_string();
+    let pts = dir.path().join("plane.xyz");
+    write_plane_points(&pts);
+    let (tif, png, c) = (
+        dir.path().join("d.tif"),
+        dir.path().join("d.png"),
+        dir.path().join("c.geojson"),
+    );
+    let o = sweeptin(&[
+        "dem",
+        &p(&pts),
+        "-o",
+        &p(&tif),
+        "--hillshade",
+        &p(&png),
+        "--contours",
+        &p(&c),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(
+        err.matches("no coordinate reference system").count(),
+        1,
+        "{err}"
+    );
+    assert!(!dir.path().join("d.prj").exists());
+    let o = sweeptin(&["hillshade", &p(&tif), "-o", &p(&dir.path().join("h.png"))]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(
+        err.matches("no coordinate reference system").count(),
+        1,
+        "{err}"
+    );
+    // With the CRS, no warning.
+    let o = sweeptin(&["dem", &p(&pts), "-o", &p(&tif), "--crs", "EPSG:3794"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("warning"), "{err}");
+}
+
+/// Mean grey level of an 8-bit GeoTIFF's cells with data (not 0).
+fn mean_shade(path: &Path) -> f64 {
+    let mut d = tiff::decoder::Decoder::new(std::fs::File::open(path).unwrap()).unwrap();
+    let tiff::decoder::DecodingResult::U8(v) = d.read_image().unwrap() else {
+        panic!("not 8-bit: {}", path.display());
+    };
+    let shaded: Vec<f64> = v
+        .iter()
+        .filter(|&&g| g > 0)
+        .map(|&g| f64::from(g))
+        .collect();
+    shaded.iter().sum::<f64>() / shaded.len() as f64
+}
+
+/// Issue 41, item 19: a DEM in degrees (EPSG:4326) with heights in metres was shaded as if both
+/// were one unit (dark and saturated): the metres a degree spans come from the CRS, as
+/// `gdaldem hillshade -s 111120` does by hand; without a CRS, cells that look like degrees are
+/// warned of.
+#[test]
+fn hillshade_of_a_geographic_dem_scales_degrees_to_metres() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |x: &Path| x.to_str().unwrap().to_string();
+    let srtm = data_dir().join("dem/landlab_SRTMGL3_40.09_-105.55_40.21_-105.35.asc");
+    let geo = dir.path().join("geo.tif");
+    if gdal(
+        "gdal_translate",
+        &["-q", "-a_srs", "EPSG:4326", &p(&srtm), &p(&geo)],
+    )
+    .is_none()
+    {
+        return;
+    }
+    let (ours, theirs, flat) = (
+        dir.path().join("ours.tif"),
+        dir.path().join("theirs.tif"),
+        dir.path().join("flat.tif"),
+    );
+    let o = sweeptin(&["hillshade", &p(&geo), "-o", &p(&ours)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("a geographic CRS: a degree taken as"), "{err}");
+    gdal(
+        "gdaldem",
+        &["hillshade", "-q", "-s", "111120", &p(&geo), &p(&theirs)],
+    )
+    .unwrap();
+    let (m_ours, m_theirs) = (mean_shade(&ours), mean_shade(&theirs));
+    assert!((m_ours - m_theirs).abs() < 5.0, "{m_ours} vs {m_theirs}");
+    // A z factor given by the user is taken as it is (and the scale with it: 1).
+    sweeptin(&["hillshade", &p(&geo), "-o", &p(&flat), "--z-factor", "1"]);
+    assert!(mean_shade(&flat) < m_theirs - 50.0, "{}", mean_shade(&flat));
+    // --scale as gdaldem's -s.
+    sweeptin(&["hillshade", &p(&geo), "-o", &p(&flat), "--scale", "111120"]);
+    assert!((mean_shade(&flat) - m_theirs).abs() < 5.0);
+    // The same grid with no CRS: a warning, once.
+    let asc = dir.path().join("srtm.asc");
+    std::fs::copy(&srtm, &asc).unwrap();
+    let o = sweeptin(&["hillshade", &p(&asc), "-o", &p(&dir.path().join("s.tif"))]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.matches("look like degrees").count(), 1, "{err}");
+    assert_eq!(err.matches("warning").count(), 1, "{err}");
+}

@@ -100,7 +100,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "{}: {} files, {} points, x {} .. {}, y {} .. {}{}",
             s.output.display(),
             s.files,
-            super::info::thousands(s.points),
+            sweeptin::fmt::count(s.points),
             s.bounds[0],
             s.bounds[3],
             s.bounds[1],

@@ -6,6 +6,7 @@
 use clap::ArgAction;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+use sweeptin::fmt::count;
 use sweeptin::input::las::{
     BBox, FileInfo, Filter, FilterStats, PointStats, Quantization, Returns, parse_classes, scan,
 };
@@ -268,19 +269,6 @@ fn class_name(c: usize) -> &'static str {
     NAMES.get(c).copied().unwrap_or("user-defined")
 }
 
-/// `1234567` as `1,234,567`.
-pub fn thousands(n: u64) -> String {
-    let s = n.to_string();
-    let mut out = String::with_capacity(s.len() + s.len() / 3);
-    for (k, c) in s.chars().enumerate() {
-        if k > 0 && (s.len() - k).is_multiple_of(3) {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
-}
-
 /// `v` with the decimals of the file's precision on `axis`.
 fn coord(q: &Quantization, axis: usize, v: f64) -> String {
     let d = q.decimals(axis);
@@ -317,7 +305,7 @@ fn print_text(r: &Report) {
         .iter()
         .enumerate()
         .filter(|(_, n)| **n > 0)
-        .map(|(k, n)| format!("{}: {}", k + 1, thousands(*n)))
+        .map(|(k, n)| format!("{}: {}", k + 1, count(*n)))
         .collect();
     if !by_return.is_empty() {
         println!("  returns:  {} (header)", by_return.join(", "));
@@ -396,16 +384,16 @@ fn print_text(r: &Report) {
 }
 
 fn print_stats(s: &PointStats, q: &Quantization) {
-    println!("  points kept: {} (read and counted)", thousands(s.points));
+    println!("  points kept: {} (read and counted)", count(s.points));
     println!("  classes:");
     for (c, n) in s.classes.iter().enumerate().filter(|(_, n)| **n > 0) {
-        println!("    {c:>3} {:<28} {:>12}", class_name(c), thousands(*n));
+        println!("    {c:>3} {:<28} {:>12}", class_name(c), count(*n));
     }
     let list = |v: &[u64]| -> String {
         v.iter()
             .enumerate()
             .filter(|(_, n)| **n > 0)
-            .map(|(k, n)| format!("{k}: {}", thousands(*n)))
+            .map(|(k, n)| format!("{k}: {}", count(*n)))
             .collect::<Vec<_>>()
             .join(", ")
     };
@@ -413,14 +401,14 @@ fn print_stats(s: &PointStats, q: &Quantization) {
     println!("  number of returns:  {}", list(&s.by_returns));
     println!(
         "  first {}, last {}, single {}",
-        thousands(s.first),
-        thousands(s.last),
-        thousands(s.single)
+        count(s.first),
+        count(s.last),
+        count(s.single)
     );
     let flags = ["synthetic", "key-point", "withheld", "overlap"];
     let set: Vec<String> = (0..4)
         .filter(|&k| s.flags[k] > 0)
-        .map(|k| format!("{} {}", flags[k], thousands(s.flags[k])))
+        .map(|k| format!("{} {}", flags[k], count(s.flags[k])))
         .collect();
     if !set.is_empty() {
         println!("  flags:    {}", set.join(", "));
@@ -469,7 +457,7 @@ fn print_summary(s: &Summary) {
         "summary of {} files ({} could not be read)",
         s.files, s.failed
     );
-    println!("  points:   {}", thousands(s.points));
+    println!("  points:   {}", count(s.points));
     if let Some(b) = s.bounds {
         println!(
             "  bounds:   x {} .. {}, y {} .. {}, z {} .. {}",
@@ -491,7 +479,7 @@ fn print_summary(s: &Summary) {
     if let Some(st) = &s.stats {
         println!("  classes:");
         for (c, n) in st.classes.iter().enumerate().filter(|(_, n)| **n > 0) {
-            println!("    {c:>3} {:<28} {:>12}", class_name(c), thousands(*n));
+            println!("    {c:>3} {:<28} {:>12}", class_name(c), count(*n));
         }
         print_filter(&st.filter);
     }

@@ -6,7 +6,7 @@ use super::info::FilterArgs;
 use std::path::{Path, PathBuf};
 use sweeptin::breaklines::CleanOptions;
 use sweeptin::breaklines::clean::{ZConflict, ZConflictKind};
-use sweeptin::crs::Crs;
+use sweeptin::crs::{Crs, LostCrs};
 use sweeptin::input::las::BBox;
 use sweeptin::output::target::Destination;
 use sweeptin::pipeline::{self, Input, RunConfig, RunOptions, RunSummary, SweepAxis};
@@ -532,8 +532,25 @@ pub fn run_products(
     };
     if coded {
         warn_crs(crs.as_ref());
+        warn_lost_crs(crs.as_ref(), &products);
     }
     Ok((run, products))
+}
+
+/// Warns, once, when the outputs that would record a CRS carry none: the input declares none
+/// (and `--crs` names none), or an ASCII grid's CRS cannot be written as a `.prj`.
+fn warn_lost_crs(crs: Option<&Crs>, products: &FanoutSummary) {
+    if let Some(l) = LostCrs::of(crs, false) {
+        eprintln!("sweeptin: warning: {l} (name it with --crs EPSG:code)");
+        return;
+    }
+    let lost = products.0.iter().find_map(|(_, s)| match s {
+        ProductSummary::Dem(d) => d.lost_crs.as_ref(),
+        _ => None,
+    });
+    if let Some(l) = lost {
+        eprintln!("sweeptin: warning: {l}");
+    }
 }
 
 /// Warns when the CRS has no EPSG code for its horizontal part, which GeoTIFF keys and a

@@ -6,7 +6,9 @@ use super::input::{InputArgs, ProductInput};
 use super::{Cli, Command};
 use anyhow::{Context, bail};
 use clap::Parser;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use sweeptin::fmt::{Figure, count};
 use sweeptin::plan::{Levels, Plan, Product, TaskOptions, TaskRecord, merge, task_from_env};
 
 /// What `sweeptin plan --help` ends with.
@@ -418,17 +420,21 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         );
     }
     let points: u64 = plan.files.iter().map(|f| f.points).sum();
-    // A tenth of 24.9 is 2.4899999999999998 in full: shown to a micrometre at most.
-    let buffer = format!("{buffer:.6}");
-    let buffer = buffer.trim_end_matches('0').trim_end_matches('.');
+    // A tenth of 24.9 is 2.4899999999999998 in full: shown to six digits.
     eprintln!(
-        "sweeptin: {} tasks (tiles of {tile}, first buffer {buffer}) over {} files, {points} \
-         points -> {}",
-        plan.tiles.len(),
-        plan.files.len(),
+        "sweeptin: {} tasks (tiles of {}, first buffer {}) over {} files, {} points -> {}",
+        count(plan.tiles.len() as u64),
+        Figure(tile),
+        Figure(buffer),
+        count(plan.files.len() as u64),
+        count(points),
         path.display()
     );
-    println!("{}", plan.tiles.len());
+    // The number of tasks for a script (`N=$(sweeptin plan …)`); on a terminal the line above
+    // says it (a bare number among the messages read as one of them).
+    if !std::io::stdout().is_terminal() {
+        println!("{}", plan.tiles.len());
+    }
     eprintln!(
         "  next: sweeptin run {} --all --jobs N   (or a job array of {} tasks: --array=0-{})",
         path.display(),
@@ -495,7 +501,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     } else if !args.quiet {
         eprintln!(
             "sweeptin: task {i} {}: {} points, {} triangles, buffer {} after {} run(s), {:.2} s",
-            r.status, r.points, r.triangles, r.buffer, r.runs, r.seconds
+            r.status,
+            count(r.points),
+            count(r.triangles),
+            Figure(r.buffer),
+            r.runs,
+            r.seconds
         );
     }
     Ok(())
@@ -523,7 +534,8 @@ fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result
     if r.status == "empty" && r.points == 0 {
         eprintln!(
             "sweeptin: warning: task {i} has no point after the filters: its outputs are empty \
-             (a nodata raster), which is not a failure"
+             ({}), which is not a failure",
+            plan.job.empty_outputs()
         );
     }
     Ok(r)
@@ -542,6 +554,9 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
         raster: args.raster.options(),
     };
     let s = merge::merge_plan(&plan, &dir, &outputs)?;
+    if let (Some(h), Some(out)) = (&s.hillshade, &args.output) {
+        super::hillshade::warn(out, &h.summary, true);
+    }
     if let Some(t) = &s.volume
         && !args.json
     {
@@ -553,8 +568,8 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     } else if !args.quiet {
         eprintln!(
             "sweeptin: merged {} tasks ({} empty){}",
-            s.tasks,
-            s.empty_tasks,
+            count(s.tasks as u64),
+            count(s.empty_tasks as u64),
             args.output
                 .as_ref()
                 .map(|p| format!(" -> {}", p.display()))

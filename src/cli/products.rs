@@ -1,13 +1,13 @@
 //! `sweeptin products`: several terrain products from one pass over the triangle stream; and the
 //! option groups and sink builders the single-product commands share.
 
-use super::info::thousands;
 use super::input::{ProductInput, check_output, run_products};
 use anyhow::{Context, bail};
 use serde_json::{Map, Value, json};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use sweeptin::fmt::{Decimals, Figure, count as thousands};
 use sweeptin::input::las::BBox;
 use sweeptin::output::raster::{Compression, Predictor, RasterFormat, RasterOptions};
 use sweeptin::pipeline::RunSummary;
@@ -322,16 +322,20 @@ impl Report {
             lines.insert(name, describe(s));
         }
         if let Some((path, s)) = &self.mesh {
-            let line = format!("{} vertices, {} triangles", s.vertices, s.triangles);
+            let line = format!(
+                "{} vertices, {} triangles",
+                thousands(s.vertices),
+                thousands(s.triangles)
+            );
             lines.insert("mesh", (Some(path), line));
         }
         if let Some((path, s)) = &self.hillshade {
-            let line = format!("{} × {} pixels, {} shaded", s.cols, s.rows, s.shaded);
+            let line = super::hillshade::describe(s);
             lines.insert("hillshade", (Some(path), line));
         }
         let trimmed = trimmed(run);
         if trimmed > 0 {
-            let line = format!("{trimmed} triangles left out by trimming");
+            let line = format!("{} triangles left out by trimming", thousands(trimmed));
             lines.insert("trimmed_triangles", (None, line));
         }
         for (name, (path, line)) in lines {
@@ -355,30 +359,44 @@ fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
             Some(&d.path),
             format!(
                 "{} × {} cells of {}, {} with data",
-                d.cols,
-                d.rows,
-                d.cell,
+                thousands(u64::from(d.cols)),
+                thousands(u64::from(d.rows)),
+                Figure(d.cell),
                 thousands(d.cells_with_data)
             ),
         ),
         ProductSummary::Contours(c) => (
             Some(&c.path),
-            format!("{} lines ({} closed rings)", c.features, c.rings),
+            format!(
+                "{} lines ({} closed rings)",
+                thousands(c.features),
+                thousands(c.rings)
+            ),
         ),
         ProductSummary::Volume(v) => {
             let t = &v.totals;
+            let d = |v: f64| Decimals(v, 3);
             let line = format!(
-                "cut {:.3}, fill {:.3}, net {:.3} (cubic units of the data; cut area {:.3}, fill \
-                 area {:.3}, covered {:.3} square units)",
-                t.cut_volume, t.fill_volume, t.net_volume, t.cut_area, t.fill_area, t.area
+                "cut {}, fill {}, net {} (cubic units of the data; cut area {}, fill area {}, \
+                 covered {} square units)",
+                d(t.cut_volume),
+                d(t.fill_volume),
+                d(t.net_volume),
+                d(t.cut_area),
+                d(t.fill_area),
+                d(t.area)
             );
             (None, line)
         }
         ProductSummary::Sample(s) => (
             Some(&s.path),
-            format!("{} of {} points inside the TIN", s.answered, s.queries),
+            format!(
+                "{} of {} points inside the TIN",
+                thousands(s.answered),
+                thousands(s.queries)
+            ),
         ),
-        ProductSummary::Profile(p) => (Some(&p.path), format!("{} points", p.points)),
+        ProductSummary::Profile(p) => (Some(&p.path), format!("{} points", thousands(p.points))),
         ProductSummary::None | ProductSummary::SurfaceStore(_) | ProductSummary::Fanout(_) => {
             (None, "done".to_string())
         }
@@ -416,6 +434,8 @@ pub fn check_hillshade(
 pub fn shade(dem: &Path, png: &Path) -> anyhow::Result<(PathBuf, HillshadeSummary)> {
     let s = hillshade(dem, png, &HillshadeOptions::default())
         .with_context(|| format!("cannot shade {}", dem.display()))?;
+    // The run has warned of a missing CRS already.
+    super::hillshade::warn(dem, &s, false);
     Ok((png.to_path_buf(), s))
 }
 

@@ -6,6 +6,7 @@ use super::plan::RunArgs;
 use anyhow::Context;
 use std::path::Path;
 use std::time::Instant;
+use sweeptin::fmt::count;
 use sweeptin::output::interrupt;
 use sweeptin::plan::Plan;
 
@@ -78,16 +79,27 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
                         Err(e) => Err(e),
                     };
                     let ok = matches!(&status, Ok(s) if s.success());
+                    // Counted under the lock that records the failure, so that the line says
+                    // how many of the tasks done so far failed ("8/8 tasks finished" was
+                    // printed when 3 had failed).
+                    let mut f = failed.lock().unwrap_or_else(|e| e.into_inner());
                     if !ok {
-                        failed
-                            .lock()
-                            .unwrap_or_else(|e| e.into_inner())
-                            .push((i, ended(status.ok())));
+                        f.push((i, ended(status.ok())));
                     }
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     if !args.quiet && !interrupt::interrupted() {
-                        eprintln!("sweeptin: {n}/{} tasks finished", todo.len());
+                        let failures = match f.len() {
+                            0 => String::new(),
+                            k => format!(", {} failed", count(k as u64)),
+                        };
+                        let what = if ok { "done" } else { "failed" };
+                        eprintln!(
+                            "sweeptin: task {i} {what}: {} of {} tasks ran{failures}",
+                            count(n as u64),
+                            count(todo.len() as u64)
+                        );
                     }
+                    drop(f);
                 }
             });
         }
@@ -124,7 +136,7 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
     } else if !args.quiet {
         eprintln!(
             "sweeptin: {} tasks in {:.2} s; next: sweeptin merge {} -o OUT",
-            todo.len(),
+            count(todo.len() as u64),
             start.elapsed().as_secs_f64(),
             args.plan.display()
         );

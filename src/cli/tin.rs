@@ -3,6 +3,7 @@
 use super::input::InputArgs;
 use std::path::PathBuf;
 use std::time::Instant;
+use sweeptin::fmt::count;
 use sweeptin::output::{MeshFormat, MeshMeta, create_mesh_sink};
 
 /// Arguments of `sweeptin tin`.
@@ -89,11 +90,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         eprintln!(
             "sweeptin: {} points ({} duplicates merged) -> {}: {} vertices, {} triangles, {} {} \
              in {:.2} s (peak memory {})",
-            summary.points_read,
-            summary.duplicates,
+            count(summary.points_read),
+            count(summary.duplicates),
             args.output.display(),
-            written.vertices,
-            written.triangles,
+            count(written.vertices),
+            count(written.triangles),
             sweeptin::human_bytes(written.bytes),
             format,
             start.elapsed().as_secs_f64(),

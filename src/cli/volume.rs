@@ -5,6 +5,7 @@ use super::input::{ProductInput, run_products};
 use super::products::read_boundary;
 use std::path::PathBuf;
 use std::time::Instant;
+use sweeptin::fmt::{Decimals, Figure, count};
 use sweeptin::pipeline::{self, Input, RunConfig};
 use sweeptin::products::overlay::{BandStore, OverlaySink};
 use sweeptin::products::volume::VolumeSink;
@@ -82,18 +83,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let t = &v.totals;
     let against = match args.plane {
-        Some(z) => format!("the plane z = {z}"),
+        Some(z) => format!("the plane z = {}", Figure(z)),
         None => "the reference surface".to_string(),
     };
     println!("against {against}:");
     print_totals(t);
     if let Some(b) = v.boundary_area {
-        println!("  boundary     {b:.3}");
+        println!("  boundary     {}", Decimals(b, 3));
     }
     eprintln!(
         "sweeptin: {} points, {} triangles in {:.2} s",
-        run.points_read,
-        run.triangles,
+        count(run.points_read),
+        count(run.triangles),
         start.elapsed().as_secs_f64()
     );
     Ok(())
@@ -132,14 +133,17 @@ pub fn coverage_warning(v: &sweeptin::sink::VolumeSummary, surface: bool) -> Opt
 
 /// Cut, fill, net volume and the areas, one per line (as `sweeptin volume` prints them).
 pub fn print_totals(t: &sweeptin::sink::CutFillTotals) {
+    let d = |v: f64| Decimals(v, 3);
     println!(
-        "  cut volume   {:.3}   (area {:.3})",
-        t.cut_volume, t.cut_area
+        "  cut volume   {}   (area {})",
+        d(t.cut_volume),
+        d(t.cut_area)
     );
     println!(
-        "  fill volume  {:.3}   (area {:.3})",
-        t.fill_volume, t.fill_area
+        "  fill volume  {}   (area {})",
+        d(t.fill_volume),
+        d(t.fill_area)
     );
-    println!("  net volume   {:.3}", t.net_volume);
-    println!("  area covered {:.3}", t.area);
+    println!("  net volume   {}", d(t.net_volume));
+    println!("  area covered {}", d(t.area));
 }

@@ -20,7 +20,7 @@
 //!
 //! Point ids are 1-based vertex numbers; a face lists the ids of its three points in the order
 //! given to [`MeshSink::triangle`] (counter-clockwise seen from above in `x, y`). Units are
-//! declared as metres. Comments from [`MeshMeta`] become XML comments.
+//! the CRS's: metres, or feet / US survey feet as `<Imperial>`. Comments from [`MeshMeta`] become XML comments.
 //!
 //! `<Pnts>` must precede `<Faces>`, so faces are spooled (binary, 24 bytes each) to an anonymous
 //! temporary file and appended at [`finish`](MeshSink::finish); vertices are written straight
@@ -135,9 +135,9 @@ impl MeshSink for LandXmlWriter {
     }
 }
 
-/// The `<Units>` element: imperial when the CRS's WKT (or a GeoTIFF unit key) says feet,
-/// metric otherwise (a CRS known only by its EPSG code is taken as metric: its unit needs the
-/// EPSG database).
+/// The `<Units>` element: `Imperial` with `linearUnit="foot"` or `"USSurveyFoot"` (LandXML 1.2's
+/// names) when the CRS counts in feet — its WKT's unit, a GeoTIFF unit key, or the unit of its
+/// EPSG code ([`crate::crs::Crs::length_unit`]) —, `Metric` otherwise.
 fn units(meta: &MeshMeta) -> String {
     use crate::crs::{Crs, LengthUnit};
     let unit = meta
@@ -329,5 +329,32 @@ mod tests {
             p.contains("<Imperial ") && p.contains("linearUnit=\"foot\""),
             "{p}"
         );
+    }
+
+    /// Issue 41, item 17: a CRS in feet known by its EPSG code alone (EPSG:2992, Oregon
+    /// Lambert in international feet) was declared metric.
+    #[test]
+    fn units_of_an_epsg_code_in_feet_are_imperial() {
+        let date = ("2026-01-02".to_string(), "03:04:05".to_string());
+        let units = |crs: &str| {
+            let meta = MeshMeta {
+                crs: Some(crs.into()),
+                comments: vec![],
+            };
+            let p = prologue("t", &meta, date.clone());
+            let start = p.find("<Units>").unwrap();
+            p[start..p.find("</Units>").unwrap()].to_string()
+        };
+        let ft = units("EPSG:2992");
+        assert!(
+            ft.contains("<Imperial ") && ft.contains("linearUnit=\"foot\""),
+            "{ft}"
+        );
+        // NAD83 / California zone 5 (ftUS).
+        let us = units("EPSG:2229");
+        assert!(us.contains("linearUnit=\"USSurveyFoot\""), "{us}");
+        for metric in ["EPSG:3794", "EPSG:32611", "EPSG:7415"] {
+            assert!(units(metric).contains("<Metric "), "{metric}");
+        }
     }
 }

@@ -232,7 +232,7 @@ fn is_char_device(p: &Path) -> bool {
 }
 
 /// The side files an output at `path` writes beside it: an ESRI ASCII grid's `.prj`, a PNG's
-/// world file and `.prj` (none beside a stream).
+/// world file, `.prj` and `.png.aux.xml` (none beside a stream).
 pub fn side_files(path: &Path) -> Vec<PathBuf> {
     if !matches!(Destination::of(path), Ok(Destination::File { .. })) {
         return Vec::new();
@@ -243,6 +243,7 @@ pub fn side_files(path: &Path) -> Vec<PathBuf> {
         "png" => vec![
             super::world::world_file_path(path),
             path.with_extension("prj"),
+            super::world::aux_xml_path(path),
         ],
         _ => Vec::new(),
     }

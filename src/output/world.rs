@@ -1,7 +1,9 @@
 //! Side files that georeference an image for GIS software: the ESRI world file (`.pgw` beside a
-//! PNG) and the `.prj` (the CRS as WKT, beside an `.asc` grid or a PNG). Each is written
-//! atomically, like every output; an image written to a stream (`-`, a FIFO, a device) has no
-//! side files (there is nowhere beside it: never `/dev/null.prj`).
+//! PNG), the `.prj` (the CRS as WKT, beside an `.asc` grid or a PNG: [`Crs::prj`]) and, beside
+//! a PNG, GDAL's `.png.aux.xml` with the same WKT (GDAL, and so QGIS, reads a PNG's CRS from
+//! there, not from a `.prj`). Each is written atomically, like every output; an image written to
+//! a stream (`-`, a FIFO, a device) has no side files (there is nowhere beside it: never
+//! `/dev/null.prj`).
 
 use crate::crs::Crs;
 use crate::error::Result;
@@ -57,21 +59,51 @@ fn beside_a_file(image: &Path) -> bool {
     )
 }
 
-/// Writes `<file>.prj` (the extension replaced) with the CRS's WKT, when a WKT is known; GDAL and
-/// ESRI software read a `.prj` as WKT only, so a CRS known only by its EPSG code writes none.
-/// Returns the path written, if any (none beside a stream).
+/// Writes `<file>.prj` (the extension replaced) with the CRS as WKT ([`Crs::prj`]: the file's
+/// WKT1, or ESRI's WKT1 of its EPSG code as GDAL writes it); none when the CRS has neither
+/// (no CRS, or a code sweeptin cannot spell: [`crate::crs::LostCrs`] says which). Returns the path
+/// written, if any (none beside a stream).
 ///
 /// # Errors
 /// [`crate::Error::Write`] naming the file.
 pub fn write_prj(file: &Path, crs: Option<&Crs>) -> Result<Option<PathBuf>> {
-    let Some(wkt) = crs.and_then(|c| c.wkt.as_deref()) else {
+    let Some(wkt) = crs.and_then(Crs::prj) else {
         return Ok(None);
     };
     if !beside_a_file(file) {
         return Ok(None);
     }
     let path = file.with_extension("prj");
-    write(&path, wkt.trim_end_matches('\0').as_bytes())?;
+    write(&path, wkt.as_bytes())?;
+    Ok(Some(path))
+}
+
+/// GDAL's auxiliary file beside `image` (`s.png` → `s.png.aux.xml`).
+pub fn aux_xml_path(image: &Path) -> PathBuf {
+    let mut name = image.as_os_str().to_owned();
+    name.push(".aux.xml");
+    PathBuf::from(name)
+}
+
+/// Writes GDAL's `<image>.aux.xml` holding the CRS's WKT ([`Crs::prj`]), which GDAL reads for
+/// a PNG (it reads no `.prj` beside one). Returns the path written, if any.
+///
+/// # Errors
+/// [`crate::Error::Write`] naming the file.
+pub fn write_aux_xml(image: &Path, crs: Option<&Crs>) -> Result<Option<PathBuf>> {
+    let Some(wkt) = crs.and_then(Crs::prj) else {
+        return Ok(None);
+    };
+    if !beside_a_file(image) {
+        return Ok(None);
+    }
+    let path = aux_xml_path(image);
+    let escaped = wkt
+        .replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;");
+    let text = format!("<PAMDataset>\n  <SRS>{escaped}</SRS>\n</PAMDataset>\n");
+    write(&path, text.as_bytes())?;
     Ok(Some(path))
 }
 
@@ -100,12 +132,24 @@ mod tests {
         let none = write_prj(
             &png,
             Some(&Crs {
-                epsg: Some(2154),
+                epsg: Some(2056),
                 ..Crs::default()
             }),
         )
         .unwrap();
         assert_eq!(none, None);
+        let code = Crs {
+            epsg: Some(2154),
+            ..Crs::default()
+        };
+        let p = write_prj(&png, Some(&code)).unwrap().unwrap();
+        assert!(
+            std::fs::read_to_string(p)
+                .unwrap()
+                .starts_with("PROJCS[\"RGF_1993_Lambert_93\",")
+        );
+        let aux = write_aux_xml(&png, Some(&code)).unwrap().unwrap();
+        assert_eq!(aux, dir.path().join("s.png.aux.xml"));
         let wkt = Crs {
             wkt: Some("PROJCS[\"x\"]".into()),
             ..Crs::default()

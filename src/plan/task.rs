@@ -183,6 +183,20 @@ impl Job {
         }
     }
 
+    /// What a task with no point writes, for a message: `a nodata raster`, `no contour line`,
+    /// `zero volumes`, `no triangle`.
+    pub fn empty_outputs(&self) -> &'static str {
+        match self.product {
+            Product::Dem {
+                contours: Some(_), ..
+            } => "a nodata raster and no contour line",
+            Product::Dem { .. } => "a nodata raster",
+            Product::Contours(_) => "no contour line",
+            Product::Volume { .. } => "zero volumes",
+            Product::Tin => "no triangle",
+        }
+    }
+
     /// The DEM's cell size, when the job makes one.
     pub fn cell(&self) -> Option<f64> {
         match self.product {

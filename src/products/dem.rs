@@ -424,9 +424,9 @@ impl TriangleSink for DemSink {
             *slot = Some((spec.clone(), values));
         }
         let bytes = r.writer.finish()?;
-        if self.memory.is_none()
-            && self.options.output.resolve(&self.path, false)?.format == RasterFormat::Ascii
-        {
+        let ascii = self.memory.is_none()
+            && self.options.output.resolve(&self.path, false)?.format == RasterFormat::Ascii;
+        if ascii {
             crate::output::world::write_prj(&self.path, spec.crs.as_ref())?;
         }
         Ok(ProductSummary::Dem(DemSummary {
@@ -438,6 +438,7 @@ impl TriangleSink for DemSink {
             extent: spec.extent(),
             nodata: spec.nodata,
             crs: spec.crs.as_ref().and_then(|c| c.definition()),
+            lost_crs: crate::crs::LostCrs::of(spec.crs.as_ref(), ascii),
             cells_with_data: r.cells_with_data,
             late_cell_writes: r.late_cells,
             max_rows_in_memory: r.max_band as u64,

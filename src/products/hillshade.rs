@@ -11,7 +11,12 @@
 //! ```
 //!
 //! with the light from azimuth `az` (degrees clockwise from north; 315 = north-west, the
-//! cartographic convention) at altitude `alt` above the horizon. Unlike `gdaldem`'s default, the
+//! cartographic convention) at altitude `alt` above the horizon. The cell sizes are in the units
+//! of the heights: multiplied by `scale` (as `gdaldem hillshade -s`), or, for a DEM in a
+//! geographic CRS when neither the scale nor the z factor is given, by the metres a degree
+//! spans east and north at the DEM's centre latitude on the WGS 84 ellipsoid (what
+//! `gdaldem -s 111120` approximates by hand; a DEM in degrees shaded with metres of height as
+//! if both were one unit is black and white). Unlike `gdaldem`'s default, the
 //! edge cells and the cells next to nodata are shaded too: missing neighbours are extrapolated
 //! linearly from the others (exact on a plane); nodata cells are transparent.
 //!
@@ -19,13 +24,13 @@
 //! crate decodes, striped or tiled, and ESRI ASCII grids); the cell size, origin, CRS and nodata
 //! value come from it and go to the output's georeferencing.
 
-use crate::crs::Crs;
+use crate::crs::{Crs, LostCrs};
 use crate::error::{Error, Result};
 use crate::input::raster::RasterReader;
 use crate::output::AtomicFile;
 use crate::output::cog::{TiffGeo, write_u8_image};
 use crate::output::raster::{RasterFormat, RasterOptions};
-use crate::output::world::{write_prj, write_world_file};
+use crate::output::world::{write_aux_xml, write_prj, write_world_file};
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
@@ -37,15 +42,18 @@ pub struct HillshadeOptions {
     pub azimuth: f64,
     /// Height of the light above the horizon, degrees.
     pub altitude: f64,
-    /// Vertical exaggeration.
-    pub z_factor: f64,
+    /// Vertical exaggeration; `None`: 1 (and the scale may come from the CRS).
+    pub z_factor: Option<f64>,
+    /// Horizontal units per unit of height, as `gdaldem hillshade -s` (111120 for degrees and
+    /// metres); `None`: from the CRS when it is geographic and no z factor is given, else 1.
+    pub scale: Option<f64>,
     /// Output format (PNG by a `.png` extension; GeoTIFF or COG) and compression.
     pub output: RasterOptions,
 }
 
 impl HillshadeOptions {
     /// Checks the options: an azimuth in [0, 360], an altitude in [0, 90] degrees, a positive
-    /// finite z factor (anything else shades every cell the same).
+    /// finite z factor and scale (anything else shades every cell the same).
     ///
     /// # Errors
     /// [`Error::Options`] naming the option and the value.
@@ -59,8 +67,12 @@ impl HillshadeOptions {
         if !(0.0..=90.0).contains(&self.altitude) {
             return bad("altitude", self.altitude, "from 0 to 90 degrees");
         }
-        if !(self.z_factor.is_finite() && self.z_factor > 0.0) {
-            return bad("z-factor", self.z_factor, "a positive number");
+        for (what, v) in [("z-factor", self.z_factor), ("scale", self.scale)] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0)
+            {
+                return bad(what, v, "a positive number");
+            }
         }
         Ok(())
     }
@@ -71,14 +83,15 @@ impl Default for HillshadeOptions {
         HillshadeOptions {
             azimuth: 315.0,
             altitude: 45.0,
-            z_factor: 1.0,
+            z_factor: None,
+            scale: None,
             output: RasterOptions::default(),
         }
     }
 }
 
 /// What [`hillshade`] produced.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct HillshadeSummary {
     /// Image width.
     pub cols: u32,
@@ -88,13 +101,23 @@ pub struct HillshadeSummary {
     pub shaded: u64,
     /// Bytes of the PNG.
     pub bytes: u64,
+    /// Metres per degree east and north taken from a geographic CRS (at the centre latitude),
+    /// when the scale came from it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub metres_per_degree: Option<[f64; 2]>,
+    /// What the output lost of the CRS (none known, or no `.prj` for a PNG).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lost_crs: Option<LostCrs>,
+    /// Other warnings: cells that look like degrees in a DEM that declares no CRS.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// The shade of the centre of a 3 × 3 window. Missing (NaN) neighbours are extrapolated so that
 /// a plane stays a plane: a side neighbour through the centre from the opposite side
 /// (`2e − opposite`, or `e` if that is missing too), a corner from the opposite corner the same
 /// way, or else from its two side neighbours (`side₁ + side₂ − e`).
-fn shade(w: [[f64; 3]; 3], ew: f64, ns: f64, o: &HillshadeOptions) -> u8 {
+fn shade(w: [[f64; 3]; 3], ew: f64, ns: f64, k: f64, o: &HillshadeOptions) -> u8 {
     let e = w[1][1];
     let mut f = w;
     for (r, c) in [(0, 1), (1, 0), (1, 2), (2, 1)] {
@@ -123,7 +146,6 @@ fn shade(w: [[f64; 3]; 3], ew: f64, ns: f64, o: &HillshadeOptions) -> u8 {
     let y =
         ((v(0, 0) + 2.0 * v(0, 1) + v(0, 2)) - (v(2, 0) + 2.0 * v(2, 1) + v(2, 2))) / (8.0 * ns);
     let (az, alt) = (o.azimuth.to_radians(), o.altitude.to_radians());
-    let k = o.z_factor;
     let s = (alt.sin() - k * (y * az.cos() * alt.cos() - x * az.sin() * alt.cos()))
         / (1.0 + k * k * (x * x + y * y)).sqrt();
     (1.0 + 254.0 * s.max(0.0)).round().clamp(1.0, 255.0) as u8
@@ -153,14 +175,29 @@ impl Rows {
     }
 }
 
+/// How the rows are shaded: cell sizes in the heights' units, and the z factor.
+#[derive(Clone, Copy, Debug)]
+struct Scaled {
+    ew: f64,
+    ns: f64,
+    k: f64,
+}
+
+/// What [`shade_rows`] saw: cells shaded, lowest and highest height.
+struct Shaded {
+    cells: u64,
+    z: [f64; 2],
+}
+
 /// Shades every row of `reader`'s grid, calling `row` with each (values 1–255, 0 where the DEM
-/// has no data); returns the cells shaded.
+/// has no data).
 fn shade_rows(
     reader: RasterReader,
+    g: Scaled,
     o: &HillshadeOptions,
     mut row: impl FnMut(u32, &[u8]) -> Result<()>,
-) -> Result<u64> {
-    let (ew, ns) = reader.spec().cell_size();
+) -> Result<Shaded> {
+    let Scaled { ew, ns, k } = g;
     let w = reader.spec().cols as usize;
     let mut rows = Rows {
         reader,
@@ -168,6 +205,7 @@ fn shade_rows(
         ready: VecDeque::new(),
     };
     let mut shaded = 0u64;
+    let mut z = [f64::INFINITY, f64::NEG_INFINITY];
     let mut prev: Option<Vec<f64>> = None;
     let mut cur = rows.next()?;
     let mut line = vec![0u8; w];
@@ -190,15 +228,29 @@ fn shade_rows(
                 [cell(Some(&c), l), c[x], cell(Some(&c), rr)],
                 [cell(b, l), cell(b, m), cell(b, rr)],
             ];
-            line[x] = shade(win, ew, ns, o);
+            line[x] = shade(win, ew, ns, k, o);
             shaded += 1;
+            z = [z[0].min(c[x]), z[1].max(c[x])];
         }
         row(r, &line)?;
         r += 1;
         prev = Some(c);
         cur = next;
     }
-    Ok(shaded)
+    Ok(Shaded { cells: shaded, z })
+}
+
+/// Metres per degree east and north at latitude `lat` (degrees) on the WGS 84 ellipsoid: the
+/// radii of curvature in the prime vertical (times cos φ) and in the meridian.
+pub fn metres_per_degree(lat: f64) -> [f64; 2] {
+    let (a, f) = (6_378_137.0_f64, 1.0 / 298.257_223_563);
+    let e2 = f * (2.0 - f);
+    let phi = lat.clamp(-90.0, 90.0).to_radians();
+    let w = (1.0 - e2 * phi.sin().powi(2)).sqrt();
+    let n = a / w;
+    let m = a * (1.0 - e2) / (w * w * w);
+    let rad = std::f64::consts::PI / 180.0;
+    [n * phi.cos() * rad, m * rad]
 }
 
 /// The CRS a grid reader reports (`EPSG:code` or WKT), as the writers take it.
@@ -215,7 +267,7 @@ fn crs_of(text: Option<&str>) -> Option<Crs> {
 
 /// Shades the DEM at `input` (GeoTIFF, COG or ESRI ASCII grid, read a band of rows at a time)
 /// into `output`: a grey + alpha PNG (nodata transparent) with a world file (`.pgw`) and, when
-/// the CRS is known as WKT, a `.prj`; or, by extension or `o.output.format`, an 8-bit
+/// the CRS can be written as WKT ([`Crs::prj`]), a `.prj` and GDAL's `.png.aux.xml`; or, by extension or `o.output.format`, an 8-bit
 /// georeferenced GeoTIFF or COG (0 = nodata, as `gdaldem hillshade` writes).
 ///
 /// # Errors
@@ -246,6 +298,39 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
     let (ew, ns) = spec.cell_size();
     let origin = [spec.transform[0], spec.transform[3]];
     let crs = crs_of(spec.crs.as_deref());
+    // The horizontal scale: given, or from a geographic CRS when no z factor is given either.
+    let metres_per_degree =
+        (o.scale.is_none() && o.z_factor.is_none() && crs.as_ref().is_some_and(Crs::is_geographic))
+            .then(|| metres_per_degree(spec.transform[3] + 0.5 * f64::from(h) * spec.transform[5]));
+    let [sx, sy] = metres_per_degree.unwrap_or([o.scale.unwrap_or(1.0); 2]);
+    let g = Scaled {
+        ew: ew * sx,
+        ns: ns * sy,
+        k: o.z_factor.unwrap_or(1.0),
+    };
+    // Heights that vary by more than ten times the grid's extent, over cells under 0.01 units,
+    // with no CRS to say so: degrees shaded as if they were metres.
+    let no_crs = crs.is_none();
+    let looks_like_degrees = |z: [f64; 2]| {
+        let extent = (f64::from(w) * ew).max(f64::from(h) * ns);
+        no_crs && o.scale.is_none() && ew.max(ns) < 0.01 && z[1] - z[0] > 10.0 * extent
+    };
+    let warn = |z: [f64; 2]| -> Vec<String> {
+        if looks_like_degrees(z) {
+            vec![format!(
+                "{}: cells of {} look like degrees of latitude and longitude (heights span {} \
+                 over a grid {} across) but the DEM declares no CRS, so the shading takes them \
+                 as the heights' unit: give --scale 111120 (metres per degree, as gdaldem -s) \
+                 or the DEM's CRS",
+                input.display(),
+                crate::fmt::Figure(ew.max(ns)),
+                crate::fmt::Figure(z[1] - z[0]),
+                crate::fmt::Figure((f64::from(w) * ew).max(f64::from(h) * ns)),
+            )]
+        } else {
+            Vec::new()
+        }
+    };
     let png = o.output.format.is_none()
         && output
             .extension()
@@ -265,10 +350,14 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
             crs,
             nodata: 0.0,
         };
-        let mut shaded = 0;
+        let lost_crs = LostCrs::of(geo.crs.as_ref(), false);
+        let mut shaded = Shaded {
+            cells: 0,
+            z: [0.0; 2],
+        };
         let bytes = write_u8_image(output, w, h, &geo, &r, |stage| {
             let mut values = vec![0f32; w as usize];
-            shaded = shade_rows(reader, o, |row, line| {
+            shaded = shade_rows(reader, g, o, |row, line| {
                 for (v, b) in values.iter_mut().zip(line) {
                     *v = f32::from(*b);
                 }
@@ -279,8 +368,11 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
         return Ok(HillshadeSummary {
             cols: w,
             rows: h,
-            shaded,
+            shaded: shaded.cells,
             bytes,
+            metres_per_degree,
+            lost_crs,
+            warnings: warn(shaded.z),
         });
     }
     let mut out = AtomicFile::create(output)?;
@@ -296,7 +388,7 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
         let mut writer = enc.write_header().map_err(png_err)?;
         let mut stream = writer.stream_writer().map_err(png_err)?;
         let mut ga = vec![0u8; w as usize * 2];
-        shaded = shade_rows(reader, o, |_, line| {
+        shaded = shade_rows(reader, g, o, |_, line| {
             for (x, v) in line.iter().enumerate() {
                 ga[2 * x] = *v;
                 ga[2 * x + 1] = if *v == 0 { 0 } else { 255 };
@@ -309,11 +401,15 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
     let bytes = out.commit()?;
     write_world_file(output, origin, [ew, ns])?;
     write_prj(output, crs.as_ref())?;
+    write_aux_xml(output, crs.as_ref())?;
     Ok(HillshadeSummary {
         cols: w,
         rows: h,
-        shaded,
+        shaded: shaded.cells,
         bytes,
+        metres_per_degree,
+        lost_crs: LostCrs::of(crs.as_ref(), true),
+        warnings: warn(shaded.z),
     })
 }
 
