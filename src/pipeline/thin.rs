@@ -281,5 +281,6 @@ fn trim(out: &mut Thinned, trim: &crate::breaklines::Trim) -> u64 {
     out.stats.kept = out.is_point.iter().filter(|&&p| p).count() as u64;
     out.stats.line_vertices = out.stats.vertices - out.stats.kept;
     out.stats.kept_ratio = out.stats.kept as f64 / out.stats.points.max(1) as f64;
+    out.stats.vertex_ratio = out.stats.vertices as f64 / out.stats.points.max(1) as f64;
     (before - out.triangles.len()) as u64
 }
