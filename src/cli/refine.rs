@@ -30,7 +30,9 @@ practice.
 Memory: the input TIN and the refined mesh are held in memory, about 750 bytes an input vertex
 at the peak (ARSO ground, 1.9 M vertices refined to 3.2 M at 25°: 1.4 GB): refine tile-sized
 inputs, or `tin` first with trimming. Under an address-space limit (ulimit -v, a batch job's
-h_vmem), each step checks for room first and fails with exit 4, writing nothing.
+h_vmem), each step checks for room first and fails with exit 4, writing nothing. --max-area
+implies an output size (at least the domain's area / max-area triangles): it is checked against
+--mem and --max-steiner before refining, and refused (exit 2) with the smallest bound that fits.
 
 Examples:
   sweeptin refine ground.ply --min-angle 30 -o mesh.2dm
@@ -92,6 +94,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         min_angle: args.min_angle,
         max_area: args.max_area,
         max_steiner: args.max_steiner,
+        mem: Some(args.input.mem.0),
     };
     options.validate()?;
     let boundary: Vec<&Path> = args.boundary_polygon.iter().map(|p| p.as_path()).collect();

@@ -218,7 +218,7 @@ impl Sections {
              {per_tile:.1} points each on average): their borders cut the points' TIN at \
              {samples} places, more than its {points} points, and every cut may become a vertex \
              of the output; give --tile {} or more",
-            round_up(1.1 * t * samples as f64 / points.max(1) as f64)
+            crate::error::round_up_figure(1.1 * t * samples as f64 / points.max(1) as f64)
         )))
     }
 
@@ -313,17 +313,6 @@ impl Sections {
         }
         Ok(out)
     }
-}
-
-/// `v > 0` rounded up to two significant digits (`4.23` → `4.3`, `1234` → `1300`).
-fn round_up(v: f64) -> f64 {
-    if !(v > 0.0 && v.is_finite()) {
-        return v;
-    }
-    let unit = 10f64.powi(v.log10().floor() as i32 - 1);
-    let r = (v / unit).ceil() * unit;
-    // Printed without the product's binary noise (4.3, not 4.300000000000001).
-    format!("{r:.12}").parse().unwrap_or(r)
 }
 
 /// The world position of a sample of line `i` of axis `k`.
@@ -648,14 +637,6 @@ mod tests {
         }
         assert!(TileLines::new(0.0).is_err() && TileLines::new(f64::NAN).is_err());
         assert!(TileLines::new(1.0).unwrap().tile_of(1e300).is_err());
-    }
-
-    #[test]
-    fn the_smallest_tile_is_rounded_up_to_two_digits() {
-        assert_eq!(round_up(4.23), 4.3);
-        assert_eq!(round_up(0.8791), 0.88);
-        assert_eq!(round_up(1234.0), 1300.0);
-        assert_eq!(round_up(4.3), 4.3);
     }
 
     #[test]
