@@ -544,6 +544,36 @@ fn a_max_area_beyond_memory_is_refused_before_refining() {
     assert!(!out.exists());
 }
 
+/// Issue 41, item 13: `refine` wrote "min angle 30°" in its PLY header, which `plyfile`
+/// decodes as ASCII (UnicodeDecodeError). The header is ASCII.
+#[test]
+fn refine_writes_an_ascii_ply_header() {
+    use sweeptin::sink::MeshSink;
+    let (pts, segs, holes) = square_pslg();
+    let (v, t) = domain(&pts, &segs, &holes);
+    let dir = tempfile::tempdir().unwrap();
+    // A file name that is not ASCII goes into the comment too.
+    let ply = dir.path().join("in – é.ply");
+    let mut w = sweeptin::output::PlyWriter::create(&ply, &Default::default()).unwrap();
+    v.iter().for_each(|&p| w.vertex(p).unwrap());
+    t.iter()
+        .for_each(|&tri| w.triangle(tri.map(u64::from)).unwrap());
+    w.finish().unwrap();
+    let out = dir.path().join("out.ply");
+    let r = sweeptin(&["refine", ply.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let bytes = std::fs::read(&out).unwrap();
+    let end = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap();
+    let head = &bytes[..end];
+    assert!(head.is_ascii(), "{}", String::from_utf8_lossy(head));
+    let head = String::from_utf8_lossy(head);
+    assert!(head.contains("min angle 30 degrees"), "{head}");
+    assert!(head.contains("in - <U+00E9>.ply"), "{head}");
+}
+
 /// Real lidar ground points (IGN, 22,332 points) as FILES: triangulated as `tin` does, refined.
 #[test]
 fn cli_real_points() {

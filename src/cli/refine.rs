@@ -213,7 +213,7 @@ fn meta(args: &Args, crs: Option<String>) -> MeshMeta {
     MeshMeta {
         crs,
         comments: vec![format!(
-            "sweeptin {} quality mesh (min angle {}°{}) of {}",
+            "sweeptin {} quality mesh (min angle {} degrees{}) of {}",
             env!("CARGO_PKG_VERSION"),
             args.min_angle,
             args.max_area

@@ -121,12 +121,37 @@ impl PlyWriter {
     }
 }
 
-/// The header; its length does not depend on the counts.
+/// `text` in ASCII, as a PLY header must be (readers such as Python's `plyfile` decode it as
+/// ASCII, and failed on `°`): a few signs spelled out (`°` → ` deg`, `×` → `x`, `²` → `2`…),
+/// any other non-ASCII character as `<U+00E9>`, control characters as spaces.
+pub(crate) fn ascii_comment(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            ' '..='~' => out.push(c),
+            '°' => out.push_str(" deg"),
+            '×' => out.push('x'),
+            '²' => out.push('2'),
+            '³' => out.push('3'),
+            'µ' => out.push('u'),
+            '–' | '—' | '−' => out.push('-'),
+            '‘' | '’' => out.push('\''),
+            '“' | '”' => out.push('"'),
+            '…' => out.push_str("..."),
+            c if c.is_control() => out.push(' '),
+            c => out.push_str(&format!("<U+{:04X}>", u32::from(c))),
+        }
+    }
+    out
+}
+
+/// The header (ASCII: every comment through [`ascii_comment`]); its length does not depend on
+/// the counts.
 fn header(comments: &[String], vertices: u64, faces: u64) -> String {
     let mut h = String::from("ply\nformat binary_little_endian 1.0\n");
     for c in comments {
         h.push_str("comment ");
-        h.push_str(c);
+        h.push_str(&ascii_comment(c));
         h.push('\n');
     }
     let (v, f) = (vertices.to_string(), faces.to_string());
@@ -187,5 +212,23 @@ mod tests {
         assert_eq!(header(&c, u64::MAX, u64::MAX).len(), n);
         assert!(header(&c, 5, 6).contains("element vertex 5\n"));
         assert!(header(&c, 5, 6).contains("element face 6\n"));
+    }
+
+    /// Issue 41, item 13: `refine` wrote "°" in a comment and `plyfile` raised
+    /// UnicodeDecodeError. Every comment (the CRS's WKT, file names) is written in ASCII.
+    #[test]
+    fn the_header_is_ascii_whatever_the_comments() {
+        let c = vec![
+            "quality mesh (min angle 30°) of /data/Réseau/tile – 2×2.laz".to_string(),
+            "crs GEOGCS[\"Nouvelle Triangulation Française\"]\u{7}".to_string(),
+        ];
+        let h = header(&c, 1, 2);
+        assert!(h.is_ascii(), "{h}");
+        assert!(
+            h.contains("min angle 30 deg) of /data/R<U+00E9>seau/tile - 2x2.laz\n"),
+            "{h}"
+        );
+        assert!(h.contains("Fran<U+00E7>aise\"] \n"), "{h}");
+        assert_eq!(header(&c, u64::MAX, 0).len(), h.len());
     }
 }
