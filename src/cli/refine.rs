@@ -123,11 +123,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     line_files.extend(lines_opts.holes.iter().cloned());
     let mut crs = args.crs.clone();
     // Open the output first: a bad output path fails before any heavy work.
-    let (vertices, triangles, mut sink) = if ply {
+    let (vertices, triangles, mut sink, kind) = if ply {
         let meta = meta(&args, crs.clone());
         let sink = create_mesh_sink(&args.output, args.format, &meta)?;
+        let kind = sweeptin::input::read_ply_kind(&args.input.inputs[0])?;
         let (v, t) = sweeptin::input::read_ply(&args.input.inputs[0])?;
-        (v, t, sink)
+        (v, t, sink, kind)
     } else {
         let config = args.input.config(input.clone())?;
         if crs.is_none() {
@@ -139,7 +140,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let run = sweeptin::pipeline::run(&config, Some(&mut collect), &mut [])
             .map_err(|e| super::input::run_error(e, &args.input.inputs))?;
         super::input::warn(&run);
-        (collect.vertices, collect.triangles, sink)
+        (collect.vertices, collect.triangles, sink, collect.kind)
     };
     let lines: Vec<[[f64; 3]; 2]> = if line_files.is_empty() {
         Vec::new()
@@ -156,6 +157,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot refine the TIN of {name}"))?;
     let refine_s = start.elapsed().as_secs_f64() - read_s;
     drop((vertices, triangles));
+    sink.declare(refined.kind(kind))?;
     for &p in &refined.vertices {
         sink.vertex(p)?;
     }

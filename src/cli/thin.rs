@@ -108,6 +108,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => {
             let (tin, summary) = sweeptin::pipeline::thin(&config, &options)
                 .map_err(|e| super::input::run_error(e, &args.input.inputs))?;
+            sink.declare(summary.mesh)?;
             for &v in &tin.vertices {
                 sink.vertex(v)?;
             }

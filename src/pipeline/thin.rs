@@ -38,6 +38,9 @@ pub struct ThinSummary {
     pub filters: Option<FilterStats>,
     /// The CRS, when known.
     pub crs: Option<String>,
+    /// What the output mesh is (constrained by breaklines, trimmed, not Delaunay across
+    /// `--tile` borders), for its writer ([`crate::sink::MeshSink::declare`]).
+    pub mesh: crate::validate::MeshKind,
     /// Seconds reading (and sorting) the points.
     pub read_seconds: f64,
     /// Peak resident memory (VmHWM), when the OS reports it.
@@ -155,6 +158,7 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
         }
     }
     summary.thin = out.stats.clone();
+    summary.mesh = l.mesh_kind();
     Ok((out, summary))
 }
 

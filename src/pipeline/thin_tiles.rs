@@ -25,6 +25,7 @@ use crate::simplify::thin_tiles::{Borders, Sections, TileLines, TileThinned};
 use crate::simplify::{ThinOptions, ThinStats};
 use crate::sink::MeshSink;
 use crate::sort::external::{Dedup, ExternalSorter, SortKey, SortRecord};
+use crate::validate::MeshKind;
 use rayon::prelude::*;
 use std::collections::{BTreeSet, HashMap};
 use std::time::Instant;
@@ -125,7 +126,17 @@ pub fn thin_tiled(
         ));
     }
     let mem = config.options().mem;
-    let mut summary = ThinSummary::default();
+    let mut summary = ThinSummary {
+        // The tiles' TINs are joined along the grid lines, and the points where the lines leave
+        // the hull are rounded off its edges.
+        mesh: MeshKind {
+            trimmed: true,
+            not_delaunay: true,
+            ..MeshKind::default()
+        },
+        ..ThinSummary::default()
+    };
+    sink.declare(summary.mesh)?;
     let mut tiles = ThinTileSummary {
         tile,
         ..ThinTileSummary::default()

@@ -176,6 +176,20 @@ pub struct Refined {
     pub stats: RefineStats,
 }
 
+impl Refined {
+    /// What the refined mesh is ([`crate::validate::MeshKind`]), for an input mesh of `input`: a
+    /// constrained Delaunay triangulation, constrained when breaklines went in; trimmed when the
+    /// input was, or when Steiner points split its boundary (rounded off the hull's edges).
+    /// Whether the input was Delaunay does not matter: refining triangulates again.
+    pub fn kind(&self, input: crate::validate::MeshKind) -> crate::validate::MeshKind {
+        crate::validate::MeshKind {
+            constrained: self.stats.breakline_segments > 0,
+            trimmed: input.trimmed || self.stats.segment_points > 0,
+            not_delaunay: false,
+        }
+    }
+}
+
 /// Refines the mesh `vertices`/`triangles` (counter-clockwise; the domain is their union) with the
 /// breakline segments `lines` (`[x, y, z]` ends; z `NaN` = take it from the mesh) until every
 /// triangle meets `options` (see the module docs).

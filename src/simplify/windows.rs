@@ -10,6 +10,7 @@ use super::{Options, SimplifyStats, Stop};
 use crate::error::{Error, Result};
 use crate::input::raster::{Heights, RasterReader, RasterSpec};
 use crate::sink::MeshSink;
+use crate::validate::MeshKind;
 use std::collections::BTreeMap;
 use std::sync::{Arc, Condvar, Mutex};
 
@@ -159,6 +160,12 @@ pub fn simplify_raster(
         )));
     }
     let mut stitch = Stitch::new(&layout.cols, &layout.rows);
+    // Windows joined along their borders; missing cells are known only once read.
+    sink.declare(MeshKind {
+        trimmed: true,
+        not_delaunay: true,
+        ..MeshKind::default()
+    })?;
     run(reader, &spec, grid, &layout, &mut stitch, sink, progress)?;
     let mut stats = stitch.finish(&spec);
     stats.seconds = start.elapsed().as_secs_f64();
@@ -297,6 +304,14 @@ fn whole(
         Heights::F64(h) => super::simplify(&spec, h, &grid.options, Some(&mut each)),
     }?;
     drop(heights);
+    // Delaunay in the grid's index space, not exactly in world coordinates (the cell centres
+    // are rounded there, and a grid is full of cocircular cells); the boundary is the hull
+    // unless missing cells cut it or the grid is rotated.
+    sink.declare(MeshKind {
+        trimmed: tin.stats.valid_cells < spec.cells() || !spec.is_axis_aligned(),
+        not_delaunay: true,
+        ..MeshKind::default()
+    })?;
     for &v in &tin.vertices {
         sink.vertex(v)?;
     }
