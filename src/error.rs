@@ -353,6 +353,18 @@ pub fn human_bytes(bytes: u64) -> String {
     }
 }
 
+/// `v > 0` rounded up to two significant digits, for a bound a message suggests (`4.23` →
+/// `4.3`, `1234` → `1300`, `2.01e-3` → `2.1e-3`); other values as they are.
+pub(crate) fn round_up_figure(v: f64) -> f64 {
+    if !(v > 0.0 && v.is_finite()) {
+        return v;
+    }
+    let unit = 10f64.powi(v.log10().floor() as i32 - 1);
+    let r = (v / unit).ceil() * unit;
+    // Without the product's binary noise (4.3, not 4.300000000000001).
+    format!("{r:.1e}").parse().unwrap_or(r)
+}
+
 /// What to do when the process may open no more files (`EMFILE`), or nothing.
 fn files_hint(e: &std::io::Error) -> &'static str {
     // EMFILE is 24 on Linux, macOS and the BSDs.
@@ -450,6 +462,16 @@ mod tests {
         assert_eq!(e.kind().exit_code(), 4);
         assert_eq!(ErrorKind::from_signal(6), ErrorKind::Internal);
         assert_eq!(ErrorKind::from_signal(15), ErrorKind::Output);
+    }
+
+    #[test]
+    fn suggested_bounds_round_up_to_two_digits() {
+        let r = super::round_up_figure;
+        assert_eq!(
+            (r(4.23), r(0.8791), r(1234.0), r(4.3)),
+            (4.3, 0.88, 1300.0, 4.3)
+        );
+        assert_eq!((r(9.95), r(2.01e-3), r(0.0)), (10.0, 2.1e-3, 0.0));
     }
 
     #[test]

@@ -14,6 +14,7 @@
 
 use crate::crs::Crs;
 use crate::error::Result;
+use crate::validate::MeshKind;
 use serde::{Serialize, Serializer};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -38,6 +39,16 @@ pub trait MeshSink {
     /// [`crate::Error::Output`] if a vertex number has not been pushed yet, exceeds what the format can
     /// store, or after `finish`; [`crate::Error::Io`] if writing fails.
     fn triangle(&mut self, t: [u64; 3]) -> Result<()>;
+
+    /// What the mesh is ([`MeshKind`]), declared by its producer before the first vertex;
+    /// several declarations add up ([`MeshKind::union`]). The PLY and `.stin` writers record
+    /// it; others ignore it.
+    ///
+    /// # Errors
+    /// [`crate::Error::Internal`] from a writer that has already begun writing records (`.stin`).
+    fn declare(&mut self, _kind: MeshKind) -> Result<()> {
+        Ok(())
+    }
 
     /// No later triangle refers to vertex `id`. Only the streaming-mesh format records this; other
     /// writers ignore it.
@@ -105,9 +116,16 @@ pub struct MemoryMesh {
     pub vertices: Vec<[f64; 3]>,
     /// Triangles, as written.
     pub triangles: Vec<[u32; 3]>,
+    /// What the producer declared.
+    pub kind: MeshKind,
 }
 
 impl MeshSink for MemoryMesh {
+    fn declare(&mut self, kind: MeshKind) -> Result<()> {
+        self.kind = self.kind.union(kind);
+        Ok(())
+    }
+
     fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
         push(&mut self.vertices, p, "a mesh's vertices in memory")
     }
@@ -596,6 +614,7 @@ impl TriangleSink for Fanout {
 
 #[cfg(test)]
 mod tests {
+
     use super::*;
     use std::sync::{Arc, Mutex};
 

@@ -145,3 +145,189 @@ fn check_on_damaged_ply_exit_3() {
         "{err}"
     );
 }
+
+/// An edit of a binary PLY's bytes: the data's offset, its vertices and triangles.
+type Edit = dyn Fn(&mut Vec<u8>, usize, &[[f64; 3]], &[[u32; 3]]);
+
+/// The byte offset of a binary PLY's data (after `end_header\n`).
+fn data_start(bytes: &[u8]) -> usize {
+    bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11
+}
+
+/// Issue 41, item 14: `check` rejected the tool's own outputs unless told how they were made
+/// (`--breaklines`, `--trimmed`, `--not-delaunay`): refine with breaklines, simplify windows,
+/// `thin --tile`, `--clip-breaklines`. Each output says what it is (a PLY `comment sweeptin:
+/// …`, the `.stin` header's flags) and `sweeptin check OUT` passes on every mesh the tool
+/// writes; a flipped edge or a moved vertex still fails.
+#[test]
+fn check_passes_every_mesh_the_tool_writes_and_fails_on_damage() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let s = sample.to_str().unwrap();
+    // Lines inside the points (heights from them), one running out of them (clipped), and a
+    // boundary polygon.
+    std::fs::write(
+        d("lines.txt"),
+        "85710 447210\n85730 447235\n\n85712 447232\n85728 447212\n",
+    )
+    .unwrap();
+    std::fs::write(d("long.txt"), "85690 447220\n85750 447220\n").unwrap();
+    std::fs::write(
+        d("bnd.geojson"),
+        r#"{"type":"Polygon","coordinates":[[[85710,447210],[85730,447212],[85729,447235],[85711,447233],[85710,447210]]]}"#,
+    )
+    .unwrap();
+    let mut grid = String::from("ncols 40\nnrows 30\nxllcorner 1000\nyllcorner 2000\n");
+    grid.push_str("cellsize 1\nNODATA_value -9999\n");
+    for r in 0..30 {
+        let row: Vec<String> = (0..40)
+            .map(|c| match (r > 20 && c < 6, (r * 7 + c * 3) % 11) {
+                (true, _) => "-9999".into(),
+                (_, k) => format!("{:.2}", (c as f64 / 5.0).sin() * 3.0 + k as f64 * 0.1),
+            })
+            .collect();
+        grid.push_str(&row.join(" "));
+        grid.push('\n');
+    }
+    std::fs::write(d("grid.asc"), grid).unwrap();
+    let (l, long, bnd, g) = (
+        d("lines.txt"),
+        d("long.txt"),
+        d("bnd.geojson"),
+        d("grid.asc"),
+    );
+    let outputs: Vec<(&str, Vec<&str>)> = vec![
+        ("tin.ply", vec!["tin", s]),
+        ("tin.stin", vec!["tin", s]),
+        ("lines.ply", vec!["tin", s, "--breaklines", &l]),
+        ("lines.stin", vec!["tin", s, "--breaklines", &l]),
+        (
+            "clip.ply",
+            vec!["tin", s, "--breaklines", &long, "--clip-breaklines"],
+        ),
+        ("boundary.ply", vec!["tin", s, "--trim-boundary", &bnd]),
+        ("maxedge.stin", vec!["tin", s, "--max-edge", "1"]),
+        ("flat.ply", vec!["tin", s, "--no-flat-triangles"]),
+        ("products.ply", vec!["products", s, "--mesh"]),
+        (
+            "thin.ply",
+            vec!["thin", s, "--max-error", "0.1", "--breaklines", &l],
+        ),
+        (
+            "tiles.ply",
+            vec!["thin", s, "--max-error", "0.1", "--tile", "5"],
+        ),
+        (
+            "tiles.stin",
+            vec!["thin", s, "--max-error", "0.1", "--tile", "5"],
+        ),
+        ("refine.ply", vec!["refine", s, "--max-area", "4"]),
+        ("refinebl.ply", vec!["refine", s, "--breaklines", &l]),
+        (
+            "refinebnd.ply",
+            vec!["refine", s, "--boundary", &bnd, "--breaklines", &l],
+        ),
+        ("simplify.ply", vec!["simplify", &g, "--max-error", "0.2"]),
+        (
+            "windows.ply",
+            vec!["simplify", &g, "--max-error", "0.2", "--window", "8"],
+        ),
+        (
+            "windows.stin",
+            vec!["simplify", &g, "--max-error", "0.2", "--window", "8"],
+        ),
+    ];
+    for (name, args) in &outputs {
+        let out = d(name);
+        let mut a = args.clone();
+        if a[0] == "products" {
+            a.push(&out);
+        } else {
+            a.extend(["-o", &out]);
+        }
+        a.push("-q");
+        let o = run(&a);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let o = run(&["check", &out]);
+        assert!(o.status.success(), "check {name}: {}", stderr(&o));
+        if name.ends_with(".ply") {
+            let bytes = std::fs::read(&out).unwrap();
+            let head = &bytes[..data_start(&bytes)];
+            assert!(head.is_ascii(), "{name}: {}", String::from_utf8_lossy(head));
+        }
+    }
+    // What the files say.
+    let says = |name: &str| {
+        let o = run(&["check", &d(name)]);
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    assert!(!says("tin.ply").contains("; a "), "{}", says("tin.ply"));
+    assert!(says("lines.ply").contains("a constrained mesh"));
+    assert!(says("tiles.stin").contains("a trimmed not-delaunay mesh"));
+    let kind = sweeptin::input::read_ply_kind(d("boundary.ply")).unwrap();
+    assert!(
+        kind.constrained && kind.trimmed && !kind.not_delaunay,
+        "{kind:?}"
+    );
+
+    // Damage: an edge of the Delaunay TIN flipped (two faces rewritten in place, the header
+    // kept), a vertex of the thinned tiles moved.
+    let damaged = |from: &str, to: &str, edit: &Edit| {
+        let (v, t) = sweeptin::input::read_ply(d(from)).unwrap();
+        let mut bytes = std::fs::read(d(from)).unwrap();
+        let start = data_start(&bytes);
+        edit(&mut bytes, start, &v, &t);
+        std::fs::write(d(to), bytes).unwrap();
+        let o = run(&["check", &d(to)]);
+        assert_eq!(o.status.code(), Some(3), "{to}: {}", stderr(&o));
+        stderr(&o)
+    };
+    let flip = |bytes: &mut Vec<u8>, start: usize, v: &[[f64; 3]], t: &[[u32; 3]]| {
+        let face = |i: usize| start + v.len() * 24 + i * 13 + 1;
+        let cross = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
+            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        };
+        let mut by_edge = std::collections::HashMap::new();
+        for (i, tri) in t.iter().enumerate() {
+            for k in 0..3 {
+                by_edge.insert((tri[k], tri[(k + 1) % 3]), (i, tri[(k + 2) % 3]));
+            }
+        }
+        // The first interior edge whose quadrilateral is strictly convex.
+        for (i, tri) in t.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+                let Some(&(j, d)) = by_edge.get(&(b, a)) else {
+                    continue;
+                };
+                let p = |x: u32| v[x as usize];
+                if cross(p(c), p(a), p(d)) > 0.0 && cross(p(d), p(b), p(c)) > 0.0 {
+                    for (f, tri) in [(i, [c, a, d]), (j, [d, b, c])] {
+                        for (n, x) in tri.iter().enumerate() {
+                            let at = face(f) + 4 * n;
+                            bytes[at..at + 4].copy_from_slice(&x.to_le_bytes());
+                        }
+                    }
+                    return;
+                }
+            }
+        }
+        panic!("no edge to flip");
+    };
+    let err = damaged("tin.ply", "flipped.ply", &flip);
+    assert!(err.contains("not locally Delaunay"), "{err}");
+    let moved = |bytes: &mut Vec<u8>, start: usize, v: &[[f64; 3]], _: &[[u32; 3]]| {
+        // The middle vertex, moved 30 units east: its triangles fold.
+        let i = v.len() / 2;
+        let x = v[i][0] + 30.0;
+        bytes[start + i * 24..start + i * 24 + 8].copy_from_slice(&x.to_le_bytes());
+    };
+    let err = damaged("tiles.ply", "moved.ply", &moved);
+    assert!(err.contains("clockwise") || err.contains("twice"), "{err}");
+    damaged("tin.ply", "moved_tin.ply", &moved);
+}

@@ -331,7 +331,7 @@ fn max_area_bounds_every_triangle() {
     let o = RefineOptions {
         min_angle: 25.0,
         max_area: Some(20.0),
-        max_steiner: None,
+        ..RefineOptions::default()
     };
     let r = refine(&v, &t, &as_lines(&pts, &segs[8..]), &o).unwrap();
     check(&r, &v, &t, &coords(&pts, &segs), 25.0);
@@ -479,6 +479,99 @@ fn cli_mesh_to_2dm() {
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(err.contains("clockwise"), "{err}");
     assert!(!o2.exists());
+}
+
+/// Issue 41, item 12: `refine --max-area 1e-6` ran to --max-steiner, then said "the angle bound
+/// cannot be met (… a bound above 34°?)". The output `--max-area` implies (the domain's area /
+/// max-area triangles) is checked against `--mem` and `--max-steiner` before refining: exit 2,
+/// naming the size and the smallest bound that fits.
+#[test]
+fn a_max_area_beyond_memory_is_refused_before_refining() {
+    use sweeptin::sink::MeshSink;
+    let (pts, segs, holes) = square_pslg();
+    let (v, t) = domain(&pts, &segs, &holes);
+    let lines = as_lines(&pts, &segs[8..]);
+    let o = RefineOptions {
+        max_area: Some(1e-6),
+        mem: Some(1 << 30),
+        ..RefineOptions::default()
+    };
+    let e = refine(&v, &t, &lines, &o).unwrap_err();
+    let msg = e.to_string();
+    assert_eq!(e.kind(), sweeptin::ErrorKind::Usage, "{msg}");
+    assert!(
+        msg.contains("--max-area 0.000001: the domain's area of 9600")
+            && msg.contains("makes at least 9.60e9 triangles")
+            && msg.contains("more than --mem 1.0 GiB; give --max-area 0.0013 or more"),
+        "{msg}"
+    );
+    // The smallest bound it names fits.
+    let fits = RefineOptions {
+        max_area: Some(0.0013),
+        max_steiner: Some(0),
+        ..o
+    };
+    let msg = refine(&v, &t, &lines, &fits).unwrap_err().to_string();
+    assert!(!msg.contains("--mem"), "{msg}");
+    // Within memory, past --max-steiner: named up front too.
+    assert!(
+        msg.contains("more than --max-steiner 0; give --max-area"),
+        "{msg}"
+    );
+    // The command line: exit 2 before refining, nothing written.
+    let dir = tempfile::tempdir().unwrap();
+    let ply = dir.path().join("in.ply");
+    let mut w = sweeptin::output::PlyWriter::create(&ply, &Default::default()).unwrap();
+    v.iter().for_each(|&p| w.vertex(p).unwrap());
+    t.iter()
+        .for_each(|&tri| w.triangle(tri.map(u64::from)).unwrap());
+    w.finish().unwrap();
+    let out = dir.path().join("out.ply");
+    let r = sweeptin(&[
+        "refine",
+        ply.to_str().unwrap(),
+        "--max-area",
+        "1e-6",
+        "--mem",
+        "256M",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(err.contains("more than --mem 256.0 MiB"), "{err}");
+    assert!(!err.contains("angle bound"), "{err}");
+    assert!(!out.exists());
+}
+
+/// Issue 41, item 13: `refine` wrote "min angle 30°" in its PLY header, which `plyfile`
+/// decodes as ASCII (UnicodeDecodeError). The header is ASCII.
+#[test]
+fn refine_writes_an_ascii_ply_header() {
+    use sweeptin::sink::MeshSink;
+    let (pts, segs, holes) = square_pslg();
+    let (v, t) = domain(&pts, &segs, &holes);
+    let dir = tempfile::tempdir().unwrap();
+    // A file name that is not ASCII goes into the comment too.
+    let ply = dir.path().join("in – é.ply");
+    let mut w = sweeptin::output::PlyWriter::create(&ply, &Default::default()).unwrap();
+    v.iter().for_each(|&p| w.vertex(p).unwrap());
+    t.iter()
+        .for_each(|&tri| w.triangle(tri.map(u64::from)).unwrap());
+    w.finish().unwrap();
+    let out = dir.path().join("out.ply");
+    let r = sweeptin(&["refine", ply.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let bytes = std::fs::read(&out).unwrap();
+    let end = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap();
+    let head = &bytes[..end];
+    assert!(head.is_ascii(), "{}", String::from_utf8_lossy(head));
+    let head = String::from_utf8_lossy(head);
+    assert!(head.contains("min angle 30 degrees"), "{head}");
+    assert!(head.contains("in - <U+00E9>.ply"), "{head}");
 }
 
 /// Real lidar ground points (IGN, 22,332 points) as FILES: triangulated as `tin` does, refined.

@@ -169,3 +169,77 @@ fn non_square_cells() {
         assert_eq!(c.uncovered_valid, 0);
     }
 }
+
+/// Issue 41, item 8: an all-nodata grid gave an empty mesh with exit 0 (in one window and in
+/// several); an extra row, or `NODATA_value` after the data, was read silently (-9999 became
+/// a height); `xllcorner 1e300` wrote a mesh outside the exact range. Each is exit 3 naming
+/// the file (and the line), and leaves no mesh.
+#[test]
+fn empty_and_damaged_ascii_grids_are_refused_naming_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.ply");
+    let head = "ncols 6\nnrows 5\nxllcorner 0\nyllcorner 0\ncellsize 1\n";
+    let row = |v: &str| format!("{}\n", [v; 6].join(" "));
+    let nodata = format!("{head}NODATA_value -9999\n{}", row("-9999").repeat(5));
+    let lonely = format!(
+        "{head}NODATA_value -9999\n{}{}",
+        row("-9999").repeat(4),
+        "1 -9999 -9999 -9999 -9999 2\n"
+    );
+    let good = row("1").repeat(5);
+    let cases: [(&str, String, &[&str], &str); 6] = [
+        (
+            "nodata.asc",
+            nodata.clone(),
+            &[],
+            "every one of its 6×5 cells is missing",
+        ),
+        // Windows of 4 cells: two bands of windows.
+        (
+            "nodata.asc",
+            nodata,
+            &["--window", "4"],
+            "every one of its 6×5 cells",
+        ),
+        (
+            "lonely.asc",
+            lonely,
+            &[],
+            "its 2 valid cells (of 6×5) make no triangle",
+        ),
+        (
+            "extra.asc",
+            format!("{head}{good}{}", row("7")),
+            &[],
+            ":11: \"7\" after the grid's last value",
+        ),
+        (
+            "after.asc",
+            format!("{head}{good}NODATA_value -9999\n"),
+            &[],
+            ":11: \"NODATA_value\" after the grid's last value: a header line",
+        ),
+        (
+            "far.asc",
+            format!("{}{good}", head.replace("xllcorner 0", "xllcorner 1e300")),
+            &[],
+            ":3: xllcorner 1e300",
+        ),
+    ];
+    for (name, text, extra, says) in cases {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+            .arg("simplify")
+            .arg(&p)
+            .args(["--max-error", "0.1", "-q", "-o"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(3), "{name} {extra:?}: {e}");
+        assert!(e.contains(says) && e.contains(name), "{name}: {e}");
+        assert!(!out.exists(), "{name}: a mesh was left");
+    }
+}

@@ -252,3 +252,73 @@ fn same_bytes_whatever_mem_and_threads_and_clear_refusals() {
         assert!(!dir.path().join("c.ply").exists());
     }
 }
+
+/// Issue 41, item 7: `thin --tile 1` on lidR (points 1.05 m apart) wrote 321,159 vertices and
+/// said "50988 points kept (69.46 %)". Tiles smaller than a point's neighbourhood (their
+/// borders cut the TIN at more places than it has points) are refused, exit 2, naming the
+/// smallest tile that works, which then runs; the summary counts the vertices written.
+#[test]
+fn a_tile_smaller_than_a_points_neighbourhood_is_refused_and_the_summary_counts_what_is_written() {
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.ply");
+    let run = |tile: &str, json: bool| {
+        let mut c = sweeptin_cmd();
+        c.arg("thin")
+            .arg(&sample)
+            .args(["--max-error", "0.1", "--tile", tile, "-o"])
+            .arg(&out);
+        if json {
+            c.arg("--json");
+        }
+        c.output().unwrap()
+    };
+    // Points about 0.18 apart: tiles of 0.5 hold about 8 points.
+    let o = run("0.5", false);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("smaller than a point's neighbourhood"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a refused run left {}", out.display());
+    let smallest = err
+        .split("give --tile ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .unwrap_or_else(|| panic!("no smallest tile named: {err}"));
+    smallest.parse::<f64>().unwrap();
+    // The tile it names works, and the summary counts what is written.
+    let o = run(smallest, true);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (vertices, _) = sweeptin::input::read_ply(&out).unwrap();
+    let t = &json["thin"];
+    assert_eq!(
+        t["vertices"].as_u64(),
+        Some(vertices.len() as u64),
+        "{json}"
+    );
+    let kept = t["kept"].as_u64().unwrap();
+    let border = json["tiles"]["border_points"].as_u64().unwrap();
+    assert!(
+        border > 0 && kept + border <= vertices.len() as u64,
+        "{json}"
+    );
+    assert_eq!(
+        t["line_vertices"].as_u64(),
+        Some(vertices.len() as u64 - kept)
+    );
+    let ratio = t["vertex_ratio"].as_f64().unwrap();
+    let points = t["points"].as_f64().unwrap();
+    assert!(
+        (ratio - vertices.len() as f64 / points).abs() < 1e-12,
+        "{json}"
+    );
+    let o = run(smallest, false);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("{} vertices (", vertices.len())),
+        "the summary does not count the vertices written: {err}"
+    );
+}

@@ -30,7 +30,9 @@ practice.
 Memory: the input TIN and the refined mesh are held in memory, about 750 bytes an input vertex
 at the peak (ARSO ground, 1.9 M vertices refined to 3.2 M at 25°: 1.4 GB): refine tile-sized
 inputs, or `tin` first with trimming. Under an address-space limit (ulimit -v, a batch job's
-h_vmem), each step checks for room first and fails with exit 4, writing nothing.
+h_vmem), each step checks for room first and fails with exit 4, writing nothing. --max-area
+implies an output size (at least the domain's area / max-area triangles): it is checked against
+--mem and --max-steiner before refining, and refused (exit 2) with the smallest bound that fits.
 
 Examples:
   sweeptin refine ground.ply --min-angle 30 -o mesh.2dm
@@ -92,6 +94,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         min_angle: args.min_angle,
         max_area: args.max_area,
         max_steiner: args.max_steiner,
+        mem: Some(args.input.mem.0),
     };
     options.validate()?;
     let boundary: Vec<&Path> = args.boundary_polygon.iter().map(|p| p.as_path()).collect();
@@ -120,11 +123,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     line_files.extend(lines_opts.holes.iter().cloned());
     let mut crs = args.crs.clone();
     // Open the output first: a bad output path fails before any heavy work.
-    let (vertices, triangles, mut sink) = if ply {
+    let (vertices, triangles, mut sink, kind) = if ply {
         let meta = meta(&args, crs.clone());
         let sink = create_mesh_sink(&args.output, args.format, &meta)?;
+        let kind = sweeptin::input::read_ply_kind(&args.input.inputs[0])?;
         let (v, t) = sweeptin::input::read_ply(&args.input.inputs[0])?;
-        (v, t, sink)
+        (v, t, sink, kind)
     } else {
         let config = args.input.config(input.clone())?;
         if crs.is_none() {
@@ -136,7 +140,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let run = sweeptin::pipeline::run(&config, Some(&mut collect), &mut [])
             .map_err(|e| super::input::run_error(e, &args.input.inputs))?;
         super::input::warn(&run);
-        (collect.vertices, collect.triangles, sink)
+        (collect.vertices, collect.triangles, sink, collect.kind)
     };
     let lines: Vec<[[f64; 3]; 2]> = if line_files.is_empty() {
         Vec::new()
@@ -153,6 +157,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot refine the TIN of {name}"))?;
     let refine_s = start.elapsed().as_secs_f64() - read_s;
     drop((vertices, triangles));
+    sink.declare(refined.kind(kind))?;
     for &p in &refined.vertices {
         sink.vertex(p)?;
     }
@@ -210,7 +215,7 @@ fn meta(args: &Args, crs: Option<String>) -> MeshMeta {
     MeshMeta {
         crs,
         comments: vec![format!(
-            "sweeptin {} quality mesh (min angle {}°{}) of {}",
+            "sweeptin {} quality mesh (min angle {} degrees{}) of {}",
             env!("CARGO_PKG_VERSION"),
             args.min_angle,
             args.max_area

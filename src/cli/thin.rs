@@ -27,7 +27,11 @@ the same bytes for any --mem or --threads, every point still within --max-error 
 keeps about as many points as the global run (the default), border vertices included: on a \
 13 M-point tile's ground at 0.1 m, 309,562 vertices with T = 250 against 310,358 (see \
 docs/ACCURACY.md); the triangles along the grid lines follow the borders, so the whole TIN is \
-not Delaunay across them.
+not Delaunay across them. A tile must be larger than a point's neighbourhood: when the grid \
+lines cut the points' TIN at more places than it has points (tiles below about 4.3 mean point \
+spacings), every cut may become a vertex, and the run is refused (exit 2) with the smallest \
+side that works. The summary counts the vertices written: the points kept and the border \
+vertices.
 
 Example: the ground of a tile within 5 cm, with a road's edges as breaklines:
   sweeptin thin tile.laz --class 2 --max-error 0.05 --breaklines road.geojson -o ground.ply --json
@@ -104,6 +108,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => {
             let (tin, summary) = sweeptin::pipeline::thin(&config, &options)
                 .map_err(|e| super::input::run_error(e, &args.input.inputs))?;
+            sink.declare(summary.mesh)?;
             for &v in &tin.vertices {
                 sink.vertex(v)?;
             }
@@ -120,19 +125,40 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.input.json {
         println!("{}", serde_json::to_string(&summary)?);
     } else {
+        // What is written: the vertices, of which the points kept are a part.
+        let others = match (&summary.tiles, s.line_vertices) {
+            (_, 0) => String::new(),
+            (Some(_), n) => format!(", {n} added on the tile borders"),
+            (None, n) => format!(", {n} breakline vertices"),
+        };
         eprintln!(
-            "sweeptin: {} points ({} duplicates merged) -> {}: {} points kept ({:.2} %), {} \
-             triangles, max error {:.4}, RMS {:.4} (bound {}) in {:.2} s",
+            "sweeptin: {} points ({} duplicates merged) -> {}: {} vertices ({:.2} % of the \
+             points; {} points kept{others}), {} triangles, max error {:.4}, RMS {:.4} (bound \
+             {}) in {:.2} s",
             summary.points_read,
             summary.duplicates,
             args.output.display(),
+            written.vertices,
+            100.0 * written.vertices as f64 / s.points.max(1) as f64,
             s.kept,
-            100.0 * s.kept_ratio,
             written.triangles,
             s.max_error,
             s.rms_error,
             args.max_error,
             start.elapsed().as_secs_f64(),
+        );
+    }
+    if s.vertices > s.points && !args.input.quiet {
+        eprintln!(
+            "sweeptin: warning: {} vertices written for {} points: {}",
+            s.vertices,
+            s.points,
+            if summary.tiles.is_some() {
+                "the tile borders add more vertices than thinning leaves out; a larger --tile \
+                 (or --max-error) thins more"
+            } else {
+                "the breaklines add more vertices than thinning leaves out"
+            }
         );
     }
     Ok(())

@@ -17,7 +17,7 @@ pub mod stin;
 pub mod vector;
 pub mod xyz;
 
-pub use ply::read_ply;
+pub use ply::{read_ply, read_ply_kind};
 
 /// What a file is, from its first bytes, when it is a binary format a user may give by mistake
 /// (a raster as points, an image as a DEM): `"a TIFF image"`, `"a LAS/LAZ point cloud"`, …;

@@ -9,6 +9,7 @@
 //! panic.
 
 use crate::error::{Error, Result};
+use crate::validate::MeshKind;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -33,6 +34,20 @@ pub fn read_ply(path: impl AsRef<Path>) -> Result<Mesh> {
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     read_ply_from(BufReader::with_capacity(1 << 20, file), len, path)
+}
+
+/// What a PLY mesh says it is: its `comment sweeptin: …` line ([`MeshKind`], as sweeptin's
+/// writer records it), or the default (a Delaunay triangulation of its vertices' convex hull)
+/// when it has none. Reads the header only.
+///
+/// # Errors
+/// As [`read_ply`] for the header; [`Error::Format`] for a kind word this version does not
+/// know.
+pub fn read_ply_kind(path: impl AsRef<Path>) -> Result<MeshKind> {
+    let path = path.as_ref();
+    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let header = parse_header(&mut BufReader::new(file), path)?;
+    Ok(header.kind)
 }
 
 /// [`read_ply`] from any buffered reader; `len` is the total input size in bytes (used only to
@@ -161,6 +176,8 @@ struct Header {
     bytes: u64,
     /// Lines in the header.
     lines: u64,
+    /// The `comment sweeptin: …` line's kind.
+    kind: MeshKind,
 }
 
 fn format_error(path: &Path, message: impl Into<String>) -> Error {
@@ -175,6 +192,7 @@ fn parse_header<R: BufRead>(src: &mut R, path: &Path) -> Result<Header> {
     let mut lines = 0u64;
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
+    let mut kind = MeshKind::default();
     let mut raw = Vec::new();
     loop {
         raw.clear();
@@ -215,6 +233,14 @@ fn parse_header<R: BufRead>(src: &mut R, path: &Path) -> Result<Header> {
         let words: Vec<&str> = line.split_ascii_whitespace().collect();
         let at = |m: String| format_error(path, format!("PLY header line {lines}: {m}"));
         match words.as_slice() {
+            ["comment", "sweeptin:", words @ ..] => {
+                kind = MeshKind::from_words(&words.join(" ")).map_err(|w| {
+                    at(format!(
+                        "\"{w}\" in the comment that says what the mesh is: a later version's \
+                         word? (the mesh cannot be checked as this version knows)"
+                    ))
+                })?;
+            }
             [] | ["comment", ..] | ["obj_info", ..] => {}
             ["format", fmt, _version] => {
                 encoding = Some(match *fmt {
@@ -273,6 +299,7 @@ fn parse_header<R: BufRead>(src: &mut R, path: &Path) -> Result<Header> {
         elements,
         bytes,
         lines,
+        kind,
     })
 }
 

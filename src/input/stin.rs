@@ -7,7 +7,8 @@
 //! An end record with the counts closes the file, so a truncated file is detected.
 //!
 //! Header: `SWEEPTIN-STREAM\0` (16 bytes), version `u32` (1), record size `u32` (32), CRS length
-//! `u32`, reserved `u32` (0), the CRS text (UTF-8, WKT or `EPSG:n`), zero padding to a multiple of
+//! `u32`, flags `u32` (what the mesh is, [`MeshKind::bits`]; 0 in files of earlier versions,
+//! which is a Delaunay mesh of its vertices' hull), the CRS text (UTF-8, WKT or `EPSG:n`), zero padding to a multiple of
 //! 32 bytes. Records: tag `u32`, reserved `u32`, then 24 bytes:
 //!
 //! | tag | record | payload |
@@ -20,6 +21,7 @@
 
 use crate::error::{Error, Result};
 use crate::idmap::IdMap;
+use crate::validate::MeshKind;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
@@ -60,6 +62,7 @@ pub struct StinReader {
     path: PathBuf,
     input: BufReader<std::fs::File>,
     crs: Option<String>,
+    kind: MeshKind,
     live: IdMap<[f64; 3]>,
     vertices: u64,
     triangles: u64,
@@ -94,6 +97,11 @@ impl StinReader {
                 word(20)
             )));
         }
+        let kind = MeshKind::from_bits(word(28)).map_err(|b| {
+            bad(format!(
+                "header flags {b:#x} unknown (a later version's file, or damage)"
+            ))
+        })?;
         let crs_len = word(24) as usize;
         if crs_len > 1 << 20 {
             return Err(bad(format!("CRS length {crs_len} is not plausible")));
@@ -108,6 +116,7 @@ impl StinReader {
             path: path.to_path_buf(),
             input,
             crs: (!crs.is_empty()).then_some(crs),
+            kind,
             live: IdMap::default(),
             vertices: 0,
             triangles: 0,
@@ -119,6 +128,11 @@ impl StinReader {
     /// The CRS recorded in the header.
     pub fn crs(&self) -> Option<&str> {
         self.crs.as_deref()
+    }
+
+    /// What the mesh is, from the header's flags ([`MeshKind`]).
+    pub fn kind(&self) -> MeshKind {
+        self.kind
     }
 
     /// Vertices currently held (not yet released).
@@ -219,7 +233,23 @@ mod tests {
             comments: vec![],
         };
         let mut w = StinWriter::create(&path, &meta).unwrap();
+        let kind = MeshKind {
+            trimmed: true,
+            not_delaunay: true,
+            ..MeshKind::default()
+        };
+        w.declare(kind).unwrap();
+        w.declare(MeshKind::default()).unwrap();
         w.vertex([0., 0., 1.]).unwrap();
+        // Once records are written, the kind can no longer change.
+        assert!(w.declare(kind).is_ok());
+        assert!(
+            w.declare(MeshKind {
+                constrained: true,
+                ..kind
+            })
+            .is_err()
+        );
         w.vertex([1., 0., 2.]).unwrap();
         w.vertex([0., 1., 3.]).unwrap();
         w.triangle([0, 1, 2]).unwrap();
@@ -228,6 +258,7 @@ mod tests {
         w.finish().unwrap();
         let mut r = StinReader::open(&path).unwrap();
         assert_eq!(r.crs(), Some("EPSG:2154"));
+        assert_eq!(r.kind(), kind);
         let mut evs = Vec::new();
         while let Some(e) = r.next().unwrap() {
             evs.push(e);

@@ -8,6 +8,7 @@ use crate::input::stin::{
     MAGIC, RECORD, T_DONE, T_END, T_TRIANGLE, T_VERTEX, T_WATERMARK, VERSION,
 };
 use crate::sink::{MeshSink, MeshSummary};
+use crate::validate::MeshKind;
 use std::io::Write;
 use std::path::Path;
 
@@ -25,6 +26,9 @@ fn record(tag: u32, a: [u8; 8], b: [u8; 8], c: [u8; 8]) -> [u8; RECORD] {
 pub struct StinWriter {
     state: SinkState,
     out: Option<AtomicFile>,
+    /// The header, until the first record: the kind declared goes into its flag word.
+    head: Option<Vec<u8>>,
+    kind: MeshKind,
 }
 
 impl StinWriter {
@@ -34,32 +38,49 @@ impl StinWriter {
     /// [`crate::Error::Write`] naming `path` if the output cannot be created.
     pub fn create(path: &Path, meta: &MeshMeta) -> Result<Self> {
         let state = SinkState::new(path);
-        let mut out = AtomicFile::create(path)?;
+        let out = AtomicFile::create(path)?;
         let crs = meta.crs.clone().unwrap_or_default().into_bytes();
         let mut head = Vec::with_capacity(32 + crs.len() + RECORD);
         head.extend_from_slice(MAGIC);
         head.extend_from_slice(&VERSION.to_le_bytes());
         head.extend_from_slice(&(RECORD as u32).to_le_bytes());
         head.extend_from_slice(&(crs.len() as u32).to_le_bytes());
+        // The flags (MeshKind::bits), set when the header is written.
         head.extend_from_slice(&0u32.to_le_bytes());
         head.extend_from_slice(&crs);
         head.resize(head.len().div_ceil(RECORD) * RECORD, 0);
-        out.write_all(&head).map_err(|e| state.io(e))?;
         Ok(StinWriter {
             state,
             out: Some(out),
+            head: Some(head),
+            kind: MeshKind::default(),
         })
     }
 
     fn put(&mut self, r: &[u8; RECORD]) -> Result<()> {
-        match self.out.as_mut() {
-            Some(out) => out.write_all(r).map_err(|e| self.state.io(e)),
-            None => Err(self.state.error("the mesh writer was already finished")),
+        let Some(out) = self.out.as_mut() else {
+            return Err(self.state.error("the mesh writer was already finished"));
+        };
+        if let Some(mut head) = self.head.take() {
+            head[28..32].copy_from_slice(&self.kind.bits().to_le_bytes());
+            out.write_all(&head).map_err(|e| self.state.io(e))?;
         }
+        out.write_all(r).map_err(|e| self.state.io(e))
     }
 }
 
 impl MeshSink for StinWriter {
+    fn declare(&mut self, kind: MeshKind) -> Result<()> {
+        let kind = self.kind.union(kind);
+        if self.head.is_none() && kind != self.kind {
+            return Err(crate::Error::Internal(
+                "a streaming mesh's kind was declared after its first record".into(),
+            ));
+        }
+        self.kind = kind;
+        Ok(())
+    }
+
     fn vertex(&mut self, p: [f64; 3]) -> Result<()> {
         self.state.vertex(p)?;
         self.put(&record(

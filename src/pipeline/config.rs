@@ -324,6 +324,16 @@ impl RunConfig {
         c
     }
 
+    /// The same run with the tiled engine's own tile side (from the data's density), whatever
+    /// `--tile` says: `thin --tile T` takes `T` for its thinning tiles, and the TIN of its first
+    /// pass (the same triangles for any tile side) must not run in tiles of, say, one point.
+    pub(crate) fn engine_tiles(mut self) -> RunConfig {
+        if let Some(t) = self.options.tiles.as_mut() {
+            t.tile = None;
+        }
+        self
+    }
+
     /// The CRS of the input, from LAS/LAZ headers or a streaming mesh's header, without reading
     /// the points (`None` for XYZ).
     ///

@@ -80,6 +80,18 @@ impl LineOptions {
             && self.holes.is_none()
             && self.max_edge.is_none()
     }
+
+    /// What these lines make of a mesh ([`crate::validate::MeshKind`]): breaklines and the rings of
+    /// a boundary or holes are constraints; a boundary, holes and `--max-edge` trim it;
+    /// `--no-flat-triangles` leaves it not Delaunay.
+    pub fn mesh_kind(&self) -> crate::validate::MeshKind {
+        let rings = self.boundary.is_some() || self.holes.is_some();
+        crate::validate::MeshKind {
+            constrained: !self.breaklines.is_empty() || rings,
+            trimmed: rings || self.max_edge.is_some(),
+            not_delaunay: self.no_flat_triangles,
+        }
+    }
 }
 
 /// What the breakline machinery did (part of the `--json` summary).

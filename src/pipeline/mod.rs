@@ -275,6 +275,11 @@ pub fn run(
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],
 ) -> Result<RunSummary> {
+    let mut mesh = mesh;
+    if let Some(m) = mesh.as_mut() {
+        // What the mesh is (a replayed mesh adds its own kind, `replay`).
+        m.declare(config.input().lines.mesh_kind())?;
+    }
     if config.source() == Source::Stream {
         return replay::replay(config, mesh, sinks);
     }

@@ -35,6 +35,9 @@ pub(crate) fn replay(
     ];
     let mut pre = StinReader::open(path)?;
     let crs = pre.crs().and_then(crs_from_text);
+    if let Some(m) = mesh.as_mut() {
+        m.declare(pre.kind())?;
+    }
     while let Some(ev) = pre.next()? {
         if let StinEvent::Vertex(p) = ev {
             bounds[0] = bounds[0].min(p[0]);

@@ -38,6 +38,9 @@ pub struct ThinSummary {
     pub filters: Option<FilterStats>,
     /// The CRS, when known.
     pub crs: Option<String>,
+    /// What the output mesh is (constrained by breaklines, trimmed, not Delaunay across
+    /// `--tile` borders), for its writer ([`crate::sink::MeshSink::declare`]).
+    pub mesh: crate::validate::MeshKind,
     /// Seconds reading (and sorting) the points.
     pub read_seconds: f64,
     /// Peak resident memory (VmHWM), when the OS reports it.
@@ -155,6 +158,7 @@ pub fn thin(config: &RunConfig, options: &ThinOptions) -> Result<(Thinned, ThinS
         }
     }
     summary.thin = out.stats.clone();
+    summary.mesh = l.mesh_kind();
     Ok((out, summary))
 }
 
@@ -281,5 +285,6 @@ fn trim(out: &mut Thinned, trim: &crate::breaklines::Trim) -> u64 {
     out.stats.kept = out.is_point.iter().filter(|&&p| p).count() as u64;
     out.stats.line_vertices = out.stats.vertices - out.stats.kept;
     out.stats.kept_ratio = out.stats.kept as f64 / out.stats.points.max(1) as f64;
+    out.stats.vertex_ratio = out.stats.vertices as f64 / out.stats.points.max(1) as f64;
     (before - out.triangles.len()) as u64
 }

@@ -25,6 +25,7 @@ use crate::simplify::thin_tiles::{Borders, Sections, TileLines, TileThinned};
 use crate::simplify::{ThinOptions, ThinStats};
 use crate::sink::MeshSink;
 use crate::sort::external::{Dedup, ExternalSorter, SortKey, SortRecord};
+use crate::validate::MeshKind;
 use rayon::prelude::*;
 use std::collections::{BTreeSet, HashMap};
 use std::time::Instant;
@@ -125,7 +126,17 @@ pub fn thin_tiled(
         ));
     }
     let mem = config.options().mem;
-    let mut summary = ThinSummary::default();
+    let mut summary = ThinSummary {
+        // The tiles' TINs are joined along the grid lines, and the points where the lines leave
+        // the hull are rounded off its edges.
+        mesh: MeshKind {
+            trimmed: true,
+            not_delaunay: true,
+            ..MeshKind::default()
+        },
+        ..ThinSummary::default()
+    };
+    sink.declare(summary.mesh)?;
     let mut tiles = ThinTileSummary {
         tile,
         ..ThinTileSummary::default()
@@ -134,8 +145,12 @@ pub fn thin_tiled(
     // 1. The borders, from the exact TIN.
     let start = Instant::now();
     let mut sections = Sections::new(grid, mem / 8);
-    super::run(&config.points_only(), None, &mut [&mut sections])?;
-    let borders = sections.borders(options)?;
+    let tin = super::run(
+        &config.points_only().engine_tiles(),
+        None,
+        &mut [&mut sections],
+    )?;
+    let borders = sections.borders(options, tin.points_kept)?;
     tiles.border_seconds = start.elapsed().as_secs_f64();
 
     // 2. Every point to its tile.
@@ -259,6 +274,8 @@ pub fn thin_tiled(
     let points = s.points;
     summary.thin = ThinStats {
         kept_ratio: s.kept as f64 / points.max(1) as f64,
+        line_vertices: s.vertices - s.kept,
+        vertex_ratio: s.vertices as f64 / points.max(1) as f64,
         rms_error: (writer.sum_sq / points.max(1) as f64).sqrt(),
         seconds: tiles.border_seconds + tiles.route_seconds + tiles.thin_seconds,
         ..writer.stats.clone()

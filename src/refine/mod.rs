@@ -73,6 +73,10 @@ pub struct RefineOptions {
     /// Stop with an error past this many Steiner points (default: 20 per input vertex plus one
     /// million).
     pub max_steiner: Option<u64>,
+    /// Memory budget (bytes): the output [`RefineOptions::max_area`] implies (the domain's
+    /// area / `max_area` triangles at least) is checked against it before refining, and
+    /// refused when it cannot fit ([`Error::Options`]). `None`: not checked.
+    pub mem: Option<u64>,
 }
 
 impl Default for RefineOptions {
@@ -81,6 +85,7 @@ impl Default for RefineOptions {
             min_angle: 30.0,
             max_area: None,
             max_steiner: None,
+            mem: None,
         }
     }
 }
@@ -169,6 +174,20 @@ pub struct Refined {
     pub constrained: Vec<[u32; 2]>,
     /// What was done.
     pub stats: RefineStats,
+}
+
+impl Refined {
+    /// What the refined mesh is ([`crate::validate::MeshKind`]), for an input mesh of `input`: a
+    /// constrained Delaunay triangulation, constrained when breaklines went in; trimmed when the
+    /// input was, or when Steiner points split its boundary (rounded off the hull's edges).
+    /// Whether the input was Delaunay does not matter: refining triangulates again.
+    pub fn kind(&self, input: crate::validate::MeshKind) -> crate::validate::MeshKind {
+        crate::validate::MeshKind {
+            constrained: self.stats.breakline_segments > 0,
+            trimmed: input.trimmed || self.stats.segment_points > 0,
+            not_delaunay: false,
+        }
+    }
 }
 
 /// Refines the mesh `vertices`/`triangles` (counter-clockwise; the domain is their union) with the
@@ -323,6 +342,76 @@ pub(super) fn room(bytes: u64, what: &str) -> Result<()> {
     )
 }
 
+/// The fewest triangles `max_area` leaves in a domain of `area`: each holds at most `max_area`.
+pub(super) fn triangles_implied(area: f64, max_area: f64) -> f64 {
+    (area / max_area).ceil()
+}
+
+/// Refuses a `max_area` whose output cannot be made, before any Steiner point: the domain's
+/// `area` needs at least `area / max_area` triangles, so about half as many vertices (Euler),
+/// each taking [`GROWTH_BYTES`] + [`OUTPUT_BYTES`]; with the input's setup ([`SETUP_BYTES`] an
+/// input vertex, [`GRID_BYTES`] an input triangle, `m`) that must fit [`RefineOptions::mem`];
+/// and the Steiner points must stay within `max_steiner`. (`refine --max-area 1e-6` on 1,968 m²
+/// ran up to `--max-steiner` and then blamed the angle bound.)
+fn check_area_bound(
+    max_area: f64,
+    area: f64,
+    input_vertices: u64,
+    m: usize,
+    options: &RefineOptions,
+    max_steiner: u64,
+) -> Result<()> {
+    let triangles = triangles_implied(area, max_area);
+    let vertices = (triangles / 2.0).max(input_vertices as f64);
+    let per_vertex = (GROWTH_BYTES + OUTPUT_BYTES) as f64;
+    let fixed = (input_vertices * SETUP_BYTES + m as u64 * GRID_BYTES) as f64;
+    let need = fixed + vertices * per_vertex;
+    let figure = |v: f64| {
+        if v < 1e6 {
+            format!("{v:.0}")
+        } else {
+            format!("{v:.2e}")
+        }
+    };
+    let what = format!(
+        "--max-area {max_area}: the domain's area of {} in triangles of at most {max_area} makes \
+         at least {} triangles and {} vertices",
+        figure(area),
+        figure(triangles),
+        figure(vertices)
+    );
+    // The smallest bound that fits `room` vertices.
+    let smallest = |room: f64| crate::error::round_up_figure(area / (2.0 * room.max(1.0)));
+    if let Some(mem) = options.mem
+        && need > mem as f64
+    {
+        let room = (mem as f64 - fixed) / per_vertex;
+        let way = if room >= 1.0 {
+            format!(
+                "give --max-area {} or more, or a larger --mem",
+                smallest(room)
+            )
+        } else {
+            "the input alone takes it: give a larger --mem".into()
+        };
+        return Err(Error::Options(format!(
+            "{what}, about {} to refine: more than --mem {}; {way}",
+            crate::human_bytes(need as u64),
+            crate::human_bytes(mem)
+        )));
+    }
+    let steiner = vertices - input_vertices as f64;
+    if steiner > max_steiner as f64 {
+        return Err(Error::Options(format!(
+            "{what}, {} of them Steiner points: more than --max-steiner {max_steiner}; give \
+             --max-area {} or more, or a larger --max-steiner",
+            figure(steiner),
+            smallest(max_steiner as f64 + input_vertices as f64)
+        )));
+    }
+    Ok(())
+}
+
 /// Refines `tin`, whose domain is `domain`, heights from `surface` (of `m` triangles).
 fn refine_tin(
     tin: Tin,
@@ -335,6 +424,10 @@ fn refine_tin(
     let mut r = run::Refiner::new(tin, surface, options, stats);
     room(m as u64 * GRID_BYTES, "the input surface's grid")?;
     r.classify(domain);
+    if let Some(a) = options.max_area {
+        let n = r.input_vertices();
+        check_area_bound(a, r.domain_area(), n, m, options, r.max_steiner())?;
+    }
     r.run()?;
     room(r.vertex_count() as u64 * OUTPUT_BYTES, "the refined mesh")?;
     Ok(r.finish())

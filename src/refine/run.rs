@@ -147,6 +147,25 @@ impl<'a> Refiner<'a> {
         self.tin.take_touched(&mut Vec::new());
     }
 
+    /// The domain's area: its triangles' areas added up.
+    pub(super) fn domain_area(&self) -> f64 {
+        self.tin
+            .triangles()
+            .filter(|t| self.inside[t.0 as usize])
+            .map(|t| self.area(t))
+            .sum()
+    }
+
+    /// The input's vertices.
+    pub(super) fn input_vertices(&self) -> u64 {
+        self.stats.input_vertices
+    }
+
+    /// The Steiner points allowed.
+    pub(super) fn max_steiner(&self) -> u64 {
+        self.max_steiner
+    }
+
     pub(super) fn run(&mut self) -> Result<()> {
         loop {
             self.split_encroached()?;
@@ -160,11 +179,29 @@ impl<'a> Refiner<'a> {
             self.fix_triangle(t, bad)?;
             let steiner = self.stats.free_points + self.stats.segment_points;
             if steiner > self.max_steiner {
-                return Err(Error::Refine(format!(
-                    "stopped after {steiner} Steiner points (--max-steiner): the angle bound \
-                     cannot be met (input angles too small, or a bound above 34°?)"
-                )));
+                return Err(Error::Refine(self.stopped(steiner)));
             }
+        }
+    }
+
+    /// Why the run stopped at `steiner` points: the area bound's share, or the angle bound.
+    fn stopped(&self, steiner: u64) -> String {
+        let head = format!("stopped after {steiner} Steiner points (--max-steiner)");
+        if self.max_area.is_finite() {
+            let t = super::triangles_implied(self.domain_area(), self.max_area);
+            format!(
+                "{head}: --max-area {} asks for at least {t:.0} triangles (the domain's area / \
+                 max-area) and the angle bound of {} degrees for more near small input angles; \
+                 give a larger --max-area or --max-steiner",
+                self.max_area, self.bound
+            )
+        } else {
+            format!(
+                "{head}: the angle bound of {} degrees cannot be met here (input angles too \
+                 small, or a long thin domain); give a smaller --min-angle or a larger \
+                 --max-steiner",
+                self.bound
+            )
         }
     }
 

@@ -100,10 +100,14 @@ pub struct ThinStats {
     pub kept: u64,
     /// `kept / points`.
     pub kept_ratio: f64,
-    /// Breakline vertices in the TIN (not input points).
+    /// Vertices of the TIN that are not input points: breakline vertices, and with
+    /// `thin --tile` the border vertices on the grid lines.
     pub line_vertices: u64,
-    /// Vertices in the output TIN (`kept + line_vertices`).
+    /// Vertices in the output TIN (`kept + line_vertices`): what is written.
     pub vertices: u64,
+    /// `vertices / points`: the output's size against the input's (above 1 when the vertices
+    /// that are not points outnumber the points left out).
+    pub vertex_ratio: f64,
     /// Triangles in the output TIN.
     pub triangles: u64,
     /// Constrained (breakline) segments inserted.
@@ -751,6 +755,7 @@ impl Thinner {
             kept_ratio: kept as f64 / n.max(1) as f64,
             line_vertices: out.vertices.len() as u64 - kept,
             vertices: out.vertices.len() as u64,
+            vertex_ratio: out.vertices.len() as f64 / n.max(1) as f64,
             triangles: out.triangles.len() as u64,
             segments: self.segments,
             insertions: self.insertions,

@@ -125,6 +125,8 @@ pub(crate) struct Sections {
     samples: u64,
     /// Memory the samples may take.
     limit: u64,
+    /// The TIN's area (its triangles' areas added up).
+    area: f64,
 }
 
 impl Sections {
@@ -135,6 +137,7 @@ impl Sections {
             lines: [BTreeMap::new(), BTreeMap::new()],
             samples: 0,
             limit,
+            area: 0.0,
         }
     }
 
@@ -189,13 +192,59 @@ impl Sections {
         Ok(())
     }
 
+    /// Refuses tiles smaller than a point's neighbourhood: when the grid lines cut the TIN at
+    /// more places (distinct samples, the lines sorted and deduplicated) than it has `points`.
+    /// A Delaunay TIN's edges cross a line about 2.16 times per mean point spacing `s` (for
+    /// uniform points, `64 / (3π²) · √density`), so a tile owning two sides of `T` is cut about
+    /// `4.3 T / s` times for its `(T / s)²` points: below `T ≈ 4.3 s` its borders outnumber its
+    /// points, each sample a possible vertex of the output (lidR's 73,403 points at `--tile 1`,
+    /// 1.05 m apart: 321,159 vertices written, 270,171 of them on the borders). The samples go
+    /// as `1 / T`, so the smallest side that works is about `T · samples / points` (10 % more
+    /// is said: the ends of the lines do not shrink with `T`).
+    fn check_tile_side(&self, points: u64) -> Result<()> {
+        let samples: u64 = self
+            .lines
+            .iter()
+            .flat_map(|l| l.values())
+            .map(|s| s.len() as u64)
+            .sum();
+        if samples <= points {
+            return Ok(());
+        }
+        let t = self.grid.size;
+        let per_tile = points as f64 * t * t / self.area.max(f64::MIN_POSITIVE);
+        Err(Error::Options(format!(
+            "thin --tile {t}: the tiles are smaller than a point's neighbourhood (they hold \
+             {per_tile:.1} points each on average): their borders cut the points' TIN at \
+             {samples} places, more than its {points} points, and every cut may become a vertex \
+             of the output; give --tile {} or more",
+            crate::error::round_up_figure(1.1 * t * samples as f64 / points.max(1) as f64)
+        )))
+    }
+
     /// The border vertices: each line cut at its ends and at the grid corners, its pieces
-    /// simplified within `options.max_error` (module docs).
+    /// simplified within `options.max_error` (module docs). `points` is the number of distinct
+    /// points of the TIN the sections were cut from.
     ///
     /// # Errors
-    /// [`Error::Internal`] when a check cannot be set up (a degenerate line).
-    pub(crate) fn borders(self, options: &ThinOptions) -> Result<Borders> {
+    /// [`Error::Options`] when the tiles are smaller than a point's neighbourhood
+    /// ([`Sections::check_tile_side`]); [`Error::Internal`] when a check cannot be set up (a
+    /// degenerate line).
+    pub(crate) fn borders(mut self, options: &ThinOptions, points: u64) -> Result<Borders> {
         let grid = self.grid;
+        for s in self.lines.iter_mut().flat_map(|l| l.values_mut()) {
+            // A total order (the triangles arrive in an order that depends on the engine and
+            // the threads): one sample per position, a vertex before a crossing rounded onto
+            // it, else the lowest.
+            s.sort_by(|a, b| {
+                a.pos
+                    .total_cmp(&b.pos)
+                    .then(b.vertex.cmp(&a.vertex))
+                    .then(a.z.total_cmp(&b.z))
+            });
+            s.dedup_by(|b, a| a.pos == b.pos);
+        }
+        self.check_tile_side(points)?;
         let [vertical, horizontal] = self.lines;
         let mut out = Borders {
             grid,
@@ -204,16 +253,6 @@ impl Sections {
         let mut corners: HashMap<(i64, i64), f64> = HashMap::new();
         for (k, lines) in [(0usize, vertical), (1, horizontal)] {
             for (i, mut s) in lines {
-                // A total order (the triangles arrive in an order that depends on the engine
-                // and the threads): one sample per position, a vertex before a crossing
-                // rounded onto it, else the lowest.
-                s.sort_by(|a, b| {
-                    a.pos
-                        .total_cmp(&b.pos)
-                        .then(b.vertex.cmp(&a.vertex))
-                        .then(a.z.total_cmp(&b.z))
-                });
-                s.dedup_by(|b, a| a.pos == b.pos);
                 let (lo, hi) = (s[0].pos, s[s.len() - 1].pos);
                 let mut anchors = vec![false; s.len()];
                 anchors[0] = true;
@@ -366,6 +405,8 @@ impl TriangleSink for Sections {
     }
 
     fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
+        let [a, b, c] = *t;
+        self.area += ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs() / 2.0;
         self.cut(t, 0)?;
         self.cut(t, 1)
     }

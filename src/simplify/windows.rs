@@ -10,6 +10,7 @@ use super::{Options, SimplifyStats, Stop};
 use crate::error::{Error, Result};
 use crate::input::raster::{Heights, RasterReader, RasterSpec};
 use crate::sink::MeshSink;
+use crate::validate::MeshKind;
 use std::collections::BTreeMap;
 use std::sync::{Arc, Condvar, Mutex};
 
@@ -113,8 +114,10 @@ impl Layout {
 ///
 /// # Errors
 /// [`Error::Options`] when the job cannot fit `grid.mem` (before anything is read), for a
-/// window under 4 cells or a point or triangle budget on a grid of several windows; the
-/// reader's and the sink's errors; [`super::simplify`]'s.
+/// window under 4 cells or a point or triangle budget on a grid of several windows;
+/// [`Error::Format`] naming the file for a grid that gives no triangle (every cell missing, or
+/// the valid cells standing alone), the sink left unfinished; the reader's and the sink's
+/// errors; [`super::simplify`]'s.
 pub fn simplify_raster(
     reader: &mut RasterReader,
     grid: &GridOptions,
@@ -137,7 +140,8 @@ pub fn simplify_raster(
     }
     let layout = plan(reader, grid)?;
     if layout.windows() == 1 {
-        return whole(reader, grid, sink, progress);
+        let stats = whole(reader, grid, sink, progress)?;
+        return not_empty(reader, stats);
     }
     let Stop::MaxError(bound) = grid.options.stop else {
         return Err(Error::Options(format!(
@@ -156,10 +160,47 @@ pub fn simplify_raster(
         )));
     }
     let mut stitch = Stitch::new(&layout.cols, &layout.rows);
+    // Windows joined along their borders; missing cells are known only once read.
+    sink.declare(MeshKind {
+        trimmed: true,
+        not_delaunay: true,
+        ..MeshKind::default()
+    })?;
     run(reader, &spec, grid, &layout, &mut stitch, sink, progress)?;
     let mut stats = stitch.finish(&spec);
     stats.seconds = start.elapsed().as_secs_f64();
-    Ok(stats)
+    not_empty(reader, stats)
+}
+
+/// `stats`, or the refusal of a TIN without a triangle (its mesh is never finished): a grid
+/// whose every cell is nodata, or whose valid cells stand alone.
+fn not_empty(reader: &RasterReader, stats: SimplifyStats) -> Result<SimplifyStats> {
+    if stats.triangles > 0 {
+        return Ok(stats);
+    }
+    let spec = reader.spec();
+    let message = if stats.valid_cells == 0 {
+        format!(
+            "every one of its {}×{} cells is missing ({}): there is no height to make a TIN \
+             of; check the nodata value and the band",
+            spec.cols,
+            spec.rows,
+            match spec.nodata {
+                Some(v) => format!("the nodata value {v}, or NaN"),
+                None => "NaN".into(),
+            }
+        )
+    } else {
+        format!(
+            "its {} valid cells (of {}×{}) make no triangle: each stands alone or in a strip \
+             one cell wide between missing cells",
+            stats.valid_cells, spec.cols, spec.rows
+        )
+    };
+    Err(Error::Format {
+        path: reader.path().to_path_buf(),
+        message,
+    })
 }
 
 /// The windows and what may be held at once, or the refusal when one band of windows cannot
@@ -263,6 +304,14 @@ fn whole(
         Heights::F64(h) => super::simplify(&spec, h, &grid.options, Some(&mut each)),
     }?;
     drop(heights);
+    // Delaunay in the grid's index space, not exactly in world coordinates (the cell centres
+    // are rounded there, and a grid is full of cocircular cells); the boundary is the hull
+    // unless missing cells cut it or the grid is rotated.
+    sink.declare(MeshKind {
+        trimmed: tin.stats.valid_cells < spec.cells() || !spec.is_axis_aligned(),
+        not_delaunay: true,
+        ..MeshKind::default()
+    })?;
     for &v in &tin.vertices {
         sink.vertex(v)?;
     }

@@ -49,6 +49,8 @@ pub(crate) struct TileWriter<'m, 'a, 'b> {
     /// tile, else [`NOT_LOCAL`]; and its number once written.
     local_left: Vec<u32>,
     local_id: Vec<u64>,
+    /// Has the mesh been told what the trimming makes of it ([`MeshSink::declare`])?
+    declared: bool,
 }
 
 /// A vertex of the tile with triangles in other tiles too (it goes through the map).
@@ -79,7 +81,27 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
             peak_live: 0,
             local_left: Vec::new(),
             local_id: Vec::new(),
+            declared: false,
         }
+    }
+
+    /// Tells the mesh, before its first record, what the trimming makes of it: trimmed, and
+    /// constrained by the rings of a boundary or holes.
+    fn declare(&mut self) -> Result<()> {
+        if self.declared {
+            return Ok(());
+        }
+        self.declared = true;
+        if let (Some(m), Some(t)) = (self.mesh.as_mut(), self.trim.as_ref())
+            && !t.keeps_all()
+        {
+            m.declare(crate::validate::MeshKind {
+                constrained: !t.rings().is_empty(),
+                trimmed: true,
+                not_delaunay: false,
+            })?;
+        }
+        Ok(())
     }
 
     /// Writes one tile's triangles.
@@ -87,6 +109,7 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
     /// # Errors
     /// Any sink's error.
     pub fn tile(&mut self, t: &TileOutput) -> Result<()> {
+        self.declare()?;
         let kept: Vec<bool> = t
             .triangles
             .iter()
@@ -246,6 +269,7 @@ impl<'m, 'a, 'b> TileWriter<'m, 'a, 'b> {
     /// # Errors
     /// Any sink's error.
     pub fn watermark(&mut self, y: f64) -> Result<()> {
+        self.declare()?;
         for s in self.sinks.iter_mut() {
             s.watermark(y)?;
         }

@@ -7,6 +7,7 @@
 //! segment's line and within its extent). Segment tests use the coordinates as given (not the local
 //! frame), so they are exact for any segment whose coordinates are in the predicates' range.
 
+use super::MeshKind;
 use super::{Report, Validator, apex_of, dst_of, invalid};
 use crate::error::Result;
 use crate::geom::grid::{Buckets, Grid};
@@ -34,6 +35,19 @@ impl Default for CdtCheck {
         CdtCheck {
             convex_hull: true,
             delaunay: true,
+        }
+    }
+}
+
+impl CdtCheck {
+    /// The checks a mesh of `kind` must pass ([`MeshKind`], as its file says): the convex hull
+    /// unless it is trimmed; the Delaunay test unless it is not Delaunay by design, or
+    /// constrained while its constraints are not given (`segments`: the file does not list its
+    /// constrained edges, so any edge may be one).
+    pub fn for_kind(kind: MeshKind, segments: bool) -> Self {
+        CdtCheck {
+            convex_hull: !kind.trimmed,
+            delaunay: !kind.not_delaunay && (!kind.constrained || segments),
         }
     }
 }

@@ -70,8 +70,10 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering as AtomicOrdering};
 
 mod cdt;
+mod kind;
 mod stream;
 pub use cdt::{CdtCheck, validate_cdt, validate_cdt_with};
+pub use kind::MeshKind;
 pub use stream::{StreamCheck, StreamChecker, StreamReport};
 
 /// What a valid mesh is made of.

@@ -45,6 +45,18 @@ impl Default for StreamCheck {
     }
 }
 
+impl StreamCheck {
+    /// The checks a streaming mesh of `kind` must pass (its header's flags): as
+    /// [`super::CdtCheck::for_kind`] without segments (the streaming check takes none).
+    pub fn for_kind(kind: super::MeshKind) -> Self {
+        let c = super::CdtCheck::for_kind(kind, false);
+        StreamCheck {
+            convex_hull: c.convex_hull,
+            delaunay: c.delaunay,
+        }
+    }
+}
+
 /// What a live vertex has seen so far.
 struct Live {
     xy: [f64; 2],

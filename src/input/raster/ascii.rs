@@ -15,7 +15,8 @@ pub(super) struct AsciiSource {
 
 pub(super) fn open_ascii(path: &Path, file: File) -> Result<RasterReader> {
     let mut r = BufReader::new(file);
-    let mut header: Vec<(String, f64)> = Vec::new();
+    // Each key with its value, line and text.
+    let mut header: Vec<(String, f64, u64, String)> = Vec::new();
     let mut offset = 0u64;
     let mut line_no = 0u64;
     let mut line = String::new();
@@ -45,17 +46,18 @@ pub(super) fn open_ascii(path: &Path, file: File) -> Result<RasterReader> {
         }
         line_no += 1;
         offset += n as u64;
-        let value = it
-            .next()
+        let text = it.next().unwrap_or_default();
+        let value = Some(text)
             .and_then(|v| v.parse::<f64>().ok())
             .ok_or_else(|| Error::Parse {
                 path: path.to_path_buf(),
                 line: line_no,
                 message: format!("header line {key:?} needs a number"),
             })?;
-        header.push((key.to_ascii_lowercase(), value));
+        header.push((key.to_ascii_lowercase(), value, line_no, text.to_string()));
     }
-    let get = |k: &str| header.iter().find(|(h, _)| h == k).map(|&(_, v)| v);
+    let find = |k: &str| header.iter().find(|(h, ..)| h == k);
+    let get = |k: &str| find(k).map(|e| e.1);
     let need = |k: &str| {
         get(k).ok_or_else(|| {
             format(
@@ -104,6 +106,44 @@ pub(super) fn open_ascii(path: &Path, file: File) -> Result<RasterReader> {
         }
     };
     let top = y0 + f64::from(rows) * dy;
+    // Every cell centre in the predicates' exact range (a mesh made of them is written, and
+    // read back by `check`, as any other).
+    let right = x0 + f64::from(cols) * dx;
+    let x_key = if get("xllcorner").is_some() {
+        "xllcorner"
+    } else {
+        "xllcenter"
+    };
+    let y_key = if get("yllcorner").is_some() {
+        "yllcorner"
+    } else {
+        "yllcenter"
+    };
+    let size_key = if get("cellsize").is_some() {
+        "cellsize"
+    } else {
+        "dx"
+    };
+    for (v, key, edge) in [
+        (x0, x_key, "west"),
+        (right, size_key, "east"),
+        (y0, y_key, "south"),
+        (top, if size_key == "dx" { "dy" } else { size_key }, "north"),
+    ] {
+        if !super::in_exact_range(v) {
+            let (line, text) = find(key).map_or((0, ""), |e| (e.2, e.3.as_str()));
+            return Err(Error::Parse {
+                path: path.to_path_buf(),
+                line,
+                message: format!(
+                    "{key} {text}: the grid's {edge} edge at {v:e} is outside the coordinates a \
+                     TIN can hold exactly (|x| and |y| up to {:e}); check the header's numbers \
+                     and units",
+                    crate::geom::predicates::MAX_COORD
+                ),
+            });
+        }
+    }
     let crs = std::fs::read_to_string(path.with_extension("prj"))
         .ok()
         .map(|s| s.trim().to_string())
@@ -145,6 +185,10 @@ pub(super) fn read_ascii_window(
     let ncols = spec.cols as u64;
     let mut index = u64::from(start_row) * ncols; // token index of the next value
     let end = u64::from(row0 + rows) * ncols;
+    // A window that reaches the last row reads on to the end of the file: nothing but
+    // whitespace may follow the grid's values (an extra row, or a header line such as
+    // `NODATA_value` after the data, was ignored and its nodata cells read as heights).
+    let last = end == spec.cells();
     let (mut offset, mut line) = (start, start_line);
     let mut token = Vec::with_capacity(32);
     let mut token_start = offset;
@@ -157,10 +201,13 @@ pub(super) fn read_ascii_window(
         for &b in buf {
             if b.is_ascii_whitespace() {
                 if !token.is_empty() {
+                    if index >= end {
+                        return Err(after_grid(path, spec, &token, line));
+                    }
                     store_token(path, spec, a, &token, index, token_start, line, w, out)?;
                     index += 1;
                     token.clear();
-                    if index >= end {
+                    if index >= end && !last {
                         return Ok(());
                     }
                 }
@@ -178,6 +225,9 @@ pub(super) fn read_ascii_window(
         r.consume(n);
     }
     if !token.is_empty() {
+        if index >= end {
+            return Err(after_grid(path, spec, &token, line));
+        }
         store_token(path, spec, a, &token, index, token_start, line, w, out)?;
         index += 1;
     }
@@ -193,6 +243,25 @@ pub(super) fn read_ascii_window(
     }
     let _ = (col0, cols);
     Ok(())
+}
+
+/// The error for `token`, on `line`, after the grid's last value.
+fn after_grid(path: &Path, spec: &RasterSpec, token: &[u8], line: u64) -> Error {
+    let token = String::from_utf8_lossy(token);
+    let what = if token.as_bytes()[0].is_ascii_alphabetic() {
+        "a header line after the data (header lines come before the first value)".to_string()
+    } else {
+        format!(
+            "more values than the header's {} rows × {} columns (a row too many, or nrows or \
+             ncols wrong)",
+            spec.rows, spec.cols
+        )
+    };
+    Error::Parse {
+        path: path.to_path_buf(),
+        line,
+        message: format!("{token:?} after the grid's last value: {what}"),
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -219,11 +288,12 @@ fn store_token(
     let text = std::str::from_utf8(token).ok();
     let v = text
         .and_then(|t| t.parse::<f64>().ok())
+        .filter(|v| !v.is_infinite())
         .ok_or_else(|| Error::Parse {
             path: path.to_path_buf(),
             line,
             message: format!(
-                "value {:?} of row {row}, column {col} is not a number",
+                "value {:?} of row {row}, column {col} is not a (finite) number",
                 String::from_utf8_lossy(token)
             ),
         })?;

@@ -15,7 +15,12 @@
 //!
 //! ESRI ASCII grid: `ncols`, `nrows`, `xllcorner`/`xllcenter`, `yllcorner`/`yllcenter`,
 //! `cellsize` (or `dx` and `dy`), optional `NODATA_value`, keys in any case, values in rows from
-//! north to south, any whitespace between values. A `.prj` file beside it supplies the CRS (WKT).
+//! north to south, any whitespace between values, nothing but whitespace after the last one (a
+//! window that reaches the last row reads on to the end of the file). A `.prj` file beside it
+//! supplies the CRS (WKT).
+//!
+//! Both formats: every cell centre must be a coordinate the predicates handle exactly (the
+//! grid's corners within `|x|, |y| <= 2^52`), or the grid is refused when opened.
 //! A window is read by scanning from the nearest row start seen before, so reading windows in
 //! row order parses the file about once per column of windows.
 
@@ -214,7 +219,28 @@ impl RasterReader {
                 || &magic == b"II+\0"
                 || &magic == b"MM\0+")
         {
-            geotiff::open_tiff(path, file)
+            let r = geotiff::open_tiff(path, file)?;
+            // Every cell centre in the predicates' exact range (the ASCII reader names the
+            // header line instead).
+            let (c, w) = (f64::from(r.spec.cols), f64::from(r.spec.rows));
+            for corner in [[0.0, 0.0], [c, 0.0], [0.0, w], [c, w]] {
+                let p = r.spec.world(corner[0], corner[1]);
+                if !(in_exact_range(p[0]) && in_exact_range(p[1])) {
+                    return Err(format(
+                        path,
+                        format!(
+                            "the grid's corner ({:e}, {:e}) is outside the coordinates a TIN \
+                             can hold exactly (|x| and |y| up to {:e}): check its \
+                             georeferencing (ModelTiepoint, ModelPixelScale, \
+                             ModelTransformation)",
+                            p[0],
+                            p[1],
+                            crate::geom::predicates::MAX_COORD
+                        ),
+                    ));
+                }
+            }
+            Ok(r)
         } else if let Some(kind) = crate::input::sniff(&head[..n]) {
             Err(Error::Format {
                 path: path.to_path_buf(),
@@ -372,6 +398,13 @@ impl RasterReader {
     }
 }
 
+/// Is `v` a coordinate the predicates handle exactly (finite, `|v| <=`
+/// [`MAX_COORD`](crate::geom::predicates::MAX_COORD))? A grid's edges are checked with it, so
+/// that every cell centre is.
+fn in_exact_range(v: f64) -> bool {
+    v.is_finite() && v.abs() <= crate::geom::predicates::MAX_COORD
+}
+
 fn read_up_to(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
     let mut n = 0;
     while n < buf.len() {
@@ -452,5 +485,47 @@ mod tests {
         assert!(e.to_string().contains("ends after 3 values"), "{e}");
         std::fs::write(&p, "hello\n").unwrap();
         assert!(RasterReader::open(&p).is_err());
+    }
+
+    /// Issue 41, item 8: an extra row, or a `NODATA_value` line after the data, was ignored
+    /// (its -9999 read as a height); `xllcorner 1e300` gave a mesh outside the exact range.
+    #[test]
+    fn ascii_data_after_the_grid_and_edges_out_of_range_name_the_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("g.asc");
+        let head = "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n";
+        let fails = |text: String, says: &str| {
+            std::fs::write(&p, text).unwrap();
+            let e = RasterReader::open(&p).and_then(|mut r| r.read_heights().map(|_| ()));
+            let e = e.expect_err(says);
+            assert_eq!(e.kind(), crate::ErrorKind::Input, "{e}");
+            assert!(e.to_string().contains(says), "{e}");
+        };
+        fails(
+            format!("{head}1 2\n3 4\n5 6\n"),
+            ":8: \"5\" after the grid's last value",
+        );
+        fails(
+            format!("{head}1 2\n3 -9999\nNODATA_value -9999\n"),
+            ":8: \"NODATA_value\" after the grid's last value: a header line",
+        );
+        fails(format!("{head}1 2\n3 inf\n"), ":7: value \"inf\"");
+        fails(
+            head.replace("xllcorner 0", "xllcorner 1e300") + "1 2\n3 4\n",
+            ":3: xllcorner 1e300",
+        );
+        fails(
+            head.replace("cellsize 1", "cellsize 1e16") + "1 2\n3 4\n",
+            ":5: cellsize 1e16: the grid's east edge at 2e16",
+        );
+        // Trailing whitespace and a last line without a line break are fine; a window that
+        // does not reach the last row does not read on.
+        std::fs::write(&p, format!("{head}1 2\n3 4 \n\n  \t\n")).unwrap();
+        let mut r = RasterReader::open(&p).unwrap();
+        assert_eq!(r.read_all().unwrap(), vec![1.0, 2.0, 3.0, 4.0]);
+        std::fs::write(&p, format!("{head}1 2\n3 4\n5\n")).unwrap();
+        let mut r = RasterReader::open(&p).unwrap();
+        assert_eq!(r.read_window(0, 0, 2, 1).unwrap(), vec![1.0, 2.0]);
+        assert!(r.read_window(0, 1, 2, 1).is_err());
     }
 }
