@@ -797,6 +797,7 @@ fn points_with_no_triangle_or_far_from_zero_are_facts_not_options() {
     assert_eq!(meshes[0], meshes[1]);
     assert!(meshes[0].contains("1600 vertices"), "{}", meshes[0]);
     assert!(dems[0] == dems[1], "the DEMs of the two engines differ");
+}
 
 // ---- Issue 41, item 1: the lists and `.vpc` files that name the inputs are inputs ------------
 
