@@ -84,6 +84,10 @@ pub(crate) struct CancelMesh<'a> {
 }
 
 impl MeshSink for CancelMesh<'_> {
+    fn declare(&mut self, kind: sweeptin::validate::MeshKind) -> sweeptin::Result<()> {
+        self.inner.declare(kind)
+    }
+
     fn vertex(&mut self, p: [f64; 3]) -> sweeptin::Result<()> {
         self.inner.vertex(p)
     }
