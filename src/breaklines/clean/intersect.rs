@@ -19,6 +19,9 @@ pub(super) struct PairResult {
     pub(super) cross: Option<[f64; 2]>,
 }
 
+/// A round's findings: each candidate pair's non-empty result, in pair order.
+pub(super) type Found = Vec<([u32; 2], PairResult)>;
+
 impl PairResult {
     fn split(&mut self, seg: u32, v: u32) {
         self.splits[self.n_splits as usize] = (seg, v);
@@ -33,7 +36,7 @@ impl PairResult {
 impl Work {
     /// Tests every candidate pair that involves a dirty item; returns the non-empty results in
     /// pair order.
-    pub(super) fn find(&self, first_round: bool) -> Vec<([u32; 2], PairResult)> {
+    pub(super) fn find(&self, first_round: bool) -> Found {
         let n_seg = self.segs.len() as u32;
         let buckets = self.buckets();
         let dirty = |i: u32| {
@@ -58,7 +61,7 @@ impl Work {
                     .cell_of(self.p(self.isolated[(i - n_seg) as usize]))
             }
         };
-        let mut found: Vec<([u32; 2], PairResult)> = (0..self.grid.len() as u32)
+        let mut found: Found = (0..self.grid.len() as u32)
             .into_par_iter()
             .flat_map_iter(|c| {
                 buckets

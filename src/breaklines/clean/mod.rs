@@ -302,7 +302,7 @@ pub fn clean_by_sweep(
 }
 
 /// What finds a round's contacts: every candidate pair's non-empty result, in pair order.
-type Finder<'a> = dyn FnMut(&Work, bool) -> Result<Vec<([u32; 2], intersect::PairResult)>> + 'a;
+type Finder<'a> = dyn FnMut(&Work, bool) -> Result<intersect::Found> + 'a;
 
 /// The graph being cleaned.
 struct Work {

@@ -15,7 +15,7 @@
 //! [`SweepStats::peak_active`] counts the most items held at once.
 
 use super::Work;
-use super::intersect::{PairResult, contact, point_on};
+use super::intersect::{Found, PairResult, contact, point_on};
 use crate::error::Result;
 use crate::geom::predicates::sweep_cmp;
 use crate::sort::external::{ExternalSorter, SortKey};
@@ -204,7 +204,7 @@ impl Work {
         first_round: bool,
         mem: u64,
         tmp_dir: &Path,
-    ) -> Result<(Vec<([u32; 2], PairResult)>, SweepStats)> {
+    ) -> Result<(Found, SweepStats)> {
         let n_seg = self.segs.len() as u64;
         let mut sorter = ExternalSorter::<Item>::new(mem / 2, tmp_dir);
         let ordered = |p: [f64; 2], q: [f64; 2]| match sweep_cmp(p, q) {
