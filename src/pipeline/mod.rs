@@ -19,6 +19,7 @@
 mod config;
 mod drive;
 mod emit;
+pub mod height;
 mod lines;
 mod read;
 mod replay;

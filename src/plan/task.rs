@@ -212,6 +212,7 @@ impl Job {
             returns: self.returns,
             drop_withheld: self.drop_withheld,
             bbox: None,
+            z_from: None,
         }
     }
 

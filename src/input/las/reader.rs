@@ -2,7 +2,7 @@
 
 use super::LidarPoint;
 use super::ahead::{Current, PointCheck, SpanJob};
-use super::decode::{Fields, FileDecoder, Spare, spans};
+use super::decode::{FileDecoder, Spare, spans};
 use super::filter::{BBox, CompiledFilter, Filter, FilterStats};
 use super::header::{Bounds3, FileInfo, format_error, inspect};
 use super::vpc;
@@ -80,6 +80,8 @@ pub struct LidarReader {
     /// Files whose CRS is not the one declared ([`ReadOptions::crs`]).
     crs_notes: Vec<String>,
     filter: Arc<CompiledFilter>,
+    /// `Filter::z_from`: the attribute z comes from.
+    z_from: Option<String>,
     stats: FilterStats,
     options: ReadOptions,
     next_source: usize,
@@ -225,6 +227,7 @@ impl LidarReader {
         Ok(LidarReader {
             sources,
             filter: Arc::new(compiled),
+            z_from: filter.z_from.clone(),
             crs,
             crs_notes,
             stats: FilterStats::default(),
@@ -254,6 +257,10 @@ impl LidarReader {
     /// [`Lattice`](super::world::Lattice)), or `None` when a file's scale, offset or box rules
     /// it out.
     pub(crate) fn lattice(&self) -> Option<super::world::Lattice> {
+        if self.z_from.is_some() {
+            // z comes from an attribute, on no file's lattice.
+            return None;
+        }
         let mut files = Vec::new();
         for s in &self.sources {
             // (An entry of a `.vpc` left unopened gives no points.)
@@ -414,6 +421,7 @@ impl LidarReader {
                     len: cur.decoder.record_len,
                     ext: cur.decoder.extended,
                     base: cur.first_index,
+                    z_from: cur.z_from.clone(),
                 };
                 let batch = self.options.batch_points as u64;
                 let cap = self.options.ahead_bytes / ahead_bytes_per_point(cur.decoder.record_len);
@@ -436,7 +444,7 @@ impl LidarReader {
                     cur.next = end;
                     Some(
                         cur.decoder
-                            .decode(spans, false, Fields::Filter, |s, raw| job.run(s, raw))?,
+                            .decode(spans, false, job.fields(), |s, raw| job.run(s, raw))?,
                     )
                 } else {
                     None
@@ -496,6 +504,10 @@ impl LidarReader {
                 spans,
                 next: 0,
                 first_index: s.first_index,
+                z_from: match &self.z_from {
+                    Some(name) => Some(super::extra::find_in_file(info, name)?),
+                    None => None,
+                },
                 check: Arc::new(PointCheck::of(info)),
                 in_flight: VecDeque::new(),
                 flying: 0,
