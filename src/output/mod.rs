@@ -7,7 +7,8 @@
 //!   [`geotiff`] (float32 GeoTIFF written in place), [`cog`] (compressed GeoTIFF and Cloud
 //!   Optimized GeoTIFF, staged and assembled in bounded memory) and [`ascii`] (ESRI ASCII grid
 //!   with a `.prj`); [`world`]: world files and `.prj` files beside images.
-//! - [`geojson`]: a streaming GeoJSON feature writer.
+//! - [`geojson`]: a streaming GeoJSON feature writer; [`gpkg`]: a GeoPackage layer of lines;
+//!   [`lines`]: [`lines::LineWriter`], either of them by the output's extension (contours).
 //! - [`pieces`]: the tiles of a plan's `tin` task, for the merge.
 //! - [`vpc`]: virtual point clouds (`.vpc`) from LAS/LAZ headers.
 //! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C;
@@ -39,8 +40,10 @@ pub mod atomic;
 pub mod cog;
 pub mod geojson;
 pub mod geotiff;
+pub mod gpkg;
 pub mod interrupt;
 pub mod landxml;
+pub mod lines;
 pub mod mesh;
 pub mod obj;
 pub mod pieces;
