@@ -31,7 +31,7 @@ use crate::error::{Error, Result};
 use crate::input::las::Filter;
 use crate::sink::{MeshSink, ProductSummary, StreamInfo, TriangleSink};
 use crate::sort::memory::DuplicatePolicy;
-use config::Source;
+pub(crate) use config::Source;
 use std::path::PathBuf;
 
 pub use config::{RunConfig, check_tile_side};

@@ -253,6 +253,20 @@ impl LidarReader {
             .map(FileInfo::quantization)
     }
 
+    /// Decimals of the finest horizontal scale among the files (`0.01` gives 2; a scale that
+    /// is no short decimal gives 9: [`Quantization::decimals`]), or `None` without a file
+    /// opened: what outputs that print coordinates may round to without losing a point's place.
+    pub fn xy_decimals(&self) -> Option<u32> {
+        self.sources
+            .iter()
+            .filter_map(|s| s.info.as_ref())
+            .map(|i| {
+                let q = i.quantization();
+                q.decimals(0).max(q.decimals(1)) as u32
+            })
+            .max()
+    }
+
     /// One decimal lattice for the points of every file with points (see
     /// [`Lattice`](super::world::Lattice)), or `None` when a file's scale, offset or box rules
     /// it out.
@@ -323,6 +337,14 @@ impl LidarReader {
             .ok()?
             .header_box()?;
         Some([b.min[0], b.min[1], b.max[0], b.max[1]])
+    }
+
+    /// [`LidarReader::xy_decimals`] of `paths`, from their headers: `None` when a header
+    /// cannot be read (the run then reports it).
+    pub fn header_xy_decimals<P: AsRef<Path>>(paths: &[P]) -> Option<u32> {
+        LidarReader::open(paths, &Filter::default())
+            .ok()?
+            .xy_decimals()
     }
 
     /// The points of the files whose header box is usable: those [`LidarReader::header_box`]
