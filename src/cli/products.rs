@@ -219,7 +219,7 @@ impl ContourArgs {
         check_output(path)?;
         let decimals = self
             .precision
-            .unwrap_or_else(|| sweeptin::products::contours::default_decimals(inputs));
+            .unwrap_or_else(|| sweeptin::pipeline::contour_decimals(inputs));
         Ok(Box::new(ContourSink::new(
             path,
             ContourOptions {

@@ -8,7 +8,8 @@ use std::time::Instant;
 use sweeptin::fmt::{Decimals, Figure, count};
 use sweeptin::input::las::{Filter, Returns};
 use sweeptin::pipeline::RunConfig;
-use sweeptin::products::overlay::{OverlaySink, reference_surface};
+use sweeptin::pipeline::reference_surface;
+use sweeptin::products::overlay::OverlaySink;
 use sweeptin::products::volume::VolumeSink;
 use sweeptin::sink::{ProductSummary, TriangleSink};
 

@@ -32,7 +32,7 @@ use crate::input::las::Filter;
 use crate::sink::{MeshSink, ProductSummary, StreamInfo, TriangleSink};
 use crate::sort::memory::DuplicatePolicy;
 pub(crate) use config::Source;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 pub use config::{RunConfig, check_tile_side};
 pub use lines::{ClipSummary, FarHeights, LineOptions, LineSummary, PLAN_REFUSES_CLIP};
@@ -330,4 +330,43 @@ pub fn run(
         }),
     )?;
     drive::run(config, Some(&prepared), mesh, sinks)
+}
+
+/// The decimals contour coordinates of the points in `inputs` are written with by default:
+/// those of the finest horizontal scale of LAS/LAZ inputs (`0.01` gives 2: no finer than the
+/// points themselves; [`crate::input::las::LidarReader::header_xy_decimals`]), else
+/// [`crate::products::contours::DEFAULT_DECIMALS`].
+pub fn contour_decimals(inputs: &[PathBuf]) -> u32 {
+    match Source::of(inputs) {
+        Ok(Source::Lidar) => crate::input::las::LidarReader::header_xy_decimals(inputs),
+        _ => None,
+    }
+    .unwrap_or(crate::products::contours::DEFAULT_DECIMALS)
+}
+
+/// Phase 1 whole: the reference surface of a volume, the TIN of `paths` read as `config` reads
+/// its own input (duplicates, breaklines, `--mem`, the box) but with the point filter `filter`
+/// (a DSM of first returns against a DTM of ground points from the same file: one filter per
+/// surface), filed into about `bands` bands in a scratch file under `dir`.
+///
+/// # Errors
+/// As [`crate::pipeline::run`] for the reference's files; [`Error::Write`] for the scratch file.
+pub fn reference_surface(
+    config: &RunConfig,
+    paths: &[PathBuf],
+    filter: crate::input::las::Filter,
+    dir: &Path,
+    bands: usize,
+) -> Result<crate::products::overlay::BandReader> {
+    let reference = RunConfig::new(
+        Input {
+            paths: paths.to_vec(),
+            filter,
+            ..config.input().clone()
+        },
+        config.options().clone(),
+    )?;
+    let mut store = crate::products::overlay::BandStore::new(dir, bands);
+    run(&reference, None, &mut [&mut store])?;
+    store.into_reader()
 }

@@ -149,3 +149,34 @@ fn lexical(p: &Path) -> std::path::PathBuf {
     }
     out
 }
+
+/// `out`, a task's output as its record names it, under the plan's directory `dir`; `None`
+/// when it is absolute or climbs out of `dir` (`..`): a record names only its own tiles.
+pub(super) fn inside(dir: &Path, out: &Path) -> Option<PathBuf> {
+    use std::path::Component;
+    let plain = out
+        .components()
+        .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+    (plain && out.components().next().is_some()).then(|| dir.join(out))
+}
+
+/// Makes `DIR/tiles/` again when it is missing (deleted to start over: every task then
+/// failed, exit 4); refuses one that is not a directory of its own.
+///
+/// # Errors
+/// [`Error::Options`] for a symbolic link or a file there; [`Error::Io`].
+pub(super) fn tiles_dir(dir: &Path) -> Result<()> {
+    let t = dir.join("tiles");
+    match std::fs::symlink_metadata(&t) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => Err(Error::Options(format!(
+            "{}: not a directory of the plan's own (a symbolic link or a file): sweeptin \
+             writes its tiles only into a directory it made (remove it)",
+            t.display()
+        ))),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::fs::create_dir_all(&t).map_err(|e| Error::write(&t, e))
+        }
+        Err(e) => Err(Error::io(&t, e)),
+    }
+}

@@ -314,7 +314,7 @@ pub fn merge_contours(
     };
     let decimals = levels.decimals.unwrap_or_else(|| {
         let paths: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
-        crate::products::contours::default_decimals(&paths)
+        crate::pipeline::contour_decimals(&paths)
     });
     let options = StitchOptions {
         decimals: Some(decimals),

@@ -32,7 +32,7 @@ pub use task::{Job, Levels, Product, TaskOptions};
 
 use crate::error::{Error, Result};
 use crate::input::las::FileInfo;
-use files::{own_file, write_atomic};
+use files::{inside, own_file, write_atomic};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -609,27 +609,6 @@ impl Plan {
         Ok(p)
     }
 
-    /// Makes `DIR/tiles/` again when it is missing (deleted to start over: every task then
-    /// failed, exit 4); refuses one that is not a directory of its own.
-    ///
-    /// # Errors
-    /// [`Error::Options`] for a symbolic link or a file there; [`Error::Io`].
-    pub fn tiles_dir(&self, dir: &Path) -> Result<()> {
-        let t = dir.join("tiles");
-        match std::fs::symlink_metadata(&t) {
-            Ok(m) if m.is_dir() => Ok(()),
-            Ok(_) => Err(Error::Options(format!(
-                "{}: not a directory of the plan's own (a symbolic link or a file): sweeptin \
-                 writes its tiles only into a directory it made (remove it)",
-                t.display()
-            ))),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                std::fs::create_dir_all(&t).map_err(|e| Error::write(&t, e))
-            }
-            Err(e) => Err(Error::io(&t, e)),
-        }
-    }
-
     /// Where task `i` records that it finished.
     pub fn marker(&self, dir: &Path, i: usize) -> PathBuf {
         dir.join("tiles").join(format!("task_{i}.json"))
@@ -699,16 +678,6 @@ impl Plan {
         let text = serde_json::to_string_pretty(&r).map_err(|e| bad(&p, e.to_string()))?;
         write_atomic(&p, text.as_bytes())
     }
-}
-
-/// `out`, a task's output as its record names it, under the plan's directory `dir`; `None`
-/// when it is absolute or climbs out of `dir` (`..`): a record names only its own tiles.
-fn inside(dir: &Path, out: &Path) -> Option<PathBuf> {
-    use std::path::Component;
-    let plain = out
-        .components()
-        .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
-    (plain && out.components().next().is_some()).then(|| dir.join(out))
 }
 
 /// The task index a batch engine gives: `SLURM_ARRAY_TASK_ID`, `JOB_COMPLETION_INDEX`

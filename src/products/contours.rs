@@ -57,7 +57,7 @@ pub struct ContourOptions {
     /// when the merge joins them.
     pub edges: bool,
     /// Decimals of the written coordinates (`None`: every bit, the shortest decimal that reads
-    /// back as the same double). [`default_decimals`] gives the data's.
+    /// back as the same double). [`crate::pipeline::contour_decimals`] gives the data's.
     pub decimals: Option<u32>,
     /// Lines (rings included) shorter than this, in map units, are left out (0: none).
     pub min_length: f64,
@@ -66,20 +66,6 @@ pub struct ContourOptions {
 /// Decimals of contour coordinates when the input's scale is unknown (XYZ text, `.stin`):
 /// millimetres in metric data.
 pub const DEFAULT_DECIMALS: u32 = 3;
-
-/// The decimals contour coordinates of the points in `inputs` are written with by default:
-/// those of the finest horizontal scale of LAS/LAZ inputs (`0.01` gives 2: no finer than the
-/// points themselves; [`crate::input::las::LidarReader::xy_decimals`]), else
-/// [`DEFAULT_DECIMALS`].
-pub fn default_decimals(inputs: &[PathBuf]) -> u32 {
-    match crate::pipeline::Source::of(inputs) {
-        Ok(crate::pipeline::Source::Lidar) => {
-            crate::input::las::LidarReader::header_xy_decimals(inputs)
-        }
-        _ => None,
-    }
-    .unwrap_or(DEFAULT_DECIMALS)
-}
 
 impl Default for ContourOptions {
     fn default() -> Self {
