@@ -193,7 +193,7 @@ pub struct ContourArgs {
     #[arg(long, default_value_t = ContourOptions::default().base, allow_hyphen_values = true)]
     pub base: f64,
     /// Decimals of the written coordinates (default: those of the LAS/LAZ scale, 2 for 0.01;
-    /// 3 for other inputs).
+    /// 3 for other inputs, a `.stin` mesh included: it does not carry the points' scale).
     #[arg(long, value_name = "N",
           value_parser = clap::value_parser!(u32).range(0..=i64::from(sweeptin::output::lines::MAX_DECIMALS)))]
     pub precision: Option<u32>,

@@ -39,10 +39,12 @@ impl super::Plan {
             .filter(|(n, _)| n != "dir")
             .map(|(n, p)| (n.as_str(), p.as_path()))
             .collect();
+        // An input named as an output is said first (it is the graver mistake).
+        crate::output::distinct_outputs(&planned, &self.read_files(), "the plan")?;
         if let Some((_, c)) = planned.iter().find(|(n, _)| *n == "contours") {
             crate::output::lines::LineFormat::of(c)?;
         }
-        crate::output::distinct_outputs(&planned, &self.read_files(), "the plan")
+        Ok(())
     }
 }
 

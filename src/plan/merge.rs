@@ -516,10 +516,6 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
         Product::Contours(_) => out,
         _ => contours.as_deref(),
     };
-    if let Some(c) = contours_out {
-        // Before anything is written (a DEM plan's mosaic comes first).
-        crate::output::lines::LineFormat::of(c)?;
-    }
     let hillshade = o.hillshade.clone().or_else(|| planned(plan, "hillshade"));
     let mut outs: Vec<(&str, &Path)> = Vec::new();
     if let Some(o) = out {
@@ -534,6 +530,10 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     let mut protected = plan.read_files();
     protected.push(dir.join("plan.json"));
     crate::output::distinct_outputs(&outs, &protected, "the plan")?;
+    if let Some(c) = contours_out {
+        // Before anything is written (a DEM plan's mosaic comes first).
+        crate::output::lines::LineFormat::of(c)?;
+    }
     for (what, o) in &outs {
         crate::output::check_output(o)?;
         super::files::outside_plan_dir(dir, what, o)?;
