@@ -8,7 +8,8 @@ compared with the file's own class 2:
   type I  = reference ground not classified ground / reference ground
   type II = reference non-ground classified ground / reference non-ground
   total   = all disagreements / points;  Cohen's kappa
-Points the reference calls noise (7, 18) or withheld are left out of the counts. Then the DEM of
+Points the reference calls noise (7, 18), water (9) or withheld are left out of the counts
+(water is the ground surface of a DTM, and progressive densification takes it as ground). Then the DEM of
 each ground (`sweeptin dem --class 2 --cell 1`) is compared with the DEM of the reference ground
 on the cells both have: share of cells within 0.15 m, RMSE, p99 of |difference|.
 
@@ -136,10 +137,10 @@ def main():
     for f in args.files:
         with tempfile.TemporaryDirectory() as tmp:
             las = laspy.read(f)
-            cls = np.asarray(las.classification)
+            cls = np.array(las.classification)  # a copy: the classes are dropped below
             ref = cls == 2
             withheld = np.asarray(las.withheld, dtype=bool) if "withheld" in las.point_format.dimension_names else np.zeros(len(cls), bool)
-            keep = (cls != 7) & (cls != 18) & ~withheld
+            keep = (cls != 7) & (cls != 18) & (cls != 9) & ~withheld
             bare = os.path.join(tmp, "bare.laz")
             las.classification = np.zeros(len(cls), dtype=np.uint8)
             las.write(bare)

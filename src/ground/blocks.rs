@@ -338,3 +338,25 @@ fn run_block(
     }
     Ok((out, stats, pts.len() as u64))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::ClassStore;
+
+    #[test]
+    fn class_store_in_a_file_gives_back_what_was_put_at_each_index() {
+        let dir = std::env::temp_dir();
+        let n = 3 * super::READ_PIECE as u64 + 17;
+        let mut file = ClassStore::new(n, 0, &dir).unwrap();
+        let mut memory = ClassStore::new(n, n, &dir).unwrap();
+        // Scattered and consecutive indices, given out of order.
+        let mut pairs: Vec<(u64, u8)> = (0..n).rev().step_by(3).map(|i| (i, (i % 251) as u8)).collect();
+        pairs.extend((0..1000).map(|i| (i * 3 + 1, 9)));
+        file.put(&mut pairs.clone()).unwrap();
+        memory.put(&mut pairs).unwrap();
+        for i in (0..n).chain([n - 1, 5, 0]) {
+            assert_eq!(file.get(i).unwrap(), memory.get(i).unwrap(), "index {i}");
+        }
+        assert!(file.get(n).is_err());
+    }
+}

@@ -226,13 +226,18 @@ pub(crate) fn classify_run(
         }
         first = false;
         // Insert the chosen candidates (in input order: the TIN does not depend on it).
-        let mut chosen: Vec<(u64, u32)> = best_slots
+        let mut chosen: Vec<(u64, u32, u32)> = best_slots
             .iter()
-            .filter_map(|&t| best[t as usize].take().map(|(_, id, i)| (id, i)))
+            .filter_map(|&t| best[t as usize].take().map(|(_, id, i)| (id, i, t)))
             .collect();
         best_slots.clear();
         chosen.sort_unstable();
-        for &(_, i) in &chosen {
+        for &(_, i, t) in &chosen {
+            // The walk starts at the triangle the candidate was found in (or what a flip made
+            // of it): next to the point.
+            if tin.is_live(TriId(t)) {
+                tin.set_hint(TriId(t));
+            }
             tin.insert(pts[i as usize])?;
             labels[i as usize] = Label::Ground;
         }
