@@ -28,23 +28,22 @@ classified noise (7, 18) take no part and keep their class. Every other attribut
 VLRs and EVLRs and the order of the points are kept.
 
 Exact and tiling-independent: the ground is decided in blocks of 16 steps a side (8 above \
---step 12.5, 4 above 25), aligned at the origin, each block from its own points and those \
+--step 6.25, 4 above 12.5, 2 above 25: 50 to 100 units), aligned at the origin, each block from its own points and those \
 within 2 steps around it. So the classes are the same for any --threads, --mem or split of the \
 input into files; several inputs are classified together (adjacent tiles classify \
 seamlessly) and each is written to --odir under its own name.
 
 Memory: one read of the inputs into a block index (sorted within --mem, spilled to --tmp-dir \
-beyond), then blocks on every core, about 200 bytes a point of a block and its buffer; a block \
+beyond), then blocks on every core, about 160 bytes a point of a block and its buffer; a block \
 that does not fit half of --mem is refused before the work (give a larger --mem or smaller \
 --step). The classes wait in a temporary file of one byte a point beyond an eighth of --mem.
 
-Terrain presets (an explicit --step, --max-distance, --max-angle, --low-noise overrides):
+Default (no preset): --step 20 --max-distance 1 --max-angle 6 --offset 0.2 --low-noise 5, \
+tuned on ARSO, AHN3 and IGN tiles (docs/ACCURACY.md). Terrain presets (LAStools lasground's \
+steps; a value given explicitly overrides the preset's):
   --wilderness  step 3        --nature  step 5        --town  step 10
-  --city  step 25             --metro  step 50
-  --forest  step 10, max-angle 30
-  --mountains  step 5, max-angle 40, max-distance 1.5, low-noise 10
-Default (no preset): step 20, max-distance 1, max-angle 12, offset 0.1, low-noise 5 (tuned on \
-ARSO, AHN3 and IGN tiles: docs/ACCURACY.md).
+  --city  step 25             --metro  step 50        --forest  step 10
+  --mountains  step 10, max-angle 12, max-distance 1.5, low-noise 10
 
 Examples:
   sweeptin ground raw.laz -o classified.laz
@@ -86,7 +85,7 @@ pub struct Args {
     /// Preset: no buildings, fine detail (step 3).
     #[arg(long, group = "terrain")]
     pub wilderness: bool,
-    /// Preset: step 5.
+    /// Preset: open natural terrain (step 5).
     #[arg(long, group = "terrain")]
     pub nature: bool,
     /// Preset: villages (step 10).
@@ -98,10 +97,10 @@ pub struct Args {
     /// Preset: large buildings (step 50).
     #[arg(long, group = "terrain")]
     pub metro: bool,
-    /// Preset: forest (step 10, max-angle 30).
+    /// Preset: forest, no buildings (step 10).
     #[arg(long, group = "terrain")]
     pub forest: bool,
-    /// Preset: steep terrain (step 5, max-angle 40, max-distance 1.5, low-noise 10).
+    /// Preset: steep terrain (step 10, max-angle 12, max-distance 1.5, low-noise 10).
     #[arg(long, group = "terrain")]
     pub mountains: bool,
     /// Memory budget (e.g. 512M, 4G).

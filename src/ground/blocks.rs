@@ -20,7 +20,7 @@ use std::time::Instant;
 /// Bytes a run takes per point of its buffered rectangle (the points, tags, labels, the
 /// cells' order, the candidates' probes, the ground TIN and its per-triangle tables), for
 /// fitting runs into `--mem`.
-pub const RUN_BYTES_PER_POINT: u64 = 200;
+pub const RUN_BYTES_PER_POINT: u64 = 160;
 
 /// Largest seed cell coordinate (block keys pack two `i32`).
 const KEY_LIMIT: f64 = ((1u64 << 31) - 4) as f64;
@@ -321,11 +321,9 @@ fn run_block(
             tags.len()
         )));
     }
-    let ids: Vec<u64> = tags.iter().map(|&t| Tag(t).index()).collect();
-    let eligible: Vec<bool> = tags.iter().map(|&t| Tag(t).eligible()).collect();
     let mut labels = Vec::new();
     let world = grid.world(&rect);
-    let stats = classify_run(&pts, &ids, &eligible, world, grid, params, &mut labels)?;
+    let stats = classify_run(&pts, &tags, world, grid, params, &mut labels)?;
     check_labels(&labels, pts.len())?;
     let mut out = Vec::new();
     for (i, p) in pts.iter().enumerate() {

@@ -2,7 +2,7 @@
 //! blocks of a global grid, so that every point's class depends only on the points near it.
 //!
 //! **Definition.** Space is cut into square *ground blocks* of side `16 × step` (8 for steps
-//! over 12.5, 4 for steps over 25), aligned at the origin: block `(i, j)` holds the points with
+//! over 6.25, 4 over 12.5, 2 over 25: blocks of 50 to 100 units), aligned at the origin: block `(i, j)` holds the points with
 //! `floor(x / B) = i`, `floor(y / B) = j`. The points a block owns are classified by running
 //! the densification ([`ptd`]) on the points of the block grown by a buffer of `2 × step` on
 //! every side (the seed cells of side `step`, aligned at the origin too, two cells deep), the
@@ -66,7 +66,7 @@ pub struct GroundParams {
 pub enum Terrain {
     /// No buildings, dense detail: step 3.
     Wilderness,
-    /// The default: step 5.
+    /// Open natural terrain: step 5.
     Nature,
     /// Villages, small buildings: step 10.
     Town,
@@ -74,9 +74,9 @@ pub enum Terrain {
     City,
     /// Large industrial or urban buildings: step 50.
     Metro,
-    /// Forest under canopy: step 10, `max_angle` 30.
+    /// Forest under canopy (no buildings): step 10.
     Forest,
-    /// Steep terrain: step 5, `max_angle` 40, `max_distance` 1.5, `low_noise` 10.
+    /// Steep terrain: step 10, `max_angle` 12, `max_distance` 1.5, `low_noise` 10.
     Mountains,
 }
 
@@ -86,18 +86,14 @@ impl Terrain {
         let base = GroundParams::default();
         match self {
             Terrain::Wilderness => GroundParams { step: 3.0, ..base },
-            Terrain::Nature => base,
+            Terrain::Nature => GroundParams { step: 5.0, ..base },
             Terrain::Town => GroundParams { step: 10.0, ..base },
             Terrain::City => GroundParams { step: 25.0, ..base },
             Terrain::Metro => GroundParams { step: 50.0, ..base },
-            Terrain::Forest => GroundParams {
-                step: 10.0,
-                max_angle: 30.0,
-                ..base
-            },
+            Terrain::Forest => GroundParams { step: 10.0, ..base },
             Terrain::Mountains => GroundParams {
-                step: 5.0,
-                max_angle: 40.0,
+                step: 10.0,
+                max_angle: 12.0,
                 max_distance: 1.5,
                 low_noise: 10.0,
                 ..base
@@ -109,12 +105,12 @@ impl Terrain {
 impl Default for GroundParams {
     fn default() -> Self {
         GroundParams {
-            step: 5.0,
+            step: 20.0,
             max_distance: 1.0,
-            max_angle: 25.0,
+            max_angle: 6.0,
             low_noise: 5.0,
-            offset: 0.05,
-            mirror: true,
+            offset: 0.2,
+            mirror: false,
             reset: false,
         }
     }
@@ -153,12 +149,14 @@ impl GroundParams {
 
     /// Halvings of a ground block into seed cells (a block is `2^shift` cells a side).
     pub fn shift(&self) -> u32 {
-        if self.step <= 12.5 {
+        if self.step <= 6.25 {
             4
-        } else if self.step <= 25.0 {
+        } else if self.step <= 12.5 {
             3
-        } else {
+        } else if self.step <= 25.0 {
             2
+        } else {
+            1
         }
     }
 
@@ -217,7 +215,7 @@ impl Tag {
         Tag((p.index << 16) | if eligible { Tag::ELIGIBLE } else { 0 } | u64::from(p.class))
     }
 
-    fn index(self) -> u64 {
+    pub(crate) fn index(self) -> u64 {
         self.0 >> 16
     }
 
@@ -225,7 +223,7 @@ impl Tag {
         self.0 as u8
     }
 
-    fn eligible(self) -> bool {
+    pub(crate) fn eligible(self) -> bool {
         self.0 & Tag::ELIGIBLE != 0
     }
 

@@ -28,7 +28,7 @@
 //! and the angles are measurements against thresholds, in floating point relative to the
 //! triangle's first vertex.
 
-use super::GroundParams;
+use super::{GroundParams, Tag};
 use crate::error::{Error, Result};
 use crate::tiles::grid::TileGrid;
 use crate::tin::{PointLocation, Tin, TriId, VertexId};
@@ -62,28 +62,28 @@ struct Probe {
 
 const NO_TRI: u32 = u32::MAX;
 
-/// Classifies the points `pts` (global input indices `ids`) of the run over the closed
-/// rectangle `rect`; only points with `eligible` set may become ground or low noise. `grid`'s
-/// blocks are the seed cells.
+/// Classifies the points `pts` (their global input index and eligibility in `tags`) of the run
+/// over the closed rectangle `rect`; only eligible points may become ground or low noise.
+/// `grid`'s blocks are the seed cells.
 ///
 /// # Errors
 /// The TIN's errors (a coordinate out of range, too many vertices).
 pub(crate) fn classify_run(
     pts: &[[f64; 3]],
-    ids: &[u64],
-    eligible: &[bool],
+    tags: &[u64],
     rect: [f64; 4],
     grid: &TileGrid,
     params: &GroundParams,
     labels: &mut Vec<Label>,
 ) -> Result<RunStats> {
     let n = pts.len();
+    let id = |i: u32| Tag(tags[i as usize]).index();
     labels.clear();
     labels.resize(n, Label::Other);
     let mut stats = RunStats::default();
     // Eligible points by cell, each cell's points from the lowest (ties: lower index).
     let mut order: Vec<(i64, i64, u32)> = (0..n)
-        .filter(|&i| eligible[i])
+        .filter(|&i| Tag(tags[i]).eligible())
         .map(|i| {
             let (cx, cy) = grid.block_of(pts[i][0], pts[i][1]);
             (cy, cx, i as u32)
@@ -96,7 +96,7 @@ pub(crate) fn classify_run(
         (a.0, a.1)
             .cmp(&(b.0, b.1))
             .then(pts[a.2 as usize][2].total_cmp(&pts[b.2 as usize][2]))
-            .then(ids[a.2 as usize].cmp(&ids[b.2 as usize]))
+            .then(id(a.2).cmp(&id(b.2)))
     });
     // Cells: (first, end) into `order`, and the cursor of the current seed.
     let mut cells: Vec<(i64, i64, usize, usize)> = Vec::new();
@@ -156,7 +156,7 @@ pub(crate) fn classify_run(
         .map(|c| order[c.2].2)
         .collect();
     stats.seeds = seeds.len() as u64;
-    let ring = virtual_ring(rect, params.step, pts, ids, &seeds);
+    let ring = virtual_ring(rect, params.step, pts, tags, &seeds);
     let mut tin = Tin::from_points(&ring)?;
     let virtuals = tin.vertex_slots();
     for &s in &seeds {
@@ -217,10 +217,10 @@ pub(crate) fn classify_run(
                         best_slots.push(tri);
                         true
                     }
-                    Some((bd, bi, _)) => (d, ids[i as usize]) < (bd, bi),
+                    Some((bd, bi, _)) => (d, id(i)) < (bd, bi),
                 };
                 if better {
-                    *slot = Some((d, ids[i as usize], i));
+                    *slot = Some((d, id(i), i));
                 }
             }
         }
@@ -292,7 +292,7 @@ fn virtual_ring(
     rect: [f64; 4],
     step: f64,
     pts: &[[f64; 3]],
-    ids: &[u64],
+    tags: &[u64],
     seeds: &[u32],
 ) -> Vec<[f64; 3]> {
     let r = [rect[0] - step, rect[1] - step, rect[2] + step, rect[3] + step];
@@ -314,8 +314,9 @@ fn virtual_ring(
             for &s in seeds {
                 let p = pts[s as usize];
                 let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
-                if (d, ids[s as usize]) < (bestd.0, bestd.1) {
-                    bestd = (d, ids[s as usize], p[2]);
+                let id = Tag(tags[s as usize]).index();
+                if (d, id) < (bestd.0, bestd.1) {
+                    bestd = (d, id, p[2]);
                 }
             }
             [q[0], q[1], bestd.2]
