@@ -8,8 +8,9 @@ compared with the file's own class 2:
   type I  = reference ground not classified ground / reference ground
   type II = reference non-ground classified ground / reference non-ground
   total   = all disagreements / points;  Cohen's kappa
-Points the reference calls noise (7, 18), water (9) or withheld are left out of the counts
-(water is the ground surface of a DTM, and progressive densification takes it as ground). Then the DEM of
+Points the reference left unclassified (0: never classified, ARSO's hold ground-level points),
+calls noise (7, 18) or water (9), and withheld points are left out of the counts (water is the
+ground surface of a DTM, and progressive densification takes it as ground). Then the DEM of
 each ground (`sweeptin dem --class 2 --cell 1`) is compared with the DEM of the reference ground
 on the cells both have: share of cells within 0.15 m, RMSE, p99 of |difference|.
 
@@ -140,7 +141,7 @@ def main():
             cls = np.array(las.classification)  # a copy: the classes are dropped below
             ref = cls == 2
             withheld = np.asarray(las.withheld, dtype=bool) if "withheld" in las.point_format.dimension_names else np.zeros(len(cls), bool)
-            keep = (cls != 7) & (cls != 18) & (cls != 9) & ~withheld
+            keep = (cls != 0) & (cls != 7) & (cls != 18) & (cls != 9) & ~withheld
             bare = os.path.join(tmp, "bare.laz")
             las.classification = np.zeros(len(cls), dtype=np.uint8)
             las.write(bare)
