@@ -147,7 +147,7 @@ fn dem_and_contours_of_a_plan_equal_one_run() {
     let out = sweeptin(&["run", s(&plan), "--task", "0", "--resume"], "resume");
     assert!(String::from_utf8_lossy(&out.stderr).contains("skipped"));
     let rec0 = &records(&job, n)[0];
-    let tif0 = PathBuf::from(rec0["outputs"][0][1].as_str().unwrap());
+    let tif0 = job.join(rec0["outputs"][0][1].as_str().unwrap());
     std::fs::remove_file(&tif0).unwrap();
     let out = sweeptin(
         &["run", s(&plan), "--task", "0", "--resume"],
@@ -814,13 +814,26 @@ fn records_count_only_for_their_plan_and_links_are_refused() {
     failing(&["merge", s(&plan), "-o", s(&m)], 2, "have not finished");
     std::fs::rename(&away, &input).unwrap();
     sweeptin(&["run", s(&plan), "--all", "--resume", "-q"], "resume");
-    // Records of the plan before an edit are not this plan's.
+    // An edited plan is refused by `run` and `merge` (its fingerprint no longer matches):
+    // a deleted tile or a file's count set to 0 gave a mosaic with holes, exit 0.
     let text = std::fs::read_to_string(&plan).unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["args"].as_array_mut().unwrap().push("(edited)".into());
-    std::fs::write(&plan, v.to_string()).unwrap();
-    failing(&["merge", s(&plan), "-o", s(&m)], 2, "have not finished");
-    sweeptin(&["run", s(&plan), "--all", "--resume", "-q"], "resume");
+    let edits: [&dyn Fn(&mut serde_json::Value); 4] = [
+        &|v| v["args"].as_array_mut().unwrap().push("(edited)".into()),
+        &|v| v["files"][0]["points"] = serde_json::json!(0),
+        &|v| {
+            v["tiles"].as_array_mut().unwrap().pop();
+        },
+        &|v| v["fingerprint"] = serde_json::json!(""),
+    ];
+    for edit in edits {
+        let mut e = v.clone();
+        edit(&mut e);
+        std::fs::write(&plan, e.to_string()).unwrap();
+        failing(&["merge", s(&plan), "-o", s(&m)], 3, "make the plan again");
+        failing(&["run", s(&plan), "--all", "--resume", "-q"], 3, "edited");
+    }
+    std::fs::write(&plan, &text).unwrap();
     sweeptin(&["merge", s(&plan), "-o", s(&m)], "merge");
     // A plan whose cell or tiles were edited apart is refused.
     v["cell"] = serde_json::json!(1.0);

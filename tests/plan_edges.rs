@@ -185,7 +185,11 @@ fn a_vrt_merge_checks_every_tile_as_the_tif_merge_does() {
             serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
         })
         .collect();
-    let tile = |i: usize| PathBuf::from(records[i]["outputs"][0][1].as_str().unwrap());
+    let tile = |i: usize| {
+        t.path()
+            .join("job")
+            .join(records[i]["outputs"][0][1].as_str().unwrap())
+    };
     let vrt = t.path().join("m.vrt");
     let merge = || {
         bin()

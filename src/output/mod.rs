@@ -7,6 +7,8 @@
 //!   [`geotiff`] (float32 GeoTIFF written in place), [`cog`] (compressed GeoTIFF and Cloud
 //!   Optimized GeoTIFF, staged and assembled in bounded memory) and [`ascii`] (ESRI ASCII grid
 //!   with a `.prj`); [`world`]: world files and `.prj` files beside images.
+//! - [`las`]: LAS/LAZ files rewritten point by point ([`las::rewrite_points`]), everything
+//!   but the edited fields kept.
 //! - [`geojson`]: a streaming GeoJSON feature writer.
 //! - [`pieces`]: the tiles of a plan's `tin` task, for the merge.
 //! - [`vpc`]: virtual point clouds (`.vpc`) from LAS/LAZ headers.
@@ -41,6 +43,7 @@ pub mod geojson;
 pub mod geotiff;
 pub mod interrupt;
 pub mod landxml;
+pub mod las;
 pub mod mesh;
 pub mod obj;
 pub mod pieces;

@@ -108,6 +108,10 @@ pub struct Plan {
     /// the file, a CRS read as `--crs` says…), as one run warns of them; `plan` prints them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// [`Plan::id`] as written by [`Plan::save`]: [`Plan::load`] computes it again and refuses
+    /// a plan whose content no longer has it (an edit: a tile deleted, a file's count changed).
+    #[serde(default)]
+    pub fingerprint: String,
     /// [`Plan::id`], computed once.
     #[serde(skip)]
     id: PlanId,
@@ -341,7 +345,7 @@ impl Plan {
                 }
             }
         }
-        let plan = Plan {
+        let mut plan = Plan {
             version: if job.lines.is_some() {
                 PLAN_VERSION_LINES
             } else {
@@ -358,10 +362,12 @@ impl Plan {
             cell,
             tiles,
             warnings,
+            fingerprint: String::new(),
             id: PlanId::default(),
         };
         plan.check_outputs()?;
         plan.check_task_memory()?;
+        plan.fingerprint = plan.id().to_string();
         Ok(plan)
     }
 
@@ -405,10 +411,13 @@ impl Plan {
 
     /// The plan's fingerprint: the SHA-256 of its content (serialised compactly, so not what
     /// `sha256sum plan.json` prints). Task records carry it, so that a record of another plan in
-    /// the same directory, or of this one before it was edited, never counts.
+    /// the same directory, or of this one before it was edited, never counts. The
+    /// [`Plan::fingerprint`] field itself is left out.
     pub fn id(&self) -> &str {
         self.id.0.get_or_init(|| {
-            let text = serde_json::to_string(self).unwrap_or_default();
+            let mut bare = self.clone();
+            bare.fingerprint = String::new();
+            let text = serde_json::to_string(&bare).unwrap_or_default();
             lines::fingerprint(text.as_bytes()).1
         })
     }
@@ -437,6 +446,21 @@ impl Plan {
         }
         let plan: Plan = serde_json::from_str(&text)
             .map_err(|e| bad(path, format!("not a sweeptin plan: {e}")))?;
+        if plan.fingerprint.is_empty() {
+            return Err(bad(
+                path,
+                "the plan has no fingerprint (made by an older sweeptin, or edited): make the \
+                 plan again",
+            ));
+        }
+        if plan.fingerprint != plan.id() {
+            return Err(bad(
+                path,
+                "its content no longer has the fingerprint it was written with: the plan was \
+                 edited (tiles, files, counts or the job), and its tasks would no longer cover \
+                 its inputs as planned; make the plan again",
+            ));
+        }
         plan.check_consistent()
             .map_err(|m| bad(path, format!("{m}: the plan was edited; make it again")))?;
         Ok(plan)
@@ -585,6 +609,27 @@ impl Plan {
         Ok(p)
     }
 
+    /// Makes `DIR/tiles/` again when it is missing (deleted to start over: every task then
+    /// failed, exit 4); refuses one that is not a directory of its own.
+    ///
+    /// # Errors
+    /// [`Error::Options`] for a symbolic link or a file there; [`Error::Io`].
+    pub fn tiles_dir(&self, dir: &Path) -> Result<()> {
+        let t = dir.join("tiles");
+        match std::fs::symlink_metadata(&t) {
+            Ok(m) if m.is_dir() => Ok(()),
+            Ok(_) => Err(Error::Options(format!(
+                "{}: not a directory of the plan's own (a symbolic link or a file): sweeptin \
+                 writes its tiles only into a directory it made (remove it)",
+                t.display()
+            ))),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                std::fs::create_dir_all(&t).map_err(|e| Error::write(&t, e))
+            }
+            Err(e) => Err(Error::io(&t, e)),
+        }
+    }
+
     /// Where task `i` records that it finished.
     pub fn marker(&self, dir: &Path, i: usize) -> PathBuf {
         dir.join("tiles").join(format!("task_{i}.json"))
@@ -598,9 +643,27 @@ impl Plan {
     pub fn record(&self, dir: &Path, i: usize) -> Result<Option<TaskRecord>> {
         let p = self.marker(dir, i);
         match std::fs::read_to_string(&p) {
-            Ok(t) => serde_json::from_str::<TaskRecord>(&t)
-                .map(|r| Some(r).filter(|r| r.plan == self.id() && r.index == i))
-                .map_err(|e| bad(&p, format!("damaged task record: {e}"))),
+            Ok(t) => {
+                let r = serde_json::from_str::<TaskRecord>(&t)
+                    .map_err(|e| bad(&p, format!("damaged task record: {e}")))?;
+                let Some(mut r) = Some(r).filter(|r| r.plan == self.id() && r.index == i) else {
+                    return Ok(None);
+                };
+                for (name, out) in &mut r.outputs {
+                    *out = inside(dir, out).ok_or_else(|| {
+                        bad(
+                            &p,
+                            format!(
+                                "the record names its {name} output {} outside its plan's \
+                                 directory (records name outputs relative to it): run task \
+                                 {i} again",
+                                out.display()
+                            ),
+                        )
+                    })?;
+                }
+                Ok(Some(r))
+            }
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(Error::io(&p, e)),
         }
@@ -625,9 +688,27 @@ impl Plan {
     /// [`Error::Io`].
     pub fn finish_task(&self, dir: &Path, r: &TaskRecord) -> Result<()> {
         let p = self.marker(dir, r.index);
-        let text = serde_json::to_string_pretty(r).map_err(|e| bad(&p, e.to_string()))?;
+        // Outputs relative to the plan's directory: a job moved or copied elsewhere merges its
+        // own tiles, never those of the place it was made in.
+        let mut r = r.clone();
+        for (_, out) in &mut r.outputs {
+            if let Ok(rel) = out.strip_prefix(dir) {
+                *out = rel.to_path_buf();
+            }
+        }
+        let text = serde_json::to_string_pretty(&r).map_err(|e| bad(&p, e.to_string()))?;
         write_atomic(&p, text.as_bytes())
     }
+}
+
+/// `out`, a task's output as its record names it, under the plan's directory `dir`; `None`
+/// when it is absolute or climbs out of `dir` (`..`): a record names only its own tiles.
+fn inside(dir: &Path, out: &Path) -> Option<PathBuf> {
+    use std::path::Component;
+    let plain = out
+        .components()
+        .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+    (plain && out.components().next().is_some()).then(|| dir.join(out))
 }
 
 /// The task index a batch engine gives: `SLURM_ARRAY_TASK_ID`, `JOB_COMPLETION_INDEX`

@@ -364,6 +364,7 @@ impl Plan {
     pub fn run_task(&self, dir: &Path, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
         let start = std::time::Instant::now();
         self.task(i)?;
+        self.tiles_dir(dir)?;
         // Not finished until it finishes now: a run that fails leaves no record of an earlier
         // one for `--resume` or `merge` to take (they mixed old tiles with new ones).
         self.forget_task(dir, i)?;

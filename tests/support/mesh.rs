@@ -132,8 +132,17 @@ pub fn contour_set(bytes: &[u8]) -> Vec<String> {
                 .collect();
             if c.len() > 1 && c.first() == c.last() {
                 c.pop();
-                let i = (0..c.len()).min_by_key(|&i| c[i]).unwrap();
-                c.rotate_left(i);
+                // The smallest rotation: a ring may pass twice through a vertex at the level
+                // (a pinch), so the smallest point alone does not fix where it starts.
+                let best = (0..c.len())
+                    .map(|i| {
+                        let mut r = c.clone();
+                        r.rotate_left(i);
+                        r
+                    })
+                    .min()
+                    .unwrap();
+                c = best;
             }
             format!("{} {c:?}", f["properties"]["elevation"])
         })

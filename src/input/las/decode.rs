@@ -75,6 +75,8 @@ pub(crate) enum Fields {
     Filter,
     /// Those, intensity and GPS time.
     Stats,
+    /// Every field (a rewrite keeps them all).
+    All,
 }
 
 impl Fields {
@@ -86,6 +88,7 @@ impl Fields {
         match self {
             Fields::Filter => base,
             Fields::Stats => base.decompress_intensity().decompress_gps_time(),
+            Fields::All => laz::DecompressionSelection::all(),
         }
     }
 }

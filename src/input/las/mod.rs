@@ -41,7 +41,8 @@
 
 mod ahead;
 pub mod copc;
-mod decode;
+pub(crate) mod decode;
+pub mod extra;
 pub mod filter;
 pub mod header;
 mod laz_check;
