@@ -217,6 +217,7 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     super::input::distinct_outputs(&pairs, &read, "ground")?;
     for o in &outputs {
         super::input::check_output(o)?;
+        sweeptin::output::las::check_point_output(o, &read)?;
     }
     sweeptin::pipeline::size_thread_pool(args.threads);
     let tmp = args.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
@@ -245,12 +246,22 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
             Ok(())
         };
         let s = sweeptin::output::las::rewrite_points(input, output, &mut edit)?;
+        for note in &s.notes {
+            bar.suspend(|| eprintln!("sweeptin: note: {note}"));
+        }
         changed += s.changed;
         bytes += s.bytes;
         base += count;
     }
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
+    if summary.ground == 0 && !args.quiet {
+        eprintln!(
+            "sweeptin: warning: no ground found in {} points (no points, or none eligible: \
+             withheld or noise): `dem --class 2` on the output has nothing to grid",
+            summary.points
+        );
+    }
     if args.json {
         let s = Summary {
             inputs: &args.inputs,
