@@ -17,8 +17,8 @@ y = 0); a seed lower than the median of its neighbour seeds by more than --low-n
 noise (class 7), and the next lowest point of its cell is tried;
   2. densification: a point is ground when its distance to the plane of the ground triangle \
 under it is at most --max-distance and the angles from that plane to its three corners are at \
-most --max-angle (with --mirror, a point near a steep edge is also tried mirrored through the \
-nearest corner); per triangle the closest point is added, iteration after iteration, until \
+most --max-angle (a point near a steep edge that fails only on the angles is also tried \
+mirrored through the nearest corner, unless --no-mirror); per triangle the closest point is added, iteration after iteration, until \
 none is;
   3. the points within --offset (vertically) of the final ground are ground too; those more \
 than --low-noise below it are low noise (7).
@@ -75,10 +75,10 @@ pub struct Args {
     /// Points within this vertical distance of the final ground are ground too.
     #[arg(long, value_name = "DZ")]
     pub offset: Option<f64>,
-    /// Also try points near steep edges mirrored through the nearest ground vertex (Axelsson's
-    /// mirroring; off by default: it takes roof edges on the data tested).
+    /// Do not try points near steep edges mirrored through the nearest ground vertex
+    /// (Axelsson's mirroring, on by default).
     #[arg(long)]
-    pub mirror: bool,
+    pub no_mirror: bool,
     /// Points that are not ground (nor noise, nor withheld) become class 1.
     #[arg(long)]
     pub reset: bool,
@@ -144,7 +144,7 @@ impl Args {
         p.max_angle = self.max_angle.unwrap_or(p.max_angle);
         p.low_noise = self.low_noise.unwrap_or(p.low_noise);
         p.offset = self.offset.unwrap_or(p.offset);
-        p.mirror = self.mirror || p.mirror;
+        p.mirror = p.mirror && !self.no_mirror;
         p.reset = self.reset;
         p
     }

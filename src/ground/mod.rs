@@ -110,7 +110,7 @@ impl Default for GroundParams {
             max_angle: 6.0,
             low_noise: 5.0,
             offset: 0.2,
-            mirror: false,
+            mirror: true,
             reset: false,
         }
     }
