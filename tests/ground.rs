@@ -48,11 +48,22 @@ fn run(pts: &[[f64; 3]], classes: &[u8], params: &GroundParams) -> Vec<u8> {
 
 #[test]
 fn ground_separates_roofs_from_a_sloping_terrain() {
-    let buildings = [[20.0, 20.0, 38.0, 34.0, 7.0], [60.0, 50.0, 75.0, 80.0, 12.0]];
+    let buildings = [
+        [20.0, 20.0, 38.0, 34.0, 7.0],
+        [60.0, 50.0, 75.0, 80.0, 12.0],
+    ];
     let (pts, truth) = terrain(100.0, 100.0, &buildings, 1);
     let got = run(&pts, &vec![0; pts.len()], &GroundParams::default());
-    let terrain_ground = truth.iter().zip(&got).filter(|(t, c)| **t && **c == 2).count();
-    let roof_ground = truth.iter().zip(&got).filter(|(t, c)| !**t && **c == 2).count();
+    let terrain_ground = truth
+        .iter()
+        .zip(&got)
+        .filter(|(t, c)| **t && **c == 2)
+        .count();
+    let roof_ground = truth
+        .iter()
+        .zip(&got)
+        .filter(|(t, c)| !**t && **c == 2)
+        .count();
     let terrain = truth.iter().filter(|t| **t).count();
     assert_eq!(roof_ground, 0, "no roof point is ground");
     assert!(
@@ -76,7 +87,11 @@ fn a_low_outlier_50_m_under_the_terrain_is_low_noise_never_ground() {
     let n = got.len();
     assert_eq!(&got[n - 3..], &[7, 7, 7], "the low outliers are class 7");
     let ground = got[..n - 3].iter().filter(|&&c| c == 2).count();
-    assert!(ground as f64 >= 0.99 * (n - 3) as f64, "{ground} of {} ground", n - 3);
+    assert!(
+        ground as f64 >= 0.99 * (n - 3) as f64,
+        "{ground} of {} ground",
+        n - 3
+    );
 }
 
 #[test]
@@ -244,7 +259,12 @@ fn the_classes_do_not_depend_on_threads_memory_or_the_api() {
         step: 2.0,
         ..GroundParams::default()
     };
-    let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+    };
     // 24 MiB: the block index's sort spills, runs are batched by memory.
     let one = pool(1).install(|| classes_of(&files, &params, 24 << 20));
     let two = pool(2).install(|| classes_of(&files, &params, 1 << 30));

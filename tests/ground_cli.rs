@@ -79,13 +79,25 @@ fn adjacent_tiles_classified_together_are_byte_identical_for_any_threads_and_mem
     let files = data::ign_tiles();
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     // 24 MiB: the block index spills and the blocks run in small batches.
-    ground_odir(&files, a.path(), &["--step", "2", "--threads", "1", "--mem", "24M"]);
-    ground_odir(&files, b.path(), &["--step", "2", "--threads", "2", "--mem", "1G"]);
+    ground_odir(
+        &files,
+        a.path(),
+        &["--step", "2", "--threads", "1", "--mem", "24M"],
+    );
+    ground_odir(
+        &files,
+        b.path(),
+        &["--step", "2", "--threads", "2", "--mem", "1G"],
+    );
     let mut ground = 0;
     for f in &files {
         let name = f.file_name().unwrap();
         let (x, y) = (a.path().join(name), b.path().join(name));
-        assert_eq!(std::fs::read(&x).unwrap(), std::fs::read(&y).unwrap(), "{name:?}");
+        assert_eq!(
+            std::fs::read(&x).unwrap(),
+            std::fs::read(&y).unwrap(),
+            "{name:?}"
+        );
         ground += read(&x).iter().filter(|p| p.classification == 2).count();
     }
     // The files were classified together: the classes are those of the whole set.
@@ -93,8 +105,14 @@ fn adjacent_tiles_classified_together_are_byte_identical_for_any_threads_and_mem
         step: 2.0,
         ..GroundParams::default()
     };
-    let (_, s) = classify_files(&files, &params, 1 << 30, &std::env::temp_dir(), &mut |_, _, _| {})
-        .unwrap();
+    let (_, s) = classify_files(
+        &files,
+        &params,
+        1 << 30,
+        &std::env::temp_dir(),
+        &mut |_, _, _| {},
+    )
+    .unwrap();
     assert_eq!(ground as u64, s.ground);
 }
 
@@ -170,7 +188,11 @@ fn an_empty_file_is_written_with_no_ground() {
 fn ground_output_never_replaces_an_input_nor_a_directory() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("in.las");
-    write_las(&input, &[[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], &[0, 0, 0]);
+    write_las(
+        &input,
+        &[[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]],
+        &[0, 0, 0],
+    );
     let before = std::fs::read(&input).unwrap();
     let (code, err) = status(&[
         "ground".as_ref(),

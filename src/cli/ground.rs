@@ -210,7 +210,12 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     let outputs = args.outputs()?;
     let pairs: Vec<(&str, &Path)> = outputs
         .iter()
-        .map(|o| (if args.odir.is_some() { "--odir" } else { "-o" }, o.as_path()))
+        .map(|o| {
+            (
+                if args.odir.is_some() { "--odir" } else { "-o" },
+                o.as_path(),
+            )
+        })
         .collect();
     let mut read = args.inputs.clone();
     read.extend(args.lists.iter().cloned());

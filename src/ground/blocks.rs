@@ -140,6 +140,17 @@ impl ClassStore {
     }
 }
 
+/// Hands every point to the function it is given (see [`classify_stream`]).
+pub type Feed<'a> = dyn FnMut(&mut dyn FnMut(GroundInput) -> Result<()>) -> Result<()> + 'a;
+
+/// What a block's run gives back: the `(index, class)` of the points it owns, its counters
+/// and the points it read.
+struct BlockResult {
+    classes: Vec<(u64, u8)>,
+    stats: RunStats,
+    points: u64,
+}
+
 /// One point handed to the classification.
 #[derive(Clone, Copy, Debug)]
 pub struct GroundInput {
@@ -164,7 +175,7 @@ pub fn classify_stream(
     total: u64,
     mem: u64,
     tmp: &Path,
-    feed: &mut dyn FnMut(&mut dyn FnMut(GroundInput) -> Result<()>) -> Result<()>,
+    feed: &mut Feed<'_>,
     progress: &mut dyn FnMut(&str, u64, u64),
 ) -> Result<(ClassStore, GroundSummary)> {
     params.check()?;
@@ -180,7 +191,12 @@ pub fn classify_stream(
     let budget = (mem / 2).max(8 << 20);
     let mut sorter = ExternalSorter::<TaggedRecord>::new(budget, tmp);
     let mut seen = 0u64;
-    let mut bounds = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut bounds = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     feed(&mut |p: GroundInput| {
         let [x, y, _] = p.xyz;
         crate::tin::check_point(p.xyz, p.index)?;
@@ -190,7 +206,12 @@ pub fn classify_stream(
                 p.index
             )));
         }
-        bounds = [bounds[0].min(x), bounds[1].min(y), bounds[2].max(x), bounds[3].max(y)];
+        bounds = [
+            bounds[0].min(x),
+            bounds[1].min(y),
+            bounds[2].max(x),
+            bounds[3].max(y),
+        ];
         // Seed cells whose keys fit (checked again exactly over all the points below).
         if x.abs().max(y.abs()) / grid.block > KEY_LIMIT {
             return Err(Error::Options(format!(
@@ -270,12 +291,16 @@ pub fn classify_stream(
             batch.push((tx, ty, rect));
             k += 1;
         }
-        let results: Vec<Result<(Vec<(u64, u8)>, RunStats, u64)>> = batch
+        let results: Vec<Result<BlockResult>> = batch
             .par_iter()
             .map(|&(tx, ty, rect)| run_block(&index, &grid, params, (tx, ty), rect))
             .collect();
         for r in results {
-            let (mut pairs, stats, run_points) = r?;
+            let BlockResult {
+                classes: mut pairs,
+                stats,
+                points: run_points,
+            } = r?;
             done_points += pairs.len() as u64;
             for &(_, c) in &pairs {
                 match c {
@@ -309,7 +334,7 @@ fn run_block(
     params: &GroundParams,
     (tx, ty): (i64, i64),
     rect: BlockRect,
-) -> Result<(Vec<(u64, u8)>, RunStats, u64)> {
+) -> Result<BlockResult> {
     let mut pts = Vec::new();
     let mut tags = Vec::new();
     index.read(&rect, &mut pts)?;
@@ -334,7 +359,11 @@ fn run_block(
         let tag = Tag(tags[i]);
         out.push((tag.index(), tag.new_class(labels[i], params.reset)));
     }
-    Ok((out, stats, pts.len() as u64))
+    Ok(BlockResult {
+        classes: out,
+        stats,
+        points: pts.len() as u64,
+    })
 }
 
 #[cfg(test)]
@@ -348,7 +377,11 @@ mod tests {
         let mut file = ClassStore::new(n, 0, &dir).unwrap();
         let mut memory = ClassStore::new(n, n, &dir).unwrap();
         // Scattered and consecutive indices, given out of order.
-        let mut pairs: Vec<(u64, u8)> = (0..n).rev().step_by(3).map(|i| (i, (i % 251) as u8)).collect();
+        let mut pairs: Vec<(u64, u8)> = (0..n)
+            .rev()
+            .step_by(3)
+            .map(|i| (i, (i % 251) as u8))
+            .collect();
         pairs.extend((0..1000).map(|i| (i * 3 + 1, 9)));
         file.put(&mut pairs.clone()).unwrap();
         memory.put(&mut pairs).unwrap();

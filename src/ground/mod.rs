@@ -27,7 +27,7 @@
 mod blocks;
 mod ptd;
 
-pub use blocks::{ClassStore, GroundInput, RUN_BYTES_PER_POINT, classify_stream};
+pub use blocks::{ClassStore, Feed, GroundInput, RUN_BYTES_PER_POINT, classify_stream};
 
 use crate::error::{Error, Result};
 use crate::input::las::{Filter, LidarPoint, LidarReader, ReadOptions};
@@ -130,7 +130,11 @@ impl GroundParams {
             }
         };
         positive(self.step, "--step", "a positive cell side, e.g. 5 (metres)")?;
-        positive(self.max_distance, "--max-distance", "a positive distance, e.g. 1")?;
+        positive(
+            self.max_distance,
+            "--max-distance",
+            "a positive distance, e.g. 1",
+        )?;
         positive(self.low_noise, "--low-noise", "a positive height, e.g. 5")?;
         if !(self.offset.is_finite() && self.offset >= 0.0) {
             return Err(Error::Options(format!(
@@ -304,6 +308,13 @@ pub fn classify(
         }
         Ok(())
     };
-    let (mut store, _) = classify_stream(params, points.len() as u64, mem, &tmp, &mut feed, &mut |_, _, _| {})?;
+    let (mut store, _) = classify_stream(
+        params,
+        points.len() as u64,
+        mem,
+        &tmp,
+        &mut feed,
+        &mut |_, _, _| {},
+    )?;
     (0..points.len() as u64).map(|i| store.get(i)).collect()
 }

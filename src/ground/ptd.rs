@@ -192,7 +192,8 @@ pub(crate) fn classify_run(
             let pr = probes[i as usize];
             let stale = first
                 || touched.get(pr.tri as usize).copied().unwrap_or(true)
-                || (pr.mirror != NO_TRI && touched.get(pr.mirror as usize).copied().unwrap_or(true));
+                || (pr.mirror != NO_TRI
+                    && touched.get(pr.mirror as usize).copied().unwrap_or(true));
             if !stale {
                 continue;
             }
@@ -295,11 +296,22 @@ fn virtual_ring(
     tags: &[u64],
     seeds: &[u32],
 ) -> Vec<[f64; 3]> {
-    let r = [rect[0] - step, rect[1] - step, rect[2] + step, rect[3] + step];
+    let r = [
+        rect[0] - step,
+        rect[1] - step,
+        rect[2] + step,
+        rect[3] + step,
+    ];
     let nx = (((r[2] - r[0]) / step).ceil() as usize).max(1);
     let ny = (((r[3] - r[1]) / step).ceil() as usize).max(1);
     let mut ring = Vec::with_capacity(2 * (nx + ny));
-    let at = |k: usize, n: usize, a: f64, b: f64| if k == n { b } else { a + (b - a) * k as f64 / n as f64 };
+    let at = |k: usize, n: usize, a: f64, b: f64| {
+        if k == n {
+            b
+        } else {
+            a + (b - a) * k as f64 / n as f64
+        }
+    };
     for k in 0..nx {
         ring.push([at(k, nx, r[0], r[2]), r[1]]);
         ring.push([at(k + 1, nx, r[0], r[2]), r[3]]);
@@ -346,11 +358,12 @@ fn evaluate(
     virtuals: usize,
 ) -> (u32, Verdict) {
     let q = [p[0], p[1]];
-    let loc = if from != NO_TRI && (from as usize) < tin.triangle_slots() && tin.is_live(TriId(from)) {
-        tin.locate_from(TriId(from), q)
-    } else {
-        tin.locate(q)
-    };
+    let loc =
+        if from != NO_TRI && (from as usize) < tin.triangle_slots() && tin.is_live(TriId(from)) {
+            tin.locate_from(TriId(from), q)
+        } else {
+            tin.locate(q)
+        };
     let t = match loc {
         PointLocation::Inside(t) => t,
         PointLocation::OnEdge(e) => e.tri(),
