@@ -4,7 +4,7 @@
 //! **Definition.** Space is cut into square *ground blocks* of side `16 × step` (8 for steps
 //! over 6.25, 4 over 12.5, 2 over 25: blocks of 50 to 100 units), aligned at the origin: block `(i, j)` holds the points with
 //! `floor(x / B) = i`, `floor(y / B) = j`. The points a block owns are classified by running
-//! the densification ([`ptd`]) on the points of the block grown by a buffer of `2 × step` on
+//! the densification (`ptd.rs`) on the points of the block grown by a buffer of `2 × step` on
 //! every side (the seed cells of side `step`, aligned at the origin too, two cells deep), the
 //! block alone deciding. So a point's class is a function of the points within the block's
 //! rectangle plus `2 × step`: the same for any `--threads`, any `--mem`, any order or split of
@@ -20,7 +20,7 @@
 //!
 //! **Memory.** The points are read once into the tiles' block index (an external sort by seed
 //! cell, spilled beyond half of `--mem`; 64-byte sort records, 24 + 8 bytes a point stored),
-//! each block's run holds its buffered rectangle (about [`blocks::RUN_BYTES_PER_POINT`] bytes
+//! each block's run holds its buffered rectangle (about [`RUN_BYTES_PER_POINT`] bytes
 //! a point; a run that does not fit half of `--mem` is refused before it starts), and the new
 //! classes go to a [`ClassStore`] (one byte a point; a temporary file past an eighth of `--mem`).
 
