@@ -1,9 +1,11 @@
 //! Times breakline cleaning on synthetic inputs:
-//! `cargo run --release --example clean_timing -- [segments] [contours|coastline|random|all]`
+//! `cargo run --release --example clean_timing -- [segments] [contours|coastline|random|roads|all]`
 //! (default 1,000,000, all).
 //!
 //! Inputs: contour lines (no crossings: the common case), a fractal coastline (simple rings), and
-//! random short segments (a crossing-heavy stress case), each about `segments` segments.
+//! random short segments (a crossing-heavy stress case), each about `segments` segments; `roads`
+//! (`synth::roads`) is also cleaned with each round's pairs found by the plane sweep
+//! (`clean_by_sweep`, `--mem 128M`), and says how many items that sweep held at once.
 use std::time::Instant;
 use sweeptin::breaklines::clean::{CleanOptions, clean};
 use sweeptin::synth::{self, SplitMix64};
@@ -43,6 +45,26 @@ fn main() {
         let coast = synth::coastline(n, 1);
         println!("coastline generated in {:.2} s", t0.elapsed().as_secs_f64());
         time("coastline", &coast);
+    }
+    if run("roads") {
+        let t0 = Instant::now();
+        let roads = synth::roads(n, 1);
+        println!("roads generated in {:.2} s", t0.elapsed().as_secs_f64());
+        time("roads", &roads);
+        let t1 = Instant::now();
+        let dir = std::env::temp_dir();
+        let (g, s) = sweeptin::breaklines::clean::clean_by_sweep(
+            &roads,
+            &CleanOptions::default(),
+            128 << 20,
+            &dir,
+        )
+        .expect("clean by sweep");
+        println!(
+            "roads by sweep: {:.3} s, {} segments out, {s:?}",
+            t1.elapsed().as_secs_f64(),
+            g.segments.len()
+        );
     }
     if !run("random") {
         return;

@@ -17,6 +17,7 @@ use std::fmt;
 
 mod codes;
 mod esri;
+pub mod project;
 mod wkt;
 
 /// Is `code` in one of the sorted inclusive `ranges`?
@@ -431,6 +432,33 @@ impl Crs {
             None => HorizontalKind::Projected,
         };
         Some((code, kind))
+    }
+
+    /// The rectangle `[xmin, ymin, xmax, ymax]` in this CRS as a closed WGS 84 longitude /
+    /// latitude ring (its corners and `per_edge − 1` points along each edge), for RFC 7946 and
+    /// STAC footprints: through the inverse projection of the horizontal EPSG code
+    /// ([`project::Projection::of_epsg`]), or as it is for WGS 84-compatible geographic codes
+    /// (4326, ETRS89 4258, RGF93 4171, NAD83 4269, NAD83(CSRS) 4617; x is the longitude).
+    /// Datums are taken as WGS 84 (within about 1 m; `project`'s docs). `None` for a CRS that
+    /// is unknown or not in the table: never projected numbers in their place.
+    pub fn wgs84_ring(&self, rect: [f64; 4], per_edge: usize) -> Option<Vec<[f64; 2]>> {
+        let (code, kind) = self.horizontal_epsg()?;
+        match kind {
+            HorizontalKind::Geographic if matches!(code, 4326 | 4258 | 4171 | 4269 | 4617) => {
+                let [x0, y0, x1, y1] = rect;
+                let ok = x0 >= -180.0 && x1 <= 180.0 && y0 >= -90.0 && y1 <= 90.0;
+                ok.then(|| vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]])
+            }
+            HorizontalKind::Geographic => None,
+            HorizontalKind::Projected => {
+                // A unit key that overrides the code's metres (a LAS in feet under a metric
+                // code) is not the code's projection.
+                if self.linear_units.is_some_and(|u| u != 9001) {
+                    return None;
+                }
+                Some(project::Projection::of_epsg(code)?.ring(rect, per_edge))
+            }
+        }
     }
 
     /// Are the horizontal coordinates latitude and longitude in degrees? From the WKT's

@@ -373,7 +373,7 @@ pub struct DemSummary {
 /// What a contour sink wrote.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ContourSummary {
-    /// The GeoJSON file.
+    /// The GeoJSON or GeoPackage file.
     pub path: PathBuf,
     /// Distance between levels.
     pub interval: f64,
@@ -389,6 +389,12 @@ pub struct ContourSummary {
     pub open_lines: u64,
     /// Degenerate pieces dropped.
     pub degenerate_dropped: u64,
+    /// Lines (rings included) left out as shorter than `min_length`.
+    pub short_dropped: u64,
+    /// The shortest line written, in map units (0: every line).
+    pub min_length: f64,
+    /// Decimals of the written coordinates (`None`: every bit).
+    pub decimals: Option<u32>,
     /// Points of open polylines moved to the scratch file.
     pub points_spilled: u64,
     /// Largest number of open polylines at once.

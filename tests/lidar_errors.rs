@@ -183,6 +183,7 @@ fn withheld_points_are_dropped_by_default_and_counted() {
         returns: Returns::First,
         drop_withheld: false,
         bbox: None,
+        z_from: None,
     };
     let mut r = LidarReader::open(&[&path], &f).unwrap();
     let got = r.read_all().unwrap();

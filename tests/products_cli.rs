@@ -248,6 +248,72 @@ fn volume_against_plane_and_surface() {
     assert!(out.contains("net volume   12000.000"), "{out}");
 }
 
+/// DSM minus DTM from one LAS file with a filter per surface (`--returns first` for the
+/// surface, `--surface-class 2` for the reference): `--surface-class` did not exist, and the
+/// reference took the input's filters, so this took two `.stin` files. The volumes are those of
+/// the two-`.stin` route, bit for bit.
+#[test]
+fn volume_with_a_filter_per_surface_equals_the_two_stin_route() {
+    let laz = data_dir().join("lidar/arso_TM_511_122_sw_250m.laz");
+    let t = tempfile::tempdir().unwrap();
+    let bbox = "511050,122050,511130,122130";
+    let o = ok(&[
+        "volume",
+        s(&laz),
+        "--bbox",
+        bbox,
+        "--returns",
+        "first",
+        "--surface",
+        s(&laz),
+        "--surface-class",
+        "2",
+        "--json",
+    ]);
+    let direct: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (dsm, dtm) = (t.path().join("dsm.stin"), t.path().join("dtm.stin"));
+    ok(&[
+        "tin",
+        s(&laz),
+        "--bbox",
+        bbox,
+        "--returns",
+        "first",
+        "-o",
+        s(&dsm),
+        "-q",
+    ]);
+    ok(&[
+        "tin",
+        s(&laz),
+        "--bbox",
+        bbox,
+        "--class",
+        "2",
+        "-o",
+        s(&dtm),
+        "-q",
+    ]);
+    let o = ok(&["volume", s(&dsm), "--surface", s(&dtm), "--json"]);
+    let two: Value = serde_json::from_slice(&o.stdout).unwrap();
+    for k in [
+        "cut_volume",
+        "fill_volume",
+        "net_volume",
+        "cut_area",
+        "fill_area",
+        "area",
+    ] {
+        assert!(direct[k].is_f64());
+        assert_eq!(direct[k], two[k], "{k}: {direct} vs {two}");
+    }
+    // Vegetation and buildings stand above the ground.
+    assert!(direct["cut_volume"].as_f64().unwrap() > 1000.0, "{direct}");
+    // A surface filter without a surface is a usage error.
+    let o = run(&["volume", s(&laz), "--plane", "0", "--surface-class", "2"]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
 /// Two surfaces that agree except in a raised patch: where they agree there is no cut and no
 /// fill (the planes' rounding made ±1e-16 differences that counted 10 % of the area as cut and
 /// as fill, and any level piece counted as fill); a surface against itself gives zeros.

@@ -173,6 +173,44 @@ fn contours_read_by_ogrinfo() {
     assert!(text.contains("3794") || text.contains("Slovene"), "{text}");
 }
 
+/// `-o c.gpkg` writes a GeoPackage that GDAL opens: one line layer in the data's CRS, every
+/// feature with its elevation (contours could only be written as GeoJSON).
+#[test]
+fn contours_as_geopackage_read_by_ogrinfo() {
+    let dir = tempfile::tempdir().unwrap();
+    let laz = data_dir().join("lidar/lidR_Topography.laz");
+    let out = dir.path().join("c.gpkg");
+    let o = sweeptin(&[
+        "contours",
+        laz.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--interval",
+        "5",
+        "--min-length",
+        "20",
+        "--json",
+    ]);
+    let summary: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let features = summary["contours"]["features"].as_u64().unwrap();
+    assert!(features > 100, "{features}");
+    let Some(text) = gdal("ogrinfo", &["-al", "-q", out.to_str().unwrap()]) else {
+        return;
+    };
+    let elevations: Vec<f64> = text
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("elevation (Real) = "))
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(elevations.len() as u64, features, "{}", &text[..2000]);
+    assert!(elevations.iter().all(|e| e % 5.0 == 0.0));
+    assert_eq!(text.matches("LINESTRING (").count() as u64, features);
+    let head = gdal("ogrinfo", &["-so", "-al", out.to_str().unwrap()]).unwrap();
+    assert!(head.contains("using driver `GPKG'"), "{head}");
+    assert!(head.contains("Line String"), "{head}");
+    assert!(head.contains("MTM zone 7"), "the CRS (EPSG:2949): {head}");
+}
+
 /// Our hillshade against `gdaldem hillshade` on a real DEM: every cell where gdaldem computes a
 /// value (it leaves the edges and the cells next to nodata out) agrees within one grey level.
 #[test]

@@ -92,6 +92,7 @@ impl InputOpts {
                 returns,
                 drop_withheld: !self.keep_withheld,
                 bbox: self.bbox()?,
+                z_from: None,
             },
             duplicates: duplicates(&self.duplicates)?,
             lines: LineOptions {

@@ -55,6 +55,8 @@ pub(crate) fn make_plan(
     let levels = Levels {
         interval: job.interval,
         base: job.base,
+        decimals: None,
+        min_length: 0.0,
     };
     let product = match job.product.as_str() {
         "dem" => Product::Dem {

@@ -1,4 +1,5 @@
-//! `sweeptin contours`: contour lines of the TIN, stitched into polylines, as GeoJSON.
+//! `sweeptin contours`: contour lines of the TIN, stitched into polylines, as GeoJSON or
+//! GeoPackage.
 
 use super::input::{ProductInput, run_products};
 use super::products::{ContourArgs, Report, finish_report};
@@ -10,7 +11,8 @@ use std::time::Instant;
 pub struct Args {
     #[command(flatten)]
     pub input: ProductInput,
-    /// Output GeoJSON (LineString features with an `elevation` property).
+    /// Output: GeoJSON (.geojson, .json) or GeoPackage (.gpkg), LineString features with an
+    /// `elevation` (and `closed`) attribute.
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
@@ -24,7 +26,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .check_outputs(&[("-o", &args.output)], &[])?;
     let sinks = vec![(
         "contours".to_string(),
-        args.contour.sink(&args.output, args.input.args.mem.0)?,
+        args.contour
+            .sink(&args.output, args.input.args.mem.0, &args.input.args.inputs)?,
     )];
     let config = args.input.config(None)?;
     let (run, products) = run_products(&args.input, &config, None, sinks)?;

@@ -67,7 +67,8 @@ pub fn sinks(args: &Args) -> anyhow::Result<Vec<(String, Box<dyn TriangleSink>)>
     if let Some(p) = &args.contours {
         sinks.push((
             "contours".into(),
-            args.contour.sink(p, args.input.args.mem.0)?,
+            args.contour
+                .sink(p, args.input.args.mem.0, &args.input.args.inputs)?,
         ));
     }
     Ok(sinks)

@@ -69,6 +69,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     sweeptin::output::vpc::write_vpc(&args.output, &infos)?;
+    let lost = sweeptin::output::vpc::without_footprint(&infos);
+    if let Some(first) = lost.first() {
+        eprintln!(
+            "sweeptin: warning: {} of {} files ({}{}) have {}: their STAC items have no \
+             geometry or bbox (which must be WGS 84 longitude and latitude); proj:bbox keeps \
+             their extent",
+            lost.len(),
+            infos.len(),
+            first.path.display(),
+            if lost.len() > 1 { ", …" } else { "" },
+            match &first.crs {
+                None => "no CRS".to_string(),
+                Some(c) => format!("a CRS sweeptin cannot turn into WGS 84 ({c})"),
+            }
+        );
+    }
     let with_points: Vec<&FileInfo> = infos.iter().filter(|i| i.point_count > 0).collect();
     let mut b = [
         f64::INFINITY,

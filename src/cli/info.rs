@@ -63,6 +63,12 @@ pub struct FilterArgs {
     /// extent misses it are not decoded, nor the COPC octree nodes that miss it.
     #[arg(long, value_name = "XMIN,YMIN,XMAX,YMAX", allow_hyphen_values = true)]
     pub bbox: Option<BBox>,
+    /// Take z from this extra-bytes attribute of the LAS/LAZ records instead of their z, e.g.
+    /// `--z-from HeightAboveGround` (written by `sweeptin height`): a canopy height model is
+    /// `dem hag.laz --returns first --z-from HeightAboveGround`. Points without a finite value
+    /// (outside the ground, see `height --help`) are dropped.
+    #[arg(long, value_name = "NAME")]
+    pub z_from: Option<String>,
 }
 
 impl FilterArgs {
@@ -73,6 +79,7 @@ impl FilterArgs {
             returns: self.returns,
             drop_withheld: self.drop_withheld && !self.keep_withheld,
             bbox: self.bbox,
+            z_from: self.z_from.clone(),
         }
     }
 }

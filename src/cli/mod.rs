@@ -12,6 +12,7 @@ mod contours;
 mod crossval;
 mod dem;
 mod ground;
+mod height;
 mod hillshade;
 mod index;
 mod info;
@@ -67,6 +68,9 @@ enum Command {
     Volume(volume::Args),
     /// Heights of the TIN at query points.
     Sample(sample::Args),
+    /// Height above ground of every point (from the TIN of the class-2 points), written back
+    /// as a HeightAboveGround attribute or replacing z.
+    Height(height::Args),
     /// Section of the TIN along polylines, with a point at every edge crossed and chainage.
     Profile(profile::Args),
     /// Shaded relief (PNG) of a DEM GeoTIFF.
@@ -112,6 +116,7 @@ impl Command {
             Command::Contours(a) => a.input.args.json,
             Command::Volume(a) => a.input.args.json,
             Command::Sample(a) => a.input.args.json,
+            Command::Height(a) => a.json,
             Command::Profile(a) => a.input.args.json,
             Command::Products(a) => a.input.args.json,
             Command::Info(a) => a.json,
@@ -306,6 +311,9 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         }
         Command::Thin(a) => a.input.expand()?,
         Command::Refine(a) => a.input.expand()?,
+        Command::Height(a) => {
+            input::expand_files(&mut a.inputs)?;
+        }
         _ => {}
     }
     match cli.command {
@@ -316,6 +324,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         Command::Contours(a) => contours::run(a),
         Command::Volume(a) => volume::run(a),
         Command::Sample(a) => sample::run(a),
+        Command::Height(a) => height::run(a),
         Command::Profile(a) => profile::run(a),
         Command::Hillshade(a) => hillshade::run(a),
         Command::Products(a) => products::run(a),

@@ -181,6 +181,8 @@ impl Job {
         let levels = |c: &super::products::ContourArgs| Levels {
             interval: c.interval,
             base: c.base,
+            decimals: c.precision,
+            min_length: c.min_length,
         };
         let product = match self {
             Job::Dem(d) => Product::Dem {

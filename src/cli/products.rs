@@ -192,6 +192,15 @@ pub struct ContourArgs {
     /// A level through which the others are counted (levels are BASE + k × INTERVAL).
     #[arg(long, default_value_t = ContourOptions::default().base, allow_hyphen_values = true)]
     pub base: f64,
+    /// Decimals of the written coordinates (default: those of the LAS/LAZ scale, 2 for 0.01;
+    /// 3 for other inputs).
+    #[arg(long, value_name = "N",
+          value_parser = clap::value_parser!(u32).range(0..=i64::from(sweeptin::output::lines::MAX_DECIMALS)))]
+    pub precision: Option<u32>,
+    /// Leave out lines, closed rings included, shorter than this (map units); the summary says
+    /// how many.
+    #[arg(long, value_name = "LENGTH", default_value_t = 0.0)]
+    pub min_length: f64,
     /// Set by `sweeptin run`: open lines keep their end edges for the merge.
     #[arg(skip)]
     pub edges: bool,
@@ -200,14 +209,25 @@ pub struct ContourArgs {
 impl ContourArgs {
     /// A contour sink writing to `path`, holding its open lines' points within an eighth of
     /// `mem` ([`ContourOptions::within`]).
-    pub fn sink(&self, path: &Path, mem: u64) -> anyhow::Result<Box<dyn TriangleSink>> {
+    /// `inputs` give the default `--precision`.
+    pub fn sink(
+        &self,
+        path: &Path,
+        mem: u64,
+        inputs: &[PathBuf],
+    ) -> anyhow::Result<Box<dyn TriangleSink>> {
         check_output(path)?;
+        let decimals = self
+            .precision
+            .unwrap_or_else(|| sweeptin::products::contours::default_decimals(inputs));
         Ok(Box::new(ContourSink::new(
             path,
             ContourOptions {
                 interval: self.interval,
                 base: self.base,
                 edges: self.edges,
+                decimals: Some(decimals),
+                min_length: self.min_length,
                 ..ContourOptions::default()
             }
             .within(mem),
@@ -234,8 +254,8 @@ pub struct Args {
     /// Write a hillshade PNG of the DEM (needs --dem with a .tif).
     #[arg(long, value_name = "PNG", requires = "dem")]
     pub hillshade: Option<PathBuf>,
-    /// Write contour lines (GeoJSON).
-    #[arg(long, value_name = "GEOJSON")]
+    /// Write contour lines (GeoJSON, or GeoPackage for .gpkg).
+    #[arg(long, value_name = "GEOJSON|GPKG")]
     pub contours: Option<PathBuf>,
     #[command(flatten)]
     pub contour_options: ContourArgs,
@@ -365,14 +385,22 @@ fn describe(s: &ProductSummary) -> (Option<&Path>, String) {
                 thousands(d.cells_with_data)
             ),
         ),
-        ProductSummary::Contours(c) => (
-            Some(&c.path),
-            format!(
-                "{} lines ({} closed rings)",
+        ProductSummary::Contours(c) => {
+            let mut line = format!(
+                "{} lines ({} closed rings), {}",
                 thousands(c.features),
-                thousands(c.rings)
-            ),
-        ),
+                thousands(c.rings),
+                sweeptin::human_bytes(c.bytes)
+            );
+            if c.short_dropped > 0 {
+                line.push_str(&format!(
+                    "; {} shorter than --min-length {} left out",
+                    thousands(c.short_dropped),
+                    Figure(c.min_length)
+                ));
+            }
+            (Some(&c.path), line)
+        }
         ProductSummary::Volume(v) => {
             let t = &v.totals;
             let d = |v: f64| Decimals(v, 3);
@@ -481,7 +509,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(p) = &args.contours {
         let mem = args.input.args.mem.0;
-        sinks.push(("contours".into(), args.contour_options.sink(p, mem)?));
+        let inputs = &args.input.args.inputs;
+        sinks.push((
+            "contours".into(),
+            args.contour_options.sink(p, mem, inputs)?,
+        ));
     }
     if let Some(z) = args.volume_plane {
         let boundary = args.boundary.as_deref().map(read_boundary).transpose()?;

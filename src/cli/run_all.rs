@@ -59,6 +59,8 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
     let next = std::sync::atomic::AtomicUsize::new(0);
     let failed = std::sync::Mutex::new(Vec::new());
     let done = std::sync::atomic::AtomicUsize::new(0);
+    let points = std::sync::atomic::AtomicU64::new(0);
+    let bar = job_bar(todo.len(), args.quiet);
     std::thread::scope(|s| {
         for _ in 0..jobs.min(todo.len()) {
             s.spawn(|| {
@@ -87,23 +89,37 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
                         f.push((i, ended(status.ok())));
                     }
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    let task_points = match plan.record(dir, i) {
+                        Ok(Some(r)) if ok => r.points,
+                        _ => 0,
+                    };
+                    let p = points.fetch_add(task_points, std::sync::atomic::Ordering::Relaxed)
+                        + task_points;
                     if !args.quiet && !interrupt::interrupted() {
-                        let failures = match f.len() {
-                            0 => String::new(),
-                            k => format!(", {} failed", count(k as u64)),
+                        let pace = Pace {
+                            done: n,
+                            total: todo.len(),
+                            failed: f.len(),
+                            points: p,
+                            seconds: start.elapsed().as_secs_f64(),
                         };
                         let what = if ok { "done" } else { "failed" };
-                        eprintln!(
-                            "sweeptin: task {i} {what}: {} of {} tasks ran{failures}",
-                            count(n as u64),
-                            count(todo.len() as u64)
-                        );
+                        if bar.is_hidden() {
+                            eprintln!("sweeptin: task {i} {what}: {}", pace.line());
+                        } else {
+                            if !ok {
+                                bar.println(format!("sweeptin: task {i} failed"));
+                            }
+                            bar.set_position(n as u64);
+                            bar.set_message(pace.rate());
+                        }
                     }
                     drop(f);
                 }
             });
         }
     });
+    bar.finish_and_clear();
     interrupt::await_interruption();
     let mut failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
     failed.sort_unstable();
@@ -142,4 +158,58 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// One bar for the whole job on a terminal (tasks done, points a second, the time left); hidden
+/// otherwise, where a line a task goes to the log instead.
+fn job_bar(tasks: usize, quiet: bool) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if quiet || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(tasks as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "sweeptin: {bar:30} {pos}/{len} tasks · {msg} · {elapsed} (about {eta} left)",
+    ) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// How far `run --all` has come.
+struct Pace {
+    done: usize,
+    total: usize,
+    failed: usize,
+    /// Points triangulated by the tasks that finished.
+    points: u64,
+    seconds: f64,
+}
+
+impl Pace {
+    /// Points a second and failures so far.
+    fn rate(&self) -> String {
+        let rate = self.points as f64 / self.seconds.max(1e-9);
+        let failures = match self.failed {
+            0 => String::new(),
+            k => format!(", {} failed", count(k as u64)),
+        };
+        format!("{:.2} M points/s{failures}", rate / 1e6)
+    }
+
+    /// The line a task's end prints to a log: `3 of 12 tasks ran, 1 failed; 1.20 M points/s,
+    /// about 40 s left`.
+    fn line(&self) -> String {
+        let failures = match self.failed {
+            0 => String::new(),
+            k => format!(", {} failed", count(k as u64)),
+        };
+        let left = self.seconds / self.done.max(1) as f64 * (self.total - self.done) as f64;
+        format!(
+            "{} of {} tasks ran{failures}; {:.2} M points/s, about {left:.0} s left",
+            count(self.done as u64),
+            count(self.total as u64),
+            self.points as f64 / self.seconds.max(1e-9) / 1e6,
+        )
+    }
 }

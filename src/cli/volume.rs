@@ -6,8 +6,9 @@ use super::products::read_boundary;
 use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::fmt::{Decimals, Figure, count};
-use sweeptin::pipeline::{self, Input, RunConfig};
-use sweeptin::products::overlay::{BandStore, OverlaySink};
+use sweeptin::input::las::{Filter, Returns};
+use sweeptin::pipeline::RunConfig;
+use sweeptin::products::overlay::{OverlaySink, reference_surface};
 use sweeptin::products::volume::VolumeSink;
 use sweeptin::sink::{ProductSummary, TriangleSink};
 
@@ -20,9 +21,19 @@ pub struct Args {
     /// The reference is the horizontal plane z = Z.
     #[arg(long, value_name = "Z", allow_hyphen_values = true)]
     pub plane: Option<f64>,
-    /// The reference is the TIN of these files (read with the same options as the input).
+    /// The reference is the TIN of these files (read with the same options as the input, but
+    /// for --surface-class and --surface-returns).
     #[arg(long, value_name = "FILE", num_args = 1..)]
     pub surface: Vec<PathBuf>,
+    /// Keep only these classes in the reference surface, e.g. `--surface-class 2` for a DTM
+    /// under a DSM of `--returns first`. With this or --surface-returns, the reference's class
+    /// and returns filters are these two alone (all classes, all returns when left out);
+    /// without either, the input's --class and --returns.
+    #[arg(long, value_name = "LIST")]
+    pub surface_class: Option<super::info::ClassList>,
+    /// Which returns the reference surface keeps (`last`, `first`, `all`); see --surface-class.
+    #[arg(long, value_enum, value_name = "RETURNS")]
+    pub surface_returns: Option<sweeptin::input::las::Returns>,
     /// Restrict to this polygon (GeoJSON Polygon/MultiPolygon; holes allowed).
     #[arg(long, value_name = "GEOJSON")]
     pub boundary: Option<PathBuf>,
@@ -40,8 +51,27 @@ pub fn plane_sink(args: &Args) -> anyhow::Result<Option<Box<dyn TriangleSink>>> 
     Ok(Some(Box::new(VolumeSink::new(z, boundary)?)))
 }
 
+/// The reference surface's point filter: the input's, with its classes and returns taken from
+/// `--surface-class` and `--surface-returns` when either is given.
+fn surface_filter(args: &Args, config: &RunConfig) -> Filter {
+    let mut f = config.input().filter.clone();
+    if args.surface_class.is_some() || args.surface_returns.is_some() {
+        f.classes = args.surface_class.as_ref().map(|c| c.0.clone());
+        f.returns = args.surface_returns.unwrap_or(Returns::All);
+    }
+    f
+}
+
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    if args.surface.is_empty() && (args.surface_class.is_some() || args.surface_returns.is_some()) {
+        return Err(sweeptin::Error::Options(
+            "--surface-class and --surface-returns filter the reference surface: give it with \
+             --surface FILE (against --plane they have nothing to filter)"
+                .into(),
+        )
+        .into());
+    }
     let config = args.input.config(None)?;
     let sink: Box<dyn TriangleSink> = match plane_sink(&args)? {
         Some(s) => s,
@@ -53,19 +83,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .tmp_dir
                 .clone()
                 .unwrap_or_else(std::env::temp_dir);
-            let mut store = BandStore::new(&dir, args.bands);
-            let reference = RunConfig::new(
-                Input {
-                    paths: args.surface.clone(),
-                    ..config.input().clone()
-                },
-                config.options().clone(),
-            )?;
-            pipeline::run(&reference, None, &mut [&mut store])
-                .map_err(|e| super::input::run_error(e, &args.surface))?;
+            let reader = reference_surface(
+                &config,
+                &args.surface,
+                surface_filter(&args, &config),
+                &dir,
+                args.bands,
+            )
+            .map_err(|e| super::input::run_error(e, &args.surface))?;
             // A quarter of the budget for the reference's pieces in memory.
             let budget = usize::try_from(config.options().mem / 4).unwrap_or(usize::MAX);
-            Box::new(OverlaySink::new(store.into_reader()?, boundary, budget))
+            Box::new(OverlaySink::new(reader, boundary, budget))
         }
     };
     let (run, products) = run_products(&args.input, &config, None, vec![("volume".into(), sink)])?;

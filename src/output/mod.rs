@@ -9,7 +9,8 @@
 //!   with a `.prj`); [`world`]: world files and `.prj` files beside images.
 //! - [`las`]: LAS/LAZ files rewritten point by point ([`las::rewrite_points`]), everything
 //!   but the edited fields kept.
-//! - [`geojson`]: a streaming GeoJSON feature writer.
+//! - [`geojson`]: a streaming GeoJSON feature writer; [`gpkg`]: a GeoPackage layer of lines;
+//!   [`lines`]: [`lines::LineWriter`], either of them by the output's extension (contours).
 //! - [`pieces`]: the tiles of a plan's `tin` task, for the merge.
 //! - [`vpc`]: virtual point clouds (`.vpc`) from LAS/LAZ headers.
 //! - [`atomic`]: [`AtomicFile`] and the registry of temporary paths deleted on Ctrl-C;
@@ -41,9 +42,11 @@ pub mod atomic;
 pub mod cog;
 pub mod geojson;
 pub mod geotiff;
+pub mod gpkg;
 pub mod interrupt;
 pub mod landxml;
 pub mod las;
+pub mod lines;
 pub mod mesh;
 pub mod obj;
 pub mod pieces;

@@ -8,7 +8,8 @@ use crate::input::las::vpc::{ItemCollection, item};
 use std::path::Path;
 
 /// Writes `path` listing `files` (their header facts), with paths relative to the `.vpc`'s
-/// folder; returns the size written.
+/// folder; returns the size written. An item whose CRS cannot be turned into WGS 84 has no
+/// `geometry` or `bbox` ([`crate::input::las::vpc::item`]): [`without_footprint`] names them.
 ///
 /// # Errors
 /// [`crate::Error::Format`] for a file with points whose header box says nothing (all zero,
@@ -37,4 +38,16 @@ pub fn write_vpc(path: &Path, files: &[FileInfo]) -> Result<u64> {
         .map_err(|e| out.err(std::io::Error::other(e)))?;
     std::io::Write::write_all(&mut out, b"\n").map_err(|e| out.err(e))?;
     out.commit()
+}
+
+/// The files of `files` whose items get no WGS 84 `geometry` and `bbox` (their CRS unknown or
+/// not one sweeptin can invert: [`crate::crs::Crs::wgs84_ring`]), for a warning.
+pub fn without_footprint(files: &[FileInfo]) -> Vec<&FileInfo> {
+    files
+        .iter()
+        .filter(|f| {
+            let r = f.rect();
+            f.crs.as_ref().and_then(|c| c.wgs84_ring(r, 1)).is_none()
+        })
+        .collect()
 }

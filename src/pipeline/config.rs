@@ -86,6 +86,9 @@ pub(crate) fn check_filter(source: Source, f: &Filter, paths: &[PathBuf]) -> Res
     if f.returns != Returns::All {
         lidar_only.push("--returns");
     }
+    if f.z_from.is_some() {
+        lidar_only.push("--z-from");
+    }
     match source {
         Source::Xyz if !lidar_only.is_empty() => Err(Error::Options(format!(
             "{}: {} need(s) the LAS/LAZ point attributes, which XYZ text does not have",

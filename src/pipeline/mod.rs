@@ -19,6 +19,7 @@
 mod config;
 mod drive;
 mod emit;
+pub mod height;
 mod lines;
 mod read;
 mod replay;
@@ -30,7 +31,7 @@ use crate::error::{Error, Result};
 use crate::input::las::Filter;
 use crate::sink::{MeshSink, ProductSummary, StreamInfo, TriangleSink};
 use crate::sort::memory::DuplicatePolicy;
-use config::Source;
+pub(crate) use config::Source;
 use std::path::PathBuf;
 
 pub use config::{RunConfig, check_tile_side};

@@ -39,6 +39,9 @@ impl super::Plan {
             .filter(|(n, _)| n != "dir")
             .map(|(n, p)| (n.as_str(), p.as_path()))
             .collect();
+        if let Some((_, c)) = planned.iter().find(|(n, _)| *n == "contours") {
+            crate::output::lines::LineFormat::of(c)?;
+        }
         crate::output::distinct_outputs(&planned, &self.read_files(), "the plan")
     }
 }

@@ -11,7 +11,7 @@ use crate::products::hillshade::{self, HillshadeSummary};
 use crate::raster::{Align, GridExtent, GridPlan};
 use std::path::{Path, PathBuf};
 
-pub use super::stitch::{StitchSummary, stitch};
+pub use super::stitch::{StitchOptions, StitchSummary, stitch};
 
 /// The records of every task of `plan` under `dir`, each output of the size its task wrote
 /// ([`Plan::check_task_outputs`]).
@@ -301,7 +301,26 @@ pub fn merge_contours(
 ) -> Result<StitchSummary> {
     let recs = records(plan, dir)?;
     let parts = outputs(&recs, "contours")?;
-    stitch(&parts, out, crs)
+    let levels = match &plan.job.product {
+        super::Product::Dem {
+            contours: Some(l), ..
+        }
+        | super::Product::Contours(l) => *l,
+        _ => {
+            return Err(Error::Internal(
+                "contours merged from a plan without".into(),
+            ));
+        }
+    };
+    let decimals = levels.decimals.unwrap_or_else(|| {
+        let paths: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
+        crate::products::contours::default_decimals(&paths)
+    });
+    let options = StitchOptions {
+        decimals: Some(decimals),
+        min_length: levels.min_length,
+    };
+    stitch(&parts, out, crs, options)
 }
 
 /// The exact totals of the tasks' volumes (the same, bit for bit, as one run over all points).
@@ -493,6 +512,14 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
         )));
     }
     let contours = o.contours.clone().or_else(|| planned(plan, "contours"));
+    let contours_out = match &plan.job.product {
+        Product::Contours(_) => out,
+        _ => contours.as_deref(),
+    };
+    if let Some(c) = contours_out {
+        // Before anything is written (a DEM plan's mosaic comes first).
+        crate::output::lines::LineFormat::of(c)?;
+    }
     let hillshade = o.hillshade.clone().or_else(|| planned(plan, "hillshade"));
     let mut outs: Vec<(&str, &Path)> = Vec::new();
     if let Some(o) = out {
@@ -574,14 +601,7 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
             }
         }
         Product::Contours(_) => {
-            let out = need(out, "contours (OUT.geojson)")?;
-            if !extension(out).is_some_and(|e| crate::products::contours::is_geojson_extension(&e))
-            {
-                return Err(Error::Options(format!(
-                    "{}: contours are written as GeoJSON (.geojson)",
-                    out.display()
-                )));
-            }
+            let out = need(out, "contours (OUT.geojson or OUT.gpkg)")?;
             summary.contours = Some(merge_contours(plan, dir, out, plan_crs(plan)?.as_ref())?);
         }
         Product::Volume { .. } => {

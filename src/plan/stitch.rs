@@ -3,12 +3,13 @@
 //! in the other's, from the same triangle edge. The tasks write the edges their open lines start
 //! and end on (`start_edge`, `end_edge`), and joining each line to the one starting on the edge it
 //! ends on gives the polylines of one run over all the points (that run joins its segments by
-//! the same edges). Repeated points are dropped and degenerate lines left out after joining, as
+//! the same edges). Coordinates are rounded to the job's decimals, repeated points dropped and
+//! degenerate lines and those shorter than the job's minimum length left out after joining, as
 //! one run does.
 
 use crate::crs::Crs;
 use crate::error::{Error, Result};
-use crate::output::geojson::FeatureWriter;
+use crate::output::lines::{LineWriter, length};
 use serde_json::Value;
 use std::collections::HashMap;
 use std::path::Path;
@@ -46,6 +47,20 @@ pub struct StitchSummary {
     pub rings: u64,
     /// Pieces of lines joined across tile edges.
     pub joins: u64,
+    /// Lines left out as shorter than the minimum length.
+    pub short_dropped: u64,
+    /// Size of the file in bytes.
+    pub bytes: u64,
+}
+
+/// How the stitched lines are written: decimals of their coordinates (`None`: every bit) and
+/// the shortest line kept.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StitchOptions {
+    /// Decimals of the written coordinates.
+    pub decimals: Option<u32>,
+    /// Lines (rings included) shorter than this are left out.
+    pub min_length: f64,
 }
 
 fn bad(path: &Path, m: impl Into<String>) -> Error {
@@ -55,12 +70,19 @@ fn bad(path: &Path, m: impl Into<String>) -> Error {
     }
 }
 
-/// Stitches the contour files `parts` (in task order) into `out`.
+/// Stitches the contour files `parts` (in task order) into `out` (GeoJSON or GeoPackage, by
+/// its extension).
 ///
 /// # Errors
-/// Reading or writing; [`Error::Format`] for a file that is not a contour output.
-pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSummary> {
-    let mut w = FeatureWriter::create(out, "contours", crs)?;
+/// Reading or writing; [`Error::Format`] for a file that is not a contour output;
+/// [`Error::Options`] for an output of another format.
+pub fn stitch(
+    parts: &[&Path],
+    out: &Path,
+    crs: Option<&Crs>,
+    options: StitchOptions,
+) -> Result<StitchSummary> {
+    let mut w = LineWriter::create(out, "contours", crs, options.decimals)?;
     let mut s = StitchSummary::default();
     let mut open: Vec<Open> = Vec::new();
     for path in parts {
@@ -87,9 +109,22 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
                 .collect();
             let closed = f["properties"]["closed"].as_bool().unwrap_or(false);
             if closed {
+                let mut ring: Vec<Pt> = Vec::with_capacity(pts.len());
+                for q in pts.iter().map(|&q| w.round(q)) {
+                    if ring.last() != Some(&q) {
+                        ring.push(q);
+                    }
+                }
+                if ring.len() < 4 {
+                    continue;
+                }
+                if length(&ring) < options.min_length {
+                    s.short_dropped += 1;
+                    continue;
+                }
                 w.line_string(
                     &serde_json::json!({"elevation": level, "closed": true}),
-                    pts,
+                    &ring,
                 )?;
                 s.features += 1;
                 s.rings += 1;
@@ -122,7 +157,7 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
         has_prev[*j] = true;
     }
     let mut used = vec![false; open.len()];
-    let mut emit = |start: usize, used: &mut Vec<bool>, w: &mut FeatureWriter| -> Result<()> {
+    let mut emit = |start: usize, used: &mut Vec<bool>, w: &mut LineWriter| -> Result<()> {
         let level = open[start].level;
         let mut pts: Vec<Pt> = Vec::new();
         let mut i = start;
@@ -132,9 +167,9 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
             if !pts.is_empty() {
                 s.joins += 1;
             }
-            for q in &open[i].points {
-                if pts.last() != Some(q) {
-                    pts.push(*q);
+            for q in open[i].points.iter().map(|&q| w.round(q)) {
+                if pts.last() != Some(&q) {
+                    pts.push(q);
                 }
             }
             match next[i] {
@@ -150,13 +185,17 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
         if pts.len() < if closed { 4 } else { 2 } {
             return Ok(());
         }
+        if length(&pts) < options.min_length {
+            s.short_dropped += 1;
+            return Ok(());
+        }
         s.features += 1;
         if closed {
             s.rings += 1;
         }
         w.line_string(
             &serde_json::json!({"elevation": level, "closed": closed}),
-            pts,
+            &pts,
         )
     };
     for i in 0..open.len() {
@@ -170,6 +209,6 @@ pub fn stitch(parts: &[&Path], out: &Path, crs: Option<&Crs>) -> Result<StitchSu
             emit(i, &mut used, &mut w)?;
         }
     }
-    w.finish()?;
+    s.bytes = w.finish()?;
     Ok(s)
 }

@@ -28,6 +28,17 @@ pub struct Levels {
     pub interval: f64,
     /// A level through which the others are counted.
     pub base: f64,
+    /// Decimals of the merged lines' coordinates (`--precision`; `None`: the data's,
+    /// [`crate::products::contours::default_decimals`]). The tasks write every bit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decimals: Option<u32>,
+    /// The merge leaves out lines shorter than this (`--min-length`).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub min_length: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl Levels {
@@ -212,6 +223,7 @@ impl Job {
             returns: self.returns,
             drop_withheld: self.drop_withheld,
             bbox: None,
+            z_from: None,
         }
     }
 
@@ -239,6 +251,20 @@ impl Job {
         };
         let levels = |l: &Levels| {
             positive(l.interval, "the contour interval")?;
+            if !(l.min_length.is_finite() && l.min_length >= 0.0) {
+                return Err(Error::Options(format!(
+                    "--min-length must be a length >= 0 in map units, not {}",
+                    l.min_length
+                )));
+            }
+            if l.decimals
+                .is_some_and(|d| d > crate::output::lines::MAX_DECIMALS)
+            {
+                return Err(Error::Options(format!(
+                    "--precision: at most {} decimals",
+                    crate::output::lines::MAX_DECIMALS
+                )));
+            }
             if l.base.is_finite() {
                 Ok(())
             } else {
@@ -728,6 +754,8 @@ mod tests {
             contours: Some(Levels {
                 interval: 0.25,
                 base: 0.1,
+                decimals: Some(2),
+                min_length: 0.0,
             }),
         });
         job.classes = Some(vec![2, 9]);
@@ -782,6 +810,8 @@ mod tests {
         job.product = Product::Contours(Levels {
             interval: 1.0,
             base: 0.0,
+            decimals: None,
+            min_length: 5.0,
         });
         let back: Job = serde_json::from_str(&serde_json::to_string(&job).unwrap()).unwrap();
         assert_eq!(back, job);

@@ -32,7 +32,7 @@
 
 use super::geom::{Tri, cmp_xy};
 use crate::error::{Error, Result};
-use crate::output::geojson::FeatureWriter;
+use crate::output::lines::LineWriter;
 use crate::sink::{ContourSummary, Needs, ProductSummary, StreamInfo, TriangleSink, Wants};
 use serde_json::json;
 use std::collections::{HashMap, VecDeque};
@@ -53,8 +53,32 @@ pub struct ContourOptions {
     /// For a task of a plan: write open lines whole (repeated points and one-point pieces
     /// kept) with the edges they start and end on (`start_edge`, `end_edge`: the edge's
     /// endpoints `[x0, y0, x1, y1]` in canonical order), so that the merge joins them exactly
-    /// as one run would.
+    /// as one run would. Such lines are written exactly: `decimals` and `min_length` apply
+    /// when the merge joins them.
     pub edges: bool,
+    /// Decimals of the written coordinates (`None`: every bit, the shortest decimal that reads
+    /// back as the same double). [`default_decimals`] gives the data's.
+    pub decimals: Option<u32>,
+    /// Lines (rings included) shorter than this, in map units, are left out (0: none).
+    pub min_length: f64,
+}
+
+/// Decimals of contour coordinates when the input's scale is unknown (XYZ text, `.stin`):
+/// millimetres in metric data.
+pub const DEFAULT_DECIMALS: u32 = 3;
+
+/// The decimals contour coordinates of the points in `inputs` are written with by default:
+/// those of the finest horizontal scale of LAS/LAZ inputs (`0.01` gives 2: no finer than the
+/// points themselves; [`crate::input::las::LidarReader::xy_decimals`]), else
+/// [`DEFAULT_DECIMALS`].
+pub fn default_decimals(inputs: &[PathBuf]) -> u32 {
+    match crate::pipeline::Source::of(inputs) {
+        Ok(crate::pipeline::Source::Lidar) => {
+            crate::input::las::LidarReader::header_xy_decimals(inputs)
+        }
+        _ => None,
+    }
+    .unwrap_or(DEFAULT_DECIMALS)
 }
 
 impl Default for ContourOptions {
@@ -64,6 +88,8 @@ impl Default for ContourOptions {
             base: 0.0,
             memory_points: 1 << 22,
             edges: false,
+            decimals: None,
+            min_length: 0.0,
         }
     }
 }
@@ -154,11 +180,6 @@ impl Wants for ContourLevels {
         }
         self.crossed(t).map_or(true, |mut ks| ks.next().is_some())
     }
-}
-
-/// Is `ext` (without its dot, any case) a GeoJSON file's: `geojson` or `json`?
-pub(crate) fn is_geojson_extension(ext: &str) -> bool {
-    matches!(ext.to_ascii_lowercase().as_str(), "geojson" | "json")
 }
 
 /// Level `k` as a number: `base + k × interval`, cleaned of binary noise (`0.30000000000000004`
@@ -376,6 +397,7 @@ struct Stats {
     rings: u64,
     open_lines: u64,
     degenerate_dropped: u64,
+    short_dropped: u64,
     points_spilled: u64,
 }
 
@@ -383,7 +405,7 @@ struct Stats {
 pub struct ContourSink {
     path: PathBuf,
     options: ContourOptions,
-    out: Option<FeatureWriter>,
+    out: Option<LineWriter>,
     stitcher: Stitcher,
     scratch: Option<File>,
     scratch_len: u64,
@@ -399,7 +421,9 @@ impl ContourSink {
     /// A contour sink writing to `path` (created when the stream begins).
     ///
     /// # Errors
-    /// [`Error::Options`] for an interval that is not a positive number or a non-finite base.
+    /// [`Error::Options`] for an interval that is not a positive number, a non-finite base,
+    /// a minimum length that is not a distance `>= 0`, too many decimals or an output that is
+    /// neither GeoJSON nor GeoPackage ([`crate::output::lines::LineFormat::of`]).
     pub fn new(path: &Path, options: ContourOptions) -> Result<ContourSink> {
         if !(options.interval.is_finite() && options.interval > 0.0 && options.base.is_finite()) {
             return Err(Error::Options(format!(
@@ -408,15 +432,27 @@ impl ContourSink {
                 options.interval, options.base
             )));
         }
-        // Contours are written as GeoJSON only: `-o x.shp` wrote GeoJSON under that name.
-        if let Some(ext) = path.extension().and_then(|e| e.to_str())
-            && !is_geojson_extension(ext)
+        if !(options.min_length.is_finite() && options.min_length >= 0.0) {
+            return Err(Error::Options(format!(
+                "--min-length must be a length >= 0 in map units, not {}",
+                options.min_length
+            )));
+        }
+        if let Some(d) = options
+            .decimals
+            .filter(|&d| d > crate::output::lines::MAX_DECIMALS)
         {
             return Err(Error::Options(format!(
-                "{}: contours are written as GeoJSON (.geojson or .json); convert with \
-                 ogr2ogr for .{ext}",
-                path.display()
+                "--precision {d}: at most {} decimals (a double holds no more)",
+                crate::output::lines::MAX_DECIMALS
             )));
+        }
+        // GeoJSON or GeoPackage: `-o x.shp` once wrote GeoJSON under that name.
+        let format = crate::output::lines::LineFormat::of(path)?;
+        if options.edges && format != crate::output::lines::LineFormat::GeoJson {
+            return Err(Error::Internal(
+                "a plan's task writes its contour pieces as GeoJSON".into(),
+            ));
         }
         Ok(ContourSink {
             path: path.to_path_buf(),
@@ -431,7 +467,7 @@ impl ContourSink {
         })
     }
 
-    fn out(&mut self) -> Result<&mut FeatureWriter> {
+    fn out(&mut self) -> Result<&mut LineWriter> {
         let path = &self.path;
         self.out.as_mut().ok_or_else(|| Error::Output {
             path: path.clone(),
@@ -450,23 +486,56 @@ impl ContourSink {
         }
     }
 
-    /// Writes a finished polyline (ring or open line), dropping repeated points.
+    /// Writes a finished polyline (ring or open line), its points rounded to the output's
+    /// decimals and repeated points dropped; leaves out degenerate lines and those shorter
+    /// than [`ContourOptions::min_length`].
     fn emit(&mut self, p: Poly, closed: bool) -> Result<()> {
         let level = self.level(p.k);
-        // First pass: count distinct consecutive points, to drop degenerate lines without
-        // writing them.
+        // A plan's task writes its pieces exactly, for the merge to join.
+        let pieces = self.options.edges && !closed;
+        let out = self.out.take().expect("checked by the caller");
+        let round = |q: [f64; 2]| if pieces { q } else { out.round(q) };
+        // First pass: count distinct consecutive points, measure the line and its box, to
+        // drop degenerate and short lines without writing them.
         let mut distinct = 0u64;
+        let mut length = 0.0;
+        let mut bbox = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
         let mut last: Option<[f64; 2]> = None;
-        self.for_each_point(&p, |q| {
-            if last != Some(q) {
+        let r = self.for_each_point(&p, |q| {
+            let q = round(q);
+            if pieces || last != Some(q) {
                 distinct += 1;
+                if let Some(l) = last {
+                    length += (q[0] - l[0]).hypot(q[1] - l[1]);
+                }
+                bbox = [
+                    bbox[0].min(q[0]),
+                    bbox[1].min(q[1]),
+                    bbox[2].max(q[0]),
+                    bbox[3].max(q[1]),
+                ];
                 last = Some(q);
             }
             Ok(())
-        })?;
-        let pieces = self.options.edges && !closed;
+        });
+        if let Err(e) = r {
+            self.out = Some(out);
+            return Err(e);
+        }
         if distinct < if closed { 4 } else { 2 } && !pieces {
             self.stats.degenerate_dropped += 1;
+            self.out = Some(out);
+            self.forget(&p);
+            return Ok(());
+        }
+        if !pieces && length < self.options.min_length {
+            self.stats.short_dropped += 1;
+            self.out = Some(out);
             self.forget(&p);
             return Ok(());
         }
@@ -484,15 +553,17 @@ impl ContourSink {
         } else {
             json!({ "elevation": level, "closed": closed })
         };
-        let mut out = self.out.take().expect("checked by the caller");
-        out.start_line(&props)?;
-        let mut last: Option<[f64; 2]> = None;
-        let r = self.for_each_point(&p, |q| {
-            if pieces || last != Some(q) {
-                last = Some(q);
-                out.point(q)?;
-            }
-            Ok(())
+        let mut out = out;
+        let r = out.start_line(&props, distinct, bbox).and_then(|_| {
+            let mut last: Option<[f64; 2]> = None;
+            self.for_each_point(&p, |q| {
+                let q = if pieces { q } else { out.round(q) };
+                if pieces || last != Some(q) {
+                    last = Some(q);
+                    out.point(q)?;
+                }
+                Ok(())
+            })
         });
         let r = r.and_then(|_| out.end_line());
         self.out = Some(out);
@@ -619,10 +690,12 @@ impl ContourSink {
 
 impl TriangleSink for ContourSink {
     fn begin(&mut self, info: &StreamInfo) -> Result<()> {
-        self.out = Some(FeatureWriter::create(
+        let decimals = self.options.decimals.filter(|_| !self.options.edges);
+        self.out = Some(LineWriter::create(
             &self.path,
             "contours",
             info.crs.as_ref(),
+            decimals,
         )?);
         Ok(())
     }
@@ -684,6 +757,9 @@ impl TriangleSink for ContourSink {
             rings: self.stats.rings,
             open_lines: self.stats.open_lines,
             degenerate_dropped: self.stats.degenerate_dropped,
+            short_dropped: self.stats.short_dropped,
+            min_length: self.options.min_length,
+            decimals: self.options.decimals.filter(|_| !self.options.edges),
             points_spilled: self.stats.points_spilled,
             max_open_polylines: max_open as u64,
             bytes,

@@ -134,6 +134,33 @@ impl Bands {
     }
 }
 
+/// Phase 1 whole: the reference surface of a volume, the TIN of `paths` read as `config` reads
+/// its own input (duplicates, breaklines, `--mem`, the box) but with the point filter `filter`
+/// (a DSM of first returns against a DTM of ground points from the same file: one filter per
+/// surface), filed into about `bands` bands in a scratch file under `dir`.
+///
+/// # Errors
+/// As [`crate::pipeline::run`] for the reference's files; [`Error::Write`] for the scratch file.
+pub fn reference_surface(
+    config: &crate::pipeline::RunConfig,
+    paths: &[PathBuf],
+    filter: crate::input::las::Filter,
+    dir: &Path,
+    bands: usize,
+) -> Result<BandReader> {
+    let reference = crate::pipeline::RunConfig::new(
+        crate::pipeline::Input {
+            paths: paths.to_vec(),
+            filter,
+            ..config.input().clone()
+        },
+        config.options().clone(),
+    )?;
+    let mut store = BandStore::new(dir, bands);
+    crate::pipeline::run(&reference, None, &mut [&mut store])?;
+    store.into_reader()
+}
+
 /// A piece of the reference: (band, block).
 type Piece = (usize, usize);
 

@@ -15,14 +15,17 @@
 //!
 //! All return `Vec<[f64; 3]>` (`[x, y, z]`), the input format of [`crate::triangulate`].
 //!
-//! Breaklines to go with them ([`contours`], [`coastline`]) are in [`lines`].
+//! Breaklines to go with them ([`contours`], [`coastline`]) are in [`lines`]; a road network with
+//! every degeneracy the breakline cleaner handles ([`roads`]) is in [`roads`](mod@roads).
 
 use std::f64::consts::{PI, TAU};
 
 pub mod heavy;
 pub mod lines;
+pub mod roads;
 pub use crate::geom::rng::SplitMix64;
 pub use lines::{coastline, coastline_points, contour_points, contours};
+pub use roads::{road_points, roads};
 
 /// Side of the square of [`uniform`] and of the background of [`clustered`], in metres.
 pub const SQUARE: f64 = 1000.0;

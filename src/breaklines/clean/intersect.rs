@@ -19,6 +19,9 @@ pub(super) struct PairResult {
     pub(super) cross: Option<[f64; 2]>,
 }
 
+/// A round's findings: each candidate pair's non-empty result, in pair order.
+pub(super) type Found = Vec<([u32; 2], PairResult)>;
+
 impl PairResult {
     fn split(&mut self, seg: u32, v: u32) {
         self.splits[self.n_splits as usize] = (seg, v);
@@ -33,7 +36,7 @@ impl PairResult {
 impl Work {
     /// Tests every candidate pair that involves a dirty item; returns the non-empty results in
     /// pair order.
-    pub(super) fn find(&self, first_round: bool) -> Vec<([u32; 2], PairResult)> {
+    pub(super) fn find(&self, first_round: bool) -> Found {
         let n_seg = self.segs.len() as u32;
         let buckets = self.buckets();
         let dirty = |i: u32| {
@@ -58,7 +61,7 @@ impl Work {
                     .cell_of(self.p(self.isolated[(i - n_seg) as usize]))
             }
         };
-        (0..self.grid.len() as u32)
+        let mut found: Found = (0..self.grid.len() as u32)
             .into_par_iter()
             .flat_map_iter(|c| {
                 buckets
@@ -97,7 +100,12 @@ impl Work {
                     (!r.is_empty()).then_some(([s, t], r))
                 })
             })
-            .collect()
+            .collect();
+        // In pair order, not the grid's: what a round does with its findings (the order in which
+        // vertices on lines take their z) then depends on the graph alone, so a plane sweep that
+        // finds the same pairs in another order gives the same graph.
+        found.par_sort_unstable_by_key(|f| f.0);
+        found
     }
 
     /// Segments and isolated points bucketed over the grid.
@@ -130,8 +138,7 @@ impl Work {
     fn test_point(&self, s: u32, v: u32) -> PairResult {
         let [a, b] = self.segs[s as usize];
         let mut r = PairResult::default();
-        let (pa, pb, pv) = (self.p(a), self.p(b), self.p(v));
-        if orient(pa, pb, pv) == Orientation::Collinear && strictly_between(pa, pb, pv) {
+        if point_on(self.p(a), self.p(b), self.p(v)) {
             r.split(s, v);
         }
         r
@@ -141,67 +148,112 @@ impl Work {
     fn test_pair(&self, s: u32, t: u32) -> PairResult {
         let [a, b] = self.segs[s as usize];
         let [c, d] = self.segs[t as usize];
-        let mut r = PairResult::default();
-        // A shared end: they can only overlap along a common line.
-        let shared = if a == c || a == d {
-            Some((a, b, if a == c { d } else { c }))
-        } else if b == c || b == d {
-            Some((b, a, if b == c { d } else { c }))
-        } else {
-            None
+        let ends = [a, b, c, d];
+        let k = contact([self.p(a), self.p(b), self.p(c), self.p(d)]);
+        let mut r = PairResult {
+            overlap: k.overlap,
+            cross: k.cross,
+            ..PairResult::default()
         };
-        if let Some((v, p, q)) = shared {
-            let (pv, pp, pq) = (self.p(v), self.p(p), self.p(q));
-            if orient(pv, pp, pq) == Orientation::Collinear && same_direction(pv, pp, pq) {
-                r.overlap = true;
-                if strictly_between(pv, pp, pq) {
-                    r.split(s, q);
-                } else {
-                    r.split(t, p);
-                }
-            }
-            return r;
-        }
-        let (pa, pb, pc, pd) = (self.p(a), self.p(b), self.p(c), self.p(d));
-        let oc = orient(pa, pb, pc);
-        let od = orient(pa, pb, pd);
-        if oc == od && oc != Orientation::Collinear {
-            return r;
-        }
-        let oa = orient(pc, pd, pa);
-        let ob = orient(pc, pd, pb);
-        if oa == ob && oa != Orientation::Collinear {
-            return r;
-        }
-        let col = Orientation::Collinear;
-        if oc == col && od == col {
-            for (seg, e0, e1, v, pv) in [
-                (s, pa, pb, c, pc),
-                (s, pa, pb, d, pd),
-                (t, pc, pd, a, pa),
-                (t, pc, pd, b, pb),
-            ] {
-                if strictly_between(e0, e1, pv) {
-                    r.split(seg, v);
-                }
-            }
-            r.overlap = r.n_splits > 0;
-            return r;
-        }
-        // At most one end lies on the other segment's line (two would be the same point).
-        if oc == col {
-            r.split(s, c);
-        } else if od == col {
-            r.split(s, d);
-        } else if oa == col {
-            r.split(t, a);
-        } else if ob == col {
-            r.split(t, b);
-        } else {
-            r.cross = Some(crossing_point(pa, pb, pc, pd));
+        for &(seg, end) in &k.splits[..k.n_splits as usize] {
+            r.split(if seg == 0 { s } else { t }, ends[end as usize]);
         }
         r
     }
+}
+
+/// Is the isolated vertex `v` on the interior of the segment `ab` (rule 4)?
+#[inline]
+pub(super) fn point_on(a: [f64; 2], b: [f64; 2], v: [f64; 2]) -> bool {
+    orient(a, b, v) == Orientation::Collinear && strictly_between(a, b, v)
+}
+
+/// What two segments of a graph with distinct vertex positions, `ab` (segment 0) and `cd`
+/// (segment 1), do to each other (rules 4–6): every decision exact. Splits name the segment
+/// (0 or 1) and the end (0..4 for `a, b, c, d`) lying on its interior.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct Contact {
+    pub(super) splits: [(u8, u8); 2],
+    pub(super) n_splits: u8,
+    pub(super) overlap: bool,
+    pub(super) cross: Option<[f64; 2]>,
+}
+
+impl Contact {
+    fn split(&mut self, seg: u8, end: u8) {
+        self.splits[self.n_splits as usize] = (seg, end);
+        self.n_splits += 1;
+    }
+
+    #[cfg(any(test, feature = "dev"))]
+    pub(super) fn is_empty(&self) -> bool {
+        self.n_splits == 0 && self.cross.is_none()
+    }
+}
+
+/// The exact contact of segments `p[0] p[1]` and `p[2] p[3]` (see [`Contact`]); ends at the same
+/// position are the same vertex.
+pub(super) fn contact(p: [[f64; 2]; 4]) -> Contact {
+    let [pa, pb, pc, pd] = p;
+    let mut r = Contact::default();
+    // A shared end: they can only overlap along a common line.
+    let shared = if pa == pc || pa == pd {
+        Some((0, 1, if pa == pc { 3 } else { 2 }))
+    } else if pb == pc || pb == pd {
+        Some((1, 0, if pb == pc { 3 } else { 2 }))
+    } else {
+        None
+    };
+    if let Some((v, q0, q1)) = shared {
+        let (pv, pp, pq) = (p[v], p[q0], p[q1]);
+        if orient(pv, pp, pq) == Orientation::Collinear && same_direction(pv, pp, pq) {
+            r.overlap = true;
+            if strictly_between(pv, pp, pq) {
+                r.split(0, q1 as u8);
+            } else {
+                r.split(1, q0 as u8);
+            }
+        }
+        return r;
+    }
+    let oc = orient(pa, pb, pc);
+    let od = orient(pa, pb, pd);
+    if oc == od && oc != Orientation::Collinear {
+        return r;
+    }
+    let oa = orient(pc, pd, pa);
+    let ob = orient(pc, pd, pb);
+    if oa == ob && oa != Orientation::Collinear {
+        return r;
+    }
+    let col = Orientation::Collinear;
+    if oc == col && od == col {
+        for (seg, e0, e1, v) in [
+            (0, pa, pb, 2),
+            (0, pa, pb, 3),
+            (1, pc, pd, 0),
+            (1, pc, pd, 1),
+        ] {
+            if strictly_between(e0, e1, p[v as usize]) {
+                r.split(seg, v);
+            }
+        }
+        r.overlap = r.n_splits > 0;
+        return r;
+    }
+    // At most one end lies on the other segment's line (two would be the same point).
+    if oc == col {
+        r.split(0, 2);
+    } else if od == col {
+        r.split(0, 3);
+    } else if oa == col {
+        r.split(1, 0);
+    } else if ob == col {
+        r.split(1, 1);
+    } else {
+        r.cross = Some(crossing_point(pa, pb, pc, pd));
+    }
+    r
 }
 
 /// `c` strictly between `a` and `b`, for `c` on the line `ab` (exact comparisons).

@@ -60,6 +60,11 @@
 mod dedup;
 mod intersect;
 mod split;
+#[cfg(any(test, feature = "dev"))]
+mod sweep;
+
+#[cfg(any(test, feature = "dev"))]
+pub use sweep::SweepStats;
 
 use crate::error::{Error, Result};
 use crate::geom::grid::Grid;
@@ -265,9 +270,39 @@ impl Pslg {
 /// [`Error::Internal`] if the graph is not planar after [`MAX_ROUNDS`] rounds.
 pub fn clean(polylines: &[Vec<[f64; 3]>], options: &CleanOptions) -> Result<Pslg> {
     let mut w = Work::new(polylines, options)?;
-    w.run()?;
+    w.run(&mut |w: &Work, first| Ok(w.find(first)))?;
     Ok(w.finish())
 }
+
+/// [`clean`] with each round's pairs found by the plane sweep of `sweep.rs` (items sorted
+/// externally within `mem` bytes under `tmp_dir`) instead of the grid: the same graph, and the
+/// most the sweeps held at once. The first step of cleaning in bounded memory (issue 40); the
+/// rounds themselves still hold the graph.
+///
+/// # Errors
+/// As [`clean`], and the external sort's.
+#[cfg(any(test, feature = "dev"))]
+pub fn clean_by_sweep(
+    polylines: &[Vec<[f64; 3]>],
+    options: &CleanOptions,
+    mem: u64,
+    tmp_dir: &std::path::Path,
+) -> Result<(Pslg, SweepStats)> {
+    let mut w = Work::new(polylines, options)?;
+    let mut peak = SweepStats::default();
+    w.run(&mut |w: &Work, first| {
+        let (found, s) = w.find_by_sweep(first, mem, tmp_dir)?;
+        peak.items = peak.items.max(s.items);
+        peak.peak_active = peak.peak_active.max(s.peak_active);
+        peak.peak_entries = peak.peak_entries.max(s.peak_entries);
+        peak.pairs_tested += s.pairs_tested;
+        Ok(found)
+    })?;
+    Ok((w.finish(), peak))
+}
+
+/// What finds a round's contacts: every candidate pair's non-empty result, in pair order.
+type Finder<'a> = dyn FnMut(&Work, bool) -> Result<intersect::Found> + 'a;
 
 /// The graph being cleaned.
 struct Work {
@@ -299,14 +334,14 @@ impl Work {
         }
     }
 
-    fn run(&mut self) -> Result<()> {
+    fn run(&mut self, find: &mut Finder<'_>) -> Result<()> {
         for round in 1..=MAX_ROUNDS {
             self.stats.rounds = round;
             if round > 1 {
                 let items = self.segs.len() + self.isolated.len();
                 self.grid = Grid::new(self.lo, self.hi, (items as f64 * CELLS_PER_ITEM) as usize);
             }
-            let found = self.find(round == 1);
+            let found = find(self, round == 1)?;
             if found.is_empty() {
                 return Ok(());
             }

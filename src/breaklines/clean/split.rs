@@ -2,7 +2,7 @@
 //! near vertex or made new ones, `z` merged, segments split into their pieces and identical pieces
 //! merged.
 
-use super::intersect::PairResult;
+use super::intersect::Found;
 use super::{Work, ZConflict, ZConflictKind, lex};
 use crate::geom::grid::Buckets;
 use rayon::prelude::*;
@@ -12,7 +12,7 @@ use std::collections::HashMap;
 impl Work {
     /// Turns the pair results into splits (creating or snapping crossing vertices) and applies
     /// them.
-    pub(super) fn apply(&mut self, found: Vec<([u32; 2], PairResult)>) {
+    pub(super) fn apply(&mut self, found: Found) {
         let mut splits: Vec<(u32, u32)> = Vec::new();
         let mut on_line: Vec<(u32, u32)> = Vec::new();
         let mut crossings: Vec<(u32, u32, [f64; 2])> = Vec::new();

@@ -20,6 +20,8 @@ pub(super) struct Current {
     /// The first span not yet decoded (or, parallel, not yet sent to decode).
     pub(super) next: usize,
     pub(super) first_index: u64,
+    /// The attribute z comes from, placed in this file's records.
+    pub(super) z_from: Option<super::extra::ExtraDim>,
     pub(super) check: Arc<PointCheck>,
     /// Spans decoding on rayon's pool, oldest first, and their points.
     pub(super) in_flight: VecDeque<InFlight>,
@@ -78,9 +80,20 @@ pub(super) struct SpanJob {
     pub(super) len: usize,
     pub(super) ext: bool,
     pub(super) base: u64,
+    /// The attribute z comes from (`Filter::z_from`), placed in this file's records.
+    pub(super) z_from: Option<super::extra::ExtraDim>,
 }
 
 impl SpanJob {
+    /// The fields to decompress: the attribute z comes from too.
+    pub(super) fn fields(&self) -> Fields {
+        if self.z_from.is_some() {
+            Fields::All
+        } else {
+            Fields::Filter
+        }
+    }
+
     pub(super) fn run(&self, span: &Chunk, raw: &[u8]) -> Result<SpanPoints> {
         let mut kept = self.spare.take();
         kept.clear();
@@ -90,12 +103,22 @@ impl SpanJob {
         for (i, rec) in raw.chunks_exact(self.len).enumerate() {
             self.check
                 .test(rec, self.ext, span, node, span.first + i as u64)?;
-            let p = decode(
+            let mut p = decode(
                 rec,
                 self.ext,
                 self.base + span.first + i as u64,
                 &self.quant,
             );
+            if let Some(d) = &self.z_from {
+                match d.value(rec).filter(|z| z.is_finite()) {
+                    Some(z) => p.z = z,
+                    None => {
+                        stats.read += 1;
+                        stats.no_value += 1;
+                        continue;
+                    }
+                }
+            }
             let v = self.filter.test(&p);
             stats.count(v);
             if v == Verdict::Keep {
@@ -150,7 +173,7 @@ impl Current {
             let (decoder, job) = (self.decoder.spans(), job.clone());
             rayon::spawn(move || {
                 let run = || {
-                    decoder.decode(&[span], &mut bytes, false, Fields::Filter, |s, raw| {
+                    decoder.decode(&[span], &mut bytes, false, job.fields(), |s, raw| {
                         job.run(s, raw)
                     })
                 };

@@ -167,6 +167,39 @@ impl ExtraDims {
     }
 }
 
+/// The attribute `name` of the file `info` describes, placed in its records.
+///
+/// # Errors
+/// [`Error::Format`] when the file has no such attribute (the message lists those it has), or
+/// its extra bytes VLR is damaged; [`Error::Io`] when it cannot be read.
+pub fn find_in_file(info: &super::FileInfo, name: &str) -> Result<ExtraDim> {
+    let path = info.path.as_path();
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let header = las::Header::new(&mut f).map_err(|e| Error::Format {
+        path: path.to_path_buf(),
+        message: format!("invalid header: {}", super::header::las_message(&e)),
+    })?;
+    let dims = match header
+        .vlrs()
+        .iter()
+        .find(|v| v.user_id == USER_ID && v.record_id == RECORD_ID)
+    {
+        Some(v) => ExtraDims::of(path, &v.data, info.point_format, info.record_length)?,
+        None => ExtraDims::default(),
+    };
+    dims.find(name).cloned().ok_or_else(|| Error::Format {
+        path: path.to_path_buf(),
+        message: format!(
+            "--z-from {name}: the file has no such extra-bytes attribute (it has: {}); \
+             `sweeptin info` lists them",
+            match dims.names() {
+                n if n.is_empty() => "none".to_string(),
+                n => n.join(", "),
+            }
+        ),
+    })
+}
+
 /// A descriptor of an attribute stored as a double, named `name` (at most 32 bytes).
 pub fn descriptor(name: &str, description: &str) -> [u8; DESCRIPTOR_LEN] {
     let mut d = [0u8; DESCRIPTOR_LEN];

@@ -137,6 +137,10 @@ pub struct Filter {
     pub drop_withheld: bool,
     /// Keep only points inside this box (real-world `x`, `y`, bounds included).
     pub bbox: Option<BBox>,
+    /// Take z from this extra-bytes attribute (by name, as the file's extra bytes VLR names
+    /// it: `HeightAboveGround` of `sweeptin height`) instead of the record's z; points whose
+    /// value is missing or not finite (NaN) are dropped (`FilterStats::no_value`).
+    pub z_from: Option<String>,
 }
 
 impl Default for Filter {
@@ -146,6 +150,7 @@ impl Default for Filter {
             returns: Returns::All,
             drop_withheld: true,
             bbox: None,
+            z_from: None,
         }
     }
 }
@@ -176,6 +181,8 @@ pub struct FilterStats {
     pub returns: u64,
     /// Dropped by the bounding box (or the area a reader was asked for), once decoded.
     pub bbox: u64,
+    /// Dropped because the `--z-from` attribute has no finite value.
+    pub no_value: u64,
     /// Points of files and COPC nodes wholly outside the box, skipped without being decoded
     /// (not counted in `read`).
     pub skipped: u64,
@@ -249,6 +256,7 @@ impl std::ops::AddAssign for FilterStats {
         self.class += o.class;
         self.returns += o.returns;
         self.bbox += o.bbox;
+        self.no_value += o.no_value;
         self.skipped += o.skipped;
     }
 }
@@ -360,6 +368,7 @@ mod tests {
             returns: Returns::Last,
             drop_withheld: true,
             bbox: Some(BBox::new(1.0, 1.0, 2.0, 2.0).unwrap()),
+            z_from: None,
         };
         let c = CompiledFilter::new(&f, None);
         let p = LidarPoint {

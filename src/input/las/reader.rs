@@ -2,7 +2,7 @@
 
 use super::LidarPoint;
 use super::ahead::{Current, PointCheck, SpanJob};
-use super::decode::{Fields, FileDecoder, Spare, spans};
+use super::decode::{FileDecoder, Spare, spans};
 use super::filter::{BBox, CompiledFilter, Filter, FilterStats};
 use super::header::{Bounds3, FileInfo, format_error, inspect};
 use super::vpc;
@@ -80,6 +80,8 @@ pub struct LidarReader {
     /// Files whose CRS is not the one declared ([`ReadOptions::crs`]).
     crs_notes: Vec<String>,
     filter: Arc<CompiledFilter>,
+    /// `Filter::z_from`: the attribute z comes from.
+    z_from: Option<String>,
     stats: FilterStats,
     options: ReadOptions,
     next_source: usize,
@@ -225,6 +227,7 @@ impl LidarReader {
         Ok(LidarReader {
             sources,
             filter: Arc::new(compiled),
+            z_from: filter.z_from.clone(),
             crs,
             crs_notes,
             stats: FilterStats::default(),
@@ -250,10 +253,28 @@ impl LidarReader {
             .map(FileInfo::quantization)
     }
 
+    /// Decimals of the finest horizontal scale among the files (`0.01` gives 2; a scale that
+    /// is no short decimal gives 9: [`Quantization::decimals`]), or `None` without a file
+    /// opened: what outputs that print coordinates may round to without losing a point's place.
+    pub fn xy_decimals(&self) -> Option<u32> {
+        self.sources
+            .iter()
+            .filter_map(|s| s.info.as_ref())
+            .map(|i| {
+                let q = i.quantization();
+                q.decimals(0).max(q.decimals(1)) as u32
+            })
+            .max()
+    }
+
     /// One decimal lattice for the points of every file with points (see
     /// [`Lattice`](super::world::Lattice)), or `None` when a file's scale, offset or box rules
     /// it out.
     pub(crate) fn lattice(&self) -> Option<super::world::Lattice> {
+        if self.z_from.is_some() {
+            // z comes from an attribute, on no file's lattice.
+            return None;
+        }
         let mut files = Vec::new();
         for s in &self.sources {
             // (An entry of a `.vpc` left unopened gives no points.)
@@ -316,6 +337,14 @@ impl LidarReader {
             .ok()?
             .header_box()?;
         Some([b.min[0], b.min[1], b.max[0], b.max[1]])
+    }
+
+    /// [`LidarReader::xy_decimals`] of `paths`, from their headers: `None` when a header
+    /// cannot be read (the run then reports it).
+    pub fn header_xy_decimals<P: AsRef<Path>>(paths: &[P]) -> Option<u32> {
+        LidarReader::open(paths, &Filter::default())
+            .ok()?
+            .xy_decimals()
     }
 
     /// The points of the files whose header box is usable: those [`LidarReader::header_box`]
@@ -414,6 +443,7 @@ impl LidarReader {
                     len: cur.decoder.record_len,
                     ext: cur.decoder.extended,
                     base: cur.first_index,
+                    z_from: cur.z_from.clone(),
                 };
                 let batch = self.options.batch_points as u64;
                 let cap = self.options.ahead_bytes / ahead_bytes_per_point(cur.decoder.record_len);
@@ -436,7 +466,7 @@ impl LidarReader {
                     cur.next = end;
                     Some(
                         cur.decoder
-                            .decode(spans, false, Fields::Filter, |s, raw| job.run(s, raw))?,
+                            .decode(spans, false, job.fields(), |s, raw| job.run(s, raw))?,
                     )
                 } else {
                     None
@@ -496,6 +526,10 @@ impl LidarReader {
                 spans,
                 next: 0,
                 first_index: s.first_index,
+                z_from: match &self.z_from {
+                    Some(name) => Some(super::extra::find_in_file(info, name)?),
+                    None => None,
+                },
                 check: Arc::new(PointCheck::of(info)),
                 in_flight: VecDeque::new(),
                 flying: 0,

@@ -9,9 +9,14 @@
 //! decides which files to open: a file opened counts with its own header's box (a list may be
 //! stale, and a STAC `bbox` is in WGS84).
 //!
-//! sweeptin has no projection library, so the items it writes carry `geometry` and `bbox` in the
-//! files' own CRS, as wrench does when it cannot reproject; `proj:bbox` and `proj:geometry`,
-//! which QGIS and wrench prefer, are exact.
+//! The items sweeptin writes carry `geometry` and `bbox` in WGS 84 longitude and latitude, as
+//! RFC 7946 and STAC require: the header box's corners and points along its edges through the
+//! inverse projection of the file's CRS ([`Crs::wgs84_ring`]: UTM, national TM grids, Lambert-93;
+//! datums taken as WGS 84, within about 1 m), `bbox` the box of that ring with the header's
+//! heights. When the CRS is unknown or not one sweeptin can invert, `geometry` is null and
+//! `bbox` left out (STAC's items without geometry), never projected numbers there.
+//! `proj:bbox` and `proj:geometry`, which QGIS and wrench prefer, are the exact header box in the
+//! file's own CRS.
 
 use super::header::{Bounds3, FileInfo, format_error};
 use crate::crs::Crs;
@@ -65,11 +70,11 @@ pub struct Item {
     /// The file's name without its extension.
     #[serde(default)]
     pub id: String,
-    /// The extent as a polygon (see the module docs for its CRS).
+    /// The extent as a WGS 84 polygon (null when the CRS cannot be inverted; module docs).
     #[serde(default)]
     pub geometry: Option<Polygon>,
-    /// The extent, `[xmin, ymin, zmin, xmax, ymax, zmax]`.
-    #[serde(default)]
+    /// The WGS 84 extent, `[west, south, zmin, east, north, zmax]` (left out with `geometry`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bbox: Option<Vec<f64>>,
     /// The extensions' fields.
     pub properties: Properties,
@@ -230,8 +235,12 @@ fn entry(path: &Path, dir: &Path, i: usize, item: Item) -> Result<VpcEntry> {
     })
 }
 
+/// Points along each edge of a footprint in degrees (the edges of a projected box are curves).
+const FOOTPRINT_EDGE_POINTS: usize = 8;
+
 /// The STAC item of a file, with its path relative to `dir` (the `.vpc`'s folder) when that is
-/// possible.
+/// possible. Its `geometry` and `bbox` are `None` when the file's CRS cannot be turned into WGS
+/// 84 (see the module docs).
 pub fn item(info: &FileInfo, dir: &Path) -> Item {
     // A file without points may have any box; a `.vpc` holds numbers (never a NaN's null).
     let none = super::Bounds3 {
@@ -256,6 +265,22 @@ pub fn item(info: &FileInfo, dir: &Path) -> Item {
         coordinates: vec![ring.clone()],
     };
     let bbox = vec![b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2]];
+    let footprint = info
+        .crs
+        .as_ref()
+        .and_then(|c| c.wgs84_ring(rect, FOOTPRINT_EDGE_POINTS));
+    let wgs84_bbox = footprint.as_ref().map(|ring| {
+        let (mut w, mut s, mut e, mut n) =
+            (f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY);
+        for p in ring {
+            (w, s, e, n) = (w.min(p[0]), s.min(p[1]), e.max(p[0]), n.max(p[1]));
+        }
+        vec![w, s, b.min[2], e, n, b.max[2]]
+    });
+    let geometry = footprint.map(|ring| Polygon {
+        kind: "Polygon".into(),
+        coordinates: vec![ring],
+    });
     let href = match relative(&info.path, dir) {
         Some(r) => format!("./{}", r.display()),
         None => std::path::absolute(&info.path)
@@ -281,8 +306,8 @@ pub fn item(info: &FileInfo, dir: &Path) -> Item {
             "https://stac-extensions.github.io/projection/v1.1.0/schema.json".into(),
         ],
         id,
-        geometry: Some(polygon()),
-        bbox: Some(bbox.clone()),
+        geometry,
+        bbox: wgs84_bbox,
         properties: Properties {
             datetime: info.creation.and_then(|(d, y)| date(y, d)),
             count: info.point_count,

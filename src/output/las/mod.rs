@@ -154,6 +154,15 @@ impl PointEdit<'_> {
         self.record[at..at + 8].copy_from_slice(&value.to_le_bytes());
     }
 
+    /// Flags the point *withheld* (in formats 0–5 bit 7 of byte 15, in 6–10 bit 2 of byte 15).
+    pub fn set_withheld(&mut self) {
+        let bit = if self.format >= 6 { 0x04 } else { 0x80 };
+        if self.record[15] & bit == 0 {
+            self.record[15] |= bit;
+            self.changed = true;
+        }
+    }
+
     /// The whole record, read-only (the point format's fields, then the extra bytes).
     pub fn record(&self) -> &[u8] {
         self.record

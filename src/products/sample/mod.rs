@@ -88,134 +88,33 @@ struct Query {
     y: f64,
 }
 
-/// Which columns of a line hold x and y: the first two (no header, or a header naming them
-/// there), or those a header names (`id,x,y`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Columns {
-    x: usize,
-    y: usize,
+mod text;
+
+use crate::sort::external::{Merge, SortRecord};
+
+/// Where the queries come from: text lines, or points sorted by the external sort.
+enum Queries {
+    Text(QueryReader),
+    Points(Merge<SortRecord>),
 }
 
-/// x and y first.
-const FIRST_TWO: Columns = Columns { x: 0, y: 1 };
-
-/// What a line is.
-enum Line {
-    Skip,
-    /// A header: the columns it names, and the name of the output's height field (`z`, or
-    /// `z_tin` beside a `z` of the header's).
-    Header(Columns, &'static str),
-    Point(f64, f64),
-}
-
-/// A line under the XYZ reader's separator rules ([`crate::input::xyz::parse_fields`]), x and y
-/// read from `cols` ([`crate::input::xyz::parse_columns`] when a header put them elsewhere): the
-/// first line that is not a number (`first_data`) is a header, which must name x and y.
-fn classify(line: &str, first_data: bool, cols: Columns) -> std::result::Result<Line, String> {
-    use crate::input::xyz::{LineError, parse_columns, parse_fields};
-    let bytes = line.trim().as_bytes();
-    let parsed = if cols == FIRST_TWO {
-        parse_fields::<2>(bytes)
-    } else {
-        parse_columns(bytes, [cols.x, cols.y])
-    };
-    match parsed {
-        Ok(None) => Ok(Line::Skip),
-        Ok(Some([x, y])) => Ok(Line::Point(x, y)),
-        Err(LineError::NotANumber { .. }) if first_data => header(bytes),
-        Err(e) => Err(e.to_string()),
-    }
-}
-
-/// The header line `bytes`: the columns it names for x and y
-/// ([`crate::input::xyz::header_axes`]).
-fn header(bytes: &[u8]) -> std::result::Result<Line, String> {
-    let ([x, y], has_z) = crate::input::xyz::header_axes(bytes)?;
-    Ok(Line::Header(
-        Columns { x, y },
-        if has_z { "z_tin" } else { "z" },
-    ))
-}
-
-/// Lazily reads the query points of a file.
-struct QueryReader {
-    path: PathBuf,
-    lines: std::io::Lines<BufReader<File>>,
-    line_no: u64,
-    n: u64,
-    seen_data: bool,
-    cols: Columns,
-}
-
-impl QueryReader {
-    fn open(path: &Path) -> Result<QueryReader> {
-        let f = File::open(path).map_err(|e| Error::io(path, e))?;
-        Ok(QueryReader {
-            path: path.to_path_buf(),
-            lines: BufReader::with_capacity(1 << 16, f).lines(),
-            line_no: 0,
-            n: 0,
-            seen_data: false,
-            cols: FIRST_TWO,
-        })
-    }
-
+impl Queries {
     fn next(&mut self) -> Result<Option<Query>> {
-        for line in self.lines.by_ref() {
-            self.line_no += 1;
-            let line = line.map_err(|e| Error::io(&self.path, e))?;
-            let first = !self.seen_data;
-            match classify(&line, first, self.cols) {
-                Ok(Line::Skip) => {}
-                Ok(Line::Header(cols, _)) => {
-                    self.seen_data = true;
-                    self.cols = cols;
-                }
-                Ok(Line::Point(x, y)) => {
-                    self.seen_data = true;
-                    let q = Query { n: self.n, x, y };
-                    self.n += 1;
-                    return Ok(Some(q));
-                }
-                Err(message) => {
-                    return Err(Error::Parse {
-                        path: self.path.clone(),
-                        line: self.line_no,
-                        message,
-                    });
-                }
-            }
+        match self {
+            Queries::Text(r) => r.next(),
+            Queries::Points(m) => match m.next() {
+                Some(r) => Ok(Some(Query {
+                    n: r.index,
+                    x: r.x,
+                    y: r.y,
+                })),
+                None => m.take_error().map_or(Ok(None), Err),
+            },
         }
-        Ok(None)
     }
 }
 
-/// A copy of `path` in the temporary directory when it is a pipe or a device (registered for
-/// deletion on interruption); `None` for a regular file.
-fn spool_stream(
-    path: &Path,
-) -> Result<Option<(tempfile::TempPath, crate::output::atomic::TempRegistration)>> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if meta.is_file() {
-        return Ok(None);
-    }
-    if meta.is_dir() {
-        return Err(Error::Format {
-            path: path.to_path_buf(),
-            message: "is a directory, not a file of query points".into(),
-        });
-    }
-    let dir = std::env::temp_dir();
-    let mut temp = tempfile::Builder::new()
-        .prefix(".sweeptin-queries-")
-        .tempfile_in(&dir)
-        .map_err(|e| Error::write(&dir, e))?;
-    let registration =
-        crate::output::atomic::register_temp(temp.path(), crate::output::atomic::TempKind::File);
-    let mut src = File::open(path).map_err(|e| Error::io(path, e))?;
-    std::io::copy(&mut src, temp.as_file_mut()).map_err(|e| Error::write(&dir, e))?;
-    Ok(Some((temp.into_temp_path(), registration)))
-}
+use text::{FIRST_TWO, Line, QueryReader, classify, spool_stream};
 
 /// A [`TriangleSink`] answering height queries (see the module docs).
 pub struct SampleSink {
@@ -228,7 +127,11 @@ pub struct SampleSink {
     output: PathBuf,
     count: u64,
     sorted: bool,
-    reader: Option<QueryReader>,
+    reader: Option<Queries>,
+    /// Queries given as points sorted by `y` ([`SampleSink::for_points`]), until `begin`.
+    points: Option<Merge<SortRecord>>,
+    /// Answers only: no text output ([`SampleSink::take_answers`]).
+    answers_only: bool,
     /// The next query not yet loaded.
     next: Option<Query>,
     /// Loaded, unanswered queries by bucket.
@@ -275,6 +178,8 @@ impl SampleSink {
             count,
             sorted,
             reader: None,
+            points: None,
+            answers_only: false,
             next: None,
             pending: FastMap::default(),
             pending_count: 0,
@@ -287,6 +192,52 @@ impl SampleSink {
             batch: Vec::new(),
             answered: 0,
         })
+    }
+
+    /// A sink answering `count` query points given sorted by `y` (then `x`), each numbered by
+    /// its `index` (below `count`), such as a file's own points through the external sort
+    /// (`sweeptin height`): read lazily as the triangles stream past, as sorted text queries
+    /// are. The answers stay in a scratch file beside `scratch` ([`SampleSink::take_answers`]).
+    pub fn for_points(points: Merge<SortRecord>, count: u64, scratch: &Path) -> SampleSink {
+        SampleSink {
+            queries: PathBuf::new(),
+            name: PathBuf::from("the points"),
+            _spool: None,
+            output: scratch.to_path_buf(),
+            count,
+            sorted: true,
+            reader: None,
+            points: Some(points),
+            answers_only: true,
+            next: None,
+            pending: FastMap::default(),
+            pending_count: 0,
+            max_pending: 0,
+            bucket: 1.0,
+            bounds: [0.0; 4],
+            level: f64::NEG_INFINITY,
+            deferred: Vec::new(),
+            answers: None,
+            batch: Vec::new(),
+            answered: 0,
+        }
+    }
+
+    /// After `finish`, the answers: the height at query `n` as the little-endian double at byte
+    /// `8 n` (NaN outside the TIN), the file rewound.
+    ///
+    /// # Errors
+    /// [`Error::Write`] when the scratch file cannot be rewound; [`Error::Internal`] before
+    /// `begin`.
+    pub fn take_answers(&mut self) -> Result<File> {
+        self.flush_answers()?;
+        let mut f = self
+            .answers
+            .take()
+            .ok_or_else(|| Error::Internal("no answers before the run began".into()))?;
+        f.seek(SeekFrom::Start(0))
+            .map_err(|e| Error::write(&self.output, e))?;
+        Ok(f)
     }
 
     /// Are the queries sorted by `y` (so that they are read lazily)?
@@ -513,9 +464,14 @@ impl TriangleSink for SampleSink {
             w.into_inner()
                 .map_err(|e| Error::write(&dir, e.into_error()))?,
         );
-        let mut reader = QueryReader::open(&self.queries)?;
-        reader.path = self.name.clone();
-        self.reader = Some(reader);
+        self.reader = Some(match self.points.take() {
+            Some(points) => Queries::Points(points),
+            None => {
+                let mut reader = QueryReader::open(&self.queries)?;
+                reader.path = self.name.clone();
+                Queries::Text(reader)
+            }
+        });
         if !self.sorted {
             self.load_until(f64::INFINITY)?;
             self.level = f64::INFINITY;
@@ -546,7 +502,12 @@ impl TriangleSink for SampleSink {
 
     fn finish(&mut self) -> Result<ProductSummary> {
         self.raise(f64::INFINITY)?;
-        let bytes = self.write_output()?;
+        let bytes = if self.answers_only {
+            self.flush_answers()?;
+            0
+        } else {
+            self.write_output()?
+        };
         Ok(ProductSummary::Sample(SampleSummary {
             path: self.output.clone(),
             queries: self.count,
