@@ -1,12 +1,17 @@
 //! A plan's job directory as nightly operations treat it (issue 43): moved or copied, it merges
 //! its own tiles from its new place; its `tiles/` deleted, `run` makes it again; a task record
-//! that names an output outside its directory is refused.
+//! that names an output outside its directory is refused; records count only for their plan,
+//! an edited plan is refused; failed tasks set the exit status and `run --all` says how far it
+//! came; `plan` says what each product writes.
 
+#[path = "support/data.rs"]
+mod data;
 #[path = "support/plans.rs"]
 mod plans;
 
-use plans::{bin, cells, s, sweeptin};
+use plans::{bin, cells, ok, plan_extent, records, s, sweeptin};
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 fn sample() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz")
@@ -140,4 +145,300 @@ fn a_record_naming_an_output_outside_its_job_is_refused() {
     }
     std::fs::write(&rec, text).unwrap();
     merged(&plan, &t.path().join("m.tif"));
+}
+
+/// The job directory's bookkeeping (a hostile tester's findings, each a mosaic wrong with exit
+/// 0 before): a task that runs again forgets its old record first, so a failed re-run is not
+/// taken as finished; records carry the plan's fingerprint, so records of a plan edited or made
+/// before in the same directory never count; a plan whose tiles do not follow from its tile
+/// side and cell is refused; a link among the plan's own files is refused, never written
+/// through (it replaced an input).
+#[test]
+fn records_count_only_for_their_plan_and_links_are_refused() {
+    let t = tempfile::tempdir().unwrap();
+    let input = t.path().join("in.laz");
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    std::fs::copy(&sample, &input).unwrap();
+    let job = t.path().join("job");
+    let plan = job.join("plan.json");
+    let plan_args = ["plan", "dem", s(&input), "--cell", "0.5", "--tile", "32"];
+    let failing = |args: &[&str], code: i32, says: &str| {
+        let o = bin().args(args).output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {e}");
+        assert!(e.contains(says), "{args:?}: {e}");
+    };
+    // An output that merge would refuse after every task ran is refused now.
+    let inside = job.join("tiles/c.geojson");
+    let contours = ["--contours", s(&inside), "--interval", "1", "-o", s(&job)];
+    failing(
+        &[&plan_args[..], &contours].concat(),
+        2,
+        "keeps its own files",
+    );
+    sweeptin(&[&plan_args[..], &["-o", s(&job)]].concat(), "plan");
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run");
+    // A nightly re-run that fails leaves no record of the night before.
+    let away = t.path().join("away.laz");
+    std::fs::rename(&input, &away).unwrap();
+    failing(&["run", s(&plan), "--task", "0", "-q"], 3, "in.laz");
+    assert!(!job.join("tiles/task_0.json").exists());
+    let m = t.path().join("m.tif");
+    failing(&["merge", s(&plan), "-o", s(&m)], 2, "have not finished");
+    std::fs::rename(&away, &input).unwrap();
+    sweeptin(&["run", s(&plan), "--all", "--resume", "-q"], "resume");
+    // An edited plan is refused by `run` and `merge` (its fingerprint no longer matches):
+    // a deleted tile or a file's count set to 0 gave a mosaic with holes, exit 0.
+    let text = std::fs::read_to_string(&plan).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let edits: [&dyn Fn(&mut serde_json::Value); 4] = [
+        &|v| v["args"].as_array_mut().unwrap().push("(edited)".into()),
+        &|v| v["files"][0]["points"] = serde_json::json!(0),
+        &|v| {
+            v["tiles"].as_array_mut().unwrap().pop();
+        },
+        &|v| v["fingerprint"] = serde_json::json!(""),
+    ];
+    for edit in edits {
+        let mut e = v.clone();
+        edit(&mut e);
+        std::fs::write(&plan, e.to_string()).unwrap();
+        failing(&["merge", s(&plan), "-o", s(&m)], 3, "make the plan again");
+        failing(&["run", s(&plan), "--all", "--resume", "-q"], 3, "edited");
+    }
+    std::fs::write(&plan, &text).unwrap();
+    sweeptin(&["merge", s(&plan), "-o", s(&m)], "merge");
+    // A plan whose cell or tiles were edited apart is refused.
+    v["cell"] = serde_json::json!(1.0);
+    std::fs::write(&plan, v.to_string()).unwrap();
+    failing(&["run", s(&plan), "--task", "0"], 3, "the plan was edited");
+    // Planned again into the directory of another plan's tasks.
+    std::fs::remove_file(&plan).unwrap();
+    let again = [
+        &plan_args[..3],
+        &["--cell", "1", "--tile", "32", "-o", s(&job)],
+    ]
+    .concat();
+    failing(&again, 2, "but no plan");
+    // An input rewritten in place with the same header (reclassified, heights corrected) is
+    // told by its size and modification time.
+    std::fs::write(&plan, &text).unwrap();
+    let f = std::fs::File::options().write(true).open(&input).unwrap();
+    let then = f.metadata().unwrap().modified().unwrap();
+    f.set_modified(then - std::time::Duration::from_secs(60))
+        .unwrap();
+    failing(
+        &["run", s(&plan), "--task", "0", "-q"],
+        3,
+        "changed since the plan was made",
+    );
+    f.set_modified(then).unwrap();
+    // A link where the plan keeps its own files is refused, and its target left alone.
+    let before = std::fs::read(&input).unwrap();
+    let record = job.join("tiles/task_0.json");
+    assert!(!record.exists(), "the refused task forgot its record");
+    std::os::unix::fs::symlink(&input, &record).unwrap();
+    failing(
+        &["run", s(&plan), "--task", "0", "-q"],
+        2,
+        "a symbolic link",
+    );
+    let tile = std::fs::read_dir(job.join("tiles"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|e| e == "tif"))
+        .unwrap();
+    std::fs::remove_file(&record).unwrap();
+    std::fs::remove_file(&tile).unwrap();
+    std::os::unix::fs::symlink(&input, &tile).unwrap();
+    let o = bin()
+        .args(["run", s(&plan), "--all", "-q"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    std::fs::remove_file(&plan).unwrap();
+    std::os::unix::fs::symlink(&input, &plan).unwrap();
+    failing(
+        &[&plan_args[..], &["-o", s(&job)]].concat(),
+        2,
+        "a symbolic link",
+    );
+    assert!(
+        std::fs::read(&input).unwrap() == before,
+        "an input was replaced"
+    );
+}
+
+/// Issue 41, item 15: `run --all` said "8/8 tasks finished" when 3 had failed: each line says
+/// which task ended how and how many of those that ran failed.
+#[test]
+fn progress_of_run_all_counts_the_failed_tasks() {
+    let t = tempfile::tempdir().unwrap();
+    let input = t.path().join("in.laz");
+    std::fs::copy(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz"),
+        &input,
+    )
+    .unwrap();
+    let job = t.path().join("job");
+    sweeptin(
+        &[
+            "plan",
+            "dem",
+            s(&input),
+            "--cell",
+            "0.5",
+            "--tile",
+            "32",
+            "-o",
+            s(&job),
+        ],
+        "plan",
+    );
+    let plan = job.join("plan.json");
+    let (_, n) = plan_extent(&plan);
+    std::fs::remove_file(&input).unwrap();
+    let out = bin().args(["run", s(&plan), "--all"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(!err.contains("tasks finished"), "{err}");
+    assert!(
+        err.contains(&format!("{n} of {n} tasks ran, {n} failed")),
+        "{err}"
+    );
+    let lines = err
+        .lines()
+        .filter(|l| l.starts_with("sweeptin: task ") && l.contains(" failed: "));
+    assert_eq!(lines.count(), n, "{err}");
+}
+
+/// `run --all` exits with the kind of its lowest failed task (here 3, bad input: a file of the
+/// plan went missing), names the failed tasks and how to run them again; `--resume` then runs
+/// them alone. `plan dem --max-cells` is checked against one task's raster.
+#[test]
+fn failed_tasks_set_the_exit_status_and_resume_runs_them_again() {
+    let t = tempfile::tempdir().unwrap();
+    let input = t.path().join("in.laz");
+    std::fs::copy(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz"),
+        &input,
+    )
+    .unwrap();
+    let job = t.path().join("job");
+    let plan_args = ["plan", "dem", s(&input), "--cell", "0.5", "--tile", "32"];
+    let out = bin()
+        .args(plan_args)
+        .args(["--max-cells", "1000", "-o", s(&job)])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--max-cells"));
+    assert!(!job.join("plan.json").exists());
+    sweeptin(&[&plan_args[..], &["-o", s(&job)]].concat(), "plan");
+    let plan = job.join("plan.json");
+    let (_, n) = plan_extent(&plan);
+    let away = t.path().join("away.laz");
+    std::fs::rename(&input, &away).unwrap();
+    let out = bin()
+        .args(["run", s(&plan), "--all", "-q"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains(&format!("{n} of {n} tasks failed")) && err.contains("--resume"),
+        "{err}"
+    );
+    std::fs::rename(&away, &input).unwrap();
+    sweeptin(
+        &["run", s(&plan), "--all", "--resume", "-q"],
+        "run --resume",
+    );
+    for r in records(&job, n) {
+        assert!(r["status"] == "done" || r["status"] == "empty", "{r}");
+    }
+    // A tile cut short after its task finished (a full disk, a copy interrupted) runs again.
+    let tile = job.join(records(&job, n)[0]["outputs"][0][1].as_str().unwrap());
+    let whole = std::fs::read(&tile).unwrap();
+    std::fs::write(&tile, &whole[..100]).unwrap();
+    sweeptin(
+        &["run", s(&plan), "--all", "--resume", "-q"],
+        "run --resume",
+    );
+    assert!(
+        std::fs::read(&tile).unwrap() == whole,
+        "the cut tile was not run again"
+    );
+}
+
+/// Issue 41, item 15: `plan` printed the number of tasks alone on standard output among its
+/// messages on a terminal; it prints it for a script (`N=$(sweeptin plan …)`) only. An empty
+/// task of a contour or TIN plan said its outputs were "a nodata raster".
+#[test]
+fn plan_messages_say_what_each_product_writes() {
+    let t = tempfile::tempdir().unwrap();
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let args = |job: &Path, product: &str| -> Vec<String> {
+        let mut a = vec!["plan".to_string(), product.to_string(), s(&sample).into()];
+        if product == "contours" {
+            a.extend(["--interval".into(), "1".into()]);
+        }
+        a.extend(
+            ["--class", "18", "--tile", "16", "-o", s(job)]
+                .iter()
+                .map(|x| x.to_string()),
+        );
+        a
+    };
+    // Captured: the count alone on stdout.
+    let job = t.path().join("piped");
+    let out = ok(bin().args(args(&job, "tin")).output().unwrap(), "plan");
+    let n: usize = String::from_utf8_lossy(&out.stdout).trim().parse().unwrap();
+    assert_eq!(n, plan_extent(&job.join("plan.json")).1);
+    // On a terminal (`script` gives the command one): the messages alone.
+    let job = t.path().join("tty");
+    let line = std::iter::once(bin().get_program().to_string_lossy().into_owned())
+        .chain(args(&job, "tin"))
+        .map(|a| format!("'{a}'"))
+        .collect::<Vec<_>>()
+        .join(" ");
+    match Command::new("script")
+        .args(["-qec", &line, "/dev/null"])
+        .output()
+    {
+        Ok(o) => {
+            let text = String::from_utf8_lossy(&o.stdout);
+            assert!(text.contains(&format!("{n} tasks")), "{text}");
+            assert!(
+                !text.lines().any(|l| l.trim() == n.to_string()),
+                "a bare count on the terminal: {text}"
+            );
+        }
+        Err(e) => assert!(!data::in_ci(), "script (util-linux) is needed: {e}"),
+    }
+    // An empty task says what its product writes.
+    for (product, says) in [
+        ("tin", "(no triangle)"),
+        ("contours", "(no contour line)"),
+        ("dem", "(a nodata raster)"),
+    ] {
+        let job = t.path().join(product);
+        let mut a = args(&job, product);
+        if product == "dem" {
+            a.extend(["--cell".into(), "0.5".into()]);
+        }
+        ok(bin().args(&a).output().unwrap(), "plan");
+        let out = sweeptin(
+            &["run", s(&job.join("plan.json")), "--task", "0"],
+            "empty task",
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{product}: {err}");
+    }
 }

@@ -286,6 +286,28 @@ fn tin_plan_with_a_boundary_and_a_hole_has_the_triangles_of_one_sweep() {
     assert_eq!(std::fs::read(&hole_path).unwrap(), before);
 }
 
+/// A TIN plan with breaklines alone (no trimming ring): the merged mesh says it is constrained
+/// (PLY comment), so `check` tests it as one (it was written as a plain Delaunay TIN, and `check`
+/// failed on the breaklines' edges).
+#[test]
+fn a_merged_tin_with_breaklines_is_declared_constrained() {
+    let t = tempfile::tempdir().unwrap();
+    let (bl, _, _) = lines(t.path());
+    let d = |n: &str| s(&t.path().join(n));
+    let mut plan = vec!["plan".to_string(), "tin".into()];
+    plan.extend(ground());
+    plan.extend(breaklines(&bl[1..]));
+    plan.extend(["--tile".into(), "50".into(), "-o".into(), d("job")]);
+    cli::ok(&plan);
+    let p = d("job/plan.json");
+    cli::ok(&["run", &p, "--all", "--jobs", "2", "-q"]);
+    cli::ok(&["merge", &p, "-o", &d("merged.ply"), "-q"]);
+    let ply = std::fs::read(t.path().join("merged.ply")).unwrap();
+    let header = String::from_utf8_lossy(&ply[..ply.len().min(4096)]).to_string();
+    assert!(header.contains("constrained"), "{header}");
+    cli::ok(&["check", &d("merged.ply")]);
+}
+
 /// Lines without z are refused by `plan` (file, line, vertex; exit 2), as are
 /// `--clip-breaklines` and `--no-flat-triangles`, with no plan written; `sweeptin sample` gives
 /// a text file of lines their z (the refusal's recipe), and that plan is made; a task refuses

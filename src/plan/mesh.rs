@@ -57,6 +57,19 @@ pub(super) fn merge_tin(
         )],
     };
     let mut sink = create_mesh_sink(out, None, &meta)?;
+    // Breaklines make the mesh constrained (trimming rings too, which the writer declares): its
+    // PLY or `.stin` says so, and `check` tests it as the constrained mesh it is.
+    if plan
+        .job
+        .lines
+        .as_ref()
+        .is_some_and(|l| !l.breaklines.is_empty())
+    {
+        sink.declare(crate::validate::MeshKind {
+            constrained: true,
+            ..crate::validate::MeshKind::default()
+        })?;
+    }
     // The pieces hold every triangle: the merge trims (boundary, holes, --max-edge).
     let trim = match (&plan.job.lines, plan.job.max_edge) {
         (Some(l), m) => Some(l.trim(m)?).filter(|t| !t.keeps_all()),

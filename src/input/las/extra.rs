@@ -5,7 +5,7 @@
 //! [`ExtraDims::of`] parses the descriptors of a file and places each attribute in the record;
 //! [`ExtraDim::value`] reads one point's value (scale and offset applied). The point writer
 //! (`output::las`) appends new attributes with [`descriptor`], and the reader takes z from one
-//! with `--z-from NAME` ([`crate::input::las::ReadOptions::z_from`]).
+//! with `--z-from NAME` ([`crate::input::las::Filter::z_from`]).
 
 use crate::error::{Error, Result};
 use std::path::Path;
