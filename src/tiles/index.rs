@@ -60,6 +60,56 @@ macro_rules! sort_by_block_key {
 
 sort_by_block_key!(BlockRecord);
 sort_by_block_key!(PackedRecord);
+sort_by_block_key!(TaggedRecord);
+
+/// A point with its block key and a tag the index keeps beside it (read back with
+/// [`BlockIndex::read_tags`]): the ground filter's global input index and class. Padded to 64
+/// bytes: the sort's sliding maps (`sort::mmap`) need a record size that divides their window.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct TaggedRecord {
+    pub key: u64,
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+    pub tag: u64,
+    pad: [u64; 3],
+}
+
+impl TaggedRecord {
+    /// Point `p` of block `(bx, by)` with `tag`.
+    pub fn new((bx, by): (i64, i64), p: [f64; 3], tag: u64) -> TaggedRecord {
+        TaggedRecord {
+            key: TileGrid::key(bx, by),
+            x: p[0],
+            y: p[1],
+            z: p[2],
+            tag,
+            pad: [0; 3],
+        }
+    }
+}
+
+impl IndexRecord for TaggedRecord {
+    type Stored = [f64; 3];
+    const TAGGED: bool = true;
+    #[inline]
+    fn pack(_: Option<&Packing>, block: (i64, i64), p: [f64; 3]) -> Result<Self> {
+        Ok(TaggedRecord::new(block, p, 0))
+    }
+    #[inline]
+    fn unpack(&self, _: Option<&Packing>) -> (u64, [f64; 3]) {
+        (self.key, [self.x, self.y, self.z])
+    }
+    #[inline]
+    fn stored(&self) -> [f64; 3] {
+        [self.x, self.y, self.z]
+    }
+    #[inline]
+    fn tag(&self) -> u64 {
+        self.tag
+    }
+}
 
 /// A point with its block key in 16 bytes ([`Packing`]).
 #[repr(C)]
@@ -133,6 +183,13 @@ pub(crate) trait IndexRecord: SortKey + bytemuck::Pod + Send {
     fn unpack(&self, packing: Option<&Packing>) -> (u64, [f64; 3]);
     /// The point as stored.
     fn stored(&self) -> Self::Stored;
+    /// Does the record carry a tag the index keeps ([`TaggedRecord`])?
+    const TAGGED: bool = false;
+    /// The record's tag (0 for untagged records).
+    #[inline]
+    fn tag(&self) -> u64 {
+        0
+    }
 }
 
 impl IndexRecord for BlockRecord {
@@ -209,12 +266,21 @@ pub(crate) struct BlockIndex {
     /// Tight box of each non-empty block's points.
     extents: Vec<Extent>,
     store: Store,
+    /// The tags of tagged records ([`TaggedRecord`]), in the points' order.
+    tags: Option<Tags>,
     /// The blocks holding points: their bounding rectangle.
     occupied: BlockRect,
     /// Corners of the convex hull of the blocks' extreme points.
     hull: Vec<[f64; 3]>,
     /// For a task of a plan: where the points it did not read may be.
     pub scope: Option<Scope>,
+}
+
+/// The tags of a tagged index, in memory or in their own anonymous file (8 bytes a point).
+#[derive(Debug)]
+enum Tags {
+    Memory(Vec<u64>),
+    File(File),
 }
 
 /// What a task knows of the data (see [`BlockIndex::scope`]).
@@ -427,6 +493,7 @@ fn write_merged<R: IndexRecord>(
     packing: Option<&Packing>,
     merge: &mut Merge<R>,
     file: &File,
+    tags: Option<&File>,
     tmp_dir: &Path,
 ) -> Result<Builder> {
     let io = |e| Error::io(tmp_dir, e);
@@ -437,6 +504,8 @@ fn write_merged<R: IndexRecord>(
             let mut b = Builder::new(grid);
             let mut w = std::io::BufWriter::with_capacity(crate::sort::WRITE_PIECE, file);
             let mut buf: Vec<R::Stored> = Vec::with_capacity(BATCH);
+            let mut tw = tags.map(|f| std::io::BufWriter::with_capacity(crate::sort::WRITE_PIECE, f));
+            let mut tbuf: Vec<u64> = Vec::new();
             for batch in full_rx {
                 for r in &batch {
                     let (key, p) = r.unpack(packing);
@@ -445,10 +514,18 @@ fn write_merged<R: IndexRecord>(
                 }
                 crate::sort::write_pieces(&mut w, bytemuck::cast_slice(&buf)).map_err(io)?;
                 buf.clear();
+                if let Some(tw) = tw.as_mut() {
+                    tbuf.extend(batch.iter().map(|r| r.tag()));
+                    crate::sort::write_pieces(tw, bytemuck::cast_slice(&tbuf)).map_err(io)?;
+                    tbuf.clear();
+                }
                 // The merging thread may have stopped taking vectors back.
                 let _ = empty_tx.try_send(batch);
             }
             w.flush().map_err(io)?;
+            if let Some(tw) = tw.as_mut() {
+                tw.flush().map_err(io)?;
+            }
             Ok(b)
         });
         let mut batch = Vec::with_capacity(BATCH);
@@ -494,6 +571,7 @@ impl BlockIndex {
     ) -> Result<Self> {
         let io = |e| Error::io(tmp_dir, e);
         let mut b = Builder::new(grid);
+        let mut tags = None;
         let store = if let Some(v) = merge.take_memory() {
             let mut pts = Vec::with_capacity(v.len());
             for r in &v {
@@ -501,10 +579,26 @@ impl BlockIndex {
                 b.note(key, &p);
                 pts.push(p);
             }
+            if R::TAGGED {
+                tags = Some(Tags::Memory(v.iter().map(|r| r.tag()).collect()));
+            }
             Store::Memory(pts)
         } else {
             let file = tempfile::tempfile_in(tmp_dir).map_err(io)?;
-            b = write_merged(grid, packing.as_ref(), &mut merge, &file, tmp_dir)?;
+            let tag_file = if R::TAGGED {
+                Some(tempfile::tempfile_in(tmp_dir).map_err(io)?)
+            } else {
+                None
+            };
+            b = write_merged(
+                grid,
+                packing.as_ref(),
+                &mut merge,
+                &file,
+                tag_file.as_ref(),
+                tmp_dir,
+            )?;
+            tags = tag_file.map(Tags::File);
             Store::File {
                 file,
                 dir: tmp_dir.to_path_buf(),
@@ -527,6 +621,7 @@ impl BlockIndex {
             starts: b.starts,
             extents: b.extents,
             store,
+            tags,
             occupied: b.occupied,
             hull: Vec::new(),
             scope: None,
@@ -657,7 +752,11 @@ impl BlockIndex {
             Store::Memory(v) => v.len() * 24,
             Store::File { .. } => 0,
         };
-        (table + points) as u64
+        let tags = match &self.tags {
+            Some(Tags::Memory(v)) => v.len() * 8,
+            _ => 0,
+        };
+        (table + points + tags) as u64
     }
 
     /// Number of non-empty blocks.
@@ -749,6 +848,36 @@ impl BlockIndex {
                 self.starts[k.end] - self.starts[k.start]
             })
             .sum()
+    }
+
+    /// Appends the tags of the points of the blocks of `r` to `out`, in the order
+    /// [`BlockIndex::read`] gives the points.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if the tags' file cannot be read; [`Error::Internal`] for an index built
+    /// from untagged records.
+    pub fn read_tags(&self, r: &BlockRect, out: &mut Vec<u64>) -> Result<()> {
+        let r = r.intersect(&self.occupied);
+        for by in r.y0..r.y1 {
+            let k = self.row_range(by, r.x0, r.x1);
+            let (a, b) = (self.starts[k.start] as usize, self.starts[k.end] as usize);
+            match &self.tags {
+                None => return Err(Error::Internal("the block index has no tags".into())),
+                Some(Tags::Memory(v)) => out.extend_from_slice(&v[a..b]),
+                Some(Tags::File(f)) => {
+                    let old = out.len();
+                    out.resize(old + (b - a), 0);
+                    let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out[old..]);
+                    let dir = match &self.store {
+                        Store::File { dir, .. } => dir.as_path(),
+                        Store::Memory(_) => Path::new("."),
+                    };
+                    f.read_exact_at(bytes, (a * 8) as u64)
+                        .map_err(|e| Error::io(dir, e))?;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Appends the points of the blocks of `r` to `out`: block rows from south to north, blocks
