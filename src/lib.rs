@@ -56,6 +56,7 @@ pub mod cpu;
 pub mod crs;
 pub mod error;
 pub mod fmt;
+pub mod ground;
 pub mod input;
 pub mod output;
 pub mod pipeline;

@@ -11,6 +11,7 @@ mod check;
 mod contours;
 mod crossval;
 mod dem;
+mod ground;
 mod height;
 mod hillshade;
 mod index;
@@ -91,6 +92,9 @@ enum Command {
     /// Write a virtual point cloud (.vpc) listing LAS/LAZ/COPC files with their extents, counts
     /// and CRS (headers only), for QGIS, PDAL wrench, lasR and sweeptin's own box reads.
     Index(index::Args),
+    /// Classify the ground (class 2) and low noise (7) of lidar points by progressive TIN
+    /// densification, and write the points back with their new classes.
+    Ground(ground::Args),
     /// Thin points into the fewest-point TIN that keeps every point within a vertical tolerance
     /// (--max-error), breaklines kept as edges.
     Thin(thin::Args),
@@ -106,6 +110,7 @@ impl Command {
         match self {
             Command::Tin(a) => a.input.json,
             Command::Thin(a) => a.input.json,
+            Command::Ground(a) => a.json,
             Command::Refine(a) => a.input.json,
             Command::Dem(a) => a.input.args.json,
             Command::Contours(a) => a.input.args.json,
@@ -330,6 +335,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         Command::Merge(a) => plan::merge(a),
         Command::Index(a) => index::run(a),
         Command::Thin(a) => thin::run(a),
+        Command::Ground(a) => ground::run(a),
         Command::Refine(a) => refine::run(a),
     }
 }

@@ -60,6 +60,7 @@ macro_rules! sort_by_block_key {
 
 sort_by_block_key!(BlockRecord);
 sort_by_block_key!(PackedRecord);
+sort_by_block_key!(TaggedRecord);
 
 /// A point with its block key in 16 bytes ([`Packing`]).
 #[repr(C)]
@@ -133,6 +134,13 @@ pub(crate) trait IndexRecord: SortKey + bytemuck::Pod + Send {
     fn unpack(&self, packing: Option<&Packing>) -> (u64, [f64; 3]);
     /// The point as stored.
     fn stored(&self) -> Self::Stored;
+    /// Does the record carry a tag the index keeps ([`TaggedRecord`])?
+    const TAGGED: bool = false;
+    /// The record's tag (0 for untagged records).
+    #[inline]
+    fn tag(&self) -> u64 {
+        0
+    }
 }
 
 impl IndexRecord for BlockRecord {
@@ -209,132 +217,14 @@ pub(crate) struct BlockIndex {
     /// Tight box of each non-empty block's points.
     extents: Vec<Extent>,
     store: Store,
+    /// The tags of tagged records ([`TaggedRecord`]), in the points' order.
+    tags: Option<Tags>,
     /// The blocks holding points: their bounding rectangle.
     occupied: BlockRect,
     /// Corners of the convex hull of the blocks' extreme points.
     hull: Vec<[f64; 3]>,
     /// For a task of a plan: where the points it did not read may be.
     pub scope: Option<Scope>,
-}
-
-/// What a task knows of the data (see [`BlockIndex::scope`]).
-#[derive(Debug, Clone)]
-pub(crate) struct Scope {
-    /// Extents of the files the task did not read (closed rectangles, from their headers):
-    /// points may lie there. A buffer that reaches one reads the whole file.
-    pub unknown: Vec<[f64; 4]>,
-    /// Parts of the extents of files the task read only around its tile (COPC): points may lie
-    /// there too, and only a buffer that covers them reads them.
-    pub beyond: Vec<[f64; 4]>,
-    /// The task's tile.
-    pub tile: [f64; 4],
-    /// How far around its tile the task read.
-    pub buffer: f64,
-}
-
-/// Does the closed disk of centre `c` and radius `r` meet the closed rectangle `u`? (A little
-/// generously: a disk that nearly touches it counts.)
-fn disk_meets(u: &[f64; 4], c: [f64; 2], r: f64) -> bool {
-    let slack = 1e-9 * (r + c[0].abs().max(c[1].abs()));
-    let dx = (u[0] - c[0]).max(c[0] - u[2]).max(0.0);
-    let dy = (u[1] - c[1]).max(c[1] - u[3]).max(0.0);
-    (dx * dx + dy * dy).sqrt() <= r + slack
-}
-
-impl Scope {
-    /// The rectangle the task read whole: its tile and buffer (every file meeting it was read).
-    pub fn read_rect(&self) -> [f64; 4] {
-        let (t, b) = (&self.tile, self.buffer);
-        [t[0] - b, t[1] - b, t[2] + b, t[3] + b]
-    }
-
-    /// Does the task know every point there is?
-    pub fn complete(&self) -> bool {
-        self.unknown.is_empty() && self.beyond.is_empty()
-    }
-
-    /// The buffer that would read the points not read that may lie in the closed disk of centre
-    /// `c` and radius `r` (conservative), or 0 when there are none.
-    pub fn disk_reach(&self, c: [f64; 2], r: f64) -> f64 {
-        let files = self
-            .unknown
-            .iter()
-            .filter(|u| disk_meets(u, c, r))
-            .map(|u| self.reach(u));
-        // A part of a file read around the tile: the buffer must cover the disk's box there.
-        let parts = self.beyond.iter().filter(|u| disk_meets(u, c, r)).map(|u| {
-            let b = [
-                (c[0] - r).max(u[0]),
-                (c[1] - r).max(u[1]),
-                (c[0] + r).min(u[2]),
-                (c[1] + r).min(u[3]),
-            ];
-            self.cover(&b)
-        });
-        files.chain(parts).fold(0.0, f64::max)
-    }
-
-    /// The buffer around the tile that reaches the rectangle `u` (a little more, so that the
-    /// plan's closed overlap test selects its file).
-    pub fn reach(&self, u: &[f64; 4]) -> f64 {
-        let t = &self.tile;
-        let d = (u[0] - t[2])
-            .max(t[0] - u[2])
-            .max(u[1] - t[3])
-            .max(t[1] - u[3]);
-        d.max(0.0) * (1.0 + 1e-9) + 1e-9
-    }
-
-    /// The buffer around the tile that covers the rectangle `u` whole (a little more).
-    pub fn cover(&self, u: &[f64; 4]) -> f64 {
-        let t = &self.tile;
-        let d = (u[2] - t[2])
-            .max(t[0] - u[0])
-            .max(u[3] - t[3])
-            .max(t[1] - u[1]);
-        d.max(0.0) * (1.0 + 1e-9) + 1e-9
-    }
-
-    /// The buffer that reads whatever may lie in the rectangles of [`Scope::unknown`] and
-    /// [`Scope::beyond`] that `meets` accepts (0: none).
-    pub fn reach_where(&self, meets: impl Fn(&[f64; 4]) -> bool) -> f64 {
-        let files = self.unknown.iter().filter(|u| meets(u)).map(|u| self.reach(u));
-        let parts = self.beyond.iter().filter(|u| meets(u)).map(|u| self.cover(u));
-        files.chain(parts).fold(0.0, f64::max)
-    }
-}
-
-/// The tight bounding box of a block's points, as `f32` offsets from the block's lower-left
-/// corner, rounded outward (so the box it stands for always holds every point of the block).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Extent([f32; 4]);
-
-impl Extent {
-    /// The outward-rounded offsets of `b` (`[xmin, ymin, xmax, ymax]`, world) from `corner`.
-    fn new(b: [f64; 4], corner: [f64; 2], block: f64) -> Extent {
-        // The f64 difference errs by an ulp of the corner, the f32 rounding by 2^-24 of a block
-        // (offsets lie within one block): the margin covers both, and the reverse sum in `world`.
-        let m = block * 1e-6 + (corner[0].abs() + corner[1].abs() + block) * 1e-14;
-        Extent([
-            (b[0] - corner[0] - m) as f32,
-            (b[1] - corner[1] - m) as f32,
-            (b[2] - corner[0] + m) as f32,
-            (b[3] - corner[1] + m) as f32,
-        ])
-    }
-
-    /// The world box `[xmin, ymin, xmax, ymax]` (a little wider than the points' box).
-    #[inline]
-    pub fn world(&self, corner: [f64; 2], block: f64) -> [f64; 4] {
-        let m = block * 1e-6 + (corner[0].abs() + corner[1].abs() + block) * 1e-14;
-        let e = &self.0;
-        [
-            corner[0] + f64::from(e[0]) - m,
-            corner[1] + f64::from(e[1]) - m,
-            corner[0] + f64::from(e[2]) + m,
-            corner[1] + f64::from(e[3]) + m,
-        ]
-    }
 }
 
 /// The table, the occupied rectangle and the hull candidates, built as the records stream by.
@@ -427,6 +317,7 @@ fn write_merged<R: IndexRecord>(
     packing: Option<&Packing>,
     merge: &mut Merge<R>,
     file: &File,
+    tags: Option<&File>,
     tmp_dir: &Path,
 ) -> Result<Builder> {
     let io = |e| Error::io(tmp_dir, e);
@@ -437,6 +328,8 @@ fn write_merged<R: IndexRecord>(
             let mut b = Builder::new(grid);
             let mut w = std::io::BufWriter::with_capacity(crate::sort::WRITE_PIECE, file);
             let mut buf: Vec<R::Stored> = Vec::with_capacity(BATCH);
+            let mut tw = tags.map(|f| std::io::BufWriter::with_capacity(crate::sort::WRITE_PIECE, f));
+            let mut tbuf: Vec<u64> = Vec::new();
             for batch in full_rx {
                 for r in &batch {
                     let (key, p) = r.unpack(packing);
@@ -445,10 +338,18 @@ fn write_merged<R: IndexRecord>(
                 }
                 crate::sort::write_pieces(&mut w, bytemuck::cast_slice(&buf)).map_err(io)?;
                 buf.clear();
+                if let Some(tw) = tw.as_mut() {
+                    tbuf.extend(batch.iter().map(|r| r.tag()));
+                    crate::sort::write_pieces(tw, bytemuck::cast_slice(&tbuf)).map_err(io)?;
+                    tbuf.clear();
+                }
                 // The merging thread may have stopped taking vectors back.
                 let _ = empty_tx.try_send(batch);
             }
             w.flush().map_err(io)?;
+            if let Some(tw) = tw.as_mut() {
+                tw.flush().map_err(io)?;
+            }
             Ok(b)
         });
         let mut batch = Vec::with_capacity(BATCH);
@@ -494,6 +395,7 @@ impl BlockIndex {
     ) -> Result<Self> {
         let io = |e| Error::io(tmp_dir, e);
         let mut b = Builder::new(grid);
+        let mut tags = None;
         let store = if let Some(v) = merge.take_memory() {
             let mut pts = Vec::with_capacity(v.len());
             for r in &v {
@@ -501,10 +403,26 @@ impl BlockIndex {
                 b.note(key, &p);
                 pts.push(p);
             }
+            if R::TAGGED {
+                tags = Some(Tags::Memory(v.iter().map(|r| r.tag()).collect()));
+            }
             Store::Memory(pts)
         } else {
             let file = tempfile::tempfile_in(tmp_dir).map_err(io)?;
-            b = write_merged(grid, packing.as_ref(), &mut merge, &file, tmp_dir)?;
+            let tag_file = if R::TAGGED {
+                Some(tempfile::tempfile_in(tmp_dir).map_err(io)?)
+            } else {
+                None
+            };
+            b = write_merged(
+                grid,
+                packing.as_ref(),
+                &mut merge,
+                &file,
+                tag_file.as_ref(),
+                tmp_dir,
+            )?;
+            tags = tag_file.map(Tags::File);
             Store::File {
                 file,
                 dir: tmp_dir.to_path_buf(),
@@ -527,6 +445,7 @@ impl BlockIndex {
             starts: b.starts,
             extents: b.extents,
             store,
+            tags,
             occupied: b.occupied,
             hull: Vec::new(),
             scope: None,
@@ -657,7 +576,11 @@ impl BlockIndex {
             Store::Memory(v) => v.len() * 24,
             Store::File { .. } => 0,
         };
-        (table + points) as u64
+        let tags = match &self.tags {
+            Some(Tags::Memory(v)) => v.len() * 8,
+            _ => 0,
+        };
+        (table + points + tags) as u64
     }
 
     /// Number of non-empty blocks.
@@ -788,6 +711,12 @@ pub(crate) fn index(mem: u64, pts: &[[f64; 3]], grid: TileGrid, dir: &Path) -> B
     }
     BlockIndex::build(grid, s.finish().unwrap(), None, dir, DuplicatePolicy::First).unwrap()
 }
+
+mod scope;
+pub(crate) use scope::{Extent, Scope};
+mod tagged;
+pub(crate) use tagged::TaggedRecord;
+use tagged::Tags;
 
 #[cfg(test)]
 mod tests;

@@ -253,7 +253,7 @@ const BATCH: usize = 1 << 16;
 /// Reads every point of `reader` on a thread of its own, a few batches ahead, and hands each
 /// batch to `f` with the points read (or skipped) so far: decoding (on every core) goes on while
 /// `f` works (the sort's chunks are sorted and spilled meanwhile).
-fn prefetched(
+pub(crate) fn prefetched(
     reader: &mut LidarReader,
     mut f: impl FnMut(&[LidarPoint], u64) -> Result<()>,
 ) -> Result<()> {

@@ -267,7 +267,7 @@ impl Tin {
     }
 }
 
-fn check_point(p: [f64; 3], index: u64) -> Result<()> {
+pub(crate) fn check_point(p: [f64; 3], index: u64) -> Result<()> {
     if !p.iter().all(|c| c.is_finite()) {
         return Err(Error::NonFinite {
             index,

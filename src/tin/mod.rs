@@ -33,6 +33,7 @@ mod check;
 mod crossval;
 mod delete;
 mod insert;
+pub(crate) use insert::check_point;
 mod segment;
 mod store;
 #[cfg(test)]

@@ -1,0 +1,294 @@
+//! `sweeptin ground`: classify the ground of lidar points (progressive TIN densification) and
+//! write the points back with their new classes.
+
+use super::input::{Size, parse_threads};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use sweeptin::ground::{GroundParams, GroundSummary, Terrain};
+
+/// Arguments of `sweeptin ground`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "\
+Progressive TIN densification (Axelsson 2000), as LAStools lasground, lidR ptd(), lasR \
+classify_with_ptd and TerraScan do it, on sweeptin's exact TIN:
+  1. seeds: the lowest point of every cell of a grid of side --step (cells aligned at x = 0, \
+y = 0); a seed lower than the median of its neighbour seeds by more than --low-noise is low \
+noise (class 7), and the next lowest point of its cell is tried;
+  2. densification: a point is ground when its distance to the plane of the ground triangle \
+under it is at most --max-distance and the angles from that plane to its three corners are at \
+most --max-angle (a point near a steep edge that fails only on the angles is also tried \
+mirrored through the nearest corner, unless --no-mirror); per triangle the closest point is added, iteration after iteration, until \
+none is;
+  3. the points within --offset (vertically) of the final ground are ground too; those more \
+than --low-noise below it are low noise (7).
+Classes written: ground 2, low noise 7; the others keep theirs (a point of class 2 that is \
+not ground becomes 1), or all become 1 with --reset. Withheld points and points already \
+classified noise (7, 18) take no part and keep their class. Every other attribute, the header, \
+VLRs and EVLRs and the order of the points are kept.
+
+Exact and tiling-independent: the ground is decided in blocks of 16 steps a side (8 above \
+--step 6.25, 4 above 12.5, 2 above 25: 50 to 100 units), aligned at the origin, each block from its own points and those \
+within 2 steps around it. So the classes are the same for any --threads, --mem or split of the \
+input into files; several inputs are classified together (adjacent tiles classify \
+seamlessly) and each is written to --odir under its own name.
+
+Memory: one read of the inputs into a block index (sorted within --mem, spilled to --tmp-dir \
+beyond), then blocks on every core, about 160 bytes a point of a block and its buffer; a block \
+that does not fit half of --mem is refused before the work (give a larger --mem or smaller \
+--step). The classes wait in a temporary file of one byte a point beyond an eighth of --mem.
+
+Default (no preset): --step 20 --max-distance 1 --max-angle 6 --offset 0.2 --low-noise 5, \
+tuned on ARSO, AHN3 and IGN tiles (docs/ACCURACY.md). Terrain presets (LAStools lasground's \
+steps; a value given explicitly overrides the preset's):
+  --wilderness  step 3        --nature  step 5        --town  step 10
+  --city  step 25             --metro  step 50        --forest  step 10
+  --mountains  step 10, max-angle 12, max-distance 1.5, low-noise 10
+
+Examples:
+  sweeptin ground raw.laz -o classified.laz
+  sweeptin ground tiles/*.laz --odir classified/ --city --json
+  sweeptin ground raw.laz -o g.laz && sweeptin dem g.laz --class 2 --cell 1 -o dtm.tif")]
+pub struct Args {
+    /// Input LAS/LAZ/COPC files (classified together).
+    #[arg(required = true, value_name = "FILES")]
+    pub inputs: Vec<PathBuf>,
+    /// Output file (.laz or .las) for one input. It appears only when complete and never
+    /// replaces an input.
+    #[arg(short, long, conflicts_with = "odir")]
+    pub output: Option<PathBuf>,
+    /// Output directory: each input written there under its own file name.
+    #[arg(long, value_name = "DIR")]
+    pub odir: Option<PathBuf>,
+    /// Seed cell side: larger than the largest building (metres, or the data's unit).
+    #[arg(long, value_name = "S")]
+    pub step: Option<f64>,
+    /// Largest distance from a point to its ground triangle's plane.
+    #[arg(long, value_name = "D")]
+    pub max_distance: Option<f64>,
+    /// Largest angle (degrees) from the ground triangle's plane to its corners.
+    #[arg(long, value_name = "DEG")]
+    pub max_angle: Option<f64>,
+    /// Depth below the neighbouring seeds, or below the final ground, that makes low noise.
+    #[arg(long, value_name = "H")]
+    pub low_noise: Option<f64>,
+    /// Points within this vertical distance of the final ground are ground too.
+    #[arg(long, value_name = "DZ")]
+    pub offset: Option<f64>,
+    /// Do not try points near steep edges mirrored through the nearest ground vertex
+    /// (Axelsson's mirroring, on by default).
+    #[arg(long)]
+    pub no_mirror: bool,
+    /// Points that are not ground (nor noise, nor withheld) become class 1.
+    #[arg(long)]
+    pub reset: bool,
+    /// Preset: no buildings, fine detail (step 3).
+    #[arg(long, group = "terrain")]
+    pub wilderness: bool,
+    /// Preset: open natural terrain (step 5).
+    #[arg(long, group = "terrain")]
+    pub nature: bool,
+    /// Preset: villages (step 10).
+    #[arg(long, group = "terrain")]
+    pub town: bool,
+    /// Preset: cities (step 25).
+    #[arg(long, group = "terrain")]
+    pub city: bool,
+    /// Preset: large buildings (step 50).
+    #[arg(long, group = "terrain")]
+    pub metro: bool,
+    /// Preset: forest, no buildings (step 10).
+    #[arg(long, group = "terrain")]
+    pub forest: bool,
+    /// Preset: steep terrain (step 10, max-angle 12, max-distance 1.5, low-noise 10).
+    #[arg(long, group = "terrain")]
+    pub mountains: bool,
+    /// Memory budget (e.g. 512M, 4G).
+    #[arg(long, value_name = "SIZE", default_value_t = Size(sweeptin::pipeline::default_mem()))]
+    pub mem: Size,
+    /// Worker threads (0: one per core). The classes are the same for any count.
+    #[arg(long, value_name = "N", default_value_t = 0, value_parser = parse_threads)]
+    pub threads: usize,
+    /// Directory for temporary files (default: the system's).
+    #[arg(long, value_name = "DIR")]
+    pub tmp_dir: Option<PathBuf>,
+    /// Print a JSON summary on standard output.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress on standard error.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// The files named by @lists and .vpc files (inputs too).
+    #[arg(skip)]
+    pub lists: Vec<PathBuf>,
+}
+
+impl Args {
+    /// The parameters: the preset's (or the default), each given value over it.
+    fn params(&self) -> GroundParams {
+        let preset = [
+            (self.wilderness, Terrain::Wilderness),
+            (self.nature, Terrain::Nature),
+            (self.town, Terrain::Town),
+            (self.city, Terrain::City),
+            (self.metro, Terrain::Metro),
+            (self.forest, Terrain::Forest),
+            (self.mountains, Terrain::Mountains),
+        ]
+        .into_iter()
+        .find(|p| p.0)
+        .map(|p| p.1);
+        let mut p = preset.map_or_else(GroundParams::default, Terrain::params);
+        p.step = self.step.unwrap_or(p.step);
+        p.max_distance = self.max_distance.unwrap_or(p.max_distance);
+        p.max_angle = self.max_angle.unwrap_or(p.max_angle);
+        p.low_noise = self.low_noise.unwrap_or(p.low_noise);
+        p.offset = self.offset.unwrap_or(p.offset);
+        p.mirror = p.mirror && !self.no_mirror;
+        p.reset = self.reset;
+        p
+    }
+
+    /// The output of each input.
+    fn outputs(&self) -> anyhow::Result<Vec<PathBuf>> {
+        match (&self.output, &self.odir) {
+            (Some(o), None) if self.inputs.len() == 1 => Ok(vec![o.clone()]),
+            (Some(_), None) => Err(sweeptin::Error::Options(format!(
+                "-o names one output for {} inputs: give --odir DIR (each input is written \
+                 there under its own name)",
+                self.inputs.len()
+            ))
+            .into()),
+            (None, Some(dir)) => {
+                if !dir.is_dir() {
+                    return Err(sweeptin::Error::Options(format!(
+                        "--odir {}: not a directory (create it first)",
+                        dir.display()
+                    ))
+                    .into());
+                }
+                self.inputs
+                    .iter()
+                    .map(|i| {
+                        i.file_name().map(|n| dir.join(n)).ok_or_else(|| {
+                            sweeptin::Error::Options(format!(
+                                "{}: an input without a file name",
+                                i.display()
+                            ))
+                            .into()
+                        })
+                    })
+                    .collect()
+            }
+            _ => Err(sweeptin::Error::Options(
+                "give -o OUT.laz (one input) or --odir DIR (any number)".into(),
+            )
+            .into()),
+        }
+    }
+}
+
+/// The `--json` summary.
+#[derive(serde::Serialize)]
+struct Summary<'a> {
+    inputs: &'a [PathBuf],
+    outputs: &'a [PathBuf],
+    params: GroundParams,
+    #[serde(flatten)]
+    ground: &'a GroundSummary,
+    changed: u64,
+    bytes: u64,
+    write_seconds: f64,
+    seconds: f64,
+}
+
+pub fn run(mut args: Args) -> anyhow::Result<()> {
+    let start = Instant::now();
+    args.lists = super::input::expand_files(&mut args.inputs)?;
+    let params = args.params();
+    params.check()?;
+    let outputs = args.outputs()?;
+    let pairs: Vec<(&str, &Path)> = outputs
+        .iter()
+        .map(|o| {
+            (
+                if args.odir.is_some() { "--odir" } else { "-o" },
+                o.as_path(),
+            )
+        })
+        .collect();
+    let mut read = args.inputs.clone();
+    read.extend(args.lists.iter().cloned());
+    super::input::distinct_outputs(&pairs, &read, "ground")?;
+    for o in &outputs {
+        super::input::check_output(o)?;
+        sweeptin::output::las::check_point_output(o, &read)?;
+    }
+    sweeptin::pipeline::size_thread_pool(args.threads);
+    let tmp = args.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
+    let bar = if args.quiet || args.json {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new_spinner();
+        b.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("template"));
+        b.enable_steady_tick(Duration::from_millis(200));
+        b
+    };
+    let mut progress = |what: &str, done: u64, total: u64| {
+        bar.set_message(format!("{what}: {done} of {total} points"));
+    };
+    let (mut classes, summary) =
+        sweeptin::ground::classify_files(&args.inputs, &params, args.mem.0, &tmp, &mut progress)
+            .map_err(|e| super::input::run_error(e, &args.inputs))?;
+    let write_start = Instant::now();
+    let (mut changed, mut bytes, mut base) = (0u64, 0u64, 0u64);
+    for (input, output) in args.inputs.iter().zip(&outputs) {
+        bar.set_message(format!("writing {}", output.display()));
+        let count = sweeptin::input::las::FileInfo::read(input)?.point_count;
+        let mut edit = |p: &mut sweeptin::output::las::PointEdit<'_>| -> sweeptin::Result<()> {
+            let c = classes.get(base + p.index())?;
+            p.set_classification(c);
+            Ok(())
+        };
+        let s = sweeptin::output::las::rewrite_points(input, output, &mut edit)?;
+        for note in &s.notes {
+            bar.suspend(|| eprintln!("sweeptin: note: {note}"));
+        }
+        changed += s.changed;
+        bytes += s.bytes;
+        base += count;
+    }
+    bar.finish_and_clear();
+    let seconds = start.elapsed().as_secs_f64();
+    if summary.ground == 0 && !args.quiet {
+        eprintln!(
+            "sweeptin: warning: no ground found in {} points (no points, or none eligible: \
+             withheld or noise): `dem --class 2` on the output has nothing to grid",
+            summary.points
+        );
+    }
+    if args.json {
+        let s = Summary {
+            inputs: &args.inputs,
+            outputs: &outputs,
+            params,
+            ground: &summary,
+            changed,
+            bytes,
+            write_seconds: write_start.elapsed().as_secs_f64(),
+            seconds,
+        };
+        println!("{}", serde_json::to_string(&s)?);
+    } else if !args.quiet {
+        eprintln!(
+            "{} points: {} ground, {} low noise ({} blocks of {}), written in {:.1} s",
+            summary.points,
+            summary.ground,
+            summary.low_noise,
+            summary.blocks,
+            summary.block,
+            seconds
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,393 @@
+//! The classification in blocks, bounded by `--mem`: every point into the tiles' block index
+//! (blocks = seed cells, with each point's global index and class as its tag), then every
+//! ground block with points run on its buffered rectangle ([`super::ptd`]), batches of blocks
+//! on every core, the classes of the points each block owns written at their global index into
+//! a [`ClassStore`] (one byte a point, a temporary file for large inputs).
+
+use super::ptd::{RunStats, check_labels, classify_run};
+use super::{GroundParams, GroundSummary, Tag};
+use crate::error::{Error, Result};
+use crate::sort::DuplicatePolicy;
+use crate::sort::external::ExternalSorter;
+use crate::tiles::grid::{BlockRect, TileGrid};
+use crate::tiles::index::{BlockIndex, TaggedRecord};
+use rayon::prelude::*;
+use std::fs::File;
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Bytes a run takes per point of its buffered rectangle (the points, tags, labels, the
+/// cells' order, the candidates' probes, the ground TIN and its per-triangle tables), for
+/// fitting runs into `--mem`.
+pub const RUN_BYTES_PER_POINT: u64 = 160;
+
+/// Largest seed cell coordinate (block keys pack two `i32`).
+const KEY_LIMIT: f64 = ((1u64 << 31) - 4) as f64;
+
+/// The classes of every point by global input index: in memory, or one byte a point in an
+/// anonymous temporary file (written at each point's offset).
+#[derive(Debug)]
+pub struct ClassStore {
+    inner: Inner,
+    len: u64,
+}
+
+#[derive(Debug)]
+enum Inner {
+    Memory(Vec<u8>),
+    File {
+        file: File,
+        dir: PathBuf,
+        buf: Vec<u8>,
+        /// Index of `buf[0]` (reading in order).
+        at: u64,
+    },
+}
+
+/// Bytes read at a time from a store's file.
+const READ_PIECE: usize = 1 << 20;
+
+impl ClassStore {
+    /// A store of `len` classes: in memory when they take at most `in_memory` bytes, else a
+    /// temporary file under `dir`.
+    ///
+    /// # Errors
+    /// [`Error::Write`] when the temporary file cannot be made.
+    pub fn new(len: u64, in_memory: u64, dir: &Path) -> Result<ClassStore> {
+        let inner = if len <= in_memory {
+            Inner::Memory(vec![0; len as usize])
+        } else {
+            let w = |e| Error::Write {
+                path: dir.to_path_buf(),
+                source: e,
+            };
+            let file = tempfile::tempfile_in(dir).map_err(w)?;
+            file.set_len(len).map_err(w)?;
+            Inner::File {
+                file,
+                dir: dir.to_path_buf(),
+                buf: Vec::new(),
+                at: 0,
+            }
+        };
+        Ok(ClassStore { inner, len })
+    }
+
+    /// Number of classes.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    /// No classes at all?
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Records `(index, class)` pairs (sorted here; runs of consecutive indices are one write).
+    fn put(&mut self, pairs: &mut [(u64, u8)]) -> Result<()> {
+        pairs.sort_unstable_by_key(|p| p.0);
+        match &mut self.inner {
+            Inner::Memory(v) => {
+                for &(i, c) in pairs.iter() {
+                    v[i as usize] = c;
+                }
+            }
+            Inner::File { file, dir, buf, .. } => {
+                let mut k = 0;
+                while k < pairs.len() {
+                    let start = pairs[k].0;
+                    buf.clear();
+                    while k < pairs.len() && pairs[k].0 == start + buf.len() as u64 {
+                        buf.push(pairs[k].1);
+                        k += 1;
+                    }
+                    file.write_all_at(buf, start).map_err(|e| Error::Write {
+                        path: dir.clone(),
+                        source: e,
+                    })?;
+                }
+                buf.clear();
+            }
+        }
+        Ok(())
+    }
+
+    /// The class of point `index`; fast when asked in increasing order.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if the temporary file cannot be read; [`Error::Internal`] past the end.
+    pub fn get(&mut self, index: u64) -> Result<u8> {
+        if index >= self.len {
+            return Err(Error::Internal(format!(
+                "point {index} has no class: the ground filter classified {} points",
+                self.len
+            )));
+        }
+        match &mut self.inner {
+            Inner::Memory(v) => Ok(v[index as usize]),
+            Inner::File { file, dir, buf, at } => {
+                if index < *at || index >= *at + buf.len() as u64 {
+                    let n = (self.len - index).min(READ_PIECE as u64) as usize;
+                    buf.resize(n, 0);
+                    file.read_exact_at(buf, index)
+                        .map_err(|e| Error::io(dir.clone(), e))?;
+                    *at = index;
+                }
+                Ok(buf[(index - *at) as usize])
+            }
+        }
+    }
+}
+
+/// Hands every point to the function it is given (see [`classify_stream`]).
+pub type Feed<'a> = dyn FnMut(&mut dyn FnMut(GroundInput) -> Result<()>) -> Result<()> + 'a;
+
+/// What a block's run gives back: the `(index, class)` of the points it owns, its counters
+/// and the points it read.
+struct BlockResult {
+    classes: Vec<(u64, u8)>,
+    stats: RunStats,
+    points: u64,
+}
+
+/// One point handed to the classification.
+#[derive(Clone, Copy, Debug)]
+pub struct GroundInput {
+    /// Global input index (0, 1, 2, ... over all the inputs).
+    pub index: u64,
+    /// Position.
+    pub xyz: [f64; 3],
+    /// Its class before.
+    pub class: u8,
+    /// Withheld (never ground, keeps its class).
+    pub withheld: bool,
+}
+
+/// Classifies the points that `feed` pushes (each exactly once, every index below `total`),
+/// within `mem` bytes, temporary files under `tmp`.
+///
+/// # Errors
+/// [`Error::Options`] for bad parameters or a run that does not fit half of `mem`; the sort's,
+/// the index's and the TIN's errors; whatever `feed` returns.
+pub fn classify_stream(
+    params: &GroundParams,
+    total: u64,
+    mem: u64,
+    tmp: &Path,
+    feed: &mut Feed<'_>,
+    progress: &mut dyn FnMut(&str, u64, u64),
+) -> Result<(ClassStore, GroundSummary)> {
+    params.check()?;
+    let start = Instant::now();
+    let grid = params.grid()?;
+    let mut summary = GroundSummary {
+        points: total,
+        block: grid.tile,
+        buffer: params.buffer(),
+        ..GroundSummary::default()
+    };
+    // 1. The block index of every point, tagged with its index and class.
+    let budget = (mem / 2).max(8 << 20);
+    let mut sorter = ExternalSorter::<TaggedRecord>::new(budget, tmp);
+    let mut seen = 0u64;
+    let mut bounds = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    feed(&mut |p: GroundInput| {
+        let [x, y, _] = p.xyz;
+        crate::tin::check_point(p.xyz, p.index)?;
+        if p.index >= total {
+            return Err(Error::Internal(format!(
+                "point {} given to the ground filter of {total} points",
+                p.index
+            )));
+        }
+        bounds = [
+            bounds[0].min(x),
+            bounds[1].min(y),
+            bounds[2].max(x),
+            bounds[3].max(y),
+        ];
+        // Seed cells whose keys fit (checked again exactly over all the points below).
+        if x.abs().max(y.abs()) / grid.block > KEY_LIMIT {
+            return Err(Error::Options(format!(
+                "point {}: ({x}, {y}) lies too far from the origin for seed cells of {}: give \
+                 a larger --step",
+                p.index, grid.block
+            )));
+        }
+        seen += 1;
+        if seen.is_multiple_of(1 << 20) {
+            progress("reading", seen, total);
+        }
+        sorter.push(TaggedRecord::new(grid.block_of(x, y), p.xyz, Tag::of(&p).0))
+    })?;
+    if seen != total {
+        return Err(Error::Internal(format!(
+            "the ground filter was given {seen} points of {total}"
+        )));
+    }
+    if seen > 0 {
+        grid.check_bounds(bounds)?;
+    }
+    let merge = sorter.finish()?;
+    let index = BlockIndex::build(grid, merge, None, tmp, DuplicatePolicy::First)?;
+    summary.read_seconds = start.elapsed().as_secs_f64();
+
+    // 2. The blocks with points, in order.
+    let start = Instant::now();
+    let mut blocks: Vec<(i64, i64)> = Vec::new();
+    let occ = index.occupied();
+    for by in occ.y0..occ.y1 {
+        for &k in index.keys_in_row(by, occ.x0, occ.x1) {
+            let (bx, by) = TileGrid::unkey(k);
+            blocks.push(grid.tile_of_block(bx, by));
+        }
+    }
+    blocks.sort_unstable_by_key(|&(tx, ty)| (ty, tx));
+    blocks.dedup();
+    summary.blocks = blocks.len() as u64;
+
+    let mut store = ClassStore::new(total, mem / 8, tmp)?;
+    let threads = rayon::current_num_threads().max(1);
+    let run_budget = mem / 2;
+    let buffer_cells = super::BUFFER_CELLS;
+    let mut k = 0;
+    let mut done_points = 0u64;
+    while k < blocks.len() {
+        // A batch: up to one block per thread, within the run budget.
+        let mut batch: Vec<(i64, i64, BlockRect)> = Vec::new();
+        let mut bytes = 0u64;
+        while k < blocks.len() && batch.len() < threads {
+            let (tx, ty) = blocks[k];
+            let owned = grid.tile_blocks(tx, ty);
+            let rect = owned.expand(buffer_cells);
+            let need = index.count(&rect) * RUN_BYTES_PER_POINT;
+            if need > run_budget {
+                let w = grid.world(&owned);
+                return Err(Error::Options(format!(
+                    "ground: the block x {} .. {}, y {} .. {} with its buffer of {} holds {} \
+                     points, about {} MiB to classify, more than half of --mem ({} MiB): give \
+                     a larger --mem, or a smaller --step (blocks are {} steps a side)",
+                    w[0],
+                    w[2],
+                    w[1],
+                    w[3],
+                    params.buffer(),
+                    index.count(&rect),
+                    need >> 20,
+                    mem >> 20,
+                    1u32 << grid.shift
+                )));
+            }
+            if !batch.is_empty() && bytes + need > run_budget {
+                break;
+            }
+            bytes += need;
+            batch.push((tx, ty, rect));
+            k += 1;
+        }
+        let results: Vec<Result<BlockResult>> = batch
+            .par_iter()
+            .map(|&(tx, ty, rect)| run_block(&index, &grid, params, (tx, ty), rect))
+            .collect();
+        for r in results {
+            let BlockResult {
+                classes: mut pairs,
+                stats,
+                points: run_points,
+            } = r?;
+            done_points += pairs.len() as u64;
+            for &(_, c) in &pairs {
+                match c {
+                    2 => summary.ground += 1,
+                    7 => summary.low_noise += 1,
+                    _ => {}
+                }
+            }
+            summary.seeds += stats.seeds;
+            summary.iterations = summary.iterations.max(stats.iterations);
+            summary.largest_run_points = summary.largest_run_points.max(run_points);
+            store.put(&mut pairs)?;
+        }
+        progress("classifying", done_points, total);
+    }
+    if done_points != total {
+        return Err(Error::Internal(format!(
+            "the ground blocks owned {done_points} points of {total}"
+        )));
+    }
+    summary.classify_seconds = start.elapsed().as_secs_f64();
+    Ok((store, summary))
+}
+
+/// Runs the block `(tx, ty)` over the blocks `rect` (its buffered rectangle): the classes of
+/// the points it owns, as `(index, tag)` pairs with the new class in the low byte, its
+/// counters and the points it read.
+fn run_block(
+    index: &BlockIndex,
+    grid: &TileGrid,
+    params: &GroundParams,
+    (tx, ty): (i64, i64),
+    rect: BlockRect,
+) -> Result<BlockResult> {
+    let mut pts = Vec::new();
+    let mut tags = Vec::new();
+    index.read(&rect, &mut pts)?;
+    index.read_tags(&rect, &mut tags)?;
+    if tags.len() != pts.len() {
+        return Err(Error::Internal(format!(
+            "the block index gave {} points and {} tags",
+            pts.len(),
+            tags.len()
+        )));
+    }
+    let mut labels = Vec::new();
+    let world = grid.world(&rect);
+    let stats = classify_run(&pts, &tags, world, grid, params, &mut labels)?;
+    check_labels(&labels, pts.len())?;
+    let mut out = Vec::new();
+    for (i, p) in pts.iter().enumerate() {
+        let (bx, by) = grid.block_of(p[0], p[1]);
+        if grid.tile_of_block(bx, by) != (tx, ty) {
+            continue;
+        }
+        let tag = Tag(tags[i]);
+        out.push((tag.index(), tag.new_class(labels[i], params.reset)));
+    }
+    Ok(BlockResult {
+        classes: out,
+        stats,
+        points: pts.len() as u64,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ClassStore;
+
+    #[test]
+    fn class_store_in_a_file_gives_back_what_was_put_at_each_index() {
+        let dir = std::env::temp_dir();
+        let n = 3 * super::READ_PIECE as u64 + 17;
+        let mut file = ClassStore::new(n, 0, &dir).unwrap();
+        let mut memory = ClassStore::new(n, n, &dir).unwrap();
+        // Scattered and consecutive indices, given out of order.
+        let mut pairs: Vec<(u64, u8)> = (0..n)
+            .rev()
+            .step_by(3)
+            .map(|i| (i, (i % 251) as u8))
+            .collect();
+        pairs.extend((0..1000).map(|i| (i * 3 + 1, 9)));
+        file.put(&mut pairs.clone()).unwrap();
+        memory.put(&mut pairs).unwrap();
+        for i in (0..n).chain([n - 1, 5, 0]) {
+            assert_eq!(file.get(i).unwrap(), memory.get(i).unwrap(), "index {i}");
+        }
+        assert!(file.get(n).is_err());
+    }
+}

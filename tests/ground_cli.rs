@@ -1,0 +1,231 @@
+//! `sweeptin ground` on the command line: the points written back with their new classes,
+//! byte for byte the same for any `--threads` and `--mem`, several files classified together,
+//! the output rules, and the empty file.
+
+#[path = "support/cli.rs"]
+mod cli;
+#[path = "support/data.rs"]
+mod data;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use sweeptin::ground::{GroundParams, classify_files};
+use sweeptin::input::las::{Filter, LidarPoint, LidarReader};
+
+fn read(path: &Path) -> Vec<LidarPoint> {
+    LidarReader::open(&[path], &Filter::keep_all())
+        .unwrap()
+        .read_all()
+        .unwrap()
+}
+
+fn status(args: &[&std::ffi::OsStr]) -> (i32, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn ground_writes_every_point_back_with_the_library_classes() {
+    let input = data::shared("lidar/startinpy_small.laz");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("classified.laz");
+    let args: [&std::ffi::OsStr; 5] = [
+        "ground".as_ref(),
+        input.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--json".as_ref(),
+    ];
+    let o = cli::ok(&args);
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (before, after) = (read(&input), read(&out));
+    assert_eq!(before.len(), after.len());
+    let (mut store, s) = classify_files(
+        std::slice::from_ref(&input),
+        &GroundParams::default(),
+        1 << 30,
+        &std::env::temp_dir(),
+        &mut |_, _, _| {},
+    )
+    .unwrap();
+    assert_eq!(summary["ground"], s.ground);
+    assert_eq!(summary["points"], before.len() as u64);
+    for (i, (a, b)) in before.iter().zip(&after).enumerate() {
+        assert_eq!((a.x, a.y, a.z), (b.x, b.y, b.z), "point {i} moved");
+        assert_eq!(
+            (a.return_number, a.number_of_returns, a.flags),
+            (b.return_number, b.number_of_returns, b.flags)
+        );
+        assert_eq!(b.classification, store.get(i as u64).unwrap(), "point {i}");
+    }
+}
+
+fn ground_odir(files: &[PathBuf], odir: &Path, extra: &[&str]) {
+    let mut args: Vec<&std::ffi::OsStr> = vec!["ground".as_ref()];
+    args.extend(files.iter().map(|f| f.as_os_str()));
+    args.extend(["--odir".as_ref(), odir.as_os_str(), "--quiet".as_ref()]);
+    args.extend(extra.iter().map(|s| std::ffi::OsStr::new(*s)));
+    cli::ok(&args);
+}
+
+#[test]
+fn adjacent_tiles_classified_together_are_byte_identical_for_any_threads_and_mem() {
+    let files = data::ign_tiles();
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    // 24 MiB: the block index spills and the blocks run in small batches.
+    ground_odir(
+        &files,
+        a.path(),
+        &["--step", "2", "--threads", "1", "--mem", "24M"],
+    );
+    ground_odir(
+        &files,
+        b.path(),
+        &["--step", "2", "--threads", "2", "--mem", "1G"],
+    );
+    let mut ground = 0;
+    for f in &files {
+        let name = f.file_name().unwrap();
+        let (x, y) = (a.path().join(name), b.path().join(name));
+        assert_eq!(
+            std::fs::read(&x).unwrap(),
+            std::fs::read(&y).unwrap(),
+            "{name:?}"
+        );
+        ground += read(&x).iter().filter(|p| p.classification == 2).count();
+    }
+    // The files were classified together: the classes are those of the whole set.
+    let params = GroundParams {
+        step: 2.0,
+        ..GroundParams::default()
+    };
+    let (_, s) = classify_files(
+        &files,
+        &params,
+        1 << 30,
+        &std::env::temp_dir(),
+        &mut |_, _, _| {},
+    )
+    .unwrap();
+    assert_eq!(ground as u64, s.ground);
+}
+
+/// Writes `pts` as a LAS 1.2 file (point format 1) with classes `classes`.
+fn write_las(path: &Path, pts: &[[f64; 3]], classes: &[u8]) {
+    use las::{Builder, Point, Transform, Vector, Writer};
+    let mut b = Builder::from((1, 2));
+    b.point_format = las::point::Format::new(1).unwrap();
+    let t = |offset| Transform {
+        scale: 0.001,
+        offset,
+    };
+    b.transforms = Vector {
+        x: t(500_000.0),
+        y: t(4_000_000.0),
+        z: t(0.0),
+    };
+    let mut w = Writer::from_path(path, b.into_header().unwrap()).unwrap();
+    for (p, &c) in pts.iter().zip(classes) {
+        w.write_point(Point {
+            x: 500_000.0 + p[0],
+            y: 4_000_000.0 + p[1],
+            z: p[2],
+            classification: las::point::Classification::new(c).unwrap(),
+            gps_time: Some(0.0),
+            ..Default::default()
+        })
+        .unwrap();
+    }
+    w.close().unwrap();
+}
+
+#[test]
+fn a_low_outlier_is_written_as_class_7_in_a_las_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("in.las"), dir.path().join("out.las"));
+    let mut pts = Vec::new();
+    for i in 0..80 {
+        for j in 0..80 {
+            pts.push([i as f64 * 0.5, j as f64 * 0.5, 100.0 + 0.05 * i as f64]);
+        }
+    }
+    pts.push([20.1, 20.1, 51.0]);
+    write_las(&input, &pts, &vec![1; pts.len()]);
+    cli::ok(&[
+        "ground".as_ref(),
+        input.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--quiet".as_ref(),
+    ]);
+    let got = read(&out);
+    assert_eq!(got.last().unwrap().classification, 7);
+    assert!(got[..got.len() - 1].iter().all(|p| p.classification == 2));
+}
+
+#[test]
+fn an_empty_file_is_written_with_no_ground() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("empty.las"), dir.path().join("out.laz"));
+    write_las(&input, &[], &[]);
+    let o = cli::ok(&[
+        "ground".as_ref(),
+        input.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no ground"));
+    assert!(read(&out).is_empty());
+}
+
+#[test]
+fn ground_output_never_replaces_an_input_nor_a_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.las");
+    write_las(
+        &input,
+        &[[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]],
+        &[0, 0, 0],
+    );
+    let before = std::fs::read(&input).unwrap();
+    let (code, err) = status(&[
+        "ground".as_ref(),
+        input.as_os_str(),
+        "-o".as_ref(),
+        input.as_os_str(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(std::fs::read(&input).unwrap(), before);
+    let (code, err) = status(&[
+        "ground".as_ref(),
+        input.as_os_str(),
+        "-o".as_ref(),
+        dir.path().as_os_str(),
+    ]);
+    assert_eq!(code, 4, "{err}");
+    // Several inputs need --odir; --odir must be a directory.
+    let (code, err) = status(&[
+        "ground".as_ref(),
+        input.as_os_str(),
+        input.as_os_str(),
+        "-o".as_ref(),
+        dir.path().join("x.laz").as_os_str(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--odir"), "{err}");
+    // --odir where the inputs are: the output would be the input itself.
+    let (code, err) = status(&[
+        "ground".as_ref(),
+        input.as_os_str(),
+        "--odir".as_ref(),
+        dir.path().as_os_str(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(std::fs::read(&input).unwrap(), before);
+}
