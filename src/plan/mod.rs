@@ -18,6 +18,7 @@
 //! every triangle (by its lowest vertex in sweep order) has exactly one owner tile.
 
 mod area;
+mod chunks;
 use area::{centres_within, grown, meets_hull, overlaps, tile_bounds, whole_multiple};
 mod files;
 mod lines;
@@ -58,6 +59,15 @@ pub struct PlanFile {
     /// `None` in plans of older builds (not checked).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stamp: Option<FileStamp>,
+    /// A plain LAZ/LAS file with points (not COPC): saving the plan writes its chunk index
+    /// (`DIR/index/<k>.chunks`, [`Plan::chunk_index_path`]), and tasks decode only the chunks
+    /// that meet their tile and buffer. `false` in plans of older builds (files read whole).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub indexed: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 /// One task: a tile of the grid.
@@ -141,6 +151,10 @@ pub struct TaskRecord {
     pub runs: u32,
     /// Points triangulated and triangles owned.
     pub points: u64,
+    /// Points decoded from the input files over all runs' last: the chunks (and COPC nodes)
+    /// that meet the tile and buffer of an indexed file, every point of the others.
+    #[serde(default)]
+    pub decoded: u64,
     /// See `points`.
     pub triangles: u64,
     /// Seconds.
@@ -269,6 +283,7 @@ impl Plan {
                 bounds: [b.min[0], b.min[1], b.max[0], b.max[1]],
                 points: info.point_count,
                 stamp: Some(FileStamp::of(p)?),
+                indexed: info.point_count > 0 && info.copc.is_none(),
             });
         }
         // Where data may be: the files' extents and the lines' vertices (the lines read and
@@ -371,7 +386,8 @@ impl Plan {
         Ok(plan)
     }
 
-    /// Writes `DIR/plan.json` (atomically) and creates `DIR/tiles/`.
+    /// Writes `DIR/plan.json` (atomically) and creates `DIR/tiles/`, after the chunk index of
+    /// every plain LAZ/LAS file (`DIR/index/`: one decoding pass over them, on every core).
     ///
     /// # Errors
     /// [`Error::Io`] naming the file.
@@ -405,6 +421,8 @@ impl Plan {
             )));
         }
         std::fs::create_dir_all(&tiles).map_err(|e| Error::write(&tiles, e))?;
+        // The indexes first: a plan.json is complete with everything its tasks read.
+        self.write_chunk_indexes(dir)?;
         write_atomic(&path, text.as_bytes())?;
         Ok(path)
     }
@@ -531,6 +549,7 @@ impl Plan {
                 .filter(|f| f.points > 0 && !overlaps(&f.bounds, &g))
                 .map(|f| f.bounds)
                 .collect(),
+            chunks: Vec::new(),
         })
     }
 

@@ -55,12 +55,14 @@ pub(super) fn read_index(
     let mut declared = Declared {
         crs: reader.crs().cloned(),
         warnings: reader.warnings(),
+        decoded: 0,
     };
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
     let (mut index, spread, cpu) = match packing {
         Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
         None => index_points::<BlockRecord>(&mut reader, probe, None, job, progress)?,
     };
+    declared.decoded = reader.stats().read;
     let bounds = spread.extent();
     if let Some(far) = spread.far_points() {
         declared.warnings.push(far.warning());
@@ -108,6 +110,8 @@ pub(super) fn read_index(
 pub(super) struct Declared {
     pub crs: Option<crate::crs::Crs>,
     pub warnings: Vec<String>,
+    /// Points decoded from the files ([`super::TileStats::points_decoded`]).
+    pub decoded: u64,
 }
 
 /// Reads every point of `reader` into the block index's sort as records `R` (packed with
@@ -173,13 +177,17 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
         let (t, b) = (sc.tile, sc.buffer);
         let area = [t[0] - b, t[1] - b, t[2] + b, t[3] + b];
         // A COPC file whose header box says nothing is read whole (its box cannot say what
-        // lies outside the area).
+        // lies outside the area); a plain LAZ/LAS file is read by area with its chunk index.
+        let indexed = |i: &crate::input::las::FileInfo| {
+            i.copc.is_some() || sc.chunks.iter().any(|(p, _)| *p == i.path)
+        };
         if !infos.is_empty()
-            && infos.iter().all(|i| i.copc.is_some() && i.known_rect().is_some())
+            && infos.iter().all(|i| indexed(i) && i.known_rect().is_some())
             && let Some(bbox) = crate::input::las::BBox::new(area[0], area[1], area[2], area[3])
         {
             let options = ReadOptions {
                 area: Some(bbox),
+                chunks: sc.chunks.clone(),
                 crs: job.crs.cloned(),
                 ..ReadOptions::for_budget(job.mem)
             };
