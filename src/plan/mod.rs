@@ -1,10 +1,12 @@
 //! Plans: one job cut into tasks, one per tile of a global grid, for batch engines (Slurm job
 //! arrays, Kubernetes Indexed Jobs, AWS Batch array jobs, GNU parallel).
 //!
-//! A [`Plan`] is written as `DIR/plan.json` from the input files' headers only (no point is
-//! decoded): the product command and its options, the tile grid, and for every tile the files
-//! whose extent reaches into it or its buffer. A task needs nothing else. It runs the tiled engine
-//! on its tile alone ([`crate::TaskScope`]): it reads the files near its tile, keeps the
+//! A [`Plan`] is made from the input files' headers (no point is decoded): the product command
+//! and its options, the tile grid, and for every tile the files whose extent reaches into it or
+//! its buffer. Saving it writes the chunk index of every plain LAZ/LAS file (`DIR/index/`, one
+//! decoding pass: [`crate::input::las::ChunkIndex`]), then `DIR/plan.json`. A task needs nothing
+//! else. It runs the tiled engine on its tile alone ([`crate::TaskScope`]): it reads the files
+//! near its tile (only their chunks, or COPC nodes, that meet its tile and buffer), keeps the
 //! points up to the buffer, and delivers exactly what its tile owns, certified to be what a run
 //! over all the points gives; when a certificate needs points beyond the buffer the task runs
 //! again with a wider one. Tasks write their outputs under `DIR/tiles/` atomically, with a

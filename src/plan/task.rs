@@ -398,11 +398,12 @@ impl Plan {
                     let mut r = record_of(i, status, buffer, runs, &run, &products);
                     self.finish_pieces(dir, i, pieces, &mut r)?;
                     if status == "empty" {
-                        // No tile for an empty task: the merges take it as nodata, no lines,
-                        // no triangles (its volume sums, all zero, stay in the record).
-                        for (_, p) in r.outputs.drain(..) {
-                            let _ = std::fs::remove_file(dir.join(p));
-                        }
+                        // No tile for an empty task: the merges take it as nodata and no lines
+                        // (its volume sums, all zero, stay in the record). A TIN's pieces stay:
+                        // they hold the triangles the merge trims, and vertices others wait for.
+                        r.outputs.retain(|(name, p)| {
+                            name == "tin" || std::fs::remove_file(dir.join(p)).is_err()
+                        });
                     }
                     break r;
                 }
