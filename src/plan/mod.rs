@@ -144,8 +144,8 @@ impl PartialEq for PlanId {
 pub struct TaskRecord {
     /// The task.
     pub index: usize,
-    /// `"done"`, or `"empty"` when no point is left in the tile after the filters (its raster is
-    /// all nodata; not a failure).
+    /// `"done"`, or `"empty"` when no point is left in the tile after the filters (no tile
+    /// written: its part of the mosaic is nodata; not a failure).
     pub status: String,
     /// The buffer the task ended with.
     pub buffer: f64,

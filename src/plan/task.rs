@@ -357,8 +357,9 @@ impl Plan {
     }
 
     /// Runs task `i` of the plan in `dir` until its buffer is wide enough; writes its outputs
-    /// and then its record, which it returns. A task with no point after the filters writes a
-    /// nodata raster and records `"empty"` with no point.
+    /// and then its record, which it returns. A task with no point after the filters, or no
+    /// triangle and no cell with data, writes no tile (a TIN's pieces excepted) and records
+    /// `"empty"`: the merges take it as nodata.
     ///
     /// # Errors
     /// [`Error::Options`] for a task that does not exist; the pipeline's and the sinks' errors.
