@@ -98,6 +98,14 @@ impl ChunkIndex {
             .map(|s| s.rect)
     }
 
+    /// The box `[xmin, ymin, xmax, ymax]` and number of points of every span with points.
+    pub fn boxes(&self) -> impl Iterator<Item = ([f64; 4], u64)> + '_ {
+        self.spans
+            .iter()
+            .filter(|s| s.span.points > 0)
+            .map(|s| (s.rect, s.span.points))
+    }
+
     /// Checks that the index describes the spans of the file `info` (same chunks, or the same
     /// blocks of [`LAS_BLOCK`] records): an index of another file, or of this one before it was
     /// rewritten, is refused.
