@@ -57,3 +57,18 @@ run "one sweep, 3-D lines" "$BIN" dem $IGN --cell 1 --breaklines "$OUT/xyz.txt" 
 cmp "$OUT/m1.tif" "$OUT/one.tif" && echo "the plan's mosaic is the sweep's bytes"
 # shellcheck disable=SC2086
 run "one sweep, 2-D lines (draped)" "$BIN" dem $IGN --cell 1 --breaklines "$OUT/xy.txt" -o "$OUT/draped.tif" -q
+# Issue 43 item 1: one big plain LAZ (ARSO, 13.2 M points), planned in tiles of 510 m: `plan`
+# writes the chunk index (one decoding pass), each task decodes only the chunks that meet its
+# tile and buffer. Total CPU (plan + run --all) against one run.
+ARSO="$D/lidar/arso_TM_511_122_from_ept.laz"
+if [ -f "$ARSO" ]; then
+    run "one run, ARSO dem --cell 3" "$BIN" dem "$ARSO" --cell 3 -o "$OUT/arso_one.tif" -q
+    run "plan (chunk index), ARSO --tile 510" "$BIN" plan dem "$ARSO" --cell 3 --tile 510 -o "$OUT/arso"
+    run "run --all, ARSO" "$BIN" run "$OUT/arso/plan.json" --all -q
+    python3 - "$OUT/arso" <<'PY'
+import json, glob, sys
+recs = [json.load(open(f)) for f in glob.glob(sys.argv[1] + "/tiles/task_*.json")]
+print(f"  {len(recs)} tasks, {sum(r['status'] == 'empty' for r in recs)} empty, points decoded "
+      f"{sum(r.get('decoded', 0) for r in recs)} in all")
+PY
+fi

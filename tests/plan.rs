@@ -144,13 +144,15 @@ fn dem_and_contours_of_a_plan_equal_one_run() {
     }
 
     // Re-running is safe; --resume skips finished tasks, but not one whose output is gone.
-    let out = sweeptin(&["run", s(&plan), "--task", "0", "--resume"], "resume");
+    let recs = records(&job, n);
+    let rec0 = recs.iter().find(|r| r["status"] == "done").unwrap();
+    let k = rec0["index"].to_string();
+    let out = sweeptin(&["run", s(&plan), "--task", &k, "--resume"], "resume");
     assert!(String::from_utf8_lossy(&out.stderr).contains("skipped"));
-    let rec0 = &records(&job, n)[0];
     let tif0 = job.join(rec0["outputs"][0][1].as_str().unwrap());
     std::fs::remove_file(&tif0).unwrap();
     let out = sweeptin(
-        &["run", s(&plan), "--task", "0", "--resume"],
+        &["run", s(&plan), "--task", &k, "--resume"],
         "resume a lost output",
     );
     assert!(!String::from_utf8_lossy(&out.stderr).contains("skipped"));

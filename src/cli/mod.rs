@@ -82,7 +82,8 @@ enum Command {
     /// Simplify a grid DEM (GeoTIFF, ESRI ASCII) into a TIN within an error bound.
     Simplify(simplify::Args),
     /// Cut a `dem`, `contours`, `volume` or `tin` job into exact tiles for a batch engine: writes
-    /// DIR/plan.json (from the files' headers only).
+    /// DIR/plan.json (from the files' headers), after the chunk index of every plain LAZ/LAS file
+    /// (DIR/index/, one decoding pass: tasks then decode only the chunks near their tile).
     Plan(plan::PlanArgs),
     /// Run one task of a plan (--task I, or the index a job array gives), or all of them.
     Run(plan::RunArgs),

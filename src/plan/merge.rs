@@ -48,15 +48,17 @@ pub fn records(plan: &Plan, dir: &Path) -> Result<Vec<TaskRecord>> {
     Ok(out)
 }
 
-/// The output `name` of every task, in task order.
-fn outputs<'a>(records: &'a [TaskRecord], name: &str) -> Result<Vec<&'a Path>> {
+/// The output `name` of every task that wrote one, with the task's index, in task order. An
+/// empty task writes none (its tile is nodata, with no lines).
+fn outputs<'a>(records: &'a [TaskRecord], name: &str) -> Result<Vec<(usize, &'a Path)>> {
     records
         .iter()
+        .filter(|r| !(r.status == "empty" && r.outputs.is_empty()))
         .map(|r| {
             r.outputs
                 .iter()
                 .find(|(n, _)| n == name)
-                .map(|(_, p)| p.as_path())
+                .map(|(_, p)| (r.index, p.as_path()))
                 .ok_or_else(|| Error::Options(format!("task {} wrote no {name} output", r.index)))
         })
         .collect()
@@ -186,11 +188,7 @@ pub fn merge_dem(
     crs: Option<&Crs>,
 ) -> Result<DemMergeSummary> {
     let recs = records(plan, dir)?;
-    let tiles: Vec<(usize, &Path)> = recs
-        .iter()
-        .map(|r| r.index)
-        .zip(outputs(&recs, "dem")?)
-        .collect();
+    let tiles = outputs(&recs, "dem")?;
     let nodata = options.nodata;
     let g = mosaic_grid(plan, nodata, options.align, crs)?;
     let ext = out
@@ -300,7 +298,10 @@ pub fn merge_contours(
     crs: Option<&Crs>,
 ) -> Result<StitchSummary> {
     let recs = records(plan, dir)?;
-    let parts = outputs(&recs, "contours")?;
+    let parts: Vec<&Path> = outputs(&recs, "contours")?
+        .into_iter()
+        .map(|(_, p)| p)
+        .collect();
     let levels = match &plan.job.product {
         super::Product::Dem {
             contours: Some(l), ..
@@ -330,7 +331,11 @@ pub fn merge_contours(
 pub fn merge_volume(plan: &Plan, dir: &Path) -> Result<crate::sink::CutFillTotals> {
     let recs = records(plan, dir)?;
     let mut parts = Vec::with_capacity(recs.len());
-    for r in &recs {
+    // An empty task that read no point has no sums (zero).
+    for r in recs
+        .iter()
+        .filter(|r| !(r.status == "empty" && r.volume.is_none()))
+    {
         parts.push(
             r.volume
                 .clone()

@@ -80,6 +80,10 @@ pub(super) fn merge_tin(
     let mut writer = TileWriter::new(Some(&mut *sink), &mut no_sinks, trim);
     let mut row = None;
     for (t, r) in plan.tiles.iter().zip(records) {
+        if r.status == "empty" && r.outputs.is_empty() {
+            // An empty task wrote no pieces: it has no triangle and no vertex.
+            continue;
+        }
         let path = r
             .outputs
             .iter()

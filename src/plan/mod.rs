@@ -1,10 +1,12 @@
 //! Plans: one job cut into tasks, one per tile of a global grid, for batch engines (Slurm job
 //! arrays, Kubernetes Indexed Jobs, AWS Batch array jobs, GNU parallel).
 //!
-//! A [`Plan`] is written as `DIR/plan.json` from the input files' headers only (no point is
-//! decoded): the product command and its options, the tile grid, and for every tile the files
-//! whose extent reaches into it or its buffer. A task needs nothing else. It runs the tiled engine
-//! on its tile alone ([`crate::TaskScope`]): it reads the files near its tile, keeps the
+//! A [`Plan`] is made from the input files' headers (no point is decoded): the product command
+//! and its options, the tile grid, and for every tile the files whose extent reaches into it or
+//! its buffer. Saving it writes the chunk index of every plain LAZ/LAS file (`DIR/index/`, one
+//! decoding pass: [`crate::input::las::ChunkIndex`]), then `DIR/plan.json`. A task needs nothing
+//! else. It runs the tiled engine on its tile alone ([`crate::TaskScope`]): it reads the files
+//! near its tile (only their chunks, or COPC nodes, that meet its tile and buffer), keeps the
 //! points up to the buffer, and delivers exactly what its tile owns, certified to be what a run
 //! over all the points gives; when a certificate needs points beyond the buffer the task runs
 //! again with a wider one. Tasks write their outputs under `DIR/tiles/` atomically, with a
@@ -18,6 +20,7 @@
 //! every triangle (by its lowest vertex in sweep order) has exactly one owner tile.
 
 mod area;
+mod chunks;
 use area::{centres_within, grown, meets_hull, overlaps, tile_bounds, whole_multiple};
 mod files;
 mod lines;
@@ -28,7 +31,7 @@ mod task;
 
 pub use files::FileStamp;
 pub use lines::{LineFile, PlanLines};
-pub use task::{Job, Levels, Product, TaskOptions};
+pub use task::{Job, Levels, Product, TaskOptions, task_from_env};
 
 use crate::error::{Error, Result};
 use crate::input::las::FileInfo;
@@ -58,6 +61,15 @@ pub struct PlanFile {
     /// `None` in plans of older builds (not checked).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stamp: Option<FileStamp>,
+    /// A plain LAZ/LAS file with points (not COPC): saving the plan writes its chunk index
+    /// (`DIR/index/<k>.chunks`, [`Plan::chunk_index_path`]), and tasks decode only the chunks
+    /// that meet their tile and buffer. `false` in plans of older builds (files read whole).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub indexed: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 /// One task: a tile of the grid.
@@ -132,8 +144,8 @@ impl PartialEq for PlanId {
 pub struct TaskRecord {
     /// The task.
     pub index: usize,
-    /// `"done"`, or `"empty"` when no point is left in the tile after the filters (its raster is
-    /// all nodata; not a failure).
+    /// `"done"`, or `"empty"` when no point is left in the tile after the filters (no tile
+    /// written: its part of the mosaic is nodata; not a failure).
     pub status: String,
     /// The buffer the task ended with.
     pub buffer: f64,
@@ -141,6 +153,10 @@ pub struct TaskRecord {
     pub runs: u32,
     /// Points triangulated and triangles owned.
     pub points: u64,
+    /// Points decoded from the input files over all runs' last: the chunks (and COPC nodes)
+    /// that meet the tile and buffer of an indexed file, every point of the others.
+    #[serde(default)]
+    pub decoded: u64,
     /// See `points`.
     pub triangles: u64,
     /// Seconds.
@@ -269,6 +285,7 @@ impl Plan {
                 bounds: [b.min[0], b.min[1], b.max[0], b.max[1]],
                 points: info.point_count,
                 stamp: Some(FileStamp::of(p)?),
+                indexed: info.point_count > 0 && info.copc.is_none(),
             });
         }
         // Where data may be: the files' extents and the lines' vertices (the lines read and
@@ -371,7 +388,8 @@ impl Plan {
         Ok(plan)
     }
 
-    /// Writes `DIR/plan.json` (atomically) and creates `DIR/tiles/`.
+    /// Writes `DIR/plan.json` (atomically) and creates `DIR/tiles/`, after the chunk index of
+    /// every plain LAZ/LAS file (`DIR/index/`: one decoding pass over them, on every core).
     ///
     /// # Errors
     /// [`Error::Io`] naming the file.
@@ -405,6 +423,8 @@ impl Plan {
             )));
         }
         std::fs::create_dir_all(&tiles).map_err(|e| Error::write(&tiles, e))?;
+        // The indexes first: a plan.json is complete with everything its tasks read.
+        self.write_chunk_indexes(dir)?;
         write_atomic(&path, text.as_bytes())?;
         Ok(path)
     }
@@ -531,6 +551,7 @@ impl Plan {
                 .filter(|f| f.points > 0 && !overlaps(&f.bounds, &g))
                 .map(|f| f.bounds)
                 .collect(),
+            chunks: Vec::new(),
         })
     }
 
@@ -678,38 +699,6 @@ impl Plan {
         let text = serde_json::to_string_pretty(&r).map_err(|e| bad(&p, e.to_string()))?;
         write_atomic(&p, text.as_bytes())
     }
-}
-
-/// The task index a batch engine gives: `SLURM_ARRAY_TASK_ID`, `JOB_COMPLETION_INDEX`
-/// (Kubernetes Indexed Job), `AWS_BATCH_JOB_ARRAY_INDEX`, `PBS_ARRAY_INDEX` (0-based) or
-/// `SGE_TASK_ID` (Grid Engine counts from 1: task 1 is the plan's task 0), the first one set.
-///
-/// # Errors
-/// [`Error::Options`] naming the variable when its value is not a task number.
-pub fn task_from_env() -> Result<Option<usize>> {
-    for (var, base) in [
-        ("SLURM_ARRAY_TASK_ID", 0),
-        ("JOB_COMPLETION_INDEX", 0),
-        ("AWS_BATCH_JOB_ARRAY_INDEX", 0),
-        ("PBS_ARRAY_INDEX", 0),
-        ("SGE_TASK_ID", 1),
-    ] {
-        let Ok(v) = std::env::var(var) else {
-            continue;
-        };
-        return match v
-            .trim()
-            .parse::<usize>()
-            .ok()
-            .and_then(|i| i.checked_sub(base))
-        {
-            Some(i) => Ok(Some(i)),
-            None => Err(Error::Options(format!(
-                "{var}={v:?} is not a task number (counted from {base})"
-            ))),
-        };
-    }
-    Ok(None)
 }
 
 /// `b` grown by `d` on every side.

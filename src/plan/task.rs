@@ -16,7 +16,7 @@ use crate::products::dem::{DemOptions, DemSink};
 use crate::products::volume::VolumeSink;
 use crate::raster::{Align, GridExtent, GridPlan};
 use crate::sink::MeshSink as _;
-use crate::sink::{Fanout, FanoutSummary, ProductSummary, StreamInfo, TriangleSink};
+use crate::sink::{Fanout, FanoutSummary, ProductSummary, TriangleSink};
 use crate::sort::memory::DuplicatePolicy;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -382,8 +382,9 @@ impl Plan {
     }
 
     /// Runs task `i` of the plan in `dir` until its buffer is wide enough; writes its outputs
-    /// and then its record, which it returns. A task with no point after the filters writes a
-    /// nodata raster and records `"empty"` with no point.
+    /// and then its record, which it returns. A task with no point after the filters, or no
+    /// triangle and no cell with data, writes no tile (a TIN's pieces excepted) and records
+    /// `"empty"`: the merges take it as nodata.
     ///
     /// # Errors
     /// [`Error::Options`] for a task that does not exist; the pipeline's and the sinks' errors.
@@ -395,12 +396,12 @@ impl Plan {
         // one for `--resume` or `merge` to take (they mixed old tiles with new ones).
         self.forget_task(dir, i)?;
         let crs = self.job.crs()?;
-        let mut buffer = self.first_buffer(i)?;
+        let mut buffer = self.first_buffer(dir, i)?;
         let mut runs = 0;
         let mut record = loop {
             runs += 1;
             self.check_files(i, buffer)?;
-            let config = self.task_config(i, buffer, options)?;
+            let config = self.task_config(dir, i, buffer, options)?;
             let mut fanout = Fanout::new(self.task_sinks(dir, i)?).with_crs(crs.clone());
             let mut pieces = self.task_pieces(dir, i)?;
             let mesh = pieces
@@ -422,6 +423,14 @@ impl Plan {
                     };
                     let mut r = record_of(i, status, buffer, runs, &run, &products);
                     self.finish_pieces(dir, i, pieces, &mut r)?;
+                    if status == "empty" {
+                        // No tile for an empty task: the merges take it as nodata and no lines
+                        // (its volume sums, all zero, stay in the record). A TIN's pieces stay:
+                        // they hold the triangles the merge trims, and vertices others wait for.
+                        r.outputs.retain(|(name, p)| {
+                            name == "tin" || std::fs::remove_file(dir.join(p)).is_err()
+                        });
+                    }
                     break r;
                 }
                 Err(Error::BufferTooSmall { reach, .. }) if runs < 40 => {
@@ -436,11 +445,12 @@ impl Plan {
                     };
                 }
                 Err(Error::TooFewPoints { .. }) => {
-                    let products = self.empty_task(dir, i, &config, crs.clone())?;
+                    // No point near the tile: an empty task writes nothing.
+                    drop(pieces);
+                    let _ = std::fs::remove_file(self.task_output(dir, i, "tin", "pieces")?);
+                    let products = FanoutSummary::default();
                     let run = RunSummary::default();
-                    let mut r = record_of(i, "empty", buffer, runs, &run, &products);
-                    self.finish_pieces(dir, i, self.task_pieces(dir, i)?, &mut r)?;
-                    break r;
+                    break record_of(i, "empty", buffer, runs, &run, &products);
                 }
                 Err(e) => return Err(e),
             }
@@ -462,11 +472,36 @@ impl Plan {
     ///
     /// # Errors
     /// As [`Plan::task`].
-    fn first_buffer(&self, i: usize) -> Result<f64> {
-        if !self.task_files(i, self.buffer)?.is_empty() {
-            return Ok(self.buffer);
-        }
+    fn first_buffer(&self, dir: &Path, i: usize) -> Result<f64> {
         let sc = self.scope(i, self.buffer)?;
+        let near_files = !self.task_files(i, self.buffer)?.is_empty();
+        if near_files {
+            // Indexed files: the nearest chunk, when none meets the grown tile (a task in a gap
+            // of the data, or beside it, reads the points nearest it, not nothing).
+            let chunks = self.task_chunks(dir, i, self.buffer)?;
+            if chunks.is_empty() || chunks.len() < self.task_files(i, self.buffer)?.len() {
+                return Ok(self.buffer);
+            }
+            let g = super::area::grown(sc.tile, self.buffer);
+            let rects = || chunks.iter().flat_map(|(_, c)| c.rects());
+            if rects().any(|r| super::area::overlaps(&r, &g)) {
+                return Ok(self.buffer);
+            }
+            let scope = crate::tiles::index::Scope {
+                unknown: Vec::new(),
+                beyond: Vec::new(),
+                tile: sc.tile,
+                buffer: sc.buffer,
+            };
+            let near = rects()
+                .map(|r| scope.reach(&r))
+                .fold(f64::INFINITY, f64::min);
+            return Ok(if near.is_finite() {
+                near.max(self.buffer)
+            } else {
+                self.buffer
+            });
+        }
         let scope = crate::tiles::index::Scope {
             unknown: sc.unread,
             beyond: Vec::new(),
@@ -489,7 +524,7 @@ impl Plan {
     }
 
     /// The run of task `i` with a buffer of `buffer`.
-    fn task_config(&self, i: usize, buffer: f64, o: &TaskOptions) -> Result<RunConfig> {
+    fn task_config(&self, dir: &Path, i: usize, buffer: f64, o: &TaskOptions) -> Result<RunConfig> {
         let lines = match &self.job.lines {
             Some(l) => l.options(self.job.max_edge),
             None => LineOptions {
@@ -512,7 +547,10 @@ impl Plan {
                 threads: o.threads,
                 tile: Some(self.tile),
                 base: None,
-                scope: Some(self.scope(i, buffer)?),
+                scope: Some(crate::tiles::TaskScope {
+                    chunks: self.task_chunks(dir, i, buffer)?,
+                    ..self.scope(i, buffer)?
+                }),
             }),
         };
         let config = RunConfig::new(input, options)?.with_crs(self.job.crs()?);
@@ -649,32 +687,6 @@ impl Plan {
         }
         Ok(())
     }
-
-    /// The outputs of a task with no point: a nodata raster over its tile, no contours, no
-    /// volume.
-    fn empty_task(
-        &self,
-        dir: &Path,
-        i: usize,
-        config: &RunConfig,
-        crs: Option<Crs>,
-    ) -> Result<FanoutSummary> {
-        let paths = &config.input().paths;
-        let crs = match crs {
-            Some(c) => Some(c),
-            None if !paths.is_empty() => config
-                .open_lidar(crate::input::las::ReadOptions::default())?
-                .crs()
-                .cloned(),
-            None => None,
-        };
-        let mut fanout = Fanout::new(self.task_sinks(dir, i)?);
-        fanout.begin(&StreamInfo {
-            crs,
-            bounds: self.task(i)?.bounds,
-        })?;
-        fanout_summary(Some(fanout.finish()?))
-    }
 }
 
 fn fanout_summary(s: Option<ProductSummary>) -> Result<FanoutSummary> {
@@ -713,6 +725,7 @@ fn record_of(
         buffer,
         runs,
         points: run.points_kept,
+        decoded: run.tiles.map_or(0, |t| t.points_decoded),
         triangles: run.triangles,
         seconds: 0.0,
         outputs,
@@ -735,6 +748,38 @@ pub(super) fn run_again(dir: &Path, i: usize, resume: bool) -> String {
             ""
         }
     )
+}
+
+/// The task index a batch engine gives: `SLURM_ARRAY_TASK_ID`, `JOB_COMPLETION_INDEX`
+/// (Kubernetes Indexed Job), `AWS_BATCH_JOB_ARRAY_INDEX`, `PBS_ARRAY_INDEX` (0-based) or
+/// `SGE_TASK_ID` (Grid Engine counts from 1: task 1 is the plan's task 0), the first one set.
+///
+/// # Errors
+/// [`Error::Options`] naming the variable when its value is not a task number.
+pub fn task_from_env() -> Result<Option<usize>> {
+    for (var, base) in [
+        ("SLURM_ARRAY_TASK_ID", 0),
+        ("JOB_COMPLETION_INDEX", 0),
+        ("AWS_BATCH_JOB_ARRAY_INDEX", 0),
+        ("PBS_ARRAY_INDEX", 0),
+        ("SGE_TASK_ID", 1),
+    ] {
+        let Ok(v) = std::env::var(var) else {
+            continue;
+        };
+        return match v
+            .trim()
+            .parse::<usize>()
+            .ok()
+            .and_then(|i| i.checked_sub(base))
+        {
+            Some(i) => Ok(Some(i)),
+            None => Err(Error::Options(format!(
+                "{var}={v:?} is not a task number (counted from {base})"
+            ))),
+        };
+    }
+    Ok(None)
 }
 
 #[cfg(test)]

@@ -82,6 +82,10 @@ pub struct TaskScope {
     /// Extents `[xmin, ymin, xmax, ymax]` of the plan's files with points that the task does not
     /// read, from their headers.
     pub unread: Vec<[f64; 4]>,
+    /// Chunk indexes of the plain LAZ/LAS files the task reads, by path
+    /// ([`crate::input::las::ReadOptions::chunks`]): when every file is COPC or indexed, the
+    /// task decodes only the chunks that meet its tile and buffer.
+    pub chunks: Vec<(std::path::PathBuf, std::sync::Arc<crate::input::las::ChunkIndex>)>,
 }
 
 /// What the tiles did (part of the `--json` summary).
@@ -105,6 +109,9 @@ pub struct TileStats {
     /// that all cover (a DEM alone: unwanted triangles are left unseen), breaklines or trimming
     /// polygons, a plan's task.
     pub uncertified_owned: Option<u64>,
+    /// Points decoded from the files (COPC nodes and indexed chunks that miss a task's area
+    /// are not decoded).
+    pub points_decoded: u64,
     /// Worker threads.
     pub threads: u64,
     /// Tiles' runs allowed at once within `--mem` (at most the workers); finished tiles waiting
@@ -398,6 +405,7 @@ pub(crate) fn run(
         tile_size: g.tile,
         block_size: g.block,
         threads: threads as u64,
+        points_decoded: declared.decoded,
         cpu,
         ..TileStats::default()
     };

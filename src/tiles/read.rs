@@ -6,7 +6,7 @@ use super::{hull, lines};
 use super::index::{self, BlockIndex, BlockRecord, IndexRecord, PackedRecord, Packing};
 use super::{BLOCK_POINTS, MAX_BLOCKS, TILE_BLOCKS, TaskScope, TileCpu, TileJob, TileOptions};
 use crate::error::Result;
-use crate::input::las::{LidarPoint, LidarReader, ReadOptions};
+use crate::input::las::{ChunkIndex, LidarPoint, LidarReader, ReadOptions};
 use crate::input::spread::Spread;
 use crate::sort::external::ExternalSorter;
 use std::time::Instant;
@@ -55,12 +55,14 @@ pub(super) fn read_index(
     let mut declared = Declared {
         crs: reader.crs().cloned(),
         warnings: reader.warnings(),
+        decoded: 0,
     };
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
     let (mut index, spread, cpu) = match packing {
         Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
         None => index_points::<BlockRecord>(&mut reader, probe, None, job, progress)?,
     };
+    declared.decoded = reader.stats().read;
     let bounds = spread.extent();
     if let Some(far) = spread.far_points() {
         declared.warnings.push(far.warning());
@@ -108,6 +110,8 @@ pub(super) fn read_index(
 pub(super) struct Declared {
     pub crs: Option<crate::crs::Crs>,
     pub warnings: Vec<String>,
+    /// Points decoded from the files ([`super::TileStats::points_decoded`]).
+    pub decoded: u64,
 }
 
 /// Reads every point of `reader` into the block index's sort as records `R` (packed with
@@ -173,13 +177,20 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
         let (t, b) = (sc.tile, sc.buffer);
         let area = [t[0] - b, t[1] - b, t[2] + b, t[3] + b];
         // A COPC file whose header box says nothing is read whole (its box cannot say what
-        // lies outside the area).
+        // lies outside the area); a plain LAZ/LAS file is read by area with its chunk index.
+        let indexed = |i: &crate::input::las::FileInfo| {
+            i.copc.is_some() || sc.chunks.iter().any(|(p, _)| *p == i.path)
+        };
         if !infos.is_empty()
-            && infos.iter().all(|i| i.copc.is_some() && i.known_rect().is_some())
+            && infos.iter().all(|i| indexed(i) && i.known_rect().is_some())
+            && (infos.iter().all(|i| i.copc.is_some())
+                || (inside_data(&infos, &sc.unread, area)
+                    && pays_to_read_by_area(&sc.chunks, area)))
             && let Some(bbox) = crate::input::las::BBox::new(area[0], area[1], area[2], area[3])
         {
             let options = ReadOptions {
                 area: Some(bbox),
+                chunks: sc.chunks.clone(),
                 crs: job.crs.cloned(),
                 ..ReadOptions::for_budget(job.mem)
             };
@@ -197,6 +208,38 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
     };
     let reader = LidarReader::open_with(job.paths, job.filter, options)?;
     Ok((reader, Vec::new()))
+}
+
+/// Whether `area` lies inside the extent of the files `infos` and `unread`: a task away from
+/// the data's outer edge. Along the edge the hull's long thin triangles need points far out, and
+/// a read by area runs again with a wider buffer (decoding again): plain files are read whole
+/// there, as before the chunk index.
+fn inside_data(infos: &[crate::input::las::FileInfo], unread: &[[f64; 4]], area: [f64; 4]) -> bool {
+    let rects = infos.iter().map(|i| i.rect()).chain(unread.iter().copied());
+    let e = rects.fold(
+        [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+        |e, r| [e[0].min(r[0]), e[1].min(r[1]), e[2].max(r[2]), e[3].max(r[3])],
+    );
+    area[0] >= e[0] && area[1] >= e[1] && area[2] <= e[2] && area[3] <= e[3]
+}
+
+/// Whether reading plain files by area through their chunk indexes `chunks` saves work: when
+/// the chunks that meet `area` hold at most half of the files' points. Chunks in acquisition
+/// order are long strips, and a task that decodes most of them anyway is better off with every
+/// point: the points beyond its area settle the triangles along the data's edge, where a read
+/// by area knows nothing and runs again with a wider buffer (decoding again). Both ways give
+/// the same output.
+fn pays_to_read_by_area(chunks: &[(std::path::PathBuf, std::sync::Arc<ChunkIndex>)], area: [f64; 4]) -> bool {
+    let (mut all, mut near) = (0u64, 0u64);
+    for (_, ix) in chunks {
+        for (r, n) in ix.boxes() {
+            all += n;
+            if r[0] <= area[2] && r[2] >= area[0] && r[1] <= area[3] && r[3] >= area[1] {
+                near += n;
+            }
+        }
+    }
+    2 * near <= all
 }
 
 /// The parts of the closed rectangle `e` outside the closed rectangle `a`, as at most four closed

@@ -29,8 +29,10 @@
 //!
 //! With a box (`Filter::bbox`, or the area of [`LidarReader::open_area`], which the exact-tiles
 //! engine can use for a tile's buffered extent), files whose header extent misses the box are
-//! never decoded, and a COPC file decodes only the octree nodes that meet it ([`copc`]): the
-//! points kept, and their indices, are exactly those of a full read, only faster.
+//! never decoded, a COPC file decodes only the octree nodes that meet it ([`copc`]), and a plain
+//! LAZ/LAS file given with its [`ChunkIndex`] ([`ReadOptions::chunks`]) only the chunks whose
+//! box meets it: the points kept, and their indices, are exactly those of a full read, only
+//! faster.
 //!
 //! # Damaged files
 //!
@@ -40,6 +42,7 @@
 //! CRS must declare the same one.
 
 mod ahead;
+pub mod chunks;
 pub mod copc;
 pub(crate) mod decode;
 pub mod extra;
@@ -53,6 +56,7 @@ pub mod vpc;
 pub mod world;
 
 pub use crate::crs::{Crs, HorizontalKind};
+pub use chunks::ChunkIndex;
 pub use copc::CopcInfo;
 pub use filter::{BBox, Filter, FilterStats, Returns, parse_classes};
 pub use header::{Bounds3, FileInfo};

@@ -2,6 +2,7 @@
 
 use super::LidarPoint;
 use super::ahead::{Current, PointCheck, SpanJob};
+use super::chunks::ChunkIndex;
 use super::decode::{FileDecoder, Spare, spans};
 use super::filter::{BBox, CompiledFilter, Filter, FilterStats};
 use super::header::{Bounds3, FileInfo, format_error, inspect};
@@ -34,6 +35,10 @@ pub struct ReadOptions {
     /// Use the octree of COPC files to decode only the nodes that meet the box (`false`: read
     /// them as plain LAZ; the points kept are the same).
     pub copc_index: bool,
+    /// Chunk indexes of plain LAZ/LAS files, by path (as given to the reader): with an area, a
+    /// file listed here decodes only the spans whose box meets it. An index that does not
+    /// match its file ([`ChunkIndex::check`]) is refused.
+    pub chunks: Vec<(PathBuf, Arc<ChunkIndex>)>,
     /// The CRS the user declares for the files (`--crs`, PDAL's `override_srs`): the reader's
     /// [`LidarReader::crs`], and files that declare others are read as in it, each named in
     /// [`LidarReader::warnings`], instead of refused.
@@ -65,6 +70,7 @@ impl Default for ReadOptions {
             ahead_bytes: 96 << 20,
             area: None,
             copc_index: true,
+            chunks: Vec::new(),
             crs: None,
         }
     }
@@ -511,11 +517,23 @@ impl LidarReader {
             let filter = &self.filter;
             let keep = |r: [f64; 4]| !filter.misses(r, m);
             let use_index = self.options.copc_index;
-            let spans = spans(
-                info,
-                self.options.batch_points as u64,
-                use_index.then_some(&keep as &dyn Fn([f64; 4]) -> bool),
-            );
+            let indexed = self
+                .options
+                .chunks
+                .iter()
+                .find(|(p, _)| *p == info.path)
+                .filter(|_| self.options.area.is_some() && info.layout.nodes.is_none());
+            let spans = match indexed {
+                Some((_, ix)) => {
+                    ix.check(info)?;
+                    ix.spans_kept(&keep)
+                }
+                None => spans(
+                    info,
+                    self.options.batch_points as u64,
+                    use_index.then_some(&keep as &dyn Fn([f64; 4]) -> bool),
+                ),
+            };
             let decoded: u64 = spans.iter().map(|c| c.points).sum();
             self.stats.skipped += info.point_count - decoded;
             if spans.is_empty() {
