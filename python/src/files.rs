@@ -272,9 +272,11 @@ pub(crate) fn run_products(
         sinks.push(("dem".into(), Box::new(sink)));
     }
     if let Some((path, interval, base)) = contours {
+        // The decimals the command line writes by default (the LAS/LAZ scale's).
         let options = ContourOptions {
             interval,
             base,
+            decimals: Some(sweeptin::pipeline::contour_decimals(&opts.files)),
             ..ContourOptions::default()
         }
         .within(opts.mem);

@@ -267,6 +267,8 @@ impl Tin {
                 ContourOptions {
                     interval,
                     base,
+                    // As the command line writes the contours of points without a LAS scale.
+                    decimals: Some(sweeptin::products::contours::DEFAULT_DECIMALS),
                     ..ContourOptions::default()
                 },
             )?;
