@@ -55,7 +55,8 @@ def test_a_python_plan_runs_anywhere_and_merges_to_one_run(ign, cli, tmp_path):
     assert again == records[0]  # skipped: its record as it was
     py_mosaic = tmp_path / "py.tif"
     s = sweeptin.merge(plan, py_mosaic)
-    assert s["tasks"] == n and s["dem"]["tiles"] == n and s["contours"]["features"] > 100
+    # Empty tasks write no tile (their part of the mosaic is nodata).
+    assert s["tasks"] == n and 0 < s["dem"]["tiles"] <= n and s["contours"]["features"] > 100
     cli_mosaic = tmp_path / "cli.tif"
     cli("merge", plan.path, "-o", cli_mosaic, "--contours", tmp_path / "cli.geojson")
     assert py_mosaic.read_bytes() == cli_mosaic.read_bytes()
