@@ -174,9 +174,21 @@ impl SampleSink {
             queries: queries.to_path_buf(),
             name: name.to_path_buf(),
             _spool: spool,
+            sorted,
+            ..SampleSink::idle(output, count)
+        })
+    }
+
+    /// A sink of `count` queries answered into `output`, before any is read: text queries,
+    /// nothing pending, nothing answered.
+    fn idle(output: &Path, count: u64) -> SampleSink {
+        SampleSink {
+            queries: PathBuf::new(),
+            name: PathBuf::new(),
+            _spool: None,
             output: output.to_path_buf(),
             count,
-            sorted,
+            sorted: true,
             reader: None,
             points: None,
             answers_only: false,
@@ -191,7 +203,7 @@ impl SampleSink {
             answers: None,
             batch: Vec::new(),
             answered: 0,
-        })
+        }
     }
 
     /// A sink answering `count` query points given sorted by `y` (then `x`), each numbered by
@@ -200,26 +212,10 @@ impl SampleSink {
     /// are. The answers stay in a scratch file beside `scratch` ([`SampleSink::take_answers`]).
     pub fn for_points(points: Merge<SortRecord>, count: u64, scratch: &Path) -> SampleSink {
         SampleSink {
-            queries: PathBuf::new(),
             name: PathBuf::from("the points"),
-            _spool: None,
-            output: scratch.to_path_buf(),
-            count,
-            sorted: true,
-            reader: None,
             points: Some(points),
             answers_only: true,
-            next: None,
-            pending: FastMap::default(),
-            pending_count: 0,
-            max_pending: 0,
-            bucket: 1.0,
-            bounds: [0.0; 4],
-            level: f64::NEG_INFINITY,
-            deferred: Vec::new(),
-            answers: None,
-            batch: Vec::new(),
-            answered: 0,
+            ..SampleSink::idle(scratch, count)
         }
     }
 
