@@ -125,3 +125,36 @@ fn far_points_are_named_with_the_bbox_that_drops_them() {
         assert!(warnings.contains(bbox), "{input:?}: {warnings}");
     }
 }
+
+/// Issue 40: points on one line (all but one) keep every triangle open to the end of the sweep,
+/// which no sweep can avoid; memory then grows past `--mem`, and the run says so (a known limit,
+/// docs/RELIABILITY.md) instead of silently breaking its budget. A disc of as many points at
+/// the same budget does not warn.
+#[test]
+fn points_on_a_line_warn_that_memory_grows_past_mem() {
+    let n = 60_000;
+    let dir = tempfile::tempdir().unwrap();
+    for (name, pts, warned) in [
+        ("line", heavy::almost_line(n, 7), true),
+        ("disc", heavy::disc(n, 7), false),
+    ] {
+        let path = dir.path().join("points.xyz");
+        write_xyz(&path, &pts);
+        let input = Input {
+            paths: vec![path],
+            filter: sweeptin::input::las::Filter::keep_all(),
+            duplicates: DuplicatePolicy::First,
+            lines: Default::default(),
+        };
+        let (_, summary) = mesh::collect_run_along(&input, None, 16 << 20, SweepAxis::Y);
+        let found = summary
+            .warnings
+            .iter()
+            .any(|w| w.contains("nearly on one line or one circle"));
+        assert_eq!(
+            found, warned,
+            "{name}: {:?} {:?}",
+            summary.stream, summary.warnings
+        );
+    }
+}

@@ -206,7 +206,38 @@ pub(crate) fn run(
             ..l.summary.clone()
         }),
         tiles: None,
-        warnings: rd.warnings.clone(),
+        warnings: {
+            let mut w = rd.warnings.clone();
+            w.extend(front_warning(&stream, options.mem));
+            w
+        },
+    })
+}
+
+/// Bytes a triangle held by the sweep costs with its share of vertices and queue entries
+/// (measured: 1 M points on a line, every triangle live to the end, 350 MB above the base).
+pub(crate) const LIVE_TRIANGLE_BYTES: u64 = 350;
+
+/// The warning for a sweep that held more triangles than half of `--mem` pays for: points on
+/// (or near) one line or one circle keep every triangle open to the end of the sweep, and no
+/// order of insertion can finish them early, so memory is O(points) there
+/// (docs/RELIABILITY.md, known limits).
+fn front_warning(stream: &crate::finalise::StreamStats, mem: u64) -> Option<String> {
+    let held = stream
+        .peak_live_triangles
+        .saturating_mul(LIVE_TRIANGLE_BYTES);
+    // A large share of all the triangles, not a small budget against an ordinary front.
+    let open = stream.peak_live_triangles.saturating_mul(10) > stream.triangles;
+    (held > mem / 2 && open).then(|| {
+        format!(
+            "the sweep held {} triangles at once (about {}), more than --mem {} allows: the \
+             points lie nearly on one line or one circle, where every triangle stays open to \
+             the end of the sweep and memory grows with the points (a known limit, see \
+             docs/RELIABILITY.md); give more --mem, or add points that close the surface",
+            stream.peak_live_triangles,
+            crate::human_bytes(held),
+            crate::human_bytes(mem)
+        )
     })
 }
 

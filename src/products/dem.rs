@@ -207,13 +207,15 @@ impl Raster {
         let [xmin, ymin, xmax, ymax] = t.bbox();
         // The candidates have a cell of slack on each side; a centre outside the triangle's
         // box is outside the triangle (exact comparisons), the exact test decides the rest.
-        let cols = self.spec.cols_over(xmin, xmax);
+        // Slack for the crossings' rounding: a cell, and a relative margin at large coordinates.
+        let slack = self.spec.cell + 1e-9 * xmin.abs().max(xmax.abs());
         for row in self.spec.rows_over(ymin, ymax).rev() {
             let y = self.spec.centre_y(row);
             if y < ymin || y > ymax {
                 continue;
             }
-            for col in cols.clone() {
+            let (x0, x1) = t.row_span(y, slack);
+            for col in self.spec.cols_over(x0.max(xmin), x1.min(xmax)) {
                 let x = self.spec.centre_x(col);
                 if x < xmin || x > xmax {
                     continue;

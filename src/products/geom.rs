@@ -86,6 +86,30 @@ impl Tri {
         crate::geom::tri_bbox(&self.v)
     }
 
+    /// A closed interval of `x` that holds every point of the triangle on the horizontal line
+    /// `y` (when `y` lies within its box), widened by `slack` on each side: a filter for a
+    /// raster's cell centres before the exact [`Tri::locate`], which decides. The crossings are
+    /// computed in floating point; `slack` (a cell) covers their rounding, so the filter is
+    /// conservative. A sliver spanning many rows then costs its width on each row, not its box.
+    pub fn row_span(&self, y: f64, slack: f64) -> (f64, f64) {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for i in 0..3 {
+            let (a, b) = (self.v[i], self.v[(i + 1) % 3]);
+            if (a[1] <= y && y <= b[1]) || (b[1] <= y && y <= a[1]) {
+                let x = if a[1] == b[1] {
+                    lo = lo.min(a[0].min(b[0]));
+                    a[0].max(b[0])
+                } else {
+                    let t = ((y - a[1]) / (b[1] - a[1])).clamp(0.0, 1.0);
+                    a[0] + t * (b[0] - a[0])
+                };
+                lo = lo.min(x);
+                hi = hi.max(x);
+            }
+        }
+        (lo - slack, hi + slack)
+    }
+
     /// Exact location of `p`.
     pub fn locate(&self, p: [f64; 2]) -> Location {
         let mut on = [false; 3];
@@ -312,6 +336,48 @@ impl ExactSum {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The DEM's filter never drops a cell centre the exact test puts in the triangle: slivers,
+    /// horizontal edges, UTM offsets, centres on edges and vertices.
+    #[test]
+    fn row_span_holds_every_point_the_exact_test_finds() {
+        let mut rng = crate::geom::rng::SplitMix64::new(7);
+        for k in 0..1500 {
+            let (ox, oy) = if k % 2 == 0 {
+                (0.0, 0.0)
+            } else {
+                (500_000.0, 5_000_000.0)
+            };
+            let mut pt = |s: f64| {
+                [
+                    ox + (rng.next_f64() * s).round() / 4.0,
+                    oy + (rng.next_f64() * s).round() / 4.0,
+                    0.0,
+                ]
+            };
+            let scale = [4.0, 16.0, 64.0][k % 3];
+            let (a, b, mut c) = (pt(scale), pt(scale), pt(scale));
+            if k % 5 == 0 {
+                c[1] = a[1]; // a horizontal edge
+            }
+            let Some(t) = Tri::new(&[a, b, c]) else {
+                continue;
+            };
+            let [x0, y0, x1, y1] = t.bbox();
+            let mut y = y0;
+            while y <= y1 {
+                let (lo, hi) = t.row_span(y, 1e-9 * x0.abs().max(x1.abs()));
+                let mut x = x0;
+                while x <= x1 {
+                    if t.locate([x, y]) != Location::Outside {
+                        assert!(lo <= x && x <= hi, "{t:?} at ({x}, {y}): span {lo}..{hi}");
+                    }
+                    x += 0.25;
+                }
+                y += 0.25;
+            }
+        }
+    }
 
     #[test]
     fn canonical_rotation_and_orientation() {
