@@ -321,7 +321,7 @@ pub fn merge_contours(
         decimals: Some(decimals),
         min_length: levels.min_length,
     };
-    stitch(&parts, out, crs, options)
+    stitch(&parts, out, crs, options, plan.job.tmp_dir.as_deref())
 }
 
 /// The exact totals of the tasks' volumes (the same, bit for bit, as one run over all points).

@@ -10,32 +10,122 @@
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use crate::output::lines::{LineWriter, length};
-use serde_json::Value;
 use std::collections::HashMap;
+use std::io::Write;
+use std::os::unix::fs::FileExt;
 use std::path::Path;
 
 type Pt = [f64; 2];
 type Key = (u64, [u64; 4]);
 
 /// The key of an end of a line: the edge it lies on, or (from a file without edges) its point.
-fn key(level: f64, edge: &Value, p: Option<&Pt>) -> Option<Key> {
-    let bits = |v: &Value| v.as_f64().map(f64::to_bits);
-    if let Some(e) = edge.as_array().filter(|e| e.len() == 4) {
-        let mut k = [0u64; 4];
-        for (slot, v) in k.iter_mut().zip(e) {
-            *slot = bits(v)?;
-        }
-        return Some((level.to_bits(), k));
+fn key(level: f64, edge: Option<&[f64]>, p: Option<&Pt>) -> Option<Key> {
+    if let Some(e) = edge.filter(|e| e.len() == 4) {
+        return Some((level.to_bits(), [0, 1, 2, 3].map(|i| e[i].to_bits())));
     }
     p.map(|p| (level.to_bits(), [p[0].to_bits(), p[1].to_bits(), 0, 0]))
 }
 
-/// An open contour line of one task.
+/// An open contour line of one task: its ends in memory, its points in the spill file.
 struct Open {
     level: f64,
-    points: Vec<Pt>,
+    /// First point's index in the spill file, and the count.
+    offset: u64,
+    len: u32,
     start: Option<Key>,
     end: Option<Key>,
+}
+
+/// One feature of a task's contour file, as the tasks write it.
+#[derive(serde::Deserialize)]
+struct Feature {
+    properties: Properties,
+    geometry: Geometry,
+}
+
+#[derive(serde::Deserialize)]
+struct Properties {
+    elevation: Option<f64>,
+    #[serde(default)]
+    closed: Option<bool>,
+    #[serde(default)]
+    start_edge: Option<Vec<f64>>,
+    #[serde(default)]
+    end_edge: Option<Vec<f64>>,
+}
+
+#[derive(serde::Deserialize)]
+struct Geometry {
+    coordinates: Vec<Vec<f64>>,
+}
+
+/// Calls `each` on every feature of the GeoJSON FeatureCollection in `path`, one at a time
+/// (a task's file is never held whole: it can be larger than `--mem`).
+fn for_each_feature(path: &Path, each: &mut dyn FnMut(Feature) -> Result<()>) -> Result<()> {
+    use serde::de::{DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
+    use std::fmt;
+    struct Collection<'a> {
+        each: &'a mut dyn FnMut(Feature) -> Result<()>,
+        failed: &'a mut Option<Error>,
+        features: bool,
+    }
+    struct Features<'a, 'b>(&'b mut Collection<'a>);
+    impl<'de> Visitor<'de> for &mut Collection<'_> {
+        type Value = ();
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a GeoJSON FeatureCollection")
+        }
+        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> std::result::Result<(), A::Error> {
+            while let Some(k) = map.next_key::<String>()? {
+                if k == "features" {
+                    map.next_value_seed(Features(self))?;
+                } else {
+                    map.next_value::<IgnoredAny>()?;
+                }
+            }
+            Ok(())
+        }
+    }
+    impl<'de> DeserializeSeed<'de> for Features<'_, '_> {
+        type Value = ();
+        fn deserialize<D: Deserializer<'de>>(self, d: D) -> std::result::Result<(), D::Error> {
+            d.deserialize_seq(self)
+        }
+    }
+    impl<'de> Visitor<'de> for Features<'_, '_> {
+        type Value = ();
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("an array of features")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<(), A::Error> {
+            self.0.features = true;
+            while let Some(f) = seq.next_element::<Feature>()? {
+                if let Err(e) = (self.0.each)(f) {
+                    *self.0.failed = Some(e);
+                    return Err(serde::de::Error::custom("stopped"));
+                }
+            }
+            Ok(())
+        }
+    }
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut de = serde_json::Deserializer::from_reader(std::io::BufReader::new(file));
+    let mut failed = None;
+    let mut c = Collection {
+        each,
+        failed: &mut failed,
+        features: false,
+    };
+    let parsed = de.deserialize_map(&mut c).and_then(|()| de.end());
+    let features = c.features;
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    parsed.map_err(|e| bad(path, format!("not a contour file: {e}")))?;
+    if !features {
+        return Err(bad(path, "no features"));
+    }
+    Ok(())
 }
 
 /// What stitching wrote.
@@ -71,7 +161,9 @@ fn bad(path: &Path, m: impl Into<String>) -> Error {
 }
 
 /// Stitches the contour files `parts` (in task order) into `out` (GeoJSON or GeoPackage, by
-/// its extension).
+/// its extension). Features are read one at a time; the open lines' points wait in a temporary
+/// file under `tmp` (the system's when `None`), their ends in memory (about 150 bytes a line,
+/// as one run keeps its open lines' ends).
 ///
 /// # Errors
 /// Reading or writing; [`Error::Format`] for a file that is not a contour output;
@@ -81,46 +173,40 @@ pub fn stitch(
     out: &Path,
     crs: Option<&Crs>,
     options: StitchOptions,
+    tmp: Option<&Path>,
 ) -> Result<StitchSummary> {
     let mut w = LineWriter::create(out, "contours", crs, options.decimals)?;
     let mut s = StitchSummary::default();
     let mut open: Vec<Open> = Vec::new();
+    let tmp_dir = tmp.map_or_else(std::env::temp_dir, Path::to_path_buf);
+    let spill_file = tempfile::tempfile_in(&tmp_dir).map_err(|e| Error::io(&tmp_dir, e))?;
+    let mut spill = std::io::BufWriter::with_capacity(1 << 20, spill_file);
+    let mut spilled = 0u64;
     for path in parts {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(*path, e))?;
-        let doc: Value =
-            serde_json::from_str(&text).map_err(|e| bad(path, format!("not GeoJSON: {e}")))?;
-        let features = doc["features"]
-            .as_array()
-            .ok_or_else(|| bad(path, "no features"))?;
-        for f in features {
-            let level = f["properties"]["elevation"]
-                .as_f64()
+        for_each_feature(path, &mut |f| {
+            let level = f
+                .properties
+                .elevation
                 .ok_or_else(|| bad(path, "a feature without elevation"))?;
-            let pts: Vec<Pt> = f["geometry"]["coordinates"]
-                .as_array()
-                .ok_or_else(|| bad(path, "a feature without coordinates"))?
-                .iter()
-                .map(|p| {
-                    [
-                        p[0].as_f64().unwrap_or(f64::NAN),
-                        p[1].as_f64().unwrap_or(f64::NAN),
-                    ]
-                })
-                .collect();
-            let closed = f["properties"]["closed"].as_bool().unwrap_or(false);
-            if closed {
-                let mut ring: Vec<Pt> = Vec::with_capacity(pts.len());
-                for q in pts.iter().map(|&q| w.round(q)) {
+            let pts = f.geometry.coordinates.iter().map(|p| {
+                [
+                    p.first().copied().unwrap_or(f64::NAN),
+                    p.get(1).copied().unwrap_or(f64::NAN),
+                ]
+            });
+            if f.properties.closed.unwrap_or(false) {
+                let mut ring: Vec<Pt> = Vec::with_capacity(f.geometry.coordinates.len());
+                for q in pts.map(|q| w.round(q)) {
                     if ring.last() != Some(&q) {
                         ring.push(q);
                     }
                 }
                 if ring.len() < 4 {
-                    continue;
+                    return Ok(());
                 }
                 if length(&ring) < options.min_length {
                     s.short_dropped += 1;
-                    continue;
+                    return Ok(());
                 }
                 w.line_string(
                     &serde_json::json!({"elevation": level, "closed": true}),
@@ -128,19 +214,30 @@ pub fn stitch(
                 )?;
                 s.features += 1;
                 s.rings += 1;
-            } else {
-                let p = &f["properties"];
-                let start = key(level, &p["start_edge"], pts.first());
-                let end = key(level, &p["end_edge"], pts.last());
-                open.push(Open {
-                    level,
-                    points: pts,
-                    start,
-                    end,
-                });
+                return Ok(());
             }
-        }
+            let pts: Vec<Pt> = pts.collect();
+            let start = key(level, f.properties.start_edge.as_deref(), pts.first());
+            let end = key(level, f.properties.end_edge.as_deref(), pts.last());
+            let len = u32::try_from(pts.len())
+                .map_err(|_| bad(path, "a contour line of more than 2^32 points"))?;
+            spill
+                .write_all(bytemuck::cast_slice(&pts))
+                .map_err(|e| Error::io(&tmp_dir, e))?;
+            open.push(Open {
+                level,
+                offset: spilled,
+                len,
+                start,
+                end,
+            });
+            spilled += u64::from(len);
+            Ok(())
+        })?;
     }
+    let spill = spill
+        .into_inner()
+        .map_err(|e| Error::io(&tmp_dir, e.into_error()))?;
     // Join ends to starts.
     let mut by_start: HashMap<Key, usize> = HashMap::with_capacity(open.len());
     for (i, l) in open.iter().enumerate() {
@@ -152,11 +249,13 @@ pub fn stitch(
         .iter()
         .map(|l| l.end.and_then(|k| by_start.get(&k).copied()))
         .collect();
+    drop(by_start);
     let mut has_prev = vec![false; open.len()];
     for j in next.iter().flatten() {
         has_prev[*j] = true;
     }
     let mut used = vec![false; open.len()];
+    let mut piece: Vec<Pt> = Vec::new();
     let mut emit = |start: usize, used: &mut Vec<bool>, w: &mut LineWriter| -> Result<()> {
         let level = open[start].level;
         let mut pts: Vec<Pt> = Vec::new();
@@ -167,7 +266,14 @@ pub fn stitch(
             if !pts.is_empty() {
                 s.joins += 1;
             }
-            for q in open[i].points.iter().map(|&q| w.round(q)) {
+            piece.resize(open[i].len as usize, [0.0; 2]);
+            spill
+                .read_exact_at(
+                    bytemuck::cast_slice_mut(&mut piece),
+                    open[i].offset * std::mem::size_of::<Pt>() as u64,
+                )
+                .map_err(|e| Error::io(&tmp_dir, e))?;
+            for q in piece.iter().map(|&q| w.round(q)) {
                 if pts.last() != Some(&q) {
                     pts.push(q);
                 }
