@@ -442,3 +442,32 @@ fn plan_messages_say_what_each_product_writes() {
         assert!(err.contains(says), "{product}: {err}");
     }
 }
+
+/// Issue 43, item 4: `plan contours … --tile 0.1` wrote 8 M tasks (a 2 GB `plan.json`, 3 GB of
+/// memory). A plan has at most 2^18 tasks, and the refusal names the smallest round `--tile`
+/// that fits, which then plans.
+#[test]
+fn a_plan_of_too_many_tasks_is_refused_naming_a_tile_that_fits() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = dir.path().join("job");
+    let input = sample();
+    let args = ["plan", "tin", s(&input), "--tile", "0.01", "-o", s(&job)];
+    failing(&args, 2, "tasks a plan may have: use --tile ");
+    assert!(!job.join("plan.json").exists());
+    let o = bin().args(args).output().unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    let tile = e
+        .split("use --tile ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .unwrap();
+    let t: f64 = tile.parse().unwrap();
+    assert!(t > 0.01, "{e}");
+    // Ten times the suggestion plans quickly (the suggestion itself lists ~2^18 tasks).
+    let larger = (10.0 * t).to_string();
+    sweeptin(
+        &["plan", "tin", s(&input), "--tile", &larger, "-o", s(&job)],
+        "plan",
+    );
+    assert!(job.join("plan.json").exists());
+}

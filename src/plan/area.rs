@@ -82,3 +82,70 @@ pub(super) fn meets_hull(hull: &[[f64; 2]], r: &[f64; 4]) -> bool {
 pub(super) fn overlaps(a: &[f64; 4], b: &[f64; 4]) -> bool {
     a[0] <= b[2] && a[2] >= b[0] && a[1] <= b[3] && a[3] >= b[1]
 }
+
+/// Tiles of side `tile` a plan cuts `[lo, hi]` into (the bounding grid; NaN when it overflows).
+pub(super) fn tile_count(lo: [f64; 2], hi: [f64; 2], tile: f64) -> f64 {
+    let cols = (hi[0] / tile).floor() - (lo[0] / tile).floor() + 1.0;
+    let rows = (hi[1] / tile).ceil() - (lo[1] / tile).ceil() + 1.0;
+    cols * rows
+}
+
+/// The smallest round tile side (1, 2, 2.5 or 5 times a power of ten; a whole multiple of
+/// `cell` when given) that cuts `[lo, hi]` into at most `max` tiles: what a refusal suggests.
+pub(super) fn fitting_tile(lo: [f64; 2], hi: [f64; 2], max: u64, cell: Option<f64>) -> f64 {
+    let (w, h) = ((hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0));
+    let need = ((w * h) / max as f64).sqrt().max((w + h) / max as f64);
+    let mut k = (need.max(1e-9).log10().floor() as i32 - 1).max(-9);
+    // Four tiles (2 × 2) always fit past the extent's side; the bound only ends the loop.
+    for _ in 0..400 {
+        for m in [1.0, 2.0, 2.5, 5.0] {
+            let mut t = m * 10f64.powi(k);
+            if let Some(c) = cell {
+                t = (t / c).ceil().max(1.0) * c;
+            }
+            let n = tile_count(lo, hi, t);
+            if n.is_finite() && n <= max as f64 {
+                return t;
+            }
+        }
+        k += 1;
+    }
+    (w.max(h) * 2.0).max(1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_suggested_tile_fits_and_is_the_smallest_round_one() {
+        for (lo, hi, cell) in [
+            ([0.0, 0.0], [59.0, 59.0], None),
+            (
+                [500_000.0, 5_000_000.0],
+                [501_000.0, 5_002_000.0],
+                Some(0.5),
+            ),
+            ([0.0, 0.0], [1e6, 3.0], None),
+            ([3.0, 3.0], [3.0, 3.0], Some(1.0)),
+        ] {
+            for max in [4u64, 7, 1000, 1 << 18] {
+                let t = fitting_tile(lo, hi, max, cell);
+                assert!(
+                    tile_count(lo, hi, t) <= max as f64,
+                    "{lo:?} {hi:?} {max}: {t}"
+                );
+                if let Some(c) = cell {
+                    assert!(whole_multiple(t, c), "{t} {c}");
+                } else if t > 1e-9 {
+                    // The next smaller round side does not fit.
+                    let smaller = t / 2.0;
+                    assert!(
+                        tile_count(lo, hi, smaller) > max as f64,
+                        "{lo:?} {hi:?} {max}: {t}"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -21,7 +21,10 @@
 
 mod area;
 mod chunks;
-use area::{centres_within, grown, meets_hull, overlaps, tile_bounds, whole_multiple};
+use area::{
+    centres_within, fitting_tile, grown, meets_hull, overlaps, tile_bounds, tile_count,
+    whole_multiple,
+};
 mod files;
 mod lines;
 pub mod merge;
@@ -181,8 +184,10 @@ pub struct TaskRecord {
     pub volume: Option<[Vec<f64>; 5]>,
 }
 
-/// Most tiles a plan may cut its data into (each a task, listed in `plan.json`).
-pub const MAX_TASKS: u64 = 1 << 20;
+/// Most tiles a plan may cut its data into (each a task, listed in `plan.json`): 262,144, a
+/// country of 1 km tiles (England's 130,000 km²), with a `plan.json` of tens of MB. A refusal
+/// names the smallest round `--tile` that fits.
+pub const MAX_TASKS: u64 = 1 << 18;
 
 fn bad(path: &Path, message: impl Into<String>) -> Error {
     Error::Format {
@@ -325,15 +330,19 @@ impl Plan {
                 None => (lo, hi),
             };
             // Counted first: `--tile 0.001` over a kilometre listed 10^12 tiles (an abort).
-            let cols = (hi[0] / tile).floor() - (lo[0] / tile).floor() + 1.0;
-            let rows = (hi[1] / tile).ceil() - (lo[1] / tile).ceil() + 1.0;
-            let count = cols * rows;
+            let count = tile_count(lo, hi, tile);
             if count.is_nan() || count > MAX_TASKS as f64 {
+                let fits = fitting_tile(lo, hi, MAX_TASKS, cell);
                 return Err(Error::Options(format!(
-                    "--tile {tile} cuts the data (x {} .. {}, y {} .. {}) into {cols:.0} × \
-                     {rows:.0} tiles, more than the {MAX_TASKS} tasks a plan may have: use a \
-                     larger --tile",
-                    lo[0], hi[0], lo[1], hi[1]
+                    "--tile {tile} cuts the data (x {} .. {}, y {} .. {}) into {} tiles, more \
+                     than the {} tasks a plan may have: use --tile {} or larger",
+                    lo[0],
+                    hi[0],
+                    lo[1],
+                    hi[1],
+                    crate::fmt::Figure(count),
+                    crate::fmt::count(MAX_TASKS),
+                    crate::fmt::Figure(fits)
                 )));
             }
             for ty in ty_of(lo[1])..=ty_of(hi[1]) {
