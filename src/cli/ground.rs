@@ -269,28 +269,29 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         b
     };
     let mut progress = |what: &str, done: u64, total: u64| {
-        bar.set_message(format!("{what}: {done} of {total} points"));
+        if total == 0 {
+            bar.set_message(what.to_string());
+        } else {
+            bar.set_message(format!("{what}: {done} of {total} points"));
+        }
     };
-    let (mut classes, summary) =
-        sweeptin::ground::classify_files(&args.inputs, &params, args.mem.0, &tmp, &mut progress)
-            .map_err(|e| super::input::run_error(e, &args.inputs))?;
-    let write_start = Instant::now();
-    let (mut changed, mut bytes, mut base) = (0u64, 0u64, 0u64);
-    for (input, output) in args.inputs.iter().zip(&outputs) {
-        bar.set_message(format!("writing {}", output.display()));
-        let count = sweeptin::input::las::FileInfo::read(input)?.point_count;
-        let mut edit = |p: &mut sweeptin::output::las::PointEdit<'_>| -> sweeptin::Result<()> {
-            let c = classes.get(base + p.index())?;
-            p.set_classification(c);
-            Ok(())
-        };
-        let s = sweeptin::output::las::rewrite_points(input, output, &mut edit)?;
+    let done = sweeptin::pipeline::ground::ground_files(
+        &args.inputs,
+        &outputs,
+        &params,
+        args.mem.0,
+        &tmp,
+        &mut progress,
+    )
+    .map_err(|e| super::input::run_error(e, &args.inputs))?;
+    let summary = &done.ground;
+    let (mut changed, mut bytes) = (0u64, 0u64);
+    for s in &done.files {
         for note in &s.notes {
             bar.suspend(|| eprintln!("sweeptin: note: {note}"));
         }
         changed += s.changed;
         bytes += s.bytes;
-        base += count;
     }
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
@@ -306,10 +307,10 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
             inputs: &args.inputs,
             outputs: &outputs,
             params,
-            ground: &summary,
+            ground: summary,
             changed,
             bytes,
-            write_seconds: write_start.elapsed().as_secs_f64(),
+            write_seconds: (seconds - summary.read_seconds - summary.classify_seconds).max(0.0),
             seconds,
         };
         println!("{}", serde_json::to_string(&s)?);

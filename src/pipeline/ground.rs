@@ -99,3 +99,70 @@ pub const PLAN_REFUSES_GROUND: &str = "--ground does not run in a plan's tasks y
 fn is_stream(p: &std::path::Path) -> bool {
     std::fs::metadata(p).is_ok_and(|m| !m.is_file())
 }
+
+/// What [`ground_files`] did: the classification, and each output written.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct GroundFiles {
+    /// The classification.
+    #[serde(flatten)]
+    pub ground: GroundSummary,
+    /// Each output, in the order of the inputs.
+    pub files: Vec<crate::output::las::RewriteSummary>,
+}
+
+/// `sweeptin ground`: classifies the points of `inputs` together (a block's buffer reaches
+/// into the neighbouring file) and writes each input to its output with the new classes,
+/// every other attribute kept ([`crate::output::las::rewrite_points`]), within `mem` bytes,
+/// temporary files under `tmp`. The outputs are checked before any work: distinct, never an
+/// input, regular files (or new).
+///
+/// # Errors
+/// [`Error::Options`] when inputs and outputs do not pair up; the output checks'; those of
+/// [`crate::ground::classify_files`] and of the writer. An output appears only complete.
+pub fn ground_files(
+    inputs: &[std::path::PathBuf],
+    outputs: &[std::path::PathBuf],
+    params: &GroundParams,
+    mem: u64,
+    tmp: &std::path::Path,
+    progress: &mut dyn FnMut(&str, u64, u64),
+) -> Result<GroundFiles> {
+    params.check()?;
+    if inputs.is_empty() {
+        return Err(Error::NoInput);
+    }
+    if inputs.len() != outputs.len() {
+        return Err(Error::Options(format!(
+            "ground: {} inputs but {} outputs (one output per input)",
+            inputs.len(),
+            outputs.len()
+        )));
+    }
+    let named: Vec<(String, &std::path::Path)> = outputs
+        .iter()
+        .enumerate()
+        .map(|(k, o)| (format!("output {}", k + 1), o.as_path()))
+        .collect();
+    let named: Vec<(&str, &std::path::Path)> = named.iter().map(|(f, o)| (f.as_str(), *o)).collect();
+    crate::output::distinct_outputs(&named, inputs, "ground")?;
+    for o in outputs {
+        crate::output::check_output(o)?;
+        crate::output::las::check_point_output(o, inputs)?;
+    }
+    let (mut classes, ground) =
+        crate::ground::classify_files(inputs, params, mem, tmp, progress)?;
+    let mut files = Vec::with_capacity(inputs.len());
+    let mut base = 0u64;
+    for (input, output) in inputs.iter().zip(outputs) {
+        progress(&format!("writing {}", output.display()), 0, 0);
+        let count = crate::input::las::FileInfo::read(input)?.point_count;
+        let mut edit = |p: &mut crate::output::las::PointEdit<'_>| -> Result<()> {
+            let c = classes.get(base + p.index())?;
+            p.set_classification(c);
+            Ok(())
+        };
+        files.push(crate::output::las::rewrite_points(input, output, &mut edit)?);
+        base += count;
+    }
+    Ok(GroundFiles { ground, files })
+}
