@@ -84,7 +84,10 @@ fn dem_with_ground_equals_ground_then_dem_class_2_for_any_threads_and_mem() {
         let want = dem(&routed, &d.join("route12.tif"), &["--class", "1,2"]);
         let mut extra = vec!["--ground", "--class", "1,2"];
         extra.extend(params.iter());
-        assert!(dem(files, &d.join("fly12.tif"), &extra) == want, "case {k}, --class 1,2");
+        assert!(
+            dem(files, &d.join("fly12.tif"), &extra) == want,
+            "case {k}, --class 1,2"
+        );
     }
 }
 
@@ -105,7 +108,13 @@ fn height_with_ground_equals_ground_then_height() {
     let d = dir.path();
     let routed = ground_route(std::slice::from_ref(&input), d, &[]);
     let (a, b) = (d.join("route_hag.laz"), d.join("fly_hag.laz"));
-    run(&[os("height"), routed[0].as_os_str(), os("-o"), a.as_os_str(), os("-q")]);
+    run(&[
+        os("height"),
+        routed[0].as_os_str(),
+        os("-o"),
+        a.as_os_str(),
+        os("-q"),
+    ]);
     run(&[
         os("height"),
         input.as_os_str(),
@@ -121,7 +130,9 @@ fn height_with_ground_equals_ground_then_height() {
     assert_eq!(want, got);
     // The file's own classes are kept: only the heights are added.
     let read = |p: &Path| -> Vec<u8> {
-        let r = LidarReader::open(&[p], &Filter::keep_all()).unwrap().read_all();
+        let r = LidarReader::open(&[p], &Filter::keep_all())
+            .unwrap()
+            .read_all();
         r.unwrap().iter().map(|p| p.classification).collect()
     };
     assert_eq!(read(&input), read(&b));
@@ -139,7 +150,13 @@ fn ground_is_refused_where_it_cannot_be_exact_and_its_options_without_it() {
     let cases: Vec<(Vec<&OsStr>, &str)> = vec![
         // The ground filter's options without --ground.
         (
-            vec![os("dem"), input.as_os_str(), os("--cell"), os("1"), os("--town")],
+            vec![
+                os("dem"),
+                input.as_os_str(),
+                os("--cell"),
+                os("1"),
+                os("--town"),
+            ],
             "apply with --ground",
         ),
         (
@@ -148,7 +165,13 @@ fn ground_is_refused_where_it_cannot_be_exact_and_its_options_without_it() {
         ),
         // Not LAS/LAZ points.
         (
-            vec![os("dem"), xyz.as_os_str(), os("--cell"), os("1"), os("--ground")],
+            vec![
+                os("dem"),
+                xyz.as_os_str(),
+                os("--cell"),
+                os("1"),
+                os("--ground"),
+            ],
             "LAS/LAZ/COPC",
         ),
         // Bad parameters.

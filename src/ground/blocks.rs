@@ -154,7 +154,9 @@ impl ClassStore {
 /// a file's classes are read with `pread`, a span at a time).
 impl crate::input::las::PointClasses for ClassStore {
     fn read_classes(&self, first: u64, out: &mut [u8]) -> Result<()> {
-        let end = first.checked_add(out.len() as u64).filter(|&e| e <= self.len);
+        let end = first
+            .checked_add(out.len() as u64)
+            .filter(|&e| e <= self.len);
         if end.is_none() {
             return Err(Error::Internal(format!(
                 "points {first} .. {} have no class: the ground filter classified {} points \

@@ -143,14 +143,14 @@ pub fn ground_files(
         .enumerate()
         .map(|(k, o)| (format!("output {}", k + 1), o.as_path()))
         .collect();
-    let named: Vec<(&str, &std::path::Path)> = named.iter().map(|(f, o)| (f.as_str(), *o)).collect();
+    let named: Vec<(&str, &std::path::Path)> =
+        named.iter().map(|(f, o)| (f.as_str(), *o)).collect();
     crate::output::distinct_outputs(&named, inputs, "ground")?;
     for o in outputs {
         crate::output::check_output(o)?;
         crate::output::las::check_point_output(o, inputs)?;
     }
-    let (mut classes, ground) =
-        crate::ground::classify_files(inputs, params, mem, tmp, progress)?;
+    let (mut classes, ground) = crate::ground::classify_files(inputs, params, mem, tmp, progress)?;
     let mut files = Vec::with_capacity(inputs.len());
     let mut base = 0u64;
     for (input, output) in inputs.iter().zip(outputs) {
@@ -161,7 +161,9 @@ pub fn ground_files(
             p.set_classification(c);
             Ok(())
         };
-        files.push(crate::output::las::rewrite_points(input, output, &mut edit)?);
+        files.push(crate::output::las::rewrite_points(
+            input, output, &mut edit,
+        )?);
         base += count;
     }
     Ok(GroundFiles { ground, files })
