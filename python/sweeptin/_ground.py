@@ -153,7 +153,8 @@ def height(
     points the ground filter finds (:func:`ground`'s parameters: ``preset``, ``step``, …).
 
     On arrays, ``height(x, y, z, classes=...)`` (or ``ground=True``) returns ``z`` minus the
-    ground TIN's height at every point as a float64 array, NaN outside the ground's hull.
+    ground TIN's height at every point as a float64 array, NaN outside the ground's hull (the
+    command line's heights to within rounding in the last bits: :meth:`Tin.interpolate`).
 
     On files, ``height(files, output=...)`` or ``odir=...`` writes each input with a
     ``HeightAboveGround`` attribute (or its z replaced with ``replace_z=True``) and returns the
