@@ -184,6 +184,7 @@ fn withheld_points_are_dropped_by_default_and_counted() {
         drop_withheld: false,
         bbox: None,
         z_from: None,
+        classes_from: None,
     };
     let mut r = LidarReader::open(&[&path], &f).unwrap();
     let got = r.read_all().unwrap();

@@ -93,6 +93,7 @@ impl InputOpts {
                 drop_withheld: !self.keep_withheld,
                 bbox: self.bbox()?,
                 z_from: None,
+                classes_from: None,
             },
             duplicates: duplicates(&self.duplicates)?,
             lines: LineOptions {

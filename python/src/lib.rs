@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 
 mod errors;
 mod files;
+mod ground;
 mod interrupt;
 mod memory;
 mod plans;
@@ -35,6 +36,9 @@ fn _sweeptin(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(files::parse_size, m)?)?;
     m.add_function(wrap_pyfunction!(files::parse_classes, m)?)?;
     m.add_function(wrap_pyfunction!(files::default_mem, m)?)?;
+    m.add_function(wrap_pyfunction!(ground::ground_points, m)?)?;
+    m.add_function(wrap_pyfunction!(ground::ground_files_native, m)?)?;
+    m.add_function(wrap_pyfunction!(ground::height_files, m)?)?;
     m.add_function(wrap_pyfunction!(plans::make_plan, m)?)?;
     m.add_function(wrap_pyfunction!(plans::run_task, m)?)?;
     m.add_function(wrap_pyfunction!(plans::merge, m)?)?;

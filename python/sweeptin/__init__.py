@@ -9,6 +9,9 @@ Three ways in, as in pdal-python:
   over LAS/LAZ/XYZ files as numpy chunks, in bounded memory.
 * **Run to completion on files**: :func:`dem`, :func:`contours`, :func:`volume` and :func:`tin`
   do what the command line does, with the same bounded memory and the same output bytes.
+* **Ground**: :func:`ground` classifies the ground (numpy arrays → classes, or files → files
+  with their new classes, as ``sweeptin ground``) and :func:`height` gives heights above it
+  (arrays → heights, or files → files with ``HeightAboveGround``, as ``sweeptin height``).
 
 And tile plans for Dask or any batch engine: :func:`plan`, :func:`run_task`, :func:`merge` over
 the same ``plan.json`` as ``sweeptin plan/run/merge``.
@@ -68,6 +71,8 @@ __all__ = [
     "volume",
     "tin",
     "stream_triangles",
+    "ground",
+    "height",
     "Plan",
     "plan",
     "run_task",
@@ -693,3 +698,6 @@ def merge(
         **_raster(format, compress, predictor, bigtiff),
     }
     return _json.loads(_native.merge(_plan_path(plan), opts))
+
+
+from ._ground import ground, height  # noqa: E402  (uses the helpers above)

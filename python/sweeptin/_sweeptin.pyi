@@ -68,3 +68,27 @@ def run_task(
     path: _Path, i: int, threads: int = 0, resume: bool = False, progress: bool = False
 ) -> str: ...
 def merge(path: _Path, opts: dict[str, Any]) -> str: ...
+def ground_points(
+    xyz: npt.NDArray[np.float64],
+    classes: npt.NDArray[np.uint8],
+    withheld: npt.NDArray[np.bool_],
+    params: dict[str, Any],
+    mem: int,
+) -> npt.NDArray[np.uint8]: ...
+def ground_files(
+    files: Sequence[_Path],
+    outputs: Sequence[_Path],
+    params: dict[str, Any],
+    mem: int,
+    tmp_dir: Optional[_Path] = None,
+) -> str: ...
+def height_files(
+    files: Sequence[_Path],
+    outputs: Sequence[_Path],
+    params: Optional[dict[str, Any]],
+    ground_class: Sequence[int],
+    replace_z: bool,
+    mem: int,
+    threads: int,
+    tmp_dir: Optional[_Path] = None,
+) -> str: ...

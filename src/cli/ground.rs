@@ -7,6 +7,102 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use sweeptin::ground::{GroundParams, GroundSummary, Terrain};
 
+/// The help heading of the ground filter's options.
+const HEADING: &str = "Ground filter (with --ground in the triangulating commands)";
+
+/// The ground filter's parameters and presets, shared by `sweeptin ground` and the
+/// triangulating commands' `--ground`.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct GroundOptions {
+    /// Seed cell side: larger than the largest building (metres, or the data's unit).
+    #[arg(long, help_heading = HEADING, value_name = "S")]
+    pub step: Option<f64>,
+    /// Largest distance from a point to its ground triangle's plane.
+    #[arg(long, help_heading = HEADING, value_name = "D")]
+    pub max_distance: Option<f64>,
+    /// Largest angle (degrees) from the ground triangle's plane to its corners.
+    #[arg(long, help_heading = HEADING, value_name = "DEG")]
+    pub max_angle: Option<f64>,
+    /// Depth below the neighbouring seeds, or below the final ground, that makes low noise.
+    #[arg(long, help_heading = HEADING, value_name = "H")]
+    pub low_noise: Option<f64>,
+    /// Points within this vertical distance of the final ground are ground too.
+    #[arg(long, help_heading = HEADING, value_name = "DZ")]
+    pub offset: Option<f64>,
+    /// Do not try points near steep edges mirrored through the nearest ground vertex
+    /// (Axelsson's mirroring, on by default).
+    #[arg(long, help_heading = HEADING)]
+    pub no_mirror: bool,
+    /// Preset: no buildings, fine detail (step 3).
+    #[arg(long, group = "terrain", help_heading = HEADING)]
+    pub wilderness: bool,
+    /// Preset: open natural terrain (step 5).
+    #[arg(long, group = "terrain", help_heading = HEADING)]
+    pub nature: bool,
+    /// Preset: villages (step 10).
+    #[arg(long, group = "terrain", help_heading = HEADING)]
+    pub town: bool,
+    /// Preset: cities (step 25).
+    #[arg(long, group = "terrain", help_heading = HEADING)]
+    pub city: bool,
+    /// Preset: large buildings (step 50).
+    #[arg(long, group = "terrain", help_heading = HEADING)]
+    pub metro: bool,
+    /// Preset: forest, no buildings (step 10).
+    #[arg(long, group = "terrain", help_heading = HEADING)]
+    pub forest: bool,
+    /// Preset: steep terrain (step 10, max-angle 12, max-distance 1.5, low-noise 10).
+    #[arg(long, group = "terrain", help_heading = HEADING)]
+    pub mountains: bool,
+}
+
+impl GroundOptions {
+    /// The parameters: the preset's (or the default), each given value over it.
+    pub fn params(&self) -> GroundParams {
+        let preset = [
+            (self.wilderness, Terrain::Wilderness),
+            (self.nature, Terrain::Nature),
+            (self.town, Terrain::Town),
+            (self.city, Terrain::City),
+            (self.metro, Terrain::Metro),
+            (self.forest, Terrain::Forest),
+            (self.mountains, Terrain::Mountains),
+        ]
+        .into_iter()
+        .find(|p| p.0)
+        .map(|p| p.1);
+        let mut p = preset.map_or_else(GroundParams::default, Terrain::params);
+        p.step = self.step.unwrap_or(p.step);
+        p.max_distance = self.max_distance.unwrap_or(p.max_distance);
+        p.max_angle = self.max_angle.unwrap_or(p.max_angle);
+        p.low_noise = self.low_noise.unwrap_or(p.low_noise);
+        p.offset = self.offset.unwrap_or(p.offset);
+        p.mirror = p.mirror && !self.no_mirror;
+        p
+    }
+
+    /// Was any parameter or preset given?
+    pub fn any(&self) -> bool {
+        [
+            self.step,
+            self.max_distance,
+            self.max_angle,
+            self.low_noise,
+            self.offset,
+        ]
+        .iter()
+        .any(Option::is_some)
+            || self.no_mirror
+            || self.wilderness
+            || self.nature
+            || self.town
+            || self.city
+            || self.metro
+            || self.forest
+            || self.mountains
+    }
+}
+
 /// Arguments of `sweeptin ground`.
 #[derive(clap::Args, Debug)]
 #[command(after_help = "\
@@ -60,49 +156,11 @@ pub struct Args {
     /// Output directory: each input written there under its own file name.
     #[arg(long, value_name = "DIR")]
     pub odir: Option<PathBuf>,
-    /// Seed cell side: larger than the largest building (metres, or the data's unit).
-    #[arg(long, value_name = "S")]
-    pub step: Option<f64>,
-    /// Largest distance from a point to its ground triangle's plane.
-    #[arg(long, value_name = "D")]
-    pub max_distance: Option<f64>,
-    /// Largest angle (degrees) from the ground triangle's plane to its corners.
-    #[arg(long, value_name = "DEG")]
-    pub max_angle: Option<f64>,
-    /// Depth below the neighbouring seeds, or below the final ground, that makes low noise.
-    #[arg(long, value_name = "H")]
-    pub low_noise: Option<f64>,
-    /// Points within this vertical distance of the final ground are ground too.
-    #[arg(long, value_name = "DZ")]
-    pub offset: Option<f64>,
-    /// Do not try points near steep edges mirrored through the nearest ground vertex
-    /// (Axelsson's mirroring, on by default).
-    #[arg(long)]
-    pub no_mirror: bool,
+    #[command(flatten)]
+    pub params: GroundOptions,
     /// Points that are not ground (nor noise, nor withheld) become class 1.
     #[arg(long)]
     pub reset: bool,
-    /// Preset: no buildings, fine detail (step 3).
-    #[arg(long, group = "terrain")]
-    pub wilderness: bool,
-    /// Preset: open natural terrain (step 5).
-    #[arg(long, group = "terrain")]
-    pub nature: bool,
-    /// Preset: villages (step 10).
-    #[arg(long, group = "terrain")]
-    pub town: bool,
-    /// Preset: cities (step 25).
-    #[arg(long, group = "terrain")]
-    pub city: bool,
-    /// Preset: large buildings (step 50).
-    #[arg(long, group = "terrain")]
-    pub metro: bool,
-    /// Preset: forest, no buildings (step 10).
-    #[arg(long, group = "terrain")]
-    pub forest: bool,
-    /// Preset: steep terrain (step 10, max-angle 12, max-distance 1.5, low-noise 10).
-    #[arg(long, group = "terrain")]
-    pub mountains: bool,
     /// Memory budget (e.g. 512M, 4G).
     #[arg(long, value_name = "SIZE", default_value_t = Size(sweeptin::pipeline::default_mem()))]
     pub mem: Size,
@@ -124,31 +182,6 @@ pub struct Args {
 }
 
 impl Args {
-    /// The parameters: the preset's (or the default), each given value over it.
-    fn params(&self) -> GroundParams {
-        let preset = [
-            (self.wilderness, Terrain::Wilderness),
-            (self.nature, Terrain::Nature),
-            (self.town, Terrain::Town),
-            (self.city, Terrain::City),
-            (self.metro, Terrain::Metro),
-            (self.forest, Terrain::Forest),
-            (self.mountains, Terrain::Mountains),
-        ]
-        .into_iter()
-        .find(|p| p.0)
-        .map(|p| p.1);
-        let mut p = preset.map_or_else(GroundParams::default, Terrain::params);
-        p.step = self.step.unwrap_or(p.step);
-        p.max_distance = self.max_distance.unwrap_or(p.max_distance);
-        p.max_angle = self.max_angle.unwrap_or(p.max_angle);
-        p.low_noise = self.low_noise.unwrap_or(p.low_noise);
-        p.offset = self.offset.unwrap_or(p.offset);
-        p.mirror = p.mirror && !self.no_mirror;
-        p.reset = self.reset;
-        p
-    }
-
     /// The output of each input.
     fn outputs(&self) -> anyhow::Result<Vec<PathBuf>> {
         match (&self.output, &self.odir) {
@@ -205,7 +238,8 @@ struct Summary<'a> {
 pub fn run(mut args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     args.lists = super::input::expand_files(&mut args.inputs)?;
-    let params = args.params();
+    let mut params = args.params.params();
+    params.reset = args.reset;
     params.check()?;
     let outputs = args.outputs()?;
     let pairs: Vec<(&str, &Path)> = outputs
@@ -235,28 +269,29 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         b
     };
     let mut progress = |what: &str, done: u64, total: u64| {
-        bar.set_message(format!("{what}: {done} of {total} points"));
+        if total == 0 {
+            bar.set_message(what.to_string());
+        } else {
+            bar.set_message(format!("{what}: {done} of {total} points"));
+        }
     };
-    let (mut classes, summary) =
-        sweeptin::ground::classify_files(&args.inputs, &params, args.mem.0, &tmp, &mut progress)
-            .map_err(|e| super::input::run_error(e, &args.inputs))?;
-    let write_start = Instant::now();
-    let (mut changed, mut bytes, mut base) = (0u64, 0u64, 0u64);
-    for (input, output) in args.inputs.iter().zip(&outputs) {
-        bar.set_message(format!("writing {}", output.display()));
-        let count = sweeptin::input::las::FileInfo::read(input)?.point_count;
-        let mut edit = |p: &mut sweeptin::output::las::PointEdit<'_>| -> sweeptin::Result<()> {
-            let c = classes.get(base + p.index())?;
-            p.set_classification(c);
-            Ok(())
-        };
-        let s = sweeptin::output::las::rewrite_points(input, output, &mut edit)?;
+    let done = sweeptin::pipeline::ground::ground_files(
+        &args.inputs,
+        &outputs,
+        &params,
+        args.mem.0,
+        &tmp,
+        &mut progress,
+    )
+    .map_err(|e| super::input::run_error(e, &args.inputs))?;
+    let summary = &done.ground;
+    let (mut changed, mut bytes) = (0u64, 0u64);
+    for s in &done.files {
         for note in &s.notes {
             bar.suspend(|| eprintln!("sweeptin: note: {note}"));
         }
         changed += s.changed;
         bytes += s.bytes;
-        base += count;
     }
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
@@ -272,10 +307,10 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
             inputs: &args.inputs,
             outputs: &outputs,
             params,
-            ground: &summary,
+            ground: summary,
             changed,
             bytes,
-            write_seconds: write_start.elapsed().as_secs_f64(),
+            write_seconds: (seconds - summary.read_seconds - summary.classify_seconds).max(0.0),
             seconds,
         };
         println!("{}", serde_json::to_string(&s)?);

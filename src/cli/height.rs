@@ -13,6 +13,8 @@ Examples:
       adds HeightAboveGround (a double, PDAL's name) from the TIN of the class-2 points
   sweeptin dem tile_hag.laz --returns first --z-from HeightAboveGround --cell 0.5 -o chm.tif
       a canopy height model from those heights
+  sweeptin height raw.laz --ground -o raw_hag.laz
+      the ground found on the fly by the ground filter (`sweeptin ground`'s options)
   sweeptin height tiles/*.laz --odir normalized/ --replace-z
       z replaced by the height (lidR's normalize_height), one output per input, the ground
       made from the class-2 points of all the tiles together
@@ -43,6 +45,14 @@ pub struct Args {
     /// Classes of the ground points (their TIN is the ground).
     #[arg(long, value_name = "LIST", default_value = "2")]
     pub ground_class: String,
+    /// Find the ground on the fly instead: the points the ground filter of `sweeptin ground`
+    /// classifies as ground (with the options below; the files' own classes are ignored and
+    /// kept in the outputs), so that `height raw.laz --ground` equals `ground raw.laz -o g.laz`
+    /// then `height g.laz` (but the classes are not written).
+    #[arg(long, conflicts_with = "ground_class")]
+    pub ground: bool,
+    #[command(flatten)]
+    pub ground_options: super::ground::GroundOptions,
     /// Memory budget (half sorts the points, half makes the ground TIN), e.g. 512M.
     #[arg(long, value_name = "SIZE", default_value_t = Size(pipeline::default_mem()))]
     pub mem: Size,
@@ -105,11 +115,23 @@ fn outputs(args: &Args) -> anyhow::Result<Vec<PathBuf>> {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
-    let classes = parse_classes(&args.ground_class)?;
+    let ground = if args.ground {
+        let params = args.ground_options.params();
+        params.check()?;
+        Ground::Classify(params)
+    } else if args.ground_options.any() {
+        anyhow::bail!(sweeptin::Error::Options(
+            "the ground filter's options (--step, --max-angle, --town, …) apply with --ground: \
+             add --ground to measure heights above the ground found on the fly"
+                .into()
+        ));
+    } else {
+        Ground::Classes(parse_classes(&args.ground_class)?)
+    };
     let job = HeightJob {
         outputs: outputs(&args)?,
         inputs: args.inputs.clone(),
-        ground: Ground::Classes(classes),
+        ground,
         replace_z: args.replace_z,
     };
     pipeline::size_thread_pool(args.threads);

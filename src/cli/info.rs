@@ -80,6 +80,7 @@ impl FilterArgs {
             drop_withheld: self.drop_withheld && !self.keep_withheld,
             bbox: self.bbox,
             z_from: self.z_from.clone(),
+            classes_from: None,
         }
     }
 }

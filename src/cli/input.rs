@@ -25,6 +25,16 @@ pub struct InputArgs {
     pub inputs: Vec<PathBuf>,
     #[command(flatten)]
     pub filter: FilterArgs,
+    /// Triangulate the ground found on the fly: classify the LAS/LAZ/COPC points with the
+    /// ground filter of `sweeptin ground` (its options below; no point is written), then read
+    /// every point with the class `ground` would write and keep class 2 (or the classes of
+    /// --class among those), so that `dem raw.laz --ground` makes the DEM of `ground raw.laz
+    /// -o g.laz` then `dem g.laz --class 2`, byte for byte. The file's own classes are ignored.
+    /// Needs --mem for both steps in turn (the classes wait in memory up to an eighth of it).
+    #[arg(long)]
+    pub ground: bool,
+    #[command(flatten)]
+    pub ground_options: super::ground::GroundOptions,
     /// Which point survives among exact (x, y) duplicates.
     #[arg(long, value_enum, default_value_t = sweeptin::DuplicatePolicy::First)]
     pub duplicates: sweeptin::DuplicatePolicy,
@@ -170,6 +180,7 @@ impl InputArgs {
             // the sweep for lines; `--engine tiles` asks for tiles.
             options.tiles = None;
         }
+        let (input, options) = self.grounded(input, options)?;
         let config = RunConfig::new(input, options)?;
         if self.engine == Engine::Tiles && !config.runs_in_tiles() && !self.quiet {
             eprintln!(
@@ -180,6 +191,40 @@ impl InputArgs {
             );
         }
         Ok(config)
+    }
+}
+
+impl InputArgs {
+    /// With `--ground`, the input that reads the ground filter's classes (the classification
+    /// done here, before the run: `sweeptin::pipeline::ground`); the ground options without
+    /// `--ground` are refused.
+    fn grounded(&self, input: Input, options: RunOptions) -> anyhow::Result<(Input, RunOptions)> {
+        if !self.ground {
+            if self.ground_options.any() {
+                return Err(sweeptin::Error::Options(
+                    "the ground filter's options (--step, --max-angle, --town, …) apply with \
+                     --ground: add --ground to triangulate the ground found on the fly"
+                        .into(),
+                )
+                .into());
+            }
+            return Ok((input, options));
+        }
+        let params = self.ground_options.params();
+        let g = pipeline::ground::ground_input(&input, &params, &options, &mut |_, _, _| {})
+            .map_err(|e| run_error(e, &input.paths))?;
+        if options.progress {
+            eprintln!(
+                "sweeptin: --ground: {} of {} points are ground ({} low noise; blocks of {}, \
+                 {:.1} s)",
+                sweeptin::fmt::count(g.summary.ground),
+                sweeptin::fmt::count(g.summary.points),
+                sweeptin::fmt::count(g.summary.low_noise),
+                g.summary.block,
+                g.summary.read_seconds + g.summary.classify_seconds
+            );
+        }
+        Ok((g.input, g.options))
     }
 }
 

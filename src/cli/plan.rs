@@ -287,6 +287,11 @@ fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
 /// Refuses what a plan cannot run exactly, before anything is written.
 fn check_job(job: &Job) -> anyhow::Result<()> {
     let a = job.args();
+    if a.ground {
+        bail!(sweeptin::Error::Options(
+            sweeptin::pipeline::ground::PLAN_REFUSES_GROUND.into()
+        ));
+    }
     if a.filter.bbox.is_some() {
         bail!("a plan covers its files whole: leave --bbox out (the tiles cut the area)");
     }

@@ -140,6 +140,41 @@ impl ClassStore {
     }
 }
 
+impl ClassStore {
+    /// Bytes the store holds in memory (0 when its classes are in a temporary file).
+    pub fn memory_bytes(&self) -> u64 {
+        match &self.inner {
+            Inner::Memory(v) => v.len() as u64,
+            Inner::File { .. } => 0,
+        }
+    }
+}
+
+/// A reader with `--ground` takes each point's class from the store (any thread, any order:
+/// a file's classes are read with `pread`, a span at a time).
+impl crate::input::las::PointClasses for ClassStore {
+    fn read_classes(&self, first: u64, out: &mut [u8]) -> Result<()> {
+        let end = first
+            .checked_add(out.len() as u64)
+            .filter(|&e| e <= self.len);
+        if end.is_none() {
+            return Err(Error::Internal(format!(
+                "points {first} .. {} have no class: the ground filter classified {} points \
+                 (the files changed since?)",
+                first.saturating_add(out.len() as u64),
+                self.len
+            )));
+        }
+        match &self.inner {
+            Inner::Memory(v) => out.copy_from_slice(&v[first as usize..first as usize + out.len()]),
+            Inner::File { file, dir, .. } => file
+                .read_exact_at(out, first)
+                .map_err(|e| Error::io(dir.clone(), e))?,
+        }
+        Ok(())
+    }
+}
+
 /// Hands every point to the function it is given (see [`classify_stream`]).
 pub type Feed<'a> = dyn FnMut(&mut dyn FnMut(GroundInput) -> Result<()>) -> Result<()> + 'a;
 

@@ -37,12 +37,13 @@ use std::path::PathBuf;
 pub const HEIGHT_ATTRIBUTE: &str = "HeightAboveGround";
 
 /// Where the ground comes from.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Ground {
     /// The points already classified with these classes (2, ground, by default).
-    // The ground classifier (`src/ground/`, `--ground`) adds a variant here: its ground points
-    // feed the same TIN, and nothing below changes.
     Classes(Vec<u8>),
+    /// The ground the filter finds in the inputs with these parameters (`--ground`: the
+    /// points `sweeptin ground` would write as class 2, [`super::ground::ground_input`]).
+    Classify(crate::ground::GroundParams),
 }
 
 impl Default for Ground {
@@ -119,6 +120,27 @@ pub fn height(job: &HeightJob, options: &RunOptions) -> Result<HeightSummary> {
             eprintln!("sweeptin: height: {m}");
         }
     };
+    // The ground's points: those of the classes, or those the filter finds (classified first,
+    // within the whole of `--mem`; the classes then wait in what is left).
+    let input = Input {
+        paths: job.inputs.clone(),
+        filter: Filter::default(),
+        duplicates: DuplicatePolicy::First,
+        lines: LineOptions::default(),
+    };
+    let (input, options) = match &job.ground {
+        Ground::Classes(classes) => {
+            let mut input = input;
+            input.filter.classes = Some(classes.clone());
+            (input, options.clone())
+        }
+        Ground::Classify(params) => {
+            say(&format!("classifying the ground of {total} points"));
+            let g = super::ground::ground_input(&input, params, options, &mut |_, _, _| {})?;
+            (g.input, g.options)
+        }
+    };
+    let options = &options;
 
     // 1. Every point, sorted by y (the queries).
     say(&format!("sorting {total} points by y"));
@@ -142,16 +164,6 @@ pub fn height(job: &HeightJob, options: &RunOptions) -> Result<HeightSummary> {
 
     // 2. The ground TIN answers them.
     say("triangulating the ground");
-    let Ground::Classes(classes) = &job.ground;
-    let input = Input {
-        paths: job.inputs.clone(),
-        filter: Filter {
-            classes: Some(classes.clone()),
-            ..Filter::default()
-        },
-        duplicates: DuplicatePolicy::First,
-        lines: LineOptions::default(),
-    };
     let mut ground_options = options.clone();
     ground_options.mem = options.mem / 2;
     let config = RunConfig::new(input, ground_options)?;

@@ -19,6 +19,7 @@
 mod config;
 mod drive;
 mod emit;
+pub mod ground;
 pub mod height;
 mod lines;
 mod read;
@@ -358,6 +359,14 @@ pub fn reference_surface(
     dir: &Path,
     bands: usize,
 ) -> Result<crate::products::overlay::BandReader> {
+    if filter.classes_from.is_some() && paths != config.input().paths.as_slice() {
+        return Err(Error::Options(
+            "--ground classifies the points of the run's own files, not those of another \
+             surface: classify the surface first (`sweeptin ground`) and give it with its \
+             classes (--surface-class 2)"
+                .into(),
+        ));
+    }
     let reference = RunConfig::new(
         Input {
             paths: paths.to_vec(),

@@ -224,6 +224,7 @@ impl Job {
             drop_withheld: self.drop_withheld,
             bbox: None,
             z_from: None,
+            classes_from: None,
         }
     }
 

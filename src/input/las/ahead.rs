@@ -100,6 +100,12 @@ impl SpanJob {
         kept.reserve(span.points as usize);
         let mut stats = FilterStats::default();
         let node = self.check.node(span);
+        // `--ground`: the classes of the span's points, by global index, replace their own.
+        let mut classes = Vec::new();
+        if let Some(from) = &self.filter.classes_from {
+            classes.resize(raw.len() / self.len, 0);
+            from.0.read_classes(self.base + span.first, &mut classes)?;
+        }
         for (i, rec) in raw.chunks_exact(self.len).enumerate() {
             self.check
                 .test(rec, self.ext, span, node, span.first + i as u64)?;
@@ -109,6 +115,9 @@ impl SpanJob {
                 self.base + span.first + i as u64,
                 &self.quant,
             );
+            if let Some(&c) = classes.get(i) {
+                p.classification = c;
+            }
             if let Some(d) = &self.z_from {
                 match d.value(rec).filter(|z| z.is_finite()) {
                     Some(z) => p.z = z,

@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Arc;
 
 /// Which returns of each pulse to keep.
 #[derive(
@@ -124,6 +125,33 @@ pub fn parse_classes(s: &str) -> Result<Vec<u8>> {
         .collect()
 }
 
+/// Classes that replace the files' own, by global input index (files in the order given, then
+/// points in file order): the ground filter's classes of `--ground` (`crate::ground::ClassStore`).
+pub trait PointClasses: Send + Sync {
+    /// Fills `out` with the classes of the points `first`, `first + 1`, …
+    ///
+    /// # Errors
+    /// When the classes cannot be read (a temporary file), or there are none that far.
+    fn read_classes(&self, first: u64, out: &mut [u8]) -> Result<()>;
+}
+
+/// The classes a [`Filter`] reads the points with instead of their own ([`PointClasses`]);
+/// equal when they are the same object.
+#[derive(Clone)]
+pub struct ClassesFrom(pub Arc<dyn PointClasses>);
+
+impl fmt::Debug for ClassesFrom {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("ClassesFrom(..)")
+    }
+}
+
+impl PartialEq for ClassesFrom {
+    fn eq(&self, other: &ClassesFrom) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
 /// Which points a [`super::LidarReader`] keeps. The default keeps everything except withheld
 /// points.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -141,6 +169,12 @@ pub struct Filter {
     /// it: `HeightAboveGround` of `sweeptin height`) instead of the record's z; points whose
     /// value is missing or not finite (NaN) are dropped (`FilterStats::no_value`).
     pub z_from: Option<String>,
+    /// Read every point with the class given here for its global input index instead of the
+    /// class in its record, before `classes` selects (`--ground`: the ground filter's classes,
+    /// as `sweeptin ground` would write them). The reader's global indices must be the ones
+    /// the classes were made for: the same files, in the same order.
+    #[serde(skip)]
+    pub classes_from: Option<ClassesFrom>,
 }
 
 impl Default for Filter {
@@ -151,6 +185,7 @@ impl Default for Filter {
             drop_withheld: true,
             bbox: None,
             z_from: None,
+            classes_from: None,
         }
     }
 }
@@ -265,6 +300,8 @@ impl std::ops::AddAssign for FilterStats {
 #[derive(Clone, Debug)]
 pub(crate) struct CompiledFilter {
     classes: Option<Box<[bool; 256]>>,
+    /// `Filter::classes_from`.
+    pub(crate) classes_from: Option<ClassesFrom>,
     returns: Returns,
     drop_withheld: bool,
     /// The filter's box met with the area asked for, `[xmin, ymin, xmax, ymax]`, edges
@@ -291,6 +328,7 @@ impl CompiledFilter {
         };
         CompiledFilter {
             classes,
+            classes_from: filter.classes_from.clone(),
             returns: filter.returns,
             drop_withheld: filter.drop_withheld,
             bbox,
@@ -369,6 +407,7 @@ mod tests {
             drop_withheld: true,
             bbox: Some(BBox::new(1.0, 1.0, 2.0, 2.0).unwrap()),
             z_from: None,
+            classes_from: None,
         };
         let c = CompiledFilter::new(&f, None);
         let p = LidarPoint {

@@ -58,7 +58,7 @@ pub mod world;
 pub use crate::crs::{Crs, HorizontalKind};
 pub use chunks::ChunkIndex;
 pub use copc::CopcInfo;
-pub use filter::{BBox, Filter, FilterStats, Returns, parse_classes};
+pub use filter::{BBox, ClassesFrom, Filter, FilterStats, PointClasses, Returns, parse_classes};
 pub use header::{Bounds3, FileInfo};
 pub use reader::{LidarReader, ReadOptions};
 pub use stats::{PointStats, scan};
