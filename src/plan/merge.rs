@@ -424,13 +424,13 @@ fn plan_crs(plan: &Plan) -> Result<Option<Crs>> {
 fn no_contours(product: &super::Product) -> String {
     use super::Product;
     match product {
-        Product::Dem { .. } => "the plan makes a DEM without contour lines (it was made without              --contours, so no task drew any): make the plan again with --contours FILE              --interval N, or draw them from the mosaic (`sweeptin contours`)"
+        Product::Dem { .. } => "the plan makes a DEM without contour lines (it was made without --contours, so no task drew any): make the plan again with --contours FILE --interval N, or draw them from the mosaic (`sweeptin contours`)"
             .into(),
-        Product::Contours(_) => "the plan makes contour lines, written to -o OUT.geojson: leave              --contours out"
+        Product::Contours(_) => "the plan makes contour lines, written to -o OUT.geojson: leave --contours out"
             .into(),
-        Product::Volume { .. } => "the plan makes volumes, printed (--json for a summary), and              no contour lines: leave --contours out"
+        Product::Volume { .. } => "the plan makes volumes, printed (--json for a summary), and no contour lines: leave --contours out"
             .into(),
-        Product::Tin => "the plan makes a TIN (-o OUT.ply, .obj, .xml or .stin) and no contour              lines: leave --contours out"
+        Product::Tin => "the plan makes a TIN (-o OUT.ply, .obj, .xml or .stin) and no contour lines: leave --contours out"
             .into(),
     }
 }
