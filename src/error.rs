@@ -365,6 +365,17 @@ pub(crate) fn round_up_figure(v: f64) -> f64 {
     format!("{r:.1e}").parse().unwrap_or(r)
 }
 
+/// `v > 0` rounded down to two significant digits (`4.27` → `4.2`), for a bound a message
+/// suggests from above; other values as they are.
+pub(crate) fn round_down_figure(v: f64) -> f64 {
+    if !(v > 0.0 && v.is_finite()) {
+        return v;
+    }
+    let unit = 10f64.powi(v.log10().floor() as i32 - 1);
+    let r = (v / unit).floor() * unit;
+    format!("{r:.1e}").parse().unwrap_or(r)
+}
+
 /// What to do when the process may open no more files (`EMFILE`), or nothing.
 fn files_hint(e: &std::io::Error) -> &'static str {
     // EMFILE is 24 on Linux, macOS and the BSDs.

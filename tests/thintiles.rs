@@ -322,3 +322,40 @@ fn a_tile_smaller_than_a_points_neighbourhood_is_refused_and_the_summary_counts_
         "the summary does not count the vertices written: {err}"
     );
 }
+
+/// Issue 43, item 4: `thin --tile` on the ARSO ground at `--mem 64M` refused every side (below
+/// 140 m "give a larger --tile", from 150 m "give a smaller --tile"). The borders now keep one
+/// sample per position as they fill (each crossing came twice, each vertex once per triangle
+/// around it), and a tile too large for `--mem` names the side that fits, which then runs.
+#[test]
+fn a_tile_too_large_for_mem_names_a_side_that_fits() {
+    let Some(las) = shared("lidar/ign_50m_tiles/test_data_77050_627755_LA93_IGN69_ground.las")
+    else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let run = |tile: &str| {
+        sweeptin_cmd()
+            .arg("thin")
+            .arg(&las)
+            .args(["--max-error", "0.1", "--mem", "2M", "--tile", tile, "-o"])
+            .arg(dir.path().join("t.ply"))
+            .output()
+            .unwrap()
+    };
+    let o = run("100");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(!dir.path().join("t.ply").exists());
+    let side = err
+        .split("give --tile ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .unwrap_or_else(|| panic!("no side named: {err}"));
+    let o = run(side);
+    assert!(
+        o.status.success(),
+        "--tile {side}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

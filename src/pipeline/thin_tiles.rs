@@ -252,9 +252,12 @@ pub fn thin_tiled(
         };
         let (tx, ty) = unkey(k);
         if need > budget {
+            // The points of a tile go as its side squared (10 % kept in hand for denser ones).
+            let fits =
+                crate::error::round_down_figure(tile * (budget as f64 / need as f64).sqrt() * 0.9);
             return Err(Error::Options(format!(
                 "thin --tile {tile}: tile ({tx}, {ty}) holds {} points, about {} MiB to thin, \
-                 more than half of --mem {} MiB: give a smaller --tile or a larger --mem",
+                 more than half of --mem {} MiB: give --tile {fits} or smaller, or a larger --mem",
                 pts.len(),
                 need >> 20,
                 mem >> 20

@@ -180,16 +180,51 @@ impl Sections {
                 }
             }
         }
-        if self.samples.saturating_mul(SAMPLE_BYTES) > self.limit {
+        if self.samples.saturating_mul(SAMPLE_BYTES) <= self.limit {
+            return Ok(());
+        }
+        // Each crossing comes from both triangles of its edge and each vertex from every
+        // triangle around it: one sample per position is all the borders keep. Refused when a
+        // quarter of the limit is not free after it (compacting again and again for a few
+        // samples each time would cost more than the pass).
+        self.compact();
+        if self.samples.saturating_mul(SAMPLE_BYTES) > self.limit / 4 * 3 {
+            // The samples go as 1 / T (the lines' count); 10 % more for the lines' ends.
+            let fits = crate::error::round_up_figure(
+                1.1 * self.grid.size * (self.samples * SAMPLE_BYTES) as f64
+                    / (self.limit / 4 * 3).max(1) as f64,
+            );
             return Err(Error::Options(format!(
                 "thin --tile {}: the TIN's sections along the tile borders need more than {} \
-                 KiB ({} samples, an eighth of --mem): give a larger --tile or a larger --mem",
+                 KiB ({} samples, an eighth of --mem): give --tile {fits} or larger, or a \
+                 larger --mem",
                 self.grid.size,
                 self.limit >> 10,
                 self.samples
             )));
         }
         Ok(())
+    }
+
+    /// Sorts every line's samples and keeps one per position: a total order (the triangles
+    /// arrive in an order that depends on the engine and the threads), a vertex before a
+    /// crossing rounded onto it, else the lowest. Keeping the least sample of each position is
+    /// the same whether done once at the end or again on the way (when the samples reach the
+    /// limit).
+    fn compact(&mut self) {
+        let mut samples = 0u64;
+        for s in self.lines.iter_mut().flat_map(|l| l.values_mut()) {
+            s.sort_by(|a, b| {
+                a.pos
+                    .total_cmp(&b.pos)
+                    .then(b.vertex.cmp(&a.vertex))
+                    .then(a.z.total_cmp(&b.z))
+            });
+            s.dedup_by(|b, a| a.pos == b.pos);
+            s.shrink_to_fit();
+            samples += s.len() as u64;
+        }
+        self.samples = samples;
     }
 
     /// Refuses tiles smaller than a point's neighbourhood: when the grid lines cut the TIN at
@@ -232,18 +267,7 @@ impl Sections {
     /// degenerate line).
     pub(crate) fn borders(mut self, options: &ThinOptions, points: u64) -> Result<Borders> {
         let grid = self.grid;
-        for s in self.lines.iter_mut().flat_map(|l| l.values_mut()) {
-            // A total order (the triangles arrive in an order that depends on the engine and
-            // the threads): one sample per position, a vertex before a crossing rounded onto
-            // it, else the lowest.
-            s.sort_by(|a, b| {
-                a.pos
-                    .total_cmp(&b.pos)
-                    .then(b.vertex.cmp(&a.vertex))
-                    .then(a.z.total_cmp(&b.z))
-            });
-            s.dedup_by(|b, a| a.pos == b.pos);
-        }
+        self.compact();
         self.check_tile_side(points)?;
         let [vertical, horizontal] = self.lines;
         let mut out = Borders {
