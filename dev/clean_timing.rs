@@ -6,6 +6,9 @@
 //! random short segments (a crossing-heavy stress case), each about `segments` segments; `roads`
 //! (`synth::roads`) is also cleaned with each round's pairs found by the plane sweep
 //! (`clean_by_sweep`, `--mem 128M`), and says how many items that sweep held at once.
+//! `roads-grid` runs `clean()` alone on the roads and `roads-stream` the streamed cleaner alone
+//! (`clean_streamed`, `--mem 128M`, its pieces counted as they are read back), one per process,
+//! so that `/usr/bin/time -v` measures each one's peak RSS (the polylines, held whole, included).
 use std::time::Instant;
 use sweeptin::breaklines::clean::{CleanOptions, clean};
 use sweeptin::synth::{self, SplitMix64};
@@ -65,6 +68,37 @@ fn main() {
             t1.elapsed().as_secs_f64(),
             g.segments.len()
         );
+    }
+    if which == "roads-grid" || which == "roads-stream" {
+        let roads = synth::roads(n, 1);
+        let t0 = Instant::now();
+        if which == "roads-grid" {
+            let g = clean(&roads, &CleanOptions::default()).expect("clean");
+            println!(
+                "roads, clean(): {:.3} s, {} segments out\n  {:?}",
+                t0.elapsed().as_secs_f64(),
+                g.segments.len(),
+                g.stats
+            );
+            return;
+        }
+        let dir = std::env::temp_dir();
+        let mut c = sweeptin::breaklines::clean::stream::clean_streamed(
+            &roads,
+            &CleanOptions::default(),
+            128 << 20,
+            &dir,
+        )
+        .expect("streamed clean");
+        let pieces = c.by_ref().count();
+        assert!(c.take_error().is_none());
+        println!(
+            "roads, streamed: {:.3} s, {pieces} pieces out, held {:?}\n  {:?}",
+            t0.elapsed().as_secs_f64(),
+            c.held,
+            c.stats
+        );
+        return;
     }
     if !run("random") {
         return;

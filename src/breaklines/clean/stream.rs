@@ -25,128 +25,19 @@
 //! without `z` takes one from the first line it lies on in `clean()`'s global pair order, and a
 //! later interpolation along a segment ending there reads it: that order is not the sweep's, so
 //! mixed heights are cleaned by `clean()` in memory and its graph is streamed out
-//! ([`StreamStats::in_memory`]). The input checks and rules 1–3 still run in memory
-//! ([`Work::new`]): the next step.
+//! ([`StreamStats::in_memory`]). Rules 1–3 are streamed too (`input.rs`); the polylines are
+//! still given as a slice (read whole by [`crate::input::lines`]), read in order, twice.
 
 use super::intersect::{contact, point_on};
 use super::split::{along, closer, z_between};
 use super::sweep::{ActiveSet, Span, x_overlap};
-use super::{
-    CleanOptions, CleanStats, MAX_ROUNDS, MAX_WARNINGS, Work, ZConflict, ZConflictKind, lex,
-};
+use super::{CleanOptions, CleanStats, MAX_ROUNDS, Work, ZConflict, ZConflictKind, lex};
 use crate::error::{Error, Result};
-use crate::geom::predicates::sweep_cmp;
-use crate::sort::external::{ExternalSorter, Merge, SortKey};
+use crate::sort::external::ExternalSorter;
+use rec::{DIRTY, Dedup, POINT, Rec, V, WKey, Warnings};
 use std::cmp::Ordering;
 use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::path::{Path, PathBuf};
-
-/// Record flag: new in the last round (tested against everything it meets).
-const DIRTY: u32 = 1;
-/// Record flag: an isolated vertex (`lo == hi`), not a segment.
-const POINT: u32 = 2;
-
-/// A segment (ends in sweep order) or an isolated vertex, as the external sort stores it, with
-/// what `clean()` knows of its ends: height, the line each first appeared on, and their order as
-/// `clean()` numbers vertices (input vertices by first appearance, `round = 0`; then those made
-/// at crossings, by round and position).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct Rec {
-    lo: [f64; 2],
-    hi: [f64; 2],
-    z: [f64; 2],
-    id: [u64; 2],
-    round: [u32; 2],
-    vline: [u32; 2],
-    line: u32,
-    flags: u32,
-    /// Records are 128 bytes: the sort's sliding maps take sizes that divide their window.
-    pad: [u64; 5],
-}
-
-impl SortKey for Rec {
-    #[inline]
-    fn order(a: &Self, b: &Self) -> Ordering {
-        sweep_cmp(a.lo, b.lo)
-            .then(sweep_cmp(a.hi, b.hi))
-            .then((a.flags & POINT).cmp(&(b.flags & POINT)))
-            .then(a.line.cmp(&b.line))
-    }
-    // Equal records are the same piece twice, merged as they are read.
-    const STABLE: bool = false;
-}
-
-/// A vertex: position, height, `clean()`'s order of it, the line it first appeared on.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct V {
-    p: [f64; 2],
-    z: f64,
-    round: u32,
-    id: u64,
-    vline: u32,
-}
-
-/// `clean()`'s vertex order: input vertices by first appearance, then by round and position.
-fn vcmp(a: &V, b: &V) -> Ordering {
-    a.round
-        .cmp(&b.round)
-        .then(a.id.cmp(&b.id))
-        .then_with(|| lex(a.p, b.p))
-}
-
-impl Rec {
-    fn end(&self, k: usize) -> V {
-        V {
-            p: if k == 0 { self.lo } else { self.hi },
-            z: self.z[k],
-            round: self.round[k],
-            id: self.id[k],
-            vline: self.vline[k],
-        }
-    }
-
-    fn new(a: V, b: V, line: u32, flags: u32) -> Rec {
-        let (a, b) = match sweep_cmp(a.p, b.p) {
-            Ordering::Greater => (b, a),
-            _ => (a, b),
-        };
-        Rec {
-            lo: a.p,
-            hi: b.p,
-            z: [a.z, b.z],
-            id: [a.id, b.id],
-            round: [a.round, b.round],
-            vline: [a.vline, b.vline],
-            line,
-            flags,
-            pad: [0; 5],
-        }
-    }
-
-    fn point(&self) -> bool {
-        self.flags & POINT != 0
-    }
-
-    /// The ends in `clean()`'s vertex order (its segment's `[a, b]`).
-    fn ends(&self) -> [V; 2] {
-        let (a, b) = (self.end(0), self.end(1));
-        if vcmp(&a, &b) == Ordering::Greater {
-            [b, a]
-        } else {
-            [a, b]
-        }
-    }
-
-    /// `clean()`'s order of items: segments by their ends' order, then isolated vertices.
-    fn key_cmp(&self, o: &Rec) -> Ordering {
-        let ([a, b], [c, d]) = (self.ends(), o.ends());
-        self.point()
-            .cmp(&o.point())
-            .then(vcmp(&a, &c))
-            .then(vcmp(&b, &d))
-    }
-}
 
 /// An active item and its number in the round's stream.
 #[derive(Clone, Copy, Debug)]
@@ -221,44 +112,6 @@ impl Iterator for Cleaned {
     }
 }
 
-/// A round's sorted items with identical pieces merged (the first line kept; new only if every
-/// copy is).
-struct Dedup {
-    inner: Merge<Rec>,
-    next: Option<Rec>,
-    merged: u64,
-}
-
-impl Dedup {
-    fn new(mut inner: Merge<Rec>) -> Dedup {
-        let next = inner.next();
-        Dedup {
-            inner,
-            next,
-            merged: 0,
-        }
-    }
-}
-
-impl Iterator for Dedup {
-    type Item = Rec;
-    fn next(&mut self) -> Option<Rec> {
-        let mut r = self.next.take()?;
-        loop {
-            match self.inner.next() {
-                Some(n) if n.lo == r.lo && n.hi == r.hi && n.point() == r.point() => {
-                    r.flags &= n.flags | !DIRTY;
-                    self.merged += 1;
-                }
-                n => {
-                    self.next = n;
-                    return Some(r);
-                }
-            }
-        }
-    }
-}
-
 /// [`super::clean`] with the rounds streamed (module docs): the same graph as pieces in sweep
 /// order, with `clean()`'s counters and warnings, and what was held. The sorts take `mem` bytes
 /// and spill under `tmp_dir`.
@@ -271,51 +124,23 @@ pub fn clean_streamed(
     mem: u64,
     tmp_dir: &Path,
 ) -> Result<Cleaned> {
-    let w = Work::new(polylines, options)?;
-    let known = w.z.iter().filter(|z| !z.is_nan()).count();
-    let mut held = StreamStats::default();
-    let w = if known == 0 || known == w.z.len() {
-        w
-    } else {
-        held.in_memory = true;
-        let mut w = w;
-        w.run(&mut |w: &Work, first| Ok(w.find(first)))?;
-        w
+    let Some(pre) = input::prepare(polylines, options, mem, tmp_dir)? else {
+        return in_memory(polylines, options, mem, tmp_dir);
     };
     let mut s = Streamer {
-        snap: w.snap,
-        ztol: w.ztol,
-        x: [w.lo[0], w.hi[0]],
+        snap: pre.snap,
+        ztol: options.z_tolerance,
+        x: pre.x,
         mem,
         tmp: tmp_dir.to_path_buf(),
-        stats: w.stats,
-        warnings: Warnings::new(w.warnings.clone()),
-        held,
+        stats: pre.stats,
+        warnings: Warnings::new(pre.warnings),
+        held: StreamStats {
+            items: pre.count,
+            ..StreamStats::default()
+        },
     };
-    let v = |i: u32| V {
-        p: w.xy[i as usize],
-        z: w.z[i as usize],
-        round: 0,
-        id: u64::from(i),
-        vline: w.vline[i as usize],
-    };
-    let mut sorter = s.sorter();
-    for (k, &[a, b]) in w.segs.iter().enumerate() {
-        let flags = if w.dirty[k] { DIRTY } else { 0 };
-        sorter.push(Rec::new(v(a), v(b), w.line[k], flags))?;
-    }
-    for &i in &w.isolated {
-        sorter.push(Rec::new(v(i), v(i), 0, POINT | DIRTY))?;
-    }
-    let items = (w.segs.len() + w.isolated.len()) as u64;
-    let segments = w.segs.len() as u64;
-    drop(w);
-    let mut input = Dedup::new(sorter.finish()?);
-    if s.held.in_memory {
-        s.stats.segments = segments;
-        return s.output(input, items);
-    }
-    s.held.items = items;
+    let mut input = Dedup::new(pre.items);
     for round in 1..=MAX_ROUNDS {
         s.stats.rounds = round;
         let mut next = s.sorter();
@@ -323,7 +148,11 @@ pub fn clean_streamed(
         if let Some(e) = input.inner.take_error() {
             return Err(e);
         }
-        s.stats.merged_pieces += input.merged;
+        if round == 1 {
+            s.stats.duplicate_segments += input.merged;
+        } else {
+            s.stats.merged_pieces += input.merged;
+        }
         input = Dedup::new(next.finish()?);
         if !found {
             s.stats.segments = count.segments;
@@ -337,74 +166,56 @@ pub fn clean_streamed(
     )))
 }
 
+/// Mixed heights: `clean()` in memory, its graph sorted and streamed out.
+fn in_memory(
+    polylines: &[Vec<[f64; 3]>],
+    options: &CleanOptions,
+    mem: u64,
+    tmp_dir: &Path,
+) -> Result<Cleaned> {
+    let mut w = Work::new(polylines, options)?;
+    w.run(&mut |w: &Work, first| Ok(w.find(first)))?;
+    let s = Streamer {
+        snap: w.snap,
+        ztol: w.ztol,
+        x: [w.lo[0], w.hi[0]],
+        mem,
+        tmp: tmp_dir.to_path_buf(),
+        stats: CleanStats {
+            segments: w.segs.len() as u64,
+            ..w.stats
+        },
+        warnings: Warnings::new(w.warnings.clone()),
+        held: StreamStats {
+            in_memory: true,
+            ..StreamStats::default()
+        },
+    };
+    let v = |i: u32| V {
+        p: w.xy[i as usize],
+        z: w.z[i as usize],
+        round: 0,
+        id: u64::from(i),
+        vline: w.vline[i as usize],
+    };
+    let mut sorter = s.sorter();
+    for (k, &[a, b]) in w.segs.iter().enumerate() {
+        sorter.push(Rec::new(v(a), v(b), w.line[k], 0))?;
+    }
+    for &i in &w.isolated {
+        sorter.push(Rec::new(v(i), v(i), 0, POINT))?;
+    }
+    let items = (w.segs.len() + w.isolated.len()) as u64;
+    drop(w);
+    let input = Dedup::new(sorter.finish()?);
+    s.output(input, items)
+}
+
 /// What a round read.
 #[derive(Clone, Copy, Debug, Default)]
 struct Count {
     items: u64,
     segments: u64,
-}
-
-/// The first [`MAX_WARNINGS`] warnings of the rounds by `clean()`'s order, after those of
-/// rules 1–3.
-struct Warnings {
-    first: Vec<ZConflict>,
-    keyed: Vec<(WKey, ZConflict)>,
-}
-
-/// Where a round's warning comes in `clean()`'s order: vertices on lines in pair order, then
-/// crossings in `(x, y)` order of their points.
-#[derive(Clone, Copy, Debug)]
-struct WKey {
-    round: u32,
-    phase: u8,
-    p: [f64; 2],
-    s: Rec,
-    t: Rec,
-    sub: u8,
-}
-
-fn wcmp(a: &WKey, b: &WKey) -> Ordering {
-    a.round
-        .cmp(&b.round)
-        .then(a.phase.cmp(&b.phase))
-        .then_with(|| lex(a.p, b.p))
-        .then_with(|| a.s.key_cmp(&b.s))
-        .then_with(|| a.t.key_cmp(&b.t))
-        .then(a.sub.cmp(&b.sub))
-}
-
-impl Warnings {
-    fn new(first: Vec<ZConflict>) -> Warnings {
-        Warnings {
-            first,
-            keyed: Vec::new(),
-        }
-    }
-
-    fn room(&self) -> usize {
-        MAX_WARNINGS.saturating_sub(self.first.len())
-    }
-
-    fn push(&mut self, key: WKey, w: ZConflict) {
-        if self.room() == 0 {
-            return;
-        }
-        self.keyed.push((key, w));
-        if self.keyed.len() >= 2 * self.room() + 64 {
-            self.trim();
-        }
-    }
-
-    fn trim(&mut self) {
-        self.keyed.sort_by(|a, b| wcmp(&a.0, &b.0));
-        self.keyed.truncate(self.room());
-    }
-
-    fn finish(mut self) -> Vec<ZConflict> {
-        self.trim();
-        self.first.extend(self.keyed.into_iter().map(|k| k.1));
-        self.first
-    }
 }
 
 /// A crossing found and not yet settled.
@@ -858,5 +669,7 @@ impl Streamer {
     }
 }
 
+mod input;
+mod rec;
 #[cfg(test)]
 mod tests;
