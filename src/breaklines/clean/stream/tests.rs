@@ -145,3 +145,18 @@ fn mixed_heights_are_cleaned_in_memory_and_streamed_out() {
     let held = both(&lines, 1 << 20);
     assert!(held.in_memory);
 }
+
+/// A road network of 200,000 segments cleaned within 4 MiB: the held items (active, waiting
+/// for crossings, near the sweep line), at 128 bytes a record and twice that for their
+/// containers, stay within the budget, where the whole graph (what `clean()` holds: 26 MB of
+/// records alone) would not; and the graph is `clean()`'s.
+#[test]
+fn a_road_network_larger_than_the_budget_is_cleaned_within_it() {
+    let mem = 4u64 << 20;
+    let lines = roads(200_000, 3);
+    let held = both(&lines, mem);
+    assert!(!held.in_memory);
+    assert!(held.items * 128 > 4 * mem, "{held:?}");
+    let bytes = (held.peak_active + held.peak_window) * 256;
+    assert!(bytes < mem / 2, "{bytes} bytes held: {held:?}");
+}
