@@ -546,7 +546,7 @@ impl Streamer {
         }
         let front = r.crossings.iter().map(|c| c.p[1]).fold(y, f64::min);
         while let Some(p) = r.points.front() {
-            if !(p.lo[1] + reach < front) {
+            if p.lo[1] + reach >= front {
                 break;
             }
             let p = r.points.pop_front().unwrap_or_default();
