@@ -22,7 +22,7 @@ run() { # name, command...
     rss=$(awk -F: '/Maximum resident/ {print $2}' "$OUT/$name.time")
     wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {print $2}' "$OUT/$name.time")
     echo "| $name | $wall | $((rss / 1024)) MiB |"
-    grep -v '^threads' "$OUT/$name.out" | head -4 | sed 's/^/    /'
+    grep -v '^threads' "$OUT/$name.out" | head -4 | cut -c1-400 | sed 's/^/    /'
 }
 echo "| run | wall | peak RSS |"
 echo "|---|---|---|"
