@@ -86,7 +86,7 @@ pub struct Piece {
 pub struct Cleaned {
     /// Counters (equal to `clean()`'s).
     pub stats: CleanStats,
-    /// The first [`MAX_WARNINGS`] `z` disagreements, in `clean()`'s order.
+    /// The first [`MAX_WARNINGS`](super::MAX_WARNINGS) `z` disagreements, in `clean()`'s order.
     pub warnings: Vec<ZConflict>,
     /// What was held.
     pub held: StreamStats,
