@@ -80,6 +80,16 @@ fn streamed_rounds_give_cleans_graph_on_road_networks() {
     }
     // A budget so small every round spills in many runs.
     both(&roads(20_000, 9), 1 << 20);
+    // At UTM offsets (a snap distance of some 75 µm there).
+    let utm: Vec<Vec<[f64; 3]>> = roads(20_000, 4)
+        .iter()
+        .map(|l| {
+            l.iter()
+                .map(|p| [447_000.0 + p[0], 5_100_000.0 + p[1], p[2]])
+                .collect()
+        })
+        .collect();
+    both(&utm, 1 << 20);
 }
 
 fn degeneracies() -> Vec<Vec<[f64; 3]>> {
