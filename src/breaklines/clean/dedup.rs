@@ -113,7 +113,7 @@ impl Work {
 }
 
 /// Every `x, y` finite and in the predicates' range, every `z` finite or `NaN`.
-fn check_input(polylines: &[Vec<[f64; 3]>]) -> Result<()> {
+pub(super) fn check_input(polylines: &[Vec<[f64; 3]>]) -> Result<()> {
     let bad = polylines.par_iter().enumerate().find_map_first(|(i, p)| {
         p.iter().enumerate().find_map(|(k, v)| {
             let message = if !(v[0].is_finite() && v[1].is_finite()) {

@@ -61,6 +61,8 @@ mod dedup;
 mod intersect;
 mod split;
 #[cfg(any(test, feature = "dev"))]
+pub mod stream;
+#[cfg(any(test, feature = "dev"))]
 mod sweep;
 
 #[cfg(any(test, feature = "dev"))]

@@ -143,12 +143,11 @@ impl Work {
     /// `z` interpolated linearly along segment `seg` at (the projection of) `p`.
     fn z_along(&self, seg: u32, p: [f64; 2]) -> f64 {
         let [a, b] = self.segs[seg as usize];
-        let (pa, pb) = (self.p(a), self.p(b));
-        let (za, zb) = (self.z[a as usize], self.z[b as usize]);
-        let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
-        let u = ((p[0] - pa[0]) * dx + (p[1] - pa[1]) * dy) / (dx * dx + dy * dy);
-        let u = u.clamp(0.0, 1.0);
-        za + u * (zb - za)
+        z_between(
+            [self.p(a), self.p(b)],
+            [self.z[a as usize], self.z[b as usize]],
+            p,
+        )
     }
 
     /// Replaces every segment that has splits by its pieces; merges identical segments.
@@ -209,9 +208,20 @@ impl Work {
     }
 }
 
+/// `z` interpolated linearly along the segment from `e[0]` (height `z[0]`) to `e[1]` at (the
+/// projection of) `p`.
+pub(super) fn z_between(e: [[f64; 2]; 2], z: [f64; 2], p: [f64; 2]) -> f64 {
+    let [pa, pb] = e;
+    let [za, zb] = z;
+    let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+    let u = ((p[0] - pa[0]) * dx + (p[1] - pa[1]) * dy) / (dx * dx + dy * dy);
+    let u = u.clamp(0.0, 1.0);
+    za + u * (zb - za)
+}
+
 /// Order of `u` and `v` along the segment from `a` to `b`: along its dominant axis, then the
 /// other one (exact for points on the segment; a consistent order for points snapped near it).
-fn along(a: [f64; 2], b: [f64; 2], u: [f64; 2], v: [f64; 2]) -> Ordering {
+pub(super) fn along(a: [f64; 2], b: [f64; 2], u: [f64; 2], v: [f64; 2]) -> Ordering {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let (major, minor) = if dx.abs() >= dy.abs() { (0, 1) } else { (1, 0) };
     let dir = |d: f64, x: f64, y: f64| {
@@ -227,16 +237,22 @@ fn along(a: [f64; 2], b: [f64; 2], u: [f64; 2], v: [f64; 2]) -> Ordering {
 
 /// A vertex near a crossing point.
 #[derive(Clone, Copy, Debug)]
-struct Near {
-    d2: f64,
-    at: [f64; 2],
-    v: u32,
+pub(super) struct Near {
+    pub(super) d2: f64,
+    pub(super) at: [f64; 2],
+    pub(super) v: u32,
 }
 
 /// `best`, or vertex `v` at `q` if it is within `snap` of `p` (or exactly at `p`) and nearer
 /// (ties: lower in `(x, y)` order).
 #[inline]
-fn closer(best: Option<Near>, p: [f64; 2], q: [f64; 2], v: u32, snap: f64) -> Option<Near> {
+pub(super) fn closer(
+    best: Option<Near>,
+    p: [f64; 2],
+    q: [f64; 2],
+    v: u32,
+    snap: f64,
+) -> Option<Near> {
     let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
     if !(d2 <= snap * snap || q == p) {
         return best;

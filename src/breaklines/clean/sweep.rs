@@ -64,28 +64,45 @@ pub struct SweepStats {
     pub pairs_tested: u64,
 }
 
+/// What the active set holds: something with a lower and an upper end in sweep order.
+pub(super) trait Span: Copy {
+    /// The lower end.
+    fn lo(&self) -> [f64; 2];
+    /// The upper end.
+    fn hi(&self) -> [f64; 2];
+}
+
+impl Span for Item {
+    fn lo(&self) -> [f64; 2] {
+        self.lo
+    }
+    fn hi(&self) -> [f64; 2] {
+        self.hi
+    }
+}
+
 /// An active item: where it is in the buckets and which generation of its slot it is.
 #[derive(Clone, Copy, Debug)]
-struct Active {
-    item: Item,
-    cols: [u32; 2],
-    generation: u32,
+pub(super) struct Active<T> {
+    pub(super) item: T,
+    pub(super) cols: [u32; 2],
+    pub(super) generation: u32,
 }
 
 /// The items crossing the sweep line, by `x` bucket.
-struct ActiveSet {
+pub(super) struct ActiveSet<T> {
     x0: f64,
     inv: f64,
     cols: u32,
-    slots: Vec<Active>,
+    pub(super) slots: Vec<Active<T>>,
     free: Vec<u32>,
     /// `(slot, generation)` per bucket; stale entries are dropped as buckets are scanned.
-    buckets: Vec<Vec<(u32, u32)>>,
-    entries: u64,
+    pub(super) buckets: Vec<Vec<(u32, u32)>>,
+    pub(super) entries: u64,
     live_entries: u64,
     /// Upper `y` (as ordered bits) of each active slot, soonest first.
     expiry: BinaryHeap<Reverse<(u64, u32)>>,
-    live: u64,
+    pub(super) live: u64,
 }
 
 /// `y` as bits whose unsigned order is `total_cmp`'s.
@@ -94,8 +111,8 @@ fn key(y: f64) -> u64 {
     if b >> 63 == 1 { !b } else { b | (1 << 63) }
 }
 
-impl ActiveSet {
-    fn new(lo: f64, hi: f64, cols: u32) -> ActiveSet {
+impl<T: Span> ActiveSet<T> {
+    pub(super) fn new(lo: f64, hi: f64, cols: u32) -> ActiveSet<T> {
         let w = hi - lo;
         let inv = if w > 0.0 && w.is_finite() {
             f64::from(cols) / w
@@ -127,13 +144,19 @@ impl ActiveSet {
         }
     }
 
-    fn cols_of(&self, it: &Item) -> [u32; 2] {
-        let (a, b) = (it.lo[0].min(it.hi[0]), it.lo[0].max(it.hi[0]));
+    pub(super) fn cols_of(&self, it: &T) -> [u32; 2] {
+        let (lo, hi) = (it.lo(), it.hi());
+        let (a, b) = (lo[0].min(hi[0]), lo[0].max(hi[0]));
         [self.col(a), self.col(b)]
     }
 
     /// Drops every item whose upper end lies below `y`.
     fn expire(&mut self, y: f64) {
+        self.expire_with(y, |_| {});
+    }
+
+    /// Drops every item whose upper end lies below `y`, handing each to `gone`.
+    pub(super) fn expire_with(&mut self, y: f64, mut gone: impl FnMut(T)) {
         let k = key(y);
         while let Some(&Reverse((top, slot))) = self.expiry.peek() {
             if top >= k {
@@ -141,6 +164,7 @@ impl ActiveSet {
             }
             self.expiry.pop();
             let a = &mut self.slots[slot as usize];
+            gone(a.item);
             self.live_entries -= u64::from(a.cols[1] - a.cols[0] + 1);
             a.generation = a.generation.wrapping_add(1);
             self.free.push(slot);
@@ -156,7 +180,7 @@ impl ActiveSet {
         }
     }
 
-    fn insert(&mut self, item: Item, cols: [u32; 2]) {
+    pub(super) fn insert(&mut self, item: T, cols: [u32; 2]) {
         let slot = match self.free.pop() {
             Some(s) => {
                 let a = &mut self.slots[s as usize];
@@ -180,16 +204,17 @@ impl ActiveSet {
         let n = u64::from(cols[1] - cols[0] + 1);
         self.entries += n;
         self.live_entries += n;
-        self.expiry.push(Reverse((key(item.hi[1]), slot)));
+        self.expiry.push(Reverse((key(item.hi()[1]), slot)));
         self.live += 1;
     }
 }
 
 /// Does `a`'s closed `x`-range meet `b`'s?
 #[inline]
-fn x_overlap(a: &Item, b: &Item) -> bool {
-    let (a0, a1) = (a.lo[0].min(a.hi[0]), a.lo[0].max(a.hi[0]));
-    let (b0, b1) = (b.lo[0].min(b.hi[0]), b.lo[0].max(b.hi[0]));
+pub(super) fn x_overlap<T: Span>(a: &T, b: &T) -> bool {
+    let (al, ah, bl, bh) = (a.lo(), a.hi(), b.lo(), b.hi());
+    let (a0, a1) = (al[0].min(ah[0]), al[0].max(ah[0]));
+    let (b0, b1) = (bl[0].min(bh[0]), bl[0].max(bh[0]));
     a0 <= b1 && b0 <= a1
 }
 
@@ -236,7 +261,7 @@ impl Work {
         let mut merge = sorter.finish()?;
         let items = n_seg + self.isolated.len() as u64;
         let cols = ((items as f64).sqrt() as u32).clamp(1, 1 << 16);
-        let mut act = ActiveSet::new(self.lo[0], self.hi[0], cols);
+        let mut act = ActiveSet::<Item>::new(self.lo[0], self.hi[0], cols);
         let mut stats = SweepStats::default();
         let mut found = Vec::new();
         for it in merge.by_ref() {

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Breaklines in bounded memory (issue 40, item 3): a synth::roads network cleaned by clean()
+# (the graph in memory) and by the streamed cleaner (breaklines::clean::stream, --mem 128M), one
+# process each under /usr/bin/time -v (peak RSS, wall time), and the CLI's tin with the network
+# as breaklines (which still cleans in memory). Both cleaners' counters are printed, to compare.
+# The polylines themselves are generated and held whole by both (O(lines)).
+#
+#   scripts/bench-breaklines-memory.sh [SEGMENTS] [POINTS]      (default 5000000 1000000)
+# Needs a release build of sweeptin and the examples dump_lines and clean_timing in
+# ${CARGO_TARGET_DIR:-target}/release.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+N=${1:-5000000}; P=${2:-1000000}
+BIN=${CARGO_TARGET_DIR:-target}/release
+OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench-breaklines}
+mkdir -p "$OUT"
+echo "load: $(uptime)"
+run() { # name, command...
+    local name=$1; shift
+    /usr/bin/time -v "$@" > "$OUT/$name.out" 2> "$OUT/$name.time" || { cat "$OUT/$name.time"; exit 1; }
+    local rss wall
+    rss=$(awk -F: '/Maximum resident/ {print $2}' "$OUT/$name.time")
+    wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {print $2}' "$OUT/$name.time")
+    echo "| $name | $wall | $((rss / 1024)) MiB |"
+    grep -v '^threads' "$OUT/$name.out" | head -4 | cut -c1-400 | sed 's/^/    /'
+}
+echo "| run | wall | peak RSS |"
+echo "|---|---|---|"
+run "clean-grid-$N" "$BIN/examples/clean_timing" "$N" roads-grid
+run "clean-stream-$N" "$BIN/examples/clean_timing" "$N" roads-stream
+if [ "$P" != 0 ]; then
+    "$BIN/examples/dump_lines" roads "$N" > "$OUT/net.txt"
+    "$BIN/examples/dump_lines" road-points "$P" > "$OUT/pts.xyz"
+    run "tin-$N-mem128M" "$BIN/sweeptin" tin "$OUT/pts.xyz" --breaklines "$OUT/net.txt" \
+        --mem 128M -o "$OUT/out.stin" --json
+    rm -f "$OUT/net.txt" "$OUT/pts.xyz" "$OUT/out.stin"
+fi
