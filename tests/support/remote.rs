@@ -198,6 +198,9 @@ pub enum Fault {
     Replace { after: usize, if_match: bool },
     /// Every answer is `200` with the whole body.
     IgnoreRange,
+    /// After the first request, ranges start one byte later than asked (and say so in their
+    /// `Content-Range`).
+    WrongRange,
 }
 
 /// A tiny HTTP/1.1 server of one object, with a chosen [`Fault`]; runs until the test ends.
@@ -276,6 +279,10 @@ fn serve(stream: TcpStream, body: &[u8], fault: Fault, count: &AtomicUsize) {
         let asked = range.filter(|_| fault != Fault::IgnoreRange).and_then(|r| {
             let (a, b) = r.strip_prefix("bytes=")?.split_once('-')?;
             Some((a.parse::<u64>().ok()?, b.parse::<u64>().ok()?.min(len - 1)))
+        });
+        let asked = asked.map(|(a, b)| match fault {
+            Fault::WrongRange if n > 0 && b + 1 < len => (a + 1, b + 1),
+            _ => (a, b),
         });
         let (head, part) = match asked {
             Some((a, b)) => (

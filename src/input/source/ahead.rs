@@ -10,7 +10,7 @@ use std::sync::{Arc, Condvar, Mutex};
 
 /// Ranges closer than this are read in one request (the gap's bytes are read and dropped): a
 /// request costs a round trip, a few KiB cost less.
-const COALESCE_GAP: u64 = 16 << 10;
+const COALESCE_GAP: u64 = 4 << 10;
 
 /// The largest request made of several ranges (a range larger than this is one request).
 const MAX_REQUEST: u64 = 8 << 20;

@@ -148,7 +148,17 @@ pub struct Source {
     name: PathBuf,
     object: Arc<dyn Object>,
     remote: bool,
+    /// A remote object's blocks read through [`SourceRead`] (headers, VLRs, chunk tables,
+    /// hierarchy pages: read by every part of a run that inspects the file), newest last.
+    blocks: Arc<Mutex<Vec<Block>>>,
 }
+
+/// A block of a remote object: its offset and bytes.
+type Block = (u64, Arc<Vec<u8>>);
+
+/// The most blocks a remote object keeps, and the largest block kept.
+const CACHED_BLOCKS: usize = 16;
+const CACHED_BLOCK_LEN: usize = 1 << 20;
 
 impl std::fmt::Debug for Source {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -192,6 +202,7 @@ impl Source {
                     name: name.to_path_buf(),
                     object,
                     remote: true,
+                    blocks: Arc::default(),
                 };
                 opened.insert(name.to_path_buf(), s.clone());
                 return Ok(s);
@@ -201,6 +212,7 @@ impl Source {
             name: name.to_path_buf(),
             object,
             remote: false,
+            blocks: Arc::default(),
         })
     }
 
@@ -245,14 +257,14 @@ impl Source {
     /// A `Read + Seek` view from the first byte, buffered (see the module's notes).
     pub fn reader(&self) -> SourceRead {
         let (min, max) = if self.remote {
-            (64 << 10, 8 << 20)
+            (16 << 10, 8 << 20)
         } else {
             (64 << 10, 64 << 10)
         };
         SourceRead {
             source: self.clone(),
             pos: 0,
-            buf: Vec::new(),
+            buf: Arc::default(),
             buf_at: 0,
             next_len: min,
             min,
@@ -261,12 +273,40 @@ impl Source {
     }
 }
 
+impl Source {
+    /// The kept block holding byte `at` of a remote object.
+    fn cached(&self, at: u64) -> Option<Block> {
+        if !self.remote {
+            return None;
+        }
+        let blocks = self.blocks.lock().unwrap_or_else(|p| p.into_inner());
+        blocks
+            .iter()
+            .rev()
+            .find(|(o, b)| (*o..o + b.len() as u64).contains(&at))
+            .cloned()
+    }
+
+    /// Keeps a small block of a remote object for the next readers.
+    fn keep(&self, at: u64, block: &Arc<Vec<u8>>) {
+        if !self.remote || block.len() > CACHED_BLOCK_LEN {
+            return;
+        }
+        let mut blocks = self.blocks.lock().unwrap_or_else(|p| p.into_inner());
+        if blocks.len() == CACHED_BLOCKS {
+            blocks.remove(0);
+        }
+        blocks.push((at, block.clone()));
+    }
+}
+
 /// A [`Source`] read as a stream: `Read + Seek`, with a buffer that doubles while the reads are
-/// sequential (up to 8 MiB for a remote object) and falls back to 64 KiB after a seek.
+/// sequential (from 16 KiB up to 8 MiB for a remote object, whose small blocks are kept for the
+/// next reader) and is 64 KiB for a local file.
 pub struct SourceRead {
     source: Source,
     pos: u64,
-    buf: Vec<u8>,
+    buf: Arc<Vec<u8>>,
     buf_at: u64,
     next_len: usize,
     min: usize,
@@ -294,12 +334,21 @@ impl Read for SourceRead {
                 self.min
             };
             let n = (self.next_len.max(out.len()) as u64).min(len - self.pos) as usize;
-            self.buf.resize(n, 0);
             self.buf_at = self.pos;
-            if let Err(e) = self.source.read_exact_at(self.pos, &mut self.buf) {
-                self.buf.clear();
-                return Err(e);
-            }
+            self.buf = match self.source.cached(self.pos) {
+                Some((at, block)) => {
+                    self.buf_at = at;
+                    block
+                }
+                None => {
+                    let mut buf = std::mem::take(&mut self.buf);
+                    let b = Arc::make_mut(&mut buf);
+                    b.resize(n, 0);
+                    self.source.read_exact_at(self.pos, b)?;
+                    self.source.keep(self.pos, &buf);
+                    buf
+                }
+            };
         }
         let from = (self.pos - self.buf_at) as usize;
         let n = out.len().min(self.buf.len() - from);
