@@ -222,9 +222,11 @@ impl Http {
         let mut req = agent()
             .get(&self.url()?)
             .header("Range", &format!("bytes={offset}-{last}"));
-        if let Some(tag) = &self.etag {
+        // `If-Match` compares strongly: a weak ETag (`W/"…"`) would never match, so it is only
+        // compared with the answer's.
+        if let Some(tag) = self.etag.as_ref().filter(|t| !t.starts_with("W/")) {
             req = req.header("If-Match", tag);
-        } else if let Some(m) = &self.modified {
+        } else if let Some(m) = self.modified.as_ref().filter(|_| self.etag.is_none()) {
             req = req.header("If-Unmodified-Since", m);
         }
         let r = req.call().map_err(|e| transport(&e))?;
