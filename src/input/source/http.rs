@@ -56,8 +56,11 @@ fn header(r: &ureq::http::Response<ureq::Body>, name: &str) -> Option<String> {
         .map(str::to_string)
 }
 
+/// A `Content-Range`: the first and last byte (`None` for `*`) and the total (`None` for `*`).
+type ContentRange = (Option<(u64, u64)>, Option<u64>);
+
 /// `bytes FIRST-LAST/TOTAL` (TOTAL may be `*`), or `bytes */TOTAL`.
-fn content_range(v: &str) -> Option<(Option<(u64, u64)>, Option<u64>)> {
+fn content_range(v: &str) -> Option<ContentRange> {
     let v = v.trim().strip_prefix("bytes")?.trim();
     let (range, total) = v.split_once('/')?;
     let total = match total.trim() {

@@ -14,7 +14,7 @@
 //!   read the same version.
 //! - **Reading**: [`Source::reader`] is a `Read + Seek` view whose buffer grows while the reads
 //!   stay sequential (64 KiB at a seek, up to 8 MiB: a LAZ file streams in large ranges, a
-//!   header costs one small request); [`Ahead`] reads a planned list of ranges (the LAZ chunks or
+//!   header costs one small request); `Ahead` reads a planned list of ranges (the LAZ chunks or
 //!   COPC nodes a job decodes) with [`io_concurrency`] requests in flight, neighbouring ranges
 //!   coalesced.
 //! - **Faults** (remote): 5xx answers, dropped connections and timeouts are retried with
