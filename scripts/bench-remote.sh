@@ -54,13 +54,22 @@ sleep 1
 URL=http://127.0.0.1:$PORT
 
 sent() { awk '{s += $NF} END {print s + 0}' "$OUT/access.log"; }
-needed() { # file xmin ymin xmax ymax → bytes of the nodes meeting the box + hierarchy pages
+needed() { # file xmin ymin xmax ymax → bytes of the nodes meeting the box + hierarchy EVLRs
     python3 - "$@" <<'PY'
-import sys, copclib as copc
-r = copc.FileReader(sys.argv[1])
+import sys, struct, copclib as copc
+path = sys.argv[1]
 x0, y0, x1, y1 = map(float, sys.argv[2:6])
-nodes = r.GetNodesIntersectBox(copc.Box(x0, y0, -1e12, x1, y1, 1e12))
-print(sum(n.byte_size for n in nodes) + sum(p.byte_size for p in r.GetPageList()))
+nodes = copc.FileReader(path).GetNodesIntersectBox(copc.Box(x0, y0, -1e12, x1, y1, 1e12))
+hier = 0
+with open(path, "rb") as f:  # the copc/1000 EVLRs: every hierarchy page
+    f.seek(235); at, n = struct.unpack("<QI", f.read(12))
+    for _ in range(n):
+        f.seek(at); h = f.read(60)
+        rid, length = struct.unpack("<HQ", h[18:28])
+        if h[2:18].rstrip(b"\0") == b"copc" and rid == 1000:
+            hier += length
+        at += 60 + length
+print(sum(n.byte_size for n in nodes) + hier)
 PY
 }
 median() { # command… → median wall seconds over $RUNS runs

@@ -152,9 +152,10 @@ pub struct Asset {
 /// Reads the files a `.vpc` lists, in its order.
 ///
 /// # Errors
-/// [`Error::Io`] if it cannot be read; [`Error::Format`] if it is not a STAC ItemCollection of
-/// point-cloud items, or an item lacks its count, extent or data file, or names a URL of another scheme than
-/// `http`, `https` or `s3`. A remote `.vpc`'s relative paths are URLs beside it.
+/// [`crate::Error::Io`] if it cannot be read; [`crate::Error::Format`] if it is not a STAC
+/// ItemCollection of point-cloud items, or an item lacks its count, extent or data file, or
+/// names a URL of another scheme than `http`, `https` or `s3`. A remote `.vpc`'s relative paths
+/// are URLs beside it.
 pub fn read(path: &Path) -> Result<Vec<VpcEntry>> {
     let text = crate::input::source::read_to_string(path)?;
     let c: ItemCollection = serde_json::from_str(&text).map_err(|e| {
