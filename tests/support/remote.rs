@@ -59,13 +59,14 @@ impl Nginx {
         let dir = tempfile::tempdir().unwrap();
         let port = free_port();
         // As root, nginx's workers would run as `nobody`, who cannot read a private temp dir.
+        // One process (no master): killing it when the test ends leaves no orphan worker.
         let user = if nix_uid() == 0 {
             "user root root;"
         } else {
             ""
         };
         let conf = format!(
-            "{user}\nworker_processes 1;\npid {d}/nginx.pid;\nerror_log {d}/error.log;\n\
+            "{user}\nmaster_process off;\nworker_processes 1;\npid {d}/nginx.pid;\nerror_log {d}/error.log;\n\
              events {{ worker_connections 64; }}\n\
              http {{\n  log_format bytes '$request $status $body_bytes_sent';\n\
                access_log {d}/access.log bytes;\n\
