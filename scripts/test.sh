@@ -7,11 +7,14 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# Debian packages (as root only): GDAL's tools and parallel for the interop tests, and the venv
+# Debian packages (as root only): GDAL's tools and parallel for the interop tests, nginx for the
+# remote ones, and the venv
 # module, which Debian's python3 leaves out.
 missing=()
 command -v gdalinfo >/dev/null 2>&1 || missing+=(gdal-bin)
 command -v parallel >/dev/null 2>&1 || missing+=(parallel)
+# nginx serves the remote-input tests' files (tests/remote.rs).
+command -v nginx >/dev/null 2>&1 || [ -x /usr/sbin/nginx ] || missing+=(nginx)
 python3 -c 'import ensurepip, venv' 2>/dev/null || missing+=(python3-venv)
 if [ ${#missing[@]} -gt 0 ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
     (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" \
@@ -19,14 +22,15 @@ if [ ${#missing[@]} -gt 0 ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/nu
 fi
 
 # Python peers in the repository's own venv, never the system Python: target/venv-py, the one
-# scripts/test-python.sh uses. The tests run the `python3` and `rio` on the PATH, so its bin/
+# scripts/test-python.sh uses. The tests run the `python3`, `rio` and `moto_server` (an S3 server
+# for tests/remote.rs, with boto3 to fill it) on the PATH, so its bin/
 # goes first. plyfile reads our PLY, rio-cogeo (with rasterio) validates COGs, copclib writes the
 # COPC copies for tests/inputs.rs (scripts/make_copc.py), laspy + lazrs are the reference reader.
 # Each test whose tool is missing fails under CI=true and is skipped with a message otherwise.
 VENV=target/venv-py
 [ -x "$VENV/bin/python" ] || python3 -m venv "$VENV"
 "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-cache-dir \
-    plyfile==1.1.5 rio-cogeo==7.0.4 copclib==2.6.3 laspy==2.7.0 lazrs==0.8.2 ||
+    plyfile==1.1.5 rio-cogeo==7.0.4 copclib==2.6.3 laspy==2.7.0 lazrs==0.8.2 'moto[server]==5.2.6' ||
     echo "test.sh: could not install the Python peers in $VENV" >&2
 export PATH="$PWD/$VENV/bin:$PATH"
 

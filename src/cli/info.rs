@@ -69,11 +69,20 @@ pub struct FilterArgs {
     /// (outside the ground, see `height --help`) are dropped.
     #[arg(long, value_name = "NAME")]
     pub z_from: Option<String>,
+    /// Range requests in flight for each remote input (an `https://`, `http://` or `s3://`
+    /// URL): the LAZ chunks or COPC nodes a run reads are fetched this many at a time,
+    /// neighbouring ones in one request (docs/REMOTE.md).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_IO_CONCURRENCY as u16,
+          value_parser = clap::value_parser!(u16).range(1..=256))]
+    pub io_concurrency: u16,
 }
 
+use sweeptin::input::source::DEFAULT_IO_CONCURRENCY;
+
 impl FilterArgs {
-    /// The library filter these flags describe.
+    /// The library filter these flags describe; also sets `--io-concurrency` for the process.
     pub fn to_filter(&self) -> Filter {
+        sweeptin::input::source::set_io_concurrency(usize::from(self.io_concurrency));
         Filter {
             classes: self.class.as_ref().map(|c| c.0.clone()),
             returns: self.returns,

@@ -354,6 +354,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
             .map(|e| e.files)
         })
         .collect::<Result<_, _>>()?;
+    sweeptin::plan::local_inputs(groups.iter().flatten().chain(&given))?;
     job.args_mut().inputs = groups.iter().flatten().cloned().collect();
     check_job(&job)?;
     let a = job.args();

@@ -10,11 +10,15 @@
 //!   from it without opening them), or is replaced by its files ([`Expand::VpcFiles`]) for
 //!   callers that need each file's header (plans).
 //!
+//! - A URL (`https://…`, `http://…`, `s3://bucket/key`) is one remote file, never a pattern; a
+//!   list may name URLs, and a remote list's relative lines are URLs beside it.
+//!
 //! The lists and `.vpc` files read on the way are inputs too ([`Expansion::lists`]): an output
 //! never replaces one (`tin @list.txt -o list.txt` overwrote the list).
 
 use crate::error::{Error, Result};
 use crate::input::las::vpc;
+use crate::input::source;
 use std::path::{Path, PathBuf};
 
 /// What to do with `.vpc` inputs.
@@ -59,7 +63,7 @@ fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Expansion, depth: usize) -> 
             )));
         }
         let list = Path::new(list);
-        let body = std::fs::read_to_string(list).map_err(|e| Error::io(list, e))?;
+        let body = source::read_to_string(list)?;
         out.lists.push(list.to_path_buf());
         let dir = list.parent().unwrap_or(Path::new(""));
         let before = out.files.len();
@@ -69,8 +73,11 @@ fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Expansion, depth: usize) -> 
                 continue;
             }
             let p = Path::new(line);
-            let p = if p.is_absolute() || line.starts_with('@') {
+            let p = if p.is_absolute() || line.starts_with('@') || source::is_remote(p) {
                 p.to_path_buf()
+            } else if source::is_remote(dir) {
+                // A URL's path joins with `/` whatever the platform.
+                PathBuf::from(format!("{}/{line}", dir.display()))
             } else {
                 dir.join(p)
             };
@@ -84,7 +91,8 @@ fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Expansion, depth: usize) -> 
         }
         return Ok(());
     }
-    if !a.exists() && text.contains(['*', '?', '[']) {
+    // A URL is one object: `?` starts its query, and a server cannot be listed.
+    if !source::is_remote(a) && !a.exists() && text.contains(['*', '?', '[']) {
         let paths = glob::glob(&text)
             .map_err(|e| Error::Options(format!("{text}: not a valid pattern: {e}")))?;
         let mut found: Vec<PathBuf> = paths.filter_map(std::result::Result::ok).collect();

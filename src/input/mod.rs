@@ -12,6 +12,7 @@ pub mod las;
 pub mod lines;
 pub mod ply;
 pub mod raster;
+pub mod source;
 pub mod spread;
 pub mod stin;
 pub mod vector;

@@ -42,6 +42,25 @@ use files::{inside, own_file, write_atomic};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// Refuses a URL among a plan's inputs (its files, lists and `.vpc` files): a plan's tasks pin
+/// local files by size and time; remote inputs are read by single commands for now (issue 44).
+///
+/// # Errors
+/// [`Error::Options`] naming the first URL.
+pub fn local_inputs<'a>(files: impl IntoIterator<Item = &'a PathBuf>) -> Result<()> {
+    match files
+        .into_iter()
+        .find(|p| crate::input::source::is_remote(p))
+    {
+        Some(url) => Err(Error::Options(format!(
+            "{}: a plan does not read remote inputs yet (its tasks pin local files); run the \
+             command on the URLs without a plan, or copy the files first",
+            url.display()
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Format version of `plan.json` (2: the typed [`Job`]).
 pub const PLAN_VERSION: u32 = 2;
 /// Format version of a `plan.json` whose job has breaklines or trimming rings
@@ -250,6 +269,17 @@ impl Plan {
         // `@list.txt`, quoted globs and `.vpc` files stand for their files (each header is
         // read); every file is named by its absolute path, so that tasks run from anywhere.
         let given = crate::input::files::expand(paths, crate::input::files::Expand::VpcFiles)?;
+        if let Some(url) = given
+            .files
+            .iter()
+            .chain(&given.lists)
+            .find(|p| crate::input::source::is_remote(p))
+        {
+            return Err(Error::Options(format!(
+                "{}: a plan does not read remote inputs yet (its tasks pin local files); run the                  command on the URLs without a plan, or copy the files first",
+                url.display()
+            )));
+        }
         let canonical = |p: &PathBuf| std::fs::canonicalize(p).map_err(|e| Error::io(p, e));
         let lists = given.lists.iter().map(canonical).collect::<Result<_>>()?;
         let paths: Vec<PathBuf> = given.files.iter().map(canonical).collect::<Result<_>>()?;

@@ -9,9 +9,8 @@
 use super::header::{Chunk, FileInfo, format_error, las_message, laz_message};
 use super::world::Quantization;
 use crate::error::{Error, Result};
+use crate::input::source::{Ahead, Source};
 use rayon::prelude::*;
-use std::fs::File;
-use std::io::{Read, Seek, SeekFrom};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -19,7 +18,9 @@ use std::sync::{Arc, Mutex};
 /// One file open for decoding.
 pub(crate) struct FileDecoder {
     path: PathBuf,
-    file: File,
+    source: Source,
+    /// A remote file's spans, read ahead ([`FileDecoder::plan`]).
+    ahead: Option<Ahead>,
     vlr: Option<laz::LazVlr>,
     pub(crate) record_len: usize,
     pub(crate) extended: bool,
@@ -97,9 +98,9 @@ impl FileDecoder {
     /// Opens the file described by `info` (checked by [`FileInfo::read`]).
     pub(crate) fn open(info: &FileInfo) -> Result<FileDecoder> {
         let path = info.path.as_path();
-        let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+        let source = Source::open(path)?;
         let vlr = if info.compressed {
-            let header = las::Header::new(&mut file)
+            let header = las::Header::new(&mut source.reader())
                 .map_err(|e| format_error(path, format!("invalid header: {}", las_message(&e))))?;
             // The count the `las` crate takes (the legacy one when non-zero) as when checked.
             let crate_count = match info.legacy_point_count {
@@ -120,7 +121,8 @@ impl FileDecoder {
         };
         Ok(FileDecoder {
             path: info.path.clone(),
-            file,
+            source,
+            ahead: None,
             vlr,
             record_len: usize::from(info.record_length),
             extended: info.point_format >= 6,
@@ -129,6 +131,16 @@ impl FileDecoder {
             raw: RawPool::default(),
             cpu: crate::clock::Tally::default(),
         })
+    }
+
+    /// Tells a remote file's decoder which spans it will read, in order: their bytes are read
+    /// ahead, neighbours in one request, a few requests in flight (`--io-concurrency`). A local
+    /// file is read span by span as asked.
+    pub(crate) fn plan(&mut self, spans: &[Chunk]) {
+        if self.source.is_remote() && !spans.is_empty() {
+            let ranges: Vec<(u64, u64)> = spans.iter().map(|s| (s.offset, s.bytes)).collect();
+            self.ahead = Some(Ahead::new(&self.source, &ranges));
+        }
     }
 
     /// Adds this decoder's CPU time to `cpu` (shared with the reader that reports it).
@@ -147,6 +159,12 @@ impl FileDecoder {
         fields: Fields,
         job: impl Fn(&Chunk, &[u8]) -> Result<T> + Sync,
     ) -> Result<Vec<T>> {
+        if self.source.is_remote()
+            && let Some(first) = spans.first()
+            && !self.ahead.as_ref().is_some_and(|a| a.covers(first.offset))
+        {
+            self.plan(spans);
+        }
         let mut bytes = Vec::with_capacity(spans.len());
         let mut unread = None;
         for s in spans {
@@ -172,6 +190,10 @@ impl FileDecoder {
         SpanDecoder {
             path: self.path.clone(),
             vlr: self.vlr.clone(),
+            layers: match &self.vlr {
+                Some(vlr) if self.source.is_remote() => super::laz_check::layer_count(vlr),
+                _ => None,
+            },
             record_len: self.record_len,
             raw: self.raw.clone(),
             cpu: self.cpu.clone(),
@@ -186,16 +208,17 @@ impl FileDecoder {
         for (s, b) in spans.iter().zip(&mut bytes) {
             b.clear();
             b.resize(LAYOUT_HEAD + s.bytes as usize, 0);
-            self.file
-                .seek(SeekFrom::Start(s.offset))
-                .and_then(|_| self.file.read_exact(&mut b[LAYOUT_HEAD..]))
-                .map_err(|e| {
-                    if e.kind() == std::io::ErrorKind::UnexpectedEof {
-                        format_error(&self.path, "unexpected end of file: the file is truncated")
-                    } else {
-                        Error::io(&self.path, e)
-                    }
-                })?;
+            match &mut self.ahead {
+                Some(a) => a.read(s.offset, &mut b[LAYOUT_HEAD..]),
+                None => self.source.read_exact_at(s.offset, &mut b[LAYOUT_HEAD..]),
+            }
+            .map_err(|e| {
+                if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                    format_error(&self.path, "unexpected end of file: the file is truncated")
+                } else {
+                    Error::io(&self.path, e)
+                }
+            })?;
         }
         Ok(bytes)
     }
@@ -212,6 +235,9 @@ impl FileDecoder {
 pub(crate) struct SpanDecoder {
     path: PathBuf,
     vlr: Option<laz::LazVlr>,
+    /// The layer count of a remote file's layered chunks, checked as each arrives (a local
+    /// file's were checked with its header: `laz_check`).
+    layers: Option<u64>,
     record_len: usize,
     raw: RawPool,
     /// CPU time spent decoding spans, on whichever thread.
@@ -247,7 +273,20 @@ impl SpanDecoder {
                         point_count: s.points,
                         byte_count: s.bytes,
                     };
-                    let out = decode_chunk(b, &mut raw[..need], vlr, entry, fields.selection())
+                    let head = LAYOUT_HEAD + vlr.items_size() as usize + 4;
+                    let fits = match self.layers {
+                        Some(layers) => super::laz_check::layers_fit(
+                            b.get(head..).unwrap_or_default(),
+                            vlr,
+                            layers,
+                            s.bytes,
+                        ),
+                        None => Ok(()),
+                    };
+                    let out = fits
+                        .and_then(|()| {
+                            decode_chunk(b, &mut raw[..need], vlr, entry, fields.selection())
+                        })
                         .map_err(|what| {
                             format_error(
                                 path,

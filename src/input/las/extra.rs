@@ -174,7 +174,7 @@ impl ExtraDims {
 /// its extra bytes VLR is damaged; [`Error::Io`] when it cannot be read.
 pub fn find_in_file(info: &super::FileInfo, name: &str) -> Result<ExtraDim> {
     let path = info.path.as_path();
-    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut f = crate::input::source::Source::open(path)?.reader();
     let header = las::Header::new(&mut f).map_err(|e| Error::Format {
         path: path.to_path_buf(),
         message: format!("invalid header: {}", super::header::las_message(&e)),

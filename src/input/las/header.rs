@@ -10,9 +10,9 @@ use super::vlrs::{self, VlrInfo};
 use super::world::Quantization;
 use crate::crs::Crs;
 use crate::error::{Error, Result};
+use crate::input::source::Source;
 use serde::Serialize;
-use std::fs::File;
-use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 /// Size of an EVLR header in bytes.
@@ -177,9 +177,9 @@ pub(crate) fn laz_message(e: &laz::LasZipError) -> String {
 
 /// Opens, checks and describes one file.
 pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    let file_len = file.metadata().map_err(|e| Error::io(path, e))?.len();
-    let mut read = BufReader::new(file);
+    let source = Source::open(path)?;
+    let file_len = source.len();
+    let mut read = source.reader();
     check_signature(path, &mut read, file_len)?;
     read.seek(SeekFrom::Start(0))
         .map_err(|e| Error::io(path, e))?;
@@ -200,7 +200,7 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
     if header.point_format().is_compressed {
         layout.chunks = super::laz_check::check_laz(
             path,
-            read.get_mut(),
+            &mut read,
             &header,
             point_count,
             file_len,
@@ -212,7 +212,7 @@ pub(crate) fn inspect(path: &Path) -> Result<FileInfo> {
     let evlrs = match raw.evlr.filter(|e| e.start_of_first_evlr > 0) {
         Some(e) => vlrs::read_evlrs(
             path,
-            read.get_mut(),
+            &mut read,
             e.start_of_first_evlr,
             e.number_of_evlrs,
             file_len,

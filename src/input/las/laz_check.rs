@@ -4,7 +4,7 @@
 
 use super::header::{Chunk, format_error, las_message, laz_message};
 use crate::error::{Error, Result};
-use std::fs::File;
+use crate::input::source::SourceRead;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
@@ -16,7 +16,7 @@ const LASZIP_RECORD_ID: u16 = 22204;
 /// returns the chunks.
 pub(super) fn check_laz(
     path: &Path,
-    file: &mut File,
+    file: &mut SourceRead,
     header: &las::Header,
     points: u64,
     file_len: u64,
@@ -80,7 +80,11 @@ pub(super) fn check_laz(
             )
         })?;
     check_chunk_entries(path, &table, &vlr, points, table_at - (data_start + 8))?;
-    if let Some(layers) = layer_count(&vlr) {
+    // A remote file's chunks are checked as their bytes arrive (`layers_fit`), not by a
+    // request per chunk here.
+    if let Some(layers) = layer_count(&vlr)
+        && !file.source().is_remote()
+    {
         check_layers(path, file, &table, &vlr, data_start + 8, layers)?;
     }
     // Fixed-size chunks: the table says `chunk_size` for the last one too, which may hold fewer.
@@ -106,7 +110,7 @@ pub(super) fn check_laz(
 /// Number of layer sizes at the start of each chunk of a *layered* LAZ file (point formats
 /// 6–10), or `None` for point-wise compression. Layer sizes are `u32`s the decoder trusts when
 /// it sizes its buffers, hence [`check_layers`].
-fn layer_count(vlr: &laz::LazVlr) -> Option<u64> {
+pub(super) fn layer_count(vlr: &laz::LazVlr) -> Option<u64> {
     use laz::LazItemType as T;
     let items = vlr.items();
     if !items.iter().any(|i| matches!(i.item_type(), T::Point14)) {
@@ -129,7 +133,7 @@ fn layer_count(vlr: &laz::LazVlr) -> Option<u64> {
 /// must fit in the chunk's bytes.
 fn check_layers(
     path: &Path,
-    file: &mut File,
+    file: &mut SourceRead,
     table: &laz::laszip::ChunkTable,
     vlr: &laz::LazVlr,
     first_chunk_at: u64,
@@ -140,37 +144,57 @@ fn check_layers(
     let mut at = first_chunk_at;
     let entries: &[laz::laszip::ChunkTableEntry] = table.as_ref();
     for (i, e) in entries.iter().enumerate() {
-        let damaged = |what: &str| {
+        if e.byte_count >= head_len + 4 * layers {
+            file.source()
+                .read_exact_at(at + head_len, &mut sizes)
+                .map_err(|e| Error::io(path, e))?;
+        }
+        layers_fit(&sizes, vlr, layers, e.byte_count).map_err(|what| {
             format_error(
                 path,
                 format!("LAZ chunk {i} (at byte {at}) is damaged: {what}"),
             )
-        };
-        if e.byte_count < head_len + 4 * layers {
-            return Err(damaged("it is too short to hold its layer sizes"));
-        }
-        file.seek(SeekFrom::Start(at + head_len))
-            .and_then(|_| file.read_exact(&mut sizes))
-            .map_err(|e| Error::io(path, e))?;
-        let total: u64 = sizes
-            .chunks_exact(4)
-            .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
-            .sum();
-        if head_len + 4 * layers + total > e.byte_count {
-            return Err(damaged(&format!(
-                "its layers claim {total} bytes, more than the chunk's {} bytes",
-                e.byte_count
-            )));
-        }
+        })?;
         at += e.byte_count;
+    }
+    Ok(())
+}
+
+/// Whether a layered chunk of `byte_count` bytes holds the layers its sizes claim: `sizes` are
+/// the `4 × layers` bytes after its first raw point and point count (read only when the chunk
+/// is long enough to hold them).
+pub(super) fn layers_fit(
+    sizes: &[u8],
+    vlr: &laz::LazVlr,
+    layers: u64,
+    byte_count: u64,
+) -> std::result::Result<(), String> {
+    let head_len = vlr.items_size() + 4;
+    if byte_count < head_len + 4 * layers {
+        return Err("it is too short to hold its layer sizes".into());
+    }
+    let total: u64 = sizes
+        .chunks_exact(4)
+        .take(layers as usize)
+        .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+        .sum();
+    if head_len + 4 * layers + total > byte_count {
+        return Err(format!(
+            "its layers claim {total} bytes, more than the chunk's {byte_count} bytes"
+        ));
     }
     Ok(())
 }
 
 /// Where the chunk table starts, found the way LASzip does: the 8 bytes at the start of the
 /// point data, or (when a streaming writer could not go back to fill them) the file's last 8.
-fn chunk_table_offset(path: &Path, file: &mut File, file_len: u64, data_start: u64) -> Result<u64> {
-    let read_i64 = |file: &mut File, at: u64| -> Result<i64> {
+fn chunk_table_offset(
+    path: &Path,
+    file: &mut SourceRead,
+    file_len: u64,
+    data_start: u64,
+) -> Result<u64> {
+    let read_i64 = |file: &mut SourceRead, at: u64| -> Result<i64> {
         let mut b = [0u8; 8];
         file.seek(SeekFrom::Start(at))
             .and_then(|_| file.read_exact(&mut b))
@@ -207,7 +231,7 @@ fn chunk_table_offset(path: &Path, file: &mut File, file_len: u64, data_start: u
     Ok(offset)
 }
 
-fn read_chunk_count(path: &Path, file: &mut File, table_at: u64) -> Result<u64> {
+fn read_chunk_count(path: &Path, file: &mut SourceRead, table_at: u64) -> Result<u64> {
     let mut b = [0u8; 8];
     file.seek(SeekFrom::Start(table_at))
         .and_then(|_| file.read_exact(&mut b))

@@ -539,8 +539,10 @@ impl LidarReader {
             if spans.is_empty() {
                 continue;
             }
+            let mut decoder = FileDecoder::open(info)?.tallied(self.decode_cpu.clone());
+            decoder.plan(&spans);
             self.current = Some(Current {
-                decoder: FileDecoder::open(info)?.tallied(self.decode_cpu.clone()),
+                decoder,
                 spans,
                 next: 0,
                 first_index: s.first_index,

@@ -20,7 +20,8 @@
 
 use super::header::{Bounds3, FileInfo, format_error};
 use crate::crs::Crs;
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::input::source;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
@@ -151,10 +152,12 @@ pub struct Asset {
 /// Reads the files a `.vpc` lists, in its order.
 ///
 /// # Errors
-/// [`Error::Io`] if it cannot be read; [`Error::Format`] if it is not a STAC ItemCollection of
-/// point-cloud items, or an item lacks its count, extent or data file, or names a remote file.
+/// [`crate::Error::Io`] if it cannot be read; [`crate::Error::Format`] if it is not a STAC
+/// ItemCollection of point-cloud items, or an item lacks its count, extent or data file, or
+/// names a URL of another scheme than `http`, `https` or `s3`. A remote `.vpc`'s relative paths
+/// are URLs beside it.
 pub fn read(path: &Path) -> Result<Vec<VpcEntry>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::input::source::read_to_string(path)?;
     let c: ItemCollection = serde_json::from_str(&text).map_err(|e| {
         format_error(
             path,
@@ -190,16 +193,22 @@ fn entry(path: &Path, dir: &Path, i: usize, item: Item) -> Result<VpcEntry> {
         })
         .ok_or_else(|| bad("no data asset"))?;
     let href = asset.href.as_str();
-    if href.contains("://") {
+    let file = if source::is_remote(Path::new(href)) {
+        PathBuf::from(href)
+    } else if href.contains("://") {
         return Err(bad(&format!(
-            "{href} is a remote file: only local files are read"
+            "{href}: only http://, https:// and s3:// URLs and local files are read"
         )));
-    }
-    let file = Path::new(href.strip_prefix("./").unwrap_or(href));
-    let file = if file.is_absolute() {
-        file.to_path_buf()
     } else {
-        dir.join(file)
+        let file = Path::new(href.strip_prefix("./").unwrap_or(href));
+        if file.is_absolute() {
+            file.to_path_buf()
+        } else if source::is_remote(dir) {
+            // A URL's path joins with `/` whatever the platform.
+            PathBuf::from(format!("{}/{href}", dir.display()))
+        } else {
+            dir.join(file)
+        }
     };
     let b = item
         .properties
@@ -501,7 +510,18 @@ mod tests {
             "assets":{"data":{"href":"https://x/a.laz"}}}]}"#,
         )
         .unwrap();
-        assert!(read(&vpc).unwrap_err().to_string().contains("remote"));
+        assert_eq!(
+            read(&vpc).unwrap()[0].path,
+            PathBuf::from("https://x/a.laz")
+        );
+        std::fs::write(
+            &vpc,
+            r#"{"type":"FeatureCollection","features":[{"type":"Feature",
+            "properties":{"pc:count":1,"proj:bbox":[0,0,1,1]},
+            "assets":{"data":{"href":"ftp://x/a.laz"}}}]}"#,
+        )
+        .unwrap();
+        assert!(read(&vpc).unwrap_err().to_string().contains("s3://"));
         std::fs::write(&vpc, "[]").unwrap();
         assert!(read(&vpc).unwrap_err().to_string().contains("STAC"));
     }

@@ -11,7 +11,6 @@
 use crate::error::{Error, Result};
 use crate::input::las::extra::{self, ExtraDims};
 use crate::input::las::header::format_error;
-use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
@@ -114,7 +113,11 @@ fn u64_at(b: &[u8], k: usize) -> u64 {
 impl Source {
     /// Reads the header block (everything before the points) and lists the EVLRs of `path`,
     /// which [`crate::input::las::FileInfo::read`] has checked.
-    pub(super) fn read(path: &Path, file: &mut File, file_len: u64) -> Result<Source> {
+    pub(super) fn read(
+        path: &Path,
+        file: &mut (impl Read + Seek),
+        file_len: u64,
+    ) -> Result<Source> {
         let io = |e| Error::io(path, e);
         let mut head = [0u8; 227];
         file.seek(SeekFrom::Start(0)).map_err(io)?;

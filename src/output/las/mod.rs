@@ -262,8 +262,8 @@ pub fn rewrite_points_with(
 ) -> Result<RewriteSummary> {
     check_point_output(output, &[input.to_path_buf()])?;
     let info = inspect(input)?;
-    let mut file = std::fs::File::open(input).map_err(|e| Error::io(input, e))?;
-    let file_len = file.metadata().map_err(|e| Error::io(input, e))?.len();
+    let mut file = crate::input::source::Source::open(input)?.reader();
+    let file_len = file.source().len();
     let src = layout::Source::read(input, &mut file, file_len)?;
     let compress = is_laz_path(output);
     let added_len = 8 * options.add.len();
@@ -477,7 +477,7 @@ fn batches(spans: &[Chunk], record_len: u64) -> impl Iterator<Item = &[Chunk]> {
 
 /// Copies `len` bytes from `from` to `to`, a piece at a time.
 fn copy_exact(
-    from: &mut std::fs::File,
+    from: &mut crate::input::source::SourceRead,
     to: &mut AtomicFile,
     len: u64,
     input: &Path,

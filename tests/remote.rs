@@ -1,0 +1,248 @@
+//! Remote inputs (`http://`, `https://`, `s3://`) against real servers the tests start: nginx,
+//! moto's S3 server, and a tiny server of chosen faults (tests/support/remote.rs). A DEM made
+//! from a URL is byte-identical to the local file's; every fault ends in a complete output or in
+//! an error naming the URL, exit 3, and no output.
+
+#[path = "support/data.rs"]
+mod data;
+#[path = "support/remote.rs"]
+mod remote;
+
+use remote::{Fault, FaultServer, Moto, Nginx};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn sweeptin(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_sweeptin"));
+    c.args(args);
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// `sweeptin dem INPUT --cell 1 EXTRA… -o OUT` must succeed; the DEM's bytes.
+fn dem(input: &str, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> (Vec<u8>, String) {
+    let mut args = vec!["dem", input, "--cell", "1", "-q", "-o"];
+    let out_s = out.to_str().unwrap();
+    args.push(out_s);
+    args.extend_from_slice(extra);
+    let o = sweeptin(&args, env);
+    assert!(o.status.success(), "sweeptin {args:?}: {}", stderr(&o));
+    (std::fs::read(out).unwrap(), stderr(&o))
+}
+
+fn laz() -> PathBuf {
+    data::shared("lidar/lidR_Topography.laz")
+}
+
+fn copc() -> PathBuf {
+    data::shared("lidR_Topography.copc.laz")
+}
+
+/// The box of `copc_box_agrees_with_laspy` (tests/inputs.rs), a corner of the file.
+const BOX: &str = "273400,5274400,273450,5274450";
+
+#[test]
+fn dem_of_laz_over_nginx_equals_local() {
+    let (dir, names) = remote::served(&[&laz()]);
+    let Some(nginx) = Nginx::start(dir.path(), "dem_of_laz_over_nginx_equals_local") else {
+        return;
+    };
+    let out = tempfile::tempdir().unwrap();
+    let (local, _) = dem(laz().to_str().unwrap(), &out.path().join("l.tif"), &[], &[]);
+    let (far, _) = dem(&nginx.url(&names[0]), &out.path().join("r.tif"), &[], &[]);
+    assert!(
+        local == far,
+        "the DEM of the URL differs from the local file's"
+    );
+}
+
+#[test]
+fn dem_of_copc_box_over_nginx_equals_local_and_reads_a_part() {
+    let (dir, names) = remote::served(&[&copc()]);
+    let test = "dem_of_copc_box_over_nginx_equals_local_and_reads_a_part";
+    let Some(nginx) = Nginx::start(dir.path(), test) else {
+        return;
+    };
+    let out = tempfile::tempdir().unwrap();
+    let b = ["--bbox", BOX];
+    let (local, _) = dem(copc().to_str().unwrap(), &out.path().join("l.tif"), &b, &[]);
+    let (far, _) = dem(&nginx.url(&names[0]), &out.path().join("r.tif"), &b, &[]);
+    assert!(
+        local == far,
+        "the DEM of the URL differs from the local file's"
+    );
+    // The three octree nodes that meet the box hold 351,938 of the file's 590,087 bytes (the
+    // root alone 277,031; copclib's `GetNodesIntersectBox`): with the header, the chunk table
+    // and the hierarchy, at most 1.2 times that may cross the wire.
+    let (sent, requests) = nginx.sent();
+    assert!(
+        sent <= 351_938 * 12 / 10,
+        "a box read of a COPC file fetched {sent} bytes in {requests} requests"
+    );
+}
+
+#[test]
+fn dem_of_laz_over_s3_equals_local() {
+    let Some(moto) = Moto::start("dem_of_laz_over_s3_equals_local") else {
+        return;
+    };
+    moto.put("lidar", "tiles/topo.laz", &laz());
+    let env = [
+        ("AWS_ENDPOINT_URL", moto.endpoint.as_str()),
+        ("AWS_ACCESS_KEY_ID", remote::KEY),
+        ("AWS_SECRET_ACCESS_KEY", remote::SECRET),
+        ("AWS_REGION", "us-east-1"),
+    ];
+    let out = tempfile::tempdir().unwrap();
+    let (local, _) = dem(laz().to_str().unwrap(), &out.path().join("l.tif"), &[], &[]);
+    let (far, _) = dem(
+        "s3://lidar/tiles/topo.laz",
+        &out.path().join("r.tif"),
+        &[],
+        &env,
+    );
+    assert!(
+        local == far,
+        "the DEM of the S3 object differs from the local file's"
+    );
+    // A missing object: its URL, exit 3, no output.
+    let missing = out.path().join("m.tif");
+    let o = sweeptin(
+        &[
+            "dem",
+            "s3://lidar/none.laz",
+            "--cell",
+            "1",
+            "-q",
+            "-o",
+            missing.to_str().unwrap(),
+        ],
+        &env,
+    );
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("s3://lidar/none.laz"), "{}", stderr(&o));
+    assert!(!missing.exists());
+}
+
+/// Runs `dem` on the fault server's object; the local file's DEM, the output's path and the
+/// command's output.
+fn through(fault: Fault, input: &Path) -> (Vec<u8>, PathBuf, Output, tempfile::TempDir) {
+    let server = FaultServer::start(remote::bytes(&input.to_path_buf()), fault);
+    let out = tempfile::tempdir().unwrap();
+    let (local, _) = dem(input.to_str().unwrap(), &out.path().join("l.tif"), &[], &[]);
+    let far = out.path().join("r.tif");
+    let url = server.url("x.laz");
+    let o = sweeptin(
+        &[
+            "dem",
+            &url,
+            "--cell",
+            "1",
+            "-q",
+            "-o",
+            far.to_str().unwrap(),
+        ],
+        &[],
+    );
+    (local, far, o, out)
+}
+
+#[test]
+fn connection_dropped_mid_body_is_retried() {
+    let (local, far, o, _dir) = through(Fault::DropMidBody(2), &laz());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("retrying"), "{}", stderr(&o));
+    assert!(std::fs::read(far).unwrap() == local);
+}
+
+#[test]
+fn service_unavailable_then_success() {
+    let (local, far, o, _dir) = through(Fault::Unavailable(2), &laz());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("HTTP 503; retrying"), "{}", stderr(&o));
+    assert!(std::fs::read(far).unwrap() == local);
+}
+
+#[test]
+fn object_replaced_between_range_reads_is_an_error() {
+    for if_match in [true, false] {
+        let fault = Fault::Replace { after: 2, if_match };
+        let (_, far, o, _dir) = through(fault, &laz());
+        assert_eq!(o.status.code(), Some(3), "{fault:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("http://127.0.0.1:") && e.contains("changed while it was being read"),
+            "{fault:?}: {e}"
+        );
+        assert!(!far.exists(), "{fault:?}: an output was left");
+    }
+}
+
+#[test]
+fn server_ignoring_range_is_read_whole_with_a_warning() {
+    let (local, far, o, _dir) = through(Fault::IgnoreRange, &copc());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("ignores range requests"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(std::fs::read(far).unwrap() == local);
+}
+
+#[test]
+fn server_failing_every_time_gives_up_naming_the_url() {
+    let (_, far, o, _dir) = through(Fault::Unavailable(usize::MAX), &laz());
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("gave up after 5 attempts") && e.contains("/x.laz"),
+        "{e}"
+    );
+    assert!(!far.exists());
+}
+
+#[test]
+fn wrong_content_range_is_an_error() {
+    let (_, far, o, _dir) = through(Fault::WrongRange, &laz());
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("the server answered Content-Range"), "{e}");
+    assert!(!far.exists());
+}
+
+/// Plans pin local files: a URL is refused up front (exit 2) rather than reported as a missing
+/// local file, and nothing is written.
+#[test]
+fn plan_over_a_url_is_refused_until_plans_read_remote_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = dir.path().join("job");
+    let o = sweeptin(
+        &[
+            "plan",
+            "dem",
+            "https://127.0.0.1:9/x.laz",
+            "--cell",
+            "1",
+            "--tile",
+            "100",
+            "-q",
+            "-o",
+            job.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("https://127.0.0.1:9/x.laz: a plan does not read remote inputs"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!job.exists());
+}
