@@ -252,9 +252,19 @@ pub fn thin_tiled(
         };
         let (tx, ty) = unkey(k);
         if need > budget {
-            // The points of a tile go as its side squared (10 % kept in hand for denser ones).
-            let fits =
-                crate::error::round_down_figure(tile * (budget as f64 / need as f64).sqrt() * 0.9);
+            // The densest tile decides (the rest only counted): the points of a tile go as its
+            // side squared, 10 % kept in hand for denser spots of a finer grid.
+            let mut most = pts.len() as u64;
+            while let Some(r) = records.next() {
+                let mut n = 1u64;
+                while records.next_if(|q| q.key == r.key).is_some() {
+                    n += 1;
+                }
+                most = most.max(n);
+            }
+            let fits = crate::error::round_down_figure(
+                tile * (budget as f64 / (most * TILE_BYTES_PER_POINT) as f64).sqrt() * 0.9,
+            );
             return Err(Error::Options(format!(
                 "thin --tile {tile}: tile ({tx}, {ty}) holds {} points, about {} MiB to thin, \
                  more than half of --mem {} MiB: give --tile {fits} or smaller, or a larger --mem",
