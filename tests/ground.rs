@@ -6,7 +6,7 @@
 mod data;
 
 use std::path::PathBuf;
-use sweeptin::ground::{GroundParams, classify, classify_files};
+use sweeptin::ground::{GroundParams, RUN_BYTES_PER_POINT, classify, classify_files};
 use sweeptin::input::las::{Filter, LidarReader};
 
 /// A small deterministic generator (SplitMix64) for the synthetic terrains.
@@ -290,4 +290,31 @@ fn a_block_too_large_for_mem_is_refused_before_the_work() {
     assert_eq!(e.kind(), sweeptin::ErrorKind::Usage);
     let m = e.to_string();
     assert!(m.contains("--mem") && m.contains("--step"), "{m}");
+}
+
+#[test]
+fn a_run_takes_no_more_than_run_bytes_per_point_of_the_refusal() {
+    // The refusal and the batches count RUN_BYTES_PER_POINT a point of a run: an upper bound
+    // of what a run holds at its peak, on real points (the AHN crop: buildings, 2/3 ground).
+    for file in [
+        data::shared("lidar/startinpy_small.laz"),
+        data::shared("lidar/ign_50m_tiles/test_data_77050_627755_LA93_IGN69.laz"),
+    ] {
+        let (_, s) = classify_files(
+            std::slice::from_ref(&file),
+            &GroundParams::default(),
+            256 << 20,
+            &std::env::temp_dir(),
+            &mut |_, _, _| {},
+        )
+        .unwrap();
+        assert!(s.largest_run_points > 0);
+        assert!(
+            s.largest_run_bytes <= RUN_BYTES_PER_POINT * s.largest_run_points,
+            "{}: a run of {} points took {} bytes, over {RUN_BYTES_PER_POINT} a point",
+            file.display(),
+            s.largest_run_points,
+            s.largest_run_bytes
+        );
+    }
 }
