@@ -20,8 +20,9 @@
 //!
 //! **Memory.** The points are read once into the tiles' block index (an external sort by seed
 //! cell, spilled beyond half of `--mem`; 64-byte sort records, 24 + 8 bytes a point stored),
-//! each block's run holds its buffered rectangle (about [`RUN_BYTES_PER_POINT`] bytes
-//! a point; a run that does not fit half of `--mem` is refused before it starts), and the new
+//! each block's run holds its buffered rectangle (at most [`RUN_BYTES_PER_POINT`] bytes a
+//! point; a run that does not fit what `--mem` leaves after the index and the class store is
+//! refused before any block runs), and the new
 //! classes go to a [`ClassStore`] (one byte a point; a temporary file past an eighth of `--mem`).
 
 mod blocks;
