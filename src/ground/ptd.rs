@@ -168,9 +168,8 @@ pub(crate) fn classify_run(
     drop(order);
     let densify = Densify::new(tin, virtuals, pts, tags, labels, params, cand.into_iter())?;
     densify.run(params.low_noise, params.offset, &mut stats)?;
-    stats.bytes += (pts.len() * std::mem::size_of::<[f64; 3]>()
-        + tags.len() * std::mem::size_of::<u64>()
-        + labels.capacity()) as u64;
+    stats.bytes +=
+        (std::mem::size_of_val(pts) + std::mem::size_of_val(tags) + labels.capacity()) as u64;
     Ok(stats)
 }
 
