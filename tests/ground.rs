@@ -6,7 +6,9 @@
 mod data;
 
 use std::path::PathBuf;
-use sweeptin::ground::{GroundParams, classify, classify_files};
+use sweeptin::ground::{
+    GroundInput, GroundParams, RUN_BYTES_PER_POINT, classify, classify_files, classify_stream,
+};
 use sweeptin::input::las::{Filter, LidarReader};
 
 /// A small deterministic generator (SplitMix64) for the synthetic terrains.
@@ -290,4 +292,81 @@ fn a_block_too_large_for_mem_is_refused_before_the_work() {
     assert_eq!(e.kind(), sweeptin::ErrorKind::Usage);
     let m = e.to_string();
     assert!(m.contains("--mem") && m.contains("--step"), "{m}");
+}
+
+#[test]
+fn a_run_takes_no_more_than_run_bytes_per_point_of_the_refusal() {
+    // The refusal and the batches count RUN_BYTES_PER_POINT a point of a run: an upper bound
+    // of what a run holds at its peak, on real points (the AHN crop: buildings, 2/3 ground).
+    for file in [
+        data::shared("lidar/startinpy_small.laz"),
+        data::shared("lidar/ign_50m_tiles/test_data_77050_627755_LA93_IGN69.laz"),
+    ] {
+        let (_, s) = classify_files(
+            std::slice::from_ref(&file),
+            &GroundParams::default(),
+            256 << 20,
+            &std::env::temp_dir(),
+            &mut |_, _, _| {},
+        )
+        .unwrap();
+        assert!(s.largest_run_points > 0);
+        assert!(
+            s.largest_run_bytes <= RUN_BYTES_PER_POINT * s.largest_run_points,
+            "{}: a run of {} points took {} bytes, over {RUN_BYTES_PER_POINT} a point",
+            file.display(),
+            s.largest_run_points,
+            s.largest_run_bytes
+        );
+    }
+}
+
+#[test]
+fn a_block_too_large_for_mem_is_refused_before_any_block_runs() {
+    // A sparse block in the south (it runs first) and a dense one in the north that does not
+    // fit: the refusal comes before any block is classified (it came when the batches reached
+    // the dense block, after the work before it: 131 s on ARSO).
+    let mut pts: Vec<[f64; 3]> = (0..400)
+        .map(|i| {
+            [
+                (i % 20) as f64 * 4.0 + 1.0,
+                (i / 20) as f64 * 4.0 + 1.0,
+                0.0,
+            ]
+        })
+        .collect();
+    pts.extend((0..300_000).map(|i| {
+        [
+            (i % 600) as f64 * 0.13 + 1.0,
+            401.0 + (i / 600) as f64 * 0.15,
+            (i % 7) as f64 * 0.1,
+        ]
+    }));
+    let mut feed = |push: &mut dyn FnMut(GroundInput) -> sweeptin::Result<()>| {
+        for (i, p) in pts.iter().enumerate() {
+            push(GroundInput {
+                index: i as u64,
+                xyz: *p,
+                class: 1,
+                withheld: false,
+            })?;
+        }
+        Ok(())
+    };
+    let mut stages = Vec::new();
+    let e = classify_stream(
+        &GroundParams::default(),
+        pts.len() as u64,
+        32 << 20,
+        &std::env::temp_dir(),
+        &mut feed,
+        &mut |what, _, _| stages.push(what.to_string()),
+    )
+    .unwrap_err();
+    assert_eq!(e.kind(), sweeptin::ErrorKind::Usage, "{e}");
+    assert!(e.to_string().contains("--mem"), "{e}");
+    assert!(
+        !stages.iter().any(|s| s == "classifying"),
+        "blocks ran before the refusal: {stages:?}"
+    );
 }

@@ -130,9 +130,9 @@ input into files; several inputs are classified together (adjacent tiles classif
 seamlessly) and each is written to --odir under its own name.
 
 Memory: one read of the inputs into a block index (sorted within --mem, spilled to --tmp-dir \
-beyond), then blocks on every core, about 160 bytes a point of a block and its buffer; a block \
-that does not fit half of --mem is refused before the work (give a larger --mem or smaller \
---step). The classes wait in a temporary file of one byte a point beyond an eighth of --mem.
+beyond), then blocks on every core, at most 128 bytes a point of a block and its buffer; a \
+block that does not fit what --mem leaves after the index is refused before the work (give a \
+larger --mem or smaller --step). The classes wait in a temporary file of one byte a point beyond an eighth of --mem.
 
 Default (no preset): --step 20 --max-distance 1 --max-angle 6 --offset 0.2 --low-noise 5, \
 tuned on ARSO, AHN3 and IGN tiles (docs/ACCURACY.md). Terrain presets (LAStools lasground's \

@@ -18,9 +18,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Bytes a run takes per point of its buffered rectangle (the points, tags, labels, the
-/// cells' order, the candidates' probes, the ground TIN and its per-triangle tables), for
-/// fitting runs into `--mem`.
-pub const RUN_BYTES_PER_POINT: u64 = 160;
+/// candidates' bucket and mirror links, the ground TIN and its per-triangle tables, grown an
+/// eighth at a time), for fitting runs into `--mem`: measured 113 on ARSO (68 % ground),
+/// checked against every run by `ground::a_run_takes_no_more_than_run_bytes_per_point_of_the_refusal`.
+pub const RUN_BYTES_PER_POINT: u64 = 128;
 
 /// Largest seed cell coordinate (block keys pack two `i32`).
 const KEY_LIMIT: f64 = ((1u64 << 31) - 4) as f64;
@@ -72,6 +73,14 @@ impl ClassStore {
             }
         };
         Ok(ClassStore { inner, len })
+    }
+
+    /// Bytes held in memory.
+    fn memory_bytes(&self) -> u64 {
+        match &self.inner {
+            Inner::Memory(v) => v.len() as u64,
+            Inner::File { .. } => READ_PIECE as u64,
+        }
     }
 
     /// Number of classes.
@@ -203,7 +212,8 @@ pub struct GroundInput {
 /// within `mem` bytes, temporary files under `tmp`.
 ///
 /// # Errors
-/// [`Error::Options`] for bad parameters or a run that does not fit half of `mem`; the sort's,
+/// [`Error::Options`] for bad parameters or a run that does not fit what the block index and
+/// the class store leave of `mem` (checked before any run); the sort's,
 /// the index's and the TIN's errors; whatever `feed` returns.
 pub fn classify_stream(
     params: &GroundParams,
@@ -289,36 +299,47 @@ pub fn classify_stream(
 
     let mut store = ClassStore::new(total, mem / 8, tmp)?;
     let threads = rayon::current_num_threads().max(1);
-    let run_budget = mem / 2;
+    // The runs have what the index and the store leave of --mem.
+    let run_budget = mem.saturating_sub(index.memory_bytes() + store.memory_bytes());
     let buffer_cells = super::BUFFER_CELLS;
+    let runs: Vec<(i64, i64, BlockRect, u64)> = blocks
+        .iter()
+        .map(|&(tx, ty)| {
+            let rect = grid.tile_blocks(tx, ty).expand(buffer_cells);
+            (tx, ty, rect, index.count(&rect) * RUN_BYTES_PER_POINT)
+        })
+        .collect();
+    // The largest run is refused before any work.
+    if let Some(&(tx, ty, rect, need)) = runs
+        .iter()
+        .max_by_key(|r| (r.3, std::cmp::Reverse((r.1, r.0))))
+        && need > run_budget
+    {
+        let w = grid.world(&grid.tile_blocks(tx, ty));
+        return Err(Error::Options(format!(
+            "ground: the block x {} .. {}, y {} .. {} with its buffer of {} holds {} points, \
+             about {} MiB to classify, more than the {} MiB that --mem ({} MiB) leaves for it: \
+             give a larger --mem, or a smaller --step (blocks are {} steps a side)",
+            w[0],
+            w[2],
+            w[1],
+            w[3],
+            params.buffer(),
+            index.count(&rect),
+            need >> 20,
+            run_budget >> 20,
+            mem >> 20,
+            1u32 << grid.shift
+        )));
+    }
     let mut k = 0;
     let mut done_points = 0u64;
-    while k < blocks.len() {
+    while k < runs.len() {
         // A batch: up to one block per thread, within the run budget.
         let mut batch: Vec<(i64, i64, BlockRect)> = Vec::new();
         let mut bytes = 0u64;
-        while k < blocks.len() && batch.len() < threads {
-            let (tx, ty) = blocks[k];
-            let owned = grid.tile_blocks(tx, ty);
-            let rect = owned.expand(buffer_cells);
-            let need = index.count(&rect) * RUN_BYTES_PER_POINT;
-            if need > run_budget {
-                let w = grid.world(&owned);
-                return Err(Error::Options(format!(
-                    "ground: the block x {} .. {}, y {} .. {} with its buffer of {} holds {} \
-                     points, about {} MiB to classify, more than half of --mem ({} MiB): give \
-                     a larger --mem, or a smaller --step (blocks are {} steps a side)",
-                    w[0],
-                    w[2],
-                    w[1],
-                    w[3],
-                    params.buffer(),
-                    index.count(&rect),
-                    need >> 20,
-                    mem >> 20,
-                    1u32 << grid.shift
-                )));
-            }
+        while k < runs.len() && batch.len() < threads {
+            let (tx, ty, rect, need) = runs[k];
             if !batch.is_empty() && bytes + need > run_budget {
                 break;
             }
@@ -347,6 +368,7 @@ pub fn classify_stream(
             summary.seeds += stats.seeds;
             summary.iterations = summary.iterations.max(stats.iterations);
             summary.largest_run_points = summary.largest_run_points.max(run_points);
+            summary.largest_run_bytes = summary.largest_run_bytes.max(stats.bytes);
             store.put(&mut pairs)?;
         }
         progress("classifying", done_points, total);
@@ -381,8 +403,9 @@ fn run_block(
             tags.len()
         )));
     }
-    let mut labels = Vec::new();
     let world = grid.world(&rect);
+    super::ptd::spatial_order(&mut pts, &mut tags, world);
+    let mut labels = Vec::new();
     let stats = classify_run(&pts, &tags, world, grid, params, &mut labels)?;
     check_labels(&labels, pts.len())?;
     let mut out = Vec::new();

@@ -28,10 +28,11 @@
 //! and the angles are measurements against thresholds, in floating point relative to the
 //! triangle's first vertex.
 
+use super::densify::Densify;
 use super::{GroundParams, Tag};
 use crate::error::{Error, Result};
 use crate::tiles::grid::TileGrid;
-use crate::tin::{PointLocation, Tin, TriId, VertexId};
+use crate::tin::Tin;
 use std::collections::HashMap;
 
 /// What the run decided for a point.
@@ -51,16 +52,10 @@ pub(crate) struct RunStats {
     pub seeds: u64,
     pub iterations: u64,
     pub evaluations: u64,
+    /// Bytes the run held at its peak (its points, tags and labels, the densification's tables
+    /// and TIN), for checking [`super::RUN_BYTES_PER_POINT`].
+    pub bytes: u64,
 }
-
-/// A candidate's last test: the triangles it read.
-#[derive(Clone, Copy)]
-struct Probe {
-    tri: u32,
-    mirror: u32,
-}
-
-const NO_TRI: u32 = u32::MAX;
 
 /// Classifies the points `pts` (their global input index and eligibility in `tags`) of the run
 /// over the closed rectangle `rect`; only eligible points may become ground or low noise.
@@ -164,117 +159,46 @@ pub(crate) fn classify_run(
         labels[s as usize] = Label::Ground;
     }
 
-    // 4. Densification.
-    let sin_max = params.max_angle.to_radians().sin();
-    let mut cand: Vec<u32> = order
+    // 4. Densification, 5. the final TIN.
+    let cand = order
         .iter()
         .map(|o| o.2)
-        .filter(|&i| labels[i as usize] == Label::Other)
-        .collect();
-    let mut probes: Vec<Probe> = vec![
-        Probe {
-            tri: NO_TRI,
-            mirror: NO_TRI,
-        };
-        n
-    ];
-    let mut touched_list: Vec<TriId> = Vec::new();
-    let mut touched: Vec<bool> = Vec::new();
-    // Best accepted candidate per triangle slot: (distance, index, point).
-    let mut best: Vec<Option<(f64, u64, u32)>> = Vec::new();
-    let mut best_slots: Vec<u32> = Vec::new();
-    let mut first = true;
-    tin.record_touched(true);
-    while !cand.is_empty() && stats.iterations < MAX_ITERATIONS {
-        stats.iterations += 1;
-        best.resize(tin.triangle_slots(), None);
-        for &i in &cand {
-            let pr = probes[i as usize];
-            let stale = first
-                || touched.get(pr.tri as usize).copied().unwrap_or(true)
-                || (pr.mirror != NO_TRI
-                    && touched.get(pr.mirror as usize).copied().unwrap_or(true));
-            if !stale {
-                continue;
-            }
-            stats.evaluations += 1;
-            let p = pts[i as usize];
-            let (tri, verdict) = evaluate(&mut tin, pr.tri, p, params, sin_max, virtuals);
-            let (mirror, accepted) = match verdict {
-                Verdict::Accept(d) => (NO_TRI, Some(d)),
-                Verdict::Reject => (NO_TRI, None),
-                Verdict::Steep(v) => mirror_test(&mut tin, v, p, params, sin_max),
-            };
-            probes[i as usize] = Probe { tri, mirror };
-            if let Some(d) = accepted {
-                if tri == NO_TRI {
-                    // At a vertex of the TIN already: ground without an insertion.
-                    labels[i as usize] = Label::Ground;
-                    continue;
-                }
-                let slot = &mut best[tri as usize];
-                let better = match *slot {
-                    None => {
-                        best_slots.push(tri);
-                        true
-                    }
-                    Some((bd, bi, _)) => (d, id(i)) < (bd, bi),
-                };
-                if better {
-                    *slot = Some((d, id(i), i));
-                }
-            }
-        }
-        first = false;
-        // Insert the chosen candidates (in input order: the TIN does not depend on it).
-        let mut chosen: Vec<(u64, u32, u32)> = best_slots
-            .iter()
-            .filter_map(|&t| best[t as usize].take().map(|(_, id, i)| (id, i, t)))
-            .collect();
-        best_slots.clear();
-        chosen.sort_unstable();
-        for &(_, i, t) in &chosen {
-            // The walk starts at the triangle the candidate was found in (or what a flip made
-            // of it): next to the point.
-            if tin.is_live(TriId(t)) {
-                tin.set_hint(TriId(t));
-            }
-            tin.insert(pts[i as usize])?;
-            labels[i as usize] = Label::Ground;
-        }
-        cand.retain(|&i| labels[i as usize] == Label::Other);
-        if chosen.is_empty() {
-            break;
-        }
-        touched.clear();
-        touched.resize(tin.triangle_slots(), false);
-        tin.take_touched(&mut touched_list);
-        for t in touched_list.drain(..) {
-            if let Some(s) = touched.get_mut(t.0 as usize) {
-                *s = true;
-            }
-        }
-    }
-    tin.record_touched(false);
-
-    // 5. Points on the final ground TIN (within `offset` vertically) are ground too; points
-    //    far below it are low noise.
-    for &i in &cand {
-        let p = pts[i as usize];
-        if let Some(z) = tin.interpolate([p[0], p[1]]) {
-            if (p[2] - z).abs() <= params.offset {
-                labels[i as usize] = Label::Ground;
-            } else if p[2] < z - params.low_noise {
-                labels[i as usize] = Label::LowNoise;
-            }
-        }
-    }
+        .filter(|&i| labels[i as usize] == Label::Other);
+    let cand: Vec<u32> = cand.collect();
+    drop(order);
+    let densify = Densify::new(tin, virtuals, pts, tags, labels, params, cand.into_iter())?;
+    densify.run(params.low_noise, params.offset, &mut stats)?;
+    stats.bytes +=
+        (std::mem::size_of_val(pts) + std::mem::size_of_val(tags) + labels.capacity()) as u64;
     Ok(stats)
 }
 
-/// Densification stops after this many iterations even if points are still accepted (each
-/// iteration inserts at most one point per triangle; real data needs a few dozen).
-const MAX_ITERATIONS: u64 = 10_000;
+/// Puts the points of a run over `rect` (and their tags) in Z order (Morton order of a
+/// 2^16 × 2^16 grid over `rect`): the candidates of a triangle then lie close together in
+/// memory. The classes do not depend on this order (every tie is broken by the input index).
+pub(crate) fn spatial_order(pts: &mut Vec<[f64; 3]>, tags: &mut Vec<u64>, rect: [f64; 4]) {
+    let sx = 65535.0 / (rect[2] - rect[0]).max(f64::MIN_POSITIVE);
+    let sy = 65535.0 / (rect[3] - rect[1]).max(f64::MIN_POSITIVE);
+    let spread = |v: u32| -> u32 {
+        let mut v = v & 0xFFFF;
+        v = (v | (v << 8)) & 0x00FF_00FF;
+        v = (v | (v << 4)) & 0x0F0F_0F0F;
+        v = (v | (v << 2)) & 0x3333_3333;
+        (v | (v << 1)) & 0x5555_5555
+    };
+    let mut keys: Vec<(u32, u32)> = pts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let x = ((p[0] - rect[0]) * sx).clamp(0.0, 65535.0) as u32;
+            let y = ((p[1] - rect[1]) * sy).clamp(0.0, 65535.0) as u32;
+            (spread(x) | (spread(y) << 1), i as u32)
+        })
+        .collect();
+    keys.sort_unstable();
+    *pts = keys.iter().map(|&(_, i)| pts[i as usize]).collect();
+    *tags = keys.iter().map(|&(_, i)| tags[i as usize]).collect();
+}
 
 /// The median of `v` (not empty): the mean of the two middle values for an even count.
 fn median(v: &mut [f64]) -> f64 {
@@ -334,136 +258,6 @@ fn virtual_ring(
             [q[0], q[1], bestd.2]
         })
         .collect()
-}
-
-/// The outcome of testing a candidate against its triangle.
-enum Verdict {
-    /// Accepted, at this distance from the plane.
-    Accept(f64),
-    /// Too far from the plane (or no triangle).
-    Reject,
-    /// Close enough to the plane but an angle is too steep: the nearest real vertex, to mirror
-    /// through, with the candidate's distance.
-    Steep(Option<(VertexId, f64)>),
-}
-
-/// Locates `p` (walking from triangle `from`, or the last one used) and tests it against its
-/// triangle: the triangle slot (or [`NO_TRI`] at a vertex) and the verdict.
-fn evaluate(
-    tin: &mut Tin,
-    from: u32,
-    p: [f64; 3],
-    params: &GroundParams,
-    sin_max: f64,
-    virtuals: usize,
-) -> (u32, Verdict) {
-    let q = [p[0], p[1]];
-    let loc =
-        if from != NO_TRI && (from as usize) < tin.triangle_slots() && tin.is_live(TriId(from)) {
-            tin.locate_from(TriId(from), q)
-        } else {
-            tin.locate(q)
-        };
-    let t = match loc {
-        PointLocation::Inside(t) => t,
-        PointLocation::OnEdge(e) => e.tri(),
-        PointLocation::OnVertex(v) => {
-            let d = (p[2] - tin.z(v)).abs();
-            return if d <= params.max_distance && (v.0 as usize) >= virtuals {
-                (NO_TRI, Verdict::Accept(d))
-            } else {
-                let t = tin.out_edge(v).map_or(NO_TRI, |e| e.tri().0);
-                (t, Verdict::Reject)
-            };
-        }
-        PointLocation::Outside(_) => return (NO_TRI, Verdict::Reject),
-    };
-    let vs = tin.tri_vertices(t);
-    let corners = vs.map(|v| tin.point(v));
-    match test(corners, p, params.max_distance, sin_max) {
-        Test::Accept(d) => (t.0, Verdict::Accept(d)),
-        Test::Far => (t.0, Verdict::Reject),
-        Test::Steep(d) => {
-            if !params.mirror {
-                return (t.0, Verdict::Reject);
-            }
-            // The nearest real vertex (ties: the lower vertex id).
-            let near = vs
-                .iter()
-                .filter(|v| (v.0 as usize) >= virtuals)
-                .map(|&v| {
-                    let c = tin.point(v);
-                    ((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2), v.0, v)
-                })
-                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
-                .map(|m| (m.2, d));
-            (t.0, Verdict::Steep(near))
-        }
-    }
-}
-
-/// The mirror test: `p` mirrored through vertex `v` (in 3-D) tested against the triangle under
-/// the mirror point: the triangle read, and the distance of `p` when accepted.
-fn mirror_test(
-    tin: &mut Tin,
-    near: Option<(VertexId, f64)>,
-    p: [f64; 3],
-    params: &GroundParams,
-    sin_max: f64,
-) -> (u32, Option<f64>) {
-    let Some((v, d)) = near else {
-        return (NO_TRI, None);
-    };
-    let c = tin.point(v);
-    let m = [2.0 * c[0] - p[0], 2.0 * c[1] - p[1], 2.0 * c[2] - p[2]];
-    let t = match tin.locate([m[0], m[1]]) {
-        PointLocation::Inside(t) => t,
-        PointLocation::OnEdge(e) => e.tri(),
-        _ => return (NO_TRI, None),
-    };
-    let corners = tin.tri_vertices(t).map(|v| tin.point(v));
-    match test(corners, m, params.max_distance, sin_max) {
-        Test::Accept(_) => (t.0, Some(d)),
-        _ => (t.0, None),
-    }
-}
-
-enum Test {
-    Accept(f64),
-    Far,
-    Steep(f64),
-}
-
-/// Axelsson's test of `p` against the plane of triangle `t`: its distance to the plane at most
-/// `max_d`, and every angle between the plane and the lines to the corners at most the angle
-/// whose sine is `sin_max`.
-#[inline]
-fn test(t: [[f64; 3]; 3], p: [f64; 3], max_d: f64, sin_max: f64) -> Test {
-    let a = t[0];
-    let u = [t[1][0] - a[0], t[1][1] - a[1], t[1][2] - a[2]];
-    let v = [t[2][0] - a[0], t[2][1] - a[1], t[2][2] - a[2]];
-    let nrm = [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ];
-    let len = (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]).sqrt();
-    if len == 0.0 || !len.is_finite() {
-        return Test::Far;
-    }
-    let w = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
-    let d = (w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2]).abs() / len;
-    if d > max_d || d.is_nan() {
-        return Test::Far;
-    }
-    for c in &t {
-        let r2 = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2);
-        // angle > max  <=>  d / r > sin(max)
-        if d > r2.sqrt() * sin_max {
-            return Test::Steep(d);
-        }
-    }
-    Test::Accept(d)
 }
 
 /// Checks the invariant the driver relies on: labels are one per point.

@@ -54,7 +54,7 @@ use super::queue::TriangleQueue;
 use super::refiner::error_key;
 use crate::error::{Error, Result};
 use crate::geom::predicates::{Orientation, Vertical, VerticalPlane, orient};
-use crate::tin::{PointLocation, Tin, TriId, VertexId};
+use crate::tin::{PointLocation, Tin, TriId, VertexId, in_closed_triangle as contains};
 use rayon::prelude::*;
 
 const NONE: u32 = u32::MAX;
@@ -768,12 +768,4 @@ impl Thinner {
         };
         Ok(out)
     }
-}
-
-/// Is `q` in the closed counter-clockwise triangle `t`?
-#[inline]
-fn contains(t: &[[f64; 2]; 3], q: [f64; 2]) -> bool {
-    orient(t[0], t[1], q) != Orientation::Clockwise
-        && orient(t[1], t[2], q) != Orientation::Clockwise
-        && orient(t[2], t[0], q) != Orientation::Clockwise
 }

@@ -258,6 +258,35 @@ impl Tin {
         self.mesh.triangle_count()
     }
 
+    /// Makes room for `vertices` more vertices (and their two triangles each) without growing
+    /// any table by more than that: for a caller that bounds its memory and knows how many
+    /// points come next (a table grown by `push` may double).
+    pub fn reserve_exact(&mut self, vertices: usize) {
+        self.xy.reserve_exact(vertices);
+        self.z.reserve_exact(vertices);
+        self.vedge.reserve_exact(vertices);
+        self.mesh.origin.reserve_exact(6 * vertices);
+        self.mesh.link.reserve_exact(6 * vertices);
+    }
+
+    /// Vertices that fit before a table must grow.
+    pub fn vertex_room(&self) -> usize {
+        let v = self.xy.capacity().min(self.z.capacity()).min(self.vedge.capacity());
+        let t = self.mesh.origin.capacity().min(self.mesh.link.capacity()) / 6;
+        (v - self.xy.len()).min(t.saturating_sub(self.mesh.origin.len() / 6))
+    }
+
+    /// Bytes the TIN holds on the heap (what its tables have allocated, used or not).
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.xy.capacity() * size_of::<[f64; 2]>()
+            + self.z.capacity() * size_of::<f64>()
+            + self.mesh.origin.capacity() * size_of::<VertexId>()
+            + self.mesh.link.capacity() * size_of::<u32>()
+            + self.vedge.capacity() * size_of::<u32>()
+            + (self.free.capacity() + self.touched.capacity()) * size_of::<TriId>()
+    }
+
     /// Edge flips done so far.
     pub fn flips(&self) -> u64 {
         self.flips
@@ -558,6 +587,16 @@ pub fn planar(a: [f64; 3], b: [f64; 3], c: [f64; 3], p: [f64; 2]) -> f64 {
     let wb = (px * vy - py * vx) / det;
     let wc = (ux * py - uy * px) / det;
     a[2] + wb * uz + wc * vz
+}
+
+/// Is `q` in the closed counter-clockwise triangle `t` (inside, or on an edge or a corner)?
+/// Exact ([`orient`]): the bucket test of the methods that keep points in the triangle that
+/// contains them (`simplify::thin`, `ground`).
+#[inline]
+pub fn in_closed_triangle(t: &[[f64; 2]; 3], q: [f64; 2]) -> bool {
+    orient(t[0], t[1], q) != Orientation::Clockwise
+        && orient(t[1], t[2], q) != Orientation::Clockwise
+        && orient(t[2], t[0], q) != Orientation::Clockwise
 }
 
 /// Height at `p` (on the segment) of the line through `a, b`.

@@ -1,0 +1,485 @@
+//! The densification of one run (steps 4 and 5 of [`super::ptd`]) with conflict lists: every
+//! candidate lives in the bucket of the ground triangle that contains it (closed, decided
+//! exactly with `orient`: a linked list through the candidates, as `simplify::thin` keeps its
+//! points), and is registered with the triangle under its mirror point when it has one.
+//!
+//! An iteration judges only the candidates of the triangles created or changed since the last
+//! one, and those whose mirror triangle changed: a candidate's answer depends on nothing else.
+//! Its accepted candidates (the closest to its plane per triangle, ties by the lower input
+//! index) are inserted by a walk from the triangle that held them; then the candidates of the
+//! triangles the insertions changed are moved, once per iteration, to the triangles that now
+//! hold them (a walk from their old triangle slot, which insertion never frees: a few steps).
+//! So no candidate is located from afar, nor judged again when nothing it read changed.
+
+use super::ptd::{Label, RunStats};
+use super::{GroundParams, Tag};
+use crate::error::{Error, Result};
+use crate::tin::{PointLocation, Tin, TriId, VertexId, planar};
+
+/// No triangle, no candidate.
+const NONE: u32 = u32::MAX;
+
+/// Densification stops after this many iterations even if points are still accepted (each
+/// iteration inserts at most one point per triangle; real data needs a few dozen).
+const MAX_ITERATIONS: u64 = 10_000;
+
+/// The state of one run's densification.
+pub(super) struct Densify<'a> {
+    tin: Tin,
+    pts: &'a [[f64; 3]],
+    tags: &'a [u64],
+    labels: &'a mut [Label],
+    max_distance: f64,
+    sin_max: f64,
+    mirror: bool,
+    /// Vertex ids below this are the virtual ring's.
+    virtuals: usize,
+    /// Per point: the triangle whose bucket holds it, the next point of that bucket, the
+    /// triangle its mirror point was found in (with its previous and next registrant there).
+    tri: Vec<u32>,
+    next: Vec<u32>,
+    mtri: Vec<u32>,
+    mprev: Vec<u32>,
+    mnext: Vec<u32>,
+    /// Per triangle slot: the first point of its bucket and of its mirror registrants; is it
+    /// to be judged again?
+    head: Vec<u32>,
+    mhead: Vec<u32>,
+    dirty: Vec<bool>,
+    /// The dirty triangles (possibly freed since), and the candidates whose mirror triangle
+    /// changed.
+    dirty_list: Vec<u32>,
+    reeval: Vec<u32>,
+    touched: Vec<TriId>,
+    gathered: Vec<u32>,
+}
+
+impl<'a> Densify<'a> {
+    /// The densification of the candidates `cand` (eligible points not yet labelled) on the
+    /// initial ground TIN `tin`, whose first `virtuals` vertices are virtual.
+    pub(super) fn new(
+        mut tin: Tin,
+        virtuals: usize,
+        pts: &'a [[f64; 3]],
+        tags: &'a [u64],
+        labels: &'a mut [Label],
+        params: &GroundParams,
+        cand: impl Iterator<Item = u32>,
+    ) -> Result<Densify<'a>> {
+        let n = pts.len();
+        let mut d = Densify {
+            pts,
+            tags,
+            labels,
+            max_distance: params.max_distance,
+            sin_max: params.max_angle.to_radians().sin(),
+            mirror: params.mirror,
+            virtuals,
+            tri: vec![NONE; n],
+            next: vec![NONE; n],
+            mtri: vec![NONE; n],
+            mprev: vec![NONE; n],
+            mnext: vec![NONE; n],
+            head: Vec::new(),
+            mhead: Vec::new(),
+            dirty: Vec::new(),
+            dirty_list: Vec::new(),
+            reeval: Vec::new(),
+            touched: Vec::new(),
+            gathered: Vec::new(),
+            tin: Tin::default(),
+        };
+        d.grow_for(&tin);
+        // Every candidate into the bucket of its triangle (a walk from the last one: the
+        // candidates come cell by cell).
+        for i in cand {
+            let p = pts[i as usize];
+            let t = match tin.locate([p[0], p[1]]) {
+                PointLocation::Inside(t) => t,
+                PointLocation::OnEdge(e) => e.tri(),
+                PointLocation::OnVertex(v) => match tin.out_edge(v) {
+                    Some(e) => e.tri(),
+                    None => continue,
+                },
+                PointLocation::Outside(_) => continue,
+            };
+            d.link(i, t.0);
+        }
+        for t in tin.triangles() {
+            d.dirty[t.0 as usize] = true;
+            d.dirty_list.push(t.0);
+        }
+        tin.record_touched(true);
+        d.tin = tin;
+        Ok(d)
+    }
+
+    /// Bytes this densification holds on the heap (the TIN's included).
+    fn heap_bytes(&self) -> usize {
+        let u = std::mem::size_of::<u32>();
+        let per_point = self.tri.capacity()
+            + self.next.capacity()
+            + self.mtri.capacity()
+            + self.mprev.capacity()
+            + self.mnext.capacity()
+            + self.dirty_list.capacity()
+            + self.reeval.capacity()
+            + self.gathered.capacity();
+        self.tin.heap_bytes()
+            + u * (per_point + self.head.capacity() + self.mhead.capacity())
+            + self.dirty.capacity()
+            + self.touched.capacity() * u
+    }
+
+    fn grow_for(&mut self, tin: &Tin) {
+        let m = tin.triangle_slots();
+        if self.head.len() < m {
+            if self.head.capacity() < m {
+                let more = (m - self.head.len()).max(m / 8);
+                self.head.reserve_exact(more);
+                self.mhead.reserve_exact(more);
+                self.dirty.reserve_exact(more);
+            }
+            self.head.resize(m, NONE);
+            self.mhead.resize(m, NONE);
+            self.dirty.resize(m, false);
+        }
+    }
+
+    #[inline]
+    fn id(&self, i: u32) -> u64 {
+        Tag(self.tags[i as usize]).index()
+    }
+
+    #[inline]
+    fn link(&mut self, i: u32, t: u32) {
+        self.next[i as usize] = self.head[t as usize];
+        self.head[t as usize] = i;
+        self.tri[i as usize] = t;
+    }
+
+    fn mlink(&mut self, i: u32, t: u32) {
+        let h = self.mhead[t as usize];
+        self.mnext[i as usize] = h;
+        self.mprev[i as usize] = NONE;
+        if h != NONE {
+            self.mprev[h as usize] = i;
+        }
+        self.mhead[t as usize] = i;
+        self.mtri[i as usize] = t;
+    }
+
+    fn munlink(&mut self, i: u32) {
+        let t = self.mtri[i as usize];
+        if t == NONE {
+            return;
+        }
+        let (p, n) = (self.mprev[i as usize], self.mnext[i as usize]);
+        if p == NONE {
+            self.mhead[t as usize] = n;
+        } else {
+            self.mnext[p as usize] = n;
+        }
+        if n != NONE {
+            self.mprev[n as usize] = p;
+        }
+        self.mtri[i as usize] = NONE;
+    }
+
+    /// Densifies until an iteration inserts nothing; then the final pass (step 5).
+    pub(super) fn run(mut self, low_noise: f64, offset: f64, stats: &mut RunStats) -> Result<()> {
+        let mut accepted: Vec<(u32, f64, u64, u32)> = Vec::new();
+        let mut chosen: Vec<(u64, u32)> = Vec::new();
+        while stats.iterations < MAX_ITERATIONS {
+            stats.iterations += 1;
+            // Judge the candidates of the dirty triangles, then those whose mirror moved.
+            accepted.clear();
+            let dirty = std::mem::take(&mut self.dirty_list);
+            for &t in &dirty {
+                if !self.tin.is_live(TriId(t)) {
+                    continue;
+                }
+                self.judge(t, None, &mut accepted, stats);
+            }
+            let reeval = std::mem::take(&mut self.reeval);
+            for &i in &reeval {
+                let t = self.tri[i as usize];
+                if self.labels[i as usize] != Label::Other || self.dirty[t as usize] {
+                    continue;
+                }
+                self.judge(t, Some(i), &mut accepted, stats);
+            }
+            for &t in &dirty {
+                self.dirty[t as usize] = false;
+            }
+            self.dirty_list = dirty;
+            self.dirty_list.clear();
+            self.reeval = reeval;
+            self.reeval.clear();
+            // The best of each triangle, inserted in input order (the TIN does not depend on
+            // it).
+            accepted.sort_unstable_by(|a, b| {
+                a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2))
+            });
+            chosen.clear();
+            let mut last = NONE;
+            for &(t, _, id, i) in &accepted {
+                if t != last {
+                    chosen.push((id, i));
+                    last = t;
+                }
+            }
+            chosen.sort_unstable();
+            if chosen.is_empty() {
+                break;
+            }
+            // Grow the TIN by an eighth at a time, not by doubling: its memory is most of a
+            // run's.
+            if self.tin.vertex_room() < chosen.len() {
+                let more = chosen.len().max(self.tin.vertex_slots() / 8);
+                self.tin.reserve_exact(more);
+            }
+            for &(_, i) in &chosen {
+                self.insert(i)?;
+            }
+            self.redistribute()?;
+        }
+        self.tin.record_touched(false);
+        stats.bytes = self.heap_bytes() as u64;
+        self.finish(low_noise, offset);
+        Ok(())
+    }
+
+    /// Judges the candidates of triangle `t`'s bucket (`only`: just that one): accepted ones
+    /// go to `accepted` as `(triangle, distance, input index, point)`; a candidate at a vertex
+    /// of the TIN is ground at once when close enough to it.
+    fn judge(
+        &mut self,
+        t: u32,
+        only: Option<u32>,
+        accepted: &mut Vec<(u32, f64, u64, u32)>,
+        stats: &mut RunStats,
+    ) {
+        let vs = self.tin.tri_vertices(TriId(t));
+        let corners = vs.map(|v| self.tin.point(v));
+        let plane = Plane::new(corners);
+        let mut i = only.unwrap_or(self.head[t as usize]);
+        while i != NONE {
+            let next = if only.is_some() {
+                NONE
+            } else {
+                self.next[i as usize]
+            };
+            if self.labels[i as usize] == Label::Other {
+                stats.evaluations += 1;
+                self.judge_one(i, t, vs, &corners, &plane, accepted);
+            }
+            i = next;
+        }
+    }
+
+    fn judge_one(
+        &mut self,
+        i: u32,
+        t: u32,
+        vs: [VertexId; 3],
+        corners: &[[f64; 3]; 3],
+        plane: &Plane,
+        accepted: &mut Vec<(u32, f64, u64, u32)>,
+    ) {
+        self.munlink(i);
+        let p = self.pts[i as usize];
+        if let Some(k) = (0..3).find(|&k| corners[k][0] == p[0] && corners[k][1] == p[1]) {
+            let d = (p[2] - corners[k][2]).abs();
+            if d <= self.max_distance && (vs[k].0 as usize) >= self.virtuals {
+                self.labels[i as usize] = Label::Ground;
+            }
+            return;
+        }
+        let d = match plane.test(corners, p, self.max_distance, self.sin_max) {
+            Test::Accept(d) => {
+                accepted.push((t, d, self.id(i), i));
+                return;
+            }
+            Test::Steep(d) if self.mirror => d,
+            Test::Far | Test::Steep(_) => return,
+        };
+        // Steep: mirror through the nearest real vertex (ties: the lower vertex id), and test
+        // the mirror point against the triangle under it.
+        let near = (0..3)
+            .filter(|&k| (vs[k].0 as usize) >= self.virtuals)
+            .map(|k| {
+                let c = corners[k];
+                ((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2), vs[k].0, k)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        if let Some((_, _, k)) = near
+            && self.mirror_accepts(i, t, corners[k], p)
+        {
+            accepted.push((t, d, self.id(i), i));
+        }
+    }
+
+    /// The mirror test of candidate `i` (in triangle `t`) through vertex `v`; registers `i`
+    /// with the triangle under the mirror point.
+    fn mirror_accepts(&mut self, i: u32, t: u32, c: [f64; 3], p: [f64; 3]) -> bool {
+        let m = [2.0 * c[0] - p[0], 2.0 * c[1] - p[1], 2.0 * c[2] - p[2]];
+        let mt = match self.tin.locate_from(TriId(t), [m[0], m[1]]) {
+            PointLocation::Inside(mt) => mt,
+            PointLocation::OnEdge(e) => e.tri(),
+            _ => return false,
+        };
+        self.mlink(i, mt.0);
+        let corners = self.tin.tri_vertices(mt).map(|v| self.tin.point(v));
+        matches!(
+            Plane::new(corners).test(&corners, m, self.max_distance, self.sin_max),
+            Test::Accept(_)
+        )
+    }
+
+    /// Inserts candidate `i` (accepted), walking from the triangle slot whose bucket holds it
+    /// (insertions never free a slot: it is live, and near the point).
+    fn insert(&mut self, i: u32) -> Result<()> {
+        let p = self.pts[i as usize];
+        self.labels[i as usize] = Label::Ground;
+        self.munlink(i);
+        // A candidate of this iteration at the same place may have gone in first: then this
+        // one is that vertex.
+        self.tin.set_hint(TriId(self.tri[i as usize]));
+        self.tin.insert(p)?;
+        Ok(())
+    }
+
+    /// After an iteration's insertions: moves the candidates of the triangles they touched
+    /// into the triangles that now hold them (a walk from the slot each was in: near), marks
+    /// the touched triangles dirty, and queues their mirror registrants.
+    fn redistribute(&mut self) -> Result<()> {
+        let tin = std::mem::take(&mut self.tin);
+        self.grow_for(&tin);
+        self.tin = tin;
+        let mut touched = std::mem::take(&mut self.touched);
+        touched.clear();
+        self.tin.take_touched(&mut touched);
+        touched.sort_unstable();
+        touched.dedup();
+        let mut gathered = std::mem::take(&mut self.gathered);
+        gathered.clear();
+        for &t in &touched {
+            let t = t.0 as usize;
+            let mut i = std::mem::replace(&mut self.head[t], NONE);
+            while i != NONE {
+                if self.labels[i as usize] == Label::Other {
+                    gathered.push(i);
+                }
+                i = self.next[i as usize];
+            }
+            let mut j = std::mem::replace(&mut self.mhead[t], NONE);
+            while j != NONE {
+                let n = self.mnext[j as usize];
+                self.mtri[j as usize] = NONE;
+                self.reeval.push(j);
+                j = n;
+            }
+            if self.tin.is_live(TriId(t as u32)) && !self.dirty[t] {
+                self.dirty[t] = true;
+                self.dirty_list.push(t as u32);
+            }
+        }
+        // In memory order (spatial, see `ptd::spatial_order`): each walk starts near the last.
+        gathered.sort_unstable();
+        for &i in &gathered {
+            let p = self.pts[i as usize];
+            let from = TriId(self.tri[i as usize]);
+            let t = match self.tin.locate_from(from, [p[0], p[1]]) {
+                PointLocation::Inside(t) => Some(t),
+                PointLocation::OnEdge(e) => Some(e.tri()),
+                PointLocation::OnVertex(v) => self.tin.out_edge(v).map(|e| e.tri()),
+                PointLocation::Outside(_) => None,
+            };
+            let Some(t) = t else {
+                return Err(Error::Internal(format!(
+                    "ground: point {} ({}, {}) left the ground TIN",
+                    self.id(i),
+                    p[0],
+                    p[1]
+                )));
+            };
+            self.link(i, t.0);
+        }
+        self.gathered = gathered;
+        self.touched = touched;
+        Ok(())
+    }
+
+    /// Step 5: a candidate left within `offset` (vertically) of the final ground TIN is ground,
+    /// one more than `low_noise` below it is low noise.
+    fn finish(&mut self, low_noise: f64, offset: f64) {
+        for i in 0..self.pts.len() {
+            let t = self.tri[i];
+            if t == NONE || self.labels[i] != Label::Other {
+                continue;
+            }
+            let p = self.pts[i];
+            let [a, b, c] = self.tin.tri_vertices(TriId(t)).map(|v| self.tin.point(v));
+            let z = planar(a, b, c, [p[0], p[1]]);
+            if (p[2] - z).abs() <= offset {
+                self.labels[i] = Label::Ground;
+            } else if p[2] < z - low_noise {
+                self.labels[i] = Label::LowNoise;
+            }
+        }
+    }
+}
+
+enum Test {
+    Accept(f64),
+    Far,
+    Steep(f64),
+}
+
+/// The plane of a triangle: its first corner and its (unnormalised) normal with its length.
+struct Plane {
+    a: [f64; 3],
+    nrm: [f64; 3],
+    len: f64,
+}
+
+impl Plane {
+    #[inline]
+    fn new(t: [[f64; 3]; 3]) -> Plane {
+        let a = t[0];
+        let u = [t[1][0] - a[0], t[1][1] - a[1], t[1][2] - a[2]];
+        let v = [t[2][0] - a[0], t[2][1] - a[1], t[2][2] - a[2]];
+        let nrm = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let len = (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]).sqrt();
+        Plane { a, nrm, len }
+    }
+
+    /// Axelsson's test of `p` against the plane of triangle `t`: its distance to the plane at
+    /// most `max_d`, and every angle between the plane and the lines to the corners at most
+    /// the angle whose sine is `sin_max`.
+    #[inline]
+    fn test(&self, t: &[[f64; 3]; 3], p: [f64; 3], max_d: f64, sin_max: f64) -> Test {
+        let (a, nrm, len) = (self.a, self.nrm, self.len);
+        if len == 0.0 || !len.is_finite() {
+            return Test::Far;
+        }
+        let w = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+        let d = (w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2]).abs() / len;
+        if d > max_d || d.is_nan() {
+            return Test::Far;
+        }
+        for c in t {
+            let r2 = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2);
+            // angle > max  <=>  d / r > sin(max)
+            if d > r2.sqrt() * sin_max {
+                return Test::Steep(d);
+            }
+        }
+        Test::Accept(d)
+    }
+}
