@@ -75,8 +75,9 @@ impl ClassStore {
         Ok(ClassStore { inner, len })
     }
 
-    /// Bytes held in memory.
-    fn memory_bytes(&self) -> u64 {
+    /// Bytes the store holds in memory (its read piece when its classes are in a temporary
+    /// file).
+    pub fn memory_bytes(&self) -> u64 {
         match &self.inner {
             Inner::Memory(v) => v.len() as u64,
             Inner::File { .. } => READ_PIECE as u64,
@@ -145,16 +146,6 @@ impl ClassStore {
                 }
                 Ok(buf[(index - *at) as usize])
             }
-        }
-    }
-}
-
-impl ClassStore {
-    /// Bytes the store holds in memory (0 when its classes are in a temporary file).
-    pub fn memory_bytes(&self) -> u64 {
-        match &self.inner {
-            Inner::Memory(v) => v.len() as u64,
-            Inner::File { .. } => 0,
         }
     }
 }

@@ -95,9 +95,9 @@ pub(super) fn tile_count(lo: [f64; 2], hi: [f64; 2], tile: f64) -> f64 {
 pub(super) fn fitting_tile(lo: [f64; 2], hi: [f64; 2], max: u64, cell: Option<f64>) -> f64 {
     let (w, h) = ((hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0));
     let need = ((w * h) / max as f64).sqrt().max((w + h) / max as f64);
-    let mut k = (need.max(1e-9).log10().floor() as i32 - 1).max(-9);
+    let k0 = (need.max(1e-9).log10().floor() as i32 - 1).max(-9);
     // Four tiles (2 × 2) always fit past the extent's side; the bound only ends the loop.
-    for _ in 0..400 {
+    for k in k0..k0 + 400 {
         for m in [1.0, 2.0, 2.5, 5.0] {
             let mut t = m * 10f64.powi(k);
             if let Some(c) = cell {
@@ -108,7 +108,6 @@ pub(super) fn fitting_tile(lo: [f64; 2], hi: [f64; 2], max: u64, cell: Option<f6
                 return t;
             }
         }
-        k += 1;
     }
     (w.max(h) * 2.0).max(1.0)
 }
