@@ -734,6 +734,7 @@ fn record_of(
         plan: String::new(),
         warnings: run.warnings.clone(),
         volume,
+        extent: run.tiles.and_then(|t| t.extent),
     }
 }
 

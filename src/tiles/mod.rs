@@ -119,6 +119,11 @@ pub struct TileStats {
     pub window: u64,
     /// CPU time by stage.
     pub cpu: TileCpu,
+    /// The extent `[xmin, ymin, xmax, ymax]` of the points read (after the filters): a DEM's
+    /// grid over the data is decided from it ([`crate::raster::GridExtent::Auto`]), and a
+    /// plan's merge decides one run's grid from its tasks' ([`crate::plan::TaskRecord::extent`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extent: Option<[f64; 4]>,
 }
 
 /// CPU seconds by stage of a tiled run (Linux; zeros elsewhere). Reading is the whole
@@ -407,6 +412,7 @@ pub(crate) fn run(
         threads: threads as u64,
         points_decoded: declared.decoded,
         cpu,
+        extent: Some(bounds).filter(|b| b.iter().all(|v| v.is_finite())),
         ..TileStats::default()
     };
     let (mut read, mut kept) = (0u64, 0u64);
