@@ -610,15 +610,7 @@ fn tasks_of_a_copc_file_read_their_area_only() {
     sweeptin(&["merge", s(&plan), "-o", s(&mosaic)], "merge");
     let single = t.path().join("single.tif");
     sweeptin(
-        &[
-            "dem",
-            s(&copc),
-            "--cell",
-            "1",
-            "-o",
-            s(&single),
-            "--quiet",
-        ],
+        &["dem", s(&copc), "--cell", "1", "-o", s(&single), "--quiet"],
         "one run",
     );
     assert_eq!(cells(&mosaic), cells(&single), "mosaic == one run");

@@ -43,15 +43,7 @@ fn plan_equals_one_run(input: &Path, t: &Path) -> Vec<serde_json::Value> {
     assert!(n >= 9, "{n} tasks");
     let single = t.join("single.tif");
     sweeptin(
-        &[
-            "dem",
-            s(input),
-            "--cell",
-            cell,
-            "-o",
-            s(&single),
-            "-q",
-        ],
+        &["dem", s(input), "--cell", cell, "-o", s(&single), "-q"],
         "single run",
     );
     sweeptin(&["run", s(&plan), "--all", "-q"], "run --all");

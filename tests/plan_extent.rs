@@ -70,7 +70,15 @@ fn the_mosaic_is_the_file_one_run_writes() {
         single.extend(["--format", format, "-q", "-o", s(&one)]);
         sweeptin(&single, "one run");
         let out = sweeptin(
-            &["merge", s(&plan), "-o", s(&mosaic), "--format", format, "--json"],
+            &[
+                "merge",
+                s(&plan),
+                "-o",
+                s(&mosaic),
+                "--format",
+                format,
+                "--json",
+            ],
             "merge",
         );
         let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -103,7 +111,15 @@ fn the_mosaic_is_the_file_one_run_writes() {
     // `--extent tiles`: the whole tiles, as one run over their union.
     let tiles = t.path().join("tiles.tif");
     let out = sweeptin(
-        &["merge", s(&plan), "-o", s(&tiles), "--extent", "tiles", "--json"],
+        &[
+            "merge",
+            s(&plan),
+            "-o",
+            s(&tiles),
+            "--extent",
+            "tiles",
+            "--json",
+        ],
         "merge --extent tiles",
     );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -115,7 +131,10 @@ fn the_mosaic_is_the_file_one_run_writes() {
     single.push(s(&boxed));
     sweeptin(&single, "one run over the tiles");
     let (a, b) = (cells(&tiles), cells(&boxed));
-    assert!(a == b, "the mosaic of the tiles differs from one run over them");
+    assert!(
+        a == b,
+        "the mosaic of the tiles differs from one run over them"
+    );
     assert!(
         u64::from(a.0) * u64::from(a.1) > u64::from(c.0) * u64::from(c.1),
         "the tiles hold no more cells than the data"
@@ -185,7 +204,14 @@ fn records_without_an_extent_give_the_tiles_with_a_warning() {
     assert!(cells(&mosaic) == cells(&boxed), "not the tiles' mosaic");
     // An extent that is neither: a usage error.
     let o = bin()
-        .args(["merge", s(&plan), "-o", s(&mosaic), "--extent", "everything"])
+        .args([
+            "merge",
+            s(&plan),
+            "-o",
+            s(&mosaic),
+            "--extent",
+            "everything",
+        ])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2), "{o:?}");
