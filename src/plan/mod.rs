@@ -189,6 +189,10 @@ pub struct TaskRecord {
     /// older builds (the mosaic then covers the tiles, with a warning).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub extent: Option<[f64; 4]>,
+    /// Tiles of the tiled engine the task ran (its last run): those holding points, or for a
+    /// DEM every one of its plan tile (their cells may lie under other tasks' triangles).
+    #[serde(default)]
+    pub subtiles: u64,
 }
 
 /// Most tiles a plan may cut its data into (each a task, listed in `plan.json`): 262,144, a

@@ -735,6 +735,7 @@ fn record_of(
         warnings: run.warnings.clone(),
         volume,
         extent: run.tiles.and_then(|t| t.extent),
+        subtiles: run.tiles.map_or(0, |t| t.tiles),
     }
 }
 
