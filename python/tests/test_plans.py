@@ -224,7 +224,8 @@ def test_the_dask_example_runs_on_two_worker_processes(tmp_path):
 def test_the_dask_example_checks_against_every_point_past_the_tiles(tmp_path):
     """The ARSO corner at 1 m cells: 200 points lie a few cm outside the plan's tiles and shape
     the first row's and column's triangles. The mosaic holds them (the tasks read a buffer); the
-    reference run must read them too (it read the tiles' box alone and said False, exit 1)."""
+    reference run must read them too (it read the tiles' box alone and said False, exit 1): one
+    run over every point, whose GeoTIFF the mosaic is (`merge` writes one run's extent)."""
     pytest.importorskip("dask.distributed") if os.environ.get("CI") not in ("true", "1") else None
     arso = data("lidar/arso_TM_511_122_sw_250m.laz")
     r = subprocess.run(
@@ -234,4 +235,4 @@ def test_the_dask_example_checks_against_every_point_past_the_tiles(tmp_path):
     )
     assert r.returncode == 0, r.stdout + r.stderr
     assert "mosaic 250 x 250 cells from 4 tiles" in r.stdout, r.stdout
-    assert "mosaic == single run over every point (the same cells): True" in r.stdout, r.stdout
+    assert "mosaic == single run (the same GeoTIFF bytes): True" in r.stdout, r.stdout
