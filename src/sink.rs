@@ -299,6 +299,13 @@ pub trait TriangleSink: Send {
     fn boundary_triangle(&mut self, _t: &[[f64; 3]; 3]) -> Result<()> {
         Ok(())
     }
+    /// Does this sink take [`TriangleSink::boundary_triangle`]s (a grid)? A task whose sinks
+    /// take none runs only the tiles of its plan tile that hold points (or line vertices): the
+    /// empty ones would only find triangles of other tasks, and their number grows with the
+    /// tile's area, not its points.
+    fn wants_boundary(&self) -> bool {
+        false
+    }
     /// Which triangles this sink needs, asked after [`TriangleSink::begin`]: a producer may
     /// leave out the others (a tiled run filters them in its workers), and tells the sink how
     /// many in [`TriangleSink::skipped`], which a sink that counts triangles must then implement.
@@ -584,6 +591,10 @@ impl TriangleSink for Fanout {
             s.boundary_triangle(t)?;
         }
         Ok(())
+    }
+
+    fn wants_boundary(&self) -> bool {
+        self.sinks.iter().any(|(_, s)| s.wants_boundary())
     }
 
     fn grid_cell(&self) -> Option<f64> {

@@ -40,10 +40,10 @@ fn dem_and_contours_of_a_plan_equal_one_run() {
     ]);
     sweeptin(&args, "plan");
     let plan = job.join("plan.json");
-    let (bbox, n) = plan_extent(&plan);
+    let (_, n) = plan_extent(&plan);
     assert!(n >= 6, "{n} tasks");
 
-    // One run over all the points, on the mosaic's extent.
+    // One run over all the points, on its own extent (the mosaic's: `merge --extent data`).
     let single = t.path().join("single.tif");
     let single_c = t.path().join("single.geojson");
     let mut one: Vec<&str> = vec!["dem"];
@@ -53,10 +53,6 @@ fn dem_and_contours_of_a_plan_equal_one_run() {
         "2",
         "--cell",
         "0.5",
-        "--bbox",
-        &bbox,
-        "--buffer",
-        "10000",
         "--contours",
         s(&single_c),
         "--interval",
@@ -604,7 +600,7 @@ fn tasks_of_a_copc_file_read_their_area_only() {
         "plan of a COPC file",
     );
     let plan = job.join("plan.json");
-    let (bbox, n) = plan_extent(&plan);
+    let (_, n) = plan_extent(&plan);
     assert!(n >= 9, "{n} tasks");
     sweeptin(
         &["run", s(&plan), "--all", "--jobs", "2", "--quiet"],
@@ -614,19 +610,7 @@ fn tasks_of_a_copc_file_read_their_area_only() {
     sweeptin(&["merge", s(&plan), "-o", s(&mosaic)], "merge");
     let single = t.path().join("single.tif");
     sweeptin(
-        &[
-            "dem",
-            s(&copc),
-            "--cell",
-            "1",
-            "--bbox",
-            &bbox,
-            "--buffer",
-            "10000",
-            "-o",
-            s(&single),
-            "--quiet",
-        ],
+        &["dem", s(&copc), "--cell", "1", "-o", s(&single), "--quiet"],
         "one run",
     );
     assert_eq!(cells(&mosaic), cells(&single), "mosaic == one run");
@@ -637,8 +621,8 @@ fn tasks_of_a_copc_file_read_their_area_only() {
     assert!(recs.iter().any(|r| r["runs"].as_u64().unwrap() > 1));
 }
 
-/// A plan over `files` with `--buffer 0` and 50 m tiles: its DEM mosaic equals one run over the
-/// plan's extent, cell for cell, and its merged TIN has the triangles of one `tin` run.
+/// A plan over `files` with `--buffer 0` and 50 m tiles: its DEM mosaic equals one run, header
+/// and cell for cell, and its merged TIN has the triangles of one `tin` run.
 fn plan_with_no_buffer_equals_one_run(dir: &Path, files: &[PathBuf]) {
     for product in ["dem", "tin"] {
         let job = dir.join(format!("job-{product}"));
@@ -650,7 +634,6 @@ fn plan_with_no_buffer_equals_one_run(dir: &Path, files: &[PathBuf]) {
         args.extend(["--tile", "50", "-o", s(&job)]);
         sweeptin(&args, "plan");
         let plan = job.join("plan.json");
-        let (bbox, _) = plan_extent(&plan);
         sweeptin(&["run", s(&plan), "--all", "-q"], "run --all");
         let ext = if product == "dem" { "tif" } else { "ply" };
         let (merged, single) = (dir.join(format!("m.{ext}")), dir.join(format!("one.{ext}")));
@@ -658,7 +641,7 @@ fn plan_with_no_buffer_equals_one_run(dir: &Path, files: &[PathBuf]) {
         let mut one: Vec<&str> = vec![product];
         one.extend(files.iter().map(|p| s(p)));
         if product == "dem" {
-            one.extend(["--cell", "1", "--bbox", &bbox, "--buffer", "10000"]);
+            one.extend(["--cell", "1"]);
         }
         one.extend(["-q", "-o", s(&single)]);
         sweeptin(&one, "single run");

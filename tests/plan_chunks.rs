@@ -39,23 +39,11 @@ fn plan_equals_one_run(input: &Path, t: &Path) -> Vec<serde_json::Value> {
         job.join("index/0.chunks").is_file(),
         "no chunk index written"
     );
-    let (bbox, n) = plan_extent(&plan);
+    let (_, n) = plan_extent(&plan);
     assert!(n >= 9, "{n} tasks");
     let single = t.join("single.tif");
     sweeptin(
-        &[
-            "dem",
-            s(input),
-            "--cell",
-            cell,
-            "--bbox",
-            &bbox,
-            "--buffer",
-            "10000",
-            "-o",
-            s(&single),
-            "-q",
-        ],
+        &["dem", s(input), "--cell", cell, "-o", s(&single), "-q"],
         "single run",
     );
     sweeptin(&["run", s(&plan), "--all", "-q"], "run --all");

@@ -176,7 +176,7 @@ fn dem_plan_with_3d_breaklines_and_a_hole_equals_one_sweep() {
         "no warning for the line beyond the files"
     );
     let p = t.path().join("job/plan.json");
-    let (bbox, n) = plan_extent(&p);
+    let (_, n) = plan_extent(&p);
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
     assert_eq!(v["version"], 3, "a plan with lines is version 3");
     let recorded = &v["job"]["lines"]["breaklines"][0];
@@ -207,10 +207,9 @@ fn dem_plan_with_3d_breaklines_and_a_hole_equals_one_sweep() {
         "--contours",
         &d("merged.geojson"),
     ]);
-    // One sweep (not tiles) over all the points, on the plan's extent.
+    // One sweep (not tiles) over all the points and lines, on its own extent (the mosaic's).
     let mut one = job.clone();
-    one.extend(["--engine", "sweep", "--buffer", "10000", "-q"].map(String::from));
-    one.extend(["--bbox".into(), bbox]);
+    one.extend(["--engine", "sweep", "-q"].map(String::from));
     one.extend(["--contours".into(), d("one.geojson")]);
     one.extend(["-o".into(), d("one.tif")]);
     cli::ok(&one);

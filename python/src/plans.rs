@@ -199,6 +199,8 @@ pub(crate) struct MergeOpts {
     compress: Option<String>,
     predictor: Option<String>,
     bigtiff: bool,
+    /// `"data"` (one run's grid) or `"tiles"`.
+    extent: String,
 }
 
 /// Joins the finished tasks of the plan `path`; returns the summary as JSON text.
@@ -214,6 +216,7 @@ pub(crate) fn merge(py: Python<'_>, path: PathBuf, opts: MergeOpts) -> PyResult<
             opts.predictor.as_deref(),
             opts.bigtiff,
         )?,
+        extent: opts.extent.parse().map_err(to_py)?,
     };
     crate::errors::detach_guarded(py, || -> sweeptin::Result<String> {
         let plan = Plan::load(&path)?;

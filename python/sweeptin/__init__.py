@@ -681,6 +681,7 @@ def merge(
     compress: str | None = None,
     predictor: str | None = None,
     bigtiff: bool = False,
+    extent: str = "data",
 ) -> dict[str, _typing.Any]:
     """``sweeptin merge``: joins the finished tasks: the DEM mosaic ``out`` (``.vrt`` over the
     tiles or one ``.tif``, a GeoTIFF or COG as the plan's ``format`` says unless ``format``,
@@ -690,9 +691,12 @@ def merge(
     (``.geojson``); the TIN ``out`` (``.ply``, ``.obj``, ``.xml`` or ``.stin``, each vertex
     once); or the summed volumes (no ``out``). Returns the summary
     (``dem``/``contours``/``hillshade``/``volume``/``tin``, ``tasks``, ``empty_tasks``,
-    ``max_buffer``)."""
+    ``max_buffer``, ``warnings``). The mosaic's cells are those one run writes
+    (``extent="data"``: the same header and cells as ``dem`` over the plan's files and filters),
+    or the whole tiles (``extent="tiles"``)."""
     opts = {
         "out": None if out is None else _os.fspath(out),
+        "extent": extent,
         "contours": None if contours is None else _os.fspath(contours),
         "hillshade": None if hillshade is None else _os.fspath(hillshade),
         **_raster(format, compress, predictor, bigtiff),

@@ -61,9 +61,17 @@ def test_a_python_plan_runs_anywhere_and_merges_to_one_run(ign, cli, tmp_path):
     cli("merge", plan.path, "-o", cli_mosaic, "--contours", tmp_path / "cli.geojson")
     assert py_mosaic.read_bytes() == cli_mosaic.read_bytes()
     assert contours.read_bytes() == (tmp_path / "cli.geojson").read_bytes()
+    # The mosaic is one run's file (its extent: the points kept); extent="tiles", the tiles'.
     single = tmp_path / "single.tif"
-    sweeptin.dem(ign, single, cell=0.5, bbox=extent(plan), classes=[2])
+    sweeptin.dem(ign, single, cell=0.5, classes=[2])
     assert py_mosaic.read_bytes() == single.read_bytes()
+    assert s["dem"]["extent"] == "data"
+    tiles, boxed = tmp_path / "tiles.tif", tmp_path / "boxed.tif"
+    assert sweeptin.merge(plan, tiles, extent="tiles")["dem"]["extent"] == "tiles"
+    sweeptin.dem(ign, boxed, cell=0.5, bbox=extent(plan), classes=[2])
+    assert tiles.read_bytes() == boxed.read_bytes()
+    with pytest.raises(sweeptin.OptionsError, match="extent"):
+        sweeptin.merge(plan, tmp_path / "x.tif", extent="everything")
 
 
 def test_a_centre_aligned_cog_plan_is_the_cli_plan(ign, cli, tmp_path):
@@ -89,8 +97,7 @@ def test_a_centre_aligned_cog_plan_is_the_cli_plan(ign, cli, tmp_path):
     cli("merge", plan.path, "-o", cli_mosaic)
     assert py_mosaic.read_bytes() == cli_mosaic.read_bytes()
     single = tmp_path / "single.tif"
-    sweeptin.dem(files, single, cell=0.5, align="centres", format="cog", bbox=extent(plan),
-                 classes=[2])
+    sweeptin.dem(files, single, cell=0.5, align="centres", format="cog", classes=[2])
     assert py_mosaic.read_bytes() == single.read_bytes()
     with pytest.raises(sweeptin.OptionsError, match="GeoTIFF"):
         sweeptin.merge(plan, tmp_path / "m.tif", format="asc")
@@ -217,7 +224,8 @@ def test_the_dask_example_runs_on_two_worker_processes(tmp_path):
 def test_the_dask_example_checks_against_every_point_past_the_tiles(tmp_path):
     """The ARSO corner at 1 m cells: 200 points lie a few cm outside the plan's tiles and shape
     the first row's and column's triangles. The mosaic holds them (the tasks read a buffer); the
-    reference run must read them too (it read the tiles' box alone and said False, exit 1)."""
+    reference run must read them too (it read the tiles' box alone and said False, exit 1): one
+    run over every point, whose GeoTIFF the mosaic is (`merge` writes one run's extent)."""
     pytest.importorskip("dask.distributed") if os.environ.get("CI") not in ("true", "1") else None
     arso = data("lidar/arso_TM_511_122_sw_250m.laz")
     r = subprocess.run(
@@ -227,4 +235,4 @@ def test_the_dask_example_checks_against_every_point_past_the_tiles(tmp_path):
     )
     assert r.returncode == 0, r.stdout + r.stderr
     assert "mosaic 250 x 250 cells from 4 tiles" in r.stdout, r.stdout
-    assert "mosaic == single run over every point (the same cells): True" in r.stdout, r.stdout
+    assert "mosaic == single run (the same GeoTIFF bytes): True" in r.stdout, r.stdout

@@ -105,6 +105,12 @@ pub struct MergeArgs {
     /// For a DEM plan: the mosaic's format (`tif`, `cog`) and compression (default: the plan's).
     #[command(flatten)]
     pub raster: super::products::RasterArgs,
+    /// For a DEM plan: the mosaic's cells. `data`: the grid one `sweeptin dem` run over the
+    /// plan's files and filters writes (every cell whose centre lies inside the points kept),
+    /// the same header and cells; `tiles`: the whole tiles of the plan (nodata beyond the data).
+    #[arg(long, value_name = "data|tiles", default_value = "data",
+          value_parser = |s: &str| s.parse::<merge::MosaicExtent>())]
+    pub extent: merge::MosaicExtent,
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
@@ -560,8 +566,12 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
         contours: args.contours.clone(),
         hillshade: args.hillshade.clone(),
         raster: args.raster.options(),
+        extent: args.extent,
     };
     let s = merge::merge_plan(&plan, &dir, &outputs)?;
+    for w in &s.warnings {
+        eprintln!("sweeptin: warning: {w}");
+    }
     if let (Some(h), Some(out)) = (&s.hillshade, &args.output) {
         super::hillshade::warn(out, &h.summary, true);
     }

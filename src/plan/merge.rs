@@ -75,49 +75,133 @@ pub struct DemMergeSummary {
     pub rows: u32,
     /// Tiles joined.
     pub tiles: u64,
+    /// The extent the mosaic covers: `"data"` (one run's grid) or `"tiles"`.
+    pub extent: MosaicExtent,
 }
 
-/// The mosaic's grid: the union of the tiles, on the plan's cell lattice.
+/// Which cells a DEM mosaic has.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MosaicExtent {
+    /// One run's grid: every cell whose centre lies inside the extent of the points kept
+    /// (and the lines' vertices), as `sweeptin dem` over the same files and filters writes it,
+    /// header and cells. Decided from the tasks' records ([`TaskRecord::extent`]).
+    #[default]
+    Data,
+    /// The whole tiles of the plan's grid (cells outside the data are nodata).
+    Tiles,
+}
+
+impl std::str::FromStr for MosaicExtent {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<MosaicExtent> {
+        match s {
+            "data" => Ok(MosaicExtent::Data),
+            "tiles" => Ok(MosaicExtent::Tiles),
+            _ => Err(Error::Options(format!(
+                "--extent {s}: give `data` (one run's grid, the default) or `tiles` (the whole \
+                 tiles)"
+            ))),
+        }
+    }
+}
+
+/// The mosaic's grid, on the plan's cell lattice: with [`MosaicExtent::Data`] the grid one run
+/// over the plan's files makes (every centre inside the union of the tasks' point extents and
+/// the lines' vertices, as [`GridPlan::grid`] decides for [`GridExtent::Auto`]); with
+/// [`MosaicExtent::Tiles`], or records of older builds without extents (with a warning), the
+/// union of the tiles. Returns the grid, the extent it covers, and the warning.
 fn mosaic_grid(
     plan: &Plan,
-    nodata: f32,
-    align: Align,
+    dir: &Path,
+    recs: &[TaskRecord],
+    options: &MosaicOptions,
     crs: Option<&Crs>,
-) -> Result<crate::raster::GridSpec> {
+) -> Result<(crate::raster::GridSpec, MosaicExtent, Option<String>)> {
     let cell = plan
         .cell
         .ok_or_else(|| Error::Options("the plan makes no DEM".into()))?;
-    let mut b = [
+    let union = |b: [f64; 4], t: [f64; 4]| {
+        [
+            b[0].min(t[0]),
+            b[1].min(t[1]),
+            b[2].max(t[2]),
+            b[3].max(t[3]),
+        ]
+    };
+    let none = [
         f64::INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::NEG_INFINITY,
     ];
-    for t in &plan.tiles {
-        b = [
-            b[0].min(t.bounds[0]),
-            b[1].min(t.bounds[1]),
-            b[2].max(t.bounds[2]),
-            b[3].max(t.bounds[3]),
-        ];
-    }
-    let mut g = GridPlan::new(
-        cell,
-        GridExtent::BBox {
-            bbox: b,
-            snap: false,
-        },
-        align,
-    )?
-    .grid(b, nodata)?;
+    let tiles = || plan.tiles.iter().fold(none, |b, t| union(b, t.bounds));
+    // A finished task that read points and recorded no extent: a record of an older build.
+    let old = recs
+        .iter()
+        .filter(|r| r.status == "done" && r.extent.is_none())
+        .count();
+    let (extent, warning) = match options.extent {
+        MosaicExtent::Data if old > 0 => (
+            MosaicExtent::Tiles,
+            Some(format!(
+                "{old} of {} task records were written by an older sweeptin and hold no extent \
+                 of their points: the mosaic covers the whole tiles ({} of one run's grid); run \
+                 the tasks again (`sweeptin run {} --all`) for one run's extent",
+                recs.len(),
+                "a superset",
+                dir.join("plan.json").display()
+            )),
+        ),
+        e => (e, None),
+    };
+    let mut g = match extent {
+        MosaicExtent::Tiles => {
+            let b = tiles();
+            GridPlan::new(
+                cell,
+                GridExtent::BBox {
+                    bbox: b,
+                    snap: false,
+                },
+                options.align,
+            )?
+            .grid(b, options.nodata)?
+        }
+        MosaicExtent::Data => {
+            let mut b = recs.iter().filter_map(|r| r.extent).fold(none, union);
+            // One run adds the lines' vertices to the points' extent (the sweep's bounds).
+            if let Some(l) = &plan.job.lines {
+                for v in l.graph()?.vertices {
+                    let (x, y) = (v[0] + 0.0, v[1] + 0.0);
+                    b = union(b, [x, y, x, y]);
+                }
+            }
+            GridPlan::new(cell, GridExtent::Auto, options.align)?.grid(b, options.nodata)?
+        }
+    };
     g.crs = crs.cloned();
-    Ok(g)
+    Ok((g, extent, warning))
+}
+
+/// Where a tile lies in a mosaic: the first column and row of the mosaic it covers, the first
+/// column and row of the tile that fall inside, and how many (`cols`, `rows`: 0 for a tile
+/// wholly outside the mosaic, whose cells are all nodata).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Placed {
+    col: u32,
+    row: u32,
+    src_col: u32,
+    src_row: u32,
+    cols: u32,
+    rows: u32,
 }
 
 /// Opens the DEM tile of task `i` (`path`, of the plan in `dir`) and finds where it sits in the
-/// mosaic `g` (its first column and row): its header must read, and place it on the mosaic's
-/// cells, inside it. Checked for the VRT as for the `.tif` (a VRT over a damaged tile was
-/// written with exit 0, and GDAL failed on it later).
+/// mosaic `g`: its header must read, and place it on the mosaic's cells (a whole number of
+/// cells from its origin); with `whole`, wholly inside it (the mosaic of the tiles). Checked
+/// for the VRT as for the `.tif` (a VRT over a damaged tile was written with exit 0, and GDAL
+/// failed on it later).
 ///
 /// # Errors
 /// [`Error::Format`] naming the tile and the task to run again.
@@ -126,7 +210,8 @@ fn open_tile(
     dir: &Path,
     i: usize,
     path: &Path,
-) -> Result<(RasterReader, u32, u32)> {
+    whole: bool,
+) -> Result<(RasterReader, Placed)> {
     let bad = |what: String| Error::Format {
         path: path.to_path_buf(),
         message: format!(
@@ -143,17 +228,18 @@ fn open_tile(
     let col = (t[0] - o[0]) / g.cell;
     let row = (o[1] - t[3]) / g.cell;
     let same = |c: f64| (c - g.cell).abs() <= 1e-9 * g.cell;
-    let whole = |k: f64, n: u32, of: u32| {
-        (k - k.round()).abs() <= 1e-6
-            && k.round() >= 0.0
-            && k.round() + f64::from(n) <= f64::from(of)
+    let lattice = |k: f64| (k - k.round()).abs() <= 1e-6 && k.round().abs() < 1e9;
+    let inside = |k: f64, n: u32, of: u32| {
+        !whole || (k.round() >= 0.0 && k.round() + f64::from(n) <= f64::from(of))
     };
     let fits = same(t[1])
         && same(-t[5])
         && t[2] == 0.0
         && t[4] == 0.0
-        && whole(col, spec.cols, g.cols)
-        && whole(row, spec.rows, g.rows);
+        && lattice(col)
+        && lattice(row)
+        && inside(col, spec.cols, g.cols)
+        && inside(row, spec.rows, g.rows);
     if !fits {
         return Err(bad(format!(
             "is not a tile of this plan's mosaic: its header says {} × {} cells of {} from \
@@ -161,7 +247,27 @@ fn open_tile(
             spec.cols, spec.rows, t[1], t[0], t[3], g.cols, g.rows, g.cell, o[0], o[1]
         )));
     }
-    Ok((r, col.round() as u32, row.round() as u32))
+    // The overlap of the tile's cells [k, k + n) with the mosaic's [0, of), on one axis.
+    let span = |k: i64, n: u32, of: u32| -> (u32, u32, u32) {
+        let lo = k.max(0);
+        let hi = (k + i64::from(n)).min(i64::from(of));
+        if hi <= lo {
+            return (0, 0, 0);
+        }
+        (lo as u32, (lo - k) as u32, (hi - lo) as u32)
+    };
+    let (c0, sc, nc) = span(col.round() as i64, spec.cols, g.cols);
+    let (r0, sr, nr) = span(row.round() as i64, spec.rows, g.rows);
+    let empty = nc == 0 || nr == 0;
+    let placed = Placed {
+        col: c0,
+        row: r0,
+        src_col: sc,
+        src_row: sr,
+        cols: if empty { 0 } else { nc },
+        rows: if empty { 0 } else { nr },
+    };
+    Ok((r, placed))
 }
 
 /// How a DEM mosaic is written.
@@ -173,10 +279,14 @@ pub struct MosaicOptions {
     pub align: Align,
     /// Format (a `.vrt` extension writes a VRT), compression, predictor, BigTIFF.
     pub output: RasterOptions,
+    /// The cells the mosaic has: one run's (the default) or the whole tiles'.
+    pub extent: MosaicExtent,
 }
 
 /// Joins the DEM tiles into `out`: a GDAL VRT (`.vrt`) over the tile GeoTIFFs, or one GeoTIFF
-/// or COG (`.tif`) written tile by tile into the writer's stage, in bounded memory.
+/// or COG (`.tif`) written tile by tile into the writer's stage, in bounded memory. Its grid is
+/// one run's ([`MosaicExtent::Data`]) or the tiles' ([`mosaic_grid`]); a warning, if any, says
+/// why it is not the one asked for.
 ///
 /// # Errors
 /// Reading the tiles or writing; [`Error::Options`] for unfinished tasks or an unknown extension.
@@ -186,17 +296,18 @@ pub fn merge_dem(
     out: &Path,
     options: &MosaicOptions,
     crs: Option<&Crs>,
-) -> Result<DemMergeSummary> {
+) -> Result<(DemMergeSummary, Option<String>)> {
     let recs = records(plan, dir)?;
     let tiles = outputs(&recs, "dem")?;
     let nodata = options.nodata;
-    let g = mosaic_grid(plan, nodata, options.align, crs)?;
+    let (g, extent, warning) = mosaic_grid(plan, dir, &recs, options, crs)?;
+    let whole = extent == MosaicExtent::Tiles;
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     if ext.as_deref() == Some("vrt") && options.output.format.is_none() {
-        write_vrt(&g, dir, &tiles, out)?;
+        write_vrt(&g, dir, &tiles, out, whole)?;
     } else {
         let mut o = options.output;
         if o.format.is_none() {
@@ -204,32 +315,33 @@ pub fn merge_dem(
         }
         let mut w = create_grid_writer(out, &o, &g)?;
         for &(i, path) in &tiles {
-            let (mut r, c0, r0) = open_tile(&g, dir, i, path)?;
-            let spec = r.spec().clone();
-            let rows_at_once = (1 << 20) / spec.cols.max(1);
+            let (mut r, at) = open_tile(&g, dir, i, path, whole)?;
+            let rows_at_once = (1 << 20) / at.cols.max(1);
             let mut row = 0;
-            while row < spec.rows {
-                let n = rows_at_once.clamp(1, spec.rows - row);
-                let v = r.read_window(0, row, spec.cols, n)?;
+            while row < at.rows {
+                let n = rows_at_once.clamp(1, at.rows - row);
+                let v = r.read_window(at.src_col, at.src_row + row, at.cols, n)?;
                 for k in 0..n {
-                    let a = (k * spec.cols) as usize;
-                    let vals: Vec<f32> = v[a..a + spec.cols as usize]
+                    let a = (k * at.cols) as usize;
+                    let vals: Vec<f32> = v[a..a + at.cols as usize]
                         .iter()
                         .map(|&x| if x.is_nan() { nodata } else { x as f32 })
                         .collect();
-                    w.write_span(r0 + row + k, c0, &vals)?;
+                    w.write_span(at.row + row + k, at.col, &vals)?;
                 }
                 row += n;
             }
         }
         w.finish()?;
     }
-    Ok(DemMergeSummary {
+    let summary = DemMergeSummary {
         path: out.to_path_buf(),
         cols: g.cols,
         rows: g.rows,
         tiles: tiles.len() as u64,
-    })
+        extent,
+    };
+    Ok((summary, warning))
 }
 
 fn write_vrt(
@@ -237,6 +349,7 @@ fn write_vrt(
     dir: &Path,
     tiles: &[(usize, &Path)],
     out: &Path,
+    whole: bool,
 ) -> Result<()> {
     use std::fmt::Write as _;
     let o = g.origin();
@@ -257,8 +370,11 @@ fn write_vrt(
     let _ = writeln!(x, "  <VRTRasterBand dataType=\"Float32\" band=\"1\">");
     let _ = writeln!(x, "    <NoDataValue>{:?}</NoDataValue>", g.nodata);
     for &(i, path) in tiles {
-        let (r, c0, r0) = open_tile(g, dir, i, path)?;
-        let spec = r.spec();
+        let (_, at) = open_tile(g, dir, i, path, whole)?;
+        if at.cols == 0 {
+            // Wholly outside one run's grid: nodata there.
+            continue;
+        }
         let abs = std::fs::canonicalize(path).map_err(|e| Error::io(path, e))?;
         let _ = writeln!(x, "    <SimpleSource>");
         let _ = writeln!(
@@ -269,10 +385,14 @@ fn write_vrt(
         let _ = writeln!(x, "      <SourceBand>1</SourceBand>");
         let _ = writeln!(
             x,
-            "      <SrcRect xOff=\"0\" yOff=\"0\" xSize=\"{c}\" ySize=\"{r}\"/>\n      \
+            "      <SrcRect xOff=\"{sc}\" yOff=\"{sr}\" xSize=\"{c}\" ySize=\"{r}\"/>\n      \
              <DstRect xOff=\"{c0}\" yOff=\"{r0}\" xSize=\"{c}\" ySize=\"{r}\"/>",
-            c = spec.cols,
-            r = spec.rows
+            sc = at.src_col,
+            sr = at.src_row,
+            c0 = at.col,
+            r0 = at.row,
+            c = at.cols,
+            r = at.rows
         );
         let _ = writeln!(x, "    </SimpleSource>");
     }
@@ -359,6 +479,8 @@ pub struct MergeOutputs {
     pub hillshade: Option<PathBuf>,
     /// The `.tif` mosaic's format (GeoTIFF or COG) and compression; all left out: the plan's.
     pub raster: RasterOptions,
+    /// The DEM mosaic's cells: one run's grid (the default) or the whole tiles.
+    pub extent: MosaicExtent,
 }
 
 /// A hillshade written by [`merge_plan`].
@@ -395,6 +517,10 @@ pub struct MergeSummary {
     pub empty_tasks: usize,
     /// The widest buffer a task needed.
     pub max_buffer: f64,
+    /// What the merge warns of (a mosaic of the tiles where one run's grid was asked for, from
+    /// records of an older build); the command line prints them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// The lower-case extension of `p`.
@@ -448,7 +574,12 @@ fn planned(plan: &Plan, name: &str) -> Option<PathBuf> {
 /// # Errors
 /// [`Error::Options`] for a mosaic that is neither `.vrt` nor `.tif`, an ESRI ASCII format, or
 /// raster options given for a `.vrt`.
-fn mosaic_options(plan: &Plan, out: &Path, given: &RasterOptions) -> Result<MosaicOptions> {
+fn mosaic_options(
+    plan: &Plan,
+    out: &Path,
+    given: &RasterOptions,
+    given_extent: MosaicExtent,
+) -> Result<MosaicOptions> {
     let super::Product::Dem {
         align,
         nodata,
@@ -484,6 +615,7 @@ fn mosaic_options(plan: &Plan, out: &Path, given: &RasterOptions) -> Result<Mosa
         nodata: *nodata,
         align: *align,
         output,
+        extent: given_extent,
     })
 }
 
@@ -548,7 +680,7 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     }
     let mosaic = if dem {
         let out = need(out, "mosaic (OUT.vrt or OUT.tif)")?;
-        let m = mosaic_options(plan, out, &o.raster)?;
+        let m = mosaic_options(plan, out, &o.raster, o.extent)?;
         if hillshade.is_some() && extension(out).as_deref() == Some("vrt") {
             return Err(Error::Options(
                 "--hillshade shades a GeoTIFF mosaic: merge with -o OUT.tif".into(),
@@ -559,6 +691,11 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
         if hillshade.is_some() {
             return Err(Error::Options(
                 "--hillshade shades a DEM plan's mosaic".into(),
+            ));
+        }
+        if o.extent != MosaicExtent::default() {
+            return Err(Error::Options(
+                "--extent applies to a DEM plan's mosaic".into(),
             ));
         }
         if o.raster != RasterOptions::default() {
@@ -593,7 +730,9 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
                 return Err(Error::Internal("a DEM plan without its mosaic".into()));
             };
             let crs = plan_crs(plan)?;
-            summary.dem = Some(merge_dem(plan, dir, out, &m, crs.as_ref())?);
+            let (dem, warning) = merge_dem(plan, dir, out, &m, crs.as_ref())?;
+            summary.dem = Some(dem);
+            summary.warnings.extend(warning);
             if let (Some(c), Some(_)) = (&contours, levels) {
                 summary.contours = Some(merge_contours(plan, dir, c, crs.as_ref())?);
             }

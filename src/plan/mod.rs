@@ -201,6 +201,17 @@ pub struct TaskRecord {
     /// Exact volume partial sums (cut, fill, cut area, fill area, area), for `volume`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub volume: Option<[Vec<f64>; 5]>,
+    /// The extent `[xmin, ymin, xmax, ymax]` of the points the task read after the filters
+    /// (its tile, buffer and beyond): their union over the tasks is the extent of the points
+    /// one run keeps, from which `merge` decides one run's DEM grid
+    /// ([`merge::MosaicExtent::Data`]). `None` for a task that read no point, and in records of
+    /// older builds (the mosaic then covers the tiles, with a warning).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extent: Option<[f64; 4]>,
+    /// Tiles of the tiled engine the task ran (its last run): those holding points, or for a
+    /// DEM every one of its plan tile (their cells may lie under other tasks' triangles).
+    #[serde(default)]
+    pub subtiles: u64,
 }
 
 /// Most tiles a plan may cut its data into (each a task, listed in `plan.json`): 262,144, a

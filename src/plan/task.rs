@@ -734,6 +734,8 @@ fn record_of(
         plan: String::new(),
         warnings: run.warnings.clone(),
         volume,
+        extent: run.tiles.and_then(|t| t.extent),
+        subtiles: run.tiles.map_or(0, |t| t.tiles),
     }
 }
 

@@ -403,6 +403,10 @@ impl TriangleSink for DemSink {
         self.triangle(t)
     }
 
+    fn wants_boundary(&self) -> bool {
+        true
+    }
+
     fn needs(&self) -> Needs {
         match &self.raster {
             Some(r) => Needs::Only(vec![Arc::new(Centres(r.spec.clone()))]),

@@ -119,6 +119,11 @@ pub struct TileStats {
     pub window: u64,
     /// CPU time by stage.
     pub cpu: TileCpu,
+    /// The extent `[xmin, ymin, xmax, ymax]` of the points read (after the filters): a DEM's
+    /// grid over the data is decided from it ([`crate::raster::GridExtent::Auto`]), and a
+    /// plan's merge decides one run's grid from its tasks' ([`crate::plan::TaskRecord::extent`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extent: Option<[f64; 4]>,
 }
 
 /// CPU seconds by stage of a tiled run (Linux; zeros elsewhere). Reading is the whole
@@ -316,8 +321,12 @@ pub(crate) fn run(
                 .collect()
         })
         .unwrap_or_default();
-    // A task runs every tile of its plan tile, with points or not: triangles of other tasks may
-    // cover its empty parts, and its cells need them.
+    // A task whose products include a grid runs every tile of its plan tile, with points or
+    // not: triangles of other tasks may cover its empty parts, and its cells need them. Other
+    // products (a TIN's pieces, contours, volumes) are owned by points: only the tiles with
+    // points run, so a task's cost follows its points, not its area (`plan tin --tile 1e6`
+    // visited 16 million empty tiles).
+    let covers = options.scope.is_some() && sinks.iter().any(|s| s.wants_boundary());
     let tiles_rect = match &options.scope {
         None => g.tiles_of(&index.occupied()),
         Some(sc) => {
@@ -361,10 +370,22 @@ pub(crate) fn run(
             y1: r.y1 * n,
         }
     });
-    let order: Vec<(i64, i64)> = (tiles_rect.y0..tiles_rect.y1)
-        .flat_map(|ty| (tiles_rect.x0..tiles_rect.x1).map(move |tx| (tx, ty)))
+    // The tiles looked at: without covering or lines, only those of the occupied blocks.
+    let walk = if covers || !line_tiles.is_empty() {
+        tiles_rect
+    } else {
+        let o = g.tiles_of(&index.occupied());
+        grid::BlockRect {
+            x0: tiles_rect.x0.max(o.x0),
+            y0: tiles_rect.y0.max(o.y0),
+            x1: tiles_rect.x1.min(o.x1),
+            y1: tiles_rect.y1.min(o.y1),
+        }
+    };
+    let order: Vec<(i64, i64)> = (walk.y0..walk.y1.max(walk.y0))
+        .flat_map(|ty| (walk.x0..walk.x1.max(walk.x0)).map(move |tx| (tx, ty)))
         .filter(|&(tx, ty)| {
-            options.scope.is_some()
+            covers
                 || index.count(&g.tile_blocks(tx, ty)) > 0
                 || line_tiles.contains(&(tx, ty))
         })
@@ -407,6 +428,7 @@ pub(crate) fn run(
         threads: threads as u64,
         points_decoded: declared.decoded,
         cpu,
+        extent: Some(bounds).filter(|b| b.iter().all(|v| v.is_finite())),
         ..TileStats::default()
     };
     let (mut read, mut kept) = (0u64, 0u64);
