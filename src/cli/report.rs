@@ -8,8 +8,10 @@ use sweeptin::plan::report::{report, write_html};
 
 /// Arguments of `sweeptin report`.
 #[derive(clap::Args, Debug)]
-#[command(after_help = "Example:\n  sweeptin report job/plan.json -o night.html\n  \
-                        sweeptin report job/plan.json --json")]
+#[command(
+    after_help = "Example:\n  sweeptin report job/plan.json -o night.html\n  \
+                        sweeptin report job/plan.json --json"
+)]
 pub struct Args {
     /// The plan (DIR/plan.json) whose tasks to report.
     #[arg(value_name = "PLAN")]

@@ -93,7 +93,9 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
                             let _ = plan.record_failure(
                                 dir,
                                 i,
-                                &format!("killed by signal {sig} (9: often the out-of-memory killer)"),
+                                &format!(
+                                    "killed by signal {sig} (9: often the out-of-memory killer)"
+                                ),
                                 0.0,
                             );
                         }

@@ -438,7 +438,25 @@ pub fn write_html(r: &Report, dir: &Path, out: &Path) -> Result<()> {
             out.display()
         )));
     }
-    write_atomic(out, html(r).as_bytes())
+    if let Ok(m) = std::fs::symlink_metadata(out)
+        && !m.file_type().is_file()
+    {
+        return Err(Error::Options(format!(
+            "the report {}: {} is there; the report replaces only a regular file (give              another name)",
+            out.display(),
+            if m.file_type().is_symlink() {
+                "a symbolic link"
+            } else {
+                "not a regular file"
+            }
+        )));
+    }
+    use std::io::Write as _;
+    let mut f = crate::output::AtomicFile::create(out)?;
+    f.write_all(html(r).as_bytes())
+        .map_err(|e| Error::write(out, e))?;
+    f.commit()?;
+    Ok(())
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {
