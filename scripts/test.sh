@@ -7,11 +7,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# Debian packages (as root only): GDAL's tools and parallel for the interop tests, and the venv
-# module, which Debian's python3 leaves out.
+# Debian packages (as root only): GDAL's tools and parallel for the interop tests, Chromium for
+# the report's browser test (tests/plan_report.rs), and the venv module, which Debian's python3
+# leaves out.
 missing=()
 command -v gdalinfo >/dev/null 2>&1 || missing+=(gdal-bin)
 command -v parallel >/dev/null 2>&1 || missing+=(parallel)
+command -v chromium >/dev/null 2>&1 || missing+=(chromium)
 python3 -c 'import ensurepip, venv' 2>/dev/null || missing+=(python3-venv)
 if [ ${#missing[@]} -gt 0 ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
     (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" \
