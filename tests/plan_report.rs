@@ -54,7 +54,7 @@ fn night(job: &Path) -> (PathBuf, usize) {
     (plan, n)
 }
 
-fn rect_of<'a>(html: &'a str, i: usize) -> &'a str {
+fn rect_of(html: &str, i: usize) -> &str {
     let at = html
         .find(&format!("data-task=\"{i}\""))
         .unwrap_or_else(|| panic!("no rect for task {i}"));

@@ -394,20 +394,15 @@ impl Plan {
         let start = std::time::Instant::now();
         self.task(i)?;
         self.forget_failure(dir, i);
-        let r = self.try_task(dir, i, options, start);
+        let r = self.try_task(dir, i, options);
         if let Err(e) = &r {
             let _ = self.record_failure(dir, i, &e.to_string(), start.elapsed().as_secs_f64());
         }
         r
     }
 
-    fn try_task(
-        &self,
-        dir: &Path,
-        i: usize,
-        options: &TaskOptions,
-        start: std::time::Instant,
-    ) -> Result<TaskRecord> {
+    fn try_task(&self, dir: &Path, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
+        let start = std::time::Instant::now();
         super::files::tiles_dir(dir)?;
         // Not finished until it finishes now: a run that fails leaves no record of an earlier
         // one for `--resume` or `merge` to take (they mixed old tiles with new ones).
