@@ -231,3 +231,44 @@ fn report_renders_the_tile_states_in_headless_chromium() {
         assert!(count(rgb) > 400, "no {state} tile in the screenshot");
     }
 }
+
+/// A task killed by a signal (the out-of-memory killer's SIGKILL) wrote nothing: the report took
+/// it for one not run. `run --all` records the signal, and the report shows it as failed.
+#[test]
+fn report_names_a_task_killed_by_a_signal_as_failed() {
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("job");
+    sweeptin(
+        &[
+            "plan",
+            "dem",
+            s(&sample()),
+            "--cell",
+            "1",
+            "--tile",
+            "32",
+            "-q",
+            "-o",
+            s(&job),
+        ],
+        "plan",
+    );
+    let plan = job.join("plan.json");
+    let o = bin()
+        .args(["run", s(&plan), "--all", "-q"])
+        .env("SWEEPTIN_TEST_KILL_TASK", "1")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(4));
+    let o = sweeptin(&["report", s(&plan), "--json"], "report");
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        (j["failed"].as_u64(), j["not_run"].as_u64()),
+        (Some(1), Some(0))
+    );
+    let task = &j["task_list"][1];
+    assert_eq!(task["state"], "failed");
+    let m = task["message"].as_str().unwrap();
+    assert!(m.contains("killed by SIGKILL (signal 9"), "{m}");
+    assert_eq!(task["rerun"], format!("sweeptin run {} --task 1", s(&plan)));
+}

@@ -93,9 +93,7 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
                             let _ = plan.record_failure(
                                 dir,
                                 i,
-                                &format!(
-                                    "killed by signal {sig} (9: often the out-of-memory killer)"
-                                ),
+                                &sweeptin::error::task_killed(i, sig),
                                 0.0,
                             );
                         }
