@@ -8,13 +8,14 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # Debian packages (as root only): GDAL's tools and parallel for the interop tests, nginx for the
-# remote ones, and the venv
+# remote ones, Chromium for the report's browser test (tests/plan_report.rs), and the venv
 # module, which Debian's python3 leaves out.
 missing=()
 command -v gdalinfo >/dev/null 2>&1 || missing+=(gdal-bin)
 command -v parallel >/dev/null 2>&1 || missing+=(parallel)
 # nginx serves the remote-input tests' files (tests/remote.rs).
 command -v nginx >/dev/null 2>&1 || [ -x /usr/sbin/nginx ] || missing+=(nginx)
+command -v chromium >/dev/null 2>&1 || missing+=(chromium)
 python3 -c 'import ensurepip, venv' 2>/dev/null || missing+=(python3-venv)
 if [ ${#missing[@]} -gt 0 ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
     (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" \

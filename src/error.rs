@@ -295,40 +295,42 @@ impl ErrorKind {
 
 /// `"; task 3 was killed by SIGKILL (…)"` for each task in `killed` (task, signal).
 fn killed_by(killed: &[(usize, i32)]) -> String {
-    let mut out = String::new();
-    for &(task, signal) in killed {
-        let name = match signal {
-            1 => "SIGHUP",
-            2 => "SIGINT",
-            3 => "SIGQUIT",
-            4 => "SIGILL",
-            5 => "SIGTRAP",
-            6 => "SIGABRT",
-            7 => "SIGBUS",
-            8 => "SIGFPE",
-            9 => "SIGKILL",
-            11 => "SIGSEGV",
-            13 => "SIGPIPE",
-            15 => "SIGTERM",
-            24 => "SIGXCPU",
-            25 => "SIGXFSZ",
-            31 => "SIGSYS",
-            _ => "a signal",
-        };
-        let why = match (signal, ErrorKind::from_signal(signal)) {
-            (9, _) => {
-                "the out-of-memory killer or a job's memory or time limit sends it: run fewer \
-                 --jobs at once, or plan smaller tiles"
-            }
-            (_, ErrorKind::Internal) => "a crash: a bug in sweeptin, please report it",
-            _ => "sent from outside",
-        };
-        let _ = std::fmt::Write::write_fmt(
-            &mut out,
-            format_args!("; task {task} was killed by {name} (signal {signal}; {why})"),
-        );
-    }
-    out
+    killed
+        .iter()
+        .map(|&(task, signal)| format!("; {}", task_killed(task, signal)))
+        .collect()
+}
+
+/// `"task 3 was killed by SIGKILL (signal 9; …what sends it…)"`: how `run --all` names a task
+/// killed by `signal`, in its error and in the task's failure record.
+pub fn task_killed(task: usize, signal: i32) -> String {
+    let name = match signal {
+        1 => "SIGHUP",
+        2 => "SIGINT",
+        3 => "SIGQUIT",
+        4 => "SIGILL",
+        5 => "SIGTRAP",
+        6 => "SIGABRT",
+        7 => "SIGBUS",
+        8 => "SIGFPE",
+        9 => "SIGKILL",
+        11 => "SIGSEGV",
+        13 => "SIGPIPE",
+        15 => "SIGTERM",
+        24 => "SIGXCPU",
+        25 => "SIGXFSZ",
+        31 => "SIGSYS",
+        _ => "a signal",
+    };
+    let why = match (signal, ErrorKind::from_signal(signal)) {
+        (9, _) => {
+            "the out-of-memory killer or a job's memory or time limit sends it: run fewer \
+             --jobs at once, or plan smaller tiles"
+        }
+        (_, ErrorKind::Internal) => "a crash: a bug in sweeptin, please report it",
+        _ => "sent from outside",
+    };
+    format!("task {task} was killed by {name} (signal {signal}; {why})")
 }
 
 /// The files' names, comma-separated.

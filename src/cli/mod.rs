@@ -21,6 +21,7 @@ mod plan;
 mod products;
 mod profile;
 mod refine;
+mod report;
 mod run_all;
 mod sample;
 mod simplify;
@@ -90,6 +91,9 @@ enum Command {
     /// Join the finished tasks of a plan into one result: a VRT or GeoTIFF mosaic, stitched
     /// contours, summed volumes.
     Merge(plan::MergeArgs),
+    /// The report of a plan's night: a static HTML page (an SVG map of the tiles coloured by
+    /// state, the failed tasks with their messages and re-run commands, totals) or --json.
+    Report(report::Args),
     /// Write a virtual point cloud (.vpc) listing LAS/LAZ/COPC files with their extents, counts
     /// and CRS (headers only), for QGIS, PDAL wrench, lasR and sweeptin's own box reads.
     Index(index::Args),
@@ -126,6 +130,7 @@ impl Command {
             Command::Simplify(a) => a.json,
             Command::Run(a) => a.json,
             Command::Merge(a) => a.json,
+            Command::Report(a) => a.json,
             Command::Check(_) | Command::Hillshade(_) | Command::Plan(_) => false,
         }
     }
@@ -334,6 +339,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         Command::Plan(a) => plan::plan(a),
         Command::Run(a) => plan::run(a),
         Command::Merge(a) => plan::merge(a),
+        Command::Report(a) => report::run(a),
         Command::Index(a) => index::run(a),
         Command::Thin(a) => thin::run(a),
         Command::Ground(a) => ground::run(a),

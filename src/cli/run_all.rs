@@ -86,7 +86,17 @@ pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
                     // printed when 3 had failed).
                     let mut f = failed.lock().unwrap_or_else(|e| e.into_inner());
                     if !ok {
-                        f.push((i, ended(status.ok())));
+                        let how = ended(status.ok());
+                        f.push((i, how));
+                        // A killed task records nothing itself: the report names the signal.
+                        if let Ended::Signal(sig) = how {
+                            let _ = plan.record_failure(
+                                dir,
+                                i,
+                                &sweeptin::error::task_killed(i, sig),
+                                0.0,
+                            );
+                        }
                     }
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     let task_points = match plan.record(dir, i) {

@@ -29,6 +29,7 @@ mod files;
 mod lines;
 pub mod merge;
 pub mod mesh;
+pub mod report;
 mod stitch;
 mod task;
 
@@ -183,6 +184,10 @@ pub struct TaskRecord {
     pub triangles: u64,
     /// Seconds.
     pub seconds: f64,
+    /// Peak resident memory of the task's process when it finished (VmHWM), in bytes, when
+    /// the system reports it. `None` in records of older builds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_memory: Option<u64>,
     /// The task's outputs, by product name.
     pub outputs: Vec<(String, PathBuf)>,
     /// The [`Plan::id`] of the plan the task ran under: a record of another plan (made into

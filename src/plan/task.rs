@@ -389,9 +389,20 @@ impl Plan {
     ///
     /// # Errors
     /// [`Error::Options`] for a task that does not exist; the pipeline's and the sinks' errors.
+    /// A task that fails records why (`tiles/task_<i>.failed.json`, [`super::report`]).
     pub fn run_task(&self, dir: &Path, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
         let start = std::time::Instant::now();
         self.task(i)?;
+        self.forget_failure(dir, i);
+        let r = self.try_task(dir, i, options);
+        if let Err(e) = &r {
+            let _ = self.record_failure(dir, i, &e.to_string(), start.elapsed().as_secs_f64());
+        }
+        r
+    }
+
+    fn try_task(&self, dir: &Path, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
+        let start = std::time::Instant::now();
         super::files::tiles_dir(dir)?;
         // Not finished until it finishes now: a run that fails leaves no record of an earlier
         // one for `--resume` or `merge` to take (they mixed old tiles with new ones).
@@ -457,6 +468,7 @@ impl Plan {
             }
         };
         record.seconds = start.elapsed().as_secs_f64();
+        record.peak_memory = crate::limits::peak_rss();
         record.plan = self.id().to_string();
         record.bytes = record
             .outputs
@@ -729,6 +741,7 @@ fn record_of(
         decoded: run.tiles.map_or(0, |t| t.points_decoded),
         triangles: run.triangles,
         seconds: 0.0,
+        peak_memory: None,
         outputs,
         bytes: Vec::new(),
         plan: String::new(),
