@@ -1,5 +1,6 @@
 //! `--ground`: the ground found on the fly. The inputs' points are classified by the ground
-//! filter ([`crate::ground::classify_files`], into a [`ClassStore`], no point written), and the
+//! filter ([`crate::ground::classify_files`], into a [`crate::ground::ClassStore`], no point
+//! written), and the
 //! run then reads every point with the class `sweeptin ground` would write for it
 //! ([`crate::input::las::Filter::classes_from`]), keeping class 2 unless `--class` says
 //! otherwise. So `dem raw.laz --ground` triangulates exactly the points of `ground raw.laz -o

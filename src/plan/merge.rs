@@ -285,7 +285,7 @@ pub struct MosaicOptions {
 
 /// Joins the DEM tiles into `out`: a GDAL VRT (`.vrt`) over the tile GeoTIFFs, or one GeoTIFF
 /// or COG (`.tif`) written tile by tile into the writer's stage, in bounded memory. Its grid is
-/// one run's ([`MosaicExtent::Data`]) or the tiles' ([`mosaic_grid`]); a warning, if any, says
+/// one run's ([`MosaicExtent::Data`]) or the whole tiles'; a warning, if any, says
 /// why it is not the one asked for.
 ///
 /// # Errors

@@ -21,6 +21,7 @@
 
 mod area;
 mod chunks;
+mod engine;
 use area::{
     centres_within, fitting_tile, grown, meets_hull, overlaps, tile_bounds, tile_count,
     whole_multiple,
@@ -33,9 +34,10 @@ pub mod report;
 mod stitch;
 mod task;
 
+pub use engine::task_from_env;
 pub use files::FileStamp;
 pub use lines::{LineFile, PlanLines};
-pub use task::{Job, Levels, Product, TaskOptions, task_from_env};
+pub use task::{Job, Levels, Product, TaskOptions};
 
 use crate::error::{Error, Result};
 use crate::input::las::FileInfo;
