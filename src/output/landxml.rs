@@ -184,7 +184,7 @@ fn prologue(surface: &str, meta: &MeshMeta, (date, time): (String, String)) -> S
     } else if let Some(crs) = &meta.crs {
         s.push_str(&format!(
             "<CoordinateSystem ogcWktCode=\"{}\"/>\n",
-            xml_escape(&one_line(crs))
+            super::escape_markup(&one_line(crs))
         ));
     }
     s.push_str(&format!(
@@ -193,26 +193,9 @@ fn prologue(surface: &str, meta: &MeshMeta, (date, time): (String, String)) -> S
     ));
     s.push_str(&format!(
         "<Surfaces>\n<Surface name=\"{}\">\n<Definition surfType=\"TIN\">\n<Pnts>\n",
-        xml_escape(surface)
+        super::escape_markup(surface)
     ));
     s
-}
-
-/// Escapes text for an XML attribute value or element content.
-fn xml_escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            c if (c as u32) < 0x20 => out.push(' '),
-            c => out.push(c),
-        }
-    }
-    out
 }
 
 /// Text safe inside `<!-- … -->`: no `--`, and not ending in `-`.
@@ -277,7 +260,10 @@ mod tests {
 
     #[test]
     fn escaping() {
-        assert_eq!(xml_escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&apos;");
+        assert_eq!(
+            crate::output::escape_markup("a<b>&\"c'"),
+            "a&lt;b&gt;&amp;&quot;c&#39;"
+        );
         assert_eq!(xml_comment("a--b-"), "a- -b- ");
         assert_eq!(xml_comment("a---b"), "a- - -b");
     }

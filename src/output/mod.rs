@@ -68,3 +68,22 @@ pub use raster::{GridWriter, MemoryGrid, RasterFormat, RasterOptions, create_gri
 pub use sms2dm::Sms2dmWriter;
 pub use stin::StinWriter;
 pub use target::{ascii_grid_prj, check_output, distinct_outputs};
+
+/// `s` escaped for XML and HTML text and attribute values (LandXML, a VRT, the plan report):
+/// the five markup characters as entities (`&#39;` for the apostrophe, which both read), and
+/// control characters, which XML 1.0 does not allow, as spaces.
+pub fn escape_markup(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c if (c as u32) < 0x20 => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}

@@ -360,7 +360,7 @@ fn write_vrt(
         g.cols, g.rows
     );
     if let Some(def) = g.crs.as_ref().and_then(|c| c.definition()) {
-        let _ = writeln!(x, "  <SRS>{}</SRS>", xml(&def));
+        let _ = writeln!(x, "  <SRS>{}</SRS>", crate::output::escape_markup(&def));
     }
     let _ = writeln!(
         x,
@@ -380,7 +380,7 @@ fn write_vrt(
         let _ = writeln!(
             x,
             "      <SourceFilename relativeToVRT=\"0\">{}</SourceFilename>",
-            xml(&abs.to_string_lossy())
+            crate::output::escape_markup(&abs.to_string_lossy())
         );
         let _ = writeln!(x, "      <SourceBand>1</SourceBand>");
         let _ = writeln!(
@@ -398,13 +398,6 @@ fn write_vrt(
     }
     let _ = writeln!(x, "  </VRTRasterBand>\n</VRTDataset>");
     super::write_atomic(out, x.as_bytes())
-}
-
-fn xml(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 /// Stitches the tasks' contours into `out`.

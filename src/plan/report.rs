@@ -257,22 +257,6 @@ fn finished(task: &mut TaskReport, rec: &TaskRecord) {
     task.rerun = None;
 }
 
-/// `s` escaped for HTML text and attribute values.
-pub fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
-
 fn mib(b: Option<u64>) -> String {
     b.map_or("not recorded".into(), |b| {
         format!("{:.1} MiB", b as f64 / 1048576.0)
@@ -292,7 +276,7 @@ pub fn html(r: &Report) -> String {
          <style>body{{font-family:sans-serif;margin:1em}}table{{border-collapse:collapse}}\
          td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}\
          svg rect{{stroke:#fff;stroke-width:0.5}}",
-        escape(&title)
+        crate::output::escape_markup(&title)
     );
     for s in [
         TaskState::Done,
@@ -302,7 +286,11 @@ pub fn html(r: &Report) -> String {
     ] {
         let _ = write!(h, " .{}{{fill:{}}}", s.name(), s.colour());
     }
-    let _ = writeln!(h, "</style></head><body>\n<h1>{}</h1>", escape(&title));
+    let _ = writeln!(
+        h,
+        "</style></head><body>\n<h1>{}</h1>",
+        crate::output::escape_markup(&title)
+    );
     let rate = r
         .points_per_second
         .map_or("not recorded".into(), |p| format!("{p:.0}"));
@@ -314,7 +302,7 @@ pub fn html(r: &Report) -> String {
          <tr><th>task seconds (sum; not wall time)</th><td>{:.2}</td></tr>\
          <tr><th>points per task second</th><td>{}</td></tr>\
          <tr><th>largest peak memory</th><td>{}</td></tr></table>",
-        escape(&r.command),
+        crate::output::escape_markup(&r.command),
         r.tasks,
         r.done,
         r.empty,
@@ -392,7 +380,7 @@ fn map(h: &mut String, r: &Report) {
             t.state.name(),
             t.state.colour(),
             t.index,
-            escape(&tip)
+            crate::output::escape_markup(&tip)
         );
     }
     h.push_str("</svg>\n");
@@ -417,8 +405,8 @@ fn failures(h: &mut String, r: &Report) {
             h,
             "<tr class=\"failed-task\"><td>{}</td><td>{}</td><td><code>{}</code></td></tr>",
             t.index,
-            escape(t.message.as_deref().unwrap_or("")),
-            escape(t.rerun.as_deref().unwrap_or(""))
+            crate::output::escape_markup(t.message.as_deref().unwrap_or("")),
+            crate::output::escape_markup(t.rerun.as_deref().unwrap_or(""))
         );
     }
     h.push_str("</table>\n");
