@@ -25,6 +25,17 @@ fn write_xyz(path: &Path, pts: &[[f64; 3]]) {
     w.flush().unwrap();
 }
 
+/// `pts` written to `path` as XYZ, read back with every point kept.
+fn xyz_input(path: &Path, pts: &[[f64; 3]]) -> Input {
+    write_xyz(path, pts);
+    Input {
+        paths: vec![path.to_path_buf()],
+        filter: sweeptin::input::las::Filter::keep_all(),
+        duplicates: DuplicatePolicy::First,
+        lines: Default::default(),
+    }
+}
+
 /// `(x, y)` triangles of the streamed run, as sorted bit triples.
 fn xy_keys(c: &mesh::Collect) -> Vec<[(u64, u64); 3]> {
     let mut out: Vec<[(u64, u64); 3]> = c
@@ -52,14 +63,7 @@ fn far_outliers_and_heavy_tails_stream_in_bounded_memory() {
         ("kuzmin", heavy::kuzmin(n, 7)),
     ] {
         heavy::arrange(&mut pts, heavy::Order::Random, 7);
-        let path = dir.path().join("points.xyz");
-        write_xyz(&path, &pts);
-        let input = Input {
-            paths: vec![path],
-            filter: sweeptin::input::las::Filter::keep_all(),
-            duplicates: DuplicatePolicy::First,
-            lines: Default::default(),
-        };
+        let input = xyz_input(&dir.path().join("points.xyz"), &pts);
         let (c, summary) = mesh::collect_run_along(&input, None, 64 << 20, SweepAxis::Y);
         let st = summary.stream;
         eprintln!("{name}: {st:?}");
@@ -138,14 +142,7 @@ fn points_on_a_line_warn_that_memory_grows_past_mem() {
         ("line", heavy::almost_line(n, 7), true),
         ("disc", heavy::disc(n, 7), false),
     ] {
-        let path = dir.path().join("points.xyz");
-        write_xyz(&path, &pts);
-        let input = Input {
-            paths: vec![path],
-            filter: sweeptin::input::las::Filter::keep_all(),
-            duplicates: DuplicatePolicy::First,
-            lines: Default::default(),
-        };
+        let input = xyz_input(&dir.path().join("points.xyz"), &pts);
         let (_, summary) = mesh::collect_run_along(&input, None, 16 << 20, SweepAxis::Y);
         let found = summary
             .warnings
