@@ -133,23 +133,31 @@ fn dem_of_laz_over_s3_equals_local() {
 /// Runs `dem` on the fault server's object; the local file's DEM, the output's path and the
 /// command's output.
 fn through(fault: Fault, input: &Path) -> (Vec<u8>, PathBuf, Output, tempfile::TempDir) {
+    through_with(fault, input, &[])
+}
+
+/// [`through`] with more options for the remote run.
+fn through_with(
+    fault: Fault,
+    input: &Path,
+    extra: &[&str],
+) -> (Vec<u8>, PathBuf, Output, tempfile::TempDir) {
     let server = FaultServer::start(remote::bytes(&input.to_path_buf()), fault);
     let out = tempfile::tempdir().unwrap();
     let (local, _) = dem(input.to_str().unwrap(), &out.path().join("l.tif"), &[], &[]);
     let far = out.path().join("r.tif");
     let url = server.url("x.laz");
-    let o = sweeptin(
-        &[
-            "dem",
-            &url,
-            "--cell",
-            "1",
-            "-q",
-            "-o",
-            far.to_str().unwrap(),
-        ],
-        &[],
-    );
+    let mut args = vec![
+        "dem",
+        &url,
+        "--cell",
+        "1",
+        "-q",
+        "-o",
+        far.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let o = sweeptin(&args, &[]);
     (local, far, o, out)
 }
 
@@ -167,6 +175,42 @@ fn service_unavailable_then_success() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("HTTP 503; retrying"), "{}", stderr(&o));
     assert!(std::fs::read(far).unwrap() == local);
+}
+
+/// A server that stops answering (before the head, or in the middle of a body) is given up on
+/// after `--io-timeout` and asked again; the output is the local file's.
+#[test]
+fn silent_server_times_out_and_is_asked_again() {
+    for fault in [Fault::SilentHead(2), Fault::SilentBody(2)] {
+        let t = std::time::Instant::now();
+        let (local, far, o, _dir) = through_with(fault, &laz(), &["--io-timeout", "1"]);
+        assert!(o.status.success(), "{fault:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("retrying") && e.contains("imeout"),
+            "{fault:?}: {e}"
+        );
+        assert!(std::fs::read(far).unwrap() == local, "{fault:?}");
+        // Not the minute the server stays silent, nor the default timeout.
+        assert!(t.elapsed().as_secs() < 50, "{fault:?}: {:?}", t.elapsed());
+    }
+}
+
+/// A server silent every time: five attempts, then exit 3 naming the URL, no output.
+#[test]
+fn server_silent_every_time_gives_up_naming_the_url() {
+    let (_, far, o, _dir) = through_with(
+        Fault::SilentHead(usize::MAX),
+        &laz(),
+        &["--io-timeout", "1"],
+    );
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("gave up after 5 attempts") && e.contains("/x.laz"),
+        "{e}"
+    );
+    assert!(!far.exists());
 }
 
 #[test]

@@ -75,14 +75,22 @@ pub struct FilterArgs {
     #[arg(long, value_name = "N", default_value_t = DEFAULT_IO_CONCURRENCY as u16,
           value_parser = clap::value_parser!(u16).range(1..=256))]
     pub io_concurrency: u16,
+    /// Seconds a request to a remote input may wait to connect and for the answer to start
+    /// (twice as long for its body); a request that times out is retried (5 attempts in all)
+    /// like a dropped connection, then the run stops naming the URL (docs/REMOTE.md).
+    #[arg(long, value_name = "SECS", default_value_t = DEFAULT_IO_TIMEOUT,
+          value_parser = clap::value_parser!(u64).range(1..=3600))]
+    pub io_timeout: u64,
 }
 
-use sweeptin::input::source::DEFAULT_IO_CONCURRENCY;
+use sweeptin::input::source::{DEFAULT_IO_CONCURRENCY, DEFAULT_IO_TIMEOUT};
 
 impl FilterArgs {
-    /// The library filter these flags describe; also sets `--io-concurrency` for the process.
+    /// The library filter these flags describe; also sets `--io-concurrency` and `--io-timeout`
+    /// for the process.
     pub fn to_filter(&self) -> Filter {
         sweeptin::input::source::set_io_concurrency(usize::from(self.io_concurrency));
+        sweeptin::input::source::set_io_timeout(self.io_timeout);
         Filter {
             classes: self.class.as_ref().map(|c| c.0.clone()),
             returns: self.returns,

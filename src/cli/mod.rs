@@ -163,11 +163,32 @@ pub static SUMMARY_PRINTED: std::sync::atomic::AtomicBool =
 /// The last panic's message and place (see `main`).
 static LAST_PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
 
+/// `--io-timeout` and `--io-concurrency` of the (sub)command, set for the process before anything
+/// is opened: a remote input's first request may come before the command's options are read.
+fn apply_io_options(m: &clap::ArgMatches) {
+    use sweeptin::input::source::{set_io_concurrency, set_io_timeout};
+    if let Ok(Some(&t)) = m.try_get_one::<u64>("io_timeout") {
+        set_io_timeout(t);
+    }
+    if let Ok(Some(&n)) = m.try_get_one::<u16>("io_concurrency") {
+        set_io_concurrency(usize::from(n));
+    }
+    if let Some((_, sub)) = m.subcommand() {
+        apply_io_options(sub);
+    }
+}
+
 /// Runs the command line; returns the process exit code.
 pub fn main() -> ExitCode {
     // Large buffers freed by a tile or run go back to the system at once (glibc).
     sweeptin::tune_allocator();
-    let cli = match Cli::try_parse() {
+    let parsed = <Cli as clap::CommandFactory>::command()
+        .try_get_matches()
+        .and_then(|m| {
+            apply_io_options(&m);
+            <Cli as clap::FromArgMatches>::from_arg_matches(&m)
+        });
+    let cli = match parsed {
         Ok(cli) => cli,
         Err(e) => {
             // A usage error found while parsing (a bad number, an unknown flag) is reported as

@@ -194,6 +194,12 @@ pub enum Fault {
     DropMidBody(usize),
     /// The first `n` requests get `503 Service Unavailable`.
     Unavailable(usize),
+    /// The first `n` requests (the first tells the object's size) get no answer: the
+    /// connection stays open, silent, for a minute.
+    SilentHead(usize),
+    /// Requests 1 to `n` (after the first) get their head and half their body, then nothing
+    /// more for a minute.
+    SilentBody(usize),
     /// After `n` requests the object is replaced by another version (another ETag); If-Match
     /// is honoured (412) when `if_match`, else ignored (the new ETag comes back).
     Replace { after: usize, if_match: bool },
@@ -203,6 +209,9 @@ pub enum Fault {
     /// `Content-Range`).
     WrongRange,
 }
+
+/// How long a silent fault keeps its connection open without a byte.
+const SILENCE: std::time::Duration = std::time::Duration::from_secs(60);
 
 /// A tiny HTTP/1.1 server of one object, with a chosen [`Fault`]; runs until the test ends.
 pub struct FaultServer {
@@ -299,7 +308,17 @@ fn serve(stream: TcpStream, body: &[u8], fault: Fault, count: &AtomicUsize) {
                 &object[..],
             ),
         };
+        if matches!(fault, Fault::SilentHead(k) if n < k) {
+            std::thread::sleep(SILENCE);
+            return;
+        }
         if out.write_all(head.as_bytes()).is_err() {
+            return;
+        }
+        if matches!(fault, Fault::SilentBody(k) if (1..=k).contains(&n)) {
+            let _ = out.write_all(&part[..part.len() / 2]);
+            let _ = out.flush();
+            std::thread::sleep(SILENCE);
             return;
         }
         if matches!(fault, Fault::DropMidBody(k) if part.len() > 1024 && (1..=k).contains(&n)) {

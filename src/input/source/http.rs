@@ -40,13 +40,23 @@ fn agent() -> &'static ureq::Agent {
     AGENT.get_or_init(|| {
         ureq::Agent::config_builder()
             .http_status_as_error(false)
-            .timeout_connect(Some(Duration::from_secs(20)))
-            .timeout_recv_response(Some(Duration::from_secs(60)))
-            .timeout_recv_body(Some(Duration::from_secs(120)))
             .user_agent(concat!("sweeptin/", env!("CARGO_PKG_VERSION")))
             .build()
             .into()
     })
+}
+
+/// A GET of `url` with the timeouts of `--io-timeout` as they are now (set per request: the
+/// agent is made at the first request, which may come before the options are read).
+fn get(url: &str) -> ureq::RequestBuilder<ureq::typestate::WithoutBody> {
+    let secs = super::io_timeout();
+    agent()
+        .get(url)
+        .config()
+        .timeout_connect(Some(Duration::from_secs(secs)))
+        .timeout_recv_response(Some(Duration::from_secs(secs)))
+        .timeout_recv_body(Some(Duration::from_secs(2 * secs)))
+        .build()
 }
 
 fn header(r: &ureq::http::Response<ureq::Body>, name: &str) -> Option<String> {
@@ -164,8 +174,7 @@ impl Http {
     }
 
     fn probe(&mut self) -> Result<(), Fault> {
-        let r = agent()
-            .get(&self.url()?)
+        let r = get(&self.url()?)
             .header("Range", "bytes=0-0")
             .call()
             .map_err(|e| transport(&e))?;
@@ -222,9 +231,7 @@ impl Http {
     /// One range request for `buf.len()` bytes at `offset`.
     fn fetch(&self, offset: u64, buf: &mut [u8]) -> Result<(), Fault> {
         let last = offset + buf.len() as u64 - 1;
-        let mut req = agent()
-            .get(&self.url()?)
-            .header("Range", &format!("bytes={offset}-{last}"));
+        let mut req = get(&self.url()?).header("Range", &format!("bytes={offset}-{last}"));
         // `If-Match` compares strongly: a weak ETag (`W/"…"`) would never match, so it is only
         // compared with the answer's.
         if let Some(tag) = self.etag.as_ref().filter(|t| !t.starts_with("W/")) {

@@ -33,7 +33,7 @@ use crate::error::{Error, Result};
 use std::collections::HashMap;
 use std::io::{self, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// Requests in flight for one remote file (`--io-concurrency`).
@@ -51,6 +51,25 @@ pub fn set_io_concurrency(n: usize) {
 /// How many range requests may be in flight for one remote file.
 pub fn io_concurrency() -> usize {
     IO_CONCURRENCY.load(Ordering::Relaxed)
+}
+
+/// Seconds to wait for a server (`--io-timeout`); see [`set_io_timeout`].
+static IO_TIMEOUT: AtomicU64 = AtomicU64::new(DEFAULT_IO_TIMEOUT);
+
+/// The default of [`set_io_timeout`], in seconds: GDAL's `GDAL_HTTP_TIMEOUT` is 30, object stores
+/// under load answer within a few seconds, and a minute leaves room for a slow proxy.
+pub const DEFAULT_IO_TIMEOUT: u64 = 60;
+
+/// Sets how long a request to a remote input may wait (at least 1 s): `secs` to connect and for
+/// the answer's head, twice that for its body (up to 8 MiB). A request that times out is
+/// retried like a dropped connection. Applies to the requests made after the call.
+pub fn set_io_timeout(secs: u64) {
+    IO_TIMEOUT.store(secs.max(1), Ordering::Relaxed);
+}
+
+/// How long a request to a remote input may wait for its answer to start, in seconds.
+pub fn io_timeout() -> u64 {
+    IO_TIMEOUT.load(Ordering::Relaxed)
 }
 
 /// Where an input lives, from the name the user gave.
