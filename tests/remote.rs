@@ -260,33 +260,3 @@ fn wrong_content_range_is_an_error() {
     assert!(e.contains("the server answered Content-Range"), "{e}");
     assert!(!far.exists());
 }
-
-/// Plans pin local files: a URL is refused up front (exit 2) rather than reported as a missing
-/// local file, and nothing is written.
-#[test]
-fn plan_over_a_url_is_refused_until_plans_read_remote_inputs() {
-    let dir = tempfile::tempdir().unwrap();
-    let job = dir.path().join("job");
-    let o = sweeptin(
-        &[
-            "plan",
-            "dem",
-            "https://127.0.0.1:9/x.laz",
-            "--cell",
-            "1",
-            "--tile",
-            "100",
-            "-q",
-            "-o",
-            job.to_str().unwrap(),
-        ],
-        &[],
-    );
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("https://127.0.0.1:9/x.laz: a plan does not read remote inputs"),
-        "{}",
-        stderr(&o)
-    );
-    assert!(!job.exists());
-}

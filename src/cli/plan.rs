@@ -360,7 +360,6 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
             .map(|e| e.files)
         })
         .collect::<Result<_, _>>()?;
-    sweeptin::plan::local_inputs(groups.iter().flatten().chain(&given))?;
     job.args_mut().inputs = groups.iter().flatten().cloned().collect();
     check_job(&job)?;
     let a = job.args();
@@ -378,9 +377,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     }
     outputs.insert(0, ("dir".to_string(), dir.clone()));
     let buffer = args.buffer.unwrap_or(tile / 10.0);
-    let canonical = |p: &PathBuf| {
-        std::fs::canonicalize(p).map_err(|e| anyhow::Error::from(sweeptin::Error::io(p, e)))
-    };
+    let canonical = |p: &PathBuf| sweeptin::input::files::absolute(p).map_err(anyhow::Error::from);
     let abs_groups: Vec<Vec<PathBuf>> = groups
         .iter()
         .map(|g| g.iter().map(canonical).collect::<anyhow::Result<_>>())

@@ -41,6 +41,18 @@ pub struct Expansion {
     pub lists: Vec<PathBuf>,
 }
 
+/// How a plan names an input so that its tasks find it from anywhere: a local file by its
+/// absolute path (links resolved), a URL as given.
+///
+/// # Errors
+/// [`Error::Io`] naming a local file that cannot be resolved.
+pub fn absolute(p: &Path) -> Result<PathBuf> {
+    if source::is_remote(p) {
+        return Ok(p.to_path_buf());
+    }
+    std::fs::canonicalize(p).map_err(|e| Error::io(p, e))
+}
+
 /// The files `args` stand for, in order, and the lists read to find them.
 ///
 /// # Errors
@@ -77,6 +89,7 @@ fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Expansion, depth: usize) -> 
                 p.to_path_buf()
             } else if source::is_remote(dir) {
                 // A URL's path joins with `/` whatever the platform.
+                let line = line.strip_prefix("./").unwrap_or(line);
                 PathBuf::from(format!("{}/{line}", dir.display()))
             } else {
                 dir.join(p)

@@ -45,25 +45,6 @@ use files::{inside, own_file, write_atomic};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// Refuses a URL among a plan's inputs (its files, lists and `.vpc` files): a plan's tasks pin
-/// local files by size and time; remote inputs are read by single commands for now (issue 44).
-///
-/// # Errors
-/// [`Error::Options`] naming the first URL.
-pub fn local_inputs<'a>(files: impl IntoIterator<Item = &'a PathBuf>) -> Result<()> {
-    match files
-        .into_iter()
-        .find(|p| crate::input::source::is_remote(p))
-    {
-        Some(url) => Err(Error::Options(format!(
-            "{}: a plan does not read remote inputs yet (its tasks pin local files); run the \
-             command on the URLs without a plan, or copy the files first",
-            url.display()
-        ))),
-        None => Ok(()),
-    }
-}
-
 /// Format version of `plan.json` (2: the typed [`Job`]).
 pub const PLAN_VERSION: u32 = 2;
 /// Format version of a `plan.json` whose job has breaklines or trimming rings
@@ -83,9 +64,14 @@ pub struct PlanFile {
     /// Its size and modification time (seconds and nanoseconds since 1970) when the plan was
     /// made: a file rewritten in place (reclassified, heights corrected) keeps its header's
     /// count and extent, and tasks before and after the rewrite mixed old and new points.
-    /// `None` in plans of older builds (not checked).
+    /// `None` in plans of older builds (not checked). A remote file's (a URL) is its size
+    /// with no time; [`PlanFile::version`] pins it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stamp: Option<FileStamp>,
+    /// A remote file's version when the plan was made: its ETag (else its Last-Modified date)
+    /// and size, as the server gave them; a task refuses another version of the object.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub version: Option<String>,
     /// A plain LAZ/LAS file with points (not COPC): saving the plan writes its chunk index
     /// (`DIR/index/<k>.chunks`, [`Plan::chunk_index_path`]), and tasks decode only the chunks
     /// that meet their tile and buffer. `false` in plans of older builds (files read whole).
@@ -285,20 +271,10 @@ impl Plan {
             return Err(Error::NoInput);
         }
         // `@list.txt`, quoted globs and `.vpc` files stand for their files (each header is
-        // read); every file is named by its absolute path, so that tasks run from anywhere.
+        // read); every local file is named by its absolute path, so that tasks run from
+        // anywhere; remote files by their URL.
         let given = crate::input::files::expand(paths, crate::input::files::Expand::VpcFiles)?;
-        if let Some(url) = given
-            .files
-            .iter()
-            .chain(&given.lists)
-            .find(|p| crate::input::source::is_remote(p))
-        {
-            return Err(Error::Options(format!(
-                "{}: a plan does not read remote inputs yet (its tasks pin local files); run the                  command on the URLs without a plan, or copy the files first",
-                url.display()
-            )));
-        }
-        let canonical = |p: &PathBuf| std::fs::canonicalize(p).map_err(|e| Error::io(p, e));
+        let canonical = |p: &PathBuf| crate::input::files::absolute(p);
         let lists = given.lists.iter().map(canonical).collect::<Result<_>>()?;
         let paths: Vec<PathBuf> = given.files.iter().map(canonical).collect::<Result<_>>()?;
         let paths = paths.as_slice();
@@ -338,6 +314,7 @@ impl Plan {
                 bounds: [b.min[0], b.min[1], b.max[0], b.max[1]],
                 points: info.point_count,
                 stamp: Some(FileStamp::of(p)?),
+                version: crate::input::source::remote_version(p)?,
                 indexed: info.point_count > 0 && info.copc.is_none(),
             });
         }
@@ -639,6 +616,18 @@ impl Plan {
             .filter(|f| f.points > 0 && overlaps(&f.bounds, &g))
         {
             let info = FileInfo::read(&f.path)?;
+            if let Some(then) = &f.version {
+                let now = crate::input::source::remote_version(&f.path)?.unwrap_or_default();
+                if &now != then {
+                    return Err(bad(
+                        &f.path,
+                        format!(
+                            "the object changed since the plan was made ({then} then; {now} \
+                             now): every task must read the same points, so make the plan again"
+                        ),
+                    ));
+                }
+            }
             if let Some(then) = f.stamp {
                 let now = FileStamp::of(&f.path)?;
                 if now != then {

@@ -205,7 +205,7 @@ fn entry(path: &Path, dir: &Path, i: usize, item: Item) -> Result<VpcEntry> {
             file.to_path_buf()
         } else if source::is_remote(dir) {
             // A URL's path joins with `/` whatever the platform.
-            PathBuf::from(format!("{}/{href}", dir.display()))
+            PathBuf::from(format!("{}/{}", dir.display(), file.display()))
         } else {
             dir.join(file)
         }

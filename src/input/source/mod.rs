@@ -119,6 +119,18 @@ pub fn is_remote(name: &Path) -> bool {
     Location::of(name).is_remote()
 }
 
+/// A remote object's version as this process reads it (its ETag, else its Last-Modified date,
+/// and its size: [`Source::identity`]); `None` for a local file.
+///
+/// # Errors
+/// [`Error::Io`] when the object cannot be opened.
+pub fn remote_version(name: &Path) -> Result<Option<String>> {
+    if !is_remote(name) {
+        return Ok(None);
+    }
+    Ok(Some(Source::open(name)?.identity()))
+}
+
 /// The largest text input read whole from a server (a `.vpc`, a file list).
 const MAX_TEXT: u64 = 256 << 20;
 

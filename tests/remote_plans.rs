@@ -1,0 +1,145 @@
+//! Plans over remote inputs (issue 44, item 3): a plan names each remote file by its URL and
+//! pins its version (ETag and size); every task reads its part over HTTP; the mosaic is the
+//! local plan's byte for byte; an object replaced after the plan stops the task that reads it.
+
+#[path = "support/data.rs"]
+mod data;
+#[path = "support/plans.rs"]
+mod plans;
+#[path = "support/remote.rs"]
+mod remote;
+
+use plans::{bin, s, sweeptin};
+use remote::Nginx;
+use std::path::{Path, PathBuf};
+
+/// The six IGN tiles (tests/data/lidar/ign_50m_tiles).
+fn ign_tiles() -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    for x in [77050, 77055, 77060] {
+        for y in [627755, 627760] {
+            v.push(data::shared(&format!(
+                "lidar/ign_50m_tiles/test_data_{x}_{y}_LA93_IGN69.laz"
+            )));
+        }
+    }
+    v
+}
+
+/// `plan dem VPC --tile 25` into `job`, `run --all`, `merge -o OUT`: the mosaic's bytes.
+fn plan_run_merge(vpc: &str, job: &Path, out: &Path) -> Vec<u8> {
+    let what = format!("plan of {vpc}");
+    sweeptin(
+        &[
+            "plan",
+            "dem",
+            vpc,
+            "--cell",
+            "1",
+            "--class",
+            "2",
+            "--tile",
+            "25",
+            "-o",
+            s(job),
+        ],
+        &what,
+    );
+    let plan = job.join("plan.json");
+    sweeptin(&["run", s(&plan), "--all", "-q"], &what);
+    sweeptin(&["merge", s(&plan), "-o", s(out), "-q"], &what);
+    std::fs::read(out).unwrap()
+}
+
+#[test]
+fn plan_over_a_remote_vpc_equals_the_local_plan() {
+    let tiles = ign_tiles();
+    let refs: Vec<&Path> = tiles.iter().map(PathBuf::as_path).collect();
+    let (served, names) = remote::served(&refs);
+    let vpc = served.path().join("ign.vpc");
+    let mut args = vec!["index"];
+    args.extend(names.iter().map(|n| n.as_str()));
+    args.extend(["-o", "ign.vpc"]);
+    let o = bin()
+        .args(&args)
+        .current_dir(served.path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let Some(nginx) = Nginx::start(
+        served.path(),
+        "plan_over_a_remote_vpc_equals_the_local_plan",
+    ) else {
+        return;
+    };
+    let t = tempfile::tempdir().unwrap();
+    let local = plan_run_merge(s(&vpc), &t.path().join("local"), &t.path().join("l.tif"));
+    let url = nginx.url("ign.vpc");
+    let far_job = t.path().join("far");
+    let far = plan_run_merge(&url, &far_job, &t.path().join("r.tif"));
+    assert!(
+        local == far,
+        "the remote plan's mosaic differs from the local plan's"
+    );
+    // The plan names the URLs (not local paths) and pins each object's ETag.
+    let plan = std::fs::read_to_string(far_job.join("plan.json")).unwrap();
+    let p: serde_json::Value = serde_json::from_str(&plan).unwrap();
+    let files = p["files"].as_array().unwrap();
+    assert_eq!(files.len(), 6);
+    for f in files {
+        let path = f["path"].as_str().unwrap();
+        assert!(path.starts_with("http://127.0.0.1:"), "{f}");
+        assert!(f["version"].as_str().unwrap().starts_with("ETag "), "{f}");
+    }
+    // Every request was a range (the plan read headers and chunk tables; tasks their chunks).
+    let (bytes, requests) = nginx.sent();
+    assert!(requests > 6 && bytes > 0);
+
+    // A tile replaced on the server after a new plan (same bytes, a new time: nginx's ETag
+    // changes): the tasks reading it stop with exit 3 naming its URL; no mosaic is made of
+    // two versions.
+    let job2 = t.path().join("again");
+    sweeptin(
+        &[
+            "plan",
+            "dem",
+            &url,
+            "--cell",
+            "1",
+            "--class",
+            "2",
+            "--tile",
+            "25",
+            "-o",
+            s(&job2),
+        ],
+        "second plan",
+    );
+    let first = served.path().join(&names[0]);
+    let f = std::fs::File::options().write(true).open(&first).unwrap();
+    let later = std::time::SystemTime::now() + std::time::Duration::from_secs(100);
+    f.set_modified(later).unwrap();
+    drop(f);
+    let o = bin()
+        .args(["run", s(&job2.join("plan.json")), "--all", "-q"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{e}");
+    assert!(
+        e.contains(&nginx.url(&names[0])) && e.contains("changed since the plan was made"),
+        "{e}"
+    );
+    let m = bin()
+        .args([
+            "merge",
+            s(&job2.join("plan.json")),
+            "-o",
+            s(&t.path().join("m.tif")),
+            "-q",
+        ])
+        .output()
+        .unwrap();
+    assert!(!m.status.success());
+    assert!(!t.path().join("m.tif").exists());
+}
