@@ -516,3 +516,63 @@ fn a_tasks_work_follows_its_points_not_its_area() {
         "merge",
     );
 }
+
+/// A DEM task runs every sub-tile of its plan tile that triangles can reach (their cells may
+/// lie under other tasks' triangles), but no triangle lies outside the box of all the data: a
+/// plan tile 60 times wider than the sample walked thousands of empty sub-tiles; now as many as
+/// one run, and the mosaic is still one run's file.
+#[test]
+fn a_dem_tasks_work_stops_at_the_datas_box() {
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("job");
+    let input = sample();
+    sweeptin(
+        &[
+            "plan",
+            "dem",
+            s(&input),
+            "--cell",
+            "1",
+            "--tile",
+            "4000",
+            "-o",
+            s(&job),
+        ],
+        "plan",
+    );
+    let plan = job.join("plan.json");
+    let (_, n) = plan_extent(&plan);
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run --all");
+    let ran: u64 = records(&job, n)
+        .iter()
+        .map(|r| r["subtiles"].as_u64().unwrap())
+        .sum();
+    let one = t.path().join("one.tif");
+    let out = sweeptin(
+        &[
+            "dem",
+            s(&input),
+            "--cell",
+            "1",
+            "--engine",
+            "tiles",
+            "--json",
+            "-q",
+            "-o",
+            s(&one),
+        ],
+        "one run",
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let tiles = summary["run"]["tiles"]["tiles"].as_u64().unwrap();
+    assert!(
+        ran >= 1 && ran <= 4 * tiles.max(1),
+        "the tasks ran {ran} sub-tiles where one run runs {tiles}"
+    );
+    let m = t.path().join("m.tif");
+    sweeptin(&["merge", s(&plan), "-o", s(&m), "-q"], "merge");
+    assert!(
+        std::fs::read(&m).unwrap() == std::fs::read(&one).unwrap(),
+        "the mosaic is not one run's DEM"
+    );
+}

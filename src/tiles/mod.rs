@@ -370,17 +370,33 @@ pub(crate) fn run(
             y1: r.y1 * n,
         }
     });
-    // The tiles looked at: without covering or lines, only those of the occupied blocks.
+    // The tiles looked at: without covering or lines, only those of the occupied blocks. A
+    // covering task looks only where triangles can be: in the box of all the data (the points
+    // read, the files it does not read, the lines' vertices); a plan tile far larger than the
+    // data (`plan dem --tile 1e6`) holds millions of tiles no triangle reaches.
+    let occupied = g.tiles_of(&index.occupied());
     let walk = if covers || !line_tiles.is_empty() {
-        tiles_rect
+        let tile_of = |x: f64, y: f64| {
+            let (bx, by) = g.block_of(x, y);
+            g.tile_of_block(bx, by)
+        };
+        let one = |(tx, ty): (i64, i64)| grid::BlockRect {
+            x0: tx,
+            y0: ty,
+            x1: tx + 1,
+            y1: ty + 1,
+        };
+        let data = options
+            .scope
+            .iter()
+            .flat_map(|sc| &sc.unread)
+            .flat_map(|b| [tile_of(b[0], b[1]), tile_of(b[2], b[3])])
+            .chain(line_tiles.iter().copied())
+            .map(one)
+            .fold(occupied, |r, t| if r.is_empty() { t } else { r.union(&t) });
+        tiles_rect.intersect(&data)
     } else {
-        let o = g.tiles_of(&index.occupied());
-        grid::BlockRect {
-            x0: tiles_rect.x0.max(o.x0),
-            y0: tiles_rect.y0.max(o.y0),
-            x1: tiles_rect.x1.min(o.x1),
-            y1: tiles_rect.y1.min(o.y1),
-        }
+        tiles_rect.intersect(&occupied)
     };
     let order: Vec<(i64, i64)> = (walk.y0..walk.y1.max(walk.y0))
         .flat_map(|ty| (walk.x0..walk.x1.max(walk.x0)).map(move |tx| (tx, ty)))
