@@ -260,3 +260,82 @@ fn wrong_content_range_is_an_error() {
     assert!(e.contains("the server answered Content-Range"), "{e}");
     assert!(!far.exists());
 }
+
+/// `-o s3://bucket/key`: the output is written to a temporary file and uploaded when complete
+/// (one PUT: the object appears whole or not at all), side files too; the object's bytes are the
+/// local run's. A missing bucket: exit 4 naming the URL, no object, no temporary file left. An
+/// HTTP URL as output is refused before any work.
+#[test]
+fn outputs_to_s3_are_the_local_bytes_and_appear_only_whole() {
+    let Some(moto) = Moto::start("outputs_to_s3_are_the_local_bytes_and_appear_only_whole") else {
+        return;
+    };
+    moto.put("out", "placeholder.laz", &laz());
+    let tmp = tempfile::tempdir().unwrap();
+    let env_owned = moto.env();
+    let mut env: Vec<(&str, &str)> = env_owned.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    env.push(("TMPDIR", tmp.path().to_str().unwrap()));
+    let out = tempfile::tempdir().unwrap();
+    let local_dem = out.path().join("l.asc");
+    let local_c = out.path().join("l.geojson");
+    let run = |dem: &str, contours: &str| {
+        sweeptin(
+            &[
+                "dem",
+                laz().to_str().unwrap(),
+                "--cell",
+                "1",
+                "--contours",
+                contours,
+                "--interval",
+                "5",
+                "-q",
+                "-o",
+                dem,
+            ],
+            &env,
+        )
+    };
+    let o = run(local_dem.to_str().unwrap(), local_c.to_str().unwrap());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run("s3://out/dem/topo.asc", "s3://out/dem/topo.geojson");
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (key, local) in [
+        ("dem/topo.asc", local_dem.clone()),
+        ("dem/topo.prj", local_dem.with_extension("prj")),
+        ("dem/topo.geojson", local_c.clone()),
+    ] {
+        let got = out.path().join("got");
+        assert!(moto.get("out", key, &got), "s3://out/{key} was not written");
+        assert!(
+            std::fs::read(&got).unwrap() == std::fs::read(&local).unwrap(),
+            "s3://out/{key} differs from the local output"
+        );
+    }
+    assert_eq!(
+        std::fs::read_dir(tmp.path()).unwrap().count(),
+        0,
+        "a temporary file was left"
+    );
+    // No such bucket: the URL, exit 4, nothing written, nothing left.
+    let o = run("s3://nobucket/topo.asc", "s3://out/c2.geojson");
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("s3://nobucket/topo.asc"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(
+        std::fs::read_dir(tmp.path()).unwrap().count(),
+        0,
+        "a temporary file was left"
+    );
+    // An HTTP URL is not an output.
+    let o = run("http://127.0.0.1:9/topo.asc", local_c.to_str().unwrap());
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("outputs go to local files or s3://"),
+        "{}",
+        stderr(&o)
+    );
+}

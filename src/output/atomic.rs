@@ -197,6 +197,9 @@ enum Inner {
         writer: BufWriter<tempfile::NamedTempFile>,
         /// Bytes written, and how many when write-behind last started ([`WRITE_BEHIND`]).
         behind: (u64, u64),
+        /// `target` is a remote object ([`Destination::Object`]): the commit uploads the
+        /// temporary file instead of renaming it.
+        upload: bool,
         _registration: TempRegistration,
     },
     Stream {
@@ -251,6 +254,22 @@ impl AtomicFile {
         }
         let inner = match Destination::of(&path)? {
             Destination::File { target, mode } => Self::temp_beside(&path, target, mode)?,
+            Destination::Object { url } => {
+                let temp = tempfile::Builder::new()
+                    .prefix(".sweeptin-upload-")
+                    .suffix(".tmp")
+                    .tempfile()
+                    .map_err(|e| Error::write(&path, e))?;
+                let registration = register_temp(temp.path(), TempKind::File);
+                Inner::Replace {
+                    target: url,
+                    mode: None,
+                    writer: BufWriter::with_capacity(WRITE_BUFFER, temp),
+                    behind: (0, 0),
+                    upload: true,
+                    _registration: registration,
+                }
+            }
             Destination::Stream { fd, .. } => {
                 let out = match fd {
                     Some(1) => StreamOut::Stdout(io::stdout()),
@@ -325,6 +344,7 @@ impl AtomicFile {
             mode,
             writer: BufWriter::with_capacity(WRITE_BUFFER, temp),
             behind: (0, 0),
+            upload: false,
             _registration: registration,
         })
     }
@@ -354,8 +374,8 @@ impl AtomicFile {
     }
 
     /// Flushes, fsyncs and renames the temporary file onto the final path (replacing any file
-    /// there, keeping its permissions); returns the size of the file in bytes. A stream is
-    /// flushed; its size is the bytes written.
+    /// there, keeping its permissions), or uploads it to the final object; returns the size of
+    /// the file in bytes. A stream is flushed; its size is the bytes written.
     ///
     /// # Errors
     /// [`Error::Write`] naming the final path; the temporary file is then deleted.
@@ -374,11 +394,21 @@ impl AtomicFile {
                 mode,
                 writer,
                 behind: _,
+                upload,
                 _registration,
             } => {
                 let temp = writer
                     .into_inner()
                     .map_err(|e| Error::write(&path, e.into_error()))?;
+                if upload {
+                    let bytes = temp
+                        .as_file()
+                        .metadata()
+                        .map_err(|e| Error::write(&path, e))?
+                        .len();
+                    crate::input::source::upload(&target, temp.as_file(), bytes)?;
+                    return Ok(bytes);
+                }
                 #[cfg(unix)]
                 if let Some(mode) = mode {
                     use std::os::unix::fs::PermissionsExt;

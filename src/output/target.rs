@@ -7,6 +7,8 @@
 //! | a symbolic link | followed (links to links too): its **target** is replaced as above, the link stays; a dangling link's target is created |
 //! | a FIFO, a character device (`/dev/null`, a terminal), `-` (standard output), `/dev/stdout`, `/dev/stderr` | written directly, as the bytes are produced ([`Destination::Stream`]); formats that need seeking (GeoTIFF) refuse it |
 //! | a directory, a block device, a socket | refused: an output never replaces them |
+//! | `s3://bucket/key` | a temporary file in the system's temporary directory, uploaded in one `PUT` when complete ([`Destination::Object`]): the object appears whole or not at all |
+//! | `http://…`, `https://…` | refused: outputs go to files or S3 objects |
 //!
 //! Temporary files are named `.NAME.sweeptin-HOST.PID-XXXXXX.tmp` ([`temp_prefix`]). A run that
 //! was killed (`kill -9`, the OOM killer) cannot delete its own; the next run writing the same
@@ -27,6 +29,11 @@ pub enum Destination {
         /// Permission bits of the existing file, kept by the replacement.
         mode: Option<u32>,
     },
+    /// An `s3://` object: written to a temporary file, uploaded when complete.
+    Object {
+        /// The object's URL.
+        url: PathBuf,
+    },
     /// A FIFO, a character device or standard output: written directly, in order.
     Stream {
         /// Standard output or standard error (`-`, `/dev/stdout`, `/dev/stderr`): the process's
@@ -44,6 +51,20 @@ impl Destination {
     /// [`Error::Output`] for a directory, a block device or a socket (or a link to one), or a
     /// chain of more than 40 symbolic links; [`Error::Write`] when the path cannot be examined.
     pub fn of(path: &Path) -> Result<Destination> {
+        match crate::input::source::Location::of(path) {
+            crate::input::source::Location::Local(_) => {}
+            crate::input::source::Location::S3 { .. } => {
+                return Ok(Destination::Object {
+                    url: path.to_path_buf(),
+                });
+            }
+            crate::input::source::Location::Http(_) => {
+                return Err(Error::Output {
+                    path: path.to_path_buf(),
+                    message: "an HTTP URL: outputs go to local files or s3:// objects".into(),
+                });
+            }
+        }
         if path.as_os_str() == "-" {
             return Ok(Destination::Stream {
                 fd: Some(1),
@@ -122,6 +143,11 @@ impl Destination {
     pub fn is_stream(&self) -> bool {
         matches!(self, Destination::Stream { .. })
     }
+
+    /// Is it a whole file (local or an object): side files can go beside it?
+    pub fn is_whole(&self) -> bool {
+        !self.is_stream()
+    }
 }
 
 /// `Some(1)` / `Some(2)` for a link to this process's standard output / error
@@ -188,8 +214,10 @@ pub fn check_output(path: &Path) -> Result<()> {
 /// directory). A stream, or a path that cannot be resolved, is returned absolute.
 pub fn written_path(path: &Path) -> PathBuf {
     let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    let Ok(Destination::File { target, .. }) = Destination::of(path) else {
-        return abs(path);
+    let target = match Destination::of(path) {
+        Ok(Destination::File { target, .. }) => target,
+        Ok(Destination::Object { url }) => return url,
+        _ => return abs(path),
     };
     let dir = super::atomic::parent_dir(&target);
     match (std::fs::canonicalize(dir), target.file_name()) {
@@ -234,7 +262,7 @@ fn is_char_device(p: &Path) -> bool {
 /// The side files an output at `path` writes beside it: an ESRI ASCII grid's `.prj`, a PNG's
 /// world file, `.prj` and `.png.aux.xml` (none beside a stream).
 pub fn side_files(path: &Path) -> Vec<PathBuf> {
-    if !matches!(Destination::of(path), Ok(Destination::File { .. })) {
+    if !Destination::of(path).is_ok_and(|d| d.is_whole()) {
         return Vec::new();
     }
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
@@ -288,7 +316,7 @@ pub fn ascii_grid_prj(path: &Path, format: Option<super::raster::RasterFormat>) 
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("asc"));
-    let file = matches!(Destination::of(path), Ok(Destination::File { .. }));
+    let file = Destination::of(path).is_ok_and(|d| d.is_whole());
     (format == Some(super::raster::RasterFormat::Ascii) && !by_extension && file)
         .then(|| path.with_extension("prj"))
 }
@@ -309,7 +337,7 @@ pub fn distinct_outputs(outputs: &[(&str, &Path)], inputs: &[PathBuf], of: &str)
         .collect();
     for (flag, o) in outputs {
         for side in side_files(o) {
-            if !matches!(Destination::of(&side)?, Destination::File { .. }) {
+            if !Destination::of(&side)?.is_whole() {
                 return Err(Error::Output {
                     path: side,
                     message: format!(

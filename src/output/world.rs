@@ -53,10 +53,7 @@ pub fn write_world_file(image: &Path, origin: [f64; 2], size: [f64; 2]) -> Resul
 
 /// Is `image` written to a file (so that side files can go beside it)?
 fn beside_a_file(image: &Path) -> bool {
-    matches!(
-        super::target::Destination::of(image),
-        Ok(super::target::Destination::File { .. })
-    )
+    super::target::Destination::of(image).is_ok_and(|d| d.is_whole())
 }
 
 /// Writes `<file>.prj` (the extension replaced) with the CRS as WKT ([`Crs::prj`]: the file's

@@ -177,6 +177,36 @@ impl Moto {
     }
 }
 
+impl Moto {
+    /// Downloads `s3://bucket/key` to `file`, with boto3; `false` when there is no such object.
+    pub fn get(&self, bucket: &str, key: &str, file: &Path) -> bool {
+        let script = format!(
+            "import boto3, sys\n\
+             s3 = boto3.client('s3', endpoint_url='{e}', aws_access_key_id='{KEY}',\n\
+                 aws_secret_access_key='{SECRET}', region_name='us-east-1')\n\
+             try:\n    s3.download_file('{bucket}', '{key}', '{f}')\n\
+             except Exception as x:\n    print(x, file=sys.stderr); sys.exit(1)\n",
+            e = self.endpoint,
+            f = file.display()
+        );
+        let o = Command::new("python3")
+            .args(["-c", &script])
+            .output()
+            .unwrap();
+        o.status.success()
+    }
+
+    /// The environment a run needs to reach this server with the tests' credentials.
+    pub fn env(&self) -> [(&'static str, String); 4] {
+        [
+            ("AWS_ENDPOINT_URL", self.endpoint.clone()),
+            ("AWS_ACCESS_KEY_ID", KEY.to_string()),
+            ("AWS_SECRET_ACCESS_KEY", SECRET.to_string()),
+            ("AWS_REGION", "us-east-1".to_string()),
+        ]
+    }
+}
+
 impl Drop for Moto {
     fn drop(&mut self) {
         let _ = self.child.kill();

@@ -149,6 +149,37 @@ fn transport(e: &ureq::Error) -> Fault {
     }
 }
 
+/// `PUT`s `len` bytes of `file` (from its start) at `url`, retried as reads are; `name` is
+/// the destination as the user wrote it.
+pub(super) fn put(name: &str, url: &str, file: &File, len: u64) -> io::Result<()> {
+    use std::io::{Seek, SeekFrom};
+    retried(name, || {
+        let mut body = file.try_clone().map_err(Fault::Fail)?;
+        body.seek(SeekFrom::Start(0)).map_err(Fault::Fail)?;
+        let secs = super::io_timeout();
+        // The body's time grows with its size (at least 1 MB/s), over the answer's wait.
+        let body_secs = secs + len / 1_000_000;
+        let r = agent()
+            .put(url)
+            .config()
+            .timeout_connect(Some(Duration::from_secs(secs)))
+            .timeout_send_body(Some(Duration::from_secs(body_secs)))
+            .timeout_recv_response(Some(Duration::from_secs(secs)))
+            .build()
+            .header("Content-Length", &len.to_string())
+            .send(body)
+            .map_err(|e| transport(&e))?;
+        match r.status().as_u16() {
+            200..=299 => Ok(()),
+            404 => Err(Fault::Fail(io::Error::new(
+                io::ErrorKind::NotFound,
+                "no such bucket (HTTP 404): check the URL",
+            ))),
+            s => Err(refused(s)),
+        }
+    })
+}
+
 impl Http {
     /// Opens `name` (the URL as given; `url` makes each request's URL when it differs, as for
     /// S3): one request for byte 0 tells the size, the identity and whether ranges work.

@@ -131,6 +131,24 @@ pub fn remote_version(name: &Path) -> Result<Option<String>> {
     Ok(Some(Source::open(name)?.identity()))
 }
 
+/// Writes the `len` bytes of `file` (from its start) as the remote object `name`, whole or not
+/// at all: an `s3://` object in one `PUT` (at most 5 GiB).
+///
+/// # Errors
+/// [`Error::Write`] naming `name`: an `http(s)://` destination, a refusal (access denied, no
+/// such bucket), a transfer that fails after its retries.
+pub fn upload(name: &Path, file: &std::fs::File, len: u64) -> Result<()> {
+    let shown = name.display().to_string();
+    let r = match Location::of(name) {
+        Location::S3 { bucket, key } => s3::put(&shown, &bucket, &key, file, len),
+        _ => Err(io::Error::new(
+            io::ErrorKind::Unsupported,
+            "outputs go to local files or s3:// objects",
+        )),
+    };
+    r.map_err(|e| Error::write(name, e))
+}
+
 /// The largest text input read whole from a server (a `.vpc`, a file list).
 const MAX_TEXT: u64 = 256 << 20;
 

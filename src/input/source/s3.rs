@@ -87,8 +87,8 @@ fn region(profile: &str) -> String {
         .unwrap_or_else(|| "us-east-1".to_string())
 }
 
-/// Opens `s3://bucket/key` (`name` as the user wrote it).
-pub(super) fn open(name: &str, bucket: &str, key: &str) -> io::Result<Http> {
+/// The bucket of `s3://bucket/key` as the environment addresses it, and the credentials.
+fn address(bucket: &str, key: &str) -> io::Result<(Bucket, Option<Credentials>)> {
     let bad = |what: String| io::Error::new(io::ErrorKind::InvalidInput, what);
     if bucket.is_empty() || key.is_empty() {
         return Err(bad("not an S3 object: write s3://BUCKET/KEY".to_string()));
@@ -108,16 +108,46 @@ pub(super) fn open(name: &str, bucket: &str, key: &str) -> io::Result<Http> {
     };
     let url = url::Url::parse(&endpoint)
         .map_err(|e| bad(format!("AWS_ENDPOINT_URL {endpoint}: not a URL: {e}")))?;
-    let bucket = Bucket::new(url, style, bucket.to_string(), region)
+    let b = Bucket::new(url, style, bucket.to_string(), region)
         .map_err(|e| bad(format!("cannot address bucket {bucket}: {e}")))?;
-    let creds = credentials(&profile);
-    let state = Arc::new((bucket, creds, key.to_string()));
+    Ok((b, credentials(&profile)))
+}
+
+/// How long a signed URL stays valid: longer than any one request with its retries.
+const SIGNED_FOR: Duration = Duration::from_secs(3600);
+
+/// Opens `s3://bucket/key` (`name` as the user wrote it).
+pub(super) fn open(name: &str, bucket: &str, key: &str) -> io::Result<Http> {
+    let state = Arc::new((address(bucket, key)?, key.to_string()));
     let sign = move || -> io::Result<String> {
-        let (bucket, creds, key) = &*state;
+        let ((bucket, creds), key) = &*state;
         Ok(bucket
             .get_object(creds.as_ref(), key)
-            .sign(Duration::from_secs(3600))
+            .sign(SIGNED_FOR)
             .to_string())
     };
     Http::open(name, Some(Box::new(sign)))
+}
+
+/// The largest object one `PUT` may write (S3's limit).
+const MAX_PUT: u64 = 5 << 30;
+
+/// Writes `len` bytes of `file` (from its start) as `s3://bucket/key` in one `PUT`: the object
+/// appears whole when the request completes, or not at all.
+pub(super) fn put(
+    name: &str,
+    bucket: &str,
+    key: &str,
+    file: &std::fs::File,
+    len: u64,
+) -> io::Result<()> {
+    if len > MAX_PUT {
+        return Err(io::Error::other(format!(
+            "{len} bytes: more than one S3 PUT writes (5 GiB; multipart uploads are not \
+             written yet): write it to a local file and copy it (aws s3 cp)"
+        )));
+    }
+    let (bucket, creds) = address(bucket, key)?;
+    let url = bucket.put_object(creds.as_ref(), key).sign(SIGNED_FOR);
+    super::http::put(name, url.as_str(), file, len)
 }
