@@ -10,7 +10,7 @@ mod plans;
 mod remote;
 
 use plans::{bin, s, sweeptin};
-use remote::Nginx;
+use remote::{Moto, Nginx};
 use std::path::{Path, PathBuf};
 
 /// The six IGN tiles (tests/data/lidar/ign_50m_tiles).
