@@ -9,7 +9,7 @@ mod data;
 #[path = "support/plans.rs"]
 mod plans;
 
-use plans::{bin, cells, ok, plan_extent, records, s, sweeptin};
+use plans::{bin, cells, ok, plan_and_run, plan_extent, records, s, sweeptin};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -526,23 +526,7 @@ fn a_dem_tasks_work_stops_at_the_datas_box() {
     let t = tempfile::tempdir().unwrap();
     let job = t.path().join("job");
     let input = sample();
-    sweeptin(
-        &[
-            "plan",
-            "dem",
-            s(&input),
-            "--cell",
-            "1",
-            "--tile",
-            "4000",
-            "-o",
-            s(&job),
-        ],
-        "plan",
-    );
-    let plan = job.join("plan.json");
-    let (_, n) = plan_extent(&plan);
-    sweeptin(&["run", s(&plan), "--all", "-q"], "run --all");
+    let (plan, n) = plan_and_run(&["dem", s(&input), "--cell", "1", "--tile", "4000"], &job);
     let ran: u64 = records(&job, n)
         .iter()
         .map(|r| r["subtiles"].as_u64().unwrap())

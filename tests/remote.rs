@@ -330,7 +330,7 @@ fn outputs_to_s3_are_the_local_bytes_and_appear_only_whole() {
         0,
         "a temporary file was left"
     );
-    // An HTTP URL is not an output.
+    // An HTTP URL is not an output; nor an S3 name that is not an object's.
     let o = run("http://127.0.0.1:9/topo.asc", local_c.to_str().unwrap());
     assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
     assert!(
@@ -338,4 +338,26 @@ fn outputs_to_s3_are_the_local_bytes_and_appear_only_whole() {
         "{}",
         stderr(&o)
     );
+    for bad in ["s3://out/dem/", "s3://out"] {
+        let o = run(bad, local_c.to_str().unwrap());
+        assert_eq!(o.status.code(), Some(4), "{bad}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("not an S3 object name"),
+            "{bad}: {}",
+            stderr(&o)
+        );
+    }
+    // An output never replaces an input object, whatever the scheme's case.
+    let o = sweeptin(
+        &[
+            "tin",
+            "s3://out/placeholder.laz",
+            "-q",
+            "-o",
+            "S3://out/placeholder.laz",
+        ],
+        &env,
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("that is an input"), "{}", stderr(&o));
 }

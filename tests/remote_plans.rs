@@ -9,7 +9,7 @@ mod plans;
 #[path = "support/remote.rs"]
 mod remote;
 
-use plans::{bin, s, sweeptin};
+use plans::{bin, plan_and_run, s, sweeptin};
 use remote::{Moto, Nginx};
 use std::path::{Path, PathBuf};
 
@@ -26,28 +26,15 @@ fn ign_tiles() -> Vec<PathBuf> {
     v
 }
 
-/// `plan dem VPC --tile 25` into `job`, `run --all`, `merge -o OUT`: the mosaic's bytes.
-fn plan_run_merge(vpc: &str, job: &Path, out: &Path) -> Vec<u8> {
-    let what = format!("plan of {vpc}");
-    sweeptin(
-        &[
-            "plan",
-            "dem",
-            vpc,
-            "--cell",
-            "1",
-            "--class",
-            "2",
-            "--tile",
-            "25",
-            "-o",
-            s(job),
-        ],
-        &what,
-    );
-    let plan = job.join("plan.json");
-    sweeptin(&["run", s(&plan), "--all", "-q"], &what);
-    sweeptin(&["merge", s(&plan), "-o", s(out), "-q"], &what);
+/// The job of the tests: the ground DEM of `vpc` in tiles of 25 m.
+fn job(vpc: &str) -> [&str; 8] {
+    ["dem", vpc, "--cell", "1", "--class", "2", "--tile", "25"]
+}
+
+/// `plan` the job into `dir`, `run --all`, `merge -o OUT`: the mosaic's bytes.
+fn plan_run_merge(vpc: &str, dir: &Path, out: &Path) -> Vec<u8> {
+    let (plan, _) = plan_and_run(&job(vpc), dir);
+    sweeptin(&["merge", s(&plan), "-o", s(out), "-q"], vpc);
     std::fs::read(out).unwrap()
 }
 
@@ -95,26 +82,49 @@ fn plan_over_a_remote_vpc_equals_the_local_plan() {
     let (bytes, requests) = nginx.sent();
     assert!(requests > 6 && bytes > 0);
 
+    // The mosaic merged straight to S3 is the same file; a VRT (it names the local tiles) is
+    // refused there, and so is a plan's directory (it is local).
+    if let Some(moto) = Moto::start("plan_over_a_remote_vpc_equals_the_local_plan") {
+        moto.put("out", "placeholder.laz", &tiles[0]);
+        let merge_to = |out: &str| {
+            bin()
+                .args(["merge", s(&far_job.join("plan.json")), "-o", out, "-q"])
+                .envs(moto.env())
+                .output()
+                .unwrap()
+        };
+        let o = merge_to("s3://out/mosaic.tif");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let got = t.path().join("got.tif");
+        assert!(moto.get("out", "mosaic.tif", &got));
+        assert!(
+            std::fs::read(&got).unwrap() == local,
+            "the mosaic on S3 differs"
+        );
+        let o = merge_to("s3://out/m.vrt");
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let mut remote_dir = vec!["plan"];
+        remote_dir.extend(job(&url));
+        remote_dir.extend(["-o", "s3://out/job"]);
+        let o = bin().args(&remote_dir).envs(moto.env()).output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{e}");
+        assert!(e.contains("a plan's directory is local"), "{e}");
+    }
+
     // A tile replaced on the server after a new plan (same bytes, a new time: nginx's ETag
     // changes): the tasks reading it stop with exit 3 naming its URL; no mosaic is made of
     // two versions.
     let job2 = t.path().join("again");
-    sweeptin(
-        &[
-            "plan",
-            "dem",
-            &url,
-            "--cell",
-            "1",
-            "--class",
-            "2",
-            "--tile",
-            "25",
-            "-o",
-            s(&job2),
-        ],
-        "second plan",
-    );
+    let mut again = vec!["plan"];
+    again.extend(job(&url));
+    again.extend(["-o", s(&job2)]);
+    sweeptin(&again, "second plan");
     let first = served.path().join(&names[0]);
     let f = std::fs::File::options().write(true).open(&first).unwrap();
     let later = std::time::SystemTime::now() + std::time::Duration::from_secs(100);

@@ -86,11 +86,9 @@ pub struct FilterArgs {
 use sweeptin::input::source::{DEFAULT_IO_CONCURRENCY, DEFAULT_IO_TIMEOUT};
 
 impl FilterArgs {
-    /// The library filter these flags describe; also sets `--io-concurrency` and `--io-timeout`
-    /// for the process.
+    /// The library filter these flags describe (`--io-concurrency` and `--io-timeout` are set
+    /// for the process when the command line is parsed: `cli::apply_io_options`).
     pub fn to_filter(&self) -> Filter {
-        sweeptin::input::source::set_io_concurrency(usize::from(self.io_concurrency));
-        sweeptin::input::source::set_io_timeout(self.io_timeout);
         Filter {
             classes: self.class.as_ref().map(|c| c.0.clone()),
             returns: self.returns,

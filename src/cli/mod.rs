@@ -165,6 +165,7 @@ static LAST_PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None
 
 /// `--io-timeout` and `--io-concurrency` of the (sub)command, set for the process before anything
 /// is opened: a remote input's first request may come before the command's options are read.
+/// The one place they are set (a plan's job too: `plan::parse_job`).
 fn apply_io_options(m: &clap::ArgMatches) {
     use sweeptin::input::source::{set_io_concurrency, set_io_timeout};
     if let Ok(Some(&t)) = m.try_get_one::<u64>("io_timeout") {

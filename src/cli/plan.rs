@@ -5,7 +5,6 @@
 use super::input::{InputArgs, ProductInput};
 use super::{Cli, Command};
 use anyhow::{Context, bail};
-use clap::Parser;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use sweeptin::fmt::{Figure, count};
@@ -268,7 +267,14 @@ fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
         // A placeholder: every task writes under the plan's directory.
         full.extend(["-o".to_string(), "plan-output".to_string()]);
     }
-    let cli = match Cli::try_parse_from(&full) {
+    // The job's `--io-timeout`/`--io-concurrency` hold for the plan's own reads (a remote `.vpc`).
+    let parsed = <Cli as clap::CommandFactory>::command()
+        .try_get_matches_from(&full)
+        .and_then(|m| {
+            super::apply_io_options(&m);
+            <Cli as clap::FromArgMatches>::from_arg_matches(&m)
+        });
+    let cli = match parsed {
         Ok(c) => c,
         Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelp => {
             // `sweeptin plan dem --help`: the command's own help, then stop.
@@ -347,6 +353,13 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let (argv, dir) = take_output(&args.command);
     let mut job = parse_job(&argv)?;
     let dir = dir.context("give the plan's directory with -o DIR")?;
+    if sweeptin::input::source::is_remote(&dir) {
+        bail!(sweeptin::Error::Options(format!(
+            "{}: a plan's directory is local (its tasks write their tiles and records there); \
+             give a local -o DIR, and merge to s3:// (`merge PLAN -o s3://BUCKET/KEY.tif`)",
+            dir.display()
+        )));
+    }
     // `@list.txt`, quoted globs and `.vpc` files: the plan names every file (it reads each
     // header), each given input standing for its files in the stored command line.
     let given = job.args().inputs.clone();

@@ -87,12 +87,8 @@ fn expand_one(a: &Path, vpc_mode: Expand, out: &mut Expansion, depth: usize) -> 
             let p = Path::new(line);
             let p = if p.is_absolute() || line.starts_with('@') || source::is_remote(p) {
                 p.to_path_buf()
-            } else if source::is_remote(dir) {
-                // A URL's path joins with `/` whatever the platform.
-                let line = line.strip_prefix("./").unwrap_or(line);
-                PathBuf::from(format!("{}/{line}", dir.display()))
             } else {
-                dir.join(p)
+                source::beside(dir, line)
             };
             expand_one(&p, vpc_mode, out, depth + 1)?;
         }

@@ -255,9 +255,18 @@ impl AtomicFile {
         let inner = match Destination::of(&path)? {
             Destination::File { target, mode } => Self::temp_beside(&path, target, mode)?,
             Destination::Object { url } => {
+                // In the system's temporary directory, named as the temporary files beside
+                // outputs are (a run killed before its upload leaves one the next removes).
+                let name = url.file_name().map_or_else(
+                    || "upload".to_string(),
+                    |n| n.to_string_lossy().into_owned(),
+                );
+                let stand_in = std::env::temp_dir().join(&name);
+                remove_stale_temps(&stand_in);
                 let temp = tempfile::Builder::new()
-                    .prefix(".sweeptin-upload-")
+                    .prefix(&temp_prefix(&name))
                     .suffix(".tmp")
+                    .rand_bytes(6)
                     .tempfile()
                     .map_err(|e| Error::write(&path, e))?;
                 let registration = register_temp(temp.path(), TempKind::File);

@@ -53,7 +53,15 @@ impl Destination {
     pub fn of(path: &Path) -> Result<Destination> {
         match crate::input::source::Location::of(path) {
             crate::input::source::Location::Local(_) => {}
-            crate::input::source::Location::S3 { .. } => {
+            crate::input::source::Location::S3 { bucket, key } => {
+                if bucket.is_empty() || key.is_empty() || key.ends_with('/') {
+                    return Err(Error::Output {
+                        path: path.to_path_buf(),
+                        message: "not an S3 object name: write s3://BUCKET/KEY, the key \
+                                  naming a file (not ending in /)"
+                            .into(),
+                    });
+                }
                 return Ok(Destination::Object {
                     url: path.to_path_buf(),
                 });
@@ -211,7 +219,8 @@ pub fn check_output(path: &Path) -> Result<()> {
 
 /// The file an output at `path` writes, as a canonical path: through symbolic links, its
 /// directory's `..` and links resolved (what `starts_with` can compare with a canonical
-/// directory). A stream, or a path that cannot be resolved, is returned absolute.
+/// directory). A stream, or a path that cannot be resolved, is returned absolute; an `s3://`
+/// object as given.
 pub fn written_path(path: &Path) -> PathBuf {
     let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
     let target = match Destination::of(path) {
@@ -229,6 +238,12 @@ pub fn written_path(path: &Path) -> PathBuf {
 /// Is `a` the same file as `b`: the same absolute path, the same file (device and inode) when
 /// both exist, or the same file an output there would write (through symbolic links)?
 fn same_file(a: &Path, b: &Path) -> bool {
+    use crate::input::source::Location;
+    let (la, lb) = (Location::of(a), Location::of(b));
+    if la.is_remote() || lb.is_remote() {
+        // Objects are the same when their scheme (any case), bucket and key are.
+        return la == lb;
+    }
     let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
     if abs(a) == abs(b) {
         return true;

@@ -65,15 +65,6 @@ impl FileStamp {
     /// # Errors
     /// [`Error::Io`] naming the file.
     pub fn of(path: &Path) -> Result<FileStamp> {
-        if crate::input::source::is_remote(path) {
-            // The version is the ETag (`PlanFile::version`); a server's times are not a stamp.
-            let s = crate::input::source::Source::open(path)?;
-            return Ok(FileStamp {
-                bytes: s.len(),
-                modified: 0,
-                nanos: 0,
-            });
-        }
         let m = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
         let t = m.modified().map_err(|e| Error::io(path, e))?;
         let (modified, nanos) = match t.duration_since(std::time::UNIX_EPOCH) {

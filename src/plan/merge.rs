@@ -589,6 +589,13 @@ fn mosaic_options(
             out.display()
         )));
     }
+    if ext.as_deref() == Some("vrt") && crate::input::source::is_remote(out) {
+        return Err(Error::Options(format!(
+            "{}: a .vrt mosaic names the plan's local tile files, which a reader of the object \
+             cannot open: merge into a .tif (or write the .vrt beside the plan)",
+            out.display()
+        )));
+    }
     super::task::check_mosaic(given)?;
     let default = RasterOptions::default();
     let output = match (ext.as_deref(), *given == default) {

@@ -64,8 +64,8 @@ pub struct PlanFile {
     /// Its size and modification time (seconds and nanoseconds since 1970) when the plan was
     /// made: a file rewritten in place (reclassified, heights corrected) keeps its header's
     /// count and extent, and tasks before and after the rewrite mixed old and new points.
-    /// `None` in plans of older builds (not checked). A remote file's (a URL) is its size
-    /// with no time; [`PlanFile::version`] pins it.
+    /// `None` in plans of older builds (not checked), and for a remote file (a URL), which
+    /// [`PlanFile::version`] pins.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stamp: Option<FileStamp>,
     /// A remote file's version when the plan was made: its ETag (else its Last-Modified date)
@@ -313,7 +313,11 @@ impl Plan {
                 path: p.clone(),
                 bounds: [b.min[0], b.min[1], b.max[0], b.max[1]],
                 points: info.point_count,
-                stamp: Some(FileStamp::of(p)?),
+                // A URL's version is its ETag and size (`version`), not a time.
+                stamp: match crate::input::source::is_remote(p) {
+                    true => None,
+                    false => Some(FileStamp::of(p)?),
+                },
                 version: crate::input::source::remote_version(p)?,
                 indexed: info.point_count > 0 && info.copc.is_none(),
             });
@@ -615,7 +619,6 @@ impl Plan {
             .iter()
             .filter(|f| f.points > 0 && overlaps(&f.bounds, &g))
         {
-            let info = FileInfo::read(&f.path)?;
             if let Some(then) = &f.version {
                 let now = crate::input::source::remote_version(&f.path)?.unwrap_or_default();
                 if &now != then {
@@ -628,6 +631,7 @@ impl Plan {
                     ));
                 }
             }
+            let info = FileInfo::read(&f.path)?;
             if let Some(then) = f.stamp {
                 let now = FileStamp::of(&f.path)?;
                 if now != then {

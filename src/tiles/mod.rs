@@ -372,8 +372,8 @@ pub(crate) fn run(
     });
     // The tiles looked at: without covering or lines, only those of the occupied blocks. A
     // covering task looks only where triangles can be: in the box of all the data (the points
-    // read, the files it does not read, the lines' vertices); a plan tile far larger than the
-    // data (`plan dem --tile 1e6`) holds millions of tiles no triangle reaches.
+    // read, the files or parts of files it does not read, the lines' vertices); a plan tile far
+    // larger than the data (`plan dem --tile 1e6`) holds millions of tiles no triangle reaches.
     let occupied = g.tiles_of(&index.occupied());
     let walk = if covers || !line_tiles.is_empty() {
         let tile_of = |x: f64, y: f64| {
@@ -386,10 +386,12 @@ pub(crate) fn run(
             x1: tx + 1,
             y1: ty + 1,
         };
-        let data = options
+        // Beside the points read: the files not read and the parts of files read only around
+        // the tile (COPC, indexed chunks), from their headers.
+        let data = index
             .scope
             .iter()
-            .flat_map(|sc| &sc.unread)
+            .flat_map(|sc| sc.unknown.iter().chain(&sc.beyond))
             .flat_map(|b| [tile_of(b[0], b[1]), tile_of(b[2], b[3])])
             .chain(line_tiles.iter().copied())
             .map(one)

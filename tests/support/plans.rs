@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use sweeptin::input::raster::RasterReader;
 
@@ -80,4 +80,17 @@ pub fn records(dir: &Path, n: usize) -> Vec<serde_json::Value> {
             serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
         })
         .collect()
+}
+
+/// `plan ARGS… -o JOB` (`args` from the job's name, e.g. `["dem", input, "--cell", "1"]`), then
+/// `run --all`: the plan file and its number of tasks.
+pub fn plan_and_run(args: &[&str], job: &Path) -> (PathBuf, usize) {
+    let mut all = vec!["plan"];
+    all.extend_from_slice(args);
+    all.extend(["-o", s(job)]);
+    sweeptin(&all, "plan");
+    let plan = job.join("plan.json");
+    let (_, n) = plan_extent(&plan);
+    sweeptin(&["run", s(&plan), "--all", "-q"], "run --all");
+    (plan, n)
 }

@@ -153,47 +153,44 @@ impl Moto {
         })
     }
 
-    /// Uploads `file` as `s3://bucket/key` (making the bucket), with boto3.
-    pub fn put(&self, bucket: &str, key: &str, file: &Path) {
+    /// Runs `body` in Python with `s3`, a boto3 client of this server.
+    fn boto(&self, body: &str) -> std::process::Output {
         let script = format!(
-            "import boto3\n\
+            "import boto3, sys\n\
              s3 = boto3.client('s3', endpoint_url='{e}', aws_access_key_id='{KEY}',\n\
-                 aws_secret_access_key='{SECRET}', region_name='us-east-1')\n\
-             try:\n    s3.create_bucket(Bucket='{bucket}')\n\
-             except s3.exceptions.BucketAlreadyOwnedByYou:\n    pass\n\
-             s3.upload_file('{f}', '{bucket}', '{key}')\n",
-            e = self.endpoint,
-            f = file.display()
+                 aws_secret_access_key='{SECRET}', region_name='us-east-1')\n{body}",
+            e = self.endpoint
         );
-        let o = Command::new("python3")
+        Command::new("python3")
             .args(["-c", &script])
             .output()
-            .unwrap();
+            .unwrap()
+    }
+
+    /// Uploads `file` as `s3://bucket/key` (making the bucket), with boto3.
+    pub fn put(&self, bucket: &str, key: &str, file: &Path) {
+        let o = self.boto(&format!(
+            "try:\n    s3.create_bucket(Bucket='{bucket}')\n\
+             except s3.exceptions.BucketAlreadyOwnedByYou:\n    pass\n\
+             s3.upload_file('{f}', '{bucket}', '{key}')\n",
+            f = file.display()
+        ));
         assert!(
             o.status.success(),
             "boto3 upload: {}",
             String::from_utf8_lossy(&o.stderr)
         );
     }
-}
 
-impl Moto {
     /// Downloads `s3://bucket/key` to `file`, with boto3; `false` when there is no such object.
     pub fn get(&self, bucket: &str, key: &str, file: &Path) -> bool {
-        let script = format!(
-            "import boto3, sys\n\
-             s3 = boto3.client('s3', endpoint_url='{e}', aws_access_key_id='{KEY}',\n\
-                 aws_secret_access_key='{SECRET}', region_name='us-east-1')\n\
-             try:\n    s3.download_file('{bucket}', '{key}', '{f}')\n\
+        self.boto(&format!(
+            "try:\n    s3.download_file('{bucket}', '{key}', '{f}')\n\
              except Exception as x:\n    print(x, file=sys.stderr); sys.exit(1)\n",
-            e = self.endpoint,
             f = file.display()
-        );
-        let o = Command::new("python3")
-            .args(["-c", &script])
-            .output()
-            .unwrap();
-        o.status.success()
+        ))
+        .status
+        .success()
     }
 
     /// The environment a run needs to reach this server with the tests' credentials.

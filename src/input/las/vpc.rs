@@ -203,11 +203,8 @@ fn entry(path: &Path, dir: &Path, i: usize, item: Item) -> Result<VpcEntry> {
         let file = Path::new(href.strip_prefix("./").unwrap_or(href));
         if file.is_absolute() {
             file.to_path_buf()
-        } else if source::is_remote(dir) {
-            // A URL's path joins with `/` whatever the platform.
-            PathBuf::from(format!("{}/{}", dir.display(), file.display()))
         } else {
-            dir.join(file)
+            source::beside(dir, href)
         }
     };
     let b = item

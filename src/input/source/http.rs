@@ -47,17 +47,25 @@ fn agent() -> &'static ureq::Agent {
 }
 
 /// A GET of `url` with the timeouts of `--io-timeout` as they are now (set per request: the
-/// agent is made at the first request, which may come before the options are read).
-fn get(url: &str) -> ureq::RequestBuilder<ureq::typestate::WithoutBody> {
+/// agent is made at the first request, which may come before the options are read); its body
+/// may take `body` times that.
+fn get(url: &str, body: u64) -> ureq::RequestBuilder<ureq::typestate::WithoutBody> {
     let secs = super::io_timeout();
     agent()
         .get(url)
         .config()
         .timeout_connect(Some(Duration::from_secs(secs)))
         .timeout_recv_response(Some(Duration::from_secs(secs)))
-        .timeout_recv_body(Some(Duration::from_secs(2 * secs)))
+        .timeout_recv_body(Some(Duration::from_secs(body * secs)))
         .build()
 }
+
+/// The body of a range request (at most 8 MiB) may take this many times `--io-timeout`.
+const RANGE_BODY: u64 = 2;
+
+/// The first request's body may take this many times `--io-timeout`: a server that ignores
+/// `Range` sends the whole object then (an hour at the default).
+const WHOLE_BODY: u64 = 60;
 
 fn header(r: &ureq::http::Response<ureq::Body>, name: &str) -> Option<String> {
     r.headers()
@@ -91,11 +99,12 @@ fn invalid(msg: String) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidData, msg)
 }
 
-/// What a status other than a success means for the user.
-fn refused(status: u16) -> Fault {
+/// What a status other than a success means for the user; a 404 means `missing` ("no such
+/// object", or "no such bucket" for a write).
+fn refused(status: u16, missing: &str) -> Fault {
     let why = match status {
         500..=599 | 429 | 408 => return Fault::Retry(format!("the server answered HTTP {status}")),
-        404 => "no such object (HTTP 404): check the URL".to_string(),
+        404 => format!("{missing} (HTTP 404): check the URL"),
         401 | 403 => format!(
             "access denied (HTTP {status}): check the URL and the credentials \
              (AWS_ACCESS_KEY_ID/AWS_SECRET_ACCESS_KEY or AWS_PROFILE for s3://)"
@@ -171,11 +180,7 @@ pub(super) fn put(name: &str, url: &str, file: &File, len: u64) -> io::Result<()
             .map_err(|e| transport(&e))?;
         match r.status().as_u16() {
             200..=299 => Ok(()),
-            404 => Err(Fault::Fail(io::Error::new(
-                io::ErrorKind::NotFound,
-                "no such bucket (HTTP 404): check the URL",
-            ))),
-            s => Err(refused(s)),
+            s => Err(refused(s, "no such bucket")),
         }
     })
 }
@@ -205,7 +210,7 @@ impl Http {
     }
 
     fn probe(&mut self) -> Result<(), Fault> {
-        let r = get(&self.url()?)
+        let r = get(&self.url()?, WHOLE_BODY)
             .header("Range", "bytes=0-0")
             .call()
             .map_err(|e| transport(&e))?;
@@ -247,7 +252,7 @@ impl Http {
                 self.whole = Some(file);
                 Ok(())
             }
-            s => Err(refused(s)),
+            s => Err(refused(s, "no such object")),
         }
     }
 
@@ -262,7 +267,8 @@ impl Http {
     /// One range request for `buf.len()` bytes at `offset`.
     fn fetch(&self, offset: u64, buf: &mut [u8]) -> Result<(), Fault> {
         let last = offset + buf.len() as u64 - 1;
-        let mut req = get(&self.url()?).header("Range", &format!("bytes={offset}-{last}"));
+        let mut req =
+            get(&self.url()?, RANGE_BODY).header("Range", &format!("bytes={offset}-{last}"));
         // `If-Match` compares strongly: a weak ETag (`W/"…"`) would never match, so it is only
         // compared with the answer's.
         if let Some(tag) = self.etag.as_ref().filter(|t| !t.starts_with("W/")) {
@@ -278,7 +284,7 @@ impl Http {
             ));
         }
         if !matches!(status, 200 | 206) {
-            return Err(refused(status));
+            return Err(refused(status, "no such object"));
         }
         let (etag, modified) = (header(&r, "etag"), header(&r, "last-modified"));
         if let (Some(was), Some(now)) = (&self.etag, &etag)

@@ -61,8 +61,9 @@ static IO_TIMEOUT: AtomicU64 = AtomicU64::new(DEFAULT_IO_TIMEOUT);
 pub const DEFAULT_IO_TIMEOUT: u64 = 60;
 
 /// Sets how long a request to a remote input may wait (at least 1 s): `secs` to connect and for
-/// the answer's head, twice that for its body (up to 8 MiB). A request that times out is
-/// retried like a dropped connection. Applies to the requests made after the call.
+/// the answer's head, twice that for a range's body (up to 8 MiB; more for the first request,
+/// which may bring a whole object, and for uploads). A request that times out is retried like
+/// a dropped connection. Applies to the requests made after the call.
 pub fn set_io_timeout(secs: u64) {
     IO_TIMEOUT.store(secs.max(1), Ordering::Relaxed);
 }
@@ -119,6 +120,17 @@ pub fn is_remote(name: &Path) -> bool {
     Location::of(name).is_remote()
 }
 
+/// `rel`, a relative path read in a list or a `.vpc` found in `dir`, as a path or URL: beside
+/// it (a URL's path joins with `/` whatever the platform; a leading `./` is dropped).
+pub fn beside(dir: &Path, rel: &str) -> PathBuf {
+    let rel = rel.strip_prefix("./").unwrap_or(rel);
+    if is_remote(dir) {
+        PathBuf::from(format!("{}/{rel}", dir.display()))
+    } else {
+        dir.join(rel)
+    }
+}
+
 /// A remote object's version as this process reads it (its ETag, else its Last-Modified date,
 /// and its size: [`Source::identity`]); `None` for a local file.
 ///
@@ -146,7 +158,13 @@ pub fn upload(name: &Path, file: &std::fs::File, len: u64) -> Result<()> {
             "outputs go to local files or s3:// objects",
         )),
     };
-    r.map_err(|e| Error::write(name, e))
+    r.map_err(|e| Error::write(name, e))?;
+    // Another version now: a later read in this process opens it afresh.
+    opened()
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .remove(name);
+    Ok(())
 }
 
 /// The largest text input read whole from a server (a `.vpc`, a file list).
