@@ -187,7 +187,7 @@ fn ground_is_refused_where_it_cannot_be_exact_and_its_options_without_it() {
             ],
             "--max-angle",
         ),
-        // A plan: the route named.
+        // A plan: the filter's options without --ground, and bad parameters.
         (
             vec![
                 os("plan"),
@@ -195,11 +195,30 @@ fn ground_is_refused_where_it_cannot_be_exact_and_its_options_without_it() {
                 input.as_os_str(),
                 os("--cell"),
                 os("1"),
-                os("--ground"),
+                os("--tile"),
+                os("20"),
+                os("--town"),
                 os("-o"),
                 plan.as_os_str(),
             ],
-            "--class 2",
+            "apply with --ground",
+        ),
+        (
+            vec![
+                os("plan"),
+                os("dem"),
+                input.as_os_str(),
+                os("--cell"),
+                os("1"),
+                os("--tile"),
+                os("20"),
+                os("--ground"),
+                os("--step"),
+                os("0"),
+                os("-o"),
+                plan.as_os_str(),
+            ],
+            "--step",
         ),
     ];
     for (mut args, says) in cases {

@@ -230,6 +230,7 @@ impl Job {
             crs: self.crs(),
             mem: a.mem.0,
             tmp_dir: a.tmp_dir.clone(),
+            ground: a.ground.then(|| a.ground_options.params()),
         })
     }
 }
@@ -293,9 +294,11 @@ fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
 /// Refuses what a plan cannot run exactly, before anything is written.
 fn check_job(job: &Job) -> anyhow::Result<()> {
     let a = job.args();
-    if a.ground {
+    if !a.ground && a.ground_options.any() {
         bail!(sweeptin::Error::Options(
-            sweeptin::pipeline::ground::PLAN_REFUSES_GROUND.into()
+            "the ground filter's options (--step, --max-angle, --town, …) apply with --ground: \
+             add --ground to plan on the ground found on the fly"
+                .into()
         ));
     }
     if a.filter.bbox.is_some() {
