@@ -41,6 +41,8 @@ struct Classified {
     ranks: Ranks,
     /// Where each classified file's points start among the classified files' indices.
     starts: BTreeMap<usize, u64>,
+    /// What the classification did.
+    summary: GroundSummary,
 }
 
 impl Plan {
@@ -74,15 +76,12 @@ impl Plan {
         let (lo, hi) = (corner(area[0], area[1]), corner(area[2], area[3]));
         let owned = grid.tile_blocks(lo.0, lo.1).union(&grid.tile_blocks(hi.0, hi.1));
         let mem = options.mem;
-        let mut summary = None;
         let classified = match &cache.0 {
             Some((o, c)) if o.contains_rect(&owned) => c.clone(),
             _ => {
                 // Those blocks grown by the buffer of their runs, and one cell more.
                 let read = grid.world(&owned.expand(BUFFER_CELLS + 1));
-                let (c, s) = self.classify_area(dir, i, read, &params, mem)?;
-                summary = Some(s);
-                let c = Arc::new(c);
+                let c = Arc::new(self.classify_area(dir, i, read, &params, mem)?);
                 cache.0 = Some((owned, c.clone()));
                 c
             }
@@ -116,11 +115,12 @@ impl Plan {
             .filter
             .classes
             .get_or_insert_with(|| vec![GROUND_CLASS]);
+        let summary = classified.summary.clone();
         input.filter.classes_from = Some(ClassesFrom(Arc::new(TaskClasses {
             classified,
             segments,
         }) as Arc<_>));
-        Ok(Some(summary.unwrap_or_default()))
+        Ok(Some(summary))
     }
 
     /// Classifies every point of the plan's files inside `read` (closed), within `mem`, each
@@ -132,7 +132,7 @@ impl Plan {
         read: [f64; 4],
         params: &crate::ground::GroundParams,
         mem: u64,
-    ) -> Result<(Classified, GroundSummary)> {
+    ) -> Result<Classified> {
         let tmp = self.job.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
         // The plan's files with points that reach there, in the plan's order.
         let files: Vec<usize> = (0..self.files.len())
@@ -146,12 +146,12 @@ impl Plan {
         }
         if files.is_empty() {
             let store = ClassStore::new(0, 0, &tmp)?;
-            let c = Classified {
+            return Ok(Classified {
                 store,
                 ranks: Ranks::default(),
                 starts,
-            };
-            return Ok((c, GroundSummary::default()));
+                summary: GroundSummary::default(),
+            });
         }
         let bbox = BBox::new(read[0], read[1], read[2], read[3]).ok_or_else(|| {
             Error::Internal(format!("task {i}: no area to classify ({read:?})"))
@@ -197,14 +197,12 @@ impl Plan {
         let mem = mem.saturating_sub(ranks.memory_bytes());
         let (store, summary) =
             classify_stream(params, ranks.total, mem, &tmp, &mut feed, &mut |_, _, _| {})?;
-        Ok((
-            Classified {
-                store,
-                ranks,
-                starts,
-            },
+        Ok(Classified {
+            store,
+            ranks,
+            starts,
             summary,
-        ))
+        })
     }
 }
 

@@ -584,8 +584,10 @@ impl Plan {
             }),
         };
         // `--ground`: the classes of the area the run reads, found first.
-        self.ground_task(dir, (i, buffer), &mut input, &mut options, ground)?;
-        let config = RunConfig::new(input, options)?.with_crs(self.job.crs()?);
+        let ground = self.ground_task(dir, (i, buffer), &mut input, &mut options, ground)?;
+        let config = RunConfig::new(input, options)?
+            .with_crs(self.job.crs()?)
+            .with_ground(ground);
         // Each line file is read once and parsed from the bytes checked against the plan's
         // fingerprint (a file changed since the plan was made is refused).
         Ok(match &self.job.lines {
