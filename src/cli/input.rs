@@ -96,7 +96,9 @@ pub struct InputArgs {
     #[arg(skip)]
     pub lists: Vec<PathBuf>,
     /// Print a one-object JSON summary on stdout (points, triangles, seconds per phase, peak
-    /// memory) for batch jobs; on failure `{"error": {"status", "kind", "message", "causes"}}`.
+    /// memory; with --ground what the filter found, as `ground --json` prints it, under the
+    /// run's `ground`) for batch jobs; on failure `{"error": {"status", "kind", "message",
+    /// "causes"}}`.
     #[arg(long)]
     pub json: bool,
 }
