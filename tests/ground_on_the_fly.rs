@@ -283,7 +283,15 @@ fn json_of_a_product_with_ground_carries_the_ground_summary() {
     ]);
     for ground in [&got["run"]["ground"], &tin["ground"]] {
         assert!(ground.is_object(), "no ground summary: {got} {tin}");
-        for key in ["points", "ground", "low_noise", "seeds", "blocks", "block", "buffer"] {
+        for key in [
+            "points",
+            "ground",
+            "low_noise",
+            "seeds",
+            "blocks",
+            "block",
+            "buffer",
+        ] {
             assert_eq!(ground[key], want[key], "{key}");
         }
     }

@@ -71,7 +71,10 @@ fn a_ground_task_run_twice_writes_the_same_tile() {
     let job = t.path().join("job");
     let plan = plan(&files, &[], "30", &job);
     let tile = |i: usize| -> Vec<u8> {
-        sweeptin(&["run", s(&plan), "--task", &i.to_string(), "-q"], "run a task");
+        sweeptin(
+            &["run", s(&plan), "--task", &i.to_string(), "-q"],
+            "run a task",
+        );
         let r: serde_json::Value = serde_json::from_str(
             &std::fs::read_to_string(job.join("tiles").join(format!("task_{i}.json"))).unwrap(),
         )

@@ -74,7 +74,9 @@ impl Plan {
             grid.tile_of_block(bx, by)
         };
         let (lo, hi) = (corner(area[0], area[1]), corner(area[2], area[3]));
-        let owned = grid.tile_blocks(lo.0, lo.1).union(&grid.tile_blocks(hi.0, hi.1));
+        let owned = grid
+            .tile_blocks(lo.0, lo.1)
+            .union(&grid.tile_blocks(hi.0, hi.1));
         let mem = options.mem;
         let classified = match &cache.0 {
             Some((o, c)) if o.contains_rect(&owned) => c.clone(),
@@ -153,13 +155,17 @@ impl Plan {
                 summary: GroundSummary::default(),
             });
         }
-        let bbox = BBox::new(read[0], read[1], read[2], read[3]).ok_or_else(|| {
-            Error::Internal(format!("task {i}: no area to classify ({read:?})"))
-        })?;
+        let bbox = BBox::new(read[0], read[1], read[2], read[3])
+            .ok_or_else(|| Error::Internal(format!("task {i}: no area to classify ({read:?})")))?;
         let chunks = files
             .iter()
             .filter(|&&k| self.files[k].indexed)
-            .map(|&k| Ok((self.files[k].path.clone(), Arc::new(self.chunk_index(dir, k)?))))
+            .map(|&k| {
+                Ok((
+                    self.files[k].path.clone(),
+                    Arc::new(self.chunk_index(dir, k)?),
+                ))
+            })
             .collect::<Result<Vec<_>>>()?;
         let area_reader = AreaReader {
             paths: files.iter().map(|&k| self.files[k].path.clone()).collect(),
@@ -285,7 +291,9 @@ impl Ranks {
         let (w, b) = ((bit >> 6) as usize, bit & 63);
         let word = page.words[w];
         (word >> b & 1 == 1).then(|| {
-            page.base + u64::from(page.before[w]) + u64::from((word & ((1u64 << b) - 1)).count_ones())
+            page.base
+                + u64::from(page.before[w])
+                + u64::from((word & ((1u64 << b) - 1)).count_ones())
         })
     }
 
