@@ -27,7 +27,11 @@ text file of `x y` lines (a blank line between lines)
   sweeptin sample tiles/*.laz --class 2 --points lines.txt -o lines_z.txt
 and plan with --breaklines lines_z.txt (the result is one run's with those 3-D lines), or run the
 job as one command. --clip-breaklines (the hull of all the points) and --no-flat-triangles (flips
-across tiles) are refused.";
+across tiles) are refused.
+
+--ground (the ground found on the fly, with the filter's options) goes into every task: each
+classifies the ground of the area it reads as one run over all the files would, then reads only
+that area; the merge is one `dem --ground` run's, byte for byte.";
 
 /// Arguments of `sweeptin plan`.
 #[derive(clap::Args, Debug)]

@@ -81,6 +81,7 @@ impl Plan {
         let classified = match &cache.0 {
             Some((o, c)) if o.contains_rect(&owned) => c.clone(),
             _ => {
+                cache.0 = None;
                 // Those blocks grown by the buffer of their runs, and one cell more.
                 let read = grid.world(&owned.expand(BUFFER_CELLS + 1));
                 let c = Arc::new(self.classify_area(dir, i, read, &params, mem)?);
@@ -109,6 +110,13 @@ impl Plan {
                 classified: c,
             });
             r += f.points;
+        }
+        if segments.len() != input.paths.len() {
+            return Err(Error::Internal(format!(
+                "task {i}: {} files read, {} placed among the classified",
+                input.paths.len(),
+                segments.len()
+            )));
         }
         // The run has --mem less the classes in memory (at most an eighth) and the ranks.
         let kept = classified.store.memory_bytes().min(mem / 8) + classified.ranks.memory_bytes();
