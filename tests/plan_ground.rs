@@ -48,8 +48,13 @@ fn a_ground_plan_merges_into_the_dem_of_one_ground_run_for_any_tile_size() {
         for tile in tiles {
             let job = t.path().join(format!("job{k}_{tile}"));
             let plan = plan(files, params, tile, &job);
-            let text = std::fs::read_to_string(&plan).unwrap();
-            assert!(text.contains("\"ground\""), "the plan keeps the filter");
+            let v: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
+            assert_eq!(v["version"], 4, "a plan with --ground is version 4");
+            assert!(
+                v["job"]["ground"]["step"].is_number(),
+                "the plan keeps the filter"
+            );
             sweeptin(
                 &["run", s(&plan), "--all", "--jobs", "2", "-q"],
                 "run --all",
