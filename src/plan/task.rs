@@ -164,7 +164,7 @@ pub struct Job {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lines: Option<super::PlanLines>,
     /// `--ground`: every task classifies the ground of its area first (as one run would,
-    /// [`super::ground`]) and reads the points with those classes (`classes` then selects,
+    /// `plan::ground`) and reads the points with those classes (`classes` then selects,
     /// class 2 when `None`). Absent from the plans of versions before 4.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ground: Option<crate::ground::GroundParams>,
