@@ -187,7 +187,7 @@ fn ground_is_refused_where_it_cannot_be_exact_and_its_options_without_it() {
             ],
             "--max-angle",
         ),
-        // A plan: the route named.
+        // A plan: the filter's options without --ground, and bad parameters.
         (
             vec![
                 os("plan"),
@@ -195,11 +195,30 @@ fn ground_is_refused_where_it_cannot_be_exact_and_its_options_without_it() {
                 input.as_os_str(),
                 os("--cell"),
                 os("1"),
-                os("--ground"),
+                os("--tile"),
+                os("20"),
+                os("--town"),
                 os("-o"),
                 plan.as_os_str(),
             ],
-            "--class 2",
+            "apply with --ground",
+        ),
+        (
+            vec![
+                os("plan"),
+                os("dem"),
+                input.as_os_str(),
+                os("--cell"),
+                os("1"),
+                os("--tile"),
+                os("20"),
+                os("--ground"),
+                os("--step"),
+                os("0"),
+                os("-o"),
+                plan.as_os_str(),
+            ],
+            "--step",
         ),
     ];
     for (mut args, says) in cases {
@@ -222,4 +241,69 @@ fn ground_is_refused_where_it_cannot_be_exact_and_its_options_without_it() {
         out.as_os_str(),
     ]);
     assert_eq!(code, 2, "{err}");
+}
+
+/// `--json` of a product command with `--ground` carries what the filter found: the summary
+/// `ground --json` prints (under the run's summary, `run.ground`; a TIN's is the run's).
+#[test]
+fn json_of_a_product_with_ground_carries_the_ground_summary() {
+    let input = data::shared("lidar/startinpy_small.laz");
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let json = |args: &[&OsStr]| -> serde_json::Value {
+        serde_json::from_slice(&cli::ok(args).stdout).unwrap()
+    };
+    let g = d.join("g.laz");
+    let want = json(&[
+        os("ground"),
+        input.as_os_str(),
+        os("-o"),
+        g.as_os_str(),
+        os("--json"),
+    ]);
+    let dem = d.join("d.tif");
+    let got = json(&[
+        os("dem"),
+        input.as_os_str(),
+        os("--ground"),
+        os("--cell"),
+        os("1"),
+        os("-o"),
+        dem.as_os_str(),
+        os("--json"),
+    ]);
+    let ply = d.join("t.ply");
+    let tin = json(&[
+        os("tin"),
+        input.as_os_str(),
+        os("--ground"),
+        os("-o"),
+        ply.as_os_str(),
+        os("--json"),
+    ]);
+    for ground in [&got["run"]["ground"], &tin["ground"]] {
+        assert!(ground.is_object(), "no ground summary: {got} {tin}");
+        for key in [
+            "points",
+            "ground",
+            "low_noise",
+            "seeds",
+            "blocks",
+            "block",
+            "buffer",
+        ] {
+            assert_eq!(ground[key], want[key], "{key}");
+        }
+    }
+    // Without --ground, no such key.
+    let plain = json(&[
+        os("dem"),
+        input.as_os_str(),
+        os("--cell"),
+        os("1"),
+        os("-o"),
+        dem.as_os_str(),
+        os("--json"),
+    ]);
+    assert!(plain["run"].get("ground").is_none(), "{plain}");
 }

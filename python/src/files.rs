@@ -13,6 +13,7 @@ use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use sweeptin::crs::Crs;
+use sweeptin::ground::GroundParams;
 use sweeptin::input::las::{BBox, Filter, Returns};
 use sweeptin::output::raster::{Compression, Predictor, RasterFormat, RasterOptions};
 use sweeptin::pipeline::{self, Input, LineOptions, RunConfig, RunOptions, RunSummary, SweepAxis};
@@ -43,6 +44,8 @@ pub(crate) struct InputOpts {
     tile: Option<f64>,
     crs: Option<String>,
     progress: bool,
+    /// `ground=True`: the filter's parameters (the command line's `--ground`).
+    ground: Option<crate::ground::ParamsOpts>,
 }
 
 impl InputOpts {
@@ -58,6 +61,11 @@ impl InputOpts {
             sweeptin::output::check_output(o).map_err(to_py)?;
         }
         Ok(())
+    }
+
+    /// The ground filter's parameters, with `ground=True`.
+    fn ground_params(&self) -> PyResult<Option<GroundParams>> {
+        self.ground.as_ref().map(|g| g.params()).transpose()
     }
 
     fn bbox(&self) -> PyResult<Option<BBox>> {
@@ -140,6 +148,22 @@ impl InputOpts {
             .map_err(to_py)?;
         Ok((RunConfig::new(input, options).map_err(to_py)?, crs))
     }
+}
+
+/// With the ground filter's parameters (`ground=True`), the run of `config` on the ground
+/// found first, as the command line's `--ground` (`pipeline::ground::ground_input`: the same
+/// bytes); its summary carries the filter's. `None` without.
+fn grounded(
+    config: &RunConfig,
+    params: Option<GroundParams>,
+) -> sweeptin::Result<Option<RunConfig>> {
+    let Some(p) = params else {
+        return Ok(None);
+    };
+    let g =
+        pipeline::ground::ground_input(config.input(), &p, config.options(), &mut |_, _, _| {})?;
+    let run = RunConfig::new(g.input, g.options)?.with_ground(Some(g.summary));
+    Ok(Some(run))
 }
 
 /// A raster's format and compression, as the command line's `--format`, `--compress`,
@@ -227,6 +251,7 @@ pub(crate) fn run_products(
     volume: Option<(f64, Option<PathBuf>)>,
 ) -> PyResult<String> {
     let (config, crs) = opts.config()?;
+    let ground = opts.ground_params()?;
     let mut outputs: Vec<(&str, &std::path::Path)> = Vec::new();
     if let Some(d) = &dem {
         outputs.push(("out", &d.out));
@@ -295,9 +320,11 @@ pub(crate) fn run_products(
     }
     let cancel = Cancel::default();
     let (mut run, products) = interruptible(py, &cancel, || {
+        let grounded = grounded(&config, ground)?;
+        let config = grounded.as_ref().unwrap_or(&config);
         let mut fanout = Fanout::new(sinks).with_crs(crs);
         let mut stop = CancelSink(&cancel);
-        let mut run = pipeline::run(&config, None, &mut [&mut fanout, &mut stop])?;
+        let mut run = pipeline::run(config, None, &mut [&mut fanout, &mut stop])?;
         run.products.truncate(1);
         let products = run.products.pop();
         Ok((run, products))
@@ -319,9 +346,12 @@ pub(crate) fn run_products(
 #[pyo3(signature = (opts, out))]
 pub(crate) fn run_tin(py: Python<'_>, opts: InputOpts, out: PathBuf) -> PyResult<String> {
     let (config, crs) = opts.config()?;
+    let ground = opts.ground_params()?;
     opts.check_outputs(&[("out", &out)])?;
     let cancel = Cancel::default();
     let (mut run, mesh) = interruptible(py, &cancel, || {
+        let grounded = grounded(&config, ground)?;
+        let config = grounded.as_ref().unwrap_or(&config);
         let crs = match crs {
             Some(c) => c.definition(),
             None => config.input_crs()?,
@@ -340,7 +370,7 @@ pub(crate) fn run_tin(py: Python<'_>, opts: InputOpts, out: PathBuf) -> PyResult
             inner: &mut *sink,
             cancel: &cancel,
         };
-        let run = pipeline::run(&config, Some(&mut guarded), &mut [])?;
+        let run = pipeline::run(config, Some(&mut guarded), &mut [])?;
         let mesh = sink.finish()?;
         Ok((run, mesh))
     })?;
@@ -464,6 +494,7 @@ pub struct TriangleStream {
 pub(crate) fn stream_triangles(opts: InputOpts, chunk: Option<i64>) -> PyResult<TriangleStream> {
     let chunk = chunk_size(chunk, opts.mem)?;
     let (config, _) = opts.config()?;
+    let ground = opts.ground_params()?;
     let (tx, rx) = crossbeam_channel::bounded(1);
     let run = std::thread::Builder::new()
         .name("sweeptin-stream".into())
@@ -474,7 +505,8 @@ pub(crate) fn stream_triangles(opts: InputOpts, chunk: Option<i64>) -> PyResult<
                 buf: Vec::new(),
             };
             sink.buf = sink.fresh();
-            pipeline::run(&config, None, &mut [&mut sink])
+            let grounded = grounded(&config, ground)?;
+            pipeline::run(grounded.as_ref().unwrap_or(&config), None, &mut [&mut sink])
         })
         .map_err(|e| value_error(format!("cannot start the run: {e}")))?;
     Ok(TriangleStream {

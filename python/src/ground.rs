@@ -26,7 +26,7 @@ pub(crate) struct ParamsOpts {
 }
 
 impl ParamsOpts {
-    fn params(&self) -> PyResult<GroundParams> {
+    pub(crate) fn params(&self) -> PyResult<GroundParams> {
         let mut p = match self.preset.as_deref() {
             None => GroundParams::default(),
             Some(name) => match name {

@@ -38,6 +38,8 @@ pub(crate) struct JobOpts {
     crs: Option<String>,
     mem: u64,
     tmp_dir: Option<PathBuf>,
+    /// `ground=True`: the filter's parameters (every task finds the ground of its area).
+    ground: Option<crate::ground::ParamsOpts>,
 }
 
 /// Writes `DIR/plan.json` for the job over `files`; returns its path.
@@ -116,6 +118,7 @@ pub(crate) fn make_plan(
             job.holes.as_deref(),
         )
         .map_err(to_py)?,
+        ground: job.ground.as_ref().map(|g| g.params()).transpose()?,
     };
     let mut outputs = vec![("dir".to_string(), dir.clone())];
     if let Some(c) = job.contours {

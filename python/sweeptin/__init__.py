@@ -385,11 +385,33 @@ def _mem(mem: int | str | None) -> int:
     return _named("mem", mem, _native.parse_size, text)
 
 
+# The ground filter's parameters (:func:`ground`'s), taken with ``ground=True``.
+_GROUND_KEYS = ("preset", "step", "max_distance", "max_angle", "low_noise", "offset", "mirror", "reset")
+
+
+def _ground_opts(ground: bool, options: dict[str, _typing.Any]) -> dict[str, _typing.Any] | None:
+    """``ground=True`` and the filter's parameters (popped from ``options``) for the native
+    module, as the command line's ``--ground`` and its options; ``None`` without."""
+    given = {k: options.pop(k) for k in _GROUND_KEYS if k in options}
+    if not ground:
+        if given:
+            raise OptionsError(
+                f"the ground filter's parameters ({', '.join(sorted(given))}) apply with ground=True"
+            )
+        return None
+    from ._ground import _params
+
+    return _params(given.pop("preset", None), given)
+
+
 def _opts(files: Files, options: dict[str, _typing.Any]) -> dict[str, _typing.Any]:
+    options = dict(options)
+    ground = _ground_opts(bool(options.pop("ground", False)), options)
     unknown = set(options) - set(_INPUT_DEFAULTS)
     if unknown:
         raise TypeError(f"unknown option(s): {', '.join(sorted(unknown))}")
     o = {**_INPUT_DEFAULTS, **options}
+    o["ground"] = ground
     o["files"] = _files(files)
     o["mem"] = _mem(o["mem"])
     o["breaklines"] = [_os.fspath(p) for p in o["breaklines"]]
@@ -441,6 +463,13 @@ def dem(
     ``--bigtiff``. ``max_cells`` as ``--max-cells``: a raster of more cells is refused before
     any work (from ``bbox`` or the LAS/LAZ headers), and so is one whose rows do not fit in a
     quarter of ``mem``.
+
+    ``ground=True`` triangulates the ground found on the fly, as the command line's
+    ``--ground`` (the same bytes): the points classified by :func:`ground`'s filter (its
+    parameters as keywords: ``preset``, ``step``, ``max_distance``, …; the files' own classes
+    ignored), class 2 kept unless ``classes`` says otherwise. So do :func:`contours`,
+    :func:`volume`, :func:`tin` and :func:`stream_triangles`; the summary's ``run["ground"]``
+    is what the filter found (``sweeptin ground --json``'s summary).
 
     Returns the run's summary: ``{"run": {...}, "products": {"dem": {...}, ...}}``, the same
     fields as the command line's ``--json``."""
@@ -588,6 +617,7 @@ def plan(
     base: float = 0.0,
     plane: float | None = None,
     boundary: PathLike | None = None,
+    ground: bool = False,
     classes: _typing.Sequence[int] | int | str | None = None,
     returns: str = "all",
     keep_withheld: bool = False,
@@ -599,6 +629,7 @@ def plan(
     crs: str | None = None,
     mem: int | str | None = None,
     tmp_dir: PathLike | None = None,
+    **ground_params: _typing.Any,
 ) -> Plan:
     """``sweeptin plan``: cuts a ``"dem"``, ``"contours"``, ``"volume"`` or ``"tin"`` job over
     LAS/LAZ files into tiles of side ``tile`` (a multiple of ``cell``), one task each, and writes
@@ -614,7 +645,14 @@ def plan(
     by its extension, with the triangles of one run). ``breaklines``, ``trim_boundary`` and
     ``holes`` go into every task when every vertex has a z (3-D lines and rings; the plan
     records each file with its size and SHA-256, and a task refuses one that changed); lines
-    without z raise :class:`OptionsError` naming the first such vertex."""
+    without z raise :class:`OptionsError` naming the first such vertex. ``ground=True`` (with
+    :func:`ground`'s parameters as keywords) plans on the ground found on the fly, as
+    ``sweeptin plan … --ground``: every task classifies the ground of its area as one run over
+    all the files would, so the merge is one ``dem(..., ground=True)``'s."""
+    rest = dict(ground_params)
+    g = _ground_opts(bool(ground), rest)
+    if rest:
+        raise TypeError(f"unknown option(s): {', '.join(sorted(rest))}")
     job = {
         "product": product,
         "cell": float(cell),
@@ -637,6 +675,7 @@ def plan(
         "crs": crs,
         "mem": _mem(mem),
         "tmp_dir": None if tmp_dir is None else _os.fspath(tmp_dir),
+        "ground": g,
     }
     names = _files(files)
     args = [product, *[_os.path.abspath(f) for f in names], "--tile", repr(float(tile))]
@@ -646,6 +685,8 @@ def plan(
             args += ["--format", format]
     if job["classes"] is not None:
         args += ["--class", ",".join(str(c) for c in job["classes"])]
+    if g is not None:
+        args += ["--ground"]
     for flag, paths in (("--breaklines", job["breaklines"]), ("--trim-boundary", [trim_boundary]),
                         ("--holes", [holes])):
         args += [a for p in paths if p is not None for a in (flag, _os.path.abspath(p))]

@@ -3,6 +3,9 @@ heights."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import laspy
 import numpy as np
 import pytest
@@ -74,3 +77,40 @@ def test_height_on_arrays_is_the_cli_height_above_ground(raw, cli, tmp_path):
     cli("height", path, "-o", out2, "-q")
     want2 = np.asarray(laspy.read(out2)["HeightAboveGround"], dtype=np.float64)
     np.testing.assert_allclose(sweeptin.height(xyz, classes=classes, withheld=withheld), want2, rtol=0, atol=1e-9)
+
+
+def test_products_with_ground_are_the_cli_bytes(raw, cli, tmp_path):
+    path, *_ = raw
+    # dem, contours and tin with ground=True: the command line's --ground, byte for byte.
+    a, b = tmp_path / "py.tif", tmp_path / "cli.tif"
+    s = sweeptin.dem(path, a, cell=1.0, ground=True, step=10, mem="64M")
+    cli("dem", path, "--ground", "--step", "10", "--cell", "1", "--mem", "64M", "-o", b, "-q")
+    assert a.read_bytes() == b.read_bytes()
+    g = s["run"]["ground"]
+    assert g["points"] == 39233 and 0 < g["ground"] < 39233 and g["block"] == 80
+    ca, cb = tmp_path / "py.geojson", tmp_path / "cli.geojson"
+    sweeptin.contours(path, ca, interval=1.0, ground=True, preset="town")
+    cli("contours", path, "--ground", "--town", "--interval", "1", "-o", cb, "-q")
+    assert ca.read_bytes() == cb.read_bytes()
+    ta, tb = tmp_path / "py.ply", tmp_path / "cli.ply"
+    t = sweeptin.tin(str(path), ta, ground=True, step=10, classes=[1, 2])
+    cli("tin", str(path), "--ground", "--step", "10", "--class", "1,2", "-o", tb, "-q")
+    assert ta.read_bytes() == tb.read_bytes()
+    assert t["run"]["ground"]["ground"] == g["ground"]
+    # Without ground=True the filter's parameters are refused, as the command line refuses them.
+    with pytest.raises(sweeptin.OptionsError, match="ground=True"):
+        sweeptin.dem(path, tmp_path / "x.tif", step=10)
+
+
+def test_a_ground_plan_merges_into_one_ground_run(raw, tmp_path):
+    path, *_ = raw
+    plan = sweeptin.plan("dem", [path], tmp_path / "job", tile=30, cell=1.0, ground=True, step=10)
+    assert json.loads(Path(plan.path).read_text())["job"]["ground"]["step"] == 10
+    for i in plan.tasks:
+        sweeptin.run_task(plan, i)
+    merged, single = tmp_path / "m.tif", tmp_path / "one.tif"
+    sweeptin.merge(plan, merged)
+    sweeptin.dem(path, single, cell=1.0, ground=True, step=10)
+    assert merged.read_bytes() == single.read_bytes()
+    with pytest.raises(TypeError, match="colour"):
+        sweeptin.plan("dem", [path], tmp_path / "j2", tile=30, ground=True, colour="red")

@@ -96,7 +96,9 @@ pub struct InputArgs {
     #[arg(skip)]
     pub lists: Vec<PathBuf>,
     /// Print a one-object JSON summary on stdout (points, triangles, seconds per phase, peak
-    /// memory) for batch jobs; on failure `{"error": {"status", "kind", "message", "causes"}}`.
+    /// memory; with --ground what the filter found, as `ground --json` prints it, under the
+    /// run's `ground`) for batch jobs; on failure `{"error": {"status", "kind", "message",
+    /// "causes"}}`.
     #[arg(long)]
     pub json: bool,
 }
@@ -180,8 +182,8 @@ impl InputArgs {
             // the sweep for lines; `--engine tiles` asks for tiles.
             options.tiles = None;
         }
-        let (input, options) = self.grounded(input, options)?;
-        let config = RunConfig::new(input, options)?;
+        let (input, options, ground) = self.grounded(input, options)?;
+        let config = RunConfig::new(input, options)?.with_ground(ground);
         if self.engine == Engine::Tiles && !config.runs_in_tiles() && !self.quiet {
             eprintln!(
                 "sweeptin: note: --engine tiles: this input runs in one exact streaming sweep \
@@ -196,9 +198,14 @@ impl InputArgs {
 
 impl InputArgs {
     /// With `--ground`, the input that reads the ground filter's classes (the classification
-    /// done here, before the run: `sweeptin::pipeline::ground`); the ground options without
-    /// `--ground` are refused.
-    fn grounded(&self, input: Input, options: RunOptions) -> anyhow::Result<(Input, RunOptions)> {
+    /// done here, before the run: `sweeptin::pipeline::ground`) and what the filter found (the
+    /// run's summary carries it); the ground options without `--ground` are refused.
+    #[allow(clippy::type_complexity)]
+    fn grounded(
+        &self,
+        input: Input,
+        options: RunOptions,
+    ) -> anyhow::Result<(Input, RunOptions, Option<sweeptin::ground::GroundSummary>)> {
         if !self.ground {
             if self.ground_options.any() {
                 return Err(sweeptin::Error::Options(
@@ -208,7 +215,7 @@ impl InputArgs {
                 )
                 .into());
             }
-            return Ok((input, options));
+            return Ok((input, options, None));
         }
         let params = self.ground_options.params();
         let g = pipeline::ground::ground_input(&input, &params, &options, &mut |_, _, _| {})
@@ -224,7 +231,7 @@ impl InputArgs {
                 g.summary.read_seconds + g.summary.classify_seconds
             );
         }
-        Ok((g.input, g.options))
+        Ok((g.input, g.options, Some(g.summary)))
     }
 }
 

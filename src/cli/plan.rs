@@ -26,7 +26,11 @@ text file of `x y` lines (a blank line between lines)
   sweeptin sample tiles/*.laz --class 2 --points lines.txt -o lines_z.txt
 and plan with --breaklines lines_z.txt (the result is one run's with those 3-D lines), or run the
 job as one command. --clip-breaklines (the hull of all the points) and --no-flat-triangles (flips
-across tiles) are refused.";
+across tiles) are refused.
+
+--ground (the ground found on the fly, with the filter's options) goes into every task: each
+classifies the ground of the area it reads as one run over all the files would, then reads only
+that area; the merge is one `dem --ground` run's, byte for byte.";
 
 /// Arguments of `sweeptin plan`.
 #[derive(clap::Args, Debug)]
@@ -229,6 +233,7 @@ impl Job {
             crs: self.crs(),
             mem: a.mem.0,
             tmp_dir: a.tmp_dir.clone(),
+            ground: a.ground.then(|| a.ground_options.params()),
         })
     }
 }
@@ -299,9 +304,11 @@ fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
 /// Refuses what a plan cannot run exactly, before anything is written.
 fn check_job(job: &Job) -> anyhow::Result<()> {
     let a = job.args();
-    if a.ground {
+    if !a.ground && a.ground_options.any() {
         bail!(sweeptin::Error::Options(
-            sweeptin::pipeline::ground::PLAN_REFUSES_GROUND.into()
+            "the ground filter's options (--step, --max-angle, --town, …) apply with --ground: \
+             add --ground to plan on the ground found on the fly"
+                .into()
         ));
     }
     if a.filter.bbox.is_some() {

@@ -40,7 +40,7 @@ use std::path::{Path, PathBuf};
 pub const BUFFER_CELLS: i64 = 2;
 
 /// The ground filter's parameters.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GroundParams {
     /// Side of the seed cells (the lowest point of each is a seed): larger than the largest
     /// building (metres, or the data's horizontal unit).

@@ -165,6 +165,8 @@ pub struct RunConfig {
     line_reader: LineReader,
     /// The CRS the user declares for the files ([`RunConfig::with_crs`]).
     crs: Option<crate::crs::Crs>,
+    /// What `--ground` found before the run ([`RunConfig::with_ground`]).
+    ground: Option<crate::ground::GroundSummary>,
 }
 
 /// How a run reads its line files: as they are ([`crate::breaklines::read_file`]), or, in a
@@ -239,6 +241,7 @@ impl RunConfig {
             streams,
             line_reader: LineReader(None),
             crs: None,
+            ground: None,
         })
     }
 
@@ -248,6 +251,19 @@ impl RunConfig {
     pub fn with_crs(mut self, crs: Option<crate::crs::Crs>) -> RunConfig {
         self.crs = crs;
         self
+    }
+
+    /// The same run, its input classified by the ground filter first (`--ground`,
+    /// [`super::ground::ground_input`]) as `ground` says: its summary carries it
+    /// ([`super::RunSummary::ground`]).
+    pub fn with_ground(mut self, ground: Option<crate::ground::GroundSummary>) -> RunConfig {
+        self.ground = ground;
+        self
+    }
+
+    /// What `--ground` found before the run ([`RunConfig::with_ground`]).
+    pub fn ground(&self) -> Option<&crate::ground::GroundSummary> {
+        self.ground.as_ref()
     }
 
     /// Opens the LAS/LAZ files of the run with `options` and the declared CRS.

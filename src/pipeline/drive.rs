@@ -211,6 +211,7 @@ pub(crate) fn run(
             w.extend(front_warning(&stream, options.mem));
             w
         },
+        ground: None,
     })
 }
 

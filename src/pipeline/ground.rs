@@ -51,7 +51,7 @@ pub fn ground_input(
         ));
     }
     if options.tiles.as_ref().is_some_and(|t| t.scope.is_some()) {
-        return Err(Error::Options(PLAN_REFUSES_GROUND.into()));
+        return Err(Error::Options(TASK_CLASSIFIES_ITS_AREA.into()));
     }
     let tmp = options.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
     let (store, summary) =
@@ -90,11 +90,10 @@ pub fn ground_input(
     })
 }
 
-/// Why a plan does not take `--ground` (yet): the route that does the same.
-pub const PLAN_REFUSES_GROUND: &str = "--ground does not run in a plan's tasks yet (each task \
-     reads only the files near its tile, and the ground of a block depends on the points 2 \
-     steps around it): classify first with `sweeptin ground FILES --odir classified/`, then \
-     plan on the classified files with `--class 2`";
+/// Why a run of a task scope ([`crate::TaskScope`]) does not classify its files itself.
+const TASK_CLASSIFIES_ITS_AREA: &str = "--ground in a plan's task: its files are only those near \
+     its tile, whose ground is not one run's; a plan's tasks classify their own area \
+     (`sweeptin plan dem … --ground`, `Job::ground`, `Plan::run_task`)";
 
 /// A pipe, a FIFO or a device: read once, so not twice.
 fn is_stream(p: &std::path::Path) -> bool {

@@ -220,6 +220,10 @@ pub struct RunSummary {
     /// point count that disagrees with the file…).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// What the ground filter found first, with `--ground` ([`RunConfig::with_ground`]): the
+    /// summary `sweeptin ground --json` prints.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ground: Option<crate::ground::GroundSummary>,
 }
 
 pub use crate::limits::{MAX_THREADS, anon_rss, check_threads, peak_rss, size_thread_pool};
@@ -273,6 +277,17 @@ fn nothing_left(config: &RunConfig, distinct: u64, e: Error) -> Error {
 /// Any reader, triangulation, sink or output error; [`crate::Error::TooFewPoints`] and
 /// [`crate::Error::AllCollinear`] when no triangle exists.
 pub fn run(
+    config: &RunConfig,
+    mesh: Option<&mut (dyn MeshSink + Send)>,
+    sinks: &mut [&mut dyn TriangleSink],
+) -> Result<RunSummary> {
+    let mut summary = run_engine(config, mesh, sinks)?;
+    summary.ground = config.ground().cloned();
+    Ok(summary)
+}
+
+/// [`run`] on the engine that fits.
+fn run_engine(
     config: &RunConfig,
     mesh: Option<&mut (dyn MeshSink + Send)>,
     sinks: &mut [&mut dyn TriangleSink],

@@ -27,6 +27,7 @@ use area::{
     whole_multiple,
 };
 mod files;
+mod ground;
 mod lines;
 pub mod merge;
 pub mod mesh;
@@ -51,6 +52,8 @@ pub const PLAN_VERSION: u32 = 2;
 /// ([`Job::lines`]): a sweeptin that reads only [`PLAN_VERSION`] refuses it instead of running
 /// its tasks without the lines. This one reads both.
 pub const PLAN_VERSION_LINES: u32 = 3;
+/// Format version of a `plan.json` whose job finds the ground on the fly ([`Job::ground`]).
+pub const PLAN_VERSION_GROUND: u32 = 4;
 
 /// One input file of a plan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -103,7 +106,8 @@ pub struct PlanTile {
 /// A job cut into tiles (see the module docs).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
-    /// [`PLAN_VERSION`], or [`PLAN_VERSION_LINES`] when the job has lines.
+    /// [`PLAN_VERSION`], [`PLAN_VERSION_LINES`] when the job has lines, [`PLAN_VERSION_GROUND`]
+    /// when it finds the ground.
     pub version: u32,
     /// The product command (`dem`, `contours`, `volume`).
     pub command: String,
@@ -401,7 +405,9 @@ impl Plan {
             }
         }
         let mut plan = Plan {
-            version: if job.lines.is_some() {
+            version: if job.ground.is_some() {
+                PLAN_VERSION_GROUND
+            } else if job.lines.is_some() {
                 PLAN_VERSION_LINES
             } else {
                 PLAN_VERSION
@@ -492,12 +498,12 @@ impl Plan {
         }
         let v: Version = serde_json::from_str(&text)
             .map_err(|e| bad(path, format!("not a sweeptin plan: {e}")))?;
-        if v.version != PLAN_VERSION && v.version != PLAN_VERSION_LINES {
+        if !(PLAN_VERSION..=PLAN_VERSION_GROUND).contains(&v.version) {
             return Err(bad(
                 path,
                 format!(
-                    "plan version {} (this sweeptin reads versions {PLAN_VERSION} and \
-                     {PLAN_VERSION_LINES}): make the plan again with this sweeptin",
+                    "plan version {} (this sweeptin reads versions {PLAN_VERSION} to \
+                     {PLAN_VERSION_GROUND}): make the plan again with this sweeptin",
                     v.version
                 ),
             ));
@@ -590,6 +596,7 @@ impl Plan {
                 .map(|f| f.bounds)
                 .collect(),
             chunks: Vec::new(),
+            by_area: self.job.ground.is_some(),
         })
     }
 

@@ -163,6 +163,11 @@ pub struct Job {
     /// [`super::PlanLines`]). Absent from the plans of versions before 3.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lines: Option<super::PlanLines>,
+    /// `--ground`: every task classifies the ground of its area first (as one run would,
+    /// `plan::ground`) and reads the points with those classes (`classes` then selects,
+    /// class 2 when `None`). Absent from the plans of versions before 4.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<crate::ground::GroundParams>,
 }
 
 impl Job {
@@ -181,6 +186,7 @@ impl Job {
             mem: crate::pipeline::default_mem(),
             tmp_dir: None,
             lines: None,
+            ground: None,
         }
     }
 
@@ -292,6 +298,9 @@ impl Job {
         }
         if let Some(m) = self.max_edge {
             positive(m, "--max-edge")?;
+        }
+        if let Some(g) = &self.ground {
+            g.check()?;
         }
         self.crs()?;
         Ok(())
@@ -409,11 +418,11 @@ impl Plan {
         self.forget_task(dir, i)?;
         let crs = self.job.crs()?;
         let mut buffer = self.first_buffer(dir, i)?;
-        let mut runs = 0;
+        let (mut runs, mut ground) = (0, super::ground::Cache::default());
         let mut record = loop {
             runs += 1;
             self.check_files(i, buffer)?;
-            let config = self.task_config(dir, i, buffer, options)?;
+            let config = self.task_config(dir, i, buffer, options, &mut ground)?;
             let mut fanout = Fanout::new(self.task_sinks(dir, i)?).with_crs(crs.clone());
             let mut pieces = self.task_pieces(dir, i)?;
             let mesh = pieces
@@ -536,8 +545,16 @@ impl Plan {
         crate::limits::fit_address_space(self.job.mem, 0)
     }
 
-    /// The run of task `i` with a buffer of `buffer`.
-    fn task_config(&self, dir: &Path, i: usize, buffer: f64, o: &TaskOptions) -> Result<RunConfig> {
+    /// The run of task `i` with a buffer of `buffer` (with `--ground`, the classes of its area,
+    /// kept in `ground` for the next run).
+    fn task_config(
+        &self,
+        dir: &Path,
+        i: usize,
+        buffer: f64,
+        o: &TaskOptions,
+        ground: &mut super::ground::Cache,
+    ) -> Result<RunConfig> {
         let lines = match &self.job.lines {
             Some(l) => l.options(self.job.max_edge),
             None => LineOptions {
@@ -545,13 +562,13 @@ impl Plan {
                 ..LineOptions::default()
             },
         };
-        let input = Input {
+        let mut input = Input {
             paths: self.task_files(i, buffer)?,
             filter: self.job.filter(),
             duplicates: self.job.duplicates,
             lines,
         };
-        let options = RunOptions {
+        let mut options = RunOptions {
             mem: self.task_mem(),
             tmp_dir: self.job.tmp_dir.clone(),
             progress: o.progress,
@@ -566,7 +583,11 @@ impl Plan {
                 }),
             }),
         };
-        let config = RunConfig::new(input, options)?.with_crs(self.job.crs()?);
+        // `--ground`: the classes of the area the run reads, found first.
+        let ground = self.ground_task(dir, (i, buffer), &mut input, &mut options, ground)?;
+        let config = RunConfig::new(input, options)?
+            .with_crs(self.job.crs()?)
+            .with_ground(ground);
         // Each line file is read once and parsed from the bytes checked against the plan's
         // fingerprint (a file changed since the plan was made is refused).
         Ok(match &self.job.lines {

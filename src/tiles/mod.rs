@@ -86,6 +86,10 @@ pub struct TaskScope {
     /// ([`crate::input::las::ReadOptions::chunks`]): when every file is COPC or indexed, the
     /// task decodes only the chunks that meet its tile and buffer.
     pub chunks: Vec<(std::path::PathBuf, std::sync::Arc<crate::input::las::ChunkIndex>)>,
+    /// Read only the points of the tile grown by the buffer, whatever the files and their
+    /// indexes (what lies beyond counts as unread): a task whose points have known classes only
+    /// there (`--ground`, [`crate::plan`]'s tasks classify their own area).
+    pub by_area: bool,
 }
 
 /// What the tiles did (part of the `--json` summary).

@@ -166,7 +166,8 @@ fn index_points<R: IndexRecord>(
 /// its tile and buffer (their octrees skip the rest) and returns the rest of each file's extent
 /// as rectangles where points it did not read may lie, like the files it does not read at all.
 /// Other tasks keep every point of their files (decoding LAZ costs the same whatever is kept,
-/// and the points farther out settle the triangles along the data's edge without another run).
+/// and the points farther out settle the triangles along the data's edge without another run),
+/// unless their scope reads by area ([`TaskScope::by_area`]: `--ground`).
 fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Vec<[f64; 4]>)> {
     if let Some(sc) = scope {
         let infos = job
@@ -181,11 +182,21 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
         let indexed = |i: &crate::input::las::FileInfo| {
             i.copc.is_some() || sc.chunks.iter().any(|(p, _)| *p == i.path)
         };
+        let known = infos.iter().all(|i| i.known_rect().is_some());
+        if sc.by_area && !known {
+            return Err(crate::error::Error::Options(
+                "a task that reads only its area (--ground) needs every file's header extent: \
+                 one says nothing (rewrite the file with a true header)"
+                    .into(),
+            ));
+        }
         if !infos.is_empty()
-            && infos.iter().all(|i| indexed(i) && i.known_rect().is_some())
-            && (infos.iter().all(|i| i.copc.is_some())
-                || (inside_data(&infos, &sc.unread, area)
-                    && pays_to_read_by_area(&sc.chunks, area)))
+            && known
+            && (sc.by_area
+                || infos.iter().all(indexed)
+                    && (infos.iter().all(|i| i.copc.is_some())
+                        || (inside_data(&infos, &sc.unread, area)
+                            && pays_to_read_by_area(&sc.chunks, area))))
             && let Some(bbox) = crate::input::las::BBox::new(area[0], area[1], area[2], area[3])
         {
             let options = ReadOptions {

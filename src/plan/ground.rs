@@ -1,0 +1,384 @@
+//! `plan … --ground`: each task finds the ground of its own area, exactly as one run over all
+//! the plan's files would ([`crate::ground`]'s definition), and then runs as without it.
+//!
+//! A task reads the points of its tile grown by its buffer (`A`, [`crate::TaskScope::by_area`]:
+//! nothing beyond, since only there are the classes known). A point's class depends only on the
+//! points of its ground block grown by `2 × step`, ties broken by the points' relative global
+//! order. So the task classifies the ground blocks that meet `A` from every point it reads in
+//! those blocks grown by the buffer (one more seed cell for the rounding of the cells' bounds),
+//! from every plan file that reaches there. It numbers those points by their rank in (position
+//! of the file in the plan, point index in the file), which orders any two points exactly as the
+//! global index of one run over the plan's files does (files in the same order, each file's
+//! points in file order; files without points hold no index in either). The classes of the
+//! blocks that meet `A` are therefore one run's; blocks at the rim of the area read are
+//! classified too, from part of their points, and never used.
+//!
+//! The ranks are known only after a first pass over the area (the classification needs its
+//! point count and each point's rank when it is handed over), so the area is decoded twice.
+
+use super::Plan;
+use super::area::{grown, overlaps};
+use crate::error::{Error, Result};
+use crate::ground::{BUFFER_CELLS, ClassStore, GroundInput, GroundSummary, classify_stream};
+use crate::input::las::{
+    BBox, ClassesFrom, Filter, LidarPoint, LidarReader, PointClasses, ReadOptions,
+};
+use crate::pipeline::ground::GROUND_CLASS;
+use crate::pipeline::{Input, RunOptions};
+use crate::tiles::grid::BlockRect;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The classes of the last area a task classified: the next run of the task (a wider buffer)
+/// takes them again when its area meets the same ground blocks.
+#[derive(Default)]
+pub(super) struct Cache(Option<(BlockRect, Arc<Classified>)>);
+
+/// A task's classes: the store, by rank among the points read in the classified area.
+struct Classified {
+    store: ClassStore,
+    ranks: Ranks,
+    /// Where each classified file's points start among the classified files' indices.
+    starts: BTreeMap<usize, u64>,
+    /// What the classification did.
+    summary: GroundSummary,
+}
+
+impl Plan {
+    /// With `--ground` ([`super::Job::ground`]): classifies the area task `i` reads with
+    /// `buffer` (or takes the classes `cache` holds for it), and makes `input` read its points
+    /// with those classes (class 2 kept unless the job's classes say otherwise), `options`
+    /// taking `--mem` less what the classes keep in memory. `None` without `--ground`.
+    ///
+    /// # Errors
+    /// As [`Plan::task`]; the readers' and the chunk indexes' errors; those of
+    /// [`crate::ground::classify_stream`] (a block too large for `--mem`).
+    pub(super) fn ground_task(
+        &self,
+        dir: &Path,
+        (i, buffer): (usize, f64),
+        input: &mut Input,
+        options: &mut RunOptions,
+        cache: &mut Cache,
+    ) -> Result<Option<GroundSummary>> {
+        let Some(params) = self.job.ground else {
+            return Ok(None);
+        };
+        params.check()?;
+        let area = grown(self.task(i)?.bounds, buffer);
+        // The ground blocks (in seed cells) that meet the area.
+        let grid = params.grid()?;
+        let corner = |x: f64, y: f64| {
+            let (bx, by) = grid.block_of(x, y);
+            grid.tile_of_block(bx, by)
+        };
+        let (lo, hi) = (corner(area[0], area[1]), corner(area[2], area[3]));
+        let owned = grid
+            .tile_blocks(lo.0, lo.1)
+            .union(&grid.tile_blocks(hi.0, hi.1));
+        let mem = options.mem;
+        let classified = match &cache.0 {
+            Some((o, c)) if o.contains_rect(&owned) => c.clone(),
+            _ => {
+                cache.0 = None;
+                // Those blocks grown by the buffer of their runs, and one cell more.
+                let read = grid.world(&owned.expand(BUFFER_CELLS + 1));
+                let c = Arc::new(self.classify_area(dir, i, read, &params, mem)?);
+                cache.0 = Some((owned, c.clone()));
+                c
+            }
+        };
+        // The run's files (in the plan's order), each to its place among the classified.
+        let mut segments = Vec::with_capacity(input.paths.len());
+        let mut r = 0u64;
+        for (k, f) in self.files.iter().enumerate() {
+            if !(f.points > 0 && overlaps(&f.bounds, &area)) {
+                continue;
+            }
+            let &c = classified.starts.get(&k).ok_or_else(|| {
+                Error::Internal(format!("task {i}: file {k} read but not classified"))
+            })?;
+            if input.paths.get(segments.len()) != Some(&f.path) {
+                return Err(Error::Internal(format!(
+                    "task {i}: the run's files are not those the ground was found for"
+                )));
+            }
+            segments.push(Segment {
+                run: r,
+                len: f.points,
+                classified: c,
+            });
+            r += f.points;
+        }
+        if segments.len() != input.paths.len() {
+            return Err(Error::Internal(format!(
+                "task {i}: {} files read, {} placed among the classified",
+                input.paths.len(),
+                segments.len()
+            )));
+        }
+        // The run has --mem less the classes in memory (at most an eighth) and the ranks.
+        let kept = classified.store.memory_bytes().min(mem / 8) + classified.ranks.memory_bytes();
+        options.mem = mem.saturating_sub(kept);
+        input
+            .filter
+            .classes
+            .get_or_insert_with(|| vec![GROUND_CLASS]);
+        let summary = classified.summary.clone();
+        input.filter.classes_from = Some(ClassesFrom(Arc::new(TaskClasses {
+            classified,
+            segments,
+        }) as Arc<_>));
+        Ok(Some(summary))
+    }
+
+    /// Classifies every point of the plan's files inside `read` (closed), within `mem`, each
+    /// numbered by its rank in the plan's global order.
+    fn classify_area(
+        &self,
+        dir: &Path,
+        i: usize,
+        read: [f64; 4],
+        params: &crate::ground::GroundParams,
+        mem: u64,
+    ) -> Result<Classified> {
+        let tmp = self.job.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
+        // The plan's files with points that reach there, in the plan's order.
+        let files: Vec<usize> = (0..self.files.len())
+            .filter(|&k| self.files[k].points > 0 && overlaps(&self.files[k].bounds, &read))
+            .collect();
+        let mut starts = BTreeMap::new();
+        let mut c = 0u64;
+        for &k in &files {
+            starts.insert(k, c);
+            c += self.files[k].points;
+        }
+        if files.is_empty() {
+            let store = ClassStore::new(0, 0, &tmp)?;
+            return Ok(Classified {
+                store,
+                ranks: Ranks::default(),
+                starts,
+                summary: GroundSummary::default(),
+            });
+        }
+        let bbox = BBox::new(read[0], read[1], read[2], read[3])
+            .ok_or_else(|| Error::Internal(format!("task {i}: no area to classify ({read:?})")))?;
+        let chunks = files
+            .iter()
+            .filter(|&&k| self.files[k].indexed)
+            .map(|&k| {
+                Ok((
+                    self.files[k].path.clone(),
+                    Arc::new(self.chunk_index(dir, k)?),
+                ))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let area_reader = AreaReader {
+            paths: files.iter().map(|&k| self.files[k].path.clone()).collect(),
+            options: ReadOptions {
+                area: Some(bbox),
+                chunks,
+                crs: self.job.crs()?,
+                ..ReadOptions::for_budget(mem)
+            },
+        };
+        // 1. Which points lie there: their ranks.
+        let mut ranks = Ranks::default();
+        area_reader.each(&mut |p| {
+            ranks.set(p.index);
+            Ok(())
+        })?;
+        ranks.finish();
+        // 2. The classification, each point by its rank.
+        let mut feed = |push: &mut dyn FnMut(GroundInput) -> Result<()>| -> Result<()> {
+            area_reader.each(&mut |p: &LidarPoint| {
+                let index = ranks.rank(p.index).ok_or_else(|| {
+                    Error::Internal(format!(
+                        "task {i}: point {} was not read the first time",
+                        p.index
+                    ))
+                })?;
+                push(GroundInput {
+                    index,
+                    xyz: [p.x, p.y, p.z],
+                    class: p.classification,
+                    withheld: p.flags & LidarPoint::WITHHELD != 0,
+                })
+            })
+        };
+        let mem = mem.saturating_sub(ranks.memory_bytes());
+        let (store, summary) =
+            classify_stream(params, ranks.total, mem, &tmp, &mut feed, &mut |_, _, _| {})?;
+        Ok(Classified {
+            store,
+            ranks,
+            starts,
+            summary,
+        })
+    }
+}
+
+/// The points of some files inside an area, read again the same way each time.
+struct AreaReader {
+    paths: Vec<PathBuf>,
+    options: ReadOptions,
+}
+
+impl AreaReader {
+    /// Hands every point (every one, withheld too) to `f`.
+    fn each(&self, f: &mut dyn FnMut(&LidarPoint) -> Result<()>) -> Result<()> {
+        let mut reader =
+            LidarReader::open_with(&self.paths, &Filter::keep_all(), self.options.clone())?;
+        crate::tiles::read::prefetched(&mut reader, |buf: &[LidarPoint], _| {
+            buf.iter().try_for_each(&mut *f)
+        })
+    }
+}
+
+/// One file of a task's run: its first index among the run's points and among the classified.
+#[derive(Clone, Copy, Debug)]
+struct Segment {
+    run: u64,
+    len: u64,
+    classified: u64,
+}
+
+/// Indices of the classified files per page of this many bits.
+const PAGE_SHIFT: u32 = 16;
+const PAGE_WORDS: usize = 1 << (PAGE_SHIFT - 6);
+
+/// A set of indices and the rank of each (how many smaller ones it holds), in pages of
+/// `2^16` indices: about 0.19 bytes an index of the pages touched.
+#[derive(Default)]
+struct Ranks {
+    pages: BTreeMap<u64, Page>,
+    /// Indices held.
+    total: u64,
+}
+
+struct Page {
+    words: Box<[u64]>,
+    /// Indices held in the page before each word.
+    before: Box<[u32]>,
+    /// Indices held in the pages before.
+    base: u64,
+}
+
+impl Ranks {
+    fn set(&mut self, i: u64) {
+        let page = self.pages.entry(i >> PAGE_SHIFT).or_insert_with(|| Page {
+            words: vec![0; PAGE_WORDS].into(),
+            before: vec![0; PAGE_WORDS].into(),
+            base: 0,
+        });
+        let bit = i & ((1 << PAGE_SHIFT) - 1);
+        page.words[(bit >> 6) as usize] |= 1 << (bit & 63);
+    }
+
+    /// Counts the ranks (after the last [`Ranks::set`]).
+    fn finish(&mut self) {
+        let mut n = 0u64;
+        for page in self.pages.values_mut() {
+            page.base = n;
+            let mut m = 0u32;
+            for (w, b) in page.words.iter().zip(page.before.iter_mut()) {
+                *b = m;
+                m += w.count_ones();
+            }
+            n += u64::from(m);
+        }
+        self.total = n;
+    }
+
+    /// The rank of `i`, if held.
+    fn rank(&self, i: u64) -> Option<u64> {
+        let page = self.pages.get(&(i >> PAGE_SHIFT))?;
+        let bit = i & ((1 << PAGE_SHIFT) - 1);
+        let (w, b) = ((bit >> 6) as usize, bit & 63);
+        let word = page.words[w];
+        (word >> b & 1 == 1).then(|| {
+            page.base
+                + u64::from(page.before[w])
+                + u64::from((word & ((1u64 << b) - 1)).count_ones())
+        })
+    }
+
+    fn memory_bytes(&self) -> u64 {
+        self.pages.len() as u64 * (PAGE_WORDS as u64 * 12 + 64)
+    }
+}
+
+/// The classes of a task's run by its own global index: through its file to the index among
+/// the classified files' points, then its rank among those read there. A point outside the area
+/// classified (its reader decodes whole spans) gets class 0; the reader's area drops it anyway.
+struct TaskClasses {
+    classified: Arc<Classified>,
+    segments: Vec<Segment>,
+}
+
+/// The class given to the points outside the area classified.
+const OUTSIDE: u8 = 0;
+
+impl PointClasses for TaskClasses {
+    fn read_classes(&self, first: u64, out: &mut [u8]) -> Result<()> {
+        let mut done = 0usize;
+        while done < out.len() {
+            let at = first + done as u64;
+            let s = self
+                .segments
+                .iter()
+                .find(|s| s.run <= at && at < s.run + s.len)
+                .ok_or_else(|| {
+                    Error::Internal(format!("point {at} lies in none of the task's files"))
+                })?;
+            let n = ((s.run + s.len - at) as usize).min(out.len() - done);
+            let from = s.classified + (at - s.run);
+            let part = &mut out[done..done + n];
+            // The ranks held in a run of indices follow each other.
+            let ranks = &self.classified.ranks;
+            let mut held = (0..n as u64).filter_map(|j| ranks.rank(from + j));
+            if let Some(r0) = held.next() {
+                let m = 1 + held.count();
+                let mut classes = vec![0u8; m];
+                self.classified.store.read_classes(r0, &mut classes)?;
+                let mut k = 0;
+                for (j, c) in part.iter_mut().enumerate() {
+                    *c = if ranks.rank(from + j as u64).is_some() {
+                        k += 1;
+                        classes[k - 1]
+                    } else {
+                        OUTSIDE
+                    };
+                }
+            } else {
+                part.fill(OUTSIDE);
+            }
+            done += n;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Ranks;
+
+    #[test]
+    fn ranks_count_the_indices_held_before_each() {
+        let mut r = Ranks::default();
+        let held = [3u64, 64, 65, 70_000, 70_001, 1 << 40];
+        for &i in held.iter().rev() {
+            r.set(i);
+        }
+        r.finish();
+        assert_eq!(r.total, held.len() as u64);
+        for (k, &i) in held.iter().enumerate() {
+            assert_eq!(r.rank(i), Some(k as u64), "index {i}");
+        }
+        for i in [0, 4, 63, 66, 69_999, 1 << 39] {
+            assert_eq!(r.rank(i), None, "index {i}");
+        }
+    }
+}
