@@ -220,6 +220,8 @@ pub(crate) struct Tag(pub u64);
 
 impl Tag {
     const ELIGIBLE: u64 = 1 << 8;
+    /// Set only within a block's run: the block owns the point.
+    const OWNED: u64 = 1 << 9;
 
     fn of(p: &GroundInput) -> Tag {
         let eligible = !p.withheld && p.class != 7 && p.class != 18;
@@ -236,6 +238,16 @@ impl Tag {
 
     pub(crate) fn eligible(self) -> bool {
         self.0 & Tag::ELIGIBLE != 0
+    }
+
+    /// The same tag, marked as owned by the block being run.
+    pub(crate) fn owned(self) -> Tag {
+        Tag(self.0 | Tag::OWNED)
+    }
+
+    /// Does the block being run own the point?
+    pub(crate) fn is_owned(self) -> bool {
+        self.0 & Tag::OWNED != 0
     }
 
     /// The class the point gets.
