@@ -61,6 +61,8 @@ pub(super) struct Densify<'a> {
     gathered: Vec<u32>,
     accepted: Vec<Accepted>,
     chosen: Vec<(u64, u32)>,
+    /// A bucket's candidates within `max_distance` of its plane: `(distance, point)`.
+    close: Vec<(f64, u32)>,
 }
 
 impl<'a> Densify<'a> {
@@ -96,6 +98,7 @@ impl<'a> Densify<'a> {
             gathered: Vec::new(),
             accepted: Vec::new(),
             chosen: Vec::new(),
+            close: Vec::new(),
             tin: Tin::default(),
         };
         d.grow_for(&tin);
@@ -140,6 +143,7 @@ impl<'a> Densify<'a> {
             + self.touched.capacity() * u
             + self.accepted.capacity() * std::mem::size_of::<Accepted>()
             + self.chosen.capacity() * std::mem::size_of::<(u64, u32)>()
+            + self.close.capacity() * std::mem::size_of::<(f64, u32)>()
     }
 
     fn grow_for(&mut self, tin: &Tin) {
@@ -290,10 +294,13 @@ impl<'a> Densify<'a> {
         Ok(())
     }
 
-    /// Judges the candidates of triangle `t`'s bucket (`only`: just that one): accepted ones
-    /// go to `accepted` (of a whole bucket only the best: closest to the plane, ties by the
-    /// lower input index, as the iteration chooses); a candidate at a vertex of the TIN is
-    /// ground at once when close enough to it.
+    /// Judges the candidates of triangle `t`'s bucket (`only`: just that one, whose mirror
+    /// triangle changed); a candidate at a vertex of the TIN is ground at once when close
+    /// enough to it. Of a whole bucket only the best accepted candidate goes to `accepted`
+    /// (closest to the plane, ties by the lower input index: the one the iteration inserts),
+    /// so the candidates within `max_distance` are tried from the closest and the angles (and
+    /// the mirror) are measured only until one is accepted: the others need no answer now, as
+    /// the insertion changes `t` and they are all judged again in the next iteration.
     fn judge(
         &mut self,
         t: u32,
@@ -306,42 +313,46 @@ impl<'a> Densify<'a> {
         let plane = Plane::new(corners);
         if let Some(i) = only {
             stats.evaluations += 1;
-            if let Some(d) = self.judge_one(i, t, vs, &corners, &plane, true) {
+            if let Some(d) = self.distance(i, vs, &corners, &plane)
+                && self.accepts(i, t, vs, &corners, d, true)
+            {
                 accepted.push((t, d, self.id(i), i));
             }
             return;
         }
-        let mut best: Option<(f64, u64, u32)> = None;
+        let mut close = std::mem::take(&mut self.close);
+        close.clear();
         let mut i = self.head[t as usize];
         while i != NONE {
-            let next = self.next[i as usize];
             if self.labels[i as usize] == Label::Other {
                 stats.evaluations += 1;
-                if let Some(d) = self.judge_one(i, t, vs, &corners, &plane, false) {
-                    let id = self.id(i);
-                    if best.is_none_or(|b| d.total_cmp(&b.0).then(id.cmp(&b.1)).is_lt()) {
-                        best = Some((d, id, i));
-                    }
+                if let Some(d) = self.distance(i, vs, &corners, &plane) {
+                    close.push((d, i));
                 }
             }
-            i = next;
+            i = self.next[i as usize];
         }
-        if let Some((d, id, i)) = best {
-            accepted.push((t, d, id, i));
+        let tags = self.tags;
+        let id = |i: u32| Tag(tags[i as usize]).index();
+        close.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(id(a.1).cmp(&id(b.1))));
+        for &(d, i) in &close {
+            if self.accepts(i, t, vs, &corners, d, false) {
+                accepted.push((t, d, id(i), i));
+                break;
+            }
         }
+        self.close = close;
     }
 
-    /// Judges candidate `i` of triangle `t`: its distance to the plane when accepted.
-    /// `same_mirror`: the triangle has not changed since `i`'s mirror point was last located
-    /// (so the mirror point is the same, and its last triangle is the walk's start).
-    fn judge_one(
+    /// The distance of candidate `i` to the plane of its triangle when at most
+    /// `max_distance`; `None` (and no mirror registration) otherwise, or when `i` lies at a
+    /// corner (then it is ground when close enough to a real one).
+    fn distance(
         &mut self,
         i: u32,
-        t: u32,
         vs: [VertexId; 3],
         corners: &[[f64; 3]; 3],
         plane: &Plane,
-        same_mirror: bool,
     ) -> Option<f64> {
         let p = self.tin.point(self.vid(i));
         if let Some(k) = (0..3).find(|&k| corners[k][0] == p[0] && corners[k][1] == p[1]) {
@@ -352,17 +363,35 @@ impl<'a> Densify<'a> {
             }
             return None;
         }
-        let d = match plane.test(corners, p, self.max_distance, self.sin_max) {
-            Test::Accept(d) => {
-                self.munlink(i);
-                return Some(d);
-            }
-            Test::Steep(d) if self.mirror => d,
-            Test::Far | Test::Steep(_) => {
-                self.munlink(i);
-                return None;
-            }
-        };
+        let d = plane.distance(p, self.max_distance);
+        if d.is_none() {
+            self.munlink(i);
+        }
+        d
+    }
+
+    /// Is candidate `i` of triangle `t`, at distance `d` from its plane, accepted: its angles,
+    /// or else its mirror point's test? `same_mirror`: the triangle has not changed since `i`'s
+    /// mirror point was last located (so the mirror point is the same, and its last triangle
+    /// is the walk's start).
+    fn accepts(
+        &mut self,
+        i: u32,
+        t: u32,
+        vs: [VertexId; 3],
+        corners: &[[f64; 3]; 3],
+        d: f64,
+        same_mirror: bool,
+    ) -> bool {
+        let p = self.tin.point(self.vid(i));
+        if !Plane::steep(corners, p, d, self.sin_max) {
+            self.munlink(i);
+            return true;
+        }
+        if !self.mirror {
+            self.munlink(i);
+            return false;
+        }
         // Steep: mirror through the nearest real vertex (ties: the lower vertex id), and test
         // the mirror point against the triangle under it.
         let near = (0..3)
@@ -373,12 +402,10 @@ impl<'a> Densify<'a> {
             })
             .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         match near {
-            Some((_, _, k)) => self
-                .mirror_accepts(i, t, corners[k], p, same_mirror)
-                .then_some(d),
+            Some((_, _, k)) => self.mirror_accepts(i, t, corners[k], p, same_mirror),
             None => {
                 self.munlink(i);
-                None
+                false
             }
         }
     }
@@ -407,10 +434,7 @@ impl<'a> Densify<'a> {
             self.mlink(i, mt.0);
         }
         let corners = self.tin.tri_vertices(mt).map(|v| self.tin.point(v));
-        matches!(
-            Plane::new(corners).test(&corners, m, self.max_distance, self.sin_max),
-            Test::Accept(_)
-        )
+        Plane::new(corners).accepts(&corners, m, self.max_distance, self.sin_max)
     }
 
     /// Inserts candidate `i` (accepted), walking from the triangle slot whose bucket holds it
@@ -506,12 +530,6 @@ impl<'a> Densify<'a> {
     }
 }
 
-enum Test {
-    Accept(f64),
-    Far,
-    Steep(f64),
-}
-
 /// The plane of a triangle: its first corner and its (unnormalised) normal with its length.
 struct Plane {
     a: [f64; 3],
@@ -534,27 +552,35 @@ impl Plane {
         Plane { a, nrm, len }
     }
 
+    /// The distance of `p` to the plane when at most `max_d` (and a plane at all).
+    #[inline]
+    fn distance(&self, p: [f64; 3], max_d: f64) -> Option<f64> {
+        let (a, nrm, len) = (self.a, self.nrm, self.len);
+        if len == 0.0 || !len.is_finite() {
+            return None;
+        }
+        let w = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+        let d = (w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2]).abs() / len;
+        (d <= max_d).then_some(d)
+    }
+
+    /// Is an angle between the plane and the lines from `p` (at distance `d` from it) to the
+    /// corners of `t` larger than the angle whose sine is `sin_max`?
+    #[inline]
+    fn steep(t: &[[f64; 3]; 3], p: [f64; 3], d: f64, sin_max: f64) -> bool {
+        t.iter().any(|c| {
+            let r2 = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2);
+            // angle > max  <=>  d / r > sin(max)
+            d > r2.sqrt() * sin_max
+        })
+    }
+
     /// Axelsson's test of `p` against the plane of triangle `t`: its distance to the plane at
     /// most `max_d`, and every angle between the plane and the lines to the corners at most
     /// the angle whose sine is `sin_max`.
     #[inline]
-    fn test(&self, t: &[[f64; 3]; 3], p: [f64; 3], max_d: f64, sin_max: f64) -> Test {
-        let (a, nrm, len) = (self.a, self.nrm, self.len);
-        if len == 0.0 || !len.is_finite() {
-            return Test::Far;
-        }
-        let w = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
-        let d = (w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2]).abs() / len;
-        if d > max_d || d.is_nan() {
-            return Test::Far;
-        }
-        for c in t {
-            let r2 = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2);
-            // angle > max  <=>  d / r > sin(max)
-            if d > r2.sqrt() * sin_max {
-                return Test::Steep(d);
-            }
-        }
-        Test::Accept(d)
+    fn accepts(&self, t: &[[f64; 3]; 3], p: [f64; 3], max_d: f64, sin_max: f64) -> bool {
+        self.distance(p, max_d)
+            .is_some_and(|d| !Plane::steep(t, p, d, sin_max))
     }
 }
