@@ -130,7 +130,7 @@ input into files; several inputs are classified together (adjacent tiles classif
 seamlessly) and each is written to --odir under its own name.
 
 Memory: one read of the inputs into a block index (sorted within --mem, spilled to --tmp-dir \
-beyond), then blocks on every core, at most 104 bytes a point of a block and its buffer; a \
+beyond), then blocks on every core, at most 108 bytes a point of a block and its buffer; a \
 block that does not fit what --mem leaves after the index is refused before the work (give a \
 larger --mem or smaller --step). The classes wait in a temporary file of one byte a point beyond an eighth of --mem.
 

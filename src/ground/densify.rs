@@ -128,7 +128,7 @@ impl<'a> Densify<'a> {
 
     /// Bytes this densification holds on the heap (the TIN's, with every point's position,
     /// included).
-    pub(super) fn heap_bytes(&self) -> usize {
+    fn heap_bytes(&self) -> usize {
         let u = std::mem::size_of::<u32>();
         let per_point = self.tri.capacity()
             + self.next.capacity()
@@ -144,6 +144,11 @@ impl<'a> Densify<'a> {
             + self.accepted.capacity() * std::mem::size_of::<Accepted>()
             + self.chosen.capacity() * std::mem::size_of::<(u64, u32)>()
             + self.close.capacity() * std::mem::size_of::<(f64, u32)>()
+    }
+
+    /// Bytes the run holds: this densification's, `extra` more, the tags and the labels.
+    fn held(&self, extra: usize) -> u64 {
+        (self.heap_bytes() + extra + std::mem::size_of_val(self.tags) + self.labels.len()) as u64
     }
 
     fn grow_for(&mut self, tin: &Tin) {
@@ -283,13 +288,23 @@ impl<'a> Densify<'a> {
                 self.insert(i)?;
             }
             self.redistribute()?;
+            // The peak, at the end of the iteration (the TIN at its largest so far, the
+            // iteration's lists at theirs); then lists far larger than their last use give
+            // their room back (the first iterations move most candidates at once).
+            let lists = accepted.capacity() * std::mem::size_of::<Accepted>()
+                + chosen.capacity() * std::mem::size_of::<(u64, u32)>();
+            stats.bytes = stats.bytes.max(self.held(lists));
+            trim(&mut accepted);
+            trim(&mut chosen);
+            trim(&mut self.gathered);
+            trim(&mut self.touched);
+            trim(&mut self.dirty_list);
+            trim(&mut self.reeval);
         }
         self.tin.record_touched(false);
         self.accepted = accepted;
         self.chosen = chosen;
-        stats.bytes = stats
-            .bytes
-            .max((self.heap_bytes() + std::mem::size_of_val(self.tags) + self.labels.len()) as u64);
+        stats.bytes = stats.bytes.max(self.held(0));
         self.finish(low_noise, offset);
         Ok(())
     }
@@ -527,6 +542,13 @@ impl<'a> Densify<'a> {
                 self.labels[i] = Label::LowNoise;
             }
         }
+    }
+}
+
+/// Gives back most of the room of a list far larger than its last use.
+fn trim<T>(v: &mut Vec<T>) {
+    if v.capacity() > 4096 && v.len() < v.capacity() / 4 {
+        v.shrink_to(2 * v.len());
     }
 }
 

@@ -3,8 +3,8 @@
 //!
 //! **Definition.** Space is cut into square *ground blocks* of side `32 × step` (16 for steps
 //! over 6.25, 8 over 12.5, 4 over 25: blocks of 100 to 200 units), aligned at the origin: block
-//! `(i, j)` holds the points with
-//! `floor(x / B) = i`, `floor(y / B) = j`. The points a block owns are classified by running
+//! `(i, j)` holds the points with `floor(x / B) = i`, `floor(y / B) = j`. The points a block
+//! owns are classified by running
 //! the densification (`ptd.rs`) on the points of the block grown by a buffer of `2 × step` on
 //! every side (the seed cells of side `step`, aligned at the origin too, two cells deep), the
 //! block alone deciding. So a point's class is a function of the points within the block's
