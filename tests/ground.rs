@@ -354,10 +354,11 @@ fn a_block_too_large_for_mem_is_refused_before_any_block_runs() {
         Ok(())
     };
     let mut stages = Vec::new();
+    // 16 MiB: the dense block's 300,000 points need about 30 MiB.
     let e = classify_stream(
         &GroundParams::default(),
         pts.len() as u64,
-        32 << 20,
+        16 << 20,
         &std::env::temp_dir(),
         &mut feed,
         &mut |what, _, _| stages.push(what.to_string()),

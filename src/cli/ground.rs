@@ -123,14 +123,14 @@ not ground becomes 1), or all become 1 with --reset. Withheld points and points 
 classified noise (7, 18) take no part and keep their class. Every other attribute, the header, \
 VLRs and EVLRs and the order of the points are kept.
 
-Exact and tiling-independent: the ground is decided in blocks of 16 steps a side (8 above \
---step 6.25, 4 above 12.5, 2 above 25: 50 to 100 units), aligned at the origin, each block from its own points and those \
+Exact and tiling-independent: the ground is decided in blocks of 32 steps a side (16 above \
+--step 6.25, 8 above 12.5, 4 above 25: 100 to 200 units), aligned at the origin, each block from its own points and those \
 within 2 steps around it. So the classes are the same for any --threads, --mem or split of the \
 input into files; several inputs are classified together (adjacent tiles classify \
 seamlessly) and each is written to --odir under its own name.
 
 Memory: one read of the inputs into a block index (sorted within --mem, spilled to --tmp-dir \
-beyond), then blocks on every core, at most 128 bytes a point of a block and its buffer; a \
+beyond), then blocks on every core, at most 108 bytes a point of a block and its buffer; a \
 block that does not fit what --mem leaves after the index is refused before the work (give a \
 larger --mem or smaller --step). The classes wait in a temporary file of one byte a point beyond an eighth of --mem.
 

@@ -17,11 +17,15 @@ use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Bytes a run takes per point of its buffered rectangle (the points, tags, labels, the
-/// candidates' bucket and mirror links, the ground TIN and its per-triangle tables, grown an
-/// eighth at a time), for fitting runs into `--mem`: measured 113 on ARSO (68 % ground),
-/// checked against every run by `ground::a_run_takes_no_more_than_run_bytes_per_point_of_the_refusal`.
-pub const RUN_BYTES_PER_POINT: u64 = 128;
+/// Bytes a run takes per point of its buffered rectangle (the tags and labels, the candidates'
+/// bucket and mirror links, the ground TIN, which holds every point's position once, and its
+/// per-triangle tables, grown a sixteenth at a time), for fitting runs into `--mem`. It grows
+/// with the share of ground (about 53 + 66 × that share): measured 96–106 on ARSO (106.3 on its
+/// densest 160 m block, 1.11 M points, most of them ground), 103 on a synthetic block, and
+/// checked against every run of real files by
+/// `ground::a_run_takes_no_more_than_run_bytes_per_point_of_the_refusal`. A block of ground
+/// alone would take about 120.
+pub const RUN_BYTES_PER_POINT: u64 = 108;
 
 /// Largest seed cell coordinate (block keys pack two `i32`).
 const KEY_LIMIT: f64 = ((1u64 << 31) - 4) as f64;
@@ -396,22 +400,29 @@ fn run_block(
     }
     let world = grid.world(&rect);
     super::ptd::spatial_order(&mut pts, &mut tags, world);
-    let mut labels = Vec::new();
-    let stats = classify_run(&pts, &tags, world, grid, params, &mut labels)?;
-    check_labels(&labels, pts.len())?;
-    let mut out = Vec::new();
-    for (i, p) in pts.iter().enumerate() {
+    // The points the block owns, marked in their tags (the run keeps no coordinates of its
+    // own: they move into its TIN).
+    for (p, tag) in pts.iter().zip(tags.iter_mut()) {
         let (bx, by) = grid.block_of(p[0], p[1]);
-        if grid.tile_of_block(bx, by) != (tx, ty) {
-            continue;
+        if grid.tile_of_block(bx, by) == (tx, ty) {
+            *tag = Tag(*tag).owned().0;
         }
-        let tag = Tag(tags[i]);
-        out.push((tag.index(), tag.new_class(labels[i], params.reset)));
+    }
+    let n = pts.len();
+    let mut labels = Vec::new();
+    let stats = classify_run(pts, &tags, world, grid, params, &mut labels)?;
+    check_labels(&labels, n)?;
+    let mut out = Vec::new();
+    for (&tag, &label) in tags.iter().zip(&labels) {
+        let tag = Tag(tag);
+        if tag.is_owned() {
+            out.push((tag.index(), tag.new_class(label, params.reset)));
+        }
     }
     Ok(BlockResult {
         classes: out,
         stats,
-        points: pts.len() as u64,
+        points: n as u64,
     })
 }
 

@@ -19,14 +19,21 @@ use crate::tin::{PointLocation, Tin, TriId, VertexId, planar};
 /// No triangle, no candidate.
 const NONE: u32 = u32::MAX;
 
+/// `mnext` of a candidate registered with no mirror triangle.
+const UNLINKED: u32 = u32::MAX - 1;
+
 /// Densification stops after this many iterations even if points are still accepted (each
 /// iteration inserts at most one point per triangle; real data needs a few dozen).
 const MAX_ITERATIONS: u64 = 10_000;
 
+/// An accepted candidate: `(triangle, distance, input index, point)`.
+type Accepted = (u32, f64, u64, u32);
+
 /// The state of one run's densification.
 pub(super) struct Densify<'a> {
+    /// The ground TIN. Every point of the run is one of its vertex ids (inserted or not:
+    /// point `i` is vertex `virtuals + i`), so each position is held once.
     tin: Tin,
-    pts: &'a [[f64; 3]],
     tags: &'a [u64],
     labels: &'a mut [Label],
     max_distance: f64,
@@ -35,40 +42,43 @@ pub(super) struct Densify<'a> {
     /// Vertex ids below this are the virtual ring's.
     virtuals: usize,
     /// Per point: the triangle whose bucket holds it, the next point of that bucket, the
-    /// triangle its mirror point was found in (with its previous and next registrant there).
+    /// triangle its mirror point was last found in (kept as the start of the next walk to the
+    /// same mirror point) and the next registrant there ([`UNLINKED`]: not registered).
     tri: Vec<u32>,
     next: Vec<u32>,
     mtri: Vec<u32>,
-    mprev: Vec<u32>,
     mnext: Vec<u32>,
     /// Per triangle slot: the first point of its bucket and of its mirror registrants; is it
-    /// to be judged again?
+    /// to be judged again (one bit a slot)?
     head: Vec<u32>,
     mhead: Vec<u32>,
-    dirty: Vec<bool>,
+    dirty: Vec<u64>,
     /// The dirty triangles (possibly freed since), and the candidates whose mirror triangle
     /// changed.
     dirty_list: Vec<u32>,
     reeval: Vec<u32>,
     touched: Vec<TriId>,
     gathered: Vec<u32>,
+    accepted: Vec<Accepted>,
+    chosen: Vec<(u64, u32)>,
+    /// A bucket's candidates within `max_distance` of its plane: `(distance, point)`.
+    close: Vec<(f64, u32)>,
 }
 
 impl<'a> Densify<'a> {
     /// The densification of the candidates `cand` (eligible points not yet labelled) on the
-    /// initial ground TIN `tin`, whose first `virtuals` vertices are virtual.
+    /// initial ground TIN `tin`, whose first `virtuals` vertices are virtual and whose next
+    /// `tags.len()` vertex ids are the run's points.
     pub(super) fn new(
         mut tin: Tin,
         virtuals: usize,
-        pts: &'a [[f64; 3]],
         tags: &'a [u64],
         labels: &'a mut [Label],
         params: &GroundParams,
-        cand: impl Iterator<Item = u32>,
+        cand: &[u32],
     ) -> Result<Densify<'a>> {
-        let n = pts.len();
+        let n = tags.len();
         let mut d = Densify {
-            pts,
             tags,
             labels,
             max_distance: params.max_distance,
@@ -78,8 +88,7 @@ impl<'a> Densify<'a> {
             tri: vec![NONE; n],
             next: vec![NONE; n],
             mtri: vec![NONE; n],
-            mprev: vec![NONE; n],
-            mnext: vec![NONE; n],
+            mnext: vec![UNLINKED; n],
             head: Vec::new(),
             mhead: Vec::new(),
             dirty: Vec::new(),
@@ -87,14 +96,17 @@ impl<'a> Densify<'a> {
             reeval: Vec::new(),
             touched: Vec::new(),
             gathered: Vec::new(),
+            accepted: Vec::new(),
+            chosen: Vec::new(),
+            close: Vec::new(),
             tin: Tin::default(),
         };
         d.grow_for(&tin);
         // Every candidate into the bucket of its triangle (a walk from the last one: the
         // candidates come cell by cell).
-        for i in cand {
-            let p = pts[i as usize];
-            let t = match tin.locate([p[0], p[1]]) {
+        for &i in cand {
+            let p = tin.xy(VertexId((virtuals + i as usize) as u32));
+            let t = match tin.locate(p) {
                 PointLocation::Inside(t) => t,
                 PointLocation::OnEdge(e) => e.tri(),
                 PointLocation::OnVertex(v) => match tin.out_edge(v) {
@@ -106,7 +118,7 @@ impl<'a> Densify<'a> {
             d.link(i, t.0);
         }
         for t in tin.triangles() {
-            d.dirty[t.0 as usize] = true;
+            d.set_dirty(t.0);
             d.dirty_list.push(t.0);
         }
         tin.record_touched(true);
@@ -114,41 +126,74 @@ impl<'a> Densify<'a> {
         Ok(d)
     }
 
-    /// Bytes this densification holds on the heap (the TIN's included).
+    /// Bytes this densification holds on the heap (the TIN's, with every point's position,
+    /// included).
     fn heap_bytes(&self) -> usize {
         let u = std::mem::size_of::<u32>();
         let per_point = self.tri.capacity()
             + self.next.capacity()
             + self.mtri.capacity()
-            + self.mprev.capacity()
             + self.mnext.capacity()
             + self.dirty_list.capacity()
             + self.reeval.capacity()
             + self.gathered.capacity();
         self.tin.heap_bytes()
             + u * (per_point + self.head.capacity() + self.mhead.capacity())
-            + self.dirty.capacity()
+            + 8 * self.dirty.capacity()
             + self.touched.capacity() * u
+            + self.accepted.capacity() * std::mem::size_of::<Accepted>()
+            + self.chosen.capacity() * std::mem::size_of::<(u64, u32)>()
+            + self.close.capacity() * std::mem::size_of::<(f64, u32)>()
+    }
+
+    /// Bytes the run holds: this densification's, `extra` more, the tags and the labels.
+    fn held(&self, extra: usize) -> u64 {
+        (self.heap_bytes() + extra + std::mem::size_of_val(self.tags) + self.labels.len()) as u64
     }
 
     fn grow_for(&mut self, tin: &Tin) {
         let m = tin.triangle_slots();
         if self.head.len() < m {
             if self.head.capacity() < m {
-                let more = (m - self.head.len()).max(m / 8);
+                let more = (m - self.head.len()).max(m / 16);
                 self.head.reserve_exact(more);
                 self.mhead.reserve_exact(more);
-                self.dirty.reserve_exact(more);
             }
             self.head.resize(m, NONE);
             self.mhead.resize(m, NONE);
-            self.dirty.resize(m, false);
+            let words = m.div_ceil(64);
+            if self.dirty.capacity() < words {
+                let more = (words - self.dirty.len()).max(words / 16);
+                self.dirty.reserve_exact(more);
+            }
+            self.dirty.resize(words, 0);
         }
+    }
+
+    #[inline]
+    fn is_dirty(&self, t: u32) -> bool {
+        self.dirty[t as usize / 64] & (1 << (t % 64)) != 0
+    }
+
+    #[inline]
+    fn set_dirty(&mut self, t: u32) {
+        self.dirty[t as usize / 64] |= 1 << (t % 64);
+    }
+
+    #[inline]
+    fn clear_dirty(&mut self, t: u32) {
+        self.dirty[t as usize / 64] &= !(1 << (t % 64));
     }
 
     #[inline]
     fn id(&self, i: u32) -> u64 {
         Tag(self.tags[i as usize]).index()
+    }
+
+    /// The vertex id of point `i`.
+    #[inline]
+    fn vid(&self, i: u32) -> VertexId {
+        VertexId((self.virtuals + i as usize) as u32)
     }
 
     #[inline]
@@ -158,38 +203,38 @@ impl<'a> Densify<'a> {
         self.tri[i as usize] = t;
     }
 
+    /// Registers `i` (not registered) with mirror triangle `t`.
     fn mlink(&mut self, i: u32, t: u32) {
-        let h = self.mhead[t as usize];
-        self.mnext[i as usize] = h;
-        self.mprev[i as usize] = NONE;
-        if h != NONE {
-            self.mprev[h as usize] = i;
-        }
+        self.mnext[i as usize] = self.mhead[t as usize];
         self.mhead[t as usize] = i;
         self.mtri[i as usize] = t;
     }
 
+    /// Takes `i` out of its mirror triangle's registrants (a short list: found by a scan).
     fn munlink(&mut self, i: u32) {
-        let t = self.mtri[i as usize];
-        if t == NONE {
+        let n = self.mnext[i as usize];
+        if n == UNLINKED {
             return;
         }
-        let (p, n) = (self.mprev[i as usize], self.mnext[i as usize]);
-        if p == NONE {
-            self.mhead[t as usize] = n;
+        let t = self.mtri[i as usize] as usize;
+        if self.mhead[t] == i {
+            self.mhead[t] = n;
         } else {
-            self.mnext[p as usize] = n;
+            let mut j = self.mhead[t];
+            while j != NONE && self.mnext[j as usize] != i {
+                j = self.mnext[j as usize];
+            }
+            if j != NONE {
+                self.mnext[j as usize] = n;
+            }
         }
-        if n != NONE {
-            self.mprev[n as usize] = p;
-        }
-        self.mtri[i as usize] = NONE;
+        self.mnext[i as usize] = UNLINKED;
     }
 
     /// Densifies until an iteration inserts nothing; then the final pass (step 5).
     pub(super) fn run(mut self, low_noise: f64, offset: f64, stats: &mut RunStats) -> Result<()> {
-        let mut accepted: Vec<(u32, f64, u64, u32)> = Vec::new();
-        let mut chosen: Vec<(u64, u32)> = Vec::new();
+        let mut accepted = std::mem::take(&mut self.accepted);
+        let mut chosen = std::mem::take(&mut self.chosen);
         while stats.iterations < MAX_ITERATIONS {
             stats.iterations += 1;
             // Judge the candidates of the dirty triangles, then those whose mirror moved.
@@ -204,13 +249,13 @@ impl<'a> Densify<'a> {
             let reeval = std::mem::take(&mut self.reeval);
             for &i in &reeval {
                 let t = self.tri[i as usize];
-                if self.labels[i as usize] != Label::Other || self.dirty[t as usize] {
+                if self.labels[i as usize] != Label::Other || self.is_dirty(t) {
                     continue;
                 }
                 self.judge(t, Some(i), &mut accepted, stats);
             }
             for &t in &dirty {
-                self.dirty[t as usize] = false;
+                self.clear_dirty(t);
             }
             self.dirty_list = dirty;
             self.dirty_list.clear();
@@ -233,77 +278,135 @@ impl<'a> Densify<'a> {
             if chosen.is_empty() {
                 break;
             }
-            // Grow the TIN by an eighth at a time, not by doubling: its memory is most of a
-            // run's.
-            if self.tin.vertex_room() < chosen.len() {
-                let more = chosen.len().max(self.tin.vertex_slots() / 8);
-                self.tin.reserve_exact(more);
+            // Grow the TIN's triangles by a sixteenth at a time, not by doubling: its memory
+            // is most of a run's.
+            if self.tin.triangle_room() < chosen.len() {
+                let more = chosen.len().max(self.tin.vertex_count() / 16);
+                self.tin.reserve_triangles_exact(more);
             }
             for &(_, i) in &chosen {
                 self.insert(i)?;
             }
             self.redistribute()?;
+            // The peak, at the end of the iteration (the TIN at its largest so far, the
+            // iteration's lists at theirs); then lists far larger than their last use give
+            // their room back (the first iterations move most candidates at once).
+            let lists = accepted.capacity() * std::mem::size_of::<Accepted>()
+                + chosen.capacity() * std::mem::size_of::<(u64, u32)>();
+            stats.bytes = stats.bytes.max(self.held(lists));
+            trim(&mut accepted);
+            trim(&mut chosen);
+            trim(&mut self.gathered);
+            trim(&mut self.touched);
+            trim(&mut self.dirty_list);
+            trim(&mut self.reeval);
         }
         self.tin.record_touched(false);
-        stats.bytes = self.heap_bytes() as u64;
+        self.accepted = accepted;
+        self.chosen = chosen;
+        stats.bytes = stats.bytes.max(self.held(0));
         self.finish(low_noise, offset);
         Ok(())
     }
 
-    /// Judges the candidates of triangle `t`'s bucket (`only`: just that one): accepted ones
-    /// go to `accepted` as `(triangle, distance, input index, point)`; a candidate at a vertex
-    /// of the TIN is ground at once when close enough to it.
+    /// Judges the candidates of triangle `t`'s bucket (`only`: just that one, whose mirror
+    /// triangle changed); a candidate at a vertex of the TIN is ground at once when close
+    /// enough to it. Of a whole bucket only the best accepted candidate goes to `accepted`
+    /// (closest to the plane, ties by the lower input index: the one the iteration inserts),
+    /// so the candidates within `max_distance` are tried from the closest and the angles (and
+    /// the mirror) are measured only until one is accepted: the others need no answer now, as
+    /// the insertion changes `t` and they are all judged again in the next iteration.
     fn judge(
         &mut self,
         t: u32,
         only: Option<u32>,
-        accepted: &mut Vec<(u32, f64, u64, u32)>,
+        accepted: &mut Vec<Accepted>,
         stats: &mut RunStats,
     ) {
         let vs = self.tin.tri_vertices(TriId(t));
         let corners = vs.map(|v| self.tin.point(v));
         let plane = Plane::new(corners);
-        let mut i = only.unwrap_or(self.head[t as usize]);
+        if let Some(i) = only {
+            stats.evaluations += 1;
+            if let Some(d) = self.distance(i, vs, &corners, &plane)
+                && self.accepts(i, t, vs, &corners, d, true)
+            {
+                accepted.push((t, d, self.id(i), i));
+            }
+            return;
+        }
+        let mut close = std::mem::take(&mut self.close);
+        close.clear();
+        let mut i = self.head[t as usize];
         while i != NONE {
-            let next = if only.is_some() {
-                NONE
-            } else {
-                self.next[i as usize]
-            };
             if self.labels[i as usize] == Label::Other {
                 stats.evaluations += 1;
-                self.judge_one(i, t, vs, &corners, &plane, accepted);
+                if let Some(d) = self.distance(i, vs, &corners, &plane) {
+                    close.push((d, i));
+                }
             }
-            i = next;
+            i = self.next[i as usize];
         }
+        let tags = self.tags;
+        let id = |i: u32| Tag(tags[i as usize]).index();
+        close.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(id(a.1).cmp(&id(b.1))));
+        for &(d, i) in &close {
+            if self.accepts(i, t, vs, &corners, d, false) {
+                accepted.push((t, d, id(i), i));
+                break;
+            }
+        }
+        self.close = close;
     }
 
-    fn judge_one(
+    /// The distance of candidate `i` to the plane of its triangle when at most
+    /// `max_distance`; `None` (and no mirror registration) otherwise, or when `i` lies at a
+    /// corner (then it is ground when close enough to a real one).
+    fn distance(
+        &mut self,
+        i: u32,
+        vs: [VertexId; 3],
+        corners: &[[f64; 3]; 3],
+        plane: &Plane,
+    ) -> Option<f64> {
+        let p = self.tin.point(self.vid(i));
+        if let Some(k) = (0..3).find(|&k| corners[k][0] == p[0] && corners[k][1] == p[1]) {
+            self.munlink(i);
+            let d = (p[2] - corners[k][2]).abs();
+            if d <= self.max_distance && (vs[k].0 as usize) >= self.virtuals {
+                self.labels[i as usize] = Label::Ground;
+            }
+            return None;
+        }
+        let d = plane.distance(p, self.max_distance);
+        if d.is_none() {
+            self.munlink(i);
+        }
+        d
+    }
+
+    /// Is candidate `i` of triangle `t`, at distance `d` from its plane, accepted: its angles,
+    /// or else its mirror point's test? `same_mirror`: the triangle has not changed since `i`'s
+    /// mirror point was last located (so the mirror point is the same, and its last triangle
+    /// is the walk's start).
+    fn accepts(
         &mut self,
         i: u32,
         t: u32,
         vs: [VertexId; 3],
         corners: &[[f64; 3]; 3],
-        plane: &Plane,
-        accepted: &mut Vec<(u32, f64, u64, u32)>,
-    ) {
-        self.munlink(i);
-        let p = self.pts[i as usize];
-        if let Some(k) = (0..3).find(|&k| corners[k][0] == p[0] && corners[k][1] == p[1]) {
-            let d = (p[2] - corners[k][2]).abs();
-            if d <= self.max_distance && (vs[k].0 as usize) >= self.virtuals {
-                self.labels[i as usize] = Label::Ground;
-            }
-            return;
+        d: f64,
+        same_mirror: bool,
+    ) -> bool {
+        let p = self.tin.point(self.vid(i));
+        if !Plane::steep(corners, p, d, self.sin_max) {
+            self.munlink(i);
+            return true;
         }
-        let d = match plane.test(corners, p, self.max_distance, self.sin_max) {
-            Test::Accept(d) => {
-                accepted.push((t, d, self.id(i), i));
-                return;
-            }
-            Test::Steep(d) if self.mirror => d,
-            Test::Far | Test::Steep(_) => return,
-        };
+        if !self.mirror {
+            self.munlink(i);
+            return false;
+        }
         // Steep: mirror through the nearest real vertex (ties: the lower vertex id), and test
         // the mirror point against the triangle under it.
         let near = (0..3)
@@ -313,40 +416,51 @@ impl<'a> Densify<'a> {
                 ((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2), vs[k].0, k)
             })
             .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        if let Some((_, _, k)) = near
-            && self.mirror_accepts(i, t, corners[k], p)
-        {
-            accepted.push((t, d, self.id(i), i));
+        match near {
+            Some((_, _, k)) => self.mirror_accepts(i, t, corners[k], p, same_mirror),
+            None => {
+                self.munlink(i);
+                false
+            }
         }
     }
 
-    /// The mirror test of candidate `i` (in triangle `t`) through vertex `v`; registers `i`
-    /// with the triangle under the mirror point.
-    fn mirror_accepts(&mut self, i: u32, t: u32, c: [f64; 3], p: [f64; 3]) -> bool {
+    /// The mirror test of candidate `i` (in triangle `t`) through corner `c`; registers `i`
+    /// with the triangle under the mirror point. The walk starts from the mirror point's last
+    /// triangle when it is the same point (`same`), else from `t`.
+    fn mirror_accepts(&mut self, i: u32, t: u32, c: [f64; 3], p: [f64; 3], same: bool) -> bool {
         let m = [2.0 * c[0] - p[0], 2.0 * c[1] - p[1], 2.0 * c[2] - p[2]];
-        let mt = match self.tin.locate_from(TriId(t), [m[0], m[1]]) {
+        let last = self.mtri[i as usize];
+        let from = if same && last != NONE && self.tin.is_live(TriId(last)) {
+            last
+        } else {
+            t
+        };
+        let mt = match self.tin.locate_from(TriId(from), [m[0], m[1]]) {
             PointLocation::Inside(mt) => mt,
             PointLocation::OnEdge(e) => e.tri(),
-            _ => return false,
+            _ => {
+                self.munlink(i);
+                return false;
+            }
         };
-        self.mlink(i, mt.0);
+        if self.mnext[i as usize] == UNLINKED || last != mt.0 {
+            self.munlink(i);
+            self.mlink(i, mt.0);
+        }
         let corners = self.tin.tri_vertices(mt).map(|v| self.tin.point(v));
-        matches!(
-            Plane::new(corners).test(&corners, m, self.max_distance, self.sin_max),
-            Test::Accept(_)
-        )
+        Plane::new(corners).accepts(&corners, m, self.max_distance, self.sin_max)
     }
 
     /// Inserts candidate `i` (accepted), walking from the triangle slot whose bucket holds it
     /// (insertions never free a slot: it is live, and near the point).
     fn insert(&mut self, i: u32) -> Result<()> {
-        let p = self.pts[i as usize];
         self.labels[i as usize] = Label::Ground;
         self.munlink(i);
         // A candidate of this iteration at the same place may have gone in first: then this
         // one is that vertex.
         self.tin.set_hint(TriId(self.tri[i as usize]));
-        self.tin.insert(p)?;
+        self.tin.insert_vertex(self.vid(i))?;
         Ok(())
     }
 
@@ -365,32 +479,32 @@ impl<'a> Densify<'a> {
         let mut gathered = std::mem::take(&mut self.gathered);
         gathered.clear();
         for &t in &touched {
-            let t = t.0 as usize;
-            let mut i = std::mem::replace(&mut self.head[t], NONE);
+            let t = t.0;
+            let mut i = std::mem::replace(&mut self.head[t as usize], NONE);
             while i != NONE {
                 if self.labels[i as usize] == Label::Other {
                     gathered.push(i);
                 }
                 i = self.next[i as usize];
             }
-            let mut j = std::mem::replace(&mut self.mhead[t], NONE);
+            let mut j = std::mem::replace(&mut self.mhead[t as usize], NONE);
             while j != NONE {
                 let n = self.mnext[j as usize];
-                self.mtri[j as usize] = NONE;
+                self.mnext[j as usize] = UNLINKED;
                 self.reeval.push(j);
                 j = n;
             }
-            if self.tin.is_live(TriId(t as u32)) && !self.dirty[t] {
-                self.dirty[t] = true;
-                self.dirty_list.push(t as u32);
+            if self.tin.is_live(TriId(t)) && !self.is_dirty(t) {
+                self.set_dirty(t);
+                self.dirty_list.push(t);
             }
         }
         // In memory order (spatial, see `ptd::spatial_order`): each walk starts near the last.
         gathered.sort_unstable();
         for &i in &gathered {
-            let p = self.pts[i as usize];
+            let p = self.tin.xy(self.vid(i));
             let from = TriId(self.tri[i as usize]);
-            let t = match self.tin.locate_from(from, [p[0], p[1]]) {
+            let t = match self.tin.locate_from(from, p) {
                 PointLocation::Inside(t) => Some(t),
                 PointLocation::OnEdge(e) => Some(e.tri()),
                 PointLocation::OnVertex(v) => self.tin.out_edge(v).map(|e| e.tri()),
@@ -414,12 +528,12 @@ impl<'a> Densify<'a> {
     /// Step 5: a candidate left within `offset` (vertically) of the final ground TIN is ground,
     /// one more than `low_noise` below it is low noise.
     fn finish(&mut self, low_noise: f64, offset: f64) {
-        for i in 0..self.pts.len() {
+        for i in 0..self.tags.len() {
             let t = self.tri[i];
             if t == NONE || self.labels[i] != Label::Other {
                 continue;
             }
-            let p = self.pts[i];
+            let p = self.tin.point(self.vid(i as u32));
             let [a, b, c] = self.tin.tri_vertices(TriId(t)).map(|v| self.tin.point(v));
             let z = planar(a, b, c, [p[0], p[1]]);
             if (p[2] - z).abs() <= offset {
@@ -431,10 +545,11 @@ impl<'a> Densify<'a> {
     }
 }
 
-enum Test {
-    Accept(f64),
-    Far,
-    Steep(f64),
+/// Gives back most of the room of a list far larger than its last use.
+fn trim<T>(v: &mut Vec<T>) {
+    if v.capacity() > 4096 && v.len() < v.capacity() / 4 {
+        v.shrink_to(2 * v.len());
+    }
 }
 
 /// The plane of a triangle: its first corner and its (unnormalised) normal with its length.
@@ -459,27 +574,35 @@ impl Plane {
         Plane { a, nrm, len }
     }
 
+    /// The distance of `p` to the plane when at most `max_d` (and a plane at all).
+    #[inline]
+    fn distance(&self, p: [f64; 3], max_d: f64) -> Option<f64> {
+        let (a, nrm, len) = (self.a, self.nrm, self.len);
+        if len == 0.0 || !len.is_finite() {
+            return None;
+        }
+        let w = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+        let d = (w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2]).abs() / len;
+        (d <= max_d).then_some(d)
+    }
+
+    /// Is an angle between the plane and the lines from `p` (at distance `d` from it) to the
+    /// corners of `t` larger than the angle whose sine is `sin_max`?
+    #[inline]
+    fn steep(t: &[[f64; 3]; 3], p: [f64; 3], d: f64, sin_max: f64) -> bool {
+        t.iter().any(|c| {
+            let r2 = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2);
+            // angle > max  <=>  d / r > sin(max)
+            d > r2.sqrt() * sin_max
+        })
+    }
+
     /// Axelsson's test of `p` against the plane of triangle `t`: its distance to the plane at
     /// most `max_d`, and every angle between the plane and the lines to the corners at most
     /// the angle whose sine is `sin_max`.
     #[inline]
-    fn test(&self, t: &[[f64; 3]; 3], p: [f64; 3], max_d: f64, sin_max: f64) -> Test {
-        let (a, nrm, len) = (self.a, self.nrm, self.len);
-        if len == 0.0 || !len.is_finite() {
-            return Test::Far;
-        }
-        let w = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
-        let d = (w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2]).abs() / len;
-        if d > max_d || d.is_nan() {
-            return Test::Far;
-        }
-        for c in t {
-            let r2 = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2);
-            // angle > max  <=>  d / r > sin(max)
-            if d > r2.sqrt() * sin_max {
-                return Test::Steep(d);
-            }
-        }
-        Test::Accept(d)
+    fn accepts(&self, t: &[[f64; 3]; 3], p: [f64; 3], max_d: f64, sin_max: f64) -> bool {
+        self.distance(p, max_d)
+            .is_some_and(|d| !Plane::steep(t, p, d, sin_max))
     }
 }

@@ -1,9 +1,10 @@
 //! Ground classification: progressive TIN densification (Axelsson 2000) on the exact TIN, in
 //! blocks of a global grid, so that every point's class depends only on the points near it.
 //!
-//! **Definition.** Space is cut into square *ground blocks* of side `16 × step` (8 for steps
-//! over 6.25, 4 over 12.5, 2 over 25: blocks of 50 to 100 units), aligned at the origin: block `(i, j)` holds the points with
-//! `floor(x / B) = i`, `floor(y / B) = j`. The points a block owns are classified by running
+//! **Definition.** Space is cut into square *ground blocks* of side `32 × step` (16 for steps
+//! over 6.25, 8 over 12.5, 4 over 25: blocks of 100 to 200 units), aligned at the origin: block
+//! `(i, j)` holds the points with `floor(x / B) = i`, `floor(y / B) = j`. The points a block
+//! owns are classified by running
 //! the densification (`ptd.rs`) on the points of the block grown by a buffer of `2 × step` on
 //! every side (the seed cells of side `step`, aligned at the origin too, two cells deep), the
 //! block alone deciding. So a point's class is a function of the points within the block's
@@ -154,18 +155,18 @@ impl GroundParams {
     }
 
     /// Halvings of a ground block into seed cells (a block is `2^shift` cells a side): blocks
-    /// of 50 to 100 units. (Blocks of 100 to 200 units would cut the buffer's overhead from 4×
-    /// to 2.3× of the points, but a run of ARSO's densest 160 m block holds 1.1 M points, which
-    /// at [`RUN_BYTES_PER_POINT`] does not fit `--mem 128M`.)
+    /// of 100 to 200 units. (Blocks of 50 to 100 units ran each point in up to four runs: the
+    /// buffer's overhead was 4× the points, 2.3× now; ARSO's densest 160 m block with its
+    /// buffer holds 1.11 M points, which at [`RUN_BYTES_PER_POINT`] fits `--mem 128M`.)
     pub fn shift(&self) -> u32 {
         if self.step <= 6.25 {
-            4
+            5
         } else if self.step <= 12.5 {
-            3
+            4
         } else if self.step <= 25.0 {
-            2
+            3
         } else {
-            1
+            2
         }
     }
 
@@ -220,6 +221,8 @@ pub(crate) struct Tag(pub u64);
 
 impl Tag {
     const ELIGIBLE: u64 = 1 << 8;
+    /// Set only within a block's run: the block owns the point.
+    const OWNED: u64 = 1 << 9;
 
     fn of(p: &GroundInput) -> Tag {
         let eligible = !p.withheld && p.class != 7 && p.class != 18;
@@ -236,6 +239,16 @@ impl Tag {
 
     pub(crate) fn eligible(self) -> bool {
         self.0 & Tag::ELIGIBLE != 0
+    }
+
+    /// The same tag, marked as owned by the block being run.
+    pub(crate) fn owned(self) -> Tag {
+        Tag(self.0 | Tag::OWNED)
+    }
+
+    /// Does the block being run own the point?
+    pub(crate) fn is_owned(self) -> bool {
+        self.0 & Tag::OWNED != 0
     }
 
     /// The class the point gets.

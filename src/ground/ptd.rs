@@ -32,7 +32,7 @@ use super::densify::Densify;
 use super::{GroundParams, Tag};
 use crate::error::{Error, Result};
 use crate::tiles::grid::TileGrid;
-use crate::tin::Tin;
+use crate::tin::{Tin, VertexId};
 use std::collections::HashMap;
 
 /// What the run decided for a point.
@@ -59,12 +59,13 @@ pub(crate) struct RunStats {
 
 /// Classifies the points `pts` (their global input index and eligibility in `tags`) of the run
 /// over the closed rectangle `rect`; only eligible points may become ground or low noise.
-/// `grid`'s blocks are the seed cells.
+/// `grid`'s blocks are the seed cells. The points move into the ground TIN (as vertex ids, most
+/// never inserted), which holds each position once.
 ///
 /// # Errors
 /// The TIN's errors (a coordinate out of range, too many vertices).
 pub(crate) fn classify_run(
-    pts: &[[f64; 3]],
+    pts: Vec<[f64; 3]>,
     tags: &[u64],
     rect: [f64; 4],
     grid: &TileGrid,
@@ -151,13 +152,25 @@ pub(crate) fn classify_run(
         .map(|c| order[c.2].2)
         .collect();
     stats.seeds = seeds.len() as u64;
-    let ring = virtual_ring(rect, params.step, pts, tags, &seeds);
+    let ring = virtual_ring(rect, params.step, &pts, tags, &seeds);
     let mut tin = Tin::from_points(&ring)?;
     let virtuals = tin.vertex_slots();
+    // Every point becomes a vertex id (point i is vertex virtuals + i), inserted or not.
+    tin.reserve_vertices_exact(n);
+    for p in &pts {
+        tin.add_vertex(*p)?;
+    }
+    let vid = |i: u32| VertexId((virtuals + i as usize) as u32);
     for &s in &seeds {
-        tin.insert(pts[s as usize])?;
+        tin.insert_vertex(vid(s))?;
         labels[s as usize] = Label::Ground;
     }
+    // The setup's peak: the points, their order and the TIN's copy of them.
+    stats.bytes = (std::mem::size_of_val(&pts[..])
+        + order.capacity() * std::mem::size_of::<(i64, i64, u32)>()
+        + std::mem::size_of_val(tags)
+        + labels.capacity()
+        + tin.heap_bytes()) as u64;
 
     // 4. Densification, 5. the final TIN.
     let cand = order
@@ -166,10 +179,10 @@ pub(crate) fn classify_run(
         .filter(|&i| labels[i as usize] == Label::Other);
     let cand: Vec<u32> = cand.collect();
     drop(order);
-    let densify = Densify::new(tin, virtuals, pts, tags, labels, params, cand.into_iter())?;
+    drop(pts);
+    let densify = Densify::new(tin, virtuals, tags, labels, params, &cand)?;
+    drop(cand);
     densify.run(params.low_noise, params.offset, &mut stats)?;
-    stats.bytes +=
-        (std::mem::size_of_val(pts) + std::mem::size_of_val(tags) + labels.capacity()) as u64;
     Ok(stats)
 }
 

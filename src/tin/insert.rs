@@ -25,6 +25,38 @@ impl Tin {
         Ok(v)
     }
 
+    /// A vertex id for `p`, not in the triangulation: [`Tin::insert_vertex`] inserts it later
+    /// (a caller that keeps its points in the TIN, inserted or not, holds each position once).
+    ///
+    /// # Errors
+    /// As [`Tin::insert`].
+    pub fn add_vertex(&mut self, p: [f64; 3]) -> Result<VertexId> {
+        check_point(p, self.xy.len() as u64)?;
+        self.push_vertex(p)
+    }
+
+    /// Inserts vertex `v` (added with [`Tin::add_vertex`], not in the triangulation) and
+    /// restores the Delaunay property; a vertex already at its position is returned instead
+    /// (`v` then stays out).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] if `v` is not a vertex id outside the triangulation, or while vertex
+    /// tracking is off.
+    pub fn insert_vertex(&mut self, v: VertexId) -> Result<VertexId> {
+        if (v.0 as usize) >= self.xy.len() || self.contains_vertex(v) || self.untracked {
+            return Err(Error::Invalid(format!(
+                "vertex {} cannot be inserted: it is not a vertex outside the triangulation",
+                v.0
+            )));
+        }
+        let loc = self.locate(self.xy(v));
+        if let PointLocation::OnVertex(w) = loc {
+            return Ok(w);
+        }
+        self.insert_located(v, loc)?;
+        Ok(v)
+    }
+
     /// Puts a removed vertex back, with the same id.
     ///
     /// # Errors

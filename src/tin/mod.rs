@@ -269,6 +269,27 @@ impl Tin {
         self.mesh.link.reserve_exact(6 * vertices);
     }
 
+    /// Makes room for `vertices` more vertex ids (positions only, no triangles): for vertices
+    /// added with [`Tin::add_vertex`] and inserted later.
+    pub fn reserve_vertices_exact(&mut self, vertices: usize) {
+        self.xy.reserve_exact(vertices);
+        self.z.reserve_exact(vertices);
+        self.vedge.reserve_exact(vertices);
+    }
+
+    /// Makes room for the triangles of `vertices` more inserted vertices (two each), without
+    /// growing the triangle tables by more than that.
+    pub fn reserve_triangles_exact(&mut self, vertices: usize) {
+        self.mesh.origin.reserve_exact(6 * vertices);
+        self.mesh.link.reserve_exact(6 * vertices);
+    }
+
+    /// Vertices whose triangles fit before the triangle tables must grow.
+    pub fn triangle_room(&self) -> usize {
+        let t = self.mesh.origin.capacity().min(self.mesh.link.capacity()) / 6;
+        t.saturating_sub(self.mesh.origin.len() / 6)
+    }
+
     /// Vertices that fit before a table must grow.
     pub fn vertex_room(&self) -> usize {
         let v = self.xy.capacity().min(self.z.capacity()).min(self.vedge.capacity());

@@ -76,6 +76,36 @@ fn insertions_match_a_triangulation_from_scratch() {
 }
 
 #[test]
+fn vertices_added_first_and_inserted_later_make_the_same_tin_as_insertions() {
+    // The ground filter keeps every point of a run as a vertex id and inserts some of them
+    // later: the TIN must be the one `insert` makes, and a position already taken gives back
+    // the vertex there (the added one stays out).
+    let mut rng = Rng::new(9);
+    let mut pts = lattice_points(&mut rng, 1500, 40);
+    pts.splice(0..0, [[-1.0, -1.0, 0.0], [41.0, -1.0, 0.0], [20.0, 41.0, 0.0]]);
+    let mut tin = Tin::from_points(&pts[..3]).unwrap();
+    let ids: Vec<VertexId> = pts[3..]
+        .iter()
+        .map(|&p| tin.add_vertex(p).unwrap())
+        .collect();
+    assert_eq!(tin.vertex_count(), 3);
+    let mut first = std::collections::HashMap::new();
+    for (&v, p) in ids.iter().zip(&pts[3..]) {
+        let got = tin.insert_vertex(v).unwrap();
+        let key = (p[0].to_bits(), p[1].to_bits());
+        assert_eq!(got, *first.entry(key).or_insert(v), "point {p:?}");
+        assert!(tin.insert_vertex(v).is_err() || got != v);
+    }
+    tin.check().unwrap();
+    assert_eq!(tin.vertex_count(), first.len() + 3);
+    let mut direct = Tin::from_points(&pts[..3]).unwrap();
+    for &p in &pts[3..] {
+        direct.insert(p).unwrap();
+    }
+    assert_eq!(tin_key(&tin), tin_key(&direct));
+}
+
+#[test]
 fn lattice_insertions_follow_the_tie_rule() {
     let mut rng = Rng::new(2);
     let pts = lattice_points(&mut rng, 3000, 40);
