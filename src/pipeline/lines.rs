@@ -138,24 +138,47 @@ impl FarHeights {
     /// The breakline vertices of `p` far from the points' heights `points_z` (see the type).
     pub(crate) fn of(p: &Prepared, points_z: [f64; 2]) -> Option<FarHeights> {
         let g = p.pslg.as_ref()?;
-        let [lo, hi] = points_z;
-        if !(lo.is_finite() && hi.is_finite()) {
-            return None;
-        }
-        let margin = (hi - lo).max(1.0);
-        let mut far = FarHeights {
-            vertices: 0,
-            lines_z: [f64::INFINITY, f64::NEG_INFINITY],
-            points_z,
-        };
+        let mut far = FarTally::new(points_z);
         for v in &g.vertices {
-            let z = v[2];
-            if z < lo - margin || z > hi + margin {
-                far.vertices += 1;
-                far.lines_z = [far.lines_z[0].min(z), far.lines_z[1].max(z)];
-            }
+            far.add(v[2]);
         }
-        (far.vertices > 0).then_some(far)
+        far.finish()
+    }
+}
+
+/// [`FarHeights`] counted one vertex at a time (the streamed lines).
+pub(crate) struct FarTally {
+    far: FarHeights,
+    /// The lowest and highest height not far, `None` when the points' range is not finite.
+    near: Option<[f64; 2]>,
+}
+
+impl FarTally {
+    pub(crate) fn new(points_z: [f64; 2]) -> FarTally {
+        let [lo, hi] = points_z;
+        let margin = (hi - lo).max(1.0);
+        FarTally {
+            far: FarHeights {
+                vertices: 0,
+                lines_z: [f64::INFINITY, f64::NEG_INFINITY],
+                points_z,
+            },
+            near: (lo.is_finite() && hi.is_finite()).then_some([lo - margin, hi + margin]),
+        }
+    }
+
+    pub(crate) fn add(&mut self, z: f64) {
+        if let Some([lo, hi]) = self.near
+            && (z < lo || z > hi)
+        {
+            let f = &mut self.far;
+            f.vertices += 1;
+            f.lines_z = [f.lines_z[0].min(z), f.lines_z[1].max(z)];
+        }
+    }
+
+    pub(crate) fn finish(self) -> Option<FarHeights> {
+        (self.far.vertices > 0).then_some(self.far)
     }
 }
 
@@ -176,8 +199,10 @@ pub struct ClipSummary {
 
 /// Breaklines ready for the sweep.
 pub(crate) struct Prepared {
-    /// The cleaned graph with every z known.
+    /// The cleaned graph with every z known (in memory).
     pub pslg: Option<Pslg>,
+    /// Or the cleaned graph streamed ([`super::line_feed`]), taken by the run that sweeps it.
+    pub feed: std::sync::Mutex<Option<super::line_feed::LineFeed>>,
     /// Trimming rules (keeps all when none were given).
     pub trim: Trim,
     /// `--no-flat-triangles`.
@@ -221,7 +246,23 @@ pub(crate) type ReadLines<'a> = dyn Fn(&Path) -> Result<Lines> + Send + Sync + '
 pub(crate) fn prepare(
     o: &LineOptions,
     read: &ReadLines<'_>,
+    drape: Option<Drape>,
+) -> Result<Prepared> {
+    prepare_with(o, read, drape, None)
+}
+
+/// [`prepare`], and with `stream` (`--mem` and the scratch directory) the lines are cleaned by
+/// the streamed cleaner and handed to the sweep as a stream ([`super::line_feed`]) when every
+/// input vertex has a `z` and `--no-flat-triangles` is off; otherwise they are cleaned in
+/// memory (draping needs the graph's vertices without `z`, the flips the whole graph).
+///
+/// # Errors
+/// As [`prepare`], and the external sorts'.
+pub(crate) fn prepare_with(
+    o: &LineOptions,
+    read: &ReadLines<'_>,
     mut drape: Option<Drape>,
+    stream: Option<(u64, &Path)>,
 ) -> Result<Prepared> {
     let mut lines = Lines::default();
     for p in &o.breaklines {
@@ -251,6 +292,7 @@ pub(crate) fn prepare(
     if lines.is_empty() {
         return Ok(Prepared {
             pslg: None,
+            feed: Default::default(),
             trim,
             flat: o.no_flat_triangles,
             summary,
@@ -273,6 +315,27 @@ pub(crate) fn prepare(
     let mut opts = CleanOptions::default();
     if let Some(t) = o.z_tolerance {
         opts.z_tolerance = t;
+    }
+    if let Some((mem, tmp)) = stream
+        && !o.no_flat_triangles
+        && lines.polylines.iter().flatten().all(|v| !v[2].is_nan())
+    {
+        // Half of --mem for the cleaner's sorts, a quarter for the half-edges', which stay
+        // open (as much as fits in that quarter) while the points are read with the other half.
+        let cleaned = lines.clean_streamed(&opts, mem / 2, tmp)?;
+        drop(lines);
+        summary.vertices = cleaned.stats.vertices;
+        summary.segments = cleaned.stats.segments;
+        summary.clean = cleaned.stats;
+        summary.z_conflicts = cleaned.warnings.clone();
+        let feed = super::line_feed::build(cleaned, mem / 4, tmp)?;
+        return Ok(Prepared {
+            pslg: None,
+            feed: std::sync::Mutex::new(Some(feed)),
+            trim,
+            flat: false,
+            summary,
+        });
     }
     let mut pslg = lines.clean(&opts)?;
     summary.vertices = pslg.vertices.len() as u64;
@@ -306,6 +369,7 @@ pub(crate) fn prepare(
     }
     Ok(Prepared {
         pslg: Some(pslg),
+        feed: Default::default(),
         trim,
         flat: o.no_flat_triangles,
         summary,

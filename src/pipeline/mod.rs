@@ -21,6 +21,7 @@ mod drive;
 mod emit;
 pub mod ground;
 pub mod height;
+mod line_feed;
 mod lines;
 mod read;
 mod replay;
@@ -315,7 +316,7 @@ pub fn run(
         return drive::run(config, None, mesh, sinks);
     }
     let points_only = config.points_only();
-    let prepared = lines::prepare(
+    let prepared = lines::prepare_with(
         lines,
         config.read_lines(),
         Some(&mut |sink| {
@@ -329,6 +330,7 @@ pub fn run(
             }
             drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
         }),
+        Some((config.options().mem, config.tmp_dir())),
     )?;
     drive::run(config, Some(&prepared), mesh, sinks)
 }

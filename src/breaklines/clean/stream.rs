@@ -100,15 +100,25 @@ impl Cleaned {
     }
 }
 
-impl Iterator for Cleaned {
-    type Item = Piece;
-    fn next(&mut self) -> Option<Piece> {
+impl Cleaned {
+    /// The next piece, with `clean()`'s order of its ends' vertices (of `lo`, then `hi`):
+    /// vertices compare by this key, then by `(x, y)` (as `clean()` numbers them: input
+    /// vertices by first appearance, then those made at crossings, by round and position).
+    pub fn next_keyed(&mut self) -> Option<(Piece, [(u32, u64); 2])> {
         let r = self.pieces.next()?;
-        Some(Piece {
+        let piece = Piece {
             lo: [r.lo[0], r.lo[1], r.z[0]],
             hi: [r.hi[0], r.hi[1], r.z[1]],
             line: r.line,
-        })
+        };
+        Some((piece, [(r.round[0], r.id[0]), (r.round[1], r.id[1])]))
+    }
+}
+
+impl Iterator for Cleaned {
+    type Item = Piece;
+    fn next(&mut self) -> Option<Piece> {
+        self.next_keyed().map(|(p, _)| p)
     }
 }
 

@@ -14,6 +14,10 @@
 //!
 //! [`SweepStats::peak_active`] counts the most items held at once.
 
+// `clean_by_sweep` (its rounds, items and counters) is for tests and benchmarks; a run uses
+// only the active set, through the streamed cleaner.
+#![cfg_attr(not(any(test, feature = "dev")), allow(dead_code, unreachable_pub))]
+
 use super::Work;
 use super::intersect::{Found, PairResult, contact, point_on};
 use crate::error::Result;
