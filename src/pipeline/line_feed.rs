@@ -18,7 +18,9 @@
 //! pending); the records of the points in flight between the threads. Two half-edges of 64
 //! bytes per segment are spilled.
 
-use super::lines::FarTally;
+use super::lines::{Drape, DrapeSink, FarTally};
+use crate::breaklines::Source;
+use crate::idmap::FastMap;
 use crate::breaklines::clean::stream::Cleaned;
 use crate::error::{Error, Result};
 use crate::geom::predicates::sweep_cmp;
@@ -74,6 +76,11 @@ pub(crate) struct LineFeed {
     pub(crate) bounds: [f64; 4],
     /// Vertices (the cleaner's count).
     pub(crate) vertices: u64,
+    /// The vertices without `z` (sorted, distinct) and a line through each (none for a lone
+    /// vertex), until draped.
+    unknown: Vec<([f64; 2], Option<u32>)>,
+    /// Their heights from the points' TIN, by position, until they join the points.
+    heights: FastMap<(u64, u64), f64>,
 }
 
 impl std::fmt::Debug for LineFeed {
@@ -105,10 +112,17 @@ pub(crate) fn build(mut cleaned: Cleaned, mem: u64, tmp: &Path) -> Result<LineFe
             bounds[3].max(p[1]),
         ];
     };
+    let mut unknown = Vec::new();
     while let Some((piece, key)) = cleaned.next_keyed() {
         let (lo, hi) = (plus(piece.lo), plus(piece.hi));
         grow(lo);
         grow(hi);
+        let line = (lo != hi).then_some(piece.line);
+        for (p, z) in [(lo, piece.lo[2]), (hi, piece.hi[2])] {
+            if z.is_nan() {
+                unknown.push((p, line));
+            }
+        }
         if lo == hi {
             sorter.push(Half {
                 at: lo,
@@ -139,11 +153,48 @@ pub(crate) fn build(mut cleaned: Cleaned, mem: u64, tmp: &Path) -> Result<LineFe
     if let Some(e) = cleaned.take_error() {
         return Err(e);
     }
+    // A vertex's first line in the order of the pieces names it.
+    unknown.sort_by(|a, b| sweep_cmp(a.0, b.0));
+    unknown.dedup_by(|a, b| a.0 == b.0);
     Ok(LineFeed {
         halves: sorter.finish()?,
         bounds,
         vertices: cleaned.stats.vertices,
+        unknown,
+        heights: FastMap::default(),
     })
+}
+
+impl LineFeed {
+    /// Gives the vertices without `z` the height of the points' TIN (`drape` runs the
+    /// points-only pass, as [`super::lines::prepare`] does); returns how many.
+    ///
+    /// # Errors
+    /// The pass's; [`Error::Format`] for a vertex outside the points' TIN, naming a line
+    /// through it (from `sources`, the polylines' places).
+    pub(crate) fn drape(&mut self, drape: Drape, sources: &[Source]) -> Result<u64> {
+        if self.unknown.is_empty() {
+            return Ok(0);
+        }
+        let mut sink = DrapeSink::new(self.unknown.iter().map(|u| u.0).collect());
+        drape(&mut sink)?;
+        for (k, &(p, line)) in self.unknown.iter().enumerate() {
+            let z = sink.z[k];
+            if z.is_nan() {
+                let source = line.and_then(|l| sources.get(l as usize));
+                return Err(super::lines::outside_error_at(p, source));
+            }
+            self.heights.insert(pos_key(p), z);
+        }
+        let n = self.unknown.len() as u64;
+        self.unknown = Vec::new();
+        Ok(n)
+    }
+}
+
+/// The key of a position (bit patterns).
+fn pos_key(p: [f64; 2]) -> (u64, u64) {
+    (p[0].to_bits(), p[1].to_bits())
 }
 
 /// The records of the line vertices taken from the stream and not yet given to the sweep.
@@ -221,12 +272,18 @@ impl<'a> WithLines<'a> {
         }
         let index = super::lines::LINE_FLAG | self.rank;
         self.rank += 1;
-        self.far.add(first.z);
+        let mut z = first.z;
+        if z.is_nan()
+            && let Some(h) = self.lines.as_mut()?.heights.remove(&pos_key(first.at))
+        {
+            z = h;
+        }
+        self.far.add(z);
         self.records.borrow_mut().push_back(rec);
         Some(SortRecord {
             x: first.at[0],
             y: first.at[1],
-            z: first.z,
+            z,
             index,
         })
     }

@@ -16,6 +16,7 @@
 //! (docs/ARCHITECTURE.md, "Coordinates"). The only change on the way out is the sweep axis: a
 //! sweep along x works on the points with x and y exchanged, which [`Frame`] undoes.
 
+mod clip;
 mod config;
 mod drive;
 mod emit;

@@ -48,7 +48,11 @@ fn write_lines(path: &Path, lines: &[Vec<[f64; 3]>]) {
     let mut s = String::new();
     for l in lines {
         for p in l {
-            s.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+            if p[2].is_nan() {
+                s.push_str(&format!("{} {}\n", p[0], p[1]));
+            } else {
+                s.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+            }
         }
         s.push('\n');
     }
@@ -78,7 +82,11 @@ fn run(
     };
     let config = RunConfig::new(input, options).unwrap();
     let stream = streamed.then_some((mem, config.tmp_dir()));
-    let p = lines::prepare_with(lines, config.read_lines(), None, stream).unwrap();
+    let points_only = config.points_only();
+    let mut drape = |sink: &mut dyn super::super::TriangleSink| {
+        drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
+    };
+    let p = lines::prepare_with(lines, config.read_lines(), Some(&mut drape), stream).unwrap();
     assert_eq!(p.feed.lock().unwrap().is_some(), streamed, "the path asked for");
     let mut trace = Trace::default();
     let summary = drive::run(&config, Some(&p), Some(&mut trace), &mut []).unwrap();
@@ -180,4 +188,39 @@ fn streamed_lines_on_points_rings_and_lone_vertices_give_the_in_memory_mesh() {
         let s = same(&p, &o, policy, 1 << 20);
         assert!(s.breaklines.unwrap().trimmed_triangles > 0);
     }
+}
+
+#[test]
+fn streamed_lines_without_z_are_draped_as_in_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let nan = f64::NAN;
+    let mut roads = crate::synth::roads(1_500, 7);
+    // Every line without z, then half of them.
+    for l in roads.iter_mut() {
+        for p in l.iter_mut() {
+            p[2] = nan;
+        }
+    }
+    let pts = crate::synth::road_points(3_000, 7);
+    let (p, l) = files(dir.path(), &pts, &roads);
+    let o = LineOptions {
+        breaklines: vec![l],
+        ..LineOptions::default()
+    };
+    let s = same(&p, &o, DuplicatePolicy::First, 1 << 20);
+    let b = s.breaklines.unwrap();
+    assert_eq!(b.draped, b.vertices, "{b:?}");
+    let mut mixed = crate::synth::roads(1_500, 7);
+    for l in mixed.iter_mut().step_by(2) {
+        for p in l.iter_mut() {
+            p[2] = nan;
+        }
+    }
+    let (p, l) = files(dir.path(), &pts, &mixed);
+    let o = LineOptions {
+        breaklines: vec![l],
+        ..LineOptions::default()
+    };
+    let b = same(&p, &o, DuplicatePolicy::First, 1 << 20).breaklines.unwrap();
+    assert!(b.draped > 0 && b.draped < b.vertices, "{b:?}");
 }
