@@ -117,6 +117,9 @@ pub struct LineSummary {
     pub flat: Option<FlatStats>,
     /// What `--clip-breaklines` cut.
     pub clipped: Option<ClipSummary>,
+    /// What the streamed cleaner held at most (`null` when the lines were cleaned in memory:
+    /// `--no-flat-triangles`, or a plan's task).
+    pub cleaner: Option<crate::breaklines::clean::stream::StreamStats>,
     /// Breakline heights far outside the points' (a warning: wrong units or vertical datum?).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub far_heights: Option<FarHeights>,
@@ -329,6 +332,7 @@ pub(crate) fn prepare_with(
         summary.segments = cleaned.stats.segments;
         summary.clean = cleaned.stats;
         summary.z_conflicts = cleaned.warnings.clone();
+        summary.cleaner = Some(cleaned.held);
         let mut feed = super::line_feed::build(cleaned, mem / 4, tmp)?;
         if let Some(drape) = drape {
             summary.draped = feed.drape(drape, &sources)?;
