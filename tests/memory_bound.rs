@@ -192,7 +192,10 @@ fn a_road_network_larger_than_mem_is_triangulated_within_it() {
     let mem: u64 = 4 << 20;
     let lines = read_file(&lines_path).unwrap();
     let polyline_bytes: usize = lines.polylines.iter().map(|l| l.len() * 24).sum();
-    assert!(polyline_bytes as u64 > mem, "the polylines alone exceed --mem");
+    assert!(
+        polyline_bytes as u64 > mem,
+        "the polylines alone exceed --mem"
+    );
     let input = Input {
         paths: vec![pts_path.clone()],
         filter: sweeptin::input::las::Filter::keep_all(),
@@ -211,7 +214,11 @@ fn a_road_network_larger_than_mem_is_triangulated_within_it() {
     // segments (with their started vertices, under 100 bytes each) are a sliver of --mem; the
     // rest of the budget goes to the sorts.
     let held = (cl.peak_active + cl.peak_window) * 128 + summary.stream.peak_pending_segments * 100;
-    assert!(held < mem / 8, "held {held} bytes: {cl:?} {:?}", summary.stream);
+    assert!(
+        held < mem / 8,
+        "held {held} bytes: {cl:?} {:?}",
+        summary.stream
+    );
     eprintln!("held {held} bytes: {cl:?} {:?}", summary.stream);
     // The mesh of the in-memory cleaning, triangulated in memory.
     let g = lines.clean(&CleanOptions::default()).unwrap();
@@ -223,7 +230,10 @@ fn a_road_network_larger_than_mem_is_triangulated_within_it() {
     let core = sweeptin::triangulate_cdt(&all, &segs, &sweeptin::Options::default()).unwrap();
     assert_eq!(core.constraint_stats.crossing_skipped, 0);
     assert_eq!(
-        xy_set(&c.vertices, c.triangles.iter().map(|t| t.map(|i| i as usize))),
+        xy_set(
+            &c.vertices,
+            c.triangles.iter().map(|t| t.map(|i| i as usize))
+        ),
         xy_set(
             &core.vertices,
             core.triangles.iter().map(|t| t.map(|i| i as usize))

@@ -20,10 +20,10 @@
 
 use super::lines::{Drape, DrapeSink, FarTally};
 use crate::breaklines::Source;
-use crate::idmap::FastMap;
 use crate::breaklines::clean::stream::Cleaned;
 use crate::error::{Error, Result};
 use crate::geom::predicates::sweep_cmp;
+use crate::idmap::FastMap;
 use crate::sort::external::{ExternalSorter, Merge, SortKey, SortRecord, sweep_order};
 use crate::sweep::ConstraintVertex;
 use std::cell::RefCell;
@@ -103,7 +103,12 @@ fn plus(p: [f64; 3]) -> [f64; 2] {
 /// The cleaner's stream's and the sort's.
 pub(crate) fn build(mut cleaned: Cleaned, mem: u64, tmp: &Path) -> Result<LineFeed> {
     let mut sorter = ExternalSorter::<Half>::new(mem, tmp);
-    let mut bounds = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut bounds = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     let mut grow = |p: [f64; 2]| {
         bounds = [
             bounds[0].min(p[0]),

@@ -2,9 +2,11 @@
 //!
 //! ```text
 //! --breaklines FILES, --boundary FILE, --holes FILE
-//!   ─► read (GeoJSON / text) ─► clean into a planar graph (crossings split, overlaps merged)
+//!   ─► read (GeoJSON / text) ─► clean into a planar graph (crossings split, overlaps merged;
+//!      streamed by the sweep axis, `breaklines::clean::stream`)
 //!   ─► [2-D vertices only] drape: z from a first pass over the points (no breaklines)
-//!   ─► graph vertices join the sorted point stream as flagged records (index = LINE_FLAG | id)
+//!   ─► graph vertices join the sorted point stream as flagged records (index = LINE_FLAG | id),
+//!      each with where its segments go (`line_feed`)
 //!   ─► the sweep inserts each segment when its upper end is swept (edge events)
 //!   ─► writer: [--no-flat-triangles: in-memory flips] ─► trim (boundary, holes, max-edge)
 //! ```
@@ -26,10 +28,14 @@
 //! after every point (so `first` keeps the point's z, `last` the line's), and the merged vertex is
 //! always a breakline vertex.
 //!
-//! **Memory**: the cleaned graph (32 bytes per line vertex plus 12 per segment and the sweep's
-//! constraint index) stays in memory for the run, beside the front; lidar points never do.
-//! `--no-flat-triangles` is the exception: its flips need the whole triangulation, which the
-//! writer then holds (about 40 bytes per point), so use it on tile-sized inputs.
+//! **Memory**: a run ([`prepare_with`] with a budget) cleans the lines in bounded memory and
+//! streams the graph into the sweep ([`super::line_feed`]): held are the polylines as read
+//! (24 bytes a vertex, until the points are read), the heights of 2-D vertices, the sorts'
+//! budgets and the cleaner's and the sweep's windows; lidar points are never held.
+//! `--no-flat-triangles` takes the cleaned graph in memory (32 bytes per line vertex plus 12 per
+//! segment and the sweep's constraint index), as do a plan's tasks and the tiles engine
+//! ([`prepare`]), and its flips need the whole triangulation, which the writer then holds (about
+//! 40 bytes per point), so use it on tile-sized inputs.
 
 use super::TriangleSink;
 use crate::breaklines::flat::FlatStats;

@@ -87,7 +87,11 @@ fn run(
         drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
     };
     let p = lines::prepare_with(lines, config.read_lines(), Some(&mut drape), stream).unwrap();
-    assert_eq!(p.feed.lock().unwrap().is_some(), streamed, "the path asked for");
+    assert_eq!(
+        p.feed.lock().unwrap().is_some(),
+        streamed,
+        "the path asked for"
+    );
     let mut trace = Trace::default();
     let summary = drive::run(&config, Some(&p), Some(&mut trace), &mut []).unwrap();
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
@@ -162,9 +166,17 @@ fn streamed_lines_on_points_rings_and_lone_vertices_give_the_in_memory_mesh() {
     let lines = vec![
         // Below every point: the first point of the sweep is a line vertex.
         vec![[100.0, -50.0, 1.0], [900.0, 450.0, 2.0]],
-        vec![[200.0, 300.0, 3.0], [800.0, 300.0, 4.0], [500.0, 500.0, 6.0]],
+        vec![
+            [200.0, 300.0, 3.0],
+            [800.0, 300.0, 4.0],
+            [500.0, 500.0, 6.0],
+        ],
         // Crossing the others.
-        vec![[150.0, 800.0, 1.0], [600.0, 100.0, 2.0], [650.0, 900.0, 8.0]],
+        vec![
+            [150.0, 800.0, 1.0],
+            [600.0, 100.0, 2.0],
+            [650.0, 900.0, 8.0],
+        ],
         // A lone vertex, and a line laid twice.
         vec![[333.0, 666.0, 1.5]],
         vec![[10.0, 10.0, 1.0], [20.0, 990.0, 1.0]],
@@ -223,6 +235,8 @@ fn streamed_lines_without_z_are_draped_as_in_memory() {
         breaklines: vec![l],
         ..LineOptions::default()
     };
-    let b = same(&p, &o, DuplicatePolicy::First, 1 << 20).breaklines.unwrap();
+    let b = same(&p, &o, DuplicatePolicy::First, 1 << 20)
+        .breaklines
+        .unwrap();
     assert!(b.draped > 0 && b.draped < b.vertices, "{b:?}");
 }
