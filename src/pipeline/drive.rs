@@ -154,7 +154,12 @@ pub(crate) fn run(
         let merger = scope.spawn(move || merge_points(merge, feed, z_range, policy, ptx));
         let frame = rd.frame;
         let writer = scope.spawn(move || write_events(erx, frame, lines, mesh, sinks_ref));
-        let swept = sweep_points(&rd, expected, lines, fed, prx, etx, &pb, &anon);
+        let cfg = StreamConfig {
+            x_sample: rd.x_sample.clone(),
+            bounds: rd.bounds,
+            expected_points: expected,
+        };
+        let swept = sweep_points(&cfg, lines, fed, prx, etx, &pb, &anon);
         let duplicates = joined(merger.join(), "merge");
         let written = joined(writer.join(), "writer");
         (swept, duplicates, written)
@@ -333,8 +338,7 @@ type Swept = (
 
 /// Sweep thread (the caller's): points in, events out.
 fn sweep_points(
-    rd: &ReadResult,
-    expected: u64,
+    cfg: &StreamConfig,
     lines: Option<&Prepared>,
     fed: bool,
     points: Receiver<PointBatch>,
@@ -342,11 +346,6 @@ fn sweep_points(
     pb: &ProgressBar,
     anon: &AnonPeak,
 ) -> Result<Swept> {
-    let cfg = StreamConfig {
-        x_sample: rd.x_sample.clone(),
-        bounds: rd.bounds,
-        expected_points: expected,
-    };
     let mut sweep: Option<StreamingSweep> = None;
     let mut kept = 0u64;
     let mut out = Vec::with_capacity(EVENT_BATCH);
@@ -373,7 +372,7 @@ fn sweep_points(
             match sweep.as_mut() {
                 None => {
                     let first = p.constraint;
-                    let mut s = StreamingSweep::new(p, &cfg);
+                    let mut s = StreamingSweep::new(p, cfg);
                     if let Some(g) = lines.and_then(Prepared::graph) {
                         s.set_constraints(g, first)?;
                     } else if fed {
