@@ -155,3 +155,88 @@ fn points_on_a_line_warn_that_memory_grows_past_mem() {
         );
     }
 }
+
+/// `(x, y)` triangles of vertices and index triples, as sorted bit triples.
+fn xy_set(vertices: &[[f64; 3]], tris: impl Iterator<Item = [usize; 3]>) -> Vec<[(u64, u64); 3]> {
+    let mut out: Vec<[(u64, u64); 3]> = tris
+        .map(|t| {
+            let mut k = t.map(|i| (vertices[i][0].to_bits(), vertices[i][1].to_bits()));
+            k.sort();
+            k
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// Issue 40, item 3: the cleaned breakline graph was held whole (the polylines, the cleaner's
+/// arrays, the `Pslg` and the sweep's `ConstraintGraph`), so a line file larger than `--mem`
+/// did not fit. Now the cleaner streams its rounds and the sweep takes the graph vertex by
+/// vertex: a road network whose polylines alone are larger than `--mem` runs with what the
+/// summary says was held far below it, and gives the mesh of the in-memory cleaning.
+#[test]
+fn a_road_network_larger_than_mem_is_triangulated_within_it() {
+    use sweeptin::breaklines::{CleanOptions, read_file};
+    let dir = tempfile::tempdir().unwrap();
+    let (pts_path, lines_path) = (dir.path().join("pts.xyz"), dir.path().join("roads.txt"));
+    write_xyz(&pts_path, &sweeptin::synth::road_points(30_000, 1));
+    let roads = sweeptin::synth::roads(260_000, 1);
+    let mut w = std::io::BufWriter::new(std::fs::File::create(&lines_path).unwrap());
+    for l in &roads {
+        for p in l {
+            writeln!(w, "{} {} {}", p[0], p[1], p[2]).unwrap();
+        }
+        writeln!(w).unwrap();
+    }
+    w.flush().unwrap();
+    let mem: u64 = 4 << 20;
+    let lines = read_file(&lines_path).unwrap();
+    let polyline_bytes: usize = lines.polylines.iter().map(|l| l.len() * 24).sum();
+    assert!(
+        polyline_bytes as u64 > mem,
+        "the polylines alone exceed --mem"
+    );
+    let input = Input {
+        paths: vec![pts_path.clone()],
+        filter: sweeptin::input::las::Filter::keep_all(),
+        duplicates: DuplicatePolicy::First,
+        lines: sweeptin::pipeline::LineOptions {
+            breaklines: vec![lines_path.clone()],
+            ..Default::default()
+        },
+    };
+    let (c, summary) = mesh::collect_run_along(&input, None, mem, SweepAxis::Y);
+    let b = summary.breaklines.clone().expect("a breakline summary");
+    assert!(b.segments >= 200_000, "{b:?}");
+    let cl = b.cleaner.expect("the lines were streamed");
+    assert!(!cl.in_memory);
+    // The summary's own figures: the cleaner's window (128-byte records) and the sweep's pending
+    // segments (with their started vertices, under 100 bytes each) are a sliver of --mem; the
+    // rest of the budget goes to the sorts.
+    let held = (cl.peak_active + cl.peak_window) * 128 + summary.stream.peak_pending_segments * 100;
+    assert!(
+        held < mem / 8,
+        "held {held} bytes: {cl:?} {:?}",
+        summary.stream
+    );
+    eprintln!("held {held} bytes: {cl:?} {:?}", summary.stream);
+    // The mesh of the in-memory cleaning, triangulated in memory.
+    let g = lines.clean(&CleanOptions::default()).unwrap();
+    assert_eq!(g.segments.len() as u64, b.segments);
+    let mut all = sweeptin::input::read_xyz(&pts_path).unwrap();
+    let base = all.len() as u32;
+    all.extend_from_slice(&g.vertices);
+    let segs: Vec<[u32; 2]> = g.segments.iter().map(|s| s.map(|v| v + base)).collect();
+    let core = sweeptin::triangulate_cdt(&all, &segs, &sweeptin::Options::default()).unwrap();
+    assert_eq!(core.constraint_stats.crossing_skipped, 0);
+    assert_eq!(
+        xy_set(
+            &c.vertices,
+            c.triangles.iter().map(|t| t.map(|i| i as usize))
+        ),
+        xy_set(
+            &core.vertices,
+            core.triangles.iter().map(|t| t.map(|i| i as usize))
+        )
+    );
+}

@@ -56,7 +56,27 @@ impl crate::input::lines::Lines {
     /// # Errors
     /// [`Error::Format`] for a coordinate the predicates cannot handle exactly.
     pub fn clean(&self, options: &CleanOptions) -> Result<Pslg> {
-        clean::clean(&self.polylines, options).map_err(|e| match e {
+        clean::clean(&self.polylines, options).map_err(|e| self.name_line(e))
+    }
+
+    /// [`Lines::clean`] streamed ([`clean::stream::clean_streamed`]: sorts of `mem` bytes
+    /// spilling under `tmp_dir`): the same graph as pieces in sweep order.
+    ///
+    /// # Errors
+    /// As [`Lines::clean`], and the external sort's.
+    pub fn clean_streamed(
+        &self,
+        options: &CleanOptions,
+        mem: u64,
+        tmp_dir: &std::path::Path,
+    ) -> Result<clean::stream::Cleaned> {
+        clean::stream::clean_streamed(&self.polylines, options, mem, tmp_dir)
+            .map_err(|e| self.name_line(e))
+    }
+
+    /// A cleaning error naming its polyline's file and feature.
+    fn name_line(&self, e: Error) -> Error {
+        match e {
             Error::BadLine {
                 polyline,
                 vertex,
@@ -73,6 +93,6 @@ impl crate::input::lines::Lines {
                 },
             },
             other => other,
-        })
+        }
     }
 }

@@ -124,3 +124,37 @@ fn segment_within(a: [f64; 2], b: [f64; 2], c: [f64; 2], r: f64) -> bool {
     let scale = dx.abs() + dy.abs() + px.abs() + py.abs() + r;
     d <= r + 1e-9 * scale
 }
+
+/// Streamed breaklines (the graph vertex by vertex with the points, see
+/// [`crate::sweep::ConstraintVertex`]) instead of a whole [`crate::sweep::ConstraintGraph`].
+impl super::StreamingSweep {
+    /// Sets streamed breaklines; `first` is the first point's constraint vertex (given to
+    /// [`super::StreamingSweep::new`]) and its record, if it is one. Call it before the second
+    /// point.
+    ///
+    /// # Errors
+    /// [`crate::error::Error::Internal`] if the first record has earlier ends.
+    pub fn set_fed_constraints(
+        &mut self,
+        first: Option<(u32, crate::sweep::ConstraintVertex)>,
+    ) -> crate::error::Result<()> {
+        self.sweep.set_fed_constraints(first)
+    }
+
+    /// [`super::StreamingSweep::push`] with the record of the constraint vertex `p` is (when
+    /// `p.constraint` names one; streamed breaklines).
+    ///
+    /// # Errors
+    /// As [`super::StreamingSweep::push`]; [`crate::error::Error::Internal`] when the record
+    /// does not match the point or the vertices before it (a bug).
+    pub fn push_fed(
+        &mut self,
+        p: super::StreamPoint,
+        rec: Option<crate::sweep::ConstraintVertex>,
+    ) -> crate::error::Result<()> {
+        if let Some(r) = rec {
+            self.sweep.next_constraint_vertex(r);
+        }
+        self.push(p)
+    }
+}

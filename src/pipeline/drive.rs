@@ -2,6 +2,7 @@
 //! merging, sweeping and writing overlap and memory stays bounded.
 
 use super::emit::{Collected, Emitter};
+use super::line_feed::{LineFeed, WithLines};
 use super::lines::{FarHeights, LINE_FLAG, LineSummary, Prepared};
 use super::read::{self, ReadResult};
 use super::{
@@ -11,6 +12,7 @@ use crate::error::{Error, Result};
 use crate::finalise::{Event, StreamConfig, StreamPoint, StreamingSweep};
 use crate::sink::MeshSink;
 use crate::sort::external::{Dedup, ExternalSorter, Merge, SortRecord};
+use crate::sweep::ConstraintVertex;
 use crossbeam_channel::{Receiver, Sender, bounded};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::time::Instant;
@@ -88,6 +90,19 @@ pub(crate) fn run(
     })?;
     let mut rd = rd;
     let mut expected = rd.points;
+    // Streamed breaklines join the points in the merge thread ([`super::line_feed`]).
+    let feed = lines.and_then(|l| l.feed.lock().ok()?.take());
+    if let Some(f) = &feed {
+        let b = f.bounds;
+        rd.bounds = [
+            rd.bounds[0].min(b[0]),
+            rd.bounds[1].min(b[1]),
+            rd.bounds[2].max(b[2]),
+            rd.bounds[3].max(b[3]),
+        ];
+        expected += f.vertices;
+    }
+    let fed = feed.is_some();
     if let Some(g) = lines.and_then(|l| l.pslg.as_ref()) {
         for (c, v) in g.vertices.iter().enumerate() {
             let (x, y) = (v[0] + 0.0, v[1] + 0.0);
@@ -132,13 +147,19 @@ pub(crate) fn run(
     pb.set_position(0);
     let sinks_ref: &mut [&mut dyn TriangleSink] = &mut *sinks;
     let outcome = std::thread::scope(|scope| {
-        let (ptx, prx) = bounded::<Vec<StreamPoint>>(4);
+        let (ptx, prx) = bounded::<PointBatch>(4);
         let (etx, erx) = bounded::<Vec<Event>>(4);
         let policy = input.duplicates;
-        let merger = scope.spawn(move || merge_points(merge, policy, ptx));
+        let z_range = rd.z_range;
+        let merger = scope.spawn(move || merge_points(merge, feed, z_range, policy, ptx));
         let frame = rd.frame;
         let writer = scope.spawn(move || write_events(erx, frame, lines, mesh, sinks_ref));
-        let swept = sweep_points(&rd, expected, lines, prx, etx, &pb, &anon);
+        let cfg = StreamConfig {
+            x_sample: rd.x_sample.clone(),
+            bounds: rd.bounds,
+            expected_points: expected,
+        };
+        let swept = sweep_points(&cfg, lines, fed, prx, etx, &pb, &anon);
         let duplicates = joined(merger.join(), "merge");
         let written = joined(writer.join(), "writer");
         (swept, duplicates, written)
@@ -146,7 +167,7 @@ pub(crate) fn run(
     let (swept, duplicates, written) = outcome;
     // A merge error ends the points early: report it before anything built from them. A writer
     // error closes its channel, which stops the sweep: report it before the sweep's.
-    let duplicates = duplicates?;
+    let (duplicates, fed_far) = duplicates?;
     let (vertices, triangles, trimmed, flat) = written?;
     let (sweep, stream, kept, cstats) = swept?;
     let triangulate_write = phase2.elapsed().as_secs_f64();
@@ -202,7 +223,11 @@ pub(crate) fn run(
             constraints: cstats,
             trimmed_triangles: trimmed,
             flat,
-            far_heights: FarHeights::of(l, rd.z_range),
+            far_heights: if fed {
+                fed_far
+            } else {
+                FarHeights::of(l, rd.z_range)
+            },
             ..l.summary.clone()
         }),
         tiles: None,
@@ -253,42 +278,56 @@ fn world_bounds(rd: &ReadResult) -> [f64; 4] {
     [lo[0], lo[1], hi[0], hi[1]]
 }
 
-/// Merge thread: sorted, de-duplicated points in batches. Returns the number of duplicates, or
-/// the error that cut the merge short (an unreadable spill file).
+/// A batch of points from the merge thread, with the records of the streamed breakline
+/// vertices among them, in order.
+type PointBatch = (Vec<StreamPoint>, Vec<ConstraintVertex>);
+
+/// Merge thread: sorted, de-duplicated points in batches, with the streamed breakline vertices
+/// (`feed`) merged in. Returns the number of duplicates and the far-heights warning of the
+/// streamed vertices (the points' heights `z_range`), or the error that cut the merge short (an
+/// unreadable spill file).
 fn merge_points(
     mut merge: Merge,
+    feed: Option<LineFeed>,
+    z_range: [f64; 2],
     policy: crate::sort::memory::DuplicatePolicy,
-    out: Sender<Vec<StreamPoint>>,
-) -> Result<u64> {
-    let mut d = Dedup::new(&mut merge, policy).with_mark(LINE_FLAG);
+    out: Sender<PointBatch>,
+) -> Result<(u64, Option<FarHeights>)> {
+    let mut src = WithLines::new(&mut merge, feed, z_range);
+    let records = src.records();
+    let mut d = Dedup::new(&mut src, policy).with_mark(LINE_FLAG);
     let mut batch = Vec::with_capacity(POINT_BATCH);
+    let mut recs = Vec::new();
     for r in d.by_ref() {
+        let constraint = if r.index & LINE_FLAG != 0 {
+            if let Some(rec) = records.borrow_mut().pop_front() {
+                recs.push(rec);
+            }
+            (r.index & !LINE_FLAG) as u32
+        } else {
+            crate::sweep::NO_CONSTRAINT
+        };
         batch.push(StreamPoint {
             xy: [r.x, r.y],
             z: r.z,
             index: r.index,
-            constraint: if r.index & LINE_FLAG != 0 {
-                (r.index & !LINE_FLAG) as u32
-            } else {
-                crate::sweep::NO_CONSTRAINT
-            },
+            constraint,
         });
         if batch.len() == POINT_BATCH {
-            if out.send(std::mem::take(&mut batch)).is_err() {
-                return Ok(d.duplicates);
+            let b = (std::mem::take(&mut batch), std::mem::take(&mut recs));
+            if out.send(b).is_err() {
+                return Ok((d.duplicates, None));
             }
             batch.reserve(POINT_BATCH);
         }
     }
     let duplicates = d.duplicates;
     // An error must not reach the sweep as a normal end of input.
-    if let Some(e) = merge.take_error() {
-        return Err(e);
-    }
+    let far = src.finish()?;
     if !batch.is_empty() {
-        let _ = out.send(batch);
+        let _ = out.send((batch, recs));
     }
-    Ok(duplicates)
+    Ok((duplicates, far))
 }
 
 type Swept = (
@@ -300,19 +339,14 @@ type Swept = (
 
 /// Sweep thread (the caller's): points in, events out.
 fn sweep_points(
-    rd: &ReadResult,
-    expected: u64,
+    cfg: &StreamConfig,
     lines: Option<&Prepared>,
-    points: Receiver<Vec<StreamPoint>>,
+    fed: bool,
+    points: Receiver<PointBatch>,
     events: Sender<Vec<Event>>,
     pb: &ProgressBar,
     anon: &AnonPeak,
 ) -> Result<Swept> {
-    let cfg = StreamConfig {
-        x_sample: rd.x_sample.clone(),
-        bounds: rd.bounds,
-        expected_points: expected,
-    };
     let mut sweep: Option<StreamingSweep> = None;
     let mut kept = 0u64;
     let mut out = Vec::with_capacity(EVENT_BATCH);
@@ -321,19 +355,33 @@ fn sweep_points(
             .send(std::mem::replace(out, Vec::with_capacity(EVENT_BATCH)))
             .is_ok()
     };
-    for batch in points.iter() {
+    for (batch, recs) in points.iter() {
+        let mut recs = recs.into_iter();
         for p in batch {
             kept += 1;
+            // A streamed breakline vertex comes with its record.
+            let rec = if fed && p.constraint != crate::sweep::NO_CONSTRAINT {
+                Some(recs.next().ok_or_else(|| {
+                    Error::Internal(format!(
+                        "breakline vertex {} came without its record from the merge",
+                        p.constraint
+                    ))
+                })?)
+            } else {
+                None
+            };
             match sweep.as_mut() {
                 None => {
                     let first = p.constraint;
-                    let mut s = StreamingSweep::new(p, &cfg);
+                    let mut s = StreamingSweep::new(p, cfg);
                     if let Some(g) = lines.and_then(Prepared::graph) {
                         s.set_constraints(g, first)?;
+                    } else if fed {
+                        s.set_fed_constraints(rec.map(|r| (first, r)))?;
                     }
                     sweep = Some(s);
                 }
-                Some(s) => s.push(p)?,
+                Some(s) => s.push_fed(p, rec)?,
             }
             if kept.is_multiple_of(WATERMARK_EVERY) {
                 let s = sweep.as_mut().expect("started");

@@ -2,9 +2,11 @@
 //!
 //! ```text
 //! --breaklines FILES, --boundary FILE, --holes FILE
-//!   ─► read (GeoJSON / text) ─► clean into a planar graph (crossings split, overlaps merged)
+//!   ─► read (GeoJSON / text) ─► clean into a planar graph (crossings split, overlaps merged;
+//!      streamed by the sweep axis, `breaklines::clean::stream`)
 //!   ─► [2-D vertices only] drape: z from a first pass over the points (no breaklines)
-//!   ─► graph vertices join the sorted point stream as flagged records (index = LINE_FLAG | id)
+//!   ─► graph vertices join the sorted point stream as flagged records (index = LINE_FLAG | id),
+//!      each with where its segments go (`line_feed`)
 //!   ─► the sweep inserts each segment when its upper end is swept (edge events)
 //!   ─► writer: [--no-flat-triangles: in-memory flips] ─► trim (boundary, holes, max-edge)
 //! ```
@@ -26,17 +28,21 @@
 //! after every point (so `first` keeps the point's z, `last` the line's), and the merged vertex is
 //! always a breakline vertex.
 //!
-//! **Memory**: the cleaned graph (32 bytes per line vertex plus 12 per segment and the sweep's
-//! constraint index) stays in memory for the run, beside the front; lidar points never do.
-//! `--no-flat-triangles` is the exception: its flips need the whole triangulation, which the
-//! writer then holds (about 40 bytes per point), so use it on tile-sized inputs.
+//! **Memory**: a run ([`prepare_with`] with a budget) cleans the lines in bounded memory and
+//! streams the graph into the sweep ([`super::line_feed`]): held are the polylines as read
+//! (24 bytes a vertex, until the points are read), the heights of 2-D vertices, the sorts'
+//! budgets and the cleaner's and the sweep's windows; lidar points are never held.
+//! `--no-flat-triangles` takes the cleaned graph in memory (32 bytes per line vertex plus 12 per
+//! segment and the sweep's constraint index), as do a plan's tasks and the tiles engine
+//! ([`prepare`]), and its flips need the whole triangulation, which the writer then holds (about
+//! 40 bytes per point), so use it on tile-sized inputs.
 
 use super::TriangleSink;
 use crate::breaklines::flat::FlatStats;
-use crate::breaklines::{CleanOptions, CleanStats, Lines, Pslg, Trim};
+use crate::breaklines::{CleanOptions, CleanStats, Lines, Pslg, Source, Trim};
 use crate::error::{Error, Result};
 use crate::geom::grid::{Buckets, Grid};
-use crate::geom::predicates::{Orientation, check_coord, orient};
+use crate::geom::predicates::check_coord;
 use crate::products::geom::{Location, Tri};
 use crate::sink::ProductSummary;
 use crate::sweep::{ConstraintGraph, ConstraintStats};
@@ -117,6 +123,9 @@ pub struct LineSummary {
     pub flat: Option<FlatStats>,
     /// What `--clip-breaklines` cut.
     pub clipped: Option<ClipSummary>,
+    /// What the streamed cleaner held at most (`null` when the lines were cleaned in memory:
+    /// `--no-flat-triangles`, or a plan's task).
+    pub cleaner: Option<crate::breaklines::clean::stream::StreamStats>,
     /// Breakline heights far outside the points' (a warning: wrong units or vertical datum?).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub far_heights: Option<FarHeights>,
@@ -138,24 +147,47 @@ impl FarHeights {
     /// The breakline vertices of `p` far from the points' heights `points_z` (see the type).
     pub(crate) fn of(p: &Prepared, points_z: [f64; 2]) -> Option<FarHeights> {
         let g = p.pslg.as_ref()?;
-        let [lo, hi] = points_z;
-        if !(lo.is_finite() && hi.is_finite()) {
-            return None;
-        }
-        let margin = (hi - lo).max(1.0);
-        let mut far = FarHeights {
-            vertices: 0,
-            lines_z: [f64::INFINITY, f64::NEG_INFINITY],
-            points_z,
-        };
+        let mut far = FarTally::new(points_z);
         for v in &g.vertices {
-            let z = v[2];
-            if z < lo - margin || z > hi + margin {
-                far.vertices += 1;
-                far.lines_z = [far.lines_z[0].min(z), far.lines_z[1].max(z)];
-            }
+            far.add(v[2]);
         }
-        (far.vertices > 0).then_some(far)
+        far.finish()
+    }
+}
+
+/// [`FarHeights`] counted one vertex at a time (the streamed lines).
+pub(crate) struct FarTally {
+    far: FarHeights,
+    /// The lowest and highest height not far, `None` when the points' range is not finite.
+    near: Option<[f64; 2]>,
+}
+
+impl FarTally {
+    pub(crate) fn new(points_z: [f64; 2]) -> FarTally {
+        let [lo, hi] = points_z;
+        let margin = (hi - lo).max(1.0);
+        FarTally {
+            far: FarHeights {
+                vertices: 0,
+                lines_z: [f64::INFINITY, f64::NEG_INFINITY],
+                points_z,
+            },
+            near: (lo.is_finite() && hi.is_finite()).then_some([lo - margin, hi + margin]),
+        }
+    }
+
+    pub(crate) fn add(&mut self, z: f64) {
+        if let Some([lo, hi]) = self.near
+            && (z < lo || z > hi)
+        {
+            let f = &mut self.far;
+            f.vertices += 1;
+            f.lines_z = [f.lines_z[0].min(z), f.lines_z[1].max(z)];
+        }
+    }
+
+    pub(crate) fn finish(self) -> Option<FarHeights> {
+        (self.far.vertices > 0).then_some(self.far)
     }
 }
 
@@ -176,8 +208,10 @@ pub struct ClipSummary {
 
 /// Breaklines ready for the sweep.
 pub(crate) struct Prepared {
-    /// The cleaned graph with every z known.
+    /// The cleaned graph with every z known (in memory).
     pub pslg: Option<Pslg>,
+    /// Or the cleaned graph streamed ([`super::line_feed`]), taken by the run that sweeps it.
+    pub feed: std::sync::Mutex<Option<super::line_feed::LineFeed>>,
     /// Trimming rules (keeps all when none were given).
     pub trim: Trim,
     /// `--no-flat-triangles`.
@@ -221,7 +255,23 @@ pub(crate) type ReadLines<'a> = dyn Fn(&Path) -> Result<Lines> + Send + Sync + '
 pub(crate) fn prepare(
     o: &LineOptions,
     read: &ReadLines<'_>,
+    drape: Option<Drape>,
+) -> Result<Prepared> {
+    prepare_with(o, read, drape, None)
+}
+
+/// [`prepare`], and with `stream` (`--mem` and the scratch directory) the lines are cleaned by
+/// the streamed cleaner and handed to the sweep as a stream ([`super::line_feed`]) when every
+/// input vertex has a `z` and `--no-flat-triangles` is off; otherwise they are cleaned in
+/// memory (draping needs the graph's vertices without `z`, the flips the whole graph).
+///
+/// # Errors
+/// As [`prepare`], and the external sorts'.
+pub(crate) fn prepare_with(
+    o: &LineOptions,
+    read: &ReadLines<'_>,
     mut drape: Option<Drape>,
+    stream: Option<(u64, &Path)>,
 ) -> Result<Prepared> {
     let mut lines = Lines::default();
     for p in &o.breaklines {
@@ -232,10 +282,10 @@ pub(crate) fn prepare(
         let Some(drape) = drape.as_mut() else {
             return Err(Error::Options(PLAN_REFUSES_CLIP.into()));
         };
-        let mut hull = HullSink::default();
+        let mut hull = super::clip::HullSink::default();
         drape(&mut hull)?;
         let h = hull.finish_hull();
-        let (cut, summary) = clip(&lines, &h);
+        let (cut, summary) = super::clip::clip(&lines, &h);
         lines = cut;
         clipped = Some(summary);
     }
@@ -251,6 +301,7 @@ pub(crate) fn prepare(
     if lines.is_empty() {
         return Ok(Prepared {
             pslg: None,
+            feed: Default::default(),
             trim,
             flat: o.no_flat_triangles,
             summary,
@@ -273,6 +324,32 @@ pub(crate) fn prepare(
     let mut opts = CleanOptions::default();
     if let Some(t) = o.z_tolerance {
         opts.z_tolerance = t;
+    }
+    if let Some((mem, tmp)) = stream
+        && !o.no_flat_triangles
+        && (drape.is_some() || lines.polylines.iter().flatten().all(|v| !v[2].is_nan()))
+    {
+        // Half of --mem for the cleaner's sorts, a quarter for the half-edges', which stay
+        // open (as much as fits in that quarter) while the points are read with the other half.
+        let cleaned = lines.clean_streamed(&opts, mem / 2, tmp)?;
+        let sources = std::mem::take(&mut lines.sources);
+        drop(lines);
+        summary.vertices = cleaned.stats.vertices;
+        summary.segments = cleaned.stats.segments;
+        summary.clean = cleaned.stats;
+        summary.z_conflicts = cleaned.warnings.clone();
+        summary.cleaner = Some(cleaned.held);
+        let mut feed = super::line_feed::build(cleaned, mem / 4, tmp)?;
+        if let Some(drape) = drape {
+            summary.draped = feed.drape(drape, &sources)?;
+        }
+        return Ok(Prepared {
+            pslg: None,
+            feed: std::sync::Mutex::new(Some(feed)),
+            trim,
+            flat: false,
+            summary,
+        });
     }
     let mut pslg = lines.clean(&opts)?;
     summary.vertices = pslg.vertices.len() as u64;
@@ -306,6 +383,7 @@ pub(crate) fn prepare(
     }
     Ok(Prepared {
         pslg: Some(pslg),
+        feed: Default::default(),
         trim,
         flat: o.no_flat_triangles,
         summary,
@@ -396,12 +474,18 @@ fn outside_error(lines: &Lines, pslg: &Pslg, v: u32) -> Error {
         .iter()
         .position(|s| s.contains(&v))
         .map(|s| pslg.lines[s] as usize);
+    outside_error_at([p[0], p[1]], line.and_then(|l| lines.sources.get(l)))
+}
+
+/// The error for the vertex at `p` without z outside the points' TIN, naming a line `source`
+/// through it if there is one.
+pub(super) fn outside_error_at(p: [f64; 2], source: Option<&Source>) -> Error {
     let message = format!(
         "breakline vertex ({}, {}) has no z and lies outside the triangulation of the points, so \
          no height can be taken from them: give the line z values or clip it to the point cloud",
         p[0], p[1]
     );
-    match line.and_then(|l| lines.sources.get(l)) {
+    match source {
         Some(s) => Error::Format {
             path: s.path.to_path_buf(),
             message: format!("{s}: {message}"),
@@ -411,15 +495,16 @@ fn outside_error(lines: &Lines, pslg: &Pslg, v: u32) -> Error {
 }
 
 /// Heights of query points from the triangle stream (the draping pass).
-struct DrapeSink {
+pub(super) struct DrapeSink {
     xy: Vec<[f64; 2]>,
-    z: Vec<f64>,
+    /// The height of each query point (NaN: outside the triangulation).
+    pub(super) z: Vec<f64>,
     grid: Grid,
     buckets: Buckets,
 }
 
 impl DrapeSink {
-    fn new(xy: Vec<[f64; 2]>) -> DrapeSink {
+    pub(super) fn new(xy: Vec<[f64; 2]>) -> DrapeSink {
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
         for p in &xy {
@@ -480,248 +565,9 @@ impl TriangleSink for DrapeSink {
     }
 }
 
-/// The convex hull of the points, from the triangle stream of a points-only pass: triangle
-/// corners are gathered and reduced to their hull whenever [`HullSink::BATCH`] have piled up,
-/// so memory stays bounded.
-#[derive(Default)]
-struct HullSink {
-    buffer: Vec<[f64; 3]>,
-}
-
-impl HullSink {
-    const BATCH: usize = 1 << 21;
-
-    fn reduce(&mut self) {
-        let h = crate::tiles::hull::hull(&mut self.buffer);
-        self.buffer = h;
-    }
-
-    /// The hull's corners, counter-clockwise.
-    fn finish_hull(mut self) -> Vec<[f64; 2]> {
-        self.reduce();
-        self.buffer.iter().map(|p| [p[0], p[1]]).collect()
-    }
-}
-
-impl TriangleSink for HullSink {
-    fn begin(&mut self, _info: &super::StreamInfo) -> Result<()> {
-        Ok(())
-    }
-
-    fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
-        self.buffer.extend_from_slice(t);
-        if self.buffer.len() >= Self::BATCH {
-            self.reduce();
-        }
-        Ok(())
-    }
-
-    fn finish(&mut self) -> Result<ProductSummary> {
-        Ok(ProductSummary::None)
-    }
-}
-
-/// Is `q` inside or on the convex polygon `hull` (counter-clockwise), decided exactly?
-fn in_hull(hull: &[[f64; 2]], q: [f64; 2]) -> bool {
-    let n = hull.len();
-    n >= 3 && (0..n).all(|i| orient(hull[i], hull[(i + 1) % n], q) != Orientation::Clockwise)
-}
-
-/// The point at `t` of segment `a → b` (z interpolated; NaN stays NaN).
-fn along(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
-    if t <= 0.0 {
-        return a;
-    }
-    if t >= 1.0 {
-        return b;
-    }
-    [
-        a[0] + t * (b[0] - a[0]),
-        a[1] + t * (b[1] - a[1]),
-        a[2] + t * (b[2] - a[2]),
-    ]
-}
-
-/// The part of segment `a → b` inside the convex `hull`, as parameters `[t0, t1]`, with both
-/// ends checked inside exactly (a computed crossing that rounds outside is moved towards the
-/// inside by bisection). `None` when no part is inside.
-fn clip_segment(hull: &[[f64; 2]], a: [f64; 3], b: [f64; 3]) -> Option<(f64, f64)> {
-    let inside = |t: f64| {
-        let p = along(a, b, t);
-        in_hull(hull, [p[0], p[1]])
-    };
-    let (ia, ib) = (inside(0.0), inside(1.0));
-    if ia && ib {
-        return Some((0.0, 1.0));
-    }
-    // Cyrus–Beck in floating point for the interval.
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    let n = hull.len();
-    let d = [b[0] - a[0], b[1] - a[1]];
-    for i in 0..n {
-        let (p, q) = (hull[i], hull[(i + 1) % n]);
-        let e = [q[0] - p[0], q[1] - p[1]];
-        // Signed (left = inside) distances, scaled.
-        let fa = e[0] * (a[1] - p[1]) - e[1] * (a[0] - p[0]);
-        let fd = e[0] * d[1] - e[1] * d[0];
-        if fd == 0.0 {
-            if fa < 0.0 {
-                return None;
-            }
-            continue;
-        }
-        let t = -fa / fd;
-        if fd > 0.0 {
-            t0 = t0.max(t);
-        } else {
-            t1 = t1.min(t);
-        }
-    }
-    if t0 > t1 {
-        return None;
-    }
-    // A point known inside, to bisect towards.
-    let mid = if ia {
-        0.0
-    } else if ib {
-        1.0
-    } else {
-        let m = 0.5 * (t0 + t1);
-        if !inside(m) {
-            return None;
-        }
-        m
-    };
-    let settle = |t: f64| {
-        if inside(t) {
-            return t;
-        }
-        let (mut out, mut inn) = (t, mid);
-        for _ in 0..64 {
-            let m = 0.5 * (out + inn);
-            if m == out || m == inn {
-                break;
-            }
-            if inside(m) {
-                inn = m;
-            } else {
-                out = m;
-            }
-        }
-        inn
-    };
-    let s0 = if ia { 0.0 } else { settle(t0) };
-    let s1 = if ib { 1.0 } else { settle(t1) };
-    (s0 < s1).then_some((s0, s1))
-}
-
-/// Cuts every polyline to the convex `hull` (see [`LineOptions::clip`]): the parts inside are
-/// kept as separate polylines (a line that leaves and comes back becomes two), with their
-/// sources; what was cut is summed.
-fn clip(lines: &Lines, hull: &[[f64; 2]]) -> (Lines, ClipSummary) {
-    let mut out = Lines {
-        crs: lines.crs.clone(),
-        ..Lines::default()
-    };
-    let mut s = ClipSummary {
-        lines: lines.len() as u64,
-        ..ClipSummary::default()
-    };
-    let len = |a: [f64; 3], b: [f64; 3]| (b[0] - a[0]).hypot(b[1] - a[1]);
-    for (line, source) in lines.polylines.iter().zip(&lines.sources) {
-        let mut pieces: Vec<Vec<[f64; 3]>> = Vec::new();
-        let mut open = false;
-        let (mut total, mut kept) = (0.0, 0.0);
-        for w in line.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            let l = len(a, b);
-            total += l;
-            let Some((t0, t1)) = clip_segment(hull, a, b) else {
-                open = false;
-                continue;
-            };
-            let (p, q) = (along(a, b, t0), along(a, b, t1));
-            kept += len(p, q);
-            if !(open && t0 == 0.0) {
-                pieces.push(vec![p]);
-            }
-            if let Some(piece) = pieces.last_mut() {
-                piece.push(q);
-            }
-            open = t1 == 1.0;
-        }
-        s.length += total;
-        let cut = (total - kept).max(0.0);
-        s.length_cut += cut;
-        if pieces.is_empty() {
-            s.lines_dropped += 1;
-            continue;
-        }
-        if pieces.len() > 1 || pieces[0].len() != line.len() {
-            s.lines_cut += 1;
-        }
-        for piece in pieces {
-            out.polylines.push(piece);
-            out.sources.push(source.clone());
-        }
-    }
-    (out, s)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn clipping_to_a_convex_hull() {
-        let hull = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
-        let src = crate::breaklines::Source {
-            path: std::sync::Arc::from(std::path::Path::new("l.geojson")),
-            location: crate::breaklines::Location::Line(1),
-        };
-        let lines = Lines {
-            polylines: vec![
-                // Crosses the square, leaves and comes back: two pieces.
-                vec![
-                    [-5.0, 5.0, 0.0],
-                    [5.0, 5.0, 10.0],
-                    [5.0, 15.0, 20.0],
-                    [8.0, 5.0, f64::NAN],
-                ],
-                // Wholly inside.
-                vec![[1.0, 1.0, f64::NAN], [2.0, 2.0, f64::NAN]],
-                // Wholly outside.
-                vec![[20.0, 20.0, 1.0], [30.0, 20.0, 1.0]],
-            ],
-            sources: vec![src.clone(), src.clone(), src],
-            crs: None,
-        };
-        let (out, s) = clip(&lines, &hull);
-        assert_eq!((s.lines, s.lines_cut, s.lines_dropped), (3, 1, 1));
-        assert_eq!(out.polylines.len(), 3);
-        assert_eq!(
-            out.polylines[0],
-            vec![[0.0, 5.0, 5.0], [5.0, 5.0, 10.0], [5.0, 10.0, 15.0]]
-        );
-        assert_eq!(out.polylines[1][1][..2], [8.0, 5.0]);
-        assert!(
-            out.polylines
-                .iter()
-                .flatten()
-                .all(|p| in_hull(&hull, [p[0], p[1]]))
-        );
-        let xy = |l: &Vec<[f64; 3]>| l.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>();
-        assert_eq!(xy(&out.polylines[2]), xy(&lines.polylines[1]));
-        let want = 5.0 + 5.0 + 1.5f64.hypot(5.0) + 10.0;
-        assert!((s.length_cut - want).abs() < 1e-9, "{s:?}");
-        // A crossing that rounds outside is moved in.
-        let tri = [[0.0, 0.0], [3.0, 0.1], [0.1, 3.0]];
-        let (t0, t1) = clip_segment(&tri, [-1.0, 0.7, 0.0], [5.0, 0.9, 0.0]).unwrap();
-        for t in [t0, t1] {
-            let p = along([-1.0, 0.7, 0.0], [5.0, 0.9, 0.0], t);
-            assert!(in_hull(&tri, [p[0], p[1]]));
-        }
-    }
 
     #[test]
     fn draping_is_linear_closed_and_independent_of_order() {

@@ -16,11 +16,13 @@
 //! (docs/ARCHITECTURE.md, "Coordinates"). The only change on the way out is the sweep axis: a
 //! sweep along x works on the points with x and y exchanged, which [`Frame`] undoes.
 
+mod clip;
 mod config;
 mod drive;
 mod emit;
 pub mod ground;
 pub mod height;
+mod line_feed;
 mod lines;
 mod read;
 mod replay;
@@ -330,7 +332,7 @@ fn run_engine(
         return drive::run(config, None, mesh, sinks);
     }
     let points_only = config.points_only();
-    let prepared = lines::prepare(
+    let prepared = lines::prepare_with(
         lines,
         config.read_lines(),
         Some(&mut |sink| {
@@ -344,6 +346,7 @@ fn run_engine(
             }
             drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
         }),
+        Some((config.options().mem, config.tmp_dir())),
     )?;
     drive::run(config, Some(&prepared), mesh, sinks)
 }

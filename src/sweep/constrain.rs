@@ -121,6 +121,45 @@ impl ConstraintGraph {
     }
 }
 
+/// A vertex of the cleaned breakline graph as a streamed run feeds it to the sweep, with the
+/// point it is: where its segments go. Positions are those of the points (local frame, `-0`
+/// as `+0`), which the graph's vertices have distinct.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ConstraintVertex {
+    /// Its position.
+    pub xy: [f64; 2],
+    /// The earlier ends (in sweep order) of its segments, in the order the segments are
+    /// inserted (the cleaner's order of those vertices, as [`ConstraintGraph::lower`]).
+    pub lower: Vec<[f64; 2]>,
+    /// The later ends of its segments.
+    pub upper: Vec<[f64; 2]>,
+}
+
+/// Streamed breaklines: the graph arrives vertex by vertex, each record with its point, so the
+/// sweep holds only the vertices whose segments to later vertices are not all in yet (with those
+/// segments' other ends), instead of a [`ConstraintGraph`].
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Fed {
+    /// The record of the point being inserted.
+    pub(super) next: Option<ConstraintVertex>,
+    /// Swept vertices with segments pending, by position.
+    started: crate::idmap::FastMap<(u64, u64), Started>,
+}
+
+/// A swept constraint vertex whose segments to later vertices are not all in.
+#[derive(Clone, Debug)]
+struct Started {
+    v: VertexId,
+    cid: u32,
+    upper: Vec<[f64; 2]>,
+    open: u32,
+}
+
+/// The key of a position (bit patterns; `-0` is `+0`).
+fn pos_key(p: [f64; 2]) -> (u64, u64) {
+    ((p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits())
+}
+
 /// Counters of the constraint insertion.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ConstraintStats {
@@ -190,6 +229,80 @@ impl<H: Mode> Sweep<H> {
         for &u in ups {
             self.hooks.segment_pending(v, cid, u, a, cons.graph.xy(u));
         }
+    }
+
+    /// Streamed breaklines: vertex `v` (at front node `n`, `None` for the first point, which
+    /// ends no segment) is constraint vertex `cid`, whose record was given with it: the segments
+    /// it ends are inserted, in its record's order, and those it starts become pending (keyed by
+    /// `cid` and their place in its record).
+    ///
+    /// # Errors
+    /// [`Error::Internal`] when the record is missing or names another position, or an earlier
+    /// end was not swept (the stream is out of step: a bug), or an insertion fails.
+    pub(super) fn fed_vertex(&mut self, v: VertexId, n: Option<NodeId>, cid: u32) -> Result<()> {
+        let xy = self.pts[v.0 as usize];
+        let rec = self
+            .cons
+            .as_mut()
+            .and_then(|c| c.fed.as_mut())
+            .and_then(|f| f.next.take())
+            .filter(|r| pos_key(r.xy) == pos_key(xy));
+        let Some(rec) = rec else {
+            return Err(Error::Internal(format!(
+                "breakline vertex {cid} at ({}, {}) came without its record in the line stream",
+                xy[0], xy[1]
+            )));
+        };
+        for (k, &lo) in rec.lower.iter().enumerate() {
+            let fed = self
+                .cons
+                .as_mut()
+                .and_then(|c| c.fed.as_mut())
+                .expect("fed constraints");
+            let key = pos_key(lo);
+            let found = fed.started.get_mut(&key).and_then(|s| {
+                let j = s.upper.iter().position(|&u| pos_key(u) == pos_key(xy))?;
+                s.open -= 1;
+                Some((s.v, s.cid, j as u32, s.open == 0))
+            });
+            let Some((a, lo_cid, j, last)) = found else {
+                return Err(Error::Internal(format!(
+                    "breakline vertex ({}, {}) was swept before the earlier end ({}, {}) of its \
+                     segment, or that end does not list it",
+                    xy[0], xy[1], lo[0], lo[1]
+                )));
+            };
+            if last {
+                fed.started.remove(&key);
+            }
+            let nb = match (k, n) {
+                (0, Some(n)) => n,
+                _ => self.front_node_of(v)?,
+            };
+            self.insert_constraint(a, v, nb)?;
+            self.constraint_finished(a, lo_cid, j);
+        }
+        if !rec.upper.is_empty() {
+            for (j, &u) in rec.upper.iter().enumerate() {
+                self.hooks.segment_pending(v, cid, j as u32, xy, u);
+            }
+            let fed = self
+                .cons
+                .as_mut()
+                .and_then(|c| c.fed.as_mut())
+                .expect("fed constraints");
+            let open = rec.upper.len() as u32;
+            fed.started.insert(
+                pos_key(xy),
+                Started {
+                    v,
+                    cid,
+                    upper: rec.upper,
+                    open,
+                },
+            );
+        }
+        Ok(())
     }
 
     /// The segment from constraint vertex `lo` (swept as `a`) to constraint vertex `hi` is in.

@@ -25,7 +25,7 @@ pub mod legalize;
 use crate::error::{Error, Result};
 use crate::geom::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
 use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, TriId, VertexId};
-pub use constrain::{ConstraintGraph, ConstraintStats};
+pub use constrain::{ConstraintGraph, ConstraintStats, ConstraintVertex};
 use front::{Front, NodeId, XMap};
 
 /// Triangles and, for each of their half-edges, the half-edge across it (`u32::MAX` on the
@@ -81,6 +81,9 @@ pub(crate) struct Constraints {
     /// Batch mode: (vertex, constraint vertex) pairs in vertex order, and the next one to use.
     batch: Vec<(u32, u32)>,
     cursor: usize,
+    /// Streamed breaklines: the graph comes vertex by vertex with the points instead
+    /// ([`constrain::Fed`]); `graph` and `vertex` are then empty.
+    fed: Option<constrain::Fed>,
 }
 
 /// No constraint vertex.
@@ -184,6 +187,7 @@ impl Sweep<Batch> {
             vertex: vec![UNSWEPT; n],
             batch,
             cursor: 0,
+            fed: None,
         });
         // The first vertex is already in: it ends no segment, but may start some.
         if let Some(&(v, c)) = cons.batch.first()
@@ -368,6 +372,7 @@ impl<H: Mode> Sweep<H> {
             vertex: vec![UNSWEPT; n],
             batch: Vec::new(),
             cursor: 0,
+            fed: None,
         });
         if first_constraint != NO_CONSTRAINT {
             let Some(slot) = cons.vertex.get_mut(first_constraint as usize) else {
@@ -382,6 +387,37 @@ impl<H: Mode> Sweep<H> {
             self.constraint_started(VertexId(FIRST_REAL), first_constraint);
         }
         Ok(())
+    }
+
+    /// Sets streamed breaklines (see [`constrain::Fed`]): each point that is a constraint vertex
+    /// comes with its [`ConstraintVertex`] record ([`Sweep::next_constraint_vertex`] before the
+    /// point is inserted); `first` is the first point's constraint vertex and its record.
+    ///
+    /// # Errors
+    /// [`Error::Internal`] if the first point's record has earlier ends (nothing is earlier).
+    pub(crate) fn set_fed_constraints(
+        &mut self,
+        first: Option<(u32, ConstraintVertex)>,
+    ) -> Result<()> {
+        self.cons = Some(Box::new(Constraints {
+            graph: ConstraintGraph::default(),
+            vertex: Vec::new(),
+            batch: Vec::new(),
+            cursor: 0,
+            fed: Some(constrain::Fed::default()),
+        }));
+        if let Some((cid, rec)) = first {
+            self.next_constraint_vertex(rec);
+            self.fed_vertex(VertexId(FIRST_REAL), None, cid)?;
+        }
+        Ok(())
+    }
+
+    /// The record of the constraint vertex the next point is (streamed breaklines).
+    pub(crate) fn next_constraint_vertex(&mut self, rec: ConstraintVertex) {
+        if let Some(f) = self.cons.as_mut().and_then(|c| c.fed.as_mut()) {
+            f.next = Some(rec);
+        }
     }
 
     /// Stores the position of vertex `v`: the next row of the vertex table, or a row freed
@@ -413,6 +449,9 @@ impl<H: Mode> Sweep<H> {
 
     /// Vertex `v` (at front node `n`) is constraint vertex `cid`: insert the segments it ends.
     fn constraint_vertex(&mut self, v: VertexId, n: NodeId, cid: u32) -> Result<()> {
+        if self.cons.as_ref().is_some_and(|c| c.fed.is_some()) {
+            return self.fed_vertex(v, Some(n), cid);
+        }
         let Some(cons) = self
             .cons
             .as_mut()

@@ -185,7 +185,6 @@ impl Contact {
         self.n_splits += 1;
     }
 
-    #[cfg(any(test, feature = "dev"))]
     pub(super) fn is_empty(&self) -> bool {
         self.n_splits == 0 && self.cross.is_none()
     }

@@ -60,9 +60,7 @@
 mod dedup;
 mod intersect;
 mod split;
-#[cfg(any(test, feature = "dev"))]
 pub mod stream;
-#[cfg(any(test, feature = "dev"))]
 mod sweep;
 
 #[cfg(any(test, feature = "dev"))]

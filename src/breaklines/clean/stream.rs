@@ -30,7 +30,7 @@
 
 use super::intersect::{contact, point_on};
 use super::split::{along, closer, z_between};
-use super::sweep::{ActiveSet, Span, x_overlap};
+use super::sweep::{ActiveSet, Span};
 use super::{CleanOptions, CleanStats, MAX_ROUNDS, Work, ZConflict, ZConflictKind, lex};
 use crate::error::{Error, Result};
 use crate::sort::external::ExternalSorter;
@@ -100,15 +100,25 @@ impl Cleaned {
     }
 }
 
-impl Iterator for Cleaned {
-    type Item = Piece;
-    fn next(&mut self) -> Option<Piece> {
+impl Cleaned {
+    /// The next piece, with `clean()`'s order of its ends' vertices (of `lo`, then `hi`):
+    /// vertices compare by this key, then by `(x, y)` (as `clean()` numbers them: input
+    /// vertices by first appearance, then those made at crossings, by round and position).
+    pub fn next_keyed(&mut self) -> Option<(Piece, [(u32, u64); 2])> {
         let r = self.pieces.next()?;
-        Some(Piece {
+        let piece = Piece {
             lo: [r.lo[0], r.lo[1], r.z[0]],
             hi: [r.hi[0], r.hi[1], r.z[1]],
             line: r.line,
-        })
+        };
+        Some((piece, [(r.round[0], r.id[0]), (r.round[1], r.id[1])]))
+    }
+}
+
+impl Iterator for Cleaned {
+    type Item = Piece;
+    fn next(&mut self) -> Option<Piece> {
+        self.next_keyed().map(|(p, _)| p)
     }
 }
 
@@ -363,39 +373,17 @@ impl Streamer {
     fn contacts(&mut self, r: &mut Round, it: &Act) {
         let cols = r.act.cols_of(it);
         let mut hits: Vec<(Act, Act)> = Vec::new();
-        for c in cols[0]..=cols[1] {
-            let ActiveSet {
-                slots,
-                buckets,
-                entries,
-                ..
-            } = &mut r.act;
-            let bucket = &mut buckets[c as usize];
-            let mut k = 0;
-            while k < bucket.len() {
-                let (slot, generation) = bucket[k];
-                let a = &slots[slot as usize];
-                if a.generation != generation {
-                    bucket.swap_remove(k);
-                    *entries -= 1;
-                    continue;
-                }
-                k += 1;
-                if c != cols[0].max(a.cols[0]) || !x_overlap(it, &a.item) {
-                    continue;
-                }
-                let other = a.item;
-                let (f, g) = (it.rec.flags, other.rec.flags);
-                if f & g & POINT != 0 || (f | g) & DIRTY == 0 {
-                    continue;
-                }
-                if it.rec.key_cmp(&other.rec) == Ordering::Less {
-                    hits.push((*it, other));
-                } else {
-                    hits.push((other, *it));
-                }
+        r.act.for_each_meeting(it, cols, |&other| {
+            let (f, g) = (it.rec.flags, other.rec.flags);
+            if f & g & POINT != 0 || (f | g) & DIRTY == 0 {
+                return;
             }
-        }
+            if it.rec.key_cmp(&other.rec) == Ordering::Less {
+                hits.push((*it, other));
+            } else {
+                hits.push((other, *it));
+            }
+        });
         for (s, t) in hits {
             self.pair(r, s, t);
         }

@@ -14,6 +14,10 @@
 //!
 //! [`SweepStats::peak_active`] counts the most items held at once.
 
+// `clean_by_sweep` (its rounds, items and counters) is for tests and benchmarks; a run uses
+// only the active set, through the streamed cleaner.
+#![cfg_attr(not(any(test, feature = "dev")), allow(dead_code, unreachable_pub))]
+
 use super::Work;
 use super::intersect::{Found, PairResult, contact, point_on};
 use crate::error::Result;
@@ -150,6 +154,30 @@ impl<T: Span> ActiveSet<T> {
         [self.col(a), self.col(b)]
     }
 
+    /// Calls `f` with each active item whose `x` range meets that of `it` (in buckets `cols`,
+    /// [`ActiveSet::cols_of`]), once: in the first bucket both cover. Stale entries met on the
+    /// way are dropped. The bucket scan of both sweeps (a round's pairs here, the streamed
+    /// cleaner's contacts).
+    pub(super) fn for_each_meeting(&mut self, it: &T, cols: [u32; 2], mut f: impl FnMut(&T)) {
+        for c in cols[0]..=cols[1] {
+            let bucket = &mut self.buckets[c as usize];
+            let mut k = 0;
+            while k < bucket.len() {
+                let (slot, generation) = bucket[k];
+                let a = &self.slots[slot as usize];
+                if a.generation != generation {
+                    bucket.swap_remove(k);
+                    self.entries -= 1;
+                    continue;
+                }
+                k += 1;
+                if c == cols[0].max(a.cols[0]) && x_overlap(it, &a.item) {
+                    f(&a.item);
+                }
+            }
+        }
+    }
+
     /// Drops every item whose upper end lies below `y`.
     fn expire(&mut self, y: f64) {
         self.expire_with(y, |_| {});
@@ -268,44 +296,21 @@ impl Work {
             stats.items += 1;
             act.expire(it.lo[1]);
             let cols = act.cols_of(&it);
-            for c in cols[0]..=cols[1] {
-                let ActiveSet {
-                    slots,
-                    buckets,
-                    entries,
-                    ..
-                } = &mut act;
-                let bucket = &mut buckets[c as usize];
-                let mut k = 0;
-                while k < bucket.len() {
-                    let (slot, generation) = bucket[k];
-                    let a = &slots[slot as usize];
-                    if a.generation != generation {
-                        bucket.swap_remove(k);
-                        *entries -= 1;
-                        continue;
-                    }
-                    k += 1;
-                    // Tested from the first bucket both cover.
-                    if c != cols[0].max(a.cols[0]) || !x_overlap(&it, &a.item) {
-                        continue;
-                    }
-                    let other = a.item;
-                    let both_points = it.flags & other.flags & POINT != 0;
-                    if both_points || (it.flags | other.flags) & DIRTY == 0 {
-                        continue;
-                    }
-                    stats.pairs_tested += 1;
-                    let (s, t) = if it.id < other.id {
-                        (it, other)
-                    } else {
-                        (other, it)
-                    };
-                    if let Some(r) = self.sweep_pair(&s, &t) {
-                        found.push(([s.id as u32, t.id as u32], r));
-                    }
+            act.for_each_meeting(&it, cols, |&other| {
+                let both_points = it.flags & other.flags & POINT != 0;
+                if both_points || (it.flags | other.flags) & DIRTY == 0 {
+                    return;
                 }
-            }
+                stats.pairs_tested += 1;
+                let (s, t) = if it.id < other.id {
+                    (it, other)
+                } else {
+                    (other, it)
+                };
+                if let Some(r) = self.sweep_pair(&s, &t) {
+                    found.push(([s.id as u32, t.id as u32], r));
+                }
+            });
             act.insert(it, cols);
             stats.peak_active = stats.peak_active.max(act.live);
             stats.peak_entries = stats.peak_entries.max(act.entries);
