@@ -400,7 +400,9 @@ pub(crate) fn run(
             .chain(line_tiles.iter().copied())
             .map(one)
             .fold(occupied, |r, t| if r.is_empty() { t } else { r.union(&t) });
-        tiles_rect.intersect(&data)
+        // Grown by a tile: a cell of a tile that only touches the data's box (its centre on the
+        // data's edge, `--align centres`) takes its value from the triangles there.
+        tiles_rect.intersect(&data.expand(1))
     } else {
         tiles_rect.intersect(&occupied)
     };
