@@ -261,26 +261,16 @@ fn json_of_a_product_with_ground_carries_the_ground_summary() {
         g.as_os_str(),
         os("--json"),
     ]);
-    let dem = d.join("d.tif");
-    let got = json(&[
-        os("dem"),
-        input.as_os_str(),
-        os("--ground"),
-        os("--cell"),
-        os("1"),
-        os("-o"),
-        dem.as_os_str(),
-        os("--json"),
-    ]);
-    let ply = d.join("t.ply");
-    let tin = json(&[
-        os("tin"),
-        input.as_os_str(),
-        os("--ground"),
-        os("-o"),
-        ply.as_os_str(),
-        os("--json"),
-    ]);
+    // `COMMAND INPUT --ground [EXTRA] -o D/OUT --json`.
+    let with_ground = |command: &str, extra: &[&str], out: &str| {
+        let out = d.join(out);
+        let mut args = vec![os(command), input.as_os_str(), os("--ground")];
+        args.extend(extra.iter().map(|a| os(a)));
+        args.extend([os("-o"), out.as_os_str(), os("--json")]);
+        json(&args)
+    };
+    let got = with_ground("dem", &["--cell", "1"], "d.tif");
+    let tin = with_ground("tin", &[], "t.ply");
     for ground in [&got["run"]["ground"], &tin["ground"]] {
         assert!(ground.is_object(), "no ground summary: {got} {tin}");
         for key in [
@@ -302,7 +292,7 @@ fn json_of_a_product_with_ground_carries_the_ground_summary() {
         os("--cell"),
         os("1"),
         os("-o"),
-        dem.as_os_str(),
+        d.join("d.tif").as_os_str(),
         os("--json"),
     ]);
     assert!(plain["run"].get("ground").is_none(), "{plain}");

@@ -15,24 +15,30 @@ fn sample() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz")
 }
 
-/// A night: a DEM plan over the sample whose task 0 fails (a directory where its tile goes),
-/// whose last task is not run and whose other tasks finish. Returns the plan and its tasks.
-fn night(job: &Path) -> (PathBuf, usize) {
+/// `plan dem` of the sample at `cell` in tiles of `tile` into `job`: the plan file.
+fn plan_dem(job: &Path, cell: &str, tile: &str) -> PathBuf {
     sweeptin(
         &[
             "plan",
             "dem",
             s(&sample()),
             "--cell",
-            "0.5",
+            cell,
             "--tile",
-            "16",
+            tile,
+            "-q",
             "-o",
             s(job),
         ],
         "plan",
     );
-    let plan = job.join("plan.json");
+    job.join("plan.json")
+}
+
+/// A night: a DEM plan over the sample whose task 0 fails (a directory where its tile goes),
+/// whose last task is not run and whose other tasks finish. Returns the plan and its tasks.
+fn night(job: &Path) -> (PathBuf, usize) {
+    let plan = plan_dem(job, "0.5", "16");
     let p: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
     let tiles = p["tiles"].as_array().unwrap();
@@ -138,21 +144,7 @@ fn report_maps_done_failed_and_not_run_tasks_and_says_how_to_rerun_the_failed() 
 fn report_refuses_the_plans_own_files_and_names_that_are_not_files() {
     let t = tempfile::tempdir().unwrap();
     let job = t.path().join("job");
-    sweeptin(
-        &[
-            "plan",
-            "dem",
-            s(&sample()),
-            "--cell",
-            "0.5",
-            "--tile",
-            "32",
-            "-o",
-            s(&job),
-        ],
-        "plan",
-    );
-    let plan = job.join("plan.json");
+    let plan = plan_dem(&job, "0.5", "32");
     let before = std::fs::read(&plan).unwrap();
     for (out, says) in [
         (plan.clone(), "plan"),
@@ -238,22 +230,7 @@ fn report_renders_the_tile_states_in_headless_chromium() {
 fn report_names_a_task_killed_by_a_signal_as_failed() {
     let t = tempfile::tempdir().unwrap();
     let job = t.path().join("job");
-    sweeptin(
-        &[
-            "plan",
-            "dem",
-            s(&sample()),
-            "--cell",
-            "1",
-            "--tile",
-            "32",
-            "-q",
-            "-o",
-            s(&job),
-        ],
-        "plan",
-    );
-    let plan = job.join("plan.json");
+    let plan = plan_dem(&job, "1", "32");
     let o = bin()
         .args(["run", s(&plan), "--all", "-q"])
         .env("SWEEPTIN_TEST_KILL_TASK", "1")

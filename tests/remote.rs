@@ -196,6 +196,17 @@ fn silent_server_times_out_and_is_asked_again() {
     }
 }
 
+/// The run gave up after its attempts: exit 3 naming the URL, no output.
+fn gave_up(o: &Output, far: &Path) {
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(o));
+    let e = stderr(o);
+    assert!(
+        e.contains("gave up after 5 attempts") && e.contains("/x.laz"),
+        "{e}"
+    );
+    assert!(!far.exists());
+}
+
 /// A server silent every time: five attempts, then exit 3 naming the URL, no output.
 #[test]
 fn server_silent_every_time_gives_up_naming_the_url() {
@@ -204,13 +215,7 @@ fn server_silent_every_time_gives_up_naming_the_url() {
         &laz(),
         &["--io-timeout", "1"],
     );
-    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
-    let e = stderr(&o);
-    assert!(
-        e.contains("gave up after 5 attempts") && e.contains("/x.laz"),
-        "{e}"
-    );
-    assert!(!far.exists());
+    gave_up(&o, &far);
 }
 
 #[test]
@@ -243,13 +248,7 @@ fn server_ignoring_range_is_read_whole_with_a_warning() {
 #[test]
 fn server_failing_every_time_gives_up_naming_the_url() {
     let (_, far, o, _dir) = through(Fault::Unavailable(usize::MAX), &laz());
-    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
-    let e = stderr(&o);
-    assert!(
-        e.contains("gave up after 5 attempts") && e.contains("/x.laz"),
-        "{e}"
-    );
-    assert!(!far.exists());
+    gave_up(&o, &far);
 }
 
 #[test]
