@@ -1,7 +1,7 @@
 //! The classification in blocks, bounded by `--mem`: every point into the tiles' block index
 //! (blocks = seed cells, with each point's global index and class as its tag), then every
-//! ground block with points run on its buffered rectangle ([`super::ptd`]), batches of blocks
-//! on every core, the classes of the points each block owns written at their global index into
+//! ground block with points run on its buffered rectangle ([`super::ptd`]), blocks taken by
+//! every core as the memory budget has room, the classes of the points each block owns written at their global index into
 //! a [`ClassStore`] (one byte a point, a temporary file for large inputs).
 
 use super::ptd::{RunStats, check_labels, classify_run};
@@ -9,12 +9,13 @@ use super::{GroundParams, GroundSummary, Tag};
 use crate::error::{Error, Result};
 use crate::sort::DuplicatePolicy;
 use crate::sort::external::ExternalSorter;
+use crate::tiles::budget::Budget;
 use crate::tiles::grid::{BlockRect, TileGrid};
 use crate::tiles::index::{BlockIndex, TaggedRecord};
-use rayon::prelude::*;
 use std::fs::File;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Bytes a run takes per point of its buffered rectangle (the tags and labels, the candidates'
@@ -327,47 +328,77 @@ pub fn classify_stream(
             1u32 << grid.shift
         )));
     }
-    let mut k = 0;
+    // Every core takes the next block while the budget has room for its run; the classes
+    // are put in the store as the runs end (a point's class does not depend on the order).
+    let budget = Budget::new(
+        run_budget,
+        runs.iter().map(|r| r.3).max().unwrap_or(1),
+        threads,
+    );
+    let next = AtomicUsize::new(0);
+    let (tx, rx) = crossbeam_channel::unbounded::<Result<BlockResult>>();
     let mut done_points = 0u64;
-    while k < runs.len() {
-        // A batch: up to one block per thread, within the run budget.
-        let mut batch: Vec<(i64, i64, BlockRect)> = Vec::new();
-        let mut bytes = 0u64;
-        while k < runs.len() && batch.len() < threads {
-            let (tx, ty, rect, need) = runs[k];
-            if !batch.is_empty() && bytes + need > run_budget {
-                break;
-            }
-            bytes += need;
-            batch.push((tx, ty, rect));
-            k += 1;
-        }
-        let results: Vec<Result<BlockResult>> = batch
-            .par_iter()
-            .map(|&(tx, ty, rect)| run_block(&index, &grid, params, (tx, ty), rect))
-            .collect();
-        for r in results {
-            let BlockResult {
-                classes: mut pairs,
-                stats,
-                points: run_points,
-            } = r?;
-            done_points += pairs.len() as u64;
-            for &(_, c) in &pairs {
-                match c {
-                    2 => summary.ground += 1,
-                    7 => summary.low_noise += 1,
-                    _ => {}
+    std::thread::scope(|scope| -> Result<()> {
+        let rx = rx;
+        for _ in 0..threads.min(runs.len()) {
+            let (tx, budget, next, runs, index, grid) =
+                (tx.clone(), &budget, &next, &runs, &index, &grid);
+            scope.spawn(move || {
+                loop {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&(tx_, ty_, rect, need)) = runs.get(k) else {
+                        break;
+                    };
+                    if !budget.take(need) {
+                        break;
+                    }
+                    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        run_block(index, grid, params, (tx_, ty_), rect)
+                    }))
+                    .unwrap_or_else(|p| Err(Error::panicked("ground block", &*p)));
+                    budget.give(need);
+                    if tx.send(r).is_err() {
+                        break;
+                    }
                 }
-            }
-            summary.seeds += stats.seeds;
-            summary.iterations = summary.iterations.max(stats.iterations);
-            summary.largest_run_points = summary.largest_run_points.max(run_points);
-            summary.largest_run_bytes = summary.largest_run_bytes.max(stats.bytes);
-            store.put(&mut pairs)?;
+            });
         }
-        progress("classifying", done_points, total);
-    }
+        drop(tx);
+        let outcome = (|| -> Result<()> {
+            for _ in 0..runs.len() {
+                let r = rx.recv().map_err(|_| {
+                    Error::Internal("a ground worker stopped without a result".into())
+                })?;
+                let BlockResult {
+                    classes: mut pairs,
+                    stats,
+                    points: run_points,
+                } = r?;
+                done_points += pairs.len() as u64;
+                for &(_, c) in &pairs {
+                    match c {
+                        2 => summary.ground += 1,
+                        7 => summary.low_noise += 1,
+                        _ => {}
+                    }
+                }
+                summary.seeds += stats.seeds;
+                summary.iterations = summary.iterations.max(stats.iterations);
+                summary.largest_run_points = summary.largest_run_points.max(run_points);
+                summary.largest_run_bytes = summary.largest_run_bytes.max(stats.bytes);
+                store.put(&mut pairs)?;
+                progress("classifying", done_points, total);
+            }
+            Ok(())
+        })();
+        // Workers waiting for memory, or to send a result, see the budget or channel closed.
+        if outcome.is_err() {
+            next.store(runs.len(), Ordering::Relaxed);
+        }
+        budget.close();
+        drop(rx);
+        outcome
+    })?;
     if done_points != total {
         return Err(Error::Internal(format!(
             "the ground blocks owned {done_points} points of {total}"

@@ -26,12 +26,13 @@ pub(crate) mod keep;
 pub(crate) mod lines;
 pub(crate) mod read;
 pub(crate) mod region;
+pub(crate) mod budget;
 pub(crate) mod worker;
 
 use crate::error::{Error, Result};
 use crate::sink::{MeshSink, Needs, StreamInfo, TriangleSink};
 
-use index::BlockIndex;
+use budget::Budget;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 use read::{read_index, with_lines};
@@ -202,74 +203,6 @@ pub(crate) struct TileJob<'a> {
     /// The CRS the user declares for the files (`--crs`; see
     /// [`crate::input::las::ReadOptions::crs`]).
     pub crs: Option<&'a crate::crs::Crs>,
-}
-
-/// The memory of tiles in flight: a run takes [`Budget::run`] bytes when it starts, gives back
-/// all but what its output holds ([`TileOutput::heap_bytes`], counted as a run's at most) when it
-/// ends, and the rest when the writer has written it. Tiles are written in order, so a slow tile
-/// (or a slow writer: an overlay's) holds the outputs after it, not the runs: the workers go on
-/// while there is room for a run.
-struct Budget {
-    free: std::sync::Mutex<(u64, bool)>,
-    freed: std::sync::Condvar,
-    /// Bytes a tile's run holds at its peak (an estimate from the density).
-    run: u64,
-    /// Runs the budget holds at once (at most the workers): the summary's `window`.
-    runs: usize,
-}
-
-impl Budget {
-    /// The budget `mem` (what the sinks keep, a DEM's rows, already taken off; then what the
-    /// index holds) for tiles of `index` on `threads` workers: at least one run, whatever `mem`.
-    fn for_tiles(index: &BlockIndex, mem: u64, threads: usize) -> Budget {
-        let per_block = index.len() as f64 / index.blocks().max(1) as f64;
-        let blocks = f64::from(1u32 << index.grid.shift.min(15));
-        // A tile's first run: its blocks and a buffer of one block around.
-        let run = (per_block * (blocks + 2.0).powi(2) * RUN_BYTES_PER_POINT).max(1.0) as u64;
-        let free = mem.saturating_sub(index.memory_bytes()).max(run);
-        Budget {
-            free: std::sync::Mutex::new((free, false)),
-            freed: std::sync::Condvar::new(),
-            run,
-            runs: ((free / run) as usize).clamp(1, threads),
-        }
-    }
-
-    /// Waits until `bytes` are free and takes them; `false` once the budget is closed.
-    fn take(&self, bytes: u64) -> bool {
-        let Ok(mut g) = self.free.lock() else {
-            return false;
-        };
-        loop {
-            if g.1 {
-                return false;
-            }
-            if g.0 >= bytes {
-                g.0 -= bytes;
-                return true;
-            }
-            g = match self.freed.wait(g) {
-                Ok(g) => g,
-                Err(_) => return false,
-            };
-        }
-    }
-
-    /// Gives back `bytes`.
-    fn give(&self, bytes: u64) {
-        if let Ok(mut g) = self.free.lock() {
-            g.0 += bytes;
-        }
-        self.freed.notify_all();
-    }
-
-    /// Wakes every waiting worker with `false`.
-    fn close(&self) {
-        if let Ok(mut g) = self.free.lock() {
-            g.1 = true;
-        }
-        self.freed.notify_all();
-    }
 }
 
 /// Runs a tiled triangulation of `job` into `mesh` and `sinks`.
@@ -459,7 +392,14 @@ pub(crate) fn run(
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     // Memory for tiles' runs in flight and their outputs waiting to be written.
-    let budget = Budget::for_tiles(&index, job.mem.saturating_sub(shares), threads);
+    let budget = {
+        let per_block = index.len() as f64 / index.blocks().max(1) as f64;
+        let blocks = f64::from(1u32 << index.grid.shift.min(15));
+        // A tile's first run: its blocks and a buffer of one block around.
+        let run = (per_block * (blocks + 2.0).powi(2) * RUN_BYTES_PER_POINT).max(1.0) as u64;
+        let free = job.mem.saturating_sub(shares + index.memory_bytes());
+        Budget::new(free, run, threads)
+    };
     stats.window = budget.runs as u64;
     let (tx, rx) = crossbeam_channel::unbounded::<(usize, (Result<TileOutput>, u64))>();
     let task = task.as_ref();
