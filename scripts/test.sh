@@ -40,6 +40,9 @@ cargo clippy --all-targets --locked -- -D warnings
 # The library as users build it (no `dev` feature: the engine is pub(crate)): no dead code.
 cargo clippy --lib --locked -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked --quiet
-cargo test --locked --quiet
+# The library's unit tests, the binary's and the one integration-test binary (tests/all.rs), then
+# the doc tests. The developer examples are not built again: clippy --all-targets checked them.
+cargo test --locked --quiet --tests
+cargo test --locked --quiet --doc
 # The Python package (python/): its own venv under target/, the extension built once (dev profile).
 scripts/test-python.sh

@@ -234,3 +234,30 @@ fn the_engine_is_not_public_api() {
         }
     }
 }
+
+/// The integration tests are one binary (`tests/all.rs`, `autotests = false`): a test file it
+/// does not declare would never run, and pass.
+#[test]
+fn every_test_file_is_a_module_of_the_one_test_binary() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests");
+    let all = std::fs::read_to_string(dir.join("all.rs")).unwrap();
+    let declared: BTreeSet<&str> = all
+        .lines()
+        .filter_map(|l| l.strip_prefix("mod ")?.strip_suffix(';'))
+        .collect();
+    let mut files = BTreeSet::new();
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        let Some(stem) = p.file_stem().and_then(|s| s.to_str()) else {
+            continue;
+        };
+        if p.extension().is_some_and(|e| e == "rs") && stem != "all" {
+            files.insert(stem.to_string());
+        }
+    }
+    let files: BTreeSet<&str> = files.iter().map(String::as_str).collect();
+    assert_eq!(
+        files, declared,
+        "tests/all.rs must declare `mod NAME;` for every tests/NAME.rs (and nothing else)"
+    );
+}
