@@ -3,6 +3,26 @@
 //! Each file under `tests/` is a module here; a new test file gets its `mod` line below. Run one
 //! file's tests with `cargo test --test all NAME::` (e.g. `cargo test --test all plan_ground::`).
 
+// Helpers shared by the test files (each file `use crate::NAME;`).
+#[path = "support/cli.rs"]
+mod cli;
+#[path = "support/data.rs"]
+mod data;
+#[path = "support/geojson.rs"]
+mod geojson;
+#[path = "support/grid_tin.rs"]
+mod grid_tin;
+#[path = "support/mesh.rs"]
+mod mesh;
+#[path = "support/plans.rs"]
+mod plans;
+#[path = "support/remote.rs"]
+mod remote_server;
+#[path = "support/saddle.rs"]
+mod saddle;
+#[path = "support/tin_errors.rs"]
+mod tin_errors;
+
 mod architecture;
 mod bigrid;
 mod breaklines_pipeline;

@@ -3,10 +3,8 @@
 //! simplifier), border vertices shared (a conforming mesh), the same bytes whatever `--threads`
 //! and `--mem`, and a grid of one window simplified exactly as a whole grid.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/grid_tin.rs"]
-mod grid_tin;
+use crate::data;
+use crate::grid_tin;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

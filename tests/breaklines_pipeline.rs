@@ -2,8 +2,7 @@
 //! equals the in-memory CDT whatever the memory budget, real BGT polygons over AHN3 lidar validate
 //! as a CDT, trimming keeps exactly what it should, and bad line input is a clear error.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};

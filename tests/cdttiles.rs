@@ -7,12 +7,9 @@
 //! along a tile edge; the CLI's DEM is the sweep's, byte for byte, for any `--threads` and
 //! `--mem`.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/mesh.rs"]
-mod mesh;
+use crate::cli;
+use crate::data;
+use crate::mesh;
 
 use mesh::{Key, write_las};
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation as _};

@@ -1,7 +1,6 @@
 //! `sweeptin info` end to end, on the real data in `tests/data/lidar` (docs/DATA.md).
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 use data::data_dir;
 
 use std::path::PathBuf;

@@ -1,8 +1,7 @@
 //! `sweeptin tin` on bad input: a clear message naming the file, exit code 3 (bad input data; 2
 //! for a bad option), no output file and no temporary file left behind.
 
-#[path = "support/cli.rs"]
-mod cli;
+use crate::cli;
 use std::path::Path;
 use std::process::Command;
 

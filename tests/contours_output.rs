@@ -2,12 +2,9 @@
 //! digits), lines shorter than `--min-length` left out and counted, GeoPackage output, and the
 //! file's size in the summary; a plan's merge writes the same.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::cli;
+use crate::data;
+use crate::plans;
 
 use cli::ok;
 use serde_json::Value;

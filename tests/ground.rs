@@ -2,8 +2,7 @@
 //! files, the bad-input cases of issue 42 on synthetic points, and the classes' independence of
 //! threads, memory and input files.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 
 use std::path::PathBuf;
 use sweeptin::ground::{

@@ -2,10 +2,8 @@
 //! byte for byte the same for any `--threads` and `--mem`, several files classified together,
 //! the output rules, and the empty file.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
+use crate::cli;
+use crate::data;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

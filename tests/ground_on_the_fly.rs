@@ -2,10 +2,8 @@
 //! `sweeptin ground` then `--class 2`, byte for byte, for any `--threads` and `--mem`; what it
 //! refuses (exit 2).
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
+use crate::cli;
+use crate::data;
 
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};

@@ -4,8 +4,7 @@
 //! Inputs are small: a 50 × 50 grid of XYZ points made here and `startinpy_small.laz` (39,233
 //! points) from the shared data.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -3,8 +3,7 @@
 //! damaged COPC hierarchies, point sets with no triangle or far from 0; through the command line.
 //! docs/RELIABILITY.md lists the cases and these tests.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -2,10 +2,8 @@
 //! against an independent TIN (spade, barycentric on the containing triangle); the canopy
 //! height route `dem --returns first --z-from HeightAboveGround`; `--replace-z`; refusals.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
+use crate::cli;
+use crate::data;
 
 use spade::{DelaunayTriangulation, FloatTriangulation as _, Point2, Triangulation as _};
 use std::collections::{HashMap, HashSet};

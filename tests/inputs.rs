@@ -5,10 +5,8 @@
 //! COPC copies are written at run time by `scripts/make_copc.py` (copclib, independent of
 //! sweeptin); a small one, `tests/data/lidR_Topography.copc.laz`, is committed.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
+use crate::cli;
+use crate::data;
 
 use data::{ign_tiles, shared};
 use std::path::{Path, PathBuf};

@@ -2,8 +2,7 @@
 //! directly, so nothing else in this process registers paths meanwhile), and the real handler in
 //! the binary, interrupted by SIGINT / SIGTERM while it waits on its input.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 
 use std::io::Write;
 use std::path::Path;

@@ -2,8 +2,7 @@
 //! (install: `python3 -m pip install plyfile==1.1.5`). Without Python or the package the test
 //! fails under `CI=true`; locally it prints SKIP and returns.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 
 use std::process::Command;
 use sweeptin::output::{MeshMeta, create_mesh_sink};

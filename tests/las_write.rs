@@ -3,8 +3,7 @@
 //! are seen by laspy, LAS versions 1.0–1.4 and point formats 0/1/3/6/7/8 with extra bytes
 //! round-trip, LAS ↔ LAZ convert, and no output is left on a refusal or an error.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,7 +1,6 @@
 //! LAS/LAZ input on the real data in `tests/data/lidar` (facts from docs/DATA.md).
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 use data::data_dir;
 
 use std::collections::BTreeMap;

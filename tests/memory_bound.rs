@@ -4,11 +4,9 @@
 //! 10⁶ units away). The bound is asserted through the run summary's own peak figures, and the
 //! triangles are checked against spade, an independent exact triangulator.
 
-#[path = "support/mesh.rs"]
-mod mesh;
+use crate::mesh;
 
-#[path = "support/cli.rs"]
-mod cli;
+use crate::cli;
 
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
 use std::io::Write;

@@ -1,11 +1,9 @@
 //! The streaming pipeline against the in-memory core: same triangles whatever the memory budget,
 //! real LAS/LAZ files, and byte-identical outputs.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 
-#[path = "support/mesh.rs"]
-mod mesh;
+use crate::mesh;
 
 use mesh::{Collect, core_keys, write_las};
 use std::path::{Path, PathBuf};

@@ -3,12 +3,9 @@
 //! bit for bit), the same contour polylines and the same volumes as one run over all the points;
 //! empty tasks are not failures; what a plan cannot do exactly is refused.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/mesh.rs"]
-mod mesh;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::data;
+use crate::mesh;
+use crate::plans;
 
 use plans::{bin, cells, ok, plan_extent, records, s, sweeptin};
 use std::path::{Path, PathBuf};

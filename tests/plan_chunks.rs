@@ -2,10 +2,8 @@
 //! of every plain file once, each task decodes only the chunks that meet its tile and buffer,
 //! and the mosaic is still one run's, cell for cell; a damaged index is refused.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::data;
+use crate::plans;
 
 use plans::{bin, cells, plan_extent, records, s, sweeptin};
 use std::path::{Path, PathBuf};

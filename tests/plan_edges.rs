@@ -1,10 +1,8 @@
 //! Plans at their edges: tile sides whose edges are not whole numbers, and a mosaic whose path
 //! reaches the tasks' outputs.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::data;
+use crate::plans;
 
 use plans::{bin, s, sweeptin};
 use std::path::PathBuf;

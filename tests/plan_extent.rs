@@ -3,10 +3,8 @@
 //! or a COG, the same header as a VRT; `--extent tiles` keeps the whole tiles; records of an
 //! older build (without the extent of their points) give the tiles, with a warning.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::data;
+use crate::plans;
 
 use plans::{bin, cells, ok, plan_extent, records, s, sweeptin};
 use std::path::{Path, PathBuf};

@@ -2,10 +2,8 @@
 //! the plan's files does, so the merged DEM is `dem --ground`'s byte for byte, whatever the tile
 //! size; a task run twice writes the same tile.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::data;
+use crate::plans;
 
 use plans::{s, sweeptin};
 use std::path::{Path, PathBuf};

@@ -4,10 +4,8 @@
 //! an edited plan is refused; failed tasks set the exit status and `run --all` says how far it
 //! came; `plan` says what each product writes.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::data;
+use crate::plans;
 
 use plans::{bin, cells, ok, plan_and_run, plan_extent, records, s, sweeptin};
 use std::path::{Path, PathBuf};

@@ -7,16 +7,11 @@
 //! that changed after planning. Lines whose heights disagree are warned of by `plan` as by one
 //! run.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/geojson.rs"]
-mod geojson;
-#[path = "support/mesh.rs"]
-mod mesh;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::cli;
+use crate::data;
+use crate::geojson;
+use crate::mesh;
+use crate::plans;
 
 use plans::{cells, plan_extent, records};
 use std::path::Path;

@@ -3,10 +3,8 @@
 //! the command that runs each again, and `--json` with the same counts — checked in the page's
 //! text and in a headless Chromium's screenshot.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::data;
+use crate::plans;
 
 use plans::{bin, s, sweeptin};
 use std::path::{Path, PathBuf};

@@ -3,8 +3,7 @@
 //! difference against a second surface shrink with N, and the average height error at N = 10000 is
 //! the thesis's 0.057 within sampling noise.
 
-#[path = "support/saddle.rs"]
-mod saddle;
+use crate::saddle;
 
 use saddle::{interpolation_error, points, saddle, tilted, tin, volume, volume_difference};
 

@@ -2,8 +2,7 @@
 //! raster (real LAS data), several products in one pass equal to the separate commands, volumes
 //! from the command line, and clear errors.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 use data::data_dir;
 
 use serde_json::Value;

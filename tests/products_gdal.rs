@@ -5,10 +5,8 @@
 //! Without the GDAL tool (`apt-get install -y gdal-bin`) each test fails under `CI=true`; locally
 //! it is skipped with a message.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
+use crate::cli;
+use crate::data;
 use data::data_dir;
 
 use serde_json::Value;

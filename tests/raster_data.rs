@@ -1,7 +1,6 @@
 //! The grid reader on the real DEMs of `tests/data/dem` (required under CI, skipped locally when absent).
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 use std::path::PathBuf;
 use sweeptin::input::raster::{RasterReader, SampleType};
 

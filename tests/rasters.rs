@@ -3,12 +3,9 @@
 //! `centres`) on real tiles and against IGN's own DTM; plan mosaics (GeoTIFF and COG) equal to
 //! one run with either alignment; `.prj` beside `.asc`; the hillshade's georeferencing.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/plans.rs"]
-mod plans;
+use crate::cli;
+use crate::data;
+use crate::plans;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -15,10 +15,8 @@
 //!   edges: spade's CDT of them holds every output triangle, or a cocircular twin of it (an exact
 //!   in-circle tie), and sweeptin's validator agrees.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/geojson.rs"]
-mod geojson;
+use crate::data;
+use crate::geojson;
 
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation as _};
 use std::collections::HashSet;

@@ -3,10 +3,8 @@
 //! from a URL is byte-identical to the local file's; every fault ends in a complete output or in
 //! an error naming the URL, exit 3, and no output.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/remote.rs"]
-mod remote;
+use crate::data;
+use crate::remote_server as remote;
 
 use remote::{Fault, FaultServer, Moto, Nginx};
 use std::path::{Path, PathBuf};

@@ -2,12 +2,9 @@
 //! pins its version (ETag and size); every task reads its part over HTTP; the mosaic is the
 //! local plan's byte for byte; an object replaced after the plan stops the task that reads it.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/plans.rs"]
-mod plans;
-#[path = "support/remote.rs"]
-mod remote;
+use crate::data;
+use crate::plans;
+use crate::remote_server as remote;
 
 use plans::{bin, plan_and_run, s, sweeptin};
 use remote::{Moto, Nginx};

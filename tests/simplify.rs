@@ -1,10 +1,8 @@
 //! Grid to TIN: the output is checked independently of the simplifier, by rasterising the output
 //! triangles (world coordinates, barycentric interpolation) back onto the grid.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/grid_tin.rs"]
-mod grid_tin;
+use crate::data;
+use crate::grid_tin;
 use grid_tin::Check;
 use std::path::PathBuf;
 use sweeptin::input::raster::RasterReader;

@@ -1,5 +1,4 @@
-#[path = "support/mesh.rs"]
-mod mesh;
+use crate::mesh;
 
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
 use sweeptin::sort::memory::{DuplicatePolicy, prepare};

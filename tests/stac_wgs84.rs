@@ -3,10 +3,8 @@
 //! coordinates. The reference values are PROJ 9's (pyproj 3.7, `Transformer.from_crs(code,
 //! geodetic CRS, always_xy=True)`) for the header boxes' corners.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
+use crate::cli;
+use crate::data;
 
 use serde_json::Value;
 

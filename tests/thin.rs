@@ -3,10 +3,8 @@
 //! the output the Delaunay triangulation of the kept points (spade) or a valid CDT with the
 //! breaklines as edges (the crate's validator), the same bytes for any --mem and --threads.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/tin_errors.rs"]
-mod tin_errors;
+use crate::data;
+use crate::tin_errors;
 
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
 use std::path::{Path, PathBuf};

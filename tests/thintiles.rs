@@ -4,12 +4,9 @@
 //! up to the boundary's), the same bytes for any --mem and --threads, and not many more points
 //! than the global run.
 
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/mesh.rs"]
-mod mesh;
-#[path = "support/tin_errors.rs"]
-mod tin_errors;
+use crate::data;
+use crate::mesh;
+use crate::tin_errors;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

@@ -4,12 +4,9 @@
 //! grow their buffers; and the tiled outputs are the same bytes for any thread count and budget,
 //! with the same DEM and contours as the single sweep.
 
-#[path = "support/cli.rs"]
-mod cli;
-#[path = "support/data.rs"]
-mod data;
-#[path = "support/mesh.rs"]
-mod mesh;
+use crate::cli;
+use crate::data;
+use crate::mesh;
 
 use data::shared;
 use mesh::{Collect, contour_set, core_keys, write_las};

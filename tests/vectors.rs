@@ -2,8 +2,7 @@
 //! same features does (GDAL's `ogr2ogr` writes the copies), give the same mesh, and
 //! `--clip-breaklines` cuts the BGT lines that run outside an AHN3 crop instead of stopping.
 
-#[path = "support/data.rs"]
-mod data;
+use crate::data;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
