@@ -10,11 +10,19 @@
 //! triangles the insertions changed are moved, once per iteration, to the triangles that now
 //! hold them (a walk from their old triangle slot, which insertion never frees: a few steps).
 //! So no candidate is located from afar, nor judged again when nothing it read changed.
+//!
+//! The judging and the walks run on every core: an iteration's dirty triangles (and its
+//! candidates whose mirror moved) are judged in pieces against the TIN as it stands, each
+//! verdict's changes (mirror registrations, ground at a vertex) applied after in list order,
+//! and the moved candidates are walked in pieces. The result is the same for any thread count:
+//! a walk's path never decides, since a point on the edge of two triangles belongs to the one
+//! with the lower slot ([`holder`]).
 
 use super::ptd::{Label, RunStats};
 use super::{GroundParams, Tag};
 use crate::error::{Error, Result};
 use crate::tin::{PointLocation, Tin, TriId, VertexId, planar};
+use rayon::prelude::*;
 
 /// No triangle, no candidate.
 const NONE: u32 = u32::MAX;
@@ -26,8 +34,48 @@ const UNLINKED: u32 = u32::MAX - 1;
 /// iteration inserts at most one point per triangle; real data needs a few dozen).
 const MAX_ITERATIONS: u64 = 10_000;
 
+/// Candidates walked to their new triangles by one task (pieces run on every core when an
+/// iteration moves at least two).
+const WALK_PIECE: usize = 4096;
+
 /// An accepted candidate: `(triangle, distance, input index, point)`.
 type Accepted = (u32, f64, u64, u32);
+
+/// Triangles (or candidates) judged by one task, pieces on every core when an iteration has at
+/// least two.
+const JUDGE_PIECE: usize = 512;
+
+/// What judging a candidate changes, applied once the iteration's judging is done (each
+/// concerns its own candidate, judged once an iteration).
+#[derive(Clone, Copy, Debug)]
+enum Effect {
+    /// Out of its mirror triangle's registrants.
+    Unlink(u32),
+    /// At a real vertex, close enough to it: ground (and out of the registrants).
+    Ground(u32),
+    /// Registered with mirror triangle `.1` (out of the one it was in).
+    Register(u32, u32),
+}
+
+/// The verdicts of a piece of an iteration's judging.
+struct Verdicts {
+    effects: Vec<Effect>,
+    accepted: Vec<Accepted>,
+    evaluations: u64,
+    /// Draws the mirror walks' edge order (the triangle found does not depend on it).
+    rng: u64,
+}
+
+impl Default for Verdicts {
+    fn default() -> Self {
+        Verdicts {
+            effects: Vec::new(),
+            accepted: Vec::new(),
+            evaluations: 0,
+            rng: 0x9E37_79B9_7F4A_7C15,
+        }
+    }
+}
 
 /// The state of one run's densification.
 pub(super) struct Densify<'a> {
@@ -59,10 +107,10 @@ pub(super) struct Densify<'a> {
     reeval: Vec<u32>,
     touched: Vec<TriId>,
     gathered: Vec<u32>,
+    /// The triangle each gathered candidate was found in.
+    found: Vec<u32>,
     accepted: Vec<Accepted>,
     chosen: Vec<(u64, u32)>,
-    /// A bucket's candidates within `max_distance` of its plane: `(distance, point)`.
-    close: Vec<(f64, u32)>,
 }
 
 impl<'a> Densify<'a> {
@@ -96,9 +144,9 @@ impl<'a> Densify<'a> {
             reeval: Vec::new(),
             touched: Vec::new(),
             gathered: Vec::new(),
+            found: Vec::new(),
             accepted: Vec::new(),
             chosen: Vec::new(),
-            close: Vec::new(),
             tin: Tin::default(),
         };
         d.grow_for(&tin);
@@ -106,16 +154,10 @@ impl<'a> Densify<'a> {
         // candidates come cell by cell).
         for &i in cand {
             let p = tin.xy(VertexId((virtuals + i as usize) as u32));
-            let t = match tin.locate(p) {
-                PointLocation::Inside(t) => t,
-                PointLocation::OnEdge(e) => e.tri(),
-                PointLocation::OnVertex(v) => match tin.out_edge(v) {
-                    Some(e) => e.tri(),
-                    None => continue,
-                },
-                PointLocation::Outside(_) => continue,
-            };
-            d.link(i, t.0);
+            let loc = tin.locate(p);
+            if let Some(t) = holder(&tin, loc) {
+                d.link(i, t.0);
+            }
         }
         for t in tin.triangles() {
             d.set_dirty(t.0);
@@ -136,14 +178,14 @@ impl<'a> Densify<'a> {
             + self.mnext.capacity()
             + self.dirty_list.capacity()
             + self.reeval.capacity()
-            + self.gathered.capacity();
+            + self.gathered.capacity()
+            + self.found.capacity();
         self.tin.heap_bytes()
             + u * (per_point + self.head.capacity() + self.mhead.capacity())
             + 8 * self.dirty.capacity()
             + self.touched.capacity() * u
             + self.accepted.capacity() * std::mem::size_of::<Accepted>()
             + self.chosen.capacity() * std::mem::size_of::<(u64, u32)>()
-            + self.close.capacity() * std::mem::size_of::<(f64, u32)>()
     }
 
     /// Bytes the run holds: this densification's, `extra` more, the tags and the labels.
@@ -237,22 +279,18 @@ impl<'a> Densify<'a> {
         let mut chosen = std::mem::take(&mut self.chosen);
         while stats.iterations < MAX_ITERATIONS {
             stats.iterations += 1;
-            // Judge the candidates of the dirty triangles, then those whose mirror moved.
+            // Judge the candidates of the dirty triangles, and those whose mirror moved (their
+            // own triangles not dirty), all against the TIN as it is, on every core; then apply
+            // what the verdicts change (each concerns its own candidate).
             accepted.clear();
             let dirty = std::mem::take(&mut self.dirty_list);
-            for &t in &dirty {
-                if !self.tin.is_live(TriId(t)) {
-                    continue;
-                }
-                self.judge(t, None, &mut accepted, stats);
-            }
             let reeval = std::mem::take(&mut self.reeval);
-            for &i in &reeval {
-                let t = self.tri[i as usize];
-                if self.labels[i as usize] != Label::Other || self.is_dirty(t) {
-                    continue;
-                }
-                self.judge(t, Some(i), &mut accepted, stats);
+            let mut verdicts = self.judge_all(&dirty, None);
+            verdicts.extend(self.judge_all(&reeval, Some(())));
+            for v in verdicts {
+                stats.evaluations += v.evaluations;
+                accepted.extend_from_slice(&v.accepted);
+                self.apply(&v.effects);
             }
             for &t in &dirty {
                 self.clear_dirty(t);
@@ -297,6 +335,7 @@ impl<'a> Densify<'a> {
             trim(&mut accepted);
             trim(&mut chosen);
             trim(&mut self.gathered);
+            trim(&mut self.found);
             trim(&mut self.touched);
             trim(&mut self.dirty_list);
             trim(&mut self.reeval);
@@ -309,39 +348,78 @@ impl<'a> Densify<'a> {
         Ok(())
     }
 
+    /// Judges the jobs of a list on every core (in pieces, when it is long): `jobs` are dirty
+    /// triangles (`single` none: each live one's whole bucket) or candidates whose mirror
+    /// triangle changed (`single`: each alone, unless it is no longer a candidate or its own
+    /// triangle is dirty, then judged with it). The verdicts come back in the list's order.
+    fn judge_all(&self, jobs: &[u32], single: Option<()>) -> Vec<Verdicts> {
+        let piece = |jobs: &[u32]| {
+            let mut v = Verdicts::default();
+            let mut close = Vec::new();
+            for &j in jobs {
+                match single {
+                    None if self.tin.is_live(TriId(j)) => self.judge(j, None, &mut v, &mut close),
+                    None => {}
+                    Some(()) => {
+                        let t = self.tri[j as usize];
+                        if self.labels[j as usize] == Label::Other && !self.is_dirty(t) {
+                            self.judge(t, Some(j), &mut v, &mut close);
+                        }
+                    }
+                }
+            }
+            v
+        };
+        if jobs.len() < 2 * JUDGE_PIECE {
+            vec![piece(jobs)]
+        } else {
+            jobs.par_chunks(JUDGE_PIECE).map(piece).collect()
+        }
+    }
+
+    /// Applies the verdicts' changes to the candidates' mirror registrations and labels.
+    fn apply(&mut self, effects: &[Effect]) {
+        for &e in effects {
+            match e {
+                Effect::Unlink(i) => self.munlink(i),
+                Effect::Ground(i) => {
+                    self.munlink(i);
+                    self.labels[i as usize] = Label::Ground;
+                }
+                Effect::Register(i, mt) => {
+                    self.munlink(i);
+                    self.mlink(i, mt);
+                }
+            }
+        }
+    }
+
     /// Judges the candidates of triangle `t`'s bucket (`only`: just that one, whose mirror
     /// triangle changed); a candidate at a vertex of the TIN is ground at once when close
-    /// enough to it. Of a whole bucket only the best accepted candidate goes to `accepted`
+    /// enough to it. Of a whole bucket only the best accepted candidate goes to the verdicts
     /// (closest to the plane, ties by the lower input index: the one the iteration inserts),
     /// so the candidates within `max_distance` are tried from the closest and the angles (and
     /// the mirror) are measured only until one is accepted: the others need no answer now, as
     /// the insertion changes `t` and they are all judged again in the next iteration.
-    fn judge(
-        &mut self,
-        t: u32,
-        only: Option<u32>,
-        accepted: &mut Vec<Accepted>,
-        stats: &mut RunStats,
-    ) {
+    fn judge(&self, t: u32, only: Option<u32>, out: &mut Verdicts, close: &mut Vec<(f64, u32)>) {
         let vs = self.tin.tri_vertices(TriId(t));
         let corners = vs.map(|v| self.tin.point(v));
         let plane = Plane::new(corners);
         if let Some(i) = only {
-            stats.evaluations += 1;
-            if let Some(d) = self.distance(i, vs, &corners, &plane)
-                && self.accepts(i, t, vs, &corners, d, true)
+            out.evaluations += 1;
+            if let Some(d) = self.distance(i, vs, &corners, &plane, out)
+                && self.accepts(i, t, vs, &corners, d, true, out)
             {
-                accepted.push((t, d, self.id(i), i));
+                out.accepted.push((t, d, self.id(i), i));
             }
             return;
         }
-        let mut close = std::mem::take(&mut self.close);
         close.clear();
         let mut i = self.head[t as usize];
         while i != NONE {
             if self.labels[i as usize] == Label::Other {
-                stats.evaluations += 1;
-                if let Some(d) = self.distance(i, vs, &corners, &plane) {
+                out.evaluations += 1;
+                if let Some(d) = self.distance(i, vs, &corners, &plane, out) {
                     close.push((d, i));
                 }
             }
@@ -349,38 +427,62 @@ impl<'a> Densify<'a> {
         }
         let tags = self.tags;
         let id = |i: u32| Tag(tags[i as usize]).index();
-        close.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(id(a.1).cmp(&id(b.1))));
-        for &(d, i) in &close {
-            if self.accepts(i, t, vs, &corners, d, false) {
-                accepted.push((t, d, id(i), i));
+        let order =
+            |a: &(f64, u32), b: &(f64, u32)| a.0.total_cmp(&b.0).then(id(a.1).cmp(&id(b.1)));
+        // The closest is usually accepted: picked by a scan; after a few refusals, the rest sorted.
+        let mut tries = 0;
+        while !close.is_empty() {
+            let k = if tries < 4 {
+                (0..close.len())
+                    .min_by(|&a, &b| order(&close[a], &close[b]))
+                    .unwrap_or(0)
+            } else {
+                if tries == 4 {
+                    close.sort_unstable_by(|a, b| order(b, a));
+                }
+                close.len() - 1
+            };
+            let (d, i) = close.swap_remove(k);
+            if self.accepts(i, t, vs, &corners, d, false, out) {
+                out.accepted.push((t, d, id(i), i));
                 break;
             }
+            tries += 1;
         }
-        self.close = close;
+    }
+
+    /// Takes `i` out of its mirror triangle's registrants (after the judging), if it is one.
+    #[inline]
+    fn unlink(&self, i: u32, out: &mut Verdicts) {
+        if self.mnext[i as usize] != UNLINKED {
+            out.effects.push(Effect::Unlink(i));
+        }
     }
 
     /// The distance of candidate `i` to the plane of its triangle when at most
     /// `max_distance`; `None` (and no mirror registration) otherwise, or when `i` lies at a
     /// corner (then it is ground when close enough to a real one).
     fn distance(
-        &mut self,
+        &self,
         i: u32,
         vs: [VertexId; 3],
         corners: &[[f64; 3]; 3],
         plane: &Plane,
+        out: &mut Verdicts,
     ) -> Option<f64> {
         let p = self.tin.point(self.vid(i));
         if let Some(k) = (0..3).find(|&k| corners[k][0] == p[0] && corners[k][1] == p[1]) {
-            self.munlink(i);
             let d = (p[2] - corners[k][2]).abs();
             if d <= self.max_distance && (vs[k].0 as usize) >= self.virtuals {
-                self.labels[i as usize] = Label::Ground;
+                out.effects.push(Effect::Ground(i));
+            } else {
+                self.unlink(i, out);
             }
             return None;
         }
         let d = plane.distance(p, self.max_distance);
         if d.is_none() {
-            self.munlink(i);
+            self.unlink(i, out);
         }
         d
     }
@@ -389,22 +491,24 @@ impl<'a> Densify<'a> {
     /// or else its mirror point's test? `same_mirror`: the triangle has not changed since `i`'s
     /// mirror point was last located (so the mirror point is the same, and its last triangle
     /// is the walk's start).
+    #[allow(clippy::too_many_arguments)]
     fn accepts(
-        &mut self,
+        &self,
         i: u32,
         t: u32,
         vs: [VertexId; 3],
         corners: &[[f64; 3]; 3],
         d: f64,
         same_mirror: bool,
+        out: &mut Verdicts,
     ) -> bool {
         let p = self.tin.point(self.vid(i));
         if !Plane::steep(corners, p, d, self.sin_max) {
-            self.munlink(i);
+            self.unlink(i, out);
             return true;
         }
         if !self.mirror {
-            self.munlink(i);
+            self.unlink(i, out);
             return false;
         }
         // Steep: mirror through the nearest real vertex (ties: the lower vertex id), and test
@@ -417,9 +521,9 @@ impl<'a> Densify<'a> {
             })
             .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         match near {
-            Some((_, _, k)) => self.mirror_accepts(i, t, corners[k], p, same_mirror),
+            Some((_, _, k)) => self.mirror_accepts(i, t, corners[k], p, same_mirror, out),
             None => {
-                self.munlink(i);
+                self.unlink(i, out);
                 false
             }
         }
@@ -428,7 +532,15 @@ impl<'a> Densify<'a> {
     /// The mirror test of candidate `i` (in triangle `t`) through corner `c`; registers `i`
     /// with the triangle under the mirror point. The walk starts from the mirror point's last
     /// triangle when it is the same point (`same`), else from `t`.
-    fn mirror_accepts(&mut self, i: u32, t: u32, c: [f64; 3], p: [f64; 3], same: bool) -> bool {
+    fn mirror_accepts(
+        &self,
+        i: u32,
+        t: u32,
+        c: [f64; 3],
+        p: [f64; 3],
+        same: bool,
+        out: &mut Verdicts,
+    ) -> bool {
         let m = [2.0 * c[0] - p[0], 2.0 * c[1] - p[1], 2.0 * c[2] - p[2]];
         let last = self.mtri[i as usize];
         let from = if same && last != NONE && self.tin.is_live(TriId(last)) {
@@ -436,17 +548,17 @@ impl<'a> Densify<'a> {
         } else {
             t
         };
-        let mt = match self.tin.locate_from(TriId(from), [m[0], m[1]]) {
-            PointLocation::Inside(mt) => mt,
-            PointLocation::OnEdge(e) => e.tri(),
-            _ => {
-                self.munlink(i);
-                return false;
-            }
+        let loc = self.tin.walk_from(TriId(from), [m[0], m[1]], &mut out.rng);
+        let mt = match loc {
+            PointLocation::Inside(_) | PointLocation::OnEdge(_) => holder(&self.tin, loc),
+            _ => None,
+        };
+        let Some(mt) = mt else {
+            self.unlink(i, out);
+            return false;
         };
         if self.mnext[i as usize] == UNLINKED || last != mt.0 {
-            self.munlink(i);
-            self.mlink(i, mt.0);
+            out.effects.push(Effect::Register(i, mt.0));
         }
         let corners = self.tin.tri_vertices(mt).map(|v| self.tin.point(v));
         Plane::new(corners).accepts(&corners, m, self.max_distance, self.sin_max)
@@ -499,27 +611,42 @@ impl<'a> Densify<'a> {
                 self.dirty_list.push(t);
             }
         }
-        // In memory order (spatial, see `ptd::spatial_order`): each walk starts near the last.
+        // In memory order (spatial, see `ptd::spatial_order`), walks from the slot each was in
+        // (near), pieces on every core: the triangle found does not depend on the walk's path.
         gathered.sort_unstable();
-        for &i in &gathered {
-            let p = self.tin.xy(self.vid(i));
-            let from = TriId(self.tri[i as usize]);
-            let t = match self.tin.locate_from(from, p) {
-                PointLocation::Inside(t) => Some(t),
-                PointLocation::OnEdge(e) => Some(e.tri()),
-                PointLocation::OnVertex(v) => self.tin.out_edge(v).map(|e| e.tri()),
-                PointLocation::Outside(_) => None,
-            };
-            let Some(t) = t else {
+        let mut found = std::mem::take(&mut self.found);
+        found.clear();
+        let (tin, tri, virtuals) = (&self.tin, &self.tri, self.virtuals as u32);
+        found.resize(gathered.len(), NONE);
+        let walk = |piece: &[u32], out: &mut [u32]| {
+            let mut rng = 0x9E37_79B9_7F4A_7C15_u64;
+            for (&i, t) in piece.iter().zip(out) {
+                let p = tin.xy(VertexId(virtuals + i));
+                let loc = tin.walk_from(TriId(tri[i as usize]), p, &mut rng);
+                *t = holder(tin, loc).map_or(NONE, |t| t.0);
+            }
+        };
+        if gathered.len() < 2 * WALK_PIECE {
+            walk(&gathered, &mut found);
+        } else {
+            gathered
+                .par_chunks(WALK_PIECE)
+                .zip(found.par_chunks_mut(WALK_PIECE))
+                .for_each(|(piece, out)| walk(piece, out));
+        }
+        for (&i, &t) in gathered.iter().zip(&found) {
+            if t == NONE {
+                let p = self.tin.xy(self.vid(i));
                 return Err(Error::Internal(format!(
                     "ground: point {} ({}, {}) left the ground TIN",
                     self.id(i),
                     p[0],
                     p[1]
                 )));
-            };
-            self.link(i, t.0);
+            }
+            self.link(i, t);
         }
+        self.found = found;
         self.gathered = gathered;
         self.touched = touched;
         Ok(())
@@ -542,6 +669,21 @@ impl<'a> Densify<'a> {
                 self.labels[i] = Label::LowNoise;
             }
         }
+    }
+}
+
+/// The triangle whose bucket holds a point found at `loc`: the one containing it; on an edge,
+/// the one of its two triangles with the lower slot (whichever the walk reached); at a vertex,
+/// the triangle of the vertex's out-edge; none outside.
+fn holder(tin: &Tin, loc: PointLocation) -> Option<TriId> {
+    match loc {
+        PointLocation::Inside(t) => Some(t),
+        PointLocation::OnEdge(e) => Some(match tin.twin(e) {
+            Some(f) => e.tri().min(f.tri()),
+            None => e.tri(),
+        }),
+        PointLocation::OnVertex(v) => tin.out_edge(v).map(|e| e.tri()),
+        PointLocation::Outside(_) => None,
     }
 }
 

@@ -18,7 +18,9 @@
 //!    is tested against the triangle under the mirror point (the paper's mirroring for steep
 //!    edges). Per triangle the accepted candidate closest to the plane (ties: lower input index)
 //!    is inserted; an iteration decides every triangle against the TIN of the previous one, and
-//!    the densification stops when an iteration inserts nothing. A candidate is judged again
+//!    the densification stops when an iteration inserts nothing. A point on the edge of two
+//!    triangles (itself, or its mirror point) belongs to the one of lower slot in the TIN
+//!    (slots follow from the insertions, so from the input alone). A candidate is judged again
 //!    only when a triangle its test read has changed (its answer cannot change otherwise).
 //! 5. **The final TIN**: a point left over within `offset` (vertically) of the final ground TIN
 //!    is ground too (densification stops in small triangles, where a few centimetres of noise

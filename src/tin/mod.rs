@@ -493,13 +493,6 @@ impl Tin {
         side == CircleSide::Inside
     }
 
-    fn next_random(&mut self) -> u64 {
-        // xorshift64*: only to vary which edge a walk tries first (no effect on the result).
-        self.rng ^= self.rng >> 12;
-        self.rng ^= self.rng << 25;
-        self.rng ^= self.rng >> 27;
-        self.rng.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
 
     /// Makes the next walk start from triangle `t` (a triangle near the next query point makes
     /// [`Tin::locate`], [`Tin::insert`] and [`Tin::restore`] fast).
@@ -522,9 +515,27 @@ impl Tin {
     /// Locates `p` by a visibility walk from triangle `start` (randomised: terminates on any
     /// triangulation, constrained or not).
     pub fn locate_from(&mut self, start: TriId, p: [f64; 2]) -> PointLocation {
+        let mut rng = self.rng;
+        let (loc, last) = self.walk(start, p, &mut rng);
+        self.rng = rng;
+        if let Some(t) = last {
+            self.hint = t.0;
+        }
+        loc
+    }
+
+    /// As [`Tin::locate_from`] without changing the TIN, the walk's edge order drawn from `rng`
+    /// (any seed: it changes only which of two triangles a point on their common edge is
+    /// reported in), so that many walks can run at once on several threads.
+    pub fn walk_from(&self, start: TriId, p: [f64; 2], rng: &mut u64) -> PointLocation {
+        self.walk(start, p, rng).0
+    }
+
+    /// The visibility walk, and the triangle it ended in (none when it ended on a vertex).
+    fn walk(&self, start: TriId, p: [f64; 2], rng: &mut u64) -> (PointLocation, Option<TriId>) {
         let mut e0 = start.edge();
         'walk: loop {
-            let r = (self.next_random() % 3) as u32;
+            let r = (xorshift(rng) % 3) as u32;
             let first = EdgeId(e0.0 - e0.0 % 3 + r);
             let mut on_edge = None;
             let mut e = first;
@@ -536,17 +547,14 @@ impl Tin {
                             e0 = t;
                             continue 'walk;
                         }
-                        None => {
-                            self.hint = e.tri().0;
-                            return PointLocation::Outside(e);
-                        }
+                        None => return (PointLocation::Outside(e), Some(e.tri())),
                     },
                     Orientation::Collinear => {
                         if self.p(a) == p {
-                            return PointLocation::OnVertex(a);
+                            return (PointLocation::OnVertex(a), None);
                         }
                         if self.p(b) == p {
-                            return PointLocation::OnVertex(b);
+                            return (PointLocation::OnVertex(b), None);
                         }
                         on_edge = Some(e);
                     }
@@ -554,11 +562,11 @@ impl Tin {
                 }
                 e = e.next();
             }
-            self.hint = e.tri().0;
-            return match on_edge {
+            let loc = match on_edge {
                 Some(e) => PointLocation::OnEdge(e),
                 None => PointLocation::Inside(e.tri()),
             };
+            return (loc, Some(e.tri()));
         }
     }
 
@@ -595,6 +603,15 @@ impl Tin {
         }
         g
     }
+}
+
+/// xorshift64*: only to vary which edge a walk tries first (the walk ends in the same place
+/// whatever it draws, but for a point on an edge, which of its two triangles).
+fn xorshift(rng: &mut u64) -> u64 {
+    *rng ^= *rng >> 12;
+    *rng ^= *rng << 25;
+    *rng ^= *rng >> 27;
+    rng.wrapping_mul(0x2545_F491_4F6C_DD1D)
 }
 
 /// Height at `p` of the plane through `a, b, c` (floating point; `a, b, c` not collinear).
