@@ -613,7 +613,7 @@ impl<'a> Densify<'a> {
         }
         // In memory order (spatial, see `ptd::spatial_order`), walks from the slot each was in
         // (near), pieces on every core: the triangle found does not depend on the walk's path.
-        gathered.sort_unstable();
+        gathered.par_sort_unstable();
         let mut found = std::mem::take(&mut self.found);
         found.clear();
         let (tin, tri, virtuals) = (&self.tin, &self.tri, self.virtuals as u32);

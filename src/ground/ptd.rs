@@ -35,6 +35,7 @@ use super::{GroundParams, Tag};
 use crate::error::{Error, Result};
 use crate::tiles::grid::TileGrid;
 use crate::tin::{Tin, VertexId};
+use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// What the run decided for a point.
@@ -90,7 +91,8 @@ pub(crate) fn classify_run(
     if order.is_empty() {
         return Ok(stats);
     }
-    order.sort_unstable_by(|a, b| {
+    // Every key is distinct (the input index last): the same order on any number of cores.
+    order.par_sort_unstable_by(|a, b| {
         (a.0, a.1)
             .cmp(&(b.0, b.1))
             .then(pts[a.2 as usize][2].total_cmp(&pts[b.2 as usize][2]))
@@ -210,7 +212,7 @@ pub(crate) fn spatial_order(pts: &mut Vec<[f64; 3]>, tags: &mut Vec<u64>, rect: 
             (spread(x) | (spread(y) << 1), i as u32)
         })
         .collect();
-    keys.sort_unstable();
+    keys.par_sort_unstable();
     *pts = keys.iter().map(|&(_, i)| pts[i as usize]).collect();
     *tags = keys.iter().map(|&(_, i)| tags[i as usize]).collect();
 }
