@@ -120,6 +120,30 @@ fn all_points_at_one_height_are_ground() {
 }
 
 #[test]
+fn a_point_1000_km_away_changes_no_other_class_and_costs_no_memory() {
+    // A GPS glitch far from the tile: blocks are local, so the others' classes are those
+    // without it, and the run stays small (no grid spans the gap: a far point is a block of
+    // its own, ground as a lone point is).
+    let (mut pts, _) = terrain(120.0, 90.0, &[[30.0, 30.0, 50.0, 45.0, 8.0]], 11);
+    let alone = run(&pts, &vec![0; pts.len()], &GroundParams::default());
+    let far = [pts[0][0] + 1.0e6, pts[0][1] - 1.0e6, pts[0][2] + 300.0];
+    pts.insert(pts.len() / 2, far);
+    let mem = 16 << 20;
+    let with = classify(
+        &pts,
+        &vec![0; pts.len()],
+        &vec![false; pts.len()],
+        &GroundParams::default(),
+        mem,
+    )
+    .unwrap();
+    let mut without = with.clone();
+    let lone = without.remove(pts.len() / 2);
+    assert_eq!(without, alone);
+    assert_eq!(lone, 2);
+}
+
+#[test]
 fn points_only_on_a_roof_are_ground_when_nothing_is_lower() {
     // A roof alone (no ground within --step): the filter cannot know it is a roof; documented.
     let (pts, _) = terrain(15.0, 15.0, &[[-1.0, -1.0, 16.0, 16.0, 10.0]], 3);
