@@ -136,12 +136,18 @@ pub const SECRET: &str = "testsecret";
 impl Moto {
     /// Starts `moto_server`, or `None` (locally) when it is not installed.
     pub fn start(test: &str) -> Option<Moto> {
+        Moto::start_with(test, &[])
+    }
+
+    /// Starts `moto_server` with `env` (its settings: `S3_UPLOAD_PART_MIN_SIZE`…).
+    pub fn start_with(test: &str, env: &[(&str, &str)]) -> Option<Moto> {
         if !data::tool("moto_server", test) || !data::python(&["boto3"], test) {
             return None;
         }
         let port = free_port();
         let mut child = Command::new("moto_server")
             .args(["-H", "127.0.0.1", "-p", &port.to_string()])
+            .envs(env.iter().copied())
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
@@ -191,6 +197,33 @@ impl Moto {
         ))
         .status
         .success()
+    }
+
+    /// Makes the bucket `bucket`, with boto3.
+    pub fn make_bucket(&self, bucket: &str) {
+        let o = self.boto(&format!("s3.create_bucket(Bucket='{bucket}')\n"));
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+
+    /// The ETag of `s3://bucket/key` (`"HEX-N"` for an object uploaded in N parts), `None`
+    /// when there is no such object.
+    pub fn etag(&self, bucket: &str, key: &str) -> Option<String> {
+        let o = self.boto(&format!(
+            "try:\n    print(s3.head_object(Bucket='{bucket}', Key='{key}')['ETag'])\n\
+             except Exception as x:\n    print(x, file=sys.stderr); sys.exit(1)\n"
+        ));
+        o.status
+            .success()
+            .then(|| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    }
+
+    /// The multipart uploads of `bucket` begun and neither completed nor aborted.
+    pub fn pending_uploads(&self, bucket: &str) -> usize {
+        let o = self.boto(&format!(
+            "print(len(s3.list_multipart_uploads(Bucket='{bucket}').get('Uploads', [])))\n"
+        ));
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).trim().parse().unwrap()
     }
 
     /// The environment a run needs to reach this server with the tests' credentials.
