@@ -152,3 +152,58 @@ fn missing_output_bucket_is_refused_before_any_input_is_read() {
     assert_eq!(moto.etag("out", "topo.tif"), None);
     no_temporary_file(tmp.path());
 }
+
+/// Ctrl-C while a multipart upload is under way (its second part unanswered): the process
+/// aborts the upload (a `DELETE …?uploadId=…`, so that no part stays stored) and deletes its
+/// temporary file, exit 130. (The parts stayed stored, billed, until a lifecycle rule.)
+#[test]
+fn interrupted_multipart_upload_is_aborted() {
+    let s3 = remote::FakeS3::start(2);
+    let tmp = tempfile::tempdir().unwrap();
+    let env = [
+        ("AWS_ENDPOINT_URL", s3.endpoint()),
+        ("AWS_ACCESS_KEY_ID", remote::KEY.to_string()),
+        ("AWS_SECRET_ACCESS_KEY", remote::SECRET.to_string()),
+        ("AWS_REGION", "us-east-1".to_string()),
+        ("SWEEPTIN_S3_PART_SIZE", PART.to_string()),
+        ("TMPDIR", tmp.path().to_str().unwrap().to_string()),
+    ];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .args(["dem", laz().to_str().unwrap(), "--cell", "1", "-q"])
+        .args(["-o", "s3://out/topo.tif"])
+        .envs(env.iter().map(|(k, v)| (*k, v.as_str())))
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !s3.requests().iter().any(|r| r.contains("partNumber=2")) {
+        if start.elapsed() > Duration::from_secs(120) {
+            let _ = child.kill();
+            panic!(
+                "the upload did not reach its second part: {:?}",
+                s3.requests()
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let killed = Command::new("kill")
+        .arg("-INT")
+        .arg(child.id().to_string())
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    let aborts: Vec<String> = s3
+        .requests()
+        .into_iter()
+        .filter(|r| r.starts_with("DELETE") && r.contains("uploadId=up1"))
+        .collect();
+    assert_eq!(aborts.len(), 1, "{:?}", s3.requests());
+    assert!(
+        stderr(&o).contains("aborted 1 upload(s) to S3"),
+        "{}",
+        stderr(&o)
+    );
+    no_temporary_file(tmp.path());
+}

@@ -292,6 +292,18 @@ pub(super) fn send(
     })
 }
 
+/// One `DELETE` of `url`, waiting at most `wait` in all, not retried (an interrupted process
+/// aborting its uploads): whether the server answered with a success.
+pub(super) fn delete_once(url: &str, wait: Duration) -> bool {
+    agent()
+        .delete(url)
+        .config()
+        .timeout_global(Some(wait))
+        .build()
+        .call()
+        .is_ok_and(|r| r.status().is_success())
+}
+
 impl Http {
     /// Opens `name` (the URL as given; `url` makes each request's URL when it differs, as for
     /// S3): one request for byte 0 tells the size, the identity and whether ranges work.

@@ -168,6 +168,13 @@ pub fn upload(name: &Path, file: &std::fs::File, len: u64) -> Result<()> {
     Ok(())
 }
 
+/// Aborts the multipart uploads of this process still in progress (it is being interrupted):
+/// the server deletes their stored parts. Waits a few seconds at most for each; returns how
+/// many were aborted.
+pub fn abort_uploads() -> usize {
+    s3::abort_pending()
+}
+
 /// Checks, before a run's work, that the remote output `name` can be written: an `s3://`
 /// object's bucket exists and its endpoint answers (once per bucket in a process). An access
 /// denied to the check passes (credentials may put objects without listing them): the upload

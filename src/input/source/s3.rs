@@ -12,7 +12,8 @@ use super::http::{Http, Payload, Verb, send};
 use rusty_s3::{Bucket, Credentials, S3Action, UrlStyle};
 use std::io;
 use std::path::PathBuf;
-use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 fn var(name: &str) -> Option<String> {
@@ -182,6 +183,7 @@ pub(super) fn put(
         key,
     };
     let id = upload.create()?;
+    let _pending = Pending::register(&upload, &id);
     let part = part.max(len.div_ceil(MAX_PARTS));
     match upload.parts(&id, file, len, part) {
         Ok(()) => Ok(()),
@@ -323,6 +325,59 @@ impl Multipart<'_> {
         .map(drop)
     }
 }
+
+/// The multipart uploads in progress in this process, by a serial number: what an
+/// interruption aborts ([`abort_pending`]). Each is the signed `DELETE` of its abort, made
+/// afresh when needed (an upload may outlast a signature).
+type AbortFn = Box<dyn Fn() -> String + Send>;
+
+fn pending() -> &'static Mutex<Vec<(u64, AbortFn)>> {
+    static PENDING: Mutex<Vec<(u64, AbortFn)>> = Mutex::new(Vec::new());
+    &PENDING
+}
+
+/// An upload registered in [`pending`] while it lives.
+struct Pending(u64);
+
+impl Pending {
+    fn register(upload: &Multipart<'_>, id: &str) -> Pending {
+        static NEXT: AtomicU64 = AtomicU64::new(0);
+        let serial = NEXT.fetch_add(1, Ordering::Relaxed);
+        let (bucket, creds) = (upload.bucket.clone(), upload.creds.cloned());
+        let (key, id) = (upload.key.to_string(), id.to_string());
+        let abort: AbortFn = Box::new(move || {
+            bucket
+                .abort_multipart_upload(creds.as_ref(), &key, &id)
+                .sign(SIGNED_FOR)
+                .to_string()
+        });
+        lock(pending()).push((serial, abort));
+        Pending(serial)
+    }
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        lock(pending()).retain(|(s, _)| *s != self.0);
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Aborts the multipart uploads in progress (the process is being interrupted): one `DELETE`
+/// each, waiting a few seconds at most, so that no part stays stored; returns how many the
+/// server aborted.
+pub(super) fn abort_pending() -> usize {
+    let urls: Vec<String> = lock(pending()).iter().map(|(_, f)| f()).collect();
+    urls.iter()
+        .filter(|url| super::http::delete_once(url, ABORT_WAIT))
+        .count()
+}
+
+/// How long an interrupted process waits for an abort's answer.
+const ABORT_WAIT: Duration = Duration::from_secs(5);
 
 /// The text of the first `<tag>` of an XML answer, unescaped.
 fn xml_text(body: &str, tag: &str) -> Option<String> {
