@@ -139,9 +139,10 @@ const MULTIPART_FROM_PARTS: u64 = 4;
 /// small files in several parts (S3 refuses parts under 5 MiB but the last).
 const PART: u64 = 16 << 20;
 
-/// S3's limits: parts in one upload, and the size of one object.
+/// S3's limits: parts in one upload, the size of one object and of one `PUT`.
 const MAX_PARTS: u64 = 10_000;
 const MAX_OBJECT: u64 = 5 << 40;
+const MAX_PUT: u64 = 5 << 30;
 
 fn part_size() -> u64 {
     var("SWEEPTIN_S3_PART_SIZE")
@@ -167,7 +168,7 @@ pub(super) fn put(
     }
     let (bucket, creds) = address(bucket, key)?;
     let part = part_size();
-    if len <= MULTIPART_FROM_PARTS * part {
+    if len <= MULTIPART_FROM_PARTS.saturating_mul(part).min(MAX_PUT) {
         let url = bucket.put_object(creds.as_ref(), key).sign(SIGNED_FOR);
         let payload = Payload::File {
             file,
@@ -184,7 +185,7 @@ pub(super) fn put(
     };
     let id = upload.create()?;
     let _pending = Pending::register(&upload, &id);
-    let part = part.max(len.div_ceil(MAX_PARTS));
+    let part = part.max(len.div_ceil(MAX_PARTS)).min(MAX_PUT);
     match upload.parts(&id, file, len, part) {
         Ok(()) => Ok(()),
         Err(e) => match upload.abort(&id) {
