@@ -66,6 +66,7 @@ mod rasters;
 mod refine;
 mod regressions;
 mod remote;
+mod remote_outputs;
 mod remote_plans;
 mod simplify;
 mod smoke;

@@ -1,4 +1,5 @@
-//! Interruptions: Ctrl-C (SIGINT), SIGTERM and SIGHUP delete every registered temporary path
+//! Interruptions: Ctrl-C (SIGINT), SIGTERM and SIGHUP abort the multipart uploads to S3 in
+//! progress ([`crate::input::source::abort_uploads`]), delete every registered temporary path
 //! ([`super::atomic::register_temp`]), pass the signal on to the child processes started with
 //! [`spawn_child`] (a plan's `run --all` runs each task in one) and wait for them, then exit with
 //! 128 + the signal's number.
@@ -145,6 +146,8 @@ pub fn install_interrupt_handler() -> Result<()> {
             .spawn(move || {
                 if let Some(signal) = signals.forever().next() {
                     stop_children(signal);
+                    // Before the temporary files: an upload's parts are read from one.
+                    let aborted = crate::input::source::abort_uploads();
                     let removed = cleanup_registered_temps();
                     let name = match signal {
                         SIGINT => "SIGINT",
@@ -152,9 +155,14 @@ pub fn install_interrupt_handler() -> Result<()> {
                         _ => "SIGHUP",
                     };
                     // Never a panic here (a closed terminal after SIGHUP): the exit must come.
+                    let uploads = match aborted {
+                        0 => String::new(),
+                        n => format!(", aborted {n} upload(s) to S3"),
+                    };
                     let _ = writeln!(
                         io::stderr(),
-                        "sweeptin: interrupted by {name}; removed {removed} temporary file(s)"
+                        "sweeptin: interrupted by {name}; removed {removed} temporary \
+                         file(s){uploads}"
                     );
                     std::process::exit(128 + signal);
                 }

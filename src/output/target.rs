@@ -7,7 +7,7 @@
 //! | a symbolic link | followed (links to links too): its **target** is replaced as above, the link stays; a dangling link's target is created |
 //! | a FIFO, a character device (`/dev/null`, a terminal), `-` (standard output), `/dev/stdout`, `/dev/stderr` | written directly, as the bytes are produced ([`Destination::Stream`]); formats that need seeking (GeoTIFF) refuse it |
 //! | a directory, a block device, a socket | refused: an output never replaces them |
-//! | `s3://bucket/key` | a temporary file in the system's temporary directory, uploaded in one `PUT` when complete ([`Destination::Object`]): the object appears whole or not at all |
+//! | `s3://bucket/key` | its bucket checked before the work ([`check_output`]); a temporary file in the system's temporary directory, uploaded when complete (one `PUT`, or a multipart upload above 64 MiB) ([`Destination::Object`]): the object appears whole or not at all |
 //! | `http://…`, `https://…` | refused: outputs go to files or S3 objects |
 //!
 //! Temporary files are named `.NAME.sweeptin-HOST.PID-XXXXXX.tmp` ([`temp_prefix`]). A run that
@@ -194,14 +194,18 @@ pub fn scratch_dir(path: &Path) -> PathBuf {
 }
 
 /// Fails early (before any heavy work) if an output cannot be created at `path`: a directory,
-/// block device or socket in the way ([`Destination::of`]), or a missing directory. Streams
-/// pass.
+/// block device or socket in the way ([`Destination::of`]), a missing directory, an `s3://`
+/// object's missing bucket or silent endpoint (one `HEAD` on the bucket,
+/// [`crate::input::source::check_destination`]). Streams pass.
 ///
 /// # Errors
-/// [`Error::Output`] for what is in the way, [`Error::Write`] for a missing directory.
+/// [`Error::Output`] for what is in the way, [`Error::Write`] for a missing directory or
+/// bucket.
 pub fn check_output(path: &Path) -> Result<()> {
-    let Destination::File { target, .. } = Destination::of(path)? else {
-        return Ok(());
+    let target = match Destination::of(path)? {
+        Destination::File { target, .. } => target,
+        Destination::Object { url } => return crate::input::source::check_destination(&url),
+        Destination::Stream { .. } => return Ok(()),
     };
     let dir = super::atomic::parent_dir(&target);
     if !dir.is_dir() {

@@ -136,12 +136,18 @@ pub const SECRET: &str = "testsecret";
 impl Moto {
     /// Starts `moto_server`, or `None` (locally) when it is not installed.
     pub fn start(test: &str) -> Option<Moto> {
+        Moto::start_with(test, &[])
+    }
+
+    /// Starts `moto_server` with `env` (its settings: `S3_UPLOAD_PART_MIN_SIZE`…).
+    pub fn start_with(test: &str, env: &[(&str, &str)]) -> Option<Moto> {
         if !data::tool("moto_server", test) || !data::python(&["boto3"], test) {
             return None;
         }
         let port = free_port();
         let mut child = Command::new("moto_server")
             .args(["-H", "127.0.0.1", "-p", &port.to_string()])
+            .envs(env.iter().copied())
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
@@ -191,6 +197,33 @@ impl Moto {
         ))
         .status
         .success()
+    }
+
+    /// Makes the bucket `bucket`, with boto3.
+    pub fn make_bucket(&self, bucket: &str) {
+        let o = self.boto(&format!("s3.create_bucket(Bucket='{bucket}')\n"));
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+
+    /// The ETag of `s3://bucket/key` (`"HEX-N"` for an object uploaded in N parts), `None`
+    /// when there is no such object.
+    pub fn etag(&self, bucket: &str, key: &str) -> Option<String> {
+        let o = self.boto(&format!(
+            "try:\n    print(s3.head_object(Bucket='{bucket}', Key='{key}')['ETag'])\n\
+             except Exception as x:\n    print(x, file=sys.stderr); sys.exit(1)\n"
+        ));
+        o.status
+            .success()
+            .then(|| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    }
+
+    /// The multipart uploads of `bucket` begun and neither completed nor aborted.
+    pub fn pending_uploads(&self, bucket: &str) -> usize {
+        let o = self.boto(&format!(
+            "print(len(s3.list_multipart_uploads(Bucket='{bucket}').get('Uploads', [])))\n"
+        ));
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).trim().parse().unwrap()
     }
 
     /// The environment a run needs to reach this server with the tests' credentials.
@@ -377,4 +410,105 @@ pub fn bytes(p: &PathBuf) -> Vec<u8> {
     let mut v = Vec::new();
     std::fs::File::open(p).unwrap().read_to_end(&mut v).unwrap();
     v
+}
+
+/// A tiny S3 endpoint that takes multipart uploads and falls silent at one part, to interrupt
+/// an upload midway: `HEAD` of a bucket is 200; `POST …?uploads` starts upload `up1`; parts
+/// are read and stored (ETag `"pN"`) except part `silent`, whose answer never comes; every
+/// request's line (method and target) is logged in [`FakeS3::log`].
+pub struct FakeS3 {
+    pub port: u16,
+    pub log: Arc<std::sync::Mutex<Vec<String>>>,
+}
+
+impl FakeS3 {
+    pub fn start(silent: u16) -> FakeS3 {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let port = listener.local_addr().unwrap().port();
+        let log = Arc::new(std::sync::Mutex::new(Vec::new()));
+        let all = log.clone();
+        std::thread::spawn(move || {
+            for stream in listener.incoming().flatten() {
+                let log = all.clone();
+                std::thread::spawn(move || serve_s3(stream, silent, &log));
+            }
+        });
+        FakeS3 { port, log }
+    }
+
+    pub fn endpoint(&self) -> String {
+        format!("http://127.0.0.1:{}", self.port)
+    }
+
+    /// The request lines received so far.
+    pub fn requests(&self) -> Vec<String> {
+        self.log.lock().unwrap().clone()
+    }
+}
+
+fn serve_s3(stream: TcpStream, silent: u16, log: &std::sync::Mutex<Vec<String>>) {
+    let mut read = BufReader::new(stream.try_clone().unwrap());
+    let mut out = stream;
+    loop {
+        let mut line = String::new();
+        if read.read_line(&mut line).unwrap_or(0) == 0 {
+            return;
+        }
+        let mut length = 0usize;
+        loop {
+            let mut h = String::new();
+            if read.read_line(&mut h).unwrap_or(0) == 0 {
+                return;
+            }
+            let h = h.trim_end();
+            if h.is_empty() {
+                break;
+            }
+            if let Some((k, v)) = h.split_once(':')
+                && k.eq_ignore_ascii_case("content-length")
+            {
+                length = v.trim().parse().unwrap_or(0);
+            }
+        }
+        let mut body = vec![0u8; length];
+        if read.read_exact(&mut body).is_err() {
+            return;
+        }
+        let mut words = line.split_whitespace();
+        let (method, target) = (words.next().unwrap_or(""), words.next().unwrap_or(""));
+        // Without the signature's parameters.
+        let (path, query) = target.split_once('?').unwrap_or((target, ""));
+        let query: Vec<&str> = query
+            .split('&')
+            .filter(|q| !q.starts_with("X-Amz-"))
+            .collect();
+        log.lock()
+            .unwrap()
+            .push(format!("{method} {path}?{}", query.join("&")));
+        let part: Option<u16> = target
+            .split(['?', '&'])
+            .find_map(|q| q.strip_prefix("partNumber=")?.parse().ok());
+        let answer = match (method, part) {
+            ("PUT", Some(n)) if n == silent => {
+                std::thread::sleep(SILENCE);
+                return;
+            }
+            ("PUT", Some(n)) => {
+                format!("HTTP/1.1 200 OK\r\nETag: \"p{n}\"\r\nContent-Length: 0\r\n\r\n")
+            }
+            ("POST", _) if target.contains("uploads") => {
+                let xml = "<InitiateMultipartUploadResult><UploadId>up1</UploadId>\
+                           </InitiateMultipartUploadResult>";
+                format!(
+                    "HTTP/1.1 200 OK\r\nContent-Length: {}\r\n\r\n{xml}",
+                    xml.len()
+                )
+            }
+            ("DELETE", _) => "HTTP/1.1 204 No Content\r\n\r\n".to_string(),
+            _ => "HTTP/1.1 200 OK\r\nContent-Length: 0\r\n\r\n".to_string(),
+        };
+        if out.write_all(answer.as_bytes()).is_err() {
+            return;
+        }
+    }
 }

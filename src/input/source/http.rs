@@ -111,10 +111,10 @@ fn refused(status: u16, missing: &str) -> Fault {
         ),
         s => format!("the server refused the request (HTTP {s})"),
     };
-    let kind = if status == 404 {
-        io::ErrorKind::NotFound
-    } else {
-        io::ErrorKind::PermissionDenied
+    let kind = match status {
+        404 => io::ErrorKind::NotFound,
+        401 | 403 => io::ErrorKind::PermissionDenied,
+        _ => io::ErrorKind::Other,
     };
     Fault::Fail(io::Error::new(kind, why))
 }
@@ -158,31 +158,150 @@ fn transport(e: &ureq::Error) -> Fault {
     }
 }
 
-/// `PUT`s `len` bytes of `file` (from its start) at `url`, retried as reads are; `name` is
-/// the destination as the user wrote it.
-pub(super) fn put(name: &str, url: &str, file: &File, len: u64) -> io::Result<()> {
+/// What a request that writes sends.
+#[derive(Clone, Copy)]
+pub(super) enum Payload<'a> {
+    /// No body.
+    Empty,
+    /// These bytes.
+    Bytes(&'a [u8]),
+    /// `len` bytes of `file` from `offset`, read from the file at each attempt.
+    File {
+        file: &'a File,
+        offset: u64,
+        len: u64,
+    },
+}
+
+impl Payload<'_> {
+    fn len(&self) -> u64 {
+        match self {
+            Payload::Empty => 0,
+            Payload::Bytes(b) => b.len() as u64,
+            Payload::File { len, .. } => *len,
+        }
+    }
+}
+
+/// The method of a request that writes, or that asks about a bucket.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Verb {
+    Put,
+    Post,
+    Delete,
+    Head,
+}
+
+/// A successful answer: its ETag and body (at most 1 MiB kept).
+pub(super) struct Answer {
+    pub(super) etag: Option<String>,
+    pub(super) body: String,
+}
+
+/// The `<Code>` of an S3 error document, if `body` is one.
+fn s3_error_code(body: &str) -> Option<&str> {
+    let rest = &body[body.find("<Error>")?..];
+    let code = &rest[rest.find("<Code>")? + 6..];
+    Some(code[..code.find("</Code>")?].trim())
+}
+
+/// Sends `verb` to `url` with `payload`, retried as reads are; `name` is the destination as the
+/// user wrote it, `missing` what a 404 means ("no such bucket"). An S3 error document in a
+/// `200` answer (S3 may answer a multipart upload's completion so) is retried.
+pub(super) fn send(
+    name: &str,
+    verb: Verb,
+    url: &str,
+    payload: Payload<'_>,
+    missing: &str,
+) -> io::Result<Answer> {
     use std::io::{Seek, SeekFrom};
     retried(name, || {
-        let mut body = file.try_clone().map_err(Fault::Fail)?;
-        body.seek(SeekFrom::Start(0)).map_err(Fault::Fail)?;
         let secs = super::io_timeout();
-        // The body's time grows with its size (at least 1 MB/s), over the answer's wait.
-        let body_secs = secs + len / 1_000_000;
-        let r = agent()
-            .put(url)
-            .config()
-            .timeout_connect(Some(Duration::from_secs(secs)))
-            .timeout_send_body(Some(Duration::from_secs(body_secs)))
-            .timeout_recv_response(Some(Duration::from_secs(secs)))
-            .build()
-            .header("Content-Length", &len.to_string())
-            .send(body)
-            .map_err(|e| transport(&e))?;
-        match r.status().as_u16() {
-            200..=299 => Ok(()),
-            s => Err(refused(s, "no such bucket")),
+        let len = payload.len();
+        // The body's time grows with its size (at least 1 MB/s), over the answer's wait; the
+        // answer's body (an S3 completion's, which may come slowly) may take 60 times the wait.
+        let t = |s: u64| Some(Duration::from_secs(s));
+        let (send_secs, answer_secs) = (secs + len / 1_000_000, WHOLE_BODY * secs);
+        let r = match verb {
+            Verb::Put | Verb::Post => {
+                let b = match verb {
+                    Verb::Put => agent().put(url),
+                    _ => agent().post(url),
+                };
+                let b = b
+                    .config()
+                    .timeout_connect(t(secs))
+                    .timeout_send_body(t(send_secs))
+                    .timeout_recv_response(t(secs))
+                    .timeout_recv_body(t(answer_secs))
+                    .build()
+                    .header("Content-Length", &len.to_string());
+                match payload {
+                    Payload::Empty => b.send_empty(),
+                    Payload::Bytes(bytes) => b.send(bytes),
+                    Payload::File { file, offset, len } => {
+                        let mut f = file.try_clone().map_err(Fault::Fail)?;
+                        f.seek(SeekFrom::Start(offset)).map_err(Fault::Fail)?;
+                        let mut part = f.take(len);
+                        b.send(ureq::SendBody::from_reader(&mut part))
+                    }
+                }
+            }
+            Verb::Delete | Verb::Head => {
+                let b = match verb {
+                    Verb::Delete => agent().delete(url),
+                    _ => agent().head(url),
+                };
+                b.config()
+                    .timeout_connect(t(secs))
+                    .timeout_recv_response(t(secs))
+                    .timeout_recv_body(t(answer_secs))
+                    .build()
+                    .call()
+            }
+        }
+        .map_err(|e| transport(&e))?;
+        let status = r.status().as_u16();
+        let etag = header(&r, "etag");
+        let body = if verb == Verb::Head {
+            String::new()
+        } else {
+            let mut text = Vec::new();
+            (&mut r.into_body().as_reader())
+                .take(1 << 20)
+                .read_to_end(&mut text)
+                .map_err(|e| Fault::Retry(format!("the connection broke in the answer: {e}")))?;
+            String::from_utf8_lossy(&text).into_owned()
+        };
+        let code = s3_error_code(&body);
+        match status {
+            200..=299 => match code {
+                None => Ok(Answer { etag, body }),
+                Some(c) => Err(Fault::Retry(format!(
+                    "the server answered HTTP {status} with the error {c}"
+                ))),
+            },
+            s => Err(match (refused(s, missing), code) {
+                (Fault::Fail(e), Some(c)) => {
+                    Fault::Fail(io::Error::new(e.kind(), format!("{e} (S3 error {c})")))
+                }
+                (f, _) => f,
+            }),
         }
     })
+}
+
+/// One `DELETE` of `url`, waiting at most `wait` in all, not retried (an interrupted process
+/// aborting its uploads): whether the server answered with a success.
+pub(super) fn delete_once(url: &str, wait: Duration) -> bool {
+    agent()
+        .delete(url)
+        .config()
+        .timeout_global(Some(wait))
+        .build()
+        .call()
+        .is_ok_and(|r| r.status().is_success())
 }
 
 impl Http {

@@ -144,7 +144,8 @@ pub fn remote_version(name: &Path) -> Result<Option<String>> {
 }
 
 /// Writes the `len` bytes of `file` (from its start) as the remote object `name`, whole or not
-/// at all: an `s3://` object in one `PUT` (at most 5 GiB).
+/// at all: an `s3://` object in one `PUT` up to 64 MiB, else in a multipart upload of 16 MiB
+/// parts (more when it needs over 10000), aborted on any error so that no part stays stored.
 ///
 /// # Errors
 /// [`Error::Write`] naming `name`: an `http(s)://` destination, a refusal (access denied, no
@@ -165,6 +166,43 @@ pub fn upload(name: &Path, file: &std::fs::File, len: u64) -> Result<()> {
         .unwrap_or_else(|p| p.into_inner())
         .remove(name);
     Ok(())
+}
+
+/// Aborts the multipart uploads of this process still in progress (it is being interrupted):
+/// the server deletes their stored parts. Waits a few seconds at most for each; returns how
+/// many were aborted.
+pub fn abort_uploads() -> usize {
+    s3::abort_pending()
+}
+
+/// Checks, before a run's work, that the remote output `name` can be written: an `s3://`
+/// object's bucket exists and its endpoint answers (once per bucket in a process). An access
+/// denied to the check passes (credentials may put objects without listing them): the upload
+/// tells then.
+///
+/// # Errors
+/// [`Error::Write`] naming `name`: no such bucket, an endpoint that does not answer, an
+/// `http(s)://` destination.
+pub fn check_destination(name: &Path) -> Result<()> {
+    static CHECKED: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    let r = match Location::of(name) {
+        Location::S3 { bucket, key } => {
+            let mut checked = CHECKED.lock().unwrap_or_else(|p| p.into_inner());
+            if checked.contains(&bucket) {
+                return Ok(());
+            }
+            let r = s3::check_bucket(&name.display().to_string(), &bucket, &key);
+            if r.is_ok() {
+                checked.push(bucket);
+            }
+            r
+        }
+        _ => Err(io::Error::new(
+            io::ErrorKind::Unsupported,
+            "outputs go to local files or s3:// objects",
+        )),
+    };
+    r.map_err(|e| Error::write(name, e))
 }
 
 /// The largest text input read whole from a server (a `.vpc`, a file list).

@@ -8,11 +8,12 @@
 //! (`AWS_CONFIG_FILE`), else `us-east-1`. Endpoint: `AWS_ENDPOINT_URL_S3` or `AWS_ENDPOINT_URL`
 //! (MinIO, Ceph, …: path-style addressing), else AWS's (virtual-host style).
 
-use super::http::Http;
+use super::http::{Http, Payload, Verb, send};
 use rusty_s3::{Bucket, Credentials, S3Action, UrlStyle};
 use std::io;
 use std::path::PathBuf;
-use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 fn var(name: &str) -> Option<String> {
@@ -129,11 +130,30 @@ pub(super) fn open(name: &str, bucket: &str, key: &str) -> io::Result<Http> {
     Http::open(name, Some(Box::new(sign)))
 }
 
-/// The largest object one `PUT` may write (S3's limit).
+/// An output is uploaded in parts when it is larger than this many parts: one `PUT` writes at
+/// most 5 GiB, and parts are retried one by one.
+const MULTIPART_FROM_PARTS: u64 = 4;
+
+/// The size of a part (the last may be smaller): 16 MiB, more when an object needs more than
+/// [`MAX_PARTS`] of them. `SWEEPTIN_S3_PART_SIZE` (bytes) sets it for the tests, which upload
+/// small files in several parts (S3 refuses parts under 5 MiB but the last).
+const PART: u64 = 16 << 20;
+
+/// S3's limits: parts in one upload, the size of one object and of one `PUT`.
+const MAX_PARTS: u64 = 10_000;
+const MAX_OBJECT: u64 = 5 << 40;
 const MAX_PUT: u64 = 5 << 30;
 
-/// Writes `len` bytes of `file` (from its start) as `s3://bucket/key` in one `PUT`: the object
-/// appears whole when the request completes, or not at all.
+fn part_size() -> u64 {
+    var("SWEEPTIN_S3_PART_SIZE")
+        .and_then(|v| v.trim().parse().ok())
+        .filter(|&n: &u64| n > 0)
+        .unwrap_or(PART)
+}
+
+/// Writes `len` bytes of `file` (from its start) as `s3://bucket/key`: in one `PUT` up to four
+/// parts' size (64 MiB), else in a multipart upload. Either way the object appears whole when
+/// the last request completes, or not at all.
 pub(super) fn put(
     name: &str,
     bucket: &str,
@@ -141,13 +161,275 @@ pub(super) fn put(
     file: &std::fs::File,
     len: u64,
 ) -> io::Result<()> {
-    if len > MAX_PUT {
+    if len > MAX_OBJECT {
         return Err(io::Error::other(format!(
-            "{len} bytes: more than one S3 PUT writes (5 GiB; multipart uploads are not \
-             written yet): write it to a local file and copy it (aws s3 cp)"
+            "{len} bytes: more than an S3 object may hold (5 TiB)"
         )));
     }
     let (bucket, creds) = address(bucket, key)?;
-    let url = bucket.put_object(creds.as_ref(), key).sign(SIGNED_FOR);
-    super::http::put(name, url.as_str(), file, len)
+    let part = part_size();
+    if len <= MULTIPART_FROM_PARTS.saturating_mul(part).min(MAX_PUT) {
+        let url = bucket.put_object(creds.as_ref(), key).sign(SIGNED_FOR);
+        let payload = Payload::File {
+            file,
+            offset: 0,
+            len,
+        };
+        return send(name, Verb::Put, url.as_str(), payload, "no such bucket").map(drop);
+    }
+    let upload = Multipart {
+        name,
+        bucket: &bucket,
+        creds: creds.as_ref(),
+        key,
+    };
+    let id = upload.create()?;
+    let _pending = Pending::register(&upload, &id);
+    let part = part.max(len.div_ceil(MAX_PARTS)).min(MAX_PUT);
+    match upload.parts(&id, file, len, part) {
+        Ok(()) => Ok(()),
+        Err(e) => match upload.abort(&id) {
+            Ok(()) => Err(io::Error::new(
+                e.kind(),
+                format!("{e}; the upload was aborted: no object was written"),
+            )),
+            Err(a) => Err(io::Error::new(
+                e.kind(),
+                format!(
+                    "{e}; the multipart upload {id} could not be aborted either ({a}): its \
+                     parts stay stored until it is (aws s3api abort-multipart-upload \
+                     --bucket {} --key {key} --upload-id {id}) or a lifecycle rule removes them",
+                    bucket.name()
+                ),
+            )),
+        },
+    }
+}
+
+/// A multipart upload of one object: created, its parts sent in order, completed; aborted on
+/// any error, so that no part is left stored.
+struct Multipart<'a> {
+    name: &'a str,
+    bucket: &'a Bucket,
+    creds: Option<&'a Credentials>,
+    key: &'a str,
+}
+
+impl Multipart<'_> {
+    /// A `POST` on the object with `query` (one parameter), signed: rusty-s3 signs
+    /// CreateMultipartUpload and CompleteMultipartUpload only with its XML feature (a parser
+    /// more), and both are one parameter and a few tags.
+    fn post_url(&self, query: (&str, &str)) -> String {
+        let url = self.bucket.object_url(self.key);
+        match self.creds {
+            Some(c) => rusty_s3::signing::sign(
+                &jiff::Timestamp::now(),
+                rusty_s3::Method::Post,
+                url,
+                c.key(),
+                c.secret(),
+                c.token(),
+                self.bucket.region(),
+                SIGNED_FOR.as_secs(),
+                std::iter::once(query),
+                std::iter::empty(),
+            )
+            .to_string(),
+            None => {
+                let mut url = url;
+                url.query_pairs_mut().append_pair(query.0, query.1);
+                url.to_string()
+            }
+        }
+    }
+
+    /// Starts the upload; its id.
+    fn create(&self) -> io::Result<String> {
+        let url = self.post_url(("uploads", ""));
+        let a = send(
+            self.name,
+            Verb::Post,
+            &url,
+            Payload::Empty,
+            "no such bucket",
+        )?;
+        xml_text(&a.body, "UploadId").ok_or_else(|| {
+            io::Error::new(
+                io::ErrorKind::InvalidData,
+                "the server started a multipart upload without naming it (no UploadId)",
+            )
+        })
+    }
+
+    /// Sends the parts of `part` bytes (the last smaller) in order, then completes the upload.
+    fn parts(&self, id: &str, file: &std::fs::File, len: u64, part: u64) -> io::Result<()> {
+        let missing = "no such upload (the bucket was removed, or the upload aborted)";
+        let mut etags = Vec::new();
+        for (k, offset) in (0..len).step_by(part as usize).enumerate() {
+            let number = u16::try_from(k + 1).map_err(io::Error::other)?;
+            let url = self
+                .bucket
+                .upload_part(self.creds, self.key, number, id)
+                .sign(SIGNED_FOR);
+            let payload = Payload::File {
+                file,
+                offset,
+                len: part.min(len - offset),
+            };
+            let count = len.div_ceil(part);
+            let a = send(self.name, Verb::Put, url.as_str(), payload, missing)
+                .map_err(|e| io::Error::new(e.kind(), format!("part {number} of {count}: {e}")))?;
+            etags.push(a.etag.ok_or_else(|| {
+                io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    format!("the server stored part {number} without an ETag"),
+                )
+            })?);
+        }
+        let mut body = String::from("<CompleteMultipartUpload>");
+        for (k, etag) in etags.iter().enumerate() {
+            body.push_str(&format!(
+                "<Part><PartNumber>{}</PartNumber><ETag>{}</ETag></Part>",
+                k + 1,
+                xml_escape(etag)
+            ));
+        }
+        body.push_str("</CompleteMultipartUpload>");
+        let url = self.post_url(("uploadId", id));
+        send(
+            self.name,
+            Verb::Post,
+            &url,
+            Payload::Bytes(body.as_bytes()),
+            missing,
+        )
+        .map(drop)
+        .map_err(|e| {
+            let what = format!("completing the upload of {} parts", etags.len());
+            io::Error::new(e.kind(), format!("{what}: {e}"))
+        })
+    }
+
+    /// Aborts the upload: the server deletes its parts.
+    fn abort(&self, id: &str) -> io::Result<()> {
+        let url = self
+            .bucket
+            .abort_multipart_upload(self.creds, self.key, id)
+            .sign(SIGNED_FOR);
+        send(
+            self.name,
+            Verb::Delete,
+            url.as_str(),
+            Payload::Empty,
+            "no such upload",
+        )
+        .map(drop)
+    }
+}
+
+/// The multipart uploads in progress in this process, by a serial number: what an
+/// interruption aborts ([`abort_pending`]). Each is the signed `DELETE` of its abort, made
+/// afresh when needed (an upload may outlast a signature).
+type AbortFn = Box<dyn Fn() -> String + Send>;
+
+fn pending() -> &'static Mutex<Vec<(u64, AbortFn)>> {
+    static PENDING: Mutex<Vec<(u64, AbortFn)>> = Mutex::new(Vec::new());
+    &PENDING
+}
+
+/// An upload registered in [`pending`] while it lives.
+struct Pending(u64);
+
+impl Pending {
+    fn register(upload: &Multipart<'_>, id: &str) -> Pending {
+        static NEXT: AtomicU64 = AtomicU64::new(0);
+        let serial = NEXT.fetch_add(1, Ordering::Relaxed);
+        let (bucket, creds) = (upload.bucket.clone(), upload.creds.cloned());
+        let (key, id) = (upload.key.to_string(), id.to_string());
+        let abort: AbortFn = Box::new(move || {
+            bucket
+                .abort_multipart_upload(creds.as_ref(), &key, &id)
+                .sign(SIGNED_FOR)
+                .to_string()
+        });
+        lock(pending()).push((serial, abort));
+        Pending(serial)
+    }
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        lock(pending()).retain(|(s, _)| *s != self.0);
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Aborts the multipart uploads in progress (the process is being interrupted): one `DELETE`
+/// each, waiting a few seconds at most, so that no part stays stored; returns how many the
+/// server aborted.
+pub(super) fn abort_pending() -> usize {
+    let urls: Vec<String> = lock(pending()).iter().map(|(_, f)| f()).collect();
+    urls.iter()
+        .filter(|url| super::http::delete_once(url, ABORT_WAIT))
+        .count()
+}
+
+/// How long an interrupted process waits for an abort's answer.
+const ABORT_WAIT: Duration = Duration::from_secs(5);
+
+/// The text of the first `<tag>` of an XML answer, unescaped.
+fn xml_text(body: &str, tag: &str) -> Option<String> {
+    let open = format!("<{tag}>");
+    let from = body.find(&open)? + open.len();
+    let to = from + body[from..].find(&format!("</{tag}>"))?;
+    let text = body[from..to].trim();
+    Some(
+        text.replace("&quot;", "\"")
+            .replace("&apos;", "'")
+            .replace("&lt;", "<")
+            .replace("&gt;", ">")
+            .replace("&amp;", "&"),
+    )
+}
+
+fn xml_escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// Checks that the bucket of `s3://bucket/key` can be written, before a run's work: a signed
+/// `HEAD` on the bucket. "No such bucket" and a failure to reach the endpoint are errors; an
+/// access denied is not (credentials allowed to put objects may not be allowed to list them,
+/// which `HEAD` needs): the upload then tells.
+pub(super) fn check_bucket(name: &str, bucket: &str, key: &str) -> io::Result<()> {
+    let (b, creds) = address(bucket, key)?;
+    let url = b.head_bucket(creds.as_ref()).sign(SIGNED_FOR);
+    match send(
+        name,
+        Verb::Head,
+        url.as_str(),
+        Payload::Empty,
+        "no such bucket",
+    ) {
+        Err(e) if e.kind() == io::ErrorKind::PermissionDenied => Ok(()),
+        r => r.map(drop),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn xml_answers() {
+        let body = "<?xml version=\"1.0\"?><InitiateMultipartUploadResult><Bucket>b</Bucket>\
+                    <UploadId> a&amp;b </UploadId></InitiateMultipartUploadResult>";
+        assert_eq!(xml_text(body, "UploadId").as_deref(), Some("a&b"));
+        assert_eq!(xml_text(body, "Key"), None);
+        assert_eq!(xml_escape("\"x\"<&"), "\"x\"&lt;&amp;");
+    }
 }
