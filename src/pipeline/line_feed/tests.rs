@@ -81,7 +81,7 @@ fn run(
         ..Default::default()
     };
     let config = RunConfig::new(input, options).unwrap();
-    let stream = streamed.then_some((mem, config.tmp_dir()));
+    let stream = streamed.then_some(config.line_budget());
     let points_only = config.points_only();
     let mut drape = |sink: &mut dyn super::super::TriangleSink| {
         drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
