@@ -28,14 +28,16 @@
 //! after every point (so `first` keeps the point's z, `last` the line's), and the merged vertex is
 //! always a breakline vertex.
 //!
-//! **Memory**: a run ([`prepare_with`] with a budget) cleans the lines in bounded memory and
-//! streams the graph into the sweep ([`super::line_feed`]): held are the polylines as read
-//! (24 bytes a vertex, until the points are read), the heights of 2-D vertices, the sorts'
-//! budgets and the cleaner's and the sweep's windows; lidar points are never held.
-//! `--no-flat-triangles` takes the cleaned graph in memory (32 bytes per line vertex plus 12 per
-//! segment and the sweep's constraint index), as do a plan's tasks and the tiles engine
-//! ([`prepare`]), and its flips need the whole triangulation, which the writer then holds (about
-//! 40 bytes per point), so use it on tile-sized inputs.
+//! **Memory**: a run ([`prepare_with`] with a budget) reads the line files polyline by polyline
+//! ([`LineStream`]: a text file one polyline at a time, other formats one file at a time),
+//! cleans them in bounded memory and streams the graph into the sweep ([`super::line_feed`]):
+//! held are the boundary and hole rings, the heights of 2-D vertices, the sorts' budgets and the
+//! cleaner's and the sweep's windows; lidar points are never held. `--clip-breaklines` reads the
+//! lines whole to cut them. `--no-flat-triangles` takes the polylines and the cleaned graph in
+//! memory (32 bytes per line vertex plus 12 per segment and the sweep's constraint index), as do
+//! a plan's tasks and the tiles engine ([`prepare`]), and its flips need the whole
+//! triangulation, which the writer then holds (about 40 bytes per point), so use it on
+//! tile-sized inputs.
 
 use super::TriangleSink;
 use crate::breaklines::clean::stream::PolylineSource;
