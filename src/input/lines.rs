@@ -207,6 +207,9 @@ fn open(
     Ok(None)
 }
 
+/// What is called with each polyline read and where it comes from.
+pub type EachLine<'a> = dyn FnMut(&[[f64; 3]], &Source) -> Result<()> + 'a;
+
 /// Breakline files read polyline by polyline, as often as asked, then polylines already in
 /// memory (the boundary and hole rings): what a run's streamed cleaning reads
 /// ([`crate::breaklines::clean::stream::PolylineSource`]). A text file is parsed as it is read,
@@ -227,7 +230,7 @@ impl LineStream {
     ///
     /// # Errors
     /// As [`read_files`] (the files' CRSs must agree), and `f`'s.
-    pub fn for_each(&self, f: &mut dyn FnMut(&[[f64; 3]], &Source) -> Result<()>) -> Result<u64> {
+    pub fn for_each(&self, f: &mut EachLine<'_>) -> Result<u64> {
         let mut crs = None;
         let then = self.then.vertex_count() as u64;
         let mut held = 0u64;
@@ -377,11 +380,7 @@ fn read_text(bytes: &[u8], path: Arc<Path>) -> Result<Lines> {
 
 /// The text format read from `reader` (the file `path`), each polyline given to `f` as soon as
 /// it ends; only the current polyline and line are held.
-fn parse_text(
-    mut reader: impl BufRead,
-    path: Arc<Path>,
-    f: &mut dyn FnMut(&[[f64; 3]], &Source) -> Result<()>,
-) -> Result<()> {
+fn parse_text(mut reader: impl BufRead, path: Arc<Path>, f: &mut EachLine<'_>) -> Result<()> {
     let mut current: Vec<[f64; 3]> = Vec::new();
     let mut source = Source {
         path,
