@@ -3,8 +3,9 @@
 # (the graph in memory) and by the streamed cleaner (breaklines::clean::stream, --mem 128M), one
 # process each under /usr/bin/time -v (peak RSS, wall time), and the CLI's tin with the network
 # as breaklines (cleaned streamed, the graph fed to the sweep vertex by vertex: what its --json
-# summary says was held is printed). Both cleaners' counters are printed, to compare. The
-# polylines themselves are generated and held whole by both (O(lines)).
+# summary says was held is printed, the line reader's too). Both cleaners' counters are printed,
+# to compare. The clean_timing rows generate the polylines and hold them whole (O(lines)); tin
+# reads the line file polyline by polyline.
 #
 #   scripts/bench-breaklines-memory.sh [SEGMENTS] [POINTS] [MEM]   (default 5000000 1000000 128M)
 # Needs a release build of sweeptin and the examples dump_lines and clean_timing in
@@ -45,7 +46,9 @@ s = json.load(open(sys.argv[1]))
 r = s.get("run", s)
 b = r["breaklines"]
 print("    summary: peak_rss_bytes", r["peak_rss_bytes"], "segments", b["segments"],
-      "cleaner", b["cleaner"], "peak_pending_segments", r["stream"]["peak_pending_segments"],
+      "cleaner", b["cleaner"], "read_held_vertices", b.get("read_held_vertices"),
+      "peak_anon_bytes", r.get("peak_anon_bytes"),
+      "peak_pending_segments", r["stream"]["peak_pending_segments"],
       "peak_live_triangles", r["stream"]["peak_live_triangles"])
 PY
     rm -f "$OUT/net.txt" "$OUT/pts.xyz" "$OUT/out.stin"

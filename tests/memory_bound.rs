@@ -211,7 +211,16 @@ fn a_road_network_larger_than_mem_is_triangulated_within_it() {
     // The summary's own figures: the cleaner's window (128-byte records) and the sweep's pending
     // segments (with their started vertices, under 100 bytes each) are a sliver of --mem; the
     // rest of the budget goes to the sorts.
-    let held = (cl.peak_active + cl.peak_window) * 128 + summary.stream.peak_pending_segments * 100;
+    // The reader too: the polylines are parsed as the cleaner reads them, one at a time (24
+    // bytes a vertex), never the whole file.
+    let held = (cl.peak_active + cl.peak_window) * 128
+        + summary.stream.peak_pending_segments * 100
+        + b.read_held_vertices * 24;
+    assert!(
+        b.read_held_vertices < 1000,
+        "the reader held {} vertices",
+        b.read_held_vertices
+    );
     assert!(
         held < mem / 8,
         "held {held} bytes: {cl:?} {:?}",

@@ -43,7 +43,7 @@ pub mod flat;
 
 pub mod trim;
 
-pub use crate::input::lines::{Lines, Location, Source, read_file, read_files};
+pub use crate::input::lines::{LineStream, Lines, Location, Source, read_file, read_files};
 pub use clean::{CleanOptions, CleanStats, Pslg, clean};
 pub use trim::Trim;
 
@@ -70,7 +70,7 @@ impl crate::input::lines::Lines {
         mem: u64,
         tmp_dir: &std::path::Path,
     ) -> Result<clean::stream::Cleaned> {
-        clean::stream::clean_streamed(&self.polylines, options, mem, tmp_dir)
+        clean::stream::clean_streamed(self.polylines.as_slice(), options, mem, tmp_dir)
             .map_err(|e| self.name_line(e))
     }
 

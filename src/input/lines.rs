@@ -14,7 +14,9 @@
 //! polyline; `#` starts a comment (a line holding only a comment does not end the polyline). A
 //! closed ring repeats its first vertex. See `docs/FORMATS.md`.
 //!
-//! A file is GeoJSON when its first non-blank character is `{`, text otherwise.
+//! A file is GeoJSON when its first non-blank character is `{`, text otherwise. A text file is
+//! parsed as it is read, one polyline held at a time ([`LineStream`] hands them on without
+//! keeping them).
 //!
 //! # GeoPackage, OGR-SQLite, Shapefile
 //!
@@ -30,6 +32,7 @@ use super::geojson::{self, is_ring, not_a_ring};
 use super::vector;
 use crate::error::{Error, Result};
 use std::fmt;
+use std::io::{BufRead, Read, Seek};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -114,22 +117,7 @@ impl Lines {
     /// # Errors
     /// [`Error::Format`] when both declare a CRS and they differ.
     pub fn append(&mut self, other: Lines) -> Result<()> {
-        match (&self.crs, &other.crs) {
-            (Some(a), Some(b)) if a != b => {
-                let path = other
-                    .sources
-                    .first()
-                    .map_or_else(PathBuf::new, |s| s.path.to_path_buf());
-                return Err(Error::Format {
-                    path,
-                    message: format!(
-                        "declares CRS {b}, but the breaklines read before declare {a}"
-                    ),
-                });
-            }
-            (None, Some(_)) => self.crs = other.crs,
-            _ => {}
-        }
+        agree_crs(&mut self.crs, &other)?;
         self.polylines.extend(other.polylines);
         self.sources.extend(other.sources);
         Ok(())
@@ -168,14 +156,144 @@ impl Lines {
 /// [`Error::Io`] when the file cannot be read; [`Error::Parse`] for a syntax error (file and
 /// line); [`Error::Format`] for content that is not breaklines (file and feature).
 pub fn read_file(path: &Path) -> Result<Lines> {
+    let mut lines = Lines::default();
+    let text = |l: &[[f64; 3]], s: &Source| {
+        lines.polylines.push(l.to_vec());
+        lines.sources.push(s.clone());
+        Ok(())
+    };
+    match open(path, text)? {
+        Some(whole) => Ok(whole),
+        None => Ok(lines),
+    }
+}
+
+/// Opens the breakline file `path`: a text file is parsed here, each polyline given to `text`
+/// as it is read (`None` returned); any other is read whole.
+///
+/// # Errors
+/// As [`read_file`], and `text`'s.
+fn open(
+    path: &Path,
+    mut text: impl FnMut(&[[f64; 3]], &Source) -> Result<()>,
+) -> Result<Option<Lines>> {
     let (file, _) = vector::split_layer(path);
     if vector::format_of(&file) != vector::VectorFormat::GeoJson {
         // The SQLite and Shapefile readers open the file themselves (and what lies beside it:
         // a database's `-wal`, a Shapefile's `.shx`).
-        return from_parts(vector::read(path)?, Arc::from(path));
+        return from_parts(vector::read(path)?, Arc::from(path)).map(Some);
     }
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    read_bytes(path, &bytes)
+    let io = |e| Error::io(path, e);
+    let mut f = std::fs::File::open(path).map_err(io)?;
+    // The first non-blank byte tells GeoJSON from text.
+    let mut chunk = [0u8; 4096];
+    let first = loop {
+        let n = f.read(&mut chunk).map_err(io)?;
+        if n == 0 {
+            break None;
+        }
+        if let Some(b) = chunk[..n].iter().find(|b| !b.is_ascii_whitespace()) {
+            break Some(*b);
+        }
+    };
+    f.rewind().map_err(io)?;
+    if first == Some(b'{') {
+        let mut bytes = Vec::new();
+        f.read_to_end(&mut bytes).map_err(io)?;
+        return read_geojson(&bytes, Arc::from(path)).map(Some);
+    }
+    let reader = std::io::BufReader::with_capacity(1 << 16, f);
+    parse_text(reader, Arc::from(path), &mut text)?;
+    Ok(None)
+}
+
+/// What is called with each polyline read and where it comes from.
+pub type EachLine<'a> = dyn FnMut(&[[f64; 3]], &Source) -> Result<()> + 'a;
+
+/// Breakline files read polyline by polyline, as often as asked, then polylines already in
+/// memory (the boundary and hole rings): what a run's streamed cleaning reads
+/// ([`crate::breaklines::clean::stream::PolylineSource`]). A text file is parsed as it is read,
+/// one polyline held at a time; a GeoJSON, GeoPackage or Shapefile file is read whole, one file
+/// at a time.
+#[derive(Clone, Debug, Default)]
+pub struct LineStream {
+    /// The files, read in this order.
+    pub paths: Vec<PathBuf>,
+    /// Polylines after those of the files.
+    pub then: Lines,
+}
+
+impl LineStream {
+    /// Calls `f` with every polyline and its source, in order; returns the most vertices held at
+    /// once (the longest polyline of a text file, every vertex of a file read whole, those of
+    /// [`LineStream::then`] all along).
+    ///
+    /// # Errors
+    /// As [`read_files`] (the files' CRSs must agree), and `f`'s.
+    pub fn for_each(&self, f: &mut EachLine<'_>) -> Result<u64> {
+        let mut crs = None;
+        let then = self.then.vertex_count() as u64;
+        let mut held = 0u64;
+        for p in &self.paths {
+            let mut text = |l: &[[f64; 3]], s: &Source| {
+                held = held.max(l.len() as u64);
+                f(l, s)
+            };
+            if let Some(whole) = open(p, &mut text)? {
+                held = held.max(whole.vertex_count() as u64);
+                agree_crs(&mut crs, &whole)?;
+                for (l, s) in whole.polylines.iter().zip(&whole.sources) {
+                    f(l, s)?;
+                }
+            }
+        }
+        agree_crs(&mut crs, &self.then)?;
+        for (l, s) in self.then.polylines.iter().zip(&self.then.sources) {
+            f(l, s)?;
+        }
+        Ok(held + then)
+    }
+
+    /// Where polyline `i` (in [`LineStream::for_each`]'s order) comes from (reading the files
+    /// again up to it: for error messages).
+    pub fn source(&self, i: u64) -> Option<Source> {
+        let mut k = 0u64;
+        let mut found = None;
+        // An error ends the walk: the source found, or a reading error (no source to name).
+        let _ = self.for_each(&mut |_, s| {
+            if k == i {
+                found = Some(s.clone());
+                return Err(Error::Internal(String::new()));
+            }
+            k += 1;
+            Ok(())
+        });
+        found
+    }
+}
+
+/// Takes the CRS `other` declares into `crs`.
+///
+/// # Errors
+/// [`Error::Format`] naming `other`'s file when both declare a CRS and they differ.
+fn agree_crs(crs: &mut Option<String>, other: &Lines) -> Result<()> {
+    match (&*crs, &other.crs) {
+        (Some(a), Some(b)) if a != b => {
+            let path = other
+                .sources
+                .first()
+                .map_or_else(PathBuf::new, |s| s.path.to_path_buf());
+            Err(Error::Format {
+                path,
+                message: format!("declares CRS {b}, but the breaklines read before declare {a}"),
+            })
+        }
+        (None, Some(_)) => {
+            crs.clone_from(&other.crs);
+            Ok(())
+        }
+        _ => Ok(()),
+    }
 }
 
 /// As [`read_file`], from `bytes`, the content of the file `path` names (`FILE:LAYER` picks a
@@ -251,54 +369,72 @@ fn from_parts(doc: geojson::GeoJson, path: Arc<Path>) -> Result<Lines> {
 // Text
 
 fn read_text(bytes: &[u8], path: Arc<Path>) -> Result<Lines> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count() as u64
-            + 1;
-        Error::Parse {
-            path: path.to_path_buf(),
-            line,
-            message: "not UTF-8 text (nor GeoJSON)".into(),
-        }
-    })?;
     let mut lines = Lines::default();
+    parse_text(bytes, path, &mut |l, s| {
+        lines.polylines.push(l.to_vec());
+        lines.sources.push(s.clone());
+        Ok(())
+    })?;
+    Ok(lines)
+}
+
+/// The text format read from `reader` (the file `path`), each polyline given to `f` as soon as
+/// it ends; only the current polyline and line are held.
+fn parse_text(mut reader: impl BufRead, path: Arc<Path>, f: &mut EachLine<'_>) -> Result<()> {
     let mut current: Vec<[f64; 3]> = Vec::new();
-    let mut start = 0u64;
-    let flush = |current: &mut Vec<[f64; 3]>, start: u64, lines: &mut Lines| {
-        if !current.is_empty() {
-            lines.polylines.push(std::mem::take(current));
-            lines.sources.push(Source {
-                path: path.clone(),
-                location: Location::Line(start),
-            });
-        }
+    let mut source = Source {
+        path,
+        location: Location::Line(0),
     };
-    for (i, raw) in text.lines().enumerate() {
-        let n = i as u64 + 1;
+    let mut flush = |current: &mut Vec<[f64; 3]>, source: &Source| {
+        let r = if current.is_empty() {
+            Ok(())
+        } else {
+            f(current, source)
+        };
+        current.clear();
+        r
+    };
+    let mut buf = Vec::new();
+    let mut n = 0u64;
+    loop {
+        buf.clear();
+        if reader
+            .read_until(b'\n', &mut buf)
+            .map_err(|e| Error::io(source.path.to_path_buf(), e))?
+            == 0
+        {
+            break;
+        }
+        n += 1;
+        let raw = std::str::from_utf8(&buf).map_err(|_| Error::Parse {
+            path: source.path.to_path_buf(),
+            line: n,
+            message: "not UTF-8 text (nor GeoJSON)".into(),
+        })?;
+        let raw = raw.strip_suffix('\n').unwrap_or(raw);
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
         let (content, comment) = match raw.find('#') {
             Some(k) => (&raw[..k], true),
             None => (raw, false),
         };
         if content.trim().is_empty() {
             if !comment {
-                flush(&mut current, start, &mut lines);
+                flush(&mut current, &source)?;
             }
             continue;
         }
         let v = parse_vertex(content).map_err(|message| Error::Parse {
-            path: path.to_path_buf(),
+            path: source.path.to_path_buf(),
             line: n,
             message,
         })?;
         if current.is_empty() {
-            start = n;
+            source.location = Location::Line(n);
         }
         current.push(v);
     }
-    flush(&mut current, start, &mut lines);
-    Ok(lines)
+    flush(&mut current, &source)
 }
 
 /// `x y [z]`, separated by whitespace or commas.

@@ -302,6 +302,17 @@ impl RunConfig {
         }
     }
 
+    /// What the run's lines get ([`super::lines::prepare_with`]): `--mem`, the scratch
+    /// directory, and whether the line files may be read again by path (not with a plan's
+    /// reader).
+    pub(crate) fn line_budget(&self) -> super::lines::LineBudget<'_> {
+        super::lines::LineBudget {
+            mem: self.options.mem,
+            tmp: self.tmp_dir(),
+            reread: self.line_reader.0.is_none(),
+        }
+    }
+
     /// What to triangulate.
     pub fn input(&self) -> &Input {
         &self.input

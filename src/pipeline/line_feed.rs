@@ -176,8 +176,12 @@ impl LineFeed {
     ///
     /// # Errors
     /// The pass's; [`Error::Format`] for a vertex outside the points' TIN, naming a line
-    /// through it (from `sources`, the polylines' places).
-    pub(crate) fn drape(&mut self, drape: Drape, sources: &[Source]) -> Result<u64> {
+    /// through it (`source` gives polyline `i`'s place).
+    pub(crate) fn drape(
+        &mut self,
+        drape: Drape,
+        source: &dyn Fn(u64) -> Option<Source>,
+    ) -> Result<u64> {
         if self.unknown.is_empty() {
             return Ok(0);
         }
@@ -186,8 +190,8 @@ impl LineFeed {
         for (k, &(p, line)) in self.unknown.iter().enumerate() {
             let z = sink.z[k];
             if z.is_nan() {
-                let source = line.and_then(|l| sources.get(l as usize));
-                return Err(super::lines::outside_error_at(p, source));
+                let source = line.and_then(|l| source(u64::from(l)));
+                return Err(super::lines::outside_error_at(p, source.as_ref()));
             }
             self.heights.insert(pos_key(p), z);
         }

@@ -28,21 +28,25 @@
 //! after every point (so `first` keeps the point's z, `last` the line's), and the merged vertex is
 //! always a breakline vertex.
 //!
-//! **Memory**: a run ([`prepare_with`] with a budget) cleans the lines in bounded memory and
-//! streams the graph into the sweep ([`super::line_feed`]): held are the polylines as read
-//! (24 bytes a vertex, until the points are read), the heights of 2-D vertices, the sorts'
-//! budgets and the cleaner's and the sweep's windows; lidar points are never held.
-//! `--no-flat-triangles` takes the cleaned graph in memory (32 bytes per line vertex plus 12 per
-//! segment and the sweep's constraint index), as do a plan's tasks and the tiles engine
-//! ([`prepare`]), and its flips need the whole triangulation, which the writer then holds (about
-//! 40 bytes per point), so use it on tile-sized inputs.
+//! **Memory**: a run ([`prepare_with`] with a budget) reads the line files polyline by polyline
+//! ([`LineStream`]: a text file one polyline at a time, other formats one file at a time),
+//! cleans them in bounded memory and streams the graph into the sweep ([`super::line_feed`]):
+//! held are the boundary and hole rings, the heights of 2-D vertices, the sorts' budgets and the
+//! cleaner's and the sweep's windows; lidar points are never held. `--clip-breaklines` reads the
+//! lines whole to cut them. `--no-flat-triangles` takes the polylines and the cleaned graph in
+//! memory (32 bytes per line vertex plus 12 per segment and the sweep's constraint index), as do
+//! a plan's tasks and the tiles engine ([`prepare`]), and its flips need the whole
+//! triangulation, which the writer then holds (about 40 bytes per point), so use it on
+//! tile-sized inputs.
 
 use super::TriangleSink;
+use crate::breaklines::clean::stream::PolylineSource;
 use crate::breaklines::flat::FlatStats;
 use crate::breaklines::{CleanOptions, CleanStats, Lines, Pslg, Source, Trim};
 use crate::error::{Error, Result};
 use crate::geom::grid::{Buckets, Grid};
 use crate::geom::predicates::check_coord;
+use crate::input::lines::LineStream;
 use crate::products::geom::{Location, Tri};
 use crate::sink::ProductSummary;
 use crate::sweep::{ConstraintGraph, ConstraintStats};
@@ -126,6 +130,11 @@ pub struct LineSummary {
     /// What the streamed cleaner held at most (`null` when the lines were cleaned in memory:
     /// `--no-flat-triangles`, or a plan's task).
     pub cleaner: Option<crate::breaklines::clean::stream::StreamStats>,
+    /// The most line vertices (24 bytes each) held at once as read: every input vertex when the
+    /// lines are read whole (`--no-flat-triangles`, `--clip-breaklines`, a plan's task, mixed
+    /// heights); streamed, the longest polyline of a text file or the vertices of a GeoJSON,
+    /// GeoPackage or Shapefile file (read whole), plus the boundary and hole rings.
+    pub read_held_vertices: u64,
     /// Breakline heights far outside the points' (a warning: wrong units or vertical datum?).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub far_heights: Option<FarHeights>,
@@ -220,6 +229,17 @@ pub(crate) struct Prepared {
 }
 
 impl Prepared {
+    /// No lines: only trimming (and `flat`).
+    fn none(trim: Trim, flat: bool, summary: LineSummary) -> Prepared {
+        Prepared {
+            pslg: None,
+            feed: Default::default(),
+            trim,
+            flat,
+            summary,
+        }
+    }
+
     /// The sweep's view of the graph.
     pub(crate) fn graph(&self) -> Option<ConstraintGraph> {
         self.pslg.as_ref().map(|g| {
@@ -260,10 +280,21 @@ pub(crate) fn prepare(
     prepare_with(o, read, drape, None)
 }
 
-/// [`prepare`], and with `stream` (`--mem` and the scratch directory) the lines are cleaned by
-/// the streamed cleaner and handed to the sweep as a stream ([`super::line_feed`]) when every
-/// input vertex has a `z` and `--no-flat-triangles` is off; otherwise they are cleaned in
-/// memory (draping needs the graph's vertices without `z`, the flips the whole graph).
+/// What a run gives its lines ([`prepare_with`]): `--mem` and the scratch directory.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LineBudget<'a> {
+    pub mem: u64,
+    pub tmp: &'a Path,
+    /// The breakline files may be read by path, polyline by polyline, as often as needed (the
+    /// run's own reader; a plan's task parses only the bytes it fingerprinted, read whole).
+    pub reread: bool,
+}
+
+/// [`prepare`], and with `stream` the lines are cleaned by the streamed cleaner and handed to
+/// the sweep as a stream ([`super::line_feed`]) when `drape` is given and `--no-flat-triangles`
+/// is off; otherwise they are cleaned in memory (the flips need the whole graph). Streamed, the
+/// breakline files are read polyline by polyline ([`LineStream`]) and never held, unless
+/// `--clip-breaklines` (which cuts them whole) or a plan's reader needs them in memory.
 ///
 /// # Errors
 /// As [`prepare`], and the external sorts'.
@@ -271,8 +302,23 @@ pub(crate) fn prepare_with(
     o: &LineOptions,
     read: &ReadLines<'_>,
     mut drape: Option<Drape>,
-    stream: Option<(u64, &Path)>,
+    stream: Option<LineBudget>,
 ) -> Result<Prepared> {
+    let stream = stream.filter(|_| !o.no_flat_triangles && drape.is_some());
+    if let Some(b) = stream.filter(|b| b.reread && !o.clip)
+        && let Some(drape) = drape
+    {
+        let (boundary, holes, trim) = read_trim(o, read)?;
+        let mut then = Lines::default();
+        for l in [boundary, holes].into_iter().flatten() {
+            then.append(l)?;
+        }
+        let lines = LineStream {
+            paths: o.breaklines.clone(),
+            then,
+        };
+        return streamed(&lines, o, b, drape, trim, LineSummary::default());
+    }
     let mut lines = Lines::default();
     for p in &o.breaklines {
         lines.append(read(p)?)?;
@@ -295,63 +341,26 @@ pub(crate) fn prepare_with(
     }
     let mut summary = LineSummary {
         polylines: lines.len() as u64,
+        read_held_vertices: lines.vertex_count() as u64,
         clipped,
         ..LineSummary::default()
     };
     if lines.is_empty() {
-        return Ok(Prepared {
-            pslg: None,
-            feed: Default::default(),
-            trim,
-            flat: o.no_flat_triangles,
-            summary,
-        });
+        return Ok(Prepared::none(trim, o.no_flat_triangles, summary));
     }
     for (i, p) in lines.polylines.iter().enumerate() {
-        for (k, v) in p.iter().enumerate() {
-            if !(check_coord(v[0]) && check_coord(v[1])) {
-                let s = &lines.sources[i];
-                return Err(Error::Format {
-                    path: s.path.to_path_buf(),
-                    message: format!(
-                        "{s}, vertex {k}: coordinate ({}, {}) is outside the supported range",
-                        v[0], v[1]
-                    ),
-                });
-            }
-        }
+        check_coords(p, &lines.sources[i])?;
     }
-    let mut opts = CleanOptions::default();
-    if let Some(t) = o.z_tolerance {
-        opts.z_tolerance = t;
-    }
-    if let Some((mem, tmp)) = stream
-        && !o.no_flat_triangles
-        && (drape.is_some() || lines.polylines.iter().flatten().all(|v| !v[2].is_nan()))
+    if let Some(b) = stream
+        && let Some(drape) = drape
     {
-        // Half of --mem for the cleaner's sorts, a quarter for the half-edges', which stay
-        // open (as much as fits in that quarter) while the points are read with the other half.
-        let cleaned = lines.clean_streamed(&opts, mem / 2, tmp)?;
-        let sources = std::mem::take(&mut lines.sources);
-        drop(lines);
-        summary.vertices = cleaned.stats.vertices;
-        summary.segments = cleaned.stats.segments;
-        summary.clean = cleaned.stats;
-        summary.z_conflicts = cleaned.warnings.clone();
-        summary.cleaner = Some(cleaned.held);
-        let mut feed = super::line_feed::build(cleaned, mem / 4, tmp)?;
-        if let Some(drape) = drape {
-            summary.draped = feed.drape(drape, &sources)?;
-        }
-        return Ok(Prepared {
-            pslg: None,
-            feed: std::sync::Mutex::new(Some(feed)),
-            trim,
-            flat: false,
-            summary,
-        });
+        let lines = LineStream {
+            paths: Vec::new(),
+            then: lines,
+        };
+        return streamed(&lines, o, b, drape, trim, summary);
     }
-    let mut pslg = lines.clean(&opts)?;
+    let mut pslg = lines.clean(&clean_options(o))?;
     summary.vertices = pslg.vertices.len() as u64;
     summary.segments = pslg.segments.len() as u64;
     summary.clean = pslg.stats;
@@ -386,6 +395,125 @@ pub(crate) fn prepare_with(
         feed: Default::default(),
         trim,
         flat: o.no_flat_triangles,
+        summary,
+    })
+}
+
+fn clean_options(o: &LineOptions) -> CleanOptions {
+    let mut opts = CleanOptions::default();
+    if let Some(t) = o.z_tolerance {
+        opts.z_tolerance = t;
+    }
+    opts
+}
+
+/// [`Error::Format`] naming the vertex of the polyline `p` (from `source`) outside the range of
+/// the predicates.
+fn check_coords(p: &[[f64; 3]], source: &Source) -> Result<()> {
+    for (k, v) in p.iter().enumerate() {
+        if !(check_coord(v[0]) && check_coord(v[1])) {
+            return Err(Error::Format {
+                path: source.path.to_path_buf(),
+                message: format!(
+                    "{source}, vertex {k}: coordinate ({}, {}) is outside the supported range",
+                    v[0], v[1]
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The polylines of a [`LineStream`] for the streamed cleaner: each checked as it is read
+/// ([`check_coords`]), and counted.
+struct Checked<'a> {
+    lines: &'a LineStream,
+    count: std::cell::Cell<u64>,
+    /// The most vertices the reader held at once.
+    held: std::cell::Cell<u64>,
+}
+
+impl PolylineSource for Checked<'_> {
+    fn for_each_polyline(&self, f: &mut dyn FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()> {
+        let mut n = 0u64;
+        let held = self.lines.for_each(&mut |l, s| {
+            check_coords(l, s)?;
+            n += 1;
+            f(l)
+        })?;
+        self.count.set(n);
+        self.held.set(self.held.get().max(held));
+        Ok(())
+    }
+}
+
+/// The lines of `lines` cleaned by the streamed cleaner within `b`, draped with `drape`, their
+/// graph sorted for the sweep ([`super::line_feed`]): the polylines are read once (twice with
+/// mixed heights) and never held.
+///
+/// # Errors
+/// The readers', the cleaner's, the sorts' and the draping pass's.
+fn streamed(
+    lines: &LineStream,
+    o: &LineOptions,
+    b: LineBudget,
+    drape: Drape,
+    trim: Trim,
+    mut summary: LineSummary,
+) -> Result<Prepared> {
+    let source = Checked {
+        lines,
+        count: Default::default(),
+        held: Default::default(),
+    };
+    // Half of --mem for the cleaner's sorts, a quarter for the half-edges', which stay open (as
+    // much as fits in that quarter) while the points are read with the other half.
+    let cleaned = crate::breaklines::clean::stream::clean_streamed(
+        &source,
+        &clean_options(o),
+        b.mem / 2,
+        b.tmp,
+    )
+    .map_err(|e| match e {
+        Error::BadLine {
+            polyline,
+            vertex,
+            message,
+        } => match lines.source(polyline) {
+            Some(s) => Error::Format {
+                path: s.path.to_path_buf(),
+                message: format!("{s}, vertex {vertex}: {message}"),
+            },
+            None => Error::BadLine {
+                polyline,
+                vertex,
+                message,
+            },
+        },
+        e => e,
+    })?;
+    summary.polylines = source.count.get();
+    // Mixed heights: the cleaner read them all into memory.
+    summary.read_held_vertices = if cleaned.held.in_memory {
+        cleaned.stats.input_vertices
+    } else {
+        source.held.get()
+    };
+    if summary.polylines == 0 {
+        return Ok(Prepared::none(trim, false, summary));
+    }
+    summary.vertices = cleaned.stats.vertices;
+    summary.segments = cleaned.stats.segments;
+    summary.clean = cleaned.stats;
+    summary.z_conflicts = cleaned.warnings.clone();
+    summary.cleaner = Some(cleaned.held);
+    let mut feed = super::line_feed::build(cleaned, b.mem / 4, b.tmp)?;
+    summary.draped = feed.drape(drape, &|l| lines.source(l))?;
+    Ok(Prepared {
+        pslg: None,
+        feed: std::sync::Mutex::new(Some(feed)),
+        trim,
+        flat: false,
         summary,
     })
 }

@@ -346,7 +346,7 @@ fn run_engine(
             }
             drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
         }),
-        Some((config.options().mem, config.tmp_dir())),
+        Some(config.line_budget()),
     )?;
     drive::run(config, Some(&prepared), mesh, sinks)
 }

@@ -115,30 +115,35 @@ impl Work {
 /// Every `x, y` finite and in the predicates' range, every `z` finite or `NaN`.
 pub(super) fn check_input(polylines: &[Vec<[f64; 3]>]) -> Result<()> {
     let bad = polylines.par_iter().enumerate().find_map_first(|(i, p)| {
-        p.iter().enumerate().find_map(|(k, v)| {
-            let message = if !(v[0].is_finite() && v[1].is_finite()) {
-                format!("coordinate is not finite ({}, {})", v[0], v[1])
-            } else if !(check_coord(v[0]) && check_coord(v[1])) {
-                format!(
-                    "coordinate ({}, {}) is outside the range where the predicates are exact",
-                    v[0], v[1]
-                )
-            } else if v[2].is_infinite() {
-                format!("z is infinite ({})", v[2])
-            } else {
-                return None;
-            };
-            Some(Error::BadLine {
-                polyline: i as u64,
-                vertex: k as u64,
-                message,
-            })
-        })
+        p.iter()
+            .enumerate()
+            .find_map(|(k, v)| check_vertex(i as u64, k as u64, v).err())
     });
     match bad {
         Some(e) => Err(e),
         None => Ok(()),
     }
+}
+
+/// [`check_input`] for vertex `vertex` of polyline `polyline`.
+pub(super) fn check_vertex(polyline: u64, vertex: u64, v: &[f64; 3]) -> Result<()> {
+    let message = if !(v[0].is_finite() && v[1].is_finite()) {
+        format!("coordinate is not finite ({}, {})", v[0], v[1])
+    } else if !(check_coord(v[0]) && check_coord(v[1])) {
+        format!(
+            "coordinate ({}, {}) is outside the range where the predicates are exact",
+            v[0], v[1]
+        )
+    } else if v[2].is_infinite() {
+        format!("z is infinite ({})", v[2])
+    } else {
+        return Ok(());
+    };
+    Err(Error::BadLine {
+        polyline,
+        vertex,
+        message,
+    })
 }
 
 /// For every input vertex (in input order), its distinct-vertex id; ids are given in order of

@@ -25,8 +25,10 @@
 //! without `z` takes one from the first line it lies on in `clean()`'s global pair order, and a
 //! later interpolation along a segment ending there reads it: that order is not the sweep's, so
 //! mixed heights are cleaned by `clean()` in memory and its graph is streamed out
-//! ([`StreamStats::in_memory`]). Rules 1–3 are streamed too (`input.rs`); the polylines are
-//! still given as a slice (read whole by [`crate::input::lines`]), read in order, twice.
+//! ([`StreamStats::in_memory`]). Rules 1–3 are streamed too (`input.rs`); the polylines come
+//! from a [`PolylineSource`], read once in order (a slice, or the breakline files read polyline
+//! by polyline: [`crate::input::lines::LineStream`]), so they are never held whole unless the
+//! heights are mixed.
 
 use super::intersect::{contact, point_on};
 use super::split::{along, closer, z_between};
@@ -122,14 +124,37 @@ impl Iterator for Cleaned {
     }
 }
 
+/// Polylines given in order, one at a time, as often as asked: what [`clean_streamed`] reads
+/// (once; a second time into memory when the heights are mixed).
+pub trait PolylineSource {
+    /// Calls `f` with every polyline, in order (the `i`-th call is polyline `i`).
+    ///
+    /// # Errors
+    /// The source's (a file that cannot be read or parsed) and the first of `f`'s.
+    fn for_each_polyline(&self, f: &mut dyn FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()>;
+}
+
+impl PolylineSource for [Vec<[f64; 3]>] {
+    fn for_each_polyline(&self, f: &mut dyn FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()> {
+        self.iter().try_for_each(|l| f(l))
+    }
+}
+
+impl PolylineSource for Vec<Vec<[f64; 3]>> {
+    fn for_each_polyline(&self, f: &mut dyn FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()> {
+        self.as_slice().for_each_polyline(f)
+    }
+}
+
 /// [`super::clean`] with the rounds streamed (module docs): the same graph as pieces in sweep
 /// order, with `clean()`'s counters and warnings, and what was held. The sorts take `mem` bytes
-/// and spill under `tmp_dir`.
+/// and spill under `tmp_dir`. The polylines are read once, in order, and not held (but for
+/// mixed heights, cleaned in memory).
 ///
 /// # Errors
-/// As [`super::clean`], and the external sort's.
+/// As [`super::clean`], and the external sort's and the source's.
 pub fn clean_streamed(
-    polylines: &[Vec<[f64; 3]>],
+    polylines: &(impl PolylineSource + ?Sized),
     options: &CleanOptions,
     mem: u64,
     tmp_dir: &Path,
@@ -176,14 +201,21 @@ pub fn clean_streamed(
     )))
 }
 
-/// Mixed heights: `clean()` in memory, its graph sorted and streamed out.
+/// Mixed heights: `clean()` in memory (the polylines read whole), its graph sorted and streamed
+/// out.
 fn in_memory(
-    polylines: &[Vec<[f64; 3]>],
+    source: &(impl PolylineSource + ?Sized),
     options: &CleanOptions,
     mem: u64,
     tmp_dir: &Path,
 ) -> Result<Cleaned> {
-    let mut w = Work::new(polylines, options)?;
+    let mut polylines = Vec::new();
+    source.for_each_polyline(&mut |l| {
+        polylines.push(l.to_vec());
+        Ok(())
+    })?;
+    let mut w = Work::new(&polylines, options)?;
+    drop(polylines);
     w.run(&mut |w: &Work, first| Ok(w.find(first)))?;
     let s = Streamer {
         snap: w.snap,

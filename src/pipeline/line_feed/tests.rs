@@ -81,7 +81,7 @@ fn run(
         ..Default::default()
     };
     let config = RunConfig::new(input, options).unwrap();
-    let stream = streamed.then_some((mem, config.tmp_dir()));
+    let stream = streamed.then_some(config.line_budget());
     let points_only = config.points_only();
     let mut drape = |sink: &mut dyn super::super::TriangleSink| {
         drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
@@ -109,7 +109,16 @@ fn same(points: &Path, lines: &LineOptions, policy: DuplicatePolicy, mem: u64) -
     }
     let (la, mut lb) = (sa.breaklines.unwrap(), sb.breaklines.clone().unwrap());
     assert!(la.cleaner.is_none() && lb.cleaner.is_some());
+    // Read whole in memory (and streamed with mixed heights, cleaned in memory); streamed, the
+    // longest polyline (these are text files).
+    let held = lb.read_held_vertices;
+    if lb.cleaner.is_some_and(|c| c.in_memory) {
+        assert_eq!(held, la.read_held_vertices);
+    } else {
+        assert!(held < la.read_held_vertices, "{held} {la:?}");
+    }
     lb.cleaner = None;
+    lb.read_held_vertices = la.read_held_vertices;
     assert_eq!(
         serde_json::to_string(&la).unwrap(),
         serde_json::to_string(&lb).unwrap()
@@ -239,4 +248,52 @@ fn streamed_lines_without_z_are_draped_as_in_memory() {
         .breaklines
         .unwrap();
     assert!(b.draped > 0 && b.draped < b.vertices, "{b:?}");
+}
+
+/// The streamed reader keeps no `Source` per polyline: a 2-D vertex outside the points' TIN is
+/// still named by its line's file and line number (found by reading the file again).
+#[test]
+fn a_streamed_line_outside_the_points_is_named_by_its_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let nan = f64::NAN;
+    let pts: Vec<[f64; 3]> = (0..100)
+        .map(|i| [(i % 10) as f64, (i / 10) as f64, 1.0])
+        .collect();
+    let lines = [
+        vec![[1.0, 1.0, nan], [2.0, 2.0, nan]],
+        vec![[3.0, 3.0, nan], [4.0, 4.0, nan], [20.0, 4.0, nan]],
+    ];
+    let (p, l) = files(dir.path(), &pts, &lines);
+    let o = LineOptions {
+        breaklines: vec![l.clone()],
+        ..LineOptions::default()
+    };
+    let input = Input {
+        paths: vec![p],
+        filter: crate::input::las::Filter::keep_all(),
+        duplicates: DuplicatePolicy::First,
+        lines: o.clone(),
+    };
+    let options = RunOptions {
+        mem: 1 << 20,
+        tmp_dir: Some(dir.path().to_path_buf()),
+        progress: false,
+        ..Default::default()
+    };
+    let config = RunConfig::new(input, options).unwrap();
+    let points_only = config.points_only();
+    let mut drape = |sink: &mut dyn super::super::TriangleSink| {
+        drive::run(&points_only, None, None, &mut [sink]).map(|_| ())
+    };
+    let e = match lines::prepare_with(
+        &o,
+        config.read_lines(),
+        Some(&mut drape),
+        Some(config.line_budget()),
+    ) {
+        Ok(_) => panic!("a vertex outside the points was draped"),
+        Err(e) => e.to_string(),
+    };
+    let want = format!("{}:4", l.display());
+    assert!(e.contains(&want) && e.contains("(20, 4) has no z"), "{e}");
 }

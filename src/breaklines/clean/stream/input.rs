@@ -11,10 +11,14 @@
 //! 3. each occurrence, flagged when it is the end of a segment, sorted by position: a vertex
 //!    that no segment ends at is an isolated vertex.
 //!
+//! The polylines are read once, in order, from a [`PolylineSource`] (step 2 finds where each
+//! polyline ends from the polyline each record carries), so they are never held.
+//!
 //! Held: the records of one position (its duplicates), the sorts' budgets.
 
-use super::super::dedup::check_input;
+use super::super::dedup::check_vertex;
 use super::super::{CleanOptions, CleanStats, MAX_WARNINGS, SNAP_REL, ZConflict, ZConflictKind};
+use super::PolylineSource;
 use super::rec::{DIRTY, POINT, Rec, V};
 use crate::error::{Error, Result};
 use crate::geom::predicates::sweep_cmp;
@@ -39,7 +43,9 @@ struct Occ {
     line: u32,
     /// Sorted by position (0) or by `g` (1).
     by_g: u32,
-    pad: [u64; 2],
+    /// The polyline of `g` (steps 1 and 2).
+    own: u64,
+    pad: u64,
 }
 
 impl SortKey for Occ {
@@ -69,35 +75,31 @@ pub(super) struct Prepared {
     pub(super) snap: f64,
 }
 
-/// Rules 1–3 over `polylines` read in order, within `mem` bytes of sorting; `None` when the
-/// heights are mixed (some vertices with `z`, some without).
+/// Rules 1–3 over `polylines` read once in order, within `mem` bytes of sorting; `None` when
+/// the heights are mixed (some vertices with `z`, some without).
 ///
 /// # Errors
-/// As `clean()`'s input checks, and the external sorts'.
+/// As `clean()`'s input checks (the first bad vertex in input order), the source's and the
+/// external sorts'.
 pub(super) fn prepare(
-    polylines: &[Vec<[f64; 3]>],
+    polylines: &(impl PolylineSource + ?Sized),
     options: &CleanOptions,
     mem: u64,
     tmp: &Path,
 ) -> Result<Option<Prepared>> {
-    check_input(polylines)?;
-    let total: usize = polylines.iter().map(Vec::len).sum();
-    if total >= u32::MAX as usize {
-        return Err(Error::TooManyPoints {
-            count: total as u64,
-            max: u32::MAX as u64 - 1,
-        });
-    }
     let budget = (mem / 4).max(1 << 20);
-    let mut stats = CleanStats {
-        input_vertices: total as u64,
-        ..CleanStats::default()
-    };
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     let mut by_pos = ExternalSorter::<Occ>::new(budget, tmp);
-    let mut g = 0u64;
-    for (i, l) in polylines.iter().enumerate() {
-        for v in l {
+    let (mut g, mut i) = (0u64, 0u64);
+    polylines.for_each_polyline(&mut |l| {
+        if g + l.len() as u64 >= u64::from(u32::MAX) {
+            return Err(Error::TooManyPoints {
+                count: g + l.len() as u64,
+                max: u64::from(u32::MAX) - 1,
+            });
+        }
+        for (k, v) in l.iter().enumerate() {
+            check_vertex(i, k as u64, v)?;
             let p = [v[0] + 0.0, v[1] + 0.0];
             for k in 0..2 {
                 lo[k] = lo[k].min(p[k]);
@@ -108,11 +110,19 @@ pub(super) fn prepare(
                 z: v[2],
                 g,
                 line: i as u32,
+                own: i,
                 ..Occ::default()
             })?;
             g += 1;
         }
-    }
+        i += 1;
+        Ok(())
+    })?;
+    let total = g;
+    let mut stats = CleanStats {
+        input_vertices: total,
+        ..CleanStats::default()
+    };
     if total == 0 {
         (lo, hi) = ([0.0; 2], [0.0; 2]);
     }
@@ -183,32 +193,29 @@ pub(super) fn prepare(
     }
     warnings.sort_by_key(|w| w.0);
     warnings.truncate(MAX_WARNINGS);
-    // Step 2: the segments, beside the polylines in input order.
+    // Step 2: the segments, the records in input order (a polyline ends where `own` changes).
     let mut items = ExternalSorter::<Rec>::new(budget, tmp);
     let mut ends = ExternalSorter::<Rec>::new(budget, tmp);
     let mut merge = by_g.finish()?;
     let mut count = 0u64;
-    for (i, l) in polylines.iter().enumerate() {
-        stats.input_segments += l.len().saturating_sub(1) as u64;
-        let mut prev: Option<(V, bool)> = None;
-        for _ in 0..l.len() {
-            let Some(o) = merge.next() else {
-                return Err(merge.take_error().unwrap_or_else(|| {
-                    Error::Internal("breakline vertices lost in sorting".into())
-                }));
-            };
-            let v = V {
-                p: o.p,
-                z: o.z,
-                round: 0,
-                id: o.id,
-                vline: o.line,
-            };
-            let mut used = false;
-            if let Some((u, u_used)) = prev {
+    let mut prev: Option<(V, bool, u64)> = None;
+    let mut read = 0u64;
+    for o in merge.by_ref() {
+        read += 1;
+        let v = V {
+            p: o.p,
+            z: o.z,
+            round: 0,
+            id: o.id,
+            vline: o.line,
+        };
+        let mut used = false;
+        match prev {
+            Some((u, u_used, line)) if line == o.own => {
+                stats.input_segments += 1;
                 let joined = u.id != v.id;
                 if joined {
-                    items.push(Rec::new(u, v, i as u32, DIRTY))?;
+                    items.push(Rec::new(u, v, o.own as u32, DIRTY))?;
                     count += 1;
                 } else {
                     stats.zero_length += 1;
@@ -216,14 +223,19 @@ pub(super) fn prepare(
                 used = joined;
                 ends.push(occurrence(u, u_used || joined))?;
             }
-            prev = Some((v, used));
+            Some((u, u_used, _)) => ends.push(occurrence(u, u_used))?,
+            None => {}
         }
-        if let Some((u, used)) = prev {
-            ends.push(occurrence(u, used))?;
-        }
+        prev = Some((v, used, o.own));
+    }
+    if let Some((u, used, _)) = prev {
+        ends.push(occurrence(u, used))?;
     }
     if let Some(e) = merge.take_error() {
         return Err(e);
+    }
+    if read != total {
+        return Err(Error::Internal("breakline vertices lost in sorting".into()));
     }
     drop(merge);
     // Step 3: vertices no segment ends at.
