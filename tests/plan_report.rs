@@ -74,7 +74,9 @@ fn unbase64(text: &str) -> Vec<u8> {
         let n = q
             .iter()
             .take_while(|&&c| c != b'=')
-            .fold((0u32, 0), |(n, k), &c| (n | u32::from(value(c)) << (18 - 6 * k), k + 1));
+            .fold((0u32, 0), |(n, k), &c| {
+                (n | u32::from(value(c)) << (18 - 6 * k), k + 1)
+            });
         out.extend_from_slice(&n.0.to_be_bytes()[1..n.1.max(1)]);
     }
     out
@@ -338,7 +340,10 @@ fn report_of_a_plan_without_a_raster_says_it_has_no_overview() {
     let note = j["overview"]["note"].as_str().unwrap();
     assert!(note.contains("no raster"), "{note}");
     let html = std::fs::read_to_string(&page).unwrap();
-    assert!(!html.contains("<img"), "an image for a plan without a raster");
+    assert!(
+        !html.contains("<img"),
+        "an image for a plan without a raster"
+    );
     assert!(html.contains("No overview: the plan&#39;s product (contours) has no raster"));
 }
 

@@ -271,14 +271,16 @@ fn crs_of(text: Option<&str>) -> Option<Crs> {
 /// How a grid of `spec` is shaded: its cell sizes in the heights' units — times the scale
 /// given, or, for a geographic CRS when neither the scale nor the z factor is given, times the
 /// metres a degree spans at the grid's centre latitude (returned too) — and the z factor.
-fn scaling(spec: &RasterSpec, crs: Option<&Crs>, o: &HillshadeOptions) -> (Scaled, Option<[f64; 2]>) {
+fn scaling(
+    spec: &RasterSpec,
+    crs: Option<&Crs>,
+    o: &HillshadeOptions,
+) -> (Scaled, Option<[f64; 2]>) {
     let (ew, ns) = spec.cell_size();
     let metres_per_degree = (o.scale.is_none()
         && o.z_factor.is_none()
         && crs.is_some_and(Crs::is_geographic))
-    .then(|| {
-        metres_per_degree(spec.transform[3] + 0.5 * f64::from(spec.rows) * spec.transform[5])
-    });
+    .then(|| metres_per_degree(spec.transform[3] + 0.5 * f64::from(spec.rows) * spec.transform[5]));
     let [sx, sy] = metres_per_degree.unwrap_or([o.scale.unwrap_or(1.0); 2]);
     let g = Scaled {
         ew: ew * sx,
@@ -442,12 +444,18 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
         let bytes = write_u8_image(output, w, h, &geo, &r, |stage| {
             let mut values = vec![0f32; w as usize];
             let mut rows = Rows::new(reader);
-            shaded = shade_rows(w as usize, || rows.next(), g, o, |row, line| {
-                for (v, b) in values.iter_mut().zip(line) {
-                    *v = f32::from(*b);
-                }
-                stage.write(row, 0, &values)
-            })?;
+            shaded = shade_rows(
+                w as usize,
+                || rows.next(),
+                g,
+                o,
+                |row, line| {
+                    for (v, b) in values.iter_mut().zip(line) {
+                        *v = f32::from(*b);
+                    }
+                    stage.write(row, 0, &values)
+                },
+            )?;
             Ok(())
         })?;
         return Ok(HillshadeSummary {
