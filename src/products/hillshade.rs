@@ -557,6 +557,39 @@ mod tests {
         assert_eq!(v, grey);
     }
 
+    /// A grid held in memory shades as the same grid read from a file (a report's overview).
+    #[test]
+    fn a_grid_in_memory_shades_as_from_a_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let dem = dir.path().join("d.tif");
+        let spec = GridSpec::aligned(2.0, 0, 0, 6, 5, -9999.0);
+        let z = |c: u32, r: u32| {
+            let (x, y) = (spec.centre_x(c), spec.centre_y(r));
+            (0.3 * x * x - 0.2 * x * y + y).round()
+        };
+        let mut w: Box<dyn GridWriter> = Box::new(GeoTiffWriter::create(&dem, &spec).unwrap());
+        for r in 0..5u32 {
+            let v: Vec<f32> = (0..6u32).map(|c| z(c, r) as f32).collect();
+            w.write_row(r, &v).unwrap();
+        }
+        w.write_cell(2, 3, -9999.0).unwrap();
+        w.finish().unwrap();
+        let png = dir.path().join("s.png");
+        hillshade(&dem, &png, &HillshadeOptions::default()).unwrap();
+        let mut values: Vec<f64> = (0..5u32)
+            .flat_map(|r| (0..6u32).map(move |c| (c, r)))
+            .map(|(c, r)| z(c, r))
+            .collect();
+        values[2 * 6 + 3] = f64::NAN;
+        let [x0, top] = spec.origin();
+        let mem = RasterSpec::north_up(6, 5, x0, top, 2.0);
+        let (bytes, shaded) = hillshade_png(&values, &mem, &HillshadeOptions::default()).unwrap();
+        assert_eq!(shaded, 29);
+        let other = dir.path().join("m.png");
+        std::fs::write(&other, bytes).unwrap();
+        assert_eq!(read_png(&other), read_png(&png));
+    }
+
     #[test]
     fn not_a_grid_is_an_error_naming_the_file() {
         let dir = tempfile::tempdir().unwrap();
