@@ -180,3 +180,143 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
     std::fs::write(&index, &bytes).unwrap();
     sweeptin(&["run", s(&plan), "--task", "0", "-q"], "run");
 }
+
+/// `sweeptin index --chunks FILE`: the plan's chunk index, built once per file (as LAStools'
+/// `lasindex` writes a `.lax`) and stored beside it.
+fn index_chunks(args: &[&str]) -> serde_json::Value {
+    let mut all = vec!["index", "--chunks", "--json"];
+    all.extend_from_slice(args);
+    let o = sweeptin(&all, "index --chunks");
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// `plan` into `job` over `input`: its stderr.
+fn plan_into(input: &Path, job: &Path) -> std::process::Output {
+    bin()
+        .args(["plan", "dem", s(input), "--cell", "1", "--tile", "32", "-o"])
+        .arg(job)
+        .output()
+        .unwrap()
+}
+
+/// Every plan over a big plain LAZ decoded it whole to index its chunks, with no way to build
+/// the index once per file: `index --chunks` writes `FILE.chunks` (each chunk's box and
+/// points), keeps it while it is up to date, and `plan` reads it instead of decoding the file.
+#[test]
+fn index_chunks_stores_the_chunk_boxes_beside_the_file_and_plan_reads_them() {
+    let t = tempfile::tempdir().unwrap();
+    let laz = t.path().join("topo.laz");
+    std::fs::copy(topography(), &laz).unwrap();
+    let copc = t.path().join("topo.copc.laz");
+    std::fs::copy(data::data_dir().join("lidR_Topography.copc.laz"), &copc).unwrap();
+    let j = index_chunks(&[s(&laz), s(&copc)]);
+    let f = &j["files"][0];
+    assert_eq!(f["state"], "built", "{f}");
+    let side = t.path().join("topo.laz.chunks");
+    assert_eq!(f["index"], s(&side));
+    let chunks = f["chunks"].as_array().unwrap();
+    assert!(chunks.len() >= 2, "{f}");
+    let points: u64 = chunks.iter().map(|c| c["points"].as_u64().unwrap()).sum();
+    assert_eq!(points, 73_403);
+    for c in chunks {
+        let b: Vec<f64> = serde_json::from_value(c["bounds"].clone()).unwrap();
+        assert!(b[0] <= b[2] && b[1] <= b[3], "{c}");
+    }
+    assert_eq!(j["files"][1]["state"], "copc");
+    assert!(!t.path().join("topo.copc.laz.chunks").exists());
+    let built = std::fs::read(&side).unwrap();
+    assert_eq!(index_chunks(&[s(&laz)])["files"][0]["state"], "up_to_date");
+
+    // The plan reads it: the same bytes in the job, and a file whose points no longer decode
+    // (same size and time) still plans with its index, not without it.
+    let o = plan_into(&laz, &t.path().join("job"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains(&format!("read the chunk index {}", s(&side))),
+        "{e}"
+    );
+    assert_eq!(
+        std::fs::read(t.path().join("job/index/0.chunks")).unwrap(),
+        built
+    );
+    let when = std::fs::metadata(&laz).unwrap().modified().unwrap();
+    let mut bytes = std::fs::read(&laz).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid..mid + 4000].fill(0xa5);
+    std::fs::write(&laz, &bytes).unwrap();
+    let file = std::fs::File::options().write(true).open(&laz).unwrap();
+    file.set_modified(when).unwrap();
+    drop(file);
+    let o = plan_into(&laz, &t.path().join("job2"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read(t.path().join("job2/index/0.chunks")).unwrap(),
+        built
+    );
+    std::fs::rename(&side, t.path().join("aside")).unwrap();
+    let o = plan_into(&laz, &t.path().join("job3"));
+    assert!(
+        !o.status.success()
+            || std::fs::read(t.path().join("job3/index/0.chunks")).unwrap() != built,
+        "the plan did not decode the file without its index"
+    );
+
+    // A file rewritten since (another time): its index is left, with a warning, and built again.
+    std::fs::rename(t.path().join("aside"), &side).unwrap();
+    std::fs::copy(topography(), &laz).unwrap();
+    let o = plan_into(&laz, &t.path().join("job4"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{e}");
+    assert!(e.contains("is of another version"), "{e}");
+    assert_eq!(
+        std::fs::read(&side).unwrap(),
+        built,
+        "the stored index was changed"
+    );
+    assert_eq!(index_chunks(&[s(&laz)])["files"][0]["state"], "built");
+}
+
+/// The LAS blocks of 50,000 records, `-o DIR`, and what `index --chunks` refuses: two files
+/// whose indexes would have one name, and a URL.
+#[test]
+fn index_chunks_of_las_blocks_into_a_directory_and_its_refusals() {
+    let t = tempfile::tempdir().unwrap();
+    let las =
+        data::data_dir().join("lidar/ign_50m_tiles/test_data_77050_627755_LA93_IGN69_ground.las");
+    let out = t.path().join("ix");
+    let j = index_chunks(&[s(&las), "-o", s(&out)]);
+    let f = &j["files"][0];
+    let want = out.join("test_data_77050_627755_LA93_IGN69_ground.las.chunks");
+    assert_eq!(f["index"], s(&want), "{f}");
+    assert!(want.is_file());
+    let chunks = f["chunks"].as_array().unwrap();
+    let total = f["points"].as_u64().unwrap();
+    assert_eq!(chunks.len() as u64, total.div_ceil(50_000), "{f}");
+    for (k, c) in chunks.iter().enumerate() {
+        assert_eq!(c["first"].as_u64().unwrap(), k as u64 * 50_000);
+    }
+    assert!(!PathBuf::from(format!("{}.chunks", s(&las))).exists());
+
+    let other = t.path().join("b");
+    std::fs::create_dir(&other).unwrap();
+    let copy = other.join(las.file_name().unwrap());
+    std::fs::copy(&las, &copy).unwrap();
+    let o = bin()
+        .args(["index", "--chunks", s(&las), s(&copy), "-o", s(&out)])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = bin()
+        .args(["index", "--chunks", "https://example.invalid/a.laz"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("local file"), "{e}");
+}

@@ -92,10 +92,12 @@ enum Command {
     /// contours, summed volumes.
     Merge(plan::MergeArgs),
     /// The report of a plan's night: a static HTML page (an SVG map of the tiles coloured by
-    /// state, the failed tasks with their messages and re-run commands, totals) or --json.
+    /// state, the failed tasks with their messages and re-run commands, totals, a hillshade of
+    /// a DEM's mosaic) or --json.
     Report(report::Args),
     /// Write a virtual point cloud (.vpc) listing LAS/LAZ/COPC files with their extents, counts
-    /// and CRS (headers only), for QGIS, PDAL wrench, lasR and sweeptin's own box reads.
+    /// and CRS (headers only), for QGIS, PDAL wrench, lasR and sweeptin's own box reads; or, with
+    /// --chunks, each plain LAZ/LAS file's chunk index (FILE.chunks), which plans read.
     Index(index::Args),
     /// Classify the ground (class 2) and low noise (7) of lidar points by progressive TIN
     /// densification, and write the points back with their new classes.

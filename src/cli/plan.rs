@@ -431,6 +431,16 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     }
     let path = plan.save(&dir)?;
     super::input::warn_headers(&plan.warnings);
+    for (index, stored) in plan.stored_chunk_indexes() {
+        match stored {
+            Ok(()) => eprintln!("sweeptin: read the chunk index {}", index.display()),
+            Err(why) => eprintln!(
+                "sweeptin: warning: the chunk index {} {why}: the plan indexed the file again \
+                 (`sweeptin index --chunks` stores a new one)",
+                index.display()
+            ),
+        }
+    }
     if let Some(g) = &lines {
         super::input::warn_z_conflicts(&g.warnings, g.stats.z_conflicts);
     }

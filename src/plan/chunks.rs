@@ -1,5 +1,8 @@
 //! The chunk indexes of a plan's plain LAZ/LAS files ([`ChunkIndex`]), built once when the plan
-//! is saved and read by every task: `DIR/index/<k>.chunks` for the plan's file `k`.
+//! is saved and read by every task: `DIR/index/<k>.chunks` for the plan's file `k`; and the
+//! index stored beside a file (`FILE.chunks`, [`store_chunk_index`], `sweeptin index
+//! --chunks`), which `plan` copies instead of decoding the file when it is of the file as it is
+//! (the same size and modification time, the same chunk table).
 //!
 //! A file holds a magic string, the input file's [`FileStamp`] when the index was built, the
 //! spans (byte offset, bytes, points, first point, box) and the SHA-256 of all that: a task
@@ -7,11 +10,12 @@
 //! plan's stamp ties the file, and so its index, to the plan).
 
 use super::files::{FileStamp, own_file, write_atomic};
-use super::{Plan, bad};
+use super::{Plan, PlanFile, bad};
 use crate::error::{Error, Result};
 use crate::input::las::chunks::SpanBox;
 use crate::input::las::{ChunkIndex, FileInfo};
 use rayon::prelude::*;
+use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -50,7 +54,10 @@ impl Plan {
             }
             let f = &self.files[k];
             let info = FileInfo::read(&f.path)?;
-            let ix = ChunkIndex::build(&info)?;
+            let ix = match stored(f, &info) {
+                Some(Ok(ix)) => ix,
+                _ => ChunkIndex::build(&info)?,
+            };
             let stamp = f.stamp.unwrap_or(FileStamp {
                 bytes: 0,
                 modified: 0,
@@ -85,45 +92,26 @@ impl Plan {
                 format!("the chunk index of {} is {what}; {again}", f.path.display()),
             )
         };
-        if bytes.len() < HEAD + SUM || &bytes[..8] != MAGIC {
-            return Err(damaged("not a sweeptin chunk index (or truncated)"));
-        }
-        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or_default());
-        let n = usize::try_from(u64_at(32)).unwrap_or(usize::MAX);
-        let len = n.checked_mul(SPAN).and_then(|s| s.checked_add(HEAD + SUM));
-        if len != Some(bytes.len()) {
-            return Err(damaged(
-                "truncated or extended (its length is not what it says)",
-            ));
-        }
-        let body = bytes.len() - SUM;
-        if sha(&bytes[..body]) != bytes[body..] {
-            return Err(damaged("damaged or edited (its checksum does not match)"));
-        }
-        let stamp = FileStamp {
-            bytes: u64_at(8),
-            modified: u64_at(16) as i64,
-            nanos: u32::from_le_bytes(bytes[24..28].try_into().unwrap_or_default()),
-        };
+        let (ix, stamp) = decode(&bytes).map_err(damaged)?;
         if f.stamp.is_some_and(|s| s != stamp) {
             return Err(damaged("of another version of the file than the plan's"));
         }
-        let spans = (0..n)
-            .map(|i| {
-                let o = HEAD + i * SPAN;
-                let f64_at = |k: usize| f64::from_bits(u64_at(o + 32 + 8 * k));
-                SpanBox {
-                    span: crate::input::las::header::Chunk {
-                        offset: u64_at(o),
-                        bytes: u64_at(o + 8),
-                        points: u64_at(o + 16),
-                        first: u64_at(o + 24),
-                    },
-                    rect: [f64_at(0), f64_at(1), f64_at(2), f64_at(3)],
-                }
+        Ok(ix)
+    }
+
+    /// What `plan` makes of the chunk index stored beside each of its plain LAZ/LAS files
+    /// (`FILE.chunks`, [`store_chunk_index`]): read (instead of decoding the file), or left
+    /// because it is not of the file as it is (and why). Files without one are not listed.
+    pub fn stored_chunk_indexes(&self) -> Vec<(PathBuf, std::result::Result<(), String>)> {
+        self.files
+            .iter()
+            .filter(|f| f.indexed)
+            .filter_map(|f| {
+                let info = FileInfo::read(&f.path).ok()?;
+                let r = stored(f, &info)?;
+                Some((beside(&f.path), r.map(|_| ())))
             })
-            .collect();
-        Ok(ChunkIndex { spans })
+            .collect()
     }
 
     /// The chunk indexes of the indexed files task `i` reads with a buffer of `buffer`.
@@ -145,6 +133,186 @@ impl Plan {
             })
             .collect()
     }
+}
+
+/// Where the chunk index of `file` is stored beside it: `FILE.chunks` (`tile.laz.chunks`).
+pub fn beside(file: &Path) -> PathBuf {
+    let mut name = file.as_os_str().to_os_string();
+    name.push(".chunks");
+    PathBuf::from(name)
+}
+
+/// The index stored beside the plan's local file `f` (whose header is `info`), if there is one:
+/// read when it is of the file as the plan pinned it (its stamp, its chunk table), else why not.
+fn stored(f: &PlanFile, info: &FileInfo) -> Option<std::result::Result<ChunkIndex, String>> {
+    let stamp = f.stamp?;
+    let p = beside(&f.path);
+    let bytes = match std::fs::read(&p) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return None,
+        Err(e) => return Some(Err(format!("cannot be read ({e})"))),
+        Ok(b) => b,
+    };
+    Some(match decode(&bytes) {
+        Err(why) => Err(format!("is {why}")),
+        Ok((_, s)) if s != stamp => Err(format!(
+            "is of another version of {} (its size or modification time differs)",
+            f.path.display()
+        )),
+        Ok((ix, _)) => match ix.check(info) {
+            Ok(()) => Ok(ix),
+            Err(_) => Err("does not list the file's chunks (of another file?)".into()),
+        },
+    })
+}
+
+/// One span of a stored chunk index, as `sweeptin index --chunks --json` prints it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ChunkBox {
+    /// Index of its first point in the file.
+    pub first: u64,
+    /// Its points.
+    pub points: u64,
+    /// `[xmin, ymin, xmax, ymax]` of its points (none without points).
+    pub bounds: Option<[f64; 4]>,
+}
+
+/// What [`store_chunk_index`] did with one file.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StoredChunks {
+    /// The LAS/LAZ file.
+    pub file: PathBuf,
+    /// The index written or kept (none for a COPC file, which carries its own, or a file
+    /// without points).
+    pub index: Option<PathBuf>,
+    /// `"built"`, `"up_to_date"` (the index there is of the file as it is: kept), `"copc"` or
+    /// `"no_points"`.
+    pub state: &'static str,
+    /// Points in the file.
+    pub points: u64,
+    /// Its spans, in file order: the LAZ chunks, or blocks of
+    /// [`LAS_BLOCK`](crate::input::las::chunks::LAS_BLOCK) LAS records.
+    pub chunks: Vec<ChunkBox>,
+}
+
+/// Builds the chunk index of the local plain LAZ/LAS file `file` (one decoding pass, its
+/// chunks on every core) and writes it, atomically, to `FILE.chunks` beside it, or into the
+/// directory `out` (`out/<name>.chunks`): the index `plan` would build, which a plan over the
+/// file reads instead when it lies beside the file ([`Plan::stored_chunk_indexes`]). An index
+/// already there that is of the file as it is (the same size and modification time, the same
+/// chunk table) is kept. A COPC file (its own index) and a file without points get none.
+///
+/// # Errors
+/// [`Error::Options`] for a URL, or an index path that is not a regular file; the decoder's
+/// errors naming the file; [`Error::Io`] naming the index.
+pub fn store_chunk_index(file: &Path, out: Option<&Path>) -> Result<StoredChunks> {
+    if crate::input::source::is_remote(file) {
+        return Err(Error::Options(format!(
+            "{}: a chunk index is stored beside a local file (a remote file is read by range; \
+             copy it first, or convert it to COPC)",
+            file.display()
+        )));
+    }
+    let info = FileInfo::read(file)?;
+    let mut s = StoredChunks {
+        file: file.to_path_buf(),
+        index: None,
+        state: "no_points",
+        points: info.point_count,
+        chunks: Vec::new(),
+    };
+    if info.copc.is_some() {
+        s.state = "copc";
+        return Ok(s);
+    }
+    if info.point_count == 0 {
+        return Ok(s);
+    }
+    let p = match out {
+        None => beside(file),
+        Some(d) => d.join(beside(Path::new(file.file_name().unwrap_or_default()))),
+    };
+    if let Ok(m) = std::fs::symlink_metadata(&p)
+        && !m.file_type().is_file()
+    {
+        return Err(Error::Options(format!(
+            "{}: not a regular file where the chunk index of {} goes (remove it, or give -o \
+             another directory)",
+            p.display(),
+            file.display()
+        )));
+    }
+    let stamp = FileStamp::of(file)?;
+    let kept = std::fs::read(&p).ok().and_then(|b| {
+        let (ix, st) = decode(&b).ok()?;
+        (st == stamp && ix.check(&info).is_ok()).then_some(ix)
+    });
+    let ix = match kept {
+        Some(ix) => {
+            s.state = "up_to_date";
+            ix
+        }
+        None => {
+            let ix = ChunkIndex::build(&info)?;
+            // The file changed while it was decoded: an index of neither version.
+            if FileStamp::of(file)? != stamp {
+                return Err(Error::Options(format!(
+                    "{} changed while it was indexed: index it again when it is written",
+                    file.display()
+                )));
+            }
+            write_atomic(&p, &encode(&ix, stamp))?;
+            s.state = "built";
+            ix
+        }
+    };
+    s.chunks = ix
+        .span_boxes()
+        .map(|(first, points, bounds)| ChunkBox {
+            first,
+            points,
+            bounds,
+        })
+        .collect();
+    s.index = Some(p);
+    Ok(s)
+}
+
+/// The index and the file's stamp in `bytes`, or what is wrong with them.
+fn decode(bytes: &[u8]) -> std::result::Result<(ChunkIndex, FileStamp), &'static str> {
+    if bytes.len() < HEAD + SUM || &bytes[..8] != MAGIC {
+        return Err("not a sweeptin chunk index (or truncated)");
+    }
+    let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or_default());
+    let n = usize::try_from(u64_at(32)).unwrap_or(usize::MAX);
+    let len = n.checked_mul(SPAN).and_then(|s| s.checked_add(HEAD + SUM));
+    if len != Some(bytes.len()) {
+        return Err("truncated or extended (its length is not what it says)");
+    }
+    let body = bytes.len() - SUM;
+    if sha(&bytes[..body]) != bytes[body..] {
+        return Err("damaged or edited (its checksum does not match)");
+    }
+    let stamp = FileStamp {
+        bytes: u64_at(8),
+        modified: u64_at(16) as i64,
+        nanos: u32::from_le_bytes(bytes[24..28].try_into().unwrap_or_default()),
+    };
+    let spans = (0..n)
+        .map(|i| {
+            let o = HEAD + i * SPAN;
+            let f64_at = |k: usize| f64::from_bits(u64_at(o + 32 + 8 * k));
+            SpanBox {
+                span: crate::input::las::header::Chunk {
+                    offset: u64_at(o),
+                    bytes: u64_at(o + 8),
+                    points: u64_at(o + 16),
+                    first: u64_at(o + 24),
+                },
+                rect: [f64_at(0), f64_at(1), f64_at(2), f64_at(3)],
+            }
+        })
+        .collect();
+    Ok((ChunkIndex { spans }, stamp))
 }
 
 /// The bytes of index `ix` of a file with stamp `stamp`.

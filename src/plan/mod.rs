@@ -20,7 +20,7 @@
 //! every triangle (by its lowest vertex in sweep order) has exactly one owner tile.
 
 mod area;
-mod chunks;
+pub mod chunks;
 mod engine;
 use area::{
     centres_within, fitting_tile, grown, meets_hull, overlaps, tile_bounds, tile_count,
@@ -31,6 +31,7 @@ mod ground;
 mod lines;
 pub mod merge;
 pub mod mesh;
+mod overview;
 pub mod report;
 mod stitch;
 mod task;

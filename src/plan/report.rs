@@ -2,10 +2,12 @@
 //! records — done, empty, failed (`tiles/task_<i>.failed.json`, [`TaskFailure`], written by a
 //! task that fails) or not run — with totals and throughput, as a typed summary ([`Report`],
 //! the `--json` of the command) and as one static HTML page ([`html`]): an SVG map of the
-//! tiles coloured by state, a hover title per tile, and the failed tasks with their messages
+//! tiles coloured by state, a hover title per tile, the overview of a DEM's mosaic (a small
+//! hillshade, [`Overview`], embedded as a `data:` URI) and the failed tasks with their messages
 //! and the command that runs each again. Every string from a record is escaped.
 
 use super::files::{own_file, write_atomic};
+pub use super::overview::Overview;
 use super::{Plan, TaskRecord};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -173,6 +175,9 @@ pub struct Report {
     pub peak_memory: Option<u64>,
     /// Every task, in plan order.
     pub task_list: Vec<TaskReport>,
+    /// The overview of the mosaic, drawn from the finished tasks' DEM tiles, or why there is
+    /// none.
+    pub overview: Overview,
 }
 
 /// The report of the plan `plan` (its file) in `dir`, from its tasks' records.
@@ -196,8 +201,10 @@ pub fn report(plan: &Plan, path: &Path, dir: &Path) -> Result<Report> {
         points_per_second: None,
         peak_memory: None,
         task_list: Vec::with_capacity(plan.tiles.len()),
+        overview: Overview::default(),
     };
     let mut finished_seconds = 0.0;
+    let mut dem = Vec::new();
     for t in &plan.tiles {
         let i = t.index;
         let rerun = Some(format!("sweeptin run {} --task {i}", path.display()));
@@ -223,6 +230,9 @@ pub fn report(plan: &Plan, path: &Path, dir: &Path) -> Result<Report> {
                 r.decoded += rec.decoded;
                 r.triangles += rec.triangles;
                 finished_seconds += rec.seconds;
+                if let Some((_, p)) = rec.outputs.iter().find(|(n, _)| n == "dem") {
+                    dem.push((i, p.clone()));
+                }
             }
         } else if let Some(f) = plan.failure(dir, i)? {
             task.state = TaskState::Failed;
@@ -240,6 +250,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &Path) -> Result<Report> {
         r.task_list.push(task);
     }
     r.points_per_second = (finished_seconds > 0.0).then(|| r.points as f64 / finished_seconds);
+    r.overview = super::overview::overview(plan, &dem);
     Ok(r)
 }
 
@@ -315,13 +326,14 @@ pub fn html(r: &Report) -> String {
         mib(r.peak_memory)
     );
     map(&mut h, r);
+    overview(&mut h, r);
     failures(&mut h, r);
     h.push_str("</body></html>\n");
     h
 }
 
-/// The SVG map: one rect per task, y up.
-fn map(h: &mut String, r: &Report) {
+/// The tiles' extent and the map's pixels per unit; none without tasks.
+fn frame(r: &Report) -> Option<([f64; 4], f64)> {
     let mut b = [f64::MAX, f64::MAX, f64::MIN, f64::MIN];
     for t in &r.task_list {
         b = [
@@ -331,10 +343,15 @@ fn map(h: &mut String, r: &Report) {
             b[3].max(t.bounds[3]),
         ];
     }
-    if r.task_list.is_empty() {
-        return;
-    }
     let scale = MAP_WIDTH / (b[2] - b[0]).max(b[3] - b[1]).max(f64::MIN_POSITIVE);
+    (!r.task_list.is_empty()).then_some((b, scale))
+}
+
+/// The SVG map: one rect per task, y up.
+fn map(h: &mut String, r: &Report) {
+    let Some((b, scale)) = frame(r) else {
+        return;
+    };
     let (w, ht) = ((b[2] - b[0]) * scale, (b[3] - b[1]) * scale);
     let _ = writeln!(
         h,
@@ -384,6 +401,33 @@ fn map(h: &mut String, r: &Report) {
         );
     }
     h.push_str("</svg>\n");
+}
+
+/// The overview of the mosaic under the map, on the map's scale, or why there is none.
+fn overview(h: &mut String, r: &Report) {
+    let o = &r.overview;
+    let size = o
+        .bounds
+        .zip(frame(r))
+        .map(|(ob, (_, scale))| ((ob[2] - ob[0]) * scale, (ob[3] - ob[1]) * scale));
+    match size {
+        Some((w, ht)) if o.drawn => {
+            let _ = writeln!(
+                h,
+                "<h2>Overview</h2><p>{}</p>\n<img class=\"overview\" alt=\"hillshade of the \
+                 mosaic\" width=\"{w:.0}\" height=\"{ht:.0}\" src=\"{}\">",
+                crate::output::escape_markup(&o.note),
+                o.data_uri()
+            );
+        }
+        _ => {
+            let _ = writeln!(
+                h,
+                "<h2>Overview</h2><p class=\"no-overview\">No overview: {}.</p>",
+                crate::output::escape_markup(&o.note)
+            );
+        }
+    }
 }
 
 /// The table of failed tasks, with the command that runs each again.

@@ -358,8 +358,9 @@ impl Plan {
         }
     }
 
-    /// Checks that every output the finished task's record `r` names is a file of the size it
-    /// recorded (a record of an older build, without sizes: present). `merge` checks every tile
+    /// Checks that every output the finished task's record `r` (as [`Plan::record`] reads it:
+    /// its outputs already under `dir`) names is a file of the size it recorded (a record of an
+    /// older build, without sizes: present). `merge` checks every tile
     /// so, whatever it writes (a VRT over a truncated tile was written, exit 0, and GDAL failed
     /// on it later).
     ///
@@ -367,7 +368,8 @@ impl Plan {
     /// [`Error::Format`] naming the output, its size and the task to run again.
     pub fn check_task_outputs(&self, dir: &Path, r: &TaskRecord) -> Result<()> {
         for (k, (name, p)) in r.outputs.iter().enumerate() {
-            let path = dir.join(p);
+            // Not joined to `dir` again: `report job/plan.json` looked under `job/job/`.
+            let path = p.clone();
             let len = std::fs::metadata(&path)
                 .ok()
                 .filter(|m| m.is_file())

@@ -26,7 +26,7 @@
 
 use crate::crs::{Crs, LostCrs};
 use crate::error::{Error, Result};
-use crate::input::raster::RasterReader;
+use crate::input::raster::{RasterReader, RasterSpec};
 use crate::output::AtomicFile;
 use crate::output::cog::{TiffGeo, write_u8_image};
 use crate::output::raster::{RasterFormat, RasterOptions};
@@ -162,6 +162,14 @@ impl Rows {
     /// Rows read per band.
     const BAND: u32 = 256;
 
+    fn new(reader: RasterReader) -> Rows {
+        Rows {
+            reader,
+            next_row: 0,
+            ready: VecDeque::new(),
+        }
+    }
+
     fn next(&mut self) -> Result<Option<Vec<f64>>> {
         let (w, h) = (self.reader.spec().cols, self.reader.spec().rows);
         if self.ready.is_empty() && self.next_row < h {
@@ -189,29 +197,24 @@ struct Shaded {
     z: [f64; 2],
 }
 
-/// Shades every row of `reader`'s grid, calling `row` with each (values 1–255, 0 where the DEM
-/// has no data).
+/// Shades every row `next` gives (`w` cells each, north to south, missing cells NaN), calling
+/// `row` with each (values 1–255, 0 where the DEM has no data).
 fn shade_rows(
-    reader: RasterReader,
+    w: usize,
+    mut next: impl FnMut() -> Result<Option<Vec<f64>>>,
     g: Scaled,
     o: &HillshadeOptions,
     mut row: impl FnMut(u32, &[u8]) -> Result<()>,
 ) -> Result<Shaded> {
     let Scaled { ew, ns, k } = g;
-    let w = reader.spec().cols as usize;
-    let mut rows = Rows {
-        reader,
-        next_row: 0,
-        ready: VecDeque::new(),
-    };
     let mut shaded = 0u64;
     let mut z = [f64::INFINITY, f64::NEG_INFINITY];
     let mut prev: Option<Vec<f64>> = None;
-    let mut cur = rows.next()?;
+    let mut cur = next()?;
     let mut line = vec![0u8; w];
     let mut r = 0u32;
     while let Some(c) = cur.take() {
-        let next = rows.next()?;
+        let below = next()?;
         let cell = |row: Option<&Vec<f64>>, x: Option<usize>| match (row, x) {
             (Some(r), Some(x)) if x < w => r[x],
             _ => f64::NAN,
@@ -222,7 +225,7 @@ fn shade_rows(
                 continue;
             }
             let (l, m, rr) = (x.checked_sub(1), Some(x), Some(x + 1));
-            let (a, b) = (prev.as_ref(), next.as_ref());
+            let (a, b) = (prev.as_ref(), below.as_ref());
             let win = [
                 [cell(a, l), cell(a, m), cell(a, rr)],
                 [cell(Some(&c), l), c[x], cell(Some(&c), rr)],
@@ -235,7 +238,7 @@ fn shade_rows(
         row(r, &line)?;
         r += 1;
         prev = Some(c);
-        cur = next;
+        cur = below;
     }
     Ok(Shaded { cells: shaded, z })
 }
@@ -263,6 +266,98 @@ fn crs_of(text: Option<&str>) -> Option<Crs> {
         }),
         None => Crs::from_wkt_bytes(t.as_bytes()),
     }
+}
+
+/// How a grid of `spec` is shaded: its cell sizes in the heights' units — times the scale
+/// given, or, for a geographic CRS when neither the scale nor the z factor is given, times the
+/// metres a degree spans at the grid's centre latitude (returned too) — and the z factor.
+fn scaling(
+    spec: &RasterSpec,
+    crs: Option<&Crs>,
+    o: &HillshadeOptions,
+) -> (Scaled, Option<[f64; 2]>) {
+    let (ew, ns) = spec.cell_size();
+    let metres_per_degree = (o.scale.is_none()
+        && o.z_factor.is_none()
+        && crs.is_some_and(Crs::is_geographic))
+    .then(|| metres_per_degree(spec.transform[3] + 0.5 * f64::from(spec.rows) * spec.transform[5]));
+    let [sx, sy] = metres_per_degree.unwrap_or([o.scale.unwrap_or(1.0); 2]);
+    let g = Scaled {
+        ew: ew * sx,
+        ns: ns * sy,
+        k: o.z_factor.unwrap_or(1.0),
+    };
+    (g, metres_per_degree)
+}
+
+/// Writes a grey + alpha PNG of `w × h` to `out` (named `name` in errors): `shade` is given the
+/// function that takes each row of shades (0, no data, transparent).
+fn write_png<W: Write>(
+    out: W,
+    w: u32,
+    h: u32,
+    name: &Path,
+    shade: impl FnOnce(&mut dyn FnMut(u32, &[u8]) -> Result<()>) -> Result<Shaded>,
+) -> Result<Shaded> {
+    let png_err = |e: png::EncodingError| Error::Output {
+        path: name.to_path_buf(),
+        message: format!("PNG: {e}"),
+    };
+    let mut enc = png::Encoder::new(out, w, h);
+    enc.set_color(png::ColorType::GrayscaleAlpha);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut writer = enc.write_header().map_err(png_err)?;
+    let mut stream = writer.stream_writer().map_err(png_err)?;
+    let mut ga = vec![0u8; w as usize * 2];
+    let shaded = shade(&mut |_, line| {
+        for (x, v) in line.iter().enumerate() {
+            ga[2 * x] = *v;
+            ga[2 * x + 1] = if *v == 0 { 0 } else { 255 };
+        }
+        stream.write_all(&ga).map_err(|e| Error::write(name, e))
+    })?;
+    stream.finish().map_err(png_err)?;
+    Ok(shaded)
+}
+
+/// The hillshade of a north-up grid held in memory (`values`, row-major from the north-west
+/// cell, missing cells NaN; its size, cells and CRS from `spec`) as the bytes of a grey + alpha
+/// PNG (nodata transparent), shaded as [`hillshade`] shades a file; with the cells shaded.
+/// A plan's report draws the overview of its mosaic with it.
+///
+/// # Errors
+/// [`Error::Options`] for options out of range; [`Error::Internal`] for values that are not
+/// `spec`'s cells or a grid that is not north-up.
+pub fn hillshade_png(
+    values: &[f64],
+    spec: &RasterSpec,
+    o: &HillshadeOptions,
+) -> Result<(Vec<u8>, u64)> {
+    o.check()?;
+    let (w, h) = (spec.cols, spec.rows);
+    if values.len() as u64 != spec.cells()
+        || !(spec.is_axis_aligned() && spec.transform[1] > 0.0 && spec.transform[5] < 0.0)
+    {
+        return Err(Error::Internal(format!(
+            "hillshade_png: {} values for a {w} × {h} grid of transform {:?}",
+            values.len(),
+            spec.transform
+        )));
+    }
+    let crs = crs_of(spec.crs.as_deref());
+    let (g, _) = scaling(spec, crs.as_ref(), o);
+    let mut bytes = Vec::new();
+    let mut rows = values.chunks_exact(w.max(1) as usize);
+    let shaded = write_png(&mut bytes, w, h, Path::new("(in memory)"), |line| {
+        shade_rows(
+            w as usize,
+            || Ok(rows.next().map(<[f64]>::to_vec)),
+            g,
+            o,
+            line,
+        )
+    })?;
+    Ok((bytes, shaded.cells))
 }
 
 /// Shades the DEM at `input` (GeoTIFF, COG or ESRI ASCII grid, read a band of rows at a time)
@@ -298,16 +393,7 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
     let (ew, ns) = spec.cell_size();
     let origin = [spec.transform[0], spec.transform[3]];
     let crs = crs_of(spec.crs.as_deref());
-    // The horizontal scale: given, or from a geographic CRS when no z factor is given either.
-    let metres_per_degree =
-        (o.scale.is_none() && o.z_factor.is_none() && crs.as_ref().is_some_and(Crs::is_geographic))
-            .then(|| metres_per_degree(spec.transform[3] + 0.5 * f64::from(h) * spec.transform[5]));
-    let [sx, sy] = metres_per_degree.unwrap_or([o.scale.unwrap_or(1.0); 2]);
-    let g = Scaled {
-        ew: ew * sx,
-        ns: ns * sy,
-        k: o.z_factor.unwrap_or(1.0),
-    };
+    let (g, metres_per_degree) = scaling(&spec, crs.as_ref(), o);
     // Heights that vary by more than ten times the grid's extent, over cells under 0.01 units,
     // with no CRS to say so: degrees shaded as if they were metres.
     let no_crs = crs.is_none();
@@ -357,12 +443,19 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
         };
         let bytes = write_u8_image(output, w, h, &geo, &r, |stage| {
             let mut values = vec![0f32; w as usize];
-            shaded = shade_rows(reader, g, o, |row, line| {
-                for (v, b) in values.iter_mut().zip(line) {
-                    *v = f32::from(*b);
-                }
-                stage.write(row, 0, &values)
-            })?;
+            let mut rows = Rows::new(reader);
+            shaded = shade_rows(
+                w as usize,
+                || rows.next(),
+                g,
+                o,
+                |row, line| {
+                    for (v, b) in values.iter_mut().zip(line) {
+                        *v = f32::from(*b);
+                    }
+                    stage.write(row, 0, &values)
+                },
+            )?;
             Ok(())
         })?;
         return Ok(HillshadeSummary {
@@ -376,27 +469,10 @@ pub fn hillshade(input: &Path, output: &Path, o: &HillshadeOptions) -> Result<Hi
         });
     }
     let mut out = AtomicFile::create(output)?;
-    let png_err = |e: png::EncodingError| Error::Output {
-        path: output.to_path_buf(),
-        message: format!("PNG: {e}"),
-    };
-    let shaded;
-    {
-        let mut enc = png::Encoder::new(&mut out, w, h);
-        enc.set_color(png::ColorType::GrayscaleAlpha);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut writer = enc.write_header().map_err(png_err)?;
-        let mut stream = writer.stream_writer().map_err(png_err)?;
-        let mut ga = vec![0u8; w as usize * 2];
-        shaded = shade_rows(reader, g, o, |_, line| {
-            for (x, v) in line.iter().enumerate() {
-                ga[2 * x] = *v;
-                ga[2 * x + 1] = if *v == 0 { 0 } else { 255 };
-            }
-            stream.write_all(&ga).map_err(|e| Error::write(output, e))
-        })?;
-        stream.finish().map_err(png_err)?;
-    }
+    let mut rows = Rows::new(reader);
+    let shaded = write_png(&mut out, w, h, output, |line| {
+        shade_rows(w as usize, || rows.next(), g, o, line)
+    })?;
     out.flush().map_err(|e| Error::write(output, e))?;
     let bytes = out.commit()?;
     write_world_file(output, origin, [ew, ns])?;
@@ -479,6 +555,39 @@ mod tests {
         };
         let grey: Vec<u8> = px.chunks(2).map(|p| p[0]).collect();
         assert_eq!(v, grey);
+    }
+
+    /// A grid held in memory shades as the same grid read from a file (a report's overview).
+    #[test]
+    fn a_grid_in_memory_shades_as_from_a_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let dem = dir.path().join("d.tif");
+        let spec = GridSpec::aligned(2.0, 0, 0, 6, 5, -9999.0);
+        let z = |c: u32, r: u32| {
+            let (x, y) = (spec.centre_x(c), spec.centre_y(r));
+            (0.3 * x * x - 0.2 * x * y + y).round()
+        };
+        let mut w: Box<dyn GridWriter> = Box::new(GeoTiffWriter::create(&dem, &spec).unwrap());
+        for r in 0..5u32 {
+            let v: Vec<f32> = (0..6u32).map(|c| z(c, r) as f32).collect();
+            w.write_row(r, &v).unwrap();
+        }
+        w.write_cell(2, 3, -9999.0).unwrap();
+        w.finish().unwrap();
+        let png = dir.path().join("s.png");
+        hillshade(&dem, &png, &HillshadeOptions::default()).unwrap();
+        let mut values: Vec<f64> = (0..5u32)
+            .flat_map(|r| (0..6u32).map(move |c| (c, r)))
+            .map(|(c, r)| z(c, r))
+            .collect();
+        values[2 * 6 + 3] = f64::NAN;
+        let [x0, top] = spec.origin();
+        let mem = RasterSpec::north_up(6, 5, x0, top, 2.0);
+        let (bytes, shaded) = hillshade_png(&values, &mem, &HillshadeOptions::default()).unwrap();
+        assert_eq!(shaded, 29);
+        let other = dir.path().join("m.png");
+        std::fs::write(&other, bytes).unwrap();
+        assert_eq!(read_png(&other), read_png(&png));
     }
 
     #[test]

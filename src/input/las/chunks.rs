@@ -10,7 +10,8 @@
 //! inside it, and the points kept, with their indices, are exactly those of a full read.
 //!
 //! LAStools' `.lax` files are not read (an index of their own, built by `lasindex`): the boxes
-//! are built by decoding.
+//! are built by decoding, by `plan` or once per file by `sweeptin index --chunks`, which stores
+//! them beside the file (`plan::chunks`).
 
 use super::decode::{Fields, FileDecoder, spans};
 use super::header::{Chunk, FileInfo, format_error};
@@ -96,6 +97,18 @@ impl ChunkIndex {
             .iter()
             .filter(|s| s.span.points > 0)
             .map(|s| s.rect)
+    }
+
+    /// Every span in file order: the index of its first point, its points, and the box
+    /// `[xmin, ymin, xmax, ymax]` of its points (none without points).
+    pub fn span_boxes(&self) -> impl Iterator<Item = (u64, u64, Option<[f64; 4]>)> + '_ {
+        self.spans.iter().map(|s| {
+            (
+                s.span.first,
+                s.span.points,
+                (s.span.points > 0).then_some(s.rect),
+            )
+        })
     }
 
     /// The box `[xmin, ymin, xmax, ymax]` and number of points of every span with points.
