@@ -8,20 +8,9 @@ use crate::remote_server as remote;
 
 use remote::{Fault, FaultServer, Moto, Nginx};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn sweeptin(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_sweeptin"));
-    c.args(args);
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    c.output().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::remote_server::{stderr, sweeptin};
 
 /// `sweeptin dem INPUT --cell 1 EXTRA… -o OUT` must succeed; the DEM's bytes.
 fn dem(input: &str, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> (Vec<u8>, String) {
@@ -155,7 +144,7 @@ fn through_with(
         far.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
-    let o = sweeptin(&args, &[]);
+    let o = sweeptin::<&str>(&args, &[]);
     (local, far, o, out)
 }
 

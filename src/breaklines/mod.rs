@@ -76,23 +76,6 @@ impl crate::input::lines::Lines {
 
     /// A cleaning error naming its polyline's file and feature.
     fn name_line(&self, e: Error) -> Error {
-        match e {
-            Error::BadLine {
-                polyline,
-                vertex,
-                message,
-            } => match self.sources.get(polyline as usize) {
-                Some(s) => Error::Format {
-                    path: s.path.to_path_buf(),
-                    message: format!("{s}, vertex {vertex}: {message}"),
-                },
-                None => Error::BadLine {
-                    polyline,
-                    vertex,
-                    message,
-                },
-            },
-            other => other,
-        }
+        crate::input::lines::name_bad_line(e, |p| self.sources.get(p as usize).cloned())
     }
 }

@@ -272,6 +272,29 @@ impl LineStream {
     }
 }
 
+/// A cleaning error of a polyline ([`Error::BadLine`]) named by the file and place it comes
+/// from (`source` of its index), when known; other errors as they are.
+pub(crate) fn name_bad_line(e: Error, source: impl FnOnce(u64) -> Option<Source>) -> Error {
+    match e {
+        Error::BadLine {
+            polyline,
+            vertex,
+            message,
+        } => match source(polyline) {
+            Some(s) => Error::Format {
+                path: s.path.to_path_buf(),
+                message: format!("{s}, vertex {vertex}: {message}"),
+            },
+            None => Error::BadLine {
+                polyline,
+                vertex,
+                message,
+            },
+        },
+        other => other,
+    }
+}
+
 /// Takes the CRS `other` declares into `crs`.
 ///
 /// # Errors

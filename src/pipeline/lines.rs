@@ -474,24 +474,7 @@ fn streamed(
         b.mem / 2,
         b.tmp,
     )
-    .map_err(|e| match e {
-        Error::BadLine {
-            polyline,
-            vertex,
-            message,
-        } => match lines.source(polyline) {
-            Some(s) => Error::Format {
-                path: s.path.to_path_buf(),
-                message: format!("{s}, vertex {vertex}: {message}"),
-            },
-            None => Error::BadLine {
-                polyline,
-                vertex,
-                message,
-            },
-        },
-        e => e,
-    })?;
+    .map_err(|e| crate::input::lines::name_bad_line(e, |p| lines.source(p)))?;
     summary.polylines = source.count.get();
     // Mixed heights: the cleaner read them all into memory.
     summary.read_held_vertices = if cleaned.held.in_memory {
