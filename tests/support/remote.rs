@@ -318,31 +318,37 @@ impl FaultServer {
     }
 }
 
+/// A request's line and its headers (names in lower case, values trimmed); `None` once the
+/// client has closed the connection.
+fn read_request(read: &mut BufReader<TcpStream>) -> Option<(String, Vec<(String, String)>)> {
+    let mut line = String::new();
+    if read.read_line(&mut line).unwrap_or(0) == 0 {
+        return None;
+    }
+    let mut headers = Vec::new();
+    loop {
+        let mut h = String::new();
+        if read.read_line(&mut h).unwrap_or(0) == 0 {
+            return None;
+        }
+        let h = h.trim_end();
+        if h.is_empty() {
+            return Some((line, headers));
+        }
+        let (k, v) = h.split_once(':').unwrap_or((h, ""));
+        headers.push((k.to_ascii_lowercase(), v.trim().to_string()));
+    }
+}
+
 fn serve(stream: TcpStream, body: &[u8], fault: Fault, count: &AtomicUsize) {
     let mut read = BufReader::new(stream.try_clone().unwrap());
     let mut out = stream;
     loop {
-        let mut line = String::new();
-        if read.read_line(&mut line).unwrap_or(0) == 0 {
+        let Some((_, headers)) = read_request(&mut read) else {
             return;
-        }
-        let (mut range, mut if_match) = (None, None);
-        loop {
-            let mut h = String::new();
-            if read.read_line(&mut h).unwrap_or(0) == 0 {
-                return;
-            }
-            let h = h.trim_end();
-            if h.is_empty() {
-                break;
-            }
-            let (k, v) = h.split_once(':').unwrap_or((h, ""));
-            match k.to_ascii_lowercase().as_str() {
-                "range" => range = Some(v.trim().to_string()),
-                "if-match" => if_match = Some(v.trim().to_string()),
-                _ => {}
-            }
-        }
+        };
+        let header = |name: &str| headers.iter().find(|h| h.0 == name).map(|h| h.1.clone());
+        let (range, if_match) = (header("range"), header("if-match"));
         let n = count.fetch_add(1, Ordering::SeqCst);
         // The object as it is now: the second version is the first with its last byte changed.
         let replaced = matches!(fault, Fault::Replace { after, .. } if n >= after);
@@ -468,26 +474,13 @@ fn serve_s3(stream: TcpStream, silent: u16, log: &std::sync::Mutex<Vec<String>>)
     let mut read = BufReader::new(stream.try_clone().unwrap());
     let mut out = stream;
     loop {
-        let mut line = String::new();
-        if read.read_line(&mut line).unwrap_or(0) == 0 {
+        let Some((line, headers)) = read_request(&mut read) else {
             return;
-        }
-        let mut length = 0usize;
-        loop {
-            let mut h = String::new();
-            if read.read_line(&mut h).unwrap_or(0) == 0 {
-                return;
-            }
-            let h = h.trim_end();
-            if h.is_empty() {
-                break;
-            }
-            if let Some((k, v)) = h.split_once(':')
-                && k.eq_ignore_ascii_case("content-length")
-            {
-                length = v.trim().parse().unwrap_or(0);
-            }
-        }
+        };
+        let length: usize = headers
+            .iter()
+            .find(|h| h.0 == "content-length")
+            .map_or(0, |h| h.1.parse().unwrap_or(0));
         let mut body = vec![0u8; length];
         if read.read_exact(&mut body).is_err() {
             return;
