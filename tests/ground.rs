@@ -302,6 +302,48 @@ fn the_classes_do_not_depend_on_threads_memory_or_the_api() {
 }
 
 #[test]
+fn a_densify_cell_judges_the_others_once_the_same_for_any_threads_and_memory() {
+    let files = &data::ign_tiles()[..1];
+    let full = GroundParams {
+        step: 2.0,
+        ..GroundParams::default()
+    };
+    let cell = GroundParams {
+        densify_cell: 1.0,
+        ..full
+    };
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+    };
+    let one = pool(1).install(|| classes_of(files, &cell, 24 << 20));
+    let two = pool(2).install(|| classes_of(files, &cell, 1 << 30));
+    assert_eq!(one, two);
+    // The points that do not densify are judged, not left out: mostly the full
+    // densification's classes (85 % of the points here, at this small step).
+    let all = classes_of(files, &full, 1 << 30);
+    let same = one.iter().zip(&all).filter(|(a, b)| a == b).count();
+    assert!(same * 100 >= all.len() * 80, "{same} of {}", all.len());
+    let ground = |c: &[u8]| c.iter().filter(|&&c| c == 2).count();
+    assert!(
+        ground(&one) * 10 >= ground(&all) * 7,
+        "{} {}",
+        ground(&one),
+        ground(&all)
+    );
+    assert!(
+        GroundParams {
+            densify_cell: -1.0,
+            ..cell
+        }
+        .check()
+        .is_err()
+    );
+}
+
+#[test]
 fn a_block_too_large_for_mem_is_refused_before_the_work() {
     let files = data::ign_tiles();
     let e = classify_files(

@@ -21,6 +21,7 @@ pub(crate) struct ParamsOpts {
     max_angle: Option<f64>,
     low_noise: Option<f64>,
     offset: Option<f64>,
+    densify_cell: Option<f64>,
     mirror: bool,
     reset: bool,
 }
@@ -51,6 +52,7 @@ impl ParamsOpts {
         p.max_angle = self.max_angle.unwrap_or(p.max_angle);
         p.low_noise = self.low_noise.unwrap_or(p.low_noise);
         p.offset = self.offset.unwrap_or(p.offset);
+        p.densify_cell = self.densify_cell.unwrap_or(p.densify_cell);
         p.mirror = self.mirror;
         p.reset = self.reset;
         p.check().map_err(to_py)?;

@@ -386,7 +386,17 @@ def _mem(mem: int | str | None) -> int:
 
 
 # The ground filter's parameters (:func:`ground`'s), taken with ``ground=True``.
-_GROUND_KEYS = ("preset", "step", "max_distance", "max_angle", "low_noise", "offset", "mirror", "reset")
+_GROUND_KEYS = (
+    "preset",
+    "step",
+    "max_distance",
+    "max_angle",
+    "low_noise",
+    "offset",
+    "densify_cell",
+    "mirror",
+    "reset",
+)
 
 
 def _ground_opts(ground: bool, options: dict[str, _typing.Any]) -> dict[str, _typing.Any] | None:

@@ -18,11 +18,12 @@ PRESETS = ("wilderness", "nature", "town", "city", "metro", "forest", "mountains
 
 def _params(preset: str | None, options: dict[str, _typing.Any]) -> dict[str, _typing.Any]:
     """The filter's parameters for the native module: ``None`` keeps the preset's value."""
-    unknown = set(options) - {"step", "max_distance", "max_angle", "low_noise", "offset", "mirror", "reset"}
+    known = {"step", "max_distance", "max_angle", "low_noise", "offset", "densify_cell", "mirror", "reset"}
+    unknown = set(options) - known
     if unknown:
         raise TypeError(f"unknown option(s): {', '.join(sorted(unknown))}")
     p: dict[str, _typing.Any] = {"preset": preset, "mirror": True, "reset": False}
-    for k in ("step", "max_distance", "max_angle", "low_noise", "offset"):
+    for k in ("step", "max_distance", "max_angle", "low_noise", "offset", "densify_cell"):
         v = options.get(k)
         p[k] = None if v is None else float(v)
     p["mirror"] = bool(options.get("mirror", True))
@@ -106,7 +107,7 @@ def ground(
 
     Parameters (keyword): ``preset`` (one of ``"wilderness"``, ``"nature"``, ``"town"``,
     ``"city"``, ``"metro"``, ``"forest"``, ``"mountains"``), ``step``, ``max_distance``,
-    ``max_angle``, ``low_noise``, ``offset`` (each over the preset's), ``mirror`` (default
+    ``max_angle``, ``low_noise``, ``offset``, ``densify_cell`` (each over the preset's), ``mirror`` (default
     ``True``), ``reset`` (the other points become class 1), ``mem``, ``tmp_dir`` (files).
     """
     from . import _files, _mem

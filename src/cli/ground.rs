@@ -29,6 +29,11 @@ pub struct GroundOptions {
     /// Points within this vertical distance of the final ground are ground too.
     #[arg(long, help_heading = HEADING, value_name = "DZ")]
     pub offset: Option<f64>,
+    /// Densification cell side: only the lowest point of each C x C cell densifies the ground
+    /// TIN, the others are judged once against the final TIN: faster on dense data, less
+    /// ground found on rough forest floors (docs/ACCURACY.md). Default 0: every point densifies.
+    #[arg(long, help_heading = HEADING, value_name = "C")]
+    pub densify_cell: Option<f64>,
     /// Do not try points near steep edges mirrored through the nearest ground vertex
     /// (Axelsson's mirroring, on by default).
     #[arg(long, help_heading = HEADING)]
@@ -77,6 +82,7 @@ impl GroundOptions {
         p.max_angle = self.max_angle.unwrap_or(p.max_angle);
         p.low_noise = self.low_noise.unwrap_or(p.low_noise);
         p.offset = self.offset.unwrap_or(p.offset);
+        p.densify_cell = self.densify_cell.unwrap_or(p.densify_cell);
         p.mirror = p.mirror && !self.no_mirror;
         p
     }
@@ -89,6 +95,7 @@ impl GroundOptions {
             self.max_angle,
             self.low_noise,
             self.offset,
+            self.densify_cell,
         ]
         .iter()
         .any(Option::is_some)

@@ -60,6 +60,12 @@ pub struct GroundParams {
     /// Mirror candidates that fail only on the angles through the nearest vertex (Axelsson's
     /// treatment of steep edges).
     pub mirror: bool,
+    /// Side of the densification cells: only the lowest point of each cell (aligned at the
+    /// origin) densifies the TIN; the others are judged once against the final ground TIN
+    /// (the densification's test, or `offset`). 0 (the default): every point densifies. A
+    /// plan written before this parameter existed reads as 0.
+    #[serde(default)]
+    pub densify_cell: f64,
     /// Points that are not ground (nor noise, nor withheld) become class 1.
     pub reset: bool,
 }
@@ -114,6 +120,7 @@ impl Default for GroundParams {
             low_noise: 5.0,
             offset: 0.2,
             mirror: true,
+            densify_cell: 0.0,
             reset: false,
         }
     }
@@ -143,6 +150,12 @@ impl GroundParams {
             return Err(Error::Options(format!(
                 "--offset {}: give a vertical distance >= 0, e.g. 0.05",
                 self.offset
+            )));
+        }
+        if !(self.densify_cell.is_finite() && self.densify_cell >= 0.0) {
+            return Err(Error::Options(format!(
+                "--densify-cell {}: give a cell side >= 0, e.g. 1 (0: every point densifies)",
+                self.densify_cell
             )));
         }
         if !(self.max_angle > 0.0 && self.max_angle < 90.0) {

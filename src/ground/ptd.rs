@@ -55,6 +55,9 @@ pub(crate) struct RunStats {
     pub seeds: u64,
     pub iterations: u64,
     pub evaluations: u64,
+    /// Candidates judged once against the final TIN (not the lowest of their densification
+    /// cell).
+    pub deferred: u64,
     /// Bytes the run held at its peak (its points, tags and labels, the densification's tables
     /// and TIN), for checking [`super::RUN_BYTES_PER_POINT`].
     pub bytes: u64,
@@ -183,11 +186,67 @@ pub(crate) fn classify_run(
         .filter(|&i| labels[i as usize] == Label::Other);
     let cand: Vec<u32> = cand.collect();
     drop(order);
+    let (cand, deferred) = by_densify_cell(&pts, tags, labels, cand, &seeds, params.densify_cell);
+    stats.deferred = deferred.len() as u64;
     drop(pts);
-    let densify = Densify::new(tin, virtuals, tags, labels, params, &cand)?;
+    let densify = Densify::new(tin, virtuals, tags, labels, params, &cand, deferred)?;
     drop(cand);
     densify.run(params.low_noise, params.offset, &mut stats)?;
     Ok(stats)
+}
+
+/// Splits the candidates `cand` (in their order) into those that densify — the lowest eligible
+/// point (seeds included; ties: the lower input index) of their densification cell
+/// (`floor(x / cell), floor(y / cell)`) — and the others, each with its cell's lowest point,
+/// in point order (spatial: [`spatial_order`]). A cell of 0: every candidate densifies.
+fn by_densify_cell(
+    pts: &[[f64; 3]],
+    tags: &[u64],
+    labels: &[Label],
+    cand: Vec<u32>,
+    seeds: &[u32],
+    cell: f64,
+) -> (Vec<u32>, Vec<(u32, u32)>) {
+    if cell == 0.0 || cand.is_empty() {
+        return (cand, Vec::new());
+    }
+    let id = |i: u32| Tag(tags[i as usize]).index();
+    let key = |i: u32| {
+        let p = pts[i as usize];
+        (
+            (p[1] / cell).floor() as i64,
+            (p[0] / cell).floor() as i64,
+            i,
+        )
+    };
+    let mut all: Vec<(i64, i64, u32)> = cand.iter().chain(seeds).map(|&i| key(i)).collect();
+    all.par_sort_unstable_by(|a, b| {
+        (a.0, a.1)
+            .cmp(&(b.0, b.1))
+            .then(pts[a.2 as usize][2].total_cmp(&pts[b.2 as usize][2]))
+            .then(id(a.2).cmp(&id(b.2)))
+    });
+    let mut densifies = vec![false; pts.len()];
+    let mut deferred = Vec::new();
+    for group in all.chunk_by(|a, b| (a.0, a.1) == (b.0, b.1)) {
+        let lowest = group[0].2;
+        if labels[lowest as usize] == Label::Other {
+            densifies[lowest as usize] = true;
+        }
+        deferred.extend(
+            group[1..]
+                .iter()
+                .filter(|k| labels[k.2 as usize] == Label::Other)
+                .map(|k| (k.2, lowest)),
+        );
+    }
+    drop(all);
+    deferred.par_sort_unstable();
+    let cand = cand
+        .into_iter()
+        .filter(|&i| densifies[i as usize])
+        .collect();
+    (cand, deferred)
 }
 
 /// Puts the points of a run over `rect` (and their tags) in Z order (Morton order of a
