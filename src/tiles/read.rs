@@ -162,12 +162,13 @@ fn index_points<R: IndexRecord>(
     Ok((index, spread, cpu))
 }
 
-/// Opens the files of `job`. A task of a plan whose files are all COPC reads only the points of
-/// its tile and buffer (their octrees skip the rest) and returns the rest of each file's extent
-/// as rectangles where points it did not read may lie, like the files it does not read at all.
-/// Other tasks keep every point of their files (decoding LAZ costs the same whatever is kept,
-/// and the points farther out settle the triangles along the data's edge without another run),
-/// unless their scope reads by area ([`TaskScope::by_area`]: `--ground`).
+/// Opens the files of `job`. A task of a plan whose files are all COPC, or all plain files with
+/// a chunk index whose chunks meeting the task's tile and buffer hold at most half of the
+/// points ([`pays_to_read_by_area`]), reads only the points of its tile and buffer and returns
+/// where the points it did not read may lie ([`unread_of`]), like the files it does not read at
+/// all. Other tasks keep every point of their files (decoding LAZ costs the same whatever is
+/// kept, and the points farther out settle the triangles along the data's edge without another
+/// run), unless their scope reads by area ([`TaskScope::by_area`]: `--ground`).
 fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Vec<[f64; 4]>)> {
     if let Some(sc) = scope {
         let infos = job
@@ -195,8 +196,7 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
             && (sc.by_area
                 || infos.iter().all(indexed)
                     && (infos.iter().all(|i| i.copc.is_some())
-                        || (inside_data(&infos, &sc.unread, area)
-                            && pays_to_read_by_area(&sc.chunks, area))))
+                        || pays_to_read_by_area(&sc.chunks, area)))
             && let Some(bbox) = crate::input::las::BBox::new(area[0], area[1], area[2], area[3])
         {
             let options = ReadOptions {
@@ -206,10 +206,7 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
                 ..ReadOptions::for_budget(job.mem)
             };
             let reader = LidarReader::open_with(job.paths, job.filter, options)?;
-            let outside = infos
-                .iter()
-                .flat_map(|i| outside_of(i.rect(), area))
-                .collect();
+            let outside = infos.iter().flat_map(|i| unread_of(i, sc, area)).collect();
             return Ok((reader, outside));
         }
     }
@@ -221,25 +218,31 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
     Ok((reader, Vec::new()))
 }
 
-/// Whether `area` lies inside the extent of the files `infos` and `unread`: a task away from
-/// the data's outer edge. Along the edge the hull's long thin triangles need points far out, and
-/// a read by area runs again with a wider buffer (decoding again): plain files are read whole
-/// there, as before the chunk index.
-fn inside_data(infos: &[crate::input::las::FileInfo], unread: &[[f64; 4]], area: [f64; 4]) -> bool {
-    let rects = infos.iter().map(|i| i.rect()).chain(unread.iter().copied());
-    let e = rects.fold(
-        [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
-        |e, r| [e[0].min(r[0]), e[1].min(r[1]), e[2].max(r[2]), e[3].max(r[3])],
-    );
-    area[0] >= e[0] && area[1] >= e[1] && area[2] <= e[2] && area[3] <= e[3]
+/// Where points of the file `i` that a read of `area` skips may lie: the boxes of its chunks
+/// that do not meet `area` and the parts outside `area` of those that do (a chunk index
+/// bounds every chunk's points), else the file's extent outside `area`. Along the data's edge
+/// the hull's long triangles then reach only where chunks are, not the whole extent.
+fn unread_of(i: &crate::input::las::FileInfo, sc: &TaskScope, area: [f64; 4]) -> Vec<[f64; 4]> {
+    match sc.chunks.iter().find(|(p, _)| *p == i.path) {
+        Some((_, ix)) if i.copc.is_none() => ix
+            .boxes()
+            .flat_map(|(r, _)| {
+                if r[0] <= area[2] && r[2] >= area[0] && r[1] <= area[3] && r[3] >= area[1] {
+                    outside_of(r, area)
+                } else {
+                    vec![r]
+                }
+            })
+            .collect(),
+        _ => outside_of(i.rect(), area),
+    }
 }
 
 /// Whether reading plain files by area through their chunk indexes `chunks` saves work: when
 /// the chunks that meet `area` hold at most half of the files' points. Chunks in acquisition
 /// order are long strips, and a task that decodes most of them anyway is better off with every
 /// point: the points beyond its area settle the triangles along the data's edge, where a read
-/// by area knows nothing and runs again with a wider buffer (decoding again). Both ways give
-/// the same output.
+/// by area may run again with a wider buffer (decoding again). Both ways give the same output.
 fn pays_to_read_by_area(chunks: &[(std::path::PathBuf, std::sync::Arc<ChunkIndex>)], area: [f64; 4]) -> bool {
     let (mut all, mut near) = (0u64, 0u64);
     for (_, ix) in chunks {
