@@ -45,14 +45,18 @@
 //! also needs only bounded memory. The event order depends only on the input.
 
 mod pending;
+mod tables;
 
 use crate::error::{Error, Result};
 use crate::geom::predicates::{self, FIRST_REAL, is_artificial};
 use crate::mesh::{Mesh, TriId, VertexId};
+use crate::sort::mmap::SpillVec;
 use crate::sweep::front::XMap;
 use crate::sweep::hooks::sealed::Hooks;
 use crate::sweep::{ConstraintGraph, ConstraintStats, Sweep, SweepStats};
 use pending::PendingSegments;
+use tables::{Spill, VertexTable};
+pub use tables::SpillPolicy;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -79,6 +83,8 @@ pub struct StreamConfig {
     pub bounds: [f64; 4],
     /// Number of points expected (sizes the finalisation queue; need not be exact).
     pub expected_points: u64,
+    /// Where the tables of held triangles go past a threshold (`None`: they stay on the heap).
+    pub spill: Option<SpillPolicy>,
 }
 
 /// Output of the streaming sweep.
@@ -120,47 +126,6 @@ const FRONT_ROWS: f64 = 2.0;
 /// Most buckets the whole `y` range of the data may span (bucket numbers stay far from overflow).
 const MAX_BUCKETS: f64 = (1u64 << 40) as f64;
 
-/// Per-vertex data needed only when streaming (the same rows as the core's vertex table).
-#[derive(Debug, Clone, Default)]
-struct VertexTable {
-    z: Vec<f64>,
-    index: Vec<u64>,
-    /// Output number, or `NOT_OUT`.
-    out: Vec<u64>,
-    /// Live triangles and pending breakline segments using the vertex.
-    refs: Vec<u32>,
-    /// Rows of released vertices, to reuse.
-    free: Vec<u32>,
-}
-
-impl VertexTable {
-    /// Appends a row.
-    fn push(&mut self, z: f64, index: u64) {
-        self.z.push(z);
-        self.index.push(index);
-        self.out.push(NOT_OUT);
-        self.refs.push(0);
-    }
-
-    /// Stores point `p` in a freed row, or a new one; returns the row (the vertex id).
-    fn add(&mut self, p: &StreamPoint) -> u32 {
-        match self.free.pop() {
-            Some(v) => {
-                let i = v as usize;
-                self.z[i] = p.z;
-                self.index[i] = p.index;
-                self.out[i] = NOT_OUT;
-                self.refs[i] = 0;
-                v
-            }
-            None => {
-                self.push(p.z, p.index);
-                (self.z.len() - 1) as u32
-            }
-        }
-    }
-}
-
 /// Peak sizes of the streaming sweep's working set.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct StreamStats {
@@ -179,6 +144,11 @@ pub struct StreamStats {
     pub triangles: u64,
     /// Vertices emitted.
     pub vertices: u64,
+    /// Most bytes of the held triangles' tables in temporary files at once (0: they stayed on
+    /// the heap; see [`SpillPolicy`]).
+    pub peak_spilled_bytes: u64,
+    /// Times their pages were dropped from the resident set.
+    pub spill_releases: u64,
 }
 
 /// The finalisation queue and streaming state: the [`crate::sweep::Mode`] of the core inside a
@@ -222,10 +192,12 @@ pub(crate) struct Finalizer {
     /// The bucket at which each triangle slot is due for its next check: queue entries for any
     /// other bucket are stale (the slot was rescheduled, flipped or refilled since) and skipped,
     /// so each slot has one live entry.
-    due: Vec<u64>,
+    due: SpillVec<u64>,
     /// How many times in a row each slot's triangle was found blocked by the front since it was
     /// made or changed (saturating): past `PATIENT_CHECKS` its waits double.
-    blocked: Vec<u8>,
+    blocked: SpillVec<u8>,
+    /// Where the tables go when they outgrow their share of `--mem`.
+    spill: Spill,
 }
 
 /// Is the circumcircle of `a b c` narrower than `limit` in radius and inside the x range of the
@@ -292,8 +264,9 @@ impl Finalizer {
             ending: false,
             pending: PendingSegments::new((x0, x1)),
             x_range: (x0, x1),
-            due: Vec::new(),
-            blocked: Vec::new(),
+            due: SpillVec::default(),
+            blocked: SpillVec::default(),
+            spill: Spill::new(cfg.spill.clone()),
         }
     }
 
@@ -526,7 +499,7 @@ impl StreamingSweep {
         fin.window_y = first.xy[1];
         fin.live_vertices = 1;
         fin.stats.peak_live_vertices = 1;
-        let pts = vec![[f64::NAN; 2], [f64::NAN; 2], first.xy];
+        let pts = SpillVec::from_vec(vec![[f64::NAN; 2], [f64::NAN; 2], first.xy]);
         let [x0, _, x1, _] = cfg.bounds;
         let xmap = if cfg.x_sample.is_empty() {
             XMap::linear(x0, x1)
@@ -574,6 +547,9 @@ impl StreamingSweep {
         let queued = (fin.in_ring + fin.far.len()) as u64;
         fin.stats.peak_queued = fin.stats.peak_queued.max(queued);
         self.finalize_due(p.xy[1]);
+        if self.fin().points.is_multiple_of(tables::CHECK_EVERY) {
+            self.look_at_tables()?;
+        }
         let fin = self.fin();
         let v = fin.vertices.add(&p);
         fin.live_vertices += 1;
@@ -637,6 +613,8 @@ impl StreamingSweep {
         let f = self.sweep.hooks();
         let mut s = f.stats;
         s.peak_pending_segments = f.pending.peak as u64;
+        s.peak_spilled_bytes = f.spill.peak_spilled;
+        s.spill_releases = f.spill.releases;
         s
     }
 
@@ -663,7 +641,21 @@ impl StreamingSweep {
     /// Ends the sweep: closes the hull and emits everything still in memory, in a fixed order
     /// (triangle slot order, then vertex slot order for the releases). The events wait in
     /// [`StreamingSweep::take_events`]; the statistics stay readable.
+    #[cfg(any(test, feature = "dev"))]
     pub fn finish(&mut self) {
+        self.finish_in_batches(usize::MAX, |_| true);
+    }
+
+    /// As [`StreamingSweep::finish`], handing the events to `drain` whenever `batch` of them
+    /// wait (and not at the end: take those with [`StreamingSweep::take_events`]), so that the
+    /// triangles held to the end (points on a line: all of them) are not all events in memory
+    /// at once. Stops early, returning `false`, when `drain` does (its consumer is gone).
+    pub fn finish_in_batches(
+        &mut self,
+        batch: usize,
+        mut drain: impl FnMut(&mut Vec<Event>) -> bool,
+    ) -> bool {
+        let _ = self.look_at_tables();
         self.sweep.close_hull();
         self.fin().ending = true;
         let slots = self.sweep.mesh().triangle_count() as u32;
@@ -676,6 +668,9 @@ impl StreamingSweep {
                     .any(|v| is_artificial(v.0))
             {
                 self.finalize(t);
+                if self.pending_events() >= batch && !drain(&mut self.fin().events) {
+                    return false;
+                }
             }
         }
         let fin = self.fin();
@@ -683,8 +678,30 @@ impl StreamingSweep {
         for v in FIRST_REAL as usize..vt.out.len() {
             if vt.out[v] != NOT_OUT && vt.refs[v] > 0 {
                 fin.events.push(Event::VertexDone(vt.out[v]));
+                if fin.events.len() >= batch && !drain(&mut fin.events) {
+                    return false;
+                }
             }
         }
+        true
+    }
+
+    /// Spills the tables of held triangles past their share of `--mem`, and drops their
+    /// resident pages when they have grown by it ([`tables::Spill::look`]).
+    fn look_at_tables(&mut self) -> Result<()> {
+        let (pts, mesh, fin) = self.sweep.tables_mut();
+        let vt = &mut fin.vertices;
+        fin.spill.look(&mut [
+            pts,
+            &mut mesh.origin,
+            &mut mesh.link,
+            &mut fin.due,
+            &mut fin.blocked,
+            &mut vt.z,
+            &mut vt.index,
+            &mut vt.out,
+            &mut vt.refs,
+        ])
     }
 
     /// Processes every queue bucket the sweep line (now at `y`) has passed.

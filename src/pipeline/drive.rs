@@ -158,6 +158,10 @@ pub(crate) fn run(
             x_sample: rd.x_sample.clone(),
             bounds: rd.bounds,
             expected_points: expected,
+            spill: Some(crate::finalise::SpillPolicy {
+                dir: config.tmp_dir().to_path_buf(),
+                mem: options.mem,
+            }),
         };
         let swept = sweep_points(&cfg, lines, fed, prx, etx, &pb, &anon);
         let duplicates = joined(merger.join(), "merge");
@@ -402,7 +406,14 @@ fn sweep_points(
     let Some(mut s) = sweep else {
         return Ok(Default::default());
     };
-    s.finish();
+    // Points on a line hold every triangle to the end: hand them over in batches, never all
+    // at once (3 events a triangle, 40 bytes each).
+    if !s.finish_in_batches(EVENT_BATCH, |ev| {
+        out.append(ev);
+        send(&mut out)
+    }) {
+        return Err(Error::Interrupted);
+    }
     s.take_events(&mut out);
     if !send(&mut out) {
         return Err(Error::Interrupted);
