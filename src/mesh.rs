@@ -27,7 +27,10 @@ use crate::sort::mmap::SpillVec;
 pub struct VertexId(pub u32);
 
 /// A half-edge: `3 * triangle + corner`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, bytemuck::Pod, bytemuck::Zeroable,
+)]
+#[repr(transparent)]
 pub struct EdgeId(pub u32);
 
 impl EdgeId {

@@ -44,8 +44,10 @@
 //! first triangle that uses it and released ([`Event::VertexDone`]) after its last one, so a consumer
 //! also needs only bounded memory. The event order depends only on the input.
 
+mod far;
 mod pending;
 mod tables;
+mod watermark;
 
 use crate::error::{Error, Result};
 use crate::geom::predicates::{self, FIRST_REAL, is_artificial};
@@ -57,8 +59,7 @@ use crate::sweep::{ConstraintGraph, ConstraintStats, Sweep, SweepStats};
 use pending::PendingSegments;
 use tables::{Spill, VertexTable};
 pub use tables::SpillPolicy;
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use far::FarQueue;
 
 /// One point for the streaming sweep.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -160,7 +161,7 @@ pub(crate) struct Finalizer {
     ring: Vec<Vec<u32>>,
     /// Entries in `ring`.
     in_ring: usize,
-    far: BinaryHeap<Reverse<(u64, u32)>>,
+    far: FarQueue,
     /// First bucket not yet processed.
     cur: u64,
     /// Bucket of the sweep line.
@@ -200,23 +201,6 @@ pub(crate) struct Finalizer {
     spill: Spill,
 }
 
-/// Is the circumcircle of `a b c` narrower than `limit` in radius and inside the x range of the
-/// data? (Floating point: a heuristic for watermarks only, never a topological decision.)
-fn ordinary(a: [f64; 2], b: [f64; 2], c: [f64; 2], limit: f64, x_range: (f64, f64)) -> bool {
-    let (bx, by) = (b[0] - a[0], b[1] - a[1]);
-    let (cx, cy) = (c[0] - a[0], c[1] - a[1]);
-    let d = 2.0 * (bx * cy - by * cx);
-    if d == 0.0 {
-        return false;
-    }
-    let (b2, c2) = (bx * bx + by * by, cx * cx + cy * cy);
-    let ux = (cy * b2 - by * c2) / d;
-    let uy = (bx * c2 - cx * b2) / d;
-    let r = (ux * ux + uy * uy).sqrt();
-    let x = a[0] + ux;
-    r < limit && x - r >= x_range.0 && x + r <= x_range.1
-}
-
 impl Finalizer {
     fn new(cfg: &StreamConfig) -> Self {
         let [x0, y0, x1, y1] = cfg.bounds;
@@ -245,7 +229,7 @@ impl Finalizer {
             free_triangles: Vec::new(),
             ring: vec![Vec::new(); RING],
             in_ring: 0,
-            far: BinaryHeap::new(),
+            far: FarQueue::default(),
             cur: 0,
             sweep_bucket: 0,
             base: if y0.is_finite() { y0 } else { 0.0 },
@@ -338,7 +322,7 @@ impl Finalizer {
             self.ring[(k % RING as u64) as usize].push(t);
             self.in_ring += 1;
         } else {
-            self.far.push(Reverse((k, t)));
+            self.far.push(k, t);
         }
     }
 
@@ -374,7 +358,7 @@ impl Finalizer {
 
     /// Moves the far-queue entries that now fall within the ring into it.
     fn pull_far(&mut self) {
-        while let Some(&Reverse((k, t))) = self.far.peek() {
+        while let Some((k, t)) = self.far.peek() {
             if k >= self.cur + RING as u64 {
                 break;
             }
@@ -563,46 +547,6 @@ impl StreamingSweep {
         out.append(&mut self.fin().events);
     }
 
-    /// Appends a watermark event: no live triangle of ordinary size has a vertex below the
-    /// returned `y`, and every later point is above it. Triangles whose finalisation waits for
-    /// the end or for a long time are left out — wider than 100 point spacings, or with a
-    /// circumcircle wider than that or reaching beyond the data's x range (the triangles along the
-    /// left and right sides of the convex hull, whose disks the front never covers), or with a
-    /// vertex more than 100 spacings below the sweep line (the rim of an empty area such as a lake,
-    /// which waits until the sweep has crossed it) — so they may arrive later below the watermark
-    /// ("late"), which every sink handles. The watermark therefore trails the sweep line by at
-    /// most 100 spacings, whatever the data's holes. O(live triangles); call it every few
-    /// thousand points.
-    pub fn emit_watermark(&mut self) -> f64 {
-        let fin = self.sweep.hooks();
-        let wide = 100.0 / fin.inv_h;
-        let mut w = fin.last[1];
-        let stuck = fin.last[1] - wide;
-        let x_range = fin.x_range;
-        let pts = self.sweep.points();
-        let o = &self.sweep.mesh().origin;
-        for t in (0..o.len()).step_by(3) {
-            let [a, b, c] = [o[t], o[t + 1], o[t + 2]];
-            if a == crate::mesh::DEAD
-                || is_artificial(a.0)
-                || is_artificial(b.0)
-                || is_artificial(c.0)
-            {
-                continue;
-            }
-            let (pa, pb, pc) = (pts[a.0 as usize], pts[b.0 as usize], pts[c.0 as usize]);
-            let low = pa[1].min(pb[1]).min(pc[1]);
-            if low < w && low >= stuck {
-                let span = pa[0].max(pb[0]).max(pc[0]) - pa[0].min(pb[0]).min(pc[0]);
-                if span < wide && ordinary(pa, pb, pc, wide, x_range) {
-                    w = low;
-                }
-            }
-        }
-        self.fin().events.push(Event::Watermark(w));
-        w
-    }
-
     /// Number of events waiting in [`StreamingSweep::take_events`].
     pub fn pending_events(&self) -> usize {
         self.sweep.hooks().events.len()
@@ -689,12 +633,16 @@ impl StreamingSweep {
     /// Spills the tables of held triangles past their share of `--mem`, and drops their
     /// resident pages when they have grown by it ([`tables::Spill::look`]).
     fn look_at_tables(&mut self) -> Result<()> {
-        let (pts, mesh, fin) = self.sweep.tables_mut();
+        let (pts, mesh, front, fin) = self.sweep.tables_mut();
+        let (nodes, buckets) = front.tables_mut();
         let vt = &mut fin.vertices;
         fin.spill.look(&mut [
             pts,
+            nodes,
+            buckets,
             &mut mesh.origin,
             &mut mesh.link,
+            fin.far.table(),
             &mut fin.due,
             &mut fin.blocked,
             &mut vt.z,
@@ -719,7 +667,7 @@ impl StreamingSweep {
             }
             if fin.in_ring == 0 {
                 // Nothing in the ring: jump straight to the sweep line or the next far entry.
-                let next_far = fin.far.peek().map_or(u64::MAX, |r| r.0.0);
+                let next_far = fin.far.peek().map_or(u64::MAX, |r| r.0);
                 fin.cur = ks.min(next_far.max(fin.cur + 1));
                 fin.pull_far();
                 continue;

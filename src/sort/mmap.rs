@@ -570,6 +570,35 @@ mod tests {
     use super::*;
     use std::io::Write;
 
+    /// A spilled table reads back what it held, grows in its file, and keeps every element
+    /// when its pages are dropped from the resident set.
+    #[test]
+    fn a_spilled_vector_keeps_its_elements_through_growth_and_release() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut v: SpillVec<u64> = SpillVec::default();
+        for i in 0..1000u64 {
+            v.push(i * 3);
+        }
+        v.spill(dir.path()).unwrap();
+        assert!(v.is_mapped() && v.heap_bytes() == 0);
+        let n = 3 * MIN_MAPPED as u64;
+        for i in 1000..n {
+            v.push(i * 3);
+        }
+        v[7] = 1;
+        v.release();
+        v.extend_from_slice(&[5, 6]);
+        v.resize(v.len() + 3, 9);
+        v.release();
+        assert_eq!(v.len() as u64, n + 5);
+        assert_eq!(v[7], 1);
+        assert!((8..n as usize).all(|i| v[i] == 3 * i as u64));
+        assert_eq!(&v[n as usize..], &[5, 6, 9, 9, 9]);
+        let c = v.clone();
+        assert!(!c.is_mapped());
+        assert_eq!(c.into_vec(), v.into_vec());
+    }
+
     #[test]
     fn reads_every_record_across_windows() {
         let per = WINDOW / 8;

@@ -357,10 +357,12 @@ impl<H: Mode> Sweep<H> {
         (&self.pts, &mut self.hooks)
     }
 
-    /// The point table, the mesh and the mode, to move the tables elsewhere (the streaming
-    /// sweep's spill, `crate::finalise`).
-    pub(crate) fn tables_mut(&mut self) -> (&mut SpillVec<[f64; 2]>, &mut Mesh, &mut H) {
-        (&mut self.pts, &mut self.mesh, &mut self.hooks)
+    /// The point table, the mesh, the front and the mode, to move the tables elsewhere (the
+    /// streaming sweep's spill, `crate::finalise`).
+    pub(crate) fn tables_mut(
+        &mut self,
+    ) -> (&mut SpillVec<[f64; 2]>, &mut Mesh, &mut Front, &mut H) {
+        (&mut self.pts, &mut self.mesh, &mut self.front, &mut self.hooks)
     }
 
     /// Sets the breaklines of a sweep whose points arrive one by one and name their constraint
