@@ -616,6 +616,10 @@ impl StreamingSweep {
                     return false;
                 }
             }
+            // This pass touches every held triangle: keep dropping the spilled pages.
+            if t % tables::CHECK_EVERY as u32 == 0 {
+                let _ = self.look_at_tables();
+            }
         }
         let fin = self.fin();
         let vt = &fin.vertices;
