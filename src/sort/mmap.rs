@@ -1,5 +1,6 @@
 //! The only `unsafe` code in sweeptin: read-only memory maps of the external sort's own spill
-//! files, one allocator setting that gives large allocations maps of their own
+//! files, [`SpillVec`] (a growable table of plain data that can move into a shared map of its own
+//! temporary file and drop its pages from the resident set), one allocator setting that gives large allocations maps of their own
 //! ([`tune_allocator`]), and one system call that has no safe wrapper ([`start_writeback`]).
 //!
 //! A spill file is an anonymous temporary file (already unlinked, so no other process can open
