@@ -102,6 +102,7 @@ pub fn stream(pts: &[[f64; 3]]) {
         x_sample: real.iter().step_by(64).map(|p| p[0]).collect(),
         bounds: [x0, y0, x1, y1],
         expected_points: real.len() as u64,
+        spill: None,
     };
     let t1 = Instant::now();
     let sp = |i: usize| StreamPoint {

@@ -36,6 +36,7 @@ fn main() {
             .collect(),
         bounds: [x0, y0, x1, y1],
         expected_points: sorted.len() as u64,
+        spill: None,
     };
     let sp = |(i, p): &(usize, [f64; 3])| StreamPoint {
         xy: [p[0], p[1]],

@@ -15,6 +15,11 @@ pub fn peak_rss() -> Option<u64> {
     proc_status_kb("VmHWM:")
 }
 
+/// Current file-backed resident memory of this process (RssFile: mapped file pages; Linux).
+pub(crate) fn file_rss() -> Option<u64> {
+    proc_status_kb("RssFile:")
+}
+
 /// Current anonymous resident memory of this process (Linux).
 pub fn anon_rss() -> Option<u64> {
     proc_status_kb("RssAnon:")

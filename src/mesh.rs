@@ -16,6 +16,8 @@
 //! Ids are 30 bits, so a mesh has at most [`MAX_HALF_EDGES`] half-edges, which bounds the points
 //! of a triangulation to [`MAX_VERTICES`].
 
+use crate::sort::mmap::SpillVec;
+
 /// A vertex: an index into the vertex table of its mesh (in the sweep, 0 and 1 are the artificial
 /// points).
 #[derive(
@@ -25,7 +27,10 @@
 pub struct VertexId(pub u32);
 
 /// A half-edge: `3 * triangle + corner`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, bytemuck::Pod, bytemuck::Zeroable,
+)]
+#[repr(transparent)]
 pub struct EdgeId(pub u32);
 
 impl EdgeId {
@@ -121,23 +126,24 @@ pub fn across(word: u32) -> Across {
     }
 }
 
-/// The triangles, as two flat arrays indexed by half-edge. Freed slots keep their place (their
+/// The triangles, as two flat arrays indexed by half-edge (on the heap, or in a temporary file's
+/// map once the streaming sweep spills them: [`SpillVec`]). Freed slots keep their place (their
 /// origins are [`DEAD`]); which slot to reuse is the owner's business (the sweep's finaliser, the
 /// TIN's free list).
 #[derive(Debug, Default, Clone)]
 pub struct Mesh {
     /// Origin vertex of each half-edge.
-    pub origin: Vec<VertexId>,
+    pub origin: SpillVec<VertexId>,
     /// Link word of each half-edge (see the module docs).
-    pub link: Vec<u32>,
+    pub link: SpillVec<u32>,
 }
 
 impl Mesh {
     /// An empty mesh with room for `triangles` triangles.
     pub fn with_capacity(triangles: usize) -> Self {
         Mesh {
-            origin: Vec::with_capacity(3 * triangles),
-            link: Vec::with_capacity(3 * triangles),
+            origin: SpillVec::with_capacity(3 * triangles),
+            link: SpillVec::with_capacity(3 * triangles),
         }
     }
 

@@ -353,6 +353,7 @@ fn streaming_breaklines_equal_batch() {
             x_sample: vec![],
             bounds: [0.0, 0.0, 100.0, 100.0],
             expected_points: real.len() as u64,
+            spill: None,
         };
         let sp = |i: usize| StreamPoint {
             xy: real[i],
@@ -424,6 +425,7 @@ fn mismatched_breaklines_are_errors_not_panics() {
         x_sample: vec![],
         bounds: [0.0, 0.0, 1.0, 2.0],
         expected_points: 4,
+        spill: None,
     };
     let sp = |i: usize, constraint: u32| StreamPoint {
         xy: prep.xy[2 + i],

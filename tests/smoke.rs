@@ -92,6 +92,7 @@ fn stream_set(
         x_sample: real.iter().step_by(64).map(|p| p[0]).collect(),
         bounds: [x0, y0, x1, y1],
         expected_points: real.len() as u64,
+        spill: None,
     };
     let sp = |i: usize| StreamPoint {
         xy: real[i],

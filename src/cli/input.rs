@@ -46,7 +46,9 @@ pub struct InputArgs {
     /// program itself, and a larger --mem is refused before any work.
     #[arg(long, value_name = "SIZE", default_value_t = Size(pipeline::default_mem()))]
     pub mem: Size,
-    /// Directory for spill files (anonymous temporary files, never left behind).
+    /// Directory for spill files (anonymous temporary files, never left behind): the sort's
+    /// chunks, and the one sweep's held triangles when points on a line or a circle keep them
+    /// all open (about 150 bytes each).
     #[arg(long, value_name = "DIR")]
     pub tmp_dir: Option<PathBuf>,
     /// Axis the sweep advances along. Memory grows with the number of points across the sweep

@@ -44,17 +44,22 @@
 //! first triangle that uses it and released ([`Event::VertexDone`]) after its last one, so a consumer
 //! also needs only bounded memory. The event order depends only on the input.
 
+mod far;
 mod pending;
+mod tables;
+mod watermark;
 
 use crate::error::{Error, Result};
 use crate::geom::predicates::{self, FIRST_REAL, is_artificial};
 use crate::mesh::{Mesh, TriId, VertexId};
+use crate::sort::mmap::SpillVec;
 use crate::sweep::front::XMap;
 use crate::sweep::hooks::sealed::Hooks;
 use crate::sweep::{ConstraintGraph, ConstraintStats, Sweep, SweepStats};
 use pending::PendingSegments;
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use tables::{Spill, VertexTable};
+pub use tables::SpillPolicy;
+use far::FarQueue;
 
 /// One point for the streaming sweep.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -79,6 +84,8 @@ pub struct StreamConfig {
     pub bounds: [f64; 4],
     /// Number of points expected (sizes the finalisation queue; need not be exact).
     pub expected_points: u64,
+    /// Where the tables of held triangles go past a threshold (`None`: they stay on the heap).
+    pub spill: Option<SpillPolicy>,
 }
 
 /// Output of the streaming sweep.
@@ -120,47 +127,6 @@ const FRONT_ROWS: f64 = 2.0;
 /// Most buckets the whole `y` range of the data may span (bucket numbers stay far from overflow).
 const MAX_BUCKETS: f64 = (1u64 << 40) as f64;
 
-/// Per-vertex data needed only when streaming (the same rows as the core's vertex table).
-#[derive(Debug, Clone, Default)]
-struct VertexTable {
-    z: Vec<f64>,
-    index: Vec<u64>,
-    /// Output number, or `NOT_OUT`.
-    out: Vec<u64>,
-    /// Live triangles and pending breakline segments using the vertex.
-    refs: Vec<u32>,
-    /// Rows of released vertices, to reuse.
-    free: Vec<u32>,
-}
-
-impl VertexTable {
-    /// Appends a row.
-    fn push(&mut self, z: f64, index: u64) {
-        self.z.push(z);
-        self.index.push(index);
-        self.out.push(NOT_OUT);
-        self.refs.push(0);
-    }
-
-    /// Stores point `p` in a freed row, or a new one; returns the row (the vertex id).
-    fn add(&mut self, p: &StreamPoint) -> u32 {
-        match self.free.pop() {
-            Some(v) => {
-                let i = v as usize;
-                self.z[i] = p.z;
-                self.index[i] = p.index;
-                self.out[i] = NOT_OUT;
-                self.refs[i] = 0;
-                v
-            }
-            None => {
-                self.push(p.z, p.index);
-                (self.z.len() - 1) as u32
-            }
-        }
-    }
-}
-
 /// Peak sizes of the streaming sweep's working set.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct StreamStats {
@@ -179,6 +145,11 @@ pub struct StreamStats {
     pub triangles: u64,
     /// Vertices emitted.
     pub vertices: u64,
+    /// Most bytes of the held triangles' tables in temporary files at once (0: they stayed on
+    /// the heap; see [`SpillPolicy`]).
+    pub peak_spilled_bytes: u64,
+    /// Times their pages were dropped from the resident set.
+    pub spill_releases: u64,
 }
 
 /// The finalisation queue and streaming state: the [`crate::sweep::Mode`] of the core inside a
@@ -190,7 +161,7 @@ pub(crate) struct Finalizer {
     ring: Vec<Vec<u32>>,
     /// Entries in `ring`.
     in_ring: usize,
-    far: BinaryHeap<Reverse<(u64, u32)>>,
+    far: FarQueue,
     /// First bucket not yet processed.
     cur: u64,
     /// Bucket of the sweep line.
@@ -222,27 +193,12 @@ pub(crate) struct Finalizer {
     /// The bucket at which each triangle slot is due for its next check: queue entries for any
     /// other bucket are stale (the slot was rescheduled, flipped or refilled since) and skipped,
     /// so each slot has one live entry.
-    due: Vec<u64>,
+    due: SpillVec<u64>,
     /// How many times in a row each slot's triangle was found blocked by the front since it was
     /// made or changed (saturating): past `PATIENT_CHECKS` its waits double.
-    blocked: Vec<u8>,
-}
-
-/// Is the circumcircle of `a b c` narrower than `limit` in radius and inside the x range of the
-/// data? (Floating point: a heuristic for watermarks only, never a topological decision.)
-fn ordinary(a: [f64; 2], b: [f64; 2], c: [f64; 2], limit: f64, x_range: (f64, f64)) -> bool {
-    let (bx, by) = (b[0] - a[0], b[1] - a[1]);
-    let (cx, cy) = (c[0] - a[0], c[1] - a[1]);
-    let d = 2.0 * (bx * cy - by * cx);
-    if d == 0.0 {
-        return false;
-    }
-    let (b2, c2) = (bx * bx + by * by, cx * cx + cy * cy);
-    let ux = (cy * b2 - by * c2) / d;
-    let uy = (bx * c2 - cx * b2) / d;
-    let r = (ux * ux + uy * uy).sqrt();
-    let x = a[0] + ux;
-    r < limit && x - r >= x_range.0 && x + r <= x_range.1
+    blocked: SpillVec<u8>,
+    /// Where the tables go when they outgrow their share of `--mem`.
+    spill: Spill,
 }
 
 impl Finalizer {
@@ -273,7 +229,7 @@ impl Finalizer {
             free_triangles: Vec::new(),
             ring: vec![Vec::new(); RING],
             in_ring: 0,
-            far: BinaryHeap::new(),
+            far: FarQueue::default(),
             cur: 0,
             sweep_bucket: 0,
             base: if y0.is_finite() { y0 } else { 0.0 },
@@ -292,8 +248,9 @@ impl Finalizer {
             ending: false,
             pending: PendingSegments::new((x0, x1)),
             x_range: (x0, x1),
-            due: Vec::new(),
-            blocked: Vec::new(),
+            due: SpillVec::default(),
+            blocked: SpillVec::default(),
+            spill: Spill::new(cfg.spill.clone()),
         }
     }
 
@@ -365,7 +322,7 @@ impl Finalizer {
             self.ring[(k % RING as u64) as usize].push(t);
             self.in_ring += 1;
         } else {
-            self.far.push(Reverse((k, t)));
+            self.far.push(k, t);
         }
     }
 
@@ -401,7 +358,7 @@ impl Finalizer {
 
     /// Moves the far-queue entries that now fall within the ring into it.
     fn pull_far(&mut self) {
-        while let Some(&Reverse((k, t))) = self.far.peek() {
+        while let Some((k, t)) = self.far.peek() {
             if k >= self.cur + RING as u64 {
                 break;
             }
@@ -526,7 +483,7 @@ impl StreamingSweep {
         fin.window_y = first.xy[1];
         fin.live_vertices = 1;
         fin.stats.peak_live_vertices = 1;
-        let pts = vec![[f64::NAN; 2], [f64::NAN; 2], first.xy];
+        let pts = SpillVec::from_vec(vec![[f64::NAN; 2], [f64::NAN; 2], first.xy]);
         let [x0, _, x1, _] = cfg.bounds;
         let xmap = if cfg.x_sample.is_empty() {
             XMap::linear(x0, x1)
@@ -574,6 +531,9 @@ impl StreamingSweep {
         let queued = (fin.in_ring + fin.far.len()) as u64;
         fin.stats.peak_queued = fin.stats.peak_queued.max(queued);
         self.finalize_due(p.xy[1]);
+        if self.fin().points.is_multiple_of(tables::CHECK_EVERY) {
+            self.look_at_tables()?;
+        }
         let fin = self.fin();
         let v = fin.vertices.add(&p);
         fin.live_vertices += 1;
@@ -587,46 +547,6 @@ impl StreamingSweep {
         out.append(&mut self.fin().events);
     }
 
-    /// Appends a watermark event: no live triangle of ordinary size has a vertex below the
-    /// returned `y`, and every later point is above it. Triangles whose finalisation waits for
-    /// the end or for a long time are left out — wider than 100 point spacings, or with a
-    /// circumcircle wider than that or reaching beyond the data's x range (the triangles along the
-    /// left and right sides of the convex hull, whose disks the front never covers), or with a
-    /// vertex more than 100 spacings below the sweep line (the rim of an empty area such as a lake,
-    /// which waits until the sweep has crossed it) — so they may arrive later below the watermark
-    /// ("late"), which every sink handles. The watermark therefore trails the sweep line by at
-    /// most 100 spacings, whatever the data's holes. O(live triangles); call it every few
-    /// thousand points.
-    pub fn emit_watermark(&mut self) -> f64 {
-        let fin = self.sweep.hooks();
-        let wide = 100.0 / fin.inv_h;
-        let mut w = fin.last[1];
-        let stuck = fin.last[1] - wide;
-        let x_range = fin.x_range;
-        let pts = self.sweep.points();
-        let o = &self.sweep.mesh().origin;
-        for t in (0..o.len()).step_by(3) {
-            let [a, b, c] = [o[t], o[t + 1], o[t + 2]];
-            if a == crate::mesh::DEAD
-                || is_artificial(a.0)
-                || is_artificial(b.0)
-                || is_artificial(c.0)
-            {
-                continue;
-            }
-            let (pa, pb, pc) = (pts[a.0 as usize], pts[b.0 as usize], pts[c.0 as usize]);
-            let low = pa[1].min(pb[1]).min(pc[1]);
-            if low < w && low >= stuck {
-                let span = pa[0].max(pb[0]).max(pc[0]) - pa[0].min(pb[0]).min(pc[0]);
-                if span < wide && ordinary(pa, pb, pc, wide, x_range) {
-                    w = low;
-                }
-            }
-        }
-        self.fin().events.push(Event::Watermark(w));
-        w
-    }
-
     /// Number of events waiting in [`StreamingSweep::take_events`].
     pub fn pending_events(&self) -> usize {
         self.sweep.hooks().events.len()
@@ -637,6 +557,8 @@ impl StreamingSweep {
         let f = self.sweep.hooks();
         let mut s = f.stats;
         s.peak_pending_segments = f.pending.peak as u64;
+        s.peak_spilled_bytes = f.spill.peak_spilled;
+        s.spill_releases = f.spill.releases;
         s
     }
 
@@ -663,7 +585,21 @@ impl StreamingSweep {
     /// Ends the sweep: closes the hull and emits everything still in memory, in a fixed order
     /// (triangle slot order, then vertex slot order for the releases). The events wait in
     /// [`StreamingSweep::take_events`]; the statistics stay readable.
+    #[cfg(any(test, feature = "dev"))]
     pub fn finish(&mut self) {
+        self.finish_in_batches(usize::MAX, |_| true);
+    }
+
+    /// As [`StreamingSweep::finish`], handing the events to `drain` whenever `batch` of them
+    /// wait (and not at the end: take those with [`StreamingSweep::take_events`]), so that the
+    /// triangles held to the end (points on a line: all of them) are not all events in memory
+    /// at once. Stops early, returning `false`, when `drain` does (its consumer is gone).
+    pub fn finish_in_batches(
+        &mut self,
+        batch: usize,
+        mut drain: impl FnMut(&mut Vec<Event>) -> bool,
+    ) -> bool {
+        let _ = self.look_at_tables();
         self.sweep.close_hull();
         self.fin().ending = true;
         let slots = self.sweep.mesh().triangle_count() as u32;
@@ -676,6 +612,13 @@ impl StreamingSweep {
                     .any(|v| is_artificial(v.0))
             {
                 self.finalize(t);
+                if self.pending_events() >= batch && !drain(&mut self.fin().events) {
+                    return false;
+                }
+            }
+            // This pass touches every held triangle: keep dropping the spilled pages.
+            if t % tables::CHECK_EVERY as u32 == 0 {
+                let _ = self.look_at_tables();
             }
         }
         let fin = self.fin();
@@ -683,8 +626,34 @@ impl StreamingSweep {
         for v in FIRST_REAL as usize..vt.out.len() {
             if vt.out[v] != NOT_OUT && vt.refs[v] > 0 {
                 fin.events.push(Event::VertexDone(vt.out[v]));
+                if fin.events.len() >= batch && !drain(&mut fin.events) {
+                    return false;
+                }
             }
         }
+        true
+    }
+
+    /// Spills the tables of held triangles past their share of `--mem`, and drops their
+    /// resident pages when they have grown by it ([`tables::Spill::look`]).
+    fn look_at_tables(&mut self) -> Result<()> {
+        let (pts, mesh, front, fin) = self.sweep.tables_mut();
+        let (nodes, buckets) = front.tables_mut();
+        let vt = &mut fin.vertices;
+        fin.spill.look(&mut [
+            pts,
+            nodes,
+            buckets,
+            &mut mesh.origin,
+            &mut mesh.link,
+            fin.far.table(),
+            &mut fin.due,
+            &mut fin.blocked,
+            &mut vt.z,
+            &mut vt.index,
+            &mut vt.out,
+            &mut vt.refs,
+        ])
     }
 
     /// Processes every queue bucket the sweep line (now at `y`) has passed.
@@ -702,7 +671,7 @@ impl StreamingSweep {
             }
             if fin.in_ring == 0 {
                 // Nothing in the ring: jump straight to the sweep line or the next far entry.
-                let next_far = fin.far.peek().map_or(u64::MAX, |r| r.0.0);
+                let next_far = fin.far.peek().map_or(u64::MAX, |r| r.0);
                 fin.cur = ks.min(next_far.max(fin.cur + 1));
                 fin.pull_far();
                 continue;

@@ -15,6 +15,7 @@ use crate::sort::external::{Dedup, ExternalSorter, Merge, SortRecord};
 use crate::sweep::ConstraintVertex;
 use crossbeam_channel::{Receiver, Sender, bounded};
 use indicatif::{ProgressBar, ProgressStyle};
+use std::path::Path;
 use std::time::Instant;
 
 /// Points per batch from the merge thread to the sweep.
@@ -158,6 +159,10 @@ pub(crate) fn run(
             x_sample: rd.x_sample.clone(),
             bounds: rd.bounds,
             expected_points: expected,
+            spill: Some(crate::finalise::SpillPolicy {
+                dir: config.tmp_dir().to_path_buf(),
+                mem: options.mem,
+            }),
         };
         let swept = sweep_points(&cfg, lines, fed, prx, etx, &pb, &anon);
         let duplicates = joined(merger.join(), "merge");
@@ -233,7 +238,7 @@ pub(crate) fn run(
         tiles: None,
         warnings: {
             let mut w = rd.warnings.clone();
-            w.extend(front_warning(&stream, options.mem));
+            w.extend(front_warning(&stream, options.mem, config.tmp_dir()));
             w
         },
         ground: None,
@@ -241,26 +246,41 @@ pub(crate) fn run(
 }
 
 /// Bytes a triangle held by the sweep costs with its share of vertices and queue entries
-/// (measured: 1 M points on a line, every triangle live to the end, 350 MB above the base).
-pub(crate) const LIVE_TRIANGLE_BYTES: u64 = 350;
+/// (measured: 1 M points on a line, every triangle live to the end, 146 MB of tables above the
+/// base, sampled; the end's events now go in batches).
+pub(crate) const LIVE_TRIANGLE_BYTES: u64 = 150;
 
-/// The warning for a sweep that held more triangles than half of `--mem` pays for: points on
-/// (or near) one line or one circle keep every triangle open to the end of the sweep, and no
-/// order of insertion can finish them early, so memory is O(points) there
-/// (docs/RELIABILITY.md, known limits).
-fn front_warning(stream: &crate::finalise::StreamStats, mem: u64) -> Option<String> {
+/// The warning for a sweep that held more triangles than a quarter of `--mem` pays for: points
+/// on (or near) one line or one circle keep every triangle open to the end of the sweep, and no
+/// order of insertion can finish them early. Their tables then go to temporary files
+/// (`crate::finalise::SpillPolicy`), which the warning names with their size; when they could
+/// not (no room, an address-space limit), memory grew past `--mem` (docs/RELIABILITY.md, known
+/// limits).
+fn front_warning(stream: &crate::finalise::StreamStats, mem: u64, tmp: &Path) -> Option<String> {
     let held = stream
         .peak_live_triangles
         .saturating_mul(LIVE_TRIANGLE_BYTES);
     // A large share of all the triangles, not a small budget against an ordinary front.
     let open = stream.peak_live_triangles.saturating_mul(10) > stream.triangles;
+    let lead = format!(
+        "the sweep held {} triangles at once: the points lie nearly on one line or one circle, \
+         where every triangle stays open to the end of the sweep",
+        stream.peak_live_triangles
+    );
+    if stream.peak_spilled_bytes > 0 && open {
+        return Some(format!(
+            "{lead}; their tables ({}) were kept in a temporary file under {} rather than in \
+             --mem {} (slower; see docs/RELIABILITY.md)",
+            crate::human_bytes(stream.peak_spilled_bytes),
+            tmp.display(),
+            crate::human_bytes(mem)
+        ));
+    }
     (held > mem / 2 && open).then(|| {
         format!(
-            "the sweep held {} triangles at once (about {}), more than --mem {} allows: the \
-             points lie nearly on one line or one circle, where every triangle stays open to \
-             the end of the sweep and memory grows with the points (a known limit, see \
-             docs/RELIABILITY.md); give more --mem, or add points that close the surface",
-            stream.peak_live_triangles,
+            "{lead}, and they (about {}) could not go to a temporary file: memory grew past \
+             --mem {} (a known limit, see docs/RELIABILITY.md); give more --mem or room under \
+             --tmp-dir, or add points that close the surface",
             crate::human_bytes(held),
             crate::human_bytes(mem)
         )
@@ -402,7 +422,14 @@ fn sweep_points(
     let Some(mut s) = sweep else {
         return Ok(Default::default());
     };
-    s.finish();
+    // Points on a line hold every triangle to the end: hand them over in batches, never all
+    // at once (3 events a triangle, 40 bytes each).
+    if !s.finish_in_batches(EVENT_BATCH, |ev| {
+        out.append(ev);
+        send(&mut out)
+    }) {
+        return Err(Error::Interrupted);
+    }
     s.take_events(&mut out);
     if !send(&mut out) {
         return Err(Error::Interrupted);

@@ -76,9 +76,10 @@ impl Prepared {
     }
 }
 
-/// Largest number of points the in-memory core accepts (half-edge ids use 30 bits: see
-/// [`crate::mesh::MAX_VERTICES`]).
-pub const MAX_POINTS: u64 = crate::mesh::MAX_VERTICES;
+/// Largest number of points the in-memory core accepts: half-edge ids use 30 bits, and `n`
+/// points make at most `6n - 15` half-edges (the mesh's `MAX_VERTICES`, equal by a test; written
+/// out here because the mesh keeps its arrays in this module's [`crate::sort::mmap::SpillVec`]).
+pub const MAX_POINTS: u64 = (1 << 30) / 6 - 4;
 
 /// A point in sort order: `key` (the order keys of `y` and `x`) and `idx` compare as `(y, x,
 /// input index)` by `f64::total_cmp` (see [`order_key`]), so the bucket sorts compare integers:
@@ -307,6 +308,11 @@ fn dedupe(recs: &[Rec], points: &[[f64; 3]], policy: DuplicatePolicy) -> (Vec<[f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn max_points_is_the_meshs_max_vertices() {
+        assert_eq!(MAX_POINTS, crate::mesh::MAX_VERTICES);
+    }
 
     #[test]
     fn records_stay_small() {

@@ -1,5 +1,6 @@
 //! The only `unsafe` code in sweeptin: read-only memory maps of the external sort's own spill
-//! files, one allocator setting that gives large allocations maps of their own
+//! files, [`SpillVec`] (a growable table of plain data that can move into a shared map of its own
+//! temporary file and drop its pages from the resident set), one allocator setting that gives large allocations maps of their own
 //! ([`tune_allocator`]), and one system call that has no safe wrapper ([`start_writeback`]).
 //!
 //! A spill file is an anonymous temporary file (already unlinked, so no other process can open
@@ -196,6 +197,281 @@ pub fn start_writeback(file: &File) {
     let _ = file;
 }
 
+/// Fewest elements a [`SpillVec`] maps (a map is never empty).
+const MIN_MAPPED: usize = 1 << 16;
+
+/// A growable array of plain-old-data values that lives on the heap like a `Vec` until
+/// [`SpillVec::spill`] moves it into a shared memory map of a temporary file of its own
+/// (anonymous: already unlinked). From then on its pages belong to the file's page cache:
+/// [`SpillVec::release`] drops them from the process's resident set (`MADV_DONTNEED`; the data
+/// stays in the file, and a later touch is a minor fault, or a read if the kernel wrote the page
+/// out and reclaimed it). The streaming sweep's per-triangle and per-vertex tables are
+/// `SpillVec`s, so the triangles it must hold (points on a line or a circle) live in a file
+/// rather than in `--mem` (`crate::finalise`).
+///
+/// Indexing goes through a raw pointer and a length, as a `Vec`'s does, in both states.
+pub struct SpillVec<T: Pod> {
+    /// Start of the elements: the vector's buffer or the map's.
+    ptr: *mut T,
+    len: usize,
+    store: Store<T>,
+}
+
+enum Store<T> {
+    Heap(Vec<T>),
+    /// `map` covers `cap` elements of `file`, which nothing else opens.
+    Map {
+        map: memmap2::MmapMut,
+        file: File,
+        cap: usize,
+    },
+}
+
+// SAFETY: a `SpillVec` owns its elements as a `Vec` does (the pointer is into its own vector or
+// its own private map, never shared), so it is sent and shared exactly when `T` is.
+unsafe impl<T: Pod + Send> Send for SpillVec<T> {}
+// SAFETY: as above: `&SpillVec` only gives `&[T]`.
+unsafe impl<T: Pod + Sync> Sync for SpillVec<T> {}
+
+impl<T: Pod> Default for SpillVec<T> {
+    fn default() -> Self {
+        Self::from_vec(Vec::new())
+    }
+}
+
+impl<T: Pod> From<Vec<T>> for SpillVec<T> {
+    fn from(v: Vec<T>) -> Self {
+        Self::from_vec(v)
+    }
+}
+
+impl<T: Pod> Clone for SpillVec<T> {
+    /// A copy on the heap.
+    fn clone(&self) -> Self {
+        Self::from_vec(self.to_vec())
+    }
+}
+
+impl<T: Pod + std::fmt::Debug> std::fmt::Debug for SpillVec<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SpillVec")
+            .field("len", &self.len)
+            .field("mapped", &self.is_mapped())
+            .finish()
+    }
+}
+
+impl<T: Pod> std::ops::Deref for SpillVec<T> {
+    type Target = [T];
+    #[inline(always)]
+    fn deref(&self) -> &[T] {
+        // SAFETY: `ptr` points at `len` initialised elements owned by `self` (the vector's first
+        // `len`, or the first `len` of the map, which covers at least that many and whose bytes
+        // are valid values of a `Pod` type); `ptr` is aligned (a vector's buffer, or a map that
+        // starts on a page) and non-null; nothing else writes them while `&self` lives.
+        unsafe { std::slice::from_raw_parts(self.ptr, self.len) }
+    }
+}
+
+impl<T: Pod> std::ops::DerefMut for SpillVec<T> {
+    #[inline(always)]
+    fn deref_mut(&mut self) -> &mut [T] {
+        // SAFETY: as for `deref`, and `&mut self` makes the access exclusive.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr, self.len) }
+    }
+}
+
+impl<T: Pod> SpillVec<T> {
+    /// An empty vector with room for `n` elements on the heap.
+    pub fn with_capacity(n: usize) -> Self {
+        Self::from_vec(Vec::with_capacity(n))
+    }
+
+    /// Takes `v` as it is (on the heap).
+    pub fn from_vec(mut v: Vec<T>) -> Self {
+        SpillVec {
+            ptr: v.as_mut_ptr(),
+            len: v.len(),
+            store: Store::Heap(v),
+        }
+    }
+
+    /// The elements as a `Vec` (the heap buffer itself, or a copy of the map).
+    pub fn into_vec(self) -> Vec<T> {
+        if self.is_mapped() {
+            return self.to_vec();
+        }
+        match self.store {
+            Store::Heap(v) => v,
+            Store::Map { .. } => unreachable!("checked above"),
+        }
+    }
+
+    /// Is it in a file's map?
+    pub fn is_mapped(&self) -> bool {
+        matches!(self.store, Store::Map { .. })
+    }
+
+    /// Elements it has room for without growing.
+    pub fn capacity(&self) -> usize {
+        match &self.store {
+            Store::Heap(v) => v.capacity(),
+            Store::Map { cap, .. } => *cap,
+        }
+    }
+
+    /// Bytes of heap it holds (its capacity; 0 once mapped).
+    pub fn heap_bytes(&self) -> usize {
+        match &self.store {
+            Store::Heap(v) => v.capacity() * std::mem::size_of::<T>(),
+            Store::Map { .. } => 0,
+        }
+    }
+
+    /// Makes room for `extra` more elements; in a map, the file grows first (its blocks
+    /// allocated, so that a later write through the map cannot find the disk full).
+    ///
+    /// # Errors
+    /// The operating system's error if the file cannot grow or be mapped again; the elements
+    /// are then as they were.
+    pub fn try_reserve(&mut self, extra: usize) -> std::io::Result<()> {
+        let need = self.len + extra;
+        match &mut self.store {
+            Store::Heap(v) => {
+                v.reserve(extra);
+                self.ptr = v.as_mut_ptr();
+            }
+            Store::Map { cap, .. } if need <= *cap => {}
+            Store::Map { map, file, cap } => {
+                let new_cap = need.max(2 * *cap);
+                let bytes = new_cap * std::mem::size_of::<T>();
+                allocate(file, bytes)?;
+                // SAFETY: as in `spill`: the file is ours alone, at least `bytes` long.
+                let mut grown = unsafe { memmap2::MmapOptions::new().len(bytes).map_mut(&*file)? };
+                self.ptr = grown.as_mut_ptr().cast();
+                *map = grown;
+                *cap = new_cap;
+            }
+        }
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn grow_for(&mut self, extra: usize) {
+        if self.len + extra > self.capacity()
+            && let Err(e) = self.try_reserve(extra)
+        {
+            // The owner reserves room before each step that adds elements (the sweep: every
+            // point), so this needs one step to add more than that room.
+            panic!("a spilled table could not grow its temporary file: {e}");
+        }
+    }
+
+    /// Makes room for exactly `extra` more elements on the heap (in a map as [`SpillVec::try_reserve`]).
+    pub fn reserve_exact(&mut self, extra: usize) {
+        if let Store::Heap(v) = &mut self.store {
+            v.reserve_exact(extra);
+            self.ptr = v.as_mut_ptr();
+        } else {
+            self.grow_for(extra);
+        }
+    }
+
+    /// Appends `x`.
+    #[inline(always)]
+    pub fn push(&mut self, x: T) {
+        self.extend_from_slice(std::slice::from_ref(&x));
+    }
+
+    /// Appends the elements of `xs`.
+    #[inline(always)]
+    pub fn extend_from_slice(&mut self, xs: &[T]) {
+        if let Store::Heap(v) = &mut self.store {
+            v.extend_from_slice(xs);
+            self.ptr = v.as_mut_ptr();
+            self.len = v.len();
+            return;
+        }
+        self.grow_for(xs.len());
+        // SAFETY: the map has room for `len + xs.len()` elements (`grow_for`), `xs` cannot
+        // overlap the map's unused part (no slice of it is handed out).
+        unsafe { std::ptr::copy_nonoverlapping(xs.as_ptr(), self.ptr.add(self.len), xs.len()) };
+        self.len += xs.len();
+    }
+
+    /// Sets the length to `n`, filling new places with `x`.
+    pub fn resize(&mut self, n: usize, x: T) {
+        if let Store::Heap(v) = &mut self.store {
+            v.resize(n, x);
+            self.ptr = v.as_mut_ptr();
+            self.len = v.len();
+            return;
+        }
+        if n > self.len {
+            self.grow_for(n - self.len);
+            let old = self.len;
+            self.len = n;
+            self[old..].fill(x);
+        } else {
+            self.len = n;
+        }
+    }
+
+    /// Moves the elements into a shared map of a new anonymous temporary file under `dir`,
+    /// with room for twice as many; the heap buffer is freed. Does nothing if already mapped.
+    ///
+    /// # Errors
+    /// The operating system's error (no room for the file, the map refused under an
+    /// address-space limit); the elements then stay where they were.
+    pub fn spill(&mut self, dir: &std::path::Path) -> std::io::Result<()> {
+        let Store::Heap(v) = &self.store else {
+            return Ok(());
+        };
+        let cap = (2 * v.len()).max(MIN_MAPPED);
+        let bytes = cap * std::mem::size_of::<T>();
+        let file = tempfile::tempfile_in(dir)?;
+        allocate(&file, bytes)?;
+        // SAFETY: the file was just created, already unlinked and is owned by this value
+        // alone: no other process or mapping can change it while it is mapped, so its bytes
+        // behave as memory of ours. It is `bytes` long, which the map covers.
+        let mut map = unsafe { memmap2::MmapOptions::new().len(bytes).map_mut(&file)? };
+        map[..v.len() * std::mem::size_of::<T>()].copy_from_slice(bytemuck::cast_slice(v));
+        self.ptr = map.as_mut_ptr().cast();
+        self.store = Store::Map { map, file, cap };
+        Ok(())
+    }
+
+    /// Drops the map's pages from the process's resident set; the data stays in the file (a
+    /// later touch faults the page in again). Does nothing on the heap.
+    pub fn release(&mut self) {
+        if let Store::Map { map, .. } = &self.store {
+            // SAFETY: on a shared file mapping, MADV_DONTNEED only unmaps the pages: their
+            // contents, dirty ones included, stay in the file's page cache and are what a later
+            // access reads, so no element changes (a reference into the map would see the same
+            // bytes).
+            let _ = unsafe { map.unchecked_advise(memmap2::UncheckedAdvice::DontNeed) };
+        }
+    }
+}
+
+/// Makes `file` `bytes` long with its blocks allocated (`fallocate`): a write through a map of
+/// it then cannot meet a full disk (which a map reports as SIGBUS, not as an error).
+fn allocate(file: &File, bytes: usize) -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::fs::{FallocateFlags, fallocate};
+        loop {
+            match fallocate(file, FallocateFlags::empty(), 0, bytes as u64) {
+                Err(rustix::io::Errno::INTR) => continue,
+                // A file system without fallocate: the size alone.
+                Err(rustix::io::Errno::OPNOTSUPP) => break,
+                r => return r.map_err(std::io::Error::from),
+            }
+        }
+    }
+    file.set_len(bytes as u64)
+}
+
 /// Bytes from which an allocation gets an anonymous memory map of its own (glibc), see
 /// [`tune_allocator`].
 pub const OWN_MAP_BYTES: usize = 4 << 20;
@@ -294,6 +570,35 @@ pub fn tune_allocator() {
 mod tests {
     use super::*;
     use std::io::Write;
+
+    /// A spilled table reads back what it held, grows in its file, and keeps every element
+    /// when its pages are dropped from the resident set.
+    #[test]
+    fn a_spilled_vector_keeps_its_elements_through_growth_and_release() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut v: SpillVec<u64> = SpillVec::default();
+        for i in 0..1000u64 {
+            v.push(i * 3);
+        }
+        v.spill(dir.path()).unwrap();
+        assert!(v.is_mapped() && v.heap_bytes() == 0);
+        let n = 3 * MIN_MAPPED as u64;
+        for i in 1000..n {
+            v.push(i * 3);
+        }
+        v[7] = 1;
+        v.release();
+        v.extend_from_slice(&[5, 6]);
+        v.resize(v.len() + 3, 9);
+        v.release();
+        assert_eq!(v.len() as u64, n + 5);
+        assert_eq!(v[7], 1);
+        assert!((8..n as usize).all(|i| v[i] == 3 * i as u64));
+        assert_eq!(&v[n as usize..], &[5, 6, 9, 9, 9]);
+        let c = v.clone();
+        assert!(!c.is_mapped());
+        assert_eq!(c.into_vec(), v.into_vec());
+    }
 
     #[test]
     fn reads_every_record_across_windows() {

@@ -7,13 +7,15 @@
 //! finds, and the result does not depend on the number of buckets.
 
 use crate::mesh::{EdgeId, VertexId};
+use crate::sort::mmap::SpillVec;
 
 /// Id of a front node.
 pub type NodeId = u32;
 const NIL: NodeId = u32::MAX;
 
 /// One vertex of the front and the segment to its right.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub struct Node {
     /// The vertex's x (−∞ for `P-1`, +∞ for `P-2`).
     pub x: f64,
@@ -32,7 +34,7 @@ pub struct Node {
 /// The advancing front.
 #[derive(Debug, Clone)]
 pub struct Front {
-    nodes: Vec<Node>,
+    nodes: SpillVec<Node>,
     free: Vec<NodeId>,
     len: usize,
     peak_len: usize,
@@ -40,7 +42,7 @@ pub struct Front {
     pub head: NodeId,
     /// Node of `P-2`.
     pub tail: NodeId,
-    buckets: Vec<NodeId>,
+    buckets: SpillVec<NodeId>,
     xmap: XMap,
     nb: f64,
 }
@@ -137,7 +139,7 @@ impl Front {
         right_edge: EdgeId,
         xmap: XMap,
     ) -> Self {
-        let nodes = vec![
+        let nodes = SpillVec::from_vec(vec![
             Node {
                 x: f64::NEG_INFINITY,
                 y: f64::NEG_INFINITY,
@@ -162,7 +164,7 @@ impl Front {
                 prev: 0,
                 edge: right_edge,
             },
-        ];
+        ]);
         let mut f = Front {
             nodes,
             free: Vec::new(),
@@ -170,7 +172,7 @@ impl Front {
             peak_len: 3,
             head: 0,
             tail: 1,
-            buckets: Vec::new(),
+            buckets: SpillVec::default(),
             xmap,
             nb: 0.0,
         };
@@ -237,8 +239,13 @@ impl Front {
         (k as usize).min(self.buckets.len() - 1)
     }
 
+    /// The node table and the x index, to move them elsewhere (the streaming sweep's spill).
+    pub(crate) fn tables_mut(&mut self) -> (&mut SpillVec<Node>, &mut SpillVec<NodeId>) {
+        (&mut self.nodes, &mut self.buckets)
+    }
+
     fn rebuild_buckets(&mut self, count: usize) {
-        self.buckets.clear();
+        self.buckets.resize(0, NIL);
         self.buckets.resize(count, NIL);
         self.nb = count as f64;
         let mut n = self.next(self.head);

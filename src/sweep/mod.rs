@@ -24,6 +24,7 @@ pub mod legalize;
 
 use crate::error::{Error, Result};
 use crate::geom::predicates::{FIRST_REAL, P_LEFT, P_RIGHT, is_artificial};
+use crate::sort::mmap::SpillVec;
 use crate::mesh::{Across, BOUNDARY, CONSTRAINED, EdgeId, Mesh, TriId, VertexId};
 pub use constrain::{ConstraintGraph, ConstraintStats, ConstraintVertex};
 use front::{Front, NodeId, XMap};
@@ -60,7 +61,7 @@ pub struct SweepStats {
 ///   later can change it.
 #[derive(Debug, Clone)]
 pub struct Sweep<H: Mode = Batch> {
-    pts: Vec<[f64; 2]>,
+    pts: SpillVec<[f64; 2]>,
     /// Batch mode: the next vertex to insert.
     next: u32,
     mesh: Mesh,
@@ -119,7 +120,7 @@ impl Sweep<Batch> {
         let xmap = XMap::from_sample(real.iter().step_by(step).map(|p| p[0]).collect());
         // A Delaunay triangulation of n points (plus 2) has at most 2(n + 2) - 5 triangles.
         let mesh = Mesh::with_capacity(2 * n + 4);
-        Ok(Self::start(pts, mesh, xmap, Batch))
+        Ok(Self::start(SpillVec::from_vec(pts), mesh, xmap, Batch))
     }
 
     /// Inserts the next point; returns `false` when all points are in.
@@ -241,7 +242,7 @@ impl Sweep<Batch> {
                 twins.push(twin);
             }
         }
-        ((tris, twins), pts, stats)
+        ((tris, twins), pts.into_vec(), stats)
     }
 
     /// Closes the front to the convex hull, drops the artificial triangles and returns the real
@@ -253,7 +254,7 @@ impl Sweep<Batch> {
         let Sweep { pts, mesh, .. } = self;
         let Mesh { origin, link } = mesh;
         drop(link);
-        let mut out: Vec<u32> = bytemuck::allocation::cast_vec(origin);
+        let mut out: Vec<u32> = bytemuck::allocation::cast_vec(origin.into_vec());
         let mut k = 0;
         for t in 0..out.len() / 3 {
             let (a, b, c) = (out[3 * t], out[3 * t + 1], out[3 * t + 2]);
@@ -271,13 +272,13 @@ impl Sweep<Batch> {
             Ok(t) => t,
             Err((_, out)) => out.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         };
-        (tris, pts, stats)
+        (tris, pts.into_vec(), stats)
     }
 }
 
 impl<H: Mode> Sweep<H> {
     /// The first triangle (P-1, P-2, first point) and the front over it.
-    pub(crate) fn start(pts: Vec<[f64; 2]>, mut mesh: Mesh, xmap: XMap, hooks: H) -> Self {
+    pub(crate) fn start(pts: SpillVec<[f64; 2]>, mut mesh: Mesh, xmap: XMap, hooks: H) -> Self {
         let first = VertexId(FIRST_REAL);
         let e = mesh.add_triangle(VertexId(P_LEFT), VertexId(P_RIGHT), first);
         // Half-edges: e: P-1→P-2 (bottom), e+1: P-2→v (under v→P-2), e+2: v→P-1 (under P-1→v).
@@ -354,6 +355,14 @@ impl<H: Mode> Sweep<H> {
     #[inline(always)]
     pub(crate) fn points_and_hooks_mut(&mut self) -> (&[[f64; 2]], &mut H) {
         (&self.pts, &mut self.hooks)
+    }
+
+    /// The point table, the mesh, the front and the mode, to move the tables elsewhere (the
+    /// streaming sweep's spill, `crate::finalise`).
+    pub(crate) fn tables_mut(
+        &mut self,
+    ) -> (&mut SpillVec<[f64; 2]>, &mut Mesh, &mut Front, &mut H) {
+        (&mut self.pts, &mut self.mesh, &mut self.front, &mut self.hooks)
     }
 
     /// Sets the breaklines of a sweep whose points arrive one by one and name their constraint

@@ -81,8 +81,8 @@ impl Tin {
             .collect();
         let n = self.live_triangles;
         let mut mesh = Mesh {
-            origin: vec![DEAD; 3 * n],
-            link: vec![HULL; 3 * n],
+            origin: vec![DEAD; 3 * n].into(),
+            link: vec![HULL; 3 * n].into(),
         };
         for (t, &nt) in new_t.iter().enumerate() {
             if nt == NONE {
