@@ -8,7 +8,9 @@ use anyhow::{Context, bail};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use sweeptin::fmt::{Figure, count};
-use sweeptin::plan::{Levels, Plan, Product, TaskOptions, TaskRecord, merge, task_from_env};
+use sweeptin::plan::{
+    Levels, Plan, PlanDir, Product, TaskOptions, TaskRecord, merge, task_from_env,
+};
 
 /// What `sweeptin plan --help` ends with.
 const PLAN_HELP: &str = "\
@@ -360,13 +362,9 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let (argv, dir) = take_output(&args.command);
     let mut job = parse_job(&argv)?;
     let dir = dir.context("give the plan's directory with -o DIR")?;
-    if sweeptin::input::source::is_remote(&dir) {
-        bail!(sweeptin::Error::Options(format!(
-            "{}: a plan's directory is local (its tasks write their tiles and records there); \
-             give a local -o DIR, and merge to s3:// (`merge PLAN -o s3://BUCKET/KEY.tif`)",
-            dir.display()
-        )));
-    }
+    // A local directory or an S3 prefix, whose bucket is checked before any header is read.
+    let plan_dir = PlanDir::new(&dir)?;
+    plan_dir.check_writable()?;
     // `@list.txt`, quoted globs and `.vpc` files: the plan names every file (it reads each
     // header), each given input standing for its files in the stored command line.
     let given = job.args().inputs.clone();
@@ -426,10 +424,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
                 )
             })?;
     }
-    if dir.exists() && !dir.is_dir() {
-        bail!("{}: not a directory", dir.display());
-    }
-    let path = plan.save(&dir)?;
+    let path = plan.save(&plan_dir)?;
     super::input::warn_headers(&plan.warnings);
     for (index, stored) in plan.stored_chunk_indexes() {
         match stored {
@@ -554,7 +549,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
 }
 
 /// Runs task `i` ([`Plan::run_task`]).
-fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result<TaskRecord> {
+fn run_task(plan: &Plan, dir: &PlanDir, i: usize, args: &RunArgs) -> anyhow::Result<TaskRecord> {
     let quiet = args.quiet || args.json || args.all;
     let options = TaskOptions {
         threads: args.threads.unwrap_or(0),
