@@ -50,7 +50,9 @@ impl PlanDir {
                         dir.display()
                     )));
                 }
-                Ok(PlanDir::S3(PathBuf::from(format!("s3://{bucket}/{prefix}"))))
+                Ok(PlanDir::S3(PathBuf::from(format!(
+                    "s3://{bucket}/{prefix}"
+                ))))
             }
         }
     }
@@ -305,5 +307,8 @@ impl PlanDir {
 pub(super) struct LocalCopy {
     /// The file to open.
     pub(super) path: PathBuf,
-    _temp: Option<(tempfile::NamedTempFile, crate::output::atomic::TempRegistration)>,
+    _temp: Option<(
+        tempfile::NamedTempFile,
+        crate::output::atomic::TempRegistration,
+    )>,
 }

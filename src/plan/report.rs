@@ -38,7 +38,13 @@ impl Plan {
     ///
     /// # Errors
     /// [`Error::Io`] naming the record; [`Error::Options`] for a task that does not exist.
-    pub fn record_failure(&self, dir: &super::PlanDir, i: usize, message: &str, seconds: f64) -> Result<()> {
+    pub fn record_failure(
+        &self,
+        dir: &super::PlanDir,
+        i: usize,
+        message: &str,
+        seconds: f64,
+    ) -> Result<()> {
         self.task(i)?;
         let f = TaskFailure {
             index: i,

@@ -478,6 +478,13 @@ impl Plan {
             .iter()
             .map(|(_, p)| Ok(dir.size(p)?.unwrap_or(0)))
             .collect::<Result<_>>()?;
+        // Fault injection for the tests: the task fails after its outputs, before its record
+        // (a worker lost there), `SWEEPTIN_TEST_FAIL_BEFORE_RECORD=I`.
+        if std::env::var("SWEEPTIN_TEST_FAIL_BEFORE_RECORD").is_ok_and(|v| v == i.to_string()) {
+            return Err(Error::Internal(format!(
+                "injected failure of task {i} before its record (SWEEPTIN_TEST_FAIL_BEFORE_RECORD)"
+            )));
+        }
         self.finish_task(dir, &record)?;
         Ok(record)
     }

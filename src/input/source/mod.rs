@@ -239,7 +239,10 @@ pub fn read_object(name: &Path) -> Result<Option<Vec<u8>>> {
     };
     if object.len() > MAX_TEXT {
         let why = format!("{} bytes: more than a plan's file may have", object.len());
-        return Err(Error::io(name, io::Error::new(io::ErrorKind::InvalidData, why)));
+        return Err(Error::io(
+            name,
+            io::Error::new(io::ErrorKind::InvalidData, why),
+        ));
     }
     let mut bytes = vec![0u8; object.len() as usize];
     if !bytes.is_empty() {

@@ -424,7 +424,13 @@ pub(super) fn check_bucket(name: &str, bucket: &str, key: &str) -> io::Result<()
 pub(super) fn size(name: &str, bucket: &str, key: &str) -> io::Result<Option<u64>> {
     let (b, creds) = address(bucket, key)?;
     let url = b.head_object(creds.as_ref(), key).sign(SIGNED_FOR);
-    match send(name, Verb::Head, url.as_str(), Payload::Empty, "no such object") {
+    match send(
+        name,
+        Verb::Head,
+        url.as_str(),
+        Payload::Empty,
+        "no such object",
+    ) {
         Ok(a) => a.length.map(Some).ok_or_else(|| {
             io::Error::new(
                 io::ErrorKind::InvalidData,
@@ -440,7 +446,13 @@ pub(super) fn size(name: &str, bucket: &str, key: &str) -> io::Result<Option<u64
 pub(super) fn delete(name: &str, bucket: &str, key: &str) -> io::Result<()> {
     let (b, creds) = address(bucket, key)?;
     let url = b.delete_object(creds.as_ref(), key).sign(SIGNED_FOR);
-    match send(name, Verb::Delete, url.as_str(), Payload::Empty, "no such object") {
+    match send(
+        name,
+        Verb::Delete,
+        url.as_str(),
+        Payload::Empty,
+        "no such object",
+    ) {
         Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(()),
         r => r.map(drop),
     }
