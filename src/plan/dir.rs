@@ -312,3 +312,47 @@ pub(super) struct LocalCopy {
         crate::output::atomic::TempRegistration,
     )>,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_s3_plan_dir_is_a_prefix_and_its_files_are_keys_under_it() {
+        let d = PlanDir::new(Path::new("s3://jobs/a/job/")).unwrap();
+        assert_eq!(d, PlanDir::S3(PathBuf::from("s3://jobs/a/job")));
+        assert_eq!(
+            d.join("tiles").join("task_3.json"),
+            Path::new("s3://jobs/a/job/tiles/task_3.json")
+        );
+        let of = PlanDir::of_plan(Path::new("s3://jobs/a/job/plan.json")).unwrap();
+        assert_eq!(of, d);
+        // A record names its outputs relative to the directory.
+        let tile = d.join("tiles/dem_1_2.tif");
+        assert_eq!(
+            tile.strip_prefix(d.path()).unwrap(),
+            Path::new("tiles/dem_1_2.tif")
+        );
+        for bad in ["s3://jobs/", "s3://jobs", "https://host/job/"] {
+            assert!(
+                matches!(PlanDir::new(Path::new(bad)), Err(Error::Options(_))),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn outputs_among_an_s3_plans_files_are_refused() {
+        let d = PlanDir::new(Path::new("s3://jobs/job")).unwrap();
+        for own in [
+            "s3://jobs/job/plan.json",
+            "s3://jobs/job/tiles/m.tif",
+            "s3://jobs/job/tiles",
+        ] {
+            assert!(d.outside("the mosaic", Path::new(own)).is_err(), "{own}");
+        }
+        for other in ["s3://jobs/job/m.tif", "s3://jobs/jobs/tiles/m.tif", "m.tif"] {
+            assert!(d.outside("the mosaic", Path::new(other)).is_ok(), "{other}");
+        }
+    }
+}
