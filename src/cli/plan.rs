@@ -45,7 +45,8 @@ pub struct PlanArgs {
     pub buffer: Option<f64>,
     /// The product command (`dem`, `contours`, `volume --plane Z` or `tin`) with its input files and
     /// options as for a single run, plus `--tile SIZE` (the plan's tile side, a multiple of the
-    /// cell) and `-o DIR` (where the plan and the tiles' outputs go).
+    /// cell) and `-o DIR` (where the plan and the tiles' outputs go: a local directory, or
+    /// `s3://BUCKET/JOB/` for workers that share no disk).
     #[arg(
         trailing_var_arg = true,
         allow_hyphen_values = true,
@@ -58,7 +59,7 @@ pub struct PlanArgs {
 /// Arguments of `sweeptin run`.
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
-    /// The plan (`DIR/plan.json`, written by `sweeptin plan`).
+    /// The plan (`DIR/plan.json`, written by `sweeptin plan`, or `s3://BUCKET/JOB/plan.json`).
     pub plan: PathBuf,
     /// The task to run (0-based). Default: from SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX
     /// (Kubernetes Indexed Job), AWS_BATCH_JOB_ARRAY_INDEX, PBS_ARRAY_INDEX or SGE_TASK_ID.
@@ -91,7 +92,7 @@ pub struct RunArgs {
 /// Arguments of `sweeptin merge`.
 #[derive(clap::Args, Debug)]
 pub struct MergeArgs {
-    /// The plan (`DIR/plan.json`).
+    /// The plan (`DIR/plan.json`, or `s3://BUCKET/JOB/plan.json`).
     pub plan: PathBuf,
     /// The mosaic: `OUT.vrt` (a GDAL VRT over the tile GeoTIFFs) or `OUT.tif` (one GeoTIFF) for
     /// a DEM plan; `OUT.geojson` for a contour plan; `OUT.ply`, `.obj`, `.xml` (LandXML) or
