@@ -288,12 +288,23 @@ impl PlanDir {
         match self {
             PlanDir::Local(d) => super::files::outside_plan_dir(d, what, p),
             PlanDir::S3(d) => {
-                let (own, written) = (d.to_string_lossy(), p.to_string_lossy());
+                // By bucket and key (the scheme in any case: `S3://` is the same object).
+                let (
+                    source::Location::S3 { bucket, key },
+                    source::Location::S3 {
+                        bucket: b,
+                        key: written,
+                    },
+                ) = (source::Location::of(d), source::Location::of(p))
+                else {
+                    return Ok(());
+                };
                 let written = written.trim_end_matches('/');
-                let tiles = format!("{own}/tiles");
-                if written == format!("{own}/plan.json")
-                    || written == tiles
-                    || written.starts_with(&format!("{tiles}/"))
+                let tiles = format!("{key}/tiles");
+                if b == bucket
+                    && (written == format!("{key}/plan.json")
+                        || written == tiles
+                        || written.starts_with(&format!("{tiles}/")))
                 {
                     return Err(super::files::among_plan_files(what, p));
                 }
@@ -347,11 +358,17 @@ mod tests {
         for own in [
             "s3://jobs/job/plan.json",
             "s3://jobs/job/tiles/m.tif",
+            "S3://jobs/job/tiles/m.tif",
             "s3://jobs/job/tiles",
         ] {
             assert!(d.outside("the mosaic", Path::new(own)).is_err(), "{own}");
         }
-        for other in ["s3://jobs/job/m.tif", "s3://jobs/jobs/tiles/m.tif", "m.tif"] {
+        for other in [
+            "s3://jobs/job/m.tif",
+            "s3://jobs/jobs/tiles/m.tif",
+            "s3://other/job/tiles/m.tif",
+            "m.tif",
+        ] {
             assert!(d.outside("the mosaic", Path::new(other)).is_ok(), "{other}");
         }
     }

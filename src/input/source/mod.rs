@@ -267,14 +267,18 @@ pub fn delete_object(name: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The first object whose name starts with `prefix` (`s3://bucket/job/tiles/task_`), if any.
+/// The first object whose name starts with `prefix` (`s3://bucket/job/tiles/task_`), if any;
+/// `None` too when the listing is denied (credentials may write and read objects without
+/// listing them: nothing is known then).
 ///
 /// # Errors
-/// [`Error::Io`] naming the prefix: no such bucket, access denied, no answer.
+/// [`Error::Io`] naming the prefix: no such bucket, no answer.
 pub fn first_object(prefix: &Path) -> Result<Option<PathBuf>> {
     let (bucket, key) = s3_object(prefix).map_err(|e| Error::io(prefix, e))?;
-    let first = s3::first_key(&prefix.display().to_string(), &bucket, &key)
-        .map_err(|e| Error::io(prefix, e))?;
+    let first = match s3::first_key(&prefix.display().to_string(), &bucket, &key) {
+        Err(e) if e.kind() == io::ErrorKind::PermissionDenied => None,
+        r => r.map_err(|e| Error::io(prefix, e))?,
+    };
     Ok(first.map(|k| PathBuf::from(format!("s3://{bucket}/{k}"))))
 }
 
