@@ -67,6 +67,7 @@ mod refine;
 mod regressions;
 mod remote;
 mod remote_outputs;
+mod remote_plan_dir;
 mod remote_plans;
 mod simplify;
 mod smoke;

@@ -125,6 +125,9 @@ pub(crate) fn make_plan(
         outputs.push(("contours".to_string(), c));
     }
     crate::errors::detach_guarded(py, || -> sweeptin::Result<PathBuf> {
+        // A local directory or an s3:// prefix, whose bucket is checked before any work.
+        let plan_dir = sweeptin::plan::PlanDir::new(&dir)?;
+        plan_dir.check_writable()?;
         let buffer = buffer.unwrap_or(tile / 10.0);
         // `@lists`, globs and `.vpc` files expanded, every file by absolute path.
         let plan = Plan::new(typed, args, outputs, &files, tile, buffer)?;
@@ -147,13 +150,7 @@ pub(crate) fn make_plan(
             .map(|(n, p)| (n.as_str(), p.as_path()))
             .collect();
         sweeptin::output::distinct_outputs(&planned, &inputs, "the plan")?;
-        if dir.exists() && !dir.is_dir() {
-            return Err(sweeptin::Error::Options(format!(
-                "{}: not a directory",
-                dir.display()
-            )));
-        }
-        plan.save(&dir)
+        plan.save(&plan_dir)
     })
     .map_err(to_py)
 }

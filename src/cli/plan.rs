@@ -8,7 +8,9 @@ use anyhow::{Context, bail};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use sweeptin::fmt::{Figure, count};
-use sweeptin::plan::{Levels, Plan, Product, TaskOptions, TaskRecord, merge, task_from_env};
+use sweeptin::plan::{
+    Levels, Plan, PlanDir, Product, TaskOptions, TaskRecord, merge, task_from_env,
+};
 
 /// What `sweeptin plan --help` ends with.
 const PLAN_HELP: &str = "\
@@ -43,7 +45,8 @@ pub struct PlanArgs {
     pub buffer: Option<f64>,
     /// The product command (`dem`, `contours`, `volume --plane Z` or `tin`) with its input files and
     /// options as for a single run, plus `--tile SIZE` (the plan's tile side, a multiple of the
-    /// cell) and `-o DIR` (where the plan and the tiles' outputs go).
+    /// cell) and `-o DIR` (where the plan and the tiles' outputs go: a local directory, or
+    /// `s3://BUCKET/JOB/` for workers that share no disk).
     #[arg(
         trailing_var_arg = true,
         allow_hyphen_values = true,
@@ -56,7 +59,7 @@ pub struct PlanArgs {
 /// Arguments of `sweeptin run`.
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
-    /// The plan (`DIR/plan.json`, written by `sweeptin plan`).
+    /// The plan (`DIR/plan.json`, written by `sweeptin plan`, or `s3://BUCKET/JOB/plan.json`).
     pub plan: PathBuf,
     /// The task to run (0-based). Default: from SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX
     /// (Kubernetes Indexed Job), AWS_BATCH_JOB_ARRAY_INDEX, PBS_ARRAY_INDEX or SGE_TASK_ID.
@@ -89,7 +92,7 @@ pub struct RunArgs {
 /// Arguments of `sweeptin merge`.
 #[derive(clap::Args, Debug)]
 pub struct MergeArgs {
-    /// The plan (`DIR/plan.json`).
+    /// The plan (`DIR/plan.json`, or `s3://BUCKET/JOB/plan.json`).
     pub plan: PathBuf,
     /// The mosaic: `OUT.vrt` (a GDAL VRT over the tile GeoTIFFs) or `OUT.tif` (one GeoTIFF) for
     /// a DEM plan; `OUT.geojson` for a contour plan; `OUT.ply`, `.obj`, `.xml` (LandXML) or
@@ -360,13 +363,9 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let (argv, dir) = take_output(&args.command);
     let mut job = parse_job(&argv)?;
     let dir = dir.context("give the plan's directory with -o DIR")?;
-    if sweeptin::input::source::is_remote(&dir) {
-        bail!(sweeptin::Error::Options(format!(
-            "{}: a plan's directory is local (its tasks write their tiles and records there); \
-             give a local -o DIR, and merge to s3:// (`merge PLAN -o s3://BUCKET/KEY.tif`)",
-            dir.display()
-        )));
-    }
+    // A local directory or an S3 prefix, whose bucket is checked before any header is read.
+    let plan_dir = PlanDir::new(&dir)?;
+    plan_dir.check_writable()?;
     // `@list.txt`, quoted globs and `.vpc` files: the plan names every file (it reads each
     // header), each given input standing for its files in the stored command line.
     let given = job.args().inputs.clone();
@@ -426,10 +425,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
                 )
             })?;
     }
-    if dir.exists() && !dir.is_dir() {
-        bail!("{}: not a directory", dir.display());
-    }
-    let path = plan.save(&dir)?;
+    let path = plan.save(&plan_dir)?;
     super::input::warn_headers(&plan.warnings);
     for (index, stored) in plan.stored_chunk_indexes() {
         match stored {
@@ -554,7 +550,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
 }
 
 /// Runs task `i` ([`Plan::run_task`]).
-fn run_task(plan: &Plan, dir: &Path, i: usize, args: &RunArgs) -> anyhow::Result<TaskRecord> {
+fn run_task(plan: &Plan, dir: &PlanDir, i: usize, args: &RunArgs) -> anyhow::Result<TaskRecord> {
     let quiet = args.quiet || args.json || args.all;
     let options = TaskOptions {
         threads: args.threads.unwrap_or(0),

@@ -2,7 +2,7 @@
 //! JSON summary.
 
 use anyhow::Context;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use sweeptin::plan::Plan;
 use sweeptin::plan::report::{report, write_html};
 
@@ -26,14 +26,10 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let plan = Plan::load(&args.plan)?;
-    let dir = args
-        .plan
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let r = report(&plan, &args.plan, dir)?;
+    let dir = Plan::dir_of(&args.plan)?;
+    let r = report(&plan, &args.plan, &dir)?;
     if let Some(out) = &args.output {
-        write_html(&r, dir, out)
+        write_html(&r, &dir, out)
             .with_context(|| format!("cannot write the report {}", out.display()))?;
     }
     if args.json {

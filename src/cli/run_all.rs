@@ -4,11 +4,10 @@
 
 use super::plan::RunArgs;
 use anyhow::Context;
-use std::path::Path;
 use std::time::Instant;
 use sweeptin::fmt::count;
 use sweeptin::output::interrupt;
-use sweeptin::plan::Plan;
+use sweeptin::plan::{Plan, PlanDir};
 
 /// The `--json` summary of `run --all` that finished every task (a failure is the error object
 /// that names the failed tasks).
@@ -43,7 +42,7 @@ fn ended(status: Option<std::process::ExitStatus>) -> Ended {
 
 /// `--all`: every task (not yet finished, with --resume), --jobs at a time, each in its own
 /// process so that one failing task does not stop the others.
-pub fn run_all(plan: &Plan, dir: &Path, args: &RunArgs) -> anyhow::Result<()> {
+pub fn run_all(plan: &Plan, dir: &PlanDir, args: &RunArgs) -> anyhow::Result<()> {
     let exe = std::env::current_exe().context("cannot find the sweeptin executable")?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let jobs = args.jobs.max(1);

@@ -9,8 +9,8 @@
 //! refuses an index that is truncated, edited, or of the file as it was before a rewrite (the
 //! plan's stamp ties the file, and so its index, to the plan).
 
-use super::files::{FileStamp, own_file, write_atomic};
-use super::{Plan, PlanFile, bad};
+use super::files::{FileStamp, write_atomic};
+use super::{Plan, PlanDir, PlanFile, bad};
 use crate::error::{Error, Result};
 use crate::input::las::chunks::SpanBox;
 use crate::input::las::{ChunkIndex, FileInfo};
@@ -29,7 +29,7 @@ pub(super) type TaskChunks = Vec<(PathBuf, Arc<ChunkIndex>)>;
 
 impl Plan {
     /// Where the chunk index of the plan's file `k` lies under `dir`.
-    pub fn chunk_index_path(dir: &Path, k: usize) -> PathBuf {
+    pub fn chunk_index_path(dir: &PlanDir, k: usize) -> PathBuf {
         dir.join("index").join(format!("{k}.chunks"))
     }
 
@@ -39,15 +39,14 @@ impl Plan {
     ///
     /// # Errors
     /// The decoder's errors naming the input; [`Error::Io`] naming the index.
-    pub(super) fn write_chunk_indexes(&self, dir: &Path) -> Result<()> {
+    pub(super) fn write_chunk_indexes(&self, dir: &PlanDir) -> Result<()> {
         let wanted: Vec<usize> = (0..self.files.len())
             .filter(|&k| self.files[k].indexed)
             .collect();
         if wanted.is_empty() {
             return Ok(());
         }
-        let idir = dir.join("index");
-        std::fs::create_dir_all(&idir).map_err(|e| Error::write(&idir, e))?;
+        dir.make_dir("index")?;
         wanted.par_iter().try_for_each(|&k| {
             if self.chunk_index(dir, k).is_ok() {
                 return Ok(());
@@ -63,7 +62,7 @@ impl Plan {
                 modified: 0,
                 nanos: 0,
             });
-            write_atomic(&Self::chunk_index_path(dir, k), &encode(&ix, stamp))
+            dir.write(&Self::chunk_index_path(dir, k), &encode(&ix, stamp))
         })
     }
 
@@ -72,12 +71,11 @@ impl Plan {
     /// # Errors
     /// [`Error::Format`] naming the index when it is missing, truncated, edited or of another
     /// version of the file (its stamp is not the plan's).
-    pub(super) fn chunk_index(&self, dir: &Path, k: usize) -> Result<ChunkIndex> {
+    pub(super) fn chunk_index(&self, dir: &PlanDir, k: usize) -> Result<ChunkIndex> {
         let p = Self::chunk_index_path(dir, k);
-        own_file(&p)?;
         let f = &self.files[k];
         let again = "the plan's tasks read only the chunks it lists: make the plan again";
-        let bytes = std::fs::read(&p).map_err(|e| {
+        let cannot = |e: String| {
             bad(
                 &p,
                 format!(
@@ -85,7 +83,13 @@ impl Plan {
                     f.path.display()
                 ),
             )
-        })?;
+        };
+        let bytes = match dir.read(&p) {
+            Ok(Some(b)) => b,
+            Ok(None) => return Err(cannot("No such file or object".into())),
+            Err(e @ Error::Options(_)) => return Err(e),
+            Err(e) => return Err(cannot(e.to_string())),
+        };
         let damaged = |what: &str| {
             bad(
                 &p,
@@ -118,7 +122,7 @@ impl Plan {
     ///
     /// # Errors
     /// As [`Plan::chunk_index`].
-    pub(super) fn task_chunks(&self, dir: &Path, i: usize, buffer: f64) -> Result<TaskChunks> {
+    pub(super) fn task_chunks(&self, dir: &PlanDir, i: usize, buffer: f64) -> Result<TaskChunks> {
         let g = super::grown(self.task(i)?.bounds, buffer);
         (0..self.files.len())
             .filter(|&k| {

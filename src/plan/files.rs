@@ -128,13 +128,18 @@ pub(crate) fn outside_plan_dir(dir: &Path, what: &str, p: &Path) -> Result<()> {
     let own = std::fs::canonicalize(&own).unwrap_or_else(|_| lexical(&own));
     let tiles = std::fs::canonicalize(own.join("tiles")).unwrap_or(own.join("tiles"));
     if written == own.join("plan.json") || written.starts_with(&tiles) {
-        return Err(Error::Options(format!(
-            "{what} {}: that is where the tasks' outputs are, or the plan: a plan's directory \
-             keeps its own files (plan.json, tiles/); write the job's outputs elsewhere",
-            p.display()
-        )));
+        return Err(among_plan_files(what, p));
     }
     Ok(())
+}
+
+/// The refusal of an output of the whole job (`what` at `p`) among the plan's own files.
+pub(super) fn among_plan_files(what: &str, p: &Path) -> Error {
+    Error::Options(format!(
+        "{what} {}: that is where the tasks' outputs are, or the plan: a plan's directory keeps \
+         its own files (plan.json, tiles/); write the job's outputs elsewhere",
+        p.display()
+    ))
 }
 
 /// `p` with `.` and `..` taken lexically.

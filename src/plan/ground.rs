@@ -27,7 +27,7 @@ use crate::pipeline::ground::GROUND_CLASS;
 use crate::pipeline::{Input, RunOptions};
 use crate::tiles::grid::BlockRect;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 /// The classes of the last area a task classified: the next run of the task (a wider buffer)
@@ -56,7 +56,7 @@ impl Plan {
     /// [`crate::ground::classify_stream`] (a block too large for `--mem`).
     pub(super) fn ground_task(
         &self,
-        dir: &Path,
+        dir: &super::PlanDir,
         (i, buffer): (usize, f64),
         input: &mut Input,
         options: &mut RunOptions,
@@ -137,7 +137,7 @@ impl Plan {
     /// numbered by its rank in the plan's global order.
     fn classify_area(
         &self,
-        dir: &Path,
+        dir: &super::PlanDir,
         i: usize,
         read: [f64; 4],
         params: &crate::ground::GroundParams,

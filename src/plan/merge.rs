@@ -19,7 +19,7 @@ pub use super::stitch::{StitchOptions, StitchSummary, stitch};
 /// # Errors
 /// [`Error::Options`] naming the tasks that have not finished; [`Error::Format`] for an output
 /// missing or of another size.
-pub fn records(plan: &Plan, dir: &Path) -> Result<Vec<TaskRecord>> {
+pub fn records(plan: &Plan, dir: &super::PlanDir) -> Result<Vec<TaskRecord>> {
     let mut out = Vec::with_capacity(plan.tiles.len());
     let mut missing = Vec::new();
     for t in &plan.tiles {
@@ -113,7 +113,7 @@ impl std::str::FromStr for MosaicExtent {
 /// union of the tiles. Returns the grid, the extent it covers, and the warning.
 fn mosaic_grid(
     plan: &Plan,
-    dir: &Path,
+    dir: &super::PlanDir,
     recs: &[TaskRecord],
     options: &MosaicOptions,
     crs: Option<&Crs>,
@@ -207,7 +207,7 @@ struct Placed {
 /// [`Error::Format`] naming the tile and the task to run again.
 fn open_tile(
     g: &crate::raster::GridSpec,
-    dir: &Path,
+    dir: &super::PlanDir,
     i: usize,
     path: &Path,
     whole: bool,
@@ -219,7 +219,10 @@ fn open_tile(
             super::task::run_again(dir, i, false)
         ),
     };
-    let r = RasterReader::open(path).map_err(|e| match e {
+    // A tile on S3 is copied to the temporary directory first (the reader takes a file); the
+    // copy goes when the reader is made (its file stays open).
+    let copy = dir.local(path)?;
+    let r = RasterReader::open(&copy.path).map_err(|e| match e {
         Error::Format { message, .. } => bad(format!("cannot be read: {message}")),
         e => e,
     })?;
@@ -292,7 +295,7 @@ pub struct MosaicOptions {
 /// Reading the tiles or writing; [`Error::Options`] for unfinished tasks or an unknown extension.
 pub fn merge_dem(
     plan: &Plan,
-    dir: &Path,
+    dir: &super::PlanDir,
     out: &Path,
     options: &MosaicOptions,
     crs: Option<&Crs>,
@@ -346,7 +349,7 @@ pub fn merge_dem(
 
 fn write_vrt(
     g: &crate::raster::GridSpec,
-    dir: &Path,
+    dir: &super::PlanDir,
     tiles: &[(usize, &Path)],
     out: &Path,
     whole: bool,
@@ -406,15 +409,17 @@ fn write_vrt(
 /// As [`stitch`]; unfinished tasks.
 pub fn merge_contours(
     plan: &Plan,
-    dir: &Path,
+    dir: &super::PlanDir,
     out: &Path,
     crs: Option<&Crs>,
 ) -> Result<StitchSummary> {
     let recs = records(plan, dir)?;
-    let parts: Vec<&Path> = outputs(&recs, "contours")?
+    // Copies of parts on S3 (the stitcher reads files), in the temporary directory.
+    let copies = outputs(&recs, "contours")?
         .into_iter()
-        .map(|(_, p)| p)
-        .collect();
+        .map(|(_, p)| dir.local(p))
+        .collect::<Result<Vec<_>>>()?;
+    let parts: Vec<&Path> = copies.iter().map(|c| c.path.as_path()).collect();
     let levels = match &plan.job.product {
         super::Product::Dem {
             contours: Some(l), ..
@@ -441,7 +446,7 @@ pub fn merge_contours(
 ///
 /// # Errors
 /// Unfinished tasks, or a task without volume sums.
-pub fn merge_volume(plan: &Plan, dir: &Path) -> Result<crate::sink::CutFillTotals> {
+pub fn merge_volume(plan: &Plan, dir: &super::PlanDir) -> Result<crate::sink::CutFillTotals> {
     let recs = records(plan, dir)?;
     let mut parts = Vec::with_capacity(recs.len());
     // An empty task that read no point has no sums (zero).
@@ -569,6 +574,7 @@ fn planned(plan: &Plan, name: &str) -> Option<PathBuf> {
 /// raster options given for a `.vrt`.
 fn mosaic_options(
     plan: &Plan,
+    dir: &super::PlanDir,
     out: &Path,
     given: &RasterOptions,
     given_extent: MosaicExtent,
@@ -587,6 +593,14 @@ fn mosaic_options(
         return Err(Error::Options(format!(
             "{}: a DEM mosaic is a .vrt or a .tif",
             out.display()
+        )));
+    }
+    if ext.as_deref() == Some("vrt") && dir.is_remote() {
+        return Err(Error::Options(format!(
+            "{}: a .vrt mosaic names the plan's tile files, which are on S3 ({}): merge into a \
+             .tif",
+            out.display(),
+            dir.display()
         )));
     }
     if ext.as_deref() == Some("vrt") && crate::input::source::is_remote(out) {
@@ -628,7 +642,7 @@ fn mosaic_options(
 /// [`Error::Options`] for unfinished tasks, a missing or wrong output, an output that is an
 /// input, the plan, a task's output or another output; [`Error::NothingLeft`] when no task
 /// found a point; the readers' and writers' errors.
-pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSummary> {
+pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result<MergeSummary> {
     use super::Product;
     let out = o.out.as_deref();
     let dem = matches!(plan.job.product, Product::Dem { .. });
@@ -673,14 +687,14 @@ pub fn merge_plan(plan: &Plan, dir: &Path, o: &MergeOutputs) -> Result<MergeSumm
     }
     for (what, o) in &outs {
         crate::output::check_output(o)?;
-        super::files::outside_plan_dir(dir, what, o)?;
+        dir.outside(what, o)?;
     }
     fn need<'a>(o: Option<&'a Path>, what: &str) -> Result<&'a Path> {
         o.ok_or_else(|| Error::Options(format!("give the {what}")))
     }
     let mosaic = if dem {
         let out = need(out, "mosaic (OUT.vrt or OUT.tif)")?;
-        let m = mosaic_options(plan, out, &o.raster, o.extent)?;
+        let m = mosaic_options(plan, dir, out, &o.raster, o.extent)?;
         if hillshade.is_some() && extension(out).as_deref() == Some("vrt") {
             return Err(Error::Options(
                 "--hillshade shades a GeoTIFF mosaic: merge with -o OUT.tif".into(),

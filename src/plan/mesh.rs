@@ -43,7 +43,7 @@ pub struct TinMergeSummary {
 /// writer's errors.
 pub(super) fn merge_tin(
     plan: &Plan,
-    dir: &Path,
+    dir: &super::PlanDir,
     records: &[TaskRecord],
     out: &Path,
     crs: Option<String>,
@@ -97,13 +97,15 @@ pub(super) fn merge_tin(
         }
         // A damaged file says which task to run again.
         let again = |e: Error| match e {
-            Error::Format { path, message } => Error::Format {
-                path,
+            Error::Format { message, .. } => Error::Format {
+                path: path.clone(),
                 message: format!("{message}; {}", super::task::run_again(dir, r.index, false)),
             },
             e => e,
         };
-        let mut pieces = PieceReader::open(&path).map_err(again)?;
+        // Pieces on S3 are read from a copy in the temporary directory.
+        let copy = dir.local(&path)?;
+        let mut pieces = PieceReader::open(&copy.path).map_err(again)?;
         while let Some(p) = pieces.next_piece().map_err(again)? {
             writer.tile(&TileOutput {
                 tile: p.tile,

@@ -21,6 +21,7 @@
 
 mod area;
 pub mod chunks;
+mod dir;
 mod engine;
 use area::{
     centres_within, fitting_tile, grown, meets_hull, overlaps, tile_bounds, tile_count,
@@ -36,6 +37,7 @@ pub mod report;
 mod stitch;
 mod task;
 
+pub use dir::PlanDir;
 pub use engine::task_from_env;
 pub use files::FileStamp;
 pub use lines::{LineFile, PlanLines};
@@ -43,7 +45,7 @@ pub use task::{Job, Levels, Product, TaskOptions};
 
 use crate::error::{Error, Result};
 use crate::input::las::FileInfo;
-use files::{inside, own_file, write_atomic};
+use files::{inside, write_atomic};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -433,44 +435,39 @@ impl Plan {
         Ok(plan)
     }
 
-    /// Writes `DIR/plan.json` (atomically) and creates `DIR/tiles/`, after the chunk index of
-    /// every plain LAZ/LAS file (`DIR/index/`: one decoding pass over them, on every core).
+    /// Writes `DIR/plan.json` (atomically: a rename, or one upload to S3) and creates
+    /// `DIR/tiles/`, after the chunk index of every plain LAZ/LAS file (`DIR/index/`: one
+    /// decoding pass over them, on every core).
     ///
     /// # Errors
-    /// [`Error::Io`] naming the file.
-    pub fn save(&self, dir: &Path) -> Result<PathBuf> {
+    /// [`Error::Io`] naming the file; [`Error::Options`] for a directory that holds another
+    /// plan, or task records without a plan.
+    pub fn save(&self, dir: &PlanDir) -> Result<PathBuf> {
         let path = dir.join("plan.json");
         let text = serde_json::to_string_pretty(self).map_err(|e| bad(&path, e.to_string()))?;
         // Another plan's tasks must never be taken for this one's.
-        if let Ok(old) = std::fs::read_to_string(&path)
-            && old != text
-        {
+        let old = dir.read_to_string(&path)?;
+        if old.as_ref().is_some_and(|old| *old != text) {
             return Err(Error::Options(format!(
                 "{} already holds another plan (and maybe its tasks' outputs): plan into a new \
                  directory, or delete that one first",
                 dir.display()
             )));
         }
-        let tiles = dir.join("tiles");
-        if !path.exists()
-            && let Some(old) = std::fs::read_dir(&tiles)
-                .into_iter()
-                .flatten()
-                .flatten()
-                .find(|e| e.file_name().to_string_lossy().starts_with("task_"))
+        if old.is_none()
+            && let Some(record) = dir.any_record()?
         {
             return Err(Error::Options(format!(
-                "{} holds a task record ({}) but no plan: the tasks of another plan; plan into a \
-                 new directory, or delete {} first",
+                "{} holds a task record ({record}) but no plan: the tasks of another plan; plan \
+                 into a new directory, or delete {} first",
                 dir.display(),
-                old.file_name().to_string_lossy(),
-                tiles.display()
+                dir.join("tiles").display()
             )));
         }
-        std::fs::create_dir_all(&tiles).map_err(|e| Error::write(&tiles, e))?;
+        dir.make_dir("tiles")?;
         // The indexes first: a plan.json is complete with everything its tasks read.
         self.write_chunk_indexes(dir)?;
-        write_atomic(&path, text.as_bytes())?;
+        dir.write(&path, text.as_bytes())?;
         Ok(path)
     }
 
@@ -487,12 +484,17 @@ impl Plan {
         })
     }
 
-    /// Reads a `plan.json`.
+    /// Reads a `plan.json`, a local file or an `s3://` object.
     ///
     /// # Errors
     /// [`Error::Io`], or [`Error::Format`] for a file that is not a plan of this version.
     pub fn load(path: &Path) -> Result<Plan> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = match crate::input::source::is_remote(path) {
+            true => PlanDir::of_plan(path)?
+                .read_to_string(path)?
+                .ok_or_else(|| Error::io(path, std::io::ErrorKind::NotFound.into()))?,
+            false => std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?,
+        };
         #[derive(Deserialize)]
         struct Version {
             version: u32,
@@ -679,17 +681,17 @@ impl Plan {
     ///
     /// # Errors
     /// [`Error::Options`] when the path is a symbolic link or not a regular file.
-    pub fn task_output(&self, dir: &Path, i: usize, name: &str, ext: &str) -> Result<PathBuf> {
+    pub fn task_output(&self, dir: &PlanDir, i: usize, name: &str, ext: &str) -> Result<PathBuf> {
         let t = &self.tiles[i];
         let p = dir
             .join("tiles")
             .join(format!("{name}_{}_{}.{ext}", t.tx, t.ty));
-        own_file(&p)?;
+        dir.own_file(&p)?;
         Ok(p)
     }
 
     /// Where task `i` records that it finished.
-    pub fn marker(&self, dir: &Path, i: usize) -> PathBuf {
+    pub fn marker(&self, dir: &PlanDir, i: usize) -> PathBuf {
         dir.join("tiles").join(format!("task_{i}.json"))
     }
 
@@ -698,17 +700,17 @@ impl Plan {
     ///
     /// # Errors
     /// [`Error::Format`] for a damaged record.
-    pub fn record(&self, dir: &Path, i: usize) -> Result<Option<TaskRecord>> {
+    pub fn record(&self, dir: &PlanDir, i: usize) -> Result<Option<TaskRecord>> {
         let p = self.marker(dir, i);
-        match std::fs::read_to_string(&p) {
-            Ok(t) => {
+        match dir.read_to_string(&p)? {
+            Some(t) => {
                 let r = serde_json::from_str::<TaskRecord>(&t)
                     .map_err(|e| bad(&p, format!("damaged task record: {e}")))?;
                 let Some(mut r) = Some(r).filter(|r| r.plan == self.id() && r.index == i) else {
                     return Ok(None);
                 };
                 for (name, out) in &mut r.outputs {
-                    *out = inside(dir, out).ok_or_else(|| {
+                    *out = inside(dir.path(), out).ok_or_else(|| {
                         bad(
                             &p,
                             format!(
@@ -722,8 +724,7 @@ impl Plan {
                 }
                 Ok(Some(r))
             }
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(Error::io(&p, e)),
+            None => Ok(None),
         }
     }
 
@@ -731,31 +732,26 @@ impl Plan {
     ///
     /// # Errors
     /// [`Error::Io`] naming the record.
-    pub fn forget_task(&self, dir: &Path, i: usize) -> Result<()> {
-        let p = self.marker(dir, i);
-        own_file(&p)?;
-        match std::fs::remove_file(&p) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::write(&p, e)),
-            _ => Ok(()),
-        }
+    pub fn forget_task(&self, dir: &PlanDir, i: usize) -> Result<()> {
+        dir.remove(&self.marker(dir, i))
     }
 
     /// Records that task `i` finished (last, after its outputs).
     ///
     /// # Errors
     /// [`Error::Io`].
-    pub fn finish_task(&self, dir: &Path, r: &TaskRecord) -> Result<()> {
+    pub fn finish_task(&self, dir: &PlanDir, r: &TaskRecord) -> Result<()> {
         let p = self.marker(dir, r.index);
         // Outputs relative to the plan's directory: a job moved or copied elsewhere merges its
         // own tiles, never those of the place it was made in.
         let mut r = r.clone();
         for (_, out) in &mut r.outputs {
-            if let Ok(rel) = out.strip_prefix(dir) {
+            if let Ok(rel) = out.strip_prefix(dir.path()) {
                 *out = rel.to_path_buf();
             }
         }
         let text = serde_json::to_string_pretty(&r).map_err(|e| bad(&p, e.to_string()))?;
-        write_atomic(&p, text.as_bytes())
+        dir.write(&p, text.as_bytes())
     }
 }
 
@@ -767,7 +763,8 @@ fn job_outputs(outputs: Vec<(String, PathBuf)>) -> Result<Vec<(String, PathBuf)>
     let dir = outputs
         .iter()
         .find(|(n, _)| n == "dir")
-        .map(|(_, d)| d.clone());
+        .map(|(_, d)| PlanDir::new(d))
+        .transpose()?;
     outputs
         .into_iter()
         .map(|(name, p)| {
@@ -775,7 +772,7 @@ fn job_outputs(outputs: Vec<(String, PathBuf)>) -> Result<Vec<(String, PathBuf)>
                 return Ok((name, p));
             }
             if let Some(d) = &dir {
-                files::outside_plan_dir(d, &format!("--{name}"), &p)?;
+                d.outside(&format!("--{name}"), &p)?;
             }
             let abs = std::path::absolute(&p).map_err(|e| Error::io(&p, e))?;
             Ok((name, abs))

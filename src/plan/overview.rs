@@ -57,7 +57,7 @@ impl Overview {
 
 /// The overview of `plan`'s mosaic from `tiles`, the DEM tiles of its finished tasks (task,
 /// path). Never fails: a tile that cannot be read is left out and named in the note.
-pub(super) fn overview(plan: &Plan, tiles: &[(usize, PathBuf)]) -> Overview {
+pub(super) fn overview(plan: &Plan, dir: &super::PlanDir, tiles: &[(usize, PathBuf)]) -> Overview {
     let Some(cell) = plan.cell else {
         return Overview::none(format!(
             "the plan's product ({}) has no raster",
@@ -94,7 +94,7 @@ pub(super) fn overview(plan: &Plan, tiles: &[(usize, PathBuf)]) -> Overview {
     };
     let (mut read, mut crs, mut failed) = (0, None, Vec::new());
     for (i, path) in tiles {
-        match grid.sample(path) {
+        match dir.local(path).and_then(|copy| grid.sample(&copy.path)) {
             Ok(c) => {
                 read += 1;
                 crs = crs.or(c);

@@ -6,7 +6,6 @@
 //! hillshade, [`Overview`], embedded as a `data:` URI) and the failed tasks with their messages
 //! and the command that runs each again. Every string from a record is escaped.
 
-use super::files::{own_file, write_atomic};
 pub use super::overview::Overview;
 use super::{Plan, TaskRecord};
 use crate::error::{Error, Result};
@@ -31,7 +30,7 @@ pub struct TaskFailure {
 
 impl Plan {
     /// Where task `i` records that it failed.
-    pub fn failure_marker(&self, dir: &Path, i: usize) -> PathBuf {
+    pub fn failure_marker(&self, dir: &super::PlanDir, i: usize) -> PathBuf {
         dir.join("tiles").join(format!("task_{i}.failed.json"))
     }
 
@@ -39,7 +38,13 @@ impl Plan {
     ///
     /// # Errors
     /// [`Error::Io`] naming the record; [`Error::Options`] for a task that does not exist.
-    pub fn record_failure(&self, dir: &Path, i: usize, message: &str, seconds: f64) -> Result<()> {
+    pub fn record_failure(
+        &self,
+        dir: &super::PlanDir,
+        i: usize,
+        message: &str,
+        seconds: f64,
+    ) -> Result<()> {
         self.task(i)?;
         let f = TaskFailure {
             index: i,
@@ -49,34 +54,30 @@ impl Plan {
         };
         let p = self.failure_marker(dir, i);
         let text = serde_json::to_string_pretty(&f).map_err(|e| Error::Internal(e.to_string()))?;
-        write_atomic(&p, text.as_bytes())
+        dir.write(&p, text.as_bytes())
     }
 
     /// The failure record of task `i` under this plan, if any (one of another plan is none).
     ///
     /// # Errors
     /// [`Error::Format`] for a damaged record.
-    pub fn failure(&self, dir: &Path, i: usize) -> Result<Option<TaskFailure>> {
+    pub fn failure(&self, dir: &super::PlanDir, i: usize) -> Result<Option<TaskFailure>> {
         let p = self.failure_marker(dir, i);
-        match std::fs::read_to_string(&p) {
-            Ok(t) => {
+        match dir.read_to_string(&p)? {
+            Some(t) => {
                 let f = serde_json::from_str::<TaskFailure>(&t).map_err(|e| Error::Format {
                     path: p.clone(),
                     message: format!("damaged failure record: {e} (delete it)"),
                 })?;
                 Ok(Some(f).filter(|f| f.plan == self.id() && f.index == i))
             }
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(Error::io(&p, e)),
+            None => Ok(None),
         }
     }
 
     /// Removes the failure record of task `i`, if any (the task runs again).
-    pub(super) fn forget_failure(&self, dir: &Path, i: usize) {
-        let p = self.failure_marker(dir, i);
-        if own_file(&p).is_ok() {
-            let _ = std::fs::remove_file(&p);
-        }
+    pub(super) fn forget_failure(&self, dir: &super::PlanDir, i: usize) {
+        let _ = dir.remove(&self.failure_marker(dir, i));
     }
 }
 
@@ -184,7 +185,7 @@ pub struct Report {
 ///
 /// # Errors
 /// [`Error::Format`] for a damaged record.
-pub fn report(plan: &Plan, path: &Path, dir: &Path) -> Result<Report> {
+pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> {
     let mut r = Report {
         plan: path.to_path_buf(),
         command: plan.command.clone(),
@@ -250,7 +251,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &Path) -> Result<Report> {
         r.task_list.push(task);
     }
     r.points_per_second = (finished_seconds > 0.0).then(|| r.points as f64 / finished_seconds);
-    r.overview = super::overview::overview(plan, &dem);
+    r.overview = super::overview::overview(plan, dir, &dem);
     Ok(r)
 }
 
@@ -461,8 +462,8 @@ fn failures(h: &mut String, r: &Report) {
 ///
 /// # Errors
 /// [`Error::Options`] for such a name; [`Error::Io`].
-pub fn write_html(r: &Report, dir: &Path, out: &Path) -> Result<()> {
-    super::files::outside_plan_dir(dir, "the report", out)?;
+pub fn write_html(r: &Report, dir: &super::PlanDir, out: &Path) -> Result<()> {
+    dir.outside("the report", out)?;
     let inputs = [dir.join("plan.json")];
     if inputs.iter().any(|p| same_file(p, out)) {
         return Err(Error::Options(format!(

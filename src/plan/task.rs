@@ -4,7 +4,7 @@
 //! command line (`sweeptin plan/run`) and the Python package (`sweeptin.plan/run_task`) both
 //! build a [`Job`] and run tasks through here, so their plans are interchangeable.
 
-use super::{Plan, TaskRecord};
+use super::{Plan, PlanDir, TaskRecord};
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use crate::input::las::{Filter, Returns};
@@ -335,23 +335,19 @@ pub struct TaskOptions {
 }
 
 impl Plan {
-    /// The directory of the plan file `path`, absolute (task records then name their outputs
-    /// wherever the task ran from).
+    /// The directory of the plan file `path` ([`PlanDir::of_plan`]): a local one absolute
+    /// (task records then name their outputs wherever the task ran from), or an `s3://` prefix.
     ///
     /// # Errors
     /// [`Error::Io`] when the path cannot be made absolute.
-    pub fn dir_of(path: &Path) -> Result<PathBuf> {
-        let abs = std::path::absolute(path).map_err(|e| Error::io(path, e))?;
-        Ok(match abs.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        })
+    pub fn dir_of(path: &Path) -> Result<PlanDir> {
+        PlanDir::of_plan(path)
     }
 
     /// Has task `i` finished, with its record readable and every output it names present, of the
     /// size it had then? (What a resumed run skips; anything less, a truncated tile too, runs
     /// again.)
-    pub fn finished(&self, dir: &Path, i: usize) -> bool {
+    pub fn finished(&self, dir: &PlanDir, i: usize) -> bool {
         match self.record(dir, i) {
             Ok(Some(r)) => self.check_task_outputs(dir, &r).is_ok(),
             _ => false,
@@ -366,14 +362,11 @@ impl Plan {
     ///
     /// # Errors
     /// [`Error::Format`] naming the output, its size and the task to run again.
-    pub fn check_task_outputs(&self, dir: &Path, r: &TaskRecord) -> Result<()> {
+    pub fn check_task_outputs(&self, dir: &PlanDir, r: &TaskRecord) -> Result<()> {
         for (k, (name, p)) in r.outputs.iter().enumerate() {
             // Not joined to `dir` again: `report job/plan.json` looked under `job/job/`.
             let path = p.clone();
-            let len = std::fs::metadata(&path)
-                .ok()
-                .filter(|m| m.is_file())
-                .map(|m| m.len());
+            let len = dir.size(&path)?;
             let wrong = match (len, r.bytes.get(k)) {
                 (None, _) => "is missing".to_string(),
                 (Some(n), Some(&b)) if n != b => format!(
@@ -401,7 +394,7 @@ impl Plan {
     /// # Errors
     /// [`Error::Options`] for a task that does not exist; the pipeline's and the sinks' errors.
     /// A task that fails records why (`tiles/task_<i>.failed.json`, [`super::report`]).
-    pub fn run_task(&self, dir: &Path, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
+    pub fn run_task(&self, dir: &PlanDir, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
         let start = std::time::Instant::now();
         self.task(i)?;
         self.forget_failure(dir, i);
@@ -412,9 +405,9 @@ impl Plan {
         r
     }
 
-    fn try_task(&self, dir: &Path, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
+    fn try_task(&self, dir: &PlanDir, i: usize, options: &TaskOptions) -> Result<TaskRecord> {
         let start = std::time::Instant::now();
-        super::files::tiles_dir(dir)?;
+        dir.tiles()?;
         // Not finished until it finishes now: a run that fails leaves no record of an earlier
         // one for `--resume` or `merge` to take (they mixed old tiles with new ones).
         self.forget_task(dir, i)?;
@@ -450,9 +443,8 @@ impl Plan {
                         // No tile for an empty task: the merges take it as nodata and no lines
                         // (its volume sums, all zero, stay in the record). A TIN's pieces stay:
                         // they hold the triangles the merge trims, and vertices others wait for.
-                        r.outputs.retain(|(name, p)| {
-                            name == "tin" || std::fs::remove_file(dir.join(p)).is_err()
-                        });
+                        r.outputs
+                            .retain(|(name, p)| name == "tin" || dir.remove(p).is_err());
                     }
                     break r;
                 }
@@ -470,7 +462,7 @@ impl Plan {
                 Err(Error::TooFewPoints { .. }) => {
                     // No point near the tile: an empty task writes nothing.
                     drop(pieces);
-                    let _ = std::fs::remove_file(self.task_output(dir, i, "tin", "pieces")?);
+                    let _ = dir.remove(&self.task_output(dir, i, "tin", "pieces")?);
                     let products = FanoutSummary::default();
                     let run = RunSummary::default();
                     break record_of(i, "empty", buffer, runs, &run, &products);
@@ -484,8 +476,15 @@ impl Plan {
         record.bytes = record
             .outputs
             .iter()
-            .map(|(_, p)| std::fs::metadata(dir.join(p)).map_or(0, |m| m.len()))
-            .collect();
+            .map(|(_, p)| Ok(dir.size(p)?.unwrap_or(0)))
+            .collect::<Result<_>>()?;
+        // Fault injection for the tests: the task fails after its outputs, before its record
+        // (a worker lost there), `SWEEPTIN_TEST_FAIL_BEFORE_RECORD=I`.
+        if std::env::var("SWEEPTIN_TEST_FAIL_BEFORE_RECORD").is_ok_and(|v| v == i.to_string()) {
+            return Err(Error::Internal(format!(
+                "injected failure of task {i} before its record (SWEEPTIN_TEST_FAIL_BEFORE_RECORD)"
+            )));
+        }
         self.finish_task(dir, &record)?;
         Ok(record)
     }
@@ -496,7 +495,7 @@ impl Plan {
     ///
     /// # Errors
     /// As [`Plan::task`].
-    fn first_buffer(&self, dir: &Path, i: usize) -> Result<f64> {
+    fn first_buffer(&self, dir: &PlanDir, i: usize) -> Result<f64> {
         let sc = self.scope(i, self.buffer)?;
         let near_files = !self.task_files(i, self.buffer)?.is_empty();
         if near_files {
@@ -551,7 +550,7 @@ impl Plan {
     /// kept in `ground` for the next run).
     fn task_config(
         &self,
-        dir: &Path,
+        dir: &PlanDir,
         i: usize,
         buffer: f64,
         o: &TaskOptions,
@@ -653,7 +652,7 @@ impl Plan {
     }
 
     /// The sinks of task `i`, writing under `dir/tiles/`.
-    fn task_sinks(&self, dir: &Path, i: usize) -> Result<Vec<(String, Box<dyn TriangleSink>)>> {
+    fn task_sinks(&self, dir: &PlanDir, i: usize) -> Result<Vec<(String, Box<dyn TriangleSink>)>> {
         let tile = self.task(i)?.bounds;
         let contours = |l: &Levels| -> Result<(String, Box<dyn TriangleSink>)> {
             let path = self.task_output(dir, i, "contours", "geojson")?;
@@ -699,7 +698,7 @@ impl Plan {
     }
 
     /// For a TIN plan: the pieces file task `i` writes (as its mesh sink).
-    fn task_pieces(&self, dir: &Path, i: usize) -> Result<Option<PieceWriter>> {
+    fn task_pieces(&self, dir: &PlanDir, i: usize) -> Result<Option<PieceWriter>> {
         match self.job.product {
             Product::Tin => Ok(Some(PieceWriter::create(
                 &self.task_output(dir, i, "tin", "pieces")?,
@@ -711,7 +710,7 @@ impl Plan {
     /// Finishes the pieces file of task `i` (if its plan makes a TIN) and names it in `r`.
     fn finish_pieces(
         &self,
-        dir: &Path,
+        dir: &PlanDir,
         i: usize,
         pieces: Option<PieceWriter>,
         r: &mut TaskRecord,
@@ -777,7 +776,7 @@ fn record_of(
 
 /// What to do about a damaged output of task `i` of the plan in `dir` (`resume`: one that
 /// `run --all --resume` runs again, being missing or of another size).
-pub(super) fn run_again(dir: &Path, i: usize, resume: bool) -> String {
+pub(super) fn run_again(dir: &PlanDir, i: usize, resume: bool) -> String {
     format!(
         "run task {i} again (`sweeptin run {} --task {i}`{}), then merge",
         dir.join("plan.json").display(),

@@ -35,8 +35,9 @@ fn tiles_cover_the_files_and_list_their_neighbours() {
         .is_err()
     );
     let dir = tempfile::tempdir().unwrap();
-    let path = p.save(dir.path()).unwrap();
+    let d = PlanDir::Local(dir.path().to_path_buf());
+    let path = p.save(&d).unwrap();
     assert_eq!(Plan::load(&path).unwrap(), p);
-    assert!(p.record(dir.path(), 0).unwrap().is_none());
+    assert!(p.record(&d, 0).unwrap().is_none());
     assert!(p.task(12).is_err());
 }

@@ -235,6 +235,67 @@ impl Moto {
             .then(|| String::from_utf8_lossy(&o.stdout).trim().to_string())
     }
 
+    /// One unsigned request to this server (moto answers them on buckets, not on objects;
+    /// boto3 costs a Python start per call): the status and the body.
+    fn raw(&self, method: &str, target: &str) -> (u16, Vec<u8>) {
+        use std::io::{Read, Write};
+        let host = self.endpoint.trim_start_matches("http://");
+        let mut c = std::net::TcpStream::connect(host).unwrap();
+        write!(
+            c,
+            "{method} {target} HTTP/1.1\r\nHost: {host}\r\nContent-Length: 0\r\n\
+             Connection: close\r\n\r\n"
+        )
+        .unwrap();
+        let mut answer = Vec::new();
+        c.read_to_end(&mut answer).unwrap();
+        let head_end = answer
+            .windows(4)
+            .position(|w| w == b"\r\n\r\n")
+            .map_or(answer.len(), |p| p + 4);
+        let head = String::from_utf8_lossy(&answer[..head_end]).to_string();
+        assert!(
+            !head
+                .to_ascii_lowercase()
+                .contains("transfer-encoding: chunked"),
+            "moto answered in chunks: {head}"
+        );
+        let status = head
+            .split(' ')
+            .nth(1)
+            .and_then(|c| c.parse().ok())
+            .unwrap_or(0);
+        (status, answer[head_end..].to_vec())
+    }
+
+    /// Makes the bucket `bucket` (an unsigned request: no Python start).
+    pub fn bucket(&self, bucket: &str) {
+        let (status, body) = self.raw("PUT", &format!("/{bucket}"));
+        assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
+    }
+
+    /// The keys of `bucket` under `prefix`, sorted (an unsigned ListObjectsV2).
+    pub fn keys(&self, bucket: &str, prefix: &str) -> Vec<String> {
+        let (status, body) = self.raw("GET", &format!("/{bucket}?list-type=2&prefix={prefix}"));
+        let body = String::from_utf8_lossy(&body);
+        assert_eq!(status, 200, "{body}");
+        let mut keys: Vec<String> = body
+            .split("<Key>")
+            .skip(1)
+            .filter_map(|k| k.split_once("</Key>").map(|(k, _)| k.to_string()))
+            .collect();
+        keys.sort();
+        keys
+    }
+
+    /// Deletes `s3://bucket/key`, with boto3 (moto refuses unsigned requests on objects).
+    pub fn delete(&self, bucket: &str, key: &str) {
+        let o = self.boto(&format!(
+            "s3.delete_object(Bucket='{bucket}', Key='{key}')\n"
+        ));
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+
     /// The multipart uploads of `bucket` begun and neither completed nor aborted.
     pub fn pending_uploads(&self, bucket: &str) -> usize {
         let o = self.boto(&format!(

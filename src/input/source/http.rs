@@ -183,18 +183,22 @@ impl Payload<'_> {
     }
 }
 
-/// The method of a request that writes, or that asks about a bucket.
+/// The method of a request that writes, or that asks about a bucket or an object (a `GET`
+/// here lists a bucket: its answer is small).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Verb {
     Put,
     Post,
     Delete,
     Head,
+    Get,
 }
 
-/// A successful answer: its ETag and body (at most 1 MiB kept).
+/// A successful answer: its ETag, `Content-Length` (a `HEAD`'s is the object's size) and body
+/// (at most 1 MiB kept).
 pub(super) struct Answer {
     pub(super) etag: Option<String>,
+    pub(super) length: Option<u64>,
     pub(super) body: String,
 }
 
@@ -248,9 +252,10 @@ pub(super) fn send(
                     }
                 }
             }
-            Verb::Delete | Verb::Head => {
+            Verb::Delete | Verb::Head | Verb::Get => {
                 let b = match verb {
                     Verb::Delete => agent().delete(url),
+                    Verb::Get => agent().get(url),
                     _ => agent().head(url),
                 };
                 b.config()
@@ -264,6 +269,7 @@ pub(super) fn send(
         .map_err(|e| transport(&e))?;
         let status = r.status().as_u16();
         let etag = header(&r, "etag");
+        let length = header(&r, "content-length").and_then(|v| v.trim().parse().ok());
         let body = if verb == Verb::Head {
             String::new()
         } else {
@@ -277,7 +283,7 @@ pub(super) fn send(
         let code = s3_error_code(&body);
         match status {
             200..=299 => match code {
-                None => Ok(Answer { etag, body }),
+                None => Ok(Answer { etag, length, body }),
                 Some(c) => Err(Fault::Retry(format!(
                     "the server answered HTTP {status} with the error {c}"
                 ))),

@@ -205,6 +205,83 @@ pub fn check_destination(name: &Path) -> Result<()> {
     r.map_err(|e| Error::write(name, e))
 }
 
+/// An `s3://` object's bucket and key, or why `name` is not one (the plan's own objects).
+fn s3_object(name: &Path) -> io::Result<(String, String)> {
+    match Location::of(name) {
+        Location::S3 { bucket, key } => Ok((bucket, key)),
+        _ => Err(io::Error::new(
+            io::ErrorKind::Unsupported,
+            "not an s3:// object (a plan's directory is local or an s3:// prefix)",
+        )),
+    }
+}
+
+/// The size of the `s3://` object `name` now (a `HEAD`), `None` when there is none.
+///
+/// # Errors
+/// [`Error::Io`] naming it: access denied, no answer after the retries, not `s3://`.
+pub fn object_size(name: &Path) -> Result<Option<u64>> {
+    let (bucket, key) = s3_object(name).map_err(|e| Error::io(name, e))?;
+    s3::size(&name.display().to_string(), &bucket, &key).map_err(|e| Error::io(name, e))
+}
+
+/// The whole `s3://` object `name` as it is now (never the version this process saw before:
+/// a plan's records are written and read again), `None` when there is none.
+///
+/// # Errors
+/// [`Error::Io`] naming it: access denied, no answer after the retries, over 256 MiB.
+pub fn read_object(name: &Path) -> Result<Option<Vec<u8>>> {
+    let (bucket, key) = s3_object(name).map_err(|e| Error::io(name, e))?;
+    let object = match s3::open(&name.display().to_string(), &bucket, &key) {
+        Ok(o) => o,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io(name, e)),
+    };
+    if object.len() > MAX_TEXT {
+        let why = format!("{} bytes: more than a plan's file may have", object.len());
+        return Err(Error::io(
+            name,
+            io::Error::new(io::ErrorKind::InvalidData, why),
+        ));
+    }
+    let mut bytes = vec![0u8; object.len() as usize];
+    if !bytes.is_empty() {
+        object
+            .read_at(0, &mut bytes)
+            .map_err(|e| Error::io(name, e))?;
+    }
+    Ok(Some(bytes))
+}
+
+/// Deletes the `s3://` object `name` (none there is no error).
+///
+/// # Errors
+/// [`Error::Write`] naming it.
+pub fn delete_object(name: &Path) -> Result<()> {
+    let (bucket, key) = s3_object(name).map_err(|e| Error::write(name, e))?;
+    s3::delete(&name.display().to_string(), &bucket, &key).map_err(|e| Error::write(name, e))?;
+    opened()
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .remove(name);
+    Ok(())
+}
+
+/// The first object whose name starts with `prefix` (`s3://bucket/job/tiles/task_`), if any;
+/// `None` too when the listing is denied (credentials may write and read objects without
+/// listing them: nothing is known then).
+///
+/// # Errors
+/// [`Error::Io`] naming the prefix: no such bucket, no answer.
+pub fn first_object(prefix: &Path) -> Result<Option<PathBuf>> {
+    let (bucket, key) = s3_object(prefix).map_err(|e| Error::io(prefix, e))?;
+    let first = match s3::first_key(&prefix.display().to_string(), &bucket, &key) {
+        Err(e) if e.kind() == io::ErrorKind::PermissionDenied => None,
+        r => r.map_err(|e| Error::io(prefix, e))?,
+    };
+    Ok(first.map(|k| PathBuf::from(format!("s3://{bucket}/{k}"))))
+}
+
 /// The largest text input read whole from a server (a `.vpc`, a file list).
 const MAX_TEXT: u64 = 256 << 20;
 

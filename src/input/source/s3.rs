@@ -420,6 +420,73 @@ pub(super) fn check_bucket(name: &str, bucket: &str, key: &str) -> io::Result<()
     }
 }
 
+/// The size of `s3://bucket/key` by a signed `HEAD`; `None` when there is no such object.
+pub(super) fn size(name: &str, bucket: &str, key: &str) -> io::Result<Option<u64>> {
+    let (b, creds) = address(bucket, key)?;
+    let url = b.head_object(creds.as_ref(), key).sign(SIGNED_FOR);
+    match send(
+        name,
+        Verb::Head,
+        url.as_str(),
+        Payload::Empty,
+        "no such object",
+    ) {
+        Ok(a) => a.length.map(Some).ok_or_else(|| {
+            io::Error::new(
+                io::ErrorKind::InvalidData,
+                "the server answered HEAD without a Content-Length",
+            )
+        }),
+        Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// Deletes `s3://bucket/key` (DeleteObject; no such object is no error, as S3 answers it).
+pub(super) fn delete(name: &str, bucket: &str, key: &str) -> io::Result<()> {
+    let (b, creds) = address(bucket, key)?;
+    let url = b.delete_object(creds.as_ref(), key).sign(SIGNED_FOR);
+    match send(
+        name,
+        Verb::Delete,
+        url.as_str(),
+        Payload::Empty,
+        "no such object",
+    ) {
+        Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(()),
+        r => r.map(drop),
+    }
+}
+
+/// The first key of `bucket` that starts with `prefix` (ListObjectsV2, one key), if any. Signed
+/// by hand as a multipart upload's requests are (rusty-s3 lists only with its XML feature).
+pub(super) fn first_key(name: &str, bucket: &str, prefix: &str) -> io::Result<Option<String>> {
+    let (b, creds) = address(bucket, if prefix.is_empty() { "-" } else { prefix })?;
+    let query = [("list-type", "2"), ("max-keys", "1"), ("prefix", prefix)];
+    let url = match &creds {
+        Some(c) => rusty_s3::signing::sign(
+            &jiff::Timestamp::now(),
+            rusty_s3::Method::Get,
+            b.base_url().clone(),
+            c.key(),
+            c.secret(),
+            c.token(),
+            b.region(),
+            SIGNED_FOR.as_secs(),
+            query.iter().copied(),
+            std::iter::empty(),
+        )
+        .to_string(),
+        None => {
+            let mut url = b.base_url().clone();
+            url.query_pairs_mut().extend_pairs(query);
+            url.to_string()
+        }
+    };
+    let a = send(name, Verb::Get, &url, Payload::Empty, "no such bucket")?;
+    Ok(xml_text(&a.body, "Key"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
