@@ -146,7 +146,7 @@ pub struct StreamStats {
     /// Vertices emitted.
     pub vertices: u64,
     /// Most bytes of the held triangles' tables in temporary files at once (0: they stayed on
-    /// the heap; see [`SpillPolicy`]).
+    /// the heap: they move past a quarter of `--mem`).
     pub peak_spilled_bytes: u64,
     /// Times their pages were dropped from the resident set.
     pub spill_releases: u64,
