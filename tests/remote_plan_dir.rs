@@ -243,21 +243,8 @@ fn a_plan_into_a_missing_bucket_is_refused_before_any_work() {
     );
     assert_eq!(std::fs::read_dir(t.path()).unwrap().count(), 0);
     // An HTTP server cannot hold a plan.
-    let o = on_s3(
-        &moto,
-        &[
-            "plan",
-            "dem",
-            s(&input()),
-            "--cell",
-            "1",
-            "--tile",
-            "25",
-            "-o",
-            "http://x/job/",
-        ],
-        &[],
-        t.path(),
-    );
+    let args = plan_args("http://x/job/");
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = on_s3(&moto, &args, &[], t.path());
     assert_eq!(o.status.code(), Some(2), "{}", remote::stderr(&o));
 }

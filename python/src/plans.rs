@@ -42,7 +42,8 @@ pub(crate) struct JobOpts {
     ground: Option<crate::ground::ParamsOpts>,
 }
 
-/// Writes `DIR/plan.json` for the job over `files`; returns its path.
+/// Writes `DIR/plan.json` for the job over `files` (`DIR` a directory or an `s3://` prefix);
+/// returns its path or URL.
 #[pyfunction]
 #[pyo3(signature = (files, dir, tile, buffer, job, args))]
 pub(crate) fn make_plan(
@@ -53,7 +54,7 @@ pub(crate) fn make_plan(
     buffer: Option<f64>,
     job: JobOpts,
     args: Vec<String>,
-) -> PyResult<PathBuf> {
+) -> PyResult<std::ffi::OsString> {
     let levels = Levels {
         interval: job.interval,
         base: job.base,
@@ -152,6 +153,8 @@ pub(crate) fn make_plan(
         sweeptin::output::distinct_outputs(&planned, &inputs, "the plan")?;
         plan.save(&plan_dir)
     })
+    // A str, not a pathlib.Path: a path would fold `s3://` into `s3:/`.
+    .map(PathBuf::into_os_string)
     .map_err(to_py)
 }
 

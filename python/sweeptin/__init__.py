@@ -40,6 +40,7 @@ from __future__ import annotations
 import json as _json
 import operator as _operator
 import os as _os
+import re as _re
 import typing as _typing
 
 import numpy as _np
@@ -583,7 +584,7 @@ class Plan:
     __slots__ = ("path",)
 
     def __init__(self, path: PathLike) -> None:
-        self.path = _os.path.abspath(_os.fspath(path))
+        self.path = _absolute(_os.fspath(path))
 
     def __fspath__(self) -> str:
         return self.path
@@ -601,6 +602,11 @@ class Plan:
     def tasks(self) -> range:
         """The task indices ``0 .. len(plan) - 1``."""
         return range(len(self))
+
+
+def _absolute(path: str) -> str:
+    """A local path made absolute; a URL (``s3://…``, ``https://…``) as it is."""
+    return path if _re.match(r"[A-Za-z][A-Za-z0-9+.-]*://", path) else _os.path.abspath(path)
 
 
 def _plan_path(p: Plan | PathLike) -> str:
@@ -688,7 +694,7 @@ def plan(
         "ground": g,
     }
     names = _files(files)
-    args = [product, *[_os.path.abspath(f) for f in names], "--tile", repr(float(tile))]
+    args = [product, *[_absolute(f) for f in names], "--tile", repr(float(tile))]
     if product == "dem":
         args += ["--cell", repr(float(cell)), "--align", align]
         if format is not None:

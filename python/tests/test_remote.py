@@ -88,3 +88,22 @@ def test_a_missing_s3_object_raises_naming_it_and_writes_nothing(s3, tmp_path):
     with pytest.raises(sweeptin.SweeptinError, match="s3://lidar/none.laz"):
         sweeptin.dem("s3://lidar/none.laz", out, cell=1)
     assert not out.exists()
+
+
+def test_a_plan_on_s3_over_an_s3_input_merges_to_the_local_plans_mosaic(s3, tmp_path):
+    local = data("lidar/startinpy_small.laz")
+    # A name no other test opened: a process keeps the first version of each remote object it
+    # opens (and where it was found).
+    s3.upload_file(os.fspath(local), "lidar", "plan/small.laz")
+    want, got = tmp_path / "want.tif", tmp_path / "got.tif"
+    p = sweeptin.plan("dem", local, tmp_path / "job", tile=25, cell=1)
+    for i in p.tasks:
+        sweeptin.run_task(p, i)
+    sweeptin.merge(p, want)
+    q = sweeptin.plan("dem", "s3://lidar/plan/small.laz", "s3://lidar/job/", tile=25, cell=1)
+    assert q.path.startswith("s3://lidar/job/") and len(q) == len(p)
+    for i in q.tasks:
+        assert sweeptin.run_task(q, i)["status"] in ("done", "empty")
+    sweeptin.merge(q, got)
+    assert got.read_bytes() == want.read_bytes()
+    assert not (tmp_path / "s3:").exists()

@@ -24,6 +24,8 @@ use crate::error::{Error, Result};
 use crate::tin::{PointLocation, Tin, TriId, VertexId, planar};
 use rayon::prelude::*;
 
+mod deferred;
+
 /// No triangle, no candidate.
 const NONE: u32 = u32::MAX;
 
@@ -674,96 +676,6 @@ impl<'a> Densify<'a> {
             } else if p[2] < z - low_noise {
                 self.labels[i] = Label::LowNoise;
             }
-        }
-    }
-}
-
-impl Densify<'_> {
-    /// The triangles of the final TIN that hold the deferred candidates (a walk from the
-    /// triangle of each one's cell's lowest point, or of the point before it), on every core.
-    fn locate_deferred(&self, deferred: &[(u32, u32)]) -> Result<Vec<u32>> {
-        let piece = |piece: &[(u32, u32)]| -> Result<Vec<u32>> {
-            let mut out = Vec::with_capacity(piece.len());
-            let mut rng = 0x9E37_79B9_7F4A_7C15_u64;
-            let mut prev = self.tin.triangles().next().map_or(NONE, |t| t.0);
-            for &(i, lowest) in piece {
-                let near = self.tri[lowest as usize];
-                let start = if near != NONE && self.tin.is_live(TriId(near)) {
-                    near
-                } else {
-                    prev
-                };
-                let p = self.tin.xy(self.vid(i));
-                let loc = self.tin.walk_from(TriId(start), p, &mut rng);
-                let Some(t) = holder(&self.tin, loc) else {
-                    return Err(Error::Internal(format!(
-                        "ground: point {} ({}, {}) lies outside the ground TIN",
-                        self.id(i),
-                        p[0],
-                        p[1]
-                    )));
-                };
-                prev = t.0;
-                out.push(t.0);
-            }
-            Ok(out)
-        };
-        let found: Vec<Vec<u32>> = if deferred.len() < 2 * WALK_PIECE {
-            vec![piece(deferred)?]
-        } else {
-            deferred
-                .par_chunks(WALK_PIECE)
-                .map(piece)
-                .collect::<Result<_>>()?
-        };
-        Ok(found.into_iter().flatten().collect())
-    }
-
-    /// Step 5 for the candidates that did not densify: each judged once against the final TIN
-    /// as the densification would ([`Self::judge_once`]), on every core.
-    fn finish_deferred(&mut self, low_noise: f64, offset: f64) -> Result<()> {
-        let deferred = std::mem::take(&mut self.deferred);
-        let found = self.locate_deferred(&deferred)?;
-        let this = &*self;
-        let judged: Vec<(u32, Label)> = deferred
-            .par_iter()
-            .zip(&found)
-            .map_init(Verdicts::default, |v, (&(i, _), &t)| {
-                (i, this.judge_once(i, t, low_noise, offset, v))
-            })
-            .collect();
-        for (i, l) in judged {
-            if l != Label::Other {
-                self.labels[i as usize] = l;
-            }
-        }
-        Ok(())
-    }
-
-    /// The label of candidate `i`, in triangle `t` of the final TIN, judged once: ground when
-    /// the densification would accept it (its distance and angles, or its mirror point's, or
-    /// at a real vertex close enough to it) or when within `offset` (vertically) of the TIN;
-    /// low noise more than `low_noise` below it.
-    fn judge_once(&self, i: u32, t: u32, low_noise: f64, offset: f64, v: &mut Verdicts) -> Label {
-        let vs = self.tin.tri_vertices(TriId(t));
-        let corners = vs.map(|v| self.tin.point(v));
-        let plane = Plane::new(corners);
-        v.effects.clear();
-        let accepted = match self.distance(i, vs, &corners, &plane, v) {
-            Some(d) => self.accepts(i, t, vs, &corners, d, false, v),
-            None => v.effects.iter().any(|e| matches!(e, Effect::Ground(_))),
-        };
-        if accepted {
-            return Label::Ground;
-        }
-        let p = self.tin.point(self.vid(i));
-        let z = planar(corners[0], corners[1], corners[2], [p[0], p[1]]);
-        if (p[2] - z).abs() <= offset {
-            Label::Ground
-        } else if p[2] < z - low_noise {
-            Label::LowNoise
-        } else {
-            Label::Other
         }
     }
 }
