@@ -675,7 +675,7 @@ def plan(
         "align": align,
         "nodata": float(nodata),
         **_raster(format, compress, predictor, bigtiff),
-        "contours": None if contours is None else _os.path.abspath(_os.fspath(contours)),
+        "contours": None if contours is None else _absolute(_os.fspath(contours)),
         "interval": float(interval),
         "base": float(base),
         "plane": None if plane is None else float(plane),
@@ -705,7 +705,7 @@ def plan(
         args += ["--ground"]
     for flag, paths in (("--breaklines", job["breaklines"]), ("--trim-boundary", [trim_boundary]),
                         ("--holes", [holes])):
-        args += [a for p in paths if p is not None for a in (flag, _os.path.abspath(p))]
+        args += [a for p in paths if p is not None for a in (flag, _absolute(_os.fspath(p)))]
     path = _native.make_plan(names, _os.fspath(dir), float(tile), buffer, job, args)
     return Plan(path)
 
