@@ -107,3 +107,13 @@ def test_a_plan_on_s3_over_an_s3_input_merges_to_the_local_plans_mosaic(s3, tmp_
     sweeptin.merge(q, got)
     assert got.read_bytes() == want.read_bytes()
     assert not (tmp_path / "s3:").exists()
+
+
+def test_a_dem_written_to_s3_is_the_local_files_bytes(s3, tmp_path):
+    local = data("lidar/startinpy_small.laz")
+    want = tmp_path / "want.tif"
+    sweeptin.dem(local, want, cell=1, classes=[2])
+    sweeptin.dem(local, "s3://lidar/out/dem.tif", cell=1, classes=[2])
+    body = s3.get_object(Bucket="lidar", Key="out/dem.tif")["Body"].read()
+    assert body == want.read_bytes()
+    assert not (tmp_path / "s3:").exists() and not os.path.exists("s3:")
