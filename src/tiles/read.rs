@@ -227,7 +227,7 @@ fn unread_of(i: &crate::input::las::FileInfo, sc: &TaskScope, area: [f64; 4]) ->
         Some((_, ix)) if i.copc.is_none() => ix
             .boxes()
             .flat_map(|(r, _)| {
-                if r[0] <= area[2] && r[2] >= area[0] && r[1] <= area[3] && r[3] >= area[1] {
+                if meets(&r, &area) {
                     outside_of(r, area)
                 } else {
                     vec![r]
@@ -248,12 +248,17 @@ fn pays_to_read_by_area(chunks: &[(std::path::PathBuf, std::sync::Arc<ChunkIndex
     for (_, ix) in chunks {
         for (r, n) in ix.boxes() {
             all += n;
-            if r[0] <= area[2] && r[2] >= area[0] && r[1] <= area[3] && r[3] >= area[1] {
+            if meets(&r, &area) {
                 near += n;
             }
         }
     }
     2 * near <= all
+}
+
+/// Do the closed rectangles `a` and `b` meet?
+fn meets(a: &[f64; 4], b: &[f64; 4]) -> bool {
+    a[0] <= b[2] && a[2] >= b[0] && a[1] <= b[3] && a[3] >= b[1]
 }
 
 /// The parts of the closed rectangle `e` outside the closed rectangle `a`, as at most four closed
