@@ -623,34 +623,11 @@ impl<'a> Densify<'a> {
         // (near), pieces on every core: the triangle found does not depend on the walk's path.
         gathered.par_sort_unstable();
         let mut found = std::mem::take(&mut self.found);
-        found.clear();
-        let (tin, tri, virtuals) = (&self.tin, &self.tri, self.virtuals as u32);
-        found.resize(gathered.len(), NONE);
-        let walk = |piece: &[u32], out: &mut [u32]| {
-            let mut rng = 0x9E37_79B9_7F4A_7C15_u64;
-            for (&i, t) in piece.iter().zip(out) {
-                let p = tin.xy(VertexId(virtuals + i));
-                let loc = tin.walk_from(TriId(tri[i as usize]), p, &mut rng);
-                *t = holder(tin, loc).map_or(NONE, |t| t.0);
-            }
-        };
-        if gathered.len() < 2 * WALK_PIECE {
-            walk(&gathered, &mut found);
-        } else {
-            gathered
-                .par_chunks(WALK_PIECE)
-                .zip(found.par_chunks_mut(WALK_PIECE))
-                .for_each(|(piece, out)| walk(piece, out));
-        }
+        let tri = &self.tri;
+        self.locate_all(&gathered, |&i, _| (i, tri[i as usize]), &mut found);
         for (&i, &t) in gathered.iter().zip(&found) {
             if t == NONE {
-                let p = self.tin.xy(self.vid(i));
-                return Err(Error::Internal(format!(
-                    "ground: point {} ({}, {}) left the ground TIN",
-                    self.id(i),
-                    p[0],
-                    p[1]
-                )));
+                return Err(self.outside(i));
             }
             self.link(i, t);
         }
@@ -658,6 +635,53 @@ impl<'a> Densify<'a> {
         self.gathered = gathered;
         self.touched = touched;
         Ok(())
+    }
+
+    /// The triangles that hold points ([`holder`]; [`NONE`] outside the TIN), one for each of
+    /// `items`: `at(item, the triangle found for the item before it)` gives its point and the
+    /// triangle its walk starts from ([`NONE`]: any). Pieces on every core: the triangle found
+    /// does not depend on the walk's path.
+    fn locate_all<T, F>(&self, items: &[T], at: F, found: &mut Vec<u32>)
+    where
+        T: Sync,
+        F: Fn(&T, u32) -> (u32, u32) + Sync,
+    {
+        found.clear();
+        found.resize(items.len(), NONE);
+        let any = self.tin.triangles().next().map_or(0, |t| t.0);
+        let walk = |piece: &[T], out: &mut [u32]| {
+            let mut rng = 0x9E37_79B9_7F4A_7C15_u64;
+            let mut prev = NONE;
+            for (item, t) in piece.iter().zip(out) {
+                let (i, start) = at(item, prev);
+                let start = if start == NONE { any } else { start };
+                let loc = self
+                    .tin
+                    .walk_from(TriId(start), self.tin.xy(self.vid(i)), &mut rng);
+                *t = holder(&self.tin, loc).map_or(NONE, |t| t.0);
+                prev = *t;
+            }
+        };
+        if items.len() < 2 * WALK_PIECE {
+            walk(items, found);
+        } else {
+            items
+                .par_chunks(WALK_PIECE)
+                .zip(found.par_chunks_mut(WALK_PIECE))
+                .for_each(|(piece, out)| walk(piece, out));
+        }
+    }
+
+    /// The error of point `i` found outside the ground TIN (every point lies inside its
+    /// virtual ring).
+    fn outside(&self, i: u32) -> Error {
+        let p = self.tin.xy(self.vid(i));
+        Error::Internal(format!(
+            "ground: point {} ({}, {}) lies outside the ground TIN",
+            self.id(i),
+            p[0],
+            p[1]
+        ))
     }
 
     /// Step 5: a candidate left within `offset` (vertically) of the final ground TIN is ground,

@@ -1,8 +1,8 @@
 //! The candidates that do not densify (`--densify-cell`): each located in the final TIN and
 //! judged once, as an iteration would judge it.
 
-use super::{Densify, Effect, NONE, Plane, Verdicts, WALK_PIECE, holder};
-use crate::error::{Error, Result};
+use super::{Densify, Effect, NONE, Plane, Verdicts};
+use crate::error::Result;
 use crate::ground::ptd::Label;
 use crate::tin::{TriId, planar};
 use rayon::prelude::*;
@@ -11,41 +11,17 @@ impl Densify<'_> {
     /// The triangles of the final TIN that hold the deferred candidates (a walk from the
     /// triangle of each one's cell's lowest point, or of the point before it), on every core.
     fn locate_deferred(&self, deferred: &[(u32, u32)]) -> Result<Vec<u32>> {
-        let piece = |piece: &[(u32, u32)]| -> Result<Vec<u32>> {
-            let mut out = Vec::with_capacity(piece.len());
-            let mut rng = 0x9E37_79B9_7F4A_7C15_u64;
-            let mut prev = self.tin.triangles().next().map_or(NONE, |t| t.0);
-            for &(i, lowest) in piece {
-                let near = self.tri[lowest as usize];
-                let start = if near != NONE && self.tin.is_live(TriId(near)) {
-                    near
-                } else {
-                    prev
-                };
-                let p = self.tin.xy(self.vid(i));
-                let loc = self.tin.walk_from(TriId(start), p, &mut rng);
-                let Some(t) = holder(&self.tin, loc) else {
-                    return Err(Error::Internal(format!(
-                        "ground: point {} ({}, {}) lies outside the ground TIN",
-                        self.id(i),
-                        p[0],
-                        p[1]
-                    )));
-                };
-                prev = t.0;
-                out.push(t.0);
-            }
-            Ok(out)
+        let mut found = Vec::new();
+        let at = |&(i, lowest): &(u32, u32), prev: u32| {
+            let near = self.tri[lowest as usize];
+            let live = near != NONE && self.tin.is_live(TriId(near));
+            (i, if live { near } else { prev })
         };
-        let found: Vec<Vec<u32>> = if deferred.len() < 2 * WALK_PIECE {
-            vec![piece(deferred)?]
-        } else {
-            deferred
-                .par_chunks(WALK_PIECE)
-                .map(piece)
-                .collect::<Result<_>>()?
-        };
-        Ok(found.into_iter().flatten().collect())
+        self.locate_all(deferred, at, &mut found);
+        match deferred.iter().zip(&found).find(|(_, t)| **t == NONE) {
+            Some((&(i, _), _)) => Err(self.outside(i)),
+            None => Ok(found),
+        }
     }
 
     /// Step 5 for the candidates that did not densify: each judged once against the final TIN
