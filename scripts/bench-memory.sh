@@ -15,13 +15,15 @@
 # Prints a Markdown table per part; every row's peak RSS is checked against --mem + 64 MB.
 #
 #   scripts/bench-memory.sh [--sizes "1M 10M"] [--mems "64M 128M 512M"] [--dists "..."]
-#                           [--out DIR] [--no-orders] [--no-spade] [--report]
+#                           [--out DIR] [--no-orders] [--no-spade] [--report] [--build DIR]
 # --report prints the tables of the results already in DIR (a run cut short).
+# --build DIR uses the release build in DIR (DIR/sweeptin, DIR/examples/...) instead of building
+# target/release (e.g. a faster non-LTO build made with CARGO_TARGET_DIR).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SIZES="1M 10M"; MEMS="64M 128M 512M"
 DISTS="square disc kuzmin disc-far lidar clustered line circle"
-OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench-memory}; ORDERS=1; SPADE=1; REPORT=0
+OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench-memory}; ORDERS=1; SPADE=1; REPORT=0; BUILD=
 while [ $# -gt 0 ]; do
     case "$1" in
         --sizes) SIZES=$2; shift 2;;
@@ -31,6 +33,7 @@ while [ $# -gt 0 ]; do
         --no-orders) ORDERS=0; shift;;
         --no-spade) SPADE=0; shift;;
         --report) REPORT=1; shift;;
+        --build) BUILD=$2; shift 2;;
         *) echo "unknown option $1" >&2; exit 2;;
     esac
 done
@@ -78,8 +81,11 @@ PY
 }
 if [ "$REPORT" = 1 ]; then report; exit 0; fi
 command -v /usr/bin/time >/dev/null || { apt-get install -y -qq time >/dev/null; }
-cargo build --release --quiet --bin sweeptin --example gen_points --example spade_xyz
-BIN=target/release/sweeptin
+if [ -z "$BUILD" ]; then
+    cargo build --release --quiet --bin sweeptin --example gen_points --example spade_xyz
+    BUILD=target/release
+fi
+BIN=$BUILD/sweeptin
 : > "$RESULTS"
 echo "commit $(git rev-parse --short HEAD)$(git diff --quiet || echo +changes), $(date -u +%FT%TZ)" >&2
 
@@ -115,7 +121,7 @@ timed() { # log cmd...
 gen() { # dist size order -> file; sets CELL
     local f="$OUT/$1-$2-$3.xyz"
     if [ ! -f "$f" ] || [ ! -f "$f.extent" ]; then
-        target/release/examples/gen_points "$1" "$2" "$f" --order "$3" > "$f.extent"
+        $BUILD/examples/gen_points "$1" "$2" "$f" --order "$3" > "$f.extent"
     fi
     CELL=$(python3 -c "import sys; x0,y0,x1,y1=map(float,open(sys.argv[1]).read().split()); w,h=x1-x0,y1-y0; c=max(w,h,1e-6)/1000; c=min(c,min(w,h)/4) if min(w,h)>0 else c; print(f'{c:.6g}')" "$f.extent")
     FILE=$f
@@ -144,7 +150,7 @@ for size in $SIZES; do
         done
         if [ "$SPADE" = 1 ]; then
             log="$OUT/spade-$dist-$size.log"; : > "$log"
-            timed "$log" target/release/examples/spade_xyz "$FILE" >> "$log" 2>&1
+            timed "$log" $BUILD/examples/spade_xyz "$FILE" >> "$log" 2>&1
             # The spade line first, then /usr/bin/time's.
             sort "$log" -o "$log"
             record spade "$dist" "$size" random - spade "$log" -

@@ -119,6 +119,8 @@ const FIRST_CHECK: u64 = 3;
 const PATIENT_CHECKS: u8 = 4;
 /// Buckets between checks of a triangle that uses an artificial point or is too flat to bound.
 const PARKED: u64 = 64;
+/// Front nodes scanned under a disk before a vertex of its triangle on the front is looked for.
+const SHORT_SCAN: usize = 64;
 /// Fewest points between two estimates of the bucket height (see [`Finalizer::adapt`]).
 const WINDOW: u64 = 1024;
 /// Rows of points the front holds, about (measured on uniform data: its nodes zigzag over two
@@ -150,6 +152,8 @@ pub struct StreamStats {
     pub peak_spilled_bytes: u64,
     /// Times their pages were dropped from the resident set.
     pub spill_releases: u64,
+    /// Front nodes scanned under circumdisks to decide whether their triangles are final.
+    pub front_scans: u64,
 }
 
 /// The finalisation queue and streaming state: the [`crate::sweep::Mode`] of the core inside a
@@ -723,7 +727,7 @@ impl StreamingSweep {
             fin.schedule(t, k.max(ks));
             return;
         }
-        let low = self.sweep.front().min_y_over(d.x_min, d.x_max, d.top);
+        let low = self.front_low(&d, [a, b, c]);
         let fin = self.fin();
         if d.top < low && fin.pending.near(d.center, d.radius) {
             // A breakline still to come may cross it.
@@ -747,6 +751,36 @@ impl StreamingSweep {
             let k = fin.bucket(y + (d.top - low));
             fin.schedule(t, k.max(ks.saturating_add(patience)));
         }
+    }
+
+    /// The front's lowest height under the disk `d` of the triangle `abc`, or the first height
+    /// found at or below the disk's top ([`crate::sweep::front::Front::min_y_within`]). When that
+    /// takes more than [`SHORT_SCAN`] front nodes, a vertex of the triangle on the front settles
+    /// it at once (it lies on the circle, so at or below the top, and inside the span): points on
+    /// a ring or a wide flat arc made every check of their slivers scan the whole arc.
+    fn front_low(&mut self, d: &predicates::DiskBounds, tri: [VertexId; 3]) -> f64 {
+        let front = self.sweep.front();
+        let mut steps = SHORT_SCAN;
+        let low = front
+            .min_y_within(d.x_min, d.x_max, d.top, &mut steps)
+            .or_else(|| {
+                let p = self.sweep.points();
+                tri.iter()
+                    .map(|v| p[v.0 as usize])
+                    .zip(tri)
+                    .filter(|&(xy, v)| xy[1] <= d.top && front.holds(v, xy[0]))
+                    .map(|(xy, _)| xy[1])
+                    .reduce(f64::min)
+            });
+        let mut scanned = (SHORT_SCAN - steps) as u64;
+        let low = low.unwrap_or_else(|| {
+            let mut rest = usize::MAX;
+            let low = front.min_y_within(d.x_min, d.x_max, d.top, &mut rest);
+            scanned += (usize::MAX - rest) as u64;
+            low.unwrap_or(f64::INFINITY)
+        });
+        self.fin().stats.front_scans += scanned;
+        low
     }
 
     /// Emits triangle slot `t` (and any vertex not yet emitted), releases what it no longer needs

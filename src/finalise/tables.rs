@@ -156,7 +156,13 @@ impl Spill {
             self.base = crate::limits::file_rss().unwrap_or(0);
         }
         for t in tables.iter_mut() {
-            t.headroom().map_err(|e| Error::write(&p.dir, e))?;
+            t.headroom().map_err(|e| {
+                let what = format!(
+                    "the temporary file of the triangles the sweep holds cannot grow ({e}): \
+                     give --tmp-dir a directory with more free space"
+                );
+                Error::write(&p.dir, std::io::Error::new(e.kind(), what))
+            })?;
         }
         let mapped: usize = tables.iter().map(|t| t.mapped_bytes()).sum();
         self.peak_spilled = self.peak_spilled.max(mapped as u64);

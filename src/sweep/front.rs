@@ -359,7 +359,10 @@ impl Front {
     /// needs to know whether the front stays above it): a triangle whose disk spans a long front
     /// (the fan of a line of points and one point beside it) is then checked in O(1), not in
     /// O(front) each time (quadratic: 200,000 points took 430 s).
-    pub fn min_y_over(&self, x0: f64, x1: f64, enough: f64) -> f64 {
+    ///
+    /// At most `steps` nodes are scanned (`steps` is decreased by the nodes scanned): `None` when
+    /// they were not enough to find a height at or below `enough` or to reach the span's end.
+    pub fn min_y_within(&self, x0: f64, x1: f64, enough: f64, steps: &mut usize) -> Option<f64> {
         let nodes = &self.nodes;
         let mut n = self.locate(x0);
         if n == self.head {
@@ -367,6 +370,10 @@ impl Front {
         }
         let mut lo = f64::INFINITY;
         while n != self.tail && lo > enough {
+            if *steps == 0 {
+                return None;
+            }
+            *steps -= 1;
             let a = &nodes[n as usize];
             if a.x >= x0 {
                 lo = lo.min(a.y);
@@ -387,7 +394,12 @@ impl Front {
             }
             n = a.next;
         }
-        lo
+        Some(lo)
+    }
+
+    /// Is vertex `v`, at `x`, a node of the front?
+    pub fn holds(&self, v: VertexId, x: f64) -> bool {
+        self.nodes[self.locate(x) as usize].v == v
     }
 
     /// Iterates the nodes from `P-1` to `P-2`.
