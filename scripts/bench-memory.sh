@@ -16,14 +16,16 @@
 #
 #   scripts/bench-memory.sh [--sizes "1M 10M"] [--mems "64M 128M 512M"] [--dists "..."]
 #                           [--out DIR] [--no-orders] [--no-spade] [--report] [--build DIR]
+#                           [--tin-only]
 # --report prints the tables of the results already in DIR (a run cut short).
+# --tin-only skips the `dem` rows (the 10 M line's DEM takes many minutes a row).
 # --build DIR uses the release build in DIR (DIR/sweeptin, DIR/examples/...) instead of building
 # target/release (e.g. a faster non-LTO build made with CARGO_TARGET_DIR).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SIZES="1M 10M"; MEMS="64M 128M 512M"
 DISTS="square disc kuzmin disc-far lidar clustered line circle"
-OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench-memory}; ORDERS=1; SPADE=1; REPORT=0; BUILD=
+OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench-memory}; ORDERS=1; SPADE=1; REPORT=0; BUILD=; TIN_ONLY=0
 while [ $# -gt 0 ]; do
     case "$1" in
         --sizes) SIZES=$2; shift 2;;
@@ -34,6 +36,7 @@ while [ $# -gt 0 ]; do
         --no-spade) SPADE=0; shift;;
         --report) REPORT=1; shift;;
         --build) BUILD=$2; shift 2;;
+        --tin-only) TIN_ONLY=1; shift;;
         *) echo "unknown option $1" >&2; exit 2;;
     esac
 done
@@ -134,7 +137,7 @@ run_pair() { # part dist size order mem
         --tmp-dir "$OUT" --json --quiet > "$OUT/$name.tin.json" 2>> "$OUT/$name.tin.log"
     record "$part" "$dist" "$size" "$order" "$mem" tin "$OUT/$name.tin.log" "$OUT/$name.tin.json"
     rm -f "$OUT/out.stin"
-    [ "$part" = orders ] && return 0
+    [ "$part" = orders ] || [ "$TIN_ONLY" = 1 ] && return 0
     : > "$OUT/$name.dem.log"
     timed "$OUT/$name.dem.log" "$BIN" dem "$FILE" --cell "$CELL" -o "$OUT/out.tif" \
         --mem "$mem" --tmp-dir "$OUT" --json --quiet > "$OUT/$name.dem.json" 2>> "$OUT/$name.dem.log"
