@@ -32,6 +32,9 @@ struct Args {
     /// Directory for a task's temporary files (default: the system's).
     #[arg(long, value_name = "DIR")]
     tmp_dir: Option<PathBuf>,
+    /// No summary on standard error.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 /// Makes the plan of `argv` (`ground FILES… options`, `-o` taken off) into `dir`.
@@ -66,6 +69,12 @@ pub fn plan(argv: &[String], dir: Option<PathBuf>) -> anyhow::Result<()> {
     let path = plan.save(&plan_dir)?;
     super::input::warn_headers(&plan.warnings);
     let points: u64 = plan.files.iter().map(|f| f.points).sum();
+    if !std::io::stdout().is_terminal() {
+        println!("{}", plan.tiles.len());
+    }
+    if args.quiet {
+        return Ok(());
+    }
     eprintln!(
         "sweeptin: {} ground tasks (tiles of {}) over {} files, {} points -> {}",
         count(plan.tiles.len() as u64),
@@ -74,9 +83,6 @@ pub fn plan(argv: &[String], dir: Option<PathBuf>) -> anyhow::Result<()> {
         count(points),
         path.display()
     );
-    if !std::io::stdout().is_terminal() {
-        println!("{}", plan.tiles.len());
-    }
     eprintln!(
         "  next: sweeptin run {} --all --jobs N, then sweeptin merge {} -o OUT.vpc (or OUT.laz)",
         path.display(),
