@@ -123,11 +123,12 @@ pub struct PointsMergeSummary {
 }
 
 /// Merges the tiles of a ground plan whose tasks all finished (`records`, in task order) into
-/// `out`: `.vpc` a virtual point cloud referencing the tiles in the plan's directory (by
-/// absolute path or URL: keep the directory, or merge into one file), `.laz`/`.las` one file.
+/// `out`: `.vpc` a virtual point cloud referencing the tiles in the plan's (local) directory by
+/// paths relative to the `.vpc` (keep the directory, or merge into one file), `.laz`/`.las` one
+/// file.
 ///
 /// # Errors
-/// [`Error::Options`] for another extension, and (exit 2) when the tiles cannot make one file
+/// [`Error::Options`] for another extension, a VPC of tiles on S3, and when the tiles cannot make one file
 /// (point formats, extra bytes or scales that differ: merge into a `.vpc`);
 /// [`Error::Format`] naming `plan.json` when the tiles do not hold every point of the files
 /// once; the writers' errors.
@@ -173,9 +174,16 @@ pub(super) fn merge_points(
         });
     }
     let bytes = if ext.as_deref() == Some("vpc") {
+        if dir.is_remote() {
+            return Err(Error::Options(format!(
+                "{}: a virtual point cloud of tiles on S3 is not written here (its items would \
+                 name the objects by local paths); merge into one file (-o OUT.laz)",
+                out.display()
+            )));
+        }
         let infos = tiles
             .iter()
-            .map(|p| FileInfo::read(p))
+            .map(FileInfo::read)
             .collect::<Result<Vec<_>>>()?;
         crate::output::vpc::write_vpc(out, &infos)?
     } else {
