@@ -401,9 +401,14 @@ impl Plan {
         // one for `--resume` or `merge` to take (they mixed old tiles with new ones).
         self.forget_task(dir, i)?;
         let crs = self.job.crs()?;
-        let mut buffer = self.first_buffer(dir, i)?;
+        let points = self.job.product == Product::Ground;
+        let mut buffer = if points {
+            0.0
+        } else {
+            self.first_buffer(dir, i)?
+        };
         let (mut runs, mut ground) = (0, super::ground::Cache::default());
-        let mut record = if self.job.product == Product::Ground {
+        let mut record = if points {
             self.ground_points_task(dir, i)?
         } else {
             loop {
