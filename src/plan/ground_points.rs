@@ -61,7 +61,9 @@ impl Plan {
                 continue;
             }
             let out = self.task_output(dir, i, &format!("ground_f{k}"), "laz")?;
+            let mut seen = 0u64;
             let mut edit = |p: &mut crate::output::las::PointEdit<'_>| -> Result<()> {
+                seen += 1;
                 let (x, y, _) = p.xyz();
                 if tile_of(x, y, self.tile) != (t.tx, t.ty) {
                     p.skip();
@@ -78,8 +80,23 @@ impl Plan {
                 p.set_classification(c);
                 Ok(())
             };
-            let s = crate::output::las::rewrite_points(&f.path, &out, &mut edit)?;
-            decoded += s.points + s.skipped;
+            // Only the chunks that meet the tile, for a file the plan indexed: their points.
+            let meet: Option<Vec<(u64, u64)>> = match f.indexed {
+                true => Some(
+                    self.chunk_index(dir, k)?
+                        .span_boxes()
+                        .filter(|(_, _, r)| r.is_some_and(|r| overlaps(&r, &near)))
+                        .map(|(first, n, _)| (first, first + n))
+                        .collect(),
+                ),
+                false => None,
+            };
+            let keep = |first: u64, n: u64| {
+                meet.as_ref()
+                    .is_none_or(|m| m.iter().any(|&(a, b)| a < first + n && first < b))
+            };
+            let s = crate::output::las::rewrite_points_in(&f.path, &out, &keep, &mut edit)?;
+            decoded += seen;
             if s.points == 0 {
                 dir.remove(&out)?;
                 continue;

@@ -206,7 +206,8 @@ pub struct RewriteSummary {
     pub output: PathBuf,
     /// Points written (all of the input's, less those the editor skipped).
     pub points: u64,
-    /// Points the editor left out ([`PointEdit::skip`]).
+    /// Points left out: by the editor ([`PointEdit::skip`]), or not read
+    /// ([`rewrite_points_in`]).
     #[serde(skip_serializing_if = "is_zero")]
     pub skipped: u64,
     /// Points whose classification or z the editor changed.
@@ -281,7 +282,38 @@ pub fn rewrite_points_with(
     edit: &mut dyn FnMut(&mut PointEdit<'_>) -> Result<()>,
 ) -> Result<RewriteSummary> {
     check_point_output(output, &[input.to_path_buf()])?;
-    rewrite(&[input.to_path_buf()], output, options, &mut |_, p| edit(p))
+    rewrite(
+        &[input.to_path_buf()],
+        output,
+        options,
+        None,
+        &mut |_, p| edit(p),
+    )
+}
+
+/// [`rewrite_points`] of only some of the input's points: the spans of records (LAZ chunks,
+/// slices of LAS records) for which `keep(first, count)` is false (the points `first ..
+/// first + count` in file order) are neither decoded nor written, as if the editor had
+/// [skipped](PointEdit::skip) each of their points. A plan's ground task reads so only the
+/// chunks that meet its tile.
+///
+/// # Errors
+/// As [`rewrite_points`].
+pub fn rewrite_points_in(
+    input: &Path,
+    output: &Path,
+    keep: &dyn Fn(u64, u64) -> bool,
+    edit: &mut dyn FnMut(&mut PointEdit<'_>) -> Result<()>,
+) -> Result<RewriteSummary> {
+    check_point_output(output, &[input.to_path_buf()])?;
+    let opts = RewriteOptions::default();
+    rewrite(
+        &[input.to_path_buf()],
+        output,
+        &opts,
+        Some(keep),
+        &mut |_, p| edit(p),
+    )
 }
 
 /// Writes the points of `inputs`, one after the other (each in its file order), into one file
@@ -346,7 +378,7 @@ pub fn join_points(
             )));
         }
     }
-    rewrite(inputs, output, &RewriteOptions::default(), edit)
+    rewrite(inputs, output, &RewriteOptions::default(), None, edit)
 }
 
 /// The rewrite of `inputs` (one file's, or several alike: [`join_points`]) into `output`.
@@ -354,6 +386,7 @@ fn rewrite(
     inputs: &[PathBuf],
     output: &Path,
     options: &RewriteOptions,
+    keep: Option<&dyn Fn(u64, u64) -> bool>,
     edit: &mut dyn FnMut(usize, &mut PointEdit<'_>) -> Result<()>,
 ) -> Result<RewriteSummary> {
     let input = inputs.first().ok_or(Error::NoInput)?.as_path();
@@ -435,7 +468,12 @@ fn rewrite(
             ));
         }
         let quant = info.quantization();
-        let all = spans(&info, (BATCH_BYTES / record_len.max(1) as u64).max(1), None);
+        let mut all = spans(&info, (BATCH_BYTES / record_len.max(1) as u64).max(1), None);
+        if let Some(keep) = keep {
+            let before: u64 = all.iter().map(|s| s.points).sum();
+            all.retain(|s| keep(s.first, s.points));
+            tally.skipped += before - all.iter().map(|s| s.points).sum::<u64>();
+        }
         let mut decoder = FileDecoder::open(&info)?;
         for batch in batches(&all, record_len as u64) {
             let raw = decoder.decode(batch, true, Fields::All, |_, raw| Ok(raw.to_vec()))?;
