@@ -1,12 +1,15 @@
 //! `plan … --ground`: every task classifies the ground of the area it reads, as one run over all
 //! the plan's files does, so the merged DEM is `dem --ground`'s byte for byte, whatever the tile
-//! size; a task run twice writes the same tile.
+//! size; a task run twice writes the same tile. `plan ground`: the classification itself tiled,
+//! every point written once with the class one `sweeptin ground` run gives it, merged into one
+//! LAZ or a VPC of the tiles.
 
 use crate::data;
 use crate::plans;
 
 use plans::{s, sweeptin};
 use std::path::{Path, PathBuf};
+use sweeptin::input::las::{Filter, LidarReader};
 
 /// `dem FILES --ground PARAMS --cell 1 -o OUT`, its bytes.
 fn one_run(files: &[PathBuf], params: &[&str], out: &Path) -> Vec<u8> {
@@ -88,4 +91,257 @@ fn a_ground_task_run_twice_writes_the_same_tile() {
     for i in 0..2 {
         assert!(tile(i) == tile(i), "task {i}: the tile changed");
     }
+}
+
+/// Every point of `files` by what it is and carries (x, y, z bits, return number, number of
+/// returns, flags, class), sorted: equal lists mean the same points, each as often, with the
+/// same classes.
+fn points(files: &[PathBuf]) -> Vec<([u64; 3], [u8; 4])> {
+    let mut v: Vec<_> = LidarReader::open(files, &Filter::keep_all())
+        .unwrap()
+        .read_all()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            (
+                [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()],
+                [
+                    p.return_number,
+                    p.number_of_returns,
+                    p.flags,
+                    p.classification,
+                ],
+            )
+        })
+        .collect();
+    v.sort_unstable();
+    v
+}
+
+/// `sweeptin ground FILES PARAMS --odir DIR`: its outputs.
+fn ground_run(files: &[PathBuf], params: &[&str], dir: &Path) -> Vec<PathBuf> {
+    std::fs::create_dir_all(dir).unwrap();
+    let mut args = vec!["ground"];
+    args.extend(files.iter().map(|p| s(p)));
+    args.extend(["--odir", s(dir), "-q"]);
+    args.extend(params);
+    sweeptin(&args, "ground");
+    files
+        .iter()
+        .map(|f| dir.join(f.file_name().unwrap()))
+        .collect()
+}
+
+/// `plan ground FILES PARAMS --tile TILE -o JOB` and `run --all`: the plan file.
+fn ground_plan(files: &[PathBuf], params: &[&str], tile: &str, job: &Path) -> PathBuf {
+    let mut args = vec!["plan", "ground"];
+    args.extend(files.iter().map(|p| s(p)));
+    args.extend(["--tile", tile, "-o", s(job), "-q"]);
+    args.extend(params);
+    sweeptin(&args, "plan ground");
+    let plan = job.join("plan.json");
+    sweeptin(
+        &["run", s(&plan), "--all", "--jobs", "2", "-q"],
+        "run --all",
+    );
+    plan
+}
+
+/// The files a `.vpc` lists.
+fn vpc_files(vpc: &Path) -> Vec<PathBuf> {
+    sweeptin::input::files::expand(
+        &[vpc.to_path_buf()],
+        sweeptin::input::files::Expand::VpcFiles,
+    )
+    .unwrap()
+    .files
+}
+
+#[test]
+fn plan_ground_gives_every_point_once_the_class_of_one_ground_run_for_any_tile_size() {
+    let t = tempfile::tempdir().unwrap();
+    // One file, and six adjacent tiles given together whose edges the plan's tiles meet (50)
+    // or cut across (70): blocks and their buffers reach across files and tasks.
+    let cases: [(Vec<PathBuf>, &[&str], [&str; 2]); 2] = [
+        (
+            vec![data::shared("lidar/startinpy_small.laz")],
+            &[],
+            ["30", "45"],
+        ),
+        (data::ign_tiles(), &["--step", "2"], ["50", "70"]),
+    ];
+    for (k, (files, params, tiles)) in cases.iter().enumerate() {
+        let one = ground_run(files, params, &t.path().join(format!("one{k}")));
+        let want = points(&one);
+        assert!(want.iter().any(|p| p.1[3] == 2), "case {k}: no ground");
+        for tile in tiles {
+            let job = t.path().join(format!("job{k}_{tile}"));
+            let plan = ground_plan(files, params, tile, &job);
+            let laz = t.path().join(format!("m{k}_{tile}.laz"));
+            sweeptin(
+                &["merge", s(&plan), "-o", s(&laz), "-q"],
+                "merge into a LAZ",
+            );
+            assert!(
+                points(std::slice::from_ref(&laz)) == want,
+                "case {k}, --tile {tile}: the merged LAZ is not one ground run's points"
+            );
+            let vpc = t.path().join(format!("m{k}_{tile}.vpc"));
+            sweeptin(
+                &["merge", s(&plan), "-o", s(&vpc), "-q"],
+                "merge into a VPC",
+            );
+            let listed = vpc_files(&vpc);
+            assert!(listed.iter().all(|f| f.starts_with(job.join("tiles"))));
+            assert!(
+                points(&listed) == want,
+                "case {k}, --tile {tile}: the VPC's tiles are not one ground run's points"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_ground_plan_resumes_after_a_lost_tile_and_its_merged_laz_reads_back() {
+    let t = tempfile::tempdir().unwrap();
+    let files = [data::shared("lidar/startinpy_small.laz")];
+    let job = t.path().join("job");
+    let plan = ground_plan(&files, &[], "30", &job);
+    let a = t.path().join("a.laz");
+    sweeptin(&["merge", s(&plan), "-o", s(&a), "-q"], "merge");
+    // A tile lost: `--resume` runs its task again, and the merge is the same file.
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(job.join("tiles/task_0.json")).unwrap())
+            .unwrap();
+    let tile = job.join(r["outputs"][0][1].as_str().expect("task 0 wrote a tile"));
+    std::fs::remove_file(&tile).unwrap();
+    let refused = plans::bin()
+        .args(["merge", s(&plan), "-o", s(&t.path().join("x.laz"))])
+        .output()
+        .unwrap();
+    assert!(!refused.status.success(), "a merge without a tile");
+    sweeptin(
+        &["run", s(&plan), "--all", "--resume", "-q"],
+        "run --all --resume",
+    );
+    assert!(tile.exists(), "--resume wrote the lost tile again");
+    let b = t.path().join("b.laz");
+    sweeptin(&["merge", s(&plan), "-o", s(&b), "-q"], "merge again");
+    assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap());
+    sweeptin(
+        &["report", s(&plan), "-o", s(&t.path().join("r.html"))],
+        "report",
+    );
+    // An independent reader: every point, the header's count and bounds those of the points.
+    if !data::python(&["laspy", "lazrs"], "ground_plan_laz_reads_back") {
+        return;
+    }
+    let script = "import sys, laspy, numpy as np\n\
+        l = laspy.read(sys.argv[1])\n\
+        h = l.header\n\
+        ok = np.allclose(h.mins, [l.x.min(), l.y.min(), l.z.min()]) and \
+             np.allclose(h.maxs, [l.x.max(), l.y.max(), l.z.max()])\n\
+        print(len(l.points), h.point_count, ok, int((np.asarray(l.classification) == 2).sum()))";
+    let o = std::process::Command::new("python3")
+        .args(["-c", script, s(&a)])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mine = points(std::slice::from_ref(&a));
+    let ground = mine.iter().filter(|p| p.1[3] == 2).count();
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        format!("{} {} True {ground}", mine.len(), mine.len())
+    );
+}
+
+/// Writes a LAS 1.2 file (point format 0, no CRS) of 20 × 20 m from `x0`: a sloping ground with
+/// a 5 m box on it, coordinates stored with `scale`.
+fn sloping_las(path: &Path, x0: f64, scale: f64) {
+    use las::{Builder, Point, Transform, Vector, Writer};
+    let mut b = Builder::from((1, 2));
+    let t = |offset| Transform { scale, offset };
+    b.transforms = Vector {
+        x: t(0.0),
+        y: t(0.0),
+        z: t(0.0),
+    };
+    let mut w = Writer::from_path(path, b.into_header().unwrap()).unwrap();
+    for i in 0..40 {
+        for j in 0..40 {
+            let (x, y) = (x0 + 0.5 * f64::from(i) + 0.25, 0.5 * f64::from(j) + 0.25);
+            let roof = (6..12).contains(&(i % 20)) && (6..12).contains(&j);
+            let z = 0.1 * x + if roof { 5.0 } else { 0.0 };
+            w.write_point(Point {
+                x,
+                y,
+                z,
+                ..Default::default()
+            })
+            .unwrap();
+        }
+    }
+    w.close().unwrap();
+}
+
+/// `sweeptin ARGS`: its exit status and standard error.
+fn status(args: &[&str]) -> (i32, String) {
+    let o = plans::bin().args(args).output().unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn plan_ground_refuses_outputs_that_are_inputs_or_not_files_and_a_single_file_of_unlike_scales() {
+    let t = tempfile::tempdir().unwrap();
+    let (a, b) = (t.path().join("a.las"), t.path().join("b.las"));
+    sloping_las(&a, 0.0, 0.01);
+    sloping_las(&b, 20.0, 0.001);
+    let before = std::fs::read(&a).unwrap();
+    // The plan's directory named as an input file.
+    let (code, err) = status(&["plan", "ground", s(&a), "--tile", "10", "-o", s(&a)]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("not a directory"), "{err}");
+    let job = t.path().join("job");
+    let plan = ground_plan(&[a.clone(), b.clone()], &["--step", "5"], "10", &job);
+    // The merge into an input, a directory, a FIFO.
+    let (code, err) = status(&["merge", s(&plan), "-o", s(&a)]);
+    assert_eq!(code, 2, "{err}");
+    let dir = t.path().join("d.laz");
+    std::fs::create_dir(&dir).unwrap();
+    let fifo = t.path().join("f.laz");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    for o in [&dir, &fifo] {
+        let (code, err) = status(&["merge", s(&plan), "-o", s(o)]);
+        assert_eq!(code, 4, "{}: {err}", o.display());
+        assert!(
+            err.contains("a directory") || err.contains("regular file"),
+            "{err}"
+        );
+    }
+    assert!(std::fs::read(&a).unwrap() == before, "an input changed");
+    // Unlike scales make no one file: refused (naming the VPC), and no file left.
+    let one = t.path().join("one.laz");
+    let (code, err) = status(&["merge", s(&plan), "-o", s(&one)]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("OUT.vpc") && err.contains("scale"), "{err}");
+    assert!(!one.exists());
+    let vpc = t.path().join("all.vpc");
+    sweeptin(
+        &["merge", s(&plan), "-o", s(&vpc), "-q"],
+        "merge into a VPC",
+    );
+    let want = points(&ground_run(
+        &[a.clone(), b.clone()],
+        &["--step", "5"],
+        &t.path().join("one"),
+    ));
+    assert!(want.iter().any(|p| p.1[3] == 2) && want.iter().any(|p| p.1[3] != 2));
+    assert!(points(&vpc_files(&vpc)) == want);
 }

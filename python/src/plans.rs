@@ -87,12 +87,18 @@ pub(crate) fn make_plan(
                 .map_err(to_py)?,
         },
         "tin" => Product::Tin,
+        // The classification itself tiled (`sweeptin plan ground`): every point kept.
+        "ground" => Product::Ground,
         p => {
             return Err(value_error(format!(
-                "product={p:?}: a plan makes 'dem', 'contours', 'volume' or 'tin'"
+                "product={p:?}: a plan makes 'dem', 'contours', 'volume', 'tin' or 'ground'"
             )));
         }
     };
+    let points = product == Product::Ground;
+    if points && job.ground.is_none() {
+        return Err(value_error("a ground plan needs the filter (ground=True)"));
+    }
     let returns = match job.returns.as_str() {
         "all" => Returns::All,
         "first" => Returns::First,
@@ -105,9 +111,9 @@ pub(crate) fn make_plan(
     };
     let typed = Job {
         product,
-        classes: job.classes,
+        classes: if points { None } else { job.classes },
         returns,
-        drop_withheld: !job.keep_withheld,
+        drop_withheld: !(job.keep_withheld || points),
         duplicates: duplicates(&job.duplicates)?,
         max_edge: job.max_edge,
         crs: job.crs,
@@ -129,7 +135,12 @@ pub(crate) fn make_plan(
         // A local directory or an s3:// prefix, whose bucket is checked before any work.
         let plan_dir = sweeptin::plan::PlanDir::new(&dir)?;
         plan_dir.check_writable()?;
-        let buffer = buffer.unwrap_or(tile / 10.0);
+        // A ground plan's tasks read what their ground blocks need: no buffer.
+        let buffer = if points {
+            0.0
+        } else {
+            buffer.unwrap_or(tile / 10.0)
+        };
         // `@lists`, globs and `.vpc` files expanded, every file by absolute path.
         let plan = Plan::new(typed, args, outputs, &files, tile, buffer)?;
         // The line files are inputs too: no output may replace one.

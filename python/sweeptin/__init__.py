@@ -664,8 +664,17 @@ def plan(
     without z raise :class:`OptionsError` naming the first such vertex. ``ground=True`` (with
     :func:`ground`'s parameters as keywords) plans on the ground found on the fly, as
     ``sweeptin plan … --ground``: every task classifies the ground of its area as one run over
-    all the files would, so the merge is one ``dem(..., ground=True)``'s."""
+    all the files would, so the merge is one ``dem(..., ground=True)``'s. ``"ground"`` tiles
+    the classification itself, as ``sweeptin plan ground`` (``ground=True`` implied, the
+    filter's parameters and ``reset`` as keywords): every task writes the points its tile owns
+    with one :func:`ground` run's classes, and :func:`merge` writes a ``.vpc`` of the tiles or
+    one ``.laz``/``.las`` file of every point (in tile order, not the inputs' order)."""
     rest = dict(ground_params)
+    if product == "ground":
+        if classes is not None or buffer is not None:
+            raise OptionsError("a ground plan keeps every point and has no buffer: leave "
+                               "classes= and buffer= out")
+        ground = True
     g = _ground_opts(bool(ground), rest)
     if rest:
         raise TypeError(f"unknown option(s): {', '.join(sorted(rest))}")
@@ -701,7 +710,7 @@ def plan(
             args += ["--format", format]
     if job["classes"] is not None:
         args += ["--class", ",".join(str(c) for c in job["classes"])]
-    if g is not None:
+    if g is not None and product != "ground":
         args += ["--ground"]
     for flag, paths in (("--breaklines", job["breaklines"]), ("--trim-boundary", [trim_boundary]),
                         ("--holes", [holes])):
@@ -748,7 +757,8 @@ def merge(
     (``.geojson``); the TIN ``out`` (``.ply``, ``.obj``, ``.xml`` or ``.stin``, each vertex
     once); or the summed volumes (no ``out``). Returns the summary
     (``dem``/``contours``/``hillshade``/``volume``/``tin``, ``tasks``, ``empty_tasks``,
-    ``max_buffer``, ``warnings``). The mosaic's cells are those one run writes
+    ``max_buffer``, ``warnings``; a ground plan's ``points``: ``out`` a ``.vpc`` of its
+    tiles or one ``.laz``/``.las``). The mosaic's cells are those one run writes
     (``extent="data"``: the same header and cells as ``dem`` over the plan's files and filters),
     or the whole tiles (``extent="tiles"``)."""
     opts = {

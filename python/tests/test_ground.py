@@ -102,6 +102,28 @@ def test_products_with_ground_are_the_cli_bytes(raw, cli, tmp_path):
         sweeptin.dem(path, tmp_path / "x.tif", step=10)
 
 
+def test_a_ground_plan_of_points_gives_every_point_the_class_of_one_ground_run(raw, cli, tmp_path):
+    path, *_ = raw
+    plan = sweeptin.plan("ground", [path], tmp_path / "job", tile=30, step=10, reset=True)
+    assert json.loads(Path(plan.path).read_text())["job"]["product"]["kind"] == "ground"
+    for i in plan.tasks:
+        sweeptin.run_task(plan, i)
+    merged, vpc, single = tmp_path / "m.laz", tmp_path / "m.vpc", tmp_path / "one.laz"
+    s = sweeptin.merge(plan, merged)
+    sweeptin.merge(plan, vpc)
+    cli("ground", path, "-o", single, "-q", "--step", "10", "--reset")
+
+    def keyed(las):
+        return sorted(zip(las.X.tolist(), las.Y.tolist(), las.Z.tolist(), las.gps_time.tolist(),
+                          np.asarray(las.classification).tolist()))
+
+    want = keyed(laspy.read(single))
+    assert s["points"]["points"] == len(want)
+    assert keyed(laspy.read(merged)) == want
+    with pytest.raises(sweeptin.OptionsError, match="buffer"):
+        sweeptin.plan("ground", [path], tmp_path / "j3", tile=30, buffer=5)
+
+
 def test_a_ground_plan_merges_into_one_ground_run(raw, tmp_path):
     path, *_ = raw
     plan = sweeptin.plan("dem", [path], tmp_path / "job", tile=30, cell=1.0, ground=True, step=10)

@@ -18,6 +18,7 @@ mod index;
 mod info;
 mod input;
 mod plan;
+mod plan_ground;
 mod products;
 mod profile;
 mod refine;

@@ -32,7 +32,18 @@ across tiles) are refused.
 
 --ground (the ground found on the fly, with the filter's options) goes into every task: each
 classifies the ground of the area it reads as one run over all the files would, then reads only
-that area; the merge is one `dem --ground` run's, byte for byte.";
+that area; the merge is one `dem --ground` run's, byte for byte.
+
+`plan ground FILES… --tile T -o JOB [--step S, --town, …, --reset, --mem, --tmp-dir]` tiles the
+classification itself: each task classifies the ground blocks of its tile as one `sweeptin
+ground` run over all FILES would and writes the points its tile owns ([x0, x1) × (y0, y1]), every
+attribute kept, to JOB/tiles/ground_f<K>_<tx>_<ty>.laz (one file per input K with points there).
+  sweeptin plan ground raw/*.laz --tile 1000 --town -o job
+  sweeptin run job/plan.json --all --jobs 2
+  sweeptin merge job/plan.json -o ground.vpc   # a VPC of the tiles, where they are
+  sweeptin merge job/plan.json -o ground.laz   # one file: tasks in order, files in order
+The single file needs the inputs' point formats, extra bytes and scales to agree; its points
+are in tile order, not the inputs' order (compare points by x, y, z and GPS time).";
 
 /// Arguments of `sweeptin plan`.
 #[derive(clap::Args, Debug)]
@@ -43,7 +54,7 @@ pub struct PlanArgs {
     /// again, so this only tunes the work, never the result.
     #[arg(long, value_name = "DISTANCE")]
     pub buffer: Option<f64>,
-    /// The product command (`dem`, `contours`, `volume --plane Z` or `tin`) with its input files and
+    /// The product command (`dem`, `contours`, `volume --plane Z`, `tin` or `ground`) with its input files and
     /// options as for a single run, plus `--tile SIZE` (the plan's tile side, a multiple of the
     /// cell) and `-o DIR` (where the plan and the tiles' outputs go: a local directory, or
     /// `s3://BUCKET/JOB/` for workers that share no disk).
@@ -96,7 +107,8 @@ pub struct MergeArgs {
     pub plan: PathBuf,
     /// The mosaic: `OUT.vrt` (a GDAL VRT over the tile GeoTIFFs) or `OUT.tif` (one GeoTIFF) for
     /// a DEM plan; `OUT.geojson` for a contour plan; `OUT.ply`, `.obj`, `.xml` (LandXML) or
-    /// `.stin` for a TIN plan (one mesh, each vertex once); not needed for a volume plan.
+    /// `.stin` for a TIN plan (one mesh, each vertex once); `OUT.vpc` (the tiles, where they are)
+    /// or `OUT.laz`/`OUT.las` (one file) for a ground plan; not needed for a volume plan.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// For a DEM plan made with --contours: the stitched contour lines (default: the path the
@@ -267,7 +279,7 @@ fn take_output(argv: &[String]) -> (Vec<String>, Option<PathBuf>) {
 fn parse_job(argv: &[String]) -> anyhow::Result<Job> {
     let name = argv.first().map(String::as_str).unwrap_or("");
     if !matches!(name, "dem" | "contours" | "volume" | "tin") {
-        bail!("a plan runs `dem`, `contours`, `volume --plane Z` or `tin`, not `{name}`");
+        bail!("a plan runs `dem`, `contours`, `volume --plane Z`, `tin` or `ground`, not `{name}`");
     }
     let mut full = vec!["sweeptin".to_string()];
     full.extend(argv.iter().cloned());
@@ -361,6 +373,12 @@ fn check_job(job: &Job) -> anyhow::Result<()> {
 
 pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let (argv, dir) = take_output(&args.command);
+    if argv.first().map(String::as_str) == Some("ground") {
+        if args.buffer.is_some() {
+            bail!("a ground plan has no --buffer: each task reads what its ground blocks need");
+        }
+        return super::plan_ground::plan(&argv, dir);
+    }
     let mut job = parse_job(&argv)?;
     let dir = dir.context("give the plan's directory with -o DIR")?;
     // A local directory or an S3 prefix, whose bucket is checked before any header is read.

@@ -19,6 +19,13 @@ pub(super) fn tile_bounds(tx: i64, ty: i64, tile: f64) -> [f64; 4] {
     ]
 }
 
+/// The tile that owns the point or cell centre `(x, y)`: columns by floor, rows by ceil − 1,
+/// so a tile owns `[x0, x1) × (y0, y1]` (a centre on a tile's lower edge belongs to the row
+/// below). Every plan tiles the data with it.
+pub(super) fn tile_of(x: f64, y: f64, tile: f64) -> (i64, i64) {
+    ((x / tile).floor() as i64, (y / tile).ceil() as i64 - 1)
+}
+
 pub(super) fn grown(b: [f64; 4], d: f64) -> [f64; 4] {
     [b[0] - d, b[1] - d, b[2] + d, b[3] + d]
 }

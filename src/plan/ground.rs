@@ -36,7 +36,7 @@ use std::sync::Arc;
 pub(super) struct Cache(Option<(BlockRect, Arc<Classified>)>);
 
 /// A task's classes: the store, by rank among the points read in the classified area.
-struct Classified {
+pub(super) struct Classified {
     store: ClassStore,
     ranks: Ranks,
     /// Where each classified file's points start among the classified files' indices.
@@ -67,24 +67,13 @@ impl Plan {
         };
         params.check()?;
         let area = grown(self.task(i)?.bounds, buffer);
-        // The ground blocks (in seed cells) that meet the area.
-        let grid = params.grid()?;
-        let corner = |x: f64, y: f64| {
-            let (bx, by) = grid.block_of(x, y);
-            grid.tile_of_block(bx, by)
-        };
-        let (lo, hi) = (corner(area[0], area[1]), corner(area[2], area[3]));
-        let owned = grid
-            .tile_blocks(lo.0, lo.1)
-            .union(&grid.tile_blocks(hi.0, hi.1));
         let mem = options.mem;
         let classified = match &cache.0 {
-            Some((o, c)) if o.contains_rect(&owned) => c.clone(),
+            Some((o, c)) if o.contains_rect(&self.ground_blocks(&params, area)?) => c.clone(),
             _ => {
                 cache.0 = None;
-                // Those blocks grown by the buffer of their runs, and one cell more.
-                let read = grid.world(&owned.expand(BUFFER_CELLS + 1));
-                let c = Arc::new(self.classify_area(dir, i, read, &params, mem)?);
+                let (owned, c) = self.classify_blocks(dir, i, &params, area, mem)?;
+                let c = Arc::new(c);
                 cache.0 = Some((owned, c.clone()));
                 c
             }
@@ -131,6 +120,43 @@ impl Plan {
             segments,
         }) as Arc<_>));
         Ok(Some(summary))
+    }
+
+    /// The ground blocks (in seed cells) that meet `area` (closed).
+    pub(super) fn ground_blocks(
+        &self,
+        params: &crate::ground::GroundParams,
+        area: [f64; 4],
+    ) -> Result<BlockRect> {
+        let grid = params.grid()?;
+        let corner = |x: f64, y: f64| {
+            let (bx, by) = grid.block_of(x, y);
+            grid.tile_of_block(bx, by)
+        };
+        let (lo, hi) = (corner(area[0], area[1]), corner(area[2], area[3]));
+        Ok(grid
+            .tile_blocks(lo.0, lo.1)
+            .union(&grid.tile_blocks(hi.0, hi.1)))
+    }
+
+    /// Classifies the ground blocks that meet `area` (closed) for task `i`, exactly as one run
+    /// over the plan's files, within `mem`: those blocks, and their classes (with those of
+    /// every point read around them, which are not one run's).
+    ///
+    /// # Errors
+    /// As [`Plan::ground_task`].
+    pub(super) fn classify_blocks(
+        &self,
+        dir: &super::PlanDir,
+        i: usize,
+        params: &crate::ground::GroundParams,
+        area: [f64; 4],
+        mem: u64,
+    ) -> Result<(BlockRect, Classified)> {
+        let owned = self.ground_blocks(params, area)?;
+        // Those blocks grown by the buffer of their runs, and one cell more.
+        let read = params.grid()?.world(&owned.expand(BUFFER_CELLS + 1));
+        Ok((owned, self.classify_area(dir, i, read, params, mem)?))
     }
 
     /// Classifies every point of the plan's files inside `read` (closed), within `mem`, each
@@ -217,6 +243,28 @@ impl Plan {
             starts,
             summary,
         })
+    }
+}
+
+impl Classified {
+    /// The class of point `index` of the plan's file `file`, if it was classified (it lies in
+    /// the area read); fast when asked in increasing order.
+    ///
+    /// # Errors
+    /// The class store's (a temporary file that cannot be read).
+    pub(super) fn class_of(&mut self, file: usize, index: u64) -> Result<Option<u8>> {
+        let Some(&start) = self.starts.get(&file) else {
+            return Ok(None);
+        };
+        match self.ranks.rank(start + index) {
+            Some(r) => Ok(Some(self.store.get(r)?)),
+            None => Ok(None),
+        }
+    }
+
+    /// What the classification did.
+    pub(super) fn summary(&self) -> &GroundSummary {
+        &self.summary
     }
 }
 

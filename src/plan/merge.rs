@@ -509,6 +509,9 @@ pub struct MergeSummary {
     /// The joined TIN.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tin: Option<super::mesh::TinMergeSummary>,
+    /// A ground plan's points: a VPC of its tiles or one file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub points: Option<super::ground_points::PointsMergeSummary>,
     /// Tasks joined.
     pub tasks: usize,
     /// Tasks that found no point.
@@ -555,6 +558,8 @@ fn no_contours(product: &super::Product) -> String {
         Product::Volume { .. } => "the plan makes volumes, printed (--json for a summary), and no contour lines: leave --contours out"
             .into(),
         Product::Tin => "the plan makes a TIN (-o OUT.ply, .obj, .xml or .stin) and no contour lines: leave --contours out"
+            .into(),
+        Product::Ground => "the plan classifies points (-o OUT.vpc, .laz or .las) and draws no contour lines: leave --contours out"
             .into(),
     }
 }
@@ -777,6 +782,11 @@ pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result
             let crs = plan_crs(plan)?;
             let def = crs.as_ref().and_then(Crs::definition);
             summary.tin = Some(super::mesh::merge_tin(plan, dir, &recs, out, def)?);
+        }
+        Product::Ground => {
+            let out = need(out, "points (OUT.vpc, OUT.laz or OUT.las)")?;
+            let p = super::ground_points::merge_points(plan, dir, &recs, out)?;
+            summary.points = Some(p);
         }
     }
     Ok(summary)

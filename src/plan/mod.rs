@@ -24,11 +24,12 @@ pub mod chunks;
 mod dir;
 mod engine;
 use area::{
-    centres_within, fitting_tile, grown, meets_hull, overlaps, tile_bounds, tile_count,
+    centres_within, fitting_tile, grown, meets_hull, overlaps, tile_bounds, tile_count, tile_of,
     whole_multiple,
 };
 mod files;
 mod ground;
+mod ground_points;
 mod lines;
 pub mod merge;
 pub mod mesh;
@@ -355,8 +356,8 @@ impl Plan {
         if lo[0].is_finite() {
             // A tile owns the cells whose centres lie in [x0, x1) × (y0, y1]: columns by floor,
             // rows by ceil − 1 (a centre on the data's lower edge belongs to the row below).
-            let col_of = |v: f64| (v / tile).floor() as i64;
-            let ty_of = |v: f64| (v / tile).ceil() as i64 - 1;
+            let col_of = |v: f64| tile_of(v, 0.0, tile).0;
+            let ty_of = |v: f64| tile_of(0.0, v, tile).1;
             // A raster alone is owned by cell centres: tiles from the first centre to the last
             // inside the data (files ending on a tile edge added a row and a column of empty
             // tasks, and the mosaic was larger than one run's raster). Triangles, contours and

@@ -80,6 +80,10 @@ pub enum Product {
     /// ([`crate::output::pieces`]); `merge` joins them into one mesh (PLY, OBJ, LandXML or a
     /// streaming mesh, by the output's extension), each vertex once.
     Tin,
+    /// The ground classification itself (`plan ground`, with [`Job::ground`]): each task
+    /// writes the points its tile owns with the classes one `sweeptin ground` run gives them
+    /// ([`super::ground_points`]); `merge` writes a VPC of those tiles or one LAS/LAZ file.
+    Ground,
     /// Cut and fill against the plane `z = plane`, within an optional boundary polygon.
     Volume {
         /// The plane's height.
@@ -112,30 +116,7 @@ fn pinned<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<super::LineFi
 }
 
 /// A non-finite `f32` (a NaN nodata) as a string in JSON.
-mod nodata {
-    use serde::{Deserialize, Deserializer, Serializer, de::Error as _};
-
-    pub(super) fn serialize<S: Serializer>(v: &f32, s: S) -> Result<S::Ok, S::Error> {
-        if v.is_finite() {
-            s.serialize_f32(*v)
-        } else {
-            s.serialize_str(&v.to_string())
-        }
-    }
-
-    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
-        #[derive(Deserialize)]
-        #[serde(untagged)]
-        enum V {
-            N(f32),
-            S(String),
-        }
-        match V::deserialize(d)? {
-            V::N(v) => Ok(v),
-            V::S(s) => s.parse().map_err(D::Error::custom),
-        }
-    }
-}
+mod nodata;
 
 /// A plan's job: the product and how the points are read (everything a task needs besides its
 /// tile, its files and its buffer).
@@ -197,6 +178,7 @@ impl Job {
             Product::Contours(_) => "contours",
             Product::Volume { .. } => "volume",
             Product::Tin => "tin",
+            Product::Ground => "ground",
         }
     }
 
@@ -211,6 +193,7 @@ impl Job {
             Product::Contours(_) => "no contour line",
             Product::Volume { .. } => "zero volumes",
             Product::Tin => "no triangle",
+            Product::Ground => "no point",
         }
     }
 
@@ -295,6 +278,12 @@ impl Job {
             Product::Contours(l) => levels(l)?,
             Product::Volume { plane, .. } => crate::products::volume::check_plane(*plane)?,
             Product::Tin => {}
+            Product::Ground if self.ground.is_none() => {
+                return Err(Error::Options(
+                    "a ground plan needs the filter's parameters (Job::ground)".into(),
+                ));
+            }
+            Product::Ground => {}
         }
         if let Some(m) = self.max_edge {
             positive(m, "--max-edge")?;
@@ -412,62 +401,70 @@ impl Plan {
         // one for `--resume` or `merge` to take (they mixed old tiles with new ones).
         self.forget_task(dir, i)?;
         let crs = self.job.crs()?;
-        let mut buffer = self.first_buffer(dir, i)?;
+        let points = self.job.product == Product::Ground;
+        let mut buffer = if points {
+            0.0
+        } else {
+            self.first_buffer(dir, i)?
+        };
         let (mut runs, mut ground) = (0, super::ground::Cache::default());
-        let mut record = loop {
-            runs += 1;
-            self.check_files(i, buffer)?;
-            let config = self.task_config(dir, i, buffer, options, &mut ground)?;
-            let mut fanout = Fanout::new(self.task_sinks(dir, i)?).with_crs(crs.clone());
-            let mut pieces = self.task_pieces(dir, i)?;
-            let mesh = pieces
-                .as_mut()
-                .map(|p| p as &mut (dyn crate::sink::MeshSink + Send));
-            match crate::pipeline::run(&config, mesh, &mut [&mut fanout]) {
-                Ok(mut run) => {
-                    let products = fanout_summary(run.products.pop())?;
-                    // Empty: no triangle of its own, and no cell with data from the triangles
-                    // of others that cover it (a tile inside a concave corner of the data).
-                    let covered = products
-                        .0
-                        .iter()
-                        .any(|(_, s)| matches!(s, ProductSummary::Dem(d) if d.cells_with_data > 0));
-                    let status = if run.triangles == 0 && !covered {
-                        "empty"
-                    } else {
-                        "done"
-                    };
-                    let mut r = record_of(i, status, buffer, runs, &run, &products);
-                    self.finish_pieces(dir, i, pieces, &mut r)?;
-                    if status == "empty" {
-                        // No tile for an empty task: the merges take it as nodata and no lines
-                        // (its volume sums, all zero, stay in the record). A TIN's pieces stay:
-                        // they hold the triangles the merge trims, and vertices others wait for.
-                        r.outputs
-                            .retain(|(name, p)| name == "tin" || dir.remove(p).is_err());
+        let mut record = if points {
+            self.ground_points_task(dir, i)?
+        } else {
+            loop {
+                runs += 1;
+                self.check_files(i, buffer)?;
+                let config = self.task_config(dir, i, buffer, options, &mut ground)?;
+                let mut fanout = Fanout::new(self.task_sinks(dir, i)?).with_crs(crs.clone());
+                let mut pieces = self.task_pieces(dir, i)?;
+                let mesh = pieces
+                    .as_mut()
+                    .map(|p| p as &mut (dyn crate::sink::MeshSink + Send));
+                match crate::pipeline::run(&config, mesh, &mut [&mut fanout]) {
+                    Ok(mut run) => {
+                        let products = fanout_summary(run.products.pop())?;
+                        // Empty: no triangle of its own, and no cell with data from the triangles
+                        // of others that cover it (a tile inside a concave corner of the data).
+                        let covered = products.0.iter().any(
+                            |(_, s)| matches!(s, ProductSummary::Dem(d) if d.cells_with_data > 0),
+                        );
+                        let status = if run.triangles == 0 && !covered {
+                            "empty"
+                        } else {
+                            "done"
+                        };
+                        let mut r = record_of(i, status, buffer, runs, &run, &products);
+                        self.finish_pieces(dir, i, pieces, &mut r)?;
+                        if status == "empty" {
+                            // No tile for an empty task: the merges take it as nodata and no lines
+                            // (its volume sums, all zero, stay in the record). A TIN's pieces stay:
+                            // they hold the triangles the merge trims, and vertices others wait for.
+                            r.outputs
+                                .retain(|(name, p)| name == "tin" || dir.remove(p).is_err());
+                        }
+                        break r;
                     }
-                    break r;
+                    Err(Error::BufferTooSmall { reach, .. }) if runs < 40 => {
+                        // Straight to the files the certificates reached, or double.
+                        let step = self.tile / 16.0;
+                        buffer = if reach > buffer {
+                            (reach / step).ceil() * step
+                        } else if buffer > 0.0 {
+                            2.0 * buffer
+                        } else {
+                            self.tile / 8.0
+                        };
+                    }
+                    Err(Error::TooFewPoints { .. }) => {
+                        // No point near the tile: an empty task writes nothing.
+                        drop(pieces);
+                        let _ = dir.remove(&self.task_output(dir, i, "tin", "pieces")?);
+                        let products = FanoutSummary::default();
+                        let run = RunSummary::default();
+                        break record_of(i, "empty", buffer, runs, &run, &products);
+                    }
+                    Err(e) => return Err(e),
                 }
-                Err(Error::BufferTooSmall { reach, .. }) if runs < 40 => {
-                    // Straight to the files the certificates reached, or double.
-                    let step = self.tile / 16.0;
-                    buffer = if reach > buffer {
-                        (reach / step).ceil() * step
-                    } else if buffer > 0.0 {
-                        2.0 * buffer
-                    } else {
-                        self.tile / 8.0
-                    };
-                }
-                Err(Error::TooFewPoints { .. }) => {
-                    // No point near the tile: an empty task writes nothing.
-                    drop(pieces);
-                    let _ = dir.remove(&self.task_output(dir, i, "tin", "pieces")?);
-                    let products = FanoutSummary::default();
-                    let run = RunSummary::default();
-                    break record_of(i, "empty", buffer, runs, &run, &products);
-                }
-                Err(e) => return Err(e),
             }
         };
         record.seconds = start.elapsed().as_secs_f64();
@@ -691,8 +688,8 @@ impl Plan {
                     Box::new(VolumeSink::new(*plane, boundary)?),
                 ));
             }
-            // Its mesh sink: see `task_pieces`.
-            Product::Tin => {}
+            // Its mesh sink: see `task_pieces`; a ground plan's tiles: `ground_points_task`.
+            Product::Tin | Product::Ground => {}
         }
         Ok(sinks)
     }

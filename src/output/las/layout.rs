@@ -23,11 +23,16 @@ pub(super) mod at {
     pub(crate) const NUMBER_OF_VLRS: usize = 100;
     pub(crate) const FORMAT: usize = 104;
     pub(crate) const RECORD_LEN: usize = 105;
+    pub(crate) const LEGACY_COUNT: usize = 107;
+    pub(crate) const LEGACY_RETURNS: usize = 111;
+    pub(crate) const MAX_X: usize = 179;
     pub(crate) const MAX_Z: usize = 211;
     pub(crate) const MIN_Z: usize = 219;
     pub(crate) const WAVEFORM: usize = 227;
     pub(crate) const FIRST_EVLR: usize = 235;
     pub(crate) const NUMBER_OF_EVLRS: usize = 243;
+    pub(crate) const COUNT_14: usize = 247;
+    pub(crate) const RETURNS_14: usize = 255;
 }
 
 /// One VLR, whole (its 54-byte header and payload).
@@ -378,5 +383,41 @@ pub(super) fn finish_header(
     if let Some([min, max]) = z_bounds {
         block[at::MAX_Z..at::MAX_Z + 8].copy_from_slice(&max.to_le_bytes());
         block[at::MIN_Z..at::MIN_Z + 8].copy_from_slice(&min.to_le_bytes());
+    }
+}
+
+/// Patches the header of an output that holds another set of points than its source's (some
+/// left out, or several files joined): the point counts, by return too, and the x, y, z
+/// bounds (`[[min, max]; 3]`). The legacy 32-bit counts are written where the source filled
+/// them (LAS 1.4 with point formats 6–10 leaves them 0), and 0 past their range.
+pub(super) fn count_points(
+    src: &Source,
+    block: &mut [u8],
+    points: u64,
+    returns: &[u64; 15],
+    bounds: [[f64; 2]; 3],
+) {
+    let put32 = |block: &mut [u8], k: usize, v: u64| {
+        let v = u32::try_from(v).unwrap_or(0);
+        block[k..k + 4].copy_from_slice(&v.to_le_bytes());
+    };
+    if u32_at(&src.header, at::LEGACY_COUNT) != 0 {
+        let fits = points <= u64::from(u32::MAX) && returns[5..].iter().all(|&n| n == 0);
+        put32(block, at::LEGACY_COUNT, if fits { points } else { 0 });
+        for (r, &n) in returns[..5].iter().enumerate() {
+            put32(block, at::LEGACY_RETURNS + 4 * r, if fits { n } else { 0 });
+        }
+    }
+    if src.version >= (1, 4) && src.header.len() >= at::RETURNS_14 + 15 * 8 {
+        block[at::COUNT_14..at::COUNT_14 + 8].copy_from_slice(&points.to_le_bytes());
+        for (r, &n) in returns.iter().enumerate() {
+            let k = at::RETURNS_14 + 8 * r;
+            block[k..k + 8].copy_from_slice(&n.to_le_bytes());
+        }
+    }
+    for (a, [min, max]) in bounds.iter().enumerate() {
+        let k = at::MAX_X + 16 * a;
+        block[k..k + 8].copy_from_slice(&max.to_le_bytes());
+        block[k + 8..k + 16].copy_from_slice(&min.to_le_bytes());
     }
 }

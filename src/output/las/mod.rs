@@ -71,6 +71,8 @@ pub struct PointEdit<'a> {
     z_changed: bool,
     /// A class that does not fit the point format, refused at the end of the edit.
     refused: Option<u8>,
+    /// Left out of the output ([`PointEdit::skip`]).
+    skipped: bool,
 }
 
 impl PointEdit<'_> {
@@ -167,6 +169,17 @@ impl PointEdit<'_> {
     pub fn record(&self) -> &[u8] {
         self.record
     }
+
+    /// Leaves the point out of the output: the header's point counts (by return too) and its
+    /// x, y, z bounds then count only the points written.
+    pub fn skip(&mut self) {
+        self.skipped = true;
+    }
+
+    /// The point's return number (bits 0–2 of byte 14 in formats 0–5, 0–3 in 6–10).
+    fn return_number(&self) -> u8 {
+        self.record[14] & if self.format >= 6 { 0x0f } else { 0x07 }
+    }
 }
 
 /// An attribute appended to every record (a double, in the extra bytes).
@@ -191,8 +204,12 @@ pub struct RewriteOptions {
 pub struct RewriteSummary {
     /// The output file.
     pub output: PathBuf,
-    /// Points written (all of the input's).
+    /// Points written (all of the input's, less those the editor skipped).
     pub points: u64,
+    /// Points left out: by the editor ([`PointEdit::skip`]), or not read
+    /// ([`rewrite_points_in`]).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub skipped: u64,
     /// Points whose classification or z the editor changed.
     pub changed: u64,
     /// Bytes of the output file.
@@ -201,6 +218,10 @@ pub struct RewriteSummary {
     pub compressed: bool,
     /// Notes for the user (a COPC input written as plain LAZ).
     pub notes: Vec<String>,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 /// Does `path` name a LAZ file (`.laz`, any case; `.copc.laz` too)?
@@ -261,6 +282,114 @@ pub fn rewrite_points_with(
     edit: &mut dyn FnMut(&mut PointEdit<'_>) -> Result<()>,
 ) -> Result<RewriteSummary> {
     check_point_output(output, &[input.to_path_buf()])?;
+    rewrite(
+        &[input.to_path_buf()],
+        output,
+        options,
+        None,
+        &mut |_, p| edit(p),
+    )
+}
+
+/// [`rewrite_points`] of only some of the input's points: the spans of records (LAZ chunks,
+/// slices of LAS records) for which `keep(first, count)` is false (the points `first ..
+/// first + count` in file order) are neither decoded nor written, as if the editor had
+/// [skipped](PointEdit::skip) each of their points. A plan's ground task reads so only the
+/// chunks that meet its tile.
+///
+/// # Errors
+/// As [`rewrite_points`].
+pub fn rewrite_points_in(
+    input: &Path,
+    output: &Path,
+    keep: &dyn Fn(u64, u64) -> bool,
+    edit: &mut dyn FnMut(&mut PointEdit<'_>) -> Result<()>,
+) -> Result<RewriteSummary> {
+    check_point_output(output, &[input.to_path_buf()])?;
+    let opts = RewriteOptions::default();
+    rewrite(
+        &[input.to_path_buf()],
+        output,
+        &opts,
+        Some(keep),
+        &mut |_, p| edit(p),
+    )
+}
+
+/// Writes the points of `inputs`, one after the other (each in its file order), into one file
+/// `output`, calling `edit` with the input's position and each point (which it may change or
+/// [skip](PointEdit::skip)). The inputs must share their point format, record length, extra
+/// bytes, scale and offset (the records are copied as they are); the output keeps the first
+/// input's header, VLRs and EVLRs, with the point counts and bounds of the points written.
+///
+/// # Errors
+/// [`Error::Options`] naming the first input that differs from the first in point format,
+/// record length, extra bytes, scale or offset (the records of one file cannot hold both);
+/// otherwise as [`rewrite_points`].
+pub fn join_points(
+    inputs: &[PathBuf],
+    output: &Path,
+    edit: &mut dyn FnMut(usize, &mut PointEdit<'_>) -> Result<()>,
+) -> Result<RewriteSummary> {
+    check_point_output(output, inputs)?;
+    let Some(first) = inputs.first() else {
+        return Err(Error::NoInput);
+    };
+    let head = |p: &Path| -> Result<(crate::input::las::FileInfo, Option<Vec<u8>>)> {
+        let info = inspect(p)?;
+        let mut file = crate::input::source::Source::open(p)?.reader();
+        let len = file.source().len();
+        let src = layout::Source::read(p, &mut file, len)?;
+        let extra = src
+            .vlrs
+            .iter()
+            .find(|v| v.user_id == extra::USER_ID && v.record_id == extra::RECORD_ID)
+            .map(|v| v.bytes[54..].to_vec());
+        Ok((info, extra))
+    };
+    let (a, a_extra) = head(first)?;
+    for p in &inputs[1..] {
+        let (b, b_extra) = head(p)?;
+        let differs = if a.point_format != b.point_format {
+            Some(format!(
+                "point format {} (not {})",
+                b.point_format, a.point_format
+            ))
+        } else if a.record_length != b.record_length || a_extra != b_extra {
+            Some(format!(
+                "records of {} bytes with their extra bytes (not {} bytes as {})",
+                b.record_length,
+                a.record_length,
+                first.display()
+            ))
+        } else if a.scale != b.scale || a.offset != b.offset {
+            Some(format!(
+                "scale {:?} and offset {:?} (not {:?} and {:?})",
+                b.scale, b.offset, a.scale, a.offset
+            ))
+        } else {
+            None
+        };
+        if let Some(d) = differs {
+            return Err(Error::Options(format!(
+                "{}: {d}: its points cannot be written unchanged into one file with those of {}",
+                p.display(),
+                first.display()
+            )));
+        }
+    }
+    rewrite(inputs, output, &RewriteOptions::default(), None, edit)
+}
+
+/// The rewrite of `inputs` (one file's, or several alike: [`join_points`]) into `output`.
+fn rewrite(
+    inputs: &[PathBuf],
+    output: &Path,
+    options: &RewriteOptions,
+    keep: Option<&dyn Fn(u64, u64) -> bool>,
+    edit: &mut dyn FnMut(usize, &mut PointEdit<'_>) -> Result<()>,
+) -> Result<RewriteSummary> {
+    let input = inputs.first().ok_or(Error::NoInput)?.as_path();
     let info = inspect(input)?;
     let mut file = crate::input::source::Source::open(input)?.reader();
     let file_len = file.source().len();
@@ -313,15 +442,6 @@ pub fn rewrite_points_with(
         )));
     }
     let mut notes = Vec::new();
-    if info.copc.is_some() {
-        notes.push(format!(
-            "{}: a COPC file, written as plain LAZ to {}: its points in the file's chunk order, \
-             its COPC index dropped",
-            input.display(),
-            output.display()
-        ));
-    }
-
     let mut out = AtomicFile::create_seekable(output, "a LAS/LAZ file")?;
     out.write_all(&plan.block).map_err(|e| out.err(e))?;
     let mut sink = match laz_vlr {
@@ -335,34 +455,55 @@ pub fn rewrite_points_with(
         .map(|k| usize::from(info.record_length) + 8 * k)
         .collect();
     let record_len = usize::from(info.record_length);
-    let quant = info.quantization();
     let mut tally = Tally::default();
-    let all = spans(&info, (BATCH_BYTES / record_len.max(1) as u64).max(1), None);
-    let mut decoder = FileDecoder::open(&info)?;
     let mut records = Vec::new();
-    for batch in batches(&all, record_len as u64) {
-        let raw = decoder.decode(batch, true, Fields::All, |_, raw| Ok(raw.to_vec()))?;
-        records.clear();
-        for (span, span_records) in batch.iter().zip(&raw) {
-            for (k, rec) in span_records.chunks_exact(record_len).enumerate() {
-                let start = records.len();
-                records.extend_from_slice(rec);
-                records.resize(start + out_len, 0);
-                let mut p = PointEdit {
-                    index: span.first + k as u64,
-                    record: &mut records[start..],
-                    format: info.point_format,
-                    quant: &quant,
-                    added: &added,
-                    changed: false,
-                    z_changed: false,
-                    refused: None,
-                };
-                edit(&mut p)?;
-                tally.add(&p, input)?;
-            }
+    for (k, path) in inputs.iter().enumerate() {
+        let info = if k == 0 { info.clone() } else { inspect(path)? };
+        if info.copc.is_some() {
+            notes.push(format!(
+                "{}: a COPC file, written as plain LAZ to {}: its points in the file's chunk \
+                 order, its COPC index dropped",
+                path.display(),
+                output.display()
+            ));
         }
-        sink.write(&records).map_err(|e| Error::write(output, e))?;
+        let quant = info.quantization();
+        let mut all = spans(&info, (BATCH_BYTES / record_len.max(1) as u64).max(1), None);
+        if let Some(keep) = keep {
+            let before: u64 = all.iter().map(|s| s.points).sum();
+            all.retain(|s| keep(s.first, s.points));
+            tally.skipped += before - all.iter().map(|s| s.points).sum::<u64>();
+        }
+        let mut decoder = FileDecoder::open(&info)?;
+        for batch in batches(&all, record_len as u64) {
+            let raw = decoder.decode(batch, true, Fields::All, |_, raw| Ok(raw.to_vec()))?;
+            records.clear();
+            for (span, span_records) in batch.iter().zip(&raw) {
+                for (j, rec) in span_records.chunks_exact(record_len).enumerate() {
+                    let start = records.len();
+                    records.extend_from_slice(rec);
+                    records.resize(start + out_len, 0);
+                    let mut p = PointEdit {
+                        index: span.first + j as u64,
+                        record: &mut records[start..],
+                        format: info.point_format,
+                        quant: &quant,
+                        added: &added,
+                        changed: false,
+                        z_changed: false,
+                        refused: None,
+                        skipped: false,
+                    };
+                    edit(k, &mut p)?;
+                    let skipped = p.skipped;
+                    tally.add(&p, path)?;
+                    if skipped {
+                        records.truncate(start);
+                    }
+                }
+            }
+            sink.write(&records).map_err(|e| Error::write(output, e))?;
+        }
     }
     let mut out = sink.finish(output)?;
     // The EVLRs, copied after the points.
@@ -378,6 +519,16 @@ pub fn rewrite_points_with(
     let mut block = plan.block;
     let z_bounds = tally.z_changed.then_some(tally.z);
     layout::finish_header(&src, &mut block, evlr_start, &moved, z_bounds);
+    if tally.skipped > 0 || inputs.len() > 1 {
+        // Another set of points than the first input's: its counts and bounds.
+        layout::count_points(
+            &src,
+            &mut block,
+            tally.points,
+            &tally.returns,
+            tally.bounds(),
+        );
+    }
     let header_len = src.header.len();
     out.seek(SeekFrom::Start(0))
         .and_then(|_| out.write_all(&block[..header_len]))
@@ -387,6 +538,7 @@ pub fn rewrite_points_with(
     Ok(RewriteSummary {
         output: output.to_path_buf(),
         points: tally.points,
+        skipped: tally.skipped,
         changed: tally.changed,
         bytes,
         compressed: compress,
@@ -423,13 +575,18 @@ impl Sink {
     }
 }
 
-/// Counts and z bounds of the points written.
+/// Counts and bounds of the points written.
 #[derive(Default)]
 struct Tally {
     points: u64,
+    skipped: u64,
     changed: u64,
     z_changed: bool,
     z: [f64; 2],
+    /// x, y bounds (min, max) of the points written.
+    xy: [[f64; 2]; 2],
+    /// Points written by return number (1 to 15).
+    returns: [u64; 15],
 }
 
 impl Tally {
@@ -443,16 +600,36 @@ impl Tally {
                 p.format
             )));
         }
-        let z = p.xyz().2;
+        if p.skipped {
+            self.skipped += 1;
+            return Ok(());
+        }
+        let (x, y, z) = p.xyz();
         if self.points == 0 {
             self.z = [z, z];
+            self.xy = [[x, x], [y, y]];
         } else {
             self.z = [self.z[0].min(z), self.z[1].max(z)];
+            self.xy = [
+                [self.xy[0][0].min(x), self.xy[0][1].max(x)],
+                [self.xy[1][0].min(y), self.xy[1][1].max(y)],
+            ];
+        }
+        if let Some(n) = self
+            .returns
+            .get_mut(usize::from(p.return_number()).wrapping_sub(1))
+        {
+            *n += 1;
         }
         self.points += 1;
         self.changed += u64::from(p.changed);
         self.z_changed |= p.z_changed;
         Ok(())
+    }
+
+    /// `[[xmin, xmax], [ymin, ymax], [zmin, zmax]]` of the points written (zeros for none).
+    fn bounds(&self) -> [[f64; 2]; 3] {
+        [self.xy[0], self.xy[1], self.z]
     }
 }
 
