@@ -203,6 +203,8 @@ pub(crate) struct Finalizer {
     blocked: SpillVec<u8>,
     /// Where the tables go when they outgrow their share of `--mem`.
     spill: Spill,
+    /// Finality checks made (for the looks at the spilled tables).
+    checks: u64,
 }
 
 impl Finalizer {
@@ -255,6 +257,7 @@ impl Finalizer {
             due: SpillVec::default(),
             blocked: SpillVec::default(),
             spill: Spill::new(cfg.spill.clone()),
+            checks: 0,
         }
     }
 
@@ -337,7 +340,9 @@ impl Finalizer {
         if self.vertices.out[i] != NOT_OUT {
             self.events.push(Event::VertexDone(self.vertices.out[i]));
         }
-        self.vertices.free.push(v.0);
+        if !self.ending {
+            self.vertices.free.push(v.0);
+        }
         self.live_vertices -= 1;
     }
 
@@ -402,7 +407,11 @@ impl Finalizer {
             }
         }
         self.live_triangles -= 1;
-        self.free_triangles.push(t);
+        // At the end no slot is used again: a free list of every held triangle would be the
+        // only table left on the heap.
+        if !self.ending {
+            self.free_triangles.push(t);
+        }
     }
 }
 
@@ -546,6 +555,11 @@ impl StreamingSweep {
         self.sweep.insert_point(VertexId(v), p.constraint)
     }
 
+    /// Triangles held now (artificial ones included).
+    pub fn live_triangles(&self) -> u64 {
+        self.sweep.hooks().live_triangles
+    }
+
     /// Moves the events produced so far into `out` (appending).
     pub fn take_events(&mut self, out: &mut Vec<Event>) {
         out.append(&mut self.fin().events);
@@ -625,14 +639,19 @@ impl StreamingSweep {
                 let _ = self.look_at_tables();
             }
         }
-        let fin = self.fin();
-        let vt = &fin.vertices;
-        for v in FIRST_REAL as usize..vt.out.len() {
+        let count = self.fin().vertices.out.len();
+        for v in FIRST_REAL as usize..count {
+            let fin = self.fin();
+            let vt = &fin.vertices;
             if vt.out[v] != NOT_OUT && vt.refs[v] > 0 {
                 fin.events.push(Event::VertexDone(vt.out[v]));
                 if fin.events.len() >= batch && !drain(&mut fin.events) {
                     return false;
                 }
+            }
+            // Millions of vertices held (a line): their rows would all come back into memory.
+            if v % tables::CHECK_EVERY as usize == 0 {
+                let _ = self.look_at_tables();
             }
         }
         true
@@ -691,6 +710,15 @@ impl StreamingSweep {
                     && self.sweep.mesh().is_live(TriId(t))
                 {
                     self.check_final(t, y, ks);
+                    // Checks of held triangles (a line's fan: millions) touch their spilled
+                    // tables and the far queue's heap all over: drop the pages as the checks
+                    // go, not only between points (a full disk is reported by the next look
+                    // between points).
+                    let fin = self.fin();
+                    fin.checks += 1;
+                    if fin.checks % tables::LOOK_EVERY_CHECKS == 0 && fin.spill.spilled() {
+                        let _ = self.look_at_tables();
+                    }
                 }
             }
             list.clear();

@@ -26,6 +26,11 @@ pub struct SpillPolicy {
     pub mem: u64,
 }
 
+/// Finality checks between two looks at the spilled tables' resident memory (each check of a
+/// held triangle touches its rows and the far queue's heap: with millions held, 4,096 points
+/// worth of checks brought hundreds of MB of the files in between two looks).
+pub(super) const LOOK_EVERY_CHECKS: u64 = 1024;
+
 /// Points between two looks at the tables' size (and, once spilled, at the resident memory).
 pub(super) const CHECK_EVERY: u64 = 4096;
 /// Smallest threshold, whatever `--mem`.
@@ -123,6 +128,11 @@ pub(super) struct Spill {
 }
 
 impl Spill {
+    /// Have the tables moved into temporary files?
+    pub(super) fn spilled(&self) -> bool {
+        self.spilled
+    }
+
     pub(super) fn new(policy: Option<SpillPolicy>) -> Self {
         Spill {
             policy,

@@ -4,6 +4,9 @@
 use super::{Event, StreamingSweep};
 use crate::geom::predicates::is_artificial;
 
+/// Triangle slots visited between drops of the spilled tables' pages.
+const RELEASE_EVERY: usize = 1 << 16;
+
 /// Is the circumcircle of `a b c` narrower than `limit` in radius and inside the x range of the
 /// data? (Floating point: a heuristic for watermarks only, never a topological decision.)
 fn ordinary(a: [f64; 2], b: [f64; 2], c: [f64; 2], limit: f64, x_range: (f64, f64)) -> bool {
@@ -38,9 +41,36 @@ impl StreamingSweep {
         let mut w = fin.last[1];
         let stuck = fin.last[1] - wide;
         let x_range = fin.x_range;
+        let len = self.sweep.mesh().origin.len();
+        let mut from = 0;
+        while from < len {
+            let to = (from + 3 * RELEASE_EVERY).min(len);
+            w = self.lowest_ordinary(from..to, w, stuck, wide, x_range);
+            from = to;
+            // Tables spilled to temporary files: the walk would bring them all into memory.
+            let (pts, mesh, _, _) = self.sweep.tables_mut();
+            if mesh.origin.is_mapped() {
+                mesh.origin.release();
+                pts.release();
+            }
+        }
+        self.fin().events.push(Event::Watermark(w));
+        w
+    }
+
+    /// [`StreamingSweep::emit_watermark`]'s minimum `w` over the triangle slots whose half-edges
+    /// are `edges`.
+    fn lowest_ordinary(
+        &self,
+        edges: std::ops::Range<usize>,
+        mut w: f64,
+        stuck: f64,
+        wide: f64,
+        x_range: (f64, f64),
+    ) -> f64 {
         let pts = self.sweep.points();
         let o = &self.sweep.mesh().origin;
-        for t in (0..o.len()).step_by(3) {
+        for t in edges.step_by(3) {
             let [a, b, c] = [o[t], o[t + 1], o[t + 2]];
             if a == crate::mesh::DEAD
                 || is_artificial(a.0)
@@ -58,7 +88,6 @@ impl StreamingSweep {
                 }
             }
         }
-        self.fin().events.push(Event::Watermark(w));
         w
     }
 

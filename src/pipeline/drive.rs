@@ -369,6 +369,7 @@ fn sweep_points(
 ) -> Result<Swept> {
     let mut sweep: Option<StreamingSweep> = None;
     let mut kept = 0u64;
+    let mut next_watermark = 0u64;
     let mut out = Vec::with_capacity(EVENT_BATCH);
     let send = |out: &mut Vec<Event>| -> bool {
         events
@@ -405,7 +406,13 @@ fn sweep_points(
             }
             if kept.is_multiple_of(WATERMARK_EVERY) {
                 let s = sweep.as_mut().expect("started");
-                s.emit_watermark();
+                // A watermark visits every live triangle: with more of them than points between
+                // two watermarks (a line's fan holds them all) it is emitted once per that many
+                // points, so its cost stays linear.
+                if kept >= next_watermark {
+                    s.emit_watermark();
+                    next_watermark = kept + s.live_triangles().max(WATERMARK_EVERY);
+                }
                 pb.set_position(kept);
                 anon.sample();
             }

@@ -12,6 +12,8 @@ use crate::sort::mmap::SpillVec;
 /// Id of a front node.
 pub type NodeId = u32;
 const NIL: NodeId = u32::MAX;
+/// Nodes walked by a rebuild of the x index between drops of a spilled node table's pages.
+const RELEASE_EVERY: usize = 1 << 16;
 
 /// One vertex of the front and the segment to its right.
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -249,12 +251,20 @@ impl Front {
         self.buckets.resize(count, NIL);
         self.nb = count as f64;
         let mut n = self.next(self.head);
+        let mut walked = 0usize;
         while n != self.tail {
             let k = self.key(self.nodes[n as usize].x);
             if self.buckets[k] == NIL {
                 self.buckets[k] = n;
             }
             n = self.next(n);
+            walked += 1;
+            // A front of millions of nodes (a line of points) spilled to a temporary file: the
+            // walk would bring the whole node table into memory at once.
+            if walked % RELEASE_EVERY == 0 && self.nodes.is_mapped() {
+                self.nodes.release();
+                self.buckets.release();
+            }
         }
     }
 

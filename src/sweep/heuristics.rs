@@ -180,7 +180,14 @@ impl<H: Mode> Sweep<H> {
     pub(crate) fn close_hull(&mut self) {
         let (head, tail) = (self.front.head, self.front.tail);
         let mut n = self.front.next(head);
+        let mut walked = 0usize;
         while n != tail {
+            walked += 1;
+            // A front of millions of nodes (points on a line) spilled to temporary files: the
+            // walk would bring the whole front and its points into memory at once.
+            if walked % (1 << 16) == 0 {
+                self.release_spilled();
+            }
             let (p, q) = (self.front.prev(n), self.front.next(n));
             if self.fillable(n) {
                 self.stats.hull_fills += 1;

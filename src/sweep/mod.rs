@@ -365,6 +365,17 @@ impl<H: Mode> Sweep<H> {
         (&mut self.pts, &mut self.mesh, &mut self.front, &mut self.hooks)
     }
 
+    /// Drops the resident pages of the tables that went to temporary files (nothing for those
+    /// on the heap): for walks over all of them, which would otherwise bring them all in.
+    pub(crate) fn release_spilled(&mut self) {
+        let (nodes, buckets) = self.front.tables_mut();
+        nodes.release();
+        buckets.release();
+        self.pts.release();
+        self.mesh.origin.release();
+        self.mesh.link.release();
+    }
+
     /// Sets the breaklines of a sweep whose points arrive one by one and name their constraint
     /// vertex (or [`NO_CONSTRAINT`]) themselves; `first_constraint` is that of the first point.
     ///
