@@ -642,12 +642,15 @@ impl StreamingSweep {
     /// resident pages when they have grown by it ([`tables::Spill::look`]).
     fn look_at_tables(&mut self) -> Result<()> {
         let (pts, mesh, front, fin) = self.sweep.tables_mut();
-        let (nodes, buckets) = front.tables_mut();
+        let (nodes, buckets, lead, last, low) = front.tables_mut();
         let vt = &mut fin.vertices;
         fin.spill.look(&mut [
             pts,
             nodes,
             buckets,
+            lead,
+            last,
+            low,
             &mut mesh.origin,
             &mut mesh.link,
             fin.far.table(),
@@ -774,10 +777,11 @@ impl StreamingSweep {
             });
         let mut scanned = (SHORT_SCAN - steps) as u64;
         let low = low.unwrap_or_else(|| {
-            let mut rest = usize::MAX;
-            let low = front.min_y_within(d.x_min, d.x_max, d.top, &mut rest);
-            scanned += (usize::MAX - rest) as u64;
-            low.unwrap_or(f64::INFINITY)
+            // The long scan: through the front's bucket minima (a check that ends in a
+            // finalisation must prove the whole span above the top).
+            self.sweep
+                .front_mut()
+                .min_y_indexed(d.x_min, d.x_max, d.top, &mut scanned)
         });
         self.fin().stats.front_scans += scanned;
         low

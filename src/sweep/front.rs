@@ -5,6 +5,14 @@
 //! The front is strictly increasing in `x` (`P-1` sits at `x = -∞`, `P-2` at `+∞`), so the segment
 //! under a point is unique: the bucket index only decides where the search starts, never what it
 //! finds, and the result does not depend on the number of buckets.
+//!
+//! Beside each bucket `k` the front keeps its first and last real node and the lowest `y` of its
+//! real nodes (the nodes of one bucket are consecutive: the key is monotone in `x`). Invariant:
+//! `lead[k]` and `last[k]` are both [`NIL`] (and `low[k]` is `+∞`) when no real node's key is
+//! `k`; otherwise they are the leftmost and rightmost such node, and `low[k]` is their lowest `y`
+//! exactly, or NaN (stale) once a node at that height was removed; a stale minimum is recomputed
+//! from the bucket's nodes when [`Front::min_y_indexed`] needs it, and
+//! [`Front::rebuild_buckets`] recomputes all. Only that long scan reads them.
 
 use crate::mesh::{EdgeId, VertexId};
 use crate::sort::mmap::SpillVec;
@@ -43,6 +51,12 @@ pub struct Front {
     /// Node of `P-2`.
     pub tail: NodeId,
     buckets: SpillVec<NodeId>,
+    /// Leftmost real node of each bucket (see the module's invariant).
+    lead: SpillVec<NodeId>,
+    /// Rightmost real node of each bucket.
+    last: SpillVec<NodeId>,
+    /// Lowest y of each bucket's real nodes, NaN when stale, `+∞` when empty.
+    low: SpillVec<f64>,
     xmap: XMap,
     nb: f64,
 }
@@ -173,6 +187,9 @@ impl Front {
             head: 0,
             tail: 1,
             buckets: SpillVec::default(),
+            lead: SpillVec::default(),
+            last: SpillVec::default(),
+            low: SpillVec::default(),
             xmap,
             nb: 0.0,
         };
@@ -239,21 +256,49 @@ impl Front {
         (k as usize).min(self.buckets.len() - 1)
     }
 
-    /// The node table and the x index, to move them elsewhere (the streaming sweep's spill).
-    pub(crate) fn tables_mut(&mut self) -> (&mut SpillVec<Node>, &mut SpillVec<NodeId>) {
-        (&mut self.nodes, &mut self.buckets)
+    /// The node table and the x index (the buckets' start nodes, first and last nodes and
+    /// minima), to move them elsewhere (the streaming sweep's spill).
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn tables_mut(
+        &mut self,
+    ) -> (
+        &mut SpillVec<Node>,
+        &mut SpillVec<NodeId>,
+        &mut SpillVec<NodeId>,
+        &mut SpillVec<NodeId>,
+        &mut SpillVec<f64>,
+    ) {
+        (
+            &mut self.nodes,
+            &mut self.buckets,
+            &mut self.lead,
+            &mut self.last,
+            &mut self.low,
+        )
     }
 
+    /// Rebuilds the x index with `count` buckets: the start nodes, and each bucket's first and
+    /// last node and exact minimum.
     fn rebuild_buckets(&mut self, count: usize) {
         self.buckets.resize(0, NIL);
         self.buckets.resize(count, NIL);
+        self.lead.resize(0, NIL);
+        self.lead.resize(count, NIL);
+        self.last.resize(0, NIL);
+        self.last.resize(count, NIL);
+        self.low.resize(0, f64::INFINITY);
+        self.low.resize(count, f64::INFINITY);
         self.nb = count as f64;
         let mut n = self.next(self.head);
         while n != self.tail {
-            let k = self.key(self.nodes[n as usize].x);
+            let Node { x, y, .. } = self.nodes[n as usize];
+            let k = self.key(x);
             if self.buckets[k] == NIL {
                 self.buckets[k] = n;
+                self.lead[k] = n;
             }
+            self.last[k] = n;
+            self.low[k] = self.low[k].min(y);
             n = self.next(n);
         }
     }
@@ -323,13 +368,34 @@ impl Front {
         }
         let k = self.key(x);
         self.buckets[k] = n;
+        let (first, end) = (self.lead[k], self.last[k]);
+        if first == NIL {
+            self.lead[k] = n;
+            self.last[k] = n;
+            self.low[k] = xy[1];
+        } else {
+            // The bucket's nodes are consecutive: `n` is its new first node when it comes just
+            // before the old one, its new last when just after.
+            if first == right {
+                self.lead[k] = n;
+            }
+            if end == left {
+                self.last[k] = n;
+            }
+            let m = self.low[k];
+            if !m.is_nan() {
+                self.low[k] = m.min(xy[1]);
+            }
+        }
         n
     }
 
     /// Removes node `n` (never `P-1` or `P-2`).
     pub fn remove(&mut self, n: NodeId) {
         debug_assert!(n != self.head && n != self.tail);
-        let Node { prev, next, x, .. } = self.nodes[n as usize];
+        let Node {
+            prev, next, x, y, ..
+        } = self.nodes[n as usize];
         self.nodes[prev as usize].next = next;
         self.nodes[next as usize].prev = prev;
         let k = self.key(x);
@@ -341,6 +407,22 @@ impl Front {
             } else {
                 NIL
             };
+        }
+        let (first, end) = (self.lead[k], self.last[k]);
+        if first == n && end == n {
+            self.lead[k] = NIL;
+            self.last[k] = NIL;
+            self.low[k] = f64::INFINITY;
+        } else {
+            if first == n {
+                self.lead[k] = next;
+            }
+            if end == n {
+                self.last[k] = prev;
+            }
+            if y <= self.low[k] {
+                self.low[k] = f64::NAN;
+            }
         }
         self.nodes[n as usize].next = NIL;
         self.nodes[n as usize].prev = NIL;
@@ -395,6 +477,77 @@ impl Front {
             n = a.next;
         }
         Some(lo)
+    }
+
+    /// [`Front::min_y_within`] without a step limit, the same value, in fewer steps: a bucket of
+    /// the x index that lies inside the span and whose nodes all stay above `enough` counts by
+    /// its minimum at once (then the walk goes on from its last node), where the node walk would
+    /// visit each of its nodes (on a ring's steep sides, thousands under a small disk). The other
+    /// nodes, those of the buckets at the span's ends, are walked one by one as there, so the
+    /// early stop happens at the same node and the minimum so far is the same. `scanned` grows by
+    /// the nodes and buckets visited.
+    pub fn min_y_indexed(&mut self, x0: f64, x1: f64, enough: f64, scanned: &mut u64) -> f64 {
+        let k1 = self.key(x1);
+        let mut n = self.locate(x0);
+        if n == self.head {
+            n = self.next(n);
+        }
+        let mut lo = f64::INFINITY;
+        while n != self.tail && lo > enough {
+            *scanned += 1;
+            let a = self.nodes[n as usize];
+            if a.x >= x0 {
+                let k = self.key(a.x);
+                // Every node of bucket `k` is at or right of `a` (its first) and left of `x1`
+                // (a lower key): no segment between them crosses the span's ends.
+                if k < k1 && self.lead[k] == n && self.last[k] != n {
+                    let m = self.bucket_low(k, scanned);
+                    if m > enough {
+                        lo = lo.min(m);
+                        n = self.last[k];
+                        continue;
+                    }
+                }
+                lo = lo.min(a.y);
+            }
+            if a.next == self.tail {
+                break;
+            }
+            let b = &self.nodes[a.next as usize];
+            if a.x < x0 && x0 < b.x {
+                lo = lo.min(segment_low(&a, b, x0));
+            }
+            if a.x < x1 && x1 < b.x {
+                lo = lo.min(segment_low(&a, b, x1));
+                break;
+            }
+            if b.x > x1 {
+                break;
+            }
+            n = a.next;
+        }
+        lo
+    }
+
+    /// The lowest y of bucket `k`'s nodes, recomputed if stale (`scanned` grows by the nodes).
+    fn bucket_low(&mut self, k: usize, scanned: &mut u64) -> f64 {
+        let m = self.low[k];
+        if !m.is_nan() {
+            return m;
+        }
+        let (mut n, end) = (self.lead[k], self.last[k]);
+        let mut m = f64::INFINITY;
+        loop {
+            *scanned += 1;
+            let a = &self.nodes[n as usize];
+            m = m.min(a.y);
+            if n == end {
+                break;
+            }
+            n = a.next;
+        }
+        self.low[k] = m;
+        m
     }
 
     /// Is vertex `v`, at `x`, a node of the front?
