@@ -779,9 +779,22 @@ impl StreamingSweep {
         let low = low.unwrap_or_else(|| {
             // The long scan: through the front's bucket minima (a check that ends in a
             // finalisation must prove the whole span above the top).
-            self.sweep
-                .front_mut()
-                .min_y_indexed(d.x_min, d.x_max, d.top, &mut scanned)
+            let low = self.sweep.front_mut().min_y_indexed(
+                d.x_min,
+                d.x_max,
+                d.top,
+                &mut scanned,
+            );
+            if cfg!(debug_assertions) {
+                let mut all = usize::MAX;
+                let walk = self.sweep.front().min_y_within(d.x_min, d.x_max, d.top, &mut all);
+                assert_eq!(
+                    walk.map(f64::to_bits),
+                    Some(low.to_bits()),
+                    "the front's bucket minima disagree with its nodes"
+                );
+            }
+            low
         });
         self.fin().stats.front_scans += scanned;
         low
