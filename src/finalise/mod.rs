@@ -760,7 +760,11 @@ impl StreamingSweep {
     /// found at or below the disk's top ([`crate::sweep::front::Front::min_y_within`]). When that
     /// takes more than [`SHORT_SCAN`] front nodes, a vertex of the triangle on the front settles
     /// it at once (it lies on the circle, so at or below the top, and inside the span): points on
-    /// a ring or a wide flat arc made every check of their slivers scan the whole arc.
+    /// a ring or a wide flat arc made every check of their slivers scan the whole arc. When no
+    /// vertex does, the span is scanned to its end (or to the first height at or below the top)
+    /// through the front's bucket minima ([`crate::sweep::front::Front::min_y_indexed`]: the
+    /// same value as the node walk, in steps that grow with the buckets at the span's ends, not
+    /// with its nodes).
     fn front_low(&mut self, d: &predicates::DiskBounds, tri: [VertexId; 3]) -> f64 {
         let front = self.sweep.front();
         let mut steps = SHORT_SCAN;
