@@ -760,11 +760,8 @@ impl StreamingSweep {
     /// found at or below the disk's top ([`crate::sweep::front::Front::min_y_within`]). When that
     /// takes more than [`SHORT_SCAN`] front nodes, a vertex of the triangle on the front settles
     /// it at once (it lies on the circle, so at or below the top, and inside the span): points on
-    /// a ring or a wide flat arc made every check of their slivers scan the whole arc. When no
-    /// vertex does, the span is scanned to its end (or to the first height at or below the top)
-    /// through the front's bucket minima ([`crate::sweep::front::Front::min_y_indexed`]: the
-    /// same value as the node walk, in steps that grow with the buckets at the span's ends, not
-    /// with its nodes).
+    /// a ring or a wide flat arc made every check of their slivers scan the whole arc. Else the
+    /// whole span is scanned through the front's bucket minima (`Front::min_y_indexed`).
     fn front_low(&mut self, d: &predicates::DiskBounds, tri: [VertexId; 3]) -> f64 {
         let front = self.sweep.front();
         let mut steps = SHORT_SCAN;
@@ -781,24 +778,8 @@ impl StreamingSweep {
             });
         let mut scanned = (SHORT_SCAN - steps) as u64;
         let low = low.unwrap_or_else(|| {
-            // The long scan: through the front's bucket minima (a check that ends in a
-            // finalisation must prove the whole span above the top).
-            let low = self.sweep.front_mut().min_y_indexed(
-                d.x_min,
-                d.x_max,
-                d.top,
-                &mut scanned,
-            );
-            if cfg!(debug_assertions) {
-                let mut all = usize::MAX;
-                let walk = self.sweep.front().min_y_within(d.x_min, d.x_max, d.top, &mut all);
-                assert_eq!(
-                    walk.map(f64::to_bits),
-                    Some(low.to_bits()),
-                    "the front's bucket minima disagree with its nodes"
-                );
-            }
-            low
+            let f = self.sweep.front_mut();
+            f.min_y_indexed(d.x_min, d.x_max, d.top, &mut scanned)
         });
         self.fin().stats.front_scans += scanned;
         low

@@ -586,6 +586,11 @@ impl Front {
             }
             n = a.next;
         }
+        if cfg!(debug_assertions) {
+            let walk = self.min_y_within(x0, x1, enough, &mut usize::MAX.clone());
+            let walk = walk.map(f64::to_bits);
+            assert_eq!(walk, Some(lo.to_bits()), "bucket minima disagree with the nodes");
+        }
         lo
     }
 
