@@ -661,12 +661,15 @@ impl StreamingSweep {
     /// resident pages when they have grown by it ([`tables::Spill::look`]).
     fn look_at_tables(&mut self) -> Result<()> {
         let (pts, mesh, front, fin) = self.sweep.tables_mut();
-        let (nodes, buckets) = front.tables_mut();
+        let (nodes, buckets, lead, last, low) = front.tables_mut();
         let vt = &mut fin.vertices;
         fin.spill.look(&mut [
             pts,
             nodes,
             buckets,
+            lead,
+            last,
+            low,
             &mut mesh.origin,
             &mut mesh.link,
             fin.far.table(),
@@ -785,7 +788,8 @@ impl StreamingSweep {
     /// found at or below the disk's top ([`crate::sweep::front::Front::min_y_within`]). When that
     /// takes more than [`SHORT_SCAN`] front nodes, a vertex of the triangle on the front settles
     /// it at once (it lies on the circle, so at or below the top, and inside the span): points on
-    /// a ring or a wide flat arc made every check of their slivers scan the whole arc.
+    /// a ring or a wide flat arc made every check of their slivers scan the whole arc. Else the
+    /// whole span is scanned through the front's bucket minima (`Front::min_y_indexed`).
     fn front_low(&mut self, d: &predicates::DiskBounds, tri: [VertexId; 3]) -> f64 {
         let front = self.sweep.front();
         let mut steps = SHORT_SCAN;
@@ -802,10 +806,8 @@ impl StreamingSweep {
             });
         let mut scanned = (SHORT_SCAN - steps) as u64;
         let low = low.unwrap_or_else(|| {
-            let mut rest = usize::MAX;
-            let low = front.min_y_within(d.x_min, d.x_max, d.top, &mut rest);
-            scanned += (usize::MAX - rest) as u64;
-            low.unwrap_or(f64::INFINITY)
+            let f = self.sweep.front_mut();
+            f.min_y_indexed(d.x_min, d.x_max, d.top, &mut scanned)
         });
         self.fin().stats.front_scans += scanned;
         low

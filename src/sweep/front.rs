@@ -5,9 +5,23 @@
 //! The front is strictly increasing in `x` (`P-1` sits at `x = -∞`, `P-2` at `+∞`), so the segment
 //! under a point is unique: the bucket index only decides where the search starts, never what it
 //! finds, and the result does not depend on the number of buckets.
+//!
+//! Beside the buckets the front keeps a tree of groups over them: level 0 is the buckets, each
+//! group of level `j + 1` covers [`FAN`] groups of level `j`, up to one group over all. Each group
+//! `g` keeps its first and last real node and the lowest `y` of its real nodes (the nodes of one
+//! group are consecutive: the key is monotone in `x`). Invariant: `lead[g]` and `last[g]` are both
+//! [`NIL`] (and `low[g]` is `+∞`) when no real node's key falls in the group; otherwise they are
+//! its leftmost and rightmost such node, and `low[g]` is their lowest `y` exactly, or NaN (stale)
+//! once a node at that height was removed; a stale minimum is recomputed (from the groups below,
+//! or from the bucket's nodes) when [`Front::min_y_indexed`] needs it, and
+//! [`Front::rebuild_buckets`] recomputes all. Only that long scan reads them.
 
 use crate::mesh::{EdgeId, VertexId};
 use crate::sort::mmap::SpillVec;
+
+/// Groups of one level of the bucket tree under a group of the level above.
+const FAN: usize = 16;
+const FAN_SHIFT: u32 = FAN.trailing_zeros();
 
 /// Id of a front node.
 pub type NodeId = u32;
@@ -45,6 +59,15 @@ pub struct Front {
     /// Node of `P-2`.
     pub tail: NodeId,
     buckets: SpillVec<NodeId>,
+    /// Leftmost real node of each group of the bucket tree, level after level (see the module's
+    /// invariant).
+    lead: SpillVec<NodeId>,
+    /// Rightmost real node of each group.
+    last: SpillVec<NodeId>,
+    /// Lowest y of each group's real nodes, NaN when stale, `+∞` when empty.
+    low: SpillVec<f64>,
+    /// Where each level of the tree starts in `lead`, `last` and `low`, and where the last ends.
+    levels: Vec<usize>,
     xmap: XMap,
     nb: f64,
 }
@@ -175,6 +198,10 @@ impl Front {
             head: 0,
             tail: 1,
             buckets: SpillVec::default(),
+            lead: SpillVec::default(),
+            last: SpillVec::default(),
+            low: SpillVec::default(),
+            levels: Vec::new(),
             xmap,
             nb: 0.0,
         };
@@ -241,22 +268,61 @@ impl Front {
         (k as usize).min(self.buckets.len() - 1)
     }
 
-    /// The node table and the x index, to move them elsewhere (the streaming sweep's spill).
-    pub(crate) fn tables_mut(&mut self) -> (&mut SpillVec<Node>, &mut SpillVec<NodeId>) {
-        (&mut self.nodes, &mut self.buckets)
+    /// The node table and the x index (the buckets' start nodes, first and last nodes and
+    /// minima), to move them elsewhere (the streaming sweep's spill).
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn tables_mut(
+        &mut self,
+    ) -> (
+        &mut SpillVec<Node>,
+        &mut SpillVec<NodeId>,
+        &mut SpillVec<NodeId>,
+        &mut SpillVec<NodeId>,
+        &mut SpillVec<f64>,
+    ) {
+        (
+            &mut self.nodes,
+            &mut self.buckets,
+            &mut self.lead,
+            &mut self.last,
+            &mut self.low,
+        )
     }
 
+    /// Rebuilds the x index with `count` buckets: the start nodes, and the tree of groups with
+    /// their first and last nodes and exact minima.
     fn rebuild_buckets(&mut self, count: usize) {
         self.buckets.resize(0, NIL);
         self.buckets.resize(count, NIL);
         self.nb = count as f64;
+        self.levels = vec![0];
+        let mut m = count;
+        loop {
+            let end = self.levels[self.levels.len() - 1] + m;
+            self.levels.push(end);
+            if m <= 1 {
+                break;
+            }
+            m = m.div_ceil(FAN);
+        }
+        let total = self.levels[self.levels.len() - 1];
+        self.lead.resize(0, NIL);
+        self.lead.resize(total, NIL);
+        self.last.resize(0, NIL);
+        self.last.resize(total, NIL);
+        self.low.resize(0, f64::INFINITY);
+        self.low.resize(total, f64::INFINITY);
         let mut n = self.next(self.head);
         let mut walked = 0usize;
         while n != self.tail {
-            let k = self.key(self.nodes[n as usize].x);
+            let Node { x, y, .. } = self.nodes[n as usize];
+            let k = self.key(x);
             if self.buckets[k] == NIL {
                 self.buckets[k] = n;
+                self.lead[k] = n;
             }
+            self.last[k] = n;
+            self.low[k] = self.low[k].min(y);
             n = self.next(n);
             walked += 1;
             // A front of millions of nodes (a line of points) spilled to a temporary file: the
@@ -264,6 +330,21 @@ impl Front {
             if walked % RELEASE_EVERY == 0 && self.nodes.is_mapped() {
                 self.nodes.release();
                 self.buckets.release();
+            }
+        }
+        for j in 1..self.levels.len() - 1 {
+            let (below, here, end) = (self.levels[j - 1], self.levels[j], self.levels[j + 1]);
+            for g in here..end {
+                let first = below + (g - here) * FAN;
+                for c in first..(first + FAN).min(here) {
+                    if self.lead[c] != NIL {
+                        if self.lead[g] == NIL {
+                            self.lead[g] = self.lead[c];
+                        }
+                        self.last[g] = self.last[c];
+                        self.low[g] = self.low[g].min(self.low[c]);
+                    }
+                }
             }
         }
     }
@@ -333,13 +414,39 @@ impl Front {
         }
         let k = self.key(x);
         self.buckets[k] = n;
+        let mut g = k;
+        for j in 0..self.levels.len() - 1 {
+            let i = self.levels[j] + g;
+            let (first, end) = (self.lead[i], self.last[i]);
+            if first == NIL {
+                self.lead[i] = n;
+                self.last[i] = n;
+                self.low[i] = xy[1];
+            } else {
+                // The group's nodes are consecutive: `n` is its new first node when it comes just
+                // before the old one, its new last when just after.
+                if first == right {
+                    self.lead[i] = n;
+                }
+                if end == left {
+                    self.last[i] = n;
+                }
+                let m = self.low[i];
+                if !m.is_nan() {
+                    self.low[i] = m.min(xy[1]);
+                }
+            }
+            g >>= FAN_SHIFT;
+        }
         n
     }
 
     /// Removes node `n` (never `P-1` or `P-2`).
     pub fn remove(&mut self, n: NodeId) {
         debug_assert!(n != self.head && n != self.tail);
-        let Node { prev, next, x, .. } = self.nodes[n as usize];
+        let Node {
+            prev, next, x, y, ..
+        } = self.nodes[n as usize];
         self.nodes[prev as usize].next = next;
         self.nodes[next as usize].prev = prev;
         let k = self.key(x);
@@ -351,6 +458,27 @@ impl Front {
             } else {
                 NIL
             };
+        }
+        let mut g = k;
+        for j in 0..self.levels.len() - 1 {
+            let i = self.levels[j] + g;
+            let (first, end) = (self.lead[i], self.last[i]);
+            if first == n && end == n {
+                self.lead[i] = NIL;
+                self.last[i] = NIL;
+                self.low[i] = f64::INFINITY;
+            } else {
+                if first == n {
+                    self.lead[i] = next;
+                }
+                if end == n {
+                    self.last[i] = prev;
+                }
+                if y <= self.low[i] {
+                    self.low[i] = f64::NAN;
+                }
+            }
+            g >>= FAN_SHIFT;
         }
         self.nodes[n as usize].next = NIL;
         self.nodes[n as usize].prev = NIL;
@@ -407,6 +535,106 @@ impl Front {
         Some(lo)
     }
 
+    /// [`Front::min_y_within`] without a step limit, the same value, in fewer steps: a group of
+    /// buckets of the x index (see the module's doc) that lies inside the span and whose nodes all
+    /// stay above `enough` counts by its minimum at once (then the walk goes on from its last
+    /// node), where the node walk would visit each of its nodes (on a ring's steep sides,
+    /// thousands under a small disk). The nodes of the buckets at the span's ends, and of a group
+    /// that reaches `enough`, are walked one by one as there, so the early stop happens at the
+    /// same node with the same minimum so far. `scanned` grows by the nodes and groups visited.
+    pub fn min_y_indexed(&mut self, x0: f64, x1: f64, enough: f64, scanned: &mut u64) -> f64 {
+        let k1 = self.key(x1);
+        let mut n = self.locate(x0);
+        if n == self.head {
+            n = self.next(n);
+        }
+        let mut lo = f64::INFINITY;
+        'walk: while n != self.tail && lo > enough {
+            *scanned += 1;
+            let a = self.nodes[n as usize];
+            if a.x >= x0 {
+                // The groups that start at `a` and end left of `x1`'s bucket: every node of one
+                // is at or right of `a` and left of `x1`, so no segment between them crosses the
+                // span's ends. The largest whose minimum stays above `enough` is skipped.
+                let k = self.key(a.x);
+                let mut top = 0;
+                while top + 1 < self.levels.len() {
+                    let g = k >> (FAN_SHIFT as usize * top);
+                    if self.lead[self.levels[top] + g] != n || (g + 1) << (FAN_SHIFT as usize * top) > k1
+                    {
+                        break;
+                    }
+                    top += 1;
+                }
+                for j in (0..top).rev() {
+                    let i = self.levels[j] + (k >> (FAN_SHIFT as usize * j));
+                    if self.last[i] == n {
+                        break;
+                    }
+                    let m = self.group_low(j, i, scanned);
+                    if m > enough {
+                        lo = lo.min(m);
+                        n = self.last[i];
+                        continue 'walk;
+                    }
+                }
+                lo = lo.min(a.y);
+            }
+            if a.next == self.tail {
+                break;
+            }
+            let b = &self.nodes[a.next as usize];
+            if a.x < x0 && x0 < b.x {
+                lo = lo.min(segment_low(&a, b, x0));
+            }
+            if a.x < x1 && x1 < b.x {
+                lo = lo.min(segment_low(&a, b, x1));
+                break;
+            }
+            if b.x > x1 {
+                break;
+            }
+            n = a.next;
+        }
+        if cfg!(debug_assertions) {
+            let walk = self.min_y_within(x0, x1, enough, &mut usize::MAX.clone());
+            let walk = walk.map(f64::to_bits);
+            assert_eq!(walk, Some(lo.to_bits()), "bucket minima disagree with the nodes");
+        }
+        lo
+    }
+
+    /// The lowest y of group `i` (of level `j`), recomputed if stale from the groups below or
+    /// the bucket's nodes (`scanned` grows by what is visited).
+    fn group_low(&mut self, j: usize, i: usize, scanned: &mut u64) -> f64 {
+        let m = self.low[i];
+        if !m.is_nan() || self.lead[i] == NIL {
+            return m;
+        }
+        let mut m = f64::INFINITY;
+        if j == 0 {
+            let (mut n, end) = (self.lead[i], self.last[i]);
+            loop {
+                *scanned += 1;
+                let a = &self.nodes[n as usize];
+                m = m.min(a.y);
+                if n == end {
+                    break;
+                }
+                n = a.next;
+            }
+        } else {
+            let (below, here) = (self.levels[j - 1], self.levels[j]);
+            let first = below + (i - here) * FAN;
+            for c in first..(first + FAN).min(here) {
+                *scanned += 1;
+                m = m.min(self.group_low(j - 1, c, scanned));
+            }
+        }
+        self.low[i] = m;
+        m
+    }
+
     /// Is vertex `v`, at `x`, a node of the front?
     pub fn holds(&self, v: VertexId, x: f64) -> bool {
         self.nodes[self.locate(x) as usize].v == v
@@ -436,4 +664,72 @@ fn segment_low(a: &Node, b: &Node, x: f64) -> f64 {
     let y = a.y + (x - a.x) / w * dy;
     let err = 8.0 * f64::EPSILON * ((x.abs() + a.x.abs()) / w * dy.abs() + a.y.abs() + b.y.abs());
     (y - err).max(a.y.min(b.y))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (xorshift).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            self.0
+        }
+        fn unit(&mut self) -> f64 {
+            (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// The bucket minima, kept lazily through inserts, removals and rebuilds (clustered x, so
+    /// buckets hold many nodes), give what the node walk gives, early stop included.
+    #[test]
+    fn the_indexed_long_scan_returns_what_the_node_walk_returns() {
+        let mut r = Rng(0x9e37_79b9_7f4a_7c15);
+        let xmap = XMap::from_sample((0..1000).map(|i| (i as f64 / 1000.0).powi(4)).collect());
+        let e = EdgeId(0);
+        let mut f = Front::new(VertexId(0), VertexId(1), VertexId(2), [0.5, 0.0], e, e, xmap);
+        let mut live = vec![VertexId(2)];
+        let (mut scanned, mut walked) = (0u64, 0u64);
+        for i in 3..20_000u32 {
+            let x = r.unit().powi(3);
+            let n = f.locate(x);
+            if f.node(n).x == x {
+                continue;
+            }
+            if i % 3 == 0 && f.len() > 3 {
+                // Remove a node (near x), often the lowest of its bucket.
+                let m = if n == f.head { f.next(n) } else { n };
+                if m != f.tail {
+                    live.retain(|&v| v != f.vertex(m));
+                    f.remove(m);
+                }
+                continue;
+            }
+            let y = (r.unit() * 8.0).floor();
+            f.insert_after(n, VertexId(i), [x, y]);
+            live.push(VertexId(i));
+            if i % 7 == 0 {
+                let a = r.unit().powi(3);
+                let b = a + r.unit() * r.unit() * 0.5;
+                // Mostly a span wholly above `enough` (the scan that ends in a finalisation).
+                let enough = if i % 4 == 0 {
+                    (r.unit() * 9.0).floor() - 1.0
+                } else {
+                    -1.0
+                };
+                let mut rest = usize::MAX;
+                let walk = f.min_y_within(a, b, enough, &mut rest).unwrap();
+                walked += (usize::MAX - rest) as u64;
+                let fast = f.min_y_indexed(a, b, enough, &mut scanned);
+                assert_eq!(walk.to_bits(), fast.to_bits(), "span {a}..{b} enough {enough}");
+            }
+        }
+        assert_eq!(f.len(), live.len() + 2);
+        // The buckets were used: fewer steps than the node walk's.
+        assert!(4 * scanned < walked, "{scanned} steps against {walked}");
+    }
 }

@@ -326,6 +326,11 @@ impl<H: Mode> Sweep<H> {
         &self.front
     }
 
+    /// The advancing front, mutable (its bucket minima are recomputed lazily).
+    pub(crate) fn front_mut(&mut self) -> &mut Front {
+        &mut self.front
+    }
+
     /// What the breakline insertion has done so far.
     pub fn constraint_stats(&self) -> ConstraintStats {
         self.cstats
