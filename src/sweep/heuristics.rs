@@ -185,7 +185,7 @@ impl<H: Mode> Sweep<H> {
             walked += 1;
             // A front of millions of nodes (points on a line) spilled to temporary files: the
             // walk would bring the whole front and its points into memory at once.
-            if walked % (1 << 16) == 0 {
+            if walked.is_multiple_of(1 << 16) {
                 self.release_spilled();
             }
             let (p, q) = (self.front.prev(n), self.front.next(n));

@@ -373,9 +373,12 @@ impl<H: Mode> Sweep<H> {
     /// Drops the resident pages of the tables that went to temporary files (nothing for those
     /// on the heap): for walks over all of them, which would otherwise bring them all in.
     pub(crate) fn release_spilled(&mut self) {
-        let (nodes, buckets) = self.front.tables_mut();
+        let (nodes, buckets, lead, last, low) = self.front.tables_mut();
         nodes.release();
         buckets.release();
+        lead.release();
+        last.release();
+        low.release();
         self.pts.release();
         self.mesh.origin.release();
         self.mesh.link.release();
