@@ -23,6 +23,22 @@ fn write_xyz(path: &Path, pts: &[[f64; 3]]) {
     w.flush().unwrap();
 }
 
+/// `sweeptin tin XYZ -o OUT --mem MEM --tmp-dir TMP --json`: its summary.
+fn tin_json(xyz: &Path, out: &Path, mem: &str, tmp: &Path) -> serde_json::Value {
+    let o = cli::ok(&[
+        "tin".as_ref(),
+        xyz.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--mem".as_ref(),
+        mem.as_ref(),
+        "--tmp-dir".as_ref(),
+        tmp.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
 /// `pts` written to `path` as XYZ, read back with every point kept.
 fn xyz_input(path: &Path, pts: &[[f64; 3]]) -> Input {
     write_xyz(path, pts);
@@ -168,18 +184,7 @@ fn points_on_a_line_stay_within_mem_while_every_triangle_is_held() {
     write_xyz(&xyz, &heavy::almost_line(n, 7));
     let out = dir.path().join("line.stin");
     let mem: u64 = 8 << 20;
-    let o = cli::ok(&[
-        "tin".as_ref(),
-        xyz.as_os_str(),
-        "-o".as_ref(),
-        out.as_os_str(),
-        "--mem".as_ref(),
-        "8M".as_ref(),
-        "--tmp-dir".as_ref(),
-        dir.path().as_os_str(),
-        "--json".as_ref(),
-    ]);
-    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let summary = tin_json(&xyz, &out, "8M", dir.path());
     // `tin` prints the run's summary itself (`dem` nests it under "run").
     let run = summary.get("run").unwrap_or(&summary);
     let stream = &run["stream"];
@@ -310,21 +315,7 @@ fn points_on_a_ring_triangulate_without_scanning_the_arc_at_every_point() {
     heavy::arrange(&mut pts, heavy::Order::Random, 7);
     let xyz = dir.path().join("ring.xyz");
     write_xyz(&xyz, &pts);
-    let tin = |mem: &str, out: &Path| {
-        let o = cli::ok(&[
-            "tin".as_ref(),
-            xyz.as_os_str(),
-            "-o".as_ref(),
-            out.as_os_str(),
-            "--mem".as_ref(),
-            mem.as_ref(),
-            "--tmp-dir".as_ref(),
-            dir.path().as_os_str(),
-            "--json".as_ref(),
-        ]);
-        let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-        summary["stream"].clone()
-    };
+    let tin = |mem: &str, out: &Path| tin_json(&xyz, out, mem, dir.path())["stream"].clone();
     let (small, large) = (dir.path().join("8M.stin"), dir.path().join("512M.stin"));
     let stream = tin("8M", &small);
     // 180 front nodes and groups a point (377 when the long scans walked every node; a uniform

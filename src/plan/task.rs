@@ -82,7 +82,7 @@ pub enum Product {
     Tin,
     /// The ground classification itself (`plan ground`, with [`Job::ground`]): each task
     /// writes the points its tile owns with the classes one `sweeptin ground` run gives them
-    /// ([`super::ground_points`]); `merge` writes a VPC of those tiles or one LAS/LAZ file.
+    /// (`plan::ground_points`); `merge` writes a VPC of those tiles or one LAS/LAZ file.
     Ground,
     /// Cut and fill against the plane `z = plane`, within an optional boundary polygon.
     Volume {
