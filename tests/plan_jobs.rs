@@ -399,6 +399,21 @@ fn plan_messages_say_what_each_product_writes() {
     let out = ok(bin().args(args(&job, "tin")).output().unwrap(), "plan");
     let n: usize = String::from_utf8_lossy(&out.stdout).trim().parse().unwrap();
     assert_eq!(n, plan_extent(&job.join("plan.json")).1);
+    assert!(
+        !out.stderr.is_empty(),
+        "the summary and next lines are on stderr"
+    );
+    // `-q`: the count on stdout, nothing on stderr (the summary and "next:" lines were printed).
+    let quiet = t.path().join("quiet");
+    let mut a = args(&quiet, "tin");
+    a.push("-q".into());
+    let out = ok(bin().args(a).output().unwrap(), "plan -q");
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), n.to_string());
     // On a terminal (`script` gives the command one): the messages alone.
     let job = t.path().join("tty");
     let line = std::iter::once(bin().get_program().to_string_lossy().into_owned())

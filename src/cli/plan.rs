@@ -414,6 +414,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     }
     outputs.insert(0, ("dir".to_string(), dir.clone()));
     let buffer = args.buffer.unwrap_or(tile / 10.0);
+    let quiet = a.quiet;
     let canonical = |p: &PathBuf| sweeptin::input::files::absolute(p).map_err(anyhow::Error::from);
     let abs_groups: Vec<Vec<PathBuf>> = groups
         .iter()
@@ -476,26 +477,30 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     }
     let points: u64 = plan.files.iter().map(|f| f.points).sum();
     // A tenth of 24.9 is 2.4899999999999998 in full: shown to six digits.
-    eprintln!(
-        "sweeptin: {} tasks (tiles of {}, first buffer {}) over {} files, {} points -> {}",
-        count(plan.tiles.len() as u64),
-        Figure(tile),
-        Figure(buffer),
-        count(plan.files.len() as u64),
-        count(points),
-        path.display()
-    );
+    if !quiet {
+        eprintln!(
+            "sweeptin: {} tasks (tiles of {}, first buffer {}) over {} files, {} points -> {}",
+            count(plan.tiles.len() as u64),
+            Figure(tile),
+            Figure(buffer),
+            count(plan.files.len() as u64),
+            count(points),
+            path.display()
+        );
+    }
     // The number of tasks for a script (`N=$(sweeptin plan …)`); on a terminal the line above
     // says it (a bare number among the messages read as one of them).
     if !std::io::stdout().is_terminal() {
         println!("{}", plan.tiles.len());
     }
-    eprintln!(
-        "  next: sweeptin run {} --all --jobs N   (or a job array of {} tasks: --array=0-{})",
-        path.display(),
-        plan.tiles.len(),
-        plan.tiles.len().saturating_sub(1)
-    );
+    if !quiet {
+        eprintln!(
+            "  next: sweeptin run {} --all --jobs N   (or a job array of {} tasks: --array=0-{})",
+            path.display(),
+            plan.tiles.len(),
+            plan.tiles.len().saturating_sub(1)
+        );
+    }
     Ok(())
 }
 
