@@ -596,11 +596,8 @@ impl Front {
             }
             n = a.next;
         }
-        if cfg!(debug_assertions) {
-            let walk = self.min_y_within(x0, x1, enough, &mut usize::MAX.clone());
-            let walk = walk.map(f64::to_bits);
-            assert_eq!(walk, Some(lo.to_bits()), "bucket minima disagree with the nodes");
-        }
+        // The node walk's value, bit for bit: `tests::the_indexed_long_scan_returns_what_the_node_walk_returns`
+        // (asserting it here on every call made the debug test suite walk every span again).
         lo
     }
 
