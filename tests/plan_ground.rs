@@ -36,13 +36,10 @@ fn a_ground_plan_merges_into_the_dem_of_one_ground_run_for_any_tile_size() {
     let t = tempfile::tempdir().unwrap();
     // One file with its own classes (ignored), and six adjacent tiles given together (blocks
     // and their buffers reach across files and tasks).
-    let cases: [(Vec<PathBuf>, &[&str], [&str; 2]); 2] = [
-        (
-            vec![data::shared("lidar/startinpy_small.laz")],
-            &[],
-            ["30", "45"],
-        ),
-        (data::ign_tiles(), &["--step", "2"], ["50", "100"]),
+    // (CI time: two tile sizes a case took 108 s; the sizes differ between the cases.)
+    let cases: [(Vec<PathBuf>, &[&str], [&str; 1]); 2] = [
+        (vec![data::shared("lidar/startinpy_small.laz")], &[], ["45"]),
+        (data::ign_tiles(), &["--step", "2"], ["50"]),
     ];
     for (k, (files, params, tiles)) in cases.iter().enumerate() {
         let want = one_run(files, params, &t.path().join(format!("one{k}.tif")));
