@@ -48,11 +48,7 @@ impl StreamingSweep {
             w = self.lowest_ordinary(from..to, w, stuck, wide, x_range);
             from = to;
             // Tables spilled to temporary files: the walk would bring them all into memory.
-            let (pts, mesh, _, _) = self.sweep.tables_mut();
-            if mesh.origin.is_mapped() {
-                mesh.origin.release();
-                pts.release();
-            }
+            self.sweep.release_spilled();
         }
         self.fin().events.push(Event::Watermark(w));
         w

@@ -327,7 +327,7 @@ impl Front {
             walked += 1;
             // A front of millions of nodes (a line of points) spilled to a temporary file: the
             // walk would bring the whole node table into memory at once.
-            if walked.is_multiple_of(RELEASE_EVERY) && self.nodes.is_mapped() {
+            if walked.is_multiple_of(RELEASE_EVERY) {
                 self.nodes.release();
                 self.buckets.release();
             }
