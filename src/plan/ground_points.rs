@@ -140,12 +140,12 @@ pub struct PointsMergeSummary {
 }
 
 /// Merges the tiles of a ground plan whose tasks all finished (`records`, in task order) into
-/// `out`: `.vpc` a virtual point cloud referencing the tiles in the plan's (local) directory by
-/// paths relative to the `.vpc` (keep the directory, or merge into one file), `.laz`/`.las` one
-/// file.
+/// `out`: `.vpc` a virtual point cloud referencing the tiles where they are (in a local plan
+/// directory by paths relative to the `.vpc`: keep the directory, or merge into one file; on S3
+/// by their `s3://` URLs), `.laz`/`.las` one file.
 ///
 /// # Errors
-/// [`Error::Options`] for another extension, a VPC of tiles on S3, and when the tiles cannot make one file
+/// [`Error::Options`] for another extension, and when the tiles cannot make one file
 /// (point formats, extra bytes or scales that differ: merge into a `.vpc`);
 /// [`Error::Format`] naming `plan.json` when the tiles do not hold every point of the files
 /// once; the writers' errors.
@@ -191,13 +191,6 @@ pub(super) fn merge_points(
         });
     }
     let bytes = if ext.as_deref() == Some("vpc") {
-        if dir.is_remote() {
-            return Err(Error::Options(format!(
-                "{}: a virtual point cloud of tiles on S3 is not written here (its items would \
-                 name the objects by local paths); merge into one file (-o OUT.laz)",
-                out.display()
-            )));
-        }
         let infos = tiles
             .iter()
             .map(FileInfo::read)
