@@ -142,7 +142,8 @@ pub struct PointsMergeSummary {
 /// Merges the tiles of a ground plan whose tasks all finished (`records`, in task order) into
 /// `out`: `.vpc` a virtual point cloud referencing the tiles where they are (in a local plan
 /// directory by paths relative to the `.vpc`: keep the directory, or merge into one file; on S3
-/// by their `s3://` URLs), `.laz`/`.las` one file.
+/// by their `s3://` URLs), `.laz`/`.las` one file (decoded and compressed `batch_bytes` of
+/// records at a time: a share of the merge's `--mem`).
 ///
 /// # Errors
 /// [`Error::Options`] for another extension, and when the tiles cannot make one file
@@ -154,6 +155,7 @@ pub(super) fn merge_points(
     dir: &PlanDir,
     records: &[TaskRecord],
     out: &Path,
+    batch_bytes: u64,
 ) -> Result<PointsMergeSummary> {
     let ext = out
         .extension()
@@ -203,15 +205,14 @@ pub(super) fn merge_points(
             .collect::<Result<Vec<_>>>()?;
         let paths: Vec<PathBuf> = local.iter().map(|l| l.path.clone()).collect();
         let s =
-            crate::output::las::join_points(&paths, out, &mut |_, _| Ok(())).map_err(
-                |e| match e {
+            crate::output::las::join_points_within(&paths, out, &mut |_, _| Ok(()), batch_bytes)
+                .map_err(|e| match e {
                     Error::Options(m) => Error::Options(format!(
                         "{m}: the plan's input files differ, so their points make no one file \
                      unchanged; merge into a virtual point cloud instead (-o OUT.vpc)"
                     )),
                     e => e,
-                },
-            )?;
+                })?;
         s.bytes
     };
     Ok(PointsMergeSummary {
