@@ -40,16 +40,7 @@ impl Plan {
         let t = self.task(i)?.clone();
         let mem = crate::limits::fit_address_space(self.job.mem, 0);
         // Every file the classification reads is what the plan saw.
-        let owned = self.ground_blocks(&params, t.bounds)?;
-        let read = params
-            .grid()?
-            .world(&owned.expand(crate::ground::BUFFER_CELLS + 1));
-        let b = t.bounds;
-        let reach = (b[0] - read[0])
-            .max(b[1] - read[1])
-            .max(read[2] - b[2])
-            .max(read[3] - b[3]);
-        self.check_files(i, reach.max(0.0))?;
+        self.check_files(i, self.read_reach(i, 0.0)?)?;
         let (_, mut classified) = self.classify_blocks(dir, i, &params, t.bounds, mem)?;
         // The files that may hold points of the tile (a hair around it: a point's owner is
         // decided by `tile_of`, not by comparing with the tile's bounds).
