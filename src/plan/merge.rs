@@ -11,7 +11,7 @@ use crate::products::hillshade::{self, HillshadeSummary};
 use crate::raster::{Align, GridExtent, GridPlan};
 use std::path::{Path, PathBuf};
 
-pub use super::stitch::{StitchOptions, StitchSummary, stitch};
+pub use super::stitch::{StitchOptions, StitchSummary, merge_contours, stitch};
 
 /// The least `--mem` a merge takes: its fixed buffers (a DEM tile read 2^20 cells at a time, the
 /// contours' spill buffer and line writer, the hillshade's band of rows, the TIN merge's
@@ -63,7 +63,7 @@ pub fn records(plan: &Plan, dir: &super::PlanDir) -> Result<Vec<TaskRecord>> {
 
 /// The output `name` of every task that wrote one, with the task's index, in task order. An
 /// empty task writes none (its tile is nodata, with no lines).
-fn outputs<'a>(records: &'a [TaskRecord], name: &str) -> Result<Vec<(usize, &'a Path)>> {
+pub(super) fn outputs<'a>(records: &'a [TaskRecord], name: &str) -> Result<Vec<(usize, &'a Path)>> {
     records
         .iter()
         .filter(|r| !(r.status == "empty" && r.outputs.is_empty()))
@@ -418,54 +418,6 @@ fn write_vrt(
     }
     let _ = writeln!(x, "  </VRTRasterBand>\n</VRTDataset>");
     super::write_atomic(out, x.as_bytes())
-}
-
-/// Stitches the tasks' contours into `out`, the ends of the lines open at the tasks' edges
-/// within half of `mem` (the merge's budget).
-///
-/// # Errors
-/// As [`stitch`]; unfinished tasks.
-pub fn merge_contours(
-    plan: &Plan,
-    dir: &super::PlanDir,
-    out: &Path,
-    crs: Option<&Crs>,
-    mem: u64,
-) -> Result<StitchSummary> {
-    let recs = records(plan, dir)?;
-    // Copies of parts on S3 (the stitcher reads files), in the temporary directory.
-    let copies = outputs(&recs, "contours")?
-        .into_iter()
-        .map(|(_, p)| dir.local(p))
-        .collect::<Result<Vec<_>>>()?;
-    let parts: Vec<&Path> = copies.iter().map(|c| c.path.as_path()).collect();
-    let levels = match &plan.job.product {
-        super::Product::Dem {
-            contours: Some(l), ..
-        }
-        | super::Product::Contours(l) => *l,
-        _ => {
-            return Err(Error::Internal(
-                "contours merged from a plan without".into(),
-            ));
-        }
-    };
-    let decimals = levels.decimals.unwrap_or_else(|| {
-        let paths: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
-        crate::pipeline::contour_decimals(&paths)
-    });
-    let options = StitchOptions {
-        decimals: Some(decimals),
-        min_length: levels.min_length,
-    };
-    stitch(
-        &parts,
-        out,
-        crs,
-        options,
-        plan.job.tmp_dir.as_deref(),
-        mem / 2,
-    )
 }
 
 /// The exact totals of the tasks' volumes (the same, bit for bit, as one run over all points).

@@ -7,13 +7,14 @@
 //! degenerate lines and those shorter than the job's minimum length left out after joining, as
 //! one run does.
 
+use super::Plan;
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use crate::output::lines::{LineWriter, length};
 use std::collections::HashMap;
 use std::io::Write;
 use std::os::unix::fs::FileExt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 type Pt = [f64; 2];
 type Key = (u64, [u64; 4]);
@@ -342,6 +343,54 @@ pub fn stitch(
     }
     s.bytes = w.finish()?;
     Ok(s)
+}
+
+/// Stitches the tasks' contours into `out`, the ends of the lines open at the tasks' edges
+/// within half of `mem` (the merge's budget).
+///
+/// # Errors
+/// As [`stitch`]; unfinished tasks.
+pub fn merge_contours(
+    plan: &Plan,
+    dir: &super::PlanDir,
+    out: &Path,
+    crs: Option<&Crs>,
+    mem: u64,
+) -> Result<StitchSummary> {
+    let recs = super::merge::records(plan, dir)?;
+    // Copies of parts on S3 (the stitcher reads files), in the temporary directory.
+    let copies = super::merge::outputs(&recs, "contours")?
+        .into_iter()
+        .map(|(_, p)| dir.local(p))
+        .collect::<Result<Vec<_>>>()?;
+    let parts: Vec<&Path> = copies.iter().map(|c| c.path.as_path()).collect();
+    let levels = match &plan.job.product {
+        super::Product::Dem {
+            contours: Some(l), ..
+        }
+        | super::Product::Contours(l) => *l,
+        _ => {
+            return Err(Error::Internal(
+                "contours merged from a plan without".into(),
+            ));
+        }
+    };
+    let decimals = levels.decimals.unwrap_or_else(|| {
+        let paths: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
+        crate::pipeline::contour_decimals(&paths)
+    });
+    let options = StitchOptions {
+        decimals: Some(decimals),
+        min_length: levels.min_length,
+    };
+    stitch(
+        &parts,
+        out,
+        crs,
+        options,
+        plan.job.tmp_dir.as_deref(),
+        mem / 2,
+    )
 }
 
 #[cfg(test)]
