@@ -119,6 +119,30 @@ fn dem_and_contours_of_a_plan_equal_one_run() {
         "stitched contours differ"
     );
 
+    // --mem (issue 43): below what a merge's fixed buffers need, refused before any output (exit
+    // 2); at that least budget, the same COG and contours as at the default.
+    let m1 = t.path().join("m1.tif");
+    let o = bin()
+        .args(["merge", s(&plan), "-o", s(&m1), "--mem", "1M"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("--mem 1.0 MiB: a merge needs at least 16.0 MiB"),
+        "{e}"
+    );
+    assert!(!m1.exists());
+    let cog = |name: &str, mem: &[&str]| {
+        let (out, c) = (t.path().join(format!("{name}.tif")), t.path().join(name));
+        let mut a = vec!["merge", s(&plan), "-o", s(&out), "--format", "cog"];
+        a.extend(["--contours", s(&c), "-q"]);
+        a.extend(mem);
+        sweeptin(&a, "merge to a COG");
+        (std::fs::read(&out).unwrap(), std::fs::read(&c).unwrap())
+    };
+    assert!(cog("default", &[]) == cog("least", &["--mem", "16M"]));
+
     // A VRT over the tiles: GDAL reads the same cells.
     let vrt = t.path().join("mosaic.vrt");
     sweeptin(&["merge", s(&plan), "-o", s(&vrt)], "merge to VRT");

@@ -90,6 +90,56 @@ fn a_ground_task_run_twice_writes_the_same_tile() {
     }
 }
 
+/// A `--ground` task classifies the ground blocks around its tile, from files well beyond its
+/// buffer (blocks of 160 m, read with 60 m around, at the default step): it checks those files
+/// against the plan too (issue 43), as it does the files of its buffer. Before, a corner task
+/// of the six IGN tiles (buffer 1 m: one file) read a far file changed since the plan unchecked
+/// (the classes of two versions mixed, or a chunk-index error). About 2 s in a debug build.
+#[test]
+fn a_ground_task_refuses_a_file_of_its_ground_blocks_changed_since_the_plan() {
+    let t = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    for f in data::ign_tiles() {
+        let to = t.path().join(f.file_name().unwrap());
+        std::fs::copy(&f, &to).unwrap();
+        let mut perm = std::fs::metadata(&to).unwrap().permissions();
+        #[allow(clippy::permissions_set_readonly_false)]
+        perm.set_readonly(false);
+        std::fs::set_permissions(&to, perm).unwrap();
+        files.push(to);
+    }
+    let job = t.path().join("job");
+    let mut args = vec!["plan", "--buffer", "1", "dem"];
+    args.extend(files.iter().map(|p| s(p)));
+    args.extend([
+        "--ground",
+        "--cell",
+        "1",
+        "--tile",
+        "25",
+        "-o",
+        s(&job),
+        "-q",
+    ]);
+    sweeptin(&args, "plan dem --ground");
+    let plan = job.join("plan.json");
+    let p: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
+    // Task 0, the south-west corner, reads the first file only; the last is 75 m away.
+    assert_eq!(p["tiles"][0]["files"], serde_json::json!([0]));
+    let far = files.last().unwrap();
+    let f = std::fs::File::options().write(true).open(far).unwrap();
+    f.set_modified(std::time::SystemTime::now() + std::time::Duration::from_secs(100))
+        .unwrap();
+    drop(f);
+    let (code, e) = status(&["run", s(&plan), "--task", "0", "-q"]);
+    assert_eq!(code, 3, "{e}");
+    assert!(
+        e.contains(&far.display().to_string()) && e.contains("changed since the plan"),
+        "{e}"
+    );
+}
+
 /// Every point of `files` by what it is and carries (x, y, z bits, return number, number of
 /// returns, flags, class), sorted: equal lists mean the same points, each as often, with the
 /// same classes.

@@ -143,3 +143,76 @@ fn plan_over_a_remote_vpc_equals_the_local_plan() {
     assert!(!m.status.success());
     assert!(!t.path().join("m.tif").exists());
 }
+
+/// A VPC names remote files by their full URL, wherever it is written (issue 43): `index` of an
+/// object into a local `.vpc` and into one on S3 under another prefix, and a ground plan on S3
+/// merged into a local `.vpc` of its tiles (refused before: its items named local paths), each
+/// read back whole. Against moto; about 6 s in a debug build.
+#[test]
+fn a_vpc_names_remote_files_by_their_urls() {
+    let Some(moto) = Moto::start("a_vpc_names_remote_files_by_their_urls") else {
+        return;
+    };
+    let t = tempfile::tempdir().unwrap();
+    let small = data::shared("lidar/startinpy_small.laz");
+    moto.put("vpcs", "t/a.laz", &small);
+    let run = |args: &[&str]| {
+        let o = bin()
+            .args(args)
+            .envs(moto.env())
+            .current_dir(t.path())
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let points = |vpc: &str| -> u64 {
+        let v: serde_json::Value = serde_json::from_str(&run(&["info", vpc, "--json"])).unwrap();
+        v["summary"]["points"].as_u64().unwrap()
+    };
+    let hrefs = |text: &str| -> Vec<String> {
+        let v: serde_json::Value = serde_json::from_str(text).unwrap();
+        v["features"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f["assets"]["data"]["href"].as_str().unwrap().to_string())
+            .collect()
+    };
+    run(&["index", "s3://vpcs/t/a.laz", "-o", "local.vpc"]);
+    let local = std::fs::read_to_string(t.path().join("local.vpc")).unwrap();
+    assert_eq!(hrefs(&local), ["s3://vpcs/t/a.laz"]);
+    assert_eq!(points("local.vpc"), 39_233);
+    run(&["index", "s3://vpcs/t/a.laz", "-o", "s3://vpcs/u/far.vpc"]);
+    let got = t.path().join("far.vpc");
+    assert!(moto.get("vpcs", "u/far.vpc", &got));
+    assert_eq!(
+        hrefs(&std::fs::read_to_string(&got).unwrap()),
+        ["s3://vpcs/t/a.laz"]
+    );
+    assert_eq!(points("s3://vpcs/u/far.vpc"), 39_233);
+    // A ground plan on S3 (4 tasks) merged into a local VPC of its tiles.
+    run(&[
+        "plan",
+        "ground",
+        s(&small),
+        "--tile",
+        "50",
+        "-o",
+        "s3://vpcs/job/",
+        "-q",
+    ]);
+    run(&["run", "s3://vpcs/job/plan.json", "--all", "-q"]);
+    run(&["merge", "s3://vpcs/job/plan.json", "-o", "ground.vpc", "-q"]);
+    let tiles = hrefs(&std::fs::read_to_string(t.path().join("ground.vpc")).unwrap());
+    assert!(!tiles.is_empty());
+    assert!(
+        tiles.iter().all(|h| h.starts_with("s3://vpcs/job/tiles/")),
+        "{tiles:?}"
+    );
+    assert_eq!(points("ground.vpc"), 39_233);
+}

@@ -215,6 +215,8 @@ pub(crate) struct MergeOpts {
     bigtiff: bool,
     /// `"data"` (one run's grid) or `"tiles"`.
     extent: String,
+    /// The memory budget (parsed by the package as `--mem`).
+    mem: u64,
 }
 
 /// Joins the finished tasks of the plan `path`; returns the summary as JSON text.
@@ -231,6 +233,7 @@ pub(crate) fn merge(py: Python<'_>, path: PathBuf, opts: MergeOpts) -> PyResult<
             opts.bigtiff,
         )?,
         extent: opts.extent.parse().map_err(to_py)?,
+        mem: opts.mem,
     };
     crate::errors::detach_guarded(py, || -> sweeptin::Result<String> {
         let plan = Plan::load(&path)?;

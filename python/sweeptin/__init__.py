@@ -748,6 +748,7 @@ def merge(
     predictor: str | None = None,
     bigtiff: bool = False,
     extent: str = "data",
+    mem: int | str | None = None,
 ) -> dict[str, _typing.Any]:
     """``sweeptin merge``: joins the finished tasks: the DEM mosaic ``out`` (``.vrt`` over the
     tiles or one ``.tif``, a GeoTIFF or COG as the plan's ``format`` says unless ``format``,
@@ -760,10 +761,12 @@ def merge(
     ``max_buffer``, ``warnings``; a ground plan's ``points``: ``out`` a ``.vpc`` of its
     tiles or one ``.laz``/``.las``). The mosaic's cells are those one run writes
     (``extent="data"``: the same header and cells as ``dem`` over the plan's files and filters),
-    or the whole tiles (``extent="tiles"``)."""
+    or the whole tiles (``extent="tiles"``). ``mem`` is the merge's memory budget, as ``--mem``
+    (at least 16M)."""
     opts = {
         "out": None if out is None else _os.fspath(out),
         "extent": extent,
+        "mem": _mem(mem),
         "contours": None if contours is None else _os.fspath(contours),
         "hillshade": None if hillshade is None else _os.fspath(hillshade),
         **_raster(format, compress, predictor, bigtiff),

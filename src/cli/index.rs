@@ -20,7 +20,8 @@ pub struct Args {
     /// LAS/LAZ/COPC files (`@list.txt`, quoted globs and `.vpc` files are expanded).
     #[arg(required = true, value_name = "FILES")]
     pub files: Vec<PathBuf>,
-    /// The virtual point cloud to write (`.vpc`); the files are named relative to its folder.
+    /// The virtual point cloud to write (`.vpc`); local files are named relative to its folder
+    /// (absolute from a `.vpc` on S3), remote files by their full URL.
     /// With --chunks: the directory to write the chunk indexes into (default: beside each file).
     #[arg(short, long, value_name = "VPC", required_unless_present = "chunks")]
     pub output: Option<PathBuf>,

@@ -129,6 +129,13 @@ pub struct MergeArgs {
     #[arg(long, value_name = "data|tiles", default_value = "data",
           value_parser = |s: &str| s.parse::<merge::MosaicExtent>())]
     pub extent: merge::MosaicExtent,
+    /// Memory budget (e.g. 64M, 1G; at least 16M): every merge holds fixed buffers of a few MiB
+    /// whatever the output's size; a compressed GeoTIFF or COG, or a ground plan's one point
+    /// file, is compressed a quarter of it at a time, and the contour lines open at the tasks'
+    /// edges may hold half of it (refused beyond, exit 4: give more).
+    #[arg(long, value_name = "SIZE",
+          default_value_t = super::input::Size(sweeptin::pipeline::default_mem()))]
+    pub mem: super::input::Size,
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
@@ -613,6 +620,7 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
         hillshade: args.hillshade.clone(),
         raster: args.raster.options(),
         extent: args.extent,
+        mem: args.mem.0,
     };
     let s = merge::merge_plan(&plan, &dir, &outputs)?;
     for w in &s.warnings {

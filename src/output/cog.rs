@@ -13,7 +13,8 @@
 //! 2. **Chunks**: tiles of 512 × 512 (COG; edge tiles padded with nodata) or strips of whole rows
 //!    (about 64 KiB of cells each; plain GeoTIFF), smallest overview first, each read from its
 //!    level's scratch, passed through the predictor and compressed on every core (a batch of at
-//!    most [`BATCH_BYTES`] of cells at a time), and appended to a second temporary file.
+//!    most [`BATCH_BYTES`] of cells at a time, or what a budget gives), and appended to a second
+//!    temporary file.
 //! 3. **Assembly**: header, GDAL's structural metadata (the "ghost area": `LAYOUT=IFDS_BEFORE_DATA`,
 //!    `BLOCK_ORDER=ROW_MAJOR`, `BLOCK_LEADER=SIZE_AS_UINT4`, `BLOCK_TRAILER=LAST_4_BYTES_REPEATED`,
 //!    each tile then preceded by its size and followed by its last 4 bytes again), every IFD
@@ -46,7 +47,8 @@ use std::path::{Path, PathBuf};
 /// Side of a COG tile.
 pub const TILE: u32 = 512;
 
-/// Cells read and compressed at once (per batch of chunks).
+/// Cells read and compressed at once (per batch of chunks), unless a budget asks for less
+/// (`sweeptin merge --mem`: a quarter of it).
 pub const BATCH_BYTES: usize = 64 << 20;
 
 /// The sample type written.
@@ -262,6 +264,7 @@ pub(crate) fn write_tiff(
     geo: &TiffGeo,
     r: &ResolvedRaster,
     samples: Samples,
+    batch_bytes: usize,
 ) -> Result<u64> {
     let cog = r.format == RasterFormat::Cog;
     let mut stages = vec![stage];
@@ -289,7 +292,7 @@ pub(crate) fn write_tiff(
             .flat_map(|cy| (0..level.across()).map(move |cx| (cx, cy)))
             .collect();
         let chunk_bytes = (level.chunk_w as usize * level.chunk_h as usize * 4).max(1);
-        let per_batch = (BATCH_BYTES / chunk_bytes).max(1);
+        let per_batch = (batch_bytes / chunk_bytes).max(1);
         for batch in ids.chunks(per_batch) {
             let encoded: Vec<Vec<u8>> = batch
                 .par_iter()
@@ -417,6 +420,8 @@ pub struct StagedGridWriter {
     spec: GridSpec,
     stage: Option<Scratch>,
     options: ResolvedRaster,
+    /// Cells compressed at once ([`BATCH_BYTES`] unless a budget gives less).
+    batch_bytes: usize,
 }
 
 impl StagedGridWriter {
@@ -440,7 +445,15 @@ impl StagedGridWriter {
             spec: spec.clone(),
             stage: Some(Scratch::new(path, spec.cols, spec.rows, spec.nodata)?),
             options: *options,
+            batch_bytes: BATCH_BYTES,
         })
+    }
+
+    /// At most `bytes` of cells compressed at once (at least one chunk; never more than
+    /// [`BATCH_BYTES`]): the same file, in less memory.
+    pub(crate) fn with_batch_bytes(mut self, bytes: usize) -> Self {
+        self.batch_bytes = bytes.min(BATCH_BYTES);
+        self
     }
 
     fn stage(&mut self) -> Result<&mut Scratch> {
@@ -502,7 +515,14 @@ impl GridWriter for StagedGridWriter {
             crs: s.crs.clone(),
             nodata: s.nodata,
         };
-        write_tiff(&self.path, stage, &geo, &self.options, Samples::F32)
+        write_tiff(
+            &self.path,
+            stage,
+            &geo,
+            &self.options,
+            Samples::F32,
+            self.batch_bytes,
+        )
     }
 }
 
@@ -521,7 +541,7 @@ pub(crate) fn write_u8_image(
 ) -> Result<u64> {
     let mut stage = Scratch::new(path, cols, rows, geo.nodata)?;
     fill(&mut stage)?;
-    write_tiff(path, stage, geo, r, Samples::U8)
+    write_tiff(path, stage, geo, r, Samples::U8, BATCH_BYTES)
 }
 
 #[cfg(test)]
@@ -585,6 +605,22 @@ mod tests {
                 w.write_cell(3, 4, 1234.5).unwrap();
                 assert_eq!(w.read_cell(3, 4).unwrap(), 1234.5);
                 w.finish().unwrap();
+                // One chunk a batch (a small `merge --mem`): the same file (one case: each
+                // write costs a second in a debug build).
+                if format == RasterFormat::Cog && compress == Compression::Deflate {
+                    let small = dir.path().join("small_batches.tif");
+                    let mut w = StagedGridWriter::create(&small, &spec, &r)
+                        .unwrap()
+                        .with_batch_bytes(1);
+                    for row in 0..spec.rows {
+                        let a = (row * spec.cols) as usize;
+                        w.write_row(row, &values[a..a + spec.cols as usize])
+                            .unwrap();
+                    }
+                    w.write_cell(3, 4, 1234.5).unwrap();
+                    Box::new(w).finish().unwrap();
+                    assert!(std::fs::read(&small).unwrap() == std::fs::read(&path).unwrap());
+                }
                 let (cols, rows, got) = decode(&path);
                 assert_eq!((cols, rows), (700, 530));
                 let mut want = values.clone();

@@ -362,14 +362,25 @@ pub fn create_grid_writer(
     options: &RasterOptions,
     spec: &GridSpec,
 ) -> Result<Box<dyn GridWriter>> {
+    create_grid_writer_within(path, options, spec, super::cog::BATCH_BYTES)
+}
+
+/// [`create_grid_writer`] whose compressed GeoTIFF or COG compresses at most `batch_bytes` of
+/// cells at once (`sweeptin merge --mem`); the same file whatever the batch.
+pub(crate) fn create_grid_writer_within(
+    path: &Path,
+    options: &RasterOptions,
+    spec: &GridSpec,
+    batch_bytes: usize,
+) -> Result<Box<dyn GridWriter>> {
     let r = options.resolve(path, false)?;
     Ok(match r.format {
         RasterFormat::GeoTiff if r.compress == Compression::None => Box::new(
             super::geotiff::GeoTiffWriter::create_with(path, spec, r.bigtiff)?,
         ),
-        RasterFormat::GeoTiff | RasterFormat::Cog => {
-            Box::new(super::cog::StagedGridWriter::create(path, spec, &r)?)
-        }
+        RasterFormat::GeoTiff | RasterFormat::Cog => Box::new(
+            super::cog::StagedGridWriter::create(path, spec, &r)?.with_batch_bytes(batch_bytes),
+        ),
         RasterFormat::Ascii => Box::new(super::ascii::AsciiGridWriter::create(path, spec)?),
     })
 }

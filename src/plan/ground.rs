@@ -139,6 +139,27 @@ impl Plan {
             .union(&grid.tile_blocks(hi.0, hi.1)))
     }
 
+    /// How far around task `i`'s tile a run with `buffer` reads: `buffer`, or with `--ground`
+    /// the ground blocks that meet the tile grown by it, grown by their runs' buffer and one
+    /// cell ([`Plan::classify_blocks`]' area), which may reach files well beyond the buffer.
+    /// [`Plan::check_files`] checks the files within it.
+    ///
+    /// # Errors
+    /// As [`Plan::task`]; the ground grid's.
+    pub(super) fn read_reach(&self, i: usize, buffer: f64) -> Result<f64> {
+        let Some(params) = self.job.ground else {
+            return Ok(buffer);
+        };
+        let b = self.task(i)?.bounds;
+        let owned = self.ground_blocks(&params, grown(b, buffer))?;
+        let read = params.grid()?.world(&owned.expand(BUFFER_CELLS + 1));
+        Ok(buffer
+            .max(b[0] - read[0])
+            .max(b[1] - read[1])
+            .max(read[2] - b[2])
+            .max(read[3] - b[3]))
+    }
+
     /// Classifies the ground blocks that meet `area` (closed) for task `i`, exactly as one run
     /// over the plan's files, within `mem`: those blocks, and their classes (with those of
     /// every point read around them, which are not one run's).

@@ -40,16 +40,7 @@ impl Plan {
         let t = self.task(i)?.clone();
         let mem = crate::limits::fit_address_space(self.job.mem, 0);
         // Every file the classification reads is what the plan saw.
-        let owned = self.ground_blocks(&params, t.bounds)?;
-        let read = params
-            .grid()?
-            .world(&owned.expand(crate::ground::BUFFER_CELLS + 1));
-        let b = t.bounds;
-        let reach = (b[0] - read[0])
-            .max(b[1] - read[1])
-            .max(read[2] - b[2])
-            .max(read[3] - b[3]);
-        self.check_files(i, reach.max(0.0))?;
+        self.check_files(i, self.read_reach(i, 0.0)?)?;
         let (_, mut classified) = self.classify_blocks(dir, i, &params, t.bounds, mem)?;
         // The files that may hold points of the tile (a hair around it: a point's owner is
         // decided by `tile_of`, not by comparing with the tile's bounds).
@@ -140,12 +131,13 @@ pub struct PointsMergeSummary {
 }
 
 /// Merges the tiles of a ground plan whose tasks all finished (`records`, in task order) into
-/// `out`: `.vpc` a virtual point cloud referencing the tiles in the plan's (local) directory by
-/// paths relative to the `.vpc` (keep the directory, or merge into one file), `.laz`/`.las` one
-/// file.
+/// `out`: `.vpc` a virtual point cloud referencing the tiles where they are (in a local plan
+/// directory by paths relative to the `.vpc`: keep the directory, or merge into one file; on S3
+/// by their `s3://` URLs), `.laz`/`.las` one file (decoded and compressed `batch_bytes` of
+/// records at a time: a share of the merge's `--mem`).
 ///
 /// # Errors
-/// [`Error::Options`] for another extension, a VPC of tiles on S3, and when the tiles cannot make one file
+/// [`Error::Options`] for another extension, and when the tiles cannot make one file
 /// (point formats, extra bytes or scales that differ: merge into a `.vpc`);
 /// [`Error::Format`] naming `plan.json` when the tiles do not hold every point of the files
 /// once; the writers' errors.
@@ -154,6 +146,7 @@ pub(super) fn merge_points(
     dir: &PlanDir,
     records: &[TaskRecord],
     out: &Path,
+    batch_bytes: u64,
 ) -> Result<PointsMergeSummary> {
     let ext = out
         .extension()
@@ -191,13 +184,6 @@ pub(super) fn merge_points(
         });
     }
     let bytes = if ext.as_deref() == Some("vpc") {
-        if dir.is_remote() {
-            return Err(Error::Options(format!(
-                "{}: a virtual point cloud of tiles on S3 is not written here (its items would \
-                 name the objects by local paths); merge into one file (-o OUT.laz)",
-                out.display()
-            )));
-        }
         let infos = tiles
             .iter()
             .map(FileInfo::read)
@@ -210,15 +196,14 @@ pub(super) fn merge_points(
             .collect::<Result<Vec<_>>>()?;
         let paths: Vec<PathBuf> = local.iter().map(|l| l.path.clone()).collect();
         let s =
-            crate::output::las::join_points(&paths, out, &mut |_, _| Ok(())).map_err(
-                |e| match e {
+            crate::output::las::join_points_within(&paths, out, &mut |_, _| Ok(()), batch_bytes)
+                .map_err(|e| match e {
                     Error::Options(m) => Error::Options(format!(
                         "{m}: the plan's input files differ, so their points make no one file \
                      unchanged; merge into a virtual point cloud instead (-o OUT.vpc)"
                     )),
                     e => e,
-                },
-            )?;
+                })?;
         s.bytes
     };
     Ok(PointsMergeSummary {

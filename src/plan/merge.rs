@@ -6,12 +6,25 @@ use super::{Plan, TaskRecord};
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use crate::input::raster::RasterReader;
-use crate::output::raster::{RasterFormat, RasterOptions, create_grid_writer};
+use crate::output::raster::{RasterFormat, RasterOptions, create_grid_writer_within};
 use crate::products::hillshade::{self, HillshadeSummary};
 use crate::raster::{Align, GridExtent, GridPlan};
 use std::path::{Path, PathBuf};
 
-pub use super::stitch::{StitchOptions, StitchSummary, stitch};
+pub use super::stitch::{StitchOptions, StitchSummary, merge_contours, stitch};
+
+/// The least `--mem` a merge takes: its fixed buffers (a DEM tile read 2^20 cells at a time, the
+/// contours' spill buffer and line writer, the hillshade's band of rows, the TIN merge's
+/// readers), which hold a few MiB whatever the plan's size. A merge's memory beyond them is
+/// bounded by its budget: a compressed GeoTIFF or COG compresses at most a quarter of it at a
+/// time, a ground plan's single point file decodes at most a quarter of it at a time, and the
+/// contour lines open at the tasks' edges may hold half of it.
+pub const MIN_MERGE_MEM: u64 = 16 << 20;
+
+/// The share of a merge's budget (`--mem`) that one batch of a compressed output takes.
+fn batch_share(mem: u64) -> u64 {
+    mem / 4
+}
 
 /// The records of every task of `plan` under `dir`, each output of the size its task wrote
 /// ([`Plan::check_task_outputs`]).
@@ -50,7 +63,7 @@ pub fn records(plan: &Plan, dir: &super::PlanDir) -> Result<Vec<TaskRecord>> {
 
 /// The output `name` of every task that wrote one, with the task's index, in task order. An
 /// empty task writes none (its tile is nodata, with no lines).
-fn outputs<'a>(records: &'a [TaskRecord], name: &str) -> Result<Vec<(usize, &'a Path)>> {
+pub(super) fn outputs<'a>(records: &'a [TaskRecord], name: &str) -> Result<Vec<(usize, &'a Path)>> {
     records
         .iter()
         .filter(|r| !(r.status == "empty" && r.outputs.is_empty()))
@@ -284,6 +297,9 @@ pub struct MosaicOptions {
     pub output: RasterOptions,
     /// The cells the mosaic has: one run's (the default) or the whole tiles'.
     pub extent: MosaicExtent,
+    /// The merge's memory budget (`--mem`): a compressed GeoTIFF or COG compresses a quarter of
+    /// it at a time (at most [`crate::output::cog::BATCH_BYTES`]).
+    pub mem: u64,
 }
 
 /// Joins the DEM tiles into `out`: a GDAL VRT (`.vrt`) over the tile GeoTIFFs, or one GeoTIFF
@@ -316,7 +332,8 @@ pub fn merge_dem(
         if o.format.is_none() {
             o.format = Some(RasterFormat::GeoTiff);
         }
-        let mut w = create_grid_writer(out, &o, &g)?;
+        let batch = usize::try_from(batch_share(options.mem)).unwrap_or(usize::MAX);
+        let mut w = create_grid_writer_within(out, &o, &g, batch)?;
         for &(i, path) in &tiles {
             let (mut r, at) = open_tile(&g, dir, i, path, whole)?;
             let rows_at_once = (1 << 20) / at.cols.max(1);
@@ -403,45 +420,6 @@ fn write_vrt(
     super::write_atomic(out, x.as_bytes())
 }
 
-/// Stitches the tasks' contours into `out`.
-///
-/// # Errors
-/// As [`stitch`]; unfinished tasks.
-pub fn merge_contours(
-    plan: &Plan,
-    dir: &super::PlanDir,
-    out: &Path,
-    crs: Option<&Crs>,
-) -> Result<StitchSummary> {
-    let recs = records(plan, dir)?;
-    // Copies of parts on S3 (the stitcher reads files), in the temporary directory.
-    let copies = outputs(&recs, "contours")?
-        .into_iter()
-        .map(|(_, p)| dir.local(p))
-        .collect::<Result<Vec<_>>>()?;
-    let parts: Vec<&Path> = copies.iter().map(|c| c.path.as_path()).collect();
-    let levels = match &plan.job.product {
-        super::Product::Dem {
-            contours: Some(l), ..
-        }
-        | super::Product::Contours(l) => *l,
-        _ => {
-            return Err(Error::Internal(
-                "contours merged from a plan without".into(),
-            ));
-        }
-    };
-    let decimals = levels.decimals.unwrap_or_else(|| {
-        let paths: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
-        crate::pipeline::contour_decimals(&paths)
-    });
-    let options = StitchOptions {
-        decimals: Some(decimals),
-        min_length: levels.min_length,
-    };
-    stitch(&parts, out, crs, options, plan.job.tmp_dir.as_deref())
-}
-
 /// The exact totals of the tasks' volumes (the same, bit for bit, as one run over all points).
 ///
 /// # Errors
@@ -479,6 +457,9 @@ pub struct MergeOutputs {
     pub raster: RasterOptions,
     /// The DEM mosaic's cells: one run's grid (the default) or the whole tiles.
     pub extent: MosaicExtent,
+    /// The memory budget, at least [`MIN_MERGE_MEM`] (`--mem`; e.g.
+    /// [`crate::pipeline::default_mem`]): see [`MIN_MERGE_MEM`] for what it bounds.
+    pub mem: u64,
 }
 
 /// A hillshade written by [`merge_plan`].
@@ -583,6 +564,7 @@ fn mosaic_options(
     out: &Path,
     given: &RasterOptions,
     given_extent: MosaicExtent,
+    mem: u64,
 ) -> Result<MosaicOptions> {
     let super::Product::Dem {
         align,
@@ -635,6 +617,7 @@ fn mosaic_options(
         align: *align,
         output,
         extent: given_extent,
+        mem,
     })
 }
 
@@ -649,6 +632,15 @@ fn mosaic_options(
 /// found a point; the readers' and writers' errors.
 pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result<MergeSummary> {
     use super::Product;
+    if o.mem < MIN_MERGE_MEM {
+        return Err(Error::Options(format!(
+            "--mem {}: a merge needs at least {} (its fixed buffers; the output's size does not \
+             matter)",
+            crate::human_bytes(o.mem),
+            crate::human_bytes(MIN_MERGE_MEM)
+        )));
+    }
+    crate::limits::check_address_space(o.mem, 0, "the merge's memory budget (--mem)")?;
     let out = o.out.as_deref();
     let dem = matches!(plan.job.product, Product::Dem { .. });
     if let Some(c) = &o.contours
@@ -699,7 +691,7 @@ pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result
     }
     let mosaic = if dem {
         let out = need(out, "mosaic (OUT.vrt or OUT.tif)")?;
-        let m = mosaic_options(plan, dir, out, &o.raster, o.extent)?;
+        let m = mosaic_options(plan, dir, out, &o.raster, o.extent, o.mem)?;
         if hillshade.is_some() && extension(out).as_deref() == Some("vrt") {
             return Err(Error::Options(
                 "--hillshade shades a GeoTIFF mosaic: merge with -o OUT.tif".into(),
@@ -753,7 +745,7 @@ pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result
             summary.dem = Some(dem);
             summary.warnings.extend(warning);
             if let (Some(c), Some(_)) = (&contours, levels) {
-                summary.contours = Some(merge_contours(plan, dir, c, crs.as_ref())?);
+                summary.contours = Some(merge_contours(plan, dir, c, crs.as_ref(), o.mem)?);
             }
             if let Some(h) = hillshade {
                 let s = hillshade::hillshade(out, &h, &hillshade::HillshadeOptions::default())?;
@@ -765,7 +757,8 @@ pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result
         }
         Product::Contours(_) => {
             let out = need(out, "contours (OUT.geojson or OUT.gpkg)")?;
-            summary.contours = Some(merge_contours(plan, dir, out, plan_crs(plan)?.as_ref())?);
+            let crs = plan_crs(plan)?;
+            summary.contours = Some(merge_contours(plan, dir, out, crs.as_ref(), o.mem)?);
         }
         Product::Volume { .. } => {
             if let Some(o) = out {
@@ -785,7 +778,8 @@ pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result
         }
         Product::Ground => {
             let out = need(out, "points (OUT.vpc, OUT.laz or OUT.las)")?;
-            let p = super::ground_points::merge_points(plan, dir, &recs, out)?;
+            let batch = batch_share(o.mem);
+            let p = super::ground_points::merge_points(plan, dir, &recs, out, batch)?;
             summary.points = Some(p);
         }
     }

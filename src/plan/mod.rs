@@ -618,8 +618,9 @@ impl Plan {
             .collect())
     }
 
-    /// Checks that the files task `i` reads with `buffer` are still what the plan saw (the same
-    /// number of points and extent in their headers).
+    /// Checks that the files within `buffer` of task `i`'s tile are still what the plan saw (the
+    /// same number of points and extent in their headers): a task checks every file it reads,
+    /// with `--ground` those of the ground blocks around it too (`Plan::read_reach`).
     ///
     /// # Errors
     /// [`Error::Format`] naming a file that changed; the header reader's errors.

@@ -7,13 +7,14 @@
 //! degenerate lines and those shorter than the job's minimum length left out after joining, as
 //! one run does.
 
+use super::Plan;
 use crate::crs::Crs;
 use crate::error::{Error, Result};
 use crate::output::lines::{LineWriter, length};
 use std::collections::HashMap;
 use std::io::Write;
 use std::os::unix::fs::FileExt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 type Pt = [f64; 2];
 type Key = (u64, [u64; 4]);
@@ -25,6 +26,13 @@ fn key(level: f64, edge: Option<&[f64]>, p: Option<&Pt>) -> Option<Key> {
     }
     p.map(|p| (level.to_bits(), [p[0].to_bits(), p[1].to_bits(), 0, 0]))
 }
+
+/// The memory an open line holds while the lines are joined: its [`Open`] record, its entry in
+/// the map of starts, its successor and two flags.
+const HELD_PER_LINE: u64 = (std::mem::size_of::<Open>()
+    + 2 * std::mem::size_of::<(Key, usize)>()
+    + std::mem::size_of::<Option<usize>>()
+    + 2) as u64;
 
 /// An open contour line of one task: its ends in memory, its points in the spill file.
 struct Open {
@@ -162,18 +170,20 @@ fn bad(path: &Path, m: impl Into<String>) -> Error {
 
 /// Stitches the contour files `parts` (in task order) into `out` (GeoJSON or GeoPackage, by
 /// its extension). Features are read one at a time; the open lines' points wait in a temporary
-/// file under `tmp` (the system's when `None`), their ends in memory (about 150 bytes a line,
-/// as one run keeps its open lines' ends).
+/// file under `tmp` (the system's when `None`), their ends in memory (about 230 bytes a line
+/// while they are joined, as one run keeps its open lines' ends), at most `mem` bytes of them.
 ///
 /// # Errors
 /// Reading or writing; [`Error::Format`] for a file that is not a contour output;
-/// [`Error::Options`] for an output of another format.
+/// [`Error::Options`] for an output of another format; [`Error::OutOfMemory`] when the open
+/// lines' ends would need more than `mem` (before the output appears).
 pub fn stitch(
     parts: &[&Path],
     out: &Path,
     crs: Option<&Crs>,
     options: StitchOptions,
     tmp: Option<&Path>,
+    mem: u64,
 ) -> Result<StitchSummary> {
     let mut w = LineWriter::create(out, "contours", crs, options.decimals)?;
     let mut s = StitchSummary::default();
@@ -221,6 +231,22 @@ pub fn stitch(
             let end = key(level, f.properties.end_edge.as_deref(), pts.last());
             let len = u32::try_from(pts.len())
                 .map_err(|_| bad(path, "a contour line of more than 2^32 points"))?;
+            let held = (open.len() as u64 + 1).saturating_mul(HELD_PER_LINE);
+            if held > mem {
+                return Err(Error::OutOfMemory {
+                    what: format!(
+                        "the ends of {} contour lines open at the tasks' edges (at {})",
+                        crate::fmt::count(open.len() as u64 + 1),
+                        path.display()
+                    ),
+                    bytes: held,
+                    hint: format!(
+                        "they may take half of the merge's --mem, {} here: give merge a larger \
+                         --mem",
+                        crate::human_bytes(mem)
+                    ),
+                });
+            }
             spill
                 .write_all(bytemuck::cast_slice(&pts))
                 .map_err(|e| Error::io(&tmp_dir, e))?;
@@ -317,4 +343,94 @@ pub fn stitch(
     }
     s.bytes = w.finish()?;
     Ok(s)
+}
+
+/// Stitches the tasks' contours into `out`, the ends of the lines open at the tasks' edges
+/// within half of `mem` (the merge's budget).
+///
+/// # Errors
+/// As [`stitch`]; unfinished tasks.
+pub fn merge_contours(
+    plan: &Plan,
+    dir: &super::PlanDir,
+    out: &Path,
+    crs: Option<&Crs>,
+    mem: u64,
+) -> Result<StitchSummary> {
+    let recs = super::merge::records(plan, dir)?;
+    // Copies of parts on S3 (the stitcher reads files), in the temporary directory.
+    let copies = super::merge::outputs(&recs, "contours")?
+        .into_iter()
+        .map(|(_, p)| dir.local(p))
+        .collect::<Result<Vec<_>>>()?;
+    let parts: Vec<&Path> = copies.iter().map(|c| c.path.as_path()).collect();
+    let levels = match &plan.job.product {
+        super::Product::Dem {
+            contours: Some(l), ..
+        }
+        | super::Product::Contours(l) => *l,
+        _ => {
+            return Err(Error::Internal(
+                "contours merged from a plan without".into(),
+            ));
+        }
+    };
+    let decimals = levels.decimals.unwrap_or_else(|| {
+        let paths: Vec<PathBuf> = plan.files.iter().map(|f| f.path.clone()).collect();
+        crate::pipeline::contour_decimals(&paths)
+    });
+    let options = StitchOptions {
+        decimals: Some(decimals),
+        min_length: levels.min_length,
+    };
+    stitch(
+        &parts,
+        out,
+        crs,
+        options,
+        plan.job.tmp_dir.as_deref(),
+        mem / 2,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two tasks' halves of one line, joined on the edge they share; the open lines' ends are
+    /// held within the budget, refused beyond it before the output appears.
+    #[test]
+    fn open_lines_join_within_the_budget() {
+        let dir = tempfile::tempdir().unwrap();
+        let part = |name: &str, coords: &str, start: &str, end: &str| {
+            let p = dir.path().join(name);
+            let text = format!(
+                r#"{{"type":"FeatureCollection","features":[{{"type":"Feature",
+                "properties":{{"elevation":1.5,"closed":false,"start_edge":{start},
+                "end_edge":{end}}},"geometry":{{"type":"LineString","coordinates":{coords}}}}}]}}"#
+            );
+            std::fs::write(&p, text).unwrap();
+            p
+        };
+        let a = part("a.geojson", "[[0,0],[1,0]]", "null", "[1,-1,1,1]");
+        let b = part("b.geojson", "[[1,0],[2,0]]", "[1,-1,1,1]", "null");
+        let parts = [a.as_path(), b.as_path()];
+        let out = dir.path().join("out.geojson");
+        let opts = StitchOptions::default();
+        let s = stitch(
+            &parts,
+            &out,
+            None,
+            opts,
+            Some(dir.path()),
+            2 * HELD_PER_LINE,
+        )
+        .unwrap();
+        assert_eq!((s.features, s.joins), (1, 1));
+        std::fs::remove_file(&out).unwrap();
+        let e = stitch(&parts, &out, None, opts, Some(dir.path()), HELD_PER_LINE).unwrap_err();
+        assert!(matches!(e, Error::OutOfMemory { .. }), "{e}");
+        assert!(e.to_string().contains("--mem"), "{e}");
+        assert!(!out.exists());
+    }
 }

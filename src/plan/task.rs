@@ -413,7 +413,8 @@ impl Plan {
         } else {
             loop {
                 runs += 1;
-                self.check_files(i, buffer)?;
+                // With --ground, the files of the ground blocks around too.
+                self.check_files(i, self.read_reach(i, buffer)?)?;
                 let config = self.task_config(dir, i, buffer, options, &mut ground)?;
                 let mut fanout = Fanout::new(self.task_sinks(dir, i)?).with_crs(crs.clone());
                 let mut pieces = self.task_pieces(dir, i)?;

@@ -287,13 +287,7 @@ pub fn item(info: &FileInfo, dir: &Path) -> Item {
         kind: "Polygon".into(),
         coordinates: vec![ring],
     });
-    let href = match relative(&info.path, dir) {
-        Some(r) => format!("./{}", r.display()),
-        None => std::path::absolute(&info.path)
-            .unwrap_or_else(|_| info.path.clone())
-            .display()
-            .to_string(),
-    };
+    let href = href(&info.path, dir);
     let id = info
         .path
         .file_name()
@@ -350,6 +344,27 @@ pub fn item(info: &FileInfo, dir: &Path) -> Item {
                 roles: vec!["data".into()],
             },
         )]),
+    }
+}
+
+/// How an item names `path` from a `.vpc` in `dir`, as PDAL wrench and QGIS write and read it:
+/// a remote file (`s3://`, `http(s)://`) by its full URL, whatever the `.vpc`'s place (a
+/// reader resolves no `..` in a URL, and a `.vpc` copied elsewhere still finds it); a local file
+/// by its path relative to a local `dir` (`./tile.laz`, `./../x/tile.laz`), or absolute when the
+/// `.vpc` is remote or on another root.
+fn href(path: &Path, dir: &Path) -> String {
+    if source::is_remote(path) {
+        return path.display().to_string();
+    }
+    let rel = (!source::is_remote(dir))
+        .then(|| relative(path, dir))
+        .flatten();
+    match rel {
+        Some(r) => format!("./{}", r.display()),
+        None => std::path::absolute(path)
+            .unwrap_or_else(|_| path.to_path_buf())
+            .display()
+            .to_string(),
     }
 }
 
@@ -475,6 +490,16 @@ mod tests {
             relative(Path::new("/a/x/c.laz"), Path::new("/a/b")),
             Some(PathBuf::from("../x/c.laz"))
         );
+        // Remote files by their full URL, wherever the `.vpc` is; local ones relative to a
+        // local `.vpc`, absolute from a remote one.
+        let h = |p: &str, d: &str| href(Path::new(p), Path::new(d));
+        assert_eq!(h("s3://bkt/t/a.laz", "/out"), "s3://bkt/t/a.laz");
+        assert_eq!(h("s3://bkt/t/a.laz", "s3://bkt/t"), "s3://bkt/t/a.laz");
+        assert_eq!(h("s3://bkt/t/a.laz", "s3://bkt/u"), "s3://bkt/t/a.laz");
+        assert_eq!(h("https://h/t/a.laz", ""), "https://h/t/a.laz");
+        assert_eq!(h("/a/b/c.laz", "/a/b"), "./c.laz");
+        assert_eq!(h("/a/x/c.laz", "/a/b"), "./../x/c.laz");
+        assert_eq!(h("/a/b/c.laz", "s3://bkt/u"), "/a/b/c.laz");
         assert_eq!(schema(1).len(), 16);
         assert_eq!(schema(8).last().map(|d| d.name.as_str()), Some("Infrared"));
     }

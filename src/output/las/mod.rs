@@ -288,6 +288,7 @@ pub fn rewrite_points_with(
         options,
         None,
         &mut |_, p| edit(p),
+        BATCH_BYTES,
     )
 }
 
@@ -313,6 +314,7 @@ pub fn rewrite_points_in(
         &opts,
         Some(keep),
         &mut |_, p| edit(p),
+        BATCH_BYTES,
     )
 }
 
@@ -330,6 +332,18 @@ pub fn join_points(
     inputs: &[PathBuf],
     output: &Path,
     edit: &mut dyn FnMut(usize, &mut PointEdit<'_>) -> Result<()>,
+) -> Result<RewriteSummary> {
+    join_points_within(inputs, output, edit, BATCH_BYTES)
+}
+
+/// [`join_points`] decoding and compressing about `batch_bytes` of records at a time (at least
+/// one LAZ chunk; never more than [`BATCH_BYTES`]): `sweeptin merge --mem`. The same file
+/// whatever the batch.
+pub(crate) fn join_points_within(
+    inputs: &[PathBuf],
+    output: &Path,
+    edit: &mut dyn FnMut(usize, &mut PointEdit<'_>) -> Result<()>,
+    batch_bytes: u64,
 ) -> Result<RewriteSummary> {
     check_point_output(output, inputs)?;
     let Some(first) = inputs.first() else {
@@ -378,7 +392,14 @@ pub fn join_points(
             )));
         }
     }
-    rewrite(inputs, output, &RewriteOptions::default(), None, edit)
+    rewrite(
+        inputs,
+        output,
+        &RewriteOptions::default(),
+        None,
+        edit,
+        batch_bytes.min(BATCH_BYTES),
+    )
 }
 
 /// The rewrite of `inputs` (one file's, or several alike: [`join_points`]) into `output`.
@@ -388,6 +409,7 @@ fn rewrite(
     options: &RewriteOptions,
     keep: Option<&dyn Fn(u64, u64) -> bool>,
     edit: &mut dyn FnMut(usize, &mut PointEdit<'_>) -> Result<()>,
+    batch_bytes: u64,
 ) -> Result<RewriteSummary> {
     let input = inputs.first().ok_or(Error::NoInput)?.as_path();
     let info = inspect(input)?;
@@ -468,14 +490,14 @@ fn rewrite(
             ));
         }
         let quant = info.quantization();
-        let mut all = spans(&info, (BATCH_BYTES / record_len.max(1) as u64).max(1), None);
+        let mut all = spans(&info, (batch_bytes / record_len.max(1) as u64).max(1), None);
         if let Some(keep) = keep {
             let before: u64 = all.iter().map(|s| s.points).sum();
             all.retain(|s| keep(s.first, s.points));
             tally.skipped += before - all.iter().map(|s| s.points).sum::<u64>();
         }
         let mut decoder = FileDecoder::open(&info)?;
-        for batch in batches(&all, record_len as u64) {
+        for batch in batches(&all, record_len as u64, batch_bytes) {
             let raw = decoder.decode(batch, true, Fields::All, |_, raw| Ok(raw.to_vec()))?;
             records.clear();
             for (span, span_records) in batch.iter().zip(&raw) {
@@ -633,16 +655,16 @@ impl Tally {
     }
 }
 
-/// Consecutive runs of spans holding about [`BATCH_BYTES`] of records (at least one span): a
+/// Consecutive runs of spans holding about `batch_bytes` of records (at least one span): a
 /// batch of LAZ chunks decodes and compresses on every core.
-fn batches(spans: &[Chunk], record_len: u64) -> impl Iterator<Item = &[Chunk]> {
+fn batches(spans: &[Chunk], record_len: u64, batch_bytes: u64) -> impl Iterator<Item = &[Chunk]> {
     let mut rest = spans;
     std::iter::from_fn(move || {
         if rest.is_empty() {
             return None;
         }
         let (mut bytes, mut n) = (0, 0);
-        while n < rest.len() && (n == 0 || bytes < BATCH_BYTES) {
+        while n < rest.len() && (n == 0 || bytes < batch_bytes) {
             bytes += rest[n].points * record_len;
             n += 1;
         }
