@@ -532,41 +532,53 @@ impl Tin {
     }
 
     /// The visibility walk, and the triangle it ended in (none when it ended on a vertex).
+    ///
+    /// Each triangle's corners are read once, and the edge the walk entered by is not tested
+    /// again (the point lies strictly on its inner side): the same draws, the same path and the
+    /// same answer as testing it, with a third fewer predicates on long walks.
     fn walk(&self, start: TriId, p: [f64; 2], rng: &mut u64) -> (PointLocation, Option<TriId>) {
         let mut e0 = start.edge();
+        let mut entry = NONE;
         'walk: loop {
             let r = (xorshift(rng) % 3) as u32;
-            let first = EdgeId(e0.0 - e0.0 % 3 + r);
+            let base = e0.0 - e0.0 % 3;
+            let vs = self.mesh.tri_vertices(TriId(base / 3));
+            let c = vs.map(|v| self.p(v));
             let mut on_edge = None;
-            let mut e = first;
-            for _ in 0..3 {
-                let (a, b) = (self.org(e), self.dst(e));
-                match self.orient_p(self.p(a), self.p(b), p) {
+            for s in 0..3 {
+                let k = ((r + s) % 3) as usize;
+                let e = EdgeId(base + k as u32);
+                if e.0 == entry {
+                    continue;
+                }
+                let (pa, pb) = (c[k], c[(k + 1) % 3]);
+                match self.orient_p(pa, pb, p) {
                     Orientation::Clockwise => match self.twin(e) {
                         Some(t) => {
                             e0 = t;
+                            entry = t.0;
                             continue 'walk;
                         }
                         None => return (PointLocation::Outside(e), Some(e.tri())),
                     },
                     Orientation::Collinear => {
-                        if self.p(a) == p {
-                            return (PointLocation::OnVertex(a), None);
+                        if pa == p {
+                            return (PointLocation::OnVertex(vs[k]), None);
                         }
-                        if self.p(b) == p {
-                            return (PointLocation::OnVertex(b), None);
+                        if pb == p {
+                            return (PointLocation::OnVertex(vs[(k + 1) % 3]), None);
                         }
                         on_edge = Some(e);
                     }
                     Orientation::CounterClockwise => {}
                 }
-                e = e.next();
             }
+            let t = TriId(base / 3);
             let loc = match on_edge {
                 Some(e) => PointLocation::OnEdge(e),
-                None => PointLocation::Inside(e.tri()),
+                None => PointLocation::Inside(t),
             };
-            return (loc, Some(e.tri()));
+            return (loc, Some(t));
         }
     }
 
