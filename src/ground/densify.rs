@@ -243,6 +243,16 @@ impl<'a> Densify<'a> {
         Tag(self.tags[i as usize]).index()
     }
 
+    /// The positions of a triangle's corners (written out: `array::map` was not inlined).
+    #[inline]
+    fn corners(&self, vs: [VertexId; 3]) -> [[f64; 3]; 3] {
+        [
+            self.tin.point(vs[0]),
+            self.tin.point(vs[1]),
+            self.tin.point(vs[2]),
+        ]
+    }
+
     /// The vertex id of point `i`.
     #[inline]
     fn vid(&self, i: u32) -> VertexId {
@@ -414,7 +424,7 @@ impl<'a> Densify<'a> {
     /// the insertion changes `t` and they are all judged again in the next iteration.
     fn judge(&self, t: u32, only: Option<u32>, out: &mut Verdicts, close: &mut Vec<(f64, u32)>) {
         let vs = self.tin.tri_vertices(TriId(t));
-        let corners = vs.map(|v| self.tin.point(v));
+        let corners = self.corners(vs);
         let plane = Plane::new(corners);
         if let Some(i) = only {
             out.evaluations += 1;
@@ -561,7 +571,7 @@ impl<'a> Densify<'a> {
         if self.mnext[i as usize] == UNLINKED || last != mt.0 {
             out.effects.push(Effect::Register(i, mt.0));
         }
-        let corners = self.tin.tri_vertices(mt).map(|v| self.tin.point(v));
+        let corners = self.corners(self.tin.tri_vertices(mt));
         Plane::new(corners).accepts(&corners, m, self.max_distance, self.sin_max)
     }
 

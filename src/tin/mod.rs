@@ -326,6 +326,7 @@ impl Tin {
     }
 
     /// `[x, y, z]` of `v`.
+    #[inline(always)]
     pub fn point(&self, v: VertexId) -> [f64; 3] {
         let [x, y] = self.xy(v);
         [x, y, self.z(v)]
@@ -540,40 +541,40 @@ impl Tin {
         let mut e0 = start.edge();
         let mut entry = NONE;
         'walk: loop {
-            let r = (xorshift(rng) % 3) as u32;
+            let mut k = (xorshift(rng) % 3) as usize;
             let base = e0.0 - e0.0 % 3;
-            let vs = self.mesh.tri_vertices(TriId(base / 3));
-            let c = vs.map(|v| self.p(v));
-            let mut on_edge = None;
-            for s in 0..3 {
-                let k = ((r + s) % 3) as usize;
-                let e = EdgeId(base + k as u32);
-                if e.0 == entry {
-                    continue;
-                }
-                let (pa, pb) = (c[k], c[(k + 1) % 3]);
-                match self.orient_p(pa, pb, p) {
-                    Orientation::Clockwise => match self.twin(e) {
-                        Some(t) => {
-                            e0 = t;
-                            entry = t.0;
-                            continue 'walk;
-                        }
-                        None => return (PointLocation::Outside(e), Some(e.tri())),
-                    },
-                    Orientation::Collinear => {
-                        if pa == p {
-                            return (PointLocation::OnVertex(vs[k]), None);
-                        }
-                        if pb == p {
-                            return (PointLocation::OnVertex(vs[(k + 1) % 3]), None);
-                        }
-                        on_edge = Some(e);
-                    }
-                    Orientation::CounterClockwise => {}
-                }
-            }
             let t = TriId(base / 3);
+            let vs = self.mesh.tri_vertices(t);
+            let c = [self.p(vs[0]), self.p(vs[1]), self.p(vs[2])];
+            let mut on_edge = None;
+            for _ in 0..3 {
+                let k1 = NEXT_CORNER[k];
+                let e = EdgeId(base + k as u32);
+                if e.0 != entry {
+                    let (pa, pb) = (c[k], c[k1]);
+                    match self.orient_p(pa, pb, p) {
+                        Orientation::Clockwise => match self.twin(e) {
+                            Some(f) => {
+                                e0 = f;
+                                entry = f.0;
+                                continue 'walk;
+                            }
+                            None => return (PointLocation::Outside(e), Some(t)),
+                        },
+                        Orientation::Collinear => {
+                            if pa == p {
+                                return (PointLocation::OnVertex(vs[k]), None);
+                            }
+                            if pb == p {
+                                return (PointLocation::OnVertex(vs[k1]), None);
+                            }
+                            on_edge = Some(e);
+                        }
+                        Orientation::CounterClockwise => {}
+                    }
+                }
+                k = k1;
+            }
             let loc = match on_edge {
                 Some(e) => PointLocation::OnEdge(e),
                 None => PointLocation::Inside(t),
@@ -616,6 +617,9 @@ impl Tin {
         g
     }
 }
+
+/// The corner after each corner of a triangle (counter-clockwise).
+const NEXT_CORNER: [usize; 3] = [1, 2, 0];
 
 /// xorshift64*: only to vary which edge a walk tries first (the walk ends in the same place
 /// whatever it draws, but for a point on an edge, which of its two triangles).

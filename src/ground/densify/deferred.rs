@@ -82,7 +82,7 @@ impl Densify<'_> {
     /// low noise more than `low_noise` below it.
     fn judge_once(&self, i: u32, t: u32, low_noise: f64, offset: f64, v: &mut Verdicts) -> Label {
         let vs = self.tin.tri_vertices(TriId(t));
-        let corners = vs.map(|v| self.tin.point(v));
+        let corners = self.corners(vs);
         let plane = Plane::new(corners);
         v.effects.clear();
         let accepted = match self.distance(i, vs, &corners, &plane, v) {
