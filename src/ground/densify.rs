@@ -21,7 +21,7 @@
 use super::ptd::{Label, RunStats};
 use super::{GroundParams, Tag};
 use crate::error::{Error, Result};
-use crate::tin::{PointLocation, Tin, TriId, VertexId, planar};
+use crate::tin::{PointLocation, Tin, TriId, VertexId};
 use rayon::prelude::*;
 
 mod deferred;
@@ -92,8 +92,8 @@ pub(super) struct Densify<'a> {
     /// Vertex ids below this are the virtual ring's.
     virtuals: usize,
     /// Per point: the triangle whose bucket holds it, the next point of that bucket, the
-    /// triangle its mirror point was last found in (kept as the start of the next walk to the
-    /// same mirror point) and the next registrant there ([`UNLINKED`]: not registered).
+    /// triangle its mirror point was last found in (kept as the start of its next mirror walk)
+    /// and the next registrant there ([`UNLINKED`]: not registered).
     tri: Vec<u32>,
     next: Vec<u32>,
     mtri: Vec<u32>,
@@ -109,6 +109,8 @@ pub(super) struct Densify<'a> {
     reeval: Vec<u32>,
     touched: Vec<TriId>,
     gathered: Vec<u32>,
+    /// One bit a point: puts a long gathered list in point order without sorting it.
+    marks: Vec<u64>,
     /// The triangle each gathered candidate was found in.
     found: Vec<u32>,
     accepted: Vec<Accepted>,
@@ -150,6 +152,7 @@ impl<'a> Densify<'a> {
             reeval: Vec::new(),
             touched: Vec::new(),
             gathered: Vec::new(),
+            marks: vec![0; n.div_ceil(64)],
             found: Vec::new(),
             accepted: Vec::new(),
             chosen: Vec::new(),
@@ -189,7 +192,7 @@ impl<'a> Densify<'a> {
             + self.found.capacity();
         self.tin.heap_bytes()
             + u * (per_point + self.head.capacity() + self.mhead.capacity())
-            + 8 * self.dirty.capacity()
+            + 8 * (self.dirty.capacity() + self.marks.capacity())
             + self.touched.capacity() * u
             + self.accepted.capacity() * std::mem::size_of::<Accepted>()
             + self.chosen.capacity() * std::mem::size_of::<(u64, u32)>()
@@ -238,6 +241,16 @@ impl<'a> Densify<'a> {
     #[inline]
     fn id(&self, i: u32) -> u64 {
         Tag(self.tags[i as usize]).index()
+    }
+
+    /// The positions of a triangle's corners (written out: `array::map` was not inlined).
+    #[inline]
+    fn corners(&self, vs: [VertexId; 3]) -> [[f64; 3]; 3] {
+        [
+            self.tin.point(vs[0]),
+            self.tin.point(vs[1]),
+            self.tin.point(vs[2]),
+        ]
     }
 
     /// The vertex id of point `i`.
@@ -411,12 +424,12 @@ impl<'a> Densify<'a> {
     /// the insertion changes `t` and they are all judged again in the next iteration.
     fn judge(&self, t: u32, only: Option<u32>, out: &mut Verdicts, close: &mut Vec<(f64, u32)>) {
         let vs = self.tin.tri_vertices(TriId(t));
-        let corners = vs.map(|v| self.tin.point(v));
+        let corners = self.corners(vs);
         let plane = Plane::new(corners);
         if let Some(i) = only {
             out.evaluations += 1;
             if let Some(d) = self.distance(i, vs, &corners, &plane, out)
-                && self.accepts(i, t, vs, &corners, d, true, out)
+                && self.accepts(i, t, vs, &corners, d, out)
             {
                 out.accepted.push((t, d, self.id(i), i));
             }
@@ -451,7 +464,7 @@ impl<'a> Densify<'a> {
                 close.len() - 1
             };
             let (d, i) = close.swap_remove(k);
-            if self.accepts(i, t, vs, &corners, d, false, out) {
+            if self.accepts(i, t, vs, &corners, d, out) {
                 out.accepted.push((t, d, id(i), i));
                 break;
             }
@@ -496,10 +509,7 @@ impl<'a> Densify<'a> {
     }
 
     /// Is candidate `i` of triangle `t`, at distance `d` from its plane, accepted: its angles,
-    /// or else its mirror point's test? `same_mirror`: the triangle has not changed since `i`'s
-    /// mirror point was last located (so the mirror point is the same, and its last triangle
-    /// is the walk's start).
-    #[allow(clippy::too_many_arguments)]
+    /// or else its mirror point's test?
     fn accepts(
         &self,
         i: u32,
@@ -507,7 +517,6 @@ impl<'a> Densify<'a> {
         vs: [VertexId; 3],
         corners: &[[f64; 3]; 3],
         d: f64,
-        same_mirror: bool,
         out: &mut Verdicts,
     ) -> bool {
         let p = self.tin.point(self.vid(i));
@@ -529,7 +538,7 @@ impl<'a> Densify<'a> {
             })
             .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         match near {
-            Some((_, _, k)) => self.mirror_accepts(i, t, corners[k], p, same_mirror, out),
+            Some((_, _, k)) => self.mirror_accepts(i, t, corners[k], p, out),
             None => {
                 self.unlink(i, out);
                 false
@@ -538,20 +547,14 @@ impl<'a> Densify<'a> {
     }
 
     /// The mirror test of candidate `i` (in triangle `t`) through corner `c`; registers `i`
-    /// with the triangle under the mirror point. The walk starts from the mirror point's last
-    /// triangle when it is the same point (`same`), else from `t`.
-    fn mirror_accepts(
-        &self,
-        i: u32,
-        t: u32,
-        c: [f64; 3],
-        p: [f64; 3],
-        same: bool,
-        out: &mut Verdicts,
-    ) -> bool {
+    /// with the triangle under the mirror point. The walk starts from the triangle slot the
+    /// mirror point was last found in (insertions never free a slot, and change a triangle only
+    /// into triangles near it: the same mirror point is there or a few steps away), else from
+    /// `t`; the triangle found does not depend on the start.
+    fn mirror_accepts(&self, i: u32, t: u32, c: [f64; 3], p: [f64; 3], out: &mut Verdicts) -> bool {
         let m = [2.0 * c[0] - p[0], 2.0 * c[1] - p[1], 2.0 * c[2] - p[2]];
         let last = self.mtri[i as usize];
-        let from = if same && last != NONE && self.tin.is_live(TriId(last)) {
+        let from = if last != NONE && self.tin.is_live(TriId(last)) {
             last
         } else {
             t
@@ -568,7 +571,7 @@ impl<'a> Densify<'a> {
         if self.mnext[i as usize] == UNLINKED || last != mt.0 {
             out.effects.push(Effect::Register(i, mt.0));
         }
-        let corners = self.tin.tri_vertices(mt).map(|v| self.tin.point(v));
+        let corners = self.corners(self.tin.tri_vertices(mt));
         Plane::new(corners).accepts(&corners, m, self.max_distance, self.sin_max)
     }
 
@@ -621,7 +624,7 @@ impl<'a> Densify<'a> {
         }
         // In memory order (spatial, see `ptd::spatial_order`), walks from the slot each was in
         // (near), pieces on every core: the triangle found does not depend on the walk's path.
-        gathered.par_sort_unstable();
+        in_point_order(&mut gathered, &mut self.marks);
         let mut found = std::mem::take(&mut self.found);
         let tri = &self.tri;
         self.locate_all(&gathered, |&i, _| (i, tri[i as usize]), &mut found);
@@ -683,25 +686,6 @@ impl<'a> Densify<'a> {
             p[1]
         ))
     }
-
-    /// Step 5: a candidate left within `offset` (vertically) of the final ground TIN is ground,
-    /// one more than `low_noise` below it is low noise.
-    fn finish(&mut self, low_noise: f64, offset: f64) {
-        for i in 0..self.tags.len() {
-            let t = self.tri[i];
-            if t == NONE || self.labels[i] != Label::Other {
-                continue;
-            }
-            let p = self.tin.point(self.vid(i as u32));
-            let [a, b, c] = self.tin.tri_vertices(TriId(t)).map(|v| self.tin.point(v));
-            let z = planar(a, b, c, [p[0], p[1]]);
-            if (p[2] - z).abs() <= offset {
-                self.labels[i] = Label::Ground;
-            } else if p[2] < z - low_noise {
-                self.labels[i] = Label::LowNoise;
-            }
-        }
-    }
 }
 
 /// The triangle whose bucket holds a point found at `loc`: the one containing it; on an edge,
@@ -716,6 +700,27 @@ fn holder(tin: &Tin, loc: PointLocation) -> Option<TriId> {
         }),
         PointLocation::OnVertex(v) => tin.out_edge(v).map(|e| e.tri()),
         PointLocation::Outside(_) => None,
+    }
+}
+
+/// Puts `list` (distinct points) in increasing order: a long list by marking its points in
+/// `marks` (one bit a point, all clear before and after) and reading the marks back, a short one
+/// by sorting it.
+fn in_point_order(list: &mut Vec<u32>, marks: &mut [u64]) {
+    if list.len() < marks.len() {
+        list.sort_unstable();
+        return;
+    }
+    for &i in list.iter() {
+        marks[i as usize / 64] |= 1 << (i % 64);
+    }
+    list.clear();
+    for (w, word) in marks.iter_mut().enumerate() {
+        let mut bits = std::mem::take(word);
+        while bits != 0 {
+            list.push(64 * w as u32 + bits.trailing_zeros());
+            bits &= bits - 1;
+        }
     }
 }
 

@@ -83,12 +83,13 @@ pub(crate) fn classify_run(
     labels.clear();
     labels.resize(n, Label::Other);
     let mut stats = RunStats::default();
-    // Eligible points by cell, each cell's points from the lowest (ties: lower index).
-    let mut order: Vec<(i64, i64, u32)> = (0..n)
+    // Eligible points by cell, each cell's points from the lowest (ties: lower index): sorted
+    // by (cell, height) packed in two integers, the input index read only on a tie.
+    let mut order: Vec<(u64, i64, u32)> = (0..n)
         .filter(|&i| Tag(tags[i]).eligible())
         .map(|i| {
             let (cx, cy) = grid.block_of(pts[i][0], pts[i][1]);
-            (cy, cx, i as u32)
+            (cell_key(cx, cy), height_key(pts[i][2]), i as u32)
         })
         .collect();
     if order.is_empty() {
@@ -98,12 +99,12 @@ pub(crate) fn classify_run(
     order.par_sort_unstable_by(|a, b| {
         (a.0, a.1)
             .cmp(&(b.0, b.1))
-            .then(pts[a.2 as usize][2].total_cmp(&pts[b.2 as usize][2]))
-            .then(id(a.2).cmp(&id(b.2)))
+            .then_with(|| id(a.2).cmp(&id(b.2)))
     });
     // Cells: (first, end) into `order`, and the cursor of the current seed.
     let mut cells: Vec<(i64, i64, usize, usize)> = Vec::new();
-    for (k, &(cy, cx, _)) in order.iter().enumerate() {
+    for (k, &(key, _, _)) in order.iter().enumerate() {
+        let (cx, cy) = cell_of_key(key);
         match cells.last_mut() {
             Some(c) if c.0 == cx && c.1 == cy => c.3 = k + 1,
             _ => cells.push((cx, cy, k, k + 1)),
@@ -174,7 +175,7 @@ pub(crate) fn classify_run(
     }
     // The setup's peak: the points, their order and the TIN's copy of them.
     stats.bytes = (std::mem::size_of_val(&pts[..])
-        + order.capacity() * std::mem::size_of::<(i64, i64, u32)>()
+        + order.capacity() * std::mem::size_of::<(u64, i64, u32)>()
         + std::mem::size_of_val(tags)
         + labels.capacity()
         + tin.heap_bytes()) as u64;
@@ -276,6 +277,24 @@ pub(crate) fn spatial_order(pts: &mut Vec<[f64; 3]>, tags: &mut Vec<u64>, rect: 
     *tags = keys.iter().map(|&(_, i)| tags[i as usize]).collect();
 }
 
+/// A seed cell (coordinates within `i32`, as the block keys) as a key that sorts as `(cy, cx)`.
+fn cell_key(cx: i64, cy: i64) -> u64 {
+    let bits = |c: i64| u64::from((c as i32 as u32) ^ 0x8000_0000);
+    (bits(cy) << 32) | bits(cx)
+}
+
+/// The cell `(cx, cy)` of a [`cell_key`].
+fn cell_of_key(key: u64) -> (i64, i64) {
+    let back = |b: u64| i64::from((b as u32 ^ 0x8000_0000) as i32);
+    (back(key & 0xFFFF_FFFF), back(key >> 32))
+}
+
+/// A height as an integer that sorts as [`f64::total_cmp`] does.
+fn height_key(z: f64) -> i64 {
+    let b = z.to_bits() as i64;
+    b ^ (((b >> 63) as u64) >> 1) as i64
+}
+
 /// The median of `v` (not empty): the mean of the two middle values for an even count.
 fn median(v: &mut [f64]) -> f64 {
     v.sort_unstable_by(f64::total_cmp);
@@ -345,4 +364,40 @@ pub(crate) fn check_labels(labels: &[Label], n: usize) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{cell_key, cell_of_key, height_key};
+
+    #[test]
+    fn the_sort_keys_order_as_the_cells_and_heights_they_pack() {
+        let cells = [
+            (-5i64, -7i64),
+            (-5, 3),
+            (0, 0),
+            (4, -7),
+            (-1, 2),
+            (1 << 30, -(1 << 30)),
+        ];
+        for &(ax, ay) in &cells {
+            assert_eq!(cell_of_key(cell_key(ax, ay)), (ax, ay));
+            for &(bx, by) in &cells {
+                assert_eq!(
+                    cell_key(ax, ay).cmp(&cell_key(bx, by)),
+                    (ay, ax).cmp(&(by, bx))
+                );
+            }
+        }
+        let zs = [-1e9, -2.5, -0.0, 0.0, 1e-300, 3.25, 247.125, f64::MAX];
+        for &a in &zs {
+            for &b in &zs {
+                assert_eq!(
+                    height_key(a).cmp(&height_key(b)),
+                    a.total_cmp(&b),
+                    "{a} {b}"
+                );
+            }
+        }
+    }
 }

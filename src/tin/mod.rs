@@ -326,6 +326,7 @@ impl Tin {
     }
 
     /// `[x, y, z]` of `v`.
+    #[inline(always)]
     pub fn point(&self, v: VertexId) -> [f64; 3] {
         let [x, y] = self.xy(v);
         [x, y, self.z(v)]
@@ -532,41 +533,53 @@ impl Tin {
     }
 
     /// The visibility walk, and the triangle it ended in (none when it ended on a vertex).
+    ///
+    /// Each triangle's corners are read once, and the edge the walk entered by is not tested
+    /// again (the point lies strictly on its inner side): the same draws, the same path and the
+    /// same answer as testing it, with a third fewer predicates on long walks.
     fn walk(&self, start: TriId, p: [f64; 2], rng: &mut u64) -> (PointLocation, Option<TriId>) {
         let mut e0 = start.edge();
+        let mut entry = NONE;
         'walk: loop {
-            let r = (xorshift(rng) % 3) as u32;
-            let first = EdgeId(e0.0 - e0.0 % 3 + r);
+            let mut k = (xorshift(rng) % 3) as usize;
+            let base = e0.0 - e0.0 % 3;
+            let t = TriId(base / 3);
+            let vs = self.mesh.tri_vertices(t);
+            let c = [self.p(vs[0]), self.p(vs[1]), self.p(vs[2])];
             let mut on_edge = None;
-            let mut e = first;
             for _ in 0..3 {
-                let (a, b) = (self.org(e), self.dst(e));
-                match self.orient_p(self.p(a), self.p(b), p) {
-                    Orientation::Clockwise => match self.twin(e) {
-                        Some(t) => {
-                            e0 = t;
-                            continue 'walk;
+                let k1 = NEXT_CORNER[k];
+                let e = EdgeId(base + k as u32);
+                if e.0 != entry {
+                    let (pa, pb) = (c[k], c[k1]);
+                    match self.orient_p(pa, pb, p) {
+                        Orientation::Clockwise => match self.twin(e) {
+                            Some(f) => {
+                                e0 = f;
+                                entry = f.0;
+                                continue 'walk;
+                            }
+                            None => return (PointLocation::Outside(e), Some(t)),
+                        },
+                        Orientation::Collinear => {
+                            if pa == p {
+                                return (PointLocation::OnVertex(vs[k]), None);
+                            }
+                            if pb == p {
+                                return (PointLocation::OnVertex(vs[k1]), None);
+                            }
+                            on_edge = Some(e);
                         }
-                        None => return (PointLocation::Outside(e), Some(e.tri())),
-                    },
-                    Orientation::Collinear => {
-                        if self.p(a) == p {
-                            return (PointLocation::OnVertex(a), None);
-                        }
-                        if self.p(b) == p {
-                            return (PointLocation::OnVertex(b), None);
-                        }
-                        on_edge = Some(e);
+                        Orientation::CounterClockwise => {}
                     }
-                    Orientation::CounterClockwise => {}
                 }
-                e = e.next();
+                k = k1;
             }
             let loc = match on_edge {
                 Some(e) => PointLocation::OnEdge(e),
-                None => PointLocation::Inside(e.tri()),
+                None => PointLocation::Inside(t),
             };
-            return (loc, Some(e.tri()));
+            return (loc, Some(t));
         }
     }
 
@@ -604,6 +617,9 @@ impl Tin {
         g
     }
 }
+
+/// The corner after each corner of a triangle (counter-clockwise).
+const NEXT_CORNER: [usize; 3] = [1, 2, 0];
 
 /// xorshift64*: only to vary which edge a walk tries first (the walk ends in the same place
 /// whatever it draws, but for a point on an edge, which of its two triangles).

@@ -1,13 +1,44 @@
-//! The candidates that do not densify (`--densify-cell`): each located in the final TIN and
-//! judged once, as an iteration would judge it.
+//! Step 5, against the final TIN: the candidates left over, and those that do not densify
+//! (`--densify-cell`), each located in the final TIN and judged once, as an iteration would
+//! judge it.
 
 use super::{Densify, Effect, NONE, Plane, Verdicts};
 use crate::error::Result;
 use crate::ground::ptd::Label;
-use crate::tin::{TriId, planar};
+use crate::tin::{TriId, VertexId, planar};
 use rayon::prelude::*;
 
+/// Points a task of step 5 labels (pieces on every core).
+const FINISH_PIECE: usize = 8192;
+
 impl Densify<'_> {
+    /// Step 5: a candidate left within `offset` (vertically) of the final ground TIN is ground,
+    /// one more than `low_noise` below it is low noise; each point alone, on every core.
+    pub(super) fn finish(&mut self, low_noise: f64, offset: f64) {
+        let (tin, tri, virtuals) = (&self.tin, &self.tri, self.virtuals);
+        let labels = &mut *self.labels;
+        labels
+            .par_chunks_mut(FINISH_PIECE)
+            .enumerate()
+            .for_each(|(k, piece)| {
+                for (j, label) in piece.iter_mut().enumerate() {
+                    let i = k * FINISH_PIECE + j;
+                    let t = tri[i];
+                    if t == NONE || *label != Label::Other {
+                        continue;
+                    }
+                    let p = tin.point(VertexId((virtuals + i) as u32));
+                    let [a, b, c] = tin.tri_vertices(TriId(t)).map(|v| tin.point(v));
+                    let z = planar(a, b, c, [p[0], p[1]]);
+                    if (p[2] - z).abs() <= offset {
+                        *label = Label::Ground;
+                    } else if p[2] < z - low_noise {
+                        *label = Label::LowNoise;
+                    }
+                }
+            });
+    }
+
     /// The triangles of the final TIN that hold the deferred candidates (a walk from the
     /// triangle of each one's cell's lowest point, or of the point before it), on every core.
     fn locate_deferred(&self, deferred: &[(u32, u32)]) -> Result<Vec<u32>> {
@@ -51,11 +82,11 @@ impl Densify<'_> {
     /// low noise more than `low_noise` below it.
     fn judge_once(&self, i: u32, t: u32, low_noise: f64, offset: f64, v: &mut Verdicts) -> Label {
         let vs = self.tin.tri_vertices(TriId(t));
-        let corners = vs.map(|v| self.tin.point(v));
+        let corners = self.corners(vs);
         let plane = Plane::new(corners);
         v.effects.clear();
         let accepted = match self.distance(i, vs, &corners, &plane, v) {
-            Some(d) => self.accepts(i, t, vs, &corners, d, false, v),
+            Some(d) => self.accepts(i, t, vs, &corners, d, v),
             None => v.effects.iter().any(|e| matches!(e, Effect::Ground(_))),
         };
         if accepted {
