@@ -161,6 +161,8 @@ impl Spill {
             // the run goes on as it would have without the spill.
             for t in tables.iter_mut() {
                 let _ = t.spill(&p.dir);
+                // The copy brought every page in: they would count in the base below.
+                t.release();
             }
             self.spilled = true;
             self.base = crate::limits::file_rss().unwrap_or(0);

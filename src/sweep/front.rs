@@ -29,6 +29,18 @@ const NIL: NodeId = u32::MAX;
 /// Nodes walked by a rebuild of the x index between drops of a spilled node table's pages.
 const RELEASE_EVERY: usize = 1 << 16;
 
+/// Empties `v` and fills it with `n` copies of `value`, dropping its pages every million
+/// elements when it is spilled: a line's front indexes millions of buckets, and one `resize`
+/// brought every page of the x index's tables into memory at once (200 MB for 10 M points).
+fn refill<T: bytemuck::Pod>(v: &mut SpillVec<T>, n: usize, value: T) {
+    const STEP: usize = 1 << 20;
+    v.resize(0, value);
+    while v.len() < n {
+        v.resize((v.len() + STEP).min(n), value);
+        v.release();
+    }
+}
+
 /// One vertex of the front and the segment to its right.
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
@@ -292,8 +304,7 @@ impl Front {
     /// Rebuilds the x index with `count` buckets: the start nodes, and the tree of groups with
     /// their first and last nodes and exact minima.
     fn rebuild_buckets(&mut self, count: usize) {
-        self.buckets.resize(0, NIL);
-        self.buckets.resize(count, NIL);
+        refill(&mut self.buckets, count, NIL);
         self.nb = count as f64;
         self.levels = vec![0];
         let mut m = count;
@@ -306,12 +317,9 @@ impl Front {
             m = m.div_ceil(FAN);
         }
         let total = self.levels[self.levels.len() - 1];
-        self.lead.resize(0, NIL);
-        self.lead.resize(total, NIL);
-        self.last.resize(0, NIL);
-        self.last.resize(total, NIL);
-        self.low.resize(0, f64::INFINITY);
-        self.low.resize(total, f64::INFINITY);
+        refill(&mut self.lead, total, NIL);
+        refill(&mut self.last, total, NIL);
+        refill(&mut self.low, total, f64::INFINITY);
         let mut n = self.next(self.head);
         let mut walked = 0usize;
         while n != self.tail {
@@ -328,13 +336,15 @@ impl Front {
             // A front of millions of nodes (a line of points) spilled to a temporary file: the
             // walk would bring the whole node table into memory at once.
             if walked.is_multiple_of(RELEASE_EVERY) {
-                self.nodes.release();
-                self.buckets.release();
+                self.release_index();
             }
         }
         for j in 1..self.levels.len() - 1 {
             let (below, here, end) = (self.levels[j - 1], self.levels[j], self.levels[j + 1]);
             for g in here..end {
+                if g.is_multiple_of(RELEASE_EVERY) {
+                    self.release_index();
+                }
                 let first = below + (g - here) * FAN;
                 for c in first..(first + FAN).min(here) {
                     if self.lead[c] != NIL {
@@ -347,6 +357,16 @@ impl Front {
                 }
             }
         }
+    }
+
+    /// Drops the resident pages of the node table and the x index when they are spilled
+    /// (a no-op on the heap).
+    fn release_index(&mut self) {
+        self.nodes.release();
+        self.buckets.release();
+        self.lead.release();
+        self.last.release();
+        self.low.release();
     }
 
     /// The node `n` with `n.x <= x < next(n).x`: the left end of the segment under `x`.
