@@ -204,8 +204,9 @@ pub(crate) struct Finalizer {
     blocked: SpillVec<u8>,
     /// Where the tables go when they outgrow their share of `--mem`.
     spill: Spill,
-    /// Finality checks made (for the looks at the spilled tables).
-    checks: u64,
+    /// Pages the finality checks may have touched since the last look at the spilled tables,
+    /// about: one a check and one a front node scanned ([`tables::LOOK_EVERY_TOUCHES`]).
+    touches: u64,
 }
 
 impl Finalizer {
@@ -258,7 +259,7 @@ impl Finalizer {
             due: SpillVec::default(),
             blocked: SpillVec::default(),
             spill: Spill::new(cfg.spill.clone()),
-            checks: 0,
+            touches: 0,
         }
     }
 
@@ -351,6 +352,11 @@ impl Finalizer {
     /// was waiting for before.
     #[inline(always)]
     fn changed(&mut self, t: u32) {
+        if self.ending {
+            // Every triangle left is emitted in slot order: a queue entry would never be read
+            // (the closing of a ring's hull changes millions of slots).
+            return;
+        }
         self.schedule(t, self.sweep_bucket.saturating_add(FIRST_CHECK));
         self.blocked[t as usize] = 0;
     }
@@ -361,6 +367,9 @@ impl Finalizer {
         self.live_triangles += 1;
         if self.live_triangles > self.stats.peak_live_triangles {
             self.stats.peak_live_triangles = self.live_triangles;
+        }
+        if self.ending {
+            return;
         }
         self.schedule(t, self.sweep_bucket.saturating_add(FIRST_CHECK));
         self.blocked[t as usize] = 0;
@@ -462,6 +471,17 @@ impl Hooks for Finalizer {
     fn segment_pending(&mut self, v: VertexId, lo: u32, hi: u32, a: [f64; 2], b: [f64; 2]) {
         self.vertices.refs[v.0 as usize] += 1;
         self.pending.add(lo, hi, a, b);
+    }
+
+    fn release_spilled(&mut self) {
+        self.due.release();
+        self.blocked.release();
+        self.far.table().release();
+        let vt = &mut self.vertices;
+        vt.z.release();
+        vt.index.release();
+        vt.out.release();
+        vt.refs.release();
     }
 
     fn segment_done(&mut self, v: VertexId, lo: u32, hi: u32) {
@@ -619,8 +639,8 @@ impl StreamingSweep {
         mut drain: impl FnMut(&mut Vec<Event>) -> bool,
     ) -> bool {
         let _ = self.look_at_tables();
-        self.sweep.close_hull();
         self.fin().ending = true;
+        self.sweep.close_hull();
         let slots = self.sweep.mesh().triangle_count() as u32;
         for t in 0..slots {
             let mesh = self.sweep.mesh();
@@ -636,7 +656,7 @@ impl StreamingSweep {
                 }
             }
             // This pass touches every held triangle: keep dropping the spilled pages.
-            if t % tables::CHECK_EVERY as u32 == 0 {
+            if t.is_multiple_of(tables::LOOK_EVERY_EMITTED) && self.fin().spill.spilled() {
                 let _ = self.look_at_tables();
             }
         }
@@ -713,14 +733,16 @@ impl StreamingSweep {
                 if self.sweep.hooks().due[t as usize] == bucket
                     && self.sweep.mesh().is_live(TriId(t))
                 {
+                    // Checks of held triangles (a line's fan, a ring: millions) touch their
+                    // spilled tables, the far queue's heap and the front's nodes all over: drop
+                    // the pages as the checks go, not only between points (a full disk is
+                    // reported by the next look between points).
+                    let scans = self.fin().stats.front_scans;
                     self.check_final(t, y, ks);
-                    // Checks of held triangles (a line's fan: millions) touch their spilled
-                    // tables and the far queue's heap all over: drop the pages as the checks
-                    // go, not only between points (a full disk is reported by the next look
-                    // between points).
                     let fin = self.fin();
-                    fin.checks += 1;
-                    if fin.checks.is_multiple_of(tables::LOOK_EVERY_CHECKS) && fin.spill.spilled() {
+                    fin.touches += 1 + fin.stats.front_scans - scans;
+                    if fin.touches >= tables::LOOK_EVERY_TOUCHES && fin.spill.spilled() {
+                        fin.touches = 0;
                         let _ = self.look_at_tables();
                     }
                 }

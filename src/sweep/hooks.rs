@@ -48,6 +48,10 @@ pub(crate) mod sealed {
 
         /// The segment from constraint vertex `lo` (swept as `v`) to `hi` is in.
         fn segment_done(&mut self, v: VertexId, lo: u32, hi: u32);
+
+        /// Drops the resident pages of the mode's own tables that live in temporary files
+        /// (called with [`crate::sweep::Sweep::release_spilled`]).
+        fn release_spilled(&mut self) {}
     }
 }
 

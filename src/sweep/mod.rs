@@ -382,6 +382,7 @@ impl<H: Mode> Sweep<H> {
         self.pts.release();
         self.mesh.origin.release();
         self.mesh.link.release();
+        self.hooks.release_spilled();
     }
 
     /// Sets the breaklines of a sweep whose points arrive one by one and name their constraint
