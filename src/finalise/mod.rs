@@ -207,6 +207,8 @@ pub(crate) struct Finalizer {
     /// Pages the finality checks may have touched since the last look at the spilled tables,
     /// about: one a check and one a front node scanned ([`tables::LOOK_EVERY_TOUCHES`]).
     touches: u64,
+    /// Triangles made since the last look at the resident memory ([`tables::LOOK_EVERY_CREATED`]).
+    created_since_look: u32,
 }
 
 impl Finalizer {
@@ -260,6 +262,7 @@ impl Finalizer {
             blocked: SpillVec::default(),
             spill: Spill::new(cfg.spill.clone()),
             touches: 0,
+            created_since_look: 0,
         }
     }
 
@@ -473,7 +476,18 @@ impl Hooks for Finalizer {
         self.pending.add(lo, hi, a, b);
     }
 
+    #[inline(always)]
+    fn spill_due(&mut self) -> bool {
+        self.created_since_look += 1;
+        if self.created_since_look < tables::LOOK_EVERY_CREATED {
+            return false;
+        }
+        self.created_since_look = 0;
+        self.spill.grown()
+    }
+
     fn release_spilled(&mut self) {
+        self.spill.released();
         self.due.release();
         self.blocked.release();
         self.far.table().release();

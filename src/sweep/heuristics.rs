@@ -9,9 +9,6 @@ use super::front::NodeId;
 use super::{Mode, Sweep};
 use crate::geom::predicates::is_artificial;
 
-/// Triangles [`Sweep::close_hull`] fills between drops of the spilled tables' pages (each
-/// fill is legalised: on a ring's upper arc they touch rows all over).
-const FILLS_BETWEEN_RELEASES: u64 = 256;
 
 /// Cosine of the largest hole angle that is filled at once. The paper uses π/2; about 114° cost
 /// 3–5% fewer instructions on uniform and clustered points and the same on lidar-like rows
@@ -185,14 +182,12 @@ impl<H: Mode> Sweep<H> {
         let (head, tail) = (self.front.head, self.front.tail);
         let mut n = self.front.next(head);
         let mut walked = 0usize;
-        let mut next_release = self.stats.hull_fills + FILLS_BETWEEN_RELEASES;
         while n != tail {
             walked += 1;
             // A front of millions of nodes (points on a line) spilled to temporary files: the
-            // walk would bring the whole front and its points into memory at once, and the
-            // fills of a ring's upper arc touch rows all over.
-            if walked.is_multiple_of(1 << 16) || self.stats.hull_fills >= next_release {
-                next_release = self.stats.hull_fills + FILLS_BETWEEN_RELEASES;
+            // walk would bring the whole front and its points into memory at once (the fills
+            // look at the resident memory themselves, `Hooks::spill_due`).
+            if walked.is_multiple_of(1 << 16) {
                 self.release_spilled();
             }
             let (p, q) = (self.front.prev(n), self.front.next(n));

@@ -52,6 +52,13 @@ pub(crate) mod sealed {
         /// Drops the resident pages of the mode's own tables that live in temporary files
         /// (called with [`crate::sweep::Sweep::release_spilled`]).
         fn release_spilled(&mut self) {}
+
+        /// Called at every new triangle: should the spilled tables' pages be dropped now
+        /// (the mode measures its resident memory every few hundred)?
+        #[inline(always)]
+        fn spill_due(&mut self) -> bool {
+            false
+        }
     }
 }
 

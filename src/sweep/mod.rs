@@ -582,6 +582,9 @@ impl<H: Mode> Sweep<H> {
             None => self.mesh.add_triangle(a, b, c),
         };
         self.created(e);
+        if self.hooks.spill_due() {
+            self.release_spilled();
+        }
         e
     }
 
