@@ -452,10 +452,10 @@ impl<T: Pod> SpillVec<T> {
 
 /// Maps the first `bytes` of a [`SpillVec`]'s file (at least that long), for random access.
 ///
-/// `MADV_RANDOM`: the tables are touched all over (a heap, rows of held triangles), and without
-/// it a fault brings in the whole large folio around the page (ext4 caches files in folios of
-/// up to 2 MiB since Linux 6.16): 1,024 checks of a line's held triangles mapped 80 MiB of the
-/// far queue's file between two releases. With it the faulted folios are single pages.
+/// `MADV_RANDOM`: the tables are touched all over (a heap, rows of held triangles), so no
+/// read-ahead around a fault. A hint whose effect was not measured apart: on Linux 6.18 with
+/// ext4's large folios the resident memory between two releases stayed bounded only once the
+/// releases came often enough (`finalise::tables`), with or without it.
 fn map_table(file: &File, bytes: usize) -> std::io::Result<memmap2::MmapMut> {
     // SAFETY: the file was created by `SpillVec::spill`, already unlinked, and is owned by one
     // `SpillVec` alone: no other process or mapping can change it while it is mapped, so its
