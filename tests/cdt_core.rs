@@ -354,6 +354,7 @@ fn streaming_breaklines_equal_batch() {
             bounds: [0.0, 0.0, 100.0, 100.0],
             expected_points: real.len() as u64,
             spill: None,
+            corners: false,
         };
         let sp = |i: usize| StreamPoint {
             xy: real[i],
@@ -386,7 +387,7 @@ fn streaming_breaklines_equal_batch() {
                     tris.push(key(t.map(|v| verts[v as usize])));
                 }
                 Event::VertexDone(v) => assert!(done.insert(v)),
-                Event::Watermark(_) => {}
+                Event::Corner { .. } | Event::Watermark(_) => {}
             }
         }
         assert_eq!(
@@ -426,6 +427,7 @@ fn mismatched_breaklines_are_errors_not_panics() {
         bounds: [0.0, 0.0, 1.0, 2.0],
         expected_points: 4,
         spill: None,
+        corners: false,
     };
     let sp = |i: usize, constraint: u32| StreamPoint {
         xy: prep.xy[2 + i],

@@ -93,6 +93,8 @@ fn stream_set(
         bounds: [x0, y0, x1, y1],
         expected_points: real.len() as u64,
         spill: None,
+        // Every triangle comes with its corners: they must be its vertices' positions.
+        corners: true,
     };
     let sp = |i: usize| StreamPoint {
         xy: real[i],
@@ -114,15 +116,22 @@ fn stream_set(
     let mut verts: Vec<[f64; 2]> = Vec::new();
     let mut done = std::collections::HashSet::new();
     let mut tris = Vec::new();
+    let mut corners = Vec::new();
     for e in &events {
         match *e {
             Event::Vertex { xy, .. } => {
                 verts.push([xy[0] + prep.origin[0], xy[1] + prep.origin[1]])
             }
+            Event::Corner { xy, .. } => {
+                corners.push([xy[0] + prep.origin[0], xy[1] + prep.origin[1]])
+            }
             Event::Triangle(t) => {
                 for v in t {
                     assert!(!done.contains(&v), "triangle uses released vertex {v}");
                 }
+                let at: Vec<[f64; 2]> = t.iter().map(|&v| verts[v as usize]).collect();
+                assert_eq!(corners, at, "the corners sent before triangle {t:?}");
+                corners.clear();
                 let mut k = t.map(|v| {
                     (
                         verts[v as usize][0].to_bits(),

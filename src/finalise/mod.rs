@@ -87,6 +87,10 @@ pub struct StreamConfig {
     pub expected_points: u64,
     /// Where the tables of held triangles go past a threshold (`None`: they stay on the heap).
     pub spill: Option<SpillPolicy>,
+    /// Precede every [`Event::Triangle`] with its three corners' positions ([`Event::Corner`]),
+    /// so a consumer that needs positions holds no table of the vertices still in use (on a
+    /// ring of points nearly all of them are, to the end).
+    pub corners: bool,
 }
 
 /// Output of the streaming sweep.
@@ -100,6 +104,14 @@ pub enum Event {
         z: f64,
         /// Index of the input point.
         index: u64,
+    },
+    /// A corner of the next [`Event::Triangle`], in its order (three of them before each
+    /// triangle, only when [`StreamConfig::corners`] asks for them).
+    Corner {
+        /// Position in the local frame.
+        xy: [f64; 2],
+        /// Height.
+        z: f64,
     },
     /// A final triangle, counter-clockwise, by vertex number.
     Triangle([u64; 3]),
@@ -191,6 +203,8 @@ pub(crate) struct Finalizer {
     stats: StreamStats,
     /// Set once all points are in: everything left is final.
     ending: bool,
+    /// Send each triangle's corners before it ([`StreamConfig::corners`]).
+    corners: bool,
     /// Breaklines whose earlier end is swept and later end is not.
     pending: PendingSegments,
     /// The data's x range (watermark heuristic).
@@ -256,6 +270,7 @@ impl Finalizer {
             live_vertices: 0,
             stats: StreamStats::default(),
             ending: false,
+            corners: cfg.corners,
             pending: PendingSegments::new((x0, x1)),
             x_range: (x0, x1),
             due: SpillVec::default(),
@@ -409,6 +424,13 @@ impl Finalizer {
                 });
             }
             ids[k] = self.vertices.out[i];
+        }
+        if self.corners {
+            for v in tri {
+                let i = v.0 as usize;
+                let z = self.vertices.z[i];
+                self.events.push(Event::Corner { xy: pts[i], z });
+            }
         }
         self.events.push(Event::Triangle(ids));
         self.stats.triangles += 1;

@@ -146,6 +146,9 @@ pub(crate) fn run(
     pb.set_message("triangulating");
     pb.set_length(rd.points);
     pb.set_position(0);
+    // The flat-triangle pass holds every vertex anyway.
+    let corners = super::emit::corners_needed(!sinks.is_empty(), lines.map(|l| &l.trim))
+        && !lines.is_some_and(|l| l.flat);
     let sinks_ref: &mut [&mut dyn TriangleSink] = &mut *sinks;
     let outcome = std::thread::scope(|scope| {
         let (ptx, prx) = bounded::<PointBatch>(4);
@@ -163,6 +166,7 @@ pub(crate) fn run(
                 dir: config.tmp_dir().to_path_buf(),
                 mem: options.mem,
             }),
+            corners,
         };
         let swept = sweep_points(&cfg, lines, fed, prx, etx, &pb, &anon);
         let duplicates = joined(merger.join(), "merge");

@@ -16,6 +16,11 @@ use std::collections::HashMap;
 /// Not written (yet).
 const NOT_OUT: u64 = u64::MAX;
 
+/// Do triangles going to `sinks` (some or none) through `trim` need their corners' positions?
+pub(super) fn corners_needed(sinks: bool, trim: Option<&Trim>) -> bool {
+    sinks || trim.is_some_and(|t| !t.keeps_all())
+}
+
 /// Delivers events to the outputs (see the module docs).
 pub(crate) struct Emitter<'m, 's, 't> {
     frame: Frame,
@@ -23,9 +28,13 @@ pub(crate) struct Emitter<'m, 's, 't> {
     sinks: &'s mut [&'t mut dyn TriangleSink],
     /// `None`: every triangle is kept, and vertices are written as they come.
     trim: Option<&'s Trim>,
-    /// Live vertices (sweep number → position, output number), when needed.
-    live: IdMap<([f64; 3], u64)>,
-    keep_live: bool,
+    /// Output number of each live vertex (by sweep number), kept only when trimming can leave
+    /// vertices unused and the output numbers them as they are first used.
+    live: IdMap<u64>,
+    /// The next triangle's corners ([`Event::Corner`]), in real-world coordinates, and how many
+    /// have come.
+    corners: [[f64; 3]; 3],
+    n_corners: usize,
     next_in: u64,
     next_out: u64,
     triangles: u64,
@@ -40,19 +49,25 @@ impl<'m, 's, 't> Emitter<'m, 's, 't> {
         trim: Option<&'s Trim>,
     ) -> Self {
         let trim = trim.filter(|t| !t.keeps_all());
-        let keep_live = !sinks.is_empty() || trim.is_some();
         Emitter {
             frame,
             mesh,
             sinks,
             trim,
             live: IdMap::default(),
-            keep_live,
+            corners: [[0.0; 3]; 3],
+            n_corners: 0,
             next_in: 0,
             next_out: 0,
             triangles: 0,
             trimmed: 0,
         }
+    }
+
+    /// Do the triangles need their corners' positions (for the sinks or the trimming)? The
+    /// sweep then sends them before each triangle ([`crate::finalise::StreamConfig::corners`]).
+    pub(super) fn needs_corners(&self) -> bool {
+        corners_needed(!self.sinks.is_empty(), self.trim)
     }
 
     /// Vertices and triangles written, triangles trimmed.
@@ -64,8 +79,18 @@ impl<'m, 's, 't> Emitter<'m, 's, 't> {
     pub(super) fn event(&mut self, ev: Event) -> Result<()> {
         match ev {
             Event::Vertex { xy, z, .. } => self.vertex(self.frame.world(xy, z)),
+            Event::Corner { xy, z } => {
+                let k = self.n_corners.min(2);
+                self.corners[k] = self.frame.world(xy, z);
+                self.n_corners += 1;
+                Ok(())
+            }
             // A sweep along x works on the mirror image: counter-clockwise there is clockwise here.
-            Event::Triangle(t) if self.frame.swap => self.triangle([t[0], t[2], t[1]]),
+            Event::Triangle(t) if self.frame.swap => {
+                let [a, b, c] = self.corners;
+                self.corners = [a, c, b];
+                self.triangle([t[0], t[2], t[1]])
+            }
             Event::Triangle(t) => self.triangle(t),
             Event::VertexDone(i) => self.vertex_done(i),
             // Watermarks are heights (world y); a sweep along x has none to give.
@@ -85,49 +110,56 @@ impl<'m, 's, 't> Emitter<'m, 's, 't> {
     fn vertex(&mut self, w: [f64; 3]) -> Result<()> {
         let id = self.next_in;
         self.next_in += 1;
-        let mut out = NOT_OUT;
-        if self.trim.is_none() {
-            if let Some(m) = self.mesh.as_mut() {
-                m.vertex(w)?;
-            }
-            out = self.next_out;
-            self.next_out += 1;
+        if self.trim.is_some() {
+            // Written when a kept triangle first uses it.
+            self.live.insert(id, NOT_OUT);
+            return Ok(());
         }
-        if self.keep_live {
-            self.live.insert(id, (w, out));
+        if let Some(m) = self.mesh.as_mut() {
+            m.vertex(w)?;
         }
+        self.next_out += 1;
         Ok(())
     }
 
     fn triangle(&mut self, t: [u64; 3]) -> Result<()> {
-        if !self.keep_live {
+        if !self.needs_corners() {
             if let Some(m) = self.mesh.as_mut() {
                 m.triangle(t)?;
             }
             self.triangles += 1;
             return Ok(());
         }
-        let p = t.map(|i| self.live[&i].0);
-        if let Some(trim) = self.trim
-            && !trim.keep(&p)
-        {
-            self.trimmed += 1;
-            return Ok(());
+        if self.n_corners != 3 {
+            return Err(crate::error::Error::Internal(format!(
+                "triangle {t:?} came with {} corners, not 3",
+                self.n_corners
+            )));
         }
-        let mut out = [0u64; 3];
-        for k in 0..3 {
-            let e = self.live.get_mut(&t[k]).expect("live vertex");
-            if e.1 == NOT_OUT {
-                if let Some(m) = self.mesh.as_mut() {
-                    m.vertex(e.0)?;
-                }
-                e.1 = self.next_out;
-                self.next_out += 1;
+        self.n_corners = 0;
+        let p = self.corners;
+        if let Some(trim) = self.trim {
+            if !trim.keep(&p) {
+                self.trimmed += 1;
+                return Ok(());
             }
-            out[k] = e.1;
-        }
-        if let Some(m) = self.mesh.as_mut() {
-            m.triangle(out)?;
+            let mut out = [0u64; 3];
+            for k in 0..3 {
+                let e = self.live.get_mut(&t[k]).expect("live vertex");
+                if *e == NOT_OUT {
+                    if let Some(m) = self.mesh.as_mut() {
+                        m.vertex(p[k])?;
+                    }
+                    *e = self.next_out;
+                    self.next_out += 1;
+                }
+                out[k] = *e;
+            }
+            if let Some(m) = self.mesh.as_mut() {
+                m.triangle(out)?;
+            }
+        } else if let Some(m) = self.mesh.as_mut() {
+            m.triangle(t)?;
         }
         for s in self.sinks.iter_mut() {
             s.triangle(&p)?;
@@ -137,11 +169,8 @@ impl<'m, 's, 't> Emitter<'m, 's, 't> {
     }
 
     fn vertex_done(&mut self, i: u64) -> Result<()> {
-        let out = if self.keep_live {
-            match self.live.remove(&i) {
-                Some((_, o)) => o,
-                None => NOT_OUT,
-            }
+        let out = if self.trim.is_some() {
+            self.live.remove(&i).unwrap_or(NOT_OUT)
         } else {
             i
         };
@@ -179,7 +208,7 @@ impl Collected {
                 });
             }
             Event::Triangle(t) => self.triangles.push(t.map(|i| i as u32)),
-            Event::VertexDone(_) | Event::Watermark(_) => {}
+            Event::Corner { .. } | Event::VertexDone(_) | Event::Watermark(_) => {}
         }
     }
 
@@ -217,6 +246,12 @@ impl Collected {
             })?;
         }
         for t in &self.triangles {
+            if emit.needs_corners() {
+                for &v in t {
+                    let [x, y, z] = self.vertices[v as usize];
+                    emit.event(Event::Corner { xy: [x, y], z })?;
+                }
+            }
             emit.event(Event::Triangle(t.map(u64::from)))?;
         }
         for i in 0..self.vertices.len() as u64 {
