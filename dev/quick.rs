@@ -103,6 +103,7 @@ pub fn stream(pts: &[[f64; 3]]) {
         bounds: [x0, y0, x1, y1],
         expected_points: real.len() as u64,
         spill: None,
+        corners: false,
     };
     let t1 = Instant::now();
     let sp = |i: usize| StreamPoint {

@@ -37,6 +37,7 @@ fn main() {
         bounds: [x0, y0, x1, y1],
         expected_points: sorted.len() as u64,
         spill: None,
+        corners: false,
     };
     let sp = |(i, p): &(usize, [f64; 3])| StreamPoint {
         xy: [p[0], p[1]],
