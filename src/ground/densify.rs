@@ -299,6 +299,19 @@ impl<'a> Densify<'a> {
 
     /// Densifies until an iteration inserts nothing; then the final pass (step 5).
     pub(super) fn run(mut self, low_noise: f64, offset: f64, stats: &mut RunStats) -> Result<()> {
+        self.iterate(stats)?;
+        self.finish(low_noise, offset);
+        self.finish_deferred(low_noise, offset)
+    }
+
+    /// Densifies until an iteration inserts nothing, and gives the TIN (no final pass).
+    pub(super) fn densified(mut self, stats: &mut RunStats) -> Result<Tin> {
+        self.iterate(stats)?;
+        Ok(std::mem::take(&mut self.tin))
+    }
+
+    /// Densifies until an iteration inserts nothing.
+    fn iterate(&mut self, stats: &mut RunStats) -> Result<()> {
         let mut accepted = std::mem::take(&mut self.accepted);
         let mut chosen = std::mem::take(&mut self.chosen);
         while stats.iterations < MAX_ITERATIONS {
@@ -373,8 +386,7 @@ impl<'a> Densify<'a> {
         self.accepted = accepted;
         self.chosen = chosen;
         stats.bytes = stats.bytes.max(self.held(0));
-        self.finish(low_noise, offset);
-        self.finish_deferred(low_noise, offset)
+        Ok(())
     }
 
     /// The candidates an iteration inserts, into `chosen` as `(input index, point)`: of each
