@@ -26,9 +26,6 @@ use rayon::prelude::*;
 
 mod deferred;
 
-static MOVES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-static INSERTED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-
 /// No triangle, no candidate.
 const NONE: u32 = u32::MAX;
 
@@ -299,19 +296,6 @@ impl<'a> Densify<'a> {
 
     /// Densifies until an iteration inserts nothing; then the final pass (step 5).
     pub(super) fn run(mut self, low_noise: f64, offset: f64, stats: &mut RunStats) -> Result<()> {
-        self.iterate(stats)?;
-        self.finish(low_noise, offset);
-        self.finish_deferred(low_noise, offset)
-    }
-
-    /// Densifies until an iteration inserts nothing, and gives the TIN (no final pass).
-    pub(super) fn densified(mut self, stats: &mut RunStats) -> Result<Tin> {
-        self.iterate(stats)?;
-        Ok(std::mem::take(&mut self.tin))
-    }
-
-    /// Densifies until an iteration inserts nothing.
-    fn iterate(&mut self, stats: &mut RunStats) -> Result<()> {
         let mut accepted = std::mem::take(&mut self.accepted);
         let mut chosen = std::mem::take(&mut self.chosen);
         while stats.iterations < MAX_ITERATIONS {
@@ -342,7 +326,13 @@ impl<'a> Densify<'a> {
                 a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2))
             });
             chosen.clear();
-            self.choose(&accepted, &mut chosen);
+            let mut last = NONE;
+            for &(t, _, id, i) in &accepted {
+                if t != last {
+                    chosen.push((id, i));
+                    last = t;
+                }
+            }
             chosen.sort_unstable();
             if chosen.is_empty() {
                 break;
@@ -353,7 +343,6 @@ impl<'a> Densify<'a> {
                 let more = chosen.len().max(self.tin.vertex_count() / 16);
                 self.tin.reserve_triangles_exact(more);
             }
-            INSERTED.fetch_add(chosen.len() as u64, std::sync::atomic::Ordering::Relaxed);
             for &(_, i) in &chosen {
                 self.insert(i)?;
             }
@@ -373,48 +362,11 @@ impl<'a> Densify<'a> {
             trim(&mut self.reeval);
         }
         self.tin.record_touched(false);
-        if std::env::var_os("SWEEPTIN_GROUND_DEBUG").is_some() {
-            eprintln!(
-                "run: {} points, {} iterations, {} evaluations, {} moves (total so far), {} inserted",
-                self.tags.len(),
-                stats.iterations,
-                stats.evaluations,
-                MOVES.load(std::sync::atomic::Ordering::Relaxed),
-                INSERTED.load(std::sync::atomic::Ordering::Relaxed)
-            );
-        }
         self.accepted = accepted;
         self.chosen = chosen;
         stats.bytes = stats.bytes.max(self.held(0));
-        Ok(())
-    }
-
-    /// The candidates an iteration inserts, into `chosen` as `(input index, point)`: of each
-    /// triangle's accepted candidates (`accepted` sorted by triangle, distance, input index),
-    /// from the closest, up to [`per_triangle`] that do not interact ([`Picked::admits`]).
-    fn choose(&self, accepted: &[Accepted], chosen: &mut Vec<(u64, u32)>) {
-        let mut k = 0;
-        while k < accepted.len() {
-            let t = accepted[k].0;
-            let end = k + accepted[k..].iter().take_while(|a| a.0 == t).count();
-            chosen.push((accepted[k].2, accepted[k].3));
-            if end - k > 1 {
-                let plane = Plane::new(self.corners(self.tin.tri_vertices(TriId(t))));
-                let mut picked = Picked::default();
-                picked.push(&plane, self.tin.point(self.vid(accepted[k].3)));
-                for &(_, _, id, i) in &accepted[k + 1..end] {
-                    if picked.n >= per_triangle() {
-                        break;
-                    }
-                    let p = self.tin.point(self.vid(i));
-                    if picked.admits(&plane, p, self.sin_max) {
-                        picked.push(&plane, p);
-                        chosen.push((id, i));
-                    }
-                }
-            }
-            k = end;
-        }
+        self.finish(low_noise, offset);
+        self.finish_deferred(low_noise, offset)
     }
 
     /// Judges the jobs of a list on every core (in pieces, when it is long): `jobs` are dirty
@@ -500,8 +452,7 @@ impl<'a> Densify<'a> {
             |a: &(f64, u32), b: &(f64, u32)| a.0.total_cmp(&b.0).then(id(a.1).cmp(&id(b.1)));
         // The closest is usually accepted: picked by a scan; after a few refusals, the rest sorted.
         let mut tries = 0;
-        let mut picked = Picked::default();
-        while !close.is_empty() && picked.n < per_triangle() {
+        while !close.is_empty() {
             let k = if tries < 4 {
                 (0..close.len())
                     .min_by(|&a, &b| order(&close[a], &close[b]))
@@ -513,10 +464,9 @@ impl<'a> Densify<'a> {
                 close.len() - 1
             };
             let (d, i) = close.swap_remove(k);
-            let p = self.tin.point(self.vid(i));
-            if picked.admits(&plane, p, self.sin_max) && self.accepts(i, t, vs, &corners, d, out) {
-                picked.push(&plane, p);
+            if self.accepts(i, t, vs, &corners, d, out) {
                 out.accepted.push((t, d, id(i), i));
+                break;
             }
             tries += 1;
         }
@@ -674,7 +624,6 @@ impl<'a> Densify<'a> {
         }
         // In memory order (spatial, see `ptd::spatial_order`), walks from the slot each was in
         // (near), pieces on every core: the triangle found does not depend on the walk's path.
-        MOVES.fetch_add(gathered.len() as u64, std::sync::atomic::Ordering::Relaxed);
         in_point_order(&mut gathered, &mut self.marks);
         let mut found = std::mem::take(&mut self.found);
         let tri = &self.tri;
@@ -782,65 +731,6 @@ fn trim<T>(v: &mut Vec<T>) {
     }
 }
 
-/// Candidates accepted in one triangle and one iteration, at most this many (the closest to
-/// the plane first).
-const PER_TRIANGLE: usize = 4;
-
-/// [`PER_TRIANGLE`] (experiments: `SWEEPTIN_GROUND_PER_TRIANGLE`, temporary).
-fn per_triangle() -> usize {
-    static K: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *K.get_or_init(|| {
-        std::env::var("SWEEPTIN_GROUND_PER_TRIANGLE")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(PER_TRIANGLE)
-            .clamp(1, PER_TRIANGLE_MAX)
-    })
-}
-
-/// Room for the candidates of one triangle accepted in one iteration.
-const PER_TRIANGLE_MAX: usize = 16;
-
-/// The candidates of one triangle accepted so far in an iteration: their positions and their
-/// signed distances to the triangle's plane.
-struct Picked {
-    n: usize,
-    at: [([f64; 3], f64); PER_TRIANGLE_MAX],
-}
-
-impl Default for Picked {
-    fn default() -> Self {
-        Picked {
-            n: 0,
-            at: [([0.0; 3], 0.0); PER_TRIANGLE_MAX],
-        }
-    }
-}
-
-impl Picked {
-    /// Can `p` go in with the candidates picked, in the same iteration: is the line from `p` to
-    /// each of them within the maximum angle of the triangle's plane (the angle test `p` would
-    /// face against a triangle with that candidate as a corner)?
-    #[inline]
-    fn admits(&self, plane: &Plane, p: [f64; 3], sin_max: f64) -> bool {
-        static PAIR: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-        if !*PAIR.get_or_init(|| std::env::var("SWEEPTIN_GROUND_PAIR").as_deref() != Ok("0")) {
-            return true;
-        }
-        let s = plane.signed(p);
-        self.at[..self.n].iter().all(|&(q, sq)| {
-            let r2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
-            (s - sq).abs() <= r2.sqrt() * sin_max
-        })
-    }
-
-    #[inline]
-    fn push(&mut self, plane: &Plane, p: [f64; 3]) {
-        self.at[self.n] = (p, plane.signed(p));
-        self.n += 1;
-    }
-}
-
 /// The plane of a triangle: its first corner and its (unnormalised) normal with its length.
 struct Plane {
     a: [f64; 3],
@@ -873,17 +763,6 @@ impl Plane {
         let w = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
         let d = (w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2]).abs() / len;
         (d <= max_d).then_some(d)
-    }
-
-    /// The signed distance of `p` to the plane (0 without a plane).
-    #[inline]
-    fn signed(&self, p: [f64; 3]) -> f64 {
-        let (a, nrm, len) = (self.a, self.nrm, self.len);
-        if len == 0.0 || !len.is_finite() {
-            return 0.0;
-        }
-        let w = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
-        (w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2]) / len
     }
 
     /// Is an angle between the plane and the lines from `p` (at distance `d` from it) to the

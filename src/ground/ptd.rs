@@ -187,7 +187,6 @@ pub(crate) fn classify_run(
         .filter(|&i| labels[i as usize] == Label::Other);
     let cand: Vec<u32> = cand.collect();
     drop(order);
-    let cand = prefilter(&tin, virtuals, &pts, tags, labels, cand, &seeds, params)?;
     let (cand, deferred) = by_densify_cell(&pts, tags, labels, cand, &seeds, params.densify_cell);
     stats.deferred = deferred.len() as u64;
     drop(pts);
@@ -195,80 +194,6 @@ pub(crate) fn classify_run(
     drop(cand);
     densify.run(params.low_noise, params.offset, &mut stats)?;
     Ok(stats)
-}
-
-/// Experiment (`SWEEPTIN_GROUND_PREFILTER=H`, `SWEEPTIN_GROUND_PRECELL=C`, default 2): a coarse
-/// densification of the lowest candidate of each C-cell on a copy of the initial TIN; the
-/// candidates more than H above that coarse TIN leave the candidates (never judged again).
-#[allow(clippy::too_many_arguments)]
-fn prefilter(
-    tin: &Tin,
-    virtuals: usize,
-    pts: &[[f64; 3]],
-    tags: &[u64],
-    labels: &[Label],
-    cand: Vec<u32>,
-    seeds: &[u32],
-    params: &GroundParams,
-) -> Result<Vec<u32>> {
-    let Some(h) = std::env::var("SWEEPTIN_GROUND_PREFILTER")
-        .ok()
-        .and_then(|v| v.parse::<f64>().ok())
-    else {
-        return Ok(cand);
-    };
-    let cell = std::env::var("SWEEPTIN_GROUND_PRECELL")
-        .ok()
-        .and_then(|v| v.parse::<f64>().ok())
-        .unwrap_or(2.0);
-    let (coarse, _) = by_densify_cell(pts, tags, labels, cand.clone(), seeds, cell);
-    let mut scratch = labels.to_vec();
-    let mut stats = RunStats::default();
-    let d = Densify::new(
-        tin.clone(),
-        virtuals,
-        tags,
-        &mut scratch,
-        params,
-        &coarse,
-        Vec::new(),
-    )?;
-    let mut coarse_tin = d.densified(&mut stats)?;
-    drop(scratch);
-    // Every candidate, in point order (spatial), against the coarse TIN.
-    let mut sorted = cand.clone();
-    sorted.sort_unstable();
-    let mut drop_it = vec![false; pts.len()];
-    let mut dropped = 0u64;
-    for &i in &sorted {
-        let p = pts[i as usize];
-        let z = match coarse_tin.locate([p[0], p[1]]) {
-            crate::tin::PointLocation::Inside(t) => {
-                let [a, b, c] = coarse_tin.tri_vertices(t).map(|v| coarse_tin.point(v));
-                crate::tin::planar(a, b, c, [p[0], p[1]])
-            }
-            crate::tin::PointLocation::OnEdge(e) => {
-                let [a, b, c] = coarse_tin.tri_vertices(e.tri()).map(|v| coarse_tin.point(v));
-                crate::tin::planar(a, b, c, [p[0], p[1]])
-            }
-            crate::tin::PointLocation::OnVertex(v) => coarse_tin.point(v)[2],
-            crate::tin::PointLocation::Outside(_) => continue,
-        };
-        if p[2] - z > h {
-            drop_it[i as usize] = true;
-            dropped += 1;
-        }
-    }
-    if std::env::var_os("SWEEPTIN_GROUND_DEBUG").is_some() {
-        eprintln!(
-            "prefilter: {} candidates, {} coarse, {} iterations, {} dropped",
-            cand.len(),
-            coarse.len(),
-            stats.iterations,
-            dropped
-        );
-    }
-    Ok(cand.into_iter().filter(|&i| !drop_it[i as usize]).collect())
 }
 
 /// Splits the candidates `cand` (in their order) into those that densify — the lowest eligible
