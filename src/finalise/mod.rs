@@ -221,8 +221,9 @@ pub(crate) struct Finalizer {
     /// Pages the finality checks may have touched since the last look at the spilled tables,
     /// about: one a check and one a front node scanned ([`tables::LOOK_EVERY_TOUCHES`]).
     touches: u64,
-    /// Triangles made since the last look at the resident memory ([`tables::LOOK_EVERY_CREATED`]).
-    created_since_look: u32,
+    /// Steps of the sweep (new triangles, flips) since the last look at the resident memory
+    /// ([`tables::LOOK_EVERY_STEPS`]).
+    steps_since_look: u32,
 }
 
 impl Finalizer {
@@ -277,7 +278,7 @@ impl Finalizer {
             blocked: SpillVec::default(),
             spill: Spill::new(cfg.spill.clone()),
             touches: 0,
-            created_since_look: 0,
+            steps_since_look: 0,
         }
     }
 
@@ -395,6 +396,7 @@ impl Finalizer {
 
     /// Moves the far-queue entries that now fall within the ring into it.
     fn pull_far(&mut self) {
+        let mut pulled = 0u32;
         while let Some((k, t)) = self.far.peek() {
             if k >= self.cur + RING as u64 {
                 break;
@@ -402,6 +404,16 @@ impl Finalizer {
             self.far.pop();
             if self.due[t as usize] == k {
                 self.push_entry(t, k);
+            }
+            // Each pop walks a path of the heap (a page a level past the first few) and reads
+            // a row of `due`: on a ring of points millions of entries come in at once, from
+            // tables spilled to files, so look at the resident memory on the way.
+            pulled += 1;
+            if pulled.is_multiple_of(tables::LOOK_EVERY_PULLS)
+                && self.spill.spilled()
+                && (self.spill.over() || self.spill.grown())
+            {
+                self.release_spilled();
             }
         }
     }
@@ -500,16 +512,18 @@ impl Hooks for Finalizer {
 
     #[inline(always)]
     fn spill_due(&mut self) -> bool {
-        self.created_since_look += 1;
-        if self.created_since_look < tables::LOOK_EVERY_CREATED {
+        if self.spill.over() {
+            return true;
+        }
+        self.steps_since_look += 1;
+        if self.steps_since_look < tables::LOOK_EVERY_STEPS {
             return false;
         }
-        self.created_since_look = 0;
+        self.steps_since_look = 0;
         self.spill.grown()
     }
 
     fn release_spilled(&mut self) {
-        self.spill.released();
         self.due.release();
         self.blocked.release();
         self.far.table().release();
@@ -518,6 +532,8 @@ impl Hooks for Finalizer {
         vt.index.release();
         vt.out.release();
         vt.refs.release();
+        // The growth counts from the resident memory without these pages.
+        self.spill.released();
     }
 
     fn segment_done(&mut self, v: VertexId, lo: u32, hi: u32) {
@@ -692,7 +708,10 @@ impl StreamingSweep {
                 }
             }
             // This pass touches every held triangle: keep dropping the spilled pages.
-            if t.is_multiple_of(tables::LOOK_EVERY_EMITTED) && self.fin().spill.spilled() {
+            let fin = self.fin();
+            if fin.spill.over()
+                || (t.is_multiple_of(tables::LOOK_EVERY_EMITTED) && fin.spill.spilled())
+            {
                 let _ = self.look_at_tables();
             }
         }
@@ -707,7 +726,7 @@ impl StreamingSweep {
                 }
             }
             // Millions of vertices held (a line): their rows would all come back into memory.
-            if v % tables::CHECK_EVERY as usize == 0 {
+            if fin.spill.over() || v % tables::CHECK_EVERY as usize == 0 {
                 let _ = self.look_at_tables();
             }
         }
@@ -718,9 +737,10 @@ impl StreamingSweep {
     /// resident pages when they have grown by it ([`tables::Spill::look`]).
     fn look_at_tables(&mut self) -> Result<()> {
         let (pts, mesh, front, fin) = self.sweep.tables_mut();
+        let had_watch = fin.spill.watch().is_some();
         let (nodes, buckets, lead, last, low) = front.tables_mut();
         let vt = &mut fin.vertices;
-        fin.spill.look(&mut [
+        let looked = fin.spill.look(&mut [
             pts,
             nodes,
             buckets,
@@ -736,7 +756,12 @@ impl StreamingSweep {
             &mut vt.index,
             &mut vt.out,
             &mut vt.refs,
-        ])
+        ]);
+        if !had_watch && let Some(w) = fin.spill.watch() {
+            // The tables have just spilled: the front's rebuilds look at the watch too.
+            front.watch_resident(Some(w));
+        }
+        looked
     }
 
     /// Processes every queue bucket the sweep line (now at `y`) has passed.
@@ -777,7 +802,9 @@ impl StreamingSweep {
                     self.check_final(t, y, ks);
                     let fin = self.fin();
                     fin.touches += 1 + fin.stats.front_scans - scans;
-                    if fin.touches >= tables::LOOK_EVERY_TOUCHES && fin.spill.spilled() {
+                    if fin.spill.over()
+                        || (fin.touches >= tables::LOOK_EVERY_TOUCHES && fin.spill.spilled())
+                    {
                         fin.touches = 0;
                         let _ = self.look_at_tables();
                     }

@@ -13,6 +13,7 @@
 //! decided never depends on where the tables are, so the output is the same.
 
 use crate::error::{Error, Result};
+use crate::limits::ResidentWatch;
 use crate::sort::mmap::SpillVec;
 use std::path::PathBuf;
 
@@ -29,12 +30,16 @@ pub struct SpillPolicy {
 /// Pages the finality checks may touch between two looks at the spilled tables' resident
 /// memory, counted as one a check and one a front node scanned under its disk (random pages
 /// when the held triangles and the front's nodes are not in sweep order: on a ring of points,
-/// 1,024 checks brought 60–100 MB of the files in between two looks).
+/// 1,024 checks brought 60–100 MB of the files in between two looks). The watch
+/// ([`ResidentWatch`]) is looked at after every check besides.
 pub(super) const LOOK_EVERY_TOUCHES: u64 = 2048;
-/// Triangles the sweep makes between two looks at the file-backed resident memory (a point
-/// inserted near the top of a ring fills and legalises hundreds of thousands: 130 MB of the
-/// files in 0.2 s between two points).
-pub(super) const LOOK_EVERY_CREATED: u32 = 256;
+/// Steps of the sweep (new triangles and flips) between two looks at the file-backed resident
+/// memory (a point inserted near the top of a ring fills and legalises hundreds of thousands:
+/// 130 MB of the files in 0.2 s between two points); the watch after every step besides.
+pub(super) const LOOK_EVERY_STEPS: u32 = 256;
+/// Far-queue entries pulled into the ring between two looks (each pop touches about a page a
+/// level of the heap past its first page: some 15 for millions of entries).
+pub(super) const LOOK_EVERY_PULLS: u32 = 128;
 /// Triangles emitted at the end of the sweep between two looks (each touches the rows of its
 /// triangle, neighbours and vertices: on a ring, 4,096 brought 160 MB in).
 pub(super) const LOOK_EVERY_EMITTED: u32 = 256;
@@ -121,12 +126,16 @@ impl<T: bytemuck::Pod> Table for SpillVec<T> {
     }
 }
 
-/// The spill's state: whether the tables are in files, and the resident memory at the last
-/// release.
+/// The spill's state: whether the tables are in files, and the watch on the resident memory
+/// since the last release.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Spill {
     policy: Option<SpillPolicy>,
     spilled: bool,
+    /// Raises its flag when the file-backed resident memory has grown by the budget since the
+    /// last release (from the spill on; see [`ResidentWatch`]: the checks, the sweep's new
+    /// triangles and flips, and the end's emission look at it after each step).
+    watch: Option<std::sync::Arc<ResidentWatch>>,
     /// File-backed resident bytes of the process just after the last release.
     base: u64,
     /// Most bytes of the tables in their files at once.
@@ -136,11 +145,6 @@ pub(super) struct Spill {
 }
 
 impl Spill {
-    /// Have the tables moved into temporary files?
-    pub(super) fn spilled(&self) -> bool {
-        self.spilled
-    }
-
     pub(super) fn new(policy: Option<SpillPolicy>) -> Self {
         Spill {
             policy,
@@ -174,6 +178,7 @@ impl Spill {
             }
             self.spilled = true;
             self.base = crate::limits::file_rss().unwrap_or(0);
+            self.watch = ResidentWatch::start(budget).map(std::sync::Arc::new);
         }
         for t in tables.iter_mut() {
             t.headroom().map_err(|e| {
@@ -186,7 +191,7 @@ impl Spill {
         }
         let mapped: usize = tables.iter().map(|t| t.mapped_bytes()).sum();
         self.peak_spilled = self.peak_spilled.max(mapped as u64);
-        if self.grown() {
+        if self.over() || self.grown() {
             for t in tables.iter_mut() {
                 t.release();
             }
@@ -195,8 +200,17 @@ impl Spill {
         Ok(())
     }
 
+    /// Has the watch seen the file-backed resident memory grow by the budget since the last
+    /// release? One atomic load: asked after every step that may touch the tables (the watch
+    /// reads `/proc` every 2 ms; the counted looks of [`Spill::grown`] catch what comes
+    /// faster).
+    #[inline(always)]
+    pub(super) fn over(&self) -> bool {
+        self.watch.as_ref().is_some_and(|w| w.over())
+    }
+
     /// Has the file-backed resident memory grown by the budget since the last release (the
-    /// tables spilled)?
+    /// tables spilled)? Reads `/proc/self/statm` now.
     pub(super) fn grown(&self) -> bool {
         let Some(p) = self.policy.as_ref().filter(|_| self.spilled) else {
             return false;
@@ -205,11 +219,24 @@ impl Spill {
         resident > self.base + (p.mem / 4).max(MIN_SPILL)
     }
 
+    /// Have the tables moved into temporary files?
+    pub(super) fn spilled(&self) -> bool {
+        self.spilled
+    }
+
+    /// The watch on the resident memory, once the tables have spilled.
+    pub(super) fn watch(&self) -> Option<std::sync::Arc<ResidentWatch>> {
+        self.watch.clone()
+    }
+
     /// The tables' pages were just dropped: the growth counts from here.
     pub(super) fn released(&mut self) {
         if self.spilled {
             self.releases += 1;
             self.base = crate::limits::file_rss().unwrap_or(0);
+            if let Some(w) = &self.watch {
+                w.rebase();
+            }
         }
     }
 }

@@ -4,8 +4,11 @@
 use super::{Event, StreamingSweep};
 use crate::geom::predicates::is_artificial;
 
-/// Triangle slots visited between drops of the spilled tables' pages.
+/// Triangle slots visited between drops of the spilled tables' pages (and between looks at
+/// the watch on the resident memory, [`crate::limits::ResidentWatch`], which drops them sooner).
 const RELEASE_EVERY: usize = 1 << 16;
+/// Triangle slots visited between two looks at the watch.
+const WATCH_EVERY: usize = 1024;
 
 /// Is the circumcircle of `a b c` narrower than `limit` in radius and inside the x range of the
 /// data? (Floating point: a heuristic for watermarks only, never a topological decision.)
@@ -44,11 +47,13 @@ impl StreamingSweep {
         let len = self.sweep.mesh().origin.len();
         let mut from = 0;
         while from < len {
-            let to = (from + 3 * RELEASE_EVERY).min(len);
+            let to = (from + 3 * WATCH_EVERY).min(len);
             w = self.lowest_ordinary(from..to, w, stuck, wide, x_range);
-            from = to;
             // Tables spilled to temporary files: the walk would bring them all into memory.
-            self.sweep.release_spilled();
+            if self.fin().spill.over() || to / (3 * RELEASE_EVERY) > from / (3 * RELEASE_EVERY) {
+                self.sweep.release_spilled();
+            }
+            from = to;
         }
         self.fin().events.push(Event::Watermark(w));
         w

@@ -187,7 +187,7 @@ impl<H: Mode> Sweep<H> {
             // A front of millions of nodes (points on a line) spilled to temporary files: the
             // walk would bring the whole front and its points into memory at once (the fills
             // look at the resident memory themselves, `Hooks::spill_due`).
-            if walked.is_multiple_of(1 << 16) {
+            if walked.is_multiple_of(1 << 16) || self.hooks.spill_due() {
                 self.release_spilled();
             }
             let (p, q) = (self.front.prev(n), self.front.next(n));

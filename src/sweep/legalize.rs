@@ -70,6 +70,11 @@ impl<H: Mode> Sweep<H> {
             let a = self.stack.pop().expect("stack is not empty");
             if let Some(b) = self.flip_if_illegal(a) {
                 self.stack.extend_from_slice(&[a, a.next(), b, b.next()]);
+                // A flip touches two triangles and four vertices: on held triangles spilled to
+                // files (a ring of points), a cascade brings their pages in.
+                if self.hooks.spill_due() {
+                    self.release_spilled();
+                }
             }
         }
     }
