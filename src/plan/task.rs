@@ -513,6 +513,7 @@ impl Plan {
                 beyond: Vec::new(),
                 tile: sc.tile,
                 buffer: sc.buffer,
+                hull: None,
             };
             let near = rects()
                 .map(|r| scope.reach(&r))
@@ -528,6 +529,7 @@ impl Plan {
             beyond: Vec::new(),
             tile: sc.tile,
             buffer: sc.buffer,
+            hull: None,
         };
         let near = scope
             .unknown

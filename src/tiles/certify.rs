@@ -698,6 +698,12 @@ impl Certifier<'_> {
         let Some(sc) = &self.index.scope else {
             return false;
         };
+        // The data's hull known: nothing lies right of the line when no corner does.
+        if let Some(h) = &sc.hull
+            && h.iter().all(|&c| orient(a, b, c) != Orientation::Clockwise)
+        {
+            return false;
+        }
         let reach = sc.reach_where(|u| corner_right_of(a, b, u));
         self.unknown.set(self.unknown.get().max(reach));
         reach > 0.0

@@ -104,6 +104,86 @@ fn span(a: [f64; 2], b: [f64; 2], y0: f64, y1: f64) -> [f64; 2] {
 }
 
 
+/// The corners of the convex hull of points streamed by, each with the height the duplicate
+/// policy keeps among the points at its position (as [`super::index::BlockIndex`]'s hull):
+/// points are buffered and folded into the corners a batch at a time.
+#[derive(Debug, Clone)]
+pub(crate) struct HullBuilder {
+    policy: crate::DuplicatePolicy,
+    /// Corners so far and the points since, as `(x, y, z, global index)`.
+    pts: Vec<([f64; 3], u64)>,
+    corners: usize,
+}
+
+/// Points buffered before they are folded into the corners.
+const HULL_BATCH: usize = 1 << 16;
+
+impl HullBuilder {
+    pub(crate) fn new(policy: crate::DuplicatePolicy) -> Self {
+        HullBuilder {
+            policy,
+            pts: Vec::new(),
+            corners: 0,
+        }
+    }
+
+    /// Adds the point `p` of global input index `index`.
+    pub(crate) fn add(&mut self, p: [f64; 3], index: u64) {
+        self.pts.push((p, index));
+        if self.pts.len() >= self.corners + HULL_BATCH {
+            self.fold();
+        }
+    }
+
+    /// Adds the corners of another builder (of other points).
+    pub(crate) fn merge(&mut self, other: HullBuilder) {
+        self.pts.extend(other.pts);
+        self.fold();
+    }
+
+    fn fold(&mut self) {
+        let policy = self.policy;
+        // By position, the point the policy keeps first at each.
+        self.pts.sort_unstable_by(|a, b| {
+            (a.0[0].total_cmp(&b.0[0]))
+                .then(a.0[1].total_cmp(&b.0[1]))
+                .then_with(|| {
+                    if policy.prefers((a.0[2], a.1), (b.0[2], b.1)) {
+                        std::cmp::Ordering::Less
+                    } else if policy.prefers((b.0[2], b.1), (a.0[2], a.1)) {
+                        std::cmp::Ordering::Greater
+                    } else {
+                        std::cmp::Ordering::Equal
+                    }
+                })
+        });
+        self.pts
+            .dedup_by(|b, a| a.0[0] == b.0[0] && a.0[1] == b.0[1]);
+        let mut v: Vec<[f64; 3]> = self.pts.iter().map(|p| p.0).collect();
+        let h = hull(&mut v);
+        let keep: Vec<([f64; 3], u64)> = h
+            .iter()
+            .map(|c| {
+                let i = self
+                    .pts
+                    .binary_search_by(|p| {
+                        p.0[0].total_cmp(&c[0]).then(p.0[1].total_cmp(&c[1]))
+                    })
+                    .unwrap_or(0);
+                self.pts[i]
+            })
+            .collect();
+        self.corners = keep.len();
+        self.pts = keep;
+    }
+
+    /// The corners, counter-clockwise.
+    pub(crate) fn finish(mut self) -> Vec<[f64; 3]> {
+        self.fold();
+        self.pts.into_iter().map(|p| p.0).collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

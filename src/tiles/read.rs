@@ -18,7 +18,18 @@ pub(super) fn read_index(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Declared, [f64; 4], TileCpu)> {
     let scope = options.scope.as_ref();
-    let (mut reader, outside) = open_for(job, scope)?;
+    let (mut reader, outside, by_area) = open_for(job, scope)?;
+    // PROTOTYPE: the data's hull corners, added where the task does not read them.
+    let global_hull = match by_area {
+        Some(a) => proto_hull(job)?.map(|h| (h, a)),
+        None => None,
+    };
+    let extra: Vec<[f64; 3]> = global_hull.as_ref().map_or_else(Vec::new, |(h, a)| {
+        h.iter()
+            .filter(|c| !(c[0] >= a[0] && c[0] <= a[2] && c[1] >= a[1] && c[1] <= a[3]))
+            .copied()
+            .collect()
+    });
     let b = reader.bounds();
     let total = reader.point_count();
     let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
@@ -59,8 +70,8 @@ pub(super) fn read_index(
     };
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
     let (mut index, spread, cpu) = match packing {
-        Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
-        None => index_points::<BlockRecord>(&mut reader, probe, None, job, progress)?,
+        Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, &extra, progress)?,
+        None => index_points::<BlockRecord>(&mut reader, probe, None, job, &extra, progress)?,
     };
     declared.decoded = reader.stats().read;
     let bounds = spread.extent();
@@ -73,6 +84,7 @@ pub(super) fn read_index(
             beyond: outside,
             tile: sc.tile,
             buffer: sc.buffer,
+            hull: global_hull.map(|(h, _)| h.iter().map(|c| [c[0], c[1]]).collect()),
         });
     }
     // The tile: as given, or about `tile_points` at the density over the non-empty blocks; for
@@ -122,6 +134,7 @@ fn index_points<R: IndexRecord>(
     grid: TileGrid,
     packing: Option<Packing>,
     job: &TileJob,
+    extra: &[[f64; 3]],
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Spread, TileCpu)> {
     let total = reader.point_count();
@@ -139,6 +152,9 @@ fn index_points<R: IndexRecord>(
         progress(done, total);
         Ok(())
     })?;
+    for p in extra {
+        sorter.push(R::pack(packing.as_ref(), grid.block_of(p[0], p[1]), *p)?)?;
+    }
     let t_read = Instant::now();
     let merge = sorter.finish()?;
     let c1 = crate::clock::process_cpu();
@@ -169,7 +185,11 @@ fn index_points<R: IndexRecord>(
 /// all. Other tasks keep every point of their files (decoding LAZ costs the same whatever is
 /// kept, and the points farther out settle the triangles along the data's edge without another
 /// run), unless their scope reads by area ([`TaskScope::by_area`]: `--ground`).
-fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Vec<[f64; 4]>)> {
+#[allow(clippy::type_complexity)]
+fn open_for(
+    job: &TileJob,
+    scope: Option<&TaskScope>,
+) -> Result<(LidarReader, Vec<[f64; 4]>, Option<[f64; 4]>)> {
     if let Some(sc) = scope {
         let infos = job
             .paths
@@ -207,7 +227,7 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
             };
             let reader = LidarReader::open_with(job.paths, job.filter, options)?;
             let outside = infos.iter().flat_map(|i| unread_of(i, sc, area)).collect();
-            return Ok((reader, outside));
+            return Ok((reader, outside, Some(area)));
         }
     }
     let options = ReadOptions {
@@ -215,7 +235,47 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
         ..ReadOptions::for_budget(job.mem)
     };
     let reader = LidarReader::open_with(job.paths, job.filter, options)?;
-    Ok((reader, Vec::new()))
+    Ok((reader, Vec::new(), None))
+}
+
+/// PROTOTYPE: the hull corners of the task's data (filter applied), cached in the file
+/// `SWEEPTIN_PROTO_HULL` (bits of x, y, z a line).
+fn proto_hull(job: &TileJob) -> Result<Option<Vec<[f64; 3]>>> {
+    let Some(path) = std::env::var_os("SWEEPTIN_PROTO_HULL") else {
+        return Ok(None);
+    };
+    if let Ok(s) = std::fs::read_to_string(&path) {
+        let h = s
+            .lines()
+            .map(|l| {
+                let v: Vec<f64> = l
+                    .split(' ')
+                    .map(|w| f64::from_bits(u64::from_str_radix(w, 16).unwrap()))
+                    .collect();
+                [v[0], v[1], v[2]]
+            })
+            .collect();
+        return Ok(Some(h));
+    }
+    let options = ReadOptions {
+        crs: job.crs.cloned(),
+        ..ReadOptions::for_budget(job.mem)
+    };
+    let mut reader = LidarReader::open_with(job.paths, job.filter, options)?;
+    let mut b = hull::HullBuilder::new(job.duplicates);
+    prefetched(&mut reader, |buf, _| {
+        for p in buf {
+            b.add([p.x, p.y, p.z], p.index);
+        }
+        Ok(())
+    })?;
+    let h = b.finish();
+    let text: String = h
+        .iter()
+        .map(|c| format!("{:x} {:x} {:x}\n", c[0].to_bits(), c[1].to_bits(), c[2].to_bits()))
+        .collect();
+    let _ = std::fs::write(&path, text);
+    Ok(Some(h))
 }
 
 /// Where points of the file `i` that a read of `area` skips may lie: the boxes of its chunks

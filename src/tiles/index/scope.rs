@@ -16,6 +16,8 @@ pub(crate) struct Scope {
     pub tile: [f64; 4],
     /// How far around its tile the task read.
     pub buffer: f64,
+    /// The corners of the data's convex hull, when known.
+    pub hull: Option<Vec<[f64; 2]>>,
 }
 
 /// Does the closed disk of centre `c` and radius `r` meet the closed rectangle `u`? (A little
