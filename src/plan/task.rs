@@ -514,6 +514,7 @@ impl Plan {
                 tile: sc.tile,
                 buffer: sc.buffer,
                 hull: None,
+                inner: None,
             };
             let near = rects()
                 .map(|r| scope.reach(&r))
@@ -530,6 +531,7 @@ impl Plan {
             tile: sc.tile,
             buffer: sc.buffer,
             hull: None,
+            inner: None,
         };
         let near = scope
             .unknown

@@ -32,7 +32,7 @@
 //! outside it lies outside the whole triangulation.
 
 use super::grid::BlockRect;
-use super::index::BlockIndex;
+use super::index::{BlockIndex, Within};
 use super::lines::{RegionScratch, RunLines, Sight};
 use super::region::bbox;
 use crate::error::Result;
@@ -278,6 +278,9 @@ impl<'a> Certifier<'a> {
             && let reach = sc.disk_reach([cx, cy], r)
             && reach > 0.0
         {
+            if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
+                eprintln!("UNKNOWN disk {reach:.1} t={t:?} r={r:.1}");
+            }
             self.unknown.set(self.unknown.get().max(reach));
             return Ok(false);
         }
@@ -543,12 +546,29 @@ impl<'a> Certifier<'a> {
         // The near box: the chord box (the segment `ab` moved up to `h` to the left), two
         // blocks wider (witnesses on the far side are most often close to the triangle).
         let near_box = chord_box(a, b, c, g, 2.0 * g.block);
-        let beyond = |e: &[f64; 4]| corner_right_of(a, b, e);
+        // The data's hull known with no corner right of `L`: nothing lies beyond it.
+        let nothing_beyond = self.index.scope.as_ref().is_some_and(|sc| {
+            sc.hull
+                .as_ref()
+                .is_some_and(|h| h.iter().all(|&p| orient(a, b, p) != Orientation::Clockwise))
+        });
+        let beyond = |e: &[f64; 4]| !nothing_beyond && corner_right_of(a, b, e);
         // A plan's task: a file it did not read that the chord box or the half-plane (within
         // the bound) reaches may hold a witness (hidden half-planes ignored: conservative).
         if let Some(sc) = &self.index.scope {
-            let reach = sc.reach_where(|u| in_bound(u) && (boxes_meet(u, &near_box) || beyond(u)));
+            let cap = chord_box(a, b, c, g, 0.0);
+            let disk = bound.filter(|b| b.1.is_finite());
+            let reach = sc.reach_where(|u| {
+                in_bound(u)
+                    && ((boxes_meet(u, &near_box)
+                        && sc.might_hold(u, &Within { disk, boxed: Some(cap), right_of: None }))
+                        || (beyond(u)
+                            && sc.might_hold(u, &Within { disk, boxed: None, right_of: Some((a, b)) })))
+            });
             if reach > 0.0 {
+                if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
+                    eprintln!("UNKNOWN flat {reach:.1} t={t:?}");
+                }
                 self.unknown.set(self.unknown.get().max(reach));
                 return Ok(Some(false));
             }
@@ -704,7 +724,14 @@ impl Certifier<'_> {
         {
             return false;
         }
-        let reach = sc.reach_where(|u| corner_right_of(a, b, u));
+        let w = Within {
+            right_of: Some((a, b)),
+            ..Within::default()
+        };
+        let reach = sc.reach_where(|u| corner_right_of(a, b, u) && sc.might_hold(u, &w));
+        if reach > 0.0 && std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
+            eprintln!("UNKNOWN hull {reach:.1} {a:?} {b:?}");
+        }
         self.unknown.set(self.unknown.get().max(reach));
         reach > 0.0
     }
