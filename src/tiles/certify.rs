@@ -274,16 +274,28 @@ impl<'a> Certifier<'a> {
         if inside(&self.world) && read.is_none_or(|w| inside(&w)) {
             return Ok(true);
         }
-        if let Some(sc) = &self.index.scope
-            && let reach = sc.disk_reach([cx, cy], r)
-            && reach > 0.0
-        {
+        // Points not read may lie in the disk: the triangle is not certified. With the hull's
+        // band known, a witness among the points given settles it first (a patch run reads
+        // it, instead of a wider buffer).
+        let reach = self.index.scope.as_ref().map_or(0.0, |sc| sc.disk_reach([cx, cy], r));
+        let band = self.index.scope.as_ref().is_some_and(|sc| sc.inner.is_some());
+        if reach > 0.0 && (!band || inside(&self.world)) {
             if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
                 eprintln!("UNKNOWN disk {reach:.1} t={t:?} r={r:.1}");
             }
             self.unknown.set(self.unknown.get().max(reach));
             return Ok(false);
         }
+        let settle = |ok: bool| {
+            if ok && reach > 0.0 {
+                if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
+                    eprintln!("UNKNOWN disk (no witness) {reach:.1} t={t:?} r={r:.1}");
+                }
+                self.unknown.set(self.unknown.get().max(reach));
+                return false;
+            }
+            ok
+        };
         if inside(&self.world) {
             return Ok(true);
         }
@@ -340,7 +352,7 @@ impl<'a> Certifier<'a> {
             found += self.witnesses_among(near, t, &sight, self.witnesses - found, out)?;
             let last = sb == b || !sb.iter().all(|v| v.is_finite());
             if found >= self.witnesses || last {
-                return Ok(found == 0);
+                return Ok(settle(found == 0));
             }
             prev = Some(sb);
             half *= 4.0;
@@ -555,6 +567,7 @@ impl<'a> Certifier<'a> {
         let beyond = |e: &[f64; 4]| !nothing_beyond && corner_right_of(a, b, e);
         // A plan's task: a file it did not read that the chord box or the half-plane (within
         // the bound) reaches may hold a witness (hidden half-planes ignored: conservative).
+        let mut flat_reach = 0.0;
         if let Some(sc) = &self.index.scope {
             let cap = chord_box(a, b, c, g, 0.0);
             let disk = bound.filter(|b| b.1.is_finite());
@@ -565,14 +578,27 @@ impl<'a> Certifier<'a> {
                         || (beyond(u)
                             && sc.might_hold(u, &Within { disk, boxed: None, right_of: Some((a, b)) })))
             });
-            if reach > 0.0 {
+            if reach > 0.0 && sc.inner.is_none() {
                 if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
                     eprintln!("UNKNOWN flat {reach:.1} t={t:?}");
                 }
                 self.unknown.set(self.unknown.get().max(reach));
                 return Ok(Some(false));
             }
+            flat_reach = reach;
         }
+        // With the hull's band known: points not read may lie in the disk only when no witness
+        // among those given withholds the certificate.
+        let settle = |ok: bool| {
+            if ok && flat_reach > 0.0 {
+                if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
+                    eprintln!("UNKNOWN flat (no witness) {flat_reach:.1} t={t:?}");
+                }
+                self.unknown.set(self.unknown.get().max(flat_reach));
+                return false;
+            }
+            ok
+        };
         // With breaklines: a constrained long edge hides the half-plane beyond it.
         let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
         let mut sight = Sight::default();
@@ -597,7 +623,7 @@ impl<'a> Certifier<'a> {
                 return Ok(Some(false));
             }
             if let Some(rb) = sight.region_box() {
-                return self.region_clear(t, &sight, &rb, out).map(Some);
+                return self.region_clear(t, &sight, &rb, out).map(|ok| Some(settle(ok)));
             }
         }
         let m = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
@@ -629,7 +655,7 @@ impl<'a> Certifier<'a> {
             return Ok(Some(false));
         }
         if hidden[i] {
-            return Ok(Some(true));
+            return Ok(Some(settle(true)));
         }
         // The rest of the half-plane right of `L`, row by row: in each row the half-plane is
         // an interval of x (bounded conservatively).
@@ -679,7 +705,8 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        Ok(Some(self.witnesses_among(far, t, &sight, self.witnesses, out)? == 0))
+        let ok = self.witnesses_among(far, t, &sight, self.witnesses, out)? == 0;
+        Ok(Some(settle(ok)))
     }
 
     /// Does block `k` (not read) hold a point inside the circumdisk of `t`? Exact.
