@@ -280,17 +280,11 @@ impl<'a> Certifier<'a> {
         let reach = self.index.scope.as_ref().map_or(0.0, |sc| sc.disk_reach([cx, cy], r));
         let band = self.index.scope.as_ref().is_some_and(|sc| sc.inner.is_some());
         if reach > 0.0 && (!band || inside(&self.world)) {
-            if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
-                eprintln!("UNKNOWN disk {reach:.1} t={t:?} r={r:.1}");
-            }
             self.unknown.set(self.unknown.get().max(reach));
             return Ok(false);
         }
         let settle = |ok: bool| {
             if ok && reach > 0.0 {
-                if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
-                    eprintln!("UNKNOWN disk (no witness) {reach:.1} t={t:?} r={r:.1}");
-                }
                 self.unknown.set(self.unknown.get().max(reach));
                 return false;
             }
@@ -579,9 +573,6 @@ impl<'a> Certifier<'a> {
                             && sc.might_hold(u, &Within { disk, boxed: None, right_of: Some((a, b)) })))
             });
             if reach > 0.0 && sc.inner.is_none() {
-                if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
-                    eprintln!("UNKNOWN flat {reach:.1} t={t:?}");
-                }
                 self.unknown.set(self.unknown.get().max(reach));
                 return Ok(Some(false));
             }
@@ -591,9 +582,6 @@ impl<'a> Certifier<'a> {
         // among those given withholds the certificate.
         let settle = |ok: bool| {
             if ok && flat_reach > 0.0 {
-                if std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
-                    eprintln!("UNKNOWN flat (no witness) {flat_reach:.1} t={t:?}");
-                }
                 self.unknown.set(self.unknown.get().max(flat_reach));
                 return false;
             }
@@ -756,9 +744,6 @@ impl Certifier<'_> {
             ..Within::default()
         };
         let reach = sc.reach_where(|u| corner_right_of(a, b, u) && sc.might_hold(u, &w));
-        if reach > 0.0 && std::env::var_os("SWEEPTIN_DEBUG_UNKNOWN").is_some() {
-            eprintln!("UNKNOWN hull {reach:.1} {a:?} {b:?}");
-        }
         self.unknown.set(self.unknown.get().max(reach));
         reach > 0.0
     }

@@ -135,12 +135,6 @@ impl HullBuilder {
         }
     }
 
-    /// Adds the corners of another builder (of other points).
-    pub(crate) fn merge(&mut self, other: HullBuilder) {
-        self.pts.extend(other.pts);
-        self.fold();
-    }
-
     fn fold(&mut self) {
         let policy = self.policy;
         // By position, the point the policy keeps first at each.
