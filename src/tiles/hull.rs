@@ -202,6 +202,45 @@ mod tests {
         assert_eq!(from_origin(h.iter().map(xy).collect()), square);
     }
 
+    /// The streamed hull is the hull of all the points, a batch at a time, each corner with
+    /// the height the duplicate policy keeps there.
+    #[test]
+    fn a_streamed_hull_is_the_hull_with_the_policys_heights() {
+        let mut rng = crate::geom::rng::SplitMix64::new(7);
+        let mut pts = Vec::new();
+        for i in 0..200_000u64 {
+            let p = [
+                511_000.0 + rng.below(1000) as f64 * 0.25,
+                122_000.0 + rng.below(700) as f64 * 0.25,
+                rng.below(100) as f64,
+            ];
+            pts.push((p, i));
+        }
+        // Every corner of the square's lattice duplicated, with heights above and below.
+        for (k, c) in [[511_000.0, 122_000.0], [511_249.75, 122_174.75]].iter().enumerate() {
+            pts.push(([c[0], c[1], -5.0], 300_000 + k as u64));
+            pts.push(([c[0], c[1], 500.0], 400_000 + k as u64));
+        }
+        let want = hull(&mut pts.iter().map(|p| p.0).collect::<Vec<_>>());
+        for policy in [crate::DuplicatePolicy::First, crate::DuplicatePolicy::Lowest] {
+            let mut b = HullBuilder::new(policy);
+            for &(p, i) in &pts {
+                b.add(p, i);
+            }
+            let got = b.finish();
+            assert_eq!(got.len(), want.len());
+            for c in &got {
+                let keep = pts
+                    .iter()
+                    .filter(|p| p.0[0] == c[0] && p.0[1] == c[1])
+                    .reduce(|k, p| if policy.prefers((p.0[2], p.1), (k.0[2], k.1)) { p } else { k })
+                    .unwrap();
+                assert_eq!(c[2], keep.0[2], "{policy:?} at {c:?}");
+                assert!(want.iter().any(|w| w[0] == c[0] && w[1] == c[1]));
+            }
+        }
+    }
+
     /// `2V − B − 2` with [`boundary_points`] is spade's number of triangles: points on a lattice
     /// in a triangle, a rotated square and a strip (many on slanted hull edges), with duplicates,
     /// at UTM-sized offsets, the index spilled to disk.

@@ -79,17 +79,21 @@ fn clip_box(mut poly: Vec<[f64; 2]>, w: &[f64; 4]) -> Vec<[f64; 2]> {
     poly
 }
 
-/// Does the closed disk of centre `c` and radius `r` meet the convex polygon `poly`?
+/// Does the closed disk of centre `c` and radius `r` meet the polygon `poly`? (Its centre
+/// inside by the crossing rule, which holds for a polygon that rounding left a little
+/// non-convex; or an edge within `r`.)
 fn disk_meets_poly(poly: &[[f64; 2]], c: [f64; 2], r: f64) -> bool {
     let n = poly.len();
-    let mut inside = n >= 3;
+    let mut inside = false;
     for i in 0..n {
         let (p, q) = (poly[i], poly[(i + 1) % n]);
+        if (p[1] > c[1]) != (q[1] > c[1])
+            && c[0] < p[0] + (c[1] - p[1]) / (q[1] - p[1]) * (q[0] - p[0])
+        {
+            inside = !inside;
+        }
         let d = [q[0] - p[0], q[1] - p[1]];
         let e = [c[0] - p[0], c[1] - p[1]];
-        if d[0] * e[1] - d[1] * e[0] < 0.0 {
-            inside = false;
-        }
         let l2 = d[0] * d[0] + d[1] * d[1];
         let t = if l2 > 0.0 {
             ((e[0] * d[0] + e[1] * d[1]) / l2).clamp(0.0, 1.0)
@@ -203,7 +207,7 @@ impl Scope {
             return true;
         };
         let mag = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let slack = 1e-7 * (mag + (u[2] - u[0]) + (u[3] - u[1]) + 1.0);
+        let slack = 2e-9 * (mag + (u[2] - u[0]) + (u[3] - u[1]) + 1.0);
         let grow = |b: &[f64; 4]| [b[0] - slack, b[1] - slack, b[2] + slack, b[3] + slack];
         let mut poly = clip_box(p.clone(), &grow(u));
         if let Some(b) = &w.boxed
@@ -229,7 +233,7 @@ impl Scope {
         }
         match w.disk {
             _ if poly.is_empty() => false,
-            Some((c, r)) => disk_meets_poly(&poly, c, r + slack),
+            Some((c, r)) => disk_meets_poly(&poly, c, r * (1.0 + 1e-12) + slack),
             None => true,
         }
     }
@@ -276,3 +280,73 @@ impl Extent {
     }
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A square hull of side 100 at UTM-sized coordinates, its band 2 wide.
+    fn scope() -> Scope {
+        let (x, y) = (500_000.0, 5_000_000.0);
+        let hull = vec![[x, y], [x + 100.0, y], [x + 100.0, y + 100.0], [x, y + 100.0]];
+        let inner = inner_polygon(&hull, 2.0);
+        Scope {
+            unknown: vec![],
+            beyond: vec![],
+            tile: [x, y, x + 10.0, y + 10.0],
+            buffer: 0.0,
+            hull: Some(hull),
+            inner: Some(inner),
+        }
+    }
+
+    #[test]
+    fn the_inner_polygon_is_the_hull_moved_inwards() {
+        let sc = scope();
+        let mut p = sc.inner.clone().unwrap();
+        p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+        p.dedup();
+        let (x, y) = (500_000.0, 5_000_000.0);
+        let want = [[x + 2.0, y + 2.0], [x + 2.0, y + 98.0], [x + 98.0, y + 2.0], [x + 98.0, y + 98.0]];
+        assert_eq!(p.len(), 4, "{p:?}");
+        for (a, b) in p.iter().zip(&want) {
+            assert!((a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6, "{p:?}");
+        }
+    }
+
+    #[test]
+    fn unknown_points_lie_only_inside_the_inner_polygon() {
+        let sc = scope();
+        let (x, y) = (500_000.0, 5_000_000.0);
+        let all = Within::default();
+        // A box within the band (the strip along the south edge) holds no unknown point.
+        let band = [x + 10.0, y, x + 30.0, y + 1.5];
+        assert!(!sc.might_hold(&band, &all));
+        // One that crosses into the inner square may.
+        let deep = [x + 10.0, y, x + 30.0, y + 2.5];
+        assert!(sc.might_hold(&deep, &all));
+        // A disk in the band (a sliver's cap), against the deep box: none; a larger one: some.
+        let disk = |c: [f64; 2], r: f64| Within {
+            disk: Some((c, r)),
+            ..Within::default()
+        };
+        assert!(!sc.might_hold(&deep, &disk([x + 20.0, y - 100.0], 101.0)));
+        assert!(sc.might_hold(&deep, &disk([x + 20.0, y - 100.0], 103.0)));
+        // A disk wholly inside the inner square meets it (its centre is inside).
+        let inside = [x + 40.0, y + 40.0, x + 60.0, y + 60.0];
+        assert!(sc.might_hold(&inside, &disk([x + 50.0, y + 50.0], 1.0)));
+        // Right of the south edge's line (below it) nothing; right of a line across, some.
+        let right = |a: [f64; 2], b: [f64; 2]| Within {
+            right_of: Some((a, b)),
+            ..Within::default()
+        };
+        let whole = [x - 10.0, y - 10.0, x + 110.0, y + 110.0];
+        assert!(!sc.might_hold(&whole, &right([x, y + 1.0], [x + 100.0, y + 1.0])));
+        assert!(sc.might_hold(&whole, &right([x, y + 50.0], [x + 100.0, y + 50.0])));
+        // Without a band, everything may hold unknown points.
+        let open = Scope {
+            inner: None,
+            ..sc
+        };
+        assert!(open.might_hold(&band, &all));
+    }
+}
