@@ -346,7 +346,12 @@ fn proto_hull(job: &TileJob) -> Result<Option<ProtoHull>> {
     for c in &out.band {
         text += &format!("{:x} {:x} {:x}\n", c[0].to_bits(), c[1].to_bits(), c[2].to_bits());
     }
-    let _ = std::fs::write(&path, text);
+    // Written whole and renamed, so that a task beside it never reads half a file.
+    let mut tmp = std::path::PathBuf::from(&path).into_os_string();
+    tmp.push(format!(".{}.tmp", std::process::id()));
+    if std::fs::write(&tmp, text).is_ok() {
+        let _ = std::fs::rename(&tmp, &path);
+    }
     Ok(Some(out))
 }
 
