@@ -254,8 +254,13 @@ fn proto_hull(job: &TileJob) -> Result<Option<ProtoHull>> {
     let Some(path) = std::env::var_os("SWEEPTIN_PROTO_HULL") else {
         return Ok(None);
     };
-    let bits = |w: &str| f64::from_bits(u64::from_str_radix(w, 16).unwrap_or(0));
     if let Ok(s) = std::fs::read_to_string(&path) {
+        let bad = || {
+            crate::error::Error::Options(format!(
+                "SWEEPTIN_PROTO_HULL: {} is not a band file",
+                std::path::Path::new(&path).display()
+            ))
+        };
         let mut out = ProtoHull { hull: vec![], inner: vec![], band: vec![] };
         let mut part = 0;
         for l in s.lines() {
@@ -263,12 +268,20 @@ fn proto_hull(job: &TileJob) -> Result<Option<ProtoHull>> {
                 part += 1;
                 continue;
             }
-            let v: Vec<f64> = l.split(' ').map(bits).collect();
-            match part {
-                1 => out.hull.push([v[0], v[1], v[2]]),
-                2 => out.inner.push([v[0], v[1]]),
-                _ => out.band.push([v[0], v[1], v[2]]),
+            let v = l
+                .split(' ')
+                .map(|w| u64::from_str_radix(w, 16).ok().map(f64::from_bits))
+                .collect::<Option<Vec<f64>>>()
+                .ok_or_else(bad)?;
+            match (part, v.len()) {
+                (1, 3) => out.hull.push([v[0], v[1], v[2]]),
+                (2, 2) => out.inner.push([v[0], v[1]]),
+                (3, 3) => out.band.push([v[0], v[1], v[2]]),
+                _ => return Err(bad()),
             }
+        }
+        if part != 3 {
+            return Err(bad());
         }
         return Ok(Some(out));
     }
