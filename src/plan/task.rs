@@ -513,6 +513,8 @@ impl Plan {
                 beyond: Vec::new(),
                 tile: sc.tile,
                 buffer: sc.buffer,
+                hull: None,
+                inner: None,
             };
             let near = rects()
                 .map(|r| scope.reach(&r))
@@ -528,6 +530,8 @@ impl Plan {
             beyond: Vec::new(),
             tile: sc.tile,
             buffer: sc.buffer,
+            hull: None,
+            inner: None,
         };
         let near = scope
             .unknown

@@ -32,7 +32,7 @@
 //! outside it lies outside the whole triangulation.
 
 use super::grid::BlockRect;
-use super::index::BlockIndex;
+use super::index::{BlockIndex, Within};
 use super::lines::{RegionScratch, RunLines, Sight};
 use super::region::bbox;
 use crate::error::Result;
@@ -274,13 +274,22 @@ impl<'a> Certifier<'a> {
         if inside(&self.world) && read.is_none_or(|w| inside(&w)) {
             return Ok(true);
         }
-        if let Some(sc) = &self.index.scope
-            && let reach = sc.disk_reach([cx, cy], r)
-            && reach > 0.0
-        {
+        // Points not read may lie in the disk: the triangle is not certified. With the hull's
+        // band known, a witness among the points given settles it first (a patch run reads
+        // it, instead of a wider buffer).
+        let reach = self.index.scope.as_ref().map_or(0.0, |sc| sc.disk_reach([cx, cy], r));
+        let band = self.index.scope.as_ref().is_some_and(|sc| sc.inner.is_some());
+        if reach > 0.0 && (!band || inside(&self.world)) {
             self.unknown.set(self.unknown.get().max(reach));
             return Ok(false);
         }
+        let settle = |ok: bool| {
+            if ok && reach > 0.0 {
+                self.unknown.set(self.unknown.get().max(reach));
+                return false;
+            }
+            ok
+        };
         if inside(&self.world) {
             return Ok(true);
         }
@@ -337,7 +346,7 @@ impl<'a> Certifier<'a> {
             found += self.witnesses_among(near, t, &sight, self.witnesses - found, out)?;
             let last = sb == b || !sb.iter().all(|v| v.is_finite());
             if found >= self.witnesses || last {
-                return Ok(found == 0);
+                return Ok(settle(found == 0));
             }
             prev = Some(sb);
             half *= 4.0;
@@ -543,16 +552,41 @@ impl<'a> Certifier<'a> {
         // The near box: the chord box (the segment `ab` moved up to `h` to the left), two
         // blocks wider (witnesses on the far side are most often close to the triangle).
         let near_box = chord_box(a, b, c, g, 2.0 * g.block);
-        let beyond = |e: &[f64; 4]| corner_right_of(a, b, e);
+        // The data's hull known with no corner right of `L`: nothing lies beyond it.
+        let nothing_beyond = self.index.scope.as_ref().is_some_and(|sc| {
+            sc.hull
+                .as_ref()
+                .is_some_and(|h| h.iter().all(|&p| orient(a, b, p) != Orientation::Clockwise))
+        });
+        let beyond = |e: &[f64; 4]| !nothing_beyond && corner_right_of(a, b, e);
         // A plan's task: a file it did not read that the chord box or the half-plane (within
         // the bound) reaches may hold a witness (hidden half-planes ignored: conservative).
+        let mut flat_reach = 0.0;
         if let Some(sc) = &self.index.scope {
-            let reach = sc.reach_where(|u| in_bound(u) && (boxes_meet(u, &near_box) || beyond(u)));
-            if reach > 0.0 {
+            let cap = chord_box(a, b, c, g, 0.0);
+            let disk = bound.filter(|b| b.1.is_finite());
+            let reach = sc.reach_where(|u| {
+                in_bound(u)
+                    && ((boxes_meet(u, &near_box)
+                        && sc.might_hold(u, &Within { disk, boxed: Some(cap), right_of: None }))
+                        || (beyond(u)
+                            && sc.might_hold(u, &Within { disk, boxed: None, right_of: Some((a, b)) })))
+            });
+            if reach > 0.0 && sc.inner.is_none() {
                 self.unknown.set(self.unknown.get().max(reach));
                 return Ok(Some(false));
             }
+            flat_reach = reach;
         }
+        // With the hull's band known: points not read may lie in the disk only when no witness
+        // among those given withholds the certificate.
+        let settle = |ok: bool| {
+            if ok && flat_reach > 0.0 {
+                self.unknown.set(self.unknown.get().max(flat_reach));
+                return false;
+            }
+            ok
+        };
         // With breaklines: a constrained long edge hides the half-plane beyond it.
         let hidden = self.lines.map_or([false; 3], |l| l.hidden(t));
         let mut sight = Sight::default();
@@ -577,7 +611,7 @@ impl<'a> Certifier<'a> {
                 return Ok(Some(false));
             }
             if let Some(rb) = sight.region_box() {
-                return self.region_clear(t, &sight, &rb, out).map(Some);
+                return self.region_clear(t, &sight, &rb, out).map(|ok| Some(settle(ok)));
             }
         }
         let m = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
@@ -609,7 +643,7 @@ impl<'a> Certifier<'a> {
             return Ok(Some(false));
         }
         if hidden[i] {
-            return Ok(Some(true));
+            return Ok(Some(settle(true)));
         }
         // The rest of the half-plane right of `L`, row by row: in each row the half-plane is
         // an interval of x (bounded conservatively).
@@ -659,7 +693,8 @@ impl<'a> Certifier<'a> {
                 Ok(())
             })?;
         }
-        Ok(Some(self.witnesses_among(far, t, &sight, self.witnesses, out)? == 0))
+        let ok = self.witnesses_among(far, t, &sight, self.witnesses, out)? == 0;
+        Ok(Some(settle(ok)))
     }
 
     /// Does block `k` (not read) hold a point inside the circumdisk of `t`? Exact.
@@ -698,7 +733,17 @@ impl Certifier<'_> {
         let Some(sc) = &self.index.scope else {
             return false;
         };
-        let reach = sc.reach_where(|u| corner_right_of(a, b, u));
+        // The data's hull known: nothing lies right of the line when no corner does.
+        if let Some(h) = &sc.hull
+            && h.iter().all(|&c| orient(a, b, c) != Orientation::Clockwise)
+        {
+            return false;
+        }
+        let w = Within {
+            right_of: Some((a, b)),
+            ..Within::default()
+        };
+        let reach = sc.reach_where(|u| corner_right_of(a, b, u) && sc.might_hold(u, &w));
         self.unknown.set(self.unknown.get().max(reach));
         reach > 0.0
     }

@@ -104,6 +104,80 @@ fn span(a: [f64; 2], b: [f64; 2], y0: f64, y1: f64) -> [f64; 2] {
 }
 
 
+/// The corners of the convex hull of points streamed by, each with the height the duplicate
+/// policy keeps among the points at its position (as [`super::index::BlockIndex`]'s hull):
+/// points are buffered and folded into the corners a batch at a time.
+#[derive(Debug, Clone)]
+pub(crate) struct HullBuilder {
+    policy: crate::DuplicatePolicy,
+    /// Corners so far and the points since, as `(x, y, z, global index)`.
+    pts: Vec<([f64; 3], u64)>,
+    corners: usize,
+}
+
+/// Points buffered before they are folded into the corners.
+const HULL_BATCH: usize = 1 << 16;
+
+impl HullBuilder {
+    pub(crate) fn new(policy: crate::DuplicatePolicy) -> Self {
+        HullBuilder {
+            policy,
+            pts: Vec::new(),
+            corners: 0,
+        }
+    }
+
+    /// Adds the point `p` of global input index `index`.
+    pub(crate) fn add(&mut self, p: [f64; 3], index: u64) {
+        self.pts.push((p, index));
+        if self.pts.len() >= self.corners + HULL_BATCH {
+            self.fold();
+        }
+    }
+
+    fn fold(&mut self) {
+        let policy = self.policy;
+        // By position, the point the policy keeps first at each.
+        self.pts.sort_unstable_by(|a, b| {
+            (a.0[0].total_cmp(&b.0[0]))
+                .then(a.0[1].total_cmp(&b.0[1]))
+                .then_with(|| {
+                    if policy.prefers((a.0[2], a.1), (b.0[2], b.1)) {
+                        std::cmp::Ordering::Less
+                    } else if policy.prefers((b.0[2], b.1), (a.0[2], a.1)) {
+                        std::cmp::Ordering::Greater
+                    } else {
+                        std::cmp::Ordering::Equal
+                    }
+                })
+        });
+        self.pts
+            .dedup_by(|b, a| a.0[0] == b.0[0] && a.0[1] == b.0[1]);
+        let mut v: Vec<[f64; 3]> = self.pts.iter().map(|p| p.0).collect();
+        let h = hull(&mut v);
+        let keep: Vec<([f64; 3], u64)> = h
+            .iter()
+            .map(|c| {
+                let i = self
+                    .pts
+                    .binary_search_by(|p| {
+                        p.0[0].total_cmp(&c[0]).then(p.0[1].total_cmp(&c[1]))
+                    })
+                    .unwrap_or(0);
+                self.pts[i]
+            })
+            .collect();
+        self.corners = keep.len();
+        self.pts = keep;
+    }
+
+    /// The corners, counter-clockwise.
+    pub(crate) fn finish(mut self) -> Vec<[f64; 3]> {
+        self.fold();
+        self.pts.into_iter().map(|p| p.0).collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -126,6 +200,45 @@ mod tests {
         };
         let h = hull(&mut v.clone());
         assert_eq!(from_origin(h.iter().map(xy).collect()), square);
+    }
+
+    /// The streamed hull is the hull of all the points, a batch at a time, each corner with
+    /// the height the duplicate policy keeps there.
+    #[test]
+    fn a_streamed_hull_is_the_hull_with_the_policys_heights() {
+        let mut rng = crate::geom::rng::SplitMix64::new(7);
+        let mut pts = Vec::new();
+        for i in 0..200_000u64 {
+            let p = [
+                511_000.0 + rng.below(1000) as f64 * 0.25,
+                122_000.0 + rng.below(700) as f64 * 0.25,
+                rng.below(100) as f64,
+            ];
+            pts.push((p, i));
+        }
+        // Every corner of the square's lattice duplicated, with heights above and below.
+        for (k, c) in [[511_000.0, 122_000.0], [511_249.75, 122_174.75]].iter().enumerate() {
+            pts.push(([c[0], c[1], -5.0], 300_000 + k as u64));
+            pts.push(([c[0], c[1], 500.0], 400_000 + k as u64));
+        }
+        let want = hull(&mut pts.iter().map(|p| p.0).collect::<Vec<_>>());
+        for policy in [crate::DuplicatePolicy::First, crate::DuplicatePolicy::Lowest] {
+            let mut b = HullBuilder::new(policy);
+            for &(p, i) in &pts {
+                b.add(p, i);
+            }
+            let got = b.finish();
+            assert_eq!(got.len(), want.len());
+            for c in &got {
+                let keep = pts
+                    .iter()
+                    .filter(|p| p.0[0] == c[0] && p.0[1] == c[1])
+                    .reduce(|k, p| if policy.prefers((p.0[2], p.1), (k.0[2], k.1)) { p } else { k })
+                    .unwrap();
+                assert_eq!(c[2], keep.0[2], "{policy:?} at {c:?}");
+                assert!(want.iter().any(|w| w[0] == c[0] && w[1] == c[1]));
+            }
+        }
     }
 
     /// `2V − B − 2` with [`boundary_points`] is spade's number of triangles: points on a lattice

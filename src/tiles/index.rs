@@ -713,7 +713,7 @@ pub(crate) fn index(mem: u64, pts: &[[f64; 3]], grid: TileGrid, dir: &Path) -> B
 }
 
 mod scope;
-pub(crate) use scope::{Extent, Scope};
+pub(crate) use scope::{Extent, Scope, Within, inner_polygon};
 mod tagged;
 pub(crate) use tagged::TaggedRecord;
 use tagged::Tags;

@@ -18,7 +18,19 @@ pub(super) fn read_index(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Declared, [f64; 4], TileCpu)> {
     let scope = options.scope.as_ref();
-    let (mut reader, outside) = open_for(job, scope)?;
+    let (mut reader, outside, by_area) = open_for(job, scope)?;
+    // PROTOTYPE: the data's hull corners, added where the task does not read them.
+    let global_hull = match by_area {
+        Some(a) => proto_hull(job)?.map(|h| (h, a)),
+        None => None,
+    };
+    let extra: Vec<[f64; 3]> = global_hull.as_ref().map_or_else(Vec::new, |(h, a)| {
+        h.band
+            .iter()
+            .filter(|c| !(c[0] >= a[0] && c[0] <= a[2] && c[1] >= a[1] && c[1] <= a[3]))
+            .copied()
+            .collect()
+    });
     let b = reader.bounds();
     let total = reader.point_count();
     let area = ((b.max[0] - b.min[0]) * (b.max[1] - b.min[1])).max(f64::MIN_POSITIVE);
@@ -59,8 +71,8 @@ pub(super) fn read_index(
     };
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
     let (mut index, spread, cpu) = match packing {
-        Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, progress)?,
-        None => index_points::<BlockRecord>(&mut reader, probe, None, job, progress)?,
+        Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, &extra, progress)?,
+        None => index_points::<BlockRecord>(&mut reader, probe, None, job, &extra, progress)?,
     };
     declared.decoded = reader.stats().read;
     let bounds = spread.extent();
@@ -73,6 +85,8 @@ pub(super) fn read_index(
             beyond: outside,
             tile: sc.tile,
             buffer: sc.buffer,
+            hull: global_hull.as_ref().map(|(h, _)| h.hull.iter().map(|c| [c[0], c[1]]).collect()),
+            inner: global_hull.map(|(h, _)| h.inner),
         });
     }
     // The tile: as given, or about `tile_points` at the density over the non-empty blocks; for
@@ -122,6 +136,7 @@ fn index_points<R: IndexRecord>(
     grid: TileGrid,
     packing: Option<Packing>,
     job: &TileJob,
+    extra: &[[f64; 3]],
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Spread, TileCpu)> {
     let total = reader.point_count();
@@ -139,6 +154,9 @@ fn index_points<R: IndexRecord>(
         progress(done, total);
         Ok(())
     })?;
+    for p in extra {
+        sorter.push(R::pack(packing.as_ref(), grid.block_of(p[0], p[1]), *p)?)?;
+    }
     let t_read = Instant::now();
     let merge = sorter.finish()?;
     let c1 = crate::clock::process_cpu();
@@ -169,7 +187,11 @@ fn index_points<R: IndexRecord>(
 /// all. Other tasks keep every point of their files (decoding LAZ costs the same whatever is
 /// kept, and the points farther out settle the triangles along the data's edge without another
 /// run), unless their scope reads by area ([`TaskScope::by_area`]: `--ground`).
-fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Vec<[f64; 4]>)> {
+#[allow(clippy::type_complexity)]
+fn open_for(
+    job: &TileJob,
+    scope: Option<&TaskScope>,
+) -> Result<(LidarReader, Vec<[f64; 4]>, Option<[f64; 4]>)> {
     if let Some(sc) = scope {
         let infos = job
             .paths
@@ -207,7 +229,7 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
             };
             let reader = LidarReader::open_with(job.paths, job.filter, options)?;
             let outside = infos.iter().flat_map(|i| unread_of(i, sc, area)).collect();
-            return Ok((reader, outside));
+            return Ok((reader, outside, Some(area)));
         }
     }
     let options = ReadOptions {
@@ -215,7 +237,135 @@ fn open_for(job: &TileJob, scope: Option<&TaskScope>) -> Result<(LidarReader, Ve
         ..ReadOptions::for_budget(job.mem)
     };
     let reader = LidarReader::open_with(job.paths, job.filter, options)?;
-    Ok((reader, Vec::new()))
+    Ok((reader, Vec::new(), None))
+}
+
+/// PROTOTYPE: the data's hull corners, a polygon inside the hull (its edges `SWEEPTIN_PROTO_BAND`
+/// inwards, default 2) and the points not strictly inside it, with the duplicate policy's z;
+/// cached in the file `SWEEPTIN_PROTO_HULL`.
+pub(super) struct ProtoHull {
+    pub hull: Vec<[f64; 3]>,
+    pub inner: Vec<[f64; 2]>,
+    pub band: Vec<[f64; 3]>,
+}
+
+fn proto_hull(job: &TileJob) -> Result<Option<ProtoHull>> {
+    use crate::geom::predicates::{Orientation, orient};
+    let Some(path) = std::env::var_os("SWEEPTIN_PROTO_HULL") else {
+        return Ok(None);
+    };
+    if let Ok(s) = std::fs::read_to_string(&path) {
+        let bad = || {
+            crate::error::Error::Options(format!(
+                "SWEEPTIN_PROTO_HULL: {} is not a band file",
+                std::path::Path::new(&path).display()
+            ))
+        };
+        let mut out = ProtoHull { hull: vec![], inner: vec![], band: vec![] };
+        let mut part = 0;
+        for l in s.lines() {
+            if l.starts_with('#') {
+                part += 1;
+                continue;
+            }
+            let v = l
+                .split(' ')
+                .map(|w| u64::from_str_radix(w, 16).ok().map(f64::from_bits))
+                .collect::<Option<Vec<f64>>>()
+                .ok_or_else(bad)?;
+            match (part, v.len()) {
+                (1, 3) => out.hull.push([v[0], v[1], v[2]]),
+                (2, 2) => out.inner.push([v[0], v[1]]),
+                (3, 3) => out.band.push([v[0], v[1], v[2]]),
+                _ => return Err(bad()),
+            }
+        }
+        if part != 3 {
+            return Err(bad());
+        }
+        return Ok(Some(out));
+    }
+    let d: f64 = std::env::var("SWEEPTIN_PROTO_BAND").ok().and_then(|v| v.parse().ok()).unwrap_or(2.0);
+    let open = || {
+        let options = ReadOptions {
+            crs: job.crs.cloned(),
+            ..ReadOptions::for_budget(job.mem)
+        };
+        LidarReader::open_with(job.paths, job.filter, options)
+    };
+    let mut reader = open()?;
+    let mut b = hull::HullBuilder::new(job.duplicates);
+    prefetched(&mut reader, |buf, _| {
+        for p in buf {
+            b.add([p.x, p.y, p.z], p.index);
+        }
+        Ok(())
+    })?;
+    let h = b.finish();
+    let h2: Vec<[f64; 2]> = h.iter().map(|c| [c[0], c[1]]).collect();
+    let inner = index::inner_polygon(&h2, d);
+    let n = inner.len();
+    let strictly_inside = |q: [f64; 2]| {
+        n >= 3
+            && (0..n).all(|i| orient(inner[i], inner[(i + 1) % n], q) == Orientation::CounterClockwise)
+    };
+    // Cells of 8 units wholly inside (their four corners strictly inside the convex polygon).
+    let cell = 8.0;
+    let (x0, y0) = (h2.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min), h2.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min));
+    let (x1, y1) = (h2.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max), h2.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max));
+    let (nx, ny) = (((x1 - x0) / cell) as usize + 1, ((y1 - y0) / cell) as usize + 1);
+    let mut full = vec![false; nx * ny];
+    for j in 0..ny {
+        for i in 0..nx {
+            let (cx, cy) = (x0 + i as f64 * cell, y0 + j as f64 * cell);
+            full[j * nx + i] = [[cx, cy], [cx + cell, cy], [cx, cy + cell], [cx + cell, cy + cell]]
+                .iter()
+                .all(|&q| strictly_inside(q));
+        }
+    }
+    let mut band: Vec<([f64; 3], u64)> = Vec::new();
+    let mut reader = open()?;
+    prefetched(&mut reader, |buf, _| {
+        for p in buf {
+            let (i, j) = (((p.x - x0) / cell) as usize, ((p.y - y0) / cell) as usize);
+            let inside = i < nx && j < ny && full[j * nx + i] || strictly_inside([p.x, p.y]);
+            if !inside {
+                band.push(([p.x, p.y, p.z], p.index));
+            }
+        }
+        Ok(())
+    })?;
+    let policy = job.duplicates;
+    band.sort_by(|a, b| {
+        (a.0[0].total_cmp(&b.0[0])).then(a.0[1].total_cmp(&b.0[1])).then_with(|| {
+            if policy.prefers((a.0[2], a.1), (b.0[2], b.1)) {
+                std::cmp::Ordering::Less
+            } else {
+                std::cmp::Ordering::Greater
+            }
+        })
+    });
+    band.dedup_by(|b, a| a.0[0] == b.0[0] && a.0[1] == b.0[1]);
+    let out = ProtoHull { hull: h, inner, band: band.into_iter().map(|p| p.0).collect() };
+    let mut text = String::from("#hull\n");
+    for c in &out.hull {
+        text += &format!("{:x} {:x} {:x}\n", c[0].to_bits(), c[1].to_bits(), c[2].to_bits());
+    }
+    text += "#inner\n";
+    for c in &out.inner {
+        text += &format!("{:x} {:x}\n", c[0].to_bits(), c[1].to_bits());
+    }
+    text += "#band\n";
+    for c in &out.band {
+        text += &format!("{:x} {:x} {:x}\n", c[0].to_bits(), c[1].to_bits(), c[2].to_bits());
+    }
+    // Written whole and renamed, so that a task beside it never reads half a file.
+    let mut tmp = std::path::PathBuf::from(&path).into_os_string();
+    tmp.push(format!(".{}.tmp", std::process::id()));
+    if std::fs::write(&tmp, text).is_ok() {
+        let _ = std::fs::rename(&tmp, &path);
+    }
+    Ok(Some(out))
 }
 
 /// Where points of the file `i` that a read of `area` skips may lie: the boxes of its chunks
