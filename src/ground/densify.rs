@@ -24,7 +24,6 @@ use crate::error::{Error, Result};
 use crate::tin::{PointLocation, Tin, TriId, VertexId};
 use rayon::prelude::*;
 
-mod cells;
 mod deferred;
 
 /// No triangle, no candidate.
@@ -119,10 +118,6 @@ pub(super) struct Densify<'a> {
     /// The candidates that do not densify (not the lowest of their densification cell), each
     /// with its cell's lowest point, in point order: judged once against the final TIN.
     deferred: Vec<(u32, u32)>,
-    /// The candidates by cell; the (triangle, point) pairs a scan found; a bit a point: moving.
-    cells: cells::Cells,
-    scanned: Vec<(u32, u32)>,
-    moving: Vec<u64>,
 }
 
 impl<'a> Densify<'a> {
@@ -162,9 +157,6 @@ impl<'a> Densify<'a> {
             accepted: Vec::new(),
             chosen: Vec::new(),
             deferred,
-            cells: cells::Cells::default(),
-            scanned: Vec::new(),
-            moving: vec![0; n.div_ceil(64)],
             tin: Tin::default(),
         };
         d.grow_for(&tin);
@@ -177,7 +169,6 @@ impl<'a> Densify<'a> {
                 d.link(i, t.0);
             }
         }
-        d.cells = cells::Cells::new(&tin, virtuals, cand, &d.tri);
         for t in tin.triangles() {
             d.set_dirty(t.0);
             d.dirty_list.push(t.0);
@@ -201,9 +192,7 @@ impl<'a> Densify<'a> {
             + self.found.capacity();
         self.tin.heap_bytes()
             + u * (per_point + self.head.capacity() + self.mhead.capacity())
-            + 8 * (self.dirty.capacity() + self.marks.capacity() + self.moving.capacity())
-            + self.cells.heap_bytes()
-            + self.scanned.capacity() * 8
+            + 8 * (self.dirty.capacity() + self.marks.capacity())
             + self.touched.capacity() * u
             + self.accepted.capacity() * std::mem::size_of::<Accepted>()
             + self.chosen.capacity() * std::mem::size_of::<(u64, u32)>()
@@ -636,8 +625,6 @@ impl<'a> Densify<'a> {
         // In memory order (spatial, see `ptd::spatial_order`), walks from the slot each was in
         // (near), pieces on every core: the triangle found does not depend on the walk's path.
         in_point_order(&mut gathered, &mut self.marks);
-        // The candidates of the triangles small enough from the cells; the others walk.
-        self.take_scanned(&touched, &mut gathered)?;
         let mut found = std::mem::take(&mut self.found);
         let tri = &self.tri;
         self.locate_all(&gathered, |&i, _| (i, tri[i as usize]), &mut found);
