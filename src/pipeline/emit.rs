@@ -327,3 +327,65 @@ impl Collected {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sink::{ProductSummary, StreamInfo};
+
+    #[derive(Default)]
+    struct Record(Vec<[[f64; 3]; 3]>);
+
+    impl TriangleSink for Record {
+        fn begin(&mut self, _info: &StreamInfo) -> Result<()> {
+            Ok(())
+        }
+        fn triangle(&mut self, t: &[[f64; 3]; 3]) -> Result<()> {
+            self.0.push(*t);
+            Ok(())
+        }
+        fn finish(&mut self) -> Result<ProductSummary> {
+            Ok(ProductSummary::None)
+        }
+    }
+
+    /// A sink gets each triangle's corners from the corner events, in the triangle's order
+    /// (mirrored for a sweep along x), and the writer keeps no table of live vertices (a ring
+    /// of points has nearly all of them live at once).
+    #[test]
+    fn triangles_take_their_corners_from_the_stream_and_no_vertex_is_held() {
+        let pts = [[0.0, 0.0, 5.0], [1.0, 0.0, 6.0], [0.0, 1.0, 7.0]];
+        for swap in [false, true] {
+            let mut rec = Record::default();
+            let mut sinks: [&mut dyn TriangleSink; 1] = [&mut rec];
+            let mut emit = Emitter::new(Frame { swap }, None, &mut sinks, None);
+            assert!(emit.needs_corners());
+            for p in pts {
+                let (xy, z) = ([p[0], p[1]], p[2]);
+                emit.event(Event::Vertex { xy, z, index: 0 }).unwrap();
+            }
+            for p in pts {
+                emit.event(Event::Corner {
+                    xy: [p[0], p[1]],
+                    z: p[2],
+                })
+                .unwrap();
+            }
+            emit.event(Event::Triangle([0, 1, 2])).unwrap();
+            assert!(emit.live.is_empty(), "no vertex map without trimming");
+            for i in 0..3 {
+                emit.event(Event::VertexDone(i)).unwrap();
+            }
+            // A triangle without its corners is an internal error, not a wrong cell.
+            assert!(emit.event(Event::Triangle([0, 1, 2])).is_err());
+            drop(emit);
+            let w = |p: [f64; 3]| Frame { swap }.world([p[0], p[1]], p[2]);
+            let want = if swap {
+                [w(pts[0]), w(pts[2]), w(pts[1])]
+            } else {
+                pts.map(w)
+            };
+            assert_eq!(rec.0, vec![want]);
+        }
+    }
+}
