@@ -678,7 +678,7 @@ impl StreamingSweep {
     /// resident pages when they have grown by it ([`tables::Spill::look`]).
     fn look_at_tables(&mut self) -> Result<()> {
         let (pts, mesh, front, fin) = self.sweep.tables_mut();
-        let had_watch = fin.spill.watch().is_some();
+        let had_watch = fin.spill.watching();
         let (nodes, buckets, lead, last, low) = front.tables_mut();
         let vt = &mut fin.vertices;
         let looked = fin.spill.look(&mut [

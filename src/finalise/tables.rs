@@ -224,7 +224,12 @@ impl Spill {
         self.spilled
     }
 
-    /// The watch on the resident memory, once the tables have spilled.
+    /// Has the watch on the resident memory started (the tables spilled)?
+    pub(super) fn watching(&self) -> bool {
+        self.watch.is_some()
+    }
+
+    /// The watch on the resident memory, once the tables have spilled (a new handle).
     pub(super) fn watch(&self) -> Option<std::sync::Arc<ResidentWatch>> {
         self.watch.clone()
     }
