@@ -42,11 +42,8 @@ impl StreamingSweep {
                 }
             }
             // This pass touches every held triangle: keep dropping the spilled pages.
-            let fin = self.fin();
-            if fin.spill.over()
-                || (t.is_multiple_of(tables::LOOK_EVERY_EMITTED) && fin.spill.spilled())
-            {
-                let _ = self.look_at_tables();
+            if self.fin().spill.touched(tables::PAGES_AN_EMISSION) {
+                self.sweep.release_spilled();
             }
         }
         let count = self.fin().vertices.out.len();

@@ -48,6 +48,7 @@ mod check;
 mod end;
 mod far;
 mod pending;
+mod ring;
 mod tables;
 mod watermark;
 
@@ -62,6 +63,7 @@ use pending::PendingSegments;
 use tables::{Spill, VertexTable};
 pub use tables::SpillPolicy;
 use far::FarQueue;
+use ring::{NearRing, RING};
 
 /// One point for the streaming sweep.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -124,9 +126,6 @@ pub enum Event {
 }
 
 const NOT_OUT: u64 = u64::MAX;
-const RING: usize = 1024;
-/// Capacity a processed ring bucket keeps for reuse.
-const RING_KEEP: usize = 256;
 /// Buckets between a triangle's creation and its first check.
 const FIRST_CHECK: u64 = 3;
 /// Checks a triangle may fail on the front before the waits between its checks double.
@@ -176,9 +175,10 @@ pub struct StreamStats {
 pub(crate) struct Finalizer {
     vertices: VertexTable,
     free_triangles: Vec<u32>,
-    ring: Vec<Vec<u32>>,
-    /// Entries in `ring`.
-    in_ring: usize,
+    /// The queue's buckets from `cur` on, [`RING`] of them; later ones wait in `far`.
+    ring: NearRing,
+    /// The entries of the bucket being processed, a block at a time.
+    batch: Vec<u32>,
     far: FarQueue,
     /// First bucket not yet processed.
     cur: u64,
@@ -219,12 +219,6 @@ pub(crate) struct Finalizer {
     blocked: SpillVec<u8>,
     /// Where the tables go when they outgrow their share of `--mem`.
     spill: Spill,
-    /// Pages the finality checks may have touched since the last look at the spilled tables,
-    /// about: one a check and one a front node scanned ([`tables::LOOK_EVERY_TOUCHES`]).
-    touches: u64,
-    /// Steps of the sweep (new triangles, flips) since the last look at the resident memory
-    /// ([`tables::LOOK_EVERY_STEPS`]).
-    steps_since_look: u32,
 }
 
 impl Finalizer {
@@ -253,8 +247,8 @@ impl Finalizer {
         Finalizer {
             vertices: VertexTable::default(),
             free_triangles: Vec::new(),
-            ring: vec![Vec::new(); RING],
-            in_ring: 0,
+            ring: NearRing::default(),
+            batch: Vec::new(),
             far: FarQueue::default(),
             cur: 0,
             sweep_bucket: 0,
@@ -278,8 +272,6 @@ impl Finalizer {
             due: SpillVec::default(),
             blocked: SpillVec::default(),
             spill: Spill::new(cfg.spill.clone()),
-            touches: 0,
-            steps_since_look: 0,
         }
     }
 
@@ -348,8 +340,7 @@ impl Finalizer {
     #[inline]
     fn push_entry(&mut self, t: u32, k: u64) {
         if k < self.cur + RING as u64 {
-            self.ring[(k % RING as u64) as usize].push(t);
-            self.in_ring += 1;
+            self.ring.push(k, t);
         } else {
             self.far.push(k, t);
         }
@@ -397,7 +388,6 @@ impl Finalizer {
 
     /// Moves the far-queue entries that now fall within the ring into it.
     fn pull_far(&mut self) {
-        let mut pulled = 0u32;
         while let Some((k, t)) = self.far.peek() {
             if k >= self.cur + RING as u64 {
                 break;
@@ -409,11 +399,7 @@ impl Finalizer {
             // Each pop walks a path of the heap (a page a level past the first few) and reads
             // a row of `due`: on a ring of points millions of entries come in at once, from
             // tables spilled to files, so look at the resident memory on the way.
-            pulled += 1;
-            if pulled.is_multiple_of(tables::LOOK_EVERY_PULLS)
-                && self.spill.spilled()
-                && (self.spill.over() || self.spill.grown())
-            {
+            if self.spill.touched(tables::PAGES_A_PULL) {
                 self.release_spilled();
             }
         }
@@ -513,21 +499,14 @@ impl Hooks for Finalizer {
 
     #[inline(always)]
     fn spill_due(&mut self) -> bool {
-        if self.spill.over() {
-            return true;
-        }
-        self.steps_since_look += 1;
-        if self.steps_since_look < tables::LOOK_EVERY_STEPS {
-            return false;
-        }
-        self.steps_since_look = 0;
-        self.spill.grown()
+        self.spill.touched(tables::PAGES_A_STEP)
     }
 
     fn release_spilled(&mut self) {
         self.due.release();
         self.blocked.release();
         self.far.table().release();
+        self.ring.table().release();
         let vt = &mut self.vertices;
         vt.z.release();
         vt.index.release();
@@ -615,7 +594,7 @@ impl StreamingSweep {
         let front = self.sweep.front().len();
         let fin = self.fin();
         fin.adapt(p.xy[1], front);
-        let queued = (fin.in_ring + fin.far.len()) as u64;
+        let queued = (fin.ring.len() + fin.far.len()) as u64;
         fin.stats.peak_queued = fin.stats.peak_queued.max(queued);
         self.finalize_due(p.xy[1]);
         if self.fin().points.is_multiple_of(tables::CHECK_EVERY) {
@@ -691,6 +670,7 @@ impl StreamingSweep {
             &mut mesh.origin,
             &mut mesh.link,
             fin.far.table(),
+            fin.ring.table(),
             &mut fin.due,
             &mut fin.blocked,
             &mut vt.z,
@@ -718,7 +698,7 @@ impl StreamingSweep {
             if fin.cur >= ks {
                 return;
             }
-            if fin.in_ring == 0 {
+            if fin.ring.len() == 0 {
                 // Nothing in the ring: jump straight to the sweep line or the next far entry.
                 let next_far = fin.far.peek().map_or(u64::MAX, |r| r.0);
                 fin.cur = ks.min(next_far.max(fin.cur + 1));
@@ -726,39 +706,30 @@ impl StreamingSweep {
                 continue;
             }
             let bucket = fin.cur;
-            let slot = (bucket % RING as u64) as usize;
             fin.cur += 1;
-            let mut list = std::mem::take(&mut fin.ring[slot]);
-            fin.in_ring -= list.len();
+            let mut chain = fin.ring.detach(bucket);
             fin.pull_far();
-            for &t in &list {
-                if self.sweep.hooks().due[t as usize] == bucket
-                    && self.sweep.mesh().is_live(TriId(t))
-                {
-                    // Checks of held triangles (a line's fan, a ring: millions) touch their
-                    // spilled tables, the far queue's heap and the front's nodes all over: drop
-                    // the pages as the checks go, not only between points (a full disk is
-                    // reported by the next look between points).
-                    let scans = self.fin().stats.front_scans;
-                    self.check_final(t, y, ks);
-                    let fin = self.fin();
-                    fin.touches += 1 + fin.stats.front_scans - scans;
-                    if fin.spill.over()
-                        || (fin.touches >= tables::LOOK_EVERY_TOUCHES && fin.spill.spilled())
+            let mut batch = std::mem::take(&mut fin.batch);
+            while self.fin().ring.next_batch(&mut chain, &mut batch) {
+                for &t in &batch {
+                    if self.sweep.hooks().due[t as usize] == bucket
+                        && self.sweep.mesh().is_live(TriId(t))
                     {
-                        fin.touches = 0;
-                        let _ = self.look_at_tables();
+                        // Checks of held triangles (a line's fan, a ring: millions) touch their
+                        // spilled tables, the far queue's heap and the front's nodes all over:
+                        // drop the pages as the checks go, not only between points (a full
+                        // disk is reported by the next look between points).
+                        let scans = self.fin().stats.front_scans;
+                        self.check_final(t, y, ks);
+                        let fin = self.fin();
+                        let pages = tables::PAGES_A_CHECK * (1 + fin.stats.front_scans - scans);
+                        if fin.spill.touched(pages) {
+                            self.sweep.release_spilled();
+                        }
                     }
                 }
             }
-            list.clear();
-            // Do not let each of the RING buckets keep the capacity of its busiest moment: that
-            // would hold RING x (entries per bucket), which grows with the front.
-            list.shrink_to(RING_KEEP);
-            let fin = self.fin();
-            if fin.ring[slot].is_empty() {
-                fin.ring[slot] = list;
-            }
+            self.fin().batch = batch;
         }
     }
 

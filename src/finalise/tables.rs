@@ -27,22 +27,24 @@ pub struct SpillPolicy {
     pub mem: u64,
 }
 
-/// Pages the finality checks may touch between two looks at the spilled tables' resident
-/// memory, counted as one a check and one a front node scanned under its disk (random pages
-/// when the held triangles and the front's nodes are not in sweep order: on a ring of points,
-/// 1,024 checks brought 60–100 MB of the files in between two looks). The watch
-/// ([`ResidentWatch`]) is looked at after every check besides.
-pub(super) const LOOK_EVERY_TOUCHES: u64 = 2048;
-/// Steps of the sweep (new triangles and flips) between two looks at the file-backed resident
-/// memory (a point inserted near the top of a ring fills and legalises hundreds of thousands:
-/// 130 MB of the files in 0.2 s between two points); the watch after every step besides.
-pub(super) const LOOK_EVERY_STEPS: u32 = 256;
-/// Far-queue entries pulled into the ring between two looks (each pop touches about a page a
-/// level of the heap past its first page: some 15 for millions of entries).
-pub(super) const LOOK_EVERY_PULLS: u32 = 128;
-/// Triangles emitted at the end of the sweep between two looks (each touches the rows of its
-/// triangle, neighbours and vertices: on a ring, 4,096 brought 160 MB in).
-pub(super) const LOOK_EVERY_EMITTED: u32 = 256;
+/// Pages of the spilled tables that may come into memory between two readings of the
+/// file-backed resident memory ([`Spill::touched`]): each step that touches the tables counts
+/// what it may bring in (random pages when the held triangles and the front's nodes are not in
+/// sweep order, as on a ring of points, where 1,024 checks brought 60–100 MB of the files in
+/// between two looks, and a point inserted near the ring's top filled and legalised hundreds of
+/// thousands of triangles: 130 MB in 0.2 s). The watch ([`ResidentWatch`]) is asked at every
+/// step besides, for what comes faster.
+pub(super) const LOOK_EVERY_PAGES: u64 = 2048;
+/// A finality check, and a front node scanned under its disk: about a page each.
+pub(super) const PAGES_A_CHECK: u64 = 1;
+/// A step of the sweep (a new triangle, a flip): the rows of its triangles and vertices.
+pub(super) const PAGES_A_STEP: u64 = 8;
+/// A far-queue entry pulled into the ring: about a page a level of the heap past its first
+/// pages (some 15 levels for millions of entries).
+pub(super) const PAGES_A_PULL: u64 = 16;
+/// A triangle emitted at the end of the sweep: the rows of its triangle, neighbours and
+/// vertices (on a ring, 4,096 emitted brought 160 MB in).
+pub(super) const PAGES_AN_EMISSION: u64 = 8;
 
 /// Points between two looks at the tables' size (and, once spilled, at the resident memory).
 pub(super) const CHECK_EVERY: u64 = 4096;
@@ -138,6 +140,8 @@ pub(super) struct Spill {
     watch: Option<std::sync::Arc<ResidentWatch>>,
     /// File-backed resident bytes of the process just after the last release.
     base: u64,
+    /// Pages counted by [`Spill::touched`] since the last reading of the resident memory.
+    touched: u64,
     /// Most bytes of the tables in their files at once.
     pub(super) peak_spilled: u64,
     /// Times the tables' pages were dropped from the resident set.
@@ -219,9 +223,25 @@ impl Spill {
         resident > self.base + (p.mem / 4).max(MIN_SPILL)
     }
 
-    /// Have the tables moved into temporary files?
-    pub(super) fn spilled(&self) -> bool {
-        self.spilled
+    /// Counts `pages` of the tables that a step may have brought into memory; `true` when
+    /// their pages should be dropped now: the watch saw the file-backed resident memory grow by
+    /// the budget, or [`LOOK_EVERY_PAGES`] have been counted since the last reading and
+    /// `/proc/self/statm` says it grew. The one count of every step that touches the tables
+    /// (checks, the sweep's new triangles and flips, far pulls, the end's emission).
+    #[inline(always)]
+    pub(super) fn touched(&mut self, pages: u64) -> bool {
+        if self.over() {
+            return true;
+        }
+        if !self.spilled {
+            return false;
+        }
+        self.touched += pages;
+        if self.touched < LOOK_EVERY_PAGES {
+            return false;
+        }
+        self.touched = 0;
+        self.grown()
     }
 
     /// Has the watch on the resident memory started (the tables spilled)?
@@ -238,6 +258,7 @@ impl Spill {
     pub(super) fn released(&mut self) {
         if self.spilled {
             self.releases += 1;
+            self.touched = 0;
             self.base = crate::limits::file_rss().unwrap_or(0);
             if let Some(w) = &self.watch {
                 w.rebase();
