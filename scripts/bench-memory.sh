@@ -16,16 +16,19 @@
 #
 #   scripts/bench-memory.sh [--sizes "1M 10M"] [--mems "64M 128M 512M"] [--dists "..."]
 #                           [--out DIR] [--no-orders] [--no-spade] [--report] [--build DIR]
-#                           [--tin-only]
+#                           [--tin-only] [--spade-timeout SECONDS]
 # --report prints the tables of the results already in DIR (a run cut short).
 # --tin-only skips the `dem` rows (the 10 M line's DEM takes many minutes a row).
 # --build DIR uses the release build in DIR (DIR/sweeptin, DIR/examples/...) instead of building
 # target/release (e.g. a faster non-LTO build made with CARGO_TARGET_DIR).
+# --spade-timeout stops spade's bulk load after SECONDS (default 900: on the 10 M line it runs
+# for hours); the table then says "> SECONDS".
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SIZES="1M 10M"; MEMS="64M 128M 512M"
 DISTS="square disc kuzmin disc-far lidar clustered line circle"
 OUT=${SWEEPTIN_BENCH_DIR:-/tmp/sweeptin-bench-memory}; ORDERS=1; SPADE=1; REPORT=0; BUILD=; TIN_ONLY=0
+SPADE_TIMEOUT=900
 while [ $# -gt 0 ]; do
     case "$1" in
         --sizes) SIZES=$2; shift 2;;
@@ -37,6 +40,7 @@ while [ $# -gt 0 ]; do
         --report) REPORT=1; shift;;
         --build) BUILD=$2; shift 2;;
         --tin-only) TIN_ONLY=1; shift;;
+        --spade-timeout) SPADE_TIMEOUT=$2; shift 2;;
         *) echo "unknown option $1" >&2; exit 2;;
     esac
 done
@@ -64,7 +68,11 @@ for part, title in (("dists", "distributions (random order)"), ("orders", "input
         bad += not ok
         pts = r.get("points", 0)
         s = spade.get((r["dist"], r["size"]))
-        sp = f"{s['wall_s']:.1f} | {s['max_rss']/2**20:.0f}" if s and s["status"] == 0 else "– | –"
+        sp = "– | –"
+        if s and s["status"] == 0:
+            sp = f"{s['wall_s']:.1f} | {s['max_rss']/2**20:.0f}"
+        elif s and s.get("timeout"):
+            sp = f"> {s['timeout']} (stopped) | {s['max_rss']/2**20:.0f}"
         flag = "yes" if ok else ("**no**" if r["status"] == 0 else f"**exit {r['status']}**")
         print(f"| {r['dist']} | {pts:,} | {r['order']} | {r['mem']} | {r['cmd']} | {r['wall_s']:.1f} | "
               f"{pts / max(r['wall_s'], 1e-9) / 1e6:.2f} | {r['max_rss']/2**20:.0f} | {bound/2**20:.0f} | {flag} | "
@@ -109,6 +117,8 @@ if js != "-":
                    front=d["sweep"]["peak_front"], warnings=len(d.get("warnings", [])))
     except Exception as e:  # a failed run: its status says so
         row.update(error=str(e))
+elif status == 124:  # stopped by `timeout`
+    row.update(timeout=int(sys.argv[9]))
 else:
     n, tris, load, secs = open(log).read().split("\n")[0].split()
     row.update(points=int(n), triangulate_s=float(secs))
@@ -153,10 +163,10 @@ for size in $SIZES; do
         done
         if [ "$SPADE" = 1 ]; then
             log="$OUT/spade-$dist-$size.log"; : > "$log"
-            timed "$log" $BUILD/examples/spade_xyz "$FILE" >> "$log" 2>&1
+            timed "$log" timeout "$SPADE_TIMEOUT" $BUILD/examples/spade_xyz "$FILE" >> "$log" 2>&1
             # The spade line first, then /usr/bin/time's.
             sort "$log" -o "$log"
-            record spade "$dist" "$size" random - spade "$log" -
+            record spade "$dist" "$size" random - spade "$log" - "$SPADE_TIMEOUT"
         fi
         rm -f "$FILE"
     done

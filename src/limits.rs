@@ -16,97 +16,12 @@ pub fn peak_rss() -> Option<u64> {
 }
 
 /// Current shared resident memory of this process: mapped file pages and shared memory
-/// (`/proc/self/statm`'s third field, RssFile + RssShmem; Linux). Read every 2 ms while a
-/// sweep's tables are spilled ([`ResidentWatch`]), so from the short `statm` rather than
-/// `status`.
+/// (`/proc/self/statm`'s third field, RssFile + RssShmem; Linux). Read every few thousand
+/// steps while a sweep's tables are spilled, so from the short `statm` rather than `status`.
 pub(crate) fn file_rss() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/statm").ok()?;
     let pages: u64 = s.split_whitespace().nth(2)?.parse().ok()?;
     Some(pages * rustix::param::page_size() as u64)
-}
-
-/// How often a [`ResidentWatch`] reads [`file_rss`].
-const WATCH_EVERY: std::time::Duration = std::time::Duration::from_millis(2);
-
-/// A thread that reads the process's file-backed resident memory ([`file_rss`]) every 2 ms
-/// and raises a flag once it is more than an allowance above the base taken at the last
-/// [`ResidentWatch::rebase`]. The loops that touch memory-mapped tables all over (a spilled
-/// sweep's held triangles) look at the flag, one atomic load, after each step and drop the
-/// tables' pages when it is up: the pages a loop brings in are dropped within milliseconds of
-/// passing the allowance, whichever loop it is and however large the kernel's folios. Counting
-/// steps between looks at `/proc` instead let a walk bring 60 MB in between two looks (a
-/// ring of 10 M points). Stopped when dropped.
-#[derive(Debug)]
-pub(crate) struct ResidentWatch {
-    state: std::sync::Arc<WatchState>,
-    thread: Option<std::thread::JoinHandle<()>>,
-}
-
-#[derive(Debug)]
-struct WatchState {
-    over: std::sync::atomic::AtomicBool,
-    base: std::sync::atomic::AtomicU64,
-    allowance: u64,
-    stop: std::sync::atomic::AtomicBool,
-}
-
-impl ResidentWatch {
-    /// Starts watching, with the base at the current file-backed resident memory; `None` where
-    /// it cannot be read (not Linux) or no thread can be started.
-    pub(crate) fn start(allowance: u64) -> Option<Self> {
-        use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
-        let state = std::sync::Arc::new(WatchState {
-            over: AtomicBool::new(false),
-            base: AtomicU64::new(file_rss()?),
-            allowance,
-            stop: AtomicBool::new(false),
-        });
-        let s = state.clone();
-        let thread = std::thread::Builder::new()
-            .name("sweeptin-resident-watch".into())
-            .spawn(move || {
-                while !s.stop.load(Relaxed) {
-                    if let Some(r) = file_rss()
-                        && r > s.base.load(Relaxed).saturating_add(s.allowance)
-                    {
-                        s.over.store(true, Relaxed);
-                    }
-                    std::thread::park_timeout(WATCH_EVERY);
-                }
-            })
-            .ok()?;
-        Some(ResidentWatch {
-            state,
-            thread: Some(thread),
-        })
-    }
-
-    /// Has the file-backed resident memory grown past the allowance since the last rebase?
-    #[inline(always)]
-    pub(crate) fn over(&self) -> bool {
-        self.state.over.load(std::sync::atomic::Ordering::Relaxed)
-    }
-
-    /// The pages were just dropped: the growth counts from the resident memory now.
-    pub(crate) fn rebase(&self) {
-        use std::sync::atomic::Ordering::Relaxed;
-        if let Some(r) = file_rss() {
-            self.state.base.store(r, Relaxed);
-        }
-        self.state.over.store(false, Relaxed);
-    }
-}
-
-impl Drop for ResidentWatch {
-    fn drop(&mut self) {
-        self.state
-            .stop
-            .store(true, std::sync::atomic::Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            t.thread().unpark();
-            let _ = t.join();
-        }
-    }
 }
 
 /// Current anonymous resident memory of this process (Linux).

@@ -57,7 +57,7 @@ impl StreamingSweep {
                 }
             }
             // Millions of vertices held (a line): their rows would all come back into memory.
-            if fin.spill.over() || v % tables::CHECK_EVERY as usize == 0 {
+            if v % tables::CHECK_EVERY as usize == 0 {
                 let _ = self.look_at_tables();
             }
         }

@@ -657,10 +657,9 @@ impl StreamingSweep {
     /// resident pages when they have grown by it ([`tables::Spill::look`]).
     fn look_at_tables(&mut self) -> Result<()> {
         let (pts, mesh, front, fin) = self.sweep.tables_mut();
-        let had_watch = fin.spill.watching();
         let (nodes, buckets, lead, last, low) = front.tables_mut();
         let vt = &mut fin.vertices;
-        let looked = fin.spill.look(&mut [
+        fin.spill.look(&mut [
             pts,
             nodes,
             buckets,
@@ -677,12 +676,7 @@ impl StreamingSweep {
             &mut vt.index,
             &mut vt.out,
             &mut vt.refs,
-        ]);
-        if !had_watch && let Some(w) = fin.spill.watch() {
-            // The tables have just spilled: the front's rebuilds look at the watch too.
-            front.watch_resident(Some(w));
-        }
-        looked
+        ])
     }
 
     /// Processes every queue bucket the sweep line (now at `y`) has passed.

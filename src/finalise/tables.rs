@@ -13,7 +13,6 @@
 //! decided never depends on where the tables are, so the output is the same.
 
 use crate::error::{Error, Result};
-use crate::limits::ResidentWatch;
 use crate::sort::mmap::SpillVec;
 use std::path::PathBuf;
 
@@ -32,8 +31,9 @@ pub struct SpillPolicy {
 /// what it may bring in (random pages when the held triangles and the front's nodes are not in
 /// sweep order, as on a ring of points, where 1,024 checks brought 60–100 MB of the files in
 /// between two looks, and a point inserted near the ring's top filled and legalised hundreds of
-/// thousands of triangles: 130 MB in 0.2 s). The watch ([`ResidentWatch`]) is asked at every
-/// step besides, for what comes faster.
+/// thousands of triangles: 130 MB in 0.2 s). A thread that read the resident memory every
+/// 2 ms and raised a flag for every step to read dropped them sooner, by 5 MB on the 10 M ring
+/// at `--mem 64M` (71 against 76 MB, bound 128): not worth a thread.
 pub(super) const LOOK_EVERY_PAGES: u64 = 2048;
 /// A finality check, and a front node scanned under its disk: about a page each.
 pub(super) const PAGES_A_CHECK: u64 = 1;
@@ -128,16 +128,12 @@ impl<T: bytemuck::Pod> Table for SpillVec<T> {
     }
 }
 
-/// The spill's state: whether the tables are in files, and the watch on the resident memory
-/// since the last release.
+/// The spill's state: whether the tables are in files, and the resident memory since the last
+/// release.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Spill {
     policy: Option<SpillPolicy>,
     spilled: bool,
-    /// Raises its flag when the file-backed resident memory has grown by the budget since the
-    /// last release (from the spill on; see [`ResidentWatch`]: the checks, the sweep's new
-    /// triangles and flips, and the end's emission look at it after each step).
-    watch: Option<std::sync::Arc<ResidentWatch>>,
     /// File-backed resident bytes of the process just after the last release.
     base: u64,
     /// Pages counted by [`Spill::touched`] since the last reading of the resident memory.
@@ -182,7 +178,6 @@ impl Spill {
             }
             self.spilled = true;
             self.base = crate::limits::file_rss().unwrap_or(0);
-            self.watch = ResidentWatch::start(budget).map(std::sync::Arc::new);
         }
         for t in tables.iter_mut() {
             t.headroom().map_err(|e| {
@@ -195,22 +190,13 @@ impl Spill {
         }
         let mapped: usize = tables.iter().map(|t| t.mapped_bytes()).sum();
         self.peak_spilled = self.peak_spilled.max(mapped as u64);
-        if self.over() || self.grown() {
+        if self.grown() {
             for t in tables.iter_mut() {
                 t.release();
             }
             self.released();
         }
         Ok(())
-    }
-
-    /// Has the watch seen the file-backed resident memory grow by the budget since the last
-    /// release? One atomic load: asked after every step that may touch the tables (the watch
-    /// reads `/proc` every 2 ms; the counted looks of [`Spill::grown`] catch what comes
-    /// faster).
-    #[inline(always)]
-    pub(super) fn over(&self) -> bool {
-        self.watch.as_ref().is_some_and(|w| w.over())
     }
 
     /// Has the file-backed resident memory grown by the budget since the last release (the
@@ -224,15 +210,12 @@ impl Spill {
     }
 
     /// Counts `pages` of the tables that a step may have brought into memory; `true` when
-    /// their pages should be dropped now: the watch saw the file-backed resident memory grow by
-    /// the budget, or [`LOOK_EVERY_PAGES`] have been counted since the last reading and
-    /// `/proc/self/statm` says it grew. The one count of every step that touches the tables
+    /// their pages should be dropped now: [`LOOK_EVERY_PAGES`] have been counted since the
+    /// last reading and `/proc/self/statm` says the file-backed resident memory grew by the
+    /// budget since the last release. The one count of every step that touches the tables
     /// (checks, the sweep's new triangles and flips, far pulls, the end's emission).
     #[inline(always)]
     pub(super) fn touched(&mut self, pages: u64) -> bool {
-        if self.over() {
-            return true;
-        }
         if !self.spilled {
             return false;
         }
@@ -244,25 +227,12 @@ impl Spill {
         self.grown()
     }
 
-    /// Has the watch on the resident memory started (the tables spilled)?
-    pub(super) fn watching(&self) -> bool {
-        self.watch.is_some()
-    }
-
-    /// The watch on the resident memory, once the tables have spilled (a new handle).
-    pub(super) fn watch(&self) -> Option<std::sync::Arc<ResidentWatch>> {
-        self.watch.clone()
-    }
-
     /// The tables' pages were just dropped: the growth counts from here.
     pub(super) fn released(&mut self) {
         if self.spilled {
             self.releases += 1;
             self.touched = 0;
             self.base = crate::limits::file_rss().unwrap_or(0);
-            if let Some(w) = &self.watch {
-                w.rebase();
-            }
         }
     }
 }

@@ -4,11 +4,8 @@
 use super::{Event, StreamingSweep};
 use crate::geom::predicates::is_artificial;
 
-/// Triangle slots visited between drops of the spilled tables' pages (and between looks at
-/// the watch on the resident memory, [`crate::limits::ResidentWatch`], which drops them sooner).
+/// Triangle slots visited between drops of the spilled tables' pages.
 const RELEASE_EVERY: usize = 1 << 16;
-/// Triangle slots visited between two looks at the watch.
-const WATCH_EVERY: usize = 1024;
 
 /// Is the circumcircle of `a b c` narrower than `limit` in radius and inside the x range of the
 /// data? (Floating point: a heuristic for watermarks only, never a topological decision.)
@@ -47,12 +44,10 @@ impl StreamingSweep {
         let len = self.sweep.mesh().origin.len();
         let mut from = 0;
         while from < len {
-            let to = (from + 3 * WATCH_EVERY).min(len);
+            let to = (from + 3 * RELEASE_EVERY).min(len);
             w = self.lowest_ordinary(from..to, w, stuck, wide, x_range);
             // Tables spilled to temporary files: the walk would bring them all into memory.
-            if self.fin().spill.over() || to / (3 * RELEASE_EVERY) > from / (3 * RELEASE_EVERY) {
-                self.sweep.release_spilled();
-            }
+            self.sweep.release_spilled();
             from = to;
         }
         self.fin().events.push(Event::Watermark(w));

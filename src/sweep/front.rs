@@ -25,7 +25,6 @@ const FAN_SHIFT: u32 = FAN.trailing_zeros();
 
 /// Id of a front node.
 pub type NodeId = u32;
-use crate::limits::ResidentWatch;
 
 const NIL: NodeId = u32::MAX;
 /// Empty buckets [`Front::locate`] steps back over before it asks the groups.
@@ -86,9 +85,6 @@ pub struct Front {
     levels: Vec<usize>,
     xmap: XMap,
     nb: f64,
-    /// The spilled sweep's watch on the resident memory: a rebuild's walk drops the tables'
-    /// pages when it says so ([`Front::watch_resident`]).
-    watch: Option<std::sync::Arc<ResidentWatch>>,
 }
 
 /// A monotone map of x onto `[0, 1]`, piecewise linear through quantiles of a sample of the
@@ -223,7 +219,6 @@ impl Front {
             levels: Vec::new(),
             xmap,
             nb: 0.0,
-            watch: None,
         };
         f.rebuild_buckets(64);
         f
@@ -343,14 +338,14 @@ impl Front {
             walked += 1;
             // A front of millions of nodes (a line of points) spilled to a temporary file: the
             // walk would bring the whole node table into memory at once.
-            if walked.is_multiple_of(RELEASE_EVERY) || self.resident_over() {
+            if walked.is_multiple_of(RELEASE_EVERY) {
                 self.release_index();
             }
         }
         for j in 1..self.levels.len() - 1 {
             let (below, here, end) = (self.levels[j - 1], self.levels[j], self.levels[j + 1]);
             for g in here..end {
-                if g.is_multiple_of(RELEASE_EVERY) || self.resident_over() {
+                if g.is_multiple_of(RELEASE_EVERY) {
                     self.release_index();
                 }
                 let first = below + (g - here) * FAN;
@@ -393,20 +388,6 @@ impl Front {
         self.lead.release();
         self.last.release();
         self.low.release();
-        if let Some(w) = &self.watch {
-            w.rebase();
-        }
-    }
-
-    /// Lets a rebuild of the x index drop its tables' pages whenever `watch` says the
-    /// file-backed resident memory has grown by the budget (besides every 65,536 nodes).
-    pub(crate) fn watch_resident(&mut self, watch: Option<std::sync::Arc<ResidentWatch>>) {
-        self.watch = watch;
-    }
-
-    #[inline(always)]
-    fn resident_over(&self) -> bool {
-        self.watch.as_ref().is_some_and(|w| w.over())
     }
 
     /// The node `n` with `n.x <= x < next(n).x`: the left end of the segment under `x`.
