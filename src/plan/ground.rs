@@ -273,9 +273,10 @@ impl Plan {
 impl Plan {
     /// With `--ground`: refuses, before the plan is written, a ground block that no task can
     /// classify within the plan's `--mem`: one whose points with their buffer take more than
-    /// `--mem` less the least a task holds beside its run (the class store's read piece), at
-    /// [`RUN_BYTES_PER_POINT`] a point. One read of every point's x and y, counted per ground
-    /// block and per strip of buffer width along its edges (nine counts a block with points).
+    /// `--mem` less the least a task holds beside its run (its class store: a byte a point, or
+    /// a file's read piece), at [`RUN_BYTES_PER_POINT`] a point. One read of every point's x
+    /// and y, counted per ground block and per strip of buffer width along its edges (nine
+    /// counts a block with points).
     /// A block that fits only when the task's block index and classes are spilled is still
     /// refused by its task, before it classifies anything.
     ///
@@ -345,7 +346,9 @@ impl Plan {
             return Ok(());
         };
         let need = points * RUN_BYTES_PER_POINT;
-        let room = mem.saturating_sub(CLASS_READ_PIECE);
+        // The least a task holds beside the run: its class store, of one byte a point of its
+        // area (at least the block's) or a file's read piece.
+        let room = mem.saturating_sub(CLASS_READ_PIECE.min(points));
         if need <= room {
             return Ok(());
         }
