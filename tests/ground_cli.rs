@@ -1,6 +1,6 @@
 //! `sweeptin ground` on the command line: the points written back with their new classes,
 //! byte for byte the same for any `--threads` and `--mem`, several files classified together,
-//! the output rules, and the empty file.
+//! the output rules, the empty file, and COPC output.
 
 use crate::cli;
 use crate::data;
@@ -226,4 +226,110 @@ fn ground_output_never_replaces_an_input_nor_a_directory() {
     ]);
     assert_eq!(code, 2, "{err}");
     assert_eq!(std::fs::read(&input).unwrap(), before);
+}
+
+/// The points of a LAS/LAZ/COPC file as a sorted multiset: position, class, returns, flags.
+fn multiset(points: &[LidarPoint]) -> Vec<(u64, u64, u64, u8, u8, u8, u8)> {
+    let mut v: Vec<_> = points
+        .iter()
+        .map(|p| {
+            let (x, y, z) = (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
+            let (c, r, n, f) = (
+                p.classification,
+                p.return_number,
+                p.number_of_returns,
+                p.flags,
+            );
+            (x, y, z, c, r, n, f)
+        })
+        .collect();
+    v.sort_unstable();
+    v
+}
+
+/// `ground -o X.copc.laz` (issue 42) writes the points `-o X.laz` writes, reordered into a COPC
+/// octree: the same multiset of points and classes through sweeptin's COPC reader and through
+/// copclib (every node's points in its voxel of the info's cube), the CRS kept (GeoTIFF
+/// keys become WKT with the code); several nodes on a larger file; a point format with NIR is
+/// refused before the work, naming `-o X.laz`. (About 6 s in a debug build.)
+#[test]
+fn ground_copc_output_holds_the_points_of_the_laz_output() {
+    let name = "ground_copc_output_holds_the_points_of_the_laz_output";
+    let dir = tempfile::tempdir().unwrap();
+    let ground = |input: &Path, out: &Path| {
+        cli::ok(&[
+            "ground".as_ref(),
+            input.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--quiet".as_ref(),
+        ]);
+    };
+    let topo = data::shared("lidar/lidR_Topography.laz");
+    let (laz, copc) = (dir.path().join("t.laz"), dir.path().join("t.copc.laz"));
+    ground(&topo, &laz);
+    ground(&topo, &copc);
+    assert_eq!(multiset(&read(&copc)), multiset(&read(&laz)));
+    let info = |p: &Path| -> serde_json::Value {
+        let o = cli::ok(&["info".as_ref(), "--json".as_ref(), p.as_os_str()]);
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["files"][0].clone()
+    };
+    let i = info(&copc);
+    assert!(i["copc"]["nodes"].as_u64().unwrap() >= 1, "{i}");
+    assert_eq!(i["point_format"], 6);
+    assert_eq!(i["crs"]["epsg"], info(&laz)["crs"]["epsg"]);
+    assert_eq!(i["creation"], info(&laz)["creation"]);
+    // A file of several octree nodes: the points of the input, with classes.
+    let ahn = data::shared("lidar/ahn3_delft_cropped_2.laz");
+    let ahn_copc = dir.path().join("a.copc.laz");
+    ground(&ahn, &ahn_copc);
+    assert!(info(&ahn_copc)["copc"]["nodes"].as_u64().unwrap() > 1);
+    let strip = |v: Vec<LidarPoint>| {
+        let mut v: Vec<_> = v
+            .iter()
+            .map(|p| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits(), p.flags))
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    assert_eq!(strip(read(&ahn_copc)), strip(read(&ahn)));
+    if data::python(&["copclib", "laspy", "lazrs"], name) {
+        let script = "import sys, copclib, laspy, numpy as np\n\
+            def rows(x, y, z, c):\n\
+            \x20   a = np.stack([np.round(np.asarray(v, dtype=float) * 1000) for v in (x, y, z, c)])\n\
+            \x20   return a[:, np.lexsort(a[::-1])]\n\
+            for copc, laz in ((sys.argv[1], sys.argv[2]), (sys.argv[3], None)):\n\
+            \x20   r = copclib.FileReader(copc)\n\
+            \x20   i, t = r.copc_config.copc_info, r.copc_config.las_header.scale\n\
+            \x20   s = (t.x, t.y, t.z)\n\
+            \x20   for n in r.GetAllNodes():\n\
+            \x20       q, side = r.GetPoints(n), 2 * i.halfsize / 2 ** n.key.d\n\
+            \x20       for v, c, k, e in zip((q.x, q.y, q.z), (i.center_x, i.center_y, i.center_z), (n.key.x, n.key.y, n.key.z), s):\n\
+            \x20           lo = c - i.halfsize + k * side\n\
+            \x20           assert lo - e <= min(v) and max(v) <= lo + side + e, (copc, n.key)\n\
+            \x20   p = r.GetAllPoints()\n\
+            \x20   got = rows(p.x, p.y, p.z, p.classification)\n\
+            \x20   assert got.shape[1] == r.copc_config.las_header.point_count\n\
+            \x20   if laz:\n\
+            \x20       q = laspy.read(laz)\n\
+            \x20       assert np.array_equal(got, rows(q.x, q.y, q.z, q.classification)), copc\n\
+            print(len(r.GetAllNodes()))";
+        let o = Command::new("python3")
+            .args(["-c", script])
+            .args([&copc, &laz, &ahn_copc])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    // Point format 8 (NIR): refused before the work, no file.
+    let nir = dir.path().join("s.copc.laz");
+    let (code, err) = status(&[
+        "ground".as_ref(),
+        data::shared("lidar/startinpy_small.laz").as_os_str(),
+        "-o".as_ref(),
+        nir.as_os_str(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("NIR") && err.contains("s.laz"), "{err}");
+    assert!(!nir.exists());
 }

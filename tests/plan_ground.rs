@@ -390,3 +390,41 @@ fn plan_ground_refuses_outputs_that_are_inputs_or_not_files_and_a_single_file_of
     assert!(want.iter().any(|p| p.1[3] == 2) && want.iter().any(|p| p.1[3] != 2));
     assert!(points(&vpc_files(&vpc)) == want);
 }
+
+/// A ground block too large for the plan's `--mem` is refused when the plan is made (exit 2,
+/// naming the block, its points and what to change), for `plan ground` and `plan dem --ground`
+/// alike, and no `plan.json` is written: it was written, and every task failed when it ran.
+/// With a larger `--mem` the same plan is made. (Under a second in a debug build.)
+#[test]
+fn a_plan_refuses_a_ground_block_too_large_for_mem() {
+    let t = tempfile::tempdir().unwrap();
+    let input = data::shared("lidar/ahn3_delft_cropped_2.laz");
+    let job = t.path().join("job");
+    for product in [&["ground"][..], &["dem", "--ground", "--cell", "1"][..]] {
+        let mut args = vec!["plan"];
+        args.extend(product);
+        args.extend([s(&input), "--tile", "100", "-o", s(&job), "-q", "--mem"]);
+        let (code, err) = status(&[args.as_slice(), &["8M"]].concat());
+        assert_eq!(code, 2, "{err}");
+        assert!(
+            err.contains("ground block x 84960 .. 85120, y 447360 .. 447520")
+                && err.contains("155005 points")
+                && err.contains("--mem")
+                && err.contains("--step"),
+            "{err}"
+        );
+        assert!(!job.join("plan.json").exists(), "{product:?}");
+    }
+    let (code, err) = status(&[
+        "plan",
+        "ground",
+        s(&input),
+        "--tile",
+        "100",
+        "-o",
+        s(&job),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(job.join("plan.json").exists());
+}

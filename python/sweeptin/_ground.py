@@ -103,7 +103,9 @@ def ground(
 
     On files, ``ground(files, output=...)`` (one input) or ``ground(files, odir=...)`` writes
     every input with its new classes, every other attribute kept (the files are classified
-    together), and returns the summary as ``sweeptin ground --json`` has it.
+    together), and returns the summary as ``sweeptin ground --json`` has it. An ``output``
+    named ``.copc.laz`` is a COPC file of the same points in octree order, as on the command
+    line (docs/GROUND.md).
 
     Parameters (keyword): ``preset`` (one of ``"wilderness"``, ``"nature"``, ``"town"``,
     ``"city"``, ``"metro"``, ``"forest"``, ``"mountains"``), ``step``, ``max_distance``,

@@ -62,6 +62,20 @@ def test_ground_and_height_on_files_are_the_cli_bytes(raw, cli, tmp_path):
         sweeptin.height(path, output=tmp_path / "x.laz", step=10)
 
 
+def test_ground_to_a_copc_file_is_the_cli_bytes(cli, tmp_path):
+    # An output named .copc.laz is a COPC file (the points in octree order), as on the
+    # command line; a point format with NIR is refused before the work.
+    path = data("lidar/lidR_Topography.laz")
+    a, b = tmp_path / "py.copc.laz", tmp_path / "cli.copc.laz"
+    s = sweeptin.ground(path, output=a)
+    cli("ground", path, "-o", b, "-q")
+    assert a.read_bytes() == b.read_bytes()
+    assert s["files"][0]["output"] == str(a) and s["files"][0]["bytes"] == a.stat().st_size
+    assert laspy.read(a).header.point_format.id == 6
+    with pytest.raises(sweeptin.OptionsError, match="NIR"):
+        sweeptin.ground(data("lidar/startinpy_small.laz"), output=tmp_path / "s.copc.laz")
+
+
 def test_height_on_arrays_is_the_cli_height_above_ground(raw, cli, tmp_path):
     path, xyz, classes, withheld = raw
     out = tmp_path / "h.laz"

@@ -128,7 +128,9 @@ than --low-noise below it are low noise (7).
 Classes written: ground 2, low noise 7; the others keep theirs (a point of class 2 that is \
 not ground becomes 1), or all become 1 with --reset. Withheld points and points already \
 classified noise (7, 18) take no part and keep their class. Every other attribute, the header, \
-VLRs and EVLRs and the order of the points are kept.
+VLRs and EVLRs and the order of the points are kept; an output named .copc.laz is a COPC file \
+of the same points in the order of its octree (LAS 1.4 point format 6 or 7; formats with NIR \
+or waveforms are refused: docs/GROUND.md).
 
 Exact and tiling-independent: the ground is decided in blocks of 32 steps a side (16 above \
 --step 6.25, 8 above 12.5, 4 above 25: 100 to 200 units), aligned at the origin, each block from its own points and those \
@@ -150,14 +152,15 @@ steps; a value given explicitly overrides the preset's):
 
 Examples:
   sweeptin ground raw.laz -o classified.laz
+  sweeptin ground raw.laz -o classified.copc.laz
   sweeptin ground tiles/*.laz --odir classified/ --city --json
   sweeptin ground raw.laz -o g.laz && sweeptin dem g.laz --class 2 --cell 1 -o dtm.tif")]
 pub struct Args {
     /// Input LAS/LAZ/COPC files (classified together).
     #[arg(required = true, value_name = "FILES")]
     pub inputs: Vec<PathBuf>,
-    /// Output file (.laz or .las) for one input. It appears only when complete and never
-    /// replaces an input.
+    /// Output file (.laz, .las or .copc.laz: COPC, the points in octree order) for one input.
+    /// It appears only when complete and never replaces an input.
     #[arg(short, long, conflicts_with = "odir")]
     pub output: Option<PathBuf>,
     /// Output directory: each input written there under its own file name.

@@ -52,7 +52,7 @@ enum Inner {
 }
 
 /// Bytes read at a time from a store's file.
-const READ_PIECE: usize = 1 << 20;
+pub(crate) const READ_PIECE: usize = 1 << 20;
 
 impl ClassStore {
     /// A store of `len` classes: in memory when they take at most `in_memory` bytes, else a

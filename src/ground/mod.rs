@@ -31,6 +31,8 @@ mod densify;
 mod ptd;
 
 pub use blocks::{ClassStore, Feed, GroundInput, RUN_BYTES_PER_POINT, classify_stream};
+/// What the class store holds in memory at least (a temporary file's read piece).
+pub(crate) const CLASS_READ_PIECE: u64 = blocks::READ_PIECE as u64;
 
 use crate::error::{Error, Result};
 use crate::input::las::{Filter, LidarPoint, LidarReader, ReadOptions};

@@ -11,6 +11,7 @@ use super::{Input, RunOptions};
 use crate::error::{Error, Result};
 use crate::ground::{GroundParams, GroundSummary};
 use crate::input::las::ClassesFrom;
+use crate::output::las::{CopcOutput, is_copc_path, rewrite_points};
 use std::sync::Arc;
 
 /// The class of the ground the filter finds.
@@ -112,13 +113,15 @@ pub struct GroundFiles {
 
 /// `sweeptin ground`: classifies the points of `inputs` together (a block's buffer reaches
 /// into the neighbouring file) and writes each input to its output with the new classes,
-/// every other attribute kept ([`crate::output::las::rewrite_points`]), within `mem` bytes,
-/// temporary files under `tmp`. The outputs are checked before any work: distinct, never an
-/// input, regular files (or new).
+/// every other attribute kept ([`crate::output::las::rewrite_points`]; an output named
+/// `.copc.laz` is a COPC file, its points in the octree's order: [`CopcOutput`]), within
+/// `mem` bytes, temporary files under `tmp`. The outputs are checked before any work:
+/// distinct, never an input, regular files (or new), COPC only of what it can keep.
 ///
 /// # Errors
-/// [`Error::Options`] when inputs and outputs do not pair up; the output checks'; those of
-/// [`crate::ground::classify_files`] and of the writer. An output appears only complete.
+/// [`Error::Options`] when inputs and outputs do not pair up; the output checks' (those of
+/// [`CopcOutput::check`] too); those of [`crate::ground::classify_files`] and of the writer.
+/// An output appears only complete.
 pub fn ground_files(
     inputs: &[std::path::PathBuf],
     outputs: &[std::path::PathBuf],
@@ -146,14 +149,19 @@ pub fn ground_files(
     let named: Vec<(&str, &std::path::Path)> =
         named.iter().map(|(f, o)| (f.as_str(), *o)).collect();
     crate::output::distinct_outputs(&named, inputs, "ground")?;
-    for o in outputs {
+    let mut copc = Vec::with_capacity(outputs.len());
+    for (input, o) in inputs.iter().zip(outputs) {
         crate::output::check_output(o)?;
         crate::output::las::check_point_output(o, inputs)?;
+        copc.push(match is_copc_path(o) {
+            true => Some(CopcOutput::check(input, o)?),
+            false => None,
+        });
     }
     let (mut classes, ground) = crate::ground::classify_files(inputs, params, mem, tmp, progress)?;
     let mut files = Vec::with_capacity(inputs.len());
     let mut base = 0u64;
-    for (input, output) in inputs.iter().zip(outputs) {
+    for ((input, output), copc) in inputs.iter().zip(outputs).zip(&copc) {
         progress(&format!("writing {}", output.display()), 0, 0);
         let count = crate::input::las::FileInfo::read(input)?.point_count;
         let mut edit = |p: &mut crate::output::las::PointEdit<'_>| -> Result<()> {
@@ -161,9 +169,10 @@ pub fn ground_files(
             p.set_classification(c);
             Ok(())
         };
-        files.push(crate::output::las::rewrite_points(
-            input, output, &mut edit,
-        )?);
+        files.push(match copc {
+            Some(c) => c.write(output, tmp, |las| rewrite_points(input, las, &mut edit))?,
+            None => rewrite_points(input, output, &mut edit)?,
+        });
         base += count;
     }
     Ok(GroundFiles { ground, files })

@@ -19,14 +19,17 @@
 use super::Plan;
 use super::area::{grown, overlaps};
 use crate::error::{Error, Result};
-use crate::ground::{BUFFER_CELLS, ClassStore, GroundInput, GroundSummary, classify_stream};
+use crate::ground::{
+    BUFFER_CELLS, CLASS_READ_PIECE, ClassStore, GroundInput, GroundSummary, RUN_BYTES_PER_POINT,
+    classify_stream,
+};
 use crate::input::las::{
     BBox, ClassesFrom, Filter, LidarPoint, LidarReader, PointClasses, ReadOptions,
 };
 use crate::pipeline::ground::GROUND_CLASS;
 use crate::pipeline::{Input, RunOptions};
 use crate::tiles::grid::BlockRect;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -264,6 +267,106 @@ impl Plan {
             starts,
             summary,
         })
+    }
+}
+
+impl Plan {
+    /// With `--ground`: refuses, before the plan is written, a ground block that no task can
+    /// classify within the plan's `--mem`: one whose points with their buffer take more than
+    /// `--mem` less the least a task holds beside its run (its class store: a byte a point, or
+    /// a file's read piece), at [`RUN_BYTES_PER_POINT`] a point. One read of every point's x
+    /// and y, counted per ground block and per strip of buffer width along its edges (nine
+    /// counts a block with points).
+    /// A block that fits only when the task's block index and classes are spilled is still
+    /// refused by its task, before it classifies anything.
+    ///
+    /// # Errors
+    /// [`Error::Options`] naming the block, its points and what to change; the readers'.
+    pub(super) fn check_ground_blocks(&self) -> Result<()> {
+        let Some(params) = self.job.ground else {
+            return Ok(());
+        };
+        let paths: Vec<PathBuf> = self
+            .files
+            .iter()
+            .filter(|f| f.points > 0)
+            .map(|f| f.path.clone())
+            .collect();
+        if paths.is_empty() {
+            return Ok(());
+        }
+        let grid = params.grid()?;
+        let n = 1i64 << grid.shift;
+        let b = BUFFER_CELLS;
+        // By block: all its points, those of its west, east, south and north strips of `b`
+        // cells, and of its four corners (south-west, south-east, north-west, north-east).
+        let mut counts: HashMap<(i64, i64), [u64; 9]> = HashMap::new();
+        let mem = self.task_mem();
+        let options = ReadOptions {
+            crs: self.job.crs()?,
+            ..ReadOptions::for_budget(mem)
+        };
+        let mut reader = LidarReader::open_with(&paths, &Filter::keep_all(), options)?;
+        crate::tiles::read::prefetched(&mut reader, |buf: &[LidarPoint], _| {
+            for p in buf {
+                let (cx, cy) = grid.block_of(p.x, p.y);
+                let (tx, ty) = grid.tile_of_block(cx, cy);
+                let (lx, ly) = (cx - tx * n, cy - ty * n);
+                let (w, e, s, nn) = (lx < b, lx >= n - b, ly < b, ly >= n - b);
+                let c = counts.entry((tx, ty)).or_default();
+                for (k, on) in [true, w, e, s, nn, w && s, e && s, w && nn, e && nn]
+                    .into_iter()
+                    .enumerate()
+                {
+                    c[k] += u64::from(on);
+                }
+            }
+            Ok(())
+        })?;
+        let at = |tx: i64, ty: i64, k: usize| counts.get(&(tx, ty)).map_or(0, |c| c[k]);
+        // A block with its buffer: its points, and the strips and corners of its neighbours
+        // that the buffer reaches (the east strip of the block to the west, …).
+        let grown = |tx: i64, ty: i64| {
+            at(tx, ty, 0)
+                + at(tx - 1, ty, 2)
+                + at(tx + 1, ty, 1)
+                + at(tx, ty - 1, 4)
+                + at(tx, ty + 1, 3)
+                + at(tx - 1, ty - 1, 8)
+                + at(tx + 1, ty - 1, 7)
+                + at(tx - 1, ty + 1, 6)
+                + at(tx + 1, ty + 1, 5)
+        };
+        let Some((points, (tx, ty))) = counts
+            .keys()
+            .map(|&(tx, ty)| (grown(tx, ty), (ty, tx)))
+            .max_by_key(|&(points, (ty, tx))| (points, std::cmp::Reverse((ty, tx))))
+            .map(|(points, (ty, tx))| (points, (tx, ty)))
+        else {
+            return Ok(());
+        };
+        let need = points * RUN_BYTES_PER_POINT;
+        // The least a task holds beside the run: its class store, of one byte a point of its
+        // area (at least the block's) or a file's read piece.
+        let room = mem.saturating_sub(CLASS_READ_PIECE.min(points));
+        if need <= room {
+            return Ok(());
+        }
+        let w = grid.world(&grid.tile_blocks(tx, ty));
+        Err(Error::Options(format!(
+            "plan: the ground block x {} .. {}, y {} .. {} with its buffer of {} holds {} points, \
+             about {} MiB to classify, more than a task's --mem ({} MiB) can give it: give a \
+             larger --mem, or a smaller --step (blocks are {} steps a side)",
+            w[0],
+            w[2],
+            w[1],
+            w[3],
+            params.buffer(),
+            points,
+            need >> 20,
+            mem >> 20,
+            n
+        )))
     }
 }
 

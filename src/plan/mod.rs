@@ -432,6 +432,7 @@ impl Plan {
         };
         plan.check_outputs()?;
         plan.check_task_memory()?;
+        plan.check_ground_blocks()?;
         plan.fingerprint = plan.id().to_string();
         Ok(plan)
     }

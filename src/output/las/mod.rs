@@ -16,7 +16,8 @@
 //!   LAZ → LAS and LAS → LAZ convert: the LASzip VLR is dropped or appended, the offsets and
 //!   the point format's compression bit follow.
 //! - A **COPC** input (`.copc.laz`) gives plain LAZ: its points in the file's chunk order, its
-//!   `copc` VLR and hierarchy EVLRs dropped (no COPC writer here).
+//!   `copc` VLR and hierarchy EVLRs dropped. A COPC output is written by [`CopcOutput`] from
+//!   the plain LAS file a rewrite writes (the points then in the octree's order).
 //!
 //! Memory is bounded: the points stream through in batches of chunks (about
 //! [`BATCH_BYTES`] of records), decoded and compressed on every core.
@@ -41,7 +42,10 @@
 //! # Ok::<(), sweeptin::Error>(())
 //! ```
 
+mod copc;
 mod layout;
+
+pub use copc::{CopcOutput, NODE_POINTS, is_copc_path};
 
 use crate::error::{Error, Result};
 use crate::input::las::decode::{Fields, FileDecoder, spans};
