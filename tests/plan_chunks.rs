@@ -324,48 +324,47 @@ fn index_chunks_of_las_blocks_into_a_directory_and_its_refusals() {
 /// An edge task over one LAZ read by chunk ran twice (lidR_Topography, tiles of 32: task 9 on
 /// the data's south-east hull, buffer 3.2 then 276, the whole file decoded), because it could
 /// not tell its own hull edges from the data's: given the data's hull and the points within 2
-/// of it (the prototype's `SWEEPTIN_PROTO_HULL`, docs/BENCHMARKS.md), it runs once and writes
-/// the same tile, byte for byte.
+/// of it (the plan's hull band, `DIR/index/band`), it runs once and writes the same tile, byte
+/// for byte; a plan made with `--no-hull-band` runs it twice.
 #[test]
 fn an_edge_task_given_the_hull_band_runs_once() {
     let t = tempfile::tempdir().unwrap();
-    let job = t.path().join("job");
     let input = topography();
-    let args = [
-        "plan",
-        "dem",
-        s(&input),
-        "--cell",
-        "1",
-        "--tile",
-        "32",
-        "-o",
-        s(&job),
-    ];
-    sweeptin(&args, "plan");
-    let plan = job.join("plan.json");
-    let task = |env: Option<&Path>| {
+    let task = |name: &str, band: bool| {
+        let job = t.path().join(name);
+        let mut args = vec!["plan"];
+        if !band {
+            args.push("--no-hull-band");
+        }
+        args.extend([
+            "dem",
+            s(&input),
+            "--cell",
+            "1",
+            "--tile",
+            "32",
+            "-o",
+            s(&job),
+        ]);
+        sweeptin(&args, "plan");
+        assert_eq!(job.join("index/band").exists(), band);
+        let plan = job.join("plan.json");
         let mut c = bin();
         c.args(["run", s(&plan), "--task", "9", "-q"]);
-        if let Some(p) = env {
-            c.env("SWEEPTIN_PROTO_HULL", p)
-                .env("SWEEPTIN_PROTO_BAND", "2");
-        }
         plans::ok(c.output().unwrap(), "run --task 9");
         let rec: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(job.join("tiles/task_9.json")).unwrap())
                 .unwrap();
         let tile = rec["outputs"][0][1].as_str().unwrap().to_string();
         let bytes = std::fs::read(job.join(&tile)).unwrap();
-        std::fs::remove_dir_all(job.join("tiles")).unwrap();
         (rec["runs"].as_u64().unwrap(), bytes)
     };
-    let (before, tile_before) = task(None);
+    let (before, tile_before) = task("off", false);
     assert_eq!(
         before, 2,
         "without the hull the edge task ran {before} times"
     );
-    let (runs, tile) = task(Some(&t.path().join("band.txt")));
+    let (runs, tile) = task("on", true);
     assert_eq!(
         runs, 1,
         "given the hull's band the edge task ran {runs} times"

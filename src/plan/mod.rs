@@ -20,6 +20,7 @@
 //! every triangle (by its lowest vertex in sweep order) has exactly one owner tile.
 
 mod area;
+mod band;
 pub mod chunks;
 mod dir;
 mod engine;
@@ -135,6 +136,10 @@ pub struct Plan {
     pub cell: Option<f64>,
     /// The tasks, in tile order (rows from south to north, west to east in a row).
     pub tiles: Vec<PlanTile>,
+    /// The width of the data's hull band given to the tasks ([`Plan::task_band`]; `None`: none,
+    /// as in plans of older builds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hull_band: Option<f64>,
     /// What the files' headers said when the plan was made (a point count that disagrees with
     /// the file, a CRS read as `--crs` says…), as one run warns of them; `plan` prints them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -408,6 +413,7 @@ impl Plan {
                 }
             }
         }
+        let hull_band = band::width_for(&job, &files);
         let mut plan = Plan {
             version: if job.ground.is_some() {
                 PLAN_VERSION_GROUND
@@ -426,6 +432,7 @@ impl Plan {
             buffer,
             cell,
             tiles,
+            hull_band,
             warnings,
             fingerprint: String::new(),
             id: PlanId::default(),
@@ -468,6 +475,7 @@ impl Plan {
         dir.make_dir("tiles")?;
         // The indexes first: a plan.json is complete with everything its tasks read.
         self.write_chunk_indexes(dir)?;
+        self.write_band(dir)?;
         dir.write(&path, text.as_bytes())?;
         Ok(path)
     }
@@ -601,6 +609,7 @@ impl Plan {
                 .collect(),
             chunks: Vec::new(),
             by_area: self.job.ground.is_some(),
+            band: None,
         })
     }
 

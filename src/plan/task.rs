@@ -544,7 +544,7 @@ impl Plan {
     /// A task's budget: the plan's `--mem`, or what an address-space limit on this node leaves
     /// beside the program (the output is the same whatever the budget, and `run` has no --mem
     /// of its own).
-    fn task_mem(&self) -> u64 {
+    pub(super) fn task_mem(&self) -> u64 {
         crate::limits::fit_address_space(self.job.mem, 0)
     }
 
@@ -582,6 +582,7 @@ impl Plan {
                 base: None,
                 scope: Some(crate::tiles::TaskScope {
                     chunks: self.task_chunks(dir, i, buffer)?,
+                    band: self.task_band(dir)?,
                     ..self.scope(i, buffer)?
                 }),
             }),
