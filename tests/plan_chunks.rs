@@ -138,7 +138,9 @@ fn an_empty_task_writes_no_tile() {
     );
 }
 
-/// A chunk index cut short or edited would make tasks skip chunks: refused, exit 3, naming it.
+/// A chunk index cut short or edited would make tasks skip chunks, a hull band cut short, edited,
+/// missing or of another plan would let them certify against points that are not the data's:
+/// refused, exit 3, naming it.
 #[test]
 fn a_truncated_or_edited_chunk_index_is_refused() {
     let t = tempfile::tempdir().unwrap();
@@ -178,6 +180,48 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
         assert!(!job.join("tiles/task_0.json").exists());
     }
     std::fs::write(&index, &bytes).unwrap();
+    // The plan's hull band: cut short, edited, missing, or another plan's.
+    let band = job.join("index/band");
+    let bytes = std::fs::read(&band).unwrap();
+    let mut edited = bytes.clone();
+    edited[120] ^= 1;
+    let other = t.path().join("other");
+    let input = topography();
+    let args = [
+        "plan",
+        "dem",
+        s(&input),
+        "--cell",
+        "1",
+        "--tile",
+        "64",
+        "-o",
+        s(&other),
+    ];
+    sweeptin(&args, "plan");
+    for (what, damaged) in [
+        ("truncated", Some(bytes[..bytes.len() - 1].to_vec())),
+        ("checksum", Some(edited)),
+        ("missing", None),
+        (
+            "another plan",
+            Some(std::fs::read(other.join("index/band")).unwrap()),
+        ),
+    ] {
+        match damaged {
+            Some(d) => std::fs::write(&band, d).unwrap(),
+            None => std::fs::remove_file(&band).unwrap(),
+        }
+        let o = bin()
+            .args(["run", s(&plan), "--task", "0", "-q"])
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(3), "{what}: {e}");
+        assert!(e.contains("hull band") && e.contains(what), "{what}: {e}");
+        assert!(!job.join("tiles/task_0.json").exists());
+    }
+    std::fs::write(&band, &bytes).unwrap();
     sweeptin(&["run", s(&plan), "--task", "0", "-q"], "run");
 }
 
@@ -190,10 +234,21 @@ fn index_chunks(args: &[&str]) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
-/// `plan` into `job` over `input`: its stderr.
+/// `plan` into `job` over `input`, without the hull band (which decodes the chunks along the
+/// data's edge: here only the chunk index is read or decoded): its stderr.
 fn plan_into(input: &Path, job: &Path) -> std::process::Output {
     bin()
-        .args(["plan", "dem", s(input), "--cell", "1", "--tile", "32", "-o"])
+        .args([
+            "plan",
+            "--no-hull-band",
+            "dem",
+            s(input),
+            "--cell",
+            "1",
+            "--tile",
+            "32",
+            "-o",
+        ])
         .arg(job)
         .output()
         .unwrap()
