@@ -8,16 +8,18 @@
 //! edges moved `width` inwards), a task adds the band's points outside its area as points read
 //! and knows that whatever it did not read lies inside `P` ([`super::index::Scope::inner`]).
 //!
-//! [`HullBand::compute`] decodes only what it needs, through the files' chunk indexes: rounds
-//! of chunks that may hold a corner (at first those along the boxes' outer edge; then any chunk
-//! whose box is not strictly inside `P` of the hull found so far, until none is left: a chunk
-//! strictly inside it holds no corner, the hull found so far being inside the data's), then
-//! one pass over the chunks not strictly inside the final `P`, keeping the band's points. The
+//! [`HullBand::compute`] decodes only what it needs, through the files' chunk indexes: first
+//! the chunks whose boxes may hold the data's extreme point in one of 64 directions (the seed),
+//! then rounds of the chunks whose box is not strictly inside `P` of the hull found so far, until
+//! none is left (a chunk strictly inside it holds no corner, the hull so far being inside the
+//! data's), keeping the points of those rounds that are not strictly inside `P` moved a little
+//! further in; last, the seed's chunks not strictly inside the final `P` again, for their band
+//! points. The points kept are then those not strictly inside the final `P`. The
 //! points are those a task reads (the job's filters), each position once with the duplicate
 //! policy's height; "strictly inside" is decided by the exact predicates on `P`'s corners as
 //! stored, so the tasks' claim holds exactly.
 
-use super::hull::{HullBuilder, hull};
+use super::hull::HullBuilder;
 use super::index::inner_polygon;
 use super::read::prefetched;
 use crate::error::Result;
@@ -105,55 +107,62 @@ impl HullBand {
         if spans.rects.is_empty() {
             return Ok(None);
         }
-        // The seed: the chunks near the outer edge of their boxes (a chunk's points reach each
-        // side of its box, so the data's hull lies within about a chunk of the boxes').
-        let mut corners: Vec<[f64; 3]> = spans
-            .rects
-            .iter()
-            .flat_map(|r| [[r[0], r[1], 0.0], [r[2], r[1], 0.0], [r[2], r[3], 0.0], [r[0], r[3], 0.0]])
-            .collect();
-        let outer: Vec<[f64; 2]> = hull(&mut corners).iter().map(|c| [c[0], c[1]]).collect();
-        let side = spans.rects.iter().map(|r| (r[2] - r[0]).max(r[3] - r[1])).sum::<f64>()
-            / spans.rects.len() as f64;
-        let seed = polygon(&outer, width + side);
-        let mut want: Vec<bool> = spans.rects.iter().map(|r| !box_inside(&seed, r)).collect();
-        let mut done = vec![false; spans.rects.len()];
+        let n = spans.rects.len();
+        let total = spans.points;
+        let cap = MAX_BAND_POINTS.min(usize::try_from(total / MAX_BAND_SHARE).unwrap_or(usize::MAX));
+        // The seed: the chunks that may hold the extreme point in some direction; then the
+        // chunks not strictly inside `P` of the hull so far, whose points not strictly inside
+        // `P` moved a little further in (`guard`, inside the final `P`) are kept.
+        let seeded = seed(&spans.rects);
+        let mut want = seeded.clone();
+        let mut done = vec![false; n];
         let mut builder = HullBuilder::new(src.policy);
+        let mut band: Vec<([f64; 3], u64)> = Vec::new();
+        let mut guard: Option<Vec<[f64; 2]>> = None;
+        let mut overflow = false;
         let (h, inner) = loop {
-            spans.decode(src, &want, |p, _| builder.add([p.x, p.y, p.z], p.index))?;
+            let near = guard.as_ref().map(|g| near_edges(g, &spans.rects));
+            spans.decode(src, &want, |p, s| {
+                builder.add([p.x, p.y, p.z], p.index);
+                if let (Some(g), Some(near)) = (&guard, &near)
+                    && !(g.len() >= 3 && near[s].iter().all(|&e| left_of(g, e, [p.x, p.y])))
+                {
+                    if band.len() < cap {
+                        band.push(([p.x, p.y, p.z], p.index));
+                    } else {
+                        overflow = true;
+                    }
+                }
+            })?;
             for (d, w) in done.iter_mut().zip(&want) {
                 *d |= *w;
             }
             let h: Vec<[f64; 2]> = builder.clone().finish().iter().map(|c| [c[0], c[1]]).collect();
             let inner = polygon(&h, width);
-            want = (0..spans.rects.len())
+            want = (0..n)
                 .map(|i| !done[i] && !box_inside(&inner, &spans.rects[i]))
                 .collect();
             if !want.contains(&true) {
                 break (h, inner);
             }
+            let mag = h.iter().fold(0.0f64, |m, c| m.max(c[0].abs()).max(c[1].abs()));
+            guard = Some(polygon(&h, width * (1.0 + 1e-3) + 1e-9 * mag));
         };
-        let total = spans.points;
         if h.len() < 3 || inner.len() < 3 {
             return Ok(None);
         }
-        // The band: the points of the chunks not strictly inside `P` that are not either.
-        let want: Vec<bool> = spans.rects.iter().map(|r| !box_inside(&inner, r)).collect();
-        // The edges each chunk's box is not strictly inside of (the only ones its points test).
-        let near: Vec<Vec<usize>> = spans
-            .rects
-            .iter()
-            .map(|r| {
-                (0..inner.len())
-                    .filter(|&e| !box_left_of(&inner, e, r))
-                    .collect()
-            })
+        // The band's points in the seed's chunks (decoded for the hull alone), or in every chunk
+        // not strictly inside `P` when more were kept than a band may hold.
+        if overflow {
+            band.clear();
+        }
+        band.retain(|p| !(0..inner.len()).all(|e| left_of(&inner, e, [p.0[0], p.0[1]])));
+        let want: Vec<bool> = (0..n)
+            .map(|i| (overflow || seeded[i]) && !box_inside(&inner, &spans.rects[i]))
             .collect();
-        let mut band: Vec<([f64; 3], u64)> = Vec::new();
-        let cap = MAX_BAND_POINTS.min(usize::try_from(total / MAX_BAND_SHARE).unwrap_or(usize::MAX));
+        let near = near_edges(&inner, &spans.rects);
         spans.decode(src, &want, |p, s| {
-            let q = [p.x, p.y];
-            if !near[s].iter().all(|&e| left_of(&inner, e, q)) && band.len() <= cap {
+            if !near[s].iter().all(|&e| left_of(&inner, e, [p.x, p.y])) && band.len() <= cap {
                 band.push(([p.x, p.y, p.z], p.index));
             }
         })?;
@@ -195,6 +204,45 @@ fn polygon(h: &[[f64; 2]], d: f64) -> Vec<[f64; 2]> {
         p.pop();
     }
     if p.len() < 3 { Vec::new() } else { p }
+}
+
+/// The spans that may hold the extreme point of the data in one of 64 directions, judged from
+/// their boxes (each side of a box holds a point of its span: before the filters, so this is
+/// only where the rounds start).
+fn seed(rects: &[[f64; 4]]) -> Vec<bool> {
+    let mut want = vec![false; rects.len()];
+    for k in 0..64 {
+        let a = f64::from(k) * std::f64::consts::TAU / 64.0;
+        let dot = |x: f64, y: f64| a.cos() * x + a.sin() * y;
+        // At least this far in the direction (a point on each side), at most that far.
+        let low = |r: &[f64; 4]| {
+            [
+                dot(r[0], r[1]).min(dot(r[0], r[3])),
+                dot(r[2], r[1]).min(dot(r[2], r[3])),
+                dot(r[0], r[1]).min(dot(r[2], r[1])),
+                dot(r[0], r[3]).min(dot(r[2], r[3])),
+            ]
+            .into_iter()
+            .fold(f64::NEG_INFINITY, f64::max)
+        };
+        let high = |r: &[f64; 4]| {
+            dot(r[0], r[1]).max(dot(r[2], r[1])).max(dot(r[2], r[3])).max(dot(r[0], r[3]))
+        };
+        let best = rects.iter().map(low).fold(f64::NEG_INFINITY, f64::max);
+        for (w, r) in want.iter_mut().zip(rects) {
+            *w |= high(r) >= best;
+        }
+    }
+    want
+}
+
+/// For each box of `rects`, the edges of the polygon `p` it is not strictly left of (the only
+/// ones its points need testing against).
+fn near_edges(p: &[[f64; 2]], rects: &[[f64; 4]]) -> Vec<Vec<usize>> {
+    rects
+        .iter()
+        .map(|r| (0..p.len()).filter(|&e| !box_left_of(p, e, r)).collect())
+        .collect()
 }
 
 /// Is `q` strictly left of the edge `e` of the polygon `p` (exactly)?
