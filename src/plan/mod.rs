@@ -4,8 +4,9 @@
 //! A [`Plan`] is made from the input files' headers (no point is decoded): the product command
 //! and its options, the tile grid, and for every tile the files whose extent reaches into it or
 //! its buffer. Saving it writes the chunk index of every plain LAZ/LAS file (`DIR/index/`, one
-//! decoding pass: [`crate::input::las::ChunkIndex`]), then `DIR/plan.json`. A task needs nothing
-//! else. It runs the tiled engine on its tile alone ([`crate::TaskScope`]): it reads the files
+//! decoding pass: [`crate::input::las::ChunkIndex`]) and the data's hull band when the plan has
+//! one ([`Plan::hull_band`]: `DIR/index/band`, [`crate::HullBand`]), then `DIR/plan.json`. A
+//! task needs nothing else. It runs the tiled engine on its tile alone ([`crate::TaskScope`]): it reads the files
 //! near its tile (only their chunks, or COPC nodes, that meet its tile and buffer), keeps the
 //! points up to the buffer, and delivers exactly what its tile owns, certified to be what a run
 //! over all the points gives; when a certificate needs points beyond the buffer the task runs
@@ -445,7 +446,7 @@ impl Plan {
 
     /// Writes `DIR/plan.json` (atomically: a rename, or one upload to S3) and creates
     /// `DIR/tiles/`, after the chunk index of every plain LAZ/LAS file (`DIR/index/`: one
-    /// decoding pass over them, on every core).
+    /// decoding pass over them, on every core) and the hull band (the chunks along the edge).
     ///
     /// # Errors
     /// [`Error::Io`] naming the file; [`Error::Options`] for a directory that holds another
