@@ -37,7 +37,9 @@ pub const BAND_WIDTH: f64 = 2.0;
 /// the whole band (data narrower than a few band widths, or coordinates in degrees).
 const MAX_BAND_SHARE: u64 = 4;
 
-/// Nor one of more points than this (about 100 MB in every task).
+/// Nor one of more points than this (about 100 MB in every task), or than a sixteenth of a
+/// task's memory holds at 24 bytes a point (each task holds the band, and sorts it with its own
+/// points).
 const MAX_BAND_POINTS: usize = 4_000_000;
 
 /// The data's convex hull and the points near it (see the module docs).
@@ -98,7 +100,8 @@ impl HullBand {
 
     /// The band of `width` of the points `src` reads, or `None` when it would not serve the
     /// tasks: the data has no hull with an inside (fewer than three corners, or narrower than
-    /// twice `width`), or the band holds more than a quarter of the points (or four million).
+    /// twice `width`), or the band holds more than a quarter of the points (or four million,
+    /// or a sixteenth of the tasks' memory `src.mem` at 24 bytes a point).
     ///
     /// # Errors
     /// The reader's errors.
@@ -109,7 +112,8 @@ impl HullBand {
         }
         let n = spans.rects.len();
         let total = spans.points;
-        let cap = MAX_BAND_POINTS.min(usize::try_from(total / MAX_BAND_SHARE).unwrap_or(usize::MAX));
+        let most = (total / MAX_BAND_SHARE).min(src.mem / 16 / 24);
+        let cap = MAX_BAND_POINTS.min(usize::try_from(most).unwrap_or(usize::MAX));
         // The seed: the chunks that may hold the extreme point in some direction; then the
         // chunks not strictly inside `P` of the hull so far, whose points not strictly inside
         // `P` moved a little further in (`guard`, inside the final `P`) are kept.
