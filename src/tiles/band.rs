@@ -126,10 +126,12 @@ impl HullBand {
         let mut overflow = false;
         let (h, inner) = loop {
             let near = guard.as_ref().map(|g| near_edges(g, &spans.rects));
+            let every: Vec<usize> = (0..guard.as_ref().map_or(0, Vec::len)).collect();
             spans.decode(src, &want, |p, s| {
                 builder.add([p.x, p.y, p.z], p.index);
                 if let (Some(g), Some(near)) = (&guard, &near)
-                    && !(g.len() >= 3 && near[s].iter().all(|&e| left_of(g, e, [p.x, p.y])))
+                    && !(g.len() >= 3
+                        && edges(near, s, &every).iter().all(|&e| left_of(g, e, [p.x, p.y])))
                 {
                     if band.len() < cap {
                         band.push(([p.x, p.y, p.z], p.index));
@@ -165,8 +167,10 @@ impl HullBand {
             .map(|i| (overflow || seeded[i]) && !box_inside(&inner, &spans.rects[i]))
             .collect();
         let near = near_edges(&inner, &spans.rects);
+        let every: Vec<usize> = (0..inner.len()).collect();
         spans.decode(src, &want, |p, s| {
-            if !near[s].iter().all(|&e| left_of(&inner, e, [p.x, p.y])) && band.len() <= cap {
+            let list = edges(&near, s, &every);
+            if !list.iter().all(|&e| left_of(&inner, e, [p.x, p.y])) && band.len() <= cap {
                 band.push(([p.x, p.y, p.z], p.index));
             }
         })?;
@@ -249,6 +253,12 @@ fn near_edges(p: &[[f64; 2]], rects: &[[f64; 4]]) -> Vec<Vec<usize>> {
         .collect()
 }
 
+/// The edges a point of span `s` is tested against: those `near` lists for its span, or `all`
+/// when its span is not known.
+fn edges<'a>(near: &'a [Vec<usize>], s: Option<usize>, all: &'a [usize]) -> &'a [usize] {
+    s.map_or(all, |s| &near[s])
+}
+
 /// Is `q` strictly left of the edge `e` of the polygon `p` (exactly)?
 fn left_of(p: &[[f64; 2]], e: usize, q: [f64; 2]) -> bool {
     orient(p[e], p[(e + 1) % p.len()], q) == Orientation::CounterClockwise
@@ -299,12 +309,13 @@ impl Spans {
     }
 
     /// Decodes the spans `want` marks (the job's filter applied) and hands `f` each point with
-    /// its span's position in [`Spans::rects`].
+    /// its span's position in [`Spans::rects`] (`None` when the point is not in that span's box:
+    /// never, unless the files' point counts and chunk tables disagree).
     fn decode(
         &self,
         src: &BandSource,
         want: &[bool],
-        mut f: impl FnMut(&LidarPoint, usize),
+        mut f: impl FnMut(&LidarPoint, Option<usize>),
     ) -> Result<()> {
         if !want.contains(&true) {
             return Ok(());
@@ -342,7 +353,10 @@ impl Spans {
         prefetched(&mut reader, |buf, _| {
             for p in buf {
                 let k = firsts.partition_point(|a| a.0 <= p.index);
-                f(p, firsts[k.saturating_sub(1)].1);
+                let s = firsts[k.saturating_sub(1)].1;
+                let r = &self.rects[s];
+                let inside = p.x >= r[0] && p.x <= r[2] && p.y >= r[1] && p.y <= r[3];
+                f(p, inside.then_some(s));
             }
             Ok(())
         })
