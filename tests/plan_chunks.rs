@@ -138,7 +138,9 @@ fn an_empty_task_writes_no_tile() {
     );
 }
 
-/// A chunk index cut short or edited would make tasks skip chunks: refused, exit 3, naming it.
+/// A chunk index cut short or edited would make tasks skip chunks, a hull band cut short, edited,
+/// missing or of another plan would let them certify against points that are not the data's:
+/// refused, exit 3, naming it.
 #[test]
 fn a_truncated_or_edited_chunk_index_is_refused() {
     let t = tempfile::tempdir().unwrap();
@@ -178,6 +180,48 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
         assert!(!job.join("tiles/task_0.json").exists());
     }
     std::fs::write(&index, &bytes).unwrap();
+    // The plan's hull band: cut short, edited, missing, or another plan's.
+    let band = job.join("index/band");
+    let bytes = std::fs::read(&band).unwrap();
+    let mut edited = bytes.clone();
+    edited[120] ^= 1;
+    let other = t.path().join("other");
+    let input = topography();
+    let args = [
+        "plan",
+        "dem",
+        s(&input),
+        "--cell",
+        "1",
+        "--tile",
+        "64",
+        "-o",
+        s(&other),
+    ];
+    sweeptin(&args, "plan");
+    for (what, damaged) in [
+        ("truncated", Some(bytes[..bytes.len() - 1].to_vec())),
+        ("checksum", Some(edited)),
+        ("missing", None),
+        (
+            "another plan",
+            Some(std::fs::read(other.join("index/band")).unwrap()),
+        ),
+    ] {
+        match damaged {
+            Some(d) => std::fs::write(&band, d).unwrap(),
+            None => std::fs::remove_file(&band).unwrap(),
+        }
+        let o = bin()
+            .args(["run", s(&plan), "--task", "0", "-q"])
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(3), "{what}: {e}");
+        assert!(e.contains("hull band") && e.contains(what), "{what}: {e}");
+        assert!(!job.join("tiles/task_0.json").exists());
+    }
+    std::fs::write(&band, &bytes).unwrap();
     sweeptin(&["run", s(&plan), "--task", "0", "-q"], "run");
 }
 
@@ -190,10 +234,21 @@ fn index_chunks(args: &[&str]) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
-/// `plan` into `job` over `input`: its stderr.
+/// `plan` into `job` over `input`, without the hull band (which decodes the chunks along the
+/// data's edge: here only the chunk index is read or decoded): its stderr.
 fn plan_into(input: &Path, job: &Path) -> std::process::Output {
     bin()
-        .args(["plan", "dem", s(input), "--cell", "1", "--tile", "32", "-o"])
+        .args([
+            "plan",
+            "--no-hull-band",
+            "dem",
+            s(input),
+            "--cell",
+            "1",
+            "--tile",
+            "32",
+            "-o",
+        ])
         .arg(job)
         .output()
         .unwrap()
@@ -324,48 +379,47 @@ fn index_chunks_of_las_blocks_into_a_directory_and_its_refusals() {
 /// An edge task over one LAZ read by chunk ran twice (lidR_Topography, tiles of 32: task 9 on
 /// the data's south-east hull, buffer 3.2 then 276, the whole file decoded), because it could
 /// not tell its own hull edges from the data's: given the data's hull and the points within 2
-/// of it (the prototype's `SWEEPTIN_PROTO_HULL`, docs/BENCHMARKS.md), it runs once and writes
-/// the same tile, byte for byte.
+/// of it (the plan's hull band, `DIR/index/band`), it runs once and writes the same tile, byte
+/// for byte; a plan made with `--no-hull-band` runs it twice.
 #[test]
 fn an_edge_task_given_the_hull_band_runs_once() {
     let t = tempfile::tempdir().unwrap();
-    let job = t.path().join("job");
     let input = topography();
-    let args = [
-        "plan",
-        "dem",
-        s(&input),
-        "--cell",
-        "1",
-        "--tile",
-        "32",
-        "-o",
-        s(&job),
-    ];
-    sweeptin(&args, "plan");
-    let plan = job.join("plan.json");
-    let task = |env: Option<&Path>| {
+    let task = |name: &str, band: bool| {
+        let job = t.path().join(name);
+        let mut args = vec!["plan"];
+        if !band {
+            args.push("--no-hull-band");
+        }
+        args.extend([
+            "dem",
+            s(&input),
+            "--cell",
+            "1",
+            "--tile",
+            "32",
+            "-o",
+            s(&job),
+        ]);
+        sweeptin(&args, "plan");
+        assert_eq!(job.join("index/band").exists(), band);
+        let plan = job.join("plan.json");
         let mut c = bin();
         c.args(["run", s(&plan), "--task", "9", "-q"]);
-        if let Some(p) = env {
-            c.env("SWEEPTIN_PROTO_HULL", p)
-                .env("SWEEPTIN_PROTO_BAND", "2");
-        }
         plans::ok(c.output().unwrap(), "run --task 9");
         let rec: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(job.join("tiles/task_9.json")).unwrap())
                 .unwrap();
         let tile = rec["outputs"][0][1].as_str().unwrap().to_string();
         let bytes = std::fs::read(job.join(&tile)).unwrap();
-        std::fs::remove_dir_all(job.join("tiles")).unwrap();
         (rec["runs"].as_u64().unwrap(), bytes)
     };
-    let (before, tile_before) = task(None);
+    let (before, tile_before) = task("off", false);
     assert_eq!(
         before, 2,
         "without the hull the edge task ran {before} times"
     );
-    let (runs, tile) = task(Some(&t.path().join("band.txt")));
+    let (runs, tile) = task("on", true);
     assert_eq!(
         runs, 1,
         "given the hull's band the edge task ran {runs} times"

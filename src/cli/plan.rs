@@ -54,6 +54,12 @@ pub struct PlanArgs {
     /// again, so this only tunes the work, never the result.
     #[arg(long, value_name = "DISTANCE")]
     pub buffer: Option<f64>,
+    /// Give the tasks no hull band: by default, over one plain LAZ/LAS file (no breaklines, no
+    /// `--ground`), the plan decodes the chunks along the data's edge once more and stores the
+    /// points within 2 units of its convex hull, so that the tasks along the edge run once. The
+    /// outputs are the same either way (for comparison).
+    #[arg(long)]
+    pub no_hull_band: bool,
     /// The product command (`dem`, `contours`, `volume --plane Z`, `tin` or `ground`) with its input files and
     /// options as for a single run, plus `--tile SIZE` (the plan's tile side, a multiple of the
     /// cell) and `-o DIR` (where the plan and the tiles' outputs go: a local directory, or
@@ -433,6 +439,10 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     // The inputs as given: the plan keeps the lists and `.vpc` files among what it reads, which
     // no output may replace (checked there, with the line files).
     let plan = Plan::new(typed, argv, outputs, &given, tile, buffer)?;
+    let plan = match args.no_hull_band {
+        true => plan.without_hull_band(),
+        false => plan,
+    };
     // The lines cleaned as every task will (checked on the bytes read): their z conflicts,
     // warned of as one run warns of them.
     let lines = plan.job.lines.as_ref().map(|l| l.graph()).transpose()?;

@@ -4,8 +4,9 @@
 //! A [`Plan`] is made from the input files' headers (no point is decoded): the product command
 //! and its options, the tile grid, and for every tile the files whose extent reaches into it or
 //! its buffer. Saving it writes the chunk index of every plain LAZ/LAS file (`DIR/index/`, one
-//! decoding pass: [`crate::input::las::ChunkIndex`]), then `DIR/plan.json`. A task needs nothing
-//! else. It runs the tiled engine on its tile alone ([`crate::TaskScope`]): it reads the files
+//! decoding pass: [`crate::input::las::ChunkIndex`]) and the data's hull band when the plan has
+//! one ([`Plan::hull_band`]: `DIR/index/band`, [`crate::HullBand`]), then `DIR/plan.json`. A
+//! task needs nothing else. It runs the tiled engine on its tile alone ([`crate::TaskScope`]): it reads the files
 //! near its tile (only their chunks, or COPC nodes, that meet its tile and buffer), keeps the
 //! points up to the buffer, and delivers exactly what its tile owns, certified to be what a run
 //! over all the points gives; when a certificate needs points beyond the buffer the task runs
@@ -20,6 +21,7 @@
 //! every triangle (by its lowest vertex in sweep order) has exactly one owner tile.
 
 mod area;
+mod band;
 pub mod chunks;
 mod dir;
 mod engine;
@@ -135,6 +137,10 @@ pub struct Plan {
     pub cell: Option<f64>,
     /// The tasks, in tile order (rows from south to north, west to east in a row).
     pub tiles: Vec<PlanTile>,
+    /// The width of the data's hull band given to the tasks ([`Plan::task_band`]; `None`: none,
+    /// as in plans of older builds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hull_band: Option<f64>,
     /// What the files' headers said when the plan was made (a point count that disagrees with
     /// the file, a CRS read as `--crs` says…), as one run warns of them; `plan` prints them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -408,6 +414,7 @@ impl Plan {
                 }
             }
         }
+        let hull_band = band::width_for(&job, &files);
         let mut plan = Plan {
             version: if job.ground.is_some() {
                 PLAN_VERSION_GROUND
@@ -426,6 +433,7 @@ impl Plan {
             buffer,
             cell,
             tiles,
+            hull_band,
             warnings,
             fingerprint: String::new(),
             id: PlanId::default(),
@@ -439,7 +447,7 @@ impl Plan {
 
     /// Writes `DIR/plan.json` (atomically: a rename, or one upload to S3) and creates
     /// `DIR/tiles/`, after the chunk index of every plain LAZ/LAS file (`DIR/index/`: one
-    /// decoding pass over them, on every core).
+    /// decoding pass over them, on every core) and the hull band (the chunks along the edge).
     ///
     /// # Errors
     /// [`Error::Io`] naming the file; [`Error::Options`] for a directory that holds another
@@ -469,6 +477,7 @@ impl Plan {
         dir.make_dir("tiles")?;
         // The indexes first: a plan.json is complete with everything its tasks read.
         self.write_chunk_indexes(dir)?;
+        self.write_band(dir)?;
         dir.write(&path, text.as_bytes())?;
         Ok(path)
     }
@@ -602,6 +611,7 @@ impl Plan {
                 .collect(),
             chunks: Vec::new(),
             by_area: self.job.ground.is_some(),
+            band: None,
         })
     }
 

@@ -582,6 +582,7 @@ impl Plan {
                 base: None,
                 scope: Some(crate::tiles::TaskScope {
                     chunks: self.task_chunks(dir, i, buffer)?,
+                    band: self.task_band(dir)?,
                     ..self.scope(i, buffer)?
                 }),
             }),

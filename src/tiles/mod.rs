@@ -17,6 +17,7 @@
 //! output is the same bytes for every memory budget and thread count. The triangle *set* is the
 //! one of the streaming sweep along `y` (the same tie rule, stated in positions), in another order.
 
+pub(crate) mod band;
 pub(crate) mod certify;
 pub(crate) mod emit;
 pub(crate) mod grid;
@@ -91,7 +92,13 @@ pub struct TaskScope {
     /// indexes (what lies beyond counts as unread): a task whose points have known classes only
     /// there (`--ground`, [`crate::plan`]'s tasks classify their own area).
     pub by_area: bool,
+    /// The data's hull and the points within its width of it ([`HullBand`], computed by the
+    /// plan): a task reading by area adds the band's points beyond its area and knows that what
+    /// it did not read lies inside the hull moved inwards, so its edge tiles need no wider buffer.
+    pub band: Option<std::sync::Arc<HullBand>>,
 }
+
+pub use band::HullBand;
 
 /// What the tiles did (part of the `--json` summary).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]

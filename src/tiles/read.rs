@@ -19,13 +19,10 @@ pub(super) fn read_index(
 ) -> Result<(BlockIndex, Declared, [f64; 4], TileCpu)> {
     let scope = options.scope.as_ref();
     let (mut reader, outside, by_area) = open_for(job, scope)?;
-    // PROTOTYPE: the data's hull corners, added where the task does not read them.
-    let global_hull = match by_area {
-        Some(a) => proto_hull(job)?.map(|h| (h, a)),
-        None => None,
-    };
-    let extra: Vec<[f64; 3]> = global_hull.as_ref().map_or_else(Vec::new, |(h, a)| {
-        h.band
+    // The data's hull band (a plan's): its points beyond the area, as read points.
+    let band = by_area.and_then(|a| Some((scope?.band.as_deref()?, a)));
+    let extra: Vec<[f64; 3]> = band.map_or_else(Vec::new, |(h, a)| {
+        h.points
             .iter()
             .filter(|c| !(c[0] >= a[0] && c[0] <= a[2] && c[1] >= a[1] && c[1] <= a[3]))
             .copied()
@@ -85,8 +82,8 @@ pub(super) fn read_index(
             beyond: outside,
             tile: sc.tile,
             buffer: sc.buffer,
-            hull: global_hull.as_ref().map(|(h, _)| h.hull.iter().map(|c| [c[0], c[1]]).collect()),
-            inner: global_hull.map(|(h, _)| h.inner),
+            hull: band.map(|(h, _)| h.hull.clone()),
+            inner: band.map(|(h, _)| h.inner.clone()),
         });
     }
     // The tile: as given, or about `tile_points` at the density over the non-empty blocks; for
@@ -238,134 +235,6 @@ fn open_for(
     };
     let reader = LidarReader::open_with(job.paths, job.filter, options)?;
     Ok((reader, Vec::new(), None))
-}
-
-/// PROTOTYPE: the data's hull corners, a polygon inside the hull (its edges `SWEEPTIN_PROTO_BAND`
-/// inwards, default 2) and the points not strictly inside it, with the duplicate policy's z;
-/// cached in the file `SWEEPTIN_PROTO_HULL`.
-pub(super) struct ProtoHull {
-    pub hull: Vec<[f64; 3]>,
-    pub inner: Vec<[f64; 2]>,
-    pub band: Vec<[f64; 3]>,
-}
-
-fn proto_hull(job: &TileJob) -> Result<Option<ProtoHull>> {
-    use crate::geom::predicates::{Orientation, orient};
-    let Some(path) = std::env::var_os("SWEEPTIN_PROTO_HULL") else {
-        return Ok(None);
-    };
-    if let Ok(s) = std::fs::read_to_string(&path) {
-        let bad = || {
-            crate::error::Error::Options(format!(
-                "SWEEPTIN_PROTO_HULL: {} is not a band file",
-                std::path::Path::new(&path).display()
-            ))
-        };
-        let mut out = ProtoHull { hull: vec![], inner: vec![], band: vec![] };
-        let mut part = 0;
-        for l in s.lines() {
-            if l.starts_with('#') {
-                part += 1;
-                continue;
-            }
-            let v = l
-                .split(' ')
-                .map(|w| u64::from_str_radix(w, 16).ok().map(f64::from_bits))
-                .collect::<Option<Vec<f64>>>()
-                .ok_or_else(bad)?;
-            match (part, v.len()) {
-                (1, 3) => out.hull.push([v[0], v[1], v[2]]),
-                (2, 2) => out.inner.push([v[0], v[1]]),
-                (3, 3) => out.band.push([v[0], v[1], v[2]]),
-                _ => return Err(bad()),
-            }
-        }
-        if part != 3 {
-            return Err(bad());
-        }
-        return Ok(Some(out));
-    }
-    let d: f64 = std::env::var("SWEEPTIN_PROTO_BAND").ok().and_then(|v| v.parse().ok()).unwrap_or(2.0);
-    let open = || {
-        let options = ReadOptions {
-            crs: job.crs.cloned(),
-            ..ReadOptions::for_budget(job.mem)
-        };
-        LidarReader::open_with(job.paths, job.filter, options)
-    };
-    let mut reader = open()?;
-    let mut b = hull::HullBuilder::new(job.duplicates);
-    prefetched(&mut reader, |buf, _| {
-        for p in buf {
-            b.add([p.x, p.y, p.z], p.index);
-        }
-        Ok(())
-    })?;
-    let h = b.finish();
-    let h2: Vec<[f64; 2]> = h.iter().map(|c| [c[0], c[1]]).collect();
-    let inner = index::inner_polygon(&h2, d);
-    let n = inner.len();
-    let strictly_inside = |q: [f64; 2]| {
-        n >= 3
-            && (0..n).all(|i| orient(inner[i], inner[(i + 1) % n], q) == Orientation::CounterClockwise)
-    };
-    // Cells of 8 units wholly inside (their four corners strictly inside the convex polygon).
-    let cell = 8.0;
-    let (x0, y0) = (h2.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min), h2.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min));
-    let (x1, y1) = (h2.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max), h2.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max));
-    let (nx, ny) = (((x1 - x0) / cell) as usize + 1, ((y1 - y0) / cell) as usize + 1);
-    let mut full = vec![false; nx * ny];
-    for j in 0..ny {
-        for i in 0..nx {
-            let (cx, cy) = (x0 + i as f64 * cell, y0 + j as f64 * cell);
-            full[j * nx + i] = [[cx, cy], [cx + cell, cy], [cx, cy + cell], [cx + cell, cy + cell]]
-                .iter()
-                .all(|&q| strictly_inside(q));
-        }
-    }
-    let mut band: Vec<([f64; 3], u64)> = Vec::new();
-    let mut reader = open()?;
-    prefetched(&mut reader, |buf, _| {
-        for p in buf {
-            let (i, j) = (((p.x - x0) / cell) as usize, ((p.y - y0) / cell) as usize);
-            let inside = i < nx && j < ny && full[j * nx + i] || strictly_inside([p.x, p.y]);
-            if !inside {
-                band.push(([p.x, p.y, p.z], p.index));
-            }
-        }
-        Ok(())
-    })?;
-    let policy = job.duplicates;
-    band.sort_by(|a, b| {
-        (a.0[0].total_cmp(&b.0[0])).then(a.0[1].total_cmp(&b.0[1])).then_with(|| {
-            if policy.prefers((a.0[2], a.1), (b.0[2], b.1)) {
-                std::cmp::Ordering::Less
-            } else {
-                std::cmp::Ordering::Greater
-            }
-        })
-    });
-    band.dedup_by(|b, a| a.0[0] == b.0[0] && a.0[1] == b.0[1]);
-    let out = ProtoHull { hull: h, inner, band: band.into_iter().map(|p| p.0).collect() };
-    let mut text = String::from("#hull\n");
-    for c in &out.hull {
-        text += &format!("{:x} {:x} {:x}\n", c[0].to_bits(), c[1].to_bits(), c[2].to_bits());
-    }
-    text += "#inner\n";
-    for c in &out.inner {
-        text += &format!("{:x} {:x}\n", c[0].to_bits(), c[1].to_bits());
-    }
-    text += "#band\n";
-    for c in &out.band {
-        text += &format!("{:x} {:x} {:x}\n", c[0].to_bits(), c[1].to_bits(), c[2].to_bits());
-    }
-    // Written whole and renamed, so that a task beside it never reads half a file.
-    let mut tmp = std::path::PathBuf::from(&path).into_os_string();
-    tmp.push(format!(".{}.tmp", std::process::id()));
-    if std::fs::write(&tmp, text).is_ok() {
-        let _ = std::fs::rename(&tmp, &path);
-    }
-    Ok(Some(out))
 }
 
 /// Where points of the file `i` that a read of `area` skips may lie: the boxes of its chunks

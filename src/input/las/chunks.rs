@@ -149,6 +149,27 @@ impl ChunkIndex {
         ))
     }
 
+    /// A copy in which the spans `keep` does not mark (by position) have a box that no area
+    /// meets: a reader given this index and an area decodes only the marked spans that meet it
+    /// (a plan's band, [`crate::tiles::band`], decodes the chunks it needs this way).
+    pub(crate) fn only(&self, keep: &[bool]) -> ChunkIndex {
+        let far = [f64::MAX; 4];
+        let spans = self
+            .spans
+            .iter()
+            .enumerate()
+            .map(|(i, s)| SpanBox {
+                span: s.span,
+                rect: if keep.get(i) == Some(&true) {
+                    s.rect
+                } else {
+                    far
+                },
+            })
+            .collect();
+        ChunkIndex { spans }
+    }
+
     /// The spans whose box `keep` keeps.
     pub(crate) fn spans_kept(&self, keep: &dyn Fn([f64; 4]) -> bool) -> Vec<Chunk> {
         self.spans
