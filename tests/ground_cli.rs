@@ -332,4 +332,19 @@ fn ground_copc_output_holds_the_points_of_the_laz_output() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("NIR") && err.contains("s.laz"), "{err}");
     assert!(!nir.exists());
+    // `--odir` writes a COPC input as plain `.laz` under its name (as `height --odir` and
+    // Python's `odir=`): a COPC file only when `-o` names one.
+    let od = dir.path().join("od");
+    std::fs::create_dir(&od).unwrap();
+    let copc_in = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/lidR_Topography.copc.laz");
+    cli::ok(&[
+        "ground".as_ref(),
+        copc_in.as_os_str(),
+        "--odir".as_ref(),
+        od.as_os_str(),
+        "--quiet".as_ref(),
+    ]);
+    assert!(od.join("lidR_Topography.laz").exists());
+    assert!(!od.join("lidR_Topography.copc.laz").exists());
 }

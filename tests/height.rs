@@ -254,8 +254,10 @@ fn replace_z_normalizes_and_withholds_points_outside_the_ground() {
     assert!(info.bounds.max[2] < 40.0, "the header's z bounds follow");
 }
 
-/// Refusals: several inputs to one `-o` file (exit 2), files without ground points (exit 3,
-/// no output), `--z-from` an attribute the file lacks (exit 3, naming those it has).
+/// Refusals: several inputs to one `-o` file (exit 2), a `.copc.laz` output (exit 2 before
+/// any work: `height` writes plain LAZ, which under that name passed for a COPC file), files
+/// without ground points (exit 3, no output), `--z-from` an attribute the file lacks (exit 3,
+/// naming those it has).
 #[test]
 fn height_refuses_what_it_cannot_do() {
     let dir = tempfile::tempdir().unwrap();
@@ -265,6 +267,12 @@ fn height_refuses_what_it_cannot_do() {
     let out = dir.path().join("x.laz");
     let o = run(&["height", &s(&a), &s(&b), "-o", &s(&out), "-q"]);
     assert_eq!(o.status.code(), Some(2));
+    let copc = dir.path().join("x.copc.laz");
+    let o = run(&["height", &s(&b), "-o", &s(&copc), "-q"]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("not COPC") && e.contains("x.laz"), "{e}");
+    assert!(!copc.exists());
     let o = run(&[
         "height",
         &s(&a),

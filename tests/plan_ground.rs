@@ -270,6 +270,12 @@ fn a_ground_plan_resumes_after_a_lost_tile_and_its_merged_laz_reads_back() {
         "run --all --resume",
     );
     assert!(tile.exists(), "--resume wrote the lost tile again");
+    // A merge writes plain LAZ: a `.copc.laz` name is refused before any work (it passed for
+    // a COPC file).
+    let copc = t.path().join("x.copc.laz");
+    let (code, err) = status(&["merge", s(&plan), "-o", s(&copc), "-q"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("not COPC") && !copc.exists(), "{err}");
     let b = t.path().join("b.laz");
     sweeptin(&["merge", s(&plan), "-o", s(&b), "-q"], "merge again");
     assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap());

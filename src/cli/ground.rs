@@ -136,7 +136,8 @@ Exact and tiling-independent: the ground is decided in blocks of 32 steps a side
 --step 6.25, 8 above 12.5, 4 above 25: 100 to 200 units), aligned at the origin, each block from its own points and those \
 within 2 steps around it. So the classes are the same for any --threads, --mem or split of the \
 input into files; several inputs are classified together (adjacent tiles classify \
-seamlessly) and each is written to --odir under its own name.
+seamlessly) and each is written to --odir under its own name (a .copc.laz input as plain .laz, \
+its points in their order; -o X.copc.laz writes a COPC file).
 
 Memory: one read of the inputs into a block index (sorted within --mem, spilled to --tmp-dir \
 beyond), then blocks on every core, at most 108 bytes a point of a block and its buffer; a \
@@ -212,14 +213,13 @@ impl Args {
                 }
                 self.inputs
                     .iter()
-                    .map(|i| {
-                        i.file_name().map(|n| dir.join(n)).ok_or_else(|| {
-                            sweeptin::Error::Options(format!(
-                                "{}: an input without a file name",
-                                i.display()
-                            ))
-                            .into()
-                        })
+                    .map(|i| match i.file_name() {
+                        Some(_) => Ok(super::input::in_dir(dir, i)),
+                        None => Err(sweeptin::Error::Options(format!(
+                            "{}: an input without a file name",
+                            i.display()
+                        ))
+                        .into()),
                     })
                     .collect()
             }

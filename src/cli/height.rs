@@ -1,7 +1,7 @@
 //! `sweeptin height`: height above ground of every point, written back into the points.
 
 use super::input::{Size, parse_threads};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 use sweeptin::input::las::parse_classes;
 use sweeptin::pipeline::height::{Ground, HeightJob, height};
@@ -70,20 +70,6 @@ pub struct Args {
     pub json: bool,
 }
 
-/// The output of `input` in directory `dir`: its own name, a COPC file's as plain `.laz`.
-fn in_dir(dir: &Path, input: &Path) -> PathBuf {
-    let name = input
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    let lower = name.to_ascii_lowercase();
-    let name = match lower.strip_suffix(".copc.laz") {
-        Some(_) => format!("{}.laz", &name[..name.len() - ".copc.laz".len()]),
-        None => name,
-    };
-    dir.join(name)
-}
-
 fn outputs(args: &Args) -> anyhow::Result<Vec<PathBuf>> {
     let dir = match (&args.odir, &args.output) {
         (Some(d), _) => Some(d.clone()),
@@ -110,7 +96,11 @@ fn outputs(args: &Args) -> anyhow::Result<Vec<PathBuf>> {
             dir.display()
         )));
     }
-    Ok(args.inputs.iter().map(|i| in_dir(&dir, i)).collect())
+    Ok(args
+        .inputs
+        .iter()
+        .map(|i| super::input::in_dir(&dir, i))
+        .collect())
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {

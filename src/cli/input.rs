@@ -237,6 +237,22 @@ impl InputArgs {
     }
 }
 
+/// The output of `input` in directory `dir` (`--odir` of `ground` and `height`): its own name,
+/// a COPC file's as plain `.laz` (its points rewritten in their order: a COPC file is written
+/// only when `-o` names one).
+pub fn in_dir(dir: &Path, input: &Path) -> PathBuf {
+    let name = input
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let lower = name.to_ascii_lowercase();
+    let name = match lower.strip_suffix(".copc.laz") {
+        Some(_) => format!("{}.laz", &name[..name.len() - ".copc.laz".len()]),
+        None => name,
+    };
+    dir.join(name)
+}
+
 /// `-` as an input is standard input (`/dev/stdin`), as in most command-line tools.
 pub fn stdin_path(p: &Path) -> PathBuf {
     if p.as_os_str() == "-" {

@@ -109,6 +109,7 @@ pub fn height(job: &HeightJob, options: &RunOptions) -> Result<HeightSummary> {
     crate::output::distinct_outputs(&named, &job.inputs, "height")?;
     for o in &job.outputs {
         check_point_output(o, &job.inputs)?;
+        crate::output::las::refuse_plain_copc(o, "height")?;
     }
     let mut counts = Vec::with_capacity(job.inputs.len());
     for i in &job.inputs {

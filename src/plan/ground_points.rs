@@ -160,6 +160,7 @@ pub(super) fn merge_points(
         )));
     }
     crate::output::las::check_point_output(out, &plan.read_files())?;
+    crate::output::las::refuse_plain_copc(out, "a ground plan's merge")?;
     let tiles: Vec<PathBuf> = records
         .iter()
         .flat_map(|r| r.outputs.iter().filter(|(n, _)| n == POINTS))

@@ -45,6 +45,25 @@ pub fn is_copc_path(path: &Path) -> bool {
         .is_some_and(|n| n.to_ascii_lowercase().ends_with(".copc.laz"))
 }
 
+/// Refuses `output` when it names a COPC file (`.copc.laz`) but `what` writes plain LAS/LAZ
+/// (only `ground` writes COPC, [`CopcOutput`]): a plain LAZ under a COPC name would be taken
+/// for one and fail in a COPC reader.
+///
+/// # Errors
+/// [`Error::Options`] naming the output and the `.laz` name to give instead.
+pub fn refuse_plain_copc(output: &Path, what: &str) -> Result<()> {
+    if !is_copc_path(output) {
+        return Ok(());
+    }
+    let mut laz = output.as_os_str().to_string_lossy().into_owned();
+    laz.truncate(laz.len() - ".copc.laz".len());
+    Err(Error::Options(format!(
+        "{}: {what} writes plain LAZ, not COPC (only `sweeptin ground` writes a .copc.laz): \
+         name the output {laz}.laz",
+        output.display()
+    )))
+}
+
 /// How the points of one input are written to a COPC file: checked from its header before
 /// any work ([`CopcOutput::check`]).
 #[derive(Clone, Debug)]

@@ -45,7 +45,7 @@
 mod copc;
 mod layout;
 
-pub use copc::{CopcOutput, NODE_POINTS, is_copc_path};
+pub use copc::{CopcOutput, NODE_POINTS, is_copc_path, refuse_plain_copc};
 
 use crate::error::{Error, Result};
 use crate::input::las::decode::{Fields, FileDecoder, spans};
@@ -415,6 +415,8 @@ fn rewrite(
     edit: &mut dyn FnMut(usize, &mut PointEdit<'_>) -> Result<()>,
     batch_bytes: u64,
 ) -> Result<RewriteSummary> {
+    // The caller's checks say so before any work; this guards the writer itself.
+    refuse_plain_copc(output, "the point rewrite")?;
     let input = inputs.first().ok_or(Error::NoInput)?.as_path();
     let info = inspect(input)?;
     let mut file = crate::input::source::Source::open(input)?.reader();
