@@ -10,7 +10,7 @@
 //! directory is not of this plan.
 
 use super::{Job, Plan, PlanDir, PlanFile, bad};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::tiles::HullBand;
 use crate::tiles::band::{BAND_WIDTH, BandSource};
 use std::path::PathBuf;
@@ -52,7 +52,7 @@ impl Plan {
     /// the chunk indexes (written first).
     ///
     /// # Errors
-    /// The chunk indexes' and the decoder's errors; [`Error::Io`] naming the file.
+    /// The chunk indexes' and the decoder's errors; [`crate::Error::Io`] naming the file.
     pub(super) fn write_band(&self, dir: &PlanDir) -> Result<()> {
         let Some(width) = self.hull_band else {
             return Ok(());
@@ -86,8 +86,8 @@ impl Plan {
     /// none worth giving (written so by `plan`).
     ///
     /// # Errors
-    /// [`Error::Format`] naming the file when it is missing, truncated, edited or of another
-    /// plan.
+    /// [`crate::Error::Format`] naming the file when it is missing, truncated, edited or of
+    /// another plan; the plan directory's I/O errors when it cannot be read.
     pub fn task_band(&self, dir: &PlanDir) -> Result<Option<Arc<HullBand>>> {
         if self.hull_band.is_none() {
             return Ok(None);
@@ -101,13 +101,9 @@ impl Plan {
         let bytes = match dir.read(&p) {
             Ok(Some(b)) => b,
             Ok(None) => return Err(bad(&p, format!("the plan's hull band is missing; {again}"))),
-            Err(e @ Error::Options(_)) => return Err(e),
-            Err(e) => {
-                return Err(bad(
-                    &p,
-                    format!("cannot read the plan's hull band ({e}); {again}"),
-                ));
-            }
+            // A read that fails (a transient S3 error, a permission) is an I/O error, exit 4: the
+            // plan is not known to be bad.
+            Err(e) => return Err(e),
         };
         decode(&bytes, self.id())
             .map_err(|what| bad(&p, format!("the plan's hull band is {what}; {again}")))
