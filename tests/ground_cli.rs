@@ -347,4 +347,20 @@ fn ground_copc_output_holds_the_points_of_the_laz_output() {
     ]);
     assert!(od.join("lidR_Topography.laz").exists());
     assert!(!od.join("lidR_Topography.copc.laz").exists());
+    // copc-writer's index files go to $TMPDIR: one where no file can be made is refused before
+    // the work (exit 4, naming it), no output.
+    let none = dir.path().join("n.copc.laz");
+    let o = Command::new(env!("CARGO_BIN_EXE_sweeptin"))
+        .env("TMPDIR", dir.path().join("none"))
+        .args([
+            "ground".as_ref(),
+            copc_in.as_os_str(),
+            "-o".as_ref(),
+            none.as_os_str(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{err}");
+    assert!(err.contains("TMPDIR") && !none.exists(), "{err}");
 }

@@ -82,7 +82,9 @@ impl CopcOutput {
     /// # Errors
     /// [`Error::Options`] naming the input for a point format with NIR or waveforms, a CRS in
     /// GeoTIFF keys sweeptin cannot spell as WKT, or no points (a COPC file holds at least
-    /// one); the header reader's errors.
+    /// one); the header reader's errors; [`Error::Write`] naming the system's temporary
+    /// directory (`$TMPDIR`, where `copc-writer` keeps its index files) when no file can be
+    /// made there.
     pub fn check(input: &Path, output: &Path) -> Result<CopcOutput> {
         let info = FileInfo::read(input)?;
         let refuse = |why: String| {
@@ -124,6 +126,16 @@ impl CopcOutput {
             }
             _ => None,
         };
+        // `copc-writer` puts its octree index files in the system's temporary directory, not
+        // `--tmp-dir`: one that cannot take a file is found now, not after the classification.
+        let sys_tmp = std::env::temp_dir();
+        tempfile::tempfile_in(&sys_tmp).map_err(|e| {
+            let what = format!(
+                "the COPC writer keeps its index files in the temporary directory ($TMPDIR), \
+                 where no file can be made ({e}): set TMPDIR to a writable directory"
+            );
+            Error::write(&sys_tmp, std::io::Error::new(e.kind(), what))
+        })?;
         Ok(CopcOutput {
             wkt,
             created: info.creation.unwrap_or_default(),
