@@ -177,21 +177,7 @@ impl HullBand {
         if band.len() > cap {
             return Ok(None);
         }
-        let policy = src.policy;
-        band.sort_unstable_by(|a, b| {
-            (a.0[0].total_cmp(&b.0[0]))
-                .then(a.0[1].total_cmp(&b.0[1]))
-                .then_with(|| {
-                    if policy.prefers((a.0[2], a.1), (b.0[2], b.1)) {
-                        std::cmp::Ordering::Less
-                    } else if policy.prefers((b.0[2], b.1), (a.0[2], a.1)) {
-                        std::cmp::Ordering::Greater
-                    } else {
-                        std::cmp::Ordering::Equal
-                    }
-                })
-        });
-        band.dedup_by(|b, a| a.0[0] == b.0[0] && a.0[1] == b.0[1]);
+        super::hull::keep_preferred(&mut band, src.policy);
         Ok(HullBand::from_parts(
             width,
             h,

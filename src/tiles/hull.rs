@@ -104,6 +104,26 @@ fn span(a: [f64; 2], b: [f64; 2], y0: f64, y1: f64) -> [f64; 2] {
 }
 
 
+/// Sorts `pts` (`(x, y, z, global index)`) by position and keeps at each position only the
+/// point the duplicate `policy` keeps (the block index's rule): the streamed hull's points and
+/// the plan's hull band.
+pub(crate) fn keep_preferred(pts: &mut Vec<([f64; 3], u64)>, policy: crate::DuplicatePolicy) {
+    pts.sort_unstable_by(|a, b| {
+        (a.0[0].total_cmp(&b.0[0]))
+            .then(a.0[1].total_cmp(&b.0[1]))
+            .then_with(|| {
+                if policy.prefers((a.0[2], a.1), (b.0[2], b.1)) {
+                    std::cmp::Ordering::Less
+                } else if policy.prefers((b.0[2], b.1), (a.0[2], a.1)) {
+                    std::cmp::Ordering::Greater
+                } else {
+                    std::cmp::Ordering::Equal
+                }
+            })
+    });
+    pts.dedup_by(|b, a| a.0[0] == b.0[0] && a.0[1] == b.0[1]);
+}
+
 /// The corners of the convex hull of points streamed by, each with the height the duplicate
 /// policy keeps among the points at its position (as [`super::index::BlockIndex`]'s hull):
 /// points are buffered and folded into the corners a batch at a time.
@@ -136,23 +156,7 @@ impl HullBuilder {
     }
 
     fn fold(&mut self) {
-        let policy = self.policy;
-        // By position, the point the policy keeps first at each.
-        self.pts.sort_unstable_by(|a, b| {
-            (a.0[0].total_cmp(&b.0[0]))
-                .then(a.0[1].total_cmp(&b.0[1]))
-                .then_with(|| {
-                    if policy.prefers((a.0[2], a.1), (b.0[2], b.1)) {
-                        std::cmp::Ordering::Less
-                    } else if policy.prefers((b.0[2], b.1), (a.0[2], a.1)) {
-                        std::cmp::Ordering::Greater
-                    } else {
-                        std::cmp::Ordering::Equal
-                    }
-                })
-        });
-        self.pts
-            .dedup_by(|b, a| a.0[0] == b.0[0] && a.0[1] == b.0[1]);
+        keep_preferred(&mut self.pts, self.policy);
         let mut v: Vec<[f64; 3]> = self.pts.iter().map(|p| p.0).collect();
         let h = hull(&mut v);
         let keep: Vec<([f64; 3], u64)> = h
