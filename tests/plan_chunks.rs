@@ -165,19 +165,23 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
     let mut edited = bytes.clone();
     // The first span's xmin.
     edited[40 + 32] ^= 1;
-    for (what, damaged) in [
-        ("truncated", bytes[..bytes.len() - 1].to_vec()),
-        ("checksum", edited),
-    ] {
-        std::fs::write(&index, &damaged).unwrap();
+    // Task 0 refused (exit 3) naming the damaged file and what is wrong, no record written.
+    let refused = |file: &str, what: &str| {
         let o = bin()
             .args(["run", s(&plan), "--task", "0", "-q"])
             .output()
             .unwrap();
         let e = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(3), "{what}: {e}");
-        assert!(e.contains("chunk index") && e.contains(what), "{what}: {e}");
+        assert!(e.contains(file) && e.contains(what), "{what}: {e}");
         assert!(!job.join("tiles/task_0.json").exists());
+    };
+    for (what, damaged) in [
+        ("truncated", bytes[..bytes.len() - 1].to_vec()),
+        ("checksum", edited),
+    ] {
+        std::fs::write(&index, &damaged).unwrap();
+        refused("chunk index", what);
     }
     std::fs::write(&index, &bytes).unwrap();
     // The plan's hull band: cut short, edited, missing, or another plan's.
@@ -212,14 +216,7 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
             Some(d) => std::fs::write(&band, d).unwrap(),
             None => std::fs::remove_file(&band).unwrap(),
         }
-        let o = bin()
-            .args(["run", s(&plan), "--task", "0", "-q"])
-            .output()
-            .unwrap();
-        let e = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(3), "{what}: {e}");
-        assert!(e.contains("hull band") && e.contains(what), "{what}: {e}");
-        assert!(!job.join("tiles/task_0.json").exists());
+        refused("hull band", what);
     }
     std::fs::write(&band, &bytes).unwrap();
     sweeptin(&["run", s(&plan), "--task", "0", "-q"], "run");
