@@ -14,7 +14,10 @@ ground surface of a DTM, and progressive densification takes it as ground). Then
 each ground (`sweeptin dem --class 2 --cell 1`) is compared with the DEM of the reference ground
 on the cells both have: share of cells within 0.15 m, RMSE, p99 of |difference|.
 
-usage: ground_accuracy.py [--sweeptin BIN] [--classes-tool BIN] [--no-csf] [--args "..."] FILES...
+With `--whitebox BIN`, WhiteboxTools' LidarGroundPointFilter too (its documented defaults).
+
+usage: ground_accuracy.py [--sweeptin BIN] [--classes-tool BIN] [--no-csf] [--whitebox BIN]
+                          [--args "..."] FILES...
 Prints a Markdown table row per file (and per method).
 """
 import argparse
@@ -124,6 +127,25 @@ def run_csf(las):
     return got, secs
 
 
+def run_whitebox(wbt, bare, tmp):
+    """WhiteboxTools' LidarGroundPointFilter (Vosselman's slope-based filter) with the defaults
+    its tool documents (radius 2, min_neighbours 0, slope 45°, height 1, classify, slope_norm),
+    given explicitly: the command line's own fallbacks differ (slope 15°, no normalisation)."""
+    src = os.path.join(tmp, "bare.las")
+    laspy.read(bare).write(src)
+    out = os.path.join(tmp, "wbt.las")
+    start = time.time()
+    subprocess.run(
+        [wbt, "-r=LidarGroundPointFilter", f"-i={src}", f"-o={out}", "--radius=2.0",
+         "--min_neighbours=0", "--slope_threshold=45.0", "--height_threshold=1.0",
+         "--classify", "--slope_norm"],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
+    secs = time.time() - start
+    return np.asarray(laspy.read(out).classification) == 2, secs
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--sweeptin", default="target/debug/sweeptin")
@@ -131,6 +153,7 @@ def main():
     ap.add_argument("--args", default="", help="extra arguments for sweeptin ground")
     ap.add_argument("--no-csf", action="store_true")
     ap.add_argument("--no-dem", action="store_true")
+    ap.add_argument("--whitebox", help="a whitebox_tools binary: its LidarGroundPointFilter too")
     ap.add_argument("files", nargs="+")
     args = ap.parse_args()
     print("| file | method | points | type I | type II | total | kappa | DEM cells ≤ 0.15 m | RMSE (m) | p99 (m) | seconds |")
@@ -154,6 +177,9 @@ def main():
             if not args.no_csf:
                 g, s = run_csf(las)
                 results.append(("CSF", g, s))
+            if args.whitebox:
+                g, s = run_whitebox(args.whitebox, bare, tmp)
+                results.append(("WhiteboxTools", g, s))
             for name, g, secs in results:
                 t1, t2, tot, kappa = metrics(ref, g, keep)
                 cells = rmse = p99 = float("nan")
