@@ -309,8 +309,15 @@ fn a_ground_plan_resumes_after_a_lost_tile_and_its_merged_laz_reads_back() {
 /// Writes a LAS 1.2 file (point format 0, no CRS) of 20 × 20 m from `x0`: a sloping ground with
 /// a 5 m box on it, coordinates stored with `scale`.
 fn sloping_las(path: &Path, x0: f64, scale: f64) {
+    sloping_las_as(path, x0, scale, (1, 2), false);
+}
+
+/// [`sloping_las`] in LAS `version`, with every seventh point a return 6 or 7 of 7 when
+/// `high_returns` (point formats 0–5 hold them in 3 bits; the counts by return of a header
+/// before LAS 1.4 have no place for them).
+fn sloping_las_as(path: &Path, x0: f64, scale: f64, version: (u8, u8), high_returns: bool) {
     use las::{Builder, Point, Transform, Vector, Writer};
-    let mut b = Builder::from((1, 2));
+    let mut b = Builder::from(version);
     let t = |offset| Transform { scale, offset };
     b.transforms = Vector {
         x: t(0.0),
@@ -323,16 +330,33 @@ fn sloping_las(path: &Path, x0: f64, scale: f64) {
             let (x, y) = (x0 + 0.5 * f64::from(i) + 0.25, 0.5 * f64::from(j) + 0.25);
             let roof = (6..12).contains(&(i % 20)) && (6..12).contains(&j);
             let z = 0.1 * x + if roof { 5.0 } else { 0.0 };
+            let high = high_returns && (i + j) % 7 == 0;
             w.write_point(Point {
                 x,
                 y,
                 z,
+                return_number: if high { 5 } else { 1 },
+                number_of_returns: if high { 5 } else { 1 },
                 ..Default::default()
             })
             .unwrap();
         }
     }
     w.close().unwrap();
+    if high_returns {
+        // The `las` crate writes no return above 5 before LAS 1.4: set the bits (point format
+        // 0, byte 14: return number in bits 0–2, number of returns in bits 3–5) as other
+        // writers do (lidR_Topography.laz holds a return 6).
+        let mut bytes = std::fs::read(path).unwrap();
+        let start = u32::from_le_bytes(bytes[96..100].try_into().unwrap()) as usize;
+        let len = usize::from(u16::from_le_bytes(bytes[105..107].try_into().unwrap()));
+        for k in (start..bytes.len()).step_by(len) {
+            if bytes[k + 14] & 7 == 5 {
+                bytes[k + 14] = (7 << 3) | (6 + (k / len) as u8 % 2);
+            }
+        }
+        std::fs::write(path, bytes).unwrap();
+    }
 }
 
 /// `sweeptin ARGS`: its exit status and standard error.
@@ -395,6 +419,66 @@ fn plan_ground_refuses_outputs_that_are_inputs_or_not_files_and_a_single_file_of
     ));
     assert!(want.iter().any(|p| p.1[3] == 2) && want.iter().any(|p| p.1[3] != 2));
     assert!(points(&vpc_files(&vpc)) == want);
+}
+
+/// Points of return 6 and 7 in LAS 1.2 files: every tile and the merged file count them (the
+/// legacy count was written 0 when a tile held one, and the merge left those tiles' points
+/// out with exit 0); a tile whose header miscounts its task's points is refused by the merge
+/// (exit 3, naming the task); files of unlike LAS versions are not joined into one file
+/// (exit 2). (About 2 s in a debug build.)
+#[test]
+fn ground_tiles_and_merges_count_returns_six_and_seven_and_refuse_what_they_cannot_join() {
+    let t = tempfile::tempdir().unwrap();
+    let (a, b) = (t.path().join("a.las"), t.path().join("b.las"));
+    sloping_las_as(&a, 0.0, 0.01, (1, 2), true);
+    sloping_las_as(&b, 20.0, 0.01, (1, 2), true);
+    let files = [a.clone(), b.clone()];
+    let want = points(&ground_run(&files, &["--step", "5"], &t.path().join("one")));
+    assert_eq!(want.len(), 3200);
+    assert!(want.iter().any(|p| p.1[0] == 7) && want.iter().any(|p| p.1[3] == 2));
+    let job = t.path().join("job");
+    let plan = ground_plan(&files, &["--step", "5"], "10", &job);
+    let m = t.path().join("m.laz");
+    sweeptin(&["merge", s(&plan), "-o", s(&m), "-q"], "merge");
+    assert!(
+        points(std::slice::from_ref(&m)) == want,
+        "the merge lost points"
+    );
+    let vpc = t.path().join("m.vpc");
+    sweeptin(
+        &["merge", s(&plan), "-o", s(&vpc), "-q"],
+        "merge into a VPC",
+    );
+    assert!(
+        points(&vpc_files(&vpc)) == want,
+        "the tiles miscount their points"
+    );
+    // A tile's header saying 0 points (as the miscounting build wrote them).
+    let tile = vpc_files(&vpc).into_iter().next().unwrap();
+    let mut bytes = std::fs::read(&tile).unwrap();
+    bytes[107..111].copy_from_slice(&0u32.to_le_bytes());
+    std::fs::write(&tile, &bytes).unwrap();
+    let (code, err) = status(&["merge", s(&plan), "-o", s(&t.path().join("n.laz"))]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("run it again") && err.contains("in their headers"),
+        "{err}"
+    );
+    // LAS 1.2 and 1.4 files: one file cannot hold both unchanged.
+    let c = t.path().join("c.las");
+    sloping_las_as(&c, 20.0, 0.01, (1, 4), false);
+    let plan2 = ground_plan(
+        &[a.clone(), c],
+        &["--step", "5"],
+        "10",
+        &t.path().join("job2"),
+    );
+    let (code, err) = status(&["merge", s(&plan2), "-o", s(&t.path().join("v.laz"))]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("LAS 1.4 (not 1.2)") && err.contains("OUT.vpc"),
+        "{err}"
+    );
 }
 
 /// A ground block too large for the plan's `--mem` is refused when the plan is made (exit 2,

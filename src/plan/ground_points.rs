@@ -11,7 +11,8 @@
 //! up to the headers') and writes either a virtual point cloud (`.vpc`) that references the
 //! tiles where they are, or one LAS/LAZ file of every point ([`crate::output::las::join_points`]:
 //! tasks in order, in each the input files in the plan's order, each file's points in file
-//! order), refused when the files' point formats, extra bytes or scales differ.
+//! order), refused when the files' point formats, extra bytes, versions, GPS time types or
+//! scales differ.
 
 use super::area::{grown, overlaps, tile_of};
 use super::{Plan, PlanDir, TaskRecord};
@@ -137,8 +138,34 @@ pub struct PointsMergeSummary {
 /// records at a time: a share of the merge's `--mem`).
 ///
 /// # Errors
+/// Each task's tiles count in their headers the points its record says it wrote: a tile whose
+/// header says otherwise (damaged, replaced, or written by a build that miscounted) would
+/// make a merge that leaves points out while its totals look right.
+fn check_tile_counts(records: &[TaskRecord]) -> Result<()> {
+    for r in records {
+        let mut counted = 0;
+        let mut last = None;
+        for (_, p) in r.outputs.iter().filter(|(n, _)| n == POINTS) {
+            counted += FileInfo::read(p)?.point_count;
+            last = Some(p.clone());
+        }
+        if let Some(path) = last.filter(|_| counted != r.points) {
+            return Err(Error::Format {
+                path,
+                message: format!(
+                    "task {}'s tiles count {counted} points in their headers, but the task \
+                     wrote {}: run it again (`sweeptin run PLAN --task {}`)",
+                    r.index, r.points, r.index
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// [`Error::Options`] for another extension, and when the tiles cannot make one file
-/// (point formats, extra bytes or scales that differ: merge into a `.vpc`);
+/// (point formats, extra bytes, versions, GPS time types or scales that differ: merge into a
+/// `.vpc`); [`Error::Format`] naming a tile whose header miscounts its task's points;
 /// [`Error::Format`] naming `plan.json` when the tiles do not hold every point of the files
 /// once; the writers' errors.
 pub(super) fn merge_points(
@@ -178,6 +205,7 @@ pub(super) fn merge_points(
             ),
         });
     }
+    check_tile_counts(records)?;
     if tiles.is_empty() {
         return Err(Error::NothingLeft {
             files: vec![dir.join("plan.json")],

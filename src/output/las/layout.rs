@@ -389,20 +389,34 @@ pub(super) fn finish_header(
 /// Patches the header of an output that holds another set of points than its source's (some
 /// left out, or several files joined): the point counts, by return too, and the x, y, z
 /// bounds (`[[min, max]; 3]`). The legacy 32-bit counts are written where the source filled
-/// them (LAS 1.4 with point formats 6–10 leaves them 0), and 0 past their range.
+/// them (LAS 1.4 with point formats 6–10 leaves them 0): the count of every point (before LAS
+/// 1.4 it is the only count a reader has; points of return 6 and 7, which point formats 0–5
+/// can hold, are in it though the five counts by return cannot name them), and 0 past their
+/// range in LAS 1.4, whose 64-bit count holds it. More points than 32 bits count in an older
+/// version are refused (the output is not committed).
 pub(super) fn count_points(
     src: &Source,
     block: &mut [u8],
     points: u64,
     returns: &[u64; 15],
     bounds: [[f64; 2]; 3],
-) {
+    output: &std::path::Path,
+) -> Result<()> {
     let put32 = |block: &mut [u8], k: usize, v: u64| {
         let v = u32::try_from(v).unwrap_or(0);
         block[k..k + 4].copy_from_slice(&v.to_le_bytes());
     };
-    if u32_at(&src.header, at::LEGACY_COUNT) != 0 {
-        let fits = points <= u64::from(u32::MAX) && returns[5..].iter().all(|&n| n == 0);
+    let fits = points <= u64::from(u32::MAX);
+    if !fits && src.version < (1, 4) {
+        return Err(Error::Options(format!(
+            "{}: {points} points do not fit the 32-bit count of a LAS {}.{} header: \
+             give LAS 1.4 inputs (e.g. `las2las -set_version 1.4`) or write fewer points a file",
+            output.display(),
+            src.version.0,
+            src.version.1
+        )));
+    }
+    if u32_at(&src.header, at::LEGACY_COUNT) != 0 || src.version < (1, 4) {
         put32(block, at::LEGACY_COUNT, if fits { points } else { 0 });
         for (r, &n) in returns[..5].iter().enumerate() {
             put32(block, at::LEGACY_RETURNS + 4 * r, if fits { n } else { 0 });
@@ -420,4 +434,5 @@ pub(super) fn count_points(
         block[k..k + 8].copy_from_slice(&max.to_le_bytes());
         block[k + 8..k + 16].copy_from_slice(&min.to_le_bytes());
     }
+    Ok(())
 }

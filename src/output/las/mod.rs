@@ -380,6 +380,24 @@ pub(crate) fn join_points_within(
                 a.record_length,
                 first.display()
             ))
+        } else if a.version != b.version {
+            Some(format!(
+                "LAS {}.{} (not {}.{})",
+                b.version.0, b.version.1, a.version.0, a.version.1
+            ))
+        } else if (a.global_encoding ^ b.global_encoding) & 1 != 0 {
+            let time = |e: u16| {
+                if e & 1 == 0 {
+                    "GPS week time"
+                } else {
+                    "adjusted standard GPS time"
+                }
+            };
+            Some(format!(
+                "{} (not {})",
+                time(b.global_encoding),
+                time(a.global_encoding)
+            ))
         } else if a.scale != b.scale || a.offset != b.offset {
             Some(format!(
                 "scale {:?} and offset {:?} (not {:?} and {:?})",
@@ -555,7 +573,8 @@ fn rewrite(
             tally.points,
             &tally.returns,
             tally.bounds(),
-        );
+            output,
+        )?;
     }
     let header_len = src.header.len();
     out.seek(SeekFrom::Start(0))
