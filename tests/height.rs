@@ -294,4 +294,27 @@ fn height_refuses_what_it_cannot_do() {
     assert_eq!(o.status.code(), Some(3));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("no such extra-bytes attribute"), "{e}");
+    // The @list or `.vpc` given as the input is an input too: never replaced (it was, exit 0);
+    // a name that says neither LAS nor LAZ is refused (LAS was written under `.txt`).
+    let list = dir.path().join("l.txt");
+    std::fs::write(&list, format!("{}\n", s(&b))).unwrap();
+    let vpc = dir.path().join("one.vpc");
+    let o = run(&["index", &s(&b), "-o", &s(&vpc)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for (input, output) in [
+        (format!("@{}", s(&list)), &list),
+        (s(&vpc), &vpc),
+        (s(&b), &dir.path().join("y.txt")),
+    ] {
+        let before = std::fs::read(output).ok();
+        let o = run(&["height", &input, "-o", &s(output), "-q"]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{}: {e}", output.display());
+        assert_eq!(
+            std::fs::read(output).ok(),
+            before,
+            "{} changed",
+            output.display()
+        );
+    }
 }

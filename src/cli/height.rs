@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(required = true, value_name = "FILES")]
     pub inputs: Vec<PathBuf>,
     /// Output file (one input), or a directory (ending in `/`, or existing) as --odir.
-    /// `.laz` is written compressed, anything else as LAS.
+    /// `.laz` is written compressed, `.las` as LAS (other names are refused).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
     /// Output directory: each input written there under its own name (a `.copc.laz` as
@@ -68,6 +68,9 @@ pub struct Args {
     /// Print a one-object JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
+    /// The files named by @lists and .vpc files (inputs too: no output may replace them).
+    #[arg(skip)]
+    pub lists: Vec<PathBuf>,
 }
 
 fn outputs(args: &Args) -> anyhow::Result<Vec<PathBuf>> {
@@ -118,8 +121,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         Ground::Classes(parse_classes(&args.ground_class)?)
     };
+    let outputs = outputs(&args)?;
+    // The lists and `.vpc` files named are inputs too (the library sees the files they name).
+    let mut read = args.inputs.clone();
+    read.extend(args.lists.iter().cloned());
+    for o in &outputs {
+        sweeptin::output::las::check_point_output(o, &read)?;
+    }
     let job = HeightJob {
-        outputs: outputs(&args)?,
+        outputs,
         inputs: args.inputs.clone(),
         ground,
         replace_z: args.replace_z,

@@ -342,9 +342,7 @@ fn dispatch(mut cli: Cli) -> anyhow::Result<()> {
         }
         Command::Thin(a) => a.input.expand()?,
         Command::Refine(a) => a.input.expand()?,
-        Command::Height(a) => {
-            input::expand_files(&mut a.inputs)?;
-        }
+        Command::Height(a) => a.lists = input::expand_files(&mut a.inputs)?,
         _ => {}
     }
     match cli.command {

@@ -57,7 +57,7 @@ impl Default for Ground {
 pub struct HeightJob {
     /// LAS/LAZ files: one point set for the ground, one output each.
     pub inputs: Vec<PathBuf>,
-    /// One output per input (`.laz` compressed, otherwise LAS).
+    /// One output per input (`.laz` compressed, `.las` not; other names are refused).
     pub outputs: Vec<PathBuf>,
     /// The ground.
     pub ground: Ground,

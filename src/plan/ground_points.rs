@@ -186,7 +186,7 @@ pub(super) fn merge_points(
             out.display()
         )));
     }
-    crate::output::las::check_point_output(out, &plan.read_files())?;
+    crate::output::las::check_output_target(out, &plan.read_files())?;
     crate::output::las::refuse_plain_copc(out, "a ground plan's merge")?;
     let tiles: Vec<PathBuf> = records
         .iter()

@@ -250,8 +250,23 @@ pub fn rewrite_points(
     rewrite_points_with(input, output, &RewriteOptions::default(), edit)
 }
 
-/// Refuses an output that is an input, or not a regular file (or nothing yet).
+/// Refuses an output not named `.las` or `.laz`, an output that is an input, or one that is not
+/// a regular file (or nothing yet).
 pub fn check_point_output(output: &Path, inputs: &[PathBuf]) -> Result<()> {
+    let ext = output.extension().and_then(|e| e.to_str());
+    if !ext.is_some_and(|e| e.eq_ignore_ascii_case("las") || e.eq_ignore_ascii_case("laz")) {
+        return Err(Error::Options(format!(
+            "{}: a point file is named OUT.laz (compressed) or OUT.las: the name says what \
+             readers find in it",
+            output.display()
+        )));
+    }
+    check_output_target(output, inputs)
+}
+
+/// [`check_point_output`] but for the name's extension: an output of points (a LAS/LAZ file or
+/// a `.vpc`) that is an input, or not a regular file (or nothing yet), is refused.
+pub(crate) fn check_output_target(output: &Path, inputs: &[PathBuf]) -> Result<()> {
     match std::fs::symlink_metadata(output) {
         Ok(m) if !m.file_type().is_file() => {
             let what = if m.file_type().is_symlink() {
