@@ -226,6 +226,19 @@ fn ground_output_never_replaces_an_input_nor_a_directory() {
     ]);
     assert_eq!(code, 2, "{err}");
     assert_eq!(std::fs::read(&input).unwrap(), before);
+    // A --tmp-dir that does not exist, refused before the work as other jobs do (it ran,
+    // exit 0, when nothing spilled).
+    let out = dir.path().join("t.laz");
+    let (code, err) = status(&[
+        "ground".as_ref(),
+        input.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--tmp-dir".as_ref(),
+        dir.path().join("none").as_os_str(),
+    ]);
+    assert_eq!(code, 4, "{err}");
+    assert!(err.contains("does not exist") && !out.exists(), "{err}");
 }
 
 /// The points of a LAS/LAZ/COPC file as a sorted multiset: position, class, returns, flags.

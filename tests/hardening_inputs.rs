@@ -340,6 +340,15 @@ fn an_address_space_limit_sets_the_default_budget_and_refuses_a_larger_one() {
     );
     assert_eq!(code(&o), 4, "{}", err(&o));
     assert!(names(d.path()).is_empty(), "{:?}", names(d.path()));
+    // `ground` too (it aborted, exit 134, "memory allocation of 40992640 bytes failed").
+    let o = limited(200_000, &format!("ground '{a}' --mem 128M -o g.laz -q"));
+    assert_eq!(code(&o), 4, "{}", err(&o));
+    assert!(
+        err(&o).contains("classification's memory budget"),
+        "{}",
+        err(&o)
+    );
+    assert!(names(d.path()).is_empty(), "{:?}", names(d.path()));
     let s = small.display();
     for (engine, out) in [("tiles", "t.tif"), ("sweep", "s.tif")] {
         let o = limited(

@@ -183,6 +183,26 @@ impl std::fmt::Debug for LineReader {
     }
 }
 
+/// Refuses a temporary directory that is not one (missing, or a file) before any work, whether
+/// or not the job will spill there ([`Error::Write`], exit 4).
+pub(crate) fn check_tmp_dir(tmp_dir: &std::path::Path) -> Result<()> {
+    if tmp_dir.is_dir() {
+        return Ok(());
+    }
+    let (kind, what) = if tmp_dir.exists() {
+        (
+            std::io::ErrorKind::NotADirectory,
+            "the temporary directory is not a directory",
+        )
+    } else {
+        (
+            std::io::ErrorKind::NotFound,
+            "temporary directory does not exist",
+        )
+    };
+    Err(Error::write(tmp_dir, std::io::Error::new(kind, what)))
+}
+
 impl RunConfig {
     /// Checks `input` and `options`.
     ///
@@ -219,20 +239,7 @@ impl RunConfig {
             });
         }
         let tmp_dir = options.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
-        if !tmp_dir.is_dir() {
-            let (kind, what) = if tmp_dir.exists() {
-                (
-                    std::io::ErrorKind::NotADirectory,
-                    "the temporary directory is not a directory",
-                )
-            } else {
-                (
-                    std::io::ErrorKind::NotFound,
-                    "temporary directory does not exist",
-                )
-            };
-            return Err(Error::write(&tmp_dir, std::io::Error::new(kind, what)));
-        }
+        check_tmp_dir(&tmp_dir)?;
         Ok(RunConfig {
             input,
             options,

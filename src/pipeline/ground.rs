@@ -149,6 +149,14 @@ pub fn ground_files(
     let named: Vec<(&str, &std::path::Path)> =
         named.iter().map(|(f, o)| (f.as_str(), *o)).collect();
     crate::output::distinct_outputs(&named, inputs, "ground")?;
+    // As every other job: a budget the address space cannot hold, or a temporary directory
+    // that is not one, refused before the work (an allocation aborted the process).
+    crate::limits::check_address_space(
+        mem,
+        rayon::current_num_threads(),
+        "the classification's memory budget (--mem)",
+    )?;
+    super::config::check_tmp_dir(tmp)?;
     let mut copc = Vec::with_capacity(outputs.len());
     for (input, o) in inputs.iter().zip(outputs) {
         crate::output::check_output(o)?;
