@@ -70,8 +70,9 @@ enum Command {
     Volume(volume::Args),
     /// Heights of the TIN at query points.
     Sample(sample::Args),
-    /// Height above ground of every point (from the TIN of the class-2 points), written back
-    /// as a HeightAboveGround attribute or replacing z.
+    /// Height above ground of every point (from the TIN of the class-2 points, or of the ground
+    /// found on the fly with --ground), written back as a HeightAboveGround attribute or
+    /// replacing z.
     Height(height::Args),
     /// Section of the TIN along polylines, with a point at every edge crossed and chainage.
     Profile(profile::Args),
@@ -83,14 +84,15 @@ enum Command {
     Crossval(crossval::Args),
     /// Simplify a grid DEM (GeoTIFF, ESRI ASCII) into a TIN within an error bound.
     Simplify(simplify::Args),
-    /// Cut a `dem`, `contours`, `volume` or `tin` job into exact tiles for a batch engine: writes
+    /// Cut a `dem`, `contours`, `volume`, `tin` or `ground` job into exact tiles for a batch engine: writes
     /// DIR/plan.json (from the files' headers), after the chunk index of every plain LAZ/LAS file
     /// (DIR/index/, one decoding pass: tasks then decode only the chunks near their tile).
     Plan(plan::PlanArgs),
     /// Run one task of a plan (--task I, or the index a job array gives), or all of them.
     Run(plan::RunArgs),
     /// Join the finished tasks of a plan into one result: a VRT or GeoTIFF mosaic, stitched
-    /// contours, summed volumes.
+    /// contours, summed volumes, one mesh, or a ground plan's points (a .vpc of the tiles, or
+    /// one .laz/.las).
     Merge(plan::MergeArgs),
     /// The report of a plan's night: a static HTML page (an SVG map of the tiles coloured by
     /// state, the failed tasks with their messages and re-run commands, totals, a hillshade of

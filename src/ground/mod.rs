@@ -150,7 +150,7 @@ impl GroundParams {
         positive(self.low_noise, "--low-noise", "a positive height, e.g. 5")?;
         if !(self.offset.is_finite() && self.offset >= 0.0) {
             return Err(Error::Options(format!(
-                "--offset {}: give a vertical distance >= 0, e.g. 0.05",
+                "--offset {}: give a vertical distance >= 0, e.g. 0.2 (the default)",
                 self.offset
             )));
         }
@@ -162,7 +162,7 @@ impl GroundParams {
         }
         if !(self.max_angle > 0.0 && self.max_angle < 90.0) {
             return Err(Error::Options(format!(
-                "--max-angle {}: give an angle in degrees between 0 and 90, e.g. 25",
+                "--max-angle {}: give an angle in degrees between 0 and 90, e.g. 6 (the default)",
                 self.max_angle
             )));
         }
@@ -208,7 +208,8 @@ pub struct GroundSummary {
     pub points: u64,
     /// Points classified as ground (class 2).
     pub ground: u64,
-    /// Points classified as low noise (class 7).
+    /// Points written as low noise (class 7): those the filter flags, and those that were class
+    /// 7 already (they keep it; `changed` in the CLI's summary counts what changed).
     pub low_noise: u64,
     /// Seeds (a point can be a seed in the runs of several blocks).
     pub seeds: u64,
