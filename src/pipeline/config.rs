@@ -189,16 +189,24 @@ pub(crate) fn check_tmp_dir(tmp_dir: &std::path::Path) -> Result<()> {
     if tmp_dir.is_dir() {
         return Ok(());
     }
-    let (kind, what) = if tmp_dir.exists() {
-        (
+    // Named as the user set it: --tmp-dir, or else $TMPDIR.
+    let (kind, what) = match (tmp_dir.exists(), tmp_dir == std::env::temp_dir()) {
+        (true, false) => (
             std::io::ErrorKind::NotADirectory,
             "the temporary directory is not a directory",
-        )
-    } else {
-        (
+        ),
+        (true, true) => (
+            std::io::ErrorKind::NotADirectory,
+            "the temporary directory ($TMPDIR) is not a directory",
+        ),
+        (false, false) => (
             std::io::ErrorKind::NotFound,
             "temporary directory does not exist",
-        )
+        ),
+        (false, true) => (
+            std::io::ErrorKind::NotFound,
+            "temporary directory ($TMPDIR) does not exist",
+        ),
     };
     Err(Error::write(tmp_dir, std::io::Error::new(kind, what)))
 }

@@ -253,6 +253,7 @@ pub fn rewrite_points(
 /// Refuses an output not named `.las` or `.laz`, an output that is an input, or one that is not
 /// a regular file (or nothing yet).
 pub fn check_point_output(output: &Path, inputs: &[PathBuf]) -> Result<()> {
+    check_output_target(output, inputs)?;
     let ext = output.extension().and_then(|e| e.to_str());
     if !ext.is_some_and(|e| e.eq_ignore_ascii_case("las") || e.eq_ignore_ascii_case("laz")) {
         return Err(Error::Options(format!(
@@ -261,7 +262,7 @@ pub fn check_point_output(output: &Path, inputs: &[PathBuf]) -> Result<()> {
             output.display()
         )));
     }
-    check_output_target(output, inputs)
+    Ok(())
 }
 
 /// [`check_point_output`] but for the name's extension: an output of points (a LAS/LAZ file or
