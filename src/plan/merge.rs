@@ -667,7 +667,7 @@ pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result
     let hillshade = o.hillshade.clone().or_else(|| planned(plan, "hillshade"));
     let mut outs: Vec<(&str, &Path)> = Vec::new();
     if let Some(o) = out {
-        outs.push(("the mosaic", o));
+        outs.push((out_name(&plan.job.product), o));
     }
     if let Some(c) = &contours {
         outs.push(("the contours", c));
@@ -784,4 +784,16 @@ pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result
         }
     }
     Ok(summary)
+}
+
+/// What `merge -o` writes for `product`, as its messages name it.
+fn out_name(product: &super::Product) -> &'static str {
+    use super::Product;
+    match product {
+        Product::Dem { .. } => "the mosaic",
+        Product::Contours(_) => "the contours",
+        Product::Tin => "the mesh",
+        Product::Ground => "the merged points",
+        Product::Volume { .. } => "the volume report",
+    }
 }
