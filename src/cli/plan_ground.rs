@@ -11,7 +11,10 @@ use std::path::PathBuf;
 use sweeptin::fmt::{Figure, count};
 use sweeptin::plan::{Job, Plan, PlanDir, Product};
 
-/// `plan ground`'s own command line (after `plan`, without `-o`).
+// `plan ground`'s own command line (after `plan`, without `-o`); the doc line below is its
+// `--help`'s first line.
+/// Tile the ground classification: each task classifies the ground blocks of its tile as one
+/// `sweeptin ground` run over all FILES would, and writes the points its tile owns (-o JOB).
 #[derive(Parser, Debug)]
 #[command(name = "sweeptin plan ground")]
 struct Args {
@@ -39,7 +42,10 @@ struct Args {
 
 /// Makes the plan of `argv` (`ground FILES… options`, `-o` taken off) into `dir`.
 pub fn plan(argv: &[String], dir: Option<PathBuf>) -> anyhow::Result<()> {
-    let args = match Args::try_parse_from(argv) {
+    // argv[0] is `ground`: the usage lines name the whole command.
+    let named =
+        std::iter::once("sweeptin plan ground").chain(argv.iter().skip(1).map(String::as_str));
+    let args = match Args::try_parse_from(named) {
         Ok(a) => a,
         Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelp => {
             let _ = e.print();
