@@ -87,6 +87,11 @@ pub(super) struct Densify<'a> {
     tags: &'a [u64],
     labels: &'a mut [Label],
     max_distance: f64,
+    /// How far (vertically) a candidate at the x, y of a real ground vertex may lie from it to
+    /// be ground: `--offset` (at most `--max-distance`). Its angles to that corner are
+    /// undefined and it cannot be inserted; Axelsson's angles (90°) would refuse it, and the
+    /// final TIN's `--offset` take it.
+    stacked: f64,
     sin_max: f64,
     mirror: bool,
     /// Vertex ids below this are the virtual ring's.
@@ -138,6 +143,7 @@ impl<'a> Densify<'a> {
             tags,
             labels,
             max_distance: params.max_distance,
+            stacked: params.offset.min(params.max_distance),
             sin_max: params.max_angle.to_radians().sin(),
             mirror: params.mirror,
             virtuals,
@@ -482,7 +488,7 @@ impl<'a> Densify<'a> {
 
     /// The distance of candidate `i` to the plane of its triangle when at most
     /// `max_distance`; `None` (and no mirror registration) otherwise, or when `i` lies at a
-    /// corner (then it is ground when close enough to a real one).
+    /// corner (then it is ground when within `stacked` of a real one).
     fn distance(
         &self,
         i: u32,
@@ -494,7 +500,7 @@ impl<'a> Densify<'a> {
         let p = self.tin.point(self.vid(i));
         if let Some(k) = (0..3).find(|&k| corners[k][0] == p[0] && corners[k][1] == p[1]) {
             let d = (p[2] - corners[k][2]).abs();
-            if d <= self.max_distance && (vs[k].0 as usize) >= self.virtuals {
+            if d <= self.stacked && (vs[k].0 as usize) >= self.virtuals {
                 out.effects.push(Effect::Ground(i));
             } else {
                 self.unlink(i, out);
