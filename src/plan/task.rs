@@ -583,6 +583,7 @@ impl Plan {
                 scope: Some(crate::tiles::TaskScope {
                     chunks: self.task_chunks(dir, i, buffer)?,
                     band: self.task_band(dir)?,
+                    store: self.task_store(dir)?,
                     ..self.scope(i, buffer)?
                 }),
             }),
@@ -764,6 +765,7 @@ fn record_of(
         runs,
         points: run.points_kept,
         decoded: run.tiles.map_or(0, |t| t.points_decoded),
+        stored: run.tiles.map_or(0, |t| t.points_stored),
         triangles: run.triangles,
         seconds: 0.0,
         peak_memory: None,
