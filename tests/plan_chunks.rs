@@ -1,6 +1,7 @@
 //! Plans over plain LAZ/LAS files read by area (issue 43 item 1): `plan` writes the chunk index
-//! of every plain file once, each task decodes only the chunks that meet its tile and buffer,
-//! and the mosaic is still one run's, cell for cell; a damaged index is refused.
+//! of every plain file once, each task decodes only the chunks that meet its tile and buffer
+//! (`--no-store`), or reads its points from the plan's point store and decodes nothing, and the
+//! mosaic is still one run's, cell for cell; a damaged index, band or store is refused.
 
 use crate::data;
 use crate::plans;
@@ -12,26 +13,19 @@ fn topography() -> PathBuf {
     data::data_dir().join("lidar/lidR_Topography.laz")
 }
 
-/// Plans a DEM over `input` into `job` (tiles of 32, cells of 1), runs every task, merges, and
-/// checks the mosaic against one run over the plan's extent. Returns the task records. (Tasks
-/// away from the data's edge read by area; lidR_Topography's second chunk is its eastern 75 m.)
-fn plan_equals_one_run(input: &Path, t: &Path) -> Vec<serde_json::Value> {
+/// Plans a DEM over `input` into `job` (tiles of 32, cells of 1; `--no-store` unless `store`),
+/// runs every task, merges, and checks the mosaic against one run over the plan's extent.
+/// Returns the task records. (Tasks away from the data's edge read by area; lidR_Topography's
+/// second chunk is its eastern 75 m.)
+fn plan_equals_one_run(input: &Path, t: &Path, store: bool) -> Vec<serde_json::Value> {
     let job = t.join("job");
     let (cell, tile) = ("1", "32");
-    sweeptin(
-        &[
-            "plan",
-            "dem",
-            s(input),
-            "--cell",
-            cell,
-            "--tile",
-            tile,
-            "-o",
-            s(&job),
-        ],
-        "plan",
-    );
+    let mut args = vec!["plan", "--no-store"];
+    if store {
+        args.pop();
+    }
+    args.extend(["dem", s(input), "--cell", cell, "--tile", tile, "-o", s(&job)]);
+    sweeptin(&args, "plan");
     let plan = job.join("plan.json");
     assert!(
         job.join("index/0.chunks").is_file(),
@@ -51,6 +45,7 @@ fn plan_equals_one_run(input: &Path, t: &Path) -> Vec<serde_json::Value> {
         cells(&mosaic) == cells(&single),
         "the mosaic differs from one run"
     );
+    assert_eq!(job.join("index/points").is_file(), store);
     let recs = records(&job, n);
     for r in &recs {
         if r["status"] == "empty" {
@@ -68,7 +63,7 @@ fn plan_equals_one_run(input: &Path, t: &Path) -> Vec<serde_json::Value> {
 #[test]
 fn tasks_of_a_plan_over_one_laz_decode_only_their_chunks() {
     let t = tempfile::tempdir().unwrap();
-    let recs = plan_equals_one_run(&topography(), t.path());
+    let recs = plan_equals_one_run(&topography(), t.path(), false);
     let decoded: Vec<u64> = recs
         .iter()
         .map(|r| r["decoded"].as_u64().unwrap())
@@ -76,6 +71,31 @@ fn tasks_of_a_plan_over_one_laz_decode_only_their_chunks() {
     assert!(
         decoded.iter().any(|&d| d > 0 && d < 73_403),
         "every task decoded the whole file: {decoded:?}"
+    );
+}
+
+/// With the plan's point store (the default over one plain file), the tasks decode nothing:
+/// they read the cells meeting their tile and buffer, and the mosaic is byte for byte the one
+/// of the plan without the store (and one run's, cell for cell).
+#[test]
+fn tasks_of_a_plan_with_the_point_store_decode_nothing() {
+    let t = tempfile::tempdir().unwrap();
+    let recs = plan_equals_one_run(&topography(), t.path(), true);
+    for r in &recs {
+        assert_eq!(r["decoded"].as_u64(), Some(0), "{r}");
+    }
+    assert!(
+        recs.iter()
+            .any(|r| (1..73_403).contains(&r["stored"].as_u64().unwrap())),
+        "no task read part of the store: {recs:?}"
+    );
+    let without = t.path().join("without");
+    std::fs::create_dir(&without).unwrap();
+    plan_equals_one_run(&topography(), &without, false);
+    let (a, b) = (t.path().join("mosaic.tif"), without.join("mosaic.tif"));
+    assert!(
+        std::fs::read(a).unwrap() == std::fs::read(b).unwrap(),
+        "the mosaics with and without the store differ"
     );
 }
 
@@ -98,7 +118,7 @@ fn tasks_of_a_plan_over_one_las_decode_only_their_blocks() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let recs = plan_equals_one_run(&las, t.path());
+    let recs = plan_equals_one_run(&las, t.path(), false);
     let decoded: Vec<u64> = recs
         .iter()
         .map(|r| r["decoded"].as_u64().unwrap())
@@ -131,7 +151,7 @@ fn an_empty_task_writes_no_tile() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let recs = plan_equals_one_run(&half, t.path());
+    let recs = plan_equals_one_run(&half, t.path(), false);
     assert!(
         recs.iter().any(|r| r["status"] == "empty"),
         "no empty task: {recs:?}"
@@ -185,10 +205,6 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
     }
     std::fs::write(&index, &bytes).unwrap();
     // The plan's hull band: cut short, edited, missing, or another plan's.
-    let band = job.join("index/band");
-    let bytes = std::fs::read(&band).unwrap();
-    let mut edited = bytes.clone();
-    edited[120] ^= 1;
     let other = t.path().join("other");
     let input = topography();
     let args = [
@@ -203,22 +219,34 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
         s(&other),
     ];
     sweeptin(&args, "plan");
-    for (what, damaged) in [
-        ("truncated", Some(bytes[..bytes.len() - 1].to_vec())),
-        ("checksum", Some(edited)),
-        ("missing", None),
-        (
-            "another plan",
-            Some(std::fs::read(other.join("index/band")).unwrap()),
-        ),
-    ] {
-        match damaged {
-            Some(d) => std::fs::write(&band, d).unwrap(),
-            None => std::fs::remove_file(&band).unwrap(),
+    // And its point store: cut short, a point edited (a cell's checksum), its table edited,
+    // missing, or another plan's.
+    for (file, name, at) in [("band", "hull band", 120), ("points", "point store", 0)] {
+        let path = job.join("index").join(file);
+        let bytes = std::fs::read(&path).unwrap();
+        let edit = |at: usize| {
+            let mut e = bytes.clone();
+            e[at] ^= 1;
+            Some(e)
+        };
+        for (what, damaged) in [
+            ("truncated", Some(bytes[..bytes.len() - 1].to_vec())),
+            ("checksum", edit(at)),
+            ("checksum", edit(bytes.len() - 100)),
+            ("missing", None),
+            (
+                "another plan",
+                Some(std::fs::read(other.join("index").join(file)).unwrap()),
+            ),
+        ] {
+            match damaged {
+                Some(d) => std::fs::write(&path, d).unwrap(),
+                None => std::fs::remove_file(&path).unwrap(),
+            }
+            refused(name, what);
         }
-        refused("hull band", what);
+        std::fs::write(&path, &bytes).unwrap();
     }
-    std::fs::write(&band, &bytes).unwrap();
     sweeptin(&["run", s(&plan), "--task", "0", "-q"], "run");
 }
 

@@ -123,7 +123,7 @@ impl PointStore {
         }
         let w = |o: usize| u64::from_le_bytes(t[o..o + 8].try_into().unwrap_or_default());
         let packed = w(80) == 1;
-        let (cells, points) = (w(152), w(160));
+        let (cells, points) = (w(136), w(144));
         let rec = if packed { 12 } else { 24 };
         let len = points
             .checked_mul(rec)
