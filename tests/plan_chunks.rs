@@ -232,7 +232,7 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
         for (what, damaged) in [
             ("truncated", Some(bytes[..bytes.len() - 1].to_vec())),
             ("checksum", edit(at)),
-            ("checksum", edit(bytes.len() - 100)),
+            ("checksum", edit(bytes.len() - 200)),
             ("missing", None),
             (
                 "another plan",
@@ -260,12 +260,14 @@ fn index_chunks(args: &[&str]) -> serde_json::Value {
 }
 
 /// `plan` into `job` over `input`, without the hull band (which decodes the chunks along the
-/// data's edge: here only the chunk index is read or decoded): its stderr.
+/// data's edge) or the point store (which decodes the file: here only the chunk index is read
+/// or decoded): its stderr.
 fn plan_into(input: &Path, job: &Path) -> std::process::Output {
     bin()
         .args([
             "plan",
             "--no-hull-band",
+            "--no-store",
             "dem",
             s(input),
             "--cell",
