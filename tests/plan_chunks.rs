@@ -24,13 +24,20 @@ fn plan_equals_one_run(input: &Path, t: &Path, store: bool) -> Vec<serde_json::V
     if store {
         args.pop();
     }
-    args.extend(["dem", s(input), "--cell", cell, "--tile", tile, "-o", s(&job)]);
+    args.extend([
+        "dem",
+        s(input),
+        "--cell",
+        cell,
+        "--tile",
+        tile,
+        "-o",
+        s(&job),
+    ]);
     sweeptin(&args, "plan");
     let plan = job.join("plan.json");
-    assert!(
-        job.join("index/0.chunks").is_file(),
-        "no chunk index written"
-    );
+    // A plan with the point store has no chunk index (its tasks and band read the store).
+    assert_eq!(job.join("index/0.chunks").is_file(), !store);
     let (_, n) = plan_extent(&plan);
     assert!(n >= 9, "{n} tasks");
     let single = t.join("single.tif");
@@ -158,37 +165,40 @@ fn an_empty_task_writes_no_tile() {
     );
 }
 
-/// A chunk index cut short or edited would make tasks skip chunks, a hull band cut short, edited,
-/// missing or of another plan would let them certify against points that are not the data's:
-/// refused, exit 3, naming it.
+/// A chunk index cut short or edited would make tasks skip chunks, a hull band or a point store
+/// cut short, edited, missing or of another plan would let them certify against points that
+/// are not the data's, or read others: refused, exit 3, naming it.
 #[test]
 fn a_truncated_or_edited_chunk_index_is_refused() {
     let t = tempfile::tempdir().unwrap();
-    let job = t.path().join("job");
-    sweeptin(
-        &[
-            "plan",
+    let input = topography();
+    // Plans of tiles of `tile` into `t/name`, with the point store or not (then with a chunk
+    // index).
+    let plan = |name: &str, tile: &str, store: bool| {
+        let job = t.path().join(name);
+        let mut args = vec!["plan", "--no-store"];
+        if store {
+            args.pop();
+        }
+        args.extend([
             "dem",
-            s(&topography()),
+            s(&input),
             "--cell",
             "1",
             "--tile",
-            "128",
+            tile,
             "-o",
             s(&job),
-        ],
-        "plan",
-    );
-    let plan = job.join("plan.json");
-    let index = job.join("index/0.chunks");
-    let bytes = std::fs::read(&index).unwrap();
-    let mut edited = bytes.clone();
-    // The first span's xmin.
-    edited[40 + 32] ^= 1;
+        ]);
+        sweeptin(&args, "plan");
+        job
+    };
+    let (chunked, stored) = (plan("job", "128", false), plan("stored", "128", true));
+    let (other, other_stored) = (plan("other", "64", false), plan("other_stored", "64", true));
     // Task 0 refused (exit 3) naming the damaged file and what is wrong, no record written.
-    let refused = |file: &str, what: &str| {
+    let refused = |job: &Path, file: &str, what: &str| {
         let o = bin()
-            .args(["run", s(&plan), "--task", "0", "-q"])
+            .args(["run", s(&job.join("plan.json")), "--task", "0", "-q"])
             .output()
             .unwrap();
         let e = String::from_utf8_lossy(&o.stderr);
@@ -196,32 +206,22 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
         assert!(e.contains(file) && e.contains(what), "{what}: {e}");
         assert!(!job.join("tiles/task_0.json").exists());
     };
-    for (what, damaged) in [
-        ("truncated", bytes[..bytes.len() - 1].to_vec()),
-        ("checksum", edited),
+    // The chunk index: cut short, or the first span's xmin edited; the plan's hull band and
+    // point store: cut short, edited (the band's points, the store's first point, the end of
+    // the store's table), missing, or another plan's.
+    for (job, other, file, name, at, table) in [
+        (&chunked, &other, "0.chunks", "chunk index", 40 + 32, None),
+        (&chunked, &other, "band", "hull band", 120, None),
+        (&stored, &other_stored, "band", "hull band", 120, None),
+        (
+            &stored,
+            &other_stored,
+            "points",
+            "point store",
+            0,
+            Some(200),
+        ),
     ] {
-        std::fs::write(&index, &damaged).unwrap();
-        refused("chunk index", what);
-    }
-    std::fs::write(&index, &bytes).unwrap();
-    // The plan's hull band: cut short, edited, missing, or another plan's.
-    let other = t.path().join("other");
-    let input = topography();
-    let args = [
-        "plan",
-        "dem",
-        s(&input),
-        "--cell",
-        "1",
-        "--tile",
-        "64",
-        "-o",
-        s(&other),
-    ];
-    sweeptin(&args, "plan");
-    // And its point store: cut short, a point edited (a cell's checksum), its table edited,
-    // missing, or another plan's.
-    for (file, name, at) in [("band", "hull band", 120), ("points", "point store", 0)] {
         let path = job.join("index").join(file);
         let bytes = std::fs::read(&path).unwrap();
         let edit = |at: usize| {
@@ -229,25 +229,33 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
             e[at] ^= 1;
             Some(e)
         };
-        for (what, damaged) in [
+        let mut cases = vec![
             ("truncated", Some(bytes[..bytes.len() - 1].to_vec())),
             ("checksum", edit(at)),
-            ("checksum", edit(bytes.len() - 200)),
-            ("missing", None),
-            (
-                "another plan",
-                Some(std::fs::read(other.join("index").join(file)).unwrap()),
-            ),
-        ] {
+        ];
+        if let Some(back) = table {
+            cases.push(("checksum", edit(bytes.len() - back)));
+        }
+        if file != "0.chunks" {
+            cases.push(("missing", None));
+            let theirs = std::fs::read(other.join("index").join(file)).unwrap();
+            cases.push(("another plan", Some(theirs)));
+        }
+        for (what, damaged) in cases {
             match damaged {
                 Some(d) => std::fs::write(&path, d).unwrap(),
                 None => std::fs::remove_file(&path).unwrap(),
             }
-            refused(name, what);
+            refused(job, name, what);
         }
         std::fs::write(&path, &bytes).unwrap();
     }
-    sweeptin(&["run", s(&plan), "--task", "0", "-q"], "run");
+    for job in [&chunked, &stored] {
+        sweeptin(
+            &["run", s(&job.join("plan.json")), "--task", "0", "-q"],
+            "run",
+        );
+    }
 }
 
 /// `sweeptin index --chunks FILE`: the plan's chunk index, built once per file (as LAStools'

@@ -4,8 +4,10 @@
 //! A [`Plan`] is made from the input files' headers (no point is decoded): the product command
 //! and its options, the tile grid, and for every tile the files whose extent reaches into it or
 //! its buffer. Saving it writes the chunk index of every plain LAZ/LAS file (`DIR/index/`, one
-//! decoding pass: [`crate::input::las::ChunkIndex`]) and the data's hull band when the plan has
-//! one ([`Plan::hull_band`]: `DIR/index/band`, [`crate::HullBand`]), then `DIR/plan.json`. A
+//! decoding pass: [`crate::input::las::ChunkIndex`]), or over one such file its point store
+//! instead ([`Plan::point_store`]: `DIR/index/points`, [`crate::PointStore`], the points its
+//! tasks read, decoded once), and the data's hull band when the plan has one
+//! ([`Plan::hull_band`]: `DIR/index/band`, [`crate::HullBand`]), then `DIR/plan.json`. A
 //! task needs nothing else. It runs the tiled engine on its tile alone ([`crate::TaskScope`]): it reads the files
 //! near its tile (only their chunks, or COPC nodes, that meet its tile and buffer), keeps the
 //! points up to the buffer, and delivers exactly what its tile owns, certified to be what a run
@@ -429,8 +431,8 @@ impl Plan {
         dir.make_dir("tiles")?;
         // The indexes first: a plan.json is complete with everything its tasks read.
         self.write_chunk_indexes(dir)?;
-        self.write_band(dir)?;
         self.write_point_store(dir)?;
+        self.write_band(dir)?;
         dir.write(&path, text.as_bytes())?;
         Ok(path)
     }

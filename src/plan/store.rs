@@ -1,7 +1,8 @@
 //! The plan's point store (`DIR/index/points`, [`crate::PointStore`]): written when the plan is
-//! saved (after the chunk indexes and the hull band) where the hull band is used (one plain
-//! local LAZ/LAS file, no breaklines, no `--ground`) and the plan's directory is local; read by
-//! every task instead of the file (docs/SCALING.md). `plan --no-store` keeps the files' route.
+//! saved where the hull band is used (one plain local LAZ/LAS file, no breaklines, no
+//! `--ground`) and the plan's directory is local, in place of the file's chunk index (one
+//! decoding pass), before the band, which is computed from its cells; read by every task
+//! instead of the file (docs/SCALING.md). `plan --no-store` keeps the chunk index's route.
 
 use super::{Plan, PlanDir};
 use crate::error::{Error, Result};
@@ -76,6 +77,22 @@ impl Plan {
         let tmp = self.job.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
         PointStore::write(&mut reader, cell, self.id(), &p, mem, &tmp)?;
         Ok(())
+    }
+
+    /// The boxes of the data near task `i` (its plan buffer), where the plan knows them: its
+    /// point store's cells, or the chunks of its files when every file is indexed.
+    ///
+    /// # Errors
+    /// As [`Plan::task_store`] and [`Plan::chunk_index`].
+    pub(super) fn data_boxes(&self, dir: &PlanDir, i: usize) -> Result<Option<Vec<[f64; 4]>>> {
+        if let Some(s) = self.task_store(dir)? {
+            return Ok(Some(s.rects().collect()));
+        }
+        let chunks = self.task_chunks(dir, i, self.buffer)?;
+        if chunks.is_empty() || chunks.len() < self.task_files(i, self.buffer)?.len() {
+            return Ok(None);
+        }
+        Ok(Some(chunks.iter().flat_map(|(_, c)| c.rects()).collect()))
     }
 
     /// The point store the plan's tasks read (`None` when the plan has none).

@@ -205,8 +205,37 @@ impl PointStore {
         r >= 1.0 && r.fract() == 0.0 && r < 1e18 && (r as u64).is_power_of_two() && block * r == self.cell
     }
 
+    /// The boxes of the cells' points, in the store's order.
+    pub(crate) fn rects(&self) -> impl Iterator<Item = [f64; 4]> + '_ {
+        self.cells.iter().map(|c| c.rect)
+    }
+
+    /// Hands `f` every point of the cells `want` marks (by position in [`PointStore::rects`])
+    /// with its position in the store (points at one position keep their input order: they lie
+    /// in one cell) and its cell.
+    ///
+    /// # Errors
+    /// As [`PointStore::read_area`].
+    pub(crate) fn read_cells(
+        &self,
+        want: &[bool],
+        mut f: impl FnMut([f64; 3], u64, usize),
+    ) -> Result<()> {
+        for (i, c) in self.cells.iter().enumerate().filter(|(i, _)| want[*i]) {
+            let mut at = c.first;
+            self.read_cell(c, |pts| {
+                for &p in pts {
+                    f(p, at, i);
+                    at += 1;
+                }
+                Ok(())
+            })?;
+        }
+        Ok(())
+    }
+
     /// Hands `f` every point of the store in the closed rectangle `area`, cell after cell (each
-    /// in input order), in batches; each cell read is checked against its checksum.
+    /// in input order), in batches, with the points scanned so far.
     ///
     /// # Errors
     /// [`Error::Format`] naming the store for a cell whose bytes are not those written;
@@ -216,51 +245,57 @@ impl PointStore {
         area: [f64; 4],
         mut f: impl FnMut(&[[f64; 3]], u64) -> Result<()>,
     ) -> Result<AreaRead> {
-        let rec = if self.lattice.is_some() { 12 } else { 24 };
         let mut out = AreaRead {
             unread: Vec::new(),
             scanned: 0,
         };
-        let mut bytes = vec![0u8; PIECE * rec];
-        let mut pts: Vec<[f64; 3]> = Vec::with_capacity(PIECE);
+        let inside =
+            |p: &&[f64; 3]| p[0] >= area[0] && p[0] <= area[2] && p[1] >= area[1] && p[1] <= area[3];
+        let mut kept: Vec<[f64; 3]> = Vec::with_capacity(PIECE);
         for c in &self.cells {
             if !super::read::meets(&c.rect, &area) {
                 out.unread.push(c.rect);
                 continue;
             }
             out.unread.extend(super::read::outside_of(c.rect, area));
-            let mut h = Sha256::new();
-            let mut done = 0u64;
-            while done < c.count {
-                let n = (c.count - done).min(PIECE as u64) as usize;
-                let b = &mut bytes[..n * rec];
-                self.file
-                    .read_exact_at(b, (c.first + done) * rec as u64)
-                    .map_err(|e| Error::io(&self.path, e))?;
-                h.update(&*b);
-                pts.clear();
-                let inside = |p: &[f64; 3]| p[0] >= area[0] && p[0] <= area[2] && p[1] >= area[1] && p[1] <= area[3];
-                match &self.lattice {
-                    Some(l) => pts.extend(
-                        b.chunks_exact(12)
-                            .map(|r| l.decode(std::array::from_fn(|k| u32::from_le_bytes(r[4 * k..4 * k + 4].try_into().unwrap_or_default()))))
-                            .filter(inside),
-                    ),
-                    None => pts.extend(
-                        b.chunks_exact(24)
-                            .map(|r| std::array::from_fn(|k| f64::from_le_bytes(r[8 * k..8 * k + 8].try_into().unwrap_or_default())))
-                            .filter(inside),
-                    ),
-                }
-                done += n as u64;
-                out.scanned += n as u64;
-                f(&pts, out.scanned)?;
-            }
-            if h.finalize()[..] != c.sum {
-                return Err(damaged(&self.path, "damaged or edited (a cell's checksum does not match)"));
-            }
+            self.read_cell(c, |pts| {
+                kept.clear();
+                kept.extend(pts.iter().filter(inside));
+                out.scanned += pts.len() as u64;
+                f(&kept, out.scanned)
+            })?;
         }
         Ok(out)
+    }
+
+    /// Hands `f` the points of cell `c` in batches, then checks the cell's checksum.
+    fn read_cell(&self, c: &Cell, mut f: impl FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()> {
+        let rec = if self.lattice.is_some() { 12 } else { 24 };
+        let mut bytes = vec![0u8; PIECE.min(c.count as usize) * rec];
+        let mut pts: Vec<[f64; 3]> = Vec::with_capacity(PIECE.min(c.count as usize));
+        let mut h = Sha256::new();
+        let mut done = 0u64;
+        while done < c.count {
+            let n = (c.count - done).min(PIECE as u64) as usize;
+            let b = &mut bytes[..n * rec];
+            self.file
+                .read_exact_at(b, (c.first + done) * rec as u64)
+                .map_err(|e| Error::io(&self.path, e))?;
+            h.update(&*b);
+            pts.clear();
+            let u = |r: &[u8], k: usize| u32::from_le_bytes(r[4 * k..4 * k + 4].try_into().unwrap_or_default());
+            let d = |r: &[u8], k: usize| f64::from_le_bytes(r[8 * k..8 * k + 8].try_into().unwrap_or_default());
+            match &self.lattice {
+                Some(l) => pts.extend(b.chunks_exact(12).map(|r| l.decode([u(r, 0), u(r, 1), u(r, 2)]))),
+                None => pts.extend(b.chunks_exact(24).map(|r| [d(r, 0), d(r, 1), d(r, 2)])),
+            }
+            done += n as u64;
+            f(&pts)?;
+        }
+        if h.finalize()[..] != c.sum {
+            return Err(damaged(&self.path, "damaged or edited (a cell's checksum does not match)"));
+        }
+        Ok(())
     }
 }
 
