@@ -61,10 +61,11 @@ pub struct PlanArgs {
     #[arg(long)]
     pub no_hull_band: bool,
     /// Make no point store: by default, where the hull band is used and the plan's directory is
-    /// local, the plan decodes the file once more into `DIR/index/points` (the points after the
-    /// filters, by cells of a quarter tile: about 12 bytes a point), and every task reads the
-    /// points of its tile and buffer from it instead of decoding the LAZ chunks there. The
-    /// outputs are the same either way (for comparison, or to save the disk).
+    /// local, the plan's decoding pass writes the points after the filters into
+    /// `DIR/index/points` (by cells of a quarter tile: about 12 bytes a point) instead of a
+    /// chunk index, and every task reads the points of its tile and buffer from it instead of
+    /// decoding the LAZ chunks there. The outputs are the same either way (for comparison, or
+    /// to save the disk).
     #[arg(long)]
     pub no_store: bool,
     /// The product command (`dem`, `contours`, `volume --plane Z`, `tin` or `ground`) with its input files and
