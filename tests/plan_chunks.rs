@@ -66,9 +66,12 @@ fn plan_equals_one_run(input: &Path, t: &Path, store: bool) -> Vec<serde_json::V
 }
 
 /// Every task decoded the whole file (one 10.6 M-point LAZ: each task ~4 s, the empty ones
-/// too): with the chunk index, tasks far from a chunk do not decode it.
+/// too): with the chunk index (`--no-store`), tasks far from a chunk do not decode it. With the
+/// plan's point store (the default over one plain file) they decode nothing: they read the
+/// cells meeting their tile and buffer, and the mosaic is byte for byte the one of the plan
+/// without the store (and one run's, cell for cell).
 #[test]
-fn tasks_of_a_plan_over_one_laz_decode_only_their_chunks() {
+fn tasks_of_a_plan_over_one_laz_decode_only_their_chunks_or_nothing_with_the_store() {
     let t = tempfile::tempdir().unwrap();
     let recs = plan_equals_one_run(&topography(), t.path(), false);
     let decoded: Vec<u64> = recs
@@ -79,15 +82,9 @@ fn tasks_of_a_plan_over_one_laz_decode_only_their_chunks() {
         decoded.iter().any(|&d| d > 0 && d < 73_403),
         "every task decoded the whole file: {decoded:?}"
     );
-}
-
-/// With the plan's point store (the default over one plain file), the tasks decode nothing:
-/// they read the cells meeting their tile and buffer, and the mosaic is byte for byte the one
-/// of the plan without the store (and one run's, cell for cell).
-#[test]
-fn tasks_of_a_plan_with_the_point_store_decode_nothing() {
-    let t = tempfile::tempdir().unwrap();
-    let recs = plan_equals_one_run(&topography(), t.path(), true);
+    let with = t.path().join("store");
+    std::fs::create_dir(&with).unwrap();
+    let recs = plan_equals_one_run(&topography(), &with, true);
     for r in &recs {
         assert_eq!(r["decoded"].as_u64(), Some(0), "{r}");
     }
@@ -96,10 +93,7 @@ fn tasks_of_a_plan_with_the_point_store_decode_nothing() {
             .any(|r| (1..73_403).contains(&r["stored"].as_u64().unwrap())),
         "no task read part of the store: {recs:?}"
     );
-    let without = t.path().join("without");
-    std::fs::create_dir(&without).unwrap();
-    plan_equals_one_run(&topography(), &without, false);
-    let (a, b) = (t.path().join("mosaic.tif"), without.join("mosaic.tif"));
+    let (a, b) = (t.path().join("mosaic.tif"), with.join("mosaic.tif"));
     assert!(
         std::fs::read(a).unwrap() == std::fs::read(b).unwrap(),
         "the mosaics with and without the store differ"
