@@ -168,14 +168,15 @@ impl PointStore {
                 }
             })
             .collect::<Vec<_>>();
-        let mut next = 0u64;
+        let mut next = Some(0u64);
         for c in &cells {
-            if c.first != next || c.count == 0 {
-                return Err(damaged(path, "damaged (its table of cells does not add up)"));
+            if next != Some(c.first) || c.count == 0 {
+                next = None;
+                break;
             }
-            next += c.count;
+            next = c.first.checked_add(c.count);
         }
-        if next != points {
+        if next != Some(points) {
             return Err(damaged(path, "damaged (its table of cells does not add up)"));
         }
         Ok(PointStore {
