@@ -92,7 +92,7 @@ pub use sort::DuplicatePolicy;
 pub use sort::external::SortStats;
 pub use sort::mmap::tune_allocator;
 pub use sweep::{ConstraintStats, SweepStats};
-pub use tiles::{HullBand, TaskScope, TileCpu, TileOptions, TileStats};
+pub use tiles::{HullBand, PointStore, TaskScope, TileCpu, TileOptions, TileStats};
 pub use tin::{CrossValidation, EdgeId, PointLocation, Tin, TriId, VertexId};
 pub use triangulation::{
     Options, Triangulation, triangulate, triangulate_cdt, triangulate_with_twins,

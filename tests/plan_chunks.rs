@@ -1,6 +1,7 @@
 //! Plans over plain LAZ/LAS files read by area (issue 43 item 1): `plan` writes the chunk index
-//! of every plain file once, each task decodes only the chunks that meet its tile and buffer,
-//! and the mosaic is still one run's, cell for cell; a damaged index is refused.
+//! of every plain file once, each task decodes only the chunks that meet its tile and buffer
+//! (`--no-store`), or reads its points from the plan's point store and decodes nothing, and the
+//! mosaic is still one run's, cell for cell; a damaged index, band or store is refused.
 
 use crate::data;
 use crate::plans;
@@ -12,31 +13,31 @@ fn topography() -> PathBuf {
     data::data_dir().join("lidar/lidR_Topography.laz")
 }
 
-/// Plans a DEM over `input` into `job` (tiles of 32, cells of 1), runs every task, merges, and
-/// checks the mosaic against one run over the plan's extent. Returns the task records. (Tasks
-/// away from the data's edge read by area; lidR_Topography's second chunk is its eastern 75 m.)
-fn plan_equals_one_run(input: &Path, t: &Path) -> Vec<serde_json::Value> {
+/// Plans a DEM over `input` into `job` (tiles of 32, cells of 1; `--no-store` unless `store`),
+/// runs every task, merges, and checks the mosaic against one run over the plan's extent.
+/// Returns the task records. (Tasks away from the data's edge read by area; lidR_Topography's
+/// second chunk is its eastern 75 m.)
+fn plan_equals_one_run(input: &Path, t: &Path, store: bool) -> Vec<serde_json::Value> {
     let job = t.join("job");
     let (cell, tile) = ("1", "32");
-    sweeptin(
-        &[
-            "plan",
-            "dem",
-            s(input),
-            "--cell",
-            cell,
-            "--tile",
-            tile,
-            "-o",
-            s(&job),
-        ],
-        "plan",
-    );
+    let mut args = vec!["plan", "--no-store"];
+    if store {
+        args.pop();
+    }
+    args.extend([
+        "dem",
+        s(input),
+        "--cell",
+        cell,
+        "--tile",
+        tile,
+        "-o",
+        s(&job),
+    ]);
+    sweeptin(&args, "plan");
     let plan = job.join("plan.json");
-    assert!(
-        job.join("index/0.chunks").is_file(),
-        "no chunk index written"
-    );
+    // A plan with the point store has no chunk index (its tasks and band read the store).
+    assert_eq!(job.join("index/0.chunks").is_file(), !store);
     let (_, n) = plan_extent(&plan);
     assert!(n >= 9, "{n} tasks");
     let single = t.join("single.tif");
@@ -51,6 +52,7 @@ fn plan_equals_one_run(input: &Path, t: &Path) -> Vec<serde_json::Value> {
         cells(&mosaic) == cells(&single),
         "the mosaic differs from one run"
     );
+    assert_eq!(job.join("index/points").is_file(), store);
     let recs = records(&job, n);
     for r in &recs {
         if r["status"] == "empty" {
@@ -64,11 +66,14 @@ fn plan_equals_one_run(input: &Path, t: &Path) -> Vec<serde_json::Value> {
 }
 
 /// Every task decoded the whole file (one 10.6 M-point LAZ: each task ~4 s, the empty ones
-/// too): with the chunk index, tasks far from a chunk do not decode it.
+/// too): with the chunk index (`--no-store`), tasks far from a chunk do not decode it. With the
+/// plan's point store (the default over one plain file) they decode nothing: they read the
+/// cells meeting their tile and buffer, and the mosaic is byte for byte the one of the plan
+/// without the store (and one run's, cell for cell).
 #[test]
-fn tasks_of_a_plan_over_one_laz_decode_only_their_chunks() {
+fn tasks_of_a_plan_over_one_laz_decode_only_their_chunks_or_nothing_with_the_store() {
     let t = tempfile::tempdir().unwrap();
-    let recs = plan_equals_one_run(&topography(), t.path());
+    let recs = plan_equals_one_run(&topography(), t.path(), false);
     let decoded: Vec<u64> = recs
         .iter()
         .map(|r| r["decoded"].as_u64().unwrap())
@@ -76,6 +81,22 @@ fn tasks_of_a_plan_over_one_laz_decode_only_their_chunks() {
     assert!(
         decoded.iter().any(|&d| d > 0 && d < 73_403),
         "every task decoded the whole file: {decoded:?}"
+    );
+    let with = t.path().join("store");
+    std::fs::create_dir(&with).unwrap();
+    let recs = plan_equals_one_run(&topography(), &with, true);
+    for r in &recs {
+        assert_eq!(r["decoded"].as_u64(), Some(0), "{r}");
+    }
+    assert!(
+        recs.iter()
+            .any(|r| (1..73_403).contains(&r["stored"].as_u64().unwrap())),
+        "no task read part of the store: {recs:?}"
+    );
+    let (a, b) = (t.path().join("mosaic.tif"), with.join("mosaic.tif"));
+    assert!(
+        std::fs::read(a).unwrap() == std::fs::read(b).unwrap(),
+        "the mosaics with and without the store differ"
     );
 }
 
@@ -98,7 +119,7 @@ fn tasks_of_a_plan_over_one_las_decode_only_their_blocks() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let recs = plan_equals_one_run(&las, t.path());
+    let recs = plan_equals_one_run(&las, t.path(), false);
     let decoded: Vec<u64> = recs
         .iter()
         .map(|r| r["decoded"].as_u64().unwrap())
@@ -131,44 +152,47 @@ fn an_empty_task_writes_no_tile() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let recs = plan_equals_one_run(&half, t.path());
+    let recs = plan_equals_one_run(&half, t.path(), false);
     assert!(
         recs.iter().any(|r| r["status"] == "empty"),
         "no empty task: {recs:?}"
     );
 }
 
-/// A chunk index cut short or edited would make tasks skip chunks, a hull band cut short, edited,
-/// missing or of another plan would let them certify against points that are not the data's:
-/// refused, exit 3, naming it.
+/// A chunk index cut short or edited would make tasks skip chunks, a hull band or a point store
+/// cut short, edited, missing or of another plan would let them certify against points that
+/// are not the data's, or read others: refused, exit 3, naming it.
 #[test]
 fn a_truncated_or_edited_chunk_index_is_refused() {
     let t = tempfile::tempdir().unwrap();
-    let job = t.path().join("job");
-    sweeptin(
-        &[
-            "plan",
+    let input = topography();
+    // Plans of tiles of `tile` into `t/name`, with the point store or not (then with a chunk
+    // index).
+    let plan = |name: &str, tile: &str, store: bool| {
+        let job = t.path().join(name);
+        let mut args = vec!["plan", "--no-store"];
+        if store {
+            args.pop();
+        }
+        args.extend([
             "dem",
-            s(&topography()),
+            s(&input),
             "--cell",
             "1",
             "--tile",
-            "128",
+            tile,
             "-o",
             s(&job),
-        ],
-        "plan",
-    );
-    let plan = job.join("plan.json");
-    let index = job.join("index/0.chunks");
-    let bytes = std::fs::read(&index).unwrap();
-    let mut edited = bytes.clone();
-    // The first span's xmin.
-    edited[40 + 32] ^= 1;
+        ]);
+        sweeptin(&args, "plan");
+        job
+    };
+    let (chunked, stored) = (plan("job", "128", false), plan("stored", "128", true));
+    let (other, other_stored) = (plan("other", "64", false), plan("other_stored", "64", true));
     // Task 0 refused (exit 3) naming the damaged file and what is wrong, no record written.
-    let refused = |file: &str, what: &str| {
+    let refused = |job: &Path, file: &str, what: &str| {
         let o = bin()
-            .args(["run", s(&plan), "--task", "0", "-q"])
+            .args(["run", s(&job.join("plan.json")), "--task", "0", "-q"])
             .output()
             .unwrap();
         let e = String::from_utf8_lossy(&o.stderr);
@@ -176,50 +200,56 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
         assert!(e.contains(file) && e.contains(what), "{what}: {e}");
         assert!(!job.join("tiles/task_0.json").exists());
     };
-    for (what, damaged) in [
-        ("truncated", bytes[..bytes.len() - 1].to_vec()),
-        ("checksum", edited),
-    ] {
-        std::fs::write(&index, &damaged).unwrap();
-        refused("chunk index", what);
-    }
-    std::fs::write(&index, &bytes).unwrap();
-    // The plan's hull band: cut short, edited, missing, or another plan's.
-    let band = job.join("index/band");
-    let bytes = std::fs::read(&band).unwrap();
-    let mut edited = bytes.clone();
-    edited[120] ^= 1;
-    let other = t.path().join("other");
-    let input = topography();
-    let args = [
-        "plan",
-        "dem",
-        s(&input),
-        "--cell",
-        "1",
-        "--tile",
-        "64",
-        "-o",
-        s(&other),
-    ];
-    sweeptin(&args, "plan");
-    for (what, damaged) in [
-        ("truncated", Some(bytes[..bytes.len() - 1].to_vec())),
-        ("checksum", Some(edited)),
-        ("missing", None),
+    // The chunk index: cut short, or the first span's xmin edited; the plan's hull band and
+    // point store: cut short, edited (the band's points, the store's first point, the end of
+    // the store's table), missing, or another plan's.
+    for (job, other, file, name, at, table) in [
+        (&chunked, &other, "0.chunks", "chunk index", 40 + 32, None),
+        (&chunked, &other, "band", "hull band", 120, None),
+        (&stored, &other_stored, "band", "hull band", 120, None),
         (
-            "another plan",
-            Some(std::fs::read(other.join("index/band")).unwrap()),
+            &stored,
+            &other_stored,
+            "points",
+            "point store",
+            0,
+            Some(200),
         ),
     ] {
-        match damaged {
-            Some(d) => std::fs::write(&band, d).unwrap(),
-            None => std::fs::remove_file(&band).unwrap(),
+        let path = job.join("index").join(file);
+        let bytes = std::fs::read(&path).unwrap();
+        let edit = |at: usize| {
+            let mut e = bytes.clone();
+            e[at] ^= 1;
+            Some(e)
+        };
+        let mut cases = vec![
+            ("truncated", Some(bytes[..bytes.len() - 1].to_vec())),
+            ("checksum", edit(at)),
+        ];
+        if let Some(back) = table {
+            cases.push(("checksum", edit(bytes.len() - back)));
         }
-        refused("hull band", what);
+        if file != "0.chunks" {
+            cases.push(("missing", None));
+            let theirs = std::fs::read(other.join("index").join(file)).unwrap();
+            cases.push(("another plan", Some(theirs)));
+        }
+        for (what, damaged) in cases {
+            match damaged {
+                Some(d) => std::fs::write(&path, d).unwrap(),
+                None => std::fs::remove_file(&path).unwrap(),
+            }
+            refused(job, name, what);
+        }
+        std::fs::write(&path, &bytes).unwrap();
     }
-    std::fs::write(&band, &bytes).unwrap();
-    sweeptin(&["run", s(&plan), "--task", "0", "-q"], "run");
+    for job in [&chunked, &stored] {
+        sweeptin(
+            &["run", s(&job.join("plan.json")), "--task", "0", "-q"],
+            "run",
+        );
+    }
 }
 
 /// `sweeptin index --chunks FILE`: the plan's chunk index, built once per file (as LAStools'
@@ -232,12 +262,14 @@ fn index_chunks(args: &[&str]) -> serde_json::Value {
 }
 
 /// `plan` into `job` over `input`, without the hull band (which decodes the chunks along the
-/// data's edge: here only the chunk index is read or decoded): its stderr.
+/// data's edge) or the point store (which decodes the file: here only the chunk index is read
+/// or decoded): its stderr.
 fn plan_into(input: &Path, job: &Path) -> std::process::Output {
     bin()
         .args([
             "plan",
             "--no-hull-band",
+            "--no-store",
             "dem",
             s(input),
             "--cell",

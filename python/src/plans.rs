@@ -143,6 +143,11 @@ pub(crate) fn make_plan(
         };
         // `@lists`, globs and `.vpc` files expanded, every file by absolute path.
         let plan = Plan::new(typed, args, outputs, &files, tile, buffer)?;
+        // A point store is written in a local plan directory only (as `plan` decides).
+        let plan = match plan_dir.is_remote() {
+            true => plan.without_point_store(),
+            false => plan,
+        };
         // The line files are inputs too: no output may replace one.
         let inputs: Vec<PathBuf> = plan
             .files

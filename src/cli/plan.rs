@@ -60,6 +60,14 @@ pub struct PlanArgs {
     /// outputs are the same either way (for comparison).
     #[arg(long)]
     pub no_hull_band: bool,
+    /// Make no point store: by default, where the hull band is used and the plan's directory is
+    /// local, the plan's decoding pass writes the points after the filters into
+    /// `DIR/index/points` (by cells of a quarter tile: about 12 bytes a point) instead of a
+    /// chunk index, and every task reads the points of its tile and buffer from it instead of
+    /// decoding the LAZ chunks there. The outputs are the same either way (for comparison, or
+    /// to save the disk).
+    #[arg(long)]
+    pub no_store: bool,
     /// The product command (`dem`, `contours`, `volume --plane Z`, `tin` or `ground`) with its input files and
     /// options as for a single run, plus `--tile SIZE` (the plan's tile side, a multiple of the
     /// cell) and `-o DIR` (where the plan and the tiles' outputs go: a local directory, or
@@ -441,6 +449,10 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let plan = Plan::new(typed, argv, outputs, &given, tile, buffer)?;
     let plan = match args.no_hull_band {
         true => plan.without_hull_band(),
+        false => plan,
+    };
+    let plan = match args.no_store || plan_dir.is_remote() {
+        true => plan.without_point_store(),
         false => plan,
     };
     // The lines cleaned as every task will (checked on the bytes read): their z conflicts,

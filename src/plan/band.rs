@@ -49,7 +49,7 @@ impl Plan {
 
     /// Computes and writes (atomically) the plan's band when it has one ([`Plan::hull_band`])
     /// and `dir` holds none of this plan: its hull's chunks and then the band's, decoded through
-    /// the chunk indexes (written first).
+    /// the chunk indexes (written first), or the point store's cells, read (written first).
     ///
     /// # Errors
     /// The chunk indexes' and the decoder's errors; [`crate::Error::Io`] naming the file.
@@ -60,16 +60,21 @@ impl Plan {
         if self.read_band(dir).is_ok() {
             return Ok(());
         }
+        // From the point store's cells when the plan has one (it has no chunk index then).
+        let store = self.task_store(dir)?;
         let mut paths = Vec::new();
         let mut chunks = Vec::new();
         for (k, f) in self.files.iter().enumerate().filter(|(_, f)| f.points > 0) {
             paths.push(f.path.clone());
-            chunks.push((f.path.clone(), Arc::new(self.chunk_index(dir, k)?)));
+            if store.is_none() {
+                chunks.push((f.path.clone(), Arc::new(self.chunk_index(dir, k)?)));
+            }
         }
         let src = BandSource {
             paths: &paths,
             filter: &self.job.filter(),
             chunks: &chunks,
+            store: store.as_deref(),
             policy: self.job.duplicates,
             crs: self.job.crs()?,
             mem: self.task_mem(),

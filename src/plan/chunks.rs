@@ -35,13 +35,15 @@ impl Plan {
 
     /// Builds and writes (atomically) the chunk index of every plain LAZ/LAS file of the plan
     /// ([`super::PlanFile::indexed`]) that `dir` does not hold yet: one decoding pass over each,
-    /// the files side by side and each file's chunks on every core.
+    /// the files side by side and each file's chunks on every core. None in a plan with a point
+    /// store ([`Plan::point_store`]: its band and its tasks read the store).
     ///
     /// # Errors
     /// The decoder's errors naming the input; [`Error::Io`] naming the index.
     pub(super) fn write_chunk_indexes(&self, dir: &PlanDir) -> Result<()> {
+        // A plan with a point store reads it instead: its tasks and its band need no index.
         let wanted: Vec<usize> = (0..self.files.len())
-            .filter(|&k| self.files[k].indexed)
+            .filter(|&k| self.files[k].indexed && self.point_store.is_none())
             .collect();
         if wanted.is_empty() {
             return Ok(());
@@ -109,7 +111,7 @@ impl Plan {
     pub fn stored_chunk_indexes(&self) -> Vec<(PathBuf, std::result::Result<(), String>)> {
         self.files
             .iter()
-            .filter(|f| f.indexed)
+            .filter(|f| f.indexed && self.point_store.is_none())
             .filter_map(|f| {
                 let info = FileInfo::read(&f.path).ok()?;
                 let r = stored(f, &info)?;
@@ -118,11 +120,15 @@ impl Plan {
             .collect()
     }
 
-    /// The chunk indexes of the indexed files task `i` reads with a buffer of `buffer`.
+    /// The chunk indexes of the indexed files task `i` reads with a buffer of `buffer` (none in
+    /// a plan with a point store).
     ///
     /// # Errors
     /// As [`Plan::chunk_index`].
     pub(super) fn task_chunks(&self, dir: &PlanDir, i: usize, buffer: f64) -> Result<TaskChunks> {
+        if self.point_store.is_some() {
+            return Ok(Vec::new());
+        }
         let g = super::grown(self.task(i)?.bounds, buffer);
         (0..self.files.len())
             .filter(|&k| {

@@ -104,6 +104,7 @@ impl Plan {
             runs: 1,
             points,
             decoded,
+            stored: 0,
             triangles: 0,
             seconds: 0.0,
             peak_memory: None,

@@ -4,8 +4,10 @@
 //! A [`Plan`] is made from the input files' headers (no point is decoded): the product command
 //! and its options, the tile grid, and for every tile the files whose extent reaches into it or
 //! its buffer. Saving it writes the chunk index of every plain LAZ/LAS file (`DIR/index/`, one
-//! decoding pass: [`crate::input::las::ChunkIndex`]) and the data's hull band when the plan has
-//! one ([`Plan::hull_band`]: `DIR/index/band`, [`crate::HullBand`]), then `DIR/plan.json`. A
+//! decoding pass: [`crate::input::las::ChunkIndex`]), or over one such file its point store
+//! instead ([`Plan::point_store`]: `DIR/index/points`, [`crate::PointStore`], the points its
+//! tasks read, decoded once), and the data's hull band when the plan has one
+//! ([`Plan::hull_band`]: `DIR/index/band`, [`crate::HullBand`]), then `DIR/plan.json`. A
 //! task needs nothing else. It runs the tiled engine on its tile alone ([`crate::TaskScope`]): it reads the files
 //! near its tile (only their chunks, or COPC nodes, that meet its tile and buffer), keeps the
 //! points up to the buffer, and delivers exactly what its tile owns, certified to be what a run
@@ -36,14 +38,17 @@ mod lines;
 pub mod merge;
 pub mod mesh;
 mod overview;
+mod record;
 pub mod report;
 mod stitch;
+pub mod store;
 mod task;
 
 pub use dir::PlanDir;
 pub use engine::task_from_env;
 pub use files::FileStamp;
 pub use lines::{LineFile, PlanLines};
+pub use record::TaskRecord;
 pub use task::{Job, Levels, Product, TaskOptions};
 
 use crate::error::{Error, Result};
@@ -141,6 +146,10 @@ pub struct Plan {
     /// as in plans of older builds).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hull_band: Option<f64>,
+    /// The cell side of the plan's point store ([`Plan::point_store_path`]: its tasks read their
+    /// points from it; `None`: they decode the files, as in plans of older builds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point_store: Option<f64>,
     /// What the files' headers said when the plan was made (a point count that disagrees with
     /// the file, a CRS read as `--crs` says…), as one run warns of them; `plan` prints them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -162,63 +171,6 @@ impl PartialEq for PlanId {
     fn eq(&self, _: &PlanId) -> bool {
         true
     }
-}
-
-/// What a finished task records in `tiles/task_<i>.json`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TaskRecord {
-    /// The task.
-    pub index: usize,
-    /// `"done"`, or `"empty"` when no point is left in the tile after the filters (no tile
-    /// written: its part of the mosaic is nodata; not a failure).
-    pub status: String,
-    /// The buffer the task ended with.
-    pub buffer: f64,
-    /// Runs (1, or more when the buffer had to grow).
-    pub runs: u32,
-    /// Points triangulated and triangles owned.
-    pub points: u64,
-    /// Points decoded from the input files over all runs' last: the chunks (and COPC nodes)
-    /// that meet the tile and buffer of an indexed file, every point of the others.
-    #[serde(default)]
-    pub decoded: u64,
-    /// See `points`.
-    pub triangles: u64,
-    /// Seconds.
-    pub seconds: f64,
-    /// Peak resident memory of the task's process when it finished (VmHWM), in bytes, when
-    /// the system reports it. `None` in records of older builds.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub peak_memory: Option<u64>,
-    /// The task's outputs, by product name.
-    pub outputs: Vec<(String, PathBuf)>,
-    /// The [`Plan::id`] of the plan the task ran under: a record of another plan (made into
-    /// the same directory before, or before the plan was edited) is no record of this one.
-    /// Empty in records of older builds.
-    #[serde(default)]
-    pub plan: String,
-    /// The sizes of `outputs` in bytes when the task finished: `--resume` runs a task again
-    /// when one no longer has its size (a truncated tile). Empty in records of older builds.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub bytes: Vec<u64>,
-    /// What the headers of the files the task read said (as [`Plan::warnings`], for these
-    /// files); `run` prints them.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
-    /// Exact volume partial sums (cut, fill, cut area, fill area, area), for `volume`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub volume: Option<[Vec<f64>; 5]>,
-    /// The extent `[xmin, ymin, xmax, ymax]` of the points the task read after the filters
-    /// (its tile, buffer and beyond): their union over the tasks is the extent of the points
-    /// one run keeps, from which `merge` decides one run's DEM grid
-    /// ([`merge::MosaicExtent::Data`]). `None` for a task that read no point, and in records of
-    /// older builds (the mosaic then covers the tiles, with a warning).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub extent: Option<[f64; 4]>,
-    /// Tiles of the tiled engine the task ran (its last run): those holding points, or for a
-    /// DEM every one of its plan tile (their cells may lie under other tasks' triangles).
-    #[serde(default)]
-    pub subtiles: u64,
 }
 
 /// Most tiles a plan may cut its data into (each a task, listed in `plan.json`): 262,144, a
@@ -415,6 +367,7 @@ impl Plan {
             }
         }
         let hull_band = band::width_for(&job, &files);
+        let point_store = store::cell_for(hull_band, tile);
         let mut plan = Plan {
             version: if job.ground.is_some() {
                 PLAN_VERSION_GROUND
@@ -434,6 +387,7 @@ impl Plan {
             cell,
             tiles,
             hull_band,
+            point_store,
             warnings,
             fingerprint: String::new(),
             id: PlanId::default(),
@@ -477,6 +431,7 @@ impl Plan {
         dir.make_dir("tiles")?;
         // The indexes first: a plan.json is complete with everything its tasks read.
         self.write_chunk_indexes(dir)?;
+        self.write_point_store(dir)?;
         self.write_band(dir)?;
         dir.write(&path, text.as_bytes())?;
         Ok(path)
@@ -612,6 +567,7 @@ impl Plan {
             chunks: Vec::new(),
             by_area: self.job.ground.is_some(),
             band: None,
+            store: None,
         })
     }
 

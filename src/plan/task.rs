@@ -497,14 +497,13 @@ impl Plan {
         let sc = self.scope(i, self.buffer)?;
         let near_files = !self.task_files(i, self.buffer)?.is_empty();
         if near_files {
-            // Indexed files: the nearest chunk, when none meets the grown tile (a task in a gap
-            // of the data, or beside it, reads the points nearest it, not nothing).
-            let chunks = self.task_chunks(dir, i, self.buffer)?;
-            if chunks.is_empty() || chunks.len() < self.task_files(i, self.buffer)?.len() {
+            // Indexed files (or a point store): the nearest chunk (cell), when none meets the grown
+            // tile (a task in a gap of the data, or beside it, reads the points nearest it).
+            let Some(boxes) = self.data_boxes(dir, i)? else {
                 return Ok(self.buffer);
-            }
+            };
             let g = super::area::grown(sc.tile, self.buffer);
-            let rects = || chunks.iter().flat_map(|(_, c)| c.rects());
+            let rects = || boxes.iter().copied();
             if rects().any(|r| super::area::overlaps(&r, &g)) {
                 return Ok(self.buffer);
             }
@@ -583,6 +582,7 @@ impl Plan {
                 scope: Some(crate::tiles::TaskScope {
                     chunks: self.task_chunks(dir, i, buffer)?,
                     band: self.task_band(dir)?,
+                    store: self.task_store(dir)?,
                     ..self.scope(i, buffer)?
                 }),
             }),
@@ -764,6 +764,7 @@ fn record_of(
         runs,
         points: run.points_kept,
         decoded: run.tiles.map_or(0, |t| t.points_decoded),
+        stored: run.tiles.map_or(0, |t| t.points_stored),
         triangles: run.triangles,
         seconds: 0.0,
         peak_memory: None,

@@ -56,11 +56,14 @@ pub struct HullBand {
 }
 
 /// What [`HullBand::compute`] reads: the files (as a task gives them to its reader), the job's
-/// filter, the files' chunk indexes, the duplicate policy, the declared CRS and a memory budget.
+/// filter, the files' chunk indexes, or the plan's point store (its cells in place of the
+/// chunks, read instead of decoded: the same band), the duplicate policy, the declared CRS and
+/// a memory budget.
 pub(crate) struct BandSource<'a> {
     pub paths: &'a [PathBuf],
     pub filter: &'a Filter,
     pub chunks: &'a [(PathBuf, Arc<ChunkIndex>)],
+    pub store: Option<&'a super::store::PointStore>,
     pub policy: crate::DuplicatePolicy,
     pub crs: Option<Crs>,
     pub mem: u64,
@@ -279,6 +282,11 @@ impl Spans {
             rects: Vec::new(),
             points: 0,
         };
+        if let Some(st) = src.store {
+            s.rects = st.rects().collect();
+            s.points = st.points();
+            return s;
+        }
         for (k, path) in src.paths.iter().enumerate() {
             let Some((_, ix)) = src.chunks.iter().find(|(p, _)| p == path) else {
                 continue;
@@ -305,6 +313,22 @@ impl Spans {
     ) -> Result<()> {
         if !want.contains(&true) {
             return Ok(());
+        }
+        if let Some(st) = src.store {
+            // A point's position in the store stands for its index: points at one position lie
+            // in one cell, in input order.
+            return st.read_cells(want, |[x, y, z], index, c| {
+                let r = &self.rects[c];
+                let inside = x >= r[0] && x <= r[2] && y >= r[1] && y <= r[3];
+                let p = LidarPoint {
+                    index,
+                    x,
+                    y,
+                    z,
+                    ..LidarPoint::default()
+                };
+                f(&p, inside.then_some(c));
+            });
         }
         let chunks: Vec<(PathBuf, Arc<ChunkIndex>)> = src
             .paths
@@ -385,11 +409,26 @@ mod tests {
                     paths: &paths,
                     filter: &filter,
                     chunks: &chunks,
+                    store: None,
                     policy,
                     crs: None,
                     mem: 256 << 20,
                 };
                 let band = HullBand::compute(&src, 2.0).unwrap().unwrap();
+                // The same band from a point store's cells (of 16 units).
+                let dir = tempfile::tempdir().unwrap();
+                let sp = dir.path().join("points");
+                let mut r = LidarReader::open_with(&paths, &filter, ReadOptions::default()).unwrap();
+                let id = "0".repeat(64);
+                let tmp = dir.path();
+                super::super::store::PointStore::write(&mut r, 16.0, &id, &sp, 256 << 20, tmp).unwrap();
+                let st = super::super::store::PointStore::open(&sp, &id).unwrap();
+                let by_store = BandSource {
+                    store: Some(&st),
+                    chunks: &[],
+                    ..src
+                };
+                assert_eq!(HullBand::compute(&by_store, 2.0).unwrap().unwrap(), band);
                 let mut r = LidarReader::open_with(&paths, &filter, ReadOptions::default()).unwrap();
                 let all = r.read_all().unwrap();
                 let mut b = HullBuilder::new(policy);

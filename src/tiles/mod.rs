@@ -27,6 +27,7 @@ pub(crate) mod keep;
 pub(crate) mod lines;
 pub(crate) mod read;
 pub(crate) mod region;
+pub(crate) mod store;
 pub(crate) mod budget;
 pub(crate) mod worker;
 
@@ -96,9 +97,13 @@ pub struct TaskScope {
     /// plan): a task reading by area adds the band's points beyond its area and knows that what
     /// it did not read lies inside the hull moved inwards, so its edge tiles need no wider buffer.
     pub band: Option<std::sync::Arc<HullBand>>,
+    /// The plan's point store ([`PointStore`]): the task reads the points of its tile and
+    /// buffer from it instead of decoding the files (the same points in the same order).
+    pub store: Option<std::sync::Arc<PointStore>>,
 }
 
 pub use band::HullBand;
+pub use store::PointStore;
 
 /// What the tiles did (part of the `--json` summary).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -124,6 +129,9 @@ pub struct TileStats {
     /// Points decoded from the files (COPC nodes and indexed chunks that miss a task's area
     /// are not decoded).
     pub points_decoded: u64,
+    /// Points read from a plan's point store ([`TaskScope::store`]) instead (those of the
+    /// cells meeting the task's area, kept or not).
+    pub points_stored: u64,
     /// Worker threads.
     pub threads: u64,
     /// Tiles' runs allowed at once within `--mem` (at most the workers); finished tiles waiting
@@ -391,6 +399,7 @@ pub(crate) fn run(
         block_size: g.block,
         threads: threads as u64,
         points_decoded: declared.decoded,
+        points_stored: declared.stored,
         cpu,
         extent: Some(bounds).filter(|b| b.iter().all(|v| v.is_finite())),
         ..TileStats::default()

@@ -18,7 +18,7 @@ pub(super) fn read_index(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Declared, [f64; 4], TileCpu)> {
     let scope = options.scope.as_ref();
-    let (mut reader, outside, by_area) = open_for(job, scope)?;
+    let (mut reader, mut outside, by_area) = open_for(job, scope)?;
     // The data's hull band (a plan's): its points beyond the area, as read points.
     let band = by_area.and_then(|a| Some((scope?.band.as_deref()?, a)));
     let extra: Vec<[f64; 3]> = band.map_or_else(Vec::new, |(h, a)| {
@@ -65,12 +65,23 @@ pub(super) fn read_index(
         crs: reader.crs().cloned(),
         warnings: reader.warnings(),
         decoded: 0,
+        stored: 0,
     };
     let packing = reader.lattice().and_then(|l| Packing::new(l, &probe));
-    let (mut index, spread, cpu) = match packing {
-        Some(_) => index_points::<PackedRecord>(&mut reader, probe, packing, job, &extra, progress)?,
-        None => index_points::<BlockRecord>(&mut reader, probe, None, job, &extra, progress)?,
+    // The plan's point store in place of the LAZ file, when every block lies in one of its cells.
+    let store = match (scope.and_then(|s| s.store.as_deref()), by_area) {
+        (Some(s), Some(a)) if s.nests(block) => Some((s, a)),
+        _ => None,
     };
+    let mut from = Points { reader: &mut reader, store, read: None };
+    let (mut index, spread, cpu) = match packing {
+        Some(_) => index_points::<PackedRecord>(&mut from, probe, packing, job, &extra, progress)?,
+        None => index_points::<BlockRecord>(&mut from, probe, None, job, &extra, progress)?,
+    };
+    if let Some(r) = from.read {
+        outside = r.unread;
+        declared.stored = r.scanned;
+    }
     declared.decoded = reader.stats().read;
     let bounds = spread.extent();
     if let Some(far) = spread.far_points() {
@@ -123,34 +134,57 @@ pub(super) struct Declared {
     pub warnings: Vec<String>,
     /// Points decoded from the files ([`super::TileStats::points_decoded`]).
     pub decoded: u64,
+    /// Points read from the plan's point store ([`super::TileStats::points_stored`]).
+    pub stored: u64,
+}
+
+/// Where a run's points come from: the reader, or a plan's point store over the area read.
+struct Points<'a> {
+    reader: &'a mut LidarReader,
+    store: Option<(&'a super::store::PointStore, [f64; 4])>,
+    /// What the store read.
+    read: Option<super::store::AreaRead>,
 }
 
 /// Reads every point of `reader` into the block index's sort as records `R` (packed with
 /// `packing`, or wide), and builds the index: with what [`Spread`] saw of the points (their
 /// bounding box, far points) and the CPU time of both steps.
 fn index_points<R: IndexRecord>(
-    reader: &mut LidarReader,
+    from: &mut Points,
     grid: TileGrid,
     packing: Option<Packing>,
     job: &TileJob,
     extra: &[[f64; 3]],
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(BlockIndex, Spread, TileCpu)> {
-    let total = reader.point_count();
+    let total = from.reader.point_count();
     let t0 = Instant::now();
     let c0 = crate::clock::process_cpu();
     let budget = index_sort_budget(job.mem, total, std::mem::size_of::<R>());
     let mut sorter = ExternalSorter::<R>::new(budget, job.tmp);
     let mut spread = Spread::default();
-    prefetched(reader, |buf, done| {
-        for p in buf {
-            let (x, y) = (p.x, p.y);
-            spread.add(x, y);
-            sorter.push(R::pack(packing.as_ref(), grid.block_of(x, y), [x, y, p.z])?)?;
+    match from.store {
+        Some((store, area)) => {
+            from.read = Some(store.read_area(area, |buf, done| {
+                for &[x, y, z] in buf {
+                    spread.add(x, y);
+                    sorter.push(R::pack(packing.as_ref(), grid.block_of(x, y), [x, y, z])?)?;
+                }
+                progress(done.min(total), total);
+                Ok(())
+            })?);
         }
-        progress(done, total);
-        Ok(())
-    })?;
+        None => prefetched(from.reader, |buf, done| {
+            for p in buf {
+                let (x, y) = (p.x, p.y);
+                spread.add(x, y);
+                sorter.push(R::pack(packing.as_ref(), grid.block_of(x, y), [x, y, p.z])?)?;
+            }
+            progress(done, total);
+            Ok(())
+        })?,
+    }
+    let reader = &*from.reader;
     for p in extra {
         sorter.push(R::pack(packing.as_ref(), grid.block_of(p[0], p[1]), *p)?)?;
     }
@@ -213,6 +247,7 @@ fn open_for(
         if !infos.is_empty()
             && known
             && (sc.by_area
+                || sc.store.is_some()
                 || infos.iter().all(indexed)
                     && (infos.iter().all(|i| i.copc.is_some())
                         || pays_to_read_by_area(&sc.chunks, area)))
@@ -276,13 +311,13 @@ fn pays_to_read_by_area(chunks: &[(std::path::PathBuf, std::sync::Arc<ChunkIndex
 }
 
 /// Do the closed rectangles `a` and `b` meet?
-fn meets(a: &[f64; 4], b: &[f64; 4]) -> bool {
+pub(super) fn meets(a: &[f64; 4], b: &[f64; 4]) -> bool {
     a[0] <= b[2] && a[2] >= b[0] && a[1] <= b[3] && a[3] >= b[1]
 }
 
 /// The parts of the closed rectangle `e` outside the closed rectangle `a`, as at most four closed
 /// rectangles (sharing `a`'s edges: points on them are read, and counted as unknown too).
-fn outside_of(e: [f64; 4], a: [f64; 4]) -> Vec<[f64; 4]> {
+pub(super) fn outside_of(e: [f64; 4], a: [f64; 4]) -> Vec<[f64; 4]> {
     let mut out = Vec::new();
     if e[1] < a[1] {
         out.push([e[0], e[1], e[2], a[1].min(e[3])]);
@@ -390,7 +425,7 @@ const MIN_INDEX_SORT: u64 = 8 << 20;
 /// the last point) leave that work to the end, with nothing beside it: ARSO (13.2 M points, 32-byte
 /// records) at `--mem 1G` took 6.9 s and 555 MB against 6.0 s and 107 MB at `--mem 128M`. The
 /// order of the records is the same whatever the budget.
-fn index_sort_budget(mem: u64, points: u64, record: usize) -> u64 {
+pub(super) fn index_sort_budget(mem: u64, points: u64, record: usize) -> u64 {
     let bytes = points.saturating_mul(record as u64);
     (mem / 2).min((bytes / INDEX_RUNS * 3).max(MIN_INDEX_SORT))
 }

@@ -217,6 +217,18 @@ impl Lattice {
         Some(q)
     }
 
+    /// The lattice's numbers (`10^k`, the stored zero and the upper corner per axis), as a
+    /// file that stores points on it keeps them ([`crate::tiles::PointStore`]).
+    pub(crate) fn parts(&self) -> (f64, [i64; 3], [u32; 3]) {
+        (self.pow, self.base, self.extent)
+    }
+
+    /// The lattice of [`Lattice::parts`] (`None` for numbers no lattice has).
+    pub(crate) fn from_parts(pow: f64, base: [i64; 3], extent: [u32; 3]) -> Option<Lattice> {
+        let ok = pow >= 1.0 && pow.is_finite() && base.iter().all(|b| b.unsigned_abs() < 1 << 52);
+        ok.then_some(Lattice { pow, base, extent })
+    }
+
     /// The point of stored integers `q`.
     #[inline]
     pub(crate) fn decode(&self, q: [u32; 3]) -> [f64; 3] {

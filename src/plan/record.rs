@@ -1,0 +1,67 @@
+//! What a finished task records ([`TaskRecord`], `tiles/task_<i>.json`).
+
+#[cfg(doc)]
+use super::Plan;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// What a finished task records in `tiles/task_<i>.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TaskRecord {
+    /// The task.
+    pub index: usize,
+    /// `"done"`, or `"empty"` when no point is left in the tile after the filters (no tile
+    /// written: its part of the mosaic is nodata; not a failure).
+    pub status: String,
+    /// The buffer the task ended with.
+    pub buffer: f64,
+    /// Runs (1, or more when the buffer had to grow).
+    pub runs: u32,
+    /// Points triangulated and triangles owned.
+    pub points: u64,
+    /// Points decoded from the input files over all runs' last: the chunks (and COPC nodes)
+    /// that meet the tile and buffer of an indexed file, every point of the others.
+    #[serde(default)]
+    pub decoded: u64,
+    /// Points read from the plan's point store instead ([`Plan::point_store`]), over all runs'
+    /// last: those of its cells that meet the tile and buffer.
+    #[serde(default)]
+    pub stored: u64,
+    /// See `points`.
+    pub triangles: u64,
+    /// Seconds.
+    pub seconds: f64,
+    /// Peak resident memory of the task's process when it finished (VmHWM), in bytes, when
+    /// the system reports it. `None` in records of older builds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_memory: Option<u64>,
+    /// The task's outputs, by product name.
+    pub outputs: Vec<(String, PathBuf)>,
+    /// The [`Plan::id`] of the plan the task ran under: a record of another plan (made into
+    /// the same directory before, or before the plan was edited) is no record of this one.
+    /// Empty in records of older builds.
+    #[serde(default)]
+    pub plan: String,
+    /// The sizes of `outputs` in bytes when the task finished: `--resume` runs a task again
+    /// when one no longer has its size (a truncated tile). Empty in records of older builds.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bytes: Vec<u64>,
+    /// What the headers of the files the task read said (as [`Plan::warnings`], for these
+    /// files); `run` prints them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+    /// Exact volume partial sums (cut, fill, cut area, fill area, area), for `volume`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume: Option<[Vec<f64>; 5]>,
+    /// The extent `[xmin, ymin, xmax, ymax]` of the points the task read after the filters
+    /// (its tile, buffer and beyond): their union over the tasks is the extent of the points
+    /// one run keeps, from which `merge` decides one run's DEM grid
+    /// ([`super::merge::MosaicExtent::Data`]). `None` for a task that read no point, and in records of
+    /// older builds (the mosaic then covers the tiles, with a warning).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extent: Option<[f64; 4]>,
+    /// Tiles of the tiled engine the task ran (its last run): those holding points, or for a
+    /// DEM every one of its plan tile (their cells may lie under other tasks' triangles).
+    #[serde(default)]
+    pub subtiles: u64,
+}

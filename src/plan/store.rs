@@ -1,0 +1,109 @@
+//! The plan's point store (`DIR/index/points`, [`crate::PointStore`]): written when the plan is
+//! saved where the hull band is used (one plain local LAZ/LAS file, no breaklines, no
+//! `--ground`) and the plan's directory is local, in place of the file's chunk index (one
+//! decoding pass), before the band, which is computed from its cells; read by every task
+//! instead of the file (docs/SCALING.md). `plan --no-store` keeps the chunk index's route.
+
+use super::{Plan, PlanDir};
+use crate::error::{Error, Result};
+use crate::input::las::{LidarReader, ReadOptions};
+use crate::tiles::PointStore;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// The store's cells a side: a quarter of the tile. A task reads the cells meeting its tile
+/// and buffer (with the default buffer, a tenth of the tile: 6 × 6 cells, 2.25 tiles' worth of
+/// points scanned, those beyond the area left out), and its blocks must be no larger than a
+/// cell (a tile of at least 16 blocks of 64 points: 1,024 points; sparser tasks decode the file).
+const CELLS_A_TILE: f64 = 4.0;
+
+/// The store's cell side for a plan whose hull band is `band`, with tiles of side `tile`.
+pub(super) fn cell_for(band: Option<f64>, tile: f64) -> Option<f64> {
+    band.map(|_| tile / CELLS_A_TILE)
+}
+
+impl Plan {
+    /// The plan without a point store: its tasks decode the files (the same outputs).
+    /// `plan --no-store`, for comparison, and for a plan directory that is not local.
+    pub fn without_point_store(mut self) -> Plan {
+        if self.point_store.is_some() {
+            self.point_store = None;
+            self.id = super::PlanId::default();
+            self.fingerprint = self.id().to_string();
+        }
+        self
+    }
+
+    /// Where the plan's point store lies under `dir`.
+    pub fn point_store_path(dir: &PlanDir) -> PathBuf {
+        dir.join("index").join("points")
+    }
+
+    /// Decodes the plan's file once more (its filters applied) into its point store, when it
+    /// has one ([`Plan::point_store`]) and `dir` holds none of this plan.
+    ///
+    /// # Errors
+    /// [`Error::Options`] for a plan directory that is not local; the reader's errors;
+    /// [`Error::Write`] naming the store (written under a temporary name: none is left).
+    pub(super) fn write_point_store(&self, dir: &PlanDir) -> Result<()> {
+        let Some(cell) = self.point_store else {
+            return Ok(());
+        };
+        if dir.is_remote() {
+            return Err(Error::Options(format!(
+                "a plan's point store is written in a local plan directory, not {}: plan with \
+                 --no-store",
+                dir.display()
+            )));
+        }
+        let p = Self::point_store_path(dir);
+        if PointStore::open(&p, self.id()).is_ok() {
+            return Ok(());
+        }
+        dir.make_dir("index")?;
+        dir.own_file(&p)?;
+        let paths: Vec<PathBuf> = self
+            .files
+            .iter()
+            .filter(|f| f.points > 0)
+            .map(|f| f.path.clone())
+            .collect();
+        let mem = self.task_mem();
+        let options = ReadOptions {
+            crs: self.job.crs()?,
+            ..ReadOptions::for_budget(mem)
+        };
+        let mut reader = LidarReader::open_with(&paths, &self.job.filter(), options)?;
+        let tmp = self.job.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
+        PointStore::write(&mut reader, cell, self.id(), &p, mem, &tmp)?;
+        Ok(())
+    }
+
+    /// The boxes of the data near task `i` (its plan buffer), where the plan knows them: its
+    /// point store's cells, or the chunks of its files when every file is indexed.
+    ///
+    /// # Errors
+    /// As [`Plan::task_store`] and [`Plan::chunk_index`].
+    pub(super) fn data_boxes(&self, dir: &PlanDir, i: usize) -> Result<Option<Vec<[f64; 4]>>> {
+        if let Some(s) = self.task_store(dir)? {
+            return Ok(Some(s.rects().collect()));
+        }
+        let chunks = self.task_chunks(dir, i, self.buffer)?;
+        if chunks.is_empty() || chunks.len() < self.task_files(i, self.buffer)?.len() {
+            return Ok(None);
+        }
+        Ok(Some(chunks.iter().flat_map(|(_, c)| c.rects()).collect()))
+    }
+
+    /// The point store the plan's tasks read (`None` when the plan has none).
+    ///
+    /// # Errors
+    /// [`Error::Format`] naming the store when it is missing, truncated, edited or of another
+    /// plan; [`Error::Io`] when it cannot be read.
+    pub fn task_store(&self, dir: &PlanDir) -> Result<Option<Arc<PointStore>>> {
+        if self.point_store.is_none() {
+            return Ok(None);
+        }
+        PointStore::open(&Self::point_store_path(dir), self.id()).map(|s| Some(Arc::new(s)))
+    }
+}
