@@ -229,6 +229,11 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
         ];
         if let Some(back) = table {
             cases.push(("checksum", edit(bytes.len() - back)));
+            // The high bit of the first point's z: no point of a damaged cell reaches the task
+            // (it did, and the task failed as an internal error, exit 5).
+            let mut e = bytes.clone();
+            e[11] ^= 0x80;
+            cases.push(("checksum", Some(e)));
         }
         if file != "0.chunks" {
             cases.push(("missing", None));
@@ -244,6 +249,24 @@ fn a_truncated_or_edited_chunk_index_is_refused() {
         }
         std::fs::write(&path, &bytes).unwrap();
     }
+    // A FIFO in the store's place is refused, not waited on; a damaged store is written anew
+    // when the plan is made again (it was kept, and the remedy looped).
+    let store = stored.join("index/points");
+    std::fs::remove_file(&store).unwrap();
+    let made = std::process::Command::new("mkfifo")
+        .arg(&store)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    refused(&stored, "point store", "not a regular file");
+    std::fs::remove_file(&store).unwrap();
+    let whole = std::fs::read(other_stored.join("index/points")).unwrap();
+    let mut bad = whole.clone();
+    bad[11] ^= 0x80;
+    std::fs::write(other_stored.join("index/points"), bad).unwrap();
+    plan("other_stored", "64", true);
+    assert!(std::fs::read(other_stored.join("index/points")).unwrap() == whole);
+    plan("stored", "128", true);
     for job in [&chunked, &stored] {
         sweeptin(
             &["run", s(&job.join("plan.json")), "--task", "0", "-q"],

@@ -57,7 +57,7 @@ pub struct PlanArgs {
     /// Give the tasks no hull band: by default, over one plain LAZ/LAS file (no breaklines, no
     /// `--ground`), the plan decodes the chunks along the data's edge once more and stores the
     /// points within 2 units of its convex hull, so that the tasks along the edge run once. The
-    /// outputs are the same either way (for comparison).
+    /// outputs are the same either way (for comparison). Implies --no-store.
     #[arg(long)]
     pub no_hull_band: bool,
     /// Make no point store: by default, where the hull band is used and the plan's directory is

@@ -34,9 +34,11 @@ pub(super) fn width_for(job: &Job, files: &[PlanFile]) -> Option<f64> {
 
 impl Plan {
     /// The plan without a hull band: its tasks run as before (the same outputs; along the
-    /// data's edge, more runs with wider buffers). `plan --no-hull-band`, for comparison.
+    /// data's edge, more runs with wider buffers), and without a point store, which comes with
+    /// the band. `plan --no-hull-band`, for comparison.
     pub fn without_hull_band(mut self) -> Plan {
         self.hull_band = None;
+        self.point_store = None;
         self.id = super::PlanId::default();
         self.fingerprint = self.id().to_string();
         self

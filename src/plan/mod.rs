@@ -367,7 +367,7 @@ impl Plan {
             }
         }
         let hull_band = band::width_for(&job, &files);
-        let point_store = store::cell_for(hull_band, tile);
+        let point_store = store::cell_for(hull_band, tile, &files);
         let mut plan = Plan {
             version: if job.ground.is_some() {
                 PLAN_VERSION_GROUND

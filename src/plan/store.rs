@@ -17,9 +17,42 @@ use std::sync::Arc;
 /// cell (a tile of at least 16 blocks of 64 points: 1,024 points; sparser tasks decode the file).
 const CELLS_A_TILE: f64 = 4.0;
 
-/// The store's cell side for a plan whose hull band is `band`, with tiles of side `tile`.
-pub(super) fn cell_for(band: Option<f64>, tile: f64) -> Option<f64> {
-    band.map(|_| tile / CELLS_A_TILE)
+/// Fewer points a tile than this on average (over the files' boxes): no store. A cell then
+/// holds about 16 points, fewer than a block's, so the tasks' blocks would be larger than a
+/// cell and they would decode the file instead of reading the store, with no chunk index to
+/// read it by ([`crate::PointStore`]'s `nests`). (lidR_Topography at tiles of 32, about 950
+/// points a tile, reads the store in every task.)
+const LEAST_TILE_POINTS: f64 = 256.0;
+
+/// The store's cell side for a plan whose hull band is `band`, with tiles of side `tile`, over
+/// `files`: none without a band, for data too sparse for its tasks to read it, or when the
+/// cells would be finer than the block keys allow so far from the origin.
+pub(super) fn cell_for(band: Option<f64>, tile: f64, files: &[super::PlanFile]) -> Option<f64> {
+    band?;
+    let with = files.iter().filter(|f| f.points > 0);
+    let rect = with.clone().fold(
+        [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ],
+        |r, f| {
+            let b = f.bounds;
+            [
+                r[0].min(b[0]),
+                r[1].min(b[1]),
+                r[2].max(b[2]),
+                r[3].max(b[3]),
+            ]
+        },
+    );
+    let points: u64 = with.map(|f| f.points).sum();
+    let area = ((rect[2] - rect[0]) * (rect[3] - rect[1])).max(tile * tile);
+    let cell = tile / CELLS_A_TILE;
+    (points as f64 * tile * tile / area >= LEAST_TILE_POINTS
+        && cell >= crate::tiles::grid::TileGrid::min_block(rect))
+    .then_some(cell)
 }
 
 impl Plan {
@@ -57,11 +90,16 @@ impl Plan {
             )));
         }
         let p = Self::point_store_path(dir);
-        if PointStore::open(&p, self.id()).is_ok() {
+        dir.own_file(&p)?;
+        // Made again into the same directory: this plan's store is kept when every cell is
+        // whole (a damaged one is written anew: "make the plan again" repairs it).
+        if PointStore::open(&p, self.id())
+            .and_then(|s| s.verify())
+            .is_ok()
+        {
             return Ok(());
         }
         dir.make_dir("index")?;
-        dir.own_file(&p)?;
         let paths: Vec<PathBuf> = self
             .files
             .iter()

@@ -105,6 +105,13 @@ impl PointStore {
     /// [`Error::Format`] naming the file when it is missing, truncated, edited or of another
     /// plan; [`Error::Io`] when it cannot be read.
     pub(crate) fn open(path: &Path, id: &str) -> Result<PointStore> {
+        // Never a FIFO (a read would wait forever), a device or a link.
+        match std::fs::symlink_metadata(path) {
+            Ok(m) if !m.file_type().is_file() => {
+                return Err(damaged(path, "not a regular file (a link, a FIFO or a directory)"));
+            }
+            _ => {}
+        }
         let file = match File::open(path) {
             Ok(f) => f,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(damaged(path, "missing")),
@@ -269,11 +276,22 @@ impl PointStore {
         Ok(out)
     }
 
-    /// Hands `f` the points of cell `c` in batches, then checks the cell's checksum.
-    fn read_cell(&self, c: &Cell, mut f: impl FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()> {
-        let rec = if self.lattice.is_some() { 12 } else { 24 };
+    /// Checks every cell's checksum (reading the whole store).
+    ///
+    /// # Errors
+    /// As [`PointStore::read_area`].
+    pub(crate) fn verify(self) -> Result<PointStore> {
+        for c in &self.cells {
+            self.pieces(c, |_| Ok(()))?;
+        }
+        Ok(self)
+    }
+
+    /// Hands `f` the bytes of cell `c` in pieces of at most [`PIECE`] records, then checks the
+    /// cell's checksum.
+    fn pieces(&self, c: &Cell, mut f: impl FnMut(&[u8]) -> Result<()>) -> Result<()> {
+        let rec = self.record();
         let mut bytes = vec![0u8; PIECE.min(c.count as usize) * rec];
-        let mut pts: Vec<[f64; 3]> = Vec::with_capacity(PIECE.min(c.count as usize));
         let mut h = Sha256::new();
         let mut done = 0u64;
         while done < c.count {
@@ -283,6 +301,34 @@ impl PointStore {
                 .read_exact_at(b, (c.first + done) * rec as u64)
                 .map_err(|e| Error::io(&self.path, e))?;
             h.update(&*b);
+            f(b)?;
+            done += n as u64;
+        }
+        if h.finalize()[..] != c.sum {
+            return Err(damaged(&self.path, "damaged or edited (a cell's checksum does not match)"));
+        }
+        Ok(())
+    }
+
+    /// Bytes a point.
+    fn record(&self) -> usize {
+        if self.lattice.is_some() { 12 } else { 24 }
+    }
+
+    /// Hands `f` the points of cell `c` in batches once its checksum holds (the cell is read
+    /// twice, the second time from the page cache: no point of a damaged cell reaches a task).
+    fn read_cell(&self, c: &Cell, mut f: impl FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()> {
+        self.pieces(c, |_| Ok(()))?;
+        let rec = self.record();
+        let mut bytes = vec![0u8; PIECE.min(c.count as usize) * rec];
+        let mut pts: Vec<[f64; 3]> = Vec::with_capacity(PIECE.min(c.count as usize));
+        let mut done = 0u64;
+        while done < c.count {
+            let n = (c.count - done).min(PIECE as u64) as usize;
+            let b = &mut bytes[..n * rec];
+            self.file
+                .read_exact_at(b, (c.first + done) * rec as u64)
+                .map_err(|e| Error::io(&self.path, e))?;
             pts.clear();
             let u = |r: &[u8], k: usize| u32::from_le_bytes(r[4 * k..4 * k + 4].try_into().unwrap_or_default());
             let d = |r: &[u8], k: usize| f64::from_le_bytes(r[8 * k..8 * k + 8].try_into().unwrap_or_default());
@@ -292,9 +338,6 @@ impl PointStore {
             }
             done += n as u64;
             f(&pts)?;
-        }
-        if h.finalize()[..] != c.sum {
-            return Err(damaged(&self.path, "damaged or edited (a cell's checksum does not match)"));
         }
         Ok(())
     }
