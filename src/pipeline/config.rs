@@ -190,23 +190,21 @@ pub(crate) fn check_tmp_dir(tmp_dir: &std::path::Path) -> Result<()> {
         return Ok(());
     }
     // Named as the user set it: --tmp-dir, or else $TMPDIR.
-    let (kind, what) = match (tmp_dir.exists(), tmp_dir == std::env::temp_dir()) {
-        (true, false) => (
+    let env = if tmp_dir == std::env::temp_dir() {
+        " ($TMPDIR)"
+    } else {
+        ""
+    };
+    let (kind, what) = if tmp_dir.exists() {
+        (
             std::io::ErrorKind::NotADirectory,
-            "the temporary directory is not a directory",
-        ),
-        (true, true) => (
-            std::io::ErrorKind::NotADirectory,
-            "the temporary directory ($TMPDIR) is not a directory",
-        ),
-        (false, false) => (
+            format!("the temporary directory{env} is not a directory"),
+        )
+    } else {
+        (
             std::io::ErrorKind::NotFound,
-            "temporary directory does not exist",
-        ),
-        (false, true) => (
-            std::io::ErrorKind::NotFound,
-            "temporary directory ($TMPDIR) does not exist",
-        ),
+            format!("temporary directory{env} does not exist"),
+        )
     };
     Err(Error::write(tmp_dir, std::io::Error::new(kind, what)))
 }

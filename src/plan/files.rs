@@ -7,6 +7,15 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 impl super::Plan {
+    /// The paths of the plan's files that hold points, in the plan's order.
+    pub(super) fn paths_with_points(&self) -> Vec<PathBuf> {
+        self.files
+            .iter()
+            .filter(|f| f.points > 0)
+            .map(|f| f.path.clone())
+            .collect()
+    }
+
     /// Every file the job reads, or was made from: the points' files and the lists and `.vpc`
     /// files that named them, the line files (a GeoPackage without its layer) and a volume's
     /// boundary. No output of the plan or of its merge may replace one.

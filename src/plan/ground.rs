@@ -286,12 +286,7 @@ impl Plan {
         let Some(params) = self.job.ground else {
             return Ok(());
         };
-        let paths: Vec<PathBuf> = self
-            .files
-            .iter()
-            .filter(|f| f.points > 0)
-            .map(|f| f.path.clone())
-            .collect();
+        let paths = self.paths_with_points();
         if paths.is_empty() {
             return Ok(());
         }

@@ -100,12 +100,7 @@ impl Plan {
             return Ok(());
         }
         dir.make_dir("index")?;
-        let paths: Vec<PathBuf> = self
-            .files
-            .iter()
-            .filter(|f| f.points > 0)
-            .map(|f| f.path.clone())
-            .collect();
+        let paths = self.paths_with_points();
         let mem = self.task_mem();
         let options = ReadOptions {
             crs: self.job.crs()?,

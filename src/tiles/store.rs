@@ -282,15 +282,15 @@ impl PointStore {
     /// As [`PointStore::read_area`].
     pub(crate) fn verify(self) -> Result<PointStore> {
         for c in &self.cells {
-            self.pieces(c, |_| Ok(()))?;
+            self.pieces(c, true, |_| Ok(()))?;
         }
         Ok(self)
     }
 
-    /// Hands `f` the bytes of cell `c` in pieces of at most [`PIECE`] records, then checks the
-    /// cell's checksum.
-    fn pieces(&self, c: &Cell, mut f: impl FnMut(&[u8]) -> Result<()>) -> Result<()> {
-        let rec = self.record();
+    /// Hands `f` the bytes of cell `c` in pieces of at most [`PIECE`] records; with `check`,
+    /// then checks the cell's checksum.
+    fn pieces(&self, c: &Cell, check: bool, mut f: impl FnMut(&[u8]) -> Result<()>) -> Result<()> {
+        let rec = if self.lattice.is_some() { 12 } else { 24 };
         let mut bytes = vec![0u8; PIECE.min(c.count as usize) * rec];
         let mut h = Sha256::new();
         let mut done = 0u64;
@@ -300,46 +300,33 @@ impl PointStore {
             self.file
                 .read_exact_at(b, (c.first + done) * rec as u64)
                 .map_err(|e| Error::io(&self.path, e))?;
-            h.update(&*b);
+            if check {
+                h.update(&*b);
+            }
             f(b)?;
             done += n as u64;
         }
-        if h.finalize()[..] != c.sum {
+        if check && h.finalize()[..] != c.sum {
             return Err(damaged(&self.path, "damaged or edited (a cell's checksum does not match)"));
         }
         Ok(())
     }
 
-    /// Bytes a point.
-    fn record(&self) -> usize {
-        if self.lattice.is_some() { 12 } else { 24 }
-    }
-
     /// Hands `f` the points of cell `c` in batches once its checksum holds (the cell is read
     /// twice, the second time from the page cache: no point of a damaged cell reaches a task).
     fn read_cell(&self, c: &Cell, mut f: impl FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()> {
-        self.pieces(c, |_| Ok(()))?;
-        let rec = self.record();
-        let mut bytes = vec![0u8; PIECE.min(c.count as usize) * rec];
+        self.pieces(c, true, |_| Ok(()))?;
         let mut pts: Vec<[f64; 3]> = Vec::with_capacity(PIECE.min(c.count as usize));
-        let mut done = 0u64;
-        while done < c.count {
-            let n = (c.count - done).min(PIECE as u64) as usize;
-            let b = &mut bytes[..n * rec];
-            self.file
-                .read_exact_at(b, (c.first + done) * rec as u64)
-                .map_err(|e| Error::io(&self.path, e))?;
+        let u = |r: &[u8], k: usize| u32::from_le_bytes(r[4 * k..4 * k + 4].try_into().unwrap_or_default());
+        let d = |r: &[u8], k: usize| f64::from_le_bytes(r[8 * k..8 * k + 8].try_into().unwrap_or_default());
+        self.pieces(c, false, |b| {
             pts.clear();
-            let u = |r: &[u8], k: usize| u32::from_le_bytes(r[4 * k..4 * k + 4].try_into().unwrap_or_default());
-            let d = |r: &[u8], k: usize| f64::from_le_bytes(r[8 * k..8 * k + 8].try_into().unwrap_or_default());
             match &self.lattice {
                 Some(l) => pts.extend(b.chunks_exact(12).map(|r| l.decode([u(r, 0), u(r, 1), u(r, 2)]))),
                 None => pts.extend(b.chunks_exact(24).map(|r| [d(r, 0), d(r, 1), d(r, 2)])),
             }
-            done += n as u64;
-            f(&pts)?;
-        }
-        Ok(())
+            f(&pts)
+        })
     }
 }
 
