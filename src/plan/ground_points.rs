@@ -132,16 +132,12 @@ pub struct PointsMergeSummary {
     pub bytes: u64,
 }
 
-/// Merges the tiles of a ground plan whose tasks all finished (`records`, in task order) into
-/// `out`: `.vpc` a virtual point cloud referencing the tiles where they are (in a local plan
-/// directory by paths relative to the `.vpc`: keep the directory, or merge into one file; on S3
-/// by their `s3://` URLs), `.laz`/`.las` one file (decoded and compressed `batch_bytes` of
-/// records at a time: a share of the merge's `--mem`).
-///
-/// # Errors
 /// Each task's tiles count in their headers the points its record says it wrote: a tile whose
 /// header says otherwise (damaged, replaced, or written by a build that miscounted) would
 /// make a merge that leaves points out while its totals look right.
+///
+/// # Errors
+/// [`Error::Format`] naming the tile; the headers' read errors.
 fn check_tile_counts(records: &[TaskRecord]) -> Result<()> {
     for r in records {
         let mut counted = 0;
@@ -164,6 +160,13 @@ fn check_tile_counts(records: &[TaskRecord]) -> Result<()> {
     Ok(())
 }
 
+/// Merges the tiles of a ground plan whose tasks all finished (`records`, in task order) into
+/// `out`: `.vpc` a virtual point cloud referencing the tiles where they are (in a local plan
+/// directory by paths relative to the `.vpc`: keep the directory, or merge into one file; on S3
+/// by their `s3://` URLs), `.laz`/`.las` one file (decoded and compressed `batch_bytes` of
+/// records at a time: a share of the merge's `--mem`).
+///
+/// # Errors
 /// [`Error::Options`] for another extension, and when the tiles cannot make one file
 /// (point formats, extra bytes, versions, GPS time types or scales that differ: merge into a
 /// `.vpc`); [`Error::Format`] naming a tile whose header miscounts its task's points;
