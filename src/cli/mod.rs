@@ -84,9 +84,11 @@ enum Command {
     Crossval(crossval::Args),
     /// Simplify a grid DEM (GeoTIFF, ESRI ASCII) into a TIN within an error bound.
     Simplify(simplify::Args),
-    /// Cut a `dem`, `contours`, `volume`, `tin` or `ground` job into exact tiles for a batch engine: writes
-    /// DIR/plan.json (from the files' headers), after the chunk index of every plain LAZ/LAS file
-    /// (DIR/index/, one decoding pass: tasks then decode only the chunks near their tile).
+    /// Cut a `dem`, `contours`, `volume`, `tin` or `ground` job into exact tiles for a batch
+    /// engine: writes DIR/plan.json (from the files' headers), after one decoding pass of the
+    /// plain LAZ/LAS files into DIR/index/: over one file, a point store its tasks read instead
+    /// of decoding (--no-store: a chunk index); over several, each file's chunk index, so that
+    /// tasks decode only the chunks near their tile.
     Plan(plan::PlanArgs),
     /// Run one task of a plan (--task I, or the index a job array gives), or all of them.
     Run(plan::RunArgs),
