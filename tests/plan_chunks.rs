@@ -93,6 +93,13 @@ fn tasks_of_a_plan_over_one_laz_decode_only_their_chunks_or_nothing_with_the_sto
             .any(|r| (1..73_403).contains(&r["stored"].as_u64().unwrap())),
         "no task read part of the store: {recs:?}"
     );
+    // The report of the night sums what the tasks read from the store.
+    let plan = with.join("job/plan.json");
+    let o = sweeptin(&["report", s(&plan), "--json"], "report");
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let stored: u64 = recs.iter().map(|r| r["stored"].as_u64().unwrap()).sum();
+    assert_eq!(report["stored"].as_u64(), Some(stored), "{report}");
+    assert_eq!(report["decoded"].as_u64(), Some(0), "{report}");
     let (a, b) = (t.path().join("mosaic.tif"), with.join("mosaic.tif"));
     assert!(
         std::fs::read(a).unwrap() == std::fs::read(b).unwrap(),

@@ -165,6 +165,8 @@ pub struct Report {
     pub points: u64,
     /// Points decoded by them.
     pub decoded: u64,
+    /// Points they read from the plan's point store instead (docs/SCALING.md).
+    pub stored: u64,
     /// Triangles they own.
     pub triangles: u64,
     /// The sum of every task's seconds (finished and failed): the job's work, not its wall
@@ -197,6 +199,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
         not_run: 0,
         points: 0,
         decoded: 0,
+        stored: 0,
         triangles: 0,
         task_seconds: 0.0,
         points_per_second: None,
@@ -229,6 +232,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
             } else {
                 r.points += rec.points;
                 r.decoded += rec.decoded;
+                r.stored += rec.stored;
                 r.triangles += rec.triangles;
                 finished_seconds += rec.seconds;
                 if let Some((_, p)) = rec.outputs.iter().find(|(n, _)| n == "dem") {
