@@ -143,6 +143,17 @@ fn write_las(path: &Path, pts: &[[f64; 3]], classes: &[u8]) {
     w.close().unwrap();
 }
 
+/// `sweeptin ground INPUT -o OUT --quiet`, which must succeed.
+fn ground_to(input: &Path, out: &Path) {
+    cli::ok(&[
+        "ground".as_ref(),
+        input.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--quiet".as_ref(),
+    ]);
+}
+
 #[test]
 fn a_low_outlier_is_written_as_class_7_in_a_las_output() {
     let dir = tempfile::tempdir().unwrap();
@@ -155,13 +166,7 @@ fn a_low_outlier_is_written_as_class_7_in_a_las_output() {
     }
     pts.push([20.1, 20.1, 51.0]);
     write_las(&input, &pts, &vec![1; pts.len()]);
-    cli::ok(&[
-        "ground".as_ref(),
-        input.as_os_str(),
-        "-o".as_ref(),
-        out.as_os_str(),
-        "--quiet".as_ref(),
-    ]);
+    ground_to(&input, &out);
     let got = read(&out);
     assert_eq!(got.last().unwrap().classification, 7);
     assert!(got[..got.len() - 1].iter().all(|p| p.classification == 2));
@@ -269,15 +274,7 @@ fn multiset(points: &[LidarPoint]) -> Vec<(u64, u64, u64, u8, u8, u8, u8)> {
 fn ground_copc_output_holds_the_points_of_the_laz_output() {
     let name = "ground_copc_output_holds_the_points_of_the_laz_output";
     let dir = tempfile::tempdir().unwrap();
-    let ground = |input: &Path, out: &Path| {
-        cli::ok(&[
-            "ground".as_ref(),
-            input.as_os_str(),
-            "-o".as_ref(),
-            out.as_os_str(),
-            "--quiet".as_ref(),
-        ]);
-    };
+    let ground = ground_to;
     let topo = data::shared("lidar/lidR_Topography.laz");
     let (laz, copc) = (dir.path().join("t.laz"), dir.path().join("t.copc.laz"));
     ground(&topo, &laz);
