@@ -36,8 +36,85 @@ fn chain(p: &[[f64; 3]], turn: Orientation) -> Vec<[f64; 3]> {
     h
 }
 
+/// Points below which [`inner_box`] is not looked for (sorting them costs less).
+const FILTER_FROM: usize = 1024;
+
+/// A box strictly inside the convex hull of the points `v` (Akl and Toussaint's filter: the
+/// hull of the extreme points in eight directions, then a box a little inside the points'
+/// bounding box whose corners lie strictly inside that octagon, tested exactly). Points in
+/// the box are inside the hull and none of them is a corner: they need not be sorted. The
+/// extremes are chosen in floating point, but they are input points, so their hull lies in
+/// the points' hull whatever was chosen.
+fn inner_box(v: &[[f64; 3]]) -> Option<[f64; 4]> {
+    if v.len() < FILTER_FROM {
+        return None;
+    }
+    const DIRS: [[f64; 2]; 8] =
+        [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, -1.0]];
+    let mut best = [(f64::NEG_INFINITY, [0.0; 3]); 8];
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in v {
+        for (b, d) in best.iter_mut().zip(DIRS) {
+            let s = d[0] * p[0] + d[1] * p[1];
+            if s > b.0 {
+                *b = (s, *p);
+            }
+        }
+        lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+        hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+    }
+    if !(lo[0].is_finite() && lo[1].is_finite() && hi[0].is_finite() && hi[1].is_finite()) {
+        return None;
+    }
+    let mut ext: Vec<[f64; 3]> = best.iter().map(|b| b.1).collect();
+    let octagon = sorted_hull(&mut ext);
+    if octagon.len() < 3 {
+        return None;
+    }
+    let strictly_in = |q: [f64; 2]| {
+        (0..octagon.len()).all(|i| {
+            orient(xy(&octagon[i]), xy(&octagon[(i + 1) % octagon.len()]), q)
+                == Orientation::CounterClockwise
+        })
+    };
+    let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
+    [1.0 / 64.0, 1.0 / 16.0, 1.0 / 4.0].into_iter().find_map(|s| {
+        let b = [lo[0] + s * w, lo[1] + s * h, hi[0] - s * w, hi[1] - s * h];
+        (b[0] < b[2]
+            && b[1] < b[3]
+            && [[b[0], b[1]], [b[2], b[1]], [b[2], b[3]], [b[0], b[3]]].into_iter().all(strictly_in))
+        .then_some(b)
+    })
+}
+
+/// Is `p` outside the closed box `b` (or is there no box)?
+fn outside(b: Option<&[f64; 4]>, p: &[f64; 3]) -> bool {
+    b.is_none_or(|b| !(p[0] >= b[0] && p[0] <= b[2] && p[1] >= b[1] && p[1] <= b[3]))
+}
+
 /// The corners of the convex hull of `v` (any order, duplicates allowed), counter-clockwise.
+/// `v` is reordered: the points that may be corners first, sorted.
 pub(crate) fn hull(v: &mut [[f64; 3]]) -> Vec<[f64; 3]> {
+    let b = inner_box(v);
+    let mut k = 0;
+    for i in 0..v.len() {
+        if outside(b.as_ref(), &v[i]) {
+            v.swap(i, k);
+            k += 1;
+        }
+    }
+    sorted_hull(&mut v[..k])
+}
+
+/// [`hull`] of points it may not reorder: only the points that may be corners are copied.
+pub(crate) fn hull_of(v: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let b = inner_box(v);
+    let mut w: Vec<[f64; 3]> = v.iter().filter(|p| outside(b.as_ref(), p)).copied().collect();
+    sorted_hull(&mut w)
+}
+
+/// [`hull`] without the filter: sorts all of `v`.
+fn sorted_hull(v: &mut [[f64; 3]]) -> Vec<[f64; 3]> {
     v.sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
     let mut d: Vec<[f64; 3]> = Vec::with_capacity(v.len());
     for p in v.iter() {
@@ -204,6 +281,44 @@ mod tests {
         };
         let h = hull(&mut v.clone());
         assert_eq!(from_origin(h.iter().map(xy).collect()), square);
+    }
+
+    /// The filtered hull is the hull of all the points sorted (corners, order and start), on
+    /// shapes where the box is found and where it is not: a disc, a rotated lattice, a thin
+    /// slanted strip, a line, two far clusters, at UTM-sized offsets, with duplicates.
+    #[test]
+    fn the_inner_box_leaves_the_hull_as_it_is() {
+        let mut rng = crate::geom::rng::SplitMix64::new(11);
+        type Shape = fn(f64, f64) -> Option<[f64; 2]>;
+        let shapes: [Shape; 5] = [
+            |u, v| ((u - 0.5).powi(2) + (v - 0.5).powi(2) <= 0.25).then_some([u, v]),
+            |u, v| Some([0.6 * u - 0.8 * v, 0.8 * u + 0.6 * v]),
+            |u, v| Some([u, 0.3 * u + 0.001 * v]),
+            |u, _| Some([u, 2.0 * u]),
+            |u, v| Some(if u < 0.5 { [u * 0.01, v * 0.01] } else { [100.0 + u * 0.01, 50.0 + v * 0.01] }),
+        ];
+        for (s, shape) in shapes.iter().enumerate() {
+            for n in [1000, 1100, 20_000] {
+                let mut v = Vec::new();
+                while v.len() < n {
+                    let (u, w) = (rng.below(1 << 20) as f64 / (1 << 20) as f64, rng.below(1 << 20) as f64 / (1 << 20) as f64);
+                    if let Some(q) = shape(u, w) {
+                        let p = [511_000.0 + q[0] * 1000.0, 122_000.0 + q[1] * 1000.0, rng.below(9) as f64];
+                        v.push(p);
+                        if rng.below(50) == 0 {
+                            v.push(p);
+                        }
+                    }
+                }
+                let want = sorted_hull(&mut v.clone());
+                assert_eq!(hull_of(&v).iter().map(xy).collect::<Vec<_>>(), want.iter().map(xy).collect::<Vec<_>>(), "shape {s}, {n}");
+                assert_eq!(hull(&mut v).iter().map(xy).collect::<Vec<_>>(), want.iter().map(xy).collect::<Vec<_>>(), "shape {s}, {n}");
+            }
+        }
+        // The box is found on a filled square, and the lattice's corners are the hull.
+        let mut g: Vec<[f64; 3]> = (0..10_000).map(|i| [(i % 100) as f64, (i / 100) as f64, 0.0]).collect();
+        assert!(inner_box(&g).is_some());
+        assert_eq!(hull(&mut g).len(), 4);
     }
 
     /// The streamed hull is the hull of all the points, a batch at a time, each corner with

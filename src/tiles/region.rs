@@ -293,7 +293,7 @@ fn flat(t: &Tri2, d: &DiskBounds) -> bool {
 /// meets the region's box? (Sets the certifier's `unknown`.)
 fn hull_unknown(cert: &Certifier, v: &[[f64; 3]], region: &Region) -> bool {
     let r = region.bbox();
-    let hull = super::hull::hull(&mut v.to_vec());
+    let hull = super::hull::hull_of(v);
     let corners = [[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]];
     for i in 0..hull.len() {
         let a = [hull[i][0], hull[i][1]];
