@@ -106,6 +106,7 @@ impl Plan {
             decoded,
             stored: 0,
             triangles: 0,
+            inside_uncounted: false,
             seconds: 0.0,
             peak_memory: None,
             outputs,

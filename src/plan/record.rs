@@ -27,8 +27,14 @@ pub struct TaskRecord {
     /// last: those of its cells that meet the tile and buffer.
     #[serde(default)]
     pub stored: u64,
-    /// See `points`.
+    /// See `points`. With `inside_uncounted`, the triangles it certified only.
     pub triangles: u64,
+    /// The task's products all cover (a DEM alone): the unwanted triangles deep inside its
+    /// sub-tiles were neither certified nor counted, as one run leaves them, and `triangles`
+    /// misses them. The report counts all the plan's triangles by Euler's formula instead
+    /// (`2V − B − 2`, with `B` from the plan's hull band) when it can.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub inside_uncounted: bool,
     /// Seconds.
     pub seconds: f64,
     /// Peak resident memory of the task's process when it finished (VmHWM), in bytes, when

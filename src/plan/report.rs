@@ -167,8 +167,10 @@ pub struct Report {
     pub decoded: u64,
     /// Points they read from the plan's point store instead (docs/SCALING.md).
     pub stored: u64,
-    /// Triangles they own.
-    pub triangles: u64,
+    /// Triangles they own. `None` while a DEM's task counts only the triangles it certified
+    /// ([`TaskRecord::inside_uncounted`]) and the total cannot be counted by Euler's formula
+    /// instead (a task not finished, or a plan without a hull band).
+    pub triangles: Option<u64>,
     /// The sum of every task's seconds (finished and failed): the job's work, not its wall
     /// time (tasks run side by side).
     pub task_seconds: f64,
@@ -200,7 +202,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
         points: 0,
         decoded: 0,
         stored: 0,
-        triangles: 0,
+        triangles: Some(0),
         task_seconds: 0.0,
         points_per_second: None,
         peak_memory: None,
@@ -208,6 +210,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
         overview: Overview::default(),
     };
     let mut finished_seconds = 0.0;
+    let mut uncounted = false;
     let mut dem = Vec::new();
     for t in &plan.tiles {
         let i = t.index;
@@ -233,7 +236,8 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
                 r.points += rec.points;
                 r.decoded += rec.decoded;
                 r.stored += rec.stored;
-                r.triangles += rec.triangles;
+                r.triangles = r.triangles.map(|t| t + rec.triangles);
+                uncounted |= rec.inside_uncounted;
                 finished_seconds += rec.seconds;
                 if let Some((_, p)) = rec.outputs.iter().find(|(n, _)| n == "dem") {
                     dem.push((i, p.clone()));
@@ -254,9 +258,30 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
         r.peak_memory = r.peak_memory.max(task.peak_memory);
         r.task_list.push(task);
     }
+    if uncounted {
+        r.triangles = euler(plan, dir, &r)?;
+    }
     r.points_per_second = (finished_seconds > 0.0).then(|| r.points as f64 / finished_seconds);
     r.overview = super::overview::overview(plan, dir, &dem);
     Ok(r)
+}
+
+/// All the plan's triangles by Euler's formula, `2V − B − 2`, when every task finished (`V`:
+/// their points, distinct and each owned once) and the plan's hull band gives `B`.
+///
+/// # Errors
+/// Reading the band ([`Plan::task_band`]).
+fn euler(plan: &Plan, dir: &super::PlanDir, r: &Report) -> Result<Option<u64>> {
+    if r.done + r.empty != r.tasks {
+        return Ok(None);
+    }
+    let Some(band) = plan.task_band(dir)? else {
+        return Ok(None);
+    };
+    if band.hull().len() < 3 {
+        return Ok(Some(0));
+    }
+    Ok((2 * r.points).checked_sub(band.boundary_points() + 2))
 }
 
 fn finished(task: &mut TaskReport, rec: &TaskRecord) {
@@ -325,7 +350,10 @@ pub fn html(r: &Report) -> String {
         r.failed,
         r.not_run,
         r.points,
-        r.triangles,
+        r.triangles.map_or(
+            "not counted (a DEM's tasks count the triangles they certify)".into(),
+            |t| t.to_string()
+        ),
         r.task_seconds,
         rate,
         mib(r.peak_memory)

@@ -766,6 +766,7 @@ fn record_of(
         decoded: run.tiles.map_or(0, |t| t.points_decoded),
         stored: run.tiles.map_or(0, |t| t.points_stored),
         triangles: run.triangles,
+        inside_uncounted: run.tiles.is_some_and(|t| t.skipped_inside),
         seconds: 0.0,
         peak_memory: None,
         outputs,

@@ -126,6 +126,10 @@ pub struct TileStats {
     /// that all cover (a DEM alone: unwanted triangles are left unseen), breaklines or trimming
     /// polygons, a plan's task.
     pub uncertified_owned: Option<u64>,
+    /// The unwanted triangles deep inside the tiles were neither certified nor counted (the
+    /// products all cover: a DEM alone). A run over all the data then counts them by Euler's
+    /// formula; a plan's task cannot, and its `triangles` are those it certified.
+    pub skipped_inside: bool,
     /// Points decoded from the files (COPC nodes and indexed chunks that miss a task's area
     /// are not decoded).
     pub points_decoded: u64,
@@ -390,11 +394,12 @@ pub(crate) fn run(
     };
     let want = keep::Want {
         mesh: mesh.is_some(),
-        skip_inside: needs.covering() && job.lines.is_none() && options.scope.is_none(),
+        skip_inside: needs.covering() && job.lines.is_none(),
         needs,
     };
     let mut writer = emit::TileWriter::new(mesh, sinks, trim);
     let mut stats = TileStats {
+        skipped_inside: want.skip_inside,
         tile_size: g.tile,
         block_size: g.block,
         threads: threads as u64,

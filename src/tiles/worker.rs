@@ -46,8 +46,8 @@
 //!
 //! **Covering needs (a DEM alone).** When the only products are covering
 //! ([`crate::sink::Wants::covering`]: a DEM uses a triangle only for the cell centres it holds,
-//! and wants every triangle whose box holds one) and no mesh, line, trim or task looks at every
-//! triangle, a run leaves unjudged the triangles lying strictly inside the tile (their box in
+//! and wants every triangle whose box holds one) and no mesh, line or trim looks at every
+//! triangle, a run (a plan's task's too) leaves unjudged the triangles lying strictly inside the tile (their box in
 //! the open tile rectangle, shrunk by the margin) that the products do not want. Every owned
 //! triangle `T` the DEM needs is still found. If `T` reaches the tile's border or beyond, take
 //! a point `q` of `T` outside the open inner rectangle but in the widened one the region judges
@@ -58,7 +58,9 @@
 //! neighbourhood). If `T` is strictly inside, it holds a centre `c` in the tile, every run
 //! triangle holding `c` is wanted, hence judged, and the same argument finds `T`. The triangles
 //! left out are counted at the end instead: a triangulation of `V` points, `B` of them on the
-//! hull's boundary, has `2V − B − 2` triangles ([`super::hull::boundary_points`]).
+//! hull's boundary, has `2V − B − 2` triangles ([`super::hull::boundary_points`]). A plan's task
+//! holds only its part of the points: it counts the triangles it certified
+//! ([`super::TileStats::skipped_inside`]), and the plan's report counts them all by Euler.
 
 use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
