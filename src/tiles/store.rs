@@ -39,6 +39,9 @@ const TRAILER: usize = 8 + 64 + 8 + 8 + 8 + 24 + 16 + 8 + 8 + 32;
 /// Points read from the file at once.
 const PIECE: usize = 1 << 16;
 
+/// A cell of at most this many bytes is read once (into memory) rather than twice.
+const CELL_AT_ONCE: u64 = 8 << 20;
+
 /// The plan's point store, its table read and checked ([`crate::TaskScope::store`]).
 #[derive(Debug)]
 pub struct PointStore {
@@ -306,27 +309,47 @@ impl PointStore {
             f(b)?;
             done += n as u64;
         }
-        if check && h.finalize()[..] != c.sum {
+        if check {
+            self.check(c, h.finalize())?;
+        }
+        Ok(())
+    }
+
+    /// Refuses cell `c` if `sum`, its bytes' SHA-256, is not the one written.
+    fn check(&self, c: &Cell, sum: impl AsRef<[u8]>) -> Result<()> {
+        if sum.as_ref() != c.sum {
             return Err(damaged(&self.path, "damaged or edited (a cell's checksum does not match)"));
         }
         Ok(())
     }
 
-    /// Hands `f` the points of cell `c` in batches once its checksum holds (the cell is read
-    /// twice, the second time from the page cache: no point of a damaged cell reaches a task).
+    /// Hands `f` the points of cell `c` in batches once its checksum holds: no point of a
+    /// damaged cell reaches a task. A cell of at most [`CELL_AT_ONCE`] bytes is read once and
+    /// checked in memory; a larger one is read twice, the second time from the page cache.
     fn read_cell(&self, c: &Cell, mut f: impl FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()> {
-        self.pieces(c, true, |_| Ok(()))?;
         let mut pts: Vec<[f64; 3]> = Vec::with_capacity(PIECE.min(c.count as usize));
         let u = |r: &[u8], k: usize| u32::from_le_bytes(r[4 * k..4 * k + 4].try_into().unwrap_or_default());
         let d = |r: &[u8], k: usize| f64::from_le_bytes(r[8 * k..8 * k + 8].try_into().unwrap_or_default());
-        self.pieces(c, false, |b| {
+        let mut batch = |b: &[u8]| {
             pts.clear();
             match &self.lattice {
                 Some(l) => pts.extend(b.chunks_exact(12).map(|r| l.decode([u(r, 0), u(r, 1), u(r, 2)]))),
                 None => pts.extend(b.chunks_exact(24).map(|r| [d(r, 0), d(r, 1), d(r, 2)])),
             }
             f(&pts)
-        })
+        };
+        let rec = if self.lattice.is_some() { 12 } else { 24 };
+        let bytes = c.count.saturating_mul(rec);
+        if bytes <= CELL_AT_ONCE {
+            let mut all = vec![0u8; bytes as usize];
+            self.file
+                .read_exact_at(&mut all, c.first * rec)
+                .map_err(|e| Error::io(&self.path, e))?;
+            self.check(c, Sha256::digest(&all))?;
+            return all.chunks(PIECE * rec as usize).try_for_each(&mut batch);
+        }
+        self.pieces(c, true, |_| Ok(()))?;
+        self.pieces(c, false, batch)
     }
 }
 
@@ -338,6 +361,19 @@ fn damaged(path: &Path, what: &str) -> Error {
             "the plan's point store is {what}; the plan's tasks read their points from it: make \
              the plan again"
         ),
+    }
+}
+
+/// Appends record `s` (three words of 4 or 8 bytes) to `buf`, each word little-endian, as
+/// [`PointStore::read_cells`] parses them (the record's own bytes on every target built here).
+fn push_le<S: bytemuck::Pod>(buf: &mut Vec<u8>, s: &S) {
+    let at = buf.len();
+    buf.extend_from_slice(bytemuck::bytes_of(s));
+    if cfg!(target_endian = "big") {
+        let w = std::mem::size_of::<S>() / 3;
+        for word in buf[at..].chunks_exact_mut(w) {
+            word.reverse();
+        }
     }
 }
 
@@ -396,7 +432,7 @@ fn write_as<R: IndexRecord>(
         if let Some((_, c, h)) = cur.as_mut() {
             c.count += 1;
             c.rect = [c.rect[0].min(p[0]), c.rect[1].min(p[1]), c.rect[2].max(p[0]), c.rect[3].max(p[1])];
-            buf.extend_from_slice(bytemuck::bytes_of(&r.stored()));
+            push_le(&mut buf, &r.stored());
             if buf.len() >= crate::sort::WRITE_PIECE {
                 h.update(&buf);
                 crate::sort::write_pieces(&mut out, &buf).map_err(wr)?;
