@@ -43,18 +43,23 @@ command -v /usr/bin/time >/dev/null || { apt-get install -y -qq time >/dev/null;
 cargo build --release --quiet --bin sweeptin
 BIN=$(realpath "${CARGO_TARGET_DIR:-target}/release/sweeptin")
 echo "commit $(git rev-parse --short HEAD)$(git diff --quiet || echo +changes), $(date -u +%FT%TZ)" >&2
+FILES=()
+for F in "$@"; do FILES+=("$(realpath "$F")"); done
 cd "$OUT"
-cpu() { # prints "user+sys peak_MB" of the command
-    /usr/bin/time -f "%U %S %M" "$@" 2>&1 >/dev/null | tail -1 | awk '{printf "%.2f %d", $1 + $2, $3 / 1024}'
+cpu() { # prints "user+sys peak_MB" of the command; stops the script if it fails
+    /usr/bin/time -f "%U %S %M" -o time.txt "$@" >/dev/null || { echo "failed: $*" >&2; exit 1; }
+    awk '{printf "%.2f %d", $1 + $2, $3 / 1024}' time.txt
 }
 echo "| file | tile | one run CPU s | plan CPU s | run --all CPU s | (plan + run) / one run | tasks | runs | peak MB (one / plan / task) | mosaic |"
 echo "|---|---:|---:|---:|---:|---:|---:|---:|---|---|"
-for F in "$@"; do
+for F in "${FILES[@]}"; do
     read -r one one_mb <<< "$(cpu "$BIN" dem "$F" --cell 3 -o single.tif -q)"
+    [ -n "$one" ] || exit 1
     for TILE in $TILES; do
         rm -rf job
         read -r plan plan_mb <<< "$(cpu "$BIN" plan dem "$F" --cell 3 --tile "$TILE" -o job -q)"
         read -r run run_mb <<< "$(cpu "$BIN" run job/plan.json --all -q)"
+        [ -n "$plan" ] && [ -n "$run" ] || exit 1
         "$BIN" merge job/plan.json -o mosaic.tif -q
         same=$(cmp -s mosaic.tif single.tif && echo "cmp-equal" || echo "DIFFERENT")
         read -r tasks runs <<< "$(python3 -c "

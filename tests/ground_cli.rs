@@ -244,6 +244,30 @@ fn ground_output_never_replaces_an_input_nor_a_directory() {
     ]);
     assert_eq!(code, 4, "{err}");
     assert!(err.contains("does not exist") && !out.exists(), "{err}");
+    // Seed cells too small for coordinates this far out: the file and --step named (the
+    // message named neither the file nor, checked over all the points, the option).
+    let far = dir.path().join("far.las");
+    let p = |x: f64, y: f64| [x, y, 300.0]; // at (500,000, 4,000,000)
+    write_las(
+        &far,
+        &[p(0.0, 0.0), p(1.0, 0.0), p(0.0, 1.0), p(1.0, 1.0)],
+        &[0; 4],
+    );
+    for step in ["1e-4", "1e-3"] {
+        let (code, err) = status(&[
+            "ground".as_ref(),
+            far.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--step".as_ref(),
+            step.as_ref(),
+        ]);
+        assert_eq!(code, 2, "--step {step}: {err}");
+        assert!(
+            err.contains("far.las") && err.contains("--step") && !out.exists(),
+            "{err}"
+        );
+    }
 }
 
 /// The points of a LAS/LAZ/COPC file as a sorted multiset: position, class, returns, flags.

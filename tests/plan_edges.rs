@@ -309,3 +309,57 @@ fn a_task_killed_by_a_signal_is_named_with_it() {
     let m = t.path().join("m.tif");
     sweeptin(&["merge", s(&plan), "-o", s(&m), "-q"], "merge");
 }
+
+/// `run --all` killed with SIGKILL (it cannot pass that on) left its tasks running, orphaned:
+/// they now end with it (the kernel sends them SIGTERM, and they clean up as interrupted).
+/// Task 0 waits; once it says so, `run --all` is killed, and the task must be gone within
+/// seconds: the stderr pipe it shares closes.
+#[cfg(target_os = "linux")]
+#[test]
+fn tasks_end_with_their_run_all() {
+    use std::io::BufRead;
+    let t = tempfile::tempdir().unwrap();
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let job = t.path().join("job");
+    let args = [
+        "plan",
+        "dem",
+        s(&sample),
+        "--cell",
+        "1",
+        "--tile",
+        "16",
+        "-q",
+    ];
+    sweeptin(&[&args[..], &["-o", s(&job)]].concat(), "plan");
+    let mut child = bin()
+        .args(["run", s(&job.join("plan.json")), "--all", "-q"])
+        .env("SWEEPTIN_TEST_TASK_WAITS", "0")
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    std::thread::spawn(move || {
+        for line in stderr.lines() {
+            let _ = tx.send(line.unwrap_or_default());
+        }
+    });
+    let wait = std::time::Duration::from_secs(60);
+    let line = rx.recv_timeout(wait).expect("task 0 never said it waits");
+    assert!(line.contains("task 0 waits"), "{line}");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    // The pipe closes when the last process holding it (the task) exits.
+    let gone = std::time::Instant::now();
+    loop {
+        match rx.recv_timeout(std::time::Duration::from_secs(20)) {
+            Ok(_) => continue,
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break,
+            Err(e) => panic!(
+                "task 0 still runs {:?} after its run --all was killed: {e}",
+                gone.elapsed()
+            ),
+        }
+    }
+}

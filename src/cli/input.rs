@@ -491,6 +491,12 @@ pub fn distinct_outputs(
     Ok(sweeptin::output::distinct_outputs(outputs, inputs, of)?)
 }
 
+/// The files' names, comma-separated (for an error that concerns them all).
+pub fn names(files: &[PathBuf]) -> String {
+    let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+    names.join(", ")
+}
+
 /// The error of a run over `inputs`: library errors name their file, line or option, and are
 /// shown as they are; those about the point set as a whole (too few points, all collinear, a
 /// coordinate out of range) are prefixed with the inputs' names.
@@ -502,8 +508,7 @@ pub fn run_error(e: sweeptin::Error, inputs: &[PathBuf]) -> anyhow::Error {
         | E::NoArea { .. }
         | E::NonFinite { .. }
         | E::CoordinateOutOfRange { .. } => {
-            let names: Vec<String> = inputs.iter().map(|f| f.display().to_string()).collect();
-            anyhow::Error::from(e).context(format!("cannot triangulate {}", names.join(", ")))
+            anyhow::Error::from(e).context(format!("cannot triangulate {}", names(inputs)))
         }
         other => other.into(),
     }

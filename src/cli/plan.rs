@@ -568,11 +568,17 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         ),
     };
     plan.task(i)?;
+    super::run_all::end_with_parent(i)?;
     // Tests: this task's process dies of SIGKILL, as under the out-of-memory killer.
     #[cfg(target_os = "linux")]
     if std::env::var("SWEEPTIN_TEST_KILL_TASK").is_ok_and(|v| v == i.to_string()) {
         use rustix::process::{Signal, getpid, kill_process};
         let _ = kill_process(getpid(), Signal::KILL);
+    }
+    // Tests: this task waits (still running when its `run --all` is killed).
+    if std::env::var("SWEEPTIN_TEST_TASK_WAITS").is_ok_and(|v| v == i.to_string()) {
+        eprintln!("sweeptin: task {i} waits (SWEEPTIN_TEST_TASK_WAITS)");
+        std::thread::sleep(std::time::Duration::from_secs(120));
     }
     if args.resume
         && plan.finished(&dir, i)

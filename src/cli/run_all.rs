@@ -40,6 +40,35 @@ fn ended(status: Option<std::process::ExitStatus>) -> Ended {
     Ended::Code(status.and_then(|s| s.code()).unwrap_or(5))
 }
 
+/// Set on the tasks `run --all` starts: its process id, so that a task ends with it.
+pub const PARENT_ENV: &str = "SWEEPTIN_RUN_ALL_PID";
+
+/// In a task started by `run --all` ([`PARENT_ENV`]): asks the kernel for a SIGTERM when that
+/// process dies (killed with SIGKILL, it cannot pass an interruption on, and its tasks ran
+/// on, orphaned), and refuses to start when it is already gone.
+///
+/// # Errors
+/// `run --all` is gone.
+pub fn end_with_parent(task: usize) -> anyhow::Result<()> {
+    let Some(parent) = std::env::var(PARENT_ENV)
+        .ok()
+        .and_then(|v| v.parse::<i32>().ok())
+    else {
+        return Ok(());
+    };
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::process::{Pid, Signal, getppid, set_parent_process_death_signal};
+        let _ = set_parent_process_death_signal(Some(Signal::TERM));
+        if Pid::as_raw(getppid()) != parent {
+            anyhow::bail!(
+                "task {task}: the `sweeptin run --all` that started it (process {parent}) is gone"
+            );
+        }
+    }
+    Ok(())
+}
+
 /// `--all`: every task (not yet finished, with --resume), --jobs at a time, each in its own
 /// process so that one failing task does not stop the others.
 pub fn run_all(plan: &Plan, dir: &PlanDir, args: &RunArgs) -> anyhow::Result<()> {
@@ -71,7 +100,8 @@ pub fn run_all(plan: &Plan, dir: &PlanDir, args: &RunArgs) -> anyhow::Result<()>
                         .arg("run")
                         .arg(&args.plan)
                         .args(["--task", &i.to_string(), "--quiet"])
-                        .args(["--threads", &threads.to_string()]);
+                        .args(["--threads", &threads.to_string()])
+                        .env(PARENT_ENV, std::process::id().to_string());
                     // An interruption (Ctrl-C, SIGTERM) passes on to the tasks running, and
                     // waits for them; none starts after it.
                     let status = match interrupt::spawn_child(&mut command) {

@@ -232,9 +232,10 @@ impl PointStore {
         want: &[bool],
         mut f: impl FnMut([f64; 3], u64, usize),
     ) -> Result<()> {
+        let mut scratch = Vec::new();
         for (i, c) in self.cells.iter().enumerate().filter(|(i, _)| want[*i]) {
             let mut at = c.first;
-            self.read_cell(c, |pts| {
+            self.read_cell(c, &mut scratch, |pts| {
                 for &p in pts {
                     f(p, at, i);
                     at += 1;
@@ -263,13 +264,14 @@ impl PointStore {
         let inside =
             |p: &&[f64; 3]| p[0] >= area[0] && p[0] <= area[2] && p[1] >= area[1] && p[1] <= area[3];
         let mut kept: Vec<[f64; 3]> = Vec::with_capacity(PIECE);
+        let mut scratch = Vec::new();
         for c in &self.cells {
             if !super::read::meets(&c.rect, &area) {
                 out.unread.push(c.rect);
                 continue;
             }
             out.unread.extend(super::read::outside_of(c.rect, area));
-            self.read_cell(c, |pts| {
+            self.read_cell(c, &mut scratch, |pts| {
                 kept.clear();
                 kept.extend(pts.iter().filter(inside));
                 out.scanned += pts.len() as u64;
@@ -326,7 +328,12 @@ impl PointStore {
     /// Hands `f` the points of cell `c` in batches once its checksum holds: no point of a
     /// damaged cell reaches a task. A cell of at most [`CELL_AT_ONCE`] bytes is read once and
     /// checked in memory; a larger one is read twice, the second time from the page cache.
-    fn read_cell(&self, c: &Cell, mut f: impl FnMut(&[[f64; 3]]) -> Result<()>) -> Result<()> {
+    fn read_cell(
+        &self,
+        c: &Cell,
+        scratch: &mut Vec<u8>,
+        mut f: impl FnMut(&[[f64; 3]]) -> Result<()>,
+    ) -> Result<()> {
         let mut pts: Vec<[f64; 3]> = Vec::with_capacity(PIECE.min(c.count as usize));
         let u = |r: &[u8], k: usize| u32::from_le_bytes(r[4 * k..4 * k + 4].try_into().unwrap_or_default());
         let d = |r: &[u8], k: usize| f64::from_le_bytes(r[8 * k..8 * k + 8].try_into().unwrap_or_default());
@@ -341,12 +348,12 @@ impl PointStore {
         let rec = if self.lattice.is_some() { 12 } else { 24 };
         let bytes = c.count.saturating_mul(rec);
         if bytes <= CELL_AT_ONCE {
-            let mut all = vec![0u8; bytes as usize];
+            scratch.resize(bytes as usize, 0);
             self.file
-                .read_exact_at(&mut all, c.first * rec)
+                .read_exact_at(scratch, c.first * rec)
                 .map_err(|e| Error::io(&self.path, e))?;
-            self.check(c, Sha256::digest(&all))?;
-            return all.chunks(PIECE * rec as usize).try_for_each(&mut batch);
+            self.check(c, Sha256::digest(&scratch))?;
+            return scratch.chunks(PIECE * rec as usize).try_for_each(&mut batch);
         }
         self.pieces(c, true, |_| Ok(()))?;
         self.pieces(c, false, batch)
