@@ -231,6 +231,18 @@ fn ground_output_never_replaces_an_input_nor_a_directory() {
     ]);
     assert_eq!(code, 2, "{err}");
     assert_eq!(std::fs::read(&input).unwrap(), before);
+    // An --odir that is missing or a file: the environment, exit 4, as a missing directory of
+    // -o is (it was exit 2).
+    for odir in [dir.path().join("missing"), input.clone()] {
+        let (code, err) = status(&[
+            "ground".as_ref(),
+            input.as_os_str(),
+            "--odir".as_ref(),
+            odir.as_os_str(),
+        ]);
+        assert_eq!(code, 4, "{err}");
+        assert!(err.contains("--odir"), "{err}");
+    }
     // A --tmp-dir that does not exist, refused before the work as other jobs do (it ran,
     // exit 0, when nothing spilled).
     let out = dir.path().join("t.laz");

@@ -204,13 +204,7 @@ impl Args {
             ))
             .into()),
             (None, Some(dir)) => {
-                if !dir.is_dir() {
-                    return Err(sweeptin::Error::Options(format!(
-                        "--odir {}: not a directory (create it first)",
-                        dir.display()
-                    ))
-                    .into());
-                }
+                super::input::check_odir(dir)?;
                 self.inputs
                     .iter()
                     .map(|i| match i.file_name() {

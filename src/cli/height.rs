@@ -93,12 +93,7 @@ fn outputs(args: &Args) -> anyhow::Result<Vec<PathBuf>> {
         )),
     };
     let dir = dir.expect("set above");
-    if !dir.is_dir() {
-        anyhow::bail!(sweeptin::Error::Options(format!(
-            "--odir {}: not a directory (create it first)",
-            dir.display()
-        )));
-    }
+    super::input::check_odir(&dir)?;
     Ok(args
         .inputs
         .iter()

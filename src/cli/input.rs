@@ -461,6 +461,24 @@ pub fn expand_files(paths: &mut Vec<PathBuf>) -> anyhow::Result<Vec<PathBuf>> {
 
 /// Fails early (before any heavy work) if an output cannot be created where asked
 /// ([`sweeptin::output::check_output`]).
+/// Refuses an `--odir` that is not an existing directory: the environment (exit 4), as a
+/// missing directory of `-o` is.
+pub fn check_odir(dir: &Path) -> anyhow::Result<()> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    let (kind, what) = if dir.exists() {
+        (std::io::ErrorKind::NotADirectory, "--odir: not a directory")
+    } else {
+        (
+            std::io::ErrorKind::NotFound,
+            "--odir: the directory does not exist (create it first)",
+        )
+    };
+    let e = std::io::Error::new(kind, what);
+    Err(sweeptin::Error::write(dir, e).into())
+}
+
 pub fn check_output(path: &Path) -> anyhow::Result<()> {
     Ok(sweeptin::output::check_output(path)?)
 }
