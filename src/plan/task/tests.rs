@@ -1,4 +1,5 @@
 use super::*;
+use crate::raster::Align;
 
 #[test]
 fn a_job_round_trips_through_json_nan_nodata_included() {
