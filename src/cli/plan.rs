@@ -595,10 +595,15 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string(&r)?);
     } else if !args.quiet {
         eprintln!(
-            "sweeptin: task {i} {}: {} points, {} triangles, buffer {} after {} run(s), {:.2} s",
+            "sweeptin: task {i} {}: {} points, {} triangles{}, buffer {} after {} run(s), {:.2} s",
             r.status,
             count(r.points),
             count(r.triangles),
+            if r.inside_uncounted {
+                " certified (those no cell needs skipped)"
+            } else {
+                ""
+            },
             Figure(r.buffer),
             r.runs,
             r.seconds

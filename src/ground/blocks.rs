@@ -272,14 +272,8 @@ pub fn classify_stream(
             "the ground filter was given {seen} points of {total}"
         )));
     }
-    if seen > 0 && grid.check_bounds(bounds).is_err() {
-        return Err(Error::Options(format!(
-            "seed cells of {} (--step) are too small for coordinates as large as {}: give a \
-             --step of at least {}",
-            grid.block,
-            bounds.iter().fold(0.0f64, |m, v| m.max(v.abs())),
-            TileGrid::min_block(bounds) * (grid.tile / grid.block)
-        )));
+    if seen > 0 {
+        grid.check_bounds(bounds)?;
     }
     let merge = sorter.finish()?;
     let index = BlockIndex::build(grid, merge, None, tmp, DuplicatePolicy::First)?;

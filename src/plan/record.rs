@@ -30,9 +30,9 @@ pub struct TaskRecord {
     /// See `points`. With `inside_uncounted`, the triangles it certified only.
     pub triangles: u64,
     /// The task's products all cover (a DEM alone): the unwanted triangles deep inside its
-    /// sub-tiles were neither certified nor counted, as one run leaves them, and `triangles`
-    /// misses them. The report counts all the plan's triangles by Euler's formula instead
-    /// (`2V − B − 2`, with `B` from the plan's hull band) when it can.
+    /// sub-tiles were neither certified nor counted, as one run leaves them (one run counts
+    /// them by Euler's formula over all the points, which no task holds), and `triangles`
+    /// misses them; the report gives no total then.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub inside_uncounted: bool,
     /// Seconds.

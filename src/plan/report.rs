@@ -167,9 +167,8 @@ pub struct Report {
     pub decoded: u64,
     /// Points they read from the plan's point store instead (docs/SCALING.md).
     pub stored: u64,
-    /// Triangles they own. `None` while a DEM's task counts only the triangles it certified
-    /// ([`TaskRecord::inside_uncounted`]) and the total cannot be counted by Euler's formula
-    /// instead (a task not finished, or a plan without a hull band).
+    /// Triangles they own. `None` when a task counted only the triangles it certified (a DEM
+    /// alone: [`TaskRecord::inside_uncounted`]).
     pub triangles: Option<u64>,
     /// The sum of every task's seconds (finished and failed): the job's work, not its wall
     /// time (tasks run side by side).
@@ -259,29 +258,11 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
         r.task_list.push(task);
     }
     if uncounted {
-        r.triangles = euler(plan, dir, &r)?;
+        r.triangles = None;
     }
     r.points_per_second = (finished_seconds > 0.0).then(|| r.points as f64 / finished_seconds);
     r.overview = super::overview::overview(plan, dir, &dem);
     Ok(r)
-}
-
-/// All the plan's triangles by Euler's formula, `2V − B − 2`, when every task finished (`V`:
-/// their points, distinct and each owned once) and the plan's hull band gives `B`.
-///
-/// # Errors
-/// Reading the band ([`Plan::task_band`]).
-fn euler(plan: &Plan, dir: &super::PlanDir, r: &Report) -> Result<Option<u64>> {
-    if r.done + r.empty != r.tasks {
-        return Ok(None);
-    }
-    let Some(band) = plan.task_band(dir)? else {
-        return Ok(None);
-    };
-    if band.hull().len() < 3 {
-        return Ok(Some(0));
-    }
-    Ok((2 * r.points).checked_sub(band.boundary_points() + 2))
 }
 
 fn finished(task: &mut TaskReport, rec: &TaskRecord) {

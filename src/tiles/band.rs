@@ -80,19 +80,6 @@ impl HullBand {
         &self.hull
     }
 
-    /// `B`, the points on the boundary of the data's hull: its corners and the band's points
-    /// exactly on its edges (all lie in the band). A triangulation of `V` distinct points has
-    /// `2V − B − 2` triangles (as `tiles::hull::boundary_points` counts over a whole index).
-    pub fn boundary_points(&self) -> u64 {
-        let h = &self.hull;
-        let n = h.len();
-        let on_edge = |p: &[f64; 3]| {
-            let q = [p[0], p[1]];
-            !h.contains(&q) && (0..n).any(|i| crate::geom::predicates::on_segment(h[i], h[(i + 1) % n], q))
-        };
-        (n + self.points.iter().filter(|p| on_edge(p)).count()) as u64
-    }
-
     /// The band's points `[x, y, z]`.
     pub fn points(&self) -> &[[f64; 3]] {
         &self.points

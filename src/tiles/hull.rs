@@ -63,7 +63,10 @@ fn inner_box(v: &[[f64; 3]]) -> Option<[f64; 4]> {
         lo = [lo[0].min(p[0]), lo[1].min(p[1])];
         hi = [hi[0].max(p[0]), hi[1].max(p[1])];
     }
-    if !(lo[0].is_finite() && lo[1].is_finite() && hi[0].is_finite() && hi[1].is_finite()) {
+    // Every direction found a point (no sum overflowed), and the box is finite.
+    if !(lo[0].is_finite() && lo[1].is_finite() && hi[0].is_finite() && hi[1].is_finite())
+        || best.iter().any(|b| !b.0.is_finite())
+    {
         return None;
     }
     let mut ext: Vec<[f64; 3]> = best.iter().map(|b| b.1).collect();

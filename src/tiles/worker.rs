@@ -60,7 +60,7 @@
 //! left out are counted at the end instead: a triangulation of `V` points, `B` of them on the
 //! hull's boundary, has `2V − B − 2` triangles ([`super::hull::boundary_points`]). A plan's task
 //! holds only its part of the points: it counts the triangles it certified
-//! ([`super::TileStats::skipped_inside`]), and the plan's report counts them all by Euler.
+//! ([`super::TileStats::skipped_inside`]).
 
 use super::certify::Loaded;
 use super::grid::{BlockRect, TileGrid};
