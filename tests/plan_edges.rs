@@ -5,7 +5,7 @@ use crate::data;
 use crate::plans;
 
 use plans::{bin, s, sweeptin};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Tiles whose edges are not whole numbers (27.9 × 225,002 rounds below the edge): each task
 /// runs its own tile, found by its centre (half the tasks ran a neighbour's or nothing, reported
@@ -265,15 +265,11 @@ fn a_damaged_pieces_file_is_an_input_error() {
     std::fs::write(&pieces, &bytes).unwrap();
 }
 
-/// `run --all` whose task process died of SIGKILL (as the out-of-memory killer does it; the
-/// test makes task 1 kill itself) exits 4, naming the task and the signal, also in `--json`
-/// (it exited 5, "a bug", without naming either); `--resume` then runs it.
+/// A DEM plan over the shipped sample in `t/job` (tiles of 16, cells of 1): its `plan.json`.
 #[cfg(target_os = "linux")]
-#[test]
-fn a_task_killed_by_a_signal_is_named_with_it() {
-    let t = tempfile::tempdir().unwrap();
+fn sample_plan(t: &Path) -> PathBuf {
     let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
-    let job = t.path().join("job");
+    let job = t.join("job");
     let args = [
         "plan",
         "dem",
@@ -283,9 +279,21 @@ fn a_task_killed_by_a_signal_is_named_with_it() {
         "--tile",
         "16",
         "-q",
+        "-o",
+        s(&job),
     ];
-    sweeptin(&[&args[..], &["-o", s(&job)]].concat(), "plan");
-    let plan = job.join("plan.json");
+    sweeptin(&args, "plan");
+    job.join("plan.json")
+}
+
+/// `run --all` whose task process died of SIGKILL (as the out-of-memory killer does it; the
+/// test makes task 1 kill itself) exits 4, naming the task and the signal, also in `--json`
+/// (it exited 5, "a bug", without naming either); `--resume` then runs it.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_task_killed_by_a_signal_is_named_with_it() {
+    let t = tempfile::tempdir().unwrap();
+    let plan = sample_plan(t.path());
     let o = bin()
         .args(["run", s(&plan), "--all", "-q", "--json"])
         .env("SWEEPTIN_TEST_KILL_TASK", "1")
@@ -319,21 +327,9 @@ fn a_task_killed_by_a_signal_is_named_with_it() {
 fn tasks_end_with_their_run_all() {
     use std::io::BufRead;
     let t = tempfile::tempdir().unwrap();
-    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
-    let job = t.path().join("job");
-    let args = [
-        "plan",
-        "dem",
-        s(&sample),
-        "--cell",
-        "1",
-        "--tile",
-        "16",
-        "-q",
-    ];
-    sweeptin(&[&args[..], &["-o", s(&job)]].concat(), "plan");
+    let plan = sample_plan(t.path());
     let mut child = bin()
-        .args(["run", s(&job.join("plan.json")), "--all", "-q"])
+        .args(["run", s(&plan), "--all", "-q"])
         .env("SWEEPTIN_TEST_TASK_WAITS", "0")
         .stderr(std::process::Stdio::piped())
         .spawn()
