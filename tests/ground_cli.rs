@@ -280,6 +280,22 @@ fn ground_output_never_replaces_an_input_nor_a_directory() {
             "{err}"
         );
     }
+    // A ground plan over them is refused when made (it was made, and every task failed).
+    let job = dir.path().join("job");
+    let (code, err) = status(&[
+        "plan".as_ref(),
+        "ground".as_ref(),
+        far.as_os_str(),
+        "--step".as_ref(),
+        "1e-3".as_ref(),
+        "--tile".as_ref(),
+        "25".as_ref(),
+        "-o".as_ref(),
+        job.as_os_str(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("far.las") && err.contains("--step"), "{err}");
+    assert!(!job.join("plan.json").exists());
 }
 
 /// The points of a LAS/LAZ/COPC file as a sorted multiset: position, class, returns, flags.

@@ -62,7 +62,8 @@ pub fn end_with_parent(task: usize) -> anyhow::Result<()> {
         let _ = set_parent_process_death_signal(Some(Signal::TERM));
         if Pid::as_raw(getppid()) != parent {
             anyhow::bail!(
-                "task {task}: the `sweeptin run --all` that started it (process {parent}) is gone"
+                "task {task}: {PARENT_ENV} names process {parent}, which is not its parent: the \
+                 `sweeptin run --all` that started it is gone (or the variable was set by hand)"
             );
         }
     }

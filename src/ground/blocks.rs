@@ -31,6 +31,29 @@ pub const RUN_BYTES_PER_POINT: u64 = 108;
 /// Largest seed cell coordinate (block keys pack two `i32`).
 const KEY_LIMIT: f64 = ((1u64 << 31) - 4) as f64;
 
+/// Refuses seed cells of `params` too small for the points of `path`, by its header's box
+/// (a plan's check, before any task runs: they would all fail on the first point).
+///
+/// # Errors
+/// [`Error::Options`] naming the file and `--step`.
+pub(crate) fn check_reach(
+    params: &GroundParams,
+    path: &std::path::Path,
+    rect: [f64; 4],
+) -> Result<()> {
+    let grid = params.grid()?;
+    let far = rect.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if far / grid.block > KEY_LIMIT {
+        return Err(Error::Options(format!(
+            "{}: its points reach coordinates as large as {far}, too far from the origin for \
+             seed cells of {} (--step): give a larger --step",
+            path.display(),
+            grid.block
+        )));
+    }
+    Ok(())
+}
+
 /// The classes of every point by global input index: in memory, or one byte a point in an
 /// anonymous temporary file (written at each point's offset).
 #[derive(Debug)]

@@ -30,6 +30,7 @@ mod blocks;
 mod densify;
 mod ptd;
 
+pub(crate) use blocks::check_reach;
 pub use blocks::{ClassStore, Feed, GroundInput, RUN_BYTES_PER_POINT, classify_stream};
 /// What the class store holds in memory at least (a temporary file's read piece).
 pub(crate) const CLASS_READ_PIECE: u64 = blocks::READ_PIECE as u64;
@@ -292,6 +293,15 @@ pub fn classify_files(
     tmp: &Path,
     progress: &mut dyn FnMut(&str, u64, u64),
 ) -> Result<(ClassStore, GroundSummary)> {
+    params.check()?;
+    // Seed cells too small for a file's coordinates: refused naming it, before any point.
+    for p in paths {
+        if let Ok(info) = crate::input::las::FileInfo::read(p)
+            && let Some(r) = info.known_rect()
+        {
+            check_reach(params, p, r)?;
+        }
+    }
     let options = ReadOptions::for_budget(mem);
     let mut reader = LidarReader::open_with(paths, &Filter::keep_all(), options)?;
     let total = reader.point_count();

@@ -290,6 +290,11 @@ impl Plan {
         if paths.is_empty() {
             return Ok(());
         }
+        for p in &paths {
+            if let Some(r) = crate::input::las::FileInfo::read(p)?.known_rect() {
+                crate::ground::check_reach(&params, p, r)?;
+            }
+        }
         let grid = params.grid()?;
         let n = 1i64 << grid.shift;
         let b = BUFFER_CELLS;
