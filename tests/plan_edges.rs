@@ -359,3 +359,36 @@ fn tasks_end_with_their_run_all() {
         }
     }
 }
+
+/// A plan whose `--max-edge` trims every triangle merged an all-nodata mosaic with exit 0,
+/// where one run refuses (exit 2, "removed all … triangles"): its merge now refuses too, and
+/// writes nothing (hostile trial).
+#[test]
+fn a_merge_with_every_triangle_trimmed_is_refused_as_one_run() {
+    let t = tempfile::tempdir().unwrap();
+    let sample = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample/startinpy_small.laz");
+    let job = t.path().join("job");
+    let dem = ["dem", s(&sample), "--cell", "1", "--max-edge", "0.01"];
+    let one = bin()
+        .args(dem)
+        .args(["-o", s(&t.path().join("one.tif"))])
+        .output()
+        .unwrap();
+    assert_eq!(one.status.code(), Some(2), "{one:?}");
+    sweeptin(
+        &[&["plan"], &dem[..], &["--tile", "16", "-q", "-o", s(&job)]].concat(),
+        "plan",
+    );
+    sweeptin(
+        &["run", s(&job.join("plan.json")), "--all", "-q"],
+        "run --all",
+    );
+    let m = t.path().join("m.tif");
+    let o = bin()
+        .args(["merge", s(&job.join("plan.json")), "-o", s(&m)])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--max-edge") && !m.exists(), "{err}");
+}

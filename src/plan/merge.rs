@@ -718,15 +718,7 @@ pub fn merge_plan(plan: &Plan, dir: &super::PlanDir, o: &MergeOutputs) -> Result
         None
     };
     let recs = records(plan, dir)?;
-    if !recs.is_empty() && recs.iter().all(|r| r.points == 0) {
-        // As one run whose filters keep nothing: the input's verdict (exit 3), not an option's.
-        return Err(Error::NothingLeft {
-            files: vec![dir.join("plan.json")],
-            what: "no task found a point after the filters: nothing to merge (check --class \
-                   and the other filters of the plan)"
-                .into(),
-        });
-    }
+    super::record::nothing_to_merge(plan, dir, &recs)?;
     let mut summary = MergeSummary {
         tasks: recs.len(),
         empty_tasks: recs.iter().filter(|r| r.status == "empty").count(),

@@ -71,3 +71,35 @@ pub struct TaskRecord {
     #[serde(default)]
     pub subtiles: u64,
 }
+
+/// Refuses to merge a plan whose tasks hold nothing, as one run refuses such a job: no task
+/// found a point after the filters (the input's verdict, exit 3), or every task is empty
+/// because `--max-edge` trimmed every triangle (exit 2: it wrote an all-nodata mosaic).
+///
+/// # Errors
+/// [`crate::Error::NothingLeft`], [`crate::Error::Options`].
+pub(super) fn nothing_to_merge(
+    plan: &super::Plan,
+    dir: &super::PlanDir,
+    recs: &[TaskRecord],
+) -> crate::error::Result<()> {
+    if recs.is_empty() {
+        return Ok(());
+    }
+    if recs.iter().all(|r| r.points == 0) {
+        return Err(crate::Error::NothingLeft {
+            files: vec![dir.join("plan.json")],
+            what: "no task found a point after the filters: nothing to merge (check --class \
+                   and the other filters of the plan)"
+                .into(),
+        });
+    }
+    if plan.job.max_edge.is_some() && recs.iter().all(|r| r.status == "empty") {
+        return Err(crate::Error::Options(
+            "the trimming (--max-edge) removed every task's triangles: nothing is left to merge \
+             (a longer --max-edge keeps some)"
+                .into(),
+        ));
+    }
+    Ok(())
+}
