@@ -287,14 +287,7 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         &tmp,
         &mut progress,
     )
-    .map_err(|e| match e {
-        // A parameter that does not suit these points: name them.
-        sweeptin::Error::Options(_) => anyhow::Error::from(e).context(format!(
-            "cannot classify the ground of {}",
-            super::input::names(&args.inputs)
-        )),
-        e => super::input::run_error(e, &args.inputs),
-    })?;
+    .map_err(|e| super::input::run_error(e, &args.inputs))?;
     let summary = &done.ground;
     let (mut changed, mut bytes) = (0u64, 0u64);
     for s in &done.files {

@@ -459,8 +459,6 @@ pub fn expand_files(paths: &mut Vec<PathBuf>) -> anyhow::Result<Vec<PathBuf>> {
     Ok(e.lists)
 }
 
-/// Fails early (before any heavy work) if an output cannot be created where asked
-/// ([`sweeptin::output::check_output`]).
 /// Refuses an `--odir` that is not an existing directory: the environment (exit 4), as a
 /// missing directory of `-o` is.
 pub fn check_odir(dir: &Path) -> anyhow::Result<()> {
@@ -479,6 +477,8 @@ pub fn check_odir(dir: &Path) -> anyhow::Result<()> {
     Err(sweeptin::Error::write(dir, e).into())
 }
 
+/// Fails early (before any heavy work) if an output cannot be created where asked
+/// ([`sweeptin::output::check_output`]).
 pub fn check_output(path: &Path) -> anyhow::Result<()> {
     Ok(sweeptin::output::check_output(path)?)
 }
@@ -509,12 +509,6 @@ pub fn distinct_outputs(
     Ok(sweeptin::output::distinct_outputs(outputs, inputs, of)?)
 }
 
-/// The files' names, comma-separated (for an error that concerns them all).
-pub fn names(files: &[PathBuf]) -> String {
-    let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
-    names.join(", ")
-}
-
 /// The error of a run over `inputs`: library errors name their file, line or option, and are
 /// shown as they are; those about the point set as a whole (too few points, all collinear, a
 /// coordinate out of range) are prefixed with the inputs' names.
@@ -526,7 +520,8 @@ pub fn run_error(e: sweeptin::Error, inputs: &[PathBuf]) -> anyhow::Error {
         | E::NoArea { .. }
         | E::NonFinite { .. }
         | E::CoordinateOutOfRange { .. } => {
-            anyhow::Error::from(e).context(format!("cannot triangulate {}", names(inputs)))
+            let names: Vec<String> = inputs.iter().map(|f| f.display().to_string()).collect();
+            anyhow::Error::from(e).context(format!("cannot triangulate {}", names.join(", ")))
         }
         other => other.into(),
     }

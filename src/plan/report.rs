@@ -201,7 +201,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
         points: 0,
         decoded: 0,
         stored: 0,
-        triangles: Some(0),
+        triangles: None,
         task_seconds: 0.0,
         points_per_second: None,
         peak_memory: None,
@@ -209,7 +209,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
         overview: Overview::default(),
     };
     let mut finished_seconds = 0.0;
-    let mut uncounted = false;
+    let (mut triangles, mut uncounted) = (0, false);
     let mut dem = Vec::new();
     for t in &plan.tiles {
         let i = t.index;
@@ -235,7 +235,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
                 r.points += rec.points;
                 r.decoded += rec.decoded;
                 r.stored += rec.stored;
-                r.triangles = r.triangles.map(|t| t + rec.triangles);
+                triangles += rec.triangles;
                 uncounted |= rec.inside_uncounted;
                 finished_seconds += rec.seconds;
                 if let Some((_, p)) = rec.outputs.iter().find(|(n, _)| n == "dem") {
@@ -257,9 +257,7 @@ pub fn report(plan: &Plan, path: &Path, dir: &super::PlanDir) -> Result<Report> 
         r.peak_memory = r.peak_memory.max(task.peak_memory);
         r.task_list.push(task);
     }
-    if uncounted {
-        r.triangles = None;
-    }
+    r.triangles = (!uncounted).then_some(triangles);
     r.points_per_second = (finished_seconds > 0.0).then(|| r.points as f64 / finished_seconds);
     r.overview = super::overview::overview(plan, dir, &dem);
     Ok(r)

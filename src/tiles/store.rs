@@ -306,15 +306,7 @@ impl PointStore {
             f(b)?;
             done += n as u64;
         }
-        if check {
-            self.check(c, h.finalize())?;
-        }
-        Ok(())
-    }
-
-    /// Refuses cell `c` if `sum`, its bytes' SHA-256, is not the one written.
-    fn check(&self, c: &Cell, sum: impl AsRef<[u8]>) -> Result<()> {
-        if sum.as_ref() != c.sum {
+        if check && h.finalize()[..] != c.sum {
             return Err(damaged(&self.path, "damaged or edited (a cell's checksum does not match)"));
         }
         Ok(())
